@@ -1,0 +1,634 @@
+"""Event-driven hybrid-quasistatic stepper for prescribed torques (paper Section II-B).
+
+The robot is tracked along its equilibrium branch by continuation in the phase t (cycles).
+In each contact mode the configuration solves three equations in x = (phi1, phi2, f_t/(M g)):
+the joint balance F = 0 and one mode equation (stick-stick: d = d0; slip of foot i with
+sign(d') = sigma: f_t = sigma mu_i f_n,i).  Every point is a Newton solve of the compiled
+mode system (no integration drift); events are guard functions of the mode, detected by a
+sign change between steps, located by Brent's method on the guard of the solved state
+(xtol 1e-13 in phase) and applied by a transition table:
+
+=============  ==========================================  ======================
+mode           guard (positive inside)                     on zero
+=============  ==========================================  ======================
+stick-stick    mu_i f_n,i - sigma f_t  (i = 1, 2; +-)        slip of foot i, sign(d') = sigma
+slip i, sigma  sigma d'                                     stick-stick (d0 = d)
+slip i, sigma  mu_j f_n,j - mu_i f_n,i                       slip of foot j, same sigma
+any            f_n,1, f_n,2                                 lift-off (failure status)
+any            d                                            feet crossing (failure status)
+any            det J (sign of the mode's start)              fold (failure status)
+=============  ==========================================  ======================
+
+A fold is located exactly by the augmented system G(x, t) = 0, J v = 0, v0.v = 1.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .inputs import PeriodicSignal, ReferenceTorque, as_signal
+from .model import AUX, NQ, Model, symbolic
+from .quadrature import gauss_nodes
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status
+
+EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True)
+class HybridOptions:
+    """Options of the event-driven stepper."""
+
+    max_step: float = 1.0 / 64
+    """largest continuation step in phase [cycles]"""
+    min_step: float = 1e-11
+    """smallest continuation step before giving up [cycles]"""
+    event_xtol: float = 1e-13
+    """tolerance of event location in phase [cycles]"""
+    residual_tol: float = 1e-10
+    """largest accepted scaled residual |G|_inf of a mode solve"""
+    max_cycles: int = 12
+    """cycles to run before declaring the gait non-periodic"""
+    min_cycles: int = 2
+    """cycles always run (the first one is a transient from the released start)"""
+    periodic_tol: float = 1e-8
+    """periodicity: max |phi change| [rad] and |f_t change|/(M g) over one cycle"""
+    max_events_per_cycle: int = 200
+    trial_step: float = 1e-9
+    """phase step used to test the consistency of a mode after a transition"""
+    quad_h: float = 1.0 / 64
+    """largest Gauss-Legendre panel for the per-cycle integrals [cycles]"""
+
+    def __post_init__(self) -> None:
+        for name in ("max_step", "min_step", "event_xtol", "residual_tol", "periodic_tol", "trial_step", "quad_h"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"HybridOptions.{name} must be a positive finite number, got {v!r}")
+        if self.max_step > 0.25:
+            raise ValueError(f"HybridOptions.max_step must be <= 0.25 cycles, got {self.max_step!r}")
+        if not (isinstance(self.max_cycles, int) and self.max_cycles >= 2):
+            raise ValueError(f"HybridOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
+        if not (isinstance(self.min_cycles, int) and 1 <= self.min_cycles <= self.max_cycles):
+            raise ValueError(f"HybridOptions.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")
+
+
+def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
+    """Mode-parameter vector q = (e_ss, sigma, w, d0) of the compiled mode system."""
+    if mode == Mode.STICK:
+        return np.array([1.0, 0.0, 0.0, d0])
+    return np.array([0.0, float(mode.sigma), 1.0 if mode.foot == 1 else 0.0, 0.0])
+
+
+#: q of the "released" start: f_t = 0, d free
+Q_RELEASED = np.array([0.0, 0.0, 1.0, 0.0])
+
+
+@dataclass
+class _Point:
+    t: float
+    x: np.ndarray
+    aux: np.ndarray
+
+    @property
+    def xdot(self) -> np.ndarray:
+        a = self.aux
+        return np.array([a[AUX["dphi1"]], a[AUX["dphi2"]], a[AUX["dft"]]])
+
+
+@dataclass
+class _Segment:
+    """A stretch of constant mode: its points, and the foot that stays fixed."""
+
+    mode: Mode
+    q: np.ndarray
+    x1_fixed: float
+    x2_fixed: float
+    points: list = field(default_factory=list)
+
+    def foot_positions(self, d):
+        d = np.asarray(d, float)
+        if self.mode == Mode.STICK:
+            return np.full_like(d, self.x1_fixed), np.full_like(d, self.x2_fixed)
+        if self.mode.foot == 1:  # foot 2 sticks
+            return self.x2_fixed - d, np.full_like(d, self.x2_fixed)
+        return np.full_like(d, self.x1_fixed), self.x1_fixed + d
+
+
+class _Failure(Exception):
+    def __init__(self, status: Status, t: float, mode: Mode, detail: str, extra: dict | None = None):
+        super().__init__(detail)
+        self.status, self.t, self.mode, self.detail, self.extra = status, t, mode, detail, extra or {}
+
+
+class HybridStepper:
+    """Event-driven simulation of the torque-driven crawler.  Build once, call :meth:`run`."""
+
+    def __init__(self, model: Model, torque, options: HybridOptions | None = None):
+        self.model = model
+        self.torque: PeriodicSignal = as_signal(torque)
+        self.opt = options or HybridOptions()
+        self.sym = symbolic()
+        self.p = model.p
+        self.Mg = model.robot.M * model.robot.g
+        self.L = model.robot.L
+        self.nfev = 0
+        self.nsteps = 0
+
+    # ------------------------------------------------------------------ primitive evaluations
+    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
+        tau = self.torque(t)
+        dtau = self.torque.derivative(t)
+        xs, aux = self.sym.solve(x0, tau, dtau, q, self.p)
+        self.nfev += 1
+        x = np.asarray(xs).ravel()
+        aux = np.asarray(aux).ravel()
+        if not (np.all(np.isfinite(aux)) and np.all(np.isfinite(x))) or aux[AUX["res"]] > self.opt.residual_tol:
+            return None
+        return _Point(t, x, aux)
+
+    def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
+        """Guard functions of a mode (scaled, positive while the mode is valid)."""
+        Mg, L = self.Mg, self.L
+        g = {"lift_off_1": aux[AUX["fn1"]] / Mg, "lift_off_2": aux[AUX["fn2"]] / Mg, "feet_crossed": aux[AUX["d"]] / L}
+        ft = aux[AUX["ft"]]
+        lim = {1: aux[AUX["lim1"]], 2: aux[AUX["lim2"]]}
+        if mode == Mode.STICK:
+            for i in (1, 2):
+                for s in (1, -1):
+                    g[f"slip_{i}{'+' if s > 0 else '-'}"] = (lim[i] - s * ft) / Mg
+        else:
+            i = mode.foot
+            j = 3 - i
+            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
+            g[f"switch_to_{j}"] = (lim[j] - lim[i]) / Mg
+        return g
+
+    def _transition(self, mode: Mode, kind: str) -> Mode | Status:
+        if kind.startswith("lift_off"):
+            return Status.LIFT_OFF
+        if kind == "feet_crossed":
+            return Status.FEET_CROSSED
+        if kind.startswith("slip_"):
+            return Mode.slip(int(kind[5]), +1 if kind[6] == "+" else -1)
+        if kind == "stick":
+            return Mode.STICK
+        if kind.startswith("switch_to_"):
+            return Mode.slip(int(kind[-1]), mode.sigma)
+        raise AssertionError(kind)
+
+    @staticmethod
+    def _hermite(p0: _Point, p1: _Point, t: float) -> np.ndarray:
+        h = p1.t - p0.t
+        if h <= 0:
+            return p0.x.copy()
+        s = (t - p0.t) / h
+        h00 = 2 * s**3 - 3 * s**2 + 1
+        h10 = s**3 - 2 * s**2 + s
+        h01 = -2 * s**3 + 3 * s**2
+        h11 = s**3 - s**2
+        return h00 * p0.x + h10 * h * p0.xdot + h01 * p1.x + h11 * h * p1.xdot
+
+    # ------------------------------------------------------------------ events
+    def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str) -> tuple[float, _Point]:
+        cache: dict[float, _Point] = {}
+
+        def g(t: float) -> float:
+            pt = self._solve(t, self._hermite(p0, p1, t), q)
+            if pt is None:
+                raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
+            cache[t] = pt
+            return self.guards(mode, pt.aux)[name]
+
+        g0, g1 = self.guards(mode, p0.aux)[name], self.guards(mode, p1.aux)[name]
+        if g1 == 0.0:
+            return p1.t, p1
+        ta = p0.t
+        if g0 <= 0.0:
+            # the guard starts at zero (it fired the transition into this mode): bracket from the
+            # last interior sample where it is positive
+            ta = None
+            for s in np.linspace(p0.t, p1.t, 10)[1:-1][::-1]:
+                if g(s) > 0:
+                    ta = s
+                    break
+            if ta is None:
+                raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
+                               f"guard {name} does not leave zero after the transition into {mode.label}")
+        ts = brentq(g, ta, p1.t, xtol=self.opt.event_xtol, rtol=4 * EPS)
+        pt = cache.get(ts)
+        if pt is None:
+            pt = self._solve(ts, self._hermite(p0, p1, ts), q)
+        return ts, pt
+
+    def _consistent(self, mode: Mode, pt: _Point, d0: float) -> _Point | None:
+        """Return the start point of ``mode`` at pt if the mode is consistent going forward, else None.
+
+        Guards that are clearly positive at the event stay positive over a short step.  Guards
+        that vanish at the event (the one that fired, seen from the new mode) may grow only
+        quadratically (slip -> stick at d' = 0 is tangential), so the trial step is enlarged
+        until their sign is resolved above round-off.
+        """
+        q = mode_q(mode, d0)
+        start = self._solve(pt.t, pt.x, q)
+        if start is None:
+            return None
+        g0 = self.guards(mode, start.aux)
+        if any(v < -1e-10 for v in g0.values()):
+            return None
+        pending = {k for k, v in g0.items() if v < 1e-10}
+        for delta in (1e-9, 1e-7, 1e-5, 1e-4):
+            nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
+            if nxt is None:
+                return None
+            g = self.guards(mode, nxt.aux)
+            for k in list(pending):
+                if g[k] < -1e-12:
+                    return None
+                if g[k] > 1e-12:
+                    pending.discard(k)
+            if not pending:
+                return start
+        return None
+
+    # ------------------------------------------------------------------ folds
+    def _locate_fold(self, pt: _Point, q: np.ndarray, t_limit: float) -> tuple[float, np.ndarray, float] | None:
+        """Newton on the augmented fold system from pt; returns (t_fold, x_fold, sigma_min/sigma_max)."""
+        _, J = self.sym.system(pt.x, self.torque(pt.t), q, self.p)
+        J = np.asarray(J)
+        _, _, vt = np.linalg.svd(J)
+        v0 = vt[-1]
+        z = np.concatenate([pt.x, [0.0], v0])
+        t0 = pt.t
+        for _outer in range(8):
+            tau0, dtau0 = self.torque(t0), self.torque.derivative(t0)
+            for _ in range(40):
+                H, dH = self.sym.fold(z, v0, tau0, dtau0, q, self.p)
+                H = np.asarray(H).ravel()
+                dH = np.asarray(dH)
+                try:
+                    dz = np.linalg.solve(dH, -H)
+                except np.linalg.LinAlgError:
+                    return None
+                z = z + dz
+                if np.max(np.abs(dz)) < 1e-14 and np.max(np.abs(H)) < 1e-12:
+                    break
+            else:
+                return None
+            t0 = t0 + z[3]
+            done = abs(z[3]) < 1e-14
+            z[3] = 0.0
+            if done:
+                break
+        if not (pt.t - 1e-9 <= t0 <= t_limit + 1e-9):
+            return None
+        _, J = self.sym.system(z[:3], self.torque(t0), q, self.p)
+        s = np.linalg.svd(np.asarray(J), compute_uv=False)
+        return t0, z[:3], s[-1] / s[0]
+
+    # ------------------------------------------------------------------ main loop
+    def initial_state(self, t0: float = 0.0) -> _Point:
+        """Released start: equilibrium with f_t = 0 at phase t0 (raises ValueError if not a valid contact state)."""
+        ref = self.torque.reference(t0) if isinstance(self.torque, ReferenceTorque) else \
+            math.pi + self.torque(t0) / self.model.robot.k
+        guesses = [np.array([ref[0], ref[1], 0.0])]
+        for lam in (0.5, 0.25, 0.0):
+            guesses.append(np.array([lam * ref[0] + (1 - lam) * math.pi * 0.6, lam * ref[1] + (1 - lam) * math.pi * 0.6, 0.0]))
+        for x0 in guesses:
+            pt = self._solve(t0, x0, Q_RELEASED)
+            if pt is not None:
+                break
+        else:
+            raise ValueError("no equilibrium found for the starting configuration (t = 0, f_t = 0)")
+        self.model.check_contact(pt.x[:2], where="starting configuration")
+        return pt
+
+    def run(self, t_eval=None) -> CrawlResult:
+        """Simulate cycles from a released start until the gait is periodic; report the steady cycle.
+
+        ``t_eval``: optional phases in [0, 1] (relative to the start of the steady cycle) for the
+        output arrays; by default the accepted steps and event points of the steady cycle.
+        """
+        self.nfev = 0
+        self.nsteps = 0
+        opt = self.opt
+        start = self.initial_state(0.0)
+        mode = Mode.STICK
+        d0 = start.aux[AUX["d"]]
+        seg = _Segment(Mode.STICK, mode_q(Mode.STICK, d0), 0.0, d0)
+        pt = self._solve(0.0, start.x, seg.q)
+        seg.points.append(pt)
+        segments = [seg]
+        events: list[Event] = []
+        cycle_states = [(pt, mode)]
+        det_sign = np.sign(pt.aux[AUX["det"]]) or 1.0
+        h = opt.max_step
+        status = Status.SUCCESS
+        detail = ""
+        fail_t = None
+        fail_mode = None
+        cycle = 0
+        periodic_at = None
+        extra: dict = {}
+        events_in_cycle = 0
+        try:
+            while True:
+                t_end = float(cycle + 1)
+                while pt.t < t_end - 1e-15:
+                    t_new = min(pt.t + h, t_end)
+                    if t_end - t_new < 1e-12:
+                        t_new = t_end
+                    hh = t_new - pt.t
+                    guess = pt.x + hh * pt.xdot
+                    new = self._solve(t_new, guess, seg.q)
+                    ok = new is not None
+                    if ok:
+                        jump = np.max(np.abs(new.x[:2] - guess[:2]))
+                        ok = jump <= 0.05 + 0.5 * np.max(np.abs(guess[:2] - pt.x[:2])) and \
+                            np.max(np.abs(new.x[:2] - pt.x[:2])) < 0.35
+                    if ok and np.sign(new.aux[AUX["det"]]) != det_sign:
+                        ok = False  # crossed a fold onto another branch: treat as failure and locate it
+                    if not ok:
+                        if hh < 1e-3:
+                            fold = self._locate_fold(pt, seg.q, t_new)
+                            if fold is not None and fold[0] <= t_new + 1e-12 and fold[2] < 1e-6:
+                                raise _Failure(Status.FOLD, fold[0], seg.mode,
+                                               f"fold of the {seg.mode.label} equilibrium branch",
+                                               {"fold_x": fold[1].tolist(), "fold_sigma_ratio": fold[2]})
+                        h = hh / 4
+                        if h < opt.min_step:
+                            raise _Failure(Status.NO_CONVERGENCE, pt.t, seg.mode,
+                                           f"continuation step fell below {opt.min_step:g} cycles")
+                        continue
+                    self.nsteps += 1
+                    g_old = self.guards(seg.mode, pt.aux)
+                    g_new = self.guards(seg.mode, new.aux)
+                    crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -1e-10]
+                    if not crossed:
+                        pt = new
+                        seg.points.append(pt)
+                        h = min(opt.max_step, 2 * h) if hh >= h * 0.999 else h
+                        continue
+                    located = [(self._locate(pt, new, seg.q, seg.mode, k), k) for k in crossed]
+                    (t_ev, ev_pt), kind = min(located, key=lambda r: r[0][0])
+                    if ev_pt is None:
+                        raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
+                    g_ev = self.guards(seg.mode, ev_pt.aux)[kind]
+                    if ev_pt.t > pt.t:
+                        seg.points.append(ev_pt)
+                    target = self._transition(seg.mode, kind)
+                    if isinstance(target, Status):
+                        events.append(Event(t_ev, kind, seg.mode.label, "failure", g_ev))
+                        raise _Failure(target, t_ev, seg.mode, f"{kind.replace('_', ' ')}")
+                    new_d0 = ev_pt.aux[AUX["d"]]
+                    trial = self._consistent(target, ev_pt, new_d0)
+                    chosen = target
+                    if trial is None:
+                        # the table's successor is inconsistent: look for any other consistent mode
+                        found = []
+                        for m in Mode:
+                            if m in (target, seg.mode):
+                                continue
+                            tr = self._consistent(m, ev_pt, new_d0)
+                            if tr is not None:
+                                found.append((m, tr))
+                        if len(found) != 1:
+                            raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
+                                           f"after event {kind}: {len(found)} consistent successor modes "
+                                           f"(table successor {target.label} is inconsistent)")
+                        chosen, trial = found[0]
+                    events.append(Event(t_ev, kind, seg.mode.label, chosen.label, g_ev))
+                    events_in_cycle += 1
+                    if events_in_cycle > opt.max_events_per_cycle:
+                        raise _Failure(Status.TOO_MANY_EVENTS, t_ev, chosen,
+                                       f"more than {opt.max_events_per_cycle} events in cycle {cycle + 1}")
+                    d_now = ev_pt.aux[AUX["d"]]
+                    x1, x2 = (a.item() for a in seg.foot_positions(d_now))
+                    q_new = mode_q(chosen, new_d0)
+                    seg = _Segment(chosen, q_new, x1, x2, [trial])
+                    segments.append(seg)
+                    pt = trial
+                    det_sign = np.sign(pt.aux[AUX["det"]]) or 1.0
+                    h = opt.max_step
+                # end of a cycle
+                cycle += 1
+                events_in_cycle = 0
+                cycle_states.append((pt, seg.mode))
+                if cycle >= opt.min_cycles:
+                    (pa, ma), (pb, mb) = cycle_states[-2], cycle_states[-1]
+                    dev = max(np.max(np.abs(pa.x[:2] - pb.x[:2])), abs(pa.x[2] - pb.x[2]))
+                    if dev <= opt.periodic_tol and ma == mb:
+                        periodic_at = cycle
+                        extra["periodicity_deviation"] = float(dev)
+                        break
+                if cycle >= opt.max_cycles:
+                    (pa, _), (pb, _) = cycle_states[-2], cycle_states[-1]
+                    raise _Failure(Status.NOT_PERIODIC, pt.t, seg.mode,
+                                   f"not periodic after {cycle} cycles (last change {np.max(np.abs(pa.x - pb.x)):.3g})")
+        except _Failure as f:
+            status, detail, fail_t, fail_mode = f.status, f.detail, f.t, f.mode.label
+            extra.update(f.extra)
+        return self._build_result(segments, events, status, detail, fail_t, fail_mode, cycle, periodic_at, t_eval, extra)
+
+    # ------------------------------------------------------------------ dense output and metrics
+    def _evaluate_many(self, seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Solve the segment's mode at many phases in one mapped call (guesses by Hermite interpolation)."""
+        pts = seg.points
+        ts = np.asarray(ts, float)
+        n = len(ts)
+        tp = np.array([p.t for p in pts])
+        if len(pts) > 1:
+            idx = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
+            guesses = np.stack([self._hermite(pts[i], pts[i + 1], t) for i, t in zip(idx, ts)], axis=1)
+        else:
+            guesses = np.tile(pts[0].x[:, None], (1, n))
+        xs, aux = mapped_solve(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
+                               seg.q, self.p)
+        self.nfev += n
+        return xs, aux
+
+    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
+        """Input work, friction dissipation and per-actuator positive work over [ta, tb].
+
+        Gauss-Legendre panels (5 nodes, length <= quad_h) on each smooth segment; for W+ a panel
+        on which an actuator's power changes sign is split at the root of its interpolant.
+        """
+        w_in = 0.0
+        diss = 0.0
+        wplus = np.zeros(2)
+        worst_res = 0.0
+        xg, wg = np.polynomial.legendre.leggauss(5)
+        for seg in segments:
+            a = max(ta, seg.points[0].t)
+            b = min(tb, seg.points[-1].t)
+            if b <= a:
+                continue
+            t, wq = gauss_nodes(a, b, self.opt.quad_h, 5)
+            xs, aux = self._evaluate_many(seg, t)
+            worst_res = max(worst_res, float(np.max(aux[AUX["res"]])))
+            power = self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]
+            w_in += float(np.sum(wq * power.sum(axis=0)))
+            diss += float(np.sum(wq * np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]])))
+            if not positive:
+                continue
+            npan = len(t) // 5
+            edges = np.linspace(a, b, npan + 1)
+            pw = power.reshape(2, npan, 5)
+            ww = wq.reshape(npan, 5)
+            extra_t, extra_w, extra_i = [], [], []
+            for i in range(2):
+                for j in range(npan):
+                    vals = pw[i, j]
+                    if np.all(vals >= 0):
+                        wplus[i] += float(np.sum(ww[j] * vals))
+                        continue
+                    if np.all(vals <= 0):
+                        continue
+                    # sign change inside the panel: split at the roots of the degree-4 interpolant
+                    cheb = np.polynomial.legendre.Legendre.fit(xg, vals, 4, domain=[-1, 1])
+                    r = cheb.roots()
+                    r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
+                    lo, hi = edges[j], edges[j + 1]
+                    cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
+                    for c0, c1 in zip(cuts[:-1], cuts[1:]):
+                        if c1 - c0 <= 0:
+                            continue
+                        tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
+                        extra_t.append(tt)
+                        extra_w.append(w2)
+                        extra_i.append(np.full(len(tt), i))
+            if extra_t:
+                te = np.concatenate(extra_t)
+                we = np.concatenate(extra_w)
+                ie = np.concatenate(extra_i)
+                _, aux2 = self._evaluate_many(seg, te)
+                p2 = self.torque(te).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
+                pv = p2[ie, np.arange(len(te))]
+                for i in range(2):
+                    wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
+        return {"input_work": w_in, "dissipation": diss, "W_plus_joint": wplus, "quad_residual": worst_res}
+
+    def _state_at(self, segments, t: float) -> _Point:
+        for seg in reversed(segments):
+            if seg.points[0].t <= t <= seg.points[-1].t + 1e-15:
+                for p in seg.points:
+                    if abs(p.t - t) < 1e-15:
+                        return p
+                xs, aux = self._evaluate_many(seg, np.array([t]))
+                return _Point(t, xs[:, 0], aux[:, 0])
+        raise ValueError(t)
+
+    def _build_result(self, segments, events, status, detail, fail_t, fail_mode, cycles, periodic_at, t_eval, extra):
+        model = self.model
+        res = CrawlResult(success=status == Status.SUCCESS, status=int(status), message="", drive="torque",
+                          gravity=model.gravity, events=events, cycles=cycles, failure_t=fail_t,
+                          failure_mode=fail_mode, extra=extra)
+        if status == Status.SUCCESS:
+            t0 = float(periodic_at - 1)
+            res.message = f"{STATUS_MESSAGES[status]} after {cycles} cycles; steady cycle t in [{t0:g}, {t0 + 1:g}]"
+        else:
+            t0 = float(max(0, math.floor(fail_t if fail_t is not None else 0.0)))
+            res.message = f"{STATUS_MESSAGES[status]}: {detail} at phase t = {fail_t:.10f} " \
+                          f"(cycle {int(math.floor(fail_t)) + 1}, phase {fail_t % 1:.10f}) in mode {fail_mode}"
+        res.t0 = t0
+        t1 = t0 + 1.0 if status == Status.SUCCESS else (fail_t if fail_t is not None else t0)
+        # output samples
+        rows = []
+        if t_eval is None:
+            for seg in segments:
+                for p in seg.points:
+                    if t0 - 1e-15 <= p.t <= t1 + 1e-15:
+                        rows.append((p.t, seg, p.x, p.aux))
+            rows.sort(key=lambda r: r[0])
+        else:
+            te = t0 + np.asarray(t_eval, dtype=float).ravel()
+            if np.any(te < t0 - 1e-12) or np.any(te > t0 + 1 + 1e-12):
+                raise ValueError("t_eval must lie in [0, 1] (phase within the steady cycle)")
+            for seg in segments:
+                a, b = seg.points[0].t, seg.points[-1].t
+                sel = np.nonzero((te >= a) & (te <= b))[0]
+                sel = [j for j in sel if not any(r[4] == j for r in rows)]
+                if not sel:
+                    continue
+                xs, aux = self._evaluate_many(seg, te[sel])
+                for c, j in enumerate(sel):
+                    rows.append((te[j], seg, xs[:, c], aux[:, c], j))
+            rows.sort(key=lambda r: r[0])
+        if rows:
+            t = np.array([r[0] for r in rows])
+            X = np.stack([r[2] for r in rows], axis=1)
+            A = np.stack([r[3] for r in rows], axis=1)
+            d = A[AUX["d"]]
+            x1 = np.empty_like(t)
+            x2 = np.empty_like(t)
+            for j, r in enumerate(rows):
+                a1, a2 = r[1].foot_positions(d[j])
+                x1[j], x2[j] = a1, a2
+            res.t, res.phi, res.theta, res.d = t, X[:2], A[AUX["theta"]], d
+            res.x1, res.x2, res.f_t, res.f_n1, res.f_n2 = x1, x2, A[AUX["ft"]], A[AUX["fn1"]], A[AUX["fn2"]]
+            res.tau = self.torque(t).reshape(2, -1)
+            res.mode = np.array([int(r[1].mode) for r in rows])
+            res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
+        if status == Status.SUCCESS:
+            pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
+            sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t][-1]
+            sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t][-1]
+            x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
+            x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
+            res.S = x1b - x1a
+            ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True)
+            Va = model.potential(pa.x[:2])
+            Vb = model.potential(pb.x[:2])
+            dV = float(Vb - Va)
+            res.W_plus_joint = ints["W_plus_joint"]
+            res.W_plus = float(np.sum(ints["W_plus_joint"]))
+            res.CoT_plus = res.W_plus / (model.robot.M * model.robot.g * abs(res.S)) if res.S != 0 else float("inf")
+            bal = ints["input_work"] - dV - ints["dissipation"]
+            scale = max(abs(ints["input_work"]), abs(ints["dissipation"]), abs(dV), 1e-300)
+            res.energy = {"input_work": ints["input_work"], "potential_change": dV,
+                          "dissipation": ints["dissipation"], "balance_residual": bal / scale}
+            res.periodicity_residual = extra.get("periodicity_deviation", float("nan"))
+        res.nfev = self.nfev
+        res.nsteps = self.nsteps
+        res.extra["segments"] = len(segments)
+        self._segments = segments
+        return res
+
+    def cycle_energy(self, cycle: int) -> dict:
+        """Energy balance of cycle ``cycle`` (0-based) of the last run: input work, potential change, dissipation."""
+        segs = self._segments
+        ta, tb = float(cycle), float(cycle + 1)
+        ints = self._cycle_integrals(segs, ta, tb, positive=False)
+        pa, pb = self._state_at(segs, ta), self._state_at(segs, tb)
+        dV = float(self.model.potential(pb.x[:2]) - self.model.potential(pa.x[:2]))
+        bal = ints["input_work"] - dV - ints["dissipation"]
+        scale = max(abs(ints["input_work"]), abs(ints["dissipation"]), abs(dV), 1e-300)
+        return {"input_work": ints["input_work"], "potential_change": dV, "dissipation": ints["dissipation"],
+                "balance_residual": bal / scale}
+
+
+_MAPPED: dict[int, object] = {}
+
+
+def mapped_solve(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
+    """Mode solve at n points in one call; sizes are padded to powers of two so few maps are compiled."""
+    n = x0.shape[1]
+    size = max(16, 1 << (n - 1).bit_length())
+    f = _MAPPED.get(size)
+    if f is None:
+        f = _MAPPED[size] = symbolic().solve.map(size)
+    pad = size - n
+
+    def padded(a):
+        return np.concatenate([a, np.repeat(a[:, -1:], pad, axis=1)], axis=1) if pad else a
+
+    q = np.asarray(q, float)
+    qm = np.tile(q[:, None], (1, size)) if q.ndim == 1 else padded(q)
+    xs, aux = f(padded(x0), padded(tau), padded(dtau), qm, np.tile(p[:, None], (1, size)))
+    return np.asarray(xs)[:, :n], np.asarray(aux)[:, :n]
+
+
+def simulate_torque(model: Model, torque, options: HybridOptions | None = None, t_eval=None) -> CrawlResult:
+    """Event-driven hybrid-quasistatic simulation of a torque-driven gait (see module docstring)."""
+    return HybridStepper(model, torque, options).run(t_eval=t_eval)

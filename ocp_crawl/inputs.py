@@ -1,0 +1,231 @@
+"""Periodic inputs as functions of the phase t (in cycles: one period is t in [0, 1)).
+
+Quasistatic solutions are time-scalable, so only the phase matters: every signal here is
+1-periodic in t and returns a 2-vector (joint 1, joint 2).  Derivatives are with respect to the
+phase t (per cycle), not per second.
+
+* :class:`Harmonic`: the paper's reference angles, eq. (ref), phi_ref,i = gamma_i + A_i sin(2 pi t +- psi/2).
+* :class:`FourierSeries`: any truncated Fourier series.
+* :class:`PeriodicSpline`: a periodic cubic spline through samples.
+* :class:`CallableSignal`: any callable of phase (derivative by central differences if not given).
+* :class:`ReferenceTorque`: the torque tau = k (phi_ref - pi) of eq. (tau) for any reference signal.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+TWO_PI = 2.0 * math.pi
+
+
+class PeriodicSignal:
+    """Base class: a 1-periodic 2-vector signal of the phase t."""
+
+    def __call__(self, t):
+        """Value at phase t (scalar -> shape (2,), array of N -> shape (2, N))."""
+        raise NotImplementedError
+
+    def derivative(self, t):
+        """d/dt of the value at phase t (same shapes as __call__)."""
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        return {"type": type(self).__name__}
+
+
+def _finite_check(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class Harmonic(PeriodicSignal):
+    """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 = gamma2 + A2 sin(2 pi t - psi/2)."""
+
+    gamma1: float = math.pi / 2
+    """nominal angle of joint 1 [rad]"""
+    gamma2: float = math.pi / 2
+    """nominal angle of joint 2 [rad]"""
+    A1: float = math.pi / 6
+    """amplitude of joint 1 [rad]"""
+    A2: float = math.pi / 6
+    """amplitude of joint 2 [rad]"""
+    psi: float = math.pi / 4
+    """phase difference, joint 1 leading for psi > 0 [rad]"""
+
+    def __post_init__(self) -> None:
+        for name in ("gamma1", "gamma2", "A1", "A2", "psi"):
+            object.__setattr__(self, name, _finite_check(name, getattr(self, name)))
+        for name in ("A1", "A2"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+
+    @classmethod
+    def from_degrees(cls, gamma_deg=90.0, A_deg=30.0, psi_deg=45.0, *, gamma1_deg=None, gamma2_deg=None,
+                     A1_deg=None, A2_deg=None) -> "Harmonic":
+        g1 = gamma_deg if gamma1_deg is None else gamma1_deg
+        g2 = gamma_deg if gamma2_deg is None else gamma2_deg
+        a1 = A_deg if A1_deg is None else A1_deg
+        a2 = A_deg if A2_deg is None else A2_deg
+        return cls(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2), math.radians(psi_deg))
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        w = TWO_PI * t
+        return np.array([self.gamma1 + self.A1 * np.sin(w + self.psi / 2),
+                         self.gamma2 + self.A2 * np.sin(w - self.psi / 2)])
+
+    def derivative(self, t):
+        t = np.asarray(t, dtype=float)
+        w = TWO_PI * t
+        return np.array([TWO_PI * self.A1 * np.cos(w + self.psi / 2),
+                         TWO_PI * self.A2 * np.cos(w - self.psi / 2)])
+
+    def describe(self) -> dict:
+        return {"type": "Harmonic", "gamma1_deg": math.degrees(self.gamma1), "gamma2_deg": math.degrees(self.gamma2),
+                "A1_deg": math.degrees(self.A1), "A2_deg": math.degrees(self.A2), "psi_deg": math.degrees(self.psi)}
+
+
+@dataclass(frozen=True)
+class FourierSeries(PeriodicSignal):
+    """u_i(t) = a0_i + sum_n (a_n,i cos(2 pi n t) + b_n,i sin(2 pi n t)).
+
+    ``a0``: shape (2,); ``a`` and ``b``: shape (2, N) for harmonics n = 1..N.
+    """
+
+    a0: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+
+    def __post_init__(self) -> None:
+        a0 = np.asarray(self.a0, dtype=float).reshape(2)
+        a = np.atleast_2d(np.asarray(self.a, dtype=float))
+        b = np.atleast_2d(np.asarray(self.b, dtype=float))
+        if a.shape != b.shape or a.shape[0] != 2:
+            raise ValueError(f"FourierSeries: a and b must both have shape (2, N), got {a.shape} and {b.shape}")
+        if not (np.all(np.isfinite(a0)) and np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            raise ValueError("FourierSeries: coefficients must be finite")
+        object.__setattr__(self, "a0", a0)
+        object.__setattr__(self, "a", a)
+        object.__setattr__(self, "b", b)
+
+    @classmethod
+    def fit(cls, samples, order: int) -> "FourierSeries":
+        """Least-squares series of the given order through equally spaced samples (shape (2, N), t = j/N)."""
+        s = np.asarray(samples, float)
+        n = s.shape[1]
+        c = np.fft.rfft(s, axis=1) / n
+        order = min(order, (n - 1) // 2)
+        return cls(c[:, 0].real, 2 * c[:, 1:order + 1].real, -2 * c[:, 1:order + 1].imag)
+
+    def _n(self):
+        return np.arange(1, self.a.shape[1] + 1)
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        w = TWO_PI * np.multiply.outer(t, self._n())  # (..., N)
+        out = self.a0.reshape((2,) + (1,) * t.ndim) + np.einsum("in,...n->i...", self.a, np.cos(w)) \
+            + np.einsum("in,...n->i...", self.b, np.sin(w))
+        return out
+
+    def derivative(self, t):
+        t = np.asarray(t, dtype=float)
+        n = self._n()
+        w = TWO_PI * np.multiply.outer(t, n)
+        return np.einsum("in,...n->i...", self.b * TWO_PI * n, np.cos(w)) \
+            - np.einsum("in,...n->i...", self.a * TWO_PI * n, np.sin(w))
+
+    def describe(self) -> dict:
+        return {"type": "FourierSeries", "order": int(self.a.shape[1]), "a0": self.a0.tolist(),
+                "a": self.a.tolist(), "b": self.b.tolist()}
+
+
+class PeriodicSpline(PeriodicSignal):
+    """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N))."""
+
+    def __init__(self, t_knots, values):
+        t = np.asarray(t_knots, dtype=float).ravel()
+        v = np.asarray(values, dtype=float)
+        if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
+            raise ValueError(f"PeriodicSpline: values must have shape (2, {t.size}), got {v.shape}")
+        if t.size < 3 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
+            raise ValueError("PeriodicSpline: need >= 3 strictly increasing knots in [0, 1)")
+        if not np.all(np.isfinite(v)):
+            raise ValueError("PeriodicSpline: values must be finite")
+        tt = np.append(t, t[0] + 1.0)
+        vv = np.concatenate([v, v[:, :1]], axis=1)
+        self._t0 = t[0]
+        self._spline = CubicSpline(tt, vv, axis=1, bc_type="periodic")
+        self._dspline = self._spline.derivative()
+        self.t_knots, self.values = t, v
+
+    def _wrap(self, t):
+        return self._t0 + np.mod(np.asarray(t, float) - self._t0, 1.0)
+
+    def __call__(self, t):
+        return self._spline(self._wrap(t))
+
+    def derivative(self, t):
+        return self._dspline(self._wrap(t))
+
+    def describe(self) -> dict:
+        return {"type": "PeriodicSpline", "knots": int(self.t_knots.size)}
+
+
+class CallableSignal(PeriodicSignal):
+    """Any callable ``f(t) -> (2,)`` of the phase, assumed 1-periodic; derivative by central differences
+    (step 1e-6, error ~1e-12 relative) unless ``df`` is given."""
+
+    def __init__(self, f: Callable, df: Callable | None = None, h: float = 1e-6):
+        if not callable(f):
+            raise TypeError(f"CallableSignal needs a callable, got {type(f).__name__}")
+        self.f, self.df, self.h = f, df, h
+
+    def _eval(self, g, t):
+        t = np.asarray(t, float)
+        if t.ndim == 0:
+            return np.asarray(g(float(t)), float).reshape(2)
+        return np.stack([np.asarray(g(float(ti)), float).reshape(2) for ti in t], axis=1)
+
+    def __call__(self, t):
+        return self._eval(self.f, t)
+
+    def derivative(self, t):
+        if self.df is not None:
+            return self._eval(self.df, t)
+        t = np.asarray(t, float)
+        return (self(t + self.h) - self(t - self.h)) / (2 * self.h)
+
+
+@dataclass(frozen=True)
+class ReferenceTorque(PeriodicSignal):
+    """Torque input of eq. (tau): tau_i = k (phi_ref,i(t) - pi) [N m], i.e. a spring whose rest angle is phi_ref."""
+
+    reference: PeriodicSignal
+    k: float
+
+    def __call__(self, t):
+        return self.k * (self.reference(t) - math.pi)
+
+    def derivative(self, t):
+        return self.k * self.reference.derivative(t)
+
+    def describe(self) -> dict:
+        return {"type": "ReferenceTorque", "k": self.k, "reference": self.reference.describe()}
+
+
+def as_signal(u) -> PeriodicSignal:
+    """Accept a PeriodicSignal or any callable of phase."""
+    if isinstance(u, PeriodicSignal):
+        return u
+    if callable(u):
+        return CallableSignal(u)
+    raise TypeError(f"an input must be a PeriodicSignal or a callable of phase, got {type(u).__name__}")

@@ -1,0 +1,334 @@
+"""Three-link crawler: parameters, kinematics and statics.
+
+The statics are derived once, symbolically, from the potential energy by virtual work
+(CasADi automatic differentiation) and compiled into CasADi functions that every solver
+shares.  The paper's closed forms are kept out of this module on purpose: they live in the
+tests as independent oracles.
+
+Conventions (see ``shared/MODEL_NOTES.md``):
+
+* ``phi = (phi1, phi2)`` are the interior joint angles below the body, ``pi`` = flat.
+* ``theta`` is the body angle, ``a = phi1 - theta`` and ``c = phi2 + theta`` the leg angles.
+* ``x`` points from foot 1 (left) to foot 2 (right); ``x2 = x1 + d(phi)``.
+* ``f_t`` is the tangential force on the robot at foot 1 along ``+x``; at foot 2 it is ``-f_t``.
+* Gravity convention ``"physical"`` uses the virtual-work sign (``-grad U_g`` in the joint
+  balance); ``"paper"`` uses the sign printed in the paper's eq. (intEq) (``+grad U_g``), which
+  is the same as a gravitational potential ``-U_g``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Literal
+
+import casadi as cs
+import numpy as np
+
+GravityConvention = Literal["physical", "paper"]
+GRAVITY_CONVENTIONS = ("physical", "paper")
+
+#: indices of the parameter vector ``p`` passed to every compiled function
+P_NAMES = ("M", "L", "beta", "k", "mu1", "mu2", "g", "sgrav")
+NP = len(P_NAMES)
+
+#: indices of the mode-parameter vector ``q``: stick-stick flag, slip direction of d, slipping
+#: foot weight (1 = foot 1, 0 = foot 2), stick distance d0 [m]
+Q_NAMES = ("e_ss", "sigma", "w", "d0")
+NQ = len(Q_NAMES)
+
+
+def _check_positive(name: str, value: float, strict: bool = True) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    if strict and value <= 0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    if not strict and value < 0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class Robot:
+    """Physical parameters of the three-link crawler (SI units)."""
+
+    M: float = 0.052
+    """total mass [kg]"""
+    L: float = 0.120
+    """total length [m]"""
+    beta: float = 2.0
+    """body-to-leg length ratio [-]; legs have length l = L/(2+beta)"""
+    k: float = 0.1677
+    """torsion spring stiffness of each joint [N m/rad]"""
+    mu1: float = 0.389
+    """Coulomb friction coefficient at foot 1 (left) [-]"""
+    mu2: float = 0.389
+    """Coulomb friction coefficient at foot 2 (right) [-]"""
+    g: float = 9.81
+    """gravitational acceleration [m/s^2]"""
+
+    def __post_init__(self) -> None:
+        for name in ("M", "L", "beta", "k", "g"):
+            object.__setattr__(self, name, _check_positive(name, getattr(self, name)))
+        for name in ("mu1", "mu2"):
+            object.__setattr__(self, name, _check_positive(name, getattr(self, name), strict=False))
+
+    @classmethod
+    def paper(cls, **overrides: float) -> "Robot":
+        """The robot of the paper's Table I (M = 52 g, L = 120 mm, k = 0.1677 N m/rad, mu = 0.389)."""
+        return cls(**overrides)
+
+    @property
+    def l(self) -> float:
+        """leg length [m]"""
+        return self.L / (2.0 + self.beta)
+
+    @property
+    def m(self) -> float:
+        """leg mass [kg]"""
+        return self.M / (2.0 + self.beta)
+
+    @property
+    def MgL(self) -> float:
+        """gravitational torque scale M g L [N m]"""
+        return self.M * self.g * self.L
+
+    def with_stiffness_ratio(self, ratio: float) -> "Robot":
+        """Copy with k = ratio * M g L."""
+        return self.replace(k=ratio * self.MgL)
+
+    def replace(self, **changes: float) -> "Robot":
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+
+PAPER_PRESSURE_COEFFS = {"a1": 0.092, "a2": 0.089, "b1": 0.127, "b2": 0.144}
+"""Table I pressure-to-bending map a_i p^2 + b_i p [rad/bar^2, rad/bar]."""
+
+
+# --------------------------------------------------------------------------------------------
+# symbolic model, built once per process
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Symbolic:
+    kin: cs.Function
+    """(phi[2], p) -> [theta, d, xc, Delta, fn1, fn2, grad_d[2], grad_Ug[2], U_el, U_g]"""
+    residual: cs.Function
+    """(phi[2], tau[2], f_t, p) -> F[2]: joint equilibrium residual [N m]"""
+    hold_torque: cs.Function
+    """(phi[2], f_t, p) -> tau[2]: torque that holds phi in equilibrium with f_t [N m]"""
+    solve: cs.Function
+    """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): Newton solve of a mode + outputs"""
+    evaluate: cs.Function
+    """(x[3], tau[2], dtau[2], q[4], p) -> aux[NAUX] without solving"""
+    system: cs.Function
+    """(x[3], tau[2], q[4], p) -> (G[3], J[3x3]) scaled mode equations and Jacobian"""
+    fold: cs.Function
+    """(z[7] = x, t-offset, v, ... ) see hybrid module"""
+
+
+#: names of the auxiliary outputs returned with every mode solve
+AUX_NAMES = (
+    "theta", "d", "xc", "Delta", "fn1", "fn2", "ft", "ddot",
+    "dphi1", "dphi2", "dft", "det", "res", "lim1", "lim2",
+)
+AUX = {n: i for i, n in enumerate(AUX_NAMES)}
+NAUX = len(AUX_NAMES)
+
+
+def _geometry(phi, p):
+    M, L, beta, k, mu1, mu2, g, sgrav = (p[i] for i in range(NP))
+    l = L / (2 + beta)
+    m = M / (2 + beta)
+    phi1, phi2 = phi[0], phi[1]
+    # branch of eq. (theta) that contains the flat configuration (theta = 0 at phi = pi)
+    theta = cs.atan2(cs.sin(phi2) - cs.sin(phi1), beta - cs.cos(phi1) - cs.cos(phi2))
+    a = phi1 - theta
+    c = phi2 + theta
+    d = l * (beta * cs.cos(theta) - cs.cos(a) - cs.cos(c))
+    # centre of mass from the link centres (not the paper's printed formula, which is an oracle)
+    x_left = -0.5 * l * cs.cos(a)
+    x_body = -l * cs.cos(a) + 0.5 * beta * l * cs.cos(theta)
+    x_right = -l * cs.cos(a) + beta * l * cs.cos(theta) - 0.5 * l * cs.cos(c)
+    xc = (m * x_left + beta * m * x_body + m * x_right) / M
+    z_left = 0.5 * l * cs.sin(a)
+    z_body = 0.5 * l * (cs.sin(a) + cs.sin(c))
+    z_right = 0.5 * l * cs.sin(c)
+    U_g = g * (m * z_left + beta * m * z_body + m * z_right)
+    U_el = 0.5 * k * ((phi1 - cs.pi) ** 2 + (phi2 - cs.pi) ** 2)
+    # normal forces from the external balance (workless constraint forces)
+    fn2 = xc / d * M * g
+    fn1 = M * g - fn2
+    return dict(l=l, m=m, theta=theta, a=a, c=c, d=d, xc=xc, U_g=U_g, U_el=U_el, fn1=fn1, fn2=fn2)
+
+
+@lru_cache(maxsize=1)
+def symbolic() -> _Symbolic:
+    """Build (once) and return the compiled CasADi functions of the model."""
+    phi = cs.SX.sym("phi", 2)
+    tau = cs.SX.sym("tau", 2)
+    dtau = cs.SX.sym("dtau", 2)
+    ft = cs.SX.sym("ft")
+    p = cs.SX.sym("p", NP)
+    q = cs.SX.sym("q", NQ)
+    M, L, beta, k, mu1, mu2, g, sgrav = (p[i] for i in range(NP))
+    geo = _geometry(phi, p)
+    d = geo["d"]
+    grad_d = cs.gradient(d, phi)
+    grad_Ug = cs.gradient(geo["U_g"], phi)
+    Delta = geo["xc"] - d / 2
+
+    # virtual work: Pi(phi; tau) = U_el + sgrav U_g - tau.phi; friction does virtual work
+    # f_t dx1 - f_t (dx1 + grad d . dphi) = -f_t grad d . dphi  =>  F = -dPi/dphi - f_t grad d
+    Pi = geo["U_el"] + sgrav * geo["U_g"] - cs.dot(tau, phi)
+    F = -cs.gradient(Pi, phi) - ft * grad_d
+
+    kin = cs.Function(
+        "kin", [phi, p],
+        [cs.vertcat(geo["theta"], d, geo["xc"], Delta, geo["fn1"], geo["fn2"], grad_d, grad_Ug,
+                    geo["U_el"], geo["U_g"])],
+        ["phi", "p"], ["kin"],
+    )
+    residual = cs.Function("residual", [phi, tau, ft, p], [F], ["phi", "tau", "ft", "p"], ["F"])
+    hold = cs.Function("hold_torque", [phi, ft, p],
+                       [cs.gradient(geo["U_el"] + sgrav * geo["U_g"], phi) + ft * grad_d],
+                       ["phi", "ft", "p"], ["tau"])
+
+    # unified mode system in x = (phi1, phi2, f_t/(M g)); q selects the mode:
+    #   stick-stick (e_ss = 1): d(phi) = d0
+    #   slip (e_ss = 0):        f_t = sigma * (w mu1 fn1 + (1-w) mu2 fn2), sigma = sign(d')
+    x = cs.SX.sym("x", 3)
+    e_ss, sigma, w, d0 = q[0], q[1], q[2], q[3]
+    Mg = M * g
+    geo_x = _geometry(x[0:2], p)
+    grad_d_x = cs.substitute(grad_d, phi, x[0:2])
+    F_x = cs.substitute(F, cs.vertcat(phi, ft), cs.vertcat(x[0:2], x[2] * Mg))
+    lim1 = mu1 * geo_x["fn1"]
+    lim2 = mu2 * geo_x["fn2"]
+    c_mode = e_ss * (geo_x["d"] - d0) / L + (1 - e_ss) * (x[2] - sigma * (w * lim1 + (1 - w) * lim2) / Mg)
+    G = cs.vertcat(F_x / (Mg * L), c_mode)
+    J = cs.jacobian(G, x)
+    G_tau = cs.jacobian(G, tau)
+    xdot = -cs.solve(J, G_tau @ dtau)
+    ddot = cs.dot(grad_d_x, xdot[0:2])
+    detJ = cs.det(J)
+    Delta_x = geo_x["xc"] - geo_x["d"] / 2
+    aux = cs.vertcat(
+        geo_x["theta"], geo_x["d"], geo_x["xc"], Delta_x, geo_x["fn1"], geo_x["fn2"], x[2] * Mg,
+        ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2,
+    )
+    assert aux.shape[0] == NAUX
+    evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"], ["aux"])
+    system = cs.Function("system", [x, tau, q, p], [G, J], ["x", "tau", "q", "p"], ["G", "J"])
+
+    # Newton solve of the mode system, fused with the outputs into one call
+    par = cs.vertcat(tau, q, p)
+    G_par = cs.substitute(G, cs.vertcat(tau, q, p), par)
+    rf = cs.rootfinder(
+        "mode_newton", "fast_newton", {"x": x, "p": par, "g": G_par},
+        {"abstol": 1e-14, "abstolStep": 1e-15, "max_iter": 25, "error_on_fail": False},
+    )
+    x0m = cs.MX.sym("x0", 3)
+    taum = cs.MX.sym("tau", 2)
+    dtaum = cs.MX.sym("dtau", 2)
+    qm = cs.MX.sym("q", NQ)
+    pm = cs.MX.sym("p", NP)
+    xs = rf(x0m, cs.vertcat(taum, qm, pm))
+    solve = cs.Function("solve", [x0m, taum, dtaum, qm, pm], [xs, evaluate(xs, taum, dtaum, qm, pm)],
+                        ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
+
+    # fold point: G(x, tau(t)) = 0 and J v = 0, |v| = 1, with tau(t) linearised around t0:
+    # tau = tau0 + (t - t0) dtau0 (the caller iterates, re-linearising at the new t)
+    z = cs.SX.sym("z", 7)  # x[3], s = t - t0, v[3]
+    v0 = cs.SX.sym("v0", 3)
+    tau0 = cs.SX.sym("tau0", 2)
+    xz, sz, vz = z[0:3], z[3], z[4:7]
+    Gz = cs.substitute(G, cs.vertcat(x, tau), cs.vertcat(xz, tau0 + sz * dtau))
+    Jz = cs.substitute(J, cs.vertcat(x, tau), cs.vertcat(xz, tau0 + sz * dtau))
+    Hz = cs.vertcat(Gz, Jz @ vz, cs.dot(v0, vz) - 1)
+    fold = cs.Function("fold", [z, v0, tau0, dtau, q, p], [Hz, cs.jacobian(Hz, z)],
+                       ["z", "v0", "tau0", "dtau", "q", "p"], ["H", "dH"])
+    return _Symbolic(kin=kin, residual=residual, hold_torque=hold, solve=solve, evaluate=evaluate,
+                     system=system, fold=fold)
+
+
+KIN_NAMES = ("theta", "d", "xc", "Delta", "fn1", "fn2", "grad_d1", "grad_d2", "grad_Ug1", "grad_Ug2",
+             "U_el", "U_g")
+KIN = {n: i for i, n in enumerate(KIN_NAMES)}
+
+
+@dataclass(frozen=True)
+class Model:
+    """A robot together with the gravity convention; numeric front end to the compiled functions."""
+
+    robot: Robot = field(default_factory=Robot.paper)
+    gravity: GravityConvention = "physical"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.robot, Robot):
+            raise TypeError(f"robot must be a Robot, got {type(self.robot).__name__}")
+        if self.gravity not in GRAVITY_CONVENTIONS:
+            raise ValueError(f"gravity must be one of {GRAVITY_CONVENTIONS}, got {self.gravity!r}")
+
+    @property
+    def sgrav(self) -> float:
+        """+1: physical (gravity potential +U_g); -1: the paper's printed sign (potential -U_g)."""
+        return 1.0 if self.gravity == "physical" else -1.0
+
+    @property
+    def p(self) -> np.ndarray:
+        r = self.robot
+        return np.array([r.M, r.L, r.beta, r.k, r.mu1, r.mu2, r.g, self.sgrav])
+
+    @property
+    def sym(self) -> _Symbolic:
+        return symbolic()
+
+    # ---------------------------------------------------------------- kinematics and statics
+    def kinematics(self, phi) -> dict[str, np.ndarray]:
+        """theta, d, x_c, Delta, normal forces, grad d, grad U_g, U_el, U_g at phi (shape (2,) or (2, N))."""
+        phi = np.asarray(phi, dtype=float)
+        if phi.ndim == 1:
+            out = np.asarray(self.sym.kin(phi, self.p)).ravel()
+            return {n: out[i] for n, i in KIN.items()}
+        f = self.sym.kin.map(phi.shape[1])
+        out = np.asarray(f(phi, np.tile(self.p[:, None], (1, phi.shape[1]))))
+        return {n: out[i] for n, i in KIN.items()}
+
+    def normal_forces(self, phi) -> tuple[np.ndarray, np.ndarray]:
+        kin = self.kinematics(phi)
+        return kin["fn1"], kin["fn2"]
+
+    def equilibrium_residual(self, phi, tau, f_t) -> np.ndarray:
+        """Joint balance residual F(phi, tau, f_t) [N m] (eq. intEq with this model's gravity sign)."""
+        return np.asarray(self.sym.residual(np.asarray(phi, float), np.asarray(tau, float), float(f_t), self.p)).ravel()
+
+    def hold_torque(self, phi, f_t) -> np.ndarray:
+        """Joint torques that hold the configuration phi in equilibrium with tangential force f_t [N m]."""
+        phi = np.asarray(phi, float)
+        if phi.ndim == 1:
+            return np.asarray(self.sym.hold_torque(phi, float(f_t), self.p)).ravel()
+        n = phi.shape[1]
+        f = self.sym.hold_torque.map(n)
+        return np.asarray(f(phi, np.asarray(f_t, float).reshape(1, n), np.tile(self.p[:, None], (1, n))))
+
+    def potential(self, phi) -> np.ndarray:
+        """Elastic plus gravitational potential of this convention [J] (input torques excluded)."""
+        kin = self.kinematics(phi)
+        return kin["U_el"] + self.sgrav * kin["U_g"]
+
+    def check_contact(self, phi, *, where: str = "configuration") -> None:
+        """Raise ValueError if phi has a foot off the ground (f_n <= 0) or the feet crossed (d <= 0)."""
+        kin = self.kinematics(np.asarray(phi, float))
+        if not kin["d"] > 0:
+            raise ValueError(f"{where}: feet crossed or coincident (d = {kin['d']:.4g} m <= 0) at phi = "
+                             f"{np.degrees(phi).round(3).tolist()} deg")
+        for i in (1, 2):
+            if not kin[f"fn{i}"] > 0:
+                raise ValueError(f"{where}: foot {i} off the ground (f_n{i} = {kin[f'fn{i}']:.4g} N <= 0) at "
+                                 f"phi = {np.degrees(phi).round(3).tolist()} deg; valid configurations keep "
+                                 "the centre of mass between the feet")

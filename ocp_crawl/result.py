@@ -1,0 +1,181 @@
+"""Result objects shared by every simulator, one table of statuses and the contact modes."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+
+
+class Status(IntEnum):
+    """Integer status of a simulation; ``SUCCESS`` is the only success."""
+
+    SUCCESS = 0
+    LIFT_OFF = 1
+    FEET_CROSSED = 2
+    FOLD = 3
+    NO_CONVERGENCE = 4
+    NOT_PERIODIC = 5
+    NO_CONSISTENT_MODE = 6
+    TOO_MANY_EVENTS = 7
+    SOLVER_FAILURE = 8
+
+
+STATUS_MESSAGES = {
+    Status.SUCCESS: "periodic gait found",
+    Status.LIFT_OFF: "a foot lifts off (normal force reaches zero): the two-contact model is no longer valid",
+    Status.FEET_CROSSED: "the feet meet or cross (d reaches zero)",
+    Status.FOLD: "loss of equilibrium: the tracked equilibrium branch folds (singular Jacobian); "
+                 "the real robot would snap through dynamically",
+    Status.NO_CONVERGENCE: "the continuation of the equilibrium did not converge",
+    Status.NOT_PERIODIC: "the gait did not become periodic within the maximum number of cycles",
+    Status.NO_CONSISTENT_MODE: "no contact mode is consistent after a transition",
+    Status.TOO_MANY_EVENTS: "too many events in one cycle (chattering input?)",
+    Status.SOLVER_FAILURE: "the step solver failed",
+}
+
+
+class Mode(IntEnum):
+    """Contact modes. SLIP1_POS: foot 1 slips towards +x while foot 2 sticks, etc."""
+
+    STICK = 0
+    SLIP1_POS = 1
+    SLIP1_NEG = 2
+    SLIP2_POS = 3
+    SLIP2_NEG = 4
+
+    @property
+    def label(self) -> str:
+        return {0: "stick-stick", 1: "slip1+", 2: "slip1-", 3: "slip2+", 4: "slip2-"}[int(self)]
+
+    @property
+    def foot(self) -> int:
+        """slipping foot (0 for stick-stick)"""
+        return 0 if self == Mode.STICK else (1 if self in (Mode.SLIP1_POS, Mode.SLIP1_NEG) else 2)
+
+    @property
+    def sigma(self) -> int:
+        """sign of d' in this mode (0 for stick-stick)"""
+        return {0: 0, 1: -1, 2: +1, 3: +1, 4: -1}[int(self)]
+
+    @classmethod
+    def slip(cls, foot: int, sigma: int) -> "Mode":
+        """Mode in which ``foot`` slips with sign(d') = sigma (foot 1 moves along -sigma, foot 2 along +sigma)."""
+        if foot == 1:
+            return cls.SLIP1_POS if sigma < 0 else cls.SLIP1_NEG
+        return cls.SLIP2_POS if sigma > 0 else cls.SLIP2_NEG
+
+
+@dataclass(frozen=True)
+class Event:
+    """A located event: phase t (cycles, counted from the start of the run), kind, modes before/after."""
+
+    t: float
+    kind: str
+    mode_before: str
+    mode_after: str
+    guard: float = 0.0
+    """value of the event's guard function at the located phase"""
+
+    def to_dict(self) -> dict:
+        return {"t": self.t, "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
+                "guard": self.guard}
+
+
+ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")
+
+
+@dataclass
+class CrawlResult:
+    """Outcome of a simulation, in the manner of scipy's ``OdeResult``.
+
+    Arrays are sampled on the output phases ``t`` (cycles; the reported steady cycle spans
+    ``[t0, t0 + 1]``). ``phi`` and ``tau`` have shape (2, N); the others shape (N,).
+    ``mode`` holds :class:`Mode` codes. ``S`` [m] is the displacement of the robot over the steady
+    cycle along +x (from foot 1 to foot 2); ``W_plus`` [J] the positive work per cycle summed over
+    the two actuators (``W_plus_joint`` per actuator); ``CoT_plus`` = W+/(M g |S|).
+    """
+
+    success: bool
+    status: int
+    message: str
+    drive: str = "torque"
+    gravity: str = "physical"
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    phi: np.ndarray = field(default_factory=lambda: np.zeros((2, 0)))
+    theta: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    d: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    x1: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    x2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    f_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    f_n1: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    f_n2: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    tau: np.ndarray = field(default_factory=lambda: np.zeros((2, 0)))
+    mode: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    events: list[Event] = field(default_factory=list)
+    S: float = float("nan")
+    W_plus: float = float("nan")
+    W_plus_joint: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    CoT_plus: float = float("nan")
+    cycles: int = 0
+    t0: float = 0.0
+    """phase at which the reported steady cycle starts"""
+    energy: dict = field(default_factory=dict)
+    """per-cycle energy balance of the steady cycle: input work, potential change, dissipation [J]"""
+    periodicity_residual: float = float("nan")
+    nfev: int = 0
+    """number of calls of the compiled mode solver"""
+    nsteps: int = 0
+    failure_t: float | None = None
+    failure_mode: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        return (f"CrawlResult(success={self.success}, status={self.status}, message={self.message!r}, "
+                f"S={self.S:.6g} m, W_plus={self.W_plus:.6g} J, CoT_plus={self.CoT_plus:.6g}, "
+                f"events={len(self.events)}, cycles={self.cycles})")
+
+    @property
+    def status_name(self) -> str:
+        return Status(self.status).name.lower()
+
+    def steady_events(self) -> list[Event]:
+        """Events inside the reported steady cycle."""
+        return [e for e in self.events if self.t0 - 1e-12 <= e.t <= self.t0 + 1 + 1e-12]
+
+    def summary(self) -> dict:
+        """JSON-friendly summary (no arrays)."""
+        def num(x):
+            x = float(x)
+            return x if np.isfinite(x) else None
+        return {
+            "status": int(self.status), "status_name": self.status_name, "success": bool(self.success),
+            "message": self.message, "drive": self.drive, "gravity": self.gravity,
+            "S": num(self.S), "W_plus": num(self.W_plus), "W_plus_joint": [num(w) for w in self.W_plus_joint],
+            "CoT_plus": num(self.CoT_plus), "cycles": int(self.cycles), "t0": float(self.t0),
+            "events": [e.to_dict() for e in self.events],
+            "energy": {k: num(v) for k, v in self.energy.items()},
+            "periodicity_residual": num(self.periodicity_residual),
+            "nfev": int(self.nfev), "nsteps": int(self.nsteps),
+            "failure_t": self.failure_t, "failure_mode": self.failure_mode,
+        }
+
+    def to_json(self, **kw) -> str:
+        return json.dumps(self.summary(), **kw)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {name: np.asarray(getattr(self, name)) for name in ARRAY_FIELDS}
+
+    def raise_on_failure(self) -> "CrawlResult":
+        if not self.success:
+            raise SimulationError(self)
+        return self
+
+
+class SimulationError(RuntimeError):
+    """Raised by ``raise_on_failure`` for an unsuccessful result."""
+
+    def __init__(self, result: CrawlResult):
+        super().__init__(result.message)
+        self.result = result
