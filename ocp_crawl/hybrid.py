@@ -30,7 +30,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .inputs import PeriodicSignal, ReferenceTorque, as_signal
-from .model import AUX, NQ, Model, symbolic
+from .model import AUX, NQ, Model, call_mapped, symbolic
 from .quadrature import gauss_nodes
 from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status
 
@@ -135,6 +135,9 @@ class HybridStepper:
         self.L = model.robot.L
         self.nfev = 0
         self.nsteps = 0
+        # round-off level of the scaled guards: the mode equations are scaled by M g L, so the
+        # conditioning (and the noise in f_t) grows with k/(M g L)
+        self.noise = 1e-13 * (1.0 + model.robot.k / model.robot.MgL)
 
     # ------------------------------------------------------------------ primitive evaluations
     def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
@@ -235,18 +238,19 @@ class HybridStepper:
         if start is None:
             return None
         g0 = self.guards(mode, start.aux)
-        if any(v < -1e-10 for v in g0.values()):
+        noise = self.noise
+        if any(v < -100 * noise for v in g0.values()):
             return None
-        pending = {k for k, v in g0.items() if v < 1e-10}
-        for delta in (1e-9, 1e-7, 1e-5, 1e-4):
+        pending = {k for k, v in g0.items() if v < 100 * noise}
+        for delta in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4):
             nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
             if nxt is None:
                 return None
             g = self.guards(mode, nxt.aux)
             for k in list(pending):
-                if g[k] < -1e-12:
+                if g[k] < -10 * noise:
                     return None
-                if g[k] > 1e-12:
+                if g[k] > 10 * noise:
                     pending.discard(k)
             if not pending:
                 return start
@@ -364,7 +368,7 @@ class HybridStepper:
                     self.nsteps += 1
                     g_old = self.guards(seg.mode, pt.aux)
                     g_new = self.guards(seg.mode, new.aux)
-                    crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -1e-10]
+                    crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -100 * self.noise]
                     if not crossed:
                         pt = new
                         seg.points.append(pt)
@@ -608,25 +612,9 @@ class HybridStepper:
                 "balance_residual": bal / scale}
 
 
-_MAPPED: dict[int, object] = {}
-
-
 def mapped_solve(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
-    """Mode solve at n points in one call; sizes are padded to powers of two so few maps are compiled."""
-    n = x0.shape[1]
-    size = max(16, 1 << (n - 1).bit_length())
-    f = _MAPPED.get(size)
-    if f is None:
-        f = _MAPPED[size] = symbolic().solve.map(size)
-    pad = size - n
-
-    def padded(a):
-        return np.concatenate([a, np.repeat(a[:, -1:], pad, axis=1)], axis=1) if pad else a
-
-    q = np.asarray(q, float)
-    qm = np.tile(q[:, None], (1, size)) if q.ndim == 1 else padded(q)
-    xs, aux = f(padded(x0), padded(tau), padded(dtau), qm, np.tile(p[:, None], (1, size)))
-    return np.asarray(xs)[:, :n], np.asarray(aux)[:, :n]
+    """Mode solve at n points in one call (columns of x0, tau, dtau and, if 2-D, q)."""
+    return call_mapped(symbolic().solve, x0, tau, dtau, np.asarray(q, float), p)
 
 
 def simulate_torque(model: Model, torque, options: HybridOptions | None = None, t_eval=None) -> CrawlResult:

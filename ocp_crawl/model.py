@@ -256,6 +256,34 @@ def symbolic() -> _Symbolic:
                      system=system, fold=fold)
 
 
+_MAPS: dict[tuple[str, int], cs.Function] = {}
+
+
+def call_mapped(fun: cs.Function, *args) -> np.ndarray:
+    """Evaluate ``fun`` column-wise over n columns in one call.
+
+    Matrix arguments are (rows, n); 1-D arguments (e.g. the parameter vector) are broadcast.
+    Sizes are padded to powers of two so that only a few mapped functions are ever compiled.
+    """
+    n = max(a.shape[1] for a in args if np.ndim(a) == 2)
+    size = max(16, 1 << (n - 1).bit_length())
+    key = (fun.name(), size)
+    f = _MAPS.get(key)
+    if f is None:
+        f = _MAPS[key] = fun.map(size)
+    cols = []
+    for a in args:
+        a = np.asarray(a, float)
+        if a.ndim == 1:
+            cols.append(np.tile(a[:, None], (1, size)))
+        else:
+            cols.append(np.concatenate([a, np.repeat(a[:, -1:], size - n, axis=1)], axis=1) if size > n else a)
+    out = f(*cols)
+    if isinstance(out, (list, tuple)):
+        return [np.asarray(o)[:, :n] for o in out]
+    return np.asarray(out)[:, :n]
+
+
 KIN_NAMES = ("theta", "d", "xc", "Delta", "fn1", "fn2", "grad_d1", "grad_d2", "grad_Ug1", "grad_Ug2",
              "U_el", "U_g")
 KIN = {n: i for i, n in enumerate(KIN_NAMES)}
@@ -295,8 +323,7 @@ class Model:
         if phi.ndim == 1:
             out = np.asarray(self.sym.kin(phi, self.p)).ravel()
             return {n: out[i] for n, i in KIN.items()}
-        f = self.sym.kin.map(phi.shape[1])
-        out = np.asarray(f(phi, np.tile(self.p[:, None], (1, phi.shape[1]))))
+        out = call_mapped(self.sym.kin, phi, self.p)
         return {n: out[i] for n, i in KIN.items()}
 
     def normal_forces(self, phi) -> tuple[np.ndarray, np.ndarray]:
@@ -312,9 +339,7 @@ class Model:
         phi = np.asarray(phi, float)
         if phi.ndim == 1:
             return np.asarray(self.sym.hold_torque(phi, float(f_t), self.p)).ravel()
-        n = phi.shape[1]
-        f = self.sym.hold_torque.map(n)
-        return np.asarray(f(phi, np.asarray(f_t, float).reshape(1, n), np.tile(self.p[:, None], (1, n))))
+        return call_mapped(self.sym.hold_torque, phi, np.asarray(f_t, float).reshape(1, -1), self.p)
 
     def potential(self, phi) -> np.ndarray:
         """Elastic plus gravitational potential of this convention [J] (input torques excluded)."""

@@ -1,0 +1,187 @@
+"""Prescribed-angle locomotion (paper Section II-A).
+
+The joint angles phi(t) are imposed, so the configuration, d(t) and the normal forces are known
+at every phase. Generically d' != 0, so one foot slips at every instant: the one with the smaller
+friction limit mu_i f_n,i (equal friction: the foot with the smaller normal force, sign of Delta in
+eq. (delta)), in the direction that changes d; then f_t = mu_s f_n,s sign(d') (eq. (ft)) and the
+holding torques follow from the joint balance.  The switching instants (d' = 0: slip direction
+reverses; mu1 f_n1 = mu2 f_n2: slipping foot changes) are located by Brent's method on the exact
+kinematics.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .inputs import PeriodicSignal, as_signal
+from .model import KIN, Model, call_mapped, symbolic
+from .quadrature import gauss_nodes, positive_part_integral
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status
+
+class _Kinematic:
+    """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
+
+    def __init__(self, model: Model, angles: PeriodicSignal):
+        self.model, self.angles = model, angles
+        r = model.robot
+        self.mu = (r.mu1, r.mu2)
+        self.Mg = r.M * r.g
+
+    def __call__(self, t) -> dict[str, np.ndarray]:
+        t = np.atleast_1d(np.asarray(t, float))
+        phi = self.angles(t).reshape(2, -1)
+        dphi = self.angles.derivative(t).reshape(2, -1)
+        k = call_mapped(symbolic().kin, phi, self.model.p)
+        out = {n: k[i] for n, i in KIN.items()}
+        out["phi"], out["dphi"] = phi, dphi
+        out["ddot"] = k[KIN["grad_d1"]] * dphi[0] + k[KIN["grad_d2"]] * dphi[1]
+        out["h"] = (self.mu[0] * out["fn1"] - self.mu[1] * out["fn2"]) / self.Mg
+        return out
+
+    def scalar(self, name: str):
+        return lambda t: float(self(t)[name][0])
+
+
+def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
+    """Prescribed-angle gait over one cycle (it is periodic after one cycle).
+
+    ``angles``: periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.inputs.Harmonic`).
+    ``t_eval``: output phases in [0, 1]; by default 201 equally spaced phases plus the switching instants.
+    ``n_scan``: phases scanned for sign changes of the switching functions before Brent's method.
+    """
+    angles = as_signal(angles)
+    kin = _Kinematic(model, angles)
+    robot = model.robot
+    Mg = robot.M * robot.g
+    res = CrawlResult(success=False, status=int(Status.SUCCESS), message="", drive="angles", gravity=model.gravity,
+                      cycles=1)
+    model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
+
+    ts = np.linspace(0.0, 1.0, n_scan + 1)
+    K = kin(ts)
+    # validity first: the first phase at which a foot lifts off or the feet cross ends the run
+    failure = None
+    for name, status, label in (("fn1", Status.LIFT_OFF, "foot 1 lifts off"), ("fn2", Status.LIFT_OFF, "foot 2 lifts off"),
+                                ("d", Status.FEET_CROSSED, "feet cross")):
+        bad = np.nonzero(K[name] <= 0)[0]
+        if bad.size:
+            j = bad[0]
+            tf = brentq(kin.scalar(name), ts[j - 1], ts[j], xtol=1e-14) if j > 0 else 0.0
+            if failure is None or tf < failure[0]:
+                failure = (tf, status, label)
+    if failure is not None:
+        tf, status, label = failure
+        res.status = int(status)
+        res.failure_t = tf
+        res.message = f"{STATUS_MESSAGES[status]}: {label} at phase t = {tf:.10f} (prescribed angles)"
+        res.events = [Event(tf, "lift_off" if status == Status.LIFT_OFF else "feet_crossed", "", "failure")]
+        return res
+
+    events: list[tuple[float, str]] = []
+    for name, kind in (("ddot", "slip_reversal"), ("h", "slip_switch")):
+        v = K[name]
+        for j in np.nonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0)[0]:
+            events.append((brentq(kin.scalar(name), ts[j], ts[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps), kind))
+        for j in np.nonzero(v[1:-1] == 0)[0]:
+            events.append((ts[j + 1], kind))
+    events.sort()
+    breaks = [0.0] + [e[0] for e in events] + [1.0]
+
+    def mode_at(tm: float) -> Mode:
+        k1 = kin(tm)
+        foot = 1 if k1["h"][0] < 0 else 2
+        sigma = 1 if k1["ddot"][0] > 0 else -1
+        return Mode.slip(foot, sigma)
+
+    # foot positions: the slipping foot follows d, the other stays
+    seg_modes = []
+    x1, x2 = 0.0, float(K["d"][0])
+    anchors = []
+    for a, b in zip(breaks[:-1], breaks[1:]):
+        if b - a <= 0:
+            continue
+        m = mode_at(0.5 * (a + b))
+        da, db = float(kin(a)["d"][0]), float(kin(b)["d"][0])
+        anchors.append((a, b, m, x1, x2))
+        if m.foot == 1:
+            x1 = x2 - db
+        else:
+            x2 = x1 + db
+        seg_modes.append(m)
+    res.S = x1 - 0.0
+    ev_objs = []
+    for (t_ev, kind) in events:
+        before = mode_at(max(t_ev - 1e-9, 0.0))
+        after = mode_at(min(t_ev + 1e-9, 1.0))
+        ev_objs.append(Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)["ddot" if kind == "slip_reversal" else "h"][0])))
+    res.events = ev_objs
+
+    def seg_of(t):
+        for a, b, m, xa1, xa2 in anchors:
+            if a <= t <= b:
+                return a, b, m, xa1, xa2
+        return anchors[-1]
+
+    # output arrays
+    if t_eval is None:
+        te = np.unique(np.concatenate([np.linspace(0, 1, 201), [e[0] for e in events]]))
+    else:
+        te = np.asarray(t_eval, float).ravel()
+        if np.any(te < 0) or np.any(te > 1):
+            raise ValueError("t_eval must lie in [0, 1]")
+    Ko = kin(te)
+    modes = np.empty(len(te), int)
+    ft = np.empty(len(te))
+    x1o = np.empty(len(te))
+    x2o = np.empty(len(te))
+    mu = (robot.mu1, robot.mu2)
+    for j, t in enumerate(te):
+        a, b, m, xa1, xa2 = seg_of(t)
+        modes[j] = int(m)
+        fn = Ko["fn1"][j] if m.foot == 1 else Ko["fn2"][j]
+        ft[j] = mu[m.foot - 1] * fn * m.sigma
+        if m.foot == 1:
+            x2o[j] = xa2
+            x1o[j] = xa2 - Ko["d"][j]
+        else:
+            x1o[j] = xa1
+            x2o[j] = xa1 + Ko["d"][j]
+    res.t, res.phi, res.theta, res.d = te, Ko["phi"], Ko["theta"], Ko["d"]
+    res.x1, res.x2, res.f_t, res.f_n1, res.f_n2, res.mode = x1o, x2o, ft, Ko["fn1"], Ko["fn2"], modes
+    res.tau = model.hold_torque(Ko["phi"], ft)
+
+    # energetics, segment by segment (f_t and the holding torques jump at the switching instants)
+    wplus = np.zeros(2)
+    w_in = 0.0
+    diss = 0.0
+    for a, b, m, _, _ in anchors:
+        def power(t, i, m=m):
+            k1 = kin(t)
+            fn = k1["fn1"] if m.foot == 1 else k1["fn2"]
+            f = mu[m.foot - 1] * fn * m.sigma
+            tau = model.hold_torque(k1["phi"], f)
+            return tau[i] * k1["dphi"][i]
+
+        for i in range(2):
+            wplus[i] += positive_part_integral(a, b, lambda t, i=i: power(t, i), lambda t, i=i: float(power(t, i)[0]))
+        tq, wq = gauss_nodes(a, b, 1.0 / 64, 5)
+        k1 = kin(tq)
+        fn = k1["fn1"] if m.foot == 1 else k1["fn2"]
+        f = mu[m.foot - 1] * fn * m.sigma
+        tau = model.hold_torque(k1["phi"], f)
+        w_in += float(np.sum(wq * np.sum(tau * k1["dphi"], axis=0)))
+        diss += float(np.sum(wq * np.abs(f * k1["ddot"])))
+    dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
+    scale = max(abs(w_in), abs(diss), 1e-300)
+    res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss,
+                  "balance_residual": (w_in - dV - diss) / scale}
+    res.W_plus_joint = wplus
+    res.W_plus = float(wplus.sum())
+    res.CoT_plus = res.W_plus / (Mg * abs(res.S)) if res.S != 0 else math.inf
+    res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
+    res.success = True
+    res.status = int(Status.SUCCESS)
+    res.message = f"prescribed-angle gait: {len(events)} switching instants per cycle"
+    return res

@@ -1,0 +1,39 @@
+"""Shared problem factories for the tests (the paper's robot and gaits)."""
+import os
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot  # noqa: E402
+
+PAPER_DATA = os.path.join(os.path.dirname(__file__), os.pardir, os.pardir, "shared", "paper_data")
+
+
+def paper_torque(robot: Robot, gamma=90.0, A=30.0, psi=45.0, **per_joint):
+    """Harmonic torque input tau = k (phi_ref - pi) of the paper's eq. (tau)."""
+    return ReferenceTorque(Harmonic.from_degrees(gamma, A, psi, **per_joint), robot.k)
+
+
+@pytest.fixture
+def paper_robot():
+    return Robot.paper()
+
+
+@pytest.fixture(params=["physical", "paper"])
+def gravity(request):
+    return request.param
+
+
+@pytest.fixture
+def make_torque():
+    return paper_torque
+
+
+@pytest.fixture
+def model_of():
+    def build(robot=None, gravity="physical", **robot_changes):
+        robot = (robot or Robot.paper()).replace(**robot_changes) if robot_changes else (robot or Robot.paper())
+        return Model(robot, gravity=gravity)
+    return build
