@@ -19,6 +19,11 @@ any            d                                            feet crossing (failu
 any            det J (sign of the mode's start)              fold (failure status)
 =============  ==========================================  ======================
 
+When mu1 f_n1 = mu2 f_n2 identically (mirror-symmetric gait, equal friction), no single-foot slip
+is consistent; the stepper then uses the non-generic slip-slip mode, in which both feet are at
+their friction limits and, the split of d' between the feet being statically indeterminate, each
+foot takes half of it (the symmetric solution). It leaves slip-slip when the limits separate.
+
 A fold is located exactly by the augmented system G(x, t) = 0, J v = 0, v0.v = 1.
 """
 from __future__ import annotations
@@ -32,9 +37,11 @@ from scipy.optimize import brentq
 from .inputs import PeriodicSignal, ReferenceTorque, as_signal
 from .model import AUX, NQ, Model, call_mapped, symbolic
 from .quadrature import gauss_nodes
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
 
 EPS = np.finfo(float).eps
+#: largest |mu1 f_n1 - mu2 f_n2|/(M g) for which the slip-slip mode is kept
+SYMMETRY_TOL = 1e-8
 
 
 @dataclass(frozen=True)
@@ -78,7 +85,7 @@ def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
     """Mode-parameter vector q = (e_ss, sigma, w, d0) of the compiled mode system."""
     if mode == Mode.STICK:
         return np.array([1.0, 0.0, 0.0, d0])
-    return np.array([0.0, float(mode.sigma), 1.0 if mode.foot == 1 else 0.0, 0.0])
+    return np.array([0.0, float(mode.sigma), {1: 1.0, 2: 0.0, 3: 0.5}[mode.foot], 0.0])
 
 
 #: q of the "released" start: f_t = 0, d free
@@ -113,7 +120,10 @@ class _Segment:
             return np.full_like(d, self.x1_fixed), np.full_like(d, self.x2_fixed)
         if self.mode.foot == 1:  # foot 2 sticks
             return self.x2_fixed - d, np.full_like(d, self.x2_fixed)
-        return np.full_like(d, self.x1_fixed), self.x1_fixed + d
+        if self.mode.foot == 2:
+            return np.full_like(d, self.x1_fixed), self.x1_fixed + d
+        mid = 0.5 * (self.x1_fixed + self.x2_fixed)  # slip-slip: symmetric split about the midpoint
+        return mid - 0.5 * d, mid + 0.5 * d
 
 
 class _Failure(Exception):
@@ -161,6 +171,9 @@ class HybridStepper:
             for i in (1, 2):
                 for s in (1, -1):
                     g[f"slip_{i}{'+' if s > 0 else '-'}"] = (lim[i] - s * ft) / Mg
+        elif mode.foot == 3:
+            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
+            g["asymmetry"] = SYMMETRY_TOL - abs(lim[1] - lim[2]) / Mg
         else:
             i = mode.foot
             j = 3 - i
@@ -179,6 +192,8 @@ class HybridStepper:
             return Mode.STICK
         if kind.startswith("switch_to_"):
             return Mode.slip(int(kind[-1]), mode.sigma)
+        if kind == "asymmetry":
+            return Mode.slip(1, mode.sigma)  # provisional: the consistency search picks the weaker foot
         raise AssertionError(kind)
 
     @staticmethod
@@ -587,7 +602,7 @@ class HybridStepper:
             dV = float(Vb - Va)
             res.W_plus_joint = ints["W_plus_joint"]
             res.W_plus = float(np.sum(ints["W_plus_joint"]))
-            res.CoT_plus = res.W_plus / (model.robot.M * model.robot.g * abs(res.S)) if res.S != 0 else float("inf")
+            res.CoT_plus = cost_of_transport(res.W_plus, model.robot, res.S)
             bal = ints["input_work"] - dV - ints["dissipation"]
             scale = max(abs(ints["input_work"]), abs(ints["dissipation"]), abs(dV), 1e-300)
             res.energy = {"input_work": ints["input_work"], "potential_change": dV,

@@ -3,7 +3,7 @@
 The joint angles phi(t) are imposed, so the configuration, d(t) and the normal forces are known
 at every phase. Generically d' != 0, so one foot slips at every instant: the one with the smaller
 friction limit mu_i f_n,i (equal friction: the foot with the smaller normal force, sign of Delta in
-eq. (delta)), in the direction that changes d; then f_t = mu_s f_n,s sign(d') (eq. (ft)) and the
+eq. (delta); for a tie, as in mirror-symmetric gaits, both feet slip symmetrically), in the direction that changes d; then f_t = mu_s f_n,s sign(d') (eq. (ft)) and the
 holding torques follow from the joint balance.  The switching instants (d' = 0: slip direction
 reverses; mu1 f_n1 = mu2 f_n2: slipping foot changes) are located by Brent's method on the exact
 kinematics.
@@ -18,7 +18,7 @@ from scipy.optimize import brentq
 from .inputs import PeriodicSignal, as_signal
 from .model import KIN, Model, call_mapped, symbolic
 from .quadrature import gauss_nodes, positive_part_integral
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
 
 class _Kinematic:
     """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
@@ -42,6 +42,10 @@ class _Kinematic:
 
     def scalar(self, name: str):
         return lambda t: float(self(t)[name][0])
+
+
+#: |mu1 f_n1 - mu2 f_n2|/(M g) below which both friction limits are taken as equal (both feet slip)
+TIE = 1e-12
 
 
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
@@ -81,17 +85,19 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
 
     events: list[tuple[float, str]] = []
     for name, kind in (("ddot", "slip_reversal"), ("h", "slip_switch")):
-        v = K[name]
+        v = np.where(np.abs(K[name]) <= TIE, 0.0, K[name]) if name == "h" else K[name]
         for j in np.nonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0)[0]:
             events.append((brentq(kin.scalar(name), ts[j], ts[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps), kind))
-        for j in np.nonzero(v[1:-1] == 0)[0]:
-            events.append((ts[j + 1], kind))
+        if name == "ddot":
+            for j in np.nonzero(v[1:-1] == 0)[0]:
+                events.append((ts[j + 1], kind))
     events.sort()
     breaks = [0.0] + [e[0] for e in events] + [1.0]
 
     def mode_at(tm: float) -> Mode:
         k1 = kin(tm)
-        foot = 1 if k1["h"][0] < 0 else 2
+        h = k1["h"][0]
+        foot = 3 if abs(h) <= TIE else (1 if h < 0 else 2)
         sigma = 1 if k1["ddot"][0] > 0 else -1
         return Mode.slip(foot, sigma)
 
@@ -107,8 +113,11 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         anchors.append((a, b, m, x1, x2))
         if m.foot == 1:
             x1 = x2 - db
-        else:
+        elif m.foot == 2:
             x2 = x1 + db
+        else:
+            mid = 0.5 * (x1 + x2)
+            x1, x2 = mid - 0.5 * db, mid + 0.5 * db
         seg_modes.append(m)
     res.S = x1 - 0.0
     ev_objs = []
@@ -140,14 +149,16 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     for j, t in enumerate(te):
         a, b, m, xa1, xa2 = seg_of(t)
         modes[j] = int(m)
-        fn = Ko["fn1"][j] if m.foot == 1 else Ko["fn2"][j]
-        ft[j] = mu[m.foot - 1] * fn * m.sigma
+        ft[j] = (mu[0] * Ko["fn1"][j] if m.foot in (1, 3) else mu[1] * Ko["fn2"][j]) * m.sigma
         if m.foot == 1:
             x2o[j] = xa2
             x1o[j] = xa2 - Ko["d"][j]
-        else:
+        elif m.foot == 2:
             x1o[j] = xa1
             x2o[j] = xa1 + Ko["d"][j]
+        else:
+            mid = 0.5 * (xa1 + xa2)
+            x1o[j], x2o[j] = mid - 0.5 * Ko["d"][j], mid + 0.5 * Ko["d"][j]
     res.t, res.phi, res.theta, res.d = te, Ko["phi"], Ko["theta"], Ko["d"]
     res.x1, res.x2, res.f_t, res.f_n1, res.f_n2, res.mode = x1o, x2o, ft, Ko["fn1"], Ko["fn2"], modes
     res.tau = model.hold_torque(Ko["phi"], ft)
@@ -159,8 +170,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     for a, b, m, _, _ in anchors:
         def power(t, i, m=m):
             k1 = kin(t)
-            fn = k1["fn1"] if m.foot == 1 else k1["fn2"]
-            f = mu[m.foot - 1] * fn * m.sigma
+            f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
             tau = model.hold_torque(k1["phi"], f)
             return tau[i] * k1["dphi"][i]
 
@@ -168,8 +178,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             wplus[i] += positive_part_integral(a, b, lambda t, i=i: power(t, i), lambda t, i=i: float(power(t, i)[0]))
         tq, wq = gauss_nodes(a, b, 1.0 / 64, 5)
         k1 = kin(tq)
-        fn = k1["fn1"] if m.foot == 1 else k1["fn2"]
-        f = mu[m.foot - 1] * fn * m.sigma
+        f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
         tau = model.hold_torque(k1["phi"], f)
         w_in += float(np.sum(wq * np.sum(tau * k1["dphi"], axis=0)))
         diss += float(np.sum(wq * np.abs(f * k1["ddot"])))
@@ -179,7 +188,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
                   "balance_residual": (w_in - dV - diss) / scale}
     res.W_plus_joint = wplus
     res.W_plus = float(wplus.sum())
-    res.CoT_plus = res.W_plus / (Mg * abs(res.S)) if res.S != 0 else math.inf
+    res.CoT_plus = cost_of_transport(res.W_plus, robot, res.S)
     res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
     res.success = True
     res.status = int(Status.SUCCESS)

@@ -44,27 +44,38 @@ class Mode(IntEnum):
     SLIP1_NEG = 2
     SLIP2_POS = 3
     SLIP2_NEG = 4
+    SLIP_BOTH_POS = 5
+    """both feet slip apart (d' > 0); only when mu1 f_n1 = mu2 f_n2 identically (mirror-symmetric gaits)"""
+    SLIP_BOTH_NEG = 6
+    """both feet slip together (d' < 0); see SLIP_BOTH_POS"""
 
     @property
     def label(self) -> str:
-        return {0: "stick-stick", 1: "slip1+", 2: "slip1-", 3: "slip2+", 4: "slip2-"}[int(self)]
+        return {0: "stick-stick", 1: "slip1+", 2: "slip1-", 3: "slip2+", 4: "slip2-", 5: "slip-slip+",
+                6: "slip-slip-"}[int(self)]
 
     @property
     def foot(self) -> int:
-        """slipping foot (0 for stick-stick)"""
-        return 0 if self == Mode.STICK else (1 if self in (Mode.SLIP1_POS, Mode.SLIP1_NEG) else 2)
+        """slipping foot: 0 for stick-stick, 1 or 2, 3 for both"""
+        return {0: 0, 1: 1, 2: 1, 3: 2, 4: 2, 5: 3, 6: 3}[int(self)]
 
     @property
     def sigma(self) -> int:
         """sign of d' in this mode (0 for stick-stick)"""
-        return {0: 0, 1: -1, 2: +1, 3: +1, 4: -1}[int(self)]
+        return {0: 0, 1: -1, 2: +1, 3: +1, 4: -1, 5: +1, 6: -1}[int(self)]
+
+    @classmethod
+    def from_label(cls, label: str) -> "Mode":
+        return {m.label: m for m in cls}[label]
 
     @classmethod
     def slip(cls, foot: int, sigma: int) -> "Mode":
         """Mode in which ``foot`` slips with sign(d') = sigma (foot 1 moves along -sigma, foot 2 along +sigma)."""
         if foot == 1:
             return cls.SLIP1_POS if sigma < 0 else cls.SLIP1_NEG
-        return cls.SLIP2_POS if sigma > 0 else cls.SLIP2_NEG
+        if foot == 2:
+            return cls.SLIP2_POS if sigma > 0 else cls.SLIP2_NEG
+        return cls.SLIP_BOTH_POS if sigma > 0 else cls.SLIP_BOTH_NEG
 
 
 @dataclass(frozen=True)
@@ -81,6 +92,13 @@ class Event:
     def to_dict(self) -> dict:
         return {"t": self.t, "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
                 "guard": self.guard}
+
+
+def cost_of_transport(w_plus: float, robot, S: float) -> float:
+    """CoT+ = W+/(M g |S|); infinite when the robot does not move (|S| at round-off, <= 1e-12 L)."""
+    if abs(S) <= 1e-12 * robot.L:
+        return float("inf")
+    return float(w_plus / (robot.M * robot.g * abs(S)))
 
 
 ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")

@@ -1,0 +1,218 @@
+"""Event-driven hybrid-quasistatic stepper: invariants, events, limits, folds, published CoT+."""
+import csv
+import math
+import os
+
+import numpy as np
+import pytest
+
+from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicSpline,
+                       ReferenceTorque, Robot, Status, simulate_torque)
+from ocp_crawl.hybrid import HybridStepper, mode_q
+from ocp_crawl.model import AUX
+from ocp_crawl.prescribed import simulate_angles
+
+from conftest import PAPER_DATA, paper_torque
+
+
+def check_samples(model, res, atol_res=1e-9):
+    """Equilibrium, Coulomb and positive normal forces at every output sample."""
+    r = model.robot
+    assert res.t.size > 50
+    for j in range(res.t.size):
+        F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
+        assert np.max(np.abs(F)) < atol_res, (j, F)
+    slack = 1e-10 * r.M * r.g
+    assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0)
+    assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + slack)
+    assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + slack)
+    # slipping samples sit on the friction limit of the slipping foot
+    for code, foot in ((Mode.SLIP1_POS, 1), (Mode.SLIP1_NEG, 1), (Mode.SLIP2_POS, 2), (Mode.SLIP2_NEG, 2)):
+        sel = res.mode == int(code)
+        lim = (r.mu1 * res.f_n1 if foot == 1 else r.mu2 * res.f_n2)[sel]
+        np.testing.assert_allclose(np.abs(res.f_t[sel]), lim, rtol=0, atol=slack)
+
+
+@pytest.mark.parametrize("mu1,mu2", [(0.389, 0.389), (0.35, 0.43)])
+def test_invariants_and_energy_balance_every_cycle(gravity, mu1, mu2):
+    robot = Robot.paper(mu1=mu1, mu2=mu2)
+    model = Model(robot, gravity=gravity)
+    stepper = HybridStepper(model, paper_torque(robot))
+    res = stepper.run()
+    assert res.success, res.message
+    assert res.cycles >= 2
+    check_samples(model, res)
+    for c in range(res.cycles):
+        e = stepper.cycle_energy(c)
+        assert e["dissipation"] > 0
+        assert abs(e["balance_residual"]) < 1e-6, (c, e)
+    assert abs(res.energy["balance_residual"]) < 1e-6
+    assert res.periodicity_residual < 1e-8
+    # the steady cycle moves: stick-stick and slip phases of both feet
+    modes = set(res.mode.tolist())
+    assert int(Mode.STICK) in modes and len(modes) >= 3
+    assert res.S < 0  # phi1 leads (psi > 0): motion towards foot 1 (MODEL_NOTES)
+    assert res.CoT_plus == pytest.approx(res.W_plus / (robot.M * robot.g * abs(res.S)), rel=1e-14)
+
+
+def test_events_are_located_on_their_guards(gravity):
+    robot = Robot.paper(mu1=0.36, mu2=0.41)
+    model = Model(robot, gravity=gravity)
+    stepper = HybridStepper(model, paper_torque(robot))
+    res = stepper.run()
+    assert res.success, res.message
+    events = res.steady_events()
+    kinds = {e.kind for e in events}
+    assert any(k.startswith("slip_") for k in kinds) and "stick" in kinds
+    Mg, L = robot.M * robot.g, robot.L
+    for ev in events:
+        assert abs(ev.guard) < 1e-9, ev
+        before = {m.label: m for m in Mode}[ev.mode_before]
+        # the guard of the mode before the event changes sign across it (bracket of 2e-10 in phase)
+        seg = [s for s in stepper._segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
+        assert seg, ev
+        p = min(seg[-1].points, key=lambda pt: abs(pt.t - ev.t))
+        vals = []
+        for dt in (-1e-10, 1e-10):
+            pt = stepper._solve(ev.t + dt, p.x, seg[-1].q)
+            vals.append(stepper.guards(before, pt.aux)[ev.kind])
+        assert vals[0] > 0 > vals[1] or (abs(vals[0]) < 1e-9 and abs(vals[1]) < 1e-9), (ev, vals)
+        # independent check of the physical guard at the event state
+        pt = stepper._solve(ev.t, p.x, seg[-1].q)
+        ft, fn1, fn2 = pt.aux[AUX["ft"]], pt.aux[AUX["fn1"]], pt.aux[AUX["fn2"]]
+        if ev.kind.startswith("slip_"):
+            i = int(ev.kind[5])
+            assert abs(abs(ft) - (robot.mu1 * fn1 if i == 1 else robot.mu2 * fn2)) < 1e-9 * Mg
+        elif ev.kind == "stick":
+            # d has a stationary point: central difference of d along the slip branch
+            h = 1e-5
+            d = [stepper._solve(ev.t + s * h, p.x, seg[-1].q).aux[AUX["d"]] for s in (-1, 1)]
+            assert abs((d[1] - d[0]) / (2 * h)) < 1e-7 * L
+        elif ev.kind.startswith("switch_to_"):
+            assert abs(robot.mu1 * fn1 - robot.mu2 * fn2) < 1e-9 * Mg
+
+
+def test_very_stiff_joints_reproduce_prescribed_angles(gravity):
+    gait = Harmonic.from_degrees(90, 30, 45)
+    robot = Robot.paper().with_stiffness_ratio(1e4)
+    model = Model(robot, gravity=gravity)
+    ref = simulate_angles(model, gait)
+    res = simulate_torque(model, ReferenceTorque(gait, robot.k))
+    assert ref.success and res.success, (ref.message, res.message)
+    assert res.S == pytest.approx(ref.S, rel=1e-3)
+
+
+def test_below_friction_threshold_nothing_moves(gravity):
+    robot = Robot.paper().with_stiffness_ratio(0.05)
+    res = simulate_torque(Model(robot, gravity=gravity), paper_torque(robot))
+    assert res.success, res.message
+    assert abs(res.S) < 1e-12 * robot.L
+    if gravity == "paper":
+        assert res.events == [] and np.all(res.mode == int(Mode.STICK))
+
+
+def test_fold_is_reported_with_phase_mode_and_singular_jacobian():
+    robot = Robot.paper().with_stiffness_ratio(0.2)
+    model = Model(robot, gravity="physical")
+    stepper = HybridStepper(model, paper_torque(robot))
+    res = stepper.run()
+    assert not res.success
+    assert res.status == Status.FOLD
+    assert "phase" in res.message and res.failure_mode in res.message
+    assert res.failure_t is not None and 0 < res.failure_t
+    x = np.array(res.extra["fold_x"])
+    mode = {m.label: m for m in Mode}[res.failure_mode]
+    seg = stepper._segments[-1]
+    assert seg.mode == mode
+    G, J = model.sym.system(x, stepper.torque(res.failure_t), seg.q, model.p)
+    assert np.max(np.abs(np.asarray(G))) < 1e-10  # the fold point is an equilibrium ...
+    s = np.linalg.svd(np.asarray(J), compute_uv=False)
+    assert s[-1] / s[0] < 1e-8  # ... with a singular Jacobian
+    # just before the fold the branch exists and its Jacobian is regular
+    last = seg.points[-1]
+    assert last.t < res.failure_t
+    _, J0 = model.sym.system(last.x, stepper.torque(last.t), seg.q, model.p)
+    s0 = np.linalg.svd(np.asarray(J0), compute_uv=False)
+    assert s0[-1] / s0[0] > s[-1] / s[0]
+
+
+def test_lift_off_is_a_status_not_an_exception():
+    robot = Robot.paper().with_stiffness_ratio(0.3)
+    res = simulate_torque(Model(robot, gravity="physical"), paper_torque(robot))
+    assert res.status == Status.LIFT_OFF and not res.success
+    assert "phase" in res.message and "lift off" in res.message
+    assert math.isnan(res.S)
+
+
+def _cot_reference():
+    path = os.path.join(PAPER_DATA, "fig_cot_vs_amplitude.csv")
+    if not os.path.exists(path):
+        pytest.skip(f"paper data not found at {path}")
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("column,ratio,tol", [("CoT_plus_large_k", 5.0, 0.03), ("CoT_plus_realistic_k", 2.74, 0.03),
+                                              ("CoT_plus_low_k", 0.3, 0.05)])
+@pytest.mark.parametrize("amplitude", [20.0, 50.0])
+def test_cot_matches_published_curve_in_paper_convention(column, ratio, tol, amplitude):
+    rows = _cot_reference()
+    A = np.array([float(r["A_deg"]) for r in rows])
+    j = int(np.argmin(np.abs(A - amplitude)))
+    published = float(rows[j][column])
+    robot = Robot.paper().with_stiffness_ratio(ratio)
+    res = simulate_torque(Model(robot, gravity="paper"), paper_torque(robot, A=A[j]))
+    assert res.success, res.message
+    assert res.CoT_plus == pytest.approx(published, rel=tol)
+
+
+def test_reversing_psi_reverses_S_and_psi_zero_does_not_move(gravity):
+    robot = Robot.paper()
+    model = Model(robot, gravity=gravity)
+    fwd = simulate_torque(model, paper_torque(robot, psi=45))
+    bwd = simulate_torque(model, paper_torque(robot, psi=-45))
+    sym = simulate_torque(model, paper_torque(robot, psi=0))
+    assert fwd.success and bwd.success and sym.success
+    assert abs(fwd.S) > 1e-3 * robot.L
+    assert bwd.S == pytest.approx(-fwd.S, rel=1e-9)
+    assert abs(sym.S) < 1e-12 * robot.L
+
+
+def test_S_does_not_depend_on_output_grid_or_event_tolerance():
+    robot = Robot.paper()
+    model = Model(robot)
+    torque = paper_torque(robot)
+    base = simulate_torque(model, torque)
+    grid = simulate_torque(model, torque, t_eval=np.linspace(0, 1, 1001))
+    fine = simulate_torque(model, torque, HybridOptions(max_step=1 / 200, event_xtol=1e-14))
+    assert base.success and grid.success and fine.success
+    assert grid.t.size == 1001
+    assert grid.S == pytest.approx(base.S, rel=1e-8)
+    assert fine.S == pytest.approx(base.S, rel=1e-8)
+    assert fine.W_plus == pytest.approx(base.W_plus, rel=1e-6)
+    for a, b in zip(base.steady_events(), fine.steady_events()):
+        assert a.kind == b.kind and a.t == pytest.approx(b.t, abs=1e-10)
+
+
+def test_general_periodic_inputs_are_accepted():
+    robot = Robot.paper()
+    model = Model(robot)
+    harmonic = paper_torque(robot)
+    base = simulate_torque(model, harmonic)
+    n = 512
+    tk = np.arange(n) / n
+    samples = harmonic(tk)
+    fourier = FourierSeries.fit(samples, order=3)
+    spline = PeriodicSpline(tk, samples)
+    plain = CallableSignal(lambda t: robot.k * (Harmonic.from_degrees(90, 30, 45)(t) - math.pi))
+    for u, tol in ((fourier, 1e-10), (spline, 1e-7), (plain, 1e-8)):
+        res = simulate_torque(model, u)
+        assert res.success, res.message
+        assert res.S == pytest.approx(base.S, rel=tol), type(u).__name__
+
+
+def test_bad_starting_configuration_is_rejected():
+    robot = Robot.paper()
+    torque = ReferenceTorque(Harmonic.from_degrees(30, 5, 45, gamma2_deg=45), robot.k)
+    with pytest.raises(ValueError, match="starting configuration"):
+        simulate_torque(Model(robot), torque)
