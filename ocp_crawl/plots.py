@@ -1,0 +1,184 @@
+"""Figures of a simulated gait, in the manner of the paper's figures simu_conf and simu_forces.
+
+Library code builds :class:`matplotlib.figure.Figure` objects on the Agg canvas and never touches
+pyplot's global state, so plotting works headless, in threads and inside notebooks alike (a
+notebook displays a returned Figure directly).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+from .files import atomic_write
+from .inputs import PeriodicSignal
+from .model import Robot
+from .result import CrawlResult, Mode
+
+#: background colour of each contact mode (light, so the curves stay readable)
+MODE_COLORS = {
+    Mode.STICK: "#e8e8e8",
+    Mode.SLIP1_POS: "#fde0c5", Mode.SLIP1_NEG: "#fbc4a0",
+    Mode.SLIP2_POS: "#cfe3f7", Mode.SLIP2_NEG: "#a9cbef",
+}
+_FALLBACK_COLORS = ("#d9f0d3", "#b8e0b0", "#f3d9f0", "#e6ccf0")
+
+
+def mode_color(code: int) -> str:
+    """Background colour of a mode code (modes added later get colours from a fallback list)."""
+    try:
+        mode = Mode(int(code))
+    except ValueError:
+        return _FALLBACK_COLORS[int(code) % len(_FALLBACK_COLORS)]
+    return MODE_COLORS.get(mode, _FALLBACK_COLORS[int(mode) % len(_FALLBACK_COLORS)])
+
+
+def mode_label(code: int) -> str:
+    try:
+        return Mode(int(code)).label
+    except ValueError:
+        return f"mode {int(code)}"
+
+
+def mode_runs(t: np.ndarray, mode: np.ndarray) -> list[tuple[float, float, int]]:
+    """Maximal runs (t_start, t_end, mode) of constant mode over the samples."""
+    runs: list[tuple[float, float, int]] = []
+    for ti, mi in zip(np.asarray(t, float), np.asarray(mode, int)):
+        if runs and runs[-1][2] == mi:
+            runs[-1] = (runs[-1][0], ti, mi)
+        else:
+            # a run starts where the previous one ended: the event phase is shared by both
+            start = runs[-1][1] if runs else ti
+            runs.append((start, ti, int(mi)))
+    return runs
+
+
+def _shade(ax, runs) -> None:
+    for a, b, m in runs:
+        if b > a:
+            ax.axvspan(a, b, color=mode_color(m), lw=0, zorder=0)
+
+
+def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) -> np.ndarray:
+    """Foot 1, joint 1, joint 2, foot 2 in the sagittal plane [m], shape (2, 4).
+
+    J1 = (x1 - l cos a, l sin a) with a = phi1 - theta, J2 = J1 + beta l (cos theta, sin theta),
+    foot 2 at (x2, 0).
+    """
+    l = robot.l
+    a = phi1 - theta
+    j1 = np.array([x1 - l * np.cos(a), l * np.sin(a)])
+    j2 = j1 + robot.beta * l * np.array([np.cos(theta), np.sin(theta)])
+    return np.stack([[x1, 0.0], j1, j2, [x2, 0.0]], axis=1)
+
+
+def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None = None, *,
+              reference: PeriodicSignal | None = None, snapshots: int = 5, title: str | None = None) -> Figure:
+    """Three panels over the phase of the reported cycle, background shaded by contact mode.
+
+    (a) joint angles phi1, phi2 [deg] (and the reference angles if ``reference`` is given),
+    (b) contact positions x1, x2 [mm], with ``snapshots`` robot configurations drawn in gray below,
+    (c) tangential force f_t [N] with the friction limits +-mu1 f_n1 and +-mu2 f_n2 dashed.
+
+    Failed runs are drawn up to the failure.  If ``path`` is given the figure is also saved there
+    (format from the suffix, e.g. .png or .pdf; written atomically).
+    """
+    fig = Figure(figsize=(7.0, 9.0), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(4, 1, gridspec_kw={"height_ratios": [1.0, 1.0, 0.8, 1.0]})
+    ax_a, ax_b, ax_s, ax_c = axes
+    t = np.asarray(result.t, float)
+    phase = t - result.t0
+    if title is None:
+        title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
+        if np.isfinite(result.S):
+            title += f", S = {1e3 * result.S:.2f} mm/cycle"
+        if result.failure_t is not None:
+            title += f" at t = {result.failure_t:.4f}"
+    fig.suptitle(title)
+    if t.size == 0:
+        for ax in axes:
+            ax.text(0.5, 0.5, "no samples", ha="center", va="center", transform=ax.transAxes)
+        _save(fig, path)
+        return fig
+
+    runs = mode_runs(phase, result.mode)
+    for ax in (ax_a, ax_b, ax_c):
+        _shade(ax, runs)
+        ax.set_xlim(phase[0], max(phase[-1], phase[0] + 1e-9))
+        ax.set_xlabel("phase t [cycles]")
+        ax.grid(True, lw=0.3, alpha=0.6)
+
+    phi = np.degrees(np.asarray(result.phi, float))
+    ax_a.plot(phase, phi[0], color="C0", label=r"$\varphi_1$")
+    ax_a.plot(phase, phi[1], color="C3", label=r"$\varphi_2$")
+    if reference is not None:
+        ref = np.degrees(np.asarray(reference(t), float)).reshape(2, -1)
+        ax_a.plot(phase, ref[0], color="C0", ls=":", label=r"$\varphi_{1,\mathrm{ref}}$")
+        ax_a.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
+    ax_a.set_ylabel("joint angle [deg]")
+    ax_a.set_title("(a) joint angles", loc="left", fontsize="medium")
+    ax_a.legend(loc="upper right", fontsize="small", ncol=2)
+
+    x1 = np.asarray(result.x1, float)
+    x2 = np.asarray(result.x2, float)
+    # positions relative to foot 1 at the start of the plotted cycle, so that x1(end) = S
+    origin = x1[0]
+    ax_b.plot(phase, 1e3 * (x1 - origin), color="C0", label="$x_1$ (foot 1)")
+    ax_b.plot(phase, 1e3 * (x2 - origin), color="C3", label="$x_2$ (foot 2)")
+    ax_b.set_ylabel("contact position [mm]")
+    ax_b.set_title("(b) contact positions", loc="left", fontsize="medium")
+    ax_b.legend(loc="best", fontsize="small")
+
+    _draw_snapshots(ax_s, result, robot, phase, origin, snapshots)
+
+    ft = np.asarray(result.f_t, float)
+    lim1 = robot.mu1 * np.asarray(result.f_n1, float)
+    lim2 = robot.mu2 * np.asarray(result.f_n2, float)
+    ax_c.plot(phase, ft, color="k", label="$f_t$")
+    ax_c.plot(phase, lim1, color="C0", ls="--", lw=1, label=r"$\pm\mu_1 f_{n1}$")
+    ax_c.plot(phase, -lim1, color="C0", ls="--", lw=1)
+    ax_c.plot(phase, lim2, color="C3", ls="--", lw=1, label=r"$\pm\mu_2 f_{n2}$")
+    ax_c.plot(phase, -lim2, color="C3", ls="--", lw=1)
+    ax_c.set_ylabel("tangential force [N]")
+    ax_c.set_title("(c) tangential force and friction limits", loc="left", fontsize="medium")
+    handles, labels = ax_c.get_legend_handles_labels()
+    present = sorted({m for _, _, m in runs})
+    handles += [Patch(color=mode_color(m)) for m in present]
+    labels += [f"mode {mode_label(m)}" for m in present]
+    # below the panels: inside (c) the legend would hide the force at the friction limits
+    fig.legend(handles, labels, loc="outside lower center", fontsize="small", ncol=4)
+    _save(fig, path)
+    return fig
+
+
+def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float, n: int) -> None:
+    ax.set_title("(b) robot snapshots", loc="left", fontsize="medium")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.axhline(0.0, color="k", lw=0.8)
+    if n <= 0:
+        return
+    span = phase[-1] - phase[0]
+    # equally spaced phases including both ends: the last snapshot repeats the first shape shifted by S
+    targets = phase[0] + span * np.arange(n) / max(n - 1, 1) if span > 0 else phase[:1]
+    idx = sorted({int(np.argmin(np.abs(phase - s))) for s in targets})
+    phi1 = np.asarray(result.phi, float)[0]
+    for j, i in enumerate(idx):
+        pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin, phi1[i], result.theta[i])
+        gray = 0.75 - 0.6 * j / max(len(idx) - 1, 1)
+        ax.plot(pts[0], pts[1], "-o", color=str(gray), lw=1.5, ms=2.5, label=f"t = {phase[i]:.2f}")
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)
+
+
+def _save(fig: Figure, path) -> None:
+    if path is None:
+        return
+    path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    atomic_write(path, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
