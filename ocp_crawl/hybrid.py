@@ -35,7 +35,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .inputs import PeriodicSignal, ReferenceTorque, as_signal
-from .model import AUX, NQ, Model, call_mapped, symbolic
+from .model import AUX, Model, fast_newton, solve_many, symbolic
 from .quadrature import gauss_nodes
 from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
 
@@ -65,7 +65,7 @@ class HybridOptions:
     max_events_per_cycle: int = 200
     trial_step: float = 1e-9
     """phase step used to test the consistency of a mode after a transition"""
-    quad_h: float = 1.0 / 64
+    quad_h: float = 1.0 / 32
     """largest Gauss-Legendre panel for the per-cycle integrals [cycles]"""
 
     def __post_init__(self) -> None:
@@ -140,6 +140,7 @@ class HybridStepper:
         self.torque: PeriodicSignal = as_signal(torque)
         self.opt = options or HybridOptions()
         self.sym = symbolic()
+        self.newton = fast_newton()
         self.p = model.p
         self.Mg = model.robot.M * model.robot.g
         self.L = model.robot.L
@@ -151,15 +152,20 @@ class HybridStepper:
 
     # ------------------------------------------------------------------ primitive evaluations
     def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
+        """Newton solve of the mode q at phase t from x0; None if it does not converge."""
         tau = self.torque(t)
         dtau = self.torque.derivative(t)
-        xs, aux = self.sym.solve(x0, tau, dtau, q, self.p)
-        self.nfev += 1
-        x = np.asarray(xs).ravel()
-        aux = np.asarray(aux).ravel()
-        if not (np.all(np.isfinite(aux)) and np.all(np.isfinite(x))) or aux[AUX["res"]] > self.opt.residual_tol:
-            return None
-        return _Point(t, x, aux)
+        x = x0
+        for _ in range(4):
+            x, aux = self.newton(x, tau, dtau, q, self.p)
+            self.nfev += 1
+            res = aux[AUX["res"]]
+            if not res <= self.opt.residual_tol:  # also catches NaN
+                if not np.isfinite(res) or res > 1e3:
+                    return None
+                continue
+            return _Point(t, x, aux)
+        return None
 
     def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
         """Guard functions of a mode (scaled, positive while the mode is valid)."""
@@ -452,19 +458,33 @@ class HybridStepper:
 
     # ------------------------------------------------------------------ dense output and metrics
     def _evaluate_many(self, seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Solve the segment's mode at many phases in one mapped call (guesses by Hermite interpolation)."""
+        """Solve the segment's mode at many phases (guesses by Hermite interpolation of its points).
+
+        Points that the batched Newton does not converge are solved again one by one.
+        """
         pts = seg.points
         ts = np.asarray(ts, float)
         n = len(ts)
-        tp = np.array([p.t for p in pts])
         if len(pts) > 1:
-            idx = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
-            guesses = np.stack([self._hermite(pts[i], pts[i + 1], t) for i, t in zip(idx, ts)], axis=1)
+            tp = np.array([p.t for p in pts])
+            X = np.stack([p.x for p in pts], axis=1)
+            XD = np.stack([p.xdot for p in pts], axis=1)
+            i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
+            h = tp[i + 1] - tp[i]
+            s = np.where(h > 0, (ts - tp[i]) / np.where(h > 0, h, 1.0), 0.0)
+            h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+            h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+            guesses = h00 * X[:, i] + h10 * h * XD[:, i] + h01 * X[:, i + 1] + h11 * h * XD[:, i + 1]
         else:
             guesses = np.tile(pts[0].x[:, None], (1, n))
-        xs, aux = mapped_solve(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
-                               seg.q, self.p)
+        xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
+                             seg.q, self.p)
         self.nfev += n
+        for j in np.nonzero(~(aux[AUX["res"]] <= self.opt.residual_tol))[0]:
+            pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
+            if pt is None:
+                raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
+            xs[:, j], aux[:, j] = pt.x, pt.aux
         return xs, aux
 
     def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
@@ -495,28 +515,29 @@ class HybridStepper:
             edges = np.linspace(a, b, npan + 1)
             pw = power.reshape(2, npan, 5)
             ww = wq.reshape(npan, 5)
+            # values at the panel edges from each panel's degree-4 interpolant, so that a sign
+            # change between an edge and the nearest Gauss node is not missed
+            coefs = np.polynomial.legendre.legfit(xg, pw.reshape(-1, 5).T, 4)
+            ends = np.polynomial.legendre.legval(np.array([-1.0, 1.0]), coefs).reshape(2, npan, 2)
+            allv = np.concatenate([pw, ends], axis=2)
+            positive_panels = np.all(allv >= 0, axis=2)
+            wplus += np.sum(np.where(positive_panels[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
             extra_t, extra_w, extra_i = [], [], []
-            for i in range(2):
-                for j in range(npan):
-                    vals = pw[i, j]
-                    if np.all(vals >= 0):
-                        wplus[i] += float(np.sum(ww[j] * vals))
+            for i, j in zip(*np.nonzero(mixed)):
+                # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+                coef = np.polynomial.legendre.legfit(xg, pw[i, j], 4)
+                r = np.polynomial.legendre.legroots(coef)
+                r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
+                lo, hi = edges[j], edges[j + 1]
+                cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
+                for c0, c1 in zip(cuts[:-1], cuts[1:]):
+                    if c1 - c0 <= 0:
                         continue
-                    if np.all(vals <= 0):
-                        continue
-                    # sign change inside the panel: split at the roots of the degree-4 interpolant
-                    cheb = np.polynomial.legendre.Legendre.fit(xg, vals, 4, domain=[-1, 1])
-                    r = cheb.roots()
-                    r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
-                    lo, hi = edges[j], edges[j + 1]
-                    cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
-                    for c0, c1 in zip(cuts[:-1], cuts[1:]):
-                        if c1 - c0 <= 0:
-                            continue
-                        tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
-                        extra_t.append(tt)
-                        extra_w.append(w2)
-                        extra_i.append(np.full(len(tt), i))
+                    tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
+                    extra_t.append(tt)
+                    extra_w.append(w2)
+                    extra_i.append(np.full(len(tt), i))
             if extra_t:
                 te = np.concatenate(extra_t)
                 we = np.concatenate(extra_w)
@@ -625,11 +646,6 @@ class HybridStepper:
         scale = max(abs(ints["input_work"]), abs(ints["dissipation"]), abs(dV), 1e-300)
         return {"input_work": ints["input_work"], "potential_change": dV, "dissipation": ints["dissipation"],
                 "balance_residual": bal / scale}
-
-
-def mapped_solve(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
-    """Mode solve at n points in one call (columns of x0, tau, dtau and, if 2-D, q)."""
-    return call_mapped(symbolic().solve, x0, tau, dtau, np.asarray(q, float), p)
 
 
 def simulate_torque(model: Model, torque, options: HybridOptions | None = None, t_eval=None) -> CrawlResult:

@@ -128,7 +128,10 @@ class _Symbolic:
     system: cs.Function
     """(x[3], tau[2], q[4], p) -> (G[3], J[3x3]) scaled mode equations and Jacobian"""
     fold: cs.Function
-    """(z[7] = x, t-offset, v, ... ) see hybrid module"""
+    """(z[7], v0[3], tau0[2], dtau[2], q, p) -> (H[7], dH[7x7]): fold system, see the hybrid module"""
+    newton: cs.Function
+    """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): NEWTON_ITERS unrolled Newton steps + outputs;
+    pure SX, so it can be compiled to C (see :mod:`ocp_crawl.compiled`)"""
 
 
 #: names of the auxiliary outputs returned with every mode solve
@@ -252,8 +255,69 @@ def symbolic() -> _Symbolic:
     Hz = cs.vertcat(Gz, Jz @ vz, cs.dot(v0, vz) - 1)
     fold = cs.Function("fold", [z, v0, tau0, dtau, q, p], [Hz, cs.jacobian(Hz, z)],
                        ["z", "v0", "tau0", "dtau", "q", "p"], ["H", "dH"])
+    xn = cs.SX.sym("x0", 3)
+    xk = xn
+    for _ in range(NEWTON_ITERS):
+        Gk, Jk = system(xk, tau, q, p)
+        xk = xk - cs.solve(Jk, Gk)
+    newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
+                         ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
     return _Symbolic(kin=kin, residual=residual, hold_torque=hold, solve=solve, evaluate=evaluate,
-                     system=system, fold=fold)
+                     system=system, fold=fold, newton=newton)
+
+
+#: Newton iterations unrolled in ``newton``; callers repeat the call until the residual is small
+NEWTON_ITERS = 4
+
+
+@lru_cache(maxsize=1)
+def fast_newton():
+    """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
+    from .compiled import FastFunction
+
+    return FastFunction(symbolic().newton)
+
+
+#: width of the compiled vectorised Newton solve
+BATCH = 64
+
+
+@lru_cache(maxsize=1)
+def fast_newton_batch():
+    """``newton`` mapped over BATCH columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
+    from .compiled import FastFunction
+
+    f = symbolic().newton.map(BATCH)
+    x0 = cs.SX.sym("x0", 3, BATCH)
+    tau = cs.SX.sym("tau", 2, BATCH)
+    dtau = cs.SX.sym("dtau", 2, BATCH)
+    q = cs.SX.sym("q", NQ, BATCH)
+    p = cs.SX.sym("p", NP)
+    xs, aux = f(x0, tau, dtau, q, cs.repmat(p, 1, BATCH))
+    return FastFunction(cs.Function("ocp_crawl_newton_batch", [x0, tau, dtau, q, p], [xs, aux]))
+
+
+def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
+    """Mode solves at n points (columns; q may be one vector for all): returns x (3, n) and aux (NAUX, n)."""
+    f = fast_newton_batch()
+    n = x0.shape[1]
+    q = np.asarray(q, float)
+    if q.ndim == 1:
+        q = np.tile(q[:, None], (1, n))
+    xs = np.empty((3, n))
+    aux = np.empty((NAUX, n))
+    for s in range(0, n, BATCH):
+        e = min(s + BATCH, n)
+        pad = BATCH - (e - s)
+
+        def chunk(a):
+            a = a[:, s:e]
+            return np.concatenate([a, np.repeat(a[:, -1:], pad, axis=1)], axis=1) if pad else a
+
+        xi, ai = f(chunk(x0).ravel("F"), chunk(tau).ravel("F"), chunk(dtau).ravel("F"), chunk(q).ravel("F"), p)
+        xs[:, s:e] = xi.reshape(3, BATCH, order="F")[:, :e - s]
+        aux[:, s:e] = ai.reshape(NAUX, BATCH, order="F")[:, :e - s]
+    return xs, aux
 
 
 _MAPS: dict[tuple[str, int], cs.Function] = {}

@@ -136,12 +136,29 @@ def test_fold_is_reported_with_phase_mode_and_singular_jacobian():
     assert s0[-1] / s0[0] > s[-1] / s[0]
 
 
-def test_lift_off_is_a_status_not_an_exception():
-    robot = Robot.paper().with_stiffness_ratio(0.3)
-    res = simulate_torque(Model(robot, gravity="physical"), paper_torque(robot))
+def test_lift_off_is_a_status_not_an_exception(gravity):
+    robot = Robot.paper().with_stiffness_ratio(10.0)
+    res = simulate_torque(Model(robot, gravity=gravity), paper_torque(robot, A=60))
     assert res.status == Status.LIFT_OFF and not res.success
-    assert "phase" in res.message and "lift off" in res.message
+    assert "phase" in res.message and "lift off 2" in res.message
     assert math.isnan(res.S)
+    last = res.events[-1]
+    assert last.kind == "lift_off_2" and last.t == pytest.approx(res.failure_t, abs=0)
+    assert abs(last.guard) < 1e-9  # f_n2/(M g) at the located lift-off
+    assert res.t[-1] == pytest.approx(res.failure_t, abs=1e-15)  # output runs up to the lift-off ...
+    assert np.all(res.f_n2[:-1] > 0)  # ... through valid states
+    assert abs(res.f_n2[-1]) < 1e-9 * robot.M * robot.g
+
+
+def test_fold_location_does_not_depend_on_the_step():
+    robot = Robot.paper().with_stiffness_ratio(0.3)
+    model = Model(robot, gravity="physical")
+    t_fold = []
+    for h in (1 / 32, 1 / 64, 1 / 128):
+        res = simulate_torque(model, paper_torque(robot), HybridOptions(max_step=h))
+        assert res.status == Status.FOLD, res.message
+        t_fold.append(res.failure_t)
+    assert max(t_fold) - min(t_fold) < 1e-10
 
 
 def _cot_reference():
