@@ -152,6 +152,9 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     labels += [f"mode {mode_label(m)}" for m in present]
     # below the panels: inside (c) the legend would hide the force at the friction limits
     fig.legend(handles, labels, loc="outside lower center", fontsize="small", ncol=4)
+    # lay out once and freeze: constrained layout would otherwise rerun (slowly) at every save
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
     _save(fig, path)
     return fig
 
@@ -176,9 +179,13 @@ def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float,
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)
 
 
-def _save(fig: Figure, path) -> None:
-    if path is None:
-        return
+def save_figure(fig: Figure, path: str | os.PathLike) -> Path:
+    """Save atomically; the format follows the suffix (.png, .pdf, .svg; none: png)."""
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower() or "png"
-    atomic_write(path, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
+    return atomic_write(path, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
+
+
+def _save(fig: Figure, path) -> None:
+    if path is not None:
+        save_figure(fig, path)

@@ -1,0 +1,297 @@
+"""Command-line interface ``ocp-crawl`` (also ``python -m ocp_crawl``).
+
+Commands live in one registry (:data:`COMMANDS`): a later issue adds a command (sweep, reproduce,
+optimize, crosscheck, animate) with :func:`register` and touches nothing else here.  Solvers that
+``simulate --solver`` can use live in :data:`SOLVERS` likewise.
+
+Exit codes: 0 success, 1 numerical failure (the result's status message goes to stderr),
+2 bad input (one line ``ocp-crawl: error: ...`` on stderr, never a traceback; set the environment
+variable ``OCP_CRAWL_TRACEBACK=1`` to see one when debugging).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import __version__
+from .files import jsonable, write_json, write_npz
+from .problem import Problem, ProblemError, load_problem, paper_problem, run_problem
+from .result import CrawlResult
+
+PROG = "ocp-crawl"
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+#: units of the summary's numbers, written with every JSON summary
+UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J"}
+
+
+class BadInput(Exception):
+    """Bad command-line input that is not about the problem file (e.g. an unwritable output directory)."""
+
+
+class _UsageError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but usage errors come back as one line and an exit code instead of sys.exit."""
+
+    def error(self, message: str):
+        raise _UsageError(f"{message} (see '{self.prog} --help')")
+
+
+# --------------------------------------------------------------------------------------------
+# registries
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: its name, one-line help, argument setup and the function that runs it."""
+
+    name: str
+    help: str
+    arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+COMMANDS: dict[str, Command] = {}
+
+
+def register(name: str, help: str, arguments: Callable[[argparse.ArgumentParser], None]):
+    """Decorator: register ``run(args) -> exit code`` as the subcommand ``name``."""
+    def wrap(run: Callable[[argparse.Namespace], int]):
+        if name in COMMANDS:
+            raise ValueError(f"command {name!r} is already registered")
+        COMMANDS[name] = Command(name, help, arguments, run)
+        return run
+    return wrap
+
+
+#: solvers of ``simulate --solver``: name -> function(problem, args) -> CrawlResult
+SOLVERS: dict[str, Callable[[Problem, argparse.Namespace], CrawlResult]] = {
+    "event": lambda problem, args: run_problem(problem),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# shared helpers
+# --------------------------------------------------------------------------------------------
+def _err(message: str) -> None:
+    print(f"{PROG}: error: " + " ".join(str(message).split("\n")), file=sys.stderr)
+
+
+def prepare_out(path: str | os.PathLike) -> Path:
+    """Create the output directory and check that it is writable, before any long computation."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except FileExistsError:
+        raise BadInput(f"--out {out}: exists and is not a directory") from None
+    except OSError as exc:
+        raise BadInput(f"--out {out}: output directory is not writable: {exc.strerror or exc}") from None
+    return out
+
+
+def _simulate(problem: Problem, solver: str, args: argparse.Namespace) -> CrawlResult:
+    try:
+        return SOLVERS[solver](problem, args)
+    except ValueError as exc:
+        # the solvers raise ValueError only for inputs they cannot start from (e.g. no released
+        # equilibrium at t = 0); numerical failures come back as a status in the result
+        raise BadInput(f"{problem.source}: {exc}") from None
+
+
+def report(result: CrawlResult, problem: Problem, solver: str = "event") -> dict:
+    """The JSON report of a run: the result's summary plus the problem and the units."""
+    out = result.summary()
+    out["solver"] = solver
+    out["problem_file"] = problem.source
+    out["problem"] = problem.to_dict()
+    out["units"] = UNITS
+    return jsonable(out)
+
+
+def _num(x, scale: float = 1.0, fmt: str = ".3f") -> str:
+    x = float(x)
+    if math.isnan(x):
+        return "-"
+    return "inf" if math.isinf(x) else format(scale * x, fmt)
+
+
+def format_summary(result: CrawlResult, problem: Problem, solver: str = "event") -> str:
+    """Readable summary: problem, status, S [mm], W+ [mJ], CoT+, events table, cycles."""
+    r = problem.robot
+    gait = problem.sections.get("gait", {})
+    gait_text = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in gait.items() if k.endswith("_deg"))
+    direction = ""
+    if np.isfinite(result.S) and result.S != 0:
+        direction = " (towards foot 1)" if result.S < 0 else " (towards foot 2)"
+    lines = [
+        f"problem    {problem.source}",
+        f"drive      {problem.drive} (solver {solver}), gravity {problem.gravity}",
+        f"robot      M = {r.M:g} kg, L = {r.L:g} m, beta = {r.beta:g}, k = {r.k:g} N m/rad, "
+        f"mu1 = {r.mu1:g}, mu2 = {r.mu2:g}, g = {r.g:g} m/s^2",
+        f"gait       {gait_text}",
+        f"status     {result.status_name} ({result.status}): {result.message}",
+        f"S          {_num(result.S, 1e3)} mm per cycle{direction}",
+        f"W+         {_num(result.W_plus, 1e3)} mJ per cycle",
+        f"CoT+       {_num(result.CoT_plus)}",
+        f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),
+    ]
+    events = result.steady_events() if result.success else result.events
+    title = "events in the steady cycle" if result.success else "events"
+    lines.append(f"{title}: {len(events)}")
+    if events:
+        lines.append(f"  {'t [cycles]':>12}  {'phase':>8}  {'kind':<14}  mode before -> after")
+        for e in events:
+            phase = e.t - result.t0 if result.success else e.t % 1.0
+            lines.append(f"  {e.t:12.6f}  {phase:8.5f}  {e.kind:<14}  {e.mode_before} -> {e.mode_after}")
+    return "\n".join(lines)
+
+
+def write_outputs(out: Path, result: CrawlResult, problem: Problem, data: dict, stem: str = "") -> list[Path]:
+    """arrays.npz, summary.json, gait.png and gait.pdf in ``out`` (each written atomically)."""
+    from .plots import plot_gait, save_figure  # matplotlib only when figures are asked for
+
+    files = [write_npz(out / f"{stem}arrays.npz", result.arrays()), write_json(out / f"{stem}summary.json", data)]
+    fig = plot_gait(result, problem.robot, reference=problem.gait)
+    for ext in ("png", "pdf"):
+        files.append(save_figure(fig, out / f"{stem}gait.{ext}"))
+    return files
+
+
+# --------------------------------------------------------------------------------------------
+# simulate
+# --------------------------------------------------------------------------------------------
+def _simulate_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set robot.k=0.05 or --set gait.drive=angles (repeatable)")
+    p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
+    p.add_argument("--solver", choices=tuple(SOLVERS), default="event",
+                   help="event: event-driven hybrid solver (default)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--out", metavar="DIR", help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
+
+
+@register("simulate", "simulate one problem file and report the gait", _simulate_args)
+def cmd_simulate(args: argparse.Namespace) -> int:
+    overrides = list(args.overrides) + ([f"gait.drive={args.drive}"] if args.drive else [])
+    problem = load_problem(args.problem, overrides)
+    out = prepare_out(args.out) if args.out else None
+    result = _simulate(problem, args.solver, args)
+    data = report(result, problem, args.solver)
+    if args.json:
+        print(json.dumps(data, allow_nan=False))
+    else:
+        print(format_summary(result, problem, args.solver))
+    if out is not None:
+        files = write_outputs(out, result, problem, data)
+        if not args.json:
+            print("wrote      " + ", ".join(str(f) for f in files))
+    if not result.success:
+        print(f"{PROG}: simulation failed: {result.message}", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# demo
+# --------------------------------------------------------------------------------------------
+#: the demo's cases: name, description, overrides of the paper problem
+DEMO_CASES = (
+    ("torque_physical", "torque drive, physical gravity", []),
+    ("torque_paper", "torque drive, paper's gravity sign", ["model.gravity=paper"]),
+    ("angles", "prescribed angles", ["gait.drive=angles"]),
+)
+
+
+def _demo_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_demo",
+                   help="directory for the figures and summaries (default: ./ocp_crawl_demo)")
+
+
+@register("demo", "run the paper's gait (torque drive, both gravity signs, prescribed angles)", _demo_args)
+def cmd_demo(args: argparse.Namespace) -> int:
+    out = prepare_out(args.out)
+    print("The paper's gait (Table I robot; gamma = 90 deg, A = 30 deg, psi = 45 deg)\n")
+    header = f"{'case':<36} {'status':<10} {'S [mm]':>9} {'W+ [mJ]':>9} {'CoT+':>8} {'events/cycle':>12}"
+    print(header)
+    print("-" * len(header))
+    reports, failed = {}, []
+    for name, text, overrides in DEMO_CASES:
+        problem = paper_problem(overrides)
+        result = _simulate(problem, "event", args)
+        n_events = len(result.steady_events()) if result.success else len(result.events)
+        print(f"{text:<36} {result.status_name:<10} {_num(result.S, 1e3):>9} {_num(result.W_plus, 1e3):>9} "
+              f"{_num(result.CoT_plus, fmt='.2f'):>8} {n_events:>12}")
+        reports[name] = data = report(result, problem)
+        write_outputs(out, result, problem, data, stem=f"{name}_")
+        if not result.success:
+            failed.append(f"{text}: {result.message}")
+    write_json(out / "demo_summary.json", reports)
+    print(f"\nfigures and summaries in {out}/ (<case>_gait.png, <case>_gait.pdf, <case>_summary.json, "
+          "<case>_arrays.npz)")
+    print("S < 0: the robot moves towards foot 1, the joint that leads in phase. The two gravity signs "
+          "differ by a few percent in S (see README, 'Gravity conventions').")
+    for f in failed:
+        print(f"{PROG}: simulation failed: {f}", file=sys.stderr)
+    return EXIT_FAILURE if failed else EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# entry point
+# --------------------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog=PROG, description="Hybrid-quasistatic simulation of a soft three-link inchworm crawler.",
+                     epilog="exit codes: 0 success, 1 numerical failure, 2 bad input")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for cmd in COMMANDS.values():
+        p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
+        cmd.arguments(p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; returns the exit code (never calls sys.exit itself)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        _err(str(exc))
+        return EXIT_BAD_INPUT
+    except SystemExit as exc:  # --help and --version end argparse this way
+        return int(exc.code or 0) if isinstance(exc.code, (int, type(None))) else EXIT_BAD_INPUT
+    try:
+        return COMMANDS[args.command].run(args)
+    except (ProblemError, BadInput) as exc:
+        _err(str(exc))
+        return EXIT_BAD_INPUT
+    except (ValueError, TypeError) as exc:
+        if os.environ.get("OCP_CRAWL_TRACEBACK"):
+            raise
+        _err(f"{type(exc).__name__}: {exc}")
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+    except BrokenPipeError:
+        # the reader (e.g. `| head`) went away: silence the interpreter's flush at exit
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_FAILURE
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
