@@ -117,10 +117,10 @@ class FastFunction:
 
     def __call__(self, *inputs) -> list[np.ndarray]:
         if not self.compiled:
-            out = self.fun(*inputs)
+            out = self.fun(*[np.reshape(x, self.fun.size_in(i), order="F") for i, x in enumerate(inputs)])
             if not isinstance(out, (list, tuple)):
                 out = [out]
-            return [np.asarray(o, float).ravel() for o in out]
+            return [np.asarray(o, float).ravel(order="F") for o in out]
         for buf, x in zip(self._in, inputs):
             buf[:] = x
         if self._f(self._arg, self._res, self._iw, self._w, 0) != 0:

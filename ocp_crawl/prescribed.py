@@ -88,9 +88,9 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         v = np.where(np.abs(K[name]) <= TIE, 0.0, K[name]) if name == "h" else K[name]
         for j in np.nonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0)[0]:
             events.append((brentq(kin.scalar(name), ts[j], ts[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps), kind))
-        if name == "ddot":
-            for j in np.nonzero(v[1:-1] == 0)[0]:
-                events.append((ts[j + 1], kind))
+        # a switching function that is exactly zero on a scan phase, with opposite signs around it
+        for j in np.nonzero((v[1:-1] == 0) & (v[:-2] * v[2:] < 0))[0]:
+            events.append((ts[j + 1], kind))
     events.sort()
     breaks = [0.0] + [e[0] for e in events] + [1.0]
 
