@@ -298,7 +298,8 @@ def _toml_type(value: Any) -> str:
 def _suggest(name: str, valid: Sequence[str]) -> str:
     # case slips (Mu for mu) score lower with difflib than a shorter name (M), so they come first
     close = [v for v in valid if v.lower() == name.lower()] or \
-        difflib.get_close_matches(name, list(valid), n=1, cutoff=0.6)
+        difflib.get_close_matches(name, list(valid), n=1, cutoff=0.6) or \
+        sorted((v for v in valid if name.lower().startswith(v.lower())), key=len, reverse=True)
     return f"did you mean {close[0]}? " if close else ""
 
 

@@ -1,0 +1,254 @@
+"""Problem files: loading, schema, overrides and one-line errors for bad input."""
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ocp_crawl.hybrid import HybridOptions
+from ocp_crawl.problem import (PAPER_GAIT, SCHEMA, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
+                               parse_override, problem_from_dict, run_problem, schema_markdown)
+from ocp_crawl.result import Status
+
+REPO = Path(__file__).resolve().parent.parent
+PROBLEMS = REPO / "problems"
+
+
+def paper_dict(**changes):
+    """The paper problem as a plain dict, with ``section__key=value`` changes (None deletes the key)."""
+    data = {s: dict(v) for s, v in PAPER_GAIT.items()}
+    for name, value in changes.items():
+        section, key = name.split("__")
+        if value is None:
+            data[section].pop(key, None)
+        else:
+            data.setdefault(section, {})[key] = value
+    return data
+
+
+def test_paper_gait_file_matches_table_one():
+    p = load_problem(PROBLEMS / "paper_gait.toml")
+    r = p.robot
+    assert (r.M, r.L, r.beta, r.k, r.mu1, r.mu2, r.g) == (0.052, 0.120, 2.0, 0.1677, 0.389, 0.389, 9.81)
+    assert p.drive == "torque" and p.gravity == "physical"
+    assert p.gait.gamma1 == pytest.approx(math.pi / 2, rel=0, abs=1e-15)
+    assert p.gait.A2 == pytest.approx(math.pi / 6, rel=0, abs=1e-15)
+    assert p.gait.psi == pytest.approx(math.pi / 4, rel=0, abs=1e-15)
+    assert p.hybrid == HybridOptions()
+    # the degree values are kept as given, for reporting
+    assert p.sections["gait"]["gamma_deg"] == 90.0
+    # the problem built in code for the demo is the same problem
+    assert p == paper_problem()
+
+
+def test_other_problem_files():
+    p = load_problem(PROBLEMS / "paper_gait_paper_gravity.toml")
+    assert p.gravity == "paper" and p.robot == paper_problem().robot
+    q = load_problem(PROBLEMS / "unequal_friction.toml")
+    assert (q.robot.mu1, q.robot.mu2) == (0.35, 0.43)
+
+
+def test_every_problem_file_has_a_unit_comment_on_every_key():
+    for path in PROBLEMS.glob("*.toml"):
+        for line in path.read_text().splitlines():
+            if "=" in line and not line.lstrip().startswith("#"):
+                assert "#" in line and "[" in line.split("#", 1)[1], f"{path.name}: no unit on {line!r}"
+
+
+def test_defaults_and_ints_for_floats():
+    data = paper_dict(robot__beta=None, robot__g=None, robot__M=1, gait__drive=None)
+    p = problem_from_dict(data)
+    assert p.robot.beta == 2.0 and p.robot.g == 9.81 and p.drive == "torque"
+    assert isinstance(p.robot.M, float) and p.robot.M == 1.0
+
+
+def test_per_joint_gait_keys():
+    data = paper_dict(gait__gamma_deg=None, gait__gamma1_deg=95.0, gait__gamma2_deg=85.0, gait__A1_deg=25.0)
+    p = problem_from_dict(data)
+    assert p.gait.gamma1 == pytest.approx(math.radians(95), rel=1e-15)
+    assert p.gait.gamma2 == pytest.approx(math.radians(85), rel=1e-15)
+    assert p.gait.A1 == pytest.approx(math.radians(25), rel=1e-15)
+    assert p.gait.A2 == pytest.approx(math.radians(30), rel=1e-15)
+
+
+def test_overrides():
+    p = load_problem(PROBLEMS / "paper_gait.toml",
+                     ["robot.k=0.05", 'gait.drive="angles"', "model.gravity=paper", "simulation.max_cycles=5"])
+    assert p.robot.k == 0.05 and p.drive == "angles" and p.gravity == "paper" and p.hybrid.max_cycles == 5
+    # setting mu replaces mu1/mu2 given in the file, and the other way round
+    q = load_problem(PROBLEMS / "unequal_friction.toml", ["robot.mu=0.5"])
+    assert (q.robot.mu1, q.robot.mu2) == (0.5, 0.5)
+    q = load_problem(PROBLEMS / "paper_gait.toml", ["robot.mu1=0.3", "robot.mu2=0.4"])
+    assert (q.robot.mu1, q.robot.mu2) == (0.3, 0.4)
+    # the last --set of a key wins
+    assert load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=1", "robot.k=2"]).robot.k == 2.0
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("robot.k=0.05", ("robot", "k", 0.05)),
+    ("robot.k = 5", ("robot", "k", 5)),
+    ('gait.drive="angles"', ("gait", "drive", "angles")),
+    ("gait.drive=angles", ("gait", "drive", "angles")),
+    ("simulation.max_cycles=8", ("simulation", "max_cycles", 8)),
+])
+def test_parse_override(text, expected):
+    assert parse_override(text) == expected
+
+
+def test_to_dict_round_trip():
+    p = load_problem(PROBLEMS / "unequal_friction.toml", ["gait.A1_deg=20"])
+    d = p.to_dict()
+    assert d["robot"]["mu1"] == 0.35 and d["gait"]["A1_deg"] == 20.0 and d["simulation"]["max_cycles"] == 12
+    assert problem_from_dict(d) == p
+    # a Problem built in code reports its objects
+    bare = problem_from_dict(Problem(robot=p.robot, gait=p.gait).to_dict())
+    assert bare.robot == p.robot
+    for name in ("gamma1", "gamma2", "A1", "A2", "psi"):
+        assert getattr(bare.gait, name) == pytest.approx(getattr(p.gait, name), rel=1e-15)
+
+
+def test_problem_is_frozen_and_validated():
+    p = paper_problem()
+    with pytest.raises(AttributeError):
+        p.drive = "angles"
+    with pytest.raises(TypeError):
+        p.sections["robot"]["k"] = 1.0
+    with pytest.raises(ValueError, match="drive"):
+        Problem(robot=p.robot, gait=p.gait, drive="walk")
+    with pytest.raises(TypeError, match="robot"):
+        Problem(robot={"M": 1}, gait=p.gait)
+
+
+def test_schema_is_one_table_with_units():
+    assert [s.name for s in SECTIONS] == ["robot", "gait", "model", "simulation"]
+    for section in SECTIONS:
+        for key in section.keys:
+            assert key.unit and key.help
+    table = schema_markdown()
+    assert "`robot.k` | float | N m/rad | required | > 0" in table
+    # the README documents the same table
+    assert table in (REPO / "README.md").read_text()
+
+
+# ------------------------------------------------------------------------------------------ errors
+BAD = [
+    # (changes to the paper problem, words the one-line message must contain)
+    (dict(robot__k=-1.0), ["[robot] k = -1.0", "> 0", "N m/rad"]),
+    (dict(robot__M=0), ["[robot] M = 0", "> 0", "kg"]),
+    (dict(robot__L=True), ["[robot] L = true", "number", "boolean"]),
+    (dict(robot__beta=math.nan), ["[robot] beta = nan", "finite"]),
+    (dict(robot__g=math.inf), ["[robot] g = inf", "finite"]),
+    (dict(robot__mu=-0.1), ["[robot] mu = -0.1", ">= 0"]),
+    (dict(robot__mu1=0.3), ["mu = 0.389", "mu1 = 0.3", "mutually exclusive"]),
+    (dict(robot__mu=None, robot__mu1=0.3), ["[robot] mu1 = 0.3", "without mu2"]),
+    (dict(robot__k=None), ["[robot] k is missing", "required"]),
+    (dict(robot__kk=0.2), ["[robot] unknown key kk = 0.2", "did you mean k?"]),
+    (dict(gait__drive="walk"), ['[gait] drive = "walk"', '"torque", "angles"']),
+    (dict(gait__A_deg=-5), ["[gait] A_deg = -5", ">= 0"]),
+    (dict(gait__psi_deg="45"), ['[gait] psi_deg = "45"', "number", "string"]),
+    (dict(model__gravity="real"), ['[model] gravity = "real"', '"physical", "paper"']),
+    (dict(simulation__max_cycles=2.5), ["[simulation] max_cycles = 2.5", "integer"]),
+    (dict(simulation__max_step=1.0), ["[simulation] max_step = 1.0", "(0, 0.25]"]),
+    (dict(gait__gamma_deg=30.0), ["[gait] gamma_deg = 30.0", "foot 1 off the ground"]),
+    (dict(gait__drive="angles", gait__A_deg=75.0), ["A_deg = 75.0", "angles drive", "foot 2 off the ground"]),
+]
+
+
+@pytest.mark.parametrize("changes, words", BAD, ids=[next(iter(c)) + "=" + repr(next(iter(c.values()))) for c, _ in BAD])
+def test_bad_values_raise_one_line_problem_error(changes, words):
+    with pytest.raises(ProblemError) as info:
+        problem_from_dict(paper_dict(**changes), source="problems/x.toml")
+    msg = str(info.value)
+    assert "\n" not in msg
+    assert msg.startswith("problems/x.toml: ")
+    for w in words:
+        assert w in msg, (w, msg)
+    assert isinstance(info.value, ValueError)
+
+
+def test_unknown_and_missing_sections():
+    with pytest.raises(ProblemError, match=r"unknown section \[robto\].*did you mean robot\?"):
+        problem_from_dict({"robto": {}, **paper_dict()}, source="f.toml")
+    data = paper_dict()
+    del data["gait"]
+    with pytest.raises(ProblemError, match=r"^f.toml: section \[gait\] is missing"):
+        problem_from_dict(data, source="f.toml")
+    with pytest.raises(ProblemError, match=r"top-level key k = 1 is not in a section"):
+        problem_from_dict({"k": 1, **paper_dict()}, source="f.toml")
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(ProblemError, match=r"nope.toml: cannot read the problem file: No such file"):
+        load_problem(tmp_path / "nope.toml")
+    with pytest.raises(ProblemError, match=r"cannot read the problem file"):
+        load_problem(tmp_path)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[robot]\nM = 0.052\nk 0.1\n")
+    with pytest.raises(ProblemError, match=r"bad.toml: malformed TOML: .*line 3.*\"k 0.1\"$"):
+        load_problem(bad)
+    bad.write_bytes(b"\xff\xfe[robot]")
+    with pytest.raises(ProblemError, match="not UTF-8"):
+        load_problem(bad)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("robot.k", "expected SECTION.KEY=VALUE"),
+    ("robot.k=", "one TOML value"),
+    ("k=1", "must be SECTION.KEY"),
+    ("robot.kk=1", "unknown key kk in \\[robot\\]; did you mean k\\?"),
+    ("robo.k=1", "unknown section \\[robo\\]; did you mean robot\\?"),
+    ("robot.k=abc", '"abc" is not a TOML value; expected a number'),
+    ("robot.k=1\nrobot.M=2", "one TOML value"),
+])
+def test_bad_overrides(text, match):
+    with pytest.raises(ProblemError, match=match) as info:
+        load_problem(PROBLEMS / "paper_gait.toml", [text])
+    assert "\n" not in str(info.value) and "paper_gait.toml" in str(info.value)
+
+
+def test_override_values_are_validated_and_marked():
+    with pytest.raises(ProblemError, match=r"\[robot\] k = -1 \(from --set\) is invalid: must be > 0"):
+        load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=-1"])
+
+
+@settings(max_examples=25, deadline=None)
+@given(M=st.floats(1e-3, 10), L=st.floats(1e-2, 2), k=st.floats(1e-3, 10), mu=st.floats(0, 2),
+       beta=st.floats(1.5, 4), psi=st.floats(-180, 180))
+def test_valid_values_load_and_round_trip(M, L, k, mu, beta, psi):
+    data = paper_dict(robot__M=M, robot__L=L, robot__k=k, robot__mu=mu, robot__beta=beta, gait__psi_deg=psi,
+                      gait__A_deg=10.0)
+    p = problem_from_dict(data)
+    assert (p.robot.M, p.robot.L, p.robot.k, p.robot.mu1, p.robot.beta) == (M, L, k, mu, beta)
+    assert problem_from_dict(tomllib.loads(_to_toml(p.to_dict()))) == p
+
+
+def _to_toml(d: dict) -> str:
+    def val(v):
+        return f'"{v}"' if isinstance(v, str) else repr(v)
+    return "\n".join(f"[{s}]\n" + "\n".join(f"{k} = {val(v)}" for k, v in keys.items()) for s, keys in d.items())
+
+
+# ------------------------------------------------------------------------------------------ running
+def test_run_problem_dispatches_on_the_drive():
+    torque = run_problem(paper_problem())
+    angles = run_problem(paper_problem(["gait.drive=angles"]))
+    assert torque.success and angles.success
+    assert torque.drive == "torque" and angles.drive == "angles"
+    # the two drives agree closely on the paper's gait (the springs track the reference well)
+    assert torque.S == pytest.approx(angles.S, rel=0.01)
+    assert torque.S < 0
+
+
+def test_run_problem_reports_numerical_failure_as_status():
+    res = run_problem(paper_problem(["robot.k=0.02"]))
+    assert not res.success and res.status == Status.LIFT_OFF
+
+
+def test_run_problem_t_eval():
+    res = run_problem(paper_problem(), t_eval=np.linspace(0, 1, 11))
+    assert res.success and res.t.shape == (11,)
+    with pytest.raises(TypeError, match="Problem"):
+        run_problem({"robot": {}})
