@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from .inputs import PeriodicSignal, as_signal
 from .model import KIN, Model, call_mapped, symbolic
@@ -46,6 +46,8 @@ class _Kinematic:
 
 #: |mu1 f_n1 - mu2 f_n2|/(M g) below which both friction limits are taken as equal (both feet slip)
 TIE = 1e-12
+#: feet closer than TOUCH * L are taken as meeting (d only touches zero in symmetric folds)
+TOUCH = 1e-9
 
 
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
@@ -65,22 +67,52 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
 
     ts = np.linspace(0.0, 1.0, n_scan + 1)
     K = kin(ts)
-    # validity first: the first phase at which a foot lifts off or the feet cross ends the run
+    # validity first: the first phase at which the feet cross (d = 0) or a foot lifts off
+    # (f_n = 0) ends the run; near d = 0 the normal forces x_c/d M g are singular, so the feet
+    # crossing is searched first and the lift-off only before it
     failure = None
-    for name, status, label in (("fn1", Status.LIFT_OFF, "foot 1 lifts off"), ("fn2", Status.LIFT_OFF, "foot 2 lifts off"),
-                                ("d", Status.FEET_CROSSED, "feet cross")):
-        bad = np.nonzero(K[name] <= 0)[0]
-        if bad.size:
-            j = bad[0]
-            tf = brentq(kin.scalar(name), ts[j - 1], ts[j], xtol=1e-14) if j > 0 else 0.0
-            if failure is None or tf < failure[0]:
-                failure = (tf, status, label)
+    d = K["d"]
+    bad_d = np.nonzero(~(d > 0))[0]
+    t_cross = None
+    if bad_d.size:
+        j = bad_d[0]
+        t_cross = brentq(kin.scalar("d"), ts[j - 1], ts[j], xtol=1e-14) if j > 0 else 0.0
+    # d may also touch zero without changing sign (symmetric legs folding through phi = 0):
+    # refine every local minimum of d on the scan
+    dmin_f = kin.scalar("d")
+    for j in np.nonzero((d[1:-1] <= d[:-2]) & (d[1:-1] <= d[2:]))[0] + 1:
+        if t_cross is not None and ts[j - 1] >= t_cross:
+            break
+        if d[j] > 1e-3 * robot.L:
+            continue
+        opt = minimize_scalar(dmin_f, bounds=(ts[j - 1], ts[j + 1]), method="bounded", options={"xatol": 1e-13})
+        if not (opt.fun > TOUCH * robot.L) and (t_cross is None or opt.x < t_cross):
+            t_cross = float(opt.x)
+            break
+    if t_cross is not None:
+        failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
+    for i in (1, 2):
+        name = f"fn{i}"
+        bad = np.nonzero(~(K[name] > 0))[0]
+        if not bad.size or (t_cross is not None and ts[bad[0] - 1] >= t_cross):
+            continue
+        j = bad[0]
+        hi = ts[j] if t_cross is None else min(ts[j], t_cross * (1 - 1e-13))
+        f = kin.scalar(name)
+        if j == 0:
+            tf = 0.0
+        elif f(hi) < 0:
+            tf = brentq(f, ts[j - 1], hi, xtol=1e-14)
+        else:
+            continue
+        if failure is None or tf < failure[0]:
+            failure = (tf, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}")
     if failure is not None:
-        tf, status, label = failure
+        tf, status, label, kind = failure
         res.status = int(status)
         res.failure_t = tf
         res.message = f"{STATUS_MESSAGES[status]}: {label} at phase t = {tf:.10f} (prescribed angles)"
-        res.events = [Event(tf, "lift_off" if status == Status.LIFT_OFF else "feet_crossed", "", "failure")]
+        res.events = [Event(tf, kind, "", "failure")]
         return res
 
     events: list[tuple[float, str]] = []

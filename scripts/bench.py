@@ -1,0 +1,74 @@
+"""Benchmarks (run by hand; figures go into the closing notes, never into timed tests).
+
+    python scripts/bench.py                # all benchmarks
+    python scripts/bench.py hybrid         # one steady cycle of the paper gait, event-driven
+    python scripts/bench.py --repeat 50
+
+Each benchmark reports the median wall time over repeated calls after one warm-up call (the
+warm-up builds or loads the compiled functions, which happens once per process).
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+
+
+def _median_time(fn, repeat: int) -> tuple[float, object]:
+    out = fn()  # warm-up: compiled functions are built or loaded once per process
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out
+
+
+def bench_hybrid(repeat: int) -> dict:
+    """One steady cycle of the paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive)."""
+    from ocp_crawl import Harmonic, HybridOptions, Model, ReferenceTorque, Robot, simulate_torque
+    from ocp_crawl.model import fast_newton
+
+    out = {}
+    for gravity in ("physical", "paper"):
+        model = Model(Robot.paper(), gravity=gravity)
+        torque = ReferenceTorque(Harmonic.from_degrees(90, 30, 45), model.robot.k)
+        med, res = _median_time(lambda: simulate_torque(model, torque), repeat)
+        ref = simulate_torque(model, torque, HybridOptions(max_step=1 / 512, event_xtol=1e-15, quad_h=1 / 256))
+        out[gravity] = {
+            "median_ms": 1e3 * med, "S_m": res.S, "S_rel_diff_vs_refined": abs(res.S / ref.S - 1),
+            "W_plus_rel_diff_vs_refined": abs(res.W_plus / ref.W_plus - 1), "cycles_run": res.cycles,
+            "nfev": res.nfev, "events": len(res.events), "compiled": fast_newton().compiled,
+        }
+    return out
+
+
+def bench_prescribed(repeat: int) -> dict:
+    from ocp_crawl import Harmonic, Model, Robot
+    from ocp_crawl.prescribed import simulate_angles
+
+    model = Model(Robot.paper())
+    med, res = _median_time(lambda: simulate_angles(model, Harmonic.from_degrees(90, 30, 45)), repeat)
+    return {"median_ms": 1e3 * med, "S_m": res.S}
+
+
+BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("which", nargs="*", choices=[[], *BENCHMARKS], default=[], help="benchmarks to run (default: all)")
+    ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
+    args = ap.parse_args(argv)
+    names = args.which or list(BENCHMARKS)
+    import os
+    print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
+    for name in names:
+        result = BENCHMARKS[name](args.repeat)
+        print(f"{name}: {result}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
