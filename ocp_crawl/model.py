@@ -287,12 +287,14 @@ def fast_newton_batch():
     """``newton`` mapped over BATCH columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
     from .compiled import FastFunction
 
+    # MX symbols keep the map as a loop over one copy of the SX kernel in the generated C
+    # (SX symbols would inline BATCH copies: a large library that takes long to compile)
     f = symbolic().newton.map(BATCH)
-    x0 = cs.SX.sym("x0", 3, BATCH)
-    tau = cs.SX.sym("tau", 2, BATCH)
-    dtau = cs.SX.sym("dtau", 2, BATCH)
-    q = cs.SX.sym("q", NQ, BATCH)
-    p = cs.SX.sym("p", NP)
+    x0 = cs.MX.sym("x0", 3, BATCH)
+    tau = cs.MX.sym("tau", 2, BATCH)
+    dtau = cs.MX.sym("dtau", 2, BATCH)
+    q = cs.MX.sym("q", NQ, BATCH)
+    p = cs.MX.sym("p", NP)
     xs, aux = f(x0, tau, dtau, q, cs.repmat(p, 1, BATCH))
     return FastFunction(cs.Function("ocp_crawl_newton_batch", [x0, tau, dtau, q, p], [xs, aux]))
 
