@@ -130,7 +130,7 @@ def test_schema_is_one_table_with_units():
     table = schema_markdown()
     assert "`robot.k` | float | N m/rad | required | > 0" in table
     # the README documents the same table
-    assert table in (REPO / "README.md").read_text()
+    assert table in (REPO / "README.md").read_text(encoding="utf-8")
 
 
 # ------------------------------------------------------------------------------------------ errors
@@ -252,3 +252,11 @@ def test_run_problem_t_eval():
     assert res.success and res.t.shape == (11,)
     with pytest.raises(TypeError, match="Problem"):
         run_problem({"robot": {}})
+
+
+def test_readme_status_table_is_current():
+    from ocp_crawl.result import STATUS_MESSAGES
+
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    for status, message in STATUS_MESSAGES.items():
+        assert f"| {int(status)} | `{status.name.lower()}` | {message} |" in text
