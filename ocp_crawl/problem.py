@@ -214,7 +214,7 @@ class Problem:
     gait: Harmonic
     """reference angles [rad]; the degree values as given are in ``sections["gait"]``"""
     drive: Drive = "torque"
-    """"torque": tau = k (phi_ref - pi) into the event-driven solver; "angles": phi = phi_ref prescribed"""
+    """actuation: "torque" (tau = k (phi_ref - pi), event-driven solver) or "angles" (phi = phi_ref prescribed)"""
     gravity: GravityConvention = "physical"
     """sign convention of the gravity term (see MODEL_NOTES erratum)"""
     hybrid: HybridOptions = field(default_factory=HybridOptions)

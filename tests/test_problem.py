@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ocp_crawl.hybrid import HybridOptions
-from ocp_crawl.problem import (PAPER_GAIT, SCHEMA, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
+from ocp_crawl.problem import (PAPER_GAIT, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
                                parse_override, problem_from_dict, run_problem, schema_markdown)
 from ocp_crawl.result import Status
 
