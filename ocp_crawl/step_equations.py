@@ -1,0 +1,48 @@
+"""The incremental (time-stepping) equations of one quasistatic step, as CasADi expressions.
+
+Shared by the MPCC step solver (:mod:`ocp_crawl.mpcc`) and the periodic-gait optimal control
+problem (:mod:`ocp_crawl.ocp`), so both use the same compiled model functions and the same
+complementarity formulation.
+
+Scaled step variables (forces by M g, lengths by L, torques by M g L):
+
+    w = (phi1, phi2, f_t1/Mg, f_t2/Mg, s1+/L, s1-/L, s2+/L, s2-/L, c1+, c1-, c2+, c2-)
+
+with the friction margins c_j lifted into variables: c = (mu1 fn1 + ft1, mu1 fn1 - ft1,
+mu2 fn2 + ft2, mu2 fn2 - ft2)/(M g) evaluated at the end of the step, and the complementarity
+pairs 0 <= s_j _|_ c_j >= 0 (MODEL_NOTES, incremental Coulomb law).
+"""
+from __future__ import annotations
+
+import casadi as cs
+
+from .model import KIN, symbolic
+
+NW = 12
+"""number of step variables"""
+NEQ = 4
+"""equations: joint balance (2), horizontal balance, kinematic closure"""
+NPAIR = 4
+PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
+
+
+def step_equations(phi_prev, w, tau_hat, p):
+    """Equations of one step from the angles ``phi_prev`` to the step variables ``w``.
+
+    Returns ``(g_eq, g_lift, s, c)``: the scaled equilibrium/balance/closure residuals (NEQ), the
+    lifting residuals c - margins (NPAIR), and the complementarity pairs s (slips / L) and c.
+    ``tau_hat`` is the torque at the end of the step divided by M g L; ``p`` the model parameters.
+    """
+    sym = symbolic()
+    phi, ft1, ft2, s, c = w[0:2], w[2], w[3], w[4:8], w[8:12]
+    M, L, mu1, mu2, g = p[0], p[1], p[4], p[5], p[6]
+    Mg = M * g
+    kin1 = sym.kin(phi, p)
+    kin0 = sym.kin(phi_prev, p)
+    F = sym.residual(phi, tau_hat * Mg * L, ft1 * Mg, p) / (Mg * L)
+    dx1, dx2 = s[0] - s[1], s[2] - s[3]
+    closure = (kin1[KIN["d"]] - kin0[KIN["d"]]) / L - (dx2 - dx1)
+    g_eq = cs.vertcat(F, ft1 + ft2, closure)
+    fn1, fn2 = kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg
+    margins = cs.vertcat(mu1 * fn1 + ft1, mu1 * fn1 - ft1, mu2 * fn2 + ft2, mu2 * fn2 - ft2)
+    return g_eq, c - margins, s, c
