@@ -250,6 +250,50 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# sweep
+# --------------------------------------------------------------------------------------------
+def _sweep_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see README, 'Problem files')")
+    p.add_argument("--grid", action="append", required=True, metavar="KEY=START:STOP:NUM",
+                   help="an axis: NUM values from START to STOP inclusive, or a list KEY=A,B,C (repeatable; "
+                        "the first axis varies slowest), e.g. --grid gait.psi_deg=0:180:37")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key of the base problem (repeatable)")
+    p.add_argument("--jobs", type=int, metavar="N", help="worker processes (default: the CPUs available)")
+    p.add_argument("--out", metavar="DIR", help="output directory (default: ./sweep_<problem stem>)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="continue an interrupted sweep in DIR")
+    again.add_argument("--force", action="store_true", help="overwrite a sweep already in DIR")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on a Dask cluster (e.g. tcp://host:8786, or 'local'); needs the [cluster] extra")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+@register("sweep", "map S, W+ and CoT+ over a grid of problem keys (parallel, resumable)", _sweep_args)
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from .sweep import SweepError, SweepFailed, default_jobs, grid_from_specs, run_sweep
+
+    problem = load_problem(args.problem, args.overrides)
+    grid = grid_from_specs(args.grid)
+    if args.jobs is not None and args.jobs < 1:
+        raise BadInput(f"--jobs {args.jobs} is invalid: must be >= 1")
+    out = prepare_out(args.out or f"sweep_{Path(args.problem).stem}")
+    try:
+        result = run_sweep(problem, grid, out_dir=out, jobs=args.jobs or default_jobs(), resume=args.resume,
+                           force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
+                           scheduler=args.scheduler)
+    except SweepError as exc:
+        raise BadInput(str(exc)) from None
+    except SweepFailed as exc:
+        _err(f"sweep incomplete: {exc}")
+        return EXIT_FAILURE
+    # failed points are data (their status is in results.csv): the command succeeded
+    print(json.dumps(result.summary(), allow_nan=False) if args.json else result.format_summary())
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
 # entry point
 # --------------------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:

@@ -334,26 +334,27 @@ class SweepSettings:
             raise SweepError(f"{where}: malformed sweep settings: {exc}") from None
 
     def differences(self, other: "SweepSettings") -> list[str]:
-        """What differs from ``other`` (empty when the two sweeps compute the same rows), in words."""
+        """How ``other`` (e.g. the settings on disk) differs from these, in words ("other -> these");
+        empty when the two sweeps compute the same rows."""
         def axis(values) -> str:
             return f"{len(values)} values {values[0]!r}..{values[-1]!r}"
 
         out = []
         if self.version != other.version:
-            out.append(f"package version {other.version} vs {self.version}")
+            out.append(f"package version {other.version} -> {self.version}")
         if self.solver != other.solver:
-            out.append(f"solver {other.solver} vs {self.solver}")
+            out.append(f"solver {other.solver} -> {self.solver}")
         if self.extra_columns != other.extra_columns:
-            out.append(f"extra columns {list(other.extra_columns)} vs {list(self.extra_columns)}")
+            out.append(f"extra columns {list(other.extra_columns)} -> {list(self.extra_columns)}")
         if self.keys != other.keys:
-            out.append(f"grid keys {', '.join(other.keys)} vs {', '.join(self.keys)}")
+            out.append(f"grid keys {', '.join(other.keys)} -> {', '.join(self.keys)}")
         else:
-            out += [f"grid {k}: {axis(b)} vs {axis(a)}" for (k, a), (_, b) in zip(self.grid, other.grid) if a != b]
+            out += [f"grid {k}: {axis(b)} -> {axis(a)}" for (k, a), (_, b) in zip(self.grid, other.grid) if a != b]
         for section in sorted(set(self.problem) | set(other.problem)):
             mine, theirs = self.problem.get(section, {}), other.problem.get(section, {})
             for key in sorted(set(mine) | set(theirs)):
                 if mine.get(key) != theirs.get(key):
-                    out.append(f"[{section}] {key} {theirs.get(key, '(absent)')!r} vs {mine.get(key, '(absent)')!r}")
+                    out.append(f"[{section}] {key} {theirs.get(key, '(absent)')!r} -> {mine.get(key, '(absent)')!r}")
         return out
 
 
@@ -758,8 +759,8 @@ class _Store:
             old = self.read_settings()
             diff = settings.differences(old)
             if diff:
-                raise SweepError(f"{self.dir}: cannot resume: its {SETTINGS_FILE} differs from this sweep "
-                                 f"({'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); "
+                raise SweepError(f"{self.dir}: cannot resume: this sweep differs from its {SETTINGS_FILE} "
+                                 f"(saved -> now: {'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); "
                                  "use another output directory, or --force to start over")
             done = self.read_done(settings)
         elif resume and ours:

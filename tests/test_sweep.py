@@ -1,0 +1,347 @@
+"""Sweeps: grid parsing, rows equal to point-by-point runs, failures as data, resume after a kill, Dask."""
+import csv
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocp_crawl.cli import main
+from ocp_crawl.problem import ProblemError, load_problem, run_problem
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, grid_from_specs,
+                             normalize_grid, parse_grid, run_sweep)
+
+REPO = Path(__file__).resolve().parent.parent
+PAPER = REPO / "problems" / "paper_gait.toml"
+NUMBERS = ("S", "W_plus", "CoT_plus")
+
+
+def same_number(a, b, rtol=1e-12):
+    if isinstance(a, float) and math.isnan(a):
+        return isinstance(b, float) and math.isnan(b)
+    return a == b or (math.isfinite(a) and abs(a - b) <= rtol * abs(b))
+
+
+def assert_same_rows(rows, ref_rows):
+    assert len(rows) == len(ref_rows)
+    for row, ref in zip(rows, ref_rows):
+        assert row.keys() == ref.keys()
+        for col in row:
+            if col in NUMBERS or isinstance(ref[col], float):
+                assert same_number(row[col], ref[col]), (col, row, ref)
+            else:
+                assert row[col] == ref[col], (col, row, ref)
+
+
+def read_csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.reader(fh))
+
+
+# --------------------------------------------------------------------------------------------
+# grids
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("spec, key, values", [
+    ("gait.psi_deg=0:180:37", "gait.psi_deg", np.linspace(0, 180, 37)),
+    ("gait.gamma_deg = 60:120:3", "gait.gamma_deg", [60.0, 90.0, 120.0]),
+    ("robot.k=0.05,0.1,0.2", "robot.k", [0.05, 0.1, 0.2]),
+    ("robot.mu=0.4", "robot.mu", [0.4]),
+    ("gait.A_deg=30:30:1", "gait.A_deg", [30.0]),
+    ("gait.psi_deg=-45:45:3", "gait.psi_deg", [-45.0, 0.0, 45.0]),
+    ("simulation.max_cycles=4:8:3", "simulation.max_cycles", [4, 6, 8]),
+    ("model.gravity=physical,paper", "model.gravity", ["physical", "paper"]),
+    ('model.gravity="paper"', "model.gravity", ["paper"]),
+    ("gait.drive=torque,angles", "gait.drive", ["torque", "angles"]),
+])
+def test_parse_grid(spec, key, values):
+    name, arr = parse_grid(spec)
+    assert name == key
+    assert arr.ndim == 1 and list(arr) == list(values)
+    if key == "simulation.max_cycles":
+        assert arr.dtype.kind == "i"
+    elif key.startswith("model") or key == "gait.drive":
+        assert arr.dtype.kind == "U"
+    else:
+        assert arr.dtype == np.float64
+
+
+@pytest.mark.parametrize("spec, match", [
+    ("gait.psi_deg", "expected SECTION.KEY=START:STOP:NUM"),
+    ("psi_deg=0:180:3", "must be SECTION.KEY"),
+    ("gait.psi=0:180:3", "did you mean gait.psi_deg"),
+    ("gaitt.psi_deg=0:180:3", "unknown section \\[gaitt\\]; did you mean gait"),
+    ("gait.psi_deg=", "no values"),
+    ("gait.psi_deg=0:180", "START:STOP:NUM, got 2 fields"),
+    ("gait.psi_deg=0:180:3:4", "got 4 fields"),
+    ("gait.psi_deg=a:180:3", "START and STOP must be numbers"),
+    ("gait.psi_deg=0:180:2.5", "NUM must be an integer >= 1"),
+    ("gait.psi_deg=0:180:0", "NUM must be an integer >= 1, got 0"),
+    ("gait.psi_deg=0:180:1", "NUM = 1 gives one value"),
+    ("gait.psi_deg=0:nan:3", "must be finite"),
+    ("gait.psi_deg=1,,2", "empty value"),
+    ("gait.psi_deg=1,x", "'x' is not a number"),
+    ("gait.psi_deg=1,1", "appears twice"),
+    ("gait.psi_deg=0:0:3", "appears twice"),
+    ("robot.k=true", "takes numbers"),
+    ("model.gravity=physical,phys", "must be one of"),
+    ("model.gravity=1", "takes strings"),
+    ("simulation.max_cycles=4:6:4", "takes integers"),
+])
+def test_parse_grid_rejects(spec, match):
+    with pytest.raises(ProblemError, match=match) as info:
+        parse_grid(spec)
+    assert "\n" not in str(info.value)
+    assert "--grid" in str(info.value)
+
+
+def test_grids_of_several_keys():
+    grid = grid_from_specs(["gait.psi_deg=0:90:3", "robot.k=0.1,0.2"])
+    assert list(grid) == ["gait.psi_deg", "robot.k"]
+    with pytest.raises(ProblemError, match="already a grid key"):
+        grid_from_specs(["robot.k=0.1", "robot.k=0.2"])
+    with pytest.raises(ProblemError, match="alternatives"):
+        normalize_grid({"robot.mu": [0.3], "robot.mu1": [0.3]})
+    with pytest.raises(ProblemError, match="1-D"):
+        normalize_grid({"robot.k": [[0.1, 0.2]]})
+    with pytest.raises(ProblemError, match="at least one key"):
+        normalize_grid({})
+    assert list(normalize_grid({"robot.k": 0.1})["robot.k"]) == [0.1]
+
+
+# --------------------------------------------------------------------------------------------
+# rows
+# --------------------------------------------------------------------------------------------
+def test_sweep_equals_point_by_point_runs(tmp_path):
+    problem = load_problem(PAPER)
+    grid = {"gait.psi_deg": [0.0, 45.0, 135.0], "gait.gamma_deg": [80.0, 100.0]}
+    res = run_sweep(problem, grid, out_dir=tmp_path / "s", jobs=2)
+    assert res.keys == ("gait.psi_deg", "gait.gamma_deg") and res.shape == (3, 2)
+    assert res.computed == 6 and len(res.rows) == 6
+    for i, psi in enumerate(grid["gait.psi_deg"]):
+        for j, gamma in enumerate(grid["gait.gamma_deg"]):
+            ref = run_problem(load_problem(PAPER, [f"gait.psi_deg={psi}", f"gait.gamma_deg={gamma}"]))
+            row = res.rows[2 * i + j]  # grid order: the last key varies fastest
+            assert (row["gait.psi_deg"], row["gait.gamma_deg"]) == (psi, gamma)
+            assert row["status"] == ref.status_name and row["message"] == ref.message
+            for col in NUMBERS:
+                assert same_number(row[col], float(getattr(ref, col))), col
+            assert same_number(float(res.array("S")[i, j]), float(ref.S) if ref.success else math.nan)
+    assert res.status_array().shape == (3, 2)
+    assert res.array("gait.gamma_deg")[:, 1].tolist() == [100.0] * 3
+    # the file holds the same rows, in grid order, with the documented columns
+    table = read_csv(tmp_path / "s" / RESULTS_FILE)
+    assert table[0] == ["gait.psi_deg", "gait.gamma_deg", "S", "W_plus", "CoT_plus", "status", "message"]
+    assert [(float(r[0]), float(r[1])) for r in table[1:]] == [(p, g) for p in grid["gait.psi_deg"]
+                                                              for g in grid["gait.gamma_deg"]]
+    assert_same_rows(SweepResult.read(tmp_path / "s").rows, res.rows)
+    assert not (tmp_path / "s" / JOURNAL_FILE).exists()
+    settings = json.loads((tmp_path / "s" / SETTINGS_FILE).read_text())
+    assert settings["grid"] == grid and settings["solver"] == "event" and settings["version"]
+    assert settings["problem"]["robot"]["k"] == 0.1677
+    summary = res.summary()
+    assert summary["points"] == 6 and sum(summary["counts"].values()) == 6
+    assert summary["best"]["point"]["gait.psi_deg"] == 45.0
+
+
+def reference_status(overrides):
+    """Status of one point run on its own: the result's status name, or bad_input."""
+    try:
+        problem = load_problem(PAPER, overrides)
+    except ProblemError as exc:
+        return "bad_input", str(exc)
+    result = run_problem(problem)
+    return result.status_name, result.message
+
+
+def test_failures_are_recorded_with_status_and_message(tmp_path):
+    # physical gravity: psi 45 with gamma 30 starts with foot 1 off the ground (bad input), psi 0 with
+    # gamma 60 folds, psi 45 with A 60 loses a contact
+    grid = {"gait.psi_deg": [0.0, 45.0], "gait.gamma_deg": [30.0, 60.0, 90.0], "gait.A_deg": [30.0, 60.0]}
+    res = run_sweep(PAPER, grid, out_dir=tmp_path / "f", jobs=2, extra_columns=("W_plus_joint", "cycles"))
+    status = res.status_array()
+    assert status.shape == (2, 3, 2)
+    assert status[0, 1, 0] == "fold"
+    assert status[1, 0, 0] == "bad_input"
+    assert status[1, 2, 0] == "success"
+    assert len(set(status.ravel())) >= 4  # success, bad_input, fold and a lost contact at least
+    for row in res.rows:
+        ref_status, ref_message = reference_status([f"{k}={row[k]}" for k in res.keys])
+        assert (row["status"], row["message"]) == (ref_status, ref_message)
+        if row["status"] != "success":
+            assert all(math.isnan(row[c]) for c in NUMBERS)
+    bad = res.rows[6]  # psi 45, gamma 30, A 30
+    assert "foot 1 off the ground" in bad["message"] and "gamma_deg = 30.0" in bad["message"]
+    s = res.array("S")
+    assert np.isnan(s[status != "success"]).all() and np.isfinite(s[status == "success"]).all()
+    w = res.array("W_plus_joint")
+    assert w.shape == (2, 3, 2, 2)
+    ok = res.rows[-2]  # psi 45, gamma 90, A 30
+    assert ok["status"] == "success" and ok["cycles"] >= 2
+    assert w[1, 2, 0].sum() == pytest.approx(ok["W_plus"], rel=1e-12)
+    table = read_csv(tmp_path / "f" / RESULTS_FILE)
+    assert len(table) == 1 + 12 and table[0][-2:] == ["W_plus_joint", "cycles"]
+    col = table[0].index("status")
+    assert [r[col] for r in table[1:]] == list(status.ravel())
+    assert_same_rows(SweepResult.read(tmp_path / "f").rows, res.rows)
+
+
+def test_bad_extra_columns_and_arguments(tmp_path):
+    with pytest.raises(ValueError, match="did you mean 'cycles'"):
+        run_sweep(PAPER, {"robot.k": [0.1]}, extra_columns=("cycels",))
+    with pytest.raises(ValueError, match="valid"):
+        run_sweep(PAPER, {"robot.k": [0.1]}, extra_columns=("phi",))
+    with pytest.raises(ValueError, match="jobs"):
+        run_sweep(PAPER, {"robot.k": [0.1]}, jobs=0)
+    with pytest.raises(ValueError, match="mutually exclusive"):
+        run_sweep(PAPER, {"robot.k": [0.1]}, out_dir=tmp_path, resume=True, force=True)
+
+
+# --------------------------------------------------------------------------------------------
+# output directories: refuse to overwrite, resume, mismatch
+# --------------------------------------------------------------------------------------------
+def test_existing_output_needs_force_and_resume_checks_settings(tmp_path):
+    out = tmp_path / "s"
+    grid = {"gait.psi_deg": [30.0, 60.0]}
+    first = run_sweep(PAPER, grid, out_dir=out)
+    before = (out / RESULTS_FILE).read_bytes()
+    with pytest.raises(SweepError, match="already holds a sweep .*--resume.*--force"):
+        run_sweep(PAPER, grid, out_dir=out)
+    assert (out / RESULTS_FILE).read_bytes() == before
+    with pytest.raises(SweepError, match=r"differs .*grid gait.psi_deg: 2 values 30.0..60.0 -> 3 values"):
+        run_sweep(PAPER, {"gait.psi_deg": [30.0, 60.0, 90.0]}, out_dir=out, resume=True)
+    with pytest.raises(SweepError, match=r"\[robot\] k 0.1677 -> 0.2"):
+        run_sweep(load_problem(PAPER, ["robot.k=0.2"]), grid, out_dir=out, resume=True)
+    with pytest.raises(SweepError, match="extra columns"):
+        run_sweep(PAPER, grid, out_dir=out, resume=True, extra_columns=("cycles",))
+    again = run_sweep(PAPER, grid, out_dir=out, resume=True)  # complete: nothing to compute
+    assert again.computed == 0 and (out / RESULTS_FILE).read_bytes() == before
+    assert_same_rows(again.rows, first.rows)
+    forced = run_sweep(PAPER, {"gait.psi_deg": [90.0]}, out_dir=out, force=True)
+    assert forced.computed == 1 and len(read_csv(out / RESULTS_FILE)) == 2
+
+
+def test_resume_from_a_journal_with_a_torn_last_line(tmp_path):
+    out = tmp_path / "s"
+    grid = {"gait.psi_deg": [0.0, 45.0, 90.0], "gait.A_deg": [30.0, 60.0]}
+    ref = run_sweep(PAPER, grid, out_dir=out)
+    expected = (out / RESULTS_FILE).read_text()
+    # the state of a run killed while writing its fourth row: a journal of three rows and a torn line
+    lines = expected.splitlines(keepends=True)
+    journal = ["index," + lines[0]] + [f"{i}," + lines[1 + i] for i in (4, 0, 2)] + ["1,0.0,60.0,,,,fo"]
+    (out / JOURNAL_FILE).write_text("".join(journal))
+    (out / RESULTS_FILE).unlink()
+    with pytest.raises(SweepError, match="incomplete .3 of 6 points"):
+        SweepResult.read(out)
+    partial = SweepResult.read(out, partial=True)
+    assert list(partial.status_array().ravel()).count("missing") == 3
+    res = run_sweep(PAPER, grid, out_dir=out, resume=True)
+    assert res.computed == 3
+    assert (out / RESULTS_FILE).read_text() == expected
+    assert_same_rows(res.rows, ref.rows)
+
+
+def test_resume_after_the_sweep_process_is_killed(tmp_path):
+    """SIGKILL to the CLI's process group mid-sweep, then --resume: the same file as an uninterrupted run."""
+    specs = ["gait.psi_deg=0:180:10", "gait.gamma_deg=80:100:3"]
+    args = ["--set", "simulation.max_step=0.004"]  # ~70 ms per point: time to kill the run half-way
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), *[a for s in specs for a in ("--grid", s)],
+           *args, "--jobs", "2", "--out", str(out), "--no-progress"]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    journal = out / JOURNAL_FILE
+    deadline = time.monotonic() + 60
+    try:
+        while time.monotonic() < deadline and proc.poll() is None:
+            if journal.exists() and journal.read_text().count("\n") >= 1 + 4:
+                break
+            time.sleep(0.005)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+    assert proc.returncode == -signal.SIGKILL, "the sweep ended before it could be killed"
+    assert not (out / RESULTS_FILE).exists()
+    finished = SweepResult.read(out, partial=True)
+    n_done = int((finished.status_array() != "missing").sum())
+    assert 4 <= n_done < 30
+
+    code = main(cmd[3:] + ["--resume", "--json"])
+    assert code == 0
+    ref = run_sweep(load_problem(PAPER, ["simulation.max_step=0.004"]), grid_from_specs(specs),
+                    out_dir=tmp_path / "ref", jobs=2)
+    got, want = read_csv(out / RESULTS_FILE), read_csv(tmp_path / "ref" / RESULTS_FILE)
+    assert got[0] == want[0] and len(got) == len(want) == 31
+    keys = [tuple(r[:2]) for r in got[1:]]
+    assert len(set(keys)) == 30 and keys == [tuple(r[:2]) for r in want[1:]]
+    assert_same_rows(SweepResult.read(out).rows, ref.rows)
+    assert not journal.exists()
+
+
+# --------------------------------------------------------------------------------------------
+# CLI
+# --------------------------------------------------------------------------------------------
+def test_cli_sweep_json_and_summary(tmp_path, capsys):
+    out = tmp_path / "c"
+    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15", "--jobs", "1",
+                 "--out", str(out), "--json"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    data = json.loads(captured.out)
+    assert data["points"] == 2 and data["successes"] == 1 and data["failures"] == 1  # A 60 loses a contact
+    assert data["out_dir"] == str(out) and data["elapsed_s"] > 0 and data["best"]["point"] == {"gait.A_deg": 30.0}
+    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15", "--out", str(out),
+                 "--resume"])
+    captured = capsys.readouterr()
+    assert code == 0
+    assert "2 points" in captured.out and "success 1" in captured.out and "best S" in captured.out
+
+
+def test_cli_default_output_directory(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--jobs", "1"]) == 0
+    assert (tmp_path / "sweep_paper_gait" / RESULTS_FILE).exists()
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--grid", "gait.psi=0:1:2"], "did you mean gait.psi_deg"),
+    ([], "--grid"),
+    (["--grid", "gait.psi_deg=45", "--resume", "--force"], "not allowed with"),
+    (["--grid", "gait.psi_deg=45", "--jobs", "0"], "--jobs 0 is invalid"),
+    (["--grid", "gait.psi_deg=45", "--set", "robot.k=-1"], "k = -1"),
+])
+def test_cli_sweep_bad_input(tmp_path, capsys, argv, match):
+    code = main(["sweep", str(PAPER), "--out", str(tmp_path / "b"), *argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and err.startswith("ocp-crawl: error:")
+    assert match in err
+
+
+def test_cli_refuses_existing_output(tmp_path, capsys):
+    argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--jobs", "1", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    assert main(argv) == 2
+    assert "already holds a sweep" in capsys.readouterr().err
+    assert main(argv + ["--force"]) == 0
+
+
+# --------------------------------------------------------------------------------------------
+# Dask
+# --------------------------------------------------------------------------------------------
+def test_dask_local_cluster_gives_the_same_rows(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="the [cluster] extra (dask.distributed) is not installed")
+    grid = {"gait.psi_deg": [0.0, 45.0, 90.0], "gait.A_deg": [30.0, 60.0]}
+    pool = run_sweep(PAPER, grid, out_dir=tmp_path / "pool", jobs=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        res = run_sweep(PAPER, grid, out_dir=tmp_path / "dask", scheduler=cluster.scheduler_address)
+    assert res.computed == 6
+    assert_same_rows(res.rows, pool.rows)
+    assert (tmp_path / "dask" / RESULTS_FILE).read_text() == (tmp_path / "pool" / RESULTS_FILE).read_text()
