@@ -1,0 +1,303 @@
+"""Cross-check of the MPCC time-stepping simulator against the event-driven hybrid stepper.
+
+Both simulators run the same model and torque input.  For every number of steps per cycle N the
+time-stepping result is compared with the event-driven one on the step phases of the steady cycle
+(the event-driven stepper is evaluated exactly there through ``t_eval``):
+
+* S, W+ and CoT+ and their relative differences;
+* the largest deviation of phi over the cycle at the step phases;
+* the contact-mode sequence of each over the steady cycle, and for each event of the event-driven
+  stepper the phase of the step where the time-stepping changes mode (its lag, in steps);
+* the convergence order of S: the least-squares slope p of log|S_N - S_event| against log N (|error| ~ N^-p).
+
+What to expect.  Inside a mode the step equations are the mode's equations at t_n, so the
+time-stepping is exact there; errors come from transitions.  A change of mode is taken at the first
+step after the event (slip -> stick up to two steps late, because the step can only stop when the
+slip of a whole step reverses); the stick distance then carries an O(h^2) error (h = 1/N), so S
+converges with order about 2 when the gait has only stick-slip transitions.  When the slipping foot
+changes during slip (unequal friction), the step straddling the switch attributes its whole slip
+to one foot: an O(h) error in S whose size depends on where the event falls inside the step.
+
+``passed`` is True when, at the finest N, every difference is within :class:`CrossCheckTolerances`,
+the mode sequences agree and every event is matched within the lag window, and the measured order
+is at least ``min_order``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .hybrid import HybridOptions, simulate_torque
+from .inputs import as_signal
+from .model import Model
+from .mpcc import MPCCOptions
+from .result import CrawlResult
+from .timestepping import TimeSteppingOptions, simulate_mpcc
+
+
+@dataclass(frozen=True)
+class CrossCheckTolerances:
+    """PASS/FAIL thresholds of the cross-check (all applied at the finest N)."""
+
+    rel_S: float = 5e-3
+    """largest relative difference of S [-]"""
+    rel_W_plus: float = 5e-3
+    """largest relative difference of W+ [-]"""
+    rel_CoT_plus: float = 1e-2
+    """largest relative difference of CoT+ [-]"""
+    max_phi_dev: float = 5e-3
+    """largest deviation of phi over the steady cycle at the step phases [rad]"""
+    min_order: float = 1.0
+    """smallest accepted convergence order of S [-]"""
+    event_lag_steps: tuple[float, float] = (-0.25, 2.25)
+    """window of the lag (step phase - event phase) of a mode change, in steps"""
+    S_floor: float = 1e-6
+    """|S| below this [m] counts as no motion: relative differences of S and CoT+ use this instead"""
+
+    def __post_init__(self) -> None:
+        for name in ("rel_S", "rel_W_plus", "rel_CoT_plus", "max_phi_dev", "S_floor"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"CrossCheckTolerances.{name} must be a positive finite number, got {v!r}")
+        if isinstance(self.min_order, bool) or not isinstance(self.min_order, (int, float)) \
+                or not math.isfinite(self.min_order):
+            raise ValueError(f"CrossCheckTolerances.min_order must be a finite number, got {self.min_order!r}")
+        lo, hi = self.event_lag_steps
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ValueError(f"CrossCheckTolerances.event_lag_steps must be (lo, hi) with lo < hi, "
+                             f"got {self.event_lag_steps!r}")
+
+
+def convergence_order(steps, errors) -> float:
+    """Least-squares slope p of log(error) = c - p log(N); NaN with fewer than two positive errors."""
+    n = np.asarray(steps, float)
+    e = np.asarray(errors, float)
+    ok = (e > 0) & np.isfinite(e)
+    if np.count_nonzero(ok) < 2:
+        return float("nan")
+    slope = np.polyfit(np.log(n[ok]), np.log(e[ok]), 1)[0]
+    return float(-slope)
+
+
+def _rel(a: float, b: float, floor: float = 0.0) -> float:
+    """|a - b| / max(|b|, floor)."""
+    den = max(abs(b), floor)
+    return abs(a - b) / den if den > 0 else (0.0 if a == b else math.inf)
+
+
+def mode_sequence(res: CrawlResult) -> list[dict]:
+    """Modes over the steady cycle: the mode at its start, then one entry per event (phase within the cycle)."""
+    if len(res.mode) == 0:
+        return []
+    from .result import Mode
+
+    seq = [{"phase": 0.0, "mode": Mode(int(res.mode[0])).label, "kind": "start"}]
+    for e in res.events:
+        if res.t0 + 1e-12 < e.t <= res.t0 + 1 + 1e-12:
+            seq.append({"phase": float(e.t - res.t0), "mode": e.mode_after, "kind": e.kind})
+    return seq
+
+
+def _cyclic(labels: list[str]) -> list[str]:
+    """Cyclic sequence of distinct consecutive modes (the end of the cycle wraps to its start)."""
+    out = []
+    for m in labels:
+        if not out or out[-1] != m:
+            out.append(m)
+    while len(out) > 1 and out[-1] == out[0]:
+        out.pop()
+    return out
+
+
+def _same_cycle(a: list[str], b: list[str]) -> bool:
+    if len(a) != len(b):
+        return False
+    return any(a == b[i:] + b[:i] for i in range(len(b))) if a else True
+
+
+@dataclass(frozen=True)
+class CrossCheckRow:
+    """Comparison at one N (steps per cycle)."""
+
+    steps: int
+    success: bool
+    message: str
+    S: float
+    W_plus: float
+    CoT_plus: float
+    rel_diff_S: float
+    rel_diff_W_plus: float
+    rel_diff_CoT_plus: float
+    max_phi_dev: float
+    modes: tuple
+    event_lags: tuple
+    """(kind, mode_after, event phase, step phase or None, lag in steps or None) per event-driven event"""
+    modes_match: bool
+    time: float
+    """wall time of the time-stepping run [s]"""
+
+
+@dataclass(frozen=True)
+class CrossCheckResult:
+    """Outcome of :func:`crosscheck`; ``summary()`` is JSON-able, ``table()`` readable."""
+
+    event: CrawlResult
+    rows: tuple
+    order: float
+    tolerances: CrossCheckTolerances
+    checks: dict = field(default_factory=dict)
+    """name -> (value, threshold, passed)"""
+    passed: bool = False
+    event_modes: tuple = ()
+
+    @property
+    def finest(self) -> CrossCheckRow:
+        return self.rows[-1]
+
+    def summary(self) -> dict:
+        def num(x):
+            x = float(x)
+            return x if math.isfinite(x) else None
+
+        ev, fin = self.event, self.finest
+        return {
+            "passed": bool(self.passed),
+            "steps": [r.steps for r in self.rows],
+            "S_event": num(ev.S), "S_mpcc": num(fin.S), "rel_diff_S": num(fin.rel_diff_S),
+            "W_plus_event": num(ev.W_plus), "W_plus_mpcc": num(fin.W_plus), "rel_diff_W_plus": num(fin.rel_diff_W_plus),
+            "CoT_plus_event": num(ev.CoT_plus), "CoT_plus_mpcc": num(fin.CoT_plus),
+            "rel_diff_CoT_plus": num(fin.rel_diff_CoT_plus),
+            "max_phi_dev": num(fin.max_phi_dev), "order": num(self.order),
+            "event_status": ev.status_name, "event_message": ev.message,
+            "modes_event": list(self.event_modes),
+            "per_steps": [{
+                "steps": r.steps, "success": r.success, "message": r.message, "S_mpcc": num(r.S),
+                "W_plus_mpcc": num(r.W_plus), "CoT_plus_mpcc": num(r.CoT_plus), "rel_diff_S": num(r.rel_diff_S),
+                "abs_diff_S": num(abs(r.S - ev.S)), "rel_diff_W_plus": num(r.rel_diff_W_plus),
+                "rel_diff_CoT_plus": num(r.rel_diff_CoT_plus), "max_phi_dev": num(r.max_phi_dev),
+                "modes_mpcc": list(r.modes), "modes_match": r.modes_match,
+                "event_lags": [{"kind": k, "mode_after": m, "event_phase": num(te),
+                                "step_phase": None if ts is None else num(ts),
+                                "lag_steps": None if lag is None else num(lag)} for k, m, te, ts, lag in r.event_lags],
+                "time": num(r.time)} for r in self.rows],
+            "checks": {k: {"value": num(v), "threshold": t if isinstance(t, str) else num(t), "passed": bool(p)}
+                       for k, (v, t, p) in self.checks.items()},
+            "tolerances": {"rel_S": self.tolerances.rel_S, "rel_W_plus": self.tolerances.rel_W_plus,
+                           "rel_CoT_plus": self.tolerances.rel_CoT_plus,
+                           "max_phi_dev": self.tolerances.max_phi_dev, "min_order": self.tolerances.min_order,
+                           "event_lag_steps": list(self.tolerances.event_lag_steps),
+                           "S_floor": self.tolerances.S_floor},
+        }
+
+    def table(self) -> str:
+        ev = self.event
+        lines = [f"Cross-check: MPCC time-stepping vs event-driven ({ev.gravity} gravity)",
+                 f"event-driven: {ev.message}",
+                 f"  S = {ev.S * 1e3:.6f} mm, W+ = {ev.W_plus:.6g} J, CoT+ = {ev.CoT_plus:.6g}",
+                 "",
+                 f"{'N':>6} {'S_mpcc [mm]':>14} {'rel dS':>10} {'W+_mpcc [J]':>13} {'rel dW+':>10} "
+                 f"{'CoT+_mpcc':>11} {'rel dCoT+':>10} {'max|dphi| [rad]':>16} {'modes':>6} {'time [s]':>9}"]
+        for r in self.rows:
+            lines.append(f"{r.steps:>6d} {r.S * 1e3:>14.6f} {r.rel_diff_S:>10.2e} {r.W_plus:>13.6g} "
+                         f"{r.rel_diff_W_plus:>10.2e} {r.CoT_plus:>11.5g} {r.rel_diff_CoT_plus:>10.2e} "
+                         f"{r.max_phi_dev:>16.2e} {'same' if r.modes_match else 'DIFF':>6} {r.time:>9.2f}")
+            if not r.success:
+                lines.append(f"       run failed: {r.message}")
+        lines.append(f"measured convergence order of S: {self.order:.3f}")
+        lines.append("")
+        lines.append(f"mode sequence over the steady cycle, event phases (event-driven) vs step phases "
+                     f"(N = {self.finest.steps}):")
+        lines.append(f"  event-driven: " + " -> ".join(f"{m['mode']}@{m['phase']:.5f}" for m in self.event_modes))
+        lines.append(f"  time-stepping: " + " -> ".join(f"{m['mode']}@{m['phase']:.5f}" for m in self.finest.modes))
+        for k, m, te, ts, lag in self.finest.event_lags:
+            step = "unmatched" if ts is None else f"step phase {ts:.5f} (lag {lag:+.2f} steps)"
+            lines.append(f"  {k:<12} -> {m:<12} event phase {te:.5f}  {step}")
+        lines.append("")
+        for name, (value, thr, ok) in self.checks.items():
+            val = f"{value:.3g}" if isinstance(value, float) else str(value)
+            lines.append(f"  [{'PASS' if ok else 'FAIL'}] {name}: {val} (threshold {thr})")
+        lines.append(f"overall: {'PASS' if self.passed else 'FAIL'}")
+        return "\n".join(lines)
+
+
+def _event_lags(ev: CrawlResult, res: CrawlResult, N: int) -> list[tuple]:
+    """Match each steady event of the event-driven run with the time-stepping mode change of the same kind."""
+    ts_events = [(e.t - res.t0, e.mode_before, e.mode_after) for e in res.events
+                 if res.t0 + 1e-12 < e.t <= res.t0 + 1 + 1e-12]
+    out = []
+    for e in ev.steady_events():
+        te = e.t - ev.t0
+        cands = [t for t, mb, ma in ts_events if ma == e.mode_after and mb == e.mode_before]
+        if not cands:
+            out.append((e.kind, e.mode_after, te, None, None))
+            continue
+        # cyclic phase difference in (-1/2, 1/2]
+        lags = [((t - te + 0.5) % 1.0) - 0.5 for t in cands]
+        j = int(np.argmin(np.abs(lags)))
+        out.append((e.kind, e.mode_after, te, cands[j], lags[j] * N))
+    return out
+
+
+def crosscheck(model: Model, torque, steps=(50, 100, 200, 400), tolerances: CrossCheckTolerances | None = None,
+               mpcc_options: TimeSteppingOptions | MPCCOptions | None = None,
+               hybrid_options: HybridOptions | None = None) -> CrossCheckResult:
+    """Run the event-driven and the MPCC time-stepping simulators on ``torque`` and compare them (see module doc).
+
+    ``steps``: increasing numbers of steps per cycle (at least two for the convergence order).
+    """
+    import time
+
+    steps = tuple(int(n) for n in steps)
+    if len(steps) < 2 or any(n < 4 for n in steps) or list(steps) != sorted(set(steps)):
+        raise ValueError(f"steps must be at least two strictly increasing integers >= 4, got {steps!r}")
+    tol = CrossCheckTolerances() if tolerances is None else tolerances
+    if not isinstance(tol, CrossCheckTolerances):
+        raise TypeError(f"tolerances must be CrossCheckTolerances, got {type(tol).__name__}")
+    torque = as_signal(torque)
+    ev = simulate_torque(model, torque, hybrid_options)
+    event_modes = tuple(mode_sequence(ev))
+    rows = []
+    for N in steps:
+        t_start = time.perf_counter()
+        res = simulate_mpcc(model, torque, steps=N, options=mpcc_options)
+        elapsed = time.perf_counter() - t_start
+        if not (res.success and ev.success):
+            rows.append(CrossCheckRow(N, res.success, res.message, res.S, res.W_plus, res.CoT_plus, math.inf,
+                                      math.inf, math.inf, math.inf, tuple(mode_sequence(res)), (), False, elapsed))
+            continue
+        ev_n = simulate_torque(model, torque, hybrid_options, t_eval=(res.t - res.t0))
+        dev = float(np.max(np.abs(ev_n.phi - res.phi))) if ev_n.success else math.inf
+        modes = tuple(mode_sequence(res))
+        match = _same_cycle(_cyclic([m["mode"] for m in event_modes]), _cyclic([m["mode"] for m in modes]))
+        rows.append(CrossCheckRow(
+            N, True, res.message, res.S, res.W_plus, res.CoT_plus, _rel(res.S, ev.S, tol.S_floor),
+            _rel(res.W_plus, ev.W_plus), _rel(res.CoT_plus, ev.CoT_plus) if abs(ev.S) >= tol.S_floor else 0.0,
+            dev, modes, tuple(_event_lags(ev, res, N)), match, elapsed))
+    errors = [abs(r.S - ev.S) for r in rows]
+    order = convergence_order(steps, errors)
+    fin = rows[-1]
+    lo, hi = tol.event_lag_steps
+    lags = [lag for *_, lag in fin.event_lags]
+    lags_ok = all(lag is not None and lo <= lag <= hi for lag in lags)
+    moving = abs(ev.S) >= tol.S_floor
+    checks = {
+        "all runs succeeded": (float(ev.success and all(r.success for r in rows)), "1", ev.success and all(r.success for r in rows)),
+        f"rel diff S at N={fin.steps}": (fin.rel_diff_S, tol.rel_S, fin.rel_diff_S <= tol.rel_S),
+        f"rel diff W+ at N={fin.steps}": (fin.rel_diff_W_plus, tol.rel_W_plus, fin.rel_diff_W_plus <= tol.rel_W_plus),
+        f"rel diff CoT+ at N={fin.steps}": (fin.rel_diff_CoT_plus, tol.rel_CoT_plus,
+                                            fin.rel_diff_CoT_plus <= tol.rel_CoT_plus),
+        f"max |phi dev| at N={fin.steps} [rad]": (fin.max_phi_dev, tol.max_phi_dev, fin.max_phi_dev <= tol.max_phi_dev),
+        "mode sequences agree": (float(fin.modes_match), "1", fin.modes_match),
+        f"event lags within {list(tol.event_lag_steps)} steps": (
+            max((abs(x) for x in lags if x is not None), default=0.0) if lags_ok else math.inf,
+            f"{lo}..{hi}", lags_ok),
+    }
+    if moving:
+        checks["convergence order of S"] = (order, tol.min_order, bool(order >= tol.min_order))
+    else:
+        # no net motion: the errors are round-off and have no order
+        checks["convergence order of S (no motion: S errors)"] = (max(errors), tol.S_floor, max(errors) <= tol.S_floor)
+    passed = all(ok for *_, ok in checks.values())
+    return CrossCheckResult(ev, tuple(rows), order, tol, checks, passed, event_modes)

@@ -1,0 +1,295 @@
+"""Time-stepping simulation of the torque-driven crawler: one MPCC step (:mod:`ocp_crawl.mpcc`) per grid phase.
+
+The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n takes the state at
+t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
+from step n-1.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
+with f_t = 0, stick-stick) and continues cycle by cycle until the state at the end of a cycle
+repeats (or for a given number of cycles); the last cycle is reported in a
+:class:`~ocp_crawl.result.CrawlResult` with the same fields as the event-driven result.
+
+Metrics on the grid of the reported cycle:
+
+* S = x1(t0 + 1) - x1(t0) [m];
+* W+ by the midpoint rule on each step: sum_n sum_i max(0, tau_i(t_{n-1/2}) (phi_i,n - phi_i,n-1)) [J]
+  (second order on smooth stretches, where the right-end rule tau_i(t_n) would be first order);
+* energy: input work sum_n tau(t_{n-1/2}) . (phi_n - phi_{n-1}), potential change, friction
+  dissipation sum_n -(f_t1 dx1 + f_t2 dx2) with the forces of step n.
+
+Failures stop the run with a status: a step that IPOPT cannot solve (after retries) gives
+``SOLVER_FAILURE``, or ``LIFT_OFF`` if the mode-enumeration oracle finds that every equilibrium of
+the step has a normal force <= 0; the message names the step, its phase and the IPOPT return status.
+A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint at or below
+the ground ``JOINT_ON_GROUND``; a sign change of the
+Jacobian determinant of the active mode's equations within one mode, or a jump of phi larger than
+``max_dphi`` in one step, gives ``FOLD`` (the tracked equilibrium branch was lost).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .hybrid import HybridStepper
+from .inputs import PeriodicSignal, as_signal
+from .model import Model
+from .mpcc import MPCCOptions, MPCCStep, StepResult, StepState, step_params
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
+from .step_oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
+
+
+@dataclass(frozen=True)
+class TimeSteppingOptions:
+    """Options of the time-stepping simulator."""
+
+    mpcc: MPCCOptions = field(default_factory=MPCCOptions)
+    """options of the step solver"""
+    max_cycles: int = 10
+    """cycles to run before declaring the gait non-periodic (when ``cycles`` is not given)"""
+    min_cycles: int = 2
+    """cycles always run (the first one is a transient from the released start)"""
+    periodic_tol: float = 1e-8
+    """periodicity: max |phi change| [rad] and |f_t change|/(M g) between consecutive cycle ends"""
+    max_dphi: float = 0.35
+    """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.mpcc, MPCCOptions):
+            raise TypeError(f"TimeSteppingOptions.mpcc must be MPCCOptions, got {type(self.mpcc).__name__}")
+        for name in ("periodic_tol", "max_dphi"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ValueError(f"TimeSteppingOptions.{name} must be a positive finite number, got {v!r}")
+        if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, int) or self.max_cycles < 2:
+            raise ValueError(f"TimeSteppingOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
+        if isinstance(self.min_cycles, bool) or not isinstance(self.min_cycles, int) \
+                or not 1 <= self.min_cycles <= self.max_cycles:
+            raise ValueError(f"TimeSteppingOptions.min_cycles must be an integer in [1, max_cycles], "
+                             f"got {self.min_cycles!r}")
+
+
+def event_kind(before: Mode, after: Mode) -> str:
+    """Name of a mode change, in the vocabulary of :class:`~ocp_crawl.result.Event` where it has one."""
+    if before == Mode.STICK:
+        return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
+    if after == Mode.STICK:
+        return "slip_to_stick"
+    if before.foot == 3:
+        return "slip_slip_end"
+    if after.foot == 3:
+        return "slip_slip_start"
+    if after.foot != before.foot:
+        return "slip_switch"
+    return "slip_reversal"
+
+
+class _Stop(Exception):
+    def __init__(self, status: Status, diagnosis: str, detail: str, t: float, mode: Mode):
+        detail = f"{detail}; {diagnosis}" if diagnosis else detail
+        super().__init__(detail)
+        self.status, self.detail, self.t, self.mode = status, detail, t, mode
+
+
+class TimeStepper:
+    """MPCC time-stepping of a torque-driven gait with N steps per cycle.  Build once, call :meth:`run`."""
+
+    def __init__(self, model: Model, torque, steps: int = 200, options: TimeSteppingOptions | MPCCOptions | None = None):
+        if not isinstance(model, Model):
+            raise TypeError(f"model must be a Model, got {type(model).__name__}")
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 4:
+            raise ValueError(f"steps must be an integer >= 4 (steps per cycle), got {steps!r}")
+        if options is None:
+            options = TimeSteppingOptions()
+        elif isinstance(options, MPCCOptions):
+            options = TimeSteppingOptions(mpcc=options)
+        elif not isinstance(options, TimeSteppingOptions):
+            raise TypeError(f"options must be TimeSteppingOptions or MPCCOptions, got {type(options).__name__}")
+        self.model = model
+        self.torque: PeriodicSignal = as_signal(torque)
+        self.steps = int(steps)
+        self.opt = options
+        self.step = MPCCStep(model, options.mpcc)
+        self._jac = mode_system()
+        r = model.robot
+        self.Mg = r.M * r.g
+
+    def _det(self, res: StepResult, state: StepState, tau: np.ndarray) -> float:
+        """Determinant of the Jacobian of the active mode's equations at the step solution."""
+        # slip-slip (equal limits) is solved by the equations of either foot: use foot 1's
+        mode = res.mode if res.mode in ENUM_MODES else Mode.slip(1, res.mode.sigma)
+        z = np.array([res.phi[0], res.phi[1], res.f_t / self.Mg])
+        J = np.asarray(self._jac(z, step_params(self.model, state, tau), selector(mode))[1])
+        return float(np.linalg.det(J))
+
+    def _diagnose(self, state: StepState, tau: np.ndarray, mode: Mode) -> tuple[Status, str]:
+        """Status of a step IPOPT could not solve, from the mode-enumeration oracle: lift-off when
+        every mode solution has a normal force <= 0, a fold when no mode is consistent and the current
+        mode's equations have no solution near the last state, else a solver failure."""
+        orc = solve_step_enumerate(self.model, state, tau)
+        check = f"mode-enumeration check: {orc.message}"
+        if orc.extra.get("lift_off"):
+            return Status.LIFT_OFF, check
+        if not orc.success:
+            current = mode if mode in ENUM_MODES else Mode.slip(1, mode.sigma)
+            cand = next(c for c in orc.extra["candidates"] if c["mode"] == current.label)
+            if not cand["converged"] or np.max(np.abs(np.asarray(cand["phi"]) - state.phi)) > self.opt.max_dphi:
+                return Status.FOLD, f"{check}; the {mode.label} equilibrium branch ends within the step (fold)"
+        return Status.SOLVER_FAILURE, check
+
+    def run(self, cycles: int | None = None, t_eval=None) -> CrawlResult:
+        """Simulate from the released start; ``cycles``: exact number of cycles, or None to run until
+        periodic (at most ``max_cycles``).  ``t_eval``: phases in [0, 1] of the reported cycle for the
+        output arrays (linear interpolation between steps); by default the step phases."""
+        if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1):
+            raise ValueError(f"cycles must be a positive integer or None, got {cycles!r}")
+        opt = self.opt
+        N = self.steps
+        start = HybridStepper(self.model, self.torque).initial_state(0.0)
+        kin0 = self.model.kinematics(start.x[:2])
+        state = StepState(start.x[:2], 0.0, float(kin0["d"]), 0.0)
+        rows = [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1, state.x2, 0.0,
+                 float(kin0["fn1"]), float(kin0["fn2"]), int(Mode.STICK))]
+        events: list[Event] = []
+        mode = Mode.STICK
+        det_ref = None
+        prev: StepResult | None = None
+        times, retries, comp_max, eq_max, polished = [], 0, 0.0, 0.0, 0
+        cycle_ends = []
+        status, detail, fail_t, fail_mode = Status.SUCCESS, "", None, None
+        n = 0
+        ncycles = 0
+        n_target = None if cycles is None else int(cycles)
+        periodic_dev = float("nan")
+        try:
+            while True:
+                n += 1
+                t1 = n / N
+                tau = np.asarray(self.torque(t1), float).reshape(2)
+                res = self.step.solve(state, tau, warm_start=prev)
+                times.append(res.solve_time)
+                cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
+                where = f"step {n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+                if not res.success:
+                    raise _Stop(*self._diagnose(state, tau, mode), f"{where} failed with IPOPT return status "
+                                f"{res.status} [{res.message}]", t1, mode)
+                retries += res.attempts > 1
+                comp_max = max(comp_max, res.comp_residual)
+                eq_max = max(eq_max, res.eq_residual)
+                polished += bool(res.extra.get("polished"))
+                if min(res.f_n1, res.f_n2) <= 0:
+                    raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N", t1, mode)
+                if res.d <= 0:
+                    raise _Stop(Status.FEET_CROSSED, "", f"{where}: d = {res.d:.4g} m", t1, mode)
+                kin = self.model.kinematics(res.phi)
+                for i in (1, 2):
+                    if f"zj{i}" in kin and not kin[f"zj{i}"] > 0:
+                        raise _Stop(Status.JOINT_ON_GROUND, "", f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m",
+                                    t1, mode)
+                jump = float(np.max(np.abs(res.phi - state.phi)))
+                if jump > opt.max_dphi:
+                    raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)", t1, mode)
+                det = self._det(res, state, tau)
+                if res.mode != mode:
+                    events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan")))
+                    det_ref = None
+                if det_ref is not None and np.sign(det) != det_ref:
+                    raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
+                                             "sign (fold of the equilibrium branch)", t1, res.mode)
+                det_ref = np.sign(det) or det_ref
+                mode = res.mode
+                rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
+                             int(res.mode)))
+                state, prev = res.next_state(), res
+                if n % N:
+                    continue
+                ncycles += 1
+                cycle_ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
+                if len(cycle_ends) >= 2:
+                    (pa, fa, ma), (pb, fb, mb) = cycle_ends[-2], cycle_ends[-1]
+                    periodic_dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
+                if n_target is not None:
+                    if ncycles >= n_target:
+                        break
+                    continue
+                if ncycles >= opt.min_cycles and len(cycle_ends) >= 2 and periodic_dev <= opt.periodic_tol \
+                        and cycle_ends[-1][2] == cycle_ends[-2][2]:
+                    break
+                if ncycles >= opt.max_cycles:
+                    raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {ncycles} cycles (last change "
+                                                     f"{periodic_dev:.3g})", t1, mode)
+        except _Stop as stop:
+            status, detail, fail_t, fail_mode = stop.status, stop.detail, stop.t, stop.mode.label
+        stats = {"steps_per_cycle": N, "ipopt_calls": self.step.ncalls, "retried_steps": retries,
+                 "step_time_median": float(np.median(times)) if times else float("nan"),
+                 "step_time_total": float(np.sum(times)), "max_comp_residual": comp_max,
+                 "max_eq_residual": eq_max, "polished_steps": polished, "W_plus_rule": "midpoint",
+                 "periodicity_deviation": periodic_dev}
+        return self._build_result(rows, events, status, detail, fail_t, fail_mode, ncycles, t_eval, stats, n)
+
+    # ------------------------------------------------------------------ output
+    def _build_result(self, rows, events, status, detail, fail_t, fail_mode, ncycles, t_eval, stats, nsteps):
+        model, N = self.model, self.steps
+        res = CrawlResult(success=status == Status.SUCCESS, status=int(status), message="", drive="torque",
+                          gravity=model.gravity, events=events, cycles=ncycles, failure_t=fail_t,
+                          failure_mode=fail_mode, nfev=stats["ipopt_calls"], nsteps=nsteps, extra=stats)
+        if status == Status.SUCCESS:
+            t0 = float(ncycles - 1)
+            res.message = (f"{STATUS_MESSAGES[status]} after {ncycles} cycles of {N} MPCC steps; "
+                           f"steady cycle t in [{t0:g}, {t0 + 1:g}]")
+            lo, hi = (ncycles - 1) * N, ncycles * N
+        else:
+            t0 = float(max(0, math.floor((fail_t - 1e-12) if fail_t is not None else 0.0)))
+            res.message = f"{STATUS_MESSAGES[status]}: {detail}"
+            lo, hi = int(round(t0 * N)), len(rows) - 1
+        res.t0 = t0
+        sel = rows[lo:hi + 1]
+        t = np.array([r[0] for r in sel])
+        phi = np.stack([r[1] for r in sel], axis=1)
+        cols = {name: np.array([r[i] for r in sel]) for i, name in
+                ((2, "theta"), (3, "d"), (4, "x1"), (5, "x2"), (6, "f_t"), (7, "f_n1"), (8, "f_n2"))}
+        mode = np.array([r[9] for r in sel], dtype=int)
+        if status == Status.SUCCESS:
+            self._metrics(res, t, phi, cols)
+            res.periodicity_residual = stats["periodicity_deviation"]
+        if t_eval is not None:
+            te = t0 + np.asarray(t_eval, dtype=float).ravel()
+            if len(t) < 2 or np.any(te < t[0] - 1e-12) or np.any(te > t[-1] + 1e-12):
+                raise ValueError("t_eval must lie in [0, 1] (phase within the reported cycle)")
+            phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
+            cols = {k: np.interp(te, t, v) for k, v in cols.items()}
+            mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]
+            t = te
+        res.t, res.phi, res.mode = t, phi, mode
+        for k, v in cols.items():
+            setattr(res, k, v)
+        res.tau = np.asarray(self.torque(t), float).reshape(2, -1)
+        return res
+
+    def _metrics(self, res: CrawlResult, t, phi, cols) -> None:
+        model = self.model
+        r = model.robot
+        tau_mid = np.asarray(self.torque(0.5 * (t[1:] + t[:-1])), float).reshape(2, -1)
+        dphi = np.diff(phi, axis=1)
+        work = tau_mid * dphi
+        res.S = float(cols["x1"][-1] - cols["x1"][0])
+        res.W_plus_joint = np.maximum(work, 0.0).sum(axis=1)
+        res.W_plus = float(res.W_plus_joint.sum())
+        res.CoT_plus = cost_of_transport(res.W_plus, r, res.S)
+        dx1, dx2 = np.diff(cols["x1"]), np.diff(cols["x2"])
+        # friction on the robot is f_t at foot 1 and -f_t at foot 2 (forces of the step's end)
+        diss = float(np.sum(-(cols["f_t"][1:] * dx1 - cols["f_t"][1:] * dx2)))
+        w_in = float(work.sum())
+        dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))
+        scale = max(abs(w_in), abs(diss), abs(dV), 1e-300)
+        res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss,
+                      "balance_residual": (w_in - dV - diss) / scale}
+
+
+def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,
+                  options: TimeSteppingOptions | MPCCOptions | None = None, t_eval=None) -> CrawlResult:
+    """MPCC time-stepping simulation of a torque-driven gait with ``steps`` steps per cycle (see module docstring).
+
+    ``cycles``: number of cycles to run, or None to run until periodic (at most ``options.max_cycles``).
+    """
+    return TimeStepper(model, torque, steps, options).run(cycles=cycles, t_eval=t_eval)
