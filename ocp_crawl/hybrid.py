@@ -40,6 +40,8 @@ from .quadrature import gauss_nodes
 from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
 
 EPS = np.finfo(float).eps
+#: phases of the default output grid over the steady cycle (events are added)
+DEFAULT_OUTPUT_POINTS = 201
 #: largest |mu1 f_n1 - mu2 f_n2|/(M g) for which the slip-slip mode is kept
 SYMMETRY_TOL = 1e-8
 
@@ -71,14 +73,23 @@ class HybridOptions:
     def __post_init__(self) -> None:
         for name in ("max_step", "min_step", "event_xtol", "residual_tol", "periodic_tol", "trial_step", "quad_h"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"HybridOptions.{name} must be a positive finite number, got {v!r}")
         if self.max_step > 0.25:
             raise ValueError(f"HybridOptions.max_step must be <= 0.25 cycles, got {self.max_step!r}")
-        if not (isinstance(self.max_cycles, int) and self.max_cycles >= 2):
+        if isinstance(self.max_cycles, bool) or not (isinstance(self.max_cycles, int) and self.max_cycles >= 2):
             raise ValueError(f"HybridOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
         if not (isinstance(self.min_cycles, int) and 1 <= self.min_cycles <= self.max_cycles):
             raise ValueError(f"HybridOptions.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")
+
+
+def event_kind(guard: str) -> str:
+    """Public event kind of an internal guard name (see :class:`~ocp_crawl.result.Event`)."""
+    if guard.startswith("slip_"):
+        return f"slip_onset_{guard[5]}"
+    if guard.startswith("switch_to_"):
+        return "slip_switch"
+    return {"stick": "slip_to_stick", "asymmetry": "slip_slip_end"}.get(guard, guard)
 
 
 def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
@@ -170,7 +181,8 @@ class HybridStepper:
     def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
         """Guard functions of a mode (scaled, positive while the mode is valid)."""
         Mg, L = self.Mg, self.L
-        g = {"lift_off_1": aux[AUX["fn1"]] / Mg, "lift_off_2": aux[AUX["fn2"]] / Mg, "feet_crossed": aux[AUX["d"]] / L}
+        g = {"lift_off_1": aux[AUX["fn1"]] / Mg, "lift_off_2": aux[AUX["fn2"]] / Mg, "feet_crossed": aux[AUX["d"]] / L,
+             "joint_1_on_ground": aux[AUX["zj1"]] / L, "joint_2_on_ground": aux[AUX["zj2"]] / L}
         ft = aux[AUX["ft"]]
         lim = {1: aux[AUX["lim1"]], 2: aux[AUX["lim2"]]}
         if mode == Mode.STICK:
@@ -192,6 +204,8 @@ class HybridStepper:
             return Status.LIFT_OFF
         if kind == "feet_crossed":
             return Status.FEET_CROSSED
+        if kind.startswith("joint_"):
+            return Status.JOINT_ON_GROUND
         if kind.startswith("slip_"):
             return Mode.slip(int(kind[5]), +1 if kind[6] == "+" else -1)
         if kind == "stick":
@@ -333,7 +347,8 @@ class HybridStepper:
         """Simulate cycles from a released start until the gait is periodic; report the steady cycle.
 
         ``t_eval``: optional phases in [0, 1] (relative to the start of the steady cycle) for the
-        output arrays; by default the accepted steps and event points of the steady cycle.
+        output arrays; by default 201 equally spaced phases plus the event phases.  A failed run
+        reports the accepted steps and events up to the failure.
         """
         self.nfev = 0
         self.nsteps = 0
@@ -378,6 +393,7 @@ class HybridStepper:
                         if hh < 1e-3:
                             fold = self._locate_fold(pt, seg.q, t_new)
                             if fold is not None and fold[0] <= t_new + 1e-12 and fold[2] < 1e-6:
+                                events.append(Event(fold[0], "fold", seg.mode.label, "failure", fold[2], "det"))
                                 raise _Failure(Status.FOLD, fold[0], seg.mode,
                                                f"fold of the {seg.mode.label} equilibrium branch",
                                                {"fold_x": fold[1].tolist(), "fold_sigma_ratio": fold[2]})
@@ -404,7 +420,7 @@ class HybridStepper:
                         seg.points.append(ev_pt)
                     target = self._transition(seg.mode, kind)
                     if isinstance(target, Status):
-                        events.append(Event(t_ev, kind, seg.mode.label, "failure", g_ev))
+                        events.append(Event(t_ev, event_kind(kind), seg.mode.label, "failure", g_ev, kind))
                         raise _Failure(target, t_ev, seg.mode, f"{kind.replace('_', ' ')}")
                     new_d0 = ev_pt.aux[AUX["d"]]
                     trial = self._consistent(target, ev_pt, new_d0)
@@ -423,7 +439,7 @@ class HybridStepper:
                                            f"after event {kind}: {len(found)} consistent successor modes "
                                            f"(table successor {target.label} is inconsistent)")
                         chosen, trial = found[0]
-                    events.append(Event(t_ev, kind, seg.mode.label, chosen.label, g_ev))
+                    events.append(Event(t_ev, event_kind(kind), seg.mode.label, chosen.label, g_ev, kind))
                     events_in_cycle += 1
                     if events_in_cycle > opt.max_events_per_cycle:
                         raise _Failure(Status.TOO_MANY_EVENTS, t_ev, chosen,
@@ -573,6 +589,10 @@ class HybridStepper:
                           f"(cycle {int(math.floor(fail_t)) + 1}, phase {fail_t % 1:.10f}) in mode {fail_mode}"
         res.t0 = t0
         t1 = t0 + 1.0 if status == Status.SUCCESS else (fail_t if fail_t is not None else t0)
+        if t_eval is None and status == Status.SUCCESS:
+            # default output: a uniform grid plus the event phases of the steady cycle
+            t_eval = np.unique(np.concatenate([np.linspace(0.0, 1.0, DEFAULT_OUTPUT_POINTS),
+                                               [e.t - t0 for e in events if t0 <= e.t <= t0 + 1]]))
         # output samples
         rows = []
         if t_eval is None:

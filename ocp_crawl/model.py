@@ -116,7 +116,7 @@ PAPER_PRESSURE_COEFFS = {"a1": 0.092, "a2": 0.089, "b1": 0.127, "b2": 0.144}
 @dataclass(frozen=True)
 class _Symbolic:
     kin: cs.Function
-    """(phi[2], p) -> [theta, d, xc, Delta, fn1, fn2, grad_d[2], grad_Ug[2], U_el, U_g]"""
+    """(phi[2], p) -> [theta, d, xc, Delta, fn1, fn2, grad_d[2], grad_Ug[2], U_el, U_g, zj1, zj2]"""
     residual: cs.Function
     """(phi[2], tau[2], f_t, p) -> F[2]: joint equilibrium residual [N m]"""
     hold_torque: cs.Function
@@ -137,7 +137,7 @@ class _Symbolic:
 #: names of the auxiliary outputs returned with every mode solve
 AUX_NAMES = (
     "theta", "d", "xc", "Delta", "fn1", "fn2", "ft", "ddot",
-    "dphi1", "dphi2", "dft", "det", "res", "lim1", "lim2",
+    "dphi1", "dphi2", "dft", "det", "res", "lim1", "lim2", "zj1", "zj2",
 )
 AUX = {n: i for i, n in enumerate(AUX_NAMES)}
 NAUX = len(AUX_NAMES)
@@ -166,7 +166,8 @@ def _geometry(phi, p):
     # normal forces from the external balance (workless constraint forces)
     fn2 = xc / d * M * g
     fn1 = M * g - fn2
-    return dict(l=l, m=m, theta=theta, a=a, c=c, d=d, xc=xc, U_g=U_g, U_el=U_el, fn1=fn1, fn2=fn2)
+    return dict(l=l, m=m, theta=theta, a=a, c=c, d=d, xc=xc, U_g=U_g, U_el=U_el, fn1=fn1, fn2=fn2,
+                zj1=l * cs.sin(a), zj2=l * cs.sin(c))
 
 
 @lru_cache(maxsize=1)
@@ -193,7 +194,7 @@ def symbolic() -> _Symbolic:
     kin = cs.Function(
         "kin", [phi, p],
         [cs.vertcat(geo["theta"], d, geo["xc"], Delta, geo["fn1"], geo["fn2"], grad_d, grad_Ug,
-                    geo["U_el"], geo["U_g"])],
+                    geo["U_el"], geo["U_g"], geo["zj1"], geo["zj2"])],
         ["phi", "p"], ["kin"],
     )
     residual = cs.Function("residual", [phi, tau, ft, p], [F], ["phi", "tau", "ft", "p"], ["F"])
@@ -222,7 +223,7 @@ def symbolic() -> _Symbolic:
     Delta_x = geo_x["xc"] - geo_x["d"] / 2
     aux = cs.vertcat(
         geo_x["theta"], geo_x["d"], geo_x["xc"], Delta_x, geo_x["fn1"], geo_x["fn2"], x[2] * Mg,
-        ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2,
+        ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2, geo_x["zj1"], geo_x["zj2"],
     )
     assert aux.shape[0] == NAUX
     evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"], ["aux"])
@@ -351,7 +352,7 @@ def call_mapped(fun: cs.Function, *args) -> np.ndarray:
 
 
 KIN_NAMES = ("theta", "d", "xc", "Delta", "fn1", "fn2", "grad_d1", "grad_d2", "grad_Ug1", "grad_Ug2",
-             "U_el", "U_g")
+             "U_el", "U_g", "zj1", "zj2")
 KIN = {n: i for i, n in enumerate(KIN_NAMES)}
 
 
@@ -419,6 +420,9 @@ class Model:
             raise ValueError(f"{where}: feet crossed or coincident (d = {kin['d']:.4g} m <= 0) at phi = "
                              f"{np.degrees(phi).round(3).tolist()} deg")
         for i in (1, 2):
+            if not kin[f"zj{i}"] > 0:
+                raise ValueError(f"{where}: joint {i} at or below the ground (height {kin[f'zj{i}'] * 1e3:.4g} mm) at "
+                                 f"phi = {np.degrees(phi).round(3).tolist()} deg; the legs must stand above the ground")
             if not kin[f"fn{i}"] > 0:
                 raise ValueError(f"{where}: foot {i} off the ground (f_n{i} = {kin[f'fn{i}']:.4g} N <= 0) at "
                                  f"phi = {np.degrees(phi).round(3).tolist()} deg; valid configurations keep "

@@ -47,7 +47,7 @@ class _Kinematic:
 #: |mu1 f_n1 - mu2 f_n2|/(M g) below which both friction limits are taken as equal (both feet slip)
 TIE = 1e-12
 #: feet closer than TOUCH * L are taken as meeting (d only touches zero in symmetric folds)
-TOUCH = 1e-9
+TOUCH = 1e-8
 
 
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
@@ -83,7 +83,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     for j in np.nonzero((d[1:-1] <= d[:-2]) & (d[1:-1] <= d[2:]))[0] + 1:
         if t_cross is not None and ts[j - 1] >= t_cross:
             break
-        if d[j] > 1e-3 * robot.L:
+        if d[j] > 0.05 * robot.L:
             continue
         opt = minimize_scalar(dmin_f, bounds=(ts[j - 1], ts[j + 1]), method="bounded", options={"xatol": 1e-13})
         if not (opt.fun > TOUCH * robot.L) and (t_cross is None or opt.x < t_cross):
@@ -91,8 +91,9 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             break
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
-    for i in (1, 2):
-        name = f"fn{i}"
+    checks = [(f"fn{i}", Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}") for i in (1, 2)]
+    checks += [(f"zj{i}", Status.JOINT_ON_GROUND, f"joint {i} reaches the ground", f"joint_{i}_on_ground") for i in (1, 2)]
+    for name, status, label, kind in checks:
         bad = np.nonzero(~(K[name] > 0))[0]
         if not bad.size or (t_cross is not None and ts[bad[0] - 1] >= t_cross):
             continue
@@ -105,8 +106,12 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             tf = brentq(f, ts[j - 1], hi, xtol=1e-14)
         else:
             continue
+        if name.startswith("zj") and abs(f(tf)) > 1e-6 * robot.L:
+            # the joint height jumps instead of vanishing: theta changes branch, which happens
+            # where the feet meet (d = 0) and the body would flip over
+            status, label, kind = Status.FEET_CROSSED, "feet meet or cross", "feet_crossed"
         if failure is None or tf < failure[0]:
-            failure = (tf, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}")
+            failure = (tf, status, label, kind)
     if failure is not None:
         tf, status, label, kind = failure
         res.status = int(status)

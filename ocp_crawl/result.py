@@ -20,6 +20,7 @@ class Status(IntEnum):
     NO_CONSISTENT_MODE = 6
     TOO_MANY_EVENTS = 7
     SOLVER_FAILURE = 8
+    JOINT_ON_GROUND = 9
 
 
 STATUS_MESSAGES = {
@@ -33,6 +34,8 @@ STATUS_MESSAGES = {
     Status.NO_CONSISTENT_MODE: "no contact mode is consistent after a transition",
     Status.TOO_MANY_EVENTS: "too many events in one cycle (chattering input?)",
     Status.SOLVER_FAILURE: "the step solver failed",
+    Status.JOINT_ON_GROUND: "a joint reaches the ground (the leg would enter it): the model with contacts "
+                            "at the feet only is no longer valid",
 }
 
 
@@ -80,7 +83,13 @@ class Mode(IntEnum):
 
 @dataclass(frozen=True)
 class Event:
-    """A located event: phase t (cycles, counted from the start of the run), kind, modes before/after."""
+    """A located event: phase t (cycles, counted from the start of the run), kind, modes before/after.
+
+    Kinds: ``slip_onset_1``/``slip_onset_2`` (stick-stick -> foot i slips; the direction is in
+    ``mode_after``), ``slip_to_stick`` (d' = 0), ``slip_switch`` (the slipping foot changes),
+    ``slip_slip_end``, ``lift_off_1``/``lift_off_2``, ``feet_crossed``, ``joint_1_on_ground``/
+    ``joint_2_on_ground``, ``fold``; prescribed angles: ``slip_reversal``, ``slip_switch``.
+    """
 
     t: float
     kind: str
@@ -88,10 +97,12 @@ class Event:
     mode_after: str
     guard: float = 0.0
     """value of the event's guard function at the located phase"""
+    guard_name: str = ""
+    """name of the guard function that located the event (solver internal)"""
 
     def to_dict(self) -> dict:
         return {"t": self.t, "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
-                "guard": self.guard}
+                "guard": self.guard, "guard_name": self.guard_name}
 
 
 def cost_of_transport(w_plus: float, robot, S: float) -> float:

@@ -115,4 +115,6 @@ def test_check_contact(paper_robot):
     model = Model(paper_robot)
     model.check_contact(np.radians([90.0, 90.0]))
     with pytest.raises(ValueError, match="foot 2 off the ground"):
-        model.check_contact(np.radians([20.0, 40.0]))
+        model.check_contact(np.radians([30.0, 50.0]))
+    with pytest.raises(ValueError, match="joint 1 at or below the ground"):
+        model.check_contact(np.radians([-5.0, 90.0]))
