@@ -680,8 +680,11 @@ class _Store:
             raise SweepError(f"{self.settings_path}: cannot read: {exc}") from None
         return SweepSettings.from_dict(data, str(self.settings_path))
 
-    def read_done(self, settings: SweepSettings) -> dict[int, dict[str, Any]]:
-        """Finished rows by flat index: all of results.csv, else those of the journal."""
+    def read_done(self, settings: SweepSettings, repair: bool = False) -> dict[int, dict[str, Any]]:
+        """Finished rows by flat index: all of results.csv, else those of the journal.
+
+        ``repair`` (the writer only) cuts a line torn by a kill off the journal before appending to it.
+        """
         done: dict[int, dict[str, Any]] = {}
         if self.results_path.exists():
             lines = self.results_path.read_text().splitlines(keepends=True)
@@ -695,14 +698,14 @@ class _Store:
                 self._check_point(settings, i, row, self.results_path)
                 done[i] = row
         if self.journal_path.exists():
-            for i, row in self._read_journal(settings).items():
+            for i, row in self._read_journal(settings, repair).items():
                 done.setdefault(i, row)
         return done
 
-    def _read_journal(self, settings: SweepSettings) -> dict[int, dict[str, Any]]:
+    def _read_journal(self, settings: SweepSettings, repair: bool) -> dict[int, dict[str, Any]]:
         raw = self.journal_path.read_bytes()
         body, _, torn = raw.rpartition(b"\n")
-        if torn:
+        if torn and repair:
             # a run killed in the middle of writing a line: that point was not finished
             with open(self.journal_path, "r+b") as fh:
                 fh.truncate(len(body) + 1 if body else 0)
@@ -762,7 +765,7 @@ class _Store:
                 raise SweepError(f"{self.dir}: cannot resume: this sweep differs from its {SETTINGS_FILE} "
                                  f"(saved -> now: {'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); "
                                  "use another output directory, or --force to start over")
-            done = self.read_done(settings)
+            done = self.read_done(settings, repair=True)
         elif resume and ours:
             raise SweepError(f"{self.dir}: cannot resume: no {SETTINGS_FILE} to check the settings against; "
                              "use --force to start over")

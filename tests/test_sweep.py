@@ -238,8 +238,10 @@ def test_resume_from_a_journal_with_a_torn_last_line(tmp_path):
     (out / RESULTS_FILE).unlink()
     with pytest.raises(SweepError, match="incomplete .3 of 6 points"):
         SweepResult.read(out)
+    journal_bytes = (out / JOURNAL_FILE).read_bytes()
     partial = SweepResult.read(out, partial=True)
     assert list(partial.status_array().ravel()).count("missing") == 3
+    assert (out / JOURNAL_FILE).read_bytes() == journal_bytes  # a reader never repairs a journal
     res = run_sweep(PAPER, grid, out_dir=out, resume=True)
     assert res.computed == 3
     assert (out / RESULTS_FILE).read_text() == expected
