@@ -387,13 +387,17 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
     """Run one point; returns (index, row).  Failures come back as the row's status, never raised."""
     row: dict[str, Any] = dict(task.point)
     row.update({"S": math.nan, "W_plus": math.nan, "CoT_plus": math.nan})
+    row.update({name: None for name in task.extra_columns})
     overrides = [f"{k}={_toml_value(v)}" for k, v in task.point]
-    result = None
     try:
         data, _ = apply_overrides(task.problem, overrides, task.source)
         problem = problem_from_dict(data, source=task.source)
         with _RUN_LOCK:
             result = run_problem(problem)
+        summary = result.summary() if task.extra_columns else {}
+        row.update({name: _extra_value(result, name, summary) for name in task.extra_columns})
+        row.update(S=float(result.S), W_plus=float(result.W_plus), CoT_plus=float(result.CoT_plus),
+                   status=result.status_name, message=result.message)
     except ProblemError as exc:
         row.update(status=BAD_INPUT, message=str(exc))
     except ValueError as exc:
@@ -401,12 +405,6 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
         row.update(status=BAD_INPUT, message=f"{task.source}: {exc}")
     except Exception as exc:  # noqa: BLE001 - one broken point must not lose a long sweep; it is recorded
         row.update(status=ERROR, message=f"{type(exc).__name__}: {exc}")
-    if result is not None:
-        row.update(S=float(result.S), W_plus=float(result.W_plus), CoT_plus=float(result.CoT_plus),
-                   status=result.status_name, message=result.message)
-    summary = result.summary() if result is not None and task.extra_columns else {}
-    for name in task.extra_columns:
-        row[name] = _extra_value(result, name, summary) if result is not None else None
     # rows are compared after a CSV round trip: normalise to what the file holds
     return task.index, {k: _parse_cell(_cell(v)) if k in task.extra_columns else v for k, v in row.items()}
 

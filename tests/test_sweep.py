@@ -191,6 +191,21 @@ def test_failures_are_recorded_with_status_and_message(tmp_path):
     assert_same_rows(SweepResult.read(tmp_path / "f").rows, res.rows)
 
 
+def test_an_unexpected_exception_is_recorded_as_error(monkeypatch):
+    import ocp_crawl.sweep as sweep
+
+    def flaky(problem):
+        if problem.robot.k > 0.15:
+            raise RuntimeError("solver bug")
+        return run_problem(problem)
+
+    monkeypatch.setattr(sweep, "run_problem", flaky)
+    res = run_sweep(PAPER, {"robot.k": [0.1, 0.2]}, jobs=1)
+    assert list(res.status_array()) == ["success", "error"]
+    assert res.rows[1]["message"] == "RuntimeError: solver bug" and math.isnan(res.rows[1]["S"])
+    assert res.summary()["counts"] == {"error": 1, "success": 1}
+
+
 def test_bad_extra_columns_and_arguments(tmp_path):
     with pytest.raises(ValueError, match="did you mean 'cycles'"):
         run_sweep(PAPER, {"robot.k": [0.1]}, extra_columns=("cycels",))
