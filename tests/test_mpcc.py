@@ -1,0 +1,376 @@
+"""MPCC step (IPOPT), its mode-enumeration oracle and the MPCC time-stepping simulator."""
+import math
+
+import numpy as np
+import pytest
+
+from ocp_crawl import Mode, Model, Robot, Status, simulate_torque
+from ocp_crawl.hybrid import HybridStepper
+from ocp_crawl.mpcc import (DEFAULT_IPOPT, IPOPT_RETURN_STATUS, MPCCOptions, MPCCStep, StepState, ipopt_status,
+                            mode_from_pairs)
+from ocp_crawl.step_oracle import solve_step_enumerate
+from ocp_crawl.timestepping import TimeSteppingOptions, simulate_mpcc
+
+from conftest import paper_torque
+
+PHI_TOL = 1e-7
+"""agreement of phi_{k+1} between the MPCC step and the oracle [rad] (the issue's requirement)"""
+
+#: gaits sampled for the step comparison: gravity, mu1, mu2, psi [deg]
+SAMPLED_GAITS = [("physical", 0.389, 0.389, 45.0), ("physical", 0.30, 0.45, 90.0),
+                 ("paper", 0.389, 0.389, 90.0), ("paper", 0.35, 0.43, 45.0)]
+#: step lengths used with the sampled states [cycles]
+STEP_LENGTHS = (1 / 400, 1 / 100, 1 / 25)
+
+
+def initial_state(model, torque) -> StepState:
+    start = HybridStepper(model, torque).initial_state(0.0)
+    return StepState(start.x[:2], 0.0, float(model.kinematics(start.x[:2])["d"]), 0.0)
+
+
+def sampled_steps(per_gait=80):
+    """(model, state, tau, h) for states taken along event-driven trajectories, with the torque one step later."""
+    out = []
+    for gravity, mu1, mu2, psi in SAMPLED_GAITS:
+        robot = Robot.paper(mu1=mu1, mu2=mu2)
+        model = Model(robot, gravity=gravity)
+        torque = paper_torque(robot, psi=psi)
+        res = HybridStepper(model, torque).run()
+        assert res.success, res.message
+        idx = set(np.linspace(0, res.t.size - 1, per_gait).round().astype(int).tolist())
+        # the event phases are output samples: include them (states on a friction limit or at d' = 0)
+        idx |= {int(np.argmin(np.abs(res.t - e.t))) for e in res.steady_events()}
+        for j, k in enumerate(sorted(idx)):
+            state = StepState(res.phi[:, k], res.x1[k], res.x2[k], res.f_t[k])
+            h = STEP_LENGTHS[j % len(STEP_LENGTHS)]
+            out.append((model, state, np.asarray(torque(res.t[k] + h)), h))
+    return out
+
+
+@pytest.fixture(scope="module")
+def samples():
+    return sampled_steps()
+
+
+@pytest.fixture(scope="module")
+def steppers():
+    """One MPCC step per model: the NLP is built once and reused for every sampled state."""
+    cache = {}
+
+    def get(model, **options):
+        key = (model, tuple(sorted(options.items())))
+        if key not in cache:
+            cache[key] = MPCCStep(model, MPCCOptions(**options))
+        return cache[key]
+    return get
+
+
+# ---------------------------------------------------------------------------------------- IPOPT status table
+def test_ipopt_status_table():
+    for status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+        assert ipopt_status(status)[0] is True
+    for status in ("Search_Direction_Becomes_Too_Small", "Infeasible_Problem_Detected", "Maximum_Iterations_Exceeded",
+                   "Restoration_Failed", "Error_In_Step_Computation", "Invalid_Number_Detected", "Diverging_Iterates",
+                   "Maximum_CpuTime_Exceeded", "Maximum_WallTime_Exceeded", "User_Requested_Stop",
+                   "Not_Enough_Degrees_Of_Freedom", "Internal_Error"):
+        assert ipopt_status(status)[0] is False, status
+    # anything not in the table is a failure, with a meaning that says so
+    accepted, meaning = ipopt_status("Some_New_Status")
+    assert accepted is False and "unknown" in meaning
+    assert all(isinstance(a, bool) and m for a, m in IPOPT_RETURN_STATUS.values())
+
+
+def test_failing_ipopt_status_fails_the_step(paper_robot):
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    step = MPCCStep(model, MPCCOptions(ipopt={"max_iter": 1}, max_retries=0))
+    res = step.solve(initial_state(model, torque), torque(0.01))
+    assert not res.success
+    assert res.status == "Maximum_Iterations_Exceeded" and ipopt_status(res.status)[0] is False
+    assert "Maximum_Iterations_Exceeded" in res.message
+    assert res.homotopy[-1].return_status == res.status and not res.homotopy[-1].accepted
+
+
+def test_acceptable_level_is_accepted_with_the_residual_checks(paper_robot):
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    state = initial_state(model, torque)
+    opts = {"tol": 1e-30, "acceptable_tol": 1e-3, "acceptable_iter": 1}
+    res = MPCCStep(model, MPCCOptions(ipopt=opts, max_retries=0)).solve(state, torque(0.3))
+    assert {s.return_status for s in res.homotopy} == {"Solved_To_Acceptable_Level"}
+    assert res.success and res.comp_residual <= 1e-8 and res.eq_residual <= 1e-9
+    ref = solve_step_enumerate(model, state, torque(0.3))
+    np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
+
+
+def test_success_needs_the_complementarity_residual(paper_robot):
+    """IPOPT succeeds at every stage, but without the polish the relaxation leaves a residual above comp_tol."""
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    state = initial_state(model, torque)
+    res = MPCCStep(model, MPCCOptions(polish=False, comp_tol=1e-14, max_retries=0)).solve(state, torque(0.3))
+    assert all(s.return_status == "Solve_Succeeded" for s in res.homotopy)
+    assert res.homotopy[-1].comp_residual > 1e-14
+    assert not res.success and "complementarity residual" in res.message
+
+
+# ---------------------------------------------------------------------------------------- options and inputs
+@pytest.mark.parametrize("kwargs,exc,match", [
+    ({"formulation": "smooth"}, ValueError, "formulation"),
+    ({"sigma_min": 1e-8}, ValueError, "sigma_min"),
+    ({"sigma_factor": 1.5}, ValueError, "sigma_factor"),
+    ({"sigma0": -1.0}, ValueError, "sigma0"),
+    ({"sigma0_warm": 1e-14}, ValueError, "sigma0_warm"),
+    ({"comp_tol": "1e-8"}, TypeError, "comp_tol"),
+    ({"max_retries": -1}, ValueError, "max_retries"),
+    ({"polish": 1}, TypeError, "polish"),
+    ({"ipopt": [("tol", 1e-8)]}, TypeError, "ipopt"),
+])
+def test_bad_options_raise(kwargs, exc, match):
+    with pytest.raises(exc, match=match):
+        MPCCOptions(**kwargs)
+
+
+def test_ipopt_options_are_copied_per_instance(paper_robot):
+    user = {"max_iter": 77}
+    opts = MPCCOptions(ipopt=user)
+    user["max_iter"] = 1
+    assert opts.ipopt == {"max_iter": 77}
+    before = dict(DEFAULT_IPOPT)
+    MPCCStep(Model(paper_robot), opts)
+    assert DEFAULT_IPOPT == before
+
+
+def test_homotopy_schedule():
+    opts = MPCCOptions(sigma0=1e-2, sigma_factor=1e-2, sigma_min=1e-12)
+    sched = opts.schedule(opts.sigma0)
+    assert sched[0] == 1e-2 and sched[-1] == 1e-12 < 1e-9
+    assert all(b < a for a, b in zip(sched, sched[1:]))
+
+
+def test_bad_step_inputs_raise(paper_robot):
+    model = Model(paper_robot)
+    step = MPCCStep(model)
+    state = initial_state(model, paper_torque(paper_robot))
+    with pytest.raises(ValueError, match="tau"):
+        step.solve(state, [0.1, 0.2, 0.3])
+    with pytest.raises(TypeError, match="state"):
+        step.solve(state.phi, [0.1, 0.2])
+    with pytest.raises(ValueError, match="phi"):
+        StepState([1.0, np.nan], 0.0, 0.1)
+    with pytest.raises(TypeError, match="model"):
+        MPCCStep("robot")
+
+
+def test_ipopt_is_quiet_unless_verbose(paper_robot, capfd):
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    state = initial_state(model, torque)
+    assert MPCCStep(model).solve(state, torque(0.01)).success
+    assert capfd.readouterr().out == ""
+    assert MPCCStep(model, MPCCOptions(verbose=True)).solve(state, torque(0.01)).success
+    assert "Ipopt" in capfd.readouterr().out
+
+
+def test_mode_from_pairs():
+    z = np.zeros(4)
+    assert mode_from_pairs(z, np.ones(4))[0] == Mode.STICK
+    assert mode_from_pairs(np.array([1e-3, 0, 0, 0]), np.array([0, 0.3, 0.1, 0.1]))[0] == Mode.SLIP1_POS
+    assert mode_from_pairs(np.array([0, 0, 0, 2e-3]), np.array([0.1, 0.1, 0.3, 0]))[0] == Mode.SLIP2_NEG
+    # both feet move apart by comparable amounts at equal limits: slip-slip, opening (d' > 0)
+    assert mode_from_pairs(np.array([0, 1e-3, 1e-3, 0]), np.array([0.2, 0, 0, 0.2]))[0] == Mode.SLIP_BOTH_POS
+    # a corner s = c = 0 is no slip
+    assert mode_from_pairs(np.zeros(4), np.array([0, 0.2, 0.1, 0.1]))[0] == Mode.STICK
+
+
+# ---------------------------------------------------------------------------------------- step vs oracle
+def test_mpcc_step_agrees_with_mode_enumeration(samples, steppers):
+    assert len(samples) >= 300
+    compared_modes = 0
+    modes_seen = set()
+    for model, state, tau, h in samples:
+        ref = solve_step_enumerate(model, state, tau)
+        assert ref.success, ref.message
+        res = steppers(model).solve(state, tau)
+        assert res.success, res.message
+        assert res.comp_residual <= 1e-8 and res.eq_residual <= 1e-9
+        ctx = (model.gravity, model.robot.mu1, model.robot.mu2, state.phi, h, res.mode.label, ref.mode.label)
+        np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL, err_msg=str(ctx))
+        # a unique consistent mode must be found; with several coinciding ones (a friction limit
+        # reached exactly at the end of the step) the mode is not defined by the step
+        if ref.extra["n_consistent"] == 1:
+            assert res.mode == ref.mode, ctx
+            compared_modes += 1
+        modes_seen.add(ref.mode)
+        np.testing.assert_allclose([res.dx1, res.dx2], [ref.dx1, ref.dx2], rtol=0, atol=PHI_TOL * model.robot.L)
+    assert compared_modes >= 0.9 * len(samples)
+    assert {Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_NEG} <= modes_seen
+
+
+@pytest.mark.parametrize("formulation", ["l1_penalty", "fischer_burmeister"])
+def test_alternative_formulations_agree_with_mode_enumeration(samples, steppers, formulation):
+    for model, state, tau, h in samples[::10]:
+        ref = solve_step_enumerate(model, state, tau)
+        res = steppers(model, formulation=formulation).solve(state, tau)
+        assert res.success, res.message
+        np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
+        if ref.extra["n_consistent"] == 1:
+            assert res.mode == ref.mode
+
+
+def test_incremental_step_is_exact_within_a_mode(gravity):
+    """Between two step phases without an event, the step solution is the event-driven solution."""
+    robot = Robot.paper(mu1=0.33, mu2=0.42)
+    model = Model(robot, gravity=gravity)
+    torque = paper_torque(robot, psi=60)
+    N = 100
+    ev = simulate_torque(model, torque, t_eval=np.arange(N + 1) / N)
+    assert ev.success, ev.message
+    event_phases = np.array([e.t for e in ev.steady_events()])
+    step = MPCCStep(model)
+    prev = None
+    checked = 0
+    for j in range(N):
+        state = StepState(ev.phi[:, j], ev.x1[j], ev.x2[j], ev.f_t[j])
+        tau = torque(ev.t[j + 1])
+        res = step.solve(state, tau, warm_start=prev)
+        assert res.success, res.message
+        prev = res
+        if np.any((event_phases > ev.t[j] - 1e-12) & (event_phases <= ev.t[j + 1] + 1e-12)):
+            continue
+        ref = solve_step_enumerate(model, state, tau)
+        for r in (res, ref):
+            np.testing.assert_allclose(r.phi, ev.phi[:, j + 1], rtol=0, atol=1e-9)
+            np.testing.assert_allclose([r.x1, r.x2], [ev.x1[j + 1], ev.x2[j + 1]], rtol=0, atol=1e-11)
+            assert int(r.mode) == ev.mode[j + 1]
+        checked += 1
+    assert checked >= N - 2 * len(event_phases)
+
+
+# ---------------------------------------------------------------------------------------- time-stepping
+@pytest.fixture(scope="module")
+def paper_run():
+    robot = Robot.paper()
+    model = Model(robot)
+    torque = paper_torque(robot)
+    return model, torque, simulate_mpcc(model, torque, steps=100)
+
+
+def test_time_stepping_result(paper_run):
+    model, torque, res = paper_run
+    r = model.robot
+    N = 100
+    assert res.success, res.message
+    assert res.status == Status.SUCCESS and res.cycles >= 2
+    assert res.t.shape == (N + 1,) and res.phi.shape == (2, N + 1) and res.tau.shape == (2, N + 1)
+    np.testing.assert_allclose(res.t, res.t0 + np.arange(N + 1) / N, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.x2 - res.x1, res.d, rtol=0, atol=1e-12)
+    kin = model.kinematics(res.phi)
+    np.testing.assert_allclose(res.d, kin["d"], rtol=0, atol=1e-12)
+    for j in range(N + 1):
+        F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
+        assert np.max(np.abs(F)) < 1e-9 * r.M * r.g * r.L
+    slack = 1e-10 * r.M * r.g
+    assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0)
+    assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + slack)
+    assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + slack)
+    # the feet move only while their mode says so
+    dx1, dx2 = np.diff(res.x1), np.diff(res.x2)
+    moving1 = np.isin(res.mode[1:], [Mode.SLIP1_POS, Mode.SLIP1_NEG])
+    moving2 = np.isin(res.mode[1:], [Mode.SLIP2_POS, Mode.SLIP2_NEG])
+    assert np.all(np.abs(dx1[~moving1]) < 1e-12) and np.all(np.abs(dx2[~moving2]) < 1e-12)
+    assert np.all(dx1[res.mode[1:] == Mode.SLIP1_NEG] < 0) and np.all(dx2[res.mode[1:] == Mode.SLIP2_NEG] < 0)
+    # metrics: displacement of foot 1, CoT+, positive work, dissipation
+    assert res.S == pytest.approx(res.x1[-1] - res.x1[0], abs=1e-15) and res.S < 0
+    assert res.CoT_plus == pytest.approx(res.W_plus / (r.M * r.g * abs(res.S)), rel=1e-14)
+    assert res.W_plus == pytest.approx(res.W_plus_joint.sum(), rel=1e-14) and np.all(res.W_plus_joint > 0)
+    assert res.energy["dissipation"] > 0 and abs(res.energy["balance_residual"]) < 1e-2
+    assert res.periodicity_residual < 1e-8
+    assert res.extra["max_comp_residual"] <= 1e-8 and res.extra["retried_steps"] == 0
+
+
+def test_events_are_the_mode_changes_between_steps(paper_run):
+    _, _, res = paper_run
+    N = 100
+    changes = [res.t[j] for j in range(1, res.t.size) if res.mode[j] != res.mode[j - 1]]
+    steady = [e.t for e in res.steady_events() if e.t > res.t0 + 1e-12]
+    np.testing.assert_allclose(steady, changes, rtol=0, atol=1e-12)
+    for e in res.events:
+        assert e.mode_before != e.mode_after
+        assert abs(e.t * N - round(e.t * N)) < 1e-9  # on the step grid
+
+
+def test_t_eval_and_fixed_cycles(paper_run):
+    model, torque, res = paper_run
+    part = simulate_mpcc(model, torque, steps=100, t_eval=[0.0, 0.25, 0.5, 1.0])
+    np.testing.assert_allclose(part.phi, res.phi[:, [0, 25, 50, 100]], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(part.x1, res.x1[[0, 25, 50, 100]], rtol=0, atol=1e-15)
+    assert list(part.mode) == list(res.mode[[0, 25, 50, 100]])
+    assert part.S == res.S
+    with pytest.raises(ValueError, match="t_eval"):
+        simulate_mpcc(model, torque, steps=100, cycles=1, t_eval=[1.5])
+    one = simulate_mpcc(model, torque, steps=50, cycles=1)
+    assert one.success and one.cycles == 1 and one.nsteps == 50 and one.t0 == 0.0
+
+
+def test_bad_simulation_inputs_raise(paper_robot):
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    with pytest.raises(ValueError, match="steps"):
+        simulate_mpcc(model, torque, steps=2)
+    with pytest.raises(ValueError, match="cycles"):
+        simulate_mpcc(model, torque, steps=50, cycles=0)
+    with pytest.raises(TypeError, match="options"):
+        simulate_mpcc(model, torque, options={"max_cycles": 3})
+    with pytest.raises(ValueError, match="max_dphi"):
+        TimeSteppingOptions(max_dphi=0.0)
+
+
+def _check_failure_names_the_step(res, N):
+    assert not res.success and res.failure_t is not None
+    n = res.nsteps
+    assert res.failure_t == pytest.approx(n / N, abs=1e-12)
+    assert f"step {n} " in res.message and f"t = {n / N:.6f}" in res.message
+    assert "IPOPT return status" in res.message
+    # nothing after the failed step: the output ends at the last solved step
+    assert res.t[-1] == pytest.approx((n - 1) / N, abs=1e-12)
+    assert math.isnan(res.S)
+
+
+def test_lift_off_ends_the_run_at_the_failed_step(gravity):
+    robot = Robot.paper().with_stiffness_ratio(10.0)
+    model = Model(robot, gravity=gravity)
+    torque = paper_torque(robot, A=60)  # pulls foot 2 off the ground (see the hybrid tests)
+    N = 100
+    res = simulate_mpcc(model, torque, steps=N)
+    assert res.status == Status.LIFT_OFF, res.message
+    _check_failure_names_the_step(res, N)
+    assert "Infeasible_Problem_Detected" in res.message
+    assert np.all(res.f_n2 > 0)
+    ev = simulate_torque(model, torque)
+    assert ev.status == Status.LIFT_OFF
+    assert res.failure_t - 1 / N < ev.failure_t <= res.failure_t
+
+
+def test_fold_ends_the_run_at_the_failed_step():
+    robot = Robot.paper().with_stiffness_ratio(0.3)
+    model = Model(robot, gravity="physical")
+    torque = paper_torque(robot)
+    N = 100
+    res = simulate_mpcc(model, torque, steps=N)
+    assert res.status == Status.FOLD, res.message
+    _check_failure_names_the_step(res, N)
+    ev = simulate_torque(model, torque)
+    assert ev.status == Status.FOLD
+    assert res.failure_t - 1 / N < ev.failure_t <= res.failure_t
+
+
+def test_ipopt_failure_ends_the_run_with_solver_failure(paper_robot):
+    model = Model(paper_robot)
+    N = 50
+    res = simulate_mpcc(model, paper_torque(paper_robot), steps=N,
+                        options=MPCCOptions(ipopt={"max_iter": 1}, max_retries=0))
+    assert res.status == Status.SOLVER_FAILURE
+    assert res.nsteps == 1
+    _check_failure_names_the_step(res, N)
+    assert "Maximum_Iterations_Exceeded" in res.message
