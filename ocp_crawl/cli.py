@@ -294,6 +294,95 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# reproduce
+# --------------------------------------------------------------------------------------------
+def _reproduce_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_reproduce",
+                   help="directory for the figures, report.md and numbers.json (default: ./ocp_crawl_reproduce)")
+    p.add_argument("--quick", action="store_true", help="coarse grids (about a minute on 2 cores); default: full grids")
+    p.add_argument("--gravity", choices=("paper", "physical"), default="paper",
+                   help="convention of the figures (default: paper, the sign the published curves were computed "
+                        "with); the statements are checked in both")
+    p.add_argument("--jobs", type=int, metavar="N", help="worker processes for the grids (default: the CPUs available)")
+    p.add_argument("--resume", action="store_true",
+                   help="reuse the grid points finished by an interrupted run in DIR/sweeps (same grids only)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run the grids on a Dask cluster (needs the [cluster] extra)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars or step lines on stderr")
+
+
+@register("reproduce", "regenerate the paper's figures and report.md (both gravity conventions checked)",
+          _reproduce_args)
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import reproduce
+    from .studies import SweepOptions
+    from .sweep import SweepError, SweepFailed, default_jobs
+
+    if args.jobs is not None and args.jobs < 1:
+        raise BadInput(f"--jobs {args.jobs} is invalid: must be >= 1")
+    out = prepare_out(args.out)
+    quiet = args.no_progress or not sys.stderr.isatty()
+    sweep = SweepOptions(jobs=args.jobs or default_jobs(), progress=not quiet, out_dir=out / "sweeps",
+                         resume=args.resume, scheduler=args.scheduler)
+    log = None if args.no_progress else (lambda msg: print(f"{PROG}: {msg}", file=sys.stderr, flush=True))
+    try:
+        result = reproduce(out, quick=args.quick, gravity=args.gravity, sweep=sweep, log=log)
+    except SweepError as exc:
+        raise BadInput(str(exc)) from None
+    except SweepFailed as exc:
+        _err(f"reproduce incomplete: {exc}")
+        return EXIT_FAILURE
+    held = sum(all(s.holds.values()) for s in result.statements)
+    changed = [s.key for s in result.statements if s.changed]
+    print(f"{result.mode} run in {result.elapsed:.0f} s: {len(result.files)} files in {result.out_dir}/ "
+          f"(report: {result.report})")
+    print(f"statements of the paper: {held} of {len(result.statements)} hold in both conventions; "
+          f"changed by the physical convention: {', '.join(changed) if changed else 'none'}")
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# animate
+# --------------------------------------------------------------------------------------------
+def _animate_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("--out", metavar="FILE.gif", default="crawl.gif", help="output GIF (default: ./crawl.gif)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set robot.k=0.05 (repeatable)")
+    p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
+    p.add_argument("--cycles", type=int, default=2, metavar="N", help="cycles to show (default: 2)")
+    p.add_argument("--frames-per-cycle", type=int, default=48, metavar="N", help="frames per cycle (default: 48)")
+    p.add_argument("--fps", type=float, default=20.0, help="frames per second (default: 20)")
+
+
+@register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
+def cmd_animate(args: argparse.Namespace) -> int:
+    from .animate import animate_problem
+
+    for name, value, low in (("--cycles", args.cycles, 1), ("--frames-per-cycle", args.frames_per_cycle, 2)):
+        if value < low:
+            raise BadInput(f"{name} {value} is invalid: must be >= {low}")
+    if not (math.isfinite(args.fps) and 0 < args.fps <= 100):
+        raise BadInput(f"--fps {args.fps:g} is invalid: must be in (0, 100]")
+    path = Path(args.out)
+    if path.suffix.lower() != ".gif":
+        raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
+    overrides = list(args.overrides) + ([f"gait.drive={args.drive}"] if args.drive else [])
+    problem = load_problem(args.problem, overrides)
+    prepare_out(path.parent if str(path.parent) else ".")
+    try:
+        result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)
+    except ValueError as exc:
+        # no equilibrium to start from: the problem cannot be simulated at all
+        raise BadInput(f"{problem.source}: {exc}") from None
+    print(f"wrote {written}: {result.status_name}, "
+          + (f"S = {1e3 * result.S:.2f} mm per cycle" if result.success else result.message))
+    if not result.success:
+        print(f"{PROG}: simulation failed: {result.message} (animated up to the failure)", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
 # entry point
 # --------------------------------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
