@@ -29,9 +29,10 @@ NLP parameters, and reused for every step.  Complementarity is handled by one of
   i.e. s c = sigma with s, c > 0, sigma driven to sigma_min.
 
 A step is accepted only when IPOPT's return status is accepted by :data:`IPOPT_RETURN_STATUS` and the
-complementarity and equation residuals are below tolerance.  After the homotopy an optional polish
-solves the tightened NLP (each pair fixed to its identified branch, s_j = 0 or c_j = 0, with the
-other kept >= 0) with the same IPOPT solver; this removes the O(sigma/s) bias of the relaxation.
+complementarity and equation residuals are below tolerance.  After the homotopy a polish can solve
+the tightened NLP (each pair fixed to its identified branch, s_j = 0 or c_j = 0, with the other kept
+>= 0) with the same IPOPT solver; this removes the O(sigma/s) bias of the relaxation and resolves
+pairs near their corner (a slip that starts or stops within the step).
 """
 from __future__ import annotations
 
@@ -50,6 +51,8 @@ from .step_equations import NEQ, NPAIR, NW, PAIR_NAMES, step_equations
 
 Formulation = Literal["scholtes", "l1_penalty", "fischer_burmeister"]
 FORMULATIONS = ("scholtes", "l1_penalty", "fischer_burmeister")
+Polish = Literal["auto", "always", "never"]
+POLISH = ("auto", "always", "never")
 
 #: The one table from CasADi ``stats()['return_status']`` of IPOPT to (accepted, meaning).  "accepted"
 #: statuses still have to pass the step's own residual checks; every other status, including any
@@ -134,8 +137,10 @@ class MPCCOptions:
     """largest accepted residual of the scaled equations and bounds [-]"""
     max_retries: int = 2
     """failed steps are retried this many times (cold start, then a non-monotone sigma schedule)"""
-    polish: bool = True
-    """after the homotopy, solve the tightened NLP on the identified branches (exact complementarity)"""
+    polish: Polish = "auto"
+    """after the homotopy, solve the tightened NLP on the identified branches (exact complementarity):
+    'always', 'never', or 'auto' = only when the homotopy's complementarity residual exceeds comp_tol
+    (saves one IPOPT call on most warm-started steps; the relaxation then leaves |min(s_j, c_j)| <= comp_tol)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`DEFAULT_IPOPT`"""
     verbose: bool = False
@@ -157,9 +162,10 @@ class MPCCOptions:
         if isinstance(self.max_retries, bool) or not isinstance(self.max_retries, (int, np.integer)) \
                 or self.max_retries < 0:
             raise ValueError(f"MPCCOptions.max_retries must be an integer >= 0, got {self.max_retries!r}")
-        for name in ("polish", "verbose"):
-            if not isinstance(getattr(self, name), bool):
-                raise TypeError(f"MPCCOptions.{name} must be a bool, got {getattr(self, name)!r}")
+        if self.polish not in POLISH:
+            raise ValueError(f"MPCCOptions.polish must be one of {POLISH}, got {self.polish!r}")
+        if not isinstance(self.verbose, bool):
+            raise TypeError(f"MPCCOptions.verbose must be a bool, got {self.verbose!r}")
         if not isinstance(self.ipopt, dict):
             raise TypeError(f"MPCCOptions.ipopt must be a dict of IPOPT options, got {type(self.ipopt).__name__}")
         object.__setattr__(self, "ipopt", dict(self.ipopt))
@@ -506,7 +512,7 @@ class MPCCStep:
                 reasons.append(f"{label}: {reason}")
                 continue
             polished = False
-            if opt.polish:
+            if opt.polish == "always" or (opt.polish == "auto" and sol.comp > opt.comp_tol):
                 pol = self._polish(attempt, state, tau, prefer, sol, stages)
                 if pol is not None:
                     sol, polished = pol, True
@@ -548,22 +554,36 @@ class MPCCStep:
         return sol, ""
 
     def _polish(self, attempt, state, tau, prefer, sol: _Solve, stages) -> _Solve | None:
-        """Tightened NLP: each pair on its identified branch (s_j = 0 or c_j = 0), the other side >= 0,
-        relaxation switched off.  Returns None (keep the homotopy's point) if it does not succeed."""
+        """Tightened NLP: each pair on its identified branch, the other side >= 0, its relaxation off.
+
+        Sticking pairs (s_j <= c_j) get s_j = 0; the slipping pair with the largest slip gets c_j = 0.
+        Any other slipping pair (the two feet at equal friction limits, where the split of the slip
+        between them is free) keeps the relaxation of the last homotopy stage, so that the objective,
+        not an over-determined system, decides the split.  Returns None (keep the homotopy's point)
+        if IPOPT or the residual checks fail.
+        """
         opt = self.options
+        sigma = stages[-1].sigma
+        _, _, lbg, ubg = self._bounds(sigma)
+        if opt.formulation == "fischer_burmeister":
+            # a kept pair may need c_j = 0 exactly (equal limits), which smoothing (s_j c_j = sigma)
+            # forbids; a tiny sigma keeps the switched-off rows' derivatives finite at s = c = 0
+            sigma = 1e-30
+        lbg, ubg = lbg.copy(), ubg.copy()
         ubx = self._ubx.copy()
-        lbg, ubg = self._lbg.copy(), self._ubg.copy()
-        lbg[NEQ + NPAIR:] = -np.inf
-        ubg[NEQ + NPAIR:] = np.inf
         w0 = sol.w.copy()
+        slipping = [j for j in range(NPAIR) if sol.s[j] > sol.c[j]]
+        lead = max(slipping, key=lambda j: sol.s[j]) if slipping else None
         for j in range(NPAIR):
-            fixed = 4 + j if sol.s[j] <= sol.c[j] else 8 + j
+            if j in slipping and j != lead:
+                continue
+            fixed = 8 + j if j == lead else 4 + j
             ubx[fixed] = 0.0
             w0[fixed] = 0.0
-        # sigma = 1: the relaxation constraints are off through their bounds; for the penalty
-        # formulation the products vanish on the tightened branches and a unit weight keeps it scaled
+            if self.ng > NEQ + NPAIR:
+                lbg[NEQ + NPAIR + j], ubg[NEQ + NPAIR + j] = -np.inf, np.inf
         t0 = time.perf_counter()
-        pol = self._call(self._solver_warm, w0, sol.lam_x, sol.lam_g, self._params(state, tau, 1.0, prefer),
+        pol = self._call(self._solver_warm, w0, sol.lam_x, sol.lam_g, self._params(state, tau, sigma, prefer),
                          self._lbx, ubx, lbg, ubg)
         stages.append(HomotopyStage(attempt, float("nan"), pol.status, pol.accepted, pol.iterations, pol.comp,
                                     time.perf_counter() - t0, kind="polish"))

@@ -108,7 +108,7 @@ def test_success_needs_the_complementarity_residual(paper_robot):
     model = Model(paper_robot)
     torque = paper_torque(paper_robot)
     state = initial_state(model, torque)
-    res = MPCCStep(model, MPCCOptions(polish=False, comp_tol=1e-14, max_retries=0)).solve(state, torque(0.3))
+    res = MPCCStep(model, MPCCOptions(polish="never", comp_tol=1e-14, max_retries=0)).solve(state, torque(0.3))
     assert all(s.return_status == "Solve_Succeeded" for s in res.homotopy)
     assert res.homotopy[-1].comp_residual > 1e-14
     assert not res.success and "complementarity residual" in res.message
@@ -123,7 +123,7 @@ def test_success_needs_the_complementarity_residual(paper_robot):
     ({"sigma0_warm": 1e-14}, ValueError, "sigma0_warm"),
     ({"comp_tol": "1e-8"}, TypeError, "comp_tol"),
     ({"max_retries": -1}, ValueError, "max_retries"),
-    ({"polish": 1}, TypeError, "polish"),
+    ({"polish": True}, ValueError, "polish"),
     ({"ipopt": [("tol", 1e-8)]}, TypeError, "ipopt"),
 ])
 def test_bad_options_raise(kwargs, exc, match):
@@ -239,9 +239,10 @@ def test_incremental_step_is_exact_within_a_mode(gravity):
         if np.any((event_phases > ev.t[j] - 1e-12) & (event_phases <= ev.t[j + 1] + 1e-12)):
             continue
         ref = solve_step_enumerate(model, state, tau)
+        # the MPCC's relaxation leaves |min(s_j, c_j)| <= comp_tol = 1e-8 (scaled): about 1e-10 in phi
         for r in (res, ref):
             np.testing.assert_allclose(r.phi, ev.phi[:, j + 1], rtol=0, atol=1e-9)
-            np.testing.assert_allclose([r.x1, r.x2], [ev.x1[j + 1], ev.x2[j + 1]], rtol=0, atol=1e-11)
+            np.testing.assert_allclose([r.x1, r.x2], [ev.x1[j + 1], ev.x2[j + 1]], rtol=0, atol=1e-9 * robot.L)
             assert int(r.mode) == ev.mode[j + 1]
         checked += 1
     assert checked >= N - 2 * len(event_phases)
@@ -274,11 +275,12 @@ def test_time_stepping_result(paper_run):
     assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0)
     assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + slack)
     assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + slack)
-    # the feet move only while their mode says so
+    # the feet move only while their mode says so (a sticking pair keeps s_j <= comp_tol = 1e-8 scaled)
+    creep = 1e-8 * r.L
     dx1, dx2 = np.diff(res.x1), np.diff(res.x2)
     moving1 = np.isin(res.mode[1:], [Mode.SLIP1_POS, Mode.SLIP1_NEG])
     moving2 = np.isin(res.mode[1:], [Mode.SLIP2_POS, Mode.SLIP2_NEG])
-    assert np.all(np.abs(dx1[~moving1]) < 1e-12) and np.all(np.abs(dx2[~moving2]) < 1e-12)
+    assert np.all(np.abs(dx1[~moving1]) < creep) and np.all(np.abs(dx2[~moving2]) < creep)
     assert np.all(dx1[res.mode[1:] == Mode.SLIP1_NEG] < 0) and np.all(dx2[res.mode[1:] == Mode.SLIP2_NEG] < 0)
     # metrics: displacement of foot 1, CoT+, positive work, dissipation
     assert res.S == pytest.approx(res.x1[-1] - res.x1[0], abs=1e-15) and res.S < 0
