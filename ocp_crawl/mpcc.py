@@ -47,7 +47,7 @@ import numpy as np
 
 from .model import KIN, NP, Model, symbolic
 from .result import Mode
-from .step_equations import NEQ, NPAIR, NW, PAIR_NAMES, step_equations
+from .step_equations import NEQ, NPAIR, NW, step_equations
 
 Formulation = Literal["scholtes", "l1_penalty", "fischer_burmeister"]
 FORMULATIONS = ("scholtes", "l1_penalty", "fischer_burmeister")
@@ -105,6 +105,7 @@ WARM_IPOPT: dict = {
     "warm_start_slack_bound_frac": 1e-12,
     "warm_start_mult_bound_push": 1e-12,
 }
+
 
 def _real(name: str, value, *, positive: bool = True) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -171,7 +172,7 @@ class MPCCOptions:
         object.__setattr__(self, "ipopt", dict(self.ipopt))
 
     def schedule(self, sigma0: float, factor: float | None = None) -> tuple[float, ...]:
-        """Homotopy parameters from sigma0 down by ``factor`` to the first value <= sigma_min (that one is sigma_min)."""
+        """Homotopy parameters from sigma0, divided by 1/``factor`` down to sigma_min (the last one)."""
         factor = self.sigma_factor if factor is None else factor
         out = []
         s = sigma0
@@ -230,31 +231,54 @@ class StepResult:
 
     success: bool
     status: str
+    """IPOPT return status (see :data:`IPOPT_RETURN_STATUS`) or the oracle's own status"""
     message: str
     phi: np.ndarray
+    """joint angles after the step [rad], shape (2,)"""
     f_t: float
+    """tangential force on the robot at foot 1 along +x [N] (at foot 2 it is -f_t)"""
     f_n1: float
+    """normal force at foot 1 after the step [N]"""
     f_n2: float
+    """normal force at foot 2 after the step [N]"""
     s1p: float
+    """slip of foot 1 towards +x [m] (>= 0)"""
     s1m: float
+    """slip of foot 1 towards -x [m] (>= 0)"""
     s2p: float
+    """slip of foot 2 towards +x [m] (>= 0)"""
     s2m: float
+    """slip of foot 2 towards -x [m] (>= 0)"""
     dx1: float
+    """displacement of foot 1 [m] = s1p - s1m"""
     dx2: float
+    """displacement of foot 2 [m] = s2p - s2m"""
     x1: float
+    """position of foot 1 after the step [m]"""
     x2: float
+    """position of foot 2 after the step [m]"""
     d: float
+    """d(phi) after the step [m]"""
     mode: Mode
+    """contact mode from the slips and friction margins (:func:`mode_from_pairs`)"""
     comp_residual: float
+    """max_j |min(s_j/L, c_j/(M g))| [-]"""
     eq_residual: float
+    """largest scaled residual of the equilibrium, balance and closure equations and the bounds [-]"""
     iterations: int
+    """IPOPT iterations (Newton iterations for the oracle), all attempts"""
     solve_time: float
+    """wall time of the step [s]"""
     homotopy: tuple = ()
+    """:class:`HomotopyStage` records of every IPOPT call, all attempts"""
     attempts: int = 1
+    """attempts used (1 = no retry)"""
     w: np.ndarray | None = None
     """scaled primal solution (warm start of the next step)"""
     lam_x: np.ndarray | None = None
+    """multipliers of the variable bounds (warm start)"""
     lam_g: np.ndarray | None = None
+    """multipliers of the constraints (warm start)"""
     extra: dict = field(default_factory=dict)
 
     @property
@@ -292,11 +316,6 @@ def step_outputs() -> cs.Function:
     comp = cs.mmax(cs.fabs(cs.fmin(s, c)))
     out = cs.vertcat(kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg, kin1[KIN["d"]], kin0[KIN["d"]], c, eq, comp)
     return cs.Function("step_outputs", [z, P], [out], ["z", "P"], ["out"])
-
-
-def natural_residual(s: np.ndarray, c: np.ndarray) -> float:
-    """max_j |min(s_j, c_j)|: zero exactly when every pair is complementary and nonnegative."""
-    return float(np.max(np.abs(np.minimum(s, c))))
 
 
 def mode_from_pairs(s: np.ndarray, c: np.ndarray) -> tuple[Mode, int]:

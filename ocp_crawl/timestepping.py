@@ -26,7 +26,6 @@ Jacobian determinant of the active mode's equations within one mode, or a jump o
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -94,7 +93,8 @@ class _Stop(Exception):
 class TimeStepper:
     """MPCC time-stepping of a torque-driven gait with N steps per cycle.  Build once, call :meth:`run`."""
 
-    def __init__(self, model: Model, torque, steps: int = 200, options: TimeSteppingOptions | MPCCOptions | None = None):
+    def __init__(self, model: Model, torque, steps: int = 200,
+                 options: TimeSteppingOptions | MPCCOptions | None = None):
         if not isinstance(model, Model):
             raise TypeError(f"model must be a Model, got {type(model).__name__}")
         if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 4:
@@ -161,6 +161,7 @@ class TimeStepper:
         ncycles = 0
         n_target = None if cycles is None else int(cycles)
         periodic_dev = float("nan")
+        calls0 = self.step.ncalls
         try:
             while True:
                 n += 1
@@ -178,7 +179,8 @@ class TimeStepper:
                 eq_max = max(eq_max, res.eq_residual)
                 polished += bool(res.extra.get("polished"))
                 if min(res.f_n1, res.f_n2) <= 0:
-                    raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N", t1, mode)
+                    raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N",
+                                t1, mode)
                 if res.d <= 0:
                     raise _Stop(Status.FEET_CROSSED, "", f"{where}: d = {res.d:.4g} m", t1, mode)
                 kin = self.model.kinematics(res.phi)
@@ -188,10 +190,13 @@ class TimeStepper:
                                     t1, mode)
                 jump = float(np.max(np.abs(res.phi - state.phi)))
                 if jump > opt.max_dphi:
-                    raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)", t1, mode)
+                    raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)",
+                                t1, mode)
                 det = self._det(res, state, tau)
                 if res.mode != mode:
-                    events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan")))
+                    # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
+                    events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
+                                        "mode_change_between_steps"))
                     det_ref = None
                 if det_ref is not None and np.sign(det) != det_ref:
                     raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
@@ -206,7 +211,7 @@ class TimeStepper:
                 ncycles += 1
                 cycle_ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
                 if len(cycle_ends) >= 2:
-                    (pa, fa, ma), (pb, fb, mb) = cycle_ends[-2], cycle_ends[-1]
+                    (pa, fa, _), (pb, fb, _) = cycle_ends[-2], cycle_ends[-1]
                     periodic_dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
                 if n_target is not None:
                     if ncycles >= n_target:
@@ -220,7 +225,7 @@ class TimeStepper:
                                                      f"{periodic_dev:.3g})", t1, mode)
         except _Stop as stop:
             status, detail, fail_t, fail_mode = stop.status, stop.detail, stop.t, stop.mode.label
-        stats = {"steps_per_cycle": N, "ipopt_calls": self.step.ncalls, "retried_steps": retries,
+        stats = {"steps_per_cycle": N, "ipopt_calls": self.step.ncalls - calls0, "retried_steps": retries,
                  "step_time_median": float(np.median(times)) if times else float("nan"),
                  "step_time_total": float(np.sum(times)), "max_comp_residual": comp_max,
                  "max_eq_residual": eq_max, "polished_steps": polished, "W_plus_rule": "midpoint",
