@@ -91,6 +91,54 @@ def test_failing_ipopt_status_fails_the_step(paper_robot):
     assert res.homotopy[-1].return_status == res.status and not res.homotopy[-1].accepted
 
 
+def _fail_calls(step, which):
+    """Let IPOPT calls number ``which`` (1-based) of ``step`` report Search_Direction_Becomes_Too_Small."""
+    original = step._call
+    count = {"n": 0}
+
+    def call(*args, **kwargs):
+        sol = original(*args, **kwargs)
+        count["n"] += 1
+        if count["n"] in which:
+            sol.status, sol.accepted = "Search_Direction_Becomes_Too_Small", False
+        return sol
+    step._call = call
+
+
+def test_failed_attempts_are_retried(paper_robot):
+    model = Model(paper_robot)
+    torque = paper_torque(paper_robot)
+    state = initial_state(model, torque)
+    ref = solve_step_enumerate(model, state, torque(0.02))
+
+    def sigmas(res, attempt):
+        return [s.sigma for s in res.homotopy if s.attempt == attempt and s.kind == "homotopy"]
+
+    # warm start fails at its first IPOPT call: retried from a cold start (monotone schedule)
+    warm = MPCCStep(model).solve(state, torque(0.01))
+    step = MPCCStep(model)
+    _fail_calls(step, {1})
+    res = step.solve(state, torque(0.02), warm_start=warm)
+    assert res.success and res.attempts == 2, res.message
+    assert res.homotopy[0].attempt == 0 and res.homotopy[0].return_status == "Search_Direction_Becomes_Too_Small"
+    s1 = sigmas(res, 1)
+    assert all(b < a for a, b in zip(s1, s1[1:])) and s1[-1] < 1e-9
+    np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
+    # cold start fails: the next attempt runs the non-monotone schedule (sigma goes up first)
+    step = MPCCStep(model)
+    _fail_calls(step, {1})
+    res = step.solve(state, torque(0.02))
+    assert res.success and res.attempts == 2, res.message
+    s1 = sigmas(res, 1)
+    assert s1[1] > s1[0] and s1[-1] < 1e-9
+    np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
+    # no retries allowed: the step fails with the status of the failed call
+    step = MPCCStep(model, MPCCOptions(max_retries=0))
+    _fail_calls(step, {1})
+    res = step.solve(state, torque(0.02))
+    assert not res.success and res.status == "Search_Direction_Becomes_Too_Small" and res.attempts == 1
+
+
 def test_acceptable_level_is_accepted_with_the_residual_checks(paper_robot):
     model = Model(paper_robot)
     torque = paper_torque(paper_robot)
