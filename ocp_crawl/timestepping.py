@@ -259,8 +259,10 @@ class TimeStepper:
             res.periodicity_residual = stats["periodicity_deviation"]
         if t_eval is not None:
             te = t0 + np.asarray(t_eval, dtype=float).ravel()
-            if len(t) < 2 or np.any(te < t[0] - 1e-12) or np.any(te > t[-1] + 1e-12):
+            if np.any(~np.isfinite(te)) or np.any(te < t0 - 1e-12) or np.any(te > t0 + 1 + 1e-12):
                 raise ValueError("t_eval must lie in [0, 1] (phase within the reported cycle)")
+            # a failed run reports the phases it reached
+            te = te[te <= t[-1] + 1e-12]
             phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
             cols = {k: np.interp(te, t, v) for k, v in cols.items()}
             mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]

@@ -6,6 +6,8 @@
 Reports the median wall time of a warm-started step solve (IPOPT calls included, the previous step's
 solution as warm start) over two cycles, the median over ``--repeat`` runs of one full cycle
 (``simulate``-style run from the released start, ``cycles=1``), and the one-off NLP build time.
+CPU times (process time) and the load average are reported too: on a shared machine the wall times
+grow with the load, the CPU times much less.
 """
 from __future__ import annotations
 
@@ -35,13 +37,17 @@ def bench(steps: int, gravity: str, psi: float, formulation: str, repeat: int) -
 
     start = HybridStepper(model, torque).initial_state(0.0)
     state = StepState(start.x[:2], 0.0, float(model.kinematics(start.x[:2])["d"]), 0.0)
-    warm, cold, calls, iters, retried = [], [], [], [], 0
+    warm, warm_cpu, cold, calls, iters, retried = [], [], [], [], [], 0
     prev = None
     for n in range(1, 2 * steps + 1):
+        cpu = time.process_time()
         res = step.solve(state, torque(n / steps), warm_start=prev)
+        cpu = time.process_time() - cpu
         if not res.success:
             raise RuntimeError(f"step {n} failed: {res.message}")
         (cold if prev is None else warm).append(res.solve_time)
+        if prev is not None:
+            warm_cpu.append(cpu)
         if prev is not None:
             calls.append(len(res.homotopy))
             iters.append(res.iterations)
@@ -49,11 +55,12 @@ def bench(steps: int, gravity: str, psi: float, formulation: str, repeat: int) -
         prev, state = res, res.next_state()
 
     stepper = TimeStepper(model, torque, steps, options)
-    cycle_times = []
+    cycle_times, cycle_cpu = [], []
     for _ in range(repeat):
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         out = stepper.run(cycles=1)
         cycle_times.append(time.perf_counter() - t)
+        cycle_cpu.append(time.process_time() - cpu)
         if not out.success:
             raise RuntimeError(out.message)
     return {
@@ -63,12 +70,15 @@ def bench(steps: int, gravity: str, psi: float, formulation: str, repeat: int) -
         "warm_step_median_ms": 1e3 * statistics.median(warm),
         "warm_step_p90_ms": 1e3 * float(np.percentile(warm, 90)),
         "warm_step_mean_ms": 1e3 * statistics.fmean(warm),
+        "warm_step_median_cpu_ms": 1e3 * statistics.median(warm_cpu),
         "cold_step_ms": 1e3 * cold[0],
         "warm_step_ipopt_calls_mean": statistics.fmean(calls),
         "warm_step_ipopt_iterations_mean": statistics.fmean(iters),
         "warm_steps_retried": retried,
         "full_cycle_median_s": statistics.median(cycle_times),
         "full_cycle_min_s": min(cycle_times),
+        "full_cycle_median_cpu_s": statistics.median(cycle_cpu),
+        "load_average_1min": os.getloadavg()[0],
     }
 
 

@@ -424,3 +424,7 @@ def test_ipopt_failure_ends_the_run_with_solver_failure(paper_robot):
     assert res.nsteps == 1
     _check_failure_names_the_step(res, N)
     assert "Maximum_Iterations_Exceeded" in res.message
+    # requested output phases beyond the failure are not invented
+    part = simulate_mpcc(model, paper_torque(paper_robot), steps=N, t_eval=[0.0, 0.5],
+                         options=MPCCOptions(ipopt={"max_iter": 1}, max_retries=0))
+    assert part.status == Status.SOLVER_FAILURE and list(part.t) == [0.0]
