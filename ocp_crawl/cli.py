@@ -76,9 +76,28 @@ def register(name: str, help: str, arguments: Callable[[argparse.ArgumentParser]
 
 
 #: solvers of ``simulate --solver``: name -> function(problem, args) -> CrawlResult
+def _run_mpcc(problem: Problem, args: argparse.Namespace) -> CrawlResult:
+    from .timestepping import simulate_mpcc
+
+    if problem.drive != "torque":
+        raise BadInput(f"{problem.source}: --solver mpcc needs the torque drive, got [gait] drive = {problem.drive!r}")
+    return simulate_mpcc(problem.model, problem.torque, steps=args.steps)
+
+
 SOLVERS: dict[str, Callable[[Problem, argparse.Namespace], CrawlResult]] = {
     "event": lambda problem, args: run_problem(problem),
+    "mpcc": _run_mpcc,
 }
+
+
+def _steps(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--steps {text!r}: must be an integer >= 4") from None
+    if n < 4:
+        raise argparse.ArgumentTypeError(f"--steps {text!r}: must be an integer >= 4")
+    return n
 
 
 # --------------------------------------------------------------------------------------------
@@ -179,7 +198,9 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                    help="override a key, e.g. --set robot.k=0.05 or --set gait.drive=angles (repeatable)")
     p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
     p.add_argument("--solver", choices=tuple(SOLVERS), default="event",
-                   help="event: event-driven hybrid solver (default)")
+                   help="event: event-driven hybrid solver (default); mpcc: MPCC time-stepping (IPOPT)")
+    p.add_argument("--steps", type=_steps, default=200, metavar="N",
+                   help="--solver mpcc: steps per cycle (default 200)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--out", metavar="DIR", help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
 
@@ -378,6 +399,94 @@ def cmd_animate(args: argparse.Namespace) -> int:
           + (f"S = {1e3 * result.S:.2f} mm per cycle" if result.success else result.message))
     if not result.success:
         print(f"{PROG}: simulation failed: {result.message} (animated up to the failure)", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# crosscheck
+# --------------------------------------------------------------------------------------------
+def _crosscheck_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (torque drive)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key (repeatable)")
+    p.add_argument("--steps", type=_steps, nargs="+", default=[50, 100, 200, 400], metavar="N",
+                   help="increasing steps per cycle of the MPCC time-stepping (default 50 100 200 400)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the table")
+
+
+@register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators", _crosscheck_args)
+def cmd_crosscheck(args: argparse.Namespace) -> int:
+    from .crosscheck import crosscheck
+
+    problem = load_problem(args.problem, args.overrides)
+    if problem.drive != "torque":
+        raise BadInput(f"{problem.source}: crosscheck needs the torque drive, got [gait] drive = {problem.drive!r}")
+    steps = sorted(set(args.steps))
+    if len(steps) < 2:
+        raise BadInput(f"--steps {' '.join(map(str, args.steps))}: give at least two different step counts")
+    result = crosscheck(problem.model, problem.torque, steps=steps)
+    if args.json:
+        print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)), allow_nan=False))
+    else:
+        print(result.table())
+    return EXIT_OK if result.summary()["passed"] else EXIT_FAILURE
+
+
+# --------------------------------------------------------------------------------------------
+# optimize
+# --------------------------------------------------------------------------------------------
+def _optimize_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file with an [ocp] section (see README)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--out", metavar="DIR", help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+
+
+def format_optimize(s: dict) -> str:
+    def mm(v):
+        return "-" if v is None else f"{1e3 * v:+.3f} mm"
+
+    h = s.get("best_harmonic") or {}
+    lines = [
+        f"status      {s['status']}: {s['message']}",
+        f"objective   {s['objective']} ({s['nodes']} nodes, {s['parametrization']} torques)",
+        f"S           OCP {mm(s['S_ocp']) if not isinstance(s['S_ocp'], list) else s['S_ocp']}, "
+        f"replay {mm(s['S_replay']) if not isinstance(s['S_replay'], list) else s['S_replay']}",
+        f"objective   OCP {s['objective_value_ocp']}, replay {s['objective_value_replay']} "
+        f"(relative difference {s['rel_diff_replay']})",
+        f"CoT+        replay {s['CoT_plus_replay']}",
+        f"harmonic    best of the envelope: psi = {h.get('psi_deg')} deg, A = {h.get('A_deg')} deg, "
+        f"objective {h.get('value')}; gain of the optimum (by replay) {s['gain']}",
+        f"residuals   complementarity {s['complementarity_residual']}, periodicity {s['periodicity_residual']}",
+        f"time        {s['solve_time_s']} s",
+    ]
+    return "\n".join(lines)
+
+
+@register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
+def cmd_optimize(args: argparse.Namespace) -> int:
+    from .ocp import optimize_gait
+    from .ocp_output import write_outputs as write_ocp_outputs
+    from .problem import ocp_settings
+
+    problem = load_problem(args.problem, args.overrides)
+    settings = ocp_settings(problem)
+    out = prepare_out(args.out) if args.out else None
+    result = optimize_gait(problem.robot, problem.gravity, settings)
+    data = jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
+                         units={"S": "m", "W_plus": "J", "CoT_plus": "-", "tau": "N m", "solve_time_s": "s"}))
+    if args.json:
+        print(json.dumps(data, allow_nan=False))
+    else:
+        print(format_optimize(data))
+    if out is not None:
+        files = write_ocp_outputs(result, problem.robot, out, data)
+        if not args.json:
+            print("wrote       " + ", ".join(str(f) for f in files))
+    if not result.success:
+        print(f"{PROG}: optimisation failed: {result.message}", file=sys.stderr)
         return EXIT_FAILURE
     return EXIT_OK
 

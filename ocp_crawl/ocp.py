@@ -89,7 +89,7 @@ class OCPSettings:
     """largest |d tau/d t| [N m per cycle]; "harmonic" (default): the peak rate 2 pi k A_max of the
     envelope's harmonic gait, so that the optimum cannot gain by packing several strokes into one
     cycle (a higher actuation frequency); None: no limit"""
-    tie_margin: float = 0.02
+    tie_margin: float = 0.002
     """a foot may slip only while its friction limit is below the other foot's by tie_margin M g:
     at a tie the incremental Coulomb law leaves free which foot slips, which an optimiser would
     exploit and the continuous system does not allow (it slips both feet symmetrically)"""
@@ -101,8 +101,11 @@ class OCPSettings:
     """robust_speed: friction scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r))"""
     robust: str = "mean"
     """robust_speed: maximise the 'mean' or the 'worst' direction * S over the scenarios"""
-    sigma0: float = 1e-2
-    sigma_min: float = 1e-11
+    sigma0: tuple = (1e-2, 1e-6)
+    """first relaxation parameters of the homotopies run from the harmonic initial guess (the
+    problem is nonconvex and the relaxation path decides the local optimum: a loose start explores,
+    a tight start stays near the guess); the best accepted result is kept"""
+    sigma_min: float = 1e-10
     sigma_factor: float = 0.1
     comp_tol: float = 1e-6
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
@@ -127,7 +130,11 @@ class OCPSettings:
         if self.nodes < 8:
             raise ValueError(f"OCPSettings.nodes must be >= 8, got {self.nodes}")
         object.__setattr__(self, "fourier_order", _num("fourier_order", self.fourier_order, positive=True, integer=True))
-        for name in ("gamma_deg", "A_max_deg", "regularization", "S_min", "sigma0", "sigma_min", "sigma_factor",
+        s0 = (self.sigma0,) if isinstance(self.sigma0, (int, float)) else tuple(self.sigma0)
+        if not s0 or any(isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1 for v in s0):
+            raise ValueError(f"OCPSettings.sigma0 must be numbers in (0, 1), got {self.sigma0!r}")
+        object.__setattr__(self, "sigma0", tuple(float(v) for v in s0))
+        for name in ("gamma_deg", "A_max_deg", "regularization", "S_min", "sigma_min", "sigma_factor",
                      "comp_tol", "periodic_tol"):
             object.__setattr__(self, name, _num(name, getattr(self, name), nonneg=name in ("regularization", "S_min"),
                                                 positive=name not in ("regularization", "S_min")))
@@ -138,7 +145,7 @@ class OCPSettings:
         if self.rate_limit is not None and self.rate_limit != "harmonic":
             object.__setattr__(self, "rate_limit", _num("rate_limit", self.rate_limit, positive=True))
         object.__setattr__(self, "tie_margin", _num("tie_margin", self.tie_margin, nonneg=True))
-        if not self.sigma_factor < 1 or not self.sigma_min < self.sigma0:
+        if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
         ratios = tuple(float(r) for r in self.mu_ratios)
         if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
@@ -169,6 +176,7 @@ class OCPSettings:
 @dataclass(frozen=True)
 class HomotopyRecord:
     sigma: float
+    """relaxation parameter of the stage (0 for the polish)"""
     return_status: str
     accepted: bool
     iterations: int
@@ -263,10 +271,11 @@ class OCPResult:
 # --------------------------------------------------------------------------------------------
 # objective values measured on simulations (harmonic sweep and replay use the same definition)
 # --------------------------------------------------------------------------------------------
-def objective_value(settings: OCPSettings, results: list[CrawlResult]) -> float:
+def objective_value(settings: OCPSettings, results: list[CrawlResult], enforce_s_min: bool = True) -> float:
     """Objective of a set of simulations (one per scenario); larger is better for speeds, smaller for CoT.
 
-    Failed simulations give NaN.  min_cot of a gait that misses S_min gives +inf.
+    Failed simulations give NaN.  min_cot of a gait that misses S_min gives +inf when
+    ``enforce_s_min`` (harmonic selection); the replay reports the CoT+ itself and checks S_min apart.
     """
     if any(not r.success for r in results):
         return float("nan")
@@ -275,7 +284,7 @@ def objective_value(settings: OCPSettings, results: list[CrawlResult]) -> float:
         return dS[0]
     if settings.objective == "robust_speed":
         return float(np.mean(dS) if settings.robust == "mean" else np.min(dS))
-    if dS[0] < settings.S_min or dS[0] <= 0:
+    if dS[0] <= 0 or (enforce_s_min and dS[0] < settings.S_min):
         return float("inf")
     return results[0].CoT_plus
 
@@ -297,6 +306,7 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings) -> Harmonic
     if settings.objective in ("max_speed", "robust_speed"):
         amps = amps[-1:]  # S grows with A (paper): the largest amplitude of the envelope
     best = None
+    closest = None  # min_cot: the gait nearest to S_min when none reaches it (initial guess only)
     n = 0
     for A in amps:
         for psi in psis:
@@ -306,21 +316,24 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings) -> Harmonic
             except ValueError:
                 continue
             n += 1
-            val = objective_value(settings, res)
-            if best is None or _better(settings, val, best.value):
-                best = HarmonicChoice(float(psi), float(A), settings.gamma_deg, val, [r.S for r in res],
-                                      [r.W_plus for r in res], [r.CoT_plus for r in res], 0)
+            if any(not r.success for r in res):
+                continue
+            choice = HarmonicChoice(float(psi), float(A), settings.gamma_deg, objective_value(settings, res),
+                                    [r.S for r in res], [r.W_plus for r in res], [r.CoT_plus for r in res], 0)
+            if math.isfinite(choice.value) and (best is None or _better(settings, choice.value, best.value)):
+                best = choice
+            if closest is None or settings.direction * choice.S[0] > settings.direction * closest.S[0]:
+                closest = choice
+    best = best or (closest if settings.objective == "min_cot" else None)
     if best is not None:
         best.evaluated = n
-        if not math.isfinite(best.value):
-            return best if settings.objective == "min_cot" else None
     return best
 
 
 # --------------------------------------------------------------------------------------------
 # the NLP
 # --------------------------------------------------------------------------------------------
-DEFAULT_IPOPT = {"tol": 1e-10, "acceptable_tol": 1e-8, "max_iter": 3000, "mu_strategy": "adaptive",
+DEFAULT_IPOPT = {"tol": 1e-10, "acceptable_tol": 1e-8, "max_iter": 2000, "mu_strategy": "adaptive",
                  "bound_relax_factor": 0.0, "nlp_scaling_method": "gradient-based"}
 
 
@@ -417,8 +430,12 @@ class GaitOCP:
                 tie = cs.vertcat((W[4, :] + W[5, :]) * (lim2 - lim1 - s.tie_margin),
                                  (W[6, :] + W[7, :]) * (lim1 - lim2 - s.tie_margin))
                 add_con(f"tie_{j}", cs.vec(tie), -inf, inf)  # lower bound -sigma, set per stage
-            S_hat = cs.sum2(W[4, :] - W[5, :])  # foot-1 displacement over the cycle / L
-            S_list.append(S_hat)
+            # S and W+ are lifted into scalar variables defined by linear constraints, so that a
+            # nonlinear objective in them (W+/S) keeps the Hessian sparse
+            S_var = cs.MX.sym(f"S_{j}")
+            add_var(f"S_{j}", S_var, -inf, inf)
+            add_con(f"S_def_{j}", S_var - cs.sum2(W[4, :] - W[5, :]), 0.0, 0.0)  # foot-1 displacement / L
+            S_list.append(S_var)
             if s.objective == "min_cot":
                 # positive work per actuator with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
                 V = cs.MX.sym(f"v_{j}", 2, N)
@@ -427,7 +444,10 @@ class GaitOCP:
                 tau_mid = 0.5 * (Tprev + Tstep)
                 dphi = PHI[:, 1:] - PHI[:, :-1]
                 add_con(f"wplus_{j}", cs.vec(V - tau_mid * dphi), 0.0, inf)
-                W_list.append(cs.sum1(cs.sum2(V)))
+                W_var = cs.MX.sym(f"Wp_{j}")
+                add_var(f"Wp_{j}", W_var, 0.0, inf)
+                add_con(f"W_def_{j}", W_var - cs.sum1(cs.sum2(V)), 0.0, 0.0)
+                W_list.append(W_var)
         d = s.direction
         reg = s.regularization * N * cs.sumsqr(dT)
         if s.objective == "max_speed":
@@ -493,10 +513,13 @@ class GaitOCP:
             x[self._slices[f"phi0_{j}"]] = phi[:, 0]
             x[self._slices[f"ft0_{j}"]] = ft[0]
             x[self._slices[f"w_{j}"]] = W.ravel(order="F")
+            x[self._slices[f"S_{j}"]] = np.sum(W[4] - W[5])
             if f"v_{j}" in self._slices:
                 tau = torque_signal(te).reshape(2, -1) / MgL
-                tau_mid = 0.5 * (tau[:, 1:] + np.c_[tau[:, 1:-1], tau[:, 0]])
-                x[self._slices[f"v_{j}"]] = np.maximum(tau_mid * np.diff(phi, axis=1), 0.0).ravel(order="F")
+                tau_mid = 0.5 * (tau[:, :-1] + tau[:, 1:])
+                V = np.maximum(tau_mid * np.diff(phi, axis=1), 0.0)
+                x[self._slices[f"v_{j}"]] = V.ravel(order="F")
+                x[self._slices[f"Wp_{j}"]] = V.sum()
         if "zeta" in self._slices:
             x[self._slices["zeta"]] = min(self.settings.direction * sim.S for sim in sims) / L
         return x
@@ -533,9 +556,29 @@ class GaitOCP:
         return float(np.sum(np.maximum(tau_mid * np.diff(phi, axis=1), 0.0)))
 
     def solve(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[HomotopyRecord], str | None, str]:
-        """Relaxation homotopy from x0; returns (best accepted x, history, failed stage, IPOPT status)."""
+        """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status)."""
+        best = None
+        runs = []
+        f0 = float(self._f(x0))  # objective of the (nearly feasible) initial guess
+        for sigma0 in self.settings.sigma0:
+            x, hist, failed, status = self._homotopy(x0, sigma0)
+            runs.append((x, hist, failed, status))
+            if x is not None and failed is None:
+                f = float(self._f(x))
+                if best is None or f < best[0]:
+                    best = (f, x, hist, failed, status)
+            if best is not None and best[0] < f0:
+                break  # improved on the initial guess: the next (tighter) start is not needed
+        history = [h for r in runs for h in r[1]]
+        if best is not None:
+            return best[1], history, None, best[4]
+        x, _, failed, status = runs[-1]
+        return x, history, failed, status
+
+    def _homotopy(self, x0: np.ndarray, sigma0: float):
+        """One relaxation homotopy from x0, then the polish."""
         s = self.settings
-        sig = s.sigma0
+        sig = sigma0
         sched = []
         while sig > s.sigma_min * (1 + 1e-9):
             sched.append(sig)
@@ -616,7 +659,7 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
                     settings=settings)
     harm = best_harmonic(robot, gravity, settings)
     res.harmonic = harm
-    if harm is None or not math.isfinite(harm.value) and settings.objective != "min_cot":
+    if harm is None:
         res.status = OCPStatus.NO_INITIAL_GUESS
         res.message = "no harmonic gait of the envelope simulates successfully: no initial guess"
         return res
@@ -692,7 +735,7 @@ def _replay(res: OCPResult, robot: Robot, gravity: str, settings: OCPSettings, o
     res.S_replay = [r.S for r in sims]
     res.W_plus_replay = [r.W_plus for r in sims]
     res.CoT_plus_replay = [r.CoT_plus for r in sims]
-    res.value_replay = objective_value(settings, sims)
+    res.value_replay = objective_value(settings, sims, enforce_s_min=False)
     res.rel_diff_replay = abs(res.value_replay - res.value_ocp) / abs(res.value_replay)
     if res.harmonic is not None and math.isfinite(res.harmonic.value) and res.harmonic.value != 0:
         h = res.harmonic.value

@@ -169,7 +169,55 @@ SECTIONS: tuple[Section, ...] = (
     )),
 )
 
+SECTIONS += (
+    Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys=(
+        Key("objective", str, "-", "what to optimise", default="max_speed",
+            choices=("max_speed", "min_cot", "robust_speed")),
+        Key("nodes", int, "-", "steps per cycle of the transcription", default=100, rule=Rule(lambda v: v >= 8, ">= 8")),
+        Key("direction", int, "-", "sign of S to pursue (-1: towards foot 1, as psi > 0 gaits)", default=-1,
+            rule=Rule(lambda v: v in (-1, 1), "-1 or 1")),
+        Key("A_max_deg", float, "deg", "half-width of the reference-angle envelope around gait.gamma_deg",
+            default=30.0, rule=Rule(lambda v: 0 < v < 90, "in (0, 90)")),
+        Key("parametrization", str, "-", "torques free at every node or a Fourier series", default="free",
+            choices=("free", "fourier")),
+        Key("fourier_order", int, "-", "order of the Fourier series", default=4, rule=Rule(lambda v: v >= 1, ">= 1")),
+        Key("rate_limit", str, "-", "torque rate limit: the harmonic envelope's peak rate, none, or max_rate",
+            default="harmonic", choices=("harmonic", "none", "max_rate")),
+        Key("max_rate", float, "N m/cycle", "largest |d tau/dt| when rate_limit = \"max_rate\"", rule=GT0),
+        Key("regularization", float, "-", "weight of the torque-change regularisation", default=1e-5, rule=GE0),
+        Key("tie_margin", float, "-", "friction-limit margin (fraction of M g) required for a foot to slip",
+            default=0.02, rule=GE0),
+        Key("S_min", float, "m", "min_cot: smallest progress direction * S per cycle", default=0.0, rule=GE0),
+        Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}", default=0.1,
+            rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+        Key("robust", str, "-", "robust_speed: maximise the mean or the worst S", default="mean",
+            choices=("mean", "worst")),
+        Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)", default=36,
+            rule=Rule(lambda v: v >= 4, ">= 4")),
+    )),
+)
+
 SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
+
+
+def ocp_settings(problem: "Problem"):
+    """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma."""
+    from .ocp import OCPSettings
+
+    sec = dict(problem.sections.get("ocp", {}))
+    if not sec:
+        sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
+    if sec.get("rate_limit") == "max_rate" and sec.get("max_rate") is None:
+        raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
+    rate = {"harmonic": "harmonic", "none": None}.get(sec.get("rate_limit"), sec.get("max_rate"))
+    eps = sec["mu_ratio_eps"]
+    return OCPSettings(objective=sec["objective"], nodes=sec["nodes"], direction=sec["direction"],
+                       gamma_deg=math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2)),
+                       A_max_deg=sec["A_max_deg"], parametrization=sec["parametrization"],
+                       fourier_order=sec["fourier_order"], rate_limit=rate, regularization=sec["regularization"],
+                       tie_margin=sec["tie_margin"], S_min=sec["S_min"],
+                       mu_ratios=(1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,), robust=sec["robust"],
+                       harmonic_psi=sec["harmonic_psi"])
 
 
 def schema_markdown() -> str:

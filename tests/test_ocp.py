@@ -1,0 +1,81 @@
+"""Periodic-gait optimal control: each objective solved, proven by replay, compared with harmonics."""
+import math
+
+import numpy as np
+import pytest
+
+from ocp_crawl import Robot
+from ocp_crawl.ocp import OCPSettings, OCPStatus, optimize_gait
+
+N = 200
+SETTINGS = {
+    "max_speed": dict(objective="max_speed"),
+    "min_cot": dict(objective="min_cot", S_min=0.04),
+    "robust_speed": dict(objective="robust_speed"),
+}
+
+
+@pytest.fixture(scope="module")
+def solved():
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            cache[name] = optimize_gait(Robot.paper(), "physical", OCPSettings(nodes=N, **SETTINGS[name]))
+        return cache[name]
+    return get
+
+
+def better_or_equal(objective, a, b):
+    return a <= b if objective == "min_cot" else a >= b
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(SETTINGS))
+def test_optimal_profile_is_proven_by_replay_and_beats_harmonics(solved, name):
+    res = solved(name)
+    assert res.success, res.message
+    st = res.settings
+    # residuals of the transcription
+    assert res.complementarity_residual <= st.comp_tol
+    assert res.periodicity_residual <= st.periodic_tol
+    assert res.homotopy[-1].accepted
+    # the replay in the event-driven simulator agrees with the OCP
+    assert len(res.replay) == len(res.S_ocp) and all(r.success for r in res.replay)
+    for s_ocp, s_rep in zip(res.S_ocp, res.S_replay):
+        assert s_rep == pytest.approx(s_ocp, rel=0.01)
+    assert res.rel_diff_replay < 0.01
+    # torques inside the envelope and the rate limit
+    lo, hi = st.torque_bounds(Robot.paper())
+    assert np.all(res.tau >= lo - 1e-9) and np.all(res.tau <= hi + 1e-9)
+    rate = st.rate_bound(Robot.paper())
+    assert np.max(np.abs(np.diff(np.c_[res.tau, res.tau[:, :1]], axis=1))) * N <= rate * (1 + 1e-6)
+    # at least as good as the best harmonic gait of the envelope, strictly better than the guess
+    # (the guess is that best harmonic gait), all measured by replay
+    h = res.harmonic
+    assert math.isfinite(h.value) and h.evaluated >= st.harmonic_psi
+    assert better_or_equal(st.objective, res.value_replay, h.value)
+    assert res.value_replay != h.value and res.gain > 0
+    if st.objective == "min_cot":
+        assert st.direction * res.S_replay[0] >= st.S_min * (1 - 0.01)
+
+
+def test_infeasible_speed_requirement_is_a_status():
+    res = optimize_gait(Robot.paper(), "physical",
+                        OCPSettings(objective="min_cot", S_min=0.5, nodes=24, harmonic_psi=12, harmonic_A=2))
+    assert not res.success
+    assert res.status == OCPStatus.INFEASIBLE, res.message
+    assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message
+
+
+@pytest.mark.parametrize("bad,match", [
+    (dict(objective="fastest"), "objective must be one of"),
+    (dict(nodes=4), "nodes must be >= 8"),
+    (dict(direction=0), "direction must be -1 or"),
+    (dict(A_max_deg=95), "A_max_deg must be in"),
+    (dict(sigma0=(2.0,)), "sigma0 must be"),
+    (dict(mu_ratios=(0.9, -1.0)), "mu_ratios must be positive"),
+])
+def test_settings_validation(bad, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        OCPSettings(**bad)
