@@ -295,6 +295,8 @@ SLIP_EPS = 1e-12
 SLIP_PAIR_MODES = (Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
 #: both feet count as slipping (SLIP_BOTH_*) when the smaller foot slip is at least this part of the larger
 BOTH_RATIO = 1e-3
+#: pairs left near their corner by the homotopy that the polish may try on the other branch
+POLISH_FLIPS = 2
 
 
 @lru_cache(maxsize=1)
@@ -575,37 +577,53 @@ class MPCCStep:
     def _polish(self, attempt, state, tau, prefer, sol: _Solve, stages) -> _Solve | None:
         """Tightened NLP: each pair on its identified branch, the other side >= 0, its relaxation off.
 
-        Sticking pairs (s_j <= c_j) get s_j = 0; the slipping pair with the largest slip gets c_j = 0.
-        Any other slipping pair (the two feet at equal friction limits, where the split of the slip
-        between them is free) keeps the relaxation of the last homotopy stage, so that the objective,
-        not an over-determined system, decides the split.  Returns None (keep the homotopy's point)
-        if IPOPT or the residual checks fail.
+        Branches (:meth:`_branches`): sticking pairs (s_j <= c_j) get s_j = 0, the slipping pair with
+        the largest slip gets c_j = 0; any other slipping pair (the two feet at equal friction limits,
+        where the split of the slip between them is free) keeps the relaxation of the last homotopy
+        stage, so that the objective, not an over-determined system, decides the split.  Pairs the
+        homotopy left near their corner (min(s_j, c_j) > comp_tol, possible up to sqrt(sigma)) may be
+        on the wrong branch: if the tightened NLP fails, each of them is tried on the other branch
+        (at most ``POLISH_FLIPS`` more IPOPT calls, only at such degenerate steps).  Returns None (keep
+        the homotopy's point) if no tightened NLP succeeds with the residual checks.
         """
         opt = self.options
-        sigma = stages[-1].sigma
-        _, _, lbg, ubg = self._bounds(sigma)
-        if opt.formulation == "fischer_burmeister":
-            # a kept pair may need c_j = 0 exactly (equal limits), which smoothing (s_j c_j = sigma)
-            # forbids; a tiny sigma keeps the switched-off rows' derivatives finite at s = c = 0
-            sigma = 1e-30
-        lbg, ubg = lbg.copy(), ubg.copy()
-        ubx = self._ubx.copy()
-        w0 = sol.w.copy()
+        sigma_last = stages[-1].sigma
+        # a kept pair may need c_j = 0 exactly (equal limits), which smoothing (s_j c_j = sigma)
+        # forbids; a tiny sigma keeps the switched-off rows' derivatives finite at s = c = 0
+        sigma = 1e-30 if opt.formulation == "fischer_burmeister" else sigma_last
+        natural = self._branches(sol)
+        corner = sorted((j for j in range(NPAIR) if min(sol.s[j], sol.c[j]) > opt.comp_tol),
+                        key=lambda j: -min(sol.s[j], sol.c[j]))
+        candidates = [natural]
+        for j in corner[:POLISH_FLIPS]:
+            flipped = list(natural)
+            flipped[j] = "slip" if natural[j] == "stick" else "stick"
+            candidates.append(flipped)
+        for branches in candidates:
+            _, _, lbg, ubg = self._bounds(sigma_last)
+            lbg, ubg = lbg.copy(), ubg.copy()
+            ubx = self._ubx.copy()
+            w0 = sol.w.copy()
+            for j, branch in enumerate(branches):
+                if branch == "relaxed":
+                    continue
+                fixed = 8 + j if branch == "slip" else 4 + j
+                ubx[fixed] = 0.0
+                w0[fixed] = 0.0
+                if self.ng > NEQ + NPAIR:
+                    lbg[NEQ + NPAIR + j], ubg[NEQ + NPAIR + j] = -np.inf, np.inf
+            t0 = time.perf_counter()
+            pol = self._call(self._solver_warm, w0, sol.lam_x, sol.lam_g, self._params(state, tau, sigma, prefer),
+                             self._lbx, ubx, lbg, ubg)
+            stages.append(HomotopyStage(attempt, float("nan"), pol.status, pol.accepted, pol.iterations, pol.comp,
+                                        time.perf_counter() - t0, kind="polish"))
+            if pol.accepted and pol.eq <= opt.eq_tol and pol.comp <= opt.comp_tol:
+                return pol
+        return None
+
+    @staticmethod
+    def _branches(sol: _Solve) -> list[str]:
+        """Identified branch of each pair: 'stick' (s_j = 0), 'slip' (c_j = 0) or 'relaxed'."""
         slipping = [j for j in range(NPAIR) if sol.s[j] > sol.c[j]]
         lead = max(slipping, key=lambda j: sol.s[j]) if slipping else None
-        for j in range(NPAIR):
-            if j in slipping and j != lead:
-                continue
-            fixed = 8 + j if j == lead else 4 + j
-            ubx[fixed] = 0.0
-            w0[fixed] = 0.0
-            if self.ng > NEQ + NPAIR:
-                lbg[NEQ + NPAIR + j], ubg[NEQ + NPAIR + j] = -np.inf, np.inf
-        t0 = time.perf_counter()
-        pol = self._call(self._solver_warm, w0, sol.lam_x, sol.lam_g, self._params(state, tau, sigma, prefer),
-                         self._lbx, ubx, lbg, ubg)
-        stages.append(HomotopyStage(attempt, float("nan"), pol.status, pol.accepted, pol.iterations, pol.comp,
-                                    time.perf_counter() - t0, kind="polish"))
-        if pol.accepted and pol.eq <= opt.eq_tol and pol.comp <= opt.comp_tol:
-            return pol
-        return None
+        return ["slip" if j == lead else "relaxed" if j in slipping else "stick" for j in range(NPAIR)]

@@ -266,6 +266,27 @@ def test_alternative_formulations_agree_with_mode_enumeration(samples, steppers,
             assert res.mode == ref.mode
 
 
+@pytest.mark.parametrize("ipopt", [{}, {"tol": 1e-10, "constr_viol_tol": 1e-10}], ids=["default", "loose-tol"])
+def test_step_at_equal_limits_and_turning_point(ipopt):
+    """Mirror-symmetric configuration (equal friction limits) where the slip also stops (d' = 0): the
+    relaxation leaves the pairs near their corners and the polish has to find the branches."""
+    robot = Robot.paper(mu1=0.328, mu2=0.328)
+    model = Model(robot, gravity="physical")
+    torque = paper_torque(robot, gamma=90.5, A=38.8, psi=-142.8)
+    N = 200
+    step = MPCCStep(model, MPCCOptions(ipopt=ipopt))
+    state, prev = initial_state(model, torque), None
+    for n in range(1, 53):  # the symmetric phase is t = 0.25 (step 50)
+        tau = torque(n / N)
+        res = step.solve(state, tau, warm_start=prev)
+        assert res.success and res.comp_residual <= 1e-8, (n, res.message)
+        if 48 <= n <= 52:
+            ref = solve_step_enumerate(model, state, tau)
+            np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
+            assert res.mode == ref.mode or ref.extra["n_consistent"] > 1
+        state, prev = res.next_state(), res
+
+
 def test_incremental_step_is_exact_within_a_mode(gravity):
     """Between two step phases without an event, the step solution is the event-driven solution."""
     robot = Robot.paper(mu1=0.33, mu2=0.42)
