@@ -4,18 +4,21 @@ The incremental problem of :mod:`ocp_crawl.mpcc` has, generically, one of five c
 the end of a step.  In each mode the unknowns z = (phi1, phi2, f_t/(M g)) solve three equations:
 the joint balance F(phi, tau, f_t) = 0 (the model's compiled residual) and
 
-==============  ====================================  =======================================
-mode            equation                              consistency (all other pairs, scaled)
-==============  ====================================  =======================================
-stick-stick     d(phi) = d(phi_k)                     every friction margin c_j >= 0
-slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0   dx1 = d_k - d >= 0 / <= 0, other c_j >= 0
-slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0   dx2 = d - d_k >= 0 / <= 0, other c_j >= 0
-==============  ====================================  =======================================
+===============  =========================================  ============================================
+mode             equation                                   consistency (all other pairs, scaled)
+===============  =========================================  ============================================
+stick-stick      d(phi) = d(phi_k)                          every friction margin c_j >= 0
+slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0  dx1 = d_k - d >= 0 / <= 0, other c_j >= 0
+slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0  dx2 = d - d_k >= 0 / <= 0, other c_j >= 0
+===============  =========================================  ============================================
 
 with f_t1 = f_t, f_t2 = -f_t and normal forces at phi_{k+1}; a slipping foot's partner sticks.
-Each mode is solved by a damped Newton method; the consistent solution is kept.  When several
-distinct consistent solutions exist (possible for a finite step of a nonlinear problem) the one
-closest to phi_k is kept and the others are reported in ``extra``.
+Each mode is solved by a damped Newton method; the consistent solution is kept (normal forces > 0
+too).  When several distinct consistent solutions exist (possible for a finite step of a nonlinear
+problem) the one closest to phi_k is kept and the count is reported in ``extra``; coinciding ones (a
+step ending exactly on a friction limit, or equal limits of the two feet) count once.  The
+equations are written here from the model's compiled ``kin`` and ``residual`` in mode form,
+independently of the MPCC's complementarity formulation.
 """
 from __future__ import annotations
 
