@@ -33,6 +33,12 @@ complementarity and equation residuals are below tolerance.  After the homotopy 
 the tightened NLP (each pair fixed to its identified branch, s_j = 0 or c_j = 0, with the other kept
 >= 0) with the same IPOPT solver; this removes the O(sigma/s) bias of the relaxation and resolves
 pairs near their corner (a slip that starts or stops within the step).
+
+Exact ties: when the friction limits of the two feet are equal (mirror-symmetric configurations)
+any split of the slip between the feet solves the step.  The small regularising objective then
+prefers the pair that slipped in the previous step (the warm start's mode) and otherwise splits the
+slip equally (mode ``SLIP_BOTH_*``).  With ``"l1_penalty"`` the penalty dominates the objective and
+the split at an exact tie follows IPOPT's path.
 """
 from __future__ import annotations
 
@@ -137,11 +143,13 @@ class MPCCOptions:
     eq_tol: float = 1e-9
     """largest accepted residual of the scaled equations and bounds [-]"""
     max_retries: int = 2
-    """failed steps are retried this many times (cold start, then a non-monotone sigma schedule)"""
+    """a failed attempt is retried up to this many times: after a warm start from a cold start, then
+    (and after a failed cold start) with a non-monotone sigma schedule from a guess with small slips"""
     polish: Polish = "auto"
     """after the homotopy, solve the tightened NLP on the identified branches (exact complementarity):
     'always', 'never', or 'auto' = only when the homotopy's complementarity residual exceeds comp_tol
-    (saves one IPOPT call on most warm-started steps; the relaxation then leaves |min(s_j, c_j)| <= comp_tol)"""
+    (saves one IPOPT call on most warm-started steps; the relaxation then leaves |min(s_j, c_j)| <= comp_tol,
+    about 1e-10 rad in phi)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`DEFAULT_IPOPT`"""
     verbose: bool = False
