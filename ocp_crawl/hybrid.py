@@ -79,7 +79,8 @@ class HybridOptions:
             raise ValueError(f"HybridOptions.max_step must be <= 0.25 cycles, got {self.max_step!r}")
         if isinstance(self.max_cycles, bool) or not (isinstance(self.max_cycles, int) and self.max_cycles >= 2):
             raise ValueError(f"HybridOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
-        if not (isinstance(self.min_cycles, int) and 1 <= self.min_cycles <= self.max_cycles):
+        if isinstance(self.min_cycles, bool) or not (isinstance(self.min_cycles, int)
+                                                     and 1 <= self.min_cycles <= self.max_cycles):
             raise ValueError(f"HybridOptions.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")
 
 

@@ -211,6 +211,15 @@ class ReferenceTorque(PeriodicSignal):
 
     reference: PeriodicSignal
     k: float
+    """joint stiffness [N m/rad]"""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.reference, PeriodicSignal):
+            raise TypeError(f"ReferenceTorque.reference must be a PeriodicSignal, got {type(self.reference).__name__}")
+        k = _finite_check("ReferenceTorque.k", self.k)
+        if k <= 0:
+            raise ValueError(f"ReferenceTorque.k must be > 0, got {k!r}")
+        object.__setattr__(self, "k", k)
 
     def __call__(self, t):
         return self.k * (self.reference(t) - math.pi)

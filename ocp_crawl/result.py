@@ -88,7 +88,8 @@ class Event:
     Kinds: ``slip_onset_1``/``slip_onset_2`` (stick-stick -> foot i slips; the direction is in
     ``mode_after``), ``slip_to_stick`` (d' = 0), ``slip_switch`` (the slipping foot changes),
     ``slip_slip_end``, ``lift_off_1``/``lift_off_2``, ``feet_crossed``, ``joint_1_on_ground``/
-    ``joint_2_on_ground``, ``fold``; prescribed angles: ``slip_reversal``, ``slip_switch``.
+    ``joint_2_on_ground``, ``fold``; prescribed angles: ``slip_reversal``, ``slip_switch``; MPCC
+    time-stepping (mode changes between steps): also ``slip_onset_both``, ``slip_slip_start``.
     """
 
     t: float
@@ -101,8 +102,9 @@ class Event:
     """name of the guard function that located the event (solver internal)"""
 
     def to_dict(self) -> dict:
-        return {"t": self.t, "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
-                "guard": self.guard, "guard_name": self.guard_name}
+        guard = float(self.guard)
+        return {"t": float(self.t), "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
+                "guard": guard if np.isfinite(guard) else None, "guard_name": self.guard_name}
 
 
 def cost_of_transport(w_plus: float, robot, S: float) -> float:
