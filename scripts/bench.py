@@ -1,7 +1,8 @@
 """Benchmarks (run by hand; figures go into the closing notes, never into timed tests).
 
-    python scripts/bench.py                # all benchmarks
+    python scripts/bench.py                # all benchmarks (several minutes)
     python scripts/bench.py hybrid         # one steady cycle of the paper gait, event-driven
+    python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -53,15 +54,62 @@ def bench_prescribed(repeat: int) -> dict:
     return {"median_ms": 1e3 * med, "S_m": res.S}
 
 
-BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed}
+def bench_ocp(repeat: int) -> dict:
+    """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve each)."""
+    from ocp_crawl import Robot
+    from ocp_crawl.ocp import OCPSettings, optimize_gait
+
+    out = {}
+    for name, kw in (("max_speed", {}), ("min_cot", {"S_min": 0.04}), ("robust_speed", {})):
+        for nodes in (100,):
+            t = time.perf_counter()
+            res = optimize_gait(Robot.paper(), "physical", OCPSettings(objective=name, nodes=nodes, **kw))
+            out[f"{name}_N{nodes}"] = {
+                "wall_s": time.perf_counter() - t, "solve_time_s": res.solve_time_s, "status": res.status,
+                "value_ocp": res.value_ocp, "value_replay": res.value_replay, "rel_diff_replay": res.rel_diff_replay,
+                "gain_vs_best_harmonic": res.gain, "stages": len(res.homotopy),
+            }
+    return out
+
+
+def _delegate(script: str, argv: list[str]):
+    """Run another benchmark script's main(argv) (they live beside this file)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).with_name(script)
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.main(argv)
+
+
+def bench_mpcc(repeat: int) -> str:
+    """MPCC step and time-stepping cycle (scripts/bench_mpcc.py)."""
+    _delegate("bench_mpcc.py", [])
+    return "see above"
+
+
+def bench_sweep(repeat: int) -> str:
+    """37 x 31 psi-gamma map, jobs 1 and 2 (scripts/bench_sweep.py)."""
+    _delegate("bench_sweep.py", [])
+    return "see above"
+
+
+BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed, "mpcc": bench_mpcc, "sweep": bench_sweep,
+              "ocp": bench_ocp}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("which", nargs="*", choices=[[], *BENCHMARKS], default=[], help="benchmarks to run (default: all)")
+    ap.add_argument("which", nargs="*", metavar="NAME", default=[],
+                    help=f"benchmarks to run: {', '.join(BENCHMARKS)} (default: all)")
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
     args = ap.parse_args(argv)
     names = args.which or list(BENCHMARKS)
+    unknown = [n for n in names if n not in BENCHMARKS]
+    if unknown:
+        ap.error(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}")
     import os
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
