@@ -19,9 +19,9 @@ so the torque input is that of eq. (tau) with the reference angle
 * an equivalent rest angle ``phi_rest`` of the joints at zero pressure, fitted to the paper's
   simulated curves (:func:`fit_rest_angle`).  With the flat rest shape (phi_rest = 180 deg) the
   robot stays nearly flat, where S depends steeply on the nominal angle, and S(p0) grows like p0^3
-  instead of the published ~p0^1.8 (relative RMS error about 0.9); a fitted rest angle near 130 deg
-  (a pre-curved, arched robot, as in the paper's Fig. 1 snapshots) brings the p0 curve within a
-  few percent;
+  instead of the published ~p0^1.8 (RMS error 0.84 in S/S_max on the paper's p0 points, paper's
+  gravity sign); the fitted rest angle, 131 deg (a pre-curved, arched robot, as in the paper's
+  Fig. 1 snapshots), brings it to 0.021 (0.053 on the psi curve);
 * the operating points the paper leaves unstated: its p0 curve is normalised at p0 = 1.7 bar and
   assumed computed at psi = 45 deg (the paper's reference gait; the normalised curve is
   insensitive to it: +-0.01 between 45 and 90 deg), its psi curve is assumed computed at

@@ -35,6 +35,8 @@ COT_K_RATIOS = (5.0, REALISTIC_K_RATIO, 0.3)
 COT_K_LABELS = ("large", "realistic", "low")
 #: low stiffness of the configuration figure, k/(M g L)
 LOW_K_RATIO = 0.3
+#: rest angle of a flat robot [deg], the alternative to the fitted rest angle of the pressure-driven robot
+FLAT_REST_DEG = 180.0
 #: |S| below this fraction of L counts as no motion ("stuck"): a stuck gait has S at round-off
 STUCK_TOL = 1e-6
 
@@ -76,6 +78,18 @@ def _stuck(S: np.ndarray, status: np.ndarray, L: float = PAPER_ROBOT.L) -> np.nd
 def _counts(status: np.ndarray) -> dict[str, int]:
     names, n = np.unique(np.asarray(status).ravel(), return_counts=True)
     return {str(a): int(b) for a, b in sorted(zip(names, n), key=lambda p: (-p[1], p[0]))}
+
+
+def outcome_runs(x, outcomes) -> list[tuple[str, float, float, int]]:
+    """Maximal runs of equal outcomes along a grid: (outcome, first x, last x, points)."""
+    out: list[tuple[str, float, float, int]] = []
+    for xi, name in zip(np.asarray(x, float), outcomes):
+        name = str(name)
+        if out and out[-1][0] == name:
+            out[-1] = (name, out[-1][1], float(xi), out[-1][3] + 1)
+        else:
+            out.append((name, float(xi), float(xi), 1))
+    return out
 
 
 def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -307,7 +321,7 @@ def friction_band(gravity: str = "paper", psi_deg=np.linspace(-180.0, 180.0, 25)
         raise ValueError(f"n_ratios must be an odd integer >= 1 (so that mu1 = mu2 is included), got {n_ratios!r}")
     if not 0 <= eps < 1:
         raise ValueError(f"eps must be in [0, 1), got {eps!r}")
-    ratios = np.linspace(1.0 - eps, 1.0 + eps, n_ratios)
+    ratios = np.linspace(1.0 - eps, 1.0 + eps, n_ratios) if n_ratios > 1 else np.ones(1)
     mu = PAPER_ROBOT.mu1
     rows, status = [], []
     psi = np.asarray(psi_deg, float)
@@ -478,6 +492,11 @@ class StiffnessStudy:
     """k/(M g L) above which the robot no longer stays stuck (bisection; NaN if not bracketed)"""
     threshold_bracket: tuple[float, float]
     """final bisection bracket (stuck at the lower end, not stuck at the upper end)"""
+    onset: float = math.nan
+    """k/(M g L) from which on the robot crawls at every grid point above (bisection; equals the
+    threshold when nothing fails in between, as with the paper's sign)"""
+    onset_bracket: tuple[float, float] = (math.nan, math.nan)
+    """final bisection bracket of the onset (not crawling at the lower end, crawling at the upper end)"""
 
     @property
     def stuck(self) -> np.ndarray:
@@ -489,26 +508,35 @@ class StiffnessStudy:
         The outcome is "stuck", "moves" or a failure status, so that e.g. the fold region of the
         physical convention shows as one run.
         """
-        out: list[tuple[str, float, float, int]] = []
-        for k, s, st in zip(self.k_ratios, self.stuck, self.status):
-            name = "stuck" if s else ("moves" if st == SUCCESS else str(st))
-            if out and out[-1][0] == name:
-                out[-1] = (name, out[-1][1], float(k), out[-1][3] + 1)
-            else:
-                out.append((name, float(k), float(k), 1))
-        return out
+        names = ["stuck" if s else ("moves" if st == SUCCESS else str(st)) for s, st in zip(self.stuck, self.status)]
+        return outcome_runs(self.k_ratios, names)
 
     @property
     def counts(self) -> dict[str, int]:
         return _counts(self.status)
 
 
-def _is_stuck(problem: Problem) -> bool:
+def _outcome(gravity: str, ratio: float) -> str:
+    """"stuck", "moves" or the failure status of the paper's gait at stiffness ratio k/(M g L)."""
+    problem = base_problem(gravity, [f"robot.k={ratio * PAPER_ROBOT.MgL!r}"])
     try:
         r = run_problem(problem)
     except ValueError:
-        return False
-    return bool(r.success and abs(r.S) <= STUCK_TOL * problem.robot.L)
+        return "bad_input"  # no equilibrium to start from, as the sweep records it
+    if not r.success:
+        return r.status_name
+    return "stuck" if abs(r.S) <= STUCK_TOL * problem.robot.L else "moves"
+
+
+def _bisect(gravity: str, lo: float, hi: float, upper: str, steps: int) -> tuple[float, float]:
+    """Shrink [lo, hi] (outcome at hi: ``upper``, at lo: anything else) by bisection."""
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        if _outcome(gravity, mid) == upper:
+            hi = mid
+        else:
+            lo = mid
+    return lo, hi
 
 
 def stiffness_study(gravity: str = "paper", k_ratios=np.geomspace(0.05, 5.0, 12), bisection_steps: int = 10,
@@ -516,7 +544,10 @@ def stiffness_study(gravity: str = "paper", k_ratios=np.geomspace(0.05, 5.0, 12)
     """S and CoT+ against k/(M g L) (gamma 90, A 30, psi 45 deg), locating the friction threshold.
 
     The threshold is bracketed by the largest k on the grid at which the robot is stuck and the
-    next grid point, and refined by ``bisection_steps`` bisections (direct runs).
+    next grid point, and refined by ``bisection_steps`` bisections (direct runs).  The onset of
+    crawling is bracketed likewise by the last grid point at which the robot does not crawl (stuck
+    or failed) and the next one.  With the paper's sign the two coincide; with the physical sign
+    folds and failures to stand lie between them.
     """
     ks = np.sort(np.asarray(k_ratios, float))
     base = base_problem(gravity)
@@ -526,15 +557,22 @@ def stiffness_study(gravity: str = "paper", k_ratios=np.geomspace(0.05, 5.0, 12)
     threshold, bracket = math.nan, (math.nan, math.nan)
     if stuck.any() and not stuck[-1]:
         j = int(np.nonzero(stuck)[0][-1])
+        # the bisection's predicate is "not stuck" at the upper end: any other outcome
         lo, hi = float(ks[j]), float(ks[j + 1])
         for _ in range(bisection_steps):
             mid = 0.5 * (lo + hi)
-            if _is_stuck(base_problem(gravity, [f"robot.k={mid * PAPER_ROBOT.MgL!r}"])):
+            if _outcome(gravity, mid) == "stuck":
                 lo = mid
             else:
                 hi = mid
         threshold, bracket = 0.5 * (lo + hi), (lo, hi)
-    return StiffnessStudy(gravity, ks, S, res.array("CoT_plus"), status, threshold, bracket)
+    moves = (status == SUCCESS) & ~stuck
+    onset, onset_bracket = math.nan, (math.nan, math.nan)
+    if moves[-1] and not moves.all():
+        j = int(np.nonzero(~moves)[0][-1])
+        onset_bracket = _bisect(gravity, float(ks[j]), float(ks[j + 1]), "moves", bisection_steps)
+        onset = 0.5 * sum(onset_bracket)
+    return StiffnessStudy(gravity, ks, S, res.array("CoT_plus"), status, threshold, bracket, onset, onset_bracket)
 
 
 # --------------------------------------------------------------------------------------------
@@ -551,6 +589,8 @@ class PressureStudy:
     paper_p0: dict[str, np.ndarray] = field(repr=False)
     """the paper's simulated curves"""
     paper_psi: dict[str, np.ndarray] = field(repr=False)
+    flat: PressureFit | None = None
+    """the same curves with the flat rest shape (phi_rest = 180 deg), to show why the rest angle is fitted"""
 
     @property
     def gravity(self) -> str:
@@ -572,22 +612,23 @@ class PressureStudy:
 
 
 def pressure_study(gravity: str = "paper", fit: bool = True, p0_bar=None, psi_deg=None,
-                   phi_rest_deg: float | None = None) -> PressureStudy:
+                   phi_rest_deg: float | None = None, compare_flat: bool = False) -> PressureStudy:
     """Fig. exp: the pressure-driven robot against p0 and psi (see :mod:`ocp_crawl.pressure`).
 
     ``fit``: fit the rest angle to the paper's simulated curves on the given grids (default: the
     paper's own points); otherwise evaluate ``phi_rest_deg`` (default: the stored fit).  The
     points run one after another in this process: the pressure input is not a problem-file key,
-    so the sweep engine cannot express it.
+    so the sweep engine cannot express it.  ``compare_flat`` also evaluates the flat rest shape.
     """
     if fit:
         result = fit_rest_angle(gravity, p0_bar, psi_deg)
     else:
         rest = FITTED_REST_DEG[gravity] if phi_rest_deg is None else phi_rest_deg
         result = evaluate_fit(rest, gravity, p0_bar, psi_deg)
+    flat = evaluate_fit(FLAT_REST_DEG, gravity, p0_bar, psi_deg) if compare_flat else None
     return PressureStudy(result, read_paper_csv("fig_exp_p0_experiment.csv"),
                          read_paper_csv("fig_exp_psi_experiment.csv"), read_paper_csv("fig_exp_p0_simulation.csv"),
-                         read_paper_csv("fig_exp_psi_simulation.csv"))
+                         read_paper_csv("fig_exp_psi_simulation.csv"), flat)
 
 
 __all__ = [
