@@ -22,7 +22,7 @@ from .files import atomic_write, write_json
 from .model import GRAVITY_CONVENTIONS
 from .plots import save_figure
 from .pressure import FITTED_REST_DEG, P0_NORMALISE_BAR, paper_grids, read_paper_csv
-from .studies import (COT_K_LABELS, REALISTIC_K_RATIO, STUCK_TOL, AmplitudeStudy, FrictionBand,
+from .studies import (COT_K_LABELS, REALISTIC_K_RATIO, outcome_runs, STUCK_TOL, AmplitudeStudy, FrictionBand,
                       GaitComparison, HigherFriction, PressureStudy, PsiGammaMap, StiffnessStudy, SweepOptions,
                       amplitude_study, friction_band, gait_comparison, higher_friction, pressure_study, psi_gamma_map,
                       stiffness_study)
@@ -149,7 +149,8 @@ def run_studies(gravity: str, grids: Grids, sweep: SweepOptions = SweepOptions()
         ("amplitude", lambda: amplitude_study(gravity, grids.amplitude_A, sweep=sweep)),
         ("friction", lambda: higher_friction(gravity, grids.friction_psi, sweep=sweep)),
         ("stiffness", lambda: stiffness_study(gravity, grids.stiffness_k, grids.bisection_steps, sweep=sweep)),
-        ("pressure", lambda: pressure_study(gravity, grids.pressure_fit, grids.pressure_p0, grids.pressure_psi)),
+        ("pressure", lambda: pressure_study(gravity, grids.pressure_fit, grids.pressure_p0, grids.pressure_psi,
+                                            compare_flat=True)),
     )
     for name, run in steps:
         t = time.perf_counter()
@@ -181,12 +182,28 @@ class Statement:
         return len(set(self.holds.values())) > 1
 
 
+def _num(x: float, fmt: str = ".3f") -> str:
+    """A number, or "n/a" when it could not be computed (e.g. the normalising run failed)."""
+    return format(x, fmt) if np.isfinite(x) else "n/a"
+
+
 def _fmt_mm(S: float) -> str:
-    return "failed" if not np.isfinite(S) else f"{MM * S:.2f} mm"
+    # + 0.0 turns a rounded -0.00 into 0.00
+    return "failed" if not np.isfinite(S) else f"{round(MM * S, 2) + 0.0:.2f} mm"
+
+
+def _runs_text(runs, var: str) -> str:
+    return "; ".join(f"{name} for {var} = {a:.3g}" + (f"..{b:.3g}" if b != a else "") for name, a, b, _ in runs)
 
 
 def _status_runs(s: StiffnessStudy) -> str:
-    return "; ".join(f"{name} for k = {a:.3g}" + (f"..{b:.3g}" if b != a else "") for name, a, b, _ in s.ranges())
+    return _runs_text(s.ranges(), "k")
+
+
+def _at(x: np.ndarray, y: np.ndarray, targets) -> str:
+    """y at the grid points nearest to each target, as "x: y" pairs."""
+    idx = sorted({int(np.argmin(np.abs(x - t))) for t in targets})
+    return ", ".join(f"{x[i]:.3g}: {y[i]:.1f}" if np.isfinite(y[i]) else f"{x[i]:.3g}: -" for i in idx)
 
 
 def _statement_checks(s: StudySet) -> dict[str, tuple[bool, str]]:
@@ -210,18 +227,19 @@ def _statement_checks(s: StudySet) -> dict[str, tuple[bool, str]]:
     # above the threshold (all k when there is none)
     above = st.k_ratios > st.threshold if np.isfinite(st.threshold) else np.ones(st.k_ratios.size, bool)
     mono = bool(np.all(np.diff(prog[above & ok_k]) >= -STUCK_TOL * 0.12)) if (above & ok_k).sum() > 1 else False
-    out["S_grows_with_k"] = (mono and not np.any(~ok_k & above),
-                             "-S [mm] at k/(M g L) = " + ", ".join(f"{k:.3g}: {MM * v:.1f}" if ok else
-                                                                   f"{k:.3g}: {stt}" for k, v, ok, stt in
-                                                                   zip(st.k_ratios, prog, ok_k, st.status)
-                                                                   if k > min(st.threshold, 0.08) or
-                                                                   not np.isfinite(st.threshold)))
+    fails_k = int(np.sum(~ok_k & above))
+    out["S_grows_with_k"] = (mono and not fails_k,
+                             f"-S non-decreasing in k above the threshold: {mono}; failed points above it: {fails_k}; "
+                             "-S [mm] at k/(M g L) = " + _at(st.k_ratios, MM * np.where(ok_k, prog, np.nan),
+                                                              [0.2, 0.3, 0.5, 1.0, REALISTIC_K_RATIO, 10.0]))
     stuck_below = bool(np.all(st.stuck[st.k_ratios < st.threshold])) if np.isfinite(st.threshold) else False
     near = np.isfinite(st.threshold) and abs(st.threshold - PAPER_THRESHOLD) <= 0.3 * PAPER_THRESHOLD
+    threshold_text = (f"threshold {st.threshold:.4f} M g L (paper ~{PAPER_THRESHOLD}, relative difference "
+                      f"{st.threshold / PAPER_THRESHOLD - 1:+.1%})" if np.isfinite(st.threshold) else
+                      "no threshold: no grid point where the robot stands still below one where it does not")
     out["threshold"] = (bool(near and stuck_below),
-                        f"threshold {st.threshold:.4f} M g L (paper ~{PAPER_THRESHOLD}, relative difference "
-                        f"{st.threshold / PAPER_THRESHOLD - 1:+.1%}); all grid points below stuck: {stuck_below}; "
-                        f"outcomes: {_status_runs(st)}")
+                        f"{threshold_text}; all grid points below stuck: {stuck_below}; "
+                        f"crawls at every k from {st.onset:.4f} M g L on; outcomes: {_status_runs(st)}")
     fj = [gc.force_jump(r) for r in (gc.prescribed, real)]
     out["force_jump"] = (fj[0] > 0.05 and real.success and fj[1] < 1e-4,
                          f"largest f_t jump at an event: prescribed {fj[0]:.4f} N, hybrid {fj[1]:.2e} N")
@@ -230,9 +248,9 @@ def _statement_checks(s: StudySet) -> dict[str, tuple[bool, str]]:
     g_opt = m.gamma_opt[cols]
     step = float(np.min(np.diff(m.gamma_deg)))
     out["gamma_opt"] = (bool(np.all(np.abs(g_opt - 90.0) <= step / 2)),
-                        "best gamma for psi in (0, 150]: " + ", ".join(f"{g:.1f}" for g in g_opt)
-                        + f" deg; failed points {sum(v for k, v in m.counts.items() if k != SUCCESS)}"
-                        f" of {m.status.size} ({', '.join(f'{k} {v}' for k, v in m.counts.items() if k != SUCCESS)})")
+                        f"best gamma for psi in (0, 150]: {np.nanmin(g_opt):.1f} .. {np.nanmax(g_opt):.1f}"
+                        f" deg; failed points {sum(v for k, v in m.counts.items() if k != SUCCESS)} of {m.status.size}"
+                        + "".join(f", {k} {v}" for k, v in m.counts.items() if k != SUCCESS))
     b = s.band
     pos = b.psi_deg > 0
     nominal = -b.nominal
@@ -266,22 +284,30 @@ def _statement_checks(s: StudySet) -> dict[str, tuple[bool, str]]:
     i_real = int(np.argmin(np.abs(a.k_ratios - REALISTIC_K_RATIO)))
     pr = -a.S[i_real]
     ok_a = a.status[i_real] == SUCCESS
-    fails_a = [f"A = {A:.1f}: {stt}" for A, stt in zip(a.A_deg, a.status[i_real]) if stt != SUCCESS]
+    fails_a = _runs_text([r for r in outcome_runs(a.A_deg, a.status[i_real]) if r[0] != SUCCESS], "A")
     out["S_grows_with_A"] = (bool(ok_a.all() and _mono(-pr)),
-                             f"realistic k: -S from {_fmt_mm(a.S[i_real][0])} (A = {a.A_deg[0]:.1f}) to "
-                             f"{_fmt_mm(a.S[i_real][ok_a][-1])} (A = {a.A_deg[ok_a][-1]:.1f}); failures: "
-                             + (", ".join(fails_a) if fails_a else "none"))
+                             f"realistic k: -S from {_fmt_mm(-a.S[i_real][0])} (A = {a.A_deg[0]:.1f}) to "
+                             f"{_fmt_mm(-a.S[i_real][ok_a][-1])} (A = {a.A_deg[ok_a][-1]:.1f} deg); failures: "
+                             + (fails_a or "none"))
     A_opt = a.A_opt
     out["A_opt"] = (bool(np.isfinite(A_opt[0]) and np.isfinite(A_opt[1])),
                     "least CoT+ at A = " + ", ".join(f"{COT_K_LABELS[i]} k: {v:.1f} deg" if np.isfinite(v) else
                                                      f"{COT_K_LABELS[i]} k: none inside the grid"
                                                      for i, v in enumerate(A_opt)))
+    comp = a.paper_comparison()
+    if comp is not None:
+        listed = np.isfinite(comp["paper"])
+        crawls = np.isfinite(a.CoT_moving)
+        missing = [int(np.sum(listed[i] & ~crawls[i])) for i in range(3)]
+        out["cot_range"] = (sum(missing) == 0, "amplitudes with a published CoT+ where the model does not crawl: "
+                            + ", ".join(f"{COT_K_LABELS[i]} k {missing[i]} of {int(listed[i].sum())}" for i in range(3)))
+    else:
+        out["cot_range"] = (False, "the amplitude study does not use the paper's three stiffnesses")
     cmin = a.CoT_min
     ordered = bool(np.all(np.isfinite(cmin)) and cmin[2] < cmin[1] < cmin[0])
-    low_fail = [f"{A:.1f} ({stt})" for A, stt in zip(a.A_deg, a.status[2]) if stt != SUCCESS]
+    low_fail = _runs_text([r for r in outcome_runs(a.A_deg, a.status[2]) if r[0] != SUCCESS], "A")
     out["softer_cheaper"] = (ordered, "least CoT+ over A: " + ", ".join(
-        f"{COT_K_LABELS[i]} k {v:.2f}" for i, v in enumerate(cmin)) + "; low k fails at A = "
-        + (", ".join(low_fail) if low_fail else "none"))
+        f"{COT_K_LABELS[i]} k {v:.2f}" for i, v in enumerate(cmin)) + "; low k fails: " + (low_fail or "none"))
     p = s.pressure
     c = p.fit.curves
     inc = _mono(-c.progress_p0[np.isfinite(c.progress_p0)])
@@ -324,6 +350,7 @@ STATEMENTS: tuple[tuple[str, str, str], ...] = (
     ("S_grows_with_A", "Sec. II-C", "S rises monotonically with the amplitude A."),
     ("A_opt", "Sec. II-C, Fig. CoT", "CoT+ has an energy-optimal amplitude (large and realistic stiffness)."),
     ("softer_cheaper", "Sec. II-C, Fig. CoT", "A softer robot is more energetically efficient (lower CoT+)."),
+    ("cot_range", "Fig. CoT", "Each of the three stiffnesses crawls at every amplitude at which the paper plots CoT+."),
     ("pressure", "Sec. III, Fig. exp",
      "The pressure-driven robot's S/Smax grows with p0 and peaks at a small phase difference (~10 deg)."),
 )
@@ -503,12 +530,13 @@ def _report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list
     w("\n## Stiffness and the friction threshold\n")
     w(_fig("stiffness", "Progress and CoT+ against k/(M g L); the dashed line is the friction threshold"))
     w(f"\nFriction threshold: **k = {st.threshold:.4f} M g L** (bisection bracket {st.threshold_bracket[0]:.5f} .. "
-      f"{st.threshold_bracket[1]:.5f}); the paper says ~{PAPER_THRESHOLD} M g L: relative difference "
+      f"{st.threshold_bracket[1]:.5f}); the robot crawls at every k from {st.onset:.4f} M g L on. The paper says ~{PAPER_THRESHOLD} M g L: relative difference "
       f"{st.threshold / PAPER_THRESHOLD - 1:+.1%}. The realistic stiffness of Table I is {REALISTIC_K_RATIO:.3f} M g L "
       f"(the paper rounds it to {PAPER_REALISTIC}: {REALISTIC_K_RATIO / PAPER_REALISTIC - 1:+.1%}).\n")
     w("Outcomes along k: " + _status_runs(st) + f". Points: {_counts_text(st.counts)}.\n")
     if o is not None:
-        w(f"{other} convention: threshold {o.stiffness.threshold:.4f} M g L; outcomes: {_status_runs(o.stiffness)}.\n")
+        w(f"{other} convention: threshold {o.stiffness.threshold:.4f} M g L, crawls at every k from "
+          f"{o.stiffness.onset:.4f} M g L on; outcomes: {_status_runs(o.stiffness)}.\n")
     w(_table(["k/(M g L)", "status", "-S [mm]", "CoT+"],
              [[f"{k:.4g}", stt, f"{-MM * v:.2f}" if np.isfinite(v) else "-", f"{c:.2f}" if np.isfinite(c) else "-"]
               for k, stt, v, c in zip(st.k_ratios, st.status, st.S, st.CoT_plus)]))
@@ -524,7 +552,10 @@ def _report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list
       "p_i(t) = p0 (1 + sin(2 pi t +- psi/2))/2; the calibrated bending a_i p^2 + b_i p (Table I) lowers the joint's "
       "reference angle from a rest angle phi_rest, phi_ref,i = phi_rest - bending_i(p_i), with tau_i = k (phi_ref,i - pi). "
       "phi_rest is the one fitted parameter: with a flat rest shape (180 deg) the robot stays nearly flat and S grows "
-      "like p0^3 instead of the paper's ~p0^1.8. The p0 curve is assumed computed at psi = "
+      "like p0^3 instead of the paper's ~p0^1.8"
+      + (f" (flat rest shape on the same grids: RMS error {_num(p.flat.rms_p0)} on the p0 curve, {_num(p.flat.rms_psi)} "
+         f"on the psi curve, {p.flat.failures} failed points)" if p.flat is not None else "")
+      + ". The p0 curve is assumed computed at psi = "
       f"{c.psi_for_p0_deg:g} deg and normalised at p0 = {P0_NORMALISE_BAR:g} bar (as the paper's), the psi curve at "
       f"p0 = {c.p0_for_psi_bar:g} bar and normalised by its maximum.\n")
     w(f"Rest angle: **{c.phi_rest_deg:.2f} deg** ({'fitted in this run' if p.fit.fitted else 'stored fit'}, "
@@ -538,11 +569,11 @@ def _report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list
       "and 0.08 at psi = 180 deg (here both ends are near 0: only the small difference between the two segments' "
       "maps breaks the mirror symmetry).\n")
     w(_table(["p0 [bar]", "model S/Smax", "paper's simulation", "difference", "status"],
-             [[f"{x:g}", f"{v:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
+             [[f"{x:g}", f"{v + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
               zip(c.p0_bar, c.progress_p0, p.fit.ref_p0, c.status_p0)]))
     w("")
     w(_table(["psi [deg]", "model S/Smax", "paper's simulation", "difference", "status"],
-             [[f"{x:.2f}", f"{v:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
+             [[f"{x:.2f}", f"{round(v, 4) + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
               zip(c.psi_deg, c.progress_psi, p.fit.ref_psi, c.status_psi)]))
 
     # ---- failures and timing

@@ -33,6 +33,8 @@ K_STYLES = ("-", "--", ":")
 STATUS_MARKERS = {"fold": "X", "lift_off": "^", "joint_on_ground": "v", "bad_input": "s", "no_consistent_mode": "D",
                   "feet_crossed": "P", "no_convergence": "*", "not_periodic": "p", "error": "h"}
 FALLBACK_MARKER = "o"
+#: legend text of statuses whose name alone would mislead
+STATUS_LABELS = {"bad_input": "no equilibrium to start from"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
 MM = 1e3
@@ -69,8 +71,9 @@ def mark_failures(ax, x, y, status, *, color="0.3", size=36, seen: set | None = 
                    edgecolor=color, linewidths=1.0, zorder=5, clip_on=False)
         if name not in seen:
             seen.add(name)
+            text = STATUS_LABELS.get(str(name), str(name).replace("_", " "))
             handles.append(Line2D([], [], ls="none", marker=marker, color=color, mfc="none" if marker not in "X*" else color,
-                                  label=f"{str(name).replace('_', ' ')} ({int(sel.sum())})"))
+                                  label=f"{text} ({int(sel.sum())})"))
     return handles
 
 
@@ -359,6 +362,10 @@ def plot_stiffness(s: StiffnessStudy) -> Figure:
         for a in (a_s, a_c):
             a.axvline(s.threshold, color="tab:red", ls="--", lw=1.2)
         lines.append(Line2D([], [], color="tab:red", ls="--", label=f"friction threshold {s.threshold:.3f} M g L"))
+    if np.isfinite(s.onset) and not abs(s.onset - s.threshold) < 1e-3:
+        for a in (a_s, a_c):
+            a.axvline(s.onset, color="tab:green", ls=":", lw=1.5)
+        lines.append(Line2D([], [], color="tab:green", ls=":", label=f"crawls at every k from {s.onset:.3f} M g L"))
     a_s.set_ylabel("progress per cycle -S [mm]")
     a_s.set_title("(a) progress", loc="left", fontsize="medium")
     a_s.legend(handles=[Line2D([], [], color=BLUE, marker=".", label="-S")] + lines + fails, fontsize="small")
