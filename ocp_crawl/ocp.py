@@ -335,6 +335,9 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings) -> Harmonic
 # --------------------------------------------------------------------------------------------
 DEFAULT_IPOPT = {"tol": 1e-10, "acceptable_tol": 1e-8, "max_iter": 2000, "mu_strategy": "adaptive",
                  "bound_relax_factor": 0.0, "nlp_scaling_method": "gradient-based"}
+WARM_IPOPT = {"warm_start_init_point": "yes", "mu_init": 1e-6, "mu_strategy": "monotone",
+              "warm_start_bound_push": 1e-9, "warm_start_bound_frac": 1e-9, "warm_start_slack_bound_push": 1e-9,
+              "warm_start_slack_bound_frac": 1e-9, "warm_start_mult_bound_push": 1e-9}
 
 
 class GaitOCP:
@@ -475,8 +478,14 @@ class GaitOCP:
         ipopt = dict(DEFAULT_IPOPT)
         ipopt.update({"print_level": 5 if s.verbose else 0, "sb": "yes"})
         ipopt.update(s.ipopt)
-        self.solver = cs.nlpsol("gait_ocp", "ipopt", {"x": X, "f": f, "g": G},
+        nlp = {"x": X, "f": f, "g": G}
+        self.solver = cs.nlpsol("gait_ocp", "ipopt", nlp,
                                 {"print_time": bool(s.verbose), "error_on_fail": False, "ipopt": ipopt})
+        # later homotopy stages start from the previous stage's primal-dual point: a small initial
+        # barrier parameter and bound push keep IPOPT from walking back into the interior
+        self.solver_warm = cs.nlpsol("gait_ocp_warm", "ipopt", nlp,
+                                     {"print_time": bool(s.verbose), "error_on_fail": False,
+                                      "ipopt": dict(WARM_IPOPT, **ipopt)})
 
     # ------------------------------------------------------------------ initial guess from a simulation
     def initial_guess(self, torque_signal, sims: list[CrawlResult]) -> np.ndarray:
@@ -597,11 +606,13 @@ class GaitOCP:
             for sl in tie_idx:
                 lbg[sl] = -sigma
             args = dict(x0=x, lbx=self._lbx, ubx=self._ubx, lbg=lbg, ubg=ubg)
+            solver = self.solver
             if lam_x is not None:
                 args.update(lam_x0=lam_x, lam_g0=lam_g)
+                solver = self.solver_warm
             t0 = time.perf_counter()
-            sol = self.solver(**args)
-            st = self.solver.stats()
+            sol = solver(**args)
+            st = solver.stats()
             status = str(st.get("return_status", "unknown"))
             accepted, _ = ipopt_status(status)
             xs = np.asarray(sol["x"]).ravel()
@@ -631,8 +642,8 @@ class GaitOCP:
         for sl in tie_idx:
             lbg[sl] = -s.sigma_min
         t0 = time.perf_counter()
-        sol = self.solver(x0=np.minimum(x, ubx), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, lam_x0=lam_x, lam_g0=lam_g)
-        st = self.solver.stats()
+        sol = self.solver_warm(x0=np.minimum(x, ubx), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, lam_x0=lam_x, lam_g0=lam_g)
+        st = self.solver_warm.stats()
         status = str(st.get("return_status", "unknown"))
         accepted, _ = ipopt_status(status)
         xs = np.asarray(sol["x"]).ravel()
