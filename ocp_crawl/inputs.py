@@ -7,6 +7,7 @@ phase t (per cycle), not per second.
 * :class:`Harmonic`: the paper's reference angles, eq. (ref), phi_ref,i = gamma_i + A_i sin(2 pi t +- psi/2).
 * :class:`FourierSeries`: any truncated Fourier series.
 * :class:`PeriodicSpline`: a periodic cubic spline through samples.
+* :class:`PeriodicLinear`: periodic piecewise-linear interpolation of samples.
 * :class:`CallableSignal`: any callable of phase (derivative by central differences if not given).
 * :class:`ReferenceTorque`: the torque tau = k (phi_ref - pi) of eq. (tau) for any reference signal.
 """
@@ -178,6 +179,43 @@ class PeriodicSpline(PeriodicSignal):
 
     def describe(self) -> dict:
         return {"type": "PeriodicSpline", "knots": int(self.t_knots.size)}
+
+
+class PeriodicLinear(PeriodicSignal):
+    """Periodic piecewise-linear interpolation of samples at phases ``t_knots`` in [0, 1) (values (2, N)).
+
+    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot),
+    which is why the optimal-control replay uses it; the derivative is piecewise constant.
+    """
+
+    def __init__(self, t_knots, values):
+        t = np.asarray(t_knots, dtype=float).ravel()
+        v = np.asarray(values, dtype=float)
+        if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
+            raise ValueError(f"PeriodicLinear: values must have shape (2, {t.size}), got {v.shape}")
+        if t.size < 2 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
+            raise ValueError("PeriodicLinear: need >= 2 strictly increasing knots in [0, 1)")
+        if not np.all(np.isfinite(v)):
+            raise ValueError("PeriodicLinear: values must be finite")
+        self.t_knots, self.values = t, v
+        self._tt = np.append(t, t[0] + 1.0)
+        self._vv = np.concatenate([v, v[:, :1]], axis=1)
+        self._slope = np.diff(self._vv, axis=1) / np.diff(self._tt)
+
+    def _wrap(self, t):
+        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
+
+    def __call__(self, t):
+        tw = self._wrap(t)
+        return np.array([np.interp(tw, self._tt, self._vv[i]) for i in range(2)])
+
+    def derivative(self, t):
+        tw = self._wrap(t)
+        k = np.clip(np.searchsorted(self._tt, tw, side="right") - 1, 0, self.t_knots.size - 1)
+        return self._slope[:, k]
+
+    def describe(self) -> dict:
+        return {"type": "PeriodicLinear", "knots": int(self.t_knots.size)}
 
 
 class CallableSignal(PeriodicSignal):

@@ -22,7 +22,7 @@ the worst direction * S).
 Solution: initial guess from the best harmonic gait of the same envelope (psi sweep with the
 event-driven stepper), Scholtes relaxation homotopy s_j c_j <= sigma with warm starts, every stage
 checked against the IPOPT status table of :mod:`ocp_crawl.mpcc`.  The optimal profile is then
-replayed in the event-driven simulator (periodic cubic spline through the node torques).
+replayed in the event-driven simulator (periodic linear interpolation of the node torques).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ import casadi as cs
 import numpy as np
 
 from .hybrid import HybridOptions, simulate_torque
-from .inputs import Harmonic, PeriodicSpline, ReferenceTorque
+from .inputs import Harmonic, PeriodicLinear, ReferenceTorque
 from .model import NP, Model, Robot
 from .mpcc import ipopt_status
 from .result import CrawlResult, Mode, cost_of_transport
@@ -656,9 +656,10 @@ class GaitOCP:
         return best, hist, None, hist[-1].return_status
 
 
-def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicSpline:
-    """Torque input of the event-driven replay: periodic cubic spline through the node torques [N m]."""
-    return PeriodicSpline(phase, tau)
+def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
+    """Torque input of the event-driven replay: periodic linear interpolation of the node torques [N m]
+    (it respects the envelope and the rate limit of the transcription, which a spline may not)."""
+    return PeriodicLinear(phase, tau)
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,

@@ -6,8 +6,8 @@ import os
 import numpy as np
 import pytest
 
-from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicSpline,
-                       ReferenceTorque, Robot, Status, simulate_torque)
+from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicLinear,
+                       PeriodicSpline, ReferenceTorque, Robot, Status, simulate_torque)
 from ocp_crawl.hybrid import HybridStepper, mode_q
 from ocp_crawl.model import AUX
 from ocp_crawl.prescribed import simulate_angles
@@ -230,7 +230,9 @@ def test_general_periodic_inputs_are_accepted():
     fourier = FourierSeries.fit(samples, order=3)
     spline = PeriodicSpline(tk, samples)
     plain = CallableSignal(lambda t: robot.k * (Harmonic.from_degrees(90, 30, 45)(t) - math.pi))
-    for u, tol in ((fourier, 1e-10), (spline, 1e-7), (plain, 1e-8)):
+    linear = PeriodicLinear(tk, samples)
+    np.testing.assert_allclose(linear(tk + 0.5 / n), 0.5 * (samples + np.roll(samples, -1, axis=1)), atol=1e-15)
+    for u, tol in ((fourier, 1e-10), (spline, 1e-7), (plain, 1e-8), (linear, 1e-4)):
         res = simulate_torque(model, u)
         assert res.success, res.message
         assert res.S == pytest.approx(base.S, rel=tol), type(u).__name__
