@@ -426,11 +426,13 @@ class HybridStepper:
                     new_d0 = ev_pt.aux[AUX["d"]]
                     trial = self._consistent(target, ev_pt, new_d0)
                     chosen = target
+                    kind_out = event_kind(kind)
                     if trial is None:
-                        # the table's successor is inconsistent: look for any other consistent mode
+                        # the table's successor is inconsistent: look for any other consistent mode,
+                        # the current one included (a grazing event: the guard touches zero and turns back)
                         found = []
                         for m in Mode:
-                            if m in (target, seg.mode):
+                            if m == target:
                                 continue
                             tr = self._consistent(m, ev_pt, new_d0)
                             if tr is not None:
@@ -440,7 +442,9 @@ class HybridStepper:
                                            f"after event {kind}: {len(found)} consistent successor modes "
                                            f"(table successor {target.label} is inconsistent)")
                         chosen, trial = found[0]
-                    events.append(Event(t_ev, event_kind(kind), seg.mode.label, chosen.label, g_ev, kind))
+                        if chosen == seg.mode:
+                            kind_out = f"graze_{kind_out}"
+                    events.append(Event(t_ev, kind_out, seg.mode.label, chosen.label, g_ev, kind))
                     events_in_cycle += 1
                     if events_in_cycle > opt.max_events_per_cycle:
                         raise _Failure(Status.TOO_MANY_EVENTS, t_ev, chosen,

@@ -88,7 +88,8 @@ class Event:
     Kinds: ``slip_onset_1``/``slip_onset_2`` (stick-stick -> foot i slips; the direction is in
     ``mode_after``), ``slip_to_stick`` (d' = 0), ``slip_switch`` (the slipping foot changes),
     ``slip_slip_end``, ``lift_off_1``/``lift_off_2``, ``feet_crossed``, ``joint_1_on_ground``/
-    ``joint_2_on_ground``, ``fold``; prescribed angles: ``slip_reversal``, ``slip_switch``; MPCC
+    ``joint_2_on_ground``, ``fold``; ``graze_<kind>`` when a guard touches zero and turns back, so
+    that the mode continues (for example f_t touching a friction limit in stick-stick); prescribed angles: ``slip_reversal``, ``slip_switch``; MPCC
     time-stepping (mode changes between steps): also ``slip_onset_both``, ``slip_slip_start``.
     """
 

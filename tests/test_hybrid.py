@@ -243,3 +243,17 @@ def test_bad_starting_configuration_is_rejected():
     torque = ReferenceTorque(Harmonic.from_degrees(30, 5, 45, gamma2_deg=45), robot.k)
     with pytest.raises(ValueError, match="starting configuration"):
         simulate_torque(Model(robot), torque)
+
+
+def test_grazing_friction_limit_keeps_the_mode():
+    """psi = 180 deg, gamma = 80 deg (physical): in stick-stick f_t touches foot 2's friction limit and
+    turns back; the stepper must stay in stick-stick (a graze event), not report an inconsistency."""
+    robot = Robot.paper()
+    stepper = HybridStepper(Model(robot), paper_torque(robot, gamma=80, psi=180))
+    res = stepper.run()
+    assert res.success, res.message
+    grazes = [e for e in res.events if e.kind.startswith("graze_")]
+    assert grazes and all(e.mode_before == e.mode_after == "stick-stick" for e in grazes)
+    for ev in grazes:
+        assert abs(ev.guard) < 1e-9
+    assert abs(res.S) < 1e-12 * robot.L  # the paper: S vanishes as psi -> 180 deg
