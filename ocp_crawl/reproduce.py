@@ -187,6 +187,11 @@ def _num(x: float, fmt: str = ".3f") -> str:
     return format(x, fmt) if np.isfinite(x) else "n/a"
 
 
+def _rel(ours: float, paper: float) -> str:
+    """ours/paper - 1, or "-" where the paper's value is too small for a ratio to mean anything."""
+    return f"{ours / paper - 1:+.1%}" if np.isfinite(ours) and abs(paper) >= 0.05 else "-"
+
+
 def _fmt_mm(S: float) -> str:
     # + 0.0 turns a rounded -0.00 into 0.00
     return "failed" if not np.isfinite(S) else f"{round(MM * S, 2) + 0.0:.2f} mm"
@@ -568,12 +573,12 @@ def _report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list
     w("The two features of the paper's psi curve this waveform does not give: S/Smax = 0.33 already at psi = 1 deg "
       "and 0.08 at psi = 180 deg (here both ends are near 0: only the small difference between the two segments' "
       "maps breaks the mirror symmetry).\n")
-    w(_table(["p0 [bar]", "model S/Smax", "paper's simulation", "difference", "status"],
-             [[f"{x:g}", f"{v + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
+    w(_table(["p0 [bar]", "model S/Smax", "paper's simulation", "difference", "relative difference", "status"],
+             [[f"{x:g}", f"{v + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", _rel(v, r), stt] for x, v, r, stt in
               zip(c.p0_bar, c.progress_p0, p.fit.ref_p0, c.status_p0)]))
     w("")
-    w(_table(["psi [deg]", "model S/Smax", "paper's simulation", "difference", "status"],
-             [[f"{x:.2f}", f"{round(v, 4) + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", stt] for x, v, r, stt in
+    w(_table(["psi [deg]", "model S/Smax", "paper's simulation", "difference", "relative difference", "status"],
+             [[f"{x:.2f}", f"{round(v, 4) + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", _rel(v, r), stt] for x, v, r, stt in
               zip(c.psi_deg, c.progress_psi, p.fit.ref_psi, c.status_psi)]))
 
     # ---- failures and timing

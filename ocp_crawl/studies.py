@@ -238,7 +238,7 @@ class PsiGammaMap:
         return _counts(self.status)
 
 
-def psi_gamma_map(gravity: str = "paper", psi_deg=np.arange(0.0, 181.0, 15.0), gamma_deg=np.arange(60.0, 151.0, 10.0),
+def psi_gamma_map(gravity: str = "paper", psi_deg=tuple(range(0, 181, 15)), gamma_deg=tuple(range(60, 151, 10)),
                   A_deg: float = 30.0, sweep: SweepOptions = SweepOptions()) -> PsiGammaMap:
     """Fig. parametric: S over the psi-gamma plane for amplitude A (paper: A = 30 deg)."""
     res = sweep.run(base_problem(gravity, [f"gait.A_deg={float(A_deg)!r}"]),
@@ -314,7 +314,7 @@ class FrictionBand:
         return _counts(self.status)
 
 
-def friction_band(gravity: str = "paper", psi_deg=np.linspace(-180.0, 180.0, 25), eps: float = 0.1,
+def friction_band(gravity: str = "paper", psi_deg=tuple(range(-180, 181, 15)), eps: float = 0.1,
                   n_ratios: int = 5, sweep: SweepOptions = SweepOptions()) -> FrictionBand:
     """Fig. d_mu: S against psi for mu1/mu2 = 1 - eps ... 1 + eps (``n_ratios`` values, odd, so 1 is one)."""
     if not (isinstance(n_ratios, int) and n_ratios >= 1 and n_ratios % 2 == 1):
@@ -396,7 +396,7 @@ class AmplitudeStudy:
         return _counts(self.status)
 
 
-def amplitude_study(gravity: str = "paper", A_deg=np.linspace(1.0, 60.0, 12), k_ratios: Sequence[float] = COT_K_RATIOS,
+def amplitude_study(gravity: str = "paper", A_deg=(1.0, 5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0), k_ratios: Sequence[float] = COT_K_RATIOS,
                     gamma_deg: float = 90.0, psi_deg: float = 45.0, sweep: SweepOptions = SweepOptions()) -> AmplitudeStudy:
     """Fig. CoT (and S against A): gamma 90, psi 45 deg, stiffnesses k/(M g L) = 5, 2.74, 0.3."""
     ks = np.asarray(k_ratios, float)
@@ -467,7 +467,7 @@ class HigherFriction:
         return _counts(self.status)
 
 
-def higher_friction(gravity: str = "paper", psi_deg=np.arange(0.0, 181.0, 15.0), factors: Sequence[float] = (1, 2, 3, 4),
+def higher_friction(gravity: str = "paper", psi_deg=tuple(range(0, 181, 15)), factors: Sequence[float] = (1, 2, 3, 4),
                     sweep: SweepOptions = SweepOptions()) -> HigherFriction:
     """Supplementary figure: S against psi for mu = 1, 2, 3, 4 times the measured 0.389."""
     f = np.asarray(factors, float)
@@ -539,7 +539,7 @@ def _bisect(gravity: str, lo: float, hi: float, upper: str, steps: int) -> tuple
     return lo, hi
 
 
-def stiffness_study(gravity: str = "paper", k_ratios=np.geomspace(0.05, 5.0, 12), bisection_steps: int = 10,
+def stiffness_study(gravity: str = "paper", k_ratios=(0.05, 0.08, 0.1, 0.15, 0.2, 0.3, 0.5, 1.0, 2.0, 5.0), bisection_steps: int = 10,
                     sweep: SweepOptions = SweepOptions()) -> StiffnessStudy:
     """S and CoT+ against k/(M g L) (gamma 90, A 30, psi 45 deg), locating the friction threshold.
 

@@ -398,7 +398,8 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
     a_s.set_xlabel("stiffness k/(M g L) [-]")
     a_s.set_ylabel("progress per cycle -S [mm]")
     a_s.set_title("(a) progress against stiffness (gamma 90, A 30, psi 45 deg)", loc="left", fontsize="medium")
-    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", ncol=2)
+    # above the failure markers, which sit just below zero at low stiffness
+    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", ncol=2, loc="center right")
     a_c.set_xlabel("amplitude A [deg]")
     a_c.set_ylabel("CoT$^+$ [-]")
     a_c.set_ylim(0, COT_YMAX)
