@@ -82,8 +82,11 @@ class OCPSettings:
     """centre of the reference-angle envelope [deg]"""
     A_max_deg: float = 30.0
     """half-width of the reference-angle envelope [deg]"""
-    parametrization: str = "free"
-    """'free' torque at every node, or 'fourier' series of order fourier_order"""
+    parametrization: str = "fourier"
+    """'fourier' series of order fourier_order (default), or 'free' torque at every node.  Free
+    profiles invite chattering: micro-strokes every few steps, each carrying an O(1/N) transition
+    error of the transcription that the optimiser exploits and that does not vanish as N grows
+    (more strokes); a band-limited series keeps the number of mode changes per cycle bounded"""
     fourier_order: int = 4
     rate_limit: float | str | None = "harmonic"
     """largest |d tau/d t| [N m per cycle]; "harmonic" (default): the peak rate 2 pi k A_max of the

@@ -165,9 +165,9 @@ def simulate_pressure(model: Model, p0_bar: float, psi_deg: float, phi_rest_deg:
 # the paper's curves and the fit
 # --------------------------------------------------------------------------------------------
 def paper_data_dir() -> Path:
-    """Directory of the paper's data files: ``$OCP_CRAWL_PAPER_DATA``, else ``shared/paper_data`` beside the checkout."""
+    """Directory of the paper's data files: ``$OCP_CRAWL_PAPER_DATA``, else the copy shipped in the package."""
     env = os.environ.get(PAPER_DATA_ENV)
-    return Path(env) if env else Path(__file__).resolve().parents[2] / "shared" / "paper_data"
+    return Path(env) if env else Path(__file__).resolve().parent / "data" / "paper"
 
 
 def read_paper_csv(name: str, data_dir: str | Path | None = None) -> dict[str, np.ndarray]:

@@ -8,7 +8,7 @@ matplotlib.use("Agg")
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot  # noqa: E402
 
-PAPER_DATA = os.path.join(os.path.dirname(__file__), os.pardir, os.pardir, "shared", "paper_data")
+PAPER_DATA = os.path.join(os.path.dirname(__file__), os.pardir, "ocp_crawl", "data", "paper")
 
 
 def paper_torque(robot: Robot, gamma=90.0, A=30.0, psi=45.0, **per_joint):
