@@ -149,18 +149,24 @@ class FourierSeries(PeriodicSignal):
                 "a": self.a.tolist(), "b": self.b.tolist()}
 
 
+def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarray, np.ndarray]:
+    """Validated knots (increasing, in [0, 1)) and values of shape (2, N)."""
+    t = np.asarray(t_knots, dtype=float).ravel()
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
+        raise ValueError(f"{name}: values must have shape (2, {t.size}), got {v.shape}")
+    if t.size < min_knots or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
+        raise ValueError(f"{name}: need >= {min_knots} strictly increasing knots in [0, 1)")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name}: values must be finite")
+    return t, v
+
+
 class PeriodicSpline(PeriodicSignal):
     """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N))."""
 
     def __init__(self, t_knots, values):
-        t = np.asarray(t_knots, dtype=float).ravel()
-        v = np.asarray(values, dtype=float)
-        if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
-            raise ValueError(f"PeriodicSpline: values must have shape (2, {t.size}), got {v.shape}")
-        if t.size < 3 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
-            raise ValueError("PeriodicSpline: need >= 3 strictly increasing knots in [0, 1)")
-        if not np.all(np.isfinite(v)):
-            raise ValueError("PeriodicSpline: values must be finite")
+        t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
         tt = np.append(t, t[0] + 1.0)
         vv = np.concatenate([v, v[:, :1]], axis=1)
         self._t0 = t[0]
@@ -189,14 +195,7 @@ class PeriodicLinear(PeriodicSignal):
     """
 
     def __init__(self, t_knots, values):
-        t = np.asarray(t_knots, dtype=float).ravel()
-        v = np.asarray(values, dtype=float)
-        if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
-            raise ValueError(f"PeriodicLinear: values must have shape (2, {t.size}), got {v.shape}")
-        if t.size < 2 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
-            raise ValueError("PeriodicLinear: need >= 2 strictly increasing knots in [0, 1)")
-        if not np.all(np.isfinite(v)):
-            raise ValueError("PeriodicLinear: values must be finite")
+        t, v = _check_samples("PeriodicLinear", t_knots, values, min_knots=2)
         self.t_knots, self.values = t, v
         self._tt = np.append(t, t[0] + 1.0)
         self._vv = np.concatenate([v, v[:, :1]], axis=1)

@@ -82,16 +82,19 @@ class OCPSettings:
     """centre of the reference-angle envelope [deg]"""
     A_max_deg: float = 30.0
     """half-width of the reference-angle envelope [deg]"""
-    parametrization: str = "fourier"
-    """'fourier' series of order fourier_order (default), or 'free' torque at every node.  Free
-    profiles invite chattering: micro-strokes every few steps, each carrying an O(1/N) transition
-    error of the transcription that the optimiser exploits and that does not vanish as N grows
-    (more strokes); a band-limited series keeps the number of mode changes per cycle bounded"""
+    parametrization: str = "free"
+    """'free' torque at every node (default, sparse), or 'fourier' series of order fourier_order
+    (band-limited, but its dense coefficient columns make IPOPT iterations much slower)"""
     fourier_order: int = 4
     rate_limit: float | str | None = "harmonic"
     """largest |d tau/d t| [N m per cycle]; "harmonic" (default): the peak rate 2 pi k A_max of the
     envelope's harmonic gait, so that the optimum cannot gain by packing several strokes into one
     cycle (a higher actuation frequency); None: no limit"""
+    curvature_limit: float | str | None = "harmonic"
+    """largest |d^2 tau/d t^2| [N m per cycle^2]; "harmonic" (default): the peak (2 pi)^2 k A_max of
+    the envelope's harmonic gait.  Without it free profiles chatter: micro-strokes every few steps,
+    each carrying an O(1/N) transition error of the transcription that the optimiser exploits and
+    that does not vanish as N grows (the strokes multiply); None: no limit"""
     tie_margin: float = 0.002
     """a foot may slip only while its friction limit is below the other foot's by tie_margin M g:
     at a tie the incremental Coulomb law leaves free which foot slips, which an optimiser would
@@ -148,6 +151,8 @@ class OCPSettings:
         if self.rate_limit is not None and self.rate_limit != "harmonic":
             object.__setattr__(self, "rate_limit", _num("rate_limit", self.rate_limit, positive=True))
         object.__setattr__(self, "tie_margin", _num("tie_margin", self.tie_margin, nonneg=True))
+        if self.curvature_limit is not None and self.curvature_limit != "harmonic":
+            object.__setattr__(self, "curvature_limit", _num("curvature_limit", self.curvature_limit, positive=True))
         if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
         ratios = tuple(float(r) for r in self.mu_ratios)
@@ -169,6 +174,12 @@ class OCPSettings:
         if self.rate_limit == "harmonic":
             return 2 * math.pi * robot.k * math.radians(self.A_max_deg)
         return self.rate_limit
+
+    def curvature_bound(self, robot: Robot) -> float | None:
+        """Largest |d^2 tau / d t^2| [N m per cycle^2] or None."""
+        if self.curvature_limit == "harmonic":
+            return (2 * math.pi) ** 2 * robot.k * math.radians(self.A_max_deg)
+        return self.curvature_limit
 
     def torque_bounds(self, robot: Robot) -> tuple[float, float]:
         """Torque range [N m] that keeps phi_ref = pi + tau/k inside the envelope."""
@@ -343,6 +354,12 @@ WARM_IPOPT = {"warm_start_init_point": "yes", "mu_init": 1e-6, "mu_strategy": "m
               "warm_start_slack_bound_frac": 1e-9, "warm_start_mult_bound_push": 1e-9}
 
 
+def fourier_basis(N: int, K: int) -> np.ndarray:
+    """(2K+1, N) values of 1, cos(2 pi n t), sin(2 pi n t), n = 1..K, at the node phases t = k/N."""
+    t = np.arange(N) / N
+    return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
+
+
 class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
@@ -358,10 +375,7 @@ class GaitOCP:
         s = self.settings
         if s.parametrization == "free":
             return cs.reshape(z_tau, 2, N)
-        K = s.fourier_order
-        t = np.arange(N) / N
-        basis = np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
-        return cs.reshape(z_tau, 2, 2 * K + 1) @ cs.DM(basis)
+        return cs.reshape(z_tau, 2, 2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
 
     def _build(self) -> None:
         s = self.settings
@@ -410,6 +424,11 @@ class GaitOCP:
         if rate is not None:
             lim = rate / MgL / N
             add_con("rate", cs.vec(dT), -lim, lim)
+        curv = s.curvature_bound(r)
+        if curv is not None:
+            lim = curv / MgL / N**2
+            d2T = cs.horzcat(dT[:, 1:], dT[:, 0]) - dT  # periodic second differences
+            add_con("curvature", cs.vec(d2T), -lim, lim)
 
         inf = np.inf
         S_list, W_list = [], []
@@ -477,6 +496,7 @@ class GaitOCP:
         self._lbx, self._ubx = np.concatenate(lbx), np.concatenate(ubx)
         self._lbg, self._ubg = np.concatenate(lbg), np.concatenate(ubg)
         self._T = cs.Function("T", [X], [T * MgL])
+        self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
         ipopt = dict(DEFAULT_IPOPT)
         ipopt.update({"print_level": 5 if s.verbose else 0, "sb": "yes"})
@@ -503,8 +523,7 @@ class GaitOCP:
         if s.parametrization == "free":
             x[self._slices["tau"]] = tau_nodes.ravel(order="F")
         else:
-            K = s.fourier_order
-            basis = np.vstack([np.ones(N)] + [f(2 * np.pi * n * t_nodes) for n in range(1, K + 1) for f in (np.cos, np.sin)])
+            basis = fourier_basis(N, s.fourier_order)
             coef, *_ = np.linalg.lstsq(basis.T, tau_nodes.T, rcond=None)
             x[self._slices["tau"]] = coef.T.ravel(order="F")
         for j, (model, sim) in enumerate(zip(self.scen, sims)):
@@ -560,6 +579,16 @@ class GaitOCP:
                                 "periodic": float(max(np.max(np.abs(phi[:, -1] - phi[:, 0])),
                                                       abs(ft[-1] - ft[0]) / (r.M * r.g)))})
         return out
+
+    def equation_residual(self, x: np.ndarray) -> float:
+        """Largest violation of the equality constraints (equilibrium, balance, closure, lifting,
+        periodicity, definitions of S and W+) at x, in the scaled units of the NLP."""
+        g = np.asarray(self._g(x)).ravel()
+        worst = 0.0
+        for name, sl in self._slices.items():
+            if name.startswith(("g_eq_", "g_periodic_", "g_S_def_", "g_W_def_")):
+                worst = max(worst, float(np.max(np.abs(g[sl] - self._lbg[sl]))))
+        return worst
 
     def positive_work(self, tau_nodes: np.ndarray, phi: np.ndarray) -> float:
         """Discrete W+ [J] of the transcription: sum over actuators and steps of max(0, tau_mid dphi)."""
@@ -708,6 +737,7 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         res.CoT_plus_ocp.append(cost_of_transport(w, model.robot, sc["S"]))
     res.complementarity_residual = max(sc["comp"] for sc in un["scen"])
     res.periodicity_residual = max(sc["periodic"] for sc in un["scen"])
+    res.equation_residual = ocp.equation_residual(x)
     res.value_ocp = _value_from(settings, res.S_ocp, res.CoT_plus_ocp)
     if failed is not None:
         res.failed_stage = failed

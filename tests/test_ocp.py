@@ -39,6 +39,7 @@ def test_optimal_profile_is_proven_by_replay_and_beats_harmonics(solved, name):
     # residuals of the transcription
     assert res.complementarity_residual <= st.comp_tol
     assert res.periodicity_residual <= st.periodic_tol
+    assert res.equation_residual <= 1e-8
     assert res.homotopy[-1].accepted
     # the replay in the event-driven simulator agrees with the OCP
     assert len(res.replay) == len(res.S_ocp) and all(r.success for r in res.replay)
@@ -50,7 +51,10 @@ def test_optimal_profile_is_proven_by_replay_and_beats_harmonics(solved, name):
     lo, hi = st.torque_bounds(Robot.paper())
     assert np.all(res.tau >= lo - 1e-9) and np.all(res.tau <= hi + 1e-9)
     rate = st.rate_bound(Robot.paper())
-    assert np.max(np.abs(np.diff(np.c_[res.tau, res.tau[:, :1]], axis=1))) * N <= rate * (1 + 1e-6)
+    dtau = np.diff(np.c_[res.tau, res.tau[:, :1]], axis=1)
+    assert np.max(np.abs(dtau)) * N <= rate * (1 + 1e-6)
+    curv = st.curvature_bound(Robot.paper())
+    assert np.max(np.abs(np.diff(np.c_[dtau, dtau[:, :1]], axis=1))) * N**2 <= curv * (1 + 1e-6)
     # at least as good as the best harmonic gait of the envelope, strictly better than the guess
     # (the guess is that best harmonic gait), all measured by replay
     h = res.harmonic
@@ -76,6 +80,7 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(A_max_deg=95), "A_max_deg must be in"),
     (dict(sigma0=(2.0,)), "sigma0 must be"),
     (dict(mu_ratios=(0.9, -1.0)), "mu_ratios must be positive"),
+    (dict(curvature_limit=-1.0), "curvature_limit must be > 0"),
 ])
 def test_settings_validation(bad, match):
     with pytest.raises((ValueError, TypeError), match=match):
