@@ -8,6 +8,7 @@ phase t (per cycle), not per second.
 * :class:`FourierSeries`: any truncated Fourier series.
 * :class:`PeriodicSpline`: a periodic cubic spline through samples.
 * :class:`PeriodicLinear`: periodic piecewise-linear interpolation of samples.
+* :class:`PeriodicPchip`: periodic shape-preserving C1 cubic interpolation of samples.
 * :class:`CallableSignal`: any callable of phase (derivative by central differences if not given).
 * :class:`ReferenceTorque`: the torque tau = k (phi_ref - pi) of eq. (tau) for any reference signal.
 """
@@ -18,7 +19,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import CubicSpline, PchipInterpolator
 
 TWO_PI = 2.0 * math.pi
 
@@ -215,6 +216,35 @@ class PeriodicLinear(PeriodicSignal):
 
     def describe(self) -> dict:
         return {"type": "PeriodicLinear", "knots": int(self.t_knots.size)}
+
+
+class PeriodicPchip(PeriodicSignal):
+    """Periodic shape-preserving cubic (PCHIP) interpolation of samples at phases ``t_knots`` in [0, 1).
+
+    C1 (continuous derivative, unlike :class:`PeriodicLinear`) and without overshoot: it stays within
+    the range of neighbouring samples, so bounds the samples satisfy hold between them too.
+    """
+
+    def __init__(self, t_knots, values):
+        t, v = _check_samples("PeriodicPchip", t_knots, values, min_knots=3)
+        self.t_knots, self.values = t, v
+        # three periods, so that the interpolant of the middle one sees its periodic neighbours
+        tt = np.concatenate([t - 1.0, t, t + 1.0])
+        vv = np.concatenate([v, v, v], axis=1)
+        self._f = PchipInterpolator(tt, vv, axis=1)
+        self._df = self._f.derivative()
+
+    def _wrap(self, t):
+        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
+
+    def __call__(self, t):
+        return self._f(self._wrap(t))
+
+    def derivative(self, t):
+        return self._df(self._wrap(t))
+
+    def describe(self) -> dict:
+        return {"type": "PeriodicPchip", "knots": int(self.t_knots.size)}
 
 
 class CallableSignal(PeriodicSignal):

@@ -22,7 +22,7 @@ the worst direction * S).
 Solution: initial guess from the best harmonic gait of the same envelope (psi sweep with the
 event-driven stepper), Scholtes relaxation homotopy s_j c_j <= sigma with warm starts, every stage
 checked against the IPOPT status table of :mod:`ocp_crawl.mpcc`.  The optimal profile is then
-replayed in the event-driven simulator (periodic linear interpolation of the node torques).
+replayed in the event-driven simulator (periodic shape-preserving cubic through the node torques).
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ import casadi as cs
 import numpy as np
 
 from .hybrid import HybridOptions, simulate_torque
-from .inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from .inputs import Harmonic, PeriodicPchip, ReferenceTorque
 from .model import NP, Model, Robot
 from .mpcc import ipopt_status
 from .result import CrawlResult, Mode, cost_of_transport
@@ -55,6 +55,10 @@ class OCPStatus:
     NOT_COMPLEMENTARY = "not_complementary"
     NO_INITIAL_GUESS = "no_initial_guess"
     REPLAY_FAILED = "replay_failed"
+
+
+#: default curvature limit in units of the peak curvature of the envelope's harmonic gait
+CURVATURE_FACTOR = 4.0
 
 
 def _num(name, v, *, positive=False, nonneg=False, integer=False):
@@ -91,11 +95,13 @@ class OCPSettings:
     envelope's harmonic gait, so that the optimum cannot gain by packing several strokes into one
     cycle (a higher actuation frequency); None: no limit"""
     curvature_limit: float | str | None = "harmonic"
-    """largest |d^2 tau/d t^2| [N m per cycle^2]; "harmonic" (default): the peak (2 pi)^2 k A_max of
-    the envelope's harmonic gait.  Without it free profiles chatter: micro-strokes every few steps,
-    each carrying an O(1/N) transition error of the transcription that the optimiser exploits and
-    that does not vanish as N grows (the strokes multiply); None: no limit"""
-    tie_margin: float = 0.002
+    """largest |d^2 tau/d t^2| [N m per cycle^2]; "harmonic" (default): CURVATURE_FACTOR times the
+    peak (2 pi)^2 k A_max of the envelope's harmonic gait.  Without a limit free profiles chatter:
+    micro-strokes every few steps, each carrying an O(1/N) transition error of the transcription
+    that the optimiser exploits and that does not vanish as N grows (the strokes multiply).  With
+    the factor 1 the full-amplitude sine is about the only admissible stroke, hence 4 (room for a
+    second harmonic at full amplitude).  None: no limit"""
+    tie_margin: float = 0.0005
     """a foot may slip only while its friction limit is below the other foot's by tie_margin M g:
     at a tie the incremental Coulomb law leaves free which foot slips, which an optimiser would
     exploit and the continuous system does not allow (it slips both feet symmetrically)"""
@@ -178,7 +184,7 @@ class OCPSettings:
     def curvature_bound(self, robot: Robot) -> float | None:
         """Largest |d^2 tau / d t^2| [N m per cycle^2] or None."""
         if self.curvature_limit == "harmonic":
-            return (2 * math.pi) ** 2 * robot.k * math.radians(self.A_max_deg)
+            return CURVATURE_FACTOR * (2 * math.pi) ** 2 * robot.k * math.radians(self.A_max_deg)
         return self.curvature_limit
 
     def torque_bounds(self, robot: Robot) -> tuple[float, float]:
@@ -688,10 +694,11 @@ class GaitOCP:
         return best, hist, None, hist[-1].return_status
 
 
-def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
-    """Torque input of the event-driven replay: periodic linear interpolation of the node torques [N m]
-    (it respects the envelope and the rate limit of the transcription, which a spline may not)."""
-    return PeriodicLinear(phase, tau)
+def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicPchip:
+    """Torque input of the event-driven replay: periodic shape-preserving cubic (PCHIP) through the node
+    torques [N m]: it keeps the envelope (no overshoot, unlike a cubic spline) and has a continuous
+    derivative (unlike linear interpolation, whose jumps of d tau/dt make d' jump at every node)."""
+    return PeriodicPchip(phase, tau)
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,

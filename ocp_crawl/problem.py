@@ -184,7 +184,7 @@ SECTIONS += (
         Key("rate_limit", str, "-", "torque rate limit: the harmonic envelope's peak rate, none, or max_rate",
             default="harmonic", choices=("harmonic", "none", "max_rate")),
         Key("max_rate", float, "N m/cycle", "largest |d tau/dt| when rate_limit = \"max_rate\"", rule=GT0),
-        Key("curvature_limit", str, "-", "limit on d^2 tau/dt^2: the harmonic envelope's peak, or none",
+        Key("curvature_limit", str, "-", "limit on d^2 tau/dt^2: 4 x the harmonic envelope's peak, or none",
             default="harmonic", choices=("harmonic", "none")),
         Key("regularization", float, "-", "weight of the torque-change regularisation", default=1e-5, rule=GE0),
         Key("tie_margin", float, "-", "friction-limit margin (fraction of M g) required for a foot to slip",
