@@ -87,3 +87,42 @@ def test_infeasible_speed_requirement_is_a_status():
 def test_settings_validation(bad, match):
     with pytest.raises((ValueError, TypeError), match=match):
         OCPSettings(**bad)
+
+
+def test_cli_optimize_json_and_outputs(tmp_path, capsys):
+    import json
+    from pathlib import Path
+
+    from ocp_crawl.cli import main
+
+    problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
+    out = tmp_path / "opt"
+    code = main(["optimize", str(problem), "--set", "ocp.nodes=40", "--set", "ocp.harmonic_psi=8", "--json",
+                 "--out", str(out)])
+    data = json.loads(capsys.readouterr().out)
+    assert code == (0 if data["success"] else 1)
+    for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
+                "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
+        assert key in data, key
+    assert data["objective"] == "max_speed" and data["best_harmonic"]["A_deg"] == 30.0
+    lines = (out / "torques.csv").read_text().splitlines()
+    assert lines[0] == "phase,tau1,tau2" and len(lines) == 41
+    phase = np.array([float(r.split(",")[0]) for r in lines[1:]])
+    assert phase[0] == 0.0 and np.all(np.diff(phase) > 0) and phase[-1] < 1.0
+    for name in ("arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
+    import json
+    from pathlib import Path
+
+    from ocp_crawl.cli import main
+
+    problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_min_cot.toml"
+    code = main(["optimize", str(problem), "--set", "ocp.nodes=24", "--set", "ocp.harmonic_psi=8",
+                 "--set", "ocp.S_min=0.5", "--json"])
+    captured = capsys.readouterr()
+    assert code == 1
+    assert json.loads(captured.out)["status"] == "infeasible"
+    assert "infeasible" in captured.err and "Traceback" not in captured.err
