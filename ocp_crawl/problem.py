@@ -188,7 +188,7 @@ SECTIONS += (
             default="harmonic", choices=("harmonic", "none")),
         Key("regularization", float, "-", "weight of the torque-change regularisation", default=1e-5, rule=GE0),
         Key("tie_margin", float, "-", "friction-limit margin (fraction of M g) required for a foot to slip",
-            default=0.02, rule=GE0),
+            default=0.0005, rule=GE0),
         Key("S_min", float, "m", "min_cot: smallest progress direction * S per cycle", default=0.0, rule=GE0),
         Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}", default=0.1,
             rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
