@@ -130,6 +130,16 @@ def _simulate(problem: Problem, solver: str, args: argparse.Namespace) -> CrawlR
         raise BadInput(f"{problem.source}: {exc}") from None
 
 
+def _finish(args: argparse.Namespace, files, success: bool, failure: str) -> int:
+    """List the written files (unless --json) and turn success into the exit code, with the failure on stderr."""
+    if files and not args.json:
+        print("wrote      " + ", ".join(str(f) for f in files))
+    if not success:
+        print(f"{PROG}: {failure}", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
 def report(result: CrawlResult, problem: Problem, solver: str = "event") -> dict:
     """The JSON report of a run: the result's summary plus the problem and the units."""
     out = result.summary()
@@ -216,14 +226,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(data, allow_nan=False))
     else:
         print(format_summary(result, problem, args.solver))
-    if out is not None:
-        files = write_outputs(out, result, problem, data)
-        if not args.json:
-            print("wrote      " + ", ".join(str(f) for f in files))
-    if not result.success:
-        print(f"{PROG}: simulation failed: {result.message}", file=sys.stderr)
-        return EXIT_FAILURE
-    return EXIT_OK
+    files = write_outputs(out, result, problem, data) if out is not None else []
+    return _finish(args, files, result.success, f"simulation failed: {result.message}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -481,14 +485,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         print(json.dumps(data, allow_nan=False))
     else:
         print(format_optimize(data))
-    if out is not None:
-        files = write_ocp_outputs(result, problem.robot, out, data)
-        if not args.json:
-            print("wrote       " + ", ".join(str(f) for f in files))
-    if not result.success:
-        print(f"{PROG}: optimisation failed: {result.message}", file=sys.stderr)
-        return EXIT_FAILURE
-    return EXIT_OK
+    files = write_ocp_outputs(result, problem.robot, out, data) if out is not None else []
+    return _finish(args, files, result.success, f"optimisation failed: {result.message}")
 
 
 # --------------------------------------------------------------------------------------------

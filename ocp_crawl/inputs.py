@@ -163,20 +163,26 @@ def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarr
     return t, v
 
 
-class PeriodicSpline(PeriodicSignal):
+class _Sampled(PeriodicSignal):
+    """Base of the signals interpolating samples at knots ``t_knots`` in [0, 1)."""
+
+    t_knots: np.ndarray
+
+    def _wrap(self, t):
+        """Phases mapped into [t_knots[0], t_knots[0] + 1), the period the interpolant is built on."""
+        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
+
+
+class PeriodicSpline(_Sampled):
     """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N))."""
 
     def __init__(self, t_knots, values):
         t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
         tt = np.append(t, t[0] + 1.0)
         vv = np.concatenate([v, v[:, :1]], axis=1)
-        self._t0 = t[0]
         self._spline = CubicSpline(tt, vv, axis=1, bc_type="periodic")
         self._dspline = self._spline.derivative()
         self.t_knots, self.values = t, v
-
-    def _wrap(self, t):
-        return self._t0 + np.mod(np.asarray(t, float) - self._t0, 1.0)
 
     def __call__(self, t):
         return self._spline(self._wrap(t))
@@ -188,7 +194,7 @@ class PeriodicSpline(PeriodicSignal):
         return {"type": "PeriodicSpline", "knots": int(self.t_knots.size)}
 
 
-class PeriodicLinear(PeriodicSignal):
+class PeriodicLinear(_Sampled):
     """Periodic piecewise-linear interpolation of samples at phases ``t_knots`` in [0, 1) (values (2, N)).
 
     It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot),
@@ -202,8 +208,6 @@ class PeriodicLinear(PeriodicSignal):
         self._vv = np.concatenate([v, v[:, :1]], axis=1)
         self._slope = np.diff(self._vv, axis=1) / np.diff(self._tt)
 
-    def _wrap(self, t):
-        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
 
     def __call__(self, t):
         tw = self._wrap(t)
@@ -218,7 +222,7 @@ class PeriodicLinear(PeriodicSignal):
         return {"type": "PeriodicLinear", "knots": int(self.t_knots.size)}
 
 
-class PeriodicPchip(PeriodicSignal):
+class PeriodicPchip(_Sampled):
     """Periodic shape-preserving cubic (PCHIP) interpolation of samples at phases ``t_knots`` in [0, 1).
 
     C1 (continuous derivative, unlike :class:`PeriodicLinear`) and without overshoot: it stays within
@@ -234,8 +238,6 @@ class PeriodicPchip(PeriodicSignal):
         self._f = PchipInterpolator(tt, vv, axis=1)
         self._df = self._f.derivative()
 
-    def _wrap(self, t):
-        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
 
     def __call__(self, t):
         return self._f(self._wrap(t))
