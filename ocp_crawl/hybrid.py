@@ -598,42 +598,39 @@ class HybridStepper:
             # default output: a uniform grid plus the event phases of the steady cycle
             t_eval = np.unique(np.concatenate([np.linspace(0.0, 1.0, DEFAULT_OUTPUT_POINTS),
                                                [e.t - t0 for e in events if t0 <= e.t <= t0 + 1]]))
-        # output samples
-        rows = []
+        # output samples: per segment, its phases, solutions, foot positions and mode
+        blocks = []  # (t, X, A, x1, x2, mode) arrays
         if t_eval is None:
             for seg in segments:
-                for p in seg.points:
-                    if t0 - 1e-15 <= p.t <= t1 + 1e-15:
-                        rows.append((p.t, seg, p.x, p.aux))
-            rows.sort(key=lambda r: r[0])
+                pts = [p for p in seg.points if t0 - 1e-15 <= p.t <= t1 + 1e-15]
+                if pts:
+                    blocks.append((np.array([p.t for p in pts]), np.stack([p.x for p in pts], axis=1),
+                                   np.stack([p.aux for p in pts], axis=1), seg))
         else:
             te = t0 + np.asarray(t_eval, dtype=float).ravel()
             if np.any(te < t0 - 1e-12) or np.any(te > t0 + 1 + 1e-12):
                 raise ValueError("t_eval must lie in [0, 1] (phase within the steady cycle)")
+            free = np.ones(te.size, bool)  # a phase on a segment boundary goes to the earlier segment
             for seg in segments:
-                a, b = seg.points[0].t, seg.points[-1].t
-                sel = np.nonzero((te >= a) & (te <= b))[0]
-                sel = [j for j in sel if not any(r[4] == j for r in rows)]
-                if not sel:
-                    continue
-                xs, aux = self._evaluate_many(seg, te[sel])
-                for c, j in enumerate(sel):
-                    rows.append((te[j], seg, xs[:, c], aux[:, c], j))
-            rows.sort(key=lambda r: r[0])
-        if rows:
-            t = np.array([r[0] for r in rows])
-            X = np.stack([r[2] for r in rows], axis=1)
-            A = np.stack([r[3] for r in rows], axis=1)
-            d = A[AUX["d"]]
-            x1 = np.empty_like(t)
-            x2 = np.empty_like(t)
-            for j, r in enumerate(rows):
-                a1, a2 = r[1].foot_positions(d[j])
-                x1[j], x2[j] = a1, a2
-            res.t, res.phi, res.theta, res.d = t, X[:2], A[AUX["theta"]], d
+                sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
+                if sel.size:
+                    free[sel] = False
+                    xs, aux = self._evaluate_many(seg, te[sel])
+                    blocks.append((te[sel], xs, aux, seg))
+        if blocks:
+            t = np.concatenate([blk[0] for blk in blocks])
+            X = np.concatenate([blk[1] for blk in blocks], axis=1)
+            A = np.concatenate([blk[2] for blk in blocks], axis=1)
+            feet = [blk[3].foot_positions(blk[2][AUX["d"]]) for blk in blocks]
+            x1 = np.concatenate([f[0] for f in feet])
+            x2 = np.concatenate([f[1] for f in feet])
+            mode = np.concatenate([np.full(blk[0].size, int(blk[3].mode)) for blk in blocks])
+            order = np.argsort(t, kind="stable")
+            t, X, A, x1, x2, mode = t[order], X[:, order], A[:, order], x1[order], x2[order], mode[order]
+            res.t, res.phi, res.theta, res.d = t, X[:2], A[AUX["theta"]], A[AUX["d"]]
             res.x1, res.x2, res.f_t, res.f_n1, res.f_n2 = x1, x2, A[AUX["ft"]], A[AUX["fn1"]], A[AUX["fn2"]]
             res.tau = self.torque(t).reshape(2, -1)
-            res.mode = np.array([int(r[1].mode) for r in rows])
+            res.mode = mode
             res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
         if status == Status.SUCCESS:
             pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)

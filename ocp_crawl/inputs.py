@@ -80,12 +80,20 @@ class Harmonic(PeriodicSignal):
         return cls(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2), math.radians(psi_deg))
 
     def __call__(self, t):
+        if isinstance(t, float):  # the steppers' hot path: scalar phases, math is ~5x faster than numpy
+            w = TWO_PI * t
+            return np.array([self.gamma1 + self.A1 * math.sin(w + self.psi / 2),
+                             self.gamma2 + self.A2 * math.sin(w - self.psi / 2)])
         t = np.asarray(t, dtype=float)
         w = TWO_PI * t
         return np.array([self.gamma1 + self.A1 * np.sin(w + self.psi / 2),
                          self.gamma2 + self.A2 * np.sin(w - self.psi / 2)])
 
     def derivative(self, t):
+        if isinstance(t, float):
+            w = TWO_PI * t
+            return np.array([TWO_PI * self.A1 * math.cos(w + self.psi / 2),
+                             TWO_PI * self.A2 * math.cos(w - self.psi / 2)])
         t = np.asarray(t, dtype=float)
         w = TWO_PI * t
         return np.array([TWO_PI * self.A1 * np.cos(w + self.psi / 2),
