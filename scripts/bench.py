@@ -72,6 +72,37 @@ def bench_ocp(repeat: int) -> dict:
     return out
 
 
+def bench_paper(repeat: int) -> dict:
+    """Accuracy checks behind the notes: stiff limit vs prescribed angles, CoT+ vs the published curve."""
+    import csv
+
+    import numpy as np
+
+    from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot, simulate_torque
+    from ocp_crawl.prescribed import simulate_angles
+    from ocp_crawl.pressure import paper_data_dir
+
+    out = {}
+    gait = Harmonic.from_degrees(90, 30, 45)
+    for gravity in ("paper", "physical"):
+        robot = Robot.paper().with_stiffness_ratio(1e4)
+        model = Model(robot, gravity=gravity)
+        s_t = simulate_torque(model, ReferenceTorque(gait, robot.k)).S
+        s_a = simulate_angles(model, gait).S
+        out[f"stiff_limit_rel_diff_{gravity}"] = abs(s_t / s_a - 1)
+    with open(paper_data_dir() / "fig_cot_vs_amplitude.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    amps = np.array([float(r["A_deg"]) for r in rows])
+    for col, ratio in (("CoT_plus_large_k", 5.0), ("CoT_plus_realistic_k", 2.74), ("CoT_plus_low_k", 0.3)):
+        for target in (20.0, 50.0):
+            j = int(np.argmin(np.abs(amps - target)))
+            robot = Robot.paper().with_stiffness_ratio(ratio)
+            res = simulate_torque(Model(robot, gravity="paper"),
+                                  ReferenceTorque(Harmonic.from_degrees(90, amps[j], 45), robot.k))
+            out[f"{col}_A{amps[j]:.1f}_rel_diff"] = res.CoT_plus / float(rows[j][col]) - 1
+    return out
+
+
 def _delegate(script: str, argv: list[str]):
     """Run another benchmark script's main(argv) (they live beside this file)."""
     import importlib.util
@@ -96,8 +127,8 @@ def bench_sweep(repeat: int) -> str:
     return "see above"
 
 
-BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed, "mpcc": bench_mpcc, "sweep": bench_sweep,
-              "ocp": bench_ocp}
+BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
+              "sweep": bench_sweep, "ocp": bench_ocp}
 
 
 def main(argv=None) -> int:
