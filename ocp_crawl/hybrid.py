@@ -84,6 +84,15 @@ class HybridOptions:
             raise ValueError(f"HybridOptions.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")
 
 
+def hermite(t0, x0, xd0, t1, x1, xd1, t):
+    """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of phases."""
+    h = np.asarray(t1 - t0, float)
+    s = np.where(h > 0, (np.asarray(t, float) - t0) / np.where(h > 0, h, 1.0), 0.0)
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    return h00 * x0 + h10 * h * xd0 + h01 * x1 + h11 * h * xd1
+
+
 def event_kind(guard: str) -> str:
     """Public event kind of an internal guard name (see :class:`~ocp_crawl.result.Event`)."""
     if guard.startswith("slip_"):
@@ -219,15 +228,7 @@ class HybridStepper:
 
     @staticmethod
     def _hermite(p0: _Point, p1: _Point, t: float) -> np.ndarray:
-        h = p1.t - p0.t
-        if h <= 0:
-            return p0.x.copy()
-        s = (t - p0.t) / h
-        h00 = 2 * s**3 - 3 * s**2 + 1
-        h10 = s**3 - 2 * s**2 + s
-        h01 = -2 * s**3 + 3 * s**2
-        h11 = s**3 - s**2
-        return h00 * p0.x + h10 * h * p0.xdot + h01 * p1.x + h11 * h * p1.xdot
+        return hermite(p0.t, p0.x, p0.xdot, p1.t, p1.x, p1.xdot, t)
 
     # ------------------------------------------------------------------ events
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str) -> tuple[float, _Point]:
@@ -491,11 +492,7 @@ class HybridStepper:
             X = np.stack([p.x for p in pts], axis=1)
             XD = np.stack([p.xdot for p in pts], axis=1)
             i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
-            h = tp[i + 1] - tp[i]
-            s = np.where(h > 0, (ts - tp[i]) / np.where(h > 0, h, 1.0), 0.0)
-            h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-            h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
-            guesses = h00 * X[:, i] + h10 * h * XD[:, i] + h01 * X[:, i + 1] + h11 * h * XD[:, i + 1]
+            guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
         else:
             guesses = np.tile(pts[0].x[:, None], (1, n))
         xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
@@ -517,8 +514,7 @@ class HybridStepper:
         w_in = 0.0
         diss = 0.0
         wplus = np.zeros(2)
-        worst_res = 0.0
-        xg, wg = np.polynomial.legendre.leggauss(5)
+        xg, _ = np.polynomial.legendre.leggauss(5)
         for seg in segments:
             a = max(ta, seg.points[0].t)
             b = min(tb, seg.points[-1].t)
@@ -526,7 +522,6 @@ class HybridStepper:
                 continue
             t, wq = gauss_nodes(a, b, self.opt.quad_h, 5)
             xs, aux = self._evaluate_many(seg, t)
-            worst_res = max(worst_res, float(np.max(aux[AUX["res"]])))
             power = self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]
             w_in += float(np.sum(wq * power.sum(axis=0)))
             diss += float(np.sum(wq * np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]])))
@@ -568,7 +563,7 @@ class HybridStepper:
                 pv = p2[ie, np.arange(len(te))]
                 for i in range(2):
                     wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
-        return {"input_work": w_in, "dissipation": diss, "W_plus_joint": wplus, "quad_residual": worst_res}
+        return {"input_work": w_in, "dissipation": diss, "W_plus_joint": wplus}
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):

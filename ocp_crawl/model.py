@@ -121,8 +121,6 @@ class _Symbolic:
     """(phi[2], tau[2], f_t, p) -> F[2]: joint equilibrium residual [N m]"""
     hold_torque: cs.Function
     """(phi[2], f_t, p) -> tau[2]: torque that holds phi in equilibrium with f_t [N m]"""
-    solve: cs.Function
-    """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): Newton solve of a mode + outputs"""
     evaluate: cs.Function
     """(x[3], tau[2], dtau[2], q[4], p) -> aux[NAUX] without solving"""
     system: cs.Function
@@ -229,22 +227,6 @@ def symbolic() -> _Symbolic:
     evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"], ["aux"])
     system = cs.Function("system", [x, tau, q, p], [G, J], ["x", "tau", "q", "p"], ["G", "J"])
 
-    # Newton solve of the mode system, fused with the outputs into one call
-    par = cs.vertcat(tau, q, p)
-    G_par = cs.substitute(G, cs.vertcat(tau, q, p), par)
-    rf = cs.rootfinder(
-        "mode_newton", "fast_newton", {"x": x, "p": par, "g": G_par},
-        {"abstol": 1e-14, "abstolStep": 1e-15, "max_iter": 25, "error_on_fail": False},
-    )
-    x0m = cs.MX.sym("x0", 3)
-    taum = cs.MX.sym("tau", 2)
-    dtaum = cs.MX.sym("dtau", 2)
-    qm = cs.MX.sym("q", NQ)
-    pm = cs.MX.sym("p", NP)
-    xs = rf(x0m, cs.vertcat(taum, qm, pm))
-    solve = cs.Function("solve", [x0m, taum, dtaum, qm, pm], [xs, evaluate(xs, taum, dtaum, qm, pm)],
-                        ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
-
     # fold point: G(x, tau(t)) = 0 and J v = 0, |v| = 1, with tau(t) linearised around t0:
     # tau = tau0 + (t - t0) dtau0 (the caller iterates, re-linearising at the new t)
     z = cs.SX.sym("z", 7)  # x[3], s = t - t0, v[3]
@@ -263,7 +245,7 @@ def symbolic() -> _Symbolic:
         xk = xk - cs.solve(Jk, Gk)
     newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
                          ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
-    return _Symbolic(kin=kin, residual=residual, hold_torque=hold, solve=solve, evaluate=evaluate,
+    return _Symbolic(kin=kin, residual=residual, hold_torque=hold, evaluate=evaluate,
                      system=system, fold=fold, newton=newton)
 
 

@@ -299,14 +299,7 @@ def objective_value(settings: OCPSettings, results: list[CrawlResult], enforce_s
     """
     if any(not r.success for r in results):
         return float("nan")
-    dS = [settings.direction * r.S for r in results]
-    if settings.objective == "max_speed":
-        return dS[0]
-    if settings.objective == "robust_speed":
-        return float(np.mean(dS) if settings.robust == "mean" else np.min(dS))
-    if dS[0] <= 0 or (enforce_s_min and dS[0] < settings.S_min):
-        return float("inf")
-    return results[0].CoT_plus
+    return _value_from(settings, [r.S for r in results], [r.CoT_plus for r in results], enforce_s_min)
 
 
 def _better(settings: OCPSettings, a: float, b: float) -> bool:
@@ -765,12 +758,15 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     return res
 
 
-def _value_from(settings: OCPSettings, S: list, CoT: list) -> float:
+def _value_from(settings: OCPSettings, S: list, CoT: list, enforce_s_min: bool = False) -> float:
+    """Objective value from S [m] and CoT+ per scenario (see :func:`objective_value`)."""
     dS = [settings.direction * v for v in S]
     if settings.objective == "max_speed":
         return dS[0]
     if settings.objective == "robust_speed":
         return float(np.mean(dS) if settings.robust == "mean" else np.min(dS))
+    if dS[0] <= 0 or (enforce_s_min and dS[0] < settings.S_min):
+        return float("inf")
     return CoT[0]
 
 
