@@ -510,8 +510,9 @@ class GaitOCP:
                                       "ipopt": dict(WARM_IPOPT, **ipopt)})
 
     # ------------------------------------------------------------------ initial guess from a simulation
-    def initial_guess(self, torque_signal, sims: list[CrawlResult]) -> np.ndarray:
-        """Variables sampled from event-driven simulations (one per scenario) of a torque input."""
+    def initial_guess(self, torque_signal) -> np.ndarray:
+        """Variables sampled from event-driven simulations (one per scenario) of a torque input
+        (a gait that simulates successfully, e.g. the best harmonic of :func:`best_harmonic`)."""
         s = self.settings
         N = s.nodes
         r = self.robot
@@ -525,9 +526,11 @@ class GaitOCP:
             basis = fourier_basis(N, s.fourier_order)
             coef, *_ = np.linalg.lstsq(basis.T, tau_nodes.T, rcond=None)
             x[self._slices["tau"]] = coef.T.ravel(order="F")
-        for j, (model, sim) in enumerate(zip(self.scen, sims)):
+        dS = []
+        for j, model in enumerate(self.scen):
             te = np.arange(N + 1) / N
             res = simulate_torque(model, torque_signal, t_eval=te)
+            dS.append(self.settings.direction * res.S)
             phi, ft, x1, x2 = res.phi, res.f_t / Mg, res.x1, res.x2
             rb = model.robot
             W = np.zeros((NW, N))
@@ -551,7 +554,7 @@ class GaitOCP:
                 x[self._slices[f"v_{j}"]] = V.ravel(order="F")
                 x[self._slices[f"Wp_{j}"]] = V.sum()
         if "zeta" in self._slices:
-            x[self._slices["zeta"]] = min(self.settings.direction * sim.S for sim in sims) / L
+            x[self._slices["zeta"]] = min(dS) / L
         return x
 
     # ------------------------------------------------------------------ residuals of a solution
@@ -710,8 +713,7 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     ocp = GaitOCP(robot, gravity, settings)
     gait = Harmonic.from_degrees(harm.gamma_deg, harm.A_deg, harm.psi_deg)
     guess_sig = ReferenceTorque(gait, robot.k)
-    sims = [simulate_torque(m, ReferenceTorque(gait, robot.k)) for m in ocp.scen]
-    x0 = ocp.initial_guess(guess_sig, sims)
+    x0 = ocp.initial_guess(guess_sig)
     x, hist, failed, status = ocp.solve(x0)
     res.homotopy = hist
     res.solve_time_s = time.perf_counter() - t_start
