@@ -355,7 +355,10 @@ class HybridStepper:
         self.nfev = 0
         self.nsteps = 0
         opt = self.opt
-        start = self.initial_state(0.0)
+        try:
+            start = self.initial_state(0.0)
+        except ValueError as exc:
+            return self._build_result([], [], Status.NO_START, str(exc), 0.0, "released start", 0, None, t_eval, {})
         mode = Mode.STICK
         d0 = start.aux[AUX["d"]]
         seg = _Segment(Mode.STICK, mode_q(Mode.STICK, d0), 0.0, d0)
@@ -583,6 +586,9 @@ class HybridStepper:
         if status == Status.SUCCESS:
             t0 = float(periodic_at - 1)
             res.message = f"{STATUS_MESSAGES[status]} after {cycles} cycles; steady cycle t in [{t0:g}, {t0 + 1:g}]"
+        elif status == Status.NO_START:
+            t0 = 0.0
+            res.message = f"{STATUS_MESSAGES[status]}: {detail}"
         else:
             t0 = float(max(0, math.floor(fail_t if fail_t is not None else 0.0)))
             res.message = f"{STATUS_MESSAGES[status]}: {detail} at phase t = {fail_t:.10f} " \

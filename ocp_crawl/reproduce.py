@@ -403,7 +403,7 @@ def _report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list
       "leads and the robot moves towards foot 1, so S < 0; the figures plot the progress -S where they compare with "
       "the paper, whose figures show the magnitude of forward progress.\n")
     w("**Failed points are data.** A point whose run stops (a fold of the equilibrium branch, a foot lifting off, a "
-      "joint touching the ground, no equilibrium at the start = `bad_input`, ...) is drawn as a marker whose shape "
+      "joint touching the ground, no equilibrium at the start = `no_start`, ...) is drawn as a marker whose shape "
       "names the status and is counted below; derived numbers use the successful points only.\n")
     w("## Grids\n")
     w(_table(["grid", "quick", "full"], [[k, v, GRIDS["full"].rows()[k]] for k, v in GRIDS["quick"].rows().items()]))

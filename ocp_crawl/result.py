@@ -21,6 +21,7 @@ class Status(IntEnum):
     TOO_MANY_EVENTS = 7
     SOLVER_FAILURE = 8
     JOINT_ON_GROUND = 9
+    NO_START = 10
 
 
 STATUS_MESSAGES = {
@@ -36,6 +37,8 @@ STATUS_MESSAGES = {
     Status.SOLVER_FAILURE: "the step solver failed",
     Status.JOINT_ON_GROUND: "a joint reaches the ground (the leg would enter it): the model with contacts "
                             "at the feet only is no longer valid",
+    Status.NO_START: "no equilibrium to start from at t = 0 (the robot cannot stand on both feet with both joints "
+                     "above the ground)",
 }
 
 

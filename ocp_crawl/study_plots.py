@@ -30,11 +30,11 @@ RUN_STYLES = ("-", "--", ":")
 K_COLORS = (BLUE, "black", PURPLE)
 K_STYLES = ("-", "--", ":")
 #: marker of each failure status (others: FALLBACK_MARKER)
-STATUS_MARKERS = {"fold": "X", "lift_off": "^", "joint_on_ground": "v", "bad_input": "s", "no_consistent_mode": "D",
+STATUS_MARKERS = {"fold": "X", "lift_off": "^", "joint_on_ground": "v", "no_start": "s", "bad_input": "d", "no_consistent_mode": "D",
                   "feet_crossed": "P", "no_convergence": "*", "not_periodic": "p", "error": "h"}
 FALLBACK_MARKER = "o"
 #: legend text of statuses whose name alone would mislead
-STATUS_LABELS = {"bad_input": "no equilibrium to start from"}
+STATUS_LABELS = {"no_start": "no equilibrium to start from"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
 MM = 1e3

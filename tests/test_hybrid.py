@@ -2,6 +2,7 @@
 import csv
 import math
 import os
+import re
 
 import numpy as np
 import pytest
@@ -114,8 +115,10 @@ def test_below_friction_threshold_physical_robot_cannot_stand():
     """With the physical sign gravity destabilises the Pi shape: at k = 0.05 M g L no equilibrium near the
     reference posture keeps both joints above the ground, so the released start is rejected (MODEL_NOTES)."""
     robot = Robot.paper().with_stiffness_ratio(0.05)
-    with pytest.raises(ValueError, match="starting configuration: joint . at or below the ground"):
-        simulate_torque(Model(robot, gravity="physical"), paper_torque(robot))
+    res = simulate_torque(Model(robot, gravity="physical"), paper_torque(robot))
+    assert not res.success and res.status_name == "no_start"
+    assert re.search("starting configuration: joint . at or below the ground", res.message), res.message
+    assert np.isnan(res.S) and res.events == [] and res.t.size == 0
 
 
 def test_fold_is_reported_with_phase_mode_and_singular_jacobian():
@@ -241,8 +244,8 @@ def test_general_periodic_inputs_are_accepted():
 def test_bad_starting_configuration_is_rejected():
     robot = Robot.paper()
     torque = ReferenceTorque(Harmonic.from_degrees(30, 5, 45, gamma2_deg=45), robot.k)
-    with pytest.raises(ValueError, match="starting configuration"):
-        simulate_torque(Model(robot), torque)
+    res = simulate_torque(Model(robot), torque)
+    assert res.status == Status.NO_START and "starting configuration" in res.message
 
 
 def test_grazing_friction_limit_keeps_the_mode():
