@@ -130,12 +130,16 @@ class _Symbolic:
     newton: cs.Function
     """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): NEWTON_ITERS unrolled Newton steps + outputs;
     pure SX, so it can be compiled to C (see :mod:`ocp_crawl.compiled`)"""
+    ddot2: cs.Function
+    """(x[3], tau[2], dtau[2], q[4], p) -> (a, b[2]): d'' = a + b . tau'' along the mode's solution"""
 
 
 #: names of the auxiliary outputs returned with every mode solve
 AUX_NAMES = (
     "theta", "d", "xc", "Delta", "fn1", "fn2", "ft", "ddot",
     "dphi1", "dphi2", "dft", "det", "res", "lim1", "lim2", "zj1", "zj2",
+    # time derivatives along the mode's solution (d/dt = grad . x'), for event detection inside a step
+    "dfn1", "dfn2", "dzj1", "dzj2",
 )
 AUX = {n: i for i, n in enumerate(AUX_NAMES)}
 NAUX = len(AUX_NAMES)
@@ -219,12 +223,20 @@ def symbolic() -> _Symbolic:
     ddot = cs.dot(grad_d_x, xdot[0:2])
     detJ = cs.det(J)
     Delta_x = geo_x["xc"] - geo_x["d"] / 2
+    rates = [cs.dot(cs.gradient(geo_x[n], x[0:2]), xdot[0:2]) for n in ("fn1", "fn2", "zj1", "zj2")]
     aux = cs.vertcat(
         geo_x["theta"], geo_x["d"], geo_x["xc"], Delta_x, geo_x["fn1"], geo_x["fn2"], x[2] * Mg,
         ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2, geo_x["zj1"], geo_x["zj2"],
+        *rates,
     )
     assert aux.shape[0] == NAUX
     evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"], ["aux"])
+    # d'' along the mode's solution, d'' = a + b . tau'' (the caller supplies the torque's second
+    # derivative); separate from ``evaluate`` because only event detection in slip modes needs it
+    ddot2 = cs.Function("ocp_crawl_ddot2", [x, tau, dtau, q, p],
+                        [cs.vertcat(cs.dot(cs.gradient(ddot, x), xdot) + cs.dot(cs.gradient(ddot, tau), dtau),
+                                    cs.gradient(ddot, dtau))],
+                        ["x", "tau", "dtau", "q", "p"], ["ab"])
     system = cs.Function("system", [x, tau, q, p], [G, J], ["x", "tau", "q", "p"], ["G", "J"])
 
     # fold point: G(x, tau(t)) = 0 and J v = 0, |v| = 1, with tau(t) linearised around t0:
@@ -246,7 +258,7 @@ def symbolic() -> _Symbolic:
     newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
                          ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
     return _Symbolic(kin=kin, residual=residual, hold_torque=hold, evaluate=evaluate,
-                     system=system, fold=fold, newton=newton)
+                     system=system, fold=fold, newton=newton, ddot2=ddot2)
 
 
 #: Newton iterations unrolled in ``newton``; callers repeat the call until the residual is small
@@ -259,6 +271,14 @@ def fast_newton():
     from .compiled import FastFunction
 
     return FastFunction(symbolic().newton)
+
+
+@lru_cache(maxsize=1)
+def fast_ddot2():
+    """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
+    from .compiled import FastFunction
+
+    return FastFunction(symbolic().ddot2)
 
 
 #: width of the compiled vectorised Newton solve
