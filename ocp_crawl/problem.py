@@ -213,8 +213,15 @@ def ocp_settings(problem: "Problem"):
         raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
     rate = {"harmonic": "harmonic", "none": None}.get(sec.get("rate_limit"), sec.get("max_rate"))
     eps = sec["mu_ratio_eps"]
+    gamma = math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2))
+    if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
+        gait = problem.sections.get("gait", {})
+        given = ", ".join(f"{k} = {_fmt(gait[k])}" for k in ("gamma_deg", "gamma1_deg", "gamma2_deg") if k in gait)
+        raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {_fmt(sec['A_max_deg'])} with [gait] "
+                           f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
+                           f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
     return OCPSettings(objective=sec["objective"], nodes=sec["nodes"], direction=sec["direction"],
-                       gamma_deg=math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2)),
+                       gamma_deg=gamma,
                        A_max_deg=sec["A_max_deg"], parametrization=sec["parametrization"],
                        fourier_order=sec["fourier_order"], rate_limit=rate,
                        curvature_limit=None if sec["curvature_limit"] == "none" else "harmonic",
@@ -329,6 +336,11 @@ def _fmt(value: Any) -> str:
     else:
         s = str(value)
     return s if len(s) <= 60 else s[:57] + "..."
+
+
+def format_value(value: Any) -> str:
+    """A value as it would be written in TOML (strings quoted), shortened for one-line messages."""
+    return _fmt(value)
 
 
 def _toml_type(value: Any) -> str:

@@ -62,8 +62,13 @@ def test_simulate_json(capsys):
 
 def test_simulate_out_writes_the_files(capsys, tmp_path):
     out_dir = tmp_path / "run" / "deep"
-    code, out, err = run(capsys, "simulate", PAPER, "--set", "model.gravity=paper", "--out", out_dir)
+    out_dir.mkdir(parents=True)
+    (out_dir / "notes.txt").write_text("mine\n")  # a directory holding other files is fine
+    argv = ["simulate", PAPER, "--set", "model.gravity=paper", "--out", out_dir]
+    code, out, err = run(capsys, *argv)
     assert code == 0, err
+    assert (out_dir / "notes.txt").read_text() == "mine\n"
+    (out_dir / "notes.txt").unlink()
     names = {p.name for p in out_dir.iterdir()}
     assert names == {"arrays.npz", "summary.json", "gait.png", "gait.pdf"}  # no temporary files left
     summary = json.loads((out_dir / "summary.json").read_text())
@@ -72,6 +77,7 @@ def test_simulate_out_writes_the_files(capsys, tmp_path):
         assert arrays["phi"].shape == (2, arrays["t"].size) and arrays["x1"].shape == arrays["t"].shape
     assert (out_dir / "gait.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out_dir / "gait.pdf").read_bytes()[:5] == b"%PDF-"
+    refuse_then_force(capsys, argv, out_dir, names, 0)
 
 
 def test_numerical_failure_exits_1_and_still_prints_json(capsys, tmp_path):
@@ -86,8 +92,9 @@ def test_numerical_failure_exits_1_and_still_prints_json(capsys, tmp_path):
     assert (tmp_path / "gait.png").exists()
 
 
-def test_demo(capsys, tmp_path):
-    code, out, err = run(capsys, "demo", "--out", tmp_path / "demo")
+def test_demo(capsys, tmp_path, monkeypatch):
+    argv = ["demo", "--out", tmp_path / "demo"]
+    code, out, err = run(capsys, *argv)
     assert code == 0, err
     assert "torque drive, physical gravity" in out and "prescribed angles" in out
     assert out.count("success") == 3
@@ -98,6 +105,15 @@ def test_demo(capsys, tmp_path):
     # the physical and the printed gravity sign differ by a few percent in S (MODEL_NOTES erratum)
     s_phys, s_paper = summary["torque_physical"]["S"], summary["torque_paper"]["S"]
     assert 0.02 < abs(s_phys - s_paper) / abs(s_phys) < 0.10
+    # --out guard: the figures of the --force run are not the point here (and cost most of the time)
+    import ocp_crawl.cli as cli
+    from ocp_crawl.files import atomic_write
+
+    def cheap_outputs(out, result, problem, data, stem=""):
+        return [atomic_write(out / f"{stem}{name}", lambda fh: fh.write(b"stand-in")) for name in cli.RUN_FILES]
+
+    monkeypatch.setattr(cli, "write_outputs", cheap_outputs)
+    refuse_then_force(capsys, argv, tmp_path / "demo", files, 0)
 
 
 def test_help_and_version(capsys):
@@ -108,58 +124,7 @@ def test_help_and_version(capsys):
 
 
 # ------------------------------------------------------------------------------------------ bad input
-# (problem file text or None for the paper file, extra arguments, words the one-line message must name)
-BAD_INPUT = {
-    "negative stiffness": (edit("k = 0.1677", "k = -1.0"), [], ["[robot] k = -1.0", "must be > 0"]),
-    "zero mass": (edit("M = 0.052", "M = 0"), [], ["[robot] M = 0", "must be > 0"]),
-    "bool is not a number": (edit("L = 0.120", "L = true"), [], ["[robot] L = true", "expected a number"]),
-    "string for a number": (edit("beta = 2.0", 'beta = "2"'), [], ['[robot] beta = "2"', "expected a number"]),
-    "infinite": (edit("g = 9.81", "g = inf"), [], ["[robot] g = inf", "finite"]),
-    "not a number": (edit("A_deg = 30.0", "A_deg = nan"), [], ["[gait] A_deg = nan", "finite"]),
-    "negative friction": (edit("mu = 0.389", "mu = -0.2"), [], ["[robot] mu = -0.2", ">= 0"]),
-    "mu with mu1": (edit("mu = 0.389", "mu = 0.389\nmu1 = 0.3"), [], ["mu = 0.389", "mu1 = 0.3", "exclusive"]),
-    "missing key": (edit("k = 0.1677", ""), [], ["[robot] k", "missing", "required"]),
-    "unknown key": (edit("k = 0.1677", "stiffness = 0.1677"), [], ["stiffness = 0.1677", "unknown key"]),
-    "unknown section": (edit("[model]", "[modle]"), [], ["[modle]", "did you mean model?"]),
-    "bad drive": (edit('drive = "torque"', 'drive = "crawl"'), [], ['[gait] drive = "crawl"', '"angles"']),
-    "bad gravity": (edit('gravity = "physical"', 'gravity = "real"'), [], ['gravity = "real"', '"paper"']),
-    "float cycles": (edit("max_cycles = 12", "max_cycles = 3.5"), [], ["max_cycles = 3.5", "integer"]),
-    "malformed TOML": (edit("k = 0.1677", "k 0.1677"), [], ["malformed TOML", "line 9", "k 0.1677"]),
-    "foot off the ground": (edit("gamma_deg = 90.0", "gamma_deg = 30.0"), [],
-                            ["gamma_deg = 30.0", "foot 1 off the ground"]),
-    "prescribed lift-off": (edit("A_deg = 30.0", "A_deg = 75.0"), ["--drive", "angles"],
-                            ["A_deg = 75.0", "below the ground"]),
-    "bad --set syntax": (None, ["--set", "robot.k"], ["robot.k", "SECTION.KEY=VALUE"]),
-    "bad --set key": (None, ["--set", "robot.kay=1"], ["robot.kay=1", "did you mean k?"]),
-    "bad --set value": (None, ["--set", "robot.k=soft"], ["robot.k=soft", "expected a number"]),
-    "bad --set physics": (None, ["--set", "robot.mu=-1"], ["[robot] mu = -1 (from --set)", ">= 0"]),
-    "missing file": ("", ["--missing"], ["nope.toml", "cannot read", "No such file"]),
-    "out is a file": (None, ["--out", "FILE"], ["--out", "not a directory"]),
-    "unknown option": (None, ["--bogus"], ["unrecognized arguments: --bogus"]),
-    "bad --drive": (None, ["--drive", "walk"], ["--drive", "'walk'"]),
-}
-
-
-@pytest.mark.parametrize("case", list(BAD_INPUT))
-def test_bad_input_exits_2_with_one_line(case, capsys, tmp_path):
-    text, extra, words = BAD_INPUT[case]
-    path = PAPER if text is None else write(tmp_path, text)
-    if "--missing" in extra:
-        path, extra = tmp_path / "nope.toml", []
-    if "FILE" in extra:
-        blocker = write(tmp_path, "", "blocker")
-        extra = [str(blocker) if a == "FILE" else a for a in extra]
-    code, out, err = run(capsys, "simulate", path, *extra)
-    assert code == 2, (out, err)
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("ocp-crawl: error: ")
-    assert "Traceback" not in err
-    if text is not None or "--missing" in BAD_INPUT[case][1]:
-        assert path.name in lines[0]
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    assert out == ""
+# the table of malformed inputs of every command is tests/test_bad_input.py
 
 
 def test_real_subprocess_bad_input_and_json(tmp_path):
@@ -174,3 +139,174 @@ def test_real_subprocess_bad_input_and_json(tmp_path):
                           capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert JSON_KEYS <= set(json.loads(proc.stdout))
+
+
+# ------------------------------------------------------------------------------------------ internal errors
+def one_line(err: str) -> str:
+    lines = err.splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.mark.parametrize("exc", [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
+                                 TypeError("unsupported operand")])
+def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
+    import ocp_crawl.cli as cli
+
+    def broken(*args, **kwargs):
+        raise exc
+
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    monkeypatch.setattr(cli, "run_problem", broken)
+    code, out, err = run(capsys, "simulate", PAPER)
+    assert code == 1
+    assert out == ""
+    assert one_line(err) == (f"ocp-crawl: internal error: {type(exc).__name__}: {exc} "
+                             "(set OCP_CRAWL_TRACEBACK=1 for the traceback)")
+    monkeypatch.setenv("OCP_CRAWL_TRACEBACK", "1")
+    with pytest.raises(type(exc)):
+        main(["simulate", str(PAPER)])
+
+
+def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
+    import ocp_crawl.ocp
+
+    def broken(*args, **kwargs):
+        return 1.0 / 0.0
+
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    monkeypatch.setattr(ocp_crawl.ocp, "optimize_gait", broken)
+    code, out, err = run(capsys, "optimize", REPO / "problems" / "ocp_max_speed.toml")
+    assert code == 1
+    assert one_line(err).startswith("ocp-crawl: internal error: ZeroDivisionError: ")
+
+
+def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
+    import ocp_crawl.cli as cli
+
+    def full(path, *args, **kwargs):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    monkeypatch.setattr(cli, "write_npz", full)
+    code, out, err = run(capsys, "simulate", PAPER, "--out", tmp_path / "o")
+    assert code == 1
+    line = one_line(err)
+    assert line.startswith("ocp-crawl: I/O error: ") and "No space left on device" in line and "arrays.npz" in line
+
+
+# ------------------------------------------------------------------------------------------ no_start
+def test_no_start_check_agrees_with_the_solver():
+    """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as no_start."""
+    from ocp_crawl.cli import BadInput, check_start
+    from ocp_crawl.problem import load_problem, run_problem
+    from ocp_crawl.result import Status
+
+    for k, expect_start in ((0.00306, False), (0.0306, True), (0.1677, True)):
+        problem = load_problem(PAPER, [f"robot.k={k}"])
+        result = run_problem(problem)
+        assert (result.status != Status.NO_START) is expect_start, (k, result.message)
+        if expect_start:
+            check_start(problem)
+        else:
+            with pytest.raises(BadInput) as info:
+                check_start(problem)
+            # the same verdict and detail as the solver's result
+            assert result.message in str(info.value)
+            assert f"k = {k}" in str(info.value)
+
+
+# ------------------------------------------------------------------------------------------ --out and --force
+def snapshot(directory: Path) -> dict:
+    """name -> (bytes, mtime_ns, inode) of every file under directory."""
+    out = {}
+    for p in sorted(directory.rglob("*")):
+        if p.is_file():
+            st = p.stat()
+            out[str(p.relative_to(directory))] = (p.read_bytes(), st.st_mtime_ns, st.st_ino)
+    return out
+
+
+OCP_CHEAP = ["--set", "ocp.nodes=8", "--set", "ocp.harmonic_psi=4"]
+
+#: command -> (arguments after the command, files the run writes in --out); --out DIR is appended
+#: (simulate and demo: in test_simulate_out_writes_the_files and test_demo)
+FORCE_CASES = {
+    "optimize": ([REPO / "problems" / "ocp_max_speed.toml", *OCP_CHEAP],
+                 {"torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"}),
+    "sweep": ([PAPER, "--grid", "gait.psi_deg=45", "--jobs", "1", "--no-progress"],
+              {"settings.json", "results.csv", "summary.json"}),
+}
+
+
+def refuse_then_force(capsys, argv, out_dir, files, first_code):
+    """After a first run: the same run refuses (exit 2, one line) leaving every file untouched; with
+    --force it runs again and rewrites the files."""
+    before = snapshot(out_dir)
+    assert set(files) <= set(before), set(before)
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    line = one_line(err)
+    assert line.startswith(f"ocp-crawl: error: --out {out_dir}: would overwrite earlier results (")
+    assert "--force" in line
+    assert snapshot(out_dir) == before  # byte-identical, not even touched
+    code, _, err = run(capsys, *argv, "--force")
+    assert code == first_code, err
+    after = snapshot(out_dir)
+    assert set(after) == set(before)
+    for name in files:  # every file written again (atomically: a new inode)
+        assert after[name][2] != before[name][2] or after[name][1] != before[name][1], name
+
+
+@pytest.mark.parametrize("command", list(FORCE_CASES))
+def test_out_is_never_overwritten_without_force(command, capsys, tmp_path):
+    args, files = FORCE_CASES[command]
+    out_dir = tmp_path / "out"
+    argv = [command, *args, "--out", out_dir]
+    first = run(capsys, *argv)[0]
+    assert first in (0, 1)  # the cheap optimisation may fail its replay; it writes its files either way
+    refuse_then_force(capsys, argv, out_dir, files, first)
+
+
+def test_animate_never_overwrites_a_gif_without_force(capsys, tmp_path):
+    gif = tmp_path / "a.gif"
+    argv = ["animate", PAPER, "--out", gif, "--cycles", "1", "--frames-per-cycle", "2"]
+    code, _, err = run(capsys, *argv)
+    assert code == 0, err
+    before = snapshot(tmp_path)
+    assert gif.read_bytes()[:6] == b"GIF89a"
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert one_line(err).startswith(f"ocp-crawl: error: --out {gif}: would overwrite earlier results (a.gif)")
+    assert snapshot(tmp_path) == before
+    code, _, err = run(capsys, *argv, "--force")
+    assert code == 0, err
+    assert gif.stat().st_ino != before["a.gif"][2] or gif.stat().st_mtime_ns != before["a.gif"][1]
+
+
+def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, tmp_path, monkeypatch):
+    """No full reproduce here: a stand-in records the calls and writes report.md like the real one."""
+    import ocp_crawl.reproduce as rp
+
+    calls = []
+
+    def fake_reproduce(out_dir, quick=False, gravity="paper", sweep=None, log=None):
+        calls.append(sweep.resume)
+        report = Path(out_dir) / "report.md"
+        report.write_text(f"run {len(calls)}\n")
+        return rp.ReproduceResult(Path(out_dir), "quick", gravity, (report,), report, {}, (), 0.0)
+
+    monkeypatch.setattr(rp, "reproduce", fake_reproduce)
+    out_dir = tmp_path / "r"
+    argv = ["reproduce", "--quick", "--no-progress", "--out", out_dir]
+    assert run(capsys, *argv)[0] == 0 and calls == [False]
+    before = snapshot(out_dir)
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == "" and calls == [False]  # refused before computing
+    line = one_line(err)
+    assert f"--out {out_dir}: would overwrite earlier results (report.md)" in line
+    assert "--resume" in line and "--force" in line
+    assert snapshot(out_dir) == before
+    assert run(capsys, *argv, "--resume")[0] == 0 and calls == [False, True]
+    assert run(capsys, *argv, "--force")[0] == 0 and calls == [False, True, False]
+    assert (out_dir / "report.md").read_text() == "run 3\n"

@@ -260,3 +260,29 @@ def test_readme_status_table_is_current():
     text = (REPO / "README.md").read_text(encoding="utf-8")
     for status, message in STATUS_MESSAGES.items():
         assert f"| {int(status)} | `{status.name.lower()}` | {message} |" in text
+
+
+@pytest.mark.parametrize("gait, A_max", [
+    ({"gamma_deg": 90.0}, 30.0),  # 60 to 120 deg: valid
+    ({"gamma_deg": 90.0, "gamma1_deg": 120.0, "gamma2_deg": 140.0}, 45.0),  # mean 130: 85 to 175, valid
+    ({"gamma_deg": 150.0}, 40.0),  # 110 to 190 deg
+    ({"gamma_deg": 60.0}, 70.0),  # -10 to 130 deg (the schema alone accepts both values)
+    ({"gamma_deg": 90.0, "gamma1_deg": 120.0, "gamma2_deg": 160.0}, 45.0),  # mean 140: 95 to 185
+])
+def test_ocp_envelope_must_lie_in_0_180(gait, A_max):
+    from ocp_crawl.problem import ocp_settings
+
+    data = paper_dict(ocp__A_max_deg=A_max, **{f"gait__{k}": v for k, v in gait.items()})
+    problem = problem_from_dict(data, source="p.toml")
+    gamma = (gait.get("gamma1_deg", gait["gamma_deg"]) + gait.get("gamma2_deg", gait["gamma_deg"])) / 2
+    if 0 < gamma - A_max and gamma + A_max < 180:
+        settings = ocp_settings(problem)
+        assert settings.A_max_deg == A_max and settings.gamma_deg == pytest.approx(gamma, abs=1e-12)
+        return
+    with pytest.raises(ProblemError) as info:
+        ocp_settings(problem)
+    msg = str(info.value)
+    assert msg.startswith(f"p.toml: [ocp] A_max_deg = {A_max!r} with [gait] ") and "(0, 180)" in msg
+    assert "\n" not in msg
+    for k, v in gait.items():  # the gait keys that set gamma, as given
+        assert f"{k} = {v!r}" in msg

@@ -1,0 +1,409 @@
+"""Bad-input matrix: every command, malformed problem files and arguments -> exit 2, one line, no traceback.
+
+One table (:data:`ROWS`) of cases; each row runs ``ocp_crawl.cli.main`` in-process with every long
+computation replaced by a function that fails the test (bad input must be rejected before any
+run), and checks: exit code 2, stdout empty, stderr exactly one line ``ocp-crawl: error: ...``
+naming the file (for file errors), the key and the value as written, no traceback.  A few rows
+also run through a real ``python -m ocp_crawl`` subprocess.
+"""
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+import ocp_crawl.animate
+import ocp_crawl.cli as cli
+import ocp_crawl.crosscheck
+import ocp_crawl.hybrid
+import ocp_crawl.ocp
+import ocp_crawl.prescribed
+import ocp_crawl.reproduce
+import ocp_crawl.sweep
+import ocp_crawl.timestepping
+
+REPO = Path(__file__).resolve().parent.parent
+PAPER = REPO / "problems" / "paper_gait.toml"
+OCP = REPO / "problems" / "ocp_max_speed.toml"
+PAPER_TEXT, OCP_TEXT = PAPER.read_text(), OCP.read_text()
+
+
+def _permissions_ignored() -> bool:
+    """True for root (os.geteuid() == 0) unless it runs without CAP_DAC_OVERRIDE: probed, not assumed."""
+    if not (hasattr(os, "geteuid") and os.geteuid() == 0):
+        return False
+    with tempfile.TemporaryDirectory() as d:
+        probe = Path(d) / "probe"
+        probe.write_text("x")
+        probe.chmod(0)
+        try:
+            probe.read_text()
+            return True
+        except PermissionError:
+            return False
+
+
+ROOT = _permissions_ignored()
+#: k = 0.05 M g L (Table I robot): the springs cannot hold the robot up at t = 0 (status no_start)
+SOFT = "robot.k=0.00306"
+
+
+def edit(old, new, text=PAPER_TEXT):
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+def ocp_edit(old, new):
+    return edit(old, new, OCP_TEXT)
+
+
+@dataclass(frozen=True)
+class Row:
+    """One case: a command and its arguments, and the words its one-line message must contain.
+
+    Placeholders in ``argv`` and ``words``: {file} the problem file written from ``text`` (its name
+    is x.toml), {paper} / {ocp} the shipped problem files, {tmp} a fresh directory, {blocker} a
+    regular file, {dir} a directory, {missing} a file that does not exist, {unreadable} a file
+    without read permission, {readonly} a directory without write permission.
+    """
+
+    command: str
+    argv: tuple
+    words: tuple
+    text: str | None = None
+    files: dict = field(default_factory=dict)
+    """files to create under {tmp} first (name -> bytes): earlier results"""
+    needs_permissions: bool = False
+    """the row relies on file permissions, which root ignores"""
+
+
+def R(command, argv, words, **kw):
+    return Row(command, tuple(argv), tuple(words), **kw)
+
+
+ROWS = {
+    # ------------------------------------------------------------------ simulate
+    "simulate: negative stiffness": R("simulate", ["{file}"], ["x.toml", "[robot] k = -1.0", "must be > 0"],
+                                      text=edit("k = 0.1677", "k = -1.0")),
+    "simulate: zero mass": R("simulate", ["{file}"], ["x.toml", "[robot] M = 0", "must be > 0"],
+                             text=edit("M = 0.052", "M = 0")),
+    "simulate: negative length": R("simulate", ["{file}"], ["x.toml", "[robot] L = -0.12", "must be > 0"],
+                                   text=edit("L = 0.120", "L = -0.12")),
+    "simulate: zero beta": R("simulate", ["{file}"], ["x.toml", "[robot] beta = 0.0", "must be > 0"],
+                             text=edit("beta = 2.0", "beta = 0.0")),
+    "simulate: zero gravity": R("simulate", ["{file}"], ["x.toml", "[robot] g = 0.0", "must be > 0"],
+                                text=edit("g = 9.81", "g = 0.0")),
+    "simulate: infinite g": R("simulate", ["{file}"], ["x.toml", "[robot] g = inf", "finite"],
+                              text=edit("g = 9.81", "g = inf")),
+    "simulate: NaN amplitude": R("simulate", ["{file}"], ["x.toml", "[gait] A_deg = nan", "finite"],
+                                 text=edit("A_deg = 30.0", "A_deg = nan")),
+    "simulate: negative friction": R("simulate", ["{file}"], ["x.toml", "[robot] mu = -0.2", ">= 0"],
+                                     text=edit("mu = 0.389", "mu = -0.2")),
+    "simulate: bool for a number": R("simulate", ["{file}"], ["x.toml", "[robot] L = true", "expected a number"],
+                                     text=edit("L = 0.120", "L = true")),
+    "simulate: string for a number": R("simulate", ["{file}"], ["x.toml", '[robot] beta = "2"', "expected a number"],
+                                       text=edit("beta = 2.0", 'beta = "2"')),
+    "simulate: float for an int": R("simulate", ["{file}"], ["x.toml", "max_cycles = 3.5", "integer"],
+                                    text=edit("max_cycles = 12", "max_cycles = 3.5")),
+    "simulate: bool for an int": R("simulate", ["{file}"], ["x.toml", "max_cycles = true", "integer"],
+                                   text=edit("max_cycles = 12", "max_cycles = true")),
+    "simulate: mu with mu1": R("simulate", ["{file}"], ["x.toml", "mu = 0.389", "mu1 = 0.3", "exclusive"],
+                               text=edit("mu = 0.389", "mu = 0.389\nmu1 = 0.3")),
+    "simulate: missing key": R("simulate", ["{file}"], ["x.toml", "[robot] k", "missing", "required"],
+                               text=edit("k = 0.1677", "")),
+    "simulate: missing section": R("simulate", ["{file}"], ["x.toml", "section [robot] is missing"],
+                                   text=PAPER_TEXT[PAPER_TEXT.index("[gait]"):]),
+    "simulate: empty file": R("simulate", ["{file}"], ["x.toml", "[robot]", "missing"], text=""),
+    "simulate: key outside a section": R("simulate", ["{file}"], ["x.toml", "top-level key k = 0.1", "section"],
+                                         text="k = 0.1\n" + PAPER_TEXT),
+    "simulate: unknown key": R("simulate", ["{file}"], ["x.toml", "stiffness = 0.1677", "unknown key"],
+                               text=edit("k = 0.1677", "stiffness = 0.1677")),
+    "simulate: unknown section": R("simulate", ["{file}"], ["x.toml", "[modle]", "did you mean model?"],
+                                   text=edit("[model]", "[modle]")),
+    "simulate: bad drive": R("simulate", ["{file}"], ["x.toml", '[gait] drive = "crawl"', '"angles"'],
+                             text=edit('drive = "torque"', 'drive = "crawl"')),
+    "simulate: bad gravity": R("simulate", ["{file}"], ["x.toml", 'gravity = "real"', '"paper"'],
+                               text=edit('gravity = "physical"', 'gravity = "real"')),
+    "simulate: malformed TOML": R("simulate", ["{file}"], ["x.toml", "malformed TOML", "line 9", "k 0.1677"],
+                                  text=edit("k = 0.1677", "k 0.1677")),
+    "simulate: not UTF-8": R("simulate", ["{file}"], ["x.toml", "not UTF-8"], text="\udcff"),
+    "simulate: foot off the ground": R("simulate", ["{file}"], ["x.toml", "gamma_deg = 30.0", "foot 1 off the ground"],
+                                       text=edit("gamma_deg = 90.0", "gamma_deg = 30.0")),
+    "simulate: prescribed lift-off": R("simulate", ["{file}", "--drive", "angles"],
+                                       ["x.toml", "A_deg = 75.0", "below the ground"],
+                                       text=edit("A_deg = 30.0", "A_deg = 75.0")),
+    "simulate: cannot stand (no_start)": R("simulate", ["{paper}", "--set", SOFT],
+                                           ["paper_gait.toml", "[robot] k = 0.00306", 'gravity = "physical"',
+                                            "gamma_deg = 90.0", "psi_deg = 45.0", "no equilibrium to start from"]),
+    "simulate: cannot stand, mpcc": R("simulate", ["{paper}", "--set", SOFT, "--solver", "mpcc"],
+                                      ["paper_gait.toml", "[robot] k = 0.00306", "no equilibrium to start from"]),
+    "simulate: --set syntax": R("simulate", ["{paper}", "--set", "robot.k"], ["robot.k", "SECTION.KEY=VALUE"]),
+    "simulate: --set unknown key": R("simulate", ["{paper}", "--set", "robot.kay=1"], ["robot.kay=1", "did you mean k?"]),
+    "simulate: --set string for a number": R("simulate", ["{paper}", "--set", "robot.k=soft"],
+                                             ["robot.k=soft", "expected a number"]),
+    "simulate: --set negative friction": R("simulate", ["{paper}", "--set", "robot.mu=-1"],
+                                           ["paper_gait.toml", "[robot] mu = -1 (from --set)", ">= 0"]),
+    "simulate: missing file": R("simulate", ["{missing}"], ["nope.toml", "cannot read", "No such file"]),
+    "simulate: directory as problem file": R("simulate", ["{dir}"], ["adir", "cannot read", "directory"]),
+    "simulate: unreadable file": R("simulate", ["{unreadable}"], ["locked.toml", "cannot read", "Permission denied"],
+                                   needs_permissions=True),
+    "simulate: --out under a file": R("simulate", ["{paper}", "--out", "{blocker}/run"],
+                                      ["--out", "blocker/run", "not writable"]),
+    "simulate: --out is a file": R("simulate", ["{paper}", "--out", "{blocker}"], ["--out", "blocker", "not a directory"]),
+    "simulate: --out read-only": R("simulate", ["{paper}", "--out", "{readonly}/run"], ["--out", "readonly", "not writable"],
+                                   needs_permissions=True),
+    "simulate: --out holds results": R("simulate", ["{paper}", "--out", "{tmp}"],
+                                       ["--out", "summary.json", "would overwrite", "--force"],
+                                       files={"summary.json": b"{}"}),
+    "simulate: --steps too small": R("simulate", ["{paper}", "--solver", "mpcc", "--steps", "3"], ["--steps 3", ">= 4"]),
+    "simulate: --steps not an integer": R("simulate", ["{paper}", "--steps", "2.5"], ["--steps 2.5", "integer"]),
+    "simulate: unknown option": R("simulate", ["{paper}", "--bogus"], ["unrecognized arguments: --bogus"]),
+    "simulate: bad --drive": R("simulate", ["{paper}", "--drive", "walk"], ["--drive", "'walk'"]),
+    "simulate: no problem file": R("simulate", [], ["PROBLEM.toml", "required"]),
+    # ------------------------------------------------------------------ demo
+    "demo: --out under a file": R("demo", ["--out", "{blocker}/d"], ["--out", "blocker/d", "not writable"]),
+    "demo: --out read-only": R("demo", ["--out", "{readonly}"], ["--out", "readonly", "not writable"],
+                               needs_permissions=True),
+    "demo: --out holds results": R("demo", ["--out", "{tmp}"], ["--out", "demo_summary.json", "would overwrite"],
+                                   files={"demo_summary.json": b"{}"}),
+    "demo: unexpected argument": R("demo", ["{paper}"], ["unrecognized arguments", "paper_gait.toml"]),
+    # ------------------------------------------------------------------ sweep
+    "sweep: NUM < 1": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180:0", "--out", "{tmp}"],
+                        ["gait.psi_deg=0:180:0", "NUM must be an integer >= 1, got 0"]),
+    "sweep: NUM not an integer": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180:2.5", "--out", "{tmp}"],
+                                   ["gait.psi_deg=0:180:2.5", "NUM must be an integer", "'2.5'"]),
+    "sweep: START:STOP malformed": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180", "--out", "{tmp}"],
+                                     ["gait.psi_deg=0:180", "START:STOP:NUM", "2 fields"]),
+    "sweep: START not a number": R("sweep", ["{paper}", "--grid", "gait.psi_deg=a:180:3", "--out", "{tmp}"],
+                                   ["gait.psi_deg=a:180:3", "START and STOP must be numbers", "'a'"]),
+    "sweep: unknown grid key": R("sweep", ["{paper}", "--grid", "gait.psi=0:1:2", "--out", "{tmp}"],
+                                 ["gait.psi=0:1:2", "did you mean gait.psi_deg"]),
+    "sweep: unknown grid section": R("sweep", ["{paper}", "--grid", "gaitt.psi_deg=0:1:2", "--out", "{tmp}"],
+                                     ["gaitt.psi_deg=0:1:2", "unknown section [gaitt]"]),
+    "sweep: grid value not numeric": R("sweep", ["{paper}", "--grid", "robot.k=soft", "--out", "{tmp}"],
+                                       ["robot.k=soft", "'soft' is not a number"]),
+    "sweep: empty list": R("sweep", ["{paper}", "--grid", "robot.k=", "--out", "{tmp}"], ["robot.k=", "no values"]),
+    "sweep: duplicate axis": R("sweep", ["{paper}", "--grid", "robot.k=0.1", "--grid", "robot.k=0.2", "--out", "{tmp}"],
+                               ["robot.k=0.2", "already a grid key"]),
+    "sweep: negative stiffness on the grid": R("sweep", ["{paper}", "--grid", "robot.k=-1:1:3", "--out", "{tmp}"],
+                                               ["robot.k=-1:1:3", "robot.k = -1.0", "must be > 0"]),
+    "sweep: every point invalid": R("sweep", ["{paper}", "--grid", "gait.gamma_deg=20,30", "--out", "{tmp}"],
+                                    ["paper_gait.toml", "gamma_deg = 20.0", "every one of the 2 points"]),
+    "sweep: --jobs 0": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--jobs", "0", "--out", "{tmp}"],
+                         ["--jobs 0", ">= 1"]),
+    "sweep: --jobs not an integer": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--jobs", "1.5"],
+                                      ["--jobs 1.5", "integer"]),
+    "sweep: --resume with --force": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--resume", "--force"],
+                                      ["--force", "not allowed with", "--resume"]),
+    "sweep: no --grid": R("sweep", ["{paper}", "--out", "{tmp}"], ["--grid", "required"]),
+    "sweep: empty --scheduler": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--scheduler", " "],
+                                  ["--scheduler", "is invalid"]),
+    "sweep: bad problem file": R("sweep", ["{file}", "--grid", "gait.psi_deg=45", "--out", "{tmp}"],
+                                 ["x.toml", "[robot] k = -1.0", "must be > 0"], text=edit("k = 0.1677", "k = -1.0")),
+    "sweep: --out under a file": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--out", "{blocker}/s"],
+                                   ["--out", "blocker/s", "not writable"]),
+    "sweep: --out holds a sweep": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--out", "{tmp}"],
+                                    ["--out", "results.csv", "already holds a sweep", "--resume", "--force"],
+                                    files={"results.csv": b"x\n"}),
+    # ------------------------------------------------------------------ reproduce
+    "reproduce: --jobs 0": R("reproduce", ["--jobs", "0", "--out", "{tmp}"], ["--jobs 0", ">= 1"]),
+    "reproduce: bad --gravity": R("reproduce", ["--gravity", "real", "--out", "{tmp}"], ["--gravity", "'real'"]),
+    "reproduce: --out under a file": R("reproduce", ["--out", "{blocker}/r"], ["--out", "blocker/r", "not writable"]),
+    "reproduce: --out holds a run": R("reproduce", ["--out", "{tmp}", "--quick"],
+                                      ["--out", "report.md", "would overwrite", "--resume", "--force"],
+                                      files={"report.md": b"# report\n"}),
+    "reproduce: --out holds a partial run": R("reproduce", ["--out", "{tmp}"], ["--out", "sweeps", "would overwrite"],
+                                              files={"sweeps/gait/settings.json": b"{}"}),
+    "reproduce: --resume with --force": R("reproduce", ["--resume", "--force", "--out", "{tmp}"],
+                                          ["--force", "not allowed with", "--resume"]),
+    # ------------------------------------------------------------------ animate
+    "animate: --fps 0": R("animate", ["{paper}", "--fps", "0", "--out", "{tmp}/a.gif"], ["--fps 0", "(0, 100]"]),
+    "animate: --fps nan": R("animate", ["{paper}", "--fps", "nan", "--out", "{tmp}/a.gif"], ["--fps nan", "(0, 100]"]),
+    "animate: --fps too high": R("animate", ["{paper}", "--fps", "1e3", "--out", "{tmp}/a.gif"], ["--fps 1e3", "(0, 100]"]),
+    "animate: --cycles 0": R("animate", ["{paper}", "--cycles", "0", "--out", "{tmp}/a.gif"], ["--cycles 0", ">= 1"]),
+    "animate: --frames-per-cycle 1": R("animate", ["{paper}", "--frames-per-cycle", "1", "--out", "{tmp}/a.gif"],
+                                       ["--frames-per-cycle 1", ">= 2"]),
+    "animate: --cycles not an integer": R("animate", ["{paper}", "--cycles", "1.5", "--out", "{tmp}/a.gif"],
+                                          ["--cycles 1.5", "integer"]),
+    "animate: --out not a GIF": R("animate", ["{paper}", "--out", "{tmp}/a.png"], ["--out", "a.png", ".gif"]),
+    "animate: --out under a file": R("animate", ["{paper}", "--out", "{blocker}/a.gif"],
+                                     ["--out", "blocker/a.gif", "blocker: exists and is not a directory"]),
+    "animate: --out exists": R("animate", ["{paper}", "--out", "{tmp}/a.gif"], ["--out", "a.gif", "would overwrite"],
+                               files={"a.gif": b"GIF89a"}),
+    "animate: cannot stand (no_start)": R("animate", ["{paper}", "--set", SOFT, "--out", "{tmp}/a.gif"],
+                                          ["paper_gait.toml", "k = 0.00306", "no equilibrium to start from"]),
+    "animate: missing file": R("animate", ["{missing}", "--out", "{tmp}/a.gif"], ["nope.toml", "cannot read"]),
+    # ------------------------------------------------------------------ crosscheck
+    "crosscheck: --steps too small": R("crosscheck", ["{paper}", "--steps", "3", "50"], ["--steps 3", ">= 4"]),
+    "crosscheck: one step count": R("crosscheck", ["{paper}", "--steps", "100", "100"],
+                                    ["--steps 100 100", "two different"]),
+    "crosscheck: angles drive": R("crosscheck", ["{paper}", "--set", "gait.drive=angles"],
+                                  ["paper_gait.toml", "torque drive", 'drive = "angles"']),
+    "crosscheck: cannot stand (no_start)": R("crosscheck", ["{paper}", "--set", SOFT],
+                                             ["paper_gait.toml", "k = 0.00306", "no equilibrium to start from"]),
+    "crosscheck: malformed TOML": R("crosscheck", ["{file}"], ["x.toml", "malformed TOML"],
+                                    text=edit("[gait]", "[gait")),
+    "crosscheck: --set bad value": R("crosscheck", ["{paper}", "--set", "robot.mu=nan"],
+                                     ["paper_gait.toml", "[robot] mu = nan (from --set)", "finite"]),
+    # ------------------------------------------------------------------ optimize
+    "optimize: too few nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 4", ">= 8"],
+                                 text=ocp_edit("nodes = 100", "nodes = 4")),
+    "optimize: float for int nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 10.5", "integer"],
+                                       text=ocp_edit("nodes = 100", "nodes = 10.5")),
+    "optimize: unknown objective": R("optimize", ["{file}"], ["x.toml", '[ocp] objective = "fastest"', '"min_cot"'],
+                                     text=ocp_edit('objective = "max_speed"', 'objective = "fastest"')),
+    "optimize: unknown [ocp] key": R("optimize", ["{file}"], ["x.toml", "[ocp] unknown key node = 100"],
+                                     text=ocp_edit("nodes = 100", "node = 100")),
+    "optimize: A_max_deg too large": R("optimize", ["{file}"], ["x.toml", "[ocp] A_max_deg = 95.0", "(0, 90)"],
+                                       text=ocp_edit("A_max_deg = 30.0", "A_max_deg = 95.0")),
+    "optimize: envelope outside (0, 180)": R("optimize", ["{ocp}", "--set", "gait.gamma_deg=150", "--set",
+                                                          "ocp.A_max_deg=40"],
+                                             ["ocp_max_speed.toml", "A_max_deg = 40", "gamma_deg = 150", "(0, 180)"]),
+    "optimize: max_rate missing": R("optimize", ["{ocp}", "--set", "ocp.rate_limit=max_rate"],
+                                    ["ocp_max_speed.toml", 'rate_limit = "max_rate"', "max_rate"]),
+    "optimize: zero direction": R("optimize", ["{ocp}", "--set", "ocp.direction=0"],
+                                  ["ocp_max_speed.toml", "[ocp] direction = 0 (from --set)", "-1 or 1"]),
+    "optimize: bool for a string": R("optimize", ["{ocp}", "--set", "ocp.robust=true"],
+                                     ["[ocp] robust = true", "expected a string"]),
+    "optimize: mu_ratio_eps = 1": R("optimize", ["{ocp}", "--set", "ocp.mu_ratio_eps=1"],
+                                    ["[ocp] mu_ratio_eps = 1", "[0, 1)"]),
+    "optimize: cannot stand (no_start)": R("optimize", ["{ocp}", "--set", SOFT],
+                                           ["ocp_max_speed.toml", "k = 0.00306", "no equilibrium to start from"]),
+    "optimize: --out under a file": R("optimize", ["{ocp}", "--out", "{blocker}/o"], ["--out", "blocker/o", "not writable"]),
+    "optimize: --out holds results": R("optimize", ["{ocp}", "--out", "{tmp}"], ["--out", "torques.csv", "would overwrite"],
+                                       files={"torques.csv": b"phase,tau1,tau2\n"}),
+    # ------------------------------------------------------------------ no command
+    "no command": R(None, [], ["COMMAND", "required"]),
+    "unknown command": R(None, ["crawl"], ["invalid choice: 'crawl'"]),
+}
+
+
+def _computed(*args, **kwargs):
+    raise AssertionError("a long computation started before the bad input was rejected")
+
+
+@pytest.fixture
+def nothing_computed(monkeypatch):
+    """Every solver, sweep and study fails the test if called (bad input must be rejected first)."""
+    for module, name in ((cli, "run_problem"), (ocp_crawl.hybrid.HybridStepper, "run"),
+                         (ocp_crawl.prescribed, "simulate_angles"), (ocp_crawl.timestepping, "simulate_mpcc"),
+                         (ocp_crawl.sweep, "run_sweep"), (ocp_crawl.reproduce, "reproduce"),
+                         (ocp_crawl.animate, "animate_problem"), (ocp_crawl.crosscheck, "crosscheck"),
+                         (ocp_crawl.ocp, "optimize_gait")):
+        monkeypatch.setattr(module, name, _computed)
+
+
+def materialise(row: Row, tmp_path: Path) -> tuple[list[str], list[str]]:
+    """The row's argv and words with the placeholders filled in (files created as needed)."""
+    work = tmp_path / "work"
+    work.mkdir()
+    places = {"{paper}": str(PAPER), "{ocp}": str(OCP), "{tmp}": str(work), "{missing}": str(tmp_path / "nope.toml")}
+    if row.text is not None:
+        path = tmp_path / "x.toml"
+        path.write_bytes(row.text.encode("utf-8", "surrogateescape"))
+        places["{file}"] = str(path)
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a regular file\n")
+    places["{blocker}"] = str(blocker)
+    (tmp_path / "adir").mkdir()
+    places["{dir}"] = str(tmp_path / "adir")
+    locked = tmp_path / "locked.toml"
+    locked.write_text(PAPER_TEXT)
+    locked.chmod(0)
+    places["{unreadable}"] = str(locked)
+    readonly = tmp_path / "readonly"
+    readonly.mkdir()
+    readonly.chmod(0o555)
+    places["{readonly}"] = str(readonly)
+    for name, data in row.files.items():
+        (work / name).parent.mkdir(parents=True, exist_ok=True)
+        (work / name).write_bytes(data)
+
+    def fill(s: str) -> str:
+        for k, v in places.items():
+            s = s.replace(k, v)
+        return s
+
+    argv = ([row.command] if row.command else []) + [fill(a) for a in row.argv]
+    return argv, [fill(w) for w in row.words]
+
+
+def check_one_line(code: int, out: str, err: str, words) -> str:
+    assert code == 2, (code, out, err)
+    assert out == ""
+    assert "Traceback" not in err
+    lines = err.splitlines()
+    assert len(lines) == 1 and err.endswith("\n"), err
+    line = lines[0]
+    assert line.startswith("ocp-crawl: error: "), line
+    for w in words:
+        assert w in line, (w, line)
+    return line
+
+
+def test_every_command_has_rows():
+    covered = {row.command for row in ROWS.values()}
+    assert set(cli.COMMANDS) <= covered, set(cli.COMMANDS) - covered
+    for name in cli.COMMANDS:  # several malformed inputs per command
+        assert sum(row.command == name for row in ROWS.values()) >= 4, name
+    assert len(ROWS) >= 30
+
+
+@pytest.mark.parametrize("case", list(ROWS))
+def test_bad_input_matrix(case, tmp_path, capsys, nothing_computed):
+    row = ROWS[case]
+    if row.needs_permissions and ROOT:
+        pytest.skip("root ignores file permissions")
+    try:
+        argv, words = materialise(row, tmp_path)
+        before = {p: p.read_bytes() for p in (tmp_path / "work").rglob("*") if p.is_file()}
+        code = cli.main(argv)
+        out, err = capsys.readouterr()
+        check_one_line(code, out, err, words)
+        # the refused run wrote nothing: earlier results are untouched, no new file appeared
+        after = {p: p.read_bytes() for p in (tmp_path / "work").rglob("*") if p.is_file()}
+        assert after == before
+    finally:
+        for name in ("locked.toml", "readonly"):
+            if (tmp_path / name).exists():
+                (tmp_path / name).chmod(0o755)
+
+
+#: rows run again through a real subprocess: no traceback reaches stderr
+SUBPROCESS_ROWS = ("sweep: NUM < 1", "optimize: unknown [ocp] key", "simulate: cannot stand (no_start)")
+
+
+@pytest.mark.parametrize("case", SUBPROCESS_ROWS)
+def test_bad_input_in_a_real_process(case, tmp_path):
+    argv, words = materialise(ROWS[case], tmp_path)
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env.pop("OCP_CRAWL_TRACEBACK", None)
+    proc = subprocess.run([sys.executable, "-m", "ocp_crawl", *argv], capture_output=True, text=True, env=env,
+                          timeout=120, cwd=tmp_path)
+    check_one_line(proc.returncode, proc.stdout, proc.stderr, words)
+
+
+def test_the_guard_catches_a_computation(tmp_path, capsys, nothing_computed, monkeypatch):
+    """The matrix's guard is live: valid input reaches a (replaced) solver, which ends as an internal error."""
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    for argv in (["simulate", str(PAPER)], ["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--out", str(tmp_path / "s")],
+                 ["optimize", str(OCP)], ["crosscheck", str(PAPER)], ["reproduce", "--out", str(tmp_path / "r")],
+                 ["animate", str(PAPER), "--out", str(tmp_path / "a.gif")], ["demo", "--out", str(tmp_path / "d")]):
+        code = cli.main(argv)
+        err = capsys.readouterr().err
+        assert code == 1, (argv, err)
+        assert err.startswith("ocp-crawl: internal error: AssertionError: a long computation started"), err
+
+
+def test_a_partly_valid_grid_is_data_not_bad_input():
+    from ocp_crawl.problem import ProblemError, load_problem
+    from ocp_crawl.sweep import check_some_point_valid, grid_from_specs
+
+    problem = load_problem(PAPER)
+    # gamma 30 with psi 45 starts with foot 1 off the ground; gamma 90 is fine: the sweep records both
+    check_some_point_valid(problem, grid_from_specs(["gait.gamma_deg=30,90"]))
+    with pytest.raises(ProblemError, match="every one of the 4 points"):
+        check_some_point_valid(problem, grid_from_specs(["gait.gamma_deg=20,30", "gait.A_deg=30,40"]))
