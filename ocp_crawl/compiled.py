@@ -21,6 +21,8 @@ from pathlib import Path
 import casadi as cs
 import numpy as np
 
+from .files import remove_stale_temps, temp_prefix
+
 
 def cache_dir() -> Path:
     base = os.environ.get("OCP_CRAWL_CACHE")
@@ -59,7 +61,11 @@ def _build(fun: cs.Function) -> Path | None:
         return lib
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=out_dir) as tmp:
+        # the source and the library are built in a private directory and the library is renamed into
+        # place: a reader (or a concurrent builder) never sees a partial library.  A build killed
+        # half-way leaves its directory; the next build removes it (files.remove_stale_temps)
+        remove_stale_temps(out_dir, lib.name)
+        with tempfile.TemporaryDirectory(dir=out_dir, prefix=temp_prefix(lib.name), suffix=".tmp") as tmp:
             c_file = Path(tmp, "f.c")
             c_file.write_text(src)
             tmp_lib = Path(tmp, "f.so")
@@ -67,7 +73,7 @@ def _build(fun: cs.Function) -> Path | None:
                                   capture_output=True, text=True, timeout=300)
             if proc.returncode != 0:
                 return None
-            os.replace(tmp_lib, lib)  # atomic: concurrent builders never see a partial library
+            os.replace(tmp_lib, lib)
     except (OSError, subprocess.SubprocessError):
         return None
     return lib

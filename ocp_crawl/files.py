@@ -1,13 +1,105 @@
-"""Atomic file output: a reader never sees a half-written result file."""
+"""Atomic file output: a reader never sees a half-written result file.
+
+Every file the package writes goes through :func:`atomic_write`: the bytes go to a temporary file
+``.<name>.<pid>-<host>.<random>.tmp`` in the target's directory, which is flushed, fsync'd and
+renamed over the target (``os.replace``, atomic on POSIX and Windows).  A process killed at any
+moment (even by SIGKILL) therefore leaves either the previous file or the new one, never a mix; what
+it can leave is its temporary file.  Such leftovers are recognised by the writer's process id and
+host in their name and removed by the next write of the same file and by :func:`remove_stale_temps`
+(which ``sweep`` and ``reproduce`` call on their directories); a temporary file of a process that is
+still running is never touched.
+"""
 from __future__ import annotations
 
+import hashlib
 import json
 import os
+import re
+import shutil
+import socket
 import tempfile
 from pathlib import Path
 from typing import IO, Any, Callable
 
 import numpy as np
+
+#: tag of this host in temporary names: a leftover is only judged by its writer's pid on the same host
+HOST_TAG = hashlib.sha1(socket.gethostname().encode("utf-8", "replace")).hexdigest()[:8]
+#: ``.<name>.<pid>-<host>.<random>.tmp``: the temporary files of :func:`atomic_write` (and of temp_prefix)
+TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)-(?P<host>[0-9a-f]{8})\.[^./]+\.tmp$")
+
+
+def temp_prefix(name: str) -> str:
+    """Prefix of a temporary file or directory (the caller adds a random part and ``.tmp``) for ``name``."""
+    return f".{name}.{os.getpid()}-{HOST_TAG}."
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    if os.name == "nt":  # os.kill(pid, 0) would terminate the process on Windows: assume it is alive
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):  # alive, another user's; or not a pid at all: leave it
+        return True
+    return True
+
+
+def is_stale_temp(name: str, target: str | None = None) -> bool:
+    """True if ``name`` is a temporary file (or directory) of a writer on this host that no longer runs;
+    with ``target``, only the temporary files of that target name."""
+    m = TEMP_RE.match(name)
+    if m is None or m["host"] != HOST_TAG or (target is not None and m["name"] != target):
+        return False
+    return not _alive(int(m["pid"]))
+
+
+def _remove(path: Path) -> bool:
+    try:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError:
+        return False
+    return True
+
+
+def remove_stale_temps(directory: str | os.PathLike, target: str | None = None) -> list[Path]:
+    """Remove the temporary files left in ``directory`` by killed writers (see the module docstring).
+
+    Only names of the form ``.<name>.<pid>-<host>.<random>.tmp`` whose process is gone on this host are
+    removed; returns them.  A missing or unreadable directory removes nothing.
+    """
+    directory = Path(directory)
+    try:
+        names = os.listdir(directory)
+    except OSError:
+        return []
+    removed = []
+    for name in names:
+        if name.endswith(".tmp") and is_stale_temp(name, target) and _remove(directory / name):
+            removed.append(directory / name)
+    return removed
+
+
+def _fsync_dir(directory: Path) -> None:
+    """Make a rename in ``directory`` durable (POSIX); a no-op where directories cannot be opened."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> Path:
@@ -15,13 +107,15 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
 
     The temporary file lives in the same directory so that ``os.replace`` is a rename on one file
     system (atomic on POSIX and Windows); on any error it is removed and the target is untouched.
+    Leftovers of earlier writers of ``path`` that were killed are removed first.
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    remove_stale_temps(path.parent, path.name)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=temp_prefix(path.name), suffix=".tmp")
     try:
-        # mkstemp makes the file private (0600); results are ordinary files, readable by others
-        os.chmod(tmp, path.stat().st_mode & 0o777 if path.exists() else 0o644)
         with os.fdopen(fd, "wb") as fh:
+            # mkstemp makes the file private (0600); results are ordinary files, readable by others
+            os.chmod(tmp, path.stat().st_mode & 0o777 if path.exists() else 0o644)
             write(fh)
             fh.flush()
             os.fsync(fh.fileno())
@@ -29,9 +123,10 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
     except BaseException:
         try:
             os.unlink(tmp)
-        except FileNotFoundError:
+        except OSError:
             pass
         raise
+    _fsync_dir(path.parent)
     return path
 
 

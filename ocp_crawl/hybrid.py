@@ -230,6 +230,9 @@ class HybridStepper:
         self.noise = 1e-13 * (1.0 + model.robot.k / model.robot.MgL)
         self.mu = (model.robot.mu1, model.robot.mu2)
         self.max_step = self.opt.max_step
+        # phases where a sampled input's derivative may have a kink (its knots): quadrature panel edges
+        signal = self.torque.reference if isinstance(self.torque, ReferenceTorque) else self.torque
+        self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
         if self.opt.resolve_input:
             self.max_step = min(self.max_step, max(input_step(self.torque), self.max_step / 64))
 
@@ -361,13 +364,16 @@ class HybridStepper:
                 start: bool = False) -> tuple[float, _Point]:
         """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (Brent's method).
         ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero."""
-        cache: dict[float, _Point] = {}
+        # the ends are known (a re-solve there could differ in the last bits and break the bracket)
+        cache: dict[float, _Point] = {p0.t: p0, p1.t: p1}
 
         def g(t: float) -> float:
-            pt = self._solve(t, self._hermite(p0, p1, t), q)
+            pt = cache.get(t)
             if pt is None:
-                raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
-            cache[t] = pt
+                pt = self._solve(t, self._hermite(p0, p1, t), q)
+                if pt is None:
+                    raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
+                cache[t] = pt
             return self.guards(mode, pt.aux)[name]
 
         g0, g1 = self.guards(mode, p0.aux)[name], self.guards(mode, p1.aux)[name]
@@ -633,7 +639,14 @@ class HybridStepper:
         except _Failure as f:
             status, detail, fail_t, fail_mode = f.status, f.detail, f.t, f.mode.label
             extra.update(f.extra)
-        return self._build_result(segments, events, status, detail, fail_t, fail_mode, cycle, periodic_at, t_eval, extra)
+        try:
+            return self._build_result(segments, events, status, detail, fail_t, fail_mode, cycle, periodic_at,
+                                      t_eval, extra)
+        except _Failure as f:
+            # the output or the cycle integrals need a solve that fails: report it, with the steps so far
+            extra.update(f.extra)
+            return self._build_result(segments, events, f.status, f"{f.detail} (output of the result)", f.t,
+                                      f.mode.label, cycle, None, None, extra)
 
     # ------------------------------------------------------------------ dense output and metrics
     def _evaluate_many(self, seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -658,9 +671,26 @@ class HybridStepper:
         for j in np.nonzero(~(aux[AUX["res"]] <= self.opt.residual_tol))[0]:
             pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
             if pt is None:
+                pt = self._continue_to(seg, float(ts[j]))
+            if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
         return xs, aux
+
+    def _continue_to(self, seg: _Segment, t: float) -> _Point | None:
+        """Solve the segment's mode at t by continuation from the last stored point before t, in 4,
+        16, then 64 sub-steps (when the interpolated guess alone does not converge)."""
+        pts = seg.points
+        i = max(0, int(np.searchsorted([p.t for p in pts], t, side="right")) - 1)
+        for n in (4, 16, 64):
+            cur = pts[i]
+            for s in np.linspace(cur.t, t, n + 1)[1:]:
+                cur = self._solve(float(s), cur.x + (s - cur.t) * cur.xdot, seg.q)
+                if cur is None:
+                    break
+            else:
+                return cur
+        return None
 
     def _panels(self, seg: _Segment, a: float, b: float):
         """Adaptive Gauss-Legendre panels (5 nodes) on [a, b] of one smooth segment.
@@ -674,6 +704,9 @@ class HybridStepper:
         xg, wg = np.polynomial.legendre.leggauss(5)
         n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
         edges = np.linspace(a, b, n + 1)
+        if self.breakpoints.size:
+            cuts = (self.breakpoints[None, :] + np.arange(math.floor(a), math.ceil(b) + 1)[:, None]).ravel()
+            edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
         pending = np.stack([edges[:-1], edges[1:]], axis=1)
         done = []
         scale = 0.0

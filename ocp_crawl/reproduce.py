@@ -4,7 +4,17 @@ Runs every study of :mod:`ocp_crawl.studies` in both gravity conventions (the st
 needs both), draws the figures in the chosen convention (PNG and PDF), and writes ``report.md``:
 each figure with the numbers behind it, the relative difference wherever the paper publishes a
 number, and every statement of the paper checked in both conventions.  ``numbers.json`` holds the
-same numbers for scripts.  All files are written atomically.
+same numbers for scripts.
+
+Nothing is lost when a run is killed: every file is written atomically (:func:`ocp_crawl.files.atomic_write`:
+a temporary file renamed over the target, so a reader sees the previous file or the new one, never a
+mix), and every grid is a journaled sweep under ``<out>/sweeps``.  ``resume`` (``--resume``) reuses
+the finished grid points there and recomputes the rest (the single gaits, the bisection of the
+friction threshold and the pressure curves are not journaled: they are recomputed); figures,
+``report.md`` and ``numbers.json`` are always written anew.  A resumed run gives the same numbers,
+report and figures as an uninterrupted one, apart from the wall times (``elapsed_s`` in
+``numbers.json``; the run time and the Timing section of ``report.md``).  Temporary files of a killed
+run are removed by the next run.
 
 The grid sizes of the quick and the full run are the one table :data:`GRIDS`.
 """
@@ -18,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from . import __version__
-from .files import atomic_write, write_json
+from .files import atomic_write, remove_stale_temps, write_json
 from .model import GRAVITY_CONVENTIONS
 from .plots import save_figure
 from .pressure import FITTED_REST_DEG, P0_NORMALISE_BAR, paper_grids, read_paper_csv
@@ -670,6 +680,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, gravity: str = "paper", 
         raise ValueError(f"gravity must be one of {GRAVITY_CONVENTIONS}, got {gravity!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temps(out)  # temporary files of a killed run (the sweeps clean their own directories)
     sweep = sweep or SweepOptions(out_dir=out / "sweeps")
     mode = "quick" if quick else "full"
     grids = GRIDS[mode]

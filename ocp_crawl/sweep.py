@@ -22,12 +22,20 @@ directory the sweep writes:
     then removed).  A resumed sweep writes the same file as an uninterrupted one.
 ``summary.json``
     counts by status, the best point, timing.
+
+Nothing is lost when a sweep is killed (even by SIGKILL): settings.json, results.csv and
+summary.json are written atomically (temporary file and rename, :mod:`ocp_crawl.files`); a journal
+line torn by the kill is not a finished point and is cut off by the resuming run; the lock
+(``.sweep.lock``, an advisory ``flock``) dies with its process, so a killed sweep never blocks its
+resume; temporary files of the killed run are removed when the sweep is resumed or started again.
+A resumed sweep writes the same results.csv, byte for byte, as an uninterrupted one.
 """
 from __future__ import annotations
 
 import csv
 import difflib
 import io
+import itertools
 import json
 import math
 import multiprocessing
@@ -47,7 +55,7 @@ from typing import Any, Iterable, Iterator, Mapping, Sequence
 import numpy as np
 
 from . import __version__
-from .files import atomic_write, jsonable, write_json
+from .files import atomic_write, jsonable, remove_stale_temps, write_json
 from .problem import SCHEMA, Key, Problem, ProblemError, apply_overrides, load_problem, problem_from_dict, run_problem
 from .result import ARRAY_FIELDS, CrawlResult
 
@@ -127,6 +135,9 @@ def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarra
                 v = int(v)
             else:
                 v = float(v)
+            # a value its own key rejects makes every point with it invalid: bad input, not data
+            if key.rule is not None and not key.rule.test(v):
+                raise ProblemError(f"{where} is invalid: {name} = {v!r} must be {key.rule.text} ({key.what})")
         out.append(v)
     seen: set = set()
     for v in out:
@@ -220,6 +231,26 @@ def grid_from_specs(specs: Iterable[str]) -> dict[str, np.ndarray]:
             raise ProblemError(f"--grid {spec.strip()!r} is invalid: {name} is already a grid key")
         grid[name] = values
     return normalize_grid(grid)
+
+
+def check_some_point_valid(problem: Problem, grid: Mapping[str, Any]) -> None:
+    """Raise ProblemError if no point of the grid is a valid problem (checked in grid order up to the
+    first valid point, usually the first: cheap).  Invalid points of a partly valid grid are data
+    (status ``bad_input``); a grid of invalid points only is bad input."""
+    grid = normalize_grid(grid)
+    base = problem.to_dict()
+    first = None
+    n = 0
+    for n, values in enumerate(itertools.product(*(v.tolist() for v in grid.values())), 1):
+        overrides = [f"{k}={_toml_value(v)}" for k, v in zip(grid, values)]
+        try:
+            data, _ = apply_overrides(base, overrides, problem.source)
+            problem_from_dict(data, source=problem.source)
+            return
+        except ProblemError as exc:
+            first = first or exc
+    raise ProblemError(f"{first} (every one of the {n} points of the grid is invalid; grid: "
+                       f"{', '.join(f'{k} = {len(v)} values' for k, v in grid.items())})")
 
 
 def _toml_value(value: Any) -> str:
@@ -400,13 +431,12 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
                    status=result.status_name, message=result.message)
     except ProblemError as exc:
         row.update(status=BAD_INPUT, message=str(exc))
-    except ValueError as exc:
-        # the solvers raise ValueError only for inputs they cannot start from (no released equilibrium)
-        row.update(status=BAD_INPUT, message=f"{task.source}: {exc}")
     except Exception as exc:  # noqa: BLE001 - one broken point must not lose a long sweep; it is recorded
         row.update(status=ERROR, message=f"{type(exc).__name__}: {exc}")
-    # rows are compared after a CSV round trip: normalise to what the file holds
-    return task.index, {k: _parse_cell(_cell(v)) if k in task.extra_columns else v for k, v in row.items()}
+    # a resumed sweep reads its finished rows back from the journal: normalise every row to what the file
+    # holds (extra columns, one-line messages), so that resumed and uninterrupted runs give the same rows
+    return task.index, {k: _parse_cell(_cell(v)) if k in task.extra_columns else _cell(v) if k == "message" else v
+                        for k, v in row.items()}
 
 
 # --------------------------------------------------------------------------------------------
@@ -748,6 +778,7 @@ class _Store:
         self.dir.mkdir(parents=True, exist_ok=True)
         self._acquire()
         try:
+            remove_stale_temps(self.dir)  # temporary files of a killed run (see files.atomic_write)
             return self._open(settings, resume, force)
         except BaseException:
             self.close()
@@ -774,7 +805,8 @@ class _Store:
             for p in (self.journal_path, self.results_path, self.summary_path):
                 p.unlink(missing_ok=True)
             write_json(self.settings_path, settings.to_dict())
-        fresh = not self.journal_path.exists()
+        # a journal killed before its header was complete is empty (repaired above): it needs the header
+        fresh = not self.journal_path.exists() or self.journal_path.stat().st_size == 0
         self._journal = open(self.journal_path, "a", encoding="utf-8", newline="")
         if fresh:
             self._write_line(_row_line(("index",) + settings.columns))

@@ -253,10 +253,13 @@ def test_grazing_friction_limit_keeps_the_mode():
     turns back; the stepper must stay in stick-stick (a graze event), not report an inconsistency."""
     robot = Robot.paper()
     stepper = HybridStepper(Model(robot), paper_torque(robot, gamma=80, psi=180))
-    res = stepper.run()
+    res = stepper.run(t_eval=np.linspace(0, 1, 20001))
     assert res.success, res.message
-    grazes = [e for e in res.events if e.kind.startswith("graze_")]
-    assert grazes and all(e.mode_before == e.mode_after == "stick-stick" for e in grazes)
-    for ev in grazes:
+    Mg = robot.M * robot.g
+    margin = np.minimum(robot.mu1 * res.f_n1, robot.mu2 * res.f_n2) - np.abs(res.f_t)
+    assert -1e-9 * Mg <= margin.min() < 1e-6 * Mg  # the friction limit is touched, not crossed
+    assert np.all(res.mode == int(Mode.STICK))
+    for ev in res.steady_events():  # a touch that round-off shows as a crossing is a graze
+        assert ev.kind.startswith("graze_") and ev.mode_before == ev.mode_after == "stick-stick"
         assert abs(ev.guard) < 1e-9
     assert abs(res.S) < 1e-12 * robot.L  # the paper: S vanishes as psi -> 180 deg

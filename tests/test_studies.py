@@ -5,6 +5,13 @@ documented difference instead.  S < 0 is progress towards foot 1 (psi > 0); "pro
 """
 import json
 import math
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -291,10 +298,17 @@ def test_grid_table_has_both_modes():
     assert GRIDS["full"].pressure_fit and not GRIDS["quick"].pressure_fit
 
 
-@pytest.mark.slow
-def test_reproduce_quick(tmp_path):
-    out = tmp_path / "repro"
+@pytest.fixture(scope="module")
+def reproduced(tmp_path_factory):
+    """An uninterrupted ``reproduce --quick`` (the reference of the kill-and-resume test)."""
+    out = tmp_path_factory.mktemp("reproduce") / "repro"
     assert main(["reproduce", "--quick", "--out", str(out), "--jobs", "2", "--no-progress"]) == 0
+    return out
+
+
+@pytest.mark.slow
+def test_reproduce_quick(reproduced):
+    out = reproduced
     for stem in FIGURES:
         for ext in ("png", "pdf"):
             f = out / f"{stem}.{ext}"
@@ -315,6 +329,82 @@ def test_reproduce_quick(tmp_path):
     assert 20 < numbers["paper"]["psi_opt_deg"] < 90
     with Image.open(out / "cot.png") as im:
         assert im.size[0] >= 800
+
+
+def _comparable_numbers(path):
+    """numbers.json without the wall times of the studies (elapsed_s): they are the only numbers that
+    differ between two runs, interrupted or not."""
+    data = json.loads(path.read_text())
+    for conv in ("paper", "physical"):
+        assert isinstance(data[conv].pop("elapsed_s"), dict)
+    return data
+
+
+def _comparable_report(path):
+    """report.md without its two wall-time parts: the run time in the first paragraph and the final
+    Timing section (wall time per study)."""
+    text = path.read_text()
+    head, timing, tail = text.partition("\n## Timing\n")
+    assert timing and "\n## " not in tail
+    head, n = re.subn(r"\(quick run, ocp_crawl (\S+), \d+ s with", r"(quick run, ocp_crawl \1, <elapsed> s with", head)
+    assert n == 1
+    return head
+
+
+def _complete_figure(path):
+    if path.suffix == ".png":
+        with Image.open(path) as im:
+            im.load()  # decodes every row: a truncated file raises
+            return np.asarray(im)
+    data = path.read_bytes()
+    assert data.startswith(b"%PDF-") and data.rstrip().endswith(b"%%EOF"), path
+    return None
+
+
+@pytest.mark.slow
+def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduced, tmp_path):
+    """``reproduce --quick`` killed by SIGKILL during the grids and again (resuming) while drawing the
+    figures, then resumed to the end: the same numbers, report, grids and figures as an uninterrupted
+    run, and no temporary file left behind (a kill while a figure is written leaves its temporary)."""
+    rng = random.Random(611)
+    out = tmp_path / "repro"
+    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs", "2"]
+    # (stage line on stderr after which to kill, largest random delay [s]): one kill in the friction
+    # band's grids, one (of the resumed run) while drawing the figures and writing the report
+    stages = [("paper convention: band ...", 1.2), ("figures ...", 2.5)]
+    for i, (stage, delay) in enumerate(stages):
+        err = tmp_path / f"stderr{i}.txt"
+        with open(err, "wb") as fh:
+            proc = subprocess.Popen(cmd + (["--resume"] if i else []), stdout=subprocess.DEVNULL, stderr=fh,
+                                    start_new_session=True, env=dict(os.environ, MPLBACKEND="Agg"))
+        try:
+            deadline = time.monotonic() + 120
+            while proc.poll() is None and time.monotonic() < deadline and stage not in err.read_text():
+                time.sleep(0.01)
+            time.sleep(rng.uniform(0.0, delay))
+        finally:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        assert proc.returncode == -signal.SIGKILL, f"run {i} ended before it was killed: {err.read_text()}"
+        assert stage in err.read_text() and "done in" not in err.read_text()
+    finished = subprocess.run(cmd + ["--resume", "--no-progress"], capture_output=True, text=True,
+                              env=dict(os.environ, MPLBACKEND="Agg"))
+    assert finished.returncode == 0, finished.stderr
+
+    assert _comparable_numbers(out / "numbers.json") == _comparable_numbers(reproduced / "numbers.json")
+    assert _comparable_report(out / "report.md") == _comparable_report(reproduced / "report.md")
+    for stem in FIGURES:
+        for ext in ("png", "pdf"):
+            got, want = _complete_figure(out / f"{stem}.{ext}"), _complete_figure(reproduced / f"{stem}.{ext}")
+            if ext == "png":
+                np.testing.assert_array_equal(got, want, err_msg=stem)
+    sweeps = sorted(p.relative_to(out) for p in (out / "sweeps").glob("*/results.csv"))
+    assert len(sweeps) == 14 and sweeps == sorted(p.relative_to(reproduced) for p in
+                                                  (reproduced / "sweeps").glob("*/results.csv"))
+    for rel in sweeps:
+        assert (out / rel).read_bytes() == (reproduced / rel).read_bytes(), rel
+    left = [p for p in out.rglob("*") if p.name.endswith(".tmp") or p.name == "results.partial.csv"]
+    assert left == []
 
 
 def test_animate_command(tmp_path):

@@ -3,6 +3,7 @@ import csv
 import json
 import math
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -14,8 +15,8 @@ import pytest
 
 from ocp_crawl.cli import main
 from ocp_crawl.problem import ProblemError, load_problem, run_problem
-from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, grid_from_specs,
-                             normalize_grid, parse_grid, run_sweep)
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, _Store,
+                             grid_from_specs, normalize_grid, parse_grid, run_sweep)
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -263,30 +264,49 @@ def test_resume_from_a_journal_with_a_torn_last_line(tmp_path):
     assert_same_rows(res.rows, ref.rows)
 
 
-def test_resume_after_the_sweep_process_is_killed(tmp_path):
-    """SIGKILL to the CLI's process group mid-sweep, then --resume: the same file as an uninterrupted run."""
+def _journal_rows(journal: Path) -> int:
+    try:
+        return max(journal.read_bytes().count(b"\n") - 1, 0)
+    except FileNotFoundError:
+        return 0
+
+
+def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
+    """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last, then
+    --resume to the end: the same file as an uninterrupted run, and nothing left behind."""
+    rng = random.Random(20240611)
     specs = ["gait.psi_deg=0:180:10", "gait.gamma_deg=80:100:3"]
-    args = ["--set", "simulation.max_step=0.004"]  # ~70 ms per point: time to kill the run half-way
+    args = ["--set", "simulation.max_step=0.004"]  # ~70 ms per point: time to kill the run several times
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), *[a for s in specs for a in ("--grid", s)],
            *args, "--jobs", "2", "--out", str(out), "--no-progress"]
-    proc = subprocess.Popen(cmd, cwd=tmp_path, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
     journal = out / JOURNAL_FILE
-    deadline = time.monotonic() + 60
-    try:
-        while time.monotonic() < deadline and proc.poll() is None:
-            if journal.exists() and journal.read_text().count("\n") >= 1 + 4:
-                break
-            time.sleep(0.005)
-    finally:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
-    assert proc.returncode == -signal.SIGKILL, "the sweep ended before it could be killed"
-    assert not (out / RESULTS_FILE).exists()
-    finished = SweepResult.read(out, partial=True)
-    n_done = int((finished.status_array() != "missing").sum())
-    assert 4 <= n_done < 30
+    n_done = 0
+    # the first kill while the process starts (before or while it opens the sweep's files), then
+    # kills after a random number of further rows plus a random delay (between and during writes)
+    for kill in range(4):
+        proc = subprocess.Popen(cmd + (["--resume"] if kill else []), cwd=tmp_path, start_new_session=True,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        try:
+            if kill == 0:
+                time.sleep(rng.uniform(0.2, 1.0))
+            else:
+                target = n_done + rng.randint(1, 5)
+                deadline = time.monotonic() + 60
+                while time.monotonic() < deadline and proc.poll() is None and _journal_rows(journal) < target:
+                    time.sleep(0.002)
+                time.sleep(rng.uniform(0.0, 0.05))
+        finally:
+            os.killpg(proc.pid, signal.SIGKILL)
+            _, err = proc.communicate()
+        assert proc.returncode == -signal.SIGKILL, f"run {kill} ended before it could be killed: {err}"
+        assert not (out / RESULTS_FILE).exists()
+        if (out / SETTINGS_FILE).exists():
+            finished = SweepResult.read(out, partial=True)  # a torn journal line is not a finished point
+            done_now = int((finished.status_array() != "missing").sum())
+            assert n_done <= done_now < 30
+            n_done = done_now
+    assert n_done >= 3
 
     code = main(cmd[3:] + ["--resume", "--json"])
     assert code == 0
@@ -297,7 +317,40 @@ def test_resume_after_the_sweep_process_is_killed(tmp_path):
     keys = [tuple(r[:2]) for r in got[1:]]
     assert len(set(keys)) == 30 and keys == [tuple(r[:2]) for r in want[1:]]
     assert_same_rows(SweepResult.read(out).rows, ref.rows)
+    assert (out / RESULTS_FILE).read_bytes() == (tmp_path / "ref" / RESULTS_FILE).read_bytes()
     assert not journal.exists()
+    assert sorted(p.name for p in out.iterdir()) == sorted([".sweep.lock", SETTINGS_FILE, RESULTS_FILE,
+                                                            "summary.json"])
+
+
+def test_resume_after_a_kill_while_the_journal_header_was_written(tmp_path, monkeypatch):
+    """A run killed before its journal's header was complete leaves an empty (or torn) journal: the
+    resumed run writes the header, so that a second kill and resume still work."""
+    out = tmp_path / "s"
+    grid = {"gait.psi_deg": [0.0, 45.0, 90.0]}
+    ref = run_sweep(PAPER, grid, out_dir=out)
+    expected = (out / RESULTS_FILE).read_text()
+    append = _Store.append
+    for torn in ("", "index,gait.ps"):
+        (out / RESULTS_FILE).unlink(missing_ok=True)
+        (out / JOURNAL_FILE).write_text(torn)
+        rows = []
+
+        def killed_at_the_second_row(self, settings, index, row):
+            rows.append(index)
+            if len(rows) == 2:
+                raise KeyboardInterrupt
+            append(self, settings, index, row)
+
+        monkeypatch.setattr(_Store, "append", killed_at_the_second_row)
+        with pytest.raises(KeyboardInterrupt):
+            run_sweep(PAPER, grid, out_dir=out, resume=True)
+        monkeypatch.undo()
+        assert (out / JOURNAL_FILE).read_text().startswith("index,gait.psi_deg,")
+        res = run_sweep(PAPER, grid, out_dir=out, resume=True)
+        assert res.computed == 2
+        assert (out / RESULTS_FILE).read_text() == expected
+        assert_same_rows(res.rows, ref.rows)
 
 
 # --------------------------------------------------------------------------------------------
@@ -344,8 +397,11 @@ def test_cli_sweep_bad_input(tmp_path, capsys, argv, match):
 def test_cli_refuses_existing_output(tmp_path, capsys):
     argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--jobs", "1", "--out", str(tmp_path)]
     assert main(argv) == 0
+    before = (tmp_path / RESULTS_FILE).read_bytes()
     assert main(argv) == 2
-    assert "already holds a sweep" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "holds a sweep" in err and "--resume" in err and "--force" in err and "Traceback" not in err
+    assert (tmp_path / RESULTS_FILE).read_bytes() == before
     assert main(argv + ["--force"]) == 0
 
 
