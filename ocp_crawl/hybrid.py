@@ -300,7 +300,8 @@ class HybridStepper:
             r[f"switch_to_{j}"] = (dlim[j] - dlim[i]) / Mg
         t, dt = pt.t, 1e-5
         ab = self.ddot2(pt.x, self.torque(t), self.torque.derivative(t), q, self.p)[0]
-        ddtau = (np.asarray(self.torque.derivative(t + dt)) - np.asarray(self.torque.derivative(t - dt))) / (2 * dt)
+        dd = np.asarray(self.torque.derivative(np.array([t + dt, t - dt]))).reshape(2, 2)
+        ddtau = (dd[:, 0] - dd[:, 1]) / (2 * dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         return r
 
