@@ -39,6 +39,19 @@ class PeriodicSignal:
         return {"type": type(self).__name__}
 
 
+def _float_array(owner: str, name: str, value) -> np.ndarray:
+    """``value`` as a float array whose entries are all finite, or ValueError naming ``owner``'s argument ``name``."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: {name} must be an array of real numbers, got {value!r:.60}") from None
+    bad = np.argwhere(~np.isfinite(arr))
+    if bad.size:
+        idx = tuple(int(i) for i in bad[0])
+        raise ValueError(f"{owner}: {name} must be finite, got {arr[idx]!r} at index {list(idx)}")
+    return arr
+
+
 def _finite_check(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         raise TypeError(f"{name} must be a real number, got {value!r}")
@@ -116,21 +129,31 @@ class FourierSeries(PeriodicSignal):
     b: np.ndarray
 
     def __post_init__(self) -> None:
-        a0 = np.asarray(self.a0, dtype=float).reshape(2)
-        a = np.atleast_2d(np.asarray(self.a, dtype=float))
-        b = np.atleast_2d(np.asarray(self.b, dtype=float))
-        if a.shape != b.shape or a.shape[0] != 2:
-            raise ValueError(f"FourierSeries: a and b must both have shape (2, N), got {a.shape} and {b.shape}")
-        if not (np.all(np.isfinite(a0)) and np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-            raise ValueError("FourierSeries: coefficients must be finite")
+        a0 = _float_array("FourierSeries", "a0", self.a0)
+        if a0.shape != (2,):
+            raise ValueError(f"FourierSeries: a0 must have shape (2,), got {a0.shape}")
+        a = _float_array("FourierSeries", "a", self.a)
+        b = _float_array("FourierSeries", "b", self.b)
+        for name, arr in (("a", a), ("b", b)):
+            if arr.ndim != 2 or arr.shape[0] != 2:
+                raise ValueError(f"FourierSeries: {name} must have shape (2, N) for N harmonics, got {arr.shape}")
+        if a.shape != b.shape:
+            raise ValueError(f"FourierSeries: a and b must have the same shape (2, N), got a {a.shape} and b {b.shape}")
         object.__setattr__(self, "a0", a0)
         object.__setattr__(self, "a", a)
         object.__setattr__(self, "b", b)
 
     @classmethod
     def fit(cls, samples, order: int) -> "FourierSeries":
-        """Least-squares series of the given order through equally spaced samples (shape (2, N), t = j/N)."""
-        s = np.asarray(samples, float)
+        """Least-squares series of the given order through equally spaced samples (shape (2, N), t = j/N).
+
+        The order is capped at (N - 1) // 2; with N odd and that order the series interpolates the samples.
+        """
+        s = _float_array("FourierSeries.fit", "samples", samples)
+        if s.ndim != 2 or s.shape[0] != 2 or s.shape[1] < 1:
+            raise ValueError(f"FourierSeries.fit: samples must have shape (2, N) with N >= 1, got {s.shape}")
+        if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 0:
+            raise ValueError(f"FourierSeries.fit: order must be an integer >= 0, got {order!r}")
         n = s.shape[1]
         c = np.fft.rfft(s, axis=1) / n
         order = min(order, (n - 1) // 2)
@@ -159,15 +182,25 @@ class FourierSeries(PeriodicSignal):
 
 
 def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarray, np.ndarray]:
-    """Validated knots (increasing, in [0, 1)) and values of shape (2, N)."""
-    t = np.asarray(t_knots, dtype=float).ravel()
-    v = np.asarray(values, dtype=float)
-    if v.ndim != 2 or v.shape[0] != 2 or v.shape[1] != t.size:
-        raise ValueError(f"{name}: values must have shape (2, {t.size}), got {v.shape}")
-    if t.size < min_knots or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] >= 1:
-        raise ValueError(f"{name}: need >= {min_knots} strictly increasing knots in [0, 1)")
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name}: values must be finite")
+    """Validated knots (increasing, in [0, 1)) and values of shape (2, N).
+
+    The knots cover one period: the first knot plus one closes it, so the last knot lies before
+    t_knots[0] + 1 and must not repeat the first (give t in [0, 1), not the closing t = 1).
+    """
+    t = _float_array(name, "t_knots", t_knots)
+    if t.ndim != 1 or t.size < min_knots:
+        raise ValueError(f"{name}: t_knots must be a 1-D array of >= {min_knots} phases, got shape {t.shape}")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        j = int(np.argmax(steps <= 0))
+        raise ValueError(f"{name}: t_knots must be strictly increasing, got t_knots[{j}] = {t[j]!r} followed by "
+                         f"{t[j + 1]!r}")
+    if t[0] < 0 or t[-1] >= 1:
+        raise ValueError(f"{name}: t_knots must lie in [0, 1) (one period; the closing knot t_knots[0] + 1 is "
+                         f"implied), got {t[0]!r} ... {t[-1]!r}")
+    v = _float_array(name, "values", values)
+    if v.shape != (2, t.size):
+        raise ValueError(f"{name}: values must have shape (2, {t.size}) (one column per knot), got {v.shape}")
     return t, v
 
 
@@ -175,6 +208,10 @@ class _Sampled(PeriodicSignal):
     """Base of the signals interpolating samples at knots ``t_knots`` in [0, 1)."""
 
     t_knots: np.ndarray
+
+    def __repr__(self) -> str:
+        with np.printoptions(precision=17, threshold=10_000):
+            return f"{type(self).__name__}(t_knots={self.t_knots!r}, values={self.values!r})"
 
     def _wrap(self, t):
         """Phases mapped into [t_knots[0], t_knots[0] + 1), the period the interpolant is built on."""
@@ -259,18 +296,33 @@ class PeriodicPchip(_Sampled):
 
 class CallableSignal(PeriodicSignal):
     """Any callable ``f(t) -> (2,)`` of the phase, assumed 1-periodic; derivative by central differences
-    (step 1e-6, error ~1e-12 relative) unless ``df`` is given."""
+    (step ``h`` = 1e-6: round-off error ~1e-10 relative to |f|) unless ``df`` is given."""
 
     def __init__(self, f: Callable, df: Callable | None = None, h: float = 1e-6):
         if not callable(f):
             raise TypeError(f"CallableSignal needs a callable, got {type(f).__name__}")
+        if df is not None and not callable(df):
+            raise TypeError(f"CallableSignal: df must be callable or None, got {type(df).__name__}")
+        h = _finite_check("CallableSignal.h", h)
+        if not 0 < h < 0.5:
+            raise ValueError(f"CallableSignal: h must be in (0, 0.5), got {h!r}")
         self.f, self.df, self.h = f, df, h
+
+    @staticmethod
+    def _one(g, t: float) -> np.ndarray:
+        v = np.asarray(g(t), float)
+        if v.size != 2:
+            raise ValueError(f"CallableSignal: the function must return 2 values (joint 1, joint 2), got shape "
+                             f"{v.shape} at t = {t!r}")
+        return v.reshape(2)
 
     def _eval(self, g, t):
         t = np.asarray(t, float)
         if t.ndim == 0:
-            return np.asarray(g(float(t)), float).reshape(2)
-        return np.stack([np.asarray(g(float(ti)), float).reshape(2) for ti in t], axis=1)
+            return self._one(g, float(t))
+        if t.size == 0:
+            return np.zeros((2,) + t.shape)
+        return np.stack([self._one(g, float(ti)) for ti in t.ravel()], axis=1).reshape((2,) + t.shape)
 
     def __call__(self, t):
         return self._eval(self.f, t)

@@ -48,63 +48,117 @@ class _Kinematic:
 TIE = 1e-12
 #: feet closer than TOUCH * L are taken as meeting (d only touches zero in symmetric folds)
 TOUCH = 1e-8
+#: largest |phi(1) - phi(0)| [rad] accepted as a periodic input
+PERIODIC_TOL = 1e-9
+
+
+def _classes(name: str, v: np.ndarray) -> np.ndarray:
+    """Sign classes of a switching function: -1, 0, +1 (for h, |h| <= TIE is the tie class 0)."""
+    if name == "h":
+        return np.where(np.abs(v) <= TIE, 0, np.sign(v)).astype(int)
+    return np.sign(v).astype(int)
+
+
+def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | None = None) -> float | None:
+    """First phase in [0, t_end) at which the guard ``f`` (values ``v`` on the scan phases ``ts``) reaches zero.
+
+    A sign change on the scan is located by Brent's method.  A guard may also reach zero between two
+    scan phases without changing sign on the scan (it touches zero, as d in a symmetric fold, or
+    dips below it and back): every local minimum of the scan below 5 % of ``scale`` (cycle ends
+    included) is refined by minimisation, and a minimum at or below TOUCH * scale is a zero too.
+    """
+    limit = 1.0 if t_end is None else t_end
+    n = v.size
+    found = None
+    bad = np.nonzero(~(v > 0))[0]
+    if bad.size:
+        j = int(bad[0])
+        if j == 0:
+            return 0.0
+        hi = min(ts[j], limit * (1 - 1e-13)) if t_end is not None else ts[j]
+        f_hi = f(hi) if ts[j - 1] < hi else math.nan
+        if f_hi < 0:
+            found = brentq(f, ts[j - 1], hi, xtol=1e-14)
+        elif f_hi == 0:
+            found = hi
+    # at the cycle ends the neighbour on the scan side counts
+    left = np.concatenate([[v[1]], v[:-1]])
+    right = np.concatenate([v[1:], [v[-2]]])
+    for j in np.nonzero((v > 0) & (v < 0.05 * scale) & (v <= left) & (v <= right))[0]:
+        lo, hi = ts[max(j - 1, 0)], min(ts[min(j + 1, n - 1)], limit)
+        if (found is not None and lo >= found) or lo >= hi:
+            break
+        opt = minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
+        if opt.fun > TOUCH * scale:
+            continue
+        t0 = brentq(f, lo, opt.x, xtol=1e-14) if opt.fun < 0 and f(lo) > 0 else float(opt.x)
+        if found is None or t0 < found:
+            found = t0
+        break
+    return found
 
 
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
     """Prescribed-angle gait over one cycle (it is periodic after one cycle).
 
-    ``angles``: periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.inputs.Harmonic`).
+    ``angles``: 1-periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.inputs.Harmonic`).
     ``t_eval``: output phases in [0, 1]; by default 201 equally spaced phases plus the switching instants.
     ``n_scan``: phases scanned for sign changes of the switching functions before Brent's method.
+
+    A loss of contact during the cycle (a foot lifting off, a joint reaching the ground, the feet
+    meeting) is returned as a failure status with its phase (``failure_t``) and the contact mode
+    just before it (``failure_mode``).  Invalid input raises ValueError (TypeError for a wrong type):
+    angles that are not finite or not 1-periodic, bad ``t_eval`` or ``n_scan``, and a start
+    configuration (the angles at t = 0) without a valid two-foot contact.
     """
+    if not isinstance(model, Model):
+        raise TypeError(f"simulate_angles: model must be a Model, got {type(model).__name__}")
     angles = as_signal(angles)
+    if isinstance(n_scan, bool) or not isinstance(n_scan, (int, np.integer)) or n_scan < 8:
+        raise ValueError(f"simulate_angles: n_scan must be an integer >= 8, got {n_scan!r}")
+    n_scan = int(n_scan)
+    te = None
+    if t_eval is not None:
+        try:
+            te = np.asarray(t_eval, dtype=float).ravel()
+        except (TypeError, ValueError):
+            raise ValueError(f"simulate_angles: t_eval must be an array of phases in [0, 1], got {t_eval!r}") from None
+        if te.size == 0 or not np.all(np.isfinite(te)) or np.any(te < 0) or np.any(te > 1):
+            raise ValueError("simulate_angles: t_eval must be a non-empty array of finite phases in [0, 1], got "
+                             f"{np.array2string(te, threshold=6)}")
     kin = _Kinematic(model, angles)
     robot = model.robot
     Mg = robot.M * robot.g
     res = CrawlResult(success=False, status=int(Status.SUCCESS), message="", drive="angles", gravity=model.gravity,
                       cycles=1)
-    model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
 
     ts = np.linspace(0.0, 1.0, n_scan + 1)
+    phi_scan = np.asarray(angles(ts), float)
+    if phi_scan.shape != (2, ts.size):
+        raise ValueError(f"simulate_angles: angles(t) must have shape (2, N) for N phases, got {phi_scan.shape}")
+    nonfinite = ~np.all(np.isfinite(phi_scan), axis=0) | ~np.all(np.isfinite(angles.derivative(ts)), axis=0)
+    if nonfinite.any():
+        raise ValueError(f"simulate_angles: angles or their derivative not finite at phase t = {ts[np.argmax(nonfinite)]:.6g}")
+    gap = float(np.max(np.abs(np.asarray(angles(1.0), float) - np.asarray(angles(0.0), float))))
+    if not gap <= PERIODIC_TOL:
+        raise ValueError(f"simulate_angles: angles must be 1-periodic in the phase, got |phi(1) - phi(0)| = {gap:.3g} rad")
+    model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
+
     K = kin(ts)
-    # validity first: the first phase at which the feet cross (d = 0) or a foot lifts off
-    # (f_n = 0) ends the run; near d = 0 the normal forces x_c/d M g are singular, so the feet
-    # crossing is searched first and the lift-off only before it
+    # validity first: the first phase at which the feet cross (d = 0), a foot lifts off (f_n = 0)
+    # or a joint reaches the ground ends the run; near d = 0 the normal forces x_c/d M g are
+    # singular, so the feet crossing is searched first and the others only before it
     failure = None
-    d = K["d"]
-    bad_d = np.nonzero(~(d > 0))[0]
-    t_cross = None
-    if bad_d.size:
-        j = bad_d[0]
-        t_cross = brentq(kin.scalar("d"), ts[j - 1], ts[j], xtol=1e-14) if j > 0 else 0.0
-    # d may also touch zero without changing sign (symmetric legs folding through phi = 0):
-    # refine every local minimum of d on the scan
-    dmin_f = kin.scalar("d")
-    for j in np.nonzero((d[1:-1] <= d[:-2]) & (d[1:-1] <= d[2:]))[0] + 1:
-        if t_cross is not None and ts[j - 1] >= t_cross:
-            break
-        if d[j] > 0.05 * robot.L:
-            continue
-        opt = minimize_scalar(dmin_f, bounds=(ts[j - 1], ts[j + 1]), method="bounded", options={"xatol": 1e-13})
-        if not (opt.fun > TOUCH * robot.L) and (t_cross is None or opt.x < t_cross):
-            t_cross = float(opt.x)
-            break
+    t_cross = _first_zero(kin.scalar("d"), ts, K["d"], robot.L)
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
-    checks = [(f"fn{i}", Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}") for i in (1, 2)]
-    checks += [(f"zj{i}", Status.JOINT_ON_GROUND, f"joint {i} reaches the ground", f"joint_{i}_on_ground") for i in (1, 2)]
-    for name, status, label, kind in checks:
-        bad = np.nonzero(~(K[name] > 0))[0]
-        if not bad.size or (t_cross is not None and ts[bad[0] - 1] >= t_cross):
-            continue
-        j = bad[0]
-        hi = ts[j] if t_cross is None else min(ts[j], t_cross * (1 - 1e-13))
+    checks = [(f"fn{i}", Mg, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}") for i in (1, 2)]
+    checks += [(f"zj{i}", robot.L, Status.JOINT_ON_GROUND, f"joint {i} reaches the ground", f"joint_{i}_on_ground")
+               for i in (1, 2)]
+    for name, scale, status, label, kind in checks:
         f = kin.scalar(name)
-        if j == 0:
-            tf = 0.0
-        elif f(hi) < 0:
-            tf = brentq(f, ts[j - 1], hi, xtol=1e-14)
-        else:
+        tf = _first_zero(f, ts, K[name], scale, t_end=t_cross)
+        if tf is None:
             continue
         if name.startswith("zj") and abs(f(tf)) > 1e-6 * robot.L:
             # the joint height jumps instead of vanishing: theta changes branch, which happens
@@ -116,27 +170,55 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         tf, status, label, kind = failure
         res.status = int(status)
         res.failure_t = tf
+        k0 = kin(max(tf - 1e-9, 0.0))
+        h0 = k0["h"][0]
+        res.failure_mode = Mode.slip(3 if abs(h0) <= TIE else (1 if h0 < 0 else 2), 1 if k0["ddot"][0] > 0 else -1).label
         res.message = f"{STATUS_MESSAGES[status]}: {label} at phase t = {tf:.10f} (prescribed angles)"
         res.events = [Event(tf, kind, "", "failure")]
         return res
 
+    # switching instants: d' changes sign (slip reversal) or vanishes on a stretch (the input holds
+    # still: both feet stick); the smaller friction limit changes feet (slip switch), or both are
+    # equal on a stretch (|h| <= TIE: both feet slip)
     events: list[tuple[float, str]] = []
-    for name, kind in (("ddot", "slip_reversal"), ("h", "slip_switch")):
-        v = np.where(np.abs(K[name]) <= TIE, 0.0, K[name]) if name == "h" else K[name]
-        for j in np.nonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0)[0]:
-            events.append((brentq(kin.scalar(name), ts[j], ts[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps), kind))
-        # a switching function that is exactly zero on a scan phase, with opposite signs around it
-        for j in np.nonzero((v[1:-1] == 0) & (v[:-2] * v[2:] < 0))[0]:
-            events.append((ts[j + 1], kind))
+    rtol = 4 * np.finfo(float).eps
+    for name in ("ddot", "h"):
+        f = kin.scalar(name)
+        c = _classes(name, K[name])
+        starts = np.concatenate([[0], np.nonzero(np.diff(c))[0] + 1])
+        runs = list(zip(c[starts], starts, np.concatenate([starts[1:] - 1, [c.size - 1]])))
+        k = 0
+        while k < len(runs) - 1:
+            (c0, _, e0), (c1, s1, e1) = runs[k], runs[k + 1]
+            if c0 and c1:
+                events.append((brentq(f, ts[e0], ts[s1], xtol=1e-14, rtol=rtol), name))
+                k += 1
+                continue
+            if c0 and s1 == e1 and k + 2 < len(runs) and runs[k + 2][0]:
+                # zero at a single scan phase: a crossing exactly there, or a touch (no event)
+                if runs[k + 2][0] == -c0:
+                    events.append((brentq(f, ts[e0], ts[runs[k + 2][1]], xtol=1e-14, rtol=rtol), name))
+                k += 2
+                continue
+            # into or out of a stretch on which the function is zero: bisection on the class
+            lo, hi = ts[e0], ts[s1]
+            while hi - lo > 1e-14:
+                mid = 0.5 * (lo + hi)
+                if _classes(name, np.array([f(mid)]))[0] == c0:
+                    lo = mid
+                else:
+                    hi = mid
+            events.append((0.5 * (lo + hi), name))
+            k += 1
     events.sort()
     breaks = [0.0] + [e[0] for e in events] + [1.0]
 
     def mode_at(tm: float) -> Mode:
         k1 = kin(tm)
-        h = k1["h"][0]
-        foot = 3 if abs(h) <= TIE else (1 if h < 0 else 2)
-        sigma = 1 if k1["ddot"][0] > 0 else -1
-        return Mode.slip(foot, sigma)
+        h, dd = k1["h"][0], k1["ddot"][0]
+        if dd == 0:
+            return Mode.STICK
+        return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
 
     # foot positions: the slipping foot follows d, the other stays
     seg_modes = []
@@ -152,16 +234,25 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             x1 = x2 - db
         elif m.foot == 2:
             x2 = x1 + db
-        else:
+        elif m.foot == 3:
             mid = 0.5 * (x1 + x2)
             x1, x2 = mid - 0.5 * db, mid + 0.5 * db
+        # stick-stick (d' = 0 on a stretch): neither foot moves
         seg_modes.append(m)
     res.S = x1 - 0.0
     ev_objs = []
-    for (t_ev, kind) in events:
+    for (t_ev, name) in events:
         before = mode_at(max(t_ev - 1e-9, 0.0))
         after = mode_at(min(t_ev + 1e-9, 1.0))
-        ev_objs.append(Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)["ddot" if kind == "slip_reversal" else "h"][0])))
+        if name == "h":
+            kind = "slip_switch"
+        elif after == Mode.STICK:
+            kind = "slip_to_stick"
+        elif before == Mode.STICK:
+            kind = {1: "slip_onset_1", 2: "slip_onset_2", 3: "slip_onset_both"}[after.foot]
+        else:
+            kind = "slip_reversal"
+        ev_objs.append(Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)[name][0])))
     res.events = ev_objs
 
     def seg_of(t):
@@ -171,12 +262,8 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         return anchors[-1]
 
     # output arrays
-    if t_eval is None:
+    if te is None:
         te = np.unique(np.concatenate([np.linspace(0, 1, 201), [e[0] for e in events]]))
-    else:
-        te = np.asarray(t_eval, float).ravel()
-        if np.any(te < 0) or np.any(te > 1):
-            raise ValueError("t_eval must lie in [0, 1]")
     Ko = kin(te)
     modes = np.empty(len(te), int)
     ft = np.empty(len(te))
@@ -193,6 +280,8 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         elif m.foot == 2:
             x1o[j] = xa1
             x2o[j] = xa1 + Ko["d"][j]
+        elif m.foot == 0:
+            x1o[j], x2o[j] = xa1, xa2
         else:
             mid = 0.5 * (xa1 + xa2)
             x1o[j], x2o[j] = mid - 0.5 * Ko["d"][j], mid + 0.5 * Ko["d"][j]
@@ -203,8 +292,17 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     # energetics, segment by segment (f_t and the holding torques jump at the switching instants)
     wplus = np.zeros(2)
     w_in = 0.0
+    w_abs = 0.0
     diss = 0.0
+    # sampled inputs (splines, PCHIP, piecewise linear) are smooth only between their knots: the
+    # quadrature panels end at the knots too, or its error grows from ~1e-12 to ~1e-6
+    knots = np.asarray(getattr(angles, "t_knots", ()), float)
+    pieces = []
     for a, b, m, _, _ in anchors:
+        inner = knots[(knots > a) & (knots < b)]
+        edges = np.concatenate([[a], inner, [b]])
+        pieces += [(lo, hi, m) for lo, hi in zip(edges[:-1], edges[1:])]
+    for a, b, m in pieces:
         def power(t, i, m=m):
             k1 = kin(t)
             f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
@@ -218,10 +316,13 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
         tau = model.hold_torque(k1["phi"], f)
         w_in += float(np.sum(wq * np.sum(tau * k1["dphi"], axis=0)))
+        w_abs += float(np.sum(wq * np.sum(np.abs(tau * k1["dphi"]), axis=0)))
         diss += float(np.sum(wq * np.abs(f * k1["ddot"])))
     dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
-    scale = max(abs(w_in), abs(diss), 1e-300)
-    res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss,
+    # residual relative to the gross work (integral of sum |tau_i phi_i'|: the net input work may be a
+    # small difference of large positive and negative works), floored for a robot that does not move
+    scale = max(abs(w_in), abs(diss), abs(dV), w_abs, 1e-12 * robot.MgL, 1e-300)
+    res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss, "gross_work": w_abs,
                   "balance_residual": (w_in - dV - diss) / scale}
     res.W_plus_joint = wplus
     res.W_plus = float(wplus.sum())

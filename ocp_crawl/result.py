@@ -92,7 +92,8 @@ class Event:
     ``mode_after``), ``slip_to_stick`` (d' = 0), ``slip_switch`` (the slipping foot changes),
     ``slip_slip_end``, ``lift_off_1``/``lift_off_2``, ``feet_crossed``, ``joint_1_on_ground``/
     ``joint_2_on_ground``, ``fold``; ``graze_<kind>`` when a guard touches zero and turns back, so
-    that the mode continues (for example f_t touching a friction limit in stick-stick); prescribed angles: ``slip_reversal``, ``slip_switch``; MPCC
+    that the mode continues (for example f_t touching a friction limit in stick-stick); prescribed angles: ``slip_reversal``, ``slip_switch``, and ``slip_to_stick``/``slip_onset_*`` where
+    the input holds still; MPCC
     time-stepping (mode changes between steps): also ``slip_onset_both``, ``slip_slip_start``.
     """
 
@@ -113,9 +114,10 @@ class Event:
 
 def cost_of_transport(w_plus: float, robot, S: float) -> float:
     """CoT+ = W+/(M g |S|); infinite when the robot does not move (|S| at round-off, <= 1e-12 L)."""
-    if abs(S) <= 1e-12 * robot.L:
+    den = robot.M * robot.g * abs(S)
+    if abs(S) <= 1e-12 * robot.L or not den > 0:  # (den underflows for absurdly small robots)
         return float("inf")
-    return float(w_plus / (robot.M * robot.g * abs(S)))
+    return float(w_plus / den)
 
 
 ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")
