@@ -28,8 +28,11 @@ NLP parameters, and reused for every step.  Complementarity is handled by one of
 * ``"fischer_burmeister"``: smoothed Fischer-Burmeister equations s + c - sqrt(s^2 + c^2 + 2 sigma) = 0,
   i.e. s c = sigma with s, c > 0, sigma driven to sigma_min.
 
-A step is accepted only when IPOPT's return status is accepted by :data:`IPOPT_RETURN_STATUS` and the
-complementarity and equation residuals are below tolerance.  After the homotopy a polish can solve
+A step is accepted only when IPOPT's return status is usable by :data:`IPOPT_RETURN_STATUS` (the one table
+through which the step, the time-stepping and the gait OCP read every solver outcome, see :func:`call_ipopt`)
+and the complementarity and equation residuals are below tolerance; failed attempts are retried (cold
+start, non-monotone sigma schedule, then the fallback formulation :data:`FALLBACK_FORMULATION`), and a step
+that still fails returns a status of the table with NaN solution fields.  After the homotopy a polish can solve
 the tightened NLP (each pair fixed to its identified branch, s_j = 0 or c_j = 0, with the other kept
 >= 0) with the same IPOPT solver; this removes the O(sigma/s) bias of the relaxation and resolves
 pairs near their corner (a slip that starts or stops within the step).
@@ -43,10 +46,11 @@ the split at an exact tie follows IPOPT's path.
 from __future__ import annotations
 
 import math
+import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import casadi as cs
 import numpy as np
@@ -60,36 +64,194 @@ FORMULATIONS = ("scholtes", "l1_penalty", "fischer_burmeister")
 Polish = Literal["auto", "always", "never"]
 POLISH = ("auto", "always", "never")
 
-#: The one table from CasADi ``stats()['return_status']`` of IPOPT to (accepted, meaning).  "accepted"
-#: statuses still have to pass the step's own residual checks; every other status, including any
-#: status not listed here, is a failure.
-IPOPT_RETURN_STATUS: dict[str, tuple[bool, str]] = {
-    "Solve_Succeeded": (True, "optimal point found to the requested tolerance"),
-    "Solved_To_Acceptable_Level": (True, "point found to IPOPT's acceptable (looser) tolerance"),
-    "Feasible_Point_Found": (True, "feasible point of a square problem found"),
-    "Infeasible_Problem_Detected": (False, "IPOPT converged to a point of local infeasibility"),
-    "Search_Direction_Becomes_Too_Small": (False, "search direction became too small (no progress)"),
-    "Diverging_Iterates": (False, "iterates diverge"),
-    "User_Requested_Stop": (False, "stopped by a user callback"),
-    "Maximum_Iterations_Exceeded": (False, "maximum number of iterations exceeded"),
-    "Maximum_CpuTime_Exceeded": (False, "maximum CPU time exceeded"),
-    "Maximum_WallTime_Exceeded": (False, "maximum wall time exceeded"),
-    "Restoration_Failed": (False, "the feasibility restoration phase failed"),
-    "Error_In_Step_Computation": (False, "error in the step computation (singular KKT system?)"),
-    "Not_Enough_Degrees_Of_Freedom": (False, "more equality constraints than free variables"),
-    "Invalid_Problem_Definition": (False, "invalid problem definition"),
-    "Invalid_Option": (False, "invalid IPOPT option"),
-    "Invalid_Number_Detected": (False, "NaN or Inf in a function or derivative value"),
-    "Unrecoverable_Exception": (False, "unrecoverable exception inside IPOPT"),
-    "NonIpopt_Exception_Thrown": (False, "exception thrown outside IPOPT (function evaluation?)"),
-    "Insufficient_Memory": (False, "insufficient memory"),
-    "Internal_Error": (False, "internal IPOPT error"),
+
+class SolverOutcome(NamedTuple):
+    """How the package reads one solver return status (a row of :data:`IPOPT_RETURN_STATUS`)."""
+
+    status: str
+    """the return status string (CasADi ``stats()['return_status']`` or one of this package's own)"""
+    kind: str
+    """our classification: 'success', 'acceptable', or a failure kind of :data:`FAILURE_KINDS`"""
+    usable: bool
+    """whether the point may be used (it still has to pass the caller's own residual checks)"""
+    message: str
+    """what it means, for a user"""
+    source: str = "ipopt"
+    """'ipopt' (IPOPT's ApplicationReturnStatus), 'casadi' (CasADi's own) or 'ocp_crawl' (this package's)"""
+
+    def describe(self) -> str:
+        """One line naming the status and its meaning, e.g. for failure messages."""
+        return f"{self.status} ({self.message})"
+
+
+#: failure kinds of :class:`SolverOutcome` (besides 'success' and 'acceptable'), in words
+FAILURE_KINDS: dict[str, str] = {
+    "infeasible": "no point satisfies the constraints (locally): the problem as posed has no solution there",
+    "limit": "a resource limit (iterations, CPU or wall time) ended the solve before convergence",
+    "no_progress": "the solver stalled or diverged (restoration failure, tiny or failed steps)",
+    "invalid_number": "NaN or Inf in a function or derivative value (inputs or iterates out of range)",
+    "setup": "the problem or the solver options are not valid for IPOPT",
+    "residual": "the solver converged but the point fails this package's residual checks",
+    "internal": "an error inside IPOPT or CasADi (exception, memory)",
+    "no_solution": "the mode-enumeration oracle found no consistent contact mode",
+    "unknown": "a status not in the table: treated as a failure",
 }
 
 
-def ipopt_status(return_status: str) -> tuple[bool, str]:
-    """(accepted, meaning) of an IPOPT return status; unknown statuses are failures."""
-    return IPOPT_RETURN_STATUS.get(str(return_status), (False, f"unknown IPOPT return status {return_status!r}"))
+def _o(status, kind, usable, message, source="ipopt"):
+    return status, SolverOutcome(status, kind, usable, message, source)
+
+
+#: The one table of solver return statuses: every IPOPT ``ApplicationReturnStatus`` (as the strings CasADi
+#: reports in ``stats()['return_status']``), CasADi's own, and this package's.  MPCC steps (:class:`MPCCStep`),
+#: the MPCC time-stepping, the cross-check and the gait OCP read solver outcomes only through
+#: :func:`ipopt_status`; a status missing from the table maps to the 'unknown' failure, never a KeyError.
+IPOPT_RETURN_STATUS: dict[str, SolverOutcome] = dict([
+    # IPOPT (IpReturnCodes_inc.h, enum ApplicationReturnStatus)
+    _o("Solve_Succeeded", "success", True, "optimal point found to the requested tolerance"),
+    _o("Solved_To_Acceptable_Level", "acceptable", True,
+       "point found to IPOPT's acceptable (looser) tolerance, not the requested one"),
+    _o("Feasible_Point_Found", "acceptable", True, "feasible point of a square problem found"),
+    _o("Infeasible_Problem_Detected", "infeasible", False,
+       "IPOPT converged to a point of local infeasibility: the constraints cannot be met there"),
+    _o("Search_Direction_Becomes_Too_Small", "no_progress", False,
+       "the search direction became too small: IPOPT stopped without confirming a solution"),
+    _o("Diverging_Iterates", "no_progress", False, "the iterates diverge (problem unbounded or badly scaled?)"),
+    _o("User_Requested_Stop", "limit", False, "stopped early by a user callback"),
+    _o("Maximum_Iterations_Exceeded", "limit", False, "maximum number of IPOPT iterations (max_iter) exceeded"),
+    _o("Maximum_CpuTime_Exceeded", "limit", False, "maximum CPU time (max_cpu_time) exceeded"),
+    _o("Maximum_WallTime_Exceeded", "limit", False, "maximum wall-clock time (max_wall_time) exceeded"),
+    _o("Restoration_Failed", "no_progress", False,
+       "the feasibility restoration phase failed (no feasible point found from here)"),
+    _o("Error_In_Step_Computation", "no_progress", False,
+       "error in the step computation (singular or ill-conditioned KKT system)"),
+    _o("Not_Enough_Degrees_Of_Freedom", "setup", False, "more equality constraints than free variables"),
+    _o("Invalid_Problem_Definition", "setup", False,
+       "invalid problem definition (e.g. a lower bound above an upper one)"),
+    _o("Invalid_Option", "setup", False, "an IPOPT option is invalid or needs a library that is not available"),
+    _o("Invalid_Number_Detected", "invalid_number", False,
+       "NaN or Inf in a function or derivative value (inputs or iterates out of range)"),
+    _o("Unrecoverable_Exception", "internal", False, "unrecoverable exception inside IPOPT"),
+    _o("NonIpopt_Exception_Thrown", "internal", False, "exception thrown outside IPOPT (function evaluation?)"),
+    _o("Insufficient_Memory", "internal", False, "IPOPT ran out of memory"),
+    _o("Internal_Error", "internal", False, "internal IPOPT error"),
+    # CasADi: its name for an IPOPT code it does not know, and an exception raised by the solver call
+    _o("Unknown", "unknown", False, "CasADi reported IPOPT's return code as unknown", "casadi"),
+    _o("Solver_Exception", "internal", False,
+       "CasADi raised an exception from the solver call (evaluation error or invalid input)", "casadi"),
+    # this package: IPOPT accepted the point but our own checks did not; the mode-enumeration oracle
+    _o("Residual_Check_Failed", "residual", False,
+       "IPOPT converged but the complementarity or equation residual exceeds the tolerance", "ocp_crawl"),
+    _o("Enumeration_Succeeded", "success", True, "mode-enumeration oracle: consistent contact mode found",
+       "ocp_crawl"),
+    _o("No_Consistent_Mode", "no_solution", False, "mode-enumeration oracle: no consistent contact mode",
+       "ocp_crawl"),
+])
+
+#: the kind of a status missing from :data:`IPOPT_RETURN_STATUS`
+UNKNOWN_KIND = "unknown"
+
+
+def ipopt_status(return_status) -> SolverOutcome:
+    """The :class:`SolverOutcome` of a return status; a status not in the table is a failure of kind 'unknown'."""
+    status = str(return_status)
+    out = IPOPT_RETURN_STATUS.get(status)
+    if out is None:
+        return SolverOutcome(status, UNKNOWN_KIND, False,
+                             f"unknown solver return status {status!r} (not in the table): treated as a failure",
+                             "unknown")
+    return out
+
+
+@dataclass(frozen=True)
+class IpoptCall:
+    """Outcome of one solver call through :func:`call_ipopt` (the primal-dual point as NumPy arrays)."""
+
+    outcome: SolverOutcome
+    x: np.ndarray
+    lam_x: np.ndarray
+    lam_g: np.ndarray
+    f: float
+    iterations: int
+    detail: str = ""
+    """the exception text when CasADi raised (status Solver_Exception), else ''"""
+
+    @property
+    def status(self) -> str:
+        return self.outcome.status
+
+    @property
+    def usable(self) -> bool:
+        """the table says the point may be used, and it is finite"""
+        return self.outcome.usable and bool(np.all(np.isfinite(self.x)))
+
+    def describe(self) -> str:
+        text = self.outcome.describe()
+        if self.detail:
+            text += f": {self.detail}"
+        elif self.outcome.usable and not self.usable:
+            text += ", but the point is not finite"
+        return text
+
+
+def call_ipopt(solver: cs.Function, nx: int, ng: int, **args) -> IpoptCall:
+    """Call a CasADi IPOPT ``solver`` and read its outcome through :data:`IPOPT_RETURN_STATUS`.
+
+    An exception raised by the call (CasADi evaluation errors, invalid inputs) is caught and reported as
+    ``Solver_Exception`` with its first line; the point is then the initial guess ``x0`` (not usable).
+    """
+    try:
+        sol = solver(**args)
+    except RuntimeError as exc:
+        detail = _casadi_reason(exc)
+        x0 = np.asarray(args.get("x0", np.full(nx, np.nan)), float).ravel()
+        return IpoptCall(ipopt_status("Solver_Exception"), x0, np.zeros(nx), np.zeros(ng), float("nan"), 0, detail)
+    st = solver.stats()
+    return IpoptCall(ipopt_status(st.get("return_status", "Unknown")), np.asarray(sol["x"], float).ravel(),
+                     np.asarray(sol["lam_x"], float).ravel(), np.asarray(sol["lam_g"], float).ravel(),
+                     float(sol["f"]), int(st.get("iter_count", 0)))
+
+
+#: types of IPOPT option values
+_IPOPT_VALUE_TYPES = (str, int, float, np.integer, np.floating)
+
+
+def check_ipopt_options(owner: str, options) -> dict:
+    """A copy of a dict of IPOPT options with string keys and finite number or string values (ValueError/TypeError
+    naming ``owner`` and the key otherwise); IPOPT itself checks names and ranges when the solver is built."""
+    if not isinstance(options, dict):
+        raise TypeError(f"{owner} must be a dict of IPOPT options, got {type(options).__name__}")
+    out = {}
+    for key, value in options.items():
+        if not isinstance(key, str) or not key:
+            raise TypeError(f"{owner}: IPOPT option names must be strings, got {key!r}")
+        if isinstance(value, bool) or not isinstance(value, _IPOPT_VALUE_TYPES):
+            raise TypeError(f"{owner}[{key!r}] must be a number or a string, got {value!r} ({type(value).__name__})")
+        if isinstance(value, (float, np.floating)) and not math.isfinite(value):
+            raise ValueError(f"{owner}[{key!r}] must be finite, got {value!r}")
+        out[key] = value.item() if isinstance(value, (np.integer, np.floating)) else value
+    return out
+
+
+def _casadi_reason(exc: BaseException) -> str:
+    """The informative line of a CasADi exception: its text without source locations and the generic
+    "Error in Function::call ..." / "Error calling ..." wrappers."""
+    lines = [re.sub(r"^\S*\.(?:cpp|hpp|h):\d+:\s*", "", s.strip()) for s in str(exc).splitlines()]
+    lines = [s for s in lines if s and not s.startswith(("Error in Function::", "Error calling "))]
+    if not lines:
+        return (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
+    return f"{lines[0]} {lines[1]}" if lines[0].endswith(":") and len(lines) > 1 else lines[0]
+
+
+def build_ipopt(name: str, nlp: dict, options: dict, owner: str, user_options: dict) -> cs.Function:
+    """The CasADi IPOPT solver of ``nlp`` with ``options`` (the package's only nlpsol call).
+
+    IPOPT's rejection of an option (unknown name, wrong type, out of range) becomes one ValueError naming
+    ``owner`` and the user's options instead of a CasADi traceback."""
+    try:
+        return cs.nlpsol(name, "ipopt", nlp, options)
+    except RuntimeError as exc:
+        raise ValueError(f"{owner} = {user_options!r}: IPOPT rejected the options: {_casadi_reason(exc)}") from None
 
 
 #: IPOPT options of the step solver; :attr:`MPCCOptions.ipopt` overrides them key by key.
@@ -142,9 +304,10 @@ class MPCCOptions:
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))| [-]"""
     eq_tol: float = 1e-9
     """largest accepted residual of the scaled equations and bounds [-]"""
-    max_retries: int = 2
+    max_retries: int = 3
     """a failed attempt is retried up to this many times: after a warm start from a cold start, then
-    (and after a failed cold start) with a non-monotone sigma schedule from a guess with small slips"""
+    (and after a failed cold start) with a non-monotone sigma schedule from a guess with small slips,
+    and last with the fallback formulation (:data:`FALLBACK_FORMULATION`) from a cold start"""
     polish: Polish = "auto"
     """after the homotopy, solve the tightened NLP on the identified branches (exact complementarity):
     'always', 'never', or 'auto' = only when the homotopy's complementarity residual exceeds comp_tol
@@ -175,9 +338,7 @@ class MPCCOptions:
             raise ValueError(f"MPCCOptions.polish must be one of {POLISH}, got {self.polish!r}")
         if not isinstance(self.verbose, bool):
             raise TypeError(f"MPCCOptions.verbose must be a bool, got {self.verbose!r}")
-        if not isinstance(self.ipopt, dict):
-            raise TypeError(f"MPCCOptions.ipopt must be a dict of IPOPT options, got {type(self.ipopt).__name__}")
-        object.__setattr__(self, "ipopt", dict(self.ipopt))
+        object.__setattr__(self, "ipopt", check_ipopt_options("MPCCOptions.ipopt", self.ipopt))
 
     def schedule(self, sigma0: float, factor: float | None = None) -> tuple[float, ...]:
         """Homotopy parameters from sigma0, divided by 1/``factor`` down to sigma_min (the last one)."""
@@ -392,6 +553,29 @@ class _Solve:
     comp: float = math.inf
     s: np.ndarray | None = None
     c: np.ndarray | None = None
+    text: str = ""
+    """the status (with CasADi's exception text), for messages"""
+
+
+#: formulation of the last retry of a step, per primary formulation
+FALLBACK_FORMULATION = {"scholtes": "l1_penalty", "fischer_burmeister": "l1_penalty",
+                        "l1_penalty": "fischer_burmeister"}
+
+#: the numeric fields of a StepResult that a successful step must have finite
+RESULT_FIELDS = ("f_t", "f_n1", "f_n2", "s1p", "s1m", "s2p", "s2m", "dx1", "dx2", "x1", "x2", "d", "comp_residual",
+                 "eq_residual")
+
+
+def _finite_result(res: StepResult) -> bool:
+    return bool(np.all(np.isfinite(res.phi))) and all(math.isfinite(getattr(res, f)) for f in RESULT_FIELDS)
+
+
+def failed_step_result(model: Model, state: StepState, tau: np.ndarray, **fields) -> StepResult:
+    """A failed :class:`StepResult`: every solution field is NaN, so that nothing can pass for a solution."""
+    nan = float("nan")
+    return StepResult(success=False, phi=np.full(2, nan), f_t=nan, f_n1=nan, f_n2=nan, s1p=nan, s1m=nan,
+                      s2p=nan, s2m=nan, dx1=nan, dx2=nan, x1=nan, x2=nan, d=nan, mode=Mode.STICK,
+                      comp_residual=nan, eq_residual=nan, **fields)
 
 
 class MPCCStep:
@@ -408,7 +592,8 @@ class MPCCStep:
         r = model.robot
         self.Mg = r.M * r.g
         self.ncalls = 0
-        """IPOPT calls made by this instance"""
+        """IPOPT calls made by this instance (including its fallback solver)"""
+        self._fallback: MPCCStep | None = None
         self._build()
 
     # ------------------------------------------------------------------ NLP construction (once)
@@ -452,8 +637,8 @@ class MPCCStep:
         base = {"print_time": bool(opt.verbose), "calc_lam_p": False, "error_on_fail": False, "ipopt": ipopt}
         warm = dict(base, ipopt=dict(WARM_IPOPT, **ipopt))
         nlp = {"x": w, "p": P, "f": f, "g": g}
-        self._solver_cold = cs.nlpsol("mpcc_step_cold", "ipopt", nlp, base)
-        self._solver_warm = cs.nlpsol("mpcc_step_warm", "ipopt", nlp, warm)
+        self._solver_cold = build_ipopt("mpcc_step_cold", nlp, base, "MPCCOptions.ipopt", opt.ipopt)
+        self._solver_warm = build_ipopt("mpcc_step_warm", nlp, warm, "MPCCOptions.ipopt", opt.ipopt)
         inf = np.inf
         self._lbx = np.concatenate([np.full(4, -inf), np.zeros(2 * NPAIR)])
         self._ubx = np.full(NW, inf)
@@ -481,15 +666,14 @@ class MPCCStep:
         if lam_x is not None:
             args["lam_x0"] = lam_x
             args["lam_g0"] = lam_g
-        sol = solver(**args)
+        call = call_ipopt(solver, NW, self.ng, **args)
         self.ncalls += 1
-        st = solver.stats()
-        status = str(st.get("return_status", "Unknown"))
-        accepted, _ = ipopt_status(status)
-        w = np.asarray(sol["x"]).ravel()
+        w = call.x
         chk = np.asarray(self._check(w, P)).ravel()
-        return _Solve(w, np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel(), status, accepted,
-                      int(st.get("iter_count", 0)), float(chk[0]), float(chk[1]), w[4:8], chk[2:6])
+        text = call.status + (f": {call.detail}" if call.detail else "") + \
+            (", but the point is not finite" if call.outcome.usable and not call.usable else "")
+        return _Solve(w, call.lam_x, call.lam_g, call.status, call.usable, call.iterations, float(chk[0]),
+                      float(chk[1]), w[4:8], chk[2:6], text)
 
     # ------------------------------------------------------------------ solve
     def initial_guess(self, state: StepState, tau: np.ndarray, slip: float = 0.0) -> np.ndarray:
@@ -500,6 +684,15 @@ class MPCCStep:
         w[8:12] = np.maximum(np.asarray(self._margins(w, self._params(state, tau, 1.0))).ravel(), 0.0)
         return w
 
+    def _fallback_step(self) -> "MPCCStep":
+        """The step solver of the fallback formulation (built on first use): cold start and the
+        non-monotone retry, no further fallback."""
+        if self._fallback is None:
+            opt = self.options
+            self._fallback = MPCCStep(self.model, replace(opt, formulation=FALLBACK_FORMULATION[opt.formulation],
+                                                          max_retries=1))
+        return self._fallback
+
     def _plans(self, state: StepState, tau: np.ndarray, warm_start: StepResult | None):
         """(label, initial point, multipliers, sigma schedule) of the first attempt and the retries."""
         opt = self.options
@@ -507,8 +700,11 @@ class MPCCStep:
         if warm_start is not None:
             if not isinstance(warm_start, StepResult):
                 raise TypeError(f"warm_start must be a StepResult or None, got {type(warm_start).__name__}")
-            if warm_start.w is not None and warm_start.w.shape == (NW,) and warm_start.lam_g is not None \
-                    and warm_start.lam_g.shape == (self.ng,):
+            # a warm start is used only if it is a complete finite primal-dual point of this NLP
+            if warm_start.success and warm_start.w is not None and warm_start.w.shape == (NW,) \
+                    and warm_start.lam_x is not None and warm_start.lam_x.shape == (NW,) \
+                    and warm_start.lam_g is not None and warm_start.lam_g.shape == (self.ng,) \
+                    and all(np.all(np.isfinite(a)) for a in (warm_start.w, warm_start.lam_x, warm_start.lam_g)):
                 plans.append(("warm start", warm_start.w.copy(), warm_start.lam_x, warm_start.lam_g,
                               opt.schedule(opt.sigma0_warm)))
         plans.append(("cold start", self.initial_guess(state, tau), None, None, opt.schedule(opt.sigma0)))
@@ -522,9 +718,12 @@ class MPCCStep:
     def solve(self, state: StepState, tau, warm_start: StepResult | None = None) -> StepResult:
         """Solve the step from ``state`` with the torque ``tau`` [N m] at t_{k+1}.
 
-        ``warm_start``: a previous step's result whose primal and dual solution seed IPOPT (the
+        ``warm_start``: a previous successful step's result whose primal and dual solution seed IPOPT (the
         homotopy then starts at ``sigma0_warm``) and whose slip is preferred at exact ties; failed
-        attempts are retried from a cold start and then with a non-monotone sigma schedule.
+        attempts are retried from a cold start, then with a non-monotone sigma schedule, then with the
+        fallback formulation (up to ``max_retries`` retries in all).  A failed step's status is that of the
+        last failed attempt of the primary formulation (:data:`IPOPT_RETURN_STATUS`, or
+        ``Residual_Check_Failed``); its solution fields are NaN.
         """
         if not isinstance(state, StepState):
             raise TypeError(f"state must be a StepState, got {type(state).__name__}")
@@ -533,37 +732,66 @@ class MPCCStep:
         t_start = time.perf_counter()
         stages: list[HomotopyStage] = []
         reasons = []
+        status = "Unknown"
         plans = self._plans(state, tau, warm_start)
-        prefer = warm_start.mode if warm_start is not None else Mode.STICK
+        prefer = warm_start.mode if warm_start is not None and warm_start.success else Mode.STICK
         for attempt, (label, w0, lam_x, lam_g, sched) in enumerate(plans):
-            sol, reason = self._homotopy(attempt, state, tau, prefer, w0, lam_x, lam_g, sched, stages)
+            sol, reason, status = self._homotopy(attempt, state, tau, prefer, w0, lam_x, lam_g, sched, stages)
             if sol is None:
                 reasons.append(f"{label}: {reason}")
                 continue
             polished = False
-            if opt.polish == "always" or (opt.polish == "auto" and sol.comp > opt.comp_tol):
+            if opt.polish == "always" or (opt.polish == "auto" and not sol.comp <= opt.comp_tol):
                 pol = self._polish(attempt, state, tau, prefer, sol, stages)
                 if pol is not None:
                     sol, polished = pol, True
-            if sol.comp > opt.comp_tol:
+            if not sol.comp <= opt.comp_tol:
+                status = "Residual_Check_Failed"
                 reasons.append(f"{label}: complementarity residual {sol.comp:.3g} > comp_tol = {opt.comp_tol:g} "
                                f"(IPOPT {sol.status})")
                 continue
             ncalls = sum(s.attempt == attempt for s in stages)
-            return step_result_from_w(
+            res = step_result_from_w(
                 self.model, state, sol.w, tau, success=True, status=sol.status,
                 message=f"step solved ({label}, {ncalls} IPOPT calls{', polished' if polished else ''})",
                 iterations=sum(s.iterations for s in stages), solve_time=time.perf_counter() - t_start,
                 homotopy=tuple(stages), attempts=attempt + 1, w=sol.w, lam_x=sol.lam_x, lam_g=sol.lam_g,
                 extra={"polished": polished})
-        status = stages[-1].return_status if stages else "Unknown"
-        return step_result_from_w(
-            self.model, state, self.initial_guess(state, tau), tau, success=False, status=status,
-            message=f"MPCC step failed after {len(plans)} attempt(s): " + "; ".join(reasons),
+            if not _finite_result(res):
+                status = "Residual_Check_Failed"
+                reasons.append(f"{label}: the solution has non-finite values (IPOPT {sol.status})")
+                continue
+            return res
+        if len(plans) < 1 + opt.max_retries:
+            # a retry is left: the fallback formulation, whose relaxation path differs (measured: Scholtes'
+            # homotopy can end in a local infeasibility at sigma ~ 1e-6 on soft robots, k ~ 0.1 M g L, where the
+            # l1 penalty finds the step); its failure keeps the primary formulation's status
+            fb = self._fallback_step()
+            calls = fb.ncalls
+            res = fb.solve(state, tau)
+            self.ncalls += fb.ncalls - calls
+            label = f"fallback {fb.options.formulation}"
+            stages += [replace(h, attempt=h.attempt + len(plans)) for h in res.homotopy]
+            attempts = len(plans) + res.attempts
+            if res.success:
+                return replace(res, message=f"step solved ({label}, after {len(plans)} failed attempt(s): "
+                                            + "; ".join(reasons) + ")",
+                               iterations=sum(s.iterations for s in stages), homotopy=tuple(stages),
+                               solve_time=time.perf_counter() - t_start, attempts=attempts,
+                               extra=dict(res.extra, fallback=fb.options.formulation))
+            reasons.append(f"{label}: {res.message}")
+        else:
+            attempts = len(plans)
+        return failed_step_result(
+            self.model, state, tau, status=status,
+            message=f"MPCC step failed with status {ipopt_status(status).describe()} after {attempts} "
+                    f"attempt(s): " + "; ".join(reasons),
             iterations=sum(s.iterations for s in stages), solve_time=time.perf_counter() - t_start,
-            homotopy=tuple(stages), attempts=len(plans), extra={"reasons": reasons})
+            homotopy=tuple(stages), attempts=attempts, extra={"reasons": reasons})
 
-    def _homotopy(self, attempt, state, tau, prefer, w0, lam_x, lam_g, sched, stages) -> tuple[_Solve | None, str]:
+    def _homotopy(self, attempt, state, tau, prefer, w0, lam_x, lam_g, sched, stages) \
+            -> tuple[_Solve | None, str, str]:
+        """One homotopy: (accepted solve or None, failure reason, status of the outcome)."""
         opt = self.options
         solver = self._solver_cold if lam_x is None else self._solver_warm
         sol = None
@@ -573,14 +801,15 @@ class MPCCStep:
             stages.append(HomotopyStage(attempt, sigma, sol.status, sol.accepted, sol.iterations, sol.comp,
                                         time.perf_counter() - t0))
             if not sol.accepted:
-                return None, f"IPOPT {sol.status} at sigma = {sigma:.3g}"
+                return None, f"IPOPT {sol.text} at sigma = {sigma:.3g}", sol.status
             w0, lam_x, lam_g = sol.w, sol.lam_x, sol.lam_g
             solver = self._solver_warm
             if opt.formulation == "l1_penalty" and sol.comp <= opt.comp_tol and sol.eq <= opt.eq_tol:
                 break  # exact penalty: complementarity already holds, a larger penalty changes nothing
-        if sol.eq > opt.eq_tol:
-            return None, f"equation residual {sol.eq:.3g} > eq_tol = {opt.eq_tol:g} (IPOPT {sol.status})"
-        return sol, ""
+        if not sol.eq <= opt.eq_tol:
+            return (None, f"equation residual {sol.eq:.3g} > eq_tol = {opt.eq_tol:g} (IPOPT {sol.status})",
+                    "Residual_Check_Failed")
+        return sol, "", sol.status
 
     def _polish(self, attempt, state, tau, prefer, sol: _Solve, stages) -> _Solve | None:
         """Tightened NLP: each pair on its identified branch, the other side >= 0, its relaxation off.

@@ -37,7 +37,7 @@ import numpy as np
 from .hybrid import HybridOptions, simulate_torque
 from .inputs import Harmonic, PeriodicPchip, ReferenceTorque
 from .model import NP, Model, Robot
-from .mpcc import ipopt_status
+from .mpcc import IpoptCall, build_ipopt, call_ipopt, check_ipopt_options, ipopt_status
 from .result import CrawlResult, Mode, cost_of_transport
 from .step_equations import NEQ, NPAIR, NW, step_equations
 
@@ -152,7 +152,7 @@ class OCPSettings:
                                                 positive=name not in ("regularization", "S_min")))
         if not 0 < self.A_max_deg < 90:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
-        if not 0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180:
+        if not (0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180):
             raise ValueError("OCPSettings: the envelope gamma +- A_max must lie in (0, 180) deg")
         if self.rate_limit is not None and self.rate_limit != "harmonic":
             object.__setattr__(self, "rate_limit", _num("rate_limit", self.rate_limit, positive=True))
@@ -165,9 +165,7 @@ class OCPSettings:
         if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
             raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
         object.__setattr__(self, "mu_ratios", ratios)
-        if not isinstance(self.ipopt, dict):
-            raise TypeError("OCPSettings.ipopt must be a dict of IPOPT options")
-        object.__setattr__(self, "ipopt", dict(self.ipopt))
+        object.__setattr__(self, "ipopt", check_ipopt_options("OCPSettings.ipopt", self.ipopt))
 
     def scenarios(self, robot: Robot) -> list[Robot]:
         if self.objective != "robust_speed":
@@ -204,6 +202,10 @@ class HomotopyRecord:
     objective: float
     S: tuple
     time: float
+    kind: str = "homotopy"
+    """'homotopy' (a relaxation stage) or 'polish' (the tightened NLP, sigma = 0)"""
+    message: str = ""
+    """the return status and its meaning from :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`"""
 
 
 @dataclass
@@ -221,8 +223,13 @@ class HarmonicChoice:
     evaluated: int
 
     def to_dict(self) -> dict:
-        return {"psi_deg": self.psi_deg, "A_deg": self.A_deg, "gamma_deg": self.gamma_deg, "value": self.value,
-                "S": self.S, "W_plus": self.W_plus, "CoT_plus": self.CoT_plus, "evaluated": self.evaluated}
+        """JSON-able (strict: a non-finite number, e.g. the infinite CoT+ of a gait short of S_min, is None)."""
+        def num(x):
+            return float(x) if math.isfinite(x) else None
+
+        return {"psi_deg": self.psi_deg, "A_deg": self.A_deg, "gamma_deg": self.gamma_deg, "value": num(self.value),
+                "S": [num(v) for v in self.S], "W_plus": [num(v) for v in self.W_plus],
+                "CoT_plus": [num(v) for v in self.CoT_plus], "evaluated": self.evaluated}
 
 
 @dataclass
@@ -284,7 +291,8 @@ class OCPResult:
             "periodicity_residual": num(self.periodicity_residual),
             "equation_residual": num(self.equation_residual),
             "failed_stage": self.failed_stage,
-            "homotopy": [h.__dict__ for h in self.homotopy],
+            "homotopy": [{k: (num(v) if isinstance(v, float) else [num(x) for x in v] if isinstance(v, tuple) else v)
+                          for k, v in h.__dict__.items()} for h in self.homotopy],
         }
 
 
@@ -367,6 +375,8 @@ class GaitOCP:
         self.gravity = gravity
         self.settings = settings or OCPSettings()
         self.scen = [Model(r, gravity=gravity) for r in self.settings.scenarios(robot)]
+        self.kept_run: list[HomotopyRecord] = []
+        """records of the homotopy whose result :meth:`solve` returned (empty if none succeeded)"""
         self._build()
 
     def _torque_nodes(self, z_tau, N):
@@ -501,13 +511,13 @@ class GaitOCP:
         ipopt.update({"print_level": 5 if s.verbose else 0, "sb": "yes"})
         ipopt.update(s.ipopt)
         nlp = {"x": X, "f": f, "g": G}
-        self.solver = cs.nlpsol("gait_ocp", "ipopt", nlp,
-                                {"print_time": bool(s.verbose), "error_on_fail": False, "ipopt": ipopt})
+        self.solver = build_ipopt("gait_ocp", nlp, {"print_time": bool(s.verbose), "error_on_fail": False,
+                                                    "ipopt": ipopt}, "OCPSettings.ipopt", s.ipopt)
         # later homotopy stages start from the previous stage's primal-dual point: a small initial
         # barrier parameter and bound push keep IPOPT from walking back into the interior
-        self.solver_warm = cs.nlpsol("gait_ocp_warm", "ipopt", nlp,
-                                     {"print_time": bool(s.verbose), "error_on_fail": False,
-                                      "ipopt": dict(WARM_IPOPT, **ipopt)})
+        self.solver_warm = build_ipopt("gait_ocp_warm", nlp, {"print_time": bool(s.verbose), "error_on_fail": False,
+                                                              "ipopt": dict(WARM_IPOPT, **ipopt)},
+                                       "OCPSettings.ipopt", s.ipopt)
 
     # ------------------------------------------------------------------ initial guess from a simulation
     def initial_guess(self, torque_signal) -> np.ndarray:
@@ -599,7 +609,12 @@ class GaitOCP:
         return float(np.sum(np.maximum(tau_mid * np.diff(phi, axis=1), 0.0)))
 
     def solve(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[HomotopyRecord], str | None, str]:
-        """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status)."""
+        """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
+
+        ``status`` is the return status (see :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`) of the solve that
+        decided: the last accepted stage or polish of the kept homotopy, else the failed stage of the last
+        homotopy, whose ``failed`` then names the stage (``x`` is that homotopy's last accepted iterate or None).
+        """
         best = None
         runs = []
         f0 = float(self._f(x0))  # objective of the (nearly feasible) initial guess
@@ -613,13 +628,28 @@ class GaitOCP:
             if best is not None and best[0] < f0:
                 break  # improved on the initial guess: the next (tighter) start is not needed
         history = [h for r in runs for h in r[1]]
+        self.kept_run = best[2] if best is not None else []
         if best is not None:
             return best[1], history, None, best[4]
         x, _, failed, status = runs[-1]
+        if len(runs) > 1:
+            failed = "; ".join(f"start sigma0 = {sigma0:.0e}: {r[2]} ({r[3]})"
+                               for sigma0, r in zip(self.settings.sigma0, runs))
         return x, history, failed, status
 
+    def _stage(self, solver, sigma: float, kind: str, **args) -> tuple[IpoptCall, HomotopyRecord]:
+        """One IPOPT call, read through the status table, and its record."""
+        t0 = time.perf_counter()
+        call = call_ipopt(solver, self.nx, self.ng, **args)
+        un = self.unpack(call.x)
+        comp = max(sc["comp"] for sc in un["scen"])
+        rec = HomotopyRecord(sigma, call.status, call.usable, call.iterations, comp, call.f,
+                             tuple(sc["S"] for sc in un["scen"]), time.perf_counter() - t0, kind=kind,
+                             message=call.describe())
+        return call, rec
+
     def _homotopy(self, x0: np.ndarray, sigma0: float):
-        """One relaxation homotopy from x0, then the polish."""
+        """One relaxation homotopy from x0, then the polish: (x or None, records, failed stage or None, status)."""
         s = self.settings
         sig = sigma0
         sched = []
@@ -644,20 +674,13 @@ class GaitOCP:
             if lam_x is not None:
                 args.update(lam_x0=lam_x, lam_g0=lam_g)
                 solver = self.solver_warm
-            t0 = time.perf_counter()
-            sol = solver(**args)
-            st = solver.stats()
-            status = str(st.get("return_status", "unknown"))
-            accepted, _ = ipopt_status(status)
-            xs = np.asarray(sol["x"]).ravel()
-            un = self.unpack(xs)
-            comp = max(sc["comp"] for sc in un["scen"])
-            hist.append(HomotopyRecord(sigma, status, accepted, int(st.get("iter_count", -1)), comp,
-                                       float(sol["f"]), tuple(sc["S"] for sc in un["scen"]), time.perf_counter() - t0))
-            if not accepted:
-                return best, hist, f"homotopy stage {k + 1}/{len(sched)} (sigma = {sigma:.1e})", status
-            x, lam_x, lam_g = xs, np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel()
-            best = xs
+            call, rec = self._stage(solver, sigma, "homotopy", **args)
+            hist.append(rec)
+            if not call.usable:
+                return best, hist, f"homotopy stage {k + 1}/{len(sched)} (sigma = {sigma:.1e})", call.status
+            x, lam_x, lam_g = call.x, call.lam_x, call.lam_g
+            best = call.x
+        decided = hist[-1].return_status
         # polish: each pair on its identified branch (s_j = 0 or c_j = 0 as bounds), which removes
         # the O(sqrt(sigma)) residual of biactive pairs; kept only if IPOPT accepts it
         lbx, ubx = self._lbx.copy(), self._ubx.copy()
@@ -675,19 +698,13 @@ class GaitOCP:
         lbg = self._lbg.copy()
         for sl in tie_idx:
             lbg[sl] = -s.sigma_min
-        t0 = time.perf_counter()
-        sol = self.solver_warm(x0=np.minimum(x, ubx), lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, lam_x0=lam_x, lam_g0=lam_g)
-        st = self.solver_warm.stats()
-        status = str(st.get("return_status", "unknown"))
-        accepted, _ = ipopt_status(status)
-        xs = np.asarray(sol["x"]).ravel()
-        un = self.unpack(xs)
-        comp = max(sc["comp"] for sc in un["scen"])
-        hist.append(HomotopyRecord(0.0, status, accepted, int(st.get("iter_count", -1)), comp, float(sol["f"]),
-                                   tuple(sc["S"] for sc in un["scen"]), time.perf_counter() - t0))
-        if accepted and comp <= hist[-2].comp_residual:
-            best = xs
-        return best, hist, None, hist[-1].return_status
+        call, rec = self._stage(self.solver_warm, 0.0, "polish", x0=np.minimum(x, ubx), lbx=lbx, ubx=ubx, lbg=lbg,
+                                ubg=ubg, lam_x0=lam_x, lam_g0=lam_g)
+        hist.append(rec)
+        if call.usable and rec.comp_residual <= hist[-2].comp_residual:
+            best = call.x
+            decided = call.status
+        return best, hist, None, decided
 
 
 def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicPchip:
@@ -717,12 +734,14 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     x, hist, failed, status = ocp.solve(x0)
     res.homotopy = hist
     res.solve_time_s = time.perf_counter() - t_start
-    if x is None:
+    outcome = ipopt_status(status)
+    if failed is not None:
+        # every homotopy failed: the status table decides infeasible vs solver failure
         res.failed_stage = failed
-        ok, meaning = ipopt_status(status)
-        res.status = OCPStatus.INFEASIBLE if status == "Infeasible_Problem_Detected" else OCPStatus.SOLVER_FAILURE
-        res.message = (f"{'infeasible' if res.status == OCPStatus.INFEASIBLE else 'IPOPT failed'} at {failed}: "
-                       f"{status} ({meaning})")
+        res.status = OCPStatus.INFEASIBLE if outcome.kind == "infeasible" else OCPStatus.SOLVER_FAILURE
+        res.message = (f"{'infeasible' if res.status == OCPStatus.INFEASIBLE else 'IPOPT failed'}: "
+                       f"IPOPT {outcome.describe()} at {failed}")
+    if x is None:
         return res
     un = ocp.unpack(x)
     N = settings.nodes
@@ -742,18 +761,26 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     res.equation_residual = ocp.equation_residual(x)
     res.value_ocp = _value_from(settings, res.S_ocp, res.CoT_plus_ocp)
     if failed is not None:
-        res.failed_stage = failed
-        res.status = OCPStatus.SOLVER_FAILURE
-        res.message = f"IPOPT failed at {failed}: {status}; the best accepted iterate is kept"
+        res.message += "; the last accepted iterate is reported (not an optimum)"
         return res
-    if res.complementarity_residual > settings.comp_tol:
+    numbers = [*res.S_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
+               res.equation_residual, *np.ravel(res.tau)]
+    if not all(math.isfinite(v) for v in numbers):
+        res.status = OCPStatus.SOLVER_FAILURE
+        res.message = f"IPOPT returned {ipopt_status(status).describe()} but the solution has NaN or Inf values"
+        return res
+    if not res.complementarity_residual <= settings.comp_tol:
         res.status = OCPStatus.NOT_COMPLEMENTARY
         res.message = (f"complementarity residual {res.complementarity_residual:.2e} above {settings.comp_tol:.1e} "
                        "after the homotopy")
         return res
     res.success = True
     res.status = OCPStatus.SUCCESS
-    res.message = f"optimal {settings.objective} profile found ({len(hist)} homotopy stages)"
+    res.message = f"optimal {settings.objective} profile found ({len(hist)} IPOPT calls, final IPOPT status " \
+                  f"{status})"
+    last = ocp.kept_run[-1] if ocp.kept_run else None
+    if last is not None and last.kind == "polish" and not last.accepted:
+        res.message += f"; polish not kept: IPOPT {last.message}"
     if replay:
         _replay(res, robot, gravity, settings, ocp)
     res.solve_time_s = time.perf_counter() - t_start
@@ -786,7 +813,8 @@ def _replay(res: OCPResult, robot: Robot, gravity: str, settings: OCPSettings, o
     res.W_plus_replay = [r.W_plus for r in sims]
     res.CoT_plus_replay = [r.CoT_plus for r in sims]
     res.value_replay = objective_value(settings, sims, enforce_s_min=False)
-    res.rel_diff_replay = abs(res.value_replay - res.value_ocp) / abs(res.value_replay)
+    res.rel_diff_replay = (abs(res.value_replay - res.value_ocp) / abs(res.value_replay) if res.value_replay != 0
+                           else float("nan"))
     if res.harmonic is not None and math.isfinite(res.harmonic.value) and res.harmonic.value != 0:
         h = res.harmonic.value
         res.gain = (h - res.value_replay) / h if settings.objective == "min_cot" else (res.value_replay - h) / abs(h)

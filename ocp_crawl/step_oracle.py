@@ -29,7 +29,7 @@ import casadi as cs
 import numpy as np
 
 from .model import KIN, NP, Model, symbolic
-from .mpcc import NPAIR, StepResult, StepState, _check_tau, step_result_from_w
+from .mpcc import NPAIR, StepResult, StepState, _check_tau, failed_step_result, step_result_from_w
 from .result import Mode
 
 #: modes enumerated, in the order of the selector vector; slip modes are indexed like the pairs
@@ -111,7 +111,8 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     """Solve the incremental step exactly by enumerating the contact modes with Newton.
 
     Returns a :class:`~ocp_crawl.mpcc.StepResult` with status ``"Enumeration_Succeeded"`` or
-    ``"No_Consistent_Mode"``; ``extra['candidates']`` lists every mode tried, ``extra['lift_off']``
+    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`; a failed result has NaN
+    solution fields); ``extra['candidates']`` lists every mode tried, ``extra['lift_off']``
     is True when no mode is consistent and a mode solution has a normal force <= 0.
     """
     if not isinstance(model, Model):
@@ -185,7 +186,6 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
                                   status="Enumeration_Succeeded", message=msg, iterations=iterations,
                                   solve_time=elapsed, extra=extra)
     extra["lift_off"] = any(c.get("converged") and c["fn_min"] <= 0 for c in candidates)
-    w = np.r_[state.phi, state.f_t / Mg, -state.f_t / Mg, np.zeros(NPAIR)]
     msg = "no consistent contact mode" + (" (a normal force would be <= 0: lift-off)" if extra["lift_off"] else "")
-    return step_result_from_w(model, state, w, tau=tau, success=False, status="No_Consistent_Mode", message=msg,
-                              iterations=iterations, solve_time=elapsed, extra=extra)
+    return failed_step_result(model, state, tau, status="No_Consistent_Mode", message=msg, iterations=iterations,
+                              solve_time=elapsed, extra=extra)
