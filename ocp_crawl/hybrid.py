@@ -48,6 +48,11 @@ SYMMETRY_TOL = 1e-8
 #: integrand (relative to the segment's largest value) and the number of halvings allowed
 QUAD_TOL = 1e-4
 QUAD_DEPTH = 8
+#: 5-point Gauss-Legendre nodes and weights on [-1, 1]; Legendre coefficients of the degree-4
+#: interpolant through values at the nodes (c = values @ _LEG_FIT) and its values at -1 and 1
+_XG, _WG = np.polynomial.legendre.leggauss(5)
+_LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
+_LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 
 
 @dataclass(frozen=True)
@@ -175,6 +180,9 @@ class _Point:
     aux: np.ndarray
     rates: dict | None = None
     """guard rates of the point's mode (cached by :meth:`HybridStepper._dips`)"""
+    tau: np.ndarray | None = None
+    """torque and its derivative at t (kept from the solve)"""
+    dtau: np.ndarray | None = None
 
     @property
     def xdot(self) -> np.ndarray:
@@ -250,7 +258,7 @@ class HybridStepper:
                 if not np.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, x, aux)
+            return _Point(t, x, aux, tau=tau, dtau=dtau)
         return None
 
     def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
@@ -299,7 +307,8 @@ class HybridStepper:
             j = 3 - i
             r[f"switch_to_{j}"] = (dlim[j] - dlim[i]) / Mg
         t, dt = pt.t, 1e-5
-        ab = self.ddot2(pt.x, self.torque(t), self.torque.derivative(t), q, self.p)[0]
+        tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
+        ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0]
         dd = np.asarray(self.torque.derivative(np.array([t + dt, t - dt]))).reshape(2, 2)
         ddtau = (dd[:, 0] - dd[:, 1]) / (2 * dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
@@ -531,9 +540,10 @@ class HybridStepper:
                     new = self._solve(t_new, guess, seg.q)
                     ok = new is not None
                     if ok:
-                        jump = np.max(np.abs(new.x[:2] - guess[:2]))
-                        ok = jump <= 0.05 + 0.5 * np.max(np.abs(guess[:2] - pt.x[:2])) and \
-                            np.max(np.abs(new.x[:2] - pt.x[:2])) < 0.35
+                        nx, gx, px = new.x, guess, pt.x
+                        jump = max(abs(nx[0] - gx[0]), abs(nx[1] - gx[1]))
+                        ok = jump <= 0.05 + 0.5 * max(abs(gx[0] - px[0]), abs(gx[1] - px[1])) and \
+                            max(abs(nx[0] - px[0]), abs(nx[1] - px[1])) < 0.35
                     if ok and np.sign(new.aux[AUX["det"]]) != det_sign:
                         ok = False  # crossed a fold onto another branch: treat as failure and locate it
                     if not ok:
@@ -702,7 +712,7 @@ class HybridStepper:
         steep stretches (low stiffness, large amplitudes) are resolved.  Returns the panel edges
         (lo, hi), nodes, weights and integrands (power (2, n, 5), friction power (n, 5)).
         """
-        xg, wg = np.polynomial.legendre.leggauss(5)
+        xg, wg = _XG, _WG
         n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
         edges = np.linspace(a, b, n + 1)
         if self.breakpoints.size:
@@ -720,7 +730,7 @@ class HybridStepper:
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
             f = np.concatenate([power, fric[None]], axis=0)  # (3, npan, 5)
             scale = max(scale, float(np.max(np.abs(f))))
-            tail = np.abs(np.polynomial.legendre.legfit(xg, f.reshape(-1, 5).T, 4)[3:]).max(axis=0).reshape(3, -1)
+            tail = np.abs(f.reshape(-1, 5) @ _LEG_FIT[:, 3:]).max(axis=1).reshape(3, -1)
             ok = np.all(tail <= QUAD_TOL * scale, axis=0) | (depth == QUAD_DEPTH)
             w = (half * wg).reshape(-1, 5)
             done.append((pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
@@ -741,7 +751,7 @@ class HybridStepper:
         w_abs = 0.0
         diss = 0.0
         wplus = np.zeros(2)
-        xg, _ = np.polynomial.legendre.leggauss(5)
+        xg = _XG
         for seg in segments:
             a = max(ta, seg.points[0].t)
             b = min(tb, seg.points[-1].t)
@@ -756,8 +766,7 @@ class HybridStepper:
             npan = len(edges)
             # values at the panel edges from each panel's degree-4 interpolant, so that a sign
             # change between an edge and the nearest Gauss node is not missed
-            coefs = np.polynomial.legendre.legfit(xg, pw.reshape(-1, 5).T, 4)
-            ends = np.polynomial.legendre.legval(np.array([-1.0, 1.0]), coefs).reshape(2, npan, 2)
+            ends = (pw.reshape(-1, 5) @ _LEG_ENDS).reshape(2, npan, 2)
             allv = np.concatenate([pw, ends], axis=2)
             positive_panels = np.all(allv >= 0, axis=2)
             wplus += np.sum(np.where(positive_panels[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
