@@ -37,7 +37,7 @@ from scipy.optimize import brentq
 from .inputs import PeriodicSignal, ReferenceTorque, as_signal
 from .model import AUX, Model, fast_ddot2, fast_newton, solve_many, symbolic
 from .quadrature import gauss_nodes
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 
 EPS = np.finfo(float).eps
 #: phases of the default output grid over the steady cycle (events are added)
@@ -798,16 +798,7 @@ class HybridStepper:
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
 
     def _balance(self, ints: dict, dV: float) -> dict:
-        """Energy balance of a cycle: input work = potential change + friction dissipation.
-
-        The residual is relative to the gross work (integral of |tau . phi'|, which the springs store and
-        return even when the net work vanishes), floored at 1e-12 M g L for a robot that does not move.
-        """
-        bal = ints["input_work"] - dV - ints["dissipation"]
-        scale = max(abs(ints["input_work"]), abs(ints["dissipation"]), abs(dV), ints["gross_work"],
-                    1e-12 * self.model.robot.MgL)
-        return {"input_work": ints["input_work"], "potential_change": dV, "dissipation": ints["dissipation"],
-                "gross_work": ints["gross_work"], "balance_residual": bal / scale}
+        return energy_balance(ints["input_work"], dV, ints["dissipation"], ints["gross_work"], self.model.robot)
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):

@@ -34,12 +34,12 @@ from typing import Literal
 import casadi as cs
 import numpy as np
 
-from .hybrid import HybridOptions, simulate_torque
+from .hybrid import simulate_torque
 from .inputs import Harmonic, PeriodicPchip, ReferenceTorque
 from .model import NP, Model, Robot
 from .mpcc import IpoptCall, build_ipopt, call_ipopt, check_ipopt_options, ipopt_status
 from .result import CrawlResult, Mode, cost_of_transport
-from .step_equations import NEQ, NPAIR, NW, step_equations
+from .step_equations import NPAIR, NW, step_equations
 
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
 OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
@@ -394,7 +394,6 @@ class GaitOCP:
         ntau = 2 * N if s.parametrization == "free" else 2 * (2 * s.fourier_order + 1)
         z_tau = cs.MX.sym("tau", ntau)
         T = self._torque_nodes(z_tau, N)  # (2, N) scaled
-        sigma = cs.MX.sym("sigma")
 
         # one step as a function, mapped over the N steps of each scenario
         phi_prev = cs.SX.sym("phi_prev", 2)

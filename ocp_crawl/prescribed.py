@@ -18,7 +18,7 @@ from scipy.optimize import brentq, minimize_scalar
 from .inputs import PeriodicSignal, as_signal
 from .model import KIN, Model, call_mapped, symbolic
 from .quadrature import gauss_nodes, positive_part_integral
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 
 class _Kinematic:
     """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
@@ -228,7 +228,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         if b - a <= 0:
             continue
         m = mode_at(0.5 * (a + b))
-        da, db = float(kin(a)["d"][0]), float(kin(b)["d"][0])
+        db = float(kin(b)["d"][0])
         anchors.append((a, b, m, x1, x2))
         if m.foot == 1:
             x1 = x2 - db
@@ -319,11 +319,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         w_abs += float(np.sum(wq * np.sum(np.abs(tau * k1["dphi"]), axis=0)))
         diss += float(np.sum(wq * np.abs(f * k1["ddot"])))
     dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
-    # residual relative to the gross work (integral of sum |tau_i phi_i'|: the net input work may be a
-    # small difference of large positive and negative works), floored for a robot that does not move
-    scale = max(abs(w_in), abs(diss), abs(dV), w_abs, 1e-12 * robot.MgL, 1e-300)
-    res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss, "gross_work": w_abs,
-                  "balance_residual": (w_in - dV - diss) / scale}
+    res.energy = energy_balance(w_in, dV, diss, w_abs, robot)
     res.W_plus_joint = wplus
     res.W_plus = float(wplus.sum())
     res.CoT_plus = cost_of_transport(res.W_plus, robot, res.S)

@@ -120,6 +120,19 @@ def cost_of_transport(w_plus: float, robot, S: float) -> float:
     return float(w_plus / den)
 
 
+def energy_balance(input_work: float, potential_change: float, dissipation: float, gross_work: float,
+                   robot) -> dict:
+    """Energy balance of a cycle [J]: input work = potential change + friction dissipation.
+
+    ``balance_residual`` is relative to the gross work (integral of sum |tau_i phi_i'|, which the springs
+    store and return even when the net work is a small difference of large works), floored at
+    1e-12 M g L for a robot that does not move (and at 1e-300 against underflow).
+    """
+    scale = max(abs(input_work), abs(dissipation), abs(potential_change), gross_work, 1e-12 * robot.MgL, 1e-300)
+    return {"input_work": input_work, "potential_change": potential_change, "dissipation": dissipation,
+            "gross_work": gross_work, "balance_residual": (input_work - potential_change - dissipation) / scale}
+
+
 ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")
 
 

@@ -39,7 +39,7 @@ from .hybrid import HybridStepper
 from .inputs import PeriodicSignal, as_signal
 from .model import Model
 from .mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport
+from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 from .step_oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 
 
@@ -311,11 +311,7 @@ class TimeStepper:
         w_in = float(work.sum())
         gross = float(np.abs(work).sum())
         dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))
-        # residual relative to the gross work sum |tau_i dphi_i| (the net input work can be a small difference
-        # of large works), floored at 1e-12 M g L for a robot that hardly moves (as the event-driven stepper)
-        scale = max(abs(w_in), abs(diss), abs(dV), gross, 1e-12 * r.MgL)
-        res.energy = {"input_work": w_in, "potential_change": dV, "dissipation": diss, "gross_work": gross,
-                      "balance_residual": (w_in - dV - diss) / scale}
+        res.energy = energy_balance(w_in, dV, diss, gross, r)
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,

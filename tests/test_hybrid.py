@@ -9,7 +9,7 @@ import pytest
 
 from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicLinear,
                        PeriodicSpline, ReferenceTorque, Robot, Status, simulate_torque)
-from ocp_crawl.hybrid import HybridStepper, mode_q
+from ocp_crawl.hybrid import HybridStepper
 from ocp_crawl.model import AUX
 from ocp_crawl.prescribed import simulate_angles
 

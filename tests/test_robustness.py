@@ -2,7 +2,6 @@
 together than the step, many events per cycle (fast chattering inputs), the event cap."""
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from ocp_crawl import FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot, Status, simulate_torque
 from ocp_crawl.hybrid import HybridStepper, _cubic_min, input_step
