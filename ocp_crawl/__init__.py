@@ -1,11 +1,11 @@
 """ocp_crawl: hybrid-quasistatic simulation, analysis and optimal control of soft inchworm crawlers."""
-from .model import Model, Robot
-from .inputs import (CallableSignal, FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
+from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.inputs import (CallableSignal, FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
                      PeriodicSpline, ReferenceTorque, as_signal)
-from .result import CrawlResult, Event, Mode, SimulationError, Status
-from .hybrid import HybridOptions, simulate_torque
-from .prescribed import simulate_angles
-from .problem import Problem, ProblemError, load_problem, problem_from_dict, run_problem
+from ocp_crawl.sim.result import CrawlResult, Event, Mode, SimulationError, Status
+from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.sim.angles import simulate_angles
+from ocp_crawl.problem.core import Problem, ProblemError, load_problem, problem_from_dict, run_problem
 
 __all__ = [
     "Model", "Robot", "Harmonic", "FourierSeries", "PeriodicSpline", "PeriodicLinear", "PeriodicPchip", "CallableSignal", "PeriodicSignal",

@@ -1,4 +1,4 @@
 """``python -m ocp_crawl``: the ``ocp-crawl`` command line."""
-from .cli import main
+from ocp_crawl.cli.app import main
 
 raise SystemExit(main())

@@ -29,7 +29,7 @@ def _median_time(fn, repeat: int) -> tuple[float, object]:
 def bench_hybrid(repeat: int) -> dict:
     """One steady cycle of the paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive)."""
     from ocp_crawl import Harmonic, HybridOptions, Model, ReferenceTorque, Robot, simulate_torque
-    from ocp_crawl.model import fast_newton
+    from ocp_crawl.model.statics import fast_newton
 
     out = {}
     for gravity in ("physical", "paper"):
@@ -47,7 +47,7 @@ def bench_hybrid(repeat: int) -> dict:
 
 def bench_prescribed(repeat: int) -> dict:
     from ocp_crawl import Harmonic, Model, Robot
-    from ocp_crawl.prescribed import simulate_angles
+    from ocp_crawl.sim.angles import simulate_angles
 
     model = Model(Robot.paper())
     med, res = _median_time(lambda: simulate_angles(model, Harmonic.from_degrees(90, 30, 45)), repeat)
@@ -57,7 +57,7 @@ def bench_prescribed(repeat: int) -> dict:
 def bench_ocp(repeat: int) -> dict:
     """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve each)."""
     from ocp_crawl import Robot
-    from ocp_crawl.ocp import OCPSettings, optimize_gait
+    from ocp_crawl.ocp.gait import OCPSettings, optimize_gait
 
     out = {}
     for name, kw in (("max_speed", {}), ("min_cot", {"S_min": 0.04}), ("robust_speed", {})):
@@ -79,8 +79,8 @@ def bench_paper(repeat: int) -> dict:
     import numpy as np
 
     from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot, simulate_torque
-    from ocp_crawl.prescribed import simulate_angles
-    from ocp_crawl.pressure import paper_data_dir
+    from ocp_crawl.sim.angles import simulate_angles
+    from ocp_crawl.io.paper_data import paper_data_dir
 
     out = {}
     gait = Harmonic.from_degrees(90, 30, 45)

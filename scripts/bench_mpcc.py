@@ -23,9 +23,9 @@ def bench(steps: int, gravity: str, psi: float, formulation: str, repeat: int) -
     import numpy as np
 
     from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
-    from ocp_crawl.hybrid import HybridStepper
-    from ocp_crawl.mpcc import MPCCOptions, MPCCStep, StepState
-    from ocp_crawl.timestepping import TimeStepper
+    from ocp_crawl.sim.event import HybridStepper
+    from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepState
+    from ocp_crawl.sim.timestepping import TimeStepper
 
     model = Model(Robot.paper(), gravity=gravity)
     torque = ReferenceTorque(Harmonic.from_degrees(90, 30, psi), model.robot.k)

@@ -1,6 +1,6 @@
 """Bad-input matrix: every command, malformed problem files and arguments -> exit 2, one line, no traceback.
 
-One table (:data:`ROWS`) of cases; each row runs ``ocp_crawl.cli.main`` in-process with every long
+One table (:data:`ROWS`) of cases; each row runs ``ocp_crawl.cli.app.main`` in-process with every long
 computation replaced by a function that fails the test (bad input must be rejected before any
 run), and checks: exit code 2, stdout empty, stderr exactly one line ``ocp-crawl: error: ...``
 naming the file (for file errors), the key and the value as written, no traceback.  A few rows
@@ -15,15 +15,15 @@ from pathlib import Path
 
 import pytest
 
-import ocp_crawl.animate
-import ocp_crawl.cli as cli
-import ocp_crawl.crosscheck
-import ocp_crawl.hybrid
-import ocp_crawl.ocp
-import ocp_crawl.prescribed
-import ocp_crawl.reproduce
-import ocp_crawl.sweep
-import ocp_crawl.timestepping
+import ocp_crawl.viz.animate
+import ocp_crawl.cli.app as cli
+import ocp_crawl.sim.crosscheck
+import ocp_crawl.sim.event
+import ocp_crawl.ocp.gait
+import ocp_crawl.sim.angles
+import ocp_crawl.studies.reproduce
+import ocp_crawl.sweep.core
+import ocp_crawl.sim.timestepping
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -288,11 +288,11 @@ def _computed(*args, **kwargs):
 @pytest.fixture
 def nothing_computed(monkeypatch):
     """Every solver, sweep and study fails the test if called (bad input must be rejected first)."""
-    for module, name in ((cli, "run_problem"), (ocp_crawl.hybrid.HybridStepper, "run"),
-                         (ocp_crawl.prescribed, "simulate_angles"), (ocp_crawl.timestepping, "simulate_mpcc"),
-                         (ocp_crawl.sweep, "run_sweep"), (ocp_crawl.reproduce, "reproduce"),
-                         (ocp_crawl.animate, "animate_problem"), (ocp_crawl.crosscheck, "crosscheck"),
-                         (ocp_crawl.ocp, "optimize_gait")):
+    for module, name in ((cli, "run_problem"), (ocp_crawl.sim.event.HybridStepper, "run"),
+                         (ocp_crawl.sim.angles, "simulate_angles"), (ocp_crawl.sim.timestepping, "simulate_mpcc"),
+                         (ocp_crawl.sweep.core, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
+                         (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
+                         (ocp_crawl.ocp.gait, "optimize_gait")):
         monkeypatch.setattr(module, name, _computed)
 
 
@@ -399,8 +399,8 @@ def test_the_guard_catches_a_computation(tmp_path, capsys, nothing_computed, mon
 
 
 def test_a_partly_valid_grid_is_data_not_bad_input():
-    from ocp_crawl.problem import ProblemError, load_problem
-    from ocp_crawl.sweep import check_some_point_valid, grid_from_specs
+    from ocp_crawl.problem.core import ProblemError, load_problem
+    from ocp_crawl.sweep.core import check_some_point_valid, grid_from_specs
 
     problem = load_problem(PAPER)
     # gamma 30 with psi 45 starts with foot 1 off the ground; gamma 90 is fine: the sweep records both

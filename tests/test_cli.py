@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ocp_crawl.cli import COMMANDS, main
+from ocp_crawl.cli.app import COMMANDS, main
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -106,8 +106,8 @@ def test_demo(capsys, tmp_path, monkeypatch):
     s_phys, s_paper = summary["torque_physical"]["S"], summary["torque_paper"]["S"]
     assert 0.02 < abs(s_phys - s_paper) / abs(s_phys) < 0.10
     # --out guard: the figures of the --force run are not the point here (and cost most of the time)
-    import ocp_crawl.cli as cli
-    from ocp_crawl.files import atomic_write
+    import ocp_crawl.cli.app as cli
+    from ocp_crawl.io.files import atomic_write
 
     def cheap_outputs(out, result, problem, data, stem=""):
         return [atomic_write(out / f"{stem}{name}", lambda fh: fh.write(b"stand-in")) for name in cli.RUN_FILES]
@@ -151,7 +151,7 @@ def one_line(err: str) -> str:
 @pytest.mark.parametrize("exc", [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
                                  TypeError("unsupported operand")])
 def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
-    import ocp_crawl.cli as cli
+    import ocp_crawl.cli.app as cli
 
     def broken(*args, **kwargs):
         raise exc
@@ -169,20 +169,20 @@ def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
 
 
 def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
-    import ocp_crawl.ocp
+    import ocp_crawl.ocp.gait
 
     def broken(*args, **kwargs):
         return 1.0 / 0.0
 
     monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
-    monkeypatch.setattr(ocp_crawl.ocp, "optimize_gait", broken)
+    monkeypatch.setattr(ocp_crawl.ocp.gait, "optimize_gait", broken)
     code, out, err = run(capsys, "optimize", REPO / "problems" / "ocp_max_speed.toml")
     assert code == 1
     assert one_line(err).startswith("ocp-crawl: internal error: ZeroDivisionError: ")
 
 
 def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
-    import ocp_crawl.cli as cli
+    import ocp_crawl.cli.app as cli
 
     def full(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
@@ -198,9 +198,9 @@ def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
 # ------------------------------------------------------------------------------------------ no_start
 def test_no_start_check_agrees_with_the_solver():
     """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as no_start."""
-    from ocp_crawl.cli import BadInput, check_start
-    from ocp_crawl.problem import load_problem, run_problem
-    from ocp_crawl.result import Status
+    from ocp_crawl.cli.app import BadInput, check_start
+    from ocp_crawl.problem.core import load_problem, run_problem
+    from ocp_crawl.sim.result import Status
 
     for k, expect_start in ((0.00306, False), (0.0306, True), (0.1677, True)):
         problem = load_problem(PAPER, [f"robot.k={k}"])
@@ -286,7 +286,7 @@ def test_animate_never_overwrites_a_gif_without_force(capsys, tmp_path):
 
 def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, tmp_path, monkeypatch):
     """No full reproduce here: a stand-in records the calls and writes report.md like the real one."""
-    import ocp_crawl.reproduce as rp
+    import ocp_crawl.studies.reproduce as rp
 
     calls = []
 

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Model, Robot
-from ocp_crawl.model import fast_newton, fast_newton_batch, solve_many, symbolic
-from ocp_crawl.hybrid import mode_q
-from ocp_crawl.result import Mode
+from ocp_crawl.model.statics import fast_newton, fast_newton_batch, solve_many, symbolic
+from ocp_crawl.sim.event import mode_q
+from ocp_crawl.sim.result import Mode
 
 SCRIPT = """
 import json
 from ocp_crawl import *
-from ocp_crawl.model import fast_newton
+from ocp_crawl.model.statics import fast_newton
 m = Model(Robot.paper(mu1=0.36, mu2=0.41))
 r = simulate_torque(m, ReferenceTorque(Harmonic.from_degrees(90, 30, 60), m.robot.k))
 print(json.dumps({"compiled": fast_newton().compiled, "S": r.S, "W": r.W_plus, "ev": [e.t for e in r.events]}))

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Model, Robot
-from ocp_crawl.crosscheck import CrossCheckTolerances, convergence_order, crosscheck
+from ocp_crawl.sim.crosscheck import CrossCheckTolerances, convergence_order, crosscheck
 
 from conftest import paper_torque
 

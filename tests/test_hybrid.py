@@ -9,9 +9,9 @@ import pytest
 
 from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicLinear,
                        PeriodicSpline, ReferenceTorque, Robot, Status, simulate_torque)
-from ocp_crawl.hybrid import HybridStepper
-from ocp_crawl.model import AUX
-from ocp_crawl.prescribed import simulate_angles
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.model.statics import AUX
+from ocp_crawl.sim.angles import simulate_angles
 
 from conftest import PAPER_DATA, paper_torque
 

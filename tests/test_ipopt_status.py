@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from ocp_crawl import CallableSignal, Model, Robot, Status
-from ocp_crawl.hybrid import HybridStepper
-from ocp_crawl.mpcc import (FAILURE_KINDS, IPOPT_RETURN_STATUS, RESULT_FIELDS, MPCCOptions, MPCCStep, SolverOutcome,
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.sim.mpcc import (FAILURE_KINDS, IPOPT_RETURN_STATUS, RESULT_FIELDS, MPCCOptions, MPCCStep, SolverOutcome,
                             StepState, call_ipopt, ipopt_status)
-from ocp_crawl.ocp import GaitOCP, OCPSettings, OCPStatus, optimize_gait
-from ocp_crawl.step_oracle import solve_step_enumerate
-from ocp_crawl.timestepping import simulate_mpcc
+from ocp_crawl.ocp.gait import GaitOCP, OCPSettings, OCPStatus, optimize_gait
+from ocp_crawl.sim.oracle import solve_step_enumerate
+from ocp_crawl.sim.timestepping import simulate_mpcc
 
 from conftest import paper_torque
 
@@ -258,8 +258,8 @@ def test_time_stepping_without_a_start_is_no_start():
 def test_cli_simulate_mpcc_solver_failure_exits_1(monkeypatch, capsys):
     """IPOPT's real failure through the CLI (iteration limit 0 in the step solver's defaults): exit code 1,
     the IPOPT status on stderr in one line, no traceback."""
-    import ocp_crawl.mpcc as mpcc
-    from ocp_crawl.cli import main
+    import ocp_crawl.sim.mpcc as mpcc
+    from ocp_crawl.cli.app import main
 
     monkeypatch.setitem(mpcc.DEFAULT_IPOPT, "max_iter", 0)
     problem = PACKAGE.parent / "problems" / "paper_gait.toml"

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Mode, Model, Robot, Status, simulate_torque
-from ocp_crawl.hybrid import HybridStepper
-from ocp_crawl.mpcc import (DEFAULT_IPOPT, MPCCOptions, MPCCStep, StepState, ipopt_status,
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.sim.mpcc import (DEFAULT_IPOPT, MPCCOptions, MPCCStep, StepState, ipopt_status,
                             mode_from_pairs)
-from ocp_crawl.step_oracle import solve_step_enumerate
-from ocp_crawl.timestepping import TimeSteppingOptions, simulate_mpcc
+from ocp_crawl.sim.oracle import solve_step_enumerate
+from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 
 from conftest import paper_torque
 

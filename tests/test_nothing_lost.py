@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ocp_crawl import files
-from ocp_crawl.files import TEMP_RE, atomic_write, remove_stale_temps, write_json, write_npz
+from ocp_crawl.io import files
+from ocp_crawl.io.files import TEMP_RE, atomic_write, remove_stale_temps, write_json, write_npz
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -79,7 +79,7 @@ def test_a_failed_first_write_creates_nothing(tmp_path):
 
 KILLED_WRITER = textwrap.dedent("""
     import os, signal, sys
-    from ocp_crawl.files import atomic_write
+    from ocp_crawl.io.files import atomic_write
 
     def write(fh):
         fh.write(b"half of the new ")
@@ -166,7 +166,7 @@ MONITOR = textwrap.dedent("""
                 events.append(["rename", src, dst])
 
     sys.addaudithook(hook)
-    from ocp_crawl.cli import main
+    from ocp_crawl.cli.app import main
     import matplotlib.pyplot as plt
     import numpy as np
 
@@ -259,7 +259,7 @@ def test_a_killed_library_build_is_cleaned_up_and_rebuilt(tmp_path, monkeypatch)
     """The C source and the library are built in a private temporary directory and the library renamed
     into the cache: a build killed half-way leaves only that directory, which the next build removes."""
     cs = pytest.importorskip("casadi")
-    from ocp_crawl import compiled
+    from ocp_crawl.model import compiled
 
     if compiled._compiler() is None:
         pytest.skip("no C compiler")

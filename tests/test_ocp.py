@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.ocp import OCPSettings, OCPStatus, optimize_gait
+from ocp_crawl.ocp.gait import OCPSettings, OCPStatus, optimize_gait
 
 N = 200
 SETTINGS = {
@@ -93,7 +93,7 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
     import json
     from pathlib import Path
 
-    from ocp_crawl.cli import main
+    from ocp_crawl.cli.app import main
 
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
     out = tmp_path / "opt"
@@ -117,7 +117,7 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     import json
     from pathlib import Path
 
-    from ocp_crawl.cli import main
+    from ocp_crawl.cli.app import main
 
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_min_cot.toml"
     code = main(["optimize", str(problem), "--set", "ocp.nodes=24", "--set", "ocp.harmonic_psi=8",

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Harmonic, Mode, Model, Robot, Status
-from ocp_crawl.prescribed import _Kinematic, simulate_angles
+from ocp_crawl.sim.angles import _Kinematic, simulate_angles
 
 
 @pytest.mark.parametrize("mu1,mu2", [(0.389, 0.389), (0.33, 0.45)])

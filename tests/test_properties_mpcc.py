@@ -23,10 +23,10 @@ from hypothesis import HealthCheck, assume, event, example, given, note, setting
 from hypothesis import strategies as st
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
-from ocp_crawl.mpcc import FAILURE_KINDS, RESULT_FIELDS, SLIP_EPS, MPCCStep, StepState, ipopt_status
-from ocp_crawl.result import STATUS_MESSAGES, Mode, Status
-from ocp_crawl.step_oracle import solve_step_enumerate
-from ocp_crawl.timestepping import TimeSteppingOptions, simulate_mpcc
+from ocp_crawl.sim.mpcc import FAILURE_KINDS, RESULT_FIELDS, SLIP_EPS, MPCCStep, StepState, ipopt_status
+from ocp_crawl.sim.result import STATUS_MESSAGES, Mode, Status
+from ocp_crawl.sim.oracle import solve_step_enumerate
+from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "20"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None, database=None,

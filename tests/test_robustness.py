@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot, Status, simulate_torque
-from ocp_crawl.hybrid import HybridStepper, _cubic_min, input_step
+from ocp_crawl.sim.event import HybridStepper, _cubic_min, input_step
 
 from conftest import paper_torque
 

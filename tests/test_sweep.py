@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ocp_crawl.cli import main
-from ocp_crawl.problem import ProblemError, load_problem, run_problem
-from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, _Store,
+from ocp_crawl.cli.app import main
+from ocp_crawl.problem.core import ProblemError, load_problem, run_problem
+from ocp_crawl.sweep.core import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, _Store,
                              grid_from_specs, normalize_grid, parse_grid, run_sweep)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -193,7 +193,7 @@ def test_failures_are_recorded_with_status_and_message(tmp_path):
 
 
 def test_an_unexpected_exception_is_recorded_as_error(monkeypatch):
-    import ocp_crawl.sweep as sweep
+    import ocp_crawl.sweep.core as sweep
 
     def flaky(problem):
         if problem.robot.k > 0.15:

@@ -30,12 +30,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hybrid import HybridOptions, simulate_torque
-from .inputs import as_signal
-from .model import Model
-from .mpcc import MPCCOptions
-from .result import CrawlResult, Mode
-from .timestepping import TimeSteppingOptions, simulate_mpcc
+from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.model.inputs import as_signal
+from ocp_crawl.model.statics import Model
+from ocp_crawl.sim.mpcc import MPCCOptions
+from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Exact solution of one incremental step by enumerating the contact modes (reference for the MPCC step).
 
-The incremental problem of :mod:`ocp_crawl.mpcc` has, generically, one of five contact modes at
+The incremental problem of :mod:`ocp_crawl.sim.mpcc` has, generically, one of five contact modes at
 the end of a step.  In each mode the unknowns z = (phi1, phi2, f_t/(M g)) solve three equations:
 the joint balance F(phi, tau, f_t) = 0 (the model's compiled residual) and
 
@@ -28,9 +28,9 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
-from .model import KIN, NP, Model, symbolic
-from .mpcc import NPAIR, StepResult, StepState, _check_tau, failed_step_result, step_result_from_w
-from .result import Mode
+from ocp_crawl.model.statics import KIN, NP, Model, symbolic
+from ocp_crawl.sim.mpcc import NPAIR, StepResult, StepState, _check_tau, failed_step_result, step_result_from_w
+from ocp_crawl.sim.result import Mode
 
 #: modes enumerated, in the order of the selector vector; slip modes are indexed like the pairs
 ENUM_MODES = (Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
@@ -110,8 +110,8 @@ def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray, max_iter: int = 4
 def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     """Solve the incremental step exactly by enumerating the contact modes with Newton.
 
-    Returns a :class:`~ocp_crawl.mpcc.StepResult` with status ``"Enumeration_Succeeded"`` or
-    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`; a failed result has NaN
+    Returns a :class:`~ocp_crawl.sim.mpcc.StepResult` with status ``"Enumeration_Succeeded"`` or
+    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`; a failed result has NaN
     solution fields); ``extra['candidates']`` lists every mode tried, ``extra['lift_off']``
     is True when no mode is consistent and a mode solution has a normal force <= 0.
     """

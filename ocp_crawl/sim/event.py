@@ -34,10 +34,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from .inputs import PeriodicSignal, ReferenceTorque, as_signal
-from .model import AUX, Model, fast_ddot2, fast_newton, solve_many, symbolic
-from .quadrature import gauss_nodes
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal
+from ocp_crawl.model.statics import AUX, Model, fast_ddot2, fast_newton, solve_many, symbolic
+from ocp_crawl.sim.quadrature import gauss_nodes
+from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 
 EPS = np.finfo(float).eps
 #: phases of the default output grid over the steady cycle (events are added)
@@ -154,7 +154,7 @@ def hermite(t0, x0, xd0, t1, x1, xd1, t):
 
 
 def event_kind(guard: str) -> str:
-    """Public event kind of an internal guard name (see :class:`~ocp_crawl.result.Event`)."""
+    """Public event kind of an internal guard name (see :class:`~ocp_crawl.sim.result.Event`)."""
     if guard.startswith("slip_"):
         return f"slip_onset_{guard[5]}"
     if guard.startswith("switch_to_"):

@@ -2,7 +2,7 @@
 
 Direct transcription over one cycle with N steps (quasistatic, hence time-scalable: only the
 phase matters).  Node k sits at phase t_k = k/N; node 0 carries the free initial state and steps
-k = 1..N are the incremental MPCC step equations of :mod:`ocp_crawl.step_equations` (the same
+k = 1..N are the incremental MPCC step equations of :mod:`ocp_crawl.model.step_equations` (the same
 compiled model functions and the same complementarity formulation as the MPCC step solver), with
 the torque of node k (node N uses the torque of node 0: the profile is periodic).  Periodicity of
 the gait is imposed explicitly (angles and tangential force of node N equal those of node 0) and
@@ -21,7 +21,7 @@ the worst direction * S).
 
 Solution: initial guess from the best harmonic gait of the same envelope (psi sweep with the
 event-driven stepper), Scholtes relaxation homotopy s_j c_j <= sigma with warm starts, every stage
-checked against the IPOPT status table of :mod:`ocp_crawl.mpcc`.  The optimal profile is then
+checked against the IPOPT status table of :mod:`ocp_crawl.sim.mpcc`.  The optimal profile is then
 replayed in the event-driven simulator (periodic shape-preserving cubic through the node torques).
 """
 from __future__ import annotations
@@ -34,12 +34,12 @@ from typing import Literal
 import casadi as cs
 import numpy as np
 
-from .hybrid import simulate_torque
-from .inputs import Harmonic, PeriodicPchip, ReferenceTorque
-from .model import NP, Model, Robot
-from .mpcc import IpoptCall, build_ipopt, call_ipopt, check_ipopt_options, ipopt_status
-from .result import CrawlResult, Mode, cost_of_transport
-from .step_equations import NPAIR, NW, step_equations
+from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.model.inputs import Harmonic, PeriodicPchip, ReferenceTorque
+from ocp_crawl.model.statics import NP, Model, Robot
+from ocp_crawl.sim.mpcc import IpoptCall, build_ipopt, call_ipopt, check_ipopt_options, ipopt_status
+from ocp_crawl.sim.result import CrawlResult, Mode, cost_of_transport
+from ocp_crawl.model.step_equations import NPAIR, NW, step_equations
 
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
 OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
@@ -205,7 +205,7 @@ class HomotopyRecord:
     kind: str = "homotopy"
     """'homotopy' (a relaxation stage) or 'polish' (the tightened NLP, sigma = 0)"""
     message: str = ""
-    """the return status and its meaning from :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`"""
+    """the return status and its meaning from :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`"""
 
 
 @dataclass
@@ -610,7 +610,7 @@ class GaitOCP:
     def solve(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[HomotopyRecord], str | None, str]:
         """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
 
-        ``status`` is the return status (see :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`) of the solve that
+        ``status`` is the return status (see :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`) of the solve that
         decided: the last accepted stage or polish of the kept homotopy, else the failed stage of the last
         homotopy, whose ``failed`` then names the stage (``x`` is that homotopy's last accepted iterate or None).
         """

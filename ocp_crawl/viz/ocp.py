@@ -9,11 +9,11 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .files import atomic_write, jsonable, write_json
-from .inputs import Harmonic, ReferenceTorque
-from .model import Robot
-from .ocp import OCPResult
-from .plots import mode_color, mode_runs, save_figure
+from ocp_crawl.io.files import atomic_write, jsonable, write_json
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.statics import Robot
+from ocp_crawl.ocp.gait import OCPResult
+from ocp_crawl.viz.gait import mode_color, mode_runs, save_figure
 
 
 def torques_csv(result: OCPResult) -> str:

@@ -1,4 +1,4 @@
-"""Figures of the paper's studies (:mod:`ocp_crawl.studies`), one function per figure.
+"""Figures of the paper's studies (:mod:`ocp_crawl.studies.core`), one function per figure.
 
 Every function returns a :class:`matplotlib.figure.Figure` on the Agg canvas (no pyplot state).
 Where a figure compares with the paper, the vertical axis is the progress per cycle -S: the
@@ -15,11 +15,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
-from .plots import mode_color, mode_runs, robot_points
-from .result import CrawlResult, Mode
-from .studies import (COT_K_LABELS, AmplitudeStudy, FrictionBand, GaitComparison, HigherFriction, PressureStudy,
+from ocp_crawl.viz.gait import mode_color, mode_runs, robot_points
+from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.studies.core import (COT_K_LABELS, AmplitudeStudy, FrictionBand, GaitComparison, HigherFriction, PressureStudy,
                       PsiGammaMap, StiffnessStudy)
-from .sweep import SUCCESS
+from ocp_crawl.sweep.core import SUCCESS
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
 BLUE = (0.0, 0.447, 0.741)

@@ -14,10 +14,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from .files import atomic_write
-from .inputs import PeriodicSignal
-from .model import Robot
-from .result import CrawlResult, Mode
+from ocp_crawl.io.files import atomic_write
+from ocp_crawl.model.inputs import PeriodicSignal
+from ocp_crawl.model.statics import Robot
+from ocp_crawl.sim.result import CrawlResult, Mode
 
 #: background colour of each contact mode (light, so the curves stay readable)
 MODE_COLORS = {

@@ -13,7 +13,7 @@ increments s_i+, s_i- >= 0 (dx_i = s_i+ - s_i-) such that
   0 <= s_i+ _|_ mu_i f_n,i + f_t,i >= 0 and 0 <= s_i- _|_ mu_i f_n,i - f_t,i >= 0
   (a foot slipping towards +x needs the friction force f_t,i = -mu_i f_n,i, i.e. opposing motion).
 
-The equations are those of :mod:`ocp_crawl.step_equations` (shared with the gait OCP), scaled
+The equations are those of :mod:`ocp_crawl.model.step_equations` (shared with the gait OCP), scaled
 (forces by M g, lengths by L, torques by M g L) in the variables
 w = (phi1, phi2, f_t1/Mg, f_t2/Mg, s1+/L, s1-/L, s2+/L, s2-/L, c1+, c1-, c2+, c2-) with the friction
 margins c_j lifted into variables.  The IPOPT NLP is built once per :class:`MPCCStep` with the previous
@@ -55,9 +55,9 @@ from typing import Literal, NamedTuple
 import casadi as cs
 import numpy as np
 
-from .model import KIN, NP, Model, symbolic
-from .result import Mode
-from .step_equations import NEQ, NPAIR, NW, step_equations
+from ocp_crawl.model.statics import KIN, NP, Model, symbolic
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.model.step_equations import NEQ, NPAIR, NW, step_equations
 
 Formulation = Literal["scholtes", "l1_penalty", "fischer_burmeister"]
 FORMULATIONS = ("scholtes", "l1_penalty", "fischer_burmeister")

@@ -15,10 +15,10 @@ import math
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from .inputs import PeriodicSignal, as_signal
-from .model import KIN, Model, call_mapped, symbolic
-from .quadrature import gauss_nodes, positive_part_integral
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
+from ocp_crawl.model.inputs import PeriodicSignal, as_signal
+from ocp_crawl.model.statics import KIN, Model, call_mapped, symbolic
+from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
+from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 
 class _Kinematic:
     """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
@@ -101,7 +101,7 @@ def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | N
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
     """Prescribed-angle gait over one cycle (it is periodic after one cycle).
 
-    ``angles``: 1-periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.inputs.Harmonic`).
+    ``angles``: 1-periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.model.inputs.Harmonic`).
     ``t_eval``: output phases in [0, 1]; by default 201 equally spaced phases plus the switching instants.
     ``n_scan``: phases scanned for sign changes of the switching functions before Brent's method.
 

@@ -7,39 +7,7 @@ from enum import IntEnum
 
 import numpy as np
 
-
-class Status(IntEnum):
-    """Integer status of a simulation; ``SUCCESS`` is the only success."""
-
-    SUCCESS = 0
-    LIFT_OFF = 1
-    FEET_CROSSED = 2
-    FOLD = 3
-    NO_CONVERGENCE = 4
-    NOT_PERIODIC = 5
-    NO_CONSISTENT_MODE = 6
-    TOO_MANY_EVENTS = 7
-    SOLVER_FAILURE = 8
-    JOINT_ON_GROUND = 9
-    NO_START = 10
-
-
-STATUS_MESSAGES = {
-    Status.SUCCESS: "periodic gait found",
-    Status.LIFT_OFF: "a foot lifts off (normal force reaches zero): the two-contact model is no longer valid",
-    Status.FEET_CROSSED: "the feet meet or cross (d reaches zero)",
-    Status.FOLD: "loss of equilibrium: the tracked equilibrium branch folds (singular Jacobian); "
-                 "the real robot would snap through dynamically",
-    Status.NO_CONVERGENCE: "the continuation of the equilibrium did not converge",
-    Status.NOT_PERIODIC: "the gait did not become periodic within the maximum number of cycles",
-    Status.NO_CONSISTENT_MODE: "no contact mode is consistent after a transition",
-    Status.TOO_MANY_EVENTS: "too many events in one cycle (chattering input?)",
-    Status.SOLVER_FAILURE: "the step solver failed",
-    Status.JOINT_ON_GROUND: "a joint reaches the ground (the leg would enter it): the model with contacts "
-                            "at the feet only is no longer valid",
-    Status.NO_START: "no equilibrium to start from at t = 0 (the robot cannot stand on both feet with both joints "
-                     "above the ground)",
-}
+from ocp_crawl.status import STATUS_MESSAGES, Status  # noqa: F401 (re-exported: the results' status)
 
 
 class Mode(IntEnum):

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Literal
+from typing import Any, Literal, NamedTuple
 
 import casadi as cs
 import numpy as np
@@ -31,6 +31,24 @@ GRAVITY_CONVENTIONS = ("physical", "paper")
 #: indices of the parameter vector ``p`` passed to every compiled function
 P_NAMES = ("M", "L", "beta", "k", "mu1", "mu2", "g", "sgrav")
 NP = len(P_NAMES)
+
+
+class Params(NamedTuple):
+    """The parameter vector ``p`` by name (CasADi symbols or floats): read ``params(p).mu1``, never ``p[4]``."""
+
+    M: Any
+    L: Any
+    beta: Any
+    k: Any
+    mu1: Any
+    mu2: Any
+    g: Any
+    sgrav: Any
+
+
+def params(p) -> Params:
+    """The entries of a parameter vector (CasADi or numpy, length NP) by name."""
+    return Params(*(p[i] for i in range(NP)))
 
 #: indices of the mode-parameter vector ``q``: stick-stick flag, slip direction of d, slipping
 #: foot weight (1 = foot 1, 0 = foot 2), stick distance d0 [m]
@@ -129,7 +147,7 @@ class _Symbolic:
     """(z[7], v0[3], tau0[2], dtau[2], q, p) -> (H[7], dH[7x7]): fold system, see the hybrid module"""
     newton: cs.Function
     """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): NEWTON_ITERS unrolled Newton steps + outputs;
-    pure SX, so it can be compiled to C (see :mod:`ocp_crawl.compiled`)"""
+    pure SX, so it can be compiled to C (see :mod:`ocp_crawl.model.compiled`)"""
     ddot2: cs.Function
     """(x[3], tau[2], dtau[2], q[4], p) -> (a, b[2]): d'' = a + b . tau'' along the mode's solution"""
 
@@ -146,7 +164,7 @@ NAUX = len(AUX_NAMES)
 
 
 def _geometry(phi, p):
-    M, L, beta, k, mu1, mu2, g, sgrav = (p[i] for i in range(NP))
+    M, L, beta, k, mu1, mu2, g, sgrav = params(p)
     l = L / (2 + beta)
     m = M / (2 + beta)
     phi1, phi2 = phi[0], phi[1]
@@ -181,7 +199,7 @@ def symbolic() -> _Symbolic:
     ft = cs.SX.sym("ft")
     p = cs.SX.sym("p", NP)
     q = cs.SX.sym("q", NQ)
-    M, L, beta, k, mu1, mu2, g, sgrav = (p[i] for i in range(NP))
+    M, L, beta, k, mu1, mu2, g, sgrav = params(p)
     geo = _geometry(phi, p)
     d = geo["d"]
     grad_d = cs.gradient(d, phi)
@@ -268,7 +286,7 @@ NEWTON_ITERS = 4
 @lru_cache(maxsize=1)
 def fast_newton():
     """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
-    from .compiled import FastFunction
+    from ocp_crawl.model.compiled import FastFunction
 
     return FastFunction(symbolic().newton)
 
@@ -276,7 +294,7 @@ def fast_newton():
 @lru_cache(maxsize=1)
 def fast_ddot2():
     """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
-    from .compiled import FastFunction
+    from ocp_crawl.model.compiled import FastFunction
 
     return FastFunction(symbolic().ddot2)
 
@@ -288,7 +306,7 @@ BATCH = 64
 @lru_cache(maxsize=1)
 def fast_newton_batch():
     """``newton`` mapped over BATCH columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
-    from .compiled import FastFunction
+    from ocp_crawl.model.compiled import FastFunction
 
     # MX symbols keep the map as a loop over one copy of the SX kernel in the generated C
     # (SX symbols would inline BATCH copies: a large library that takes long to compile)

@@ -1,7 +1,7 @@
 """The incremental (time-stepping) equations of one quasistatic step, as CasADi expressions.
 
-Shared by the MPCC step solver (:mod:`ocp_crawl.mpcc`) and the periodic-gait optimal control
-problem (:mod:`ocp_crawl.ocp`), so both use the same compiled model functions and the same
+Shared by the MPCC step solver (:mod:`ocp_crawl.sim.mpcc`) and the periodic-gait optimal control
+problem (:mod:`ocp_crawl.ocp.gait`), so both use the same compiled model functions and the same
 complementarity formulation.
 
 Scaled step variables (forces by M g, lengths by L, torques by M g L):
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import casadi as cs
 
-from .model import KIN, symbolic
+from ocp_crawl.model.statics import KIN, params, symbolic
 
 NW = 12
 """number of step variables"""
@@ -24,6 +24,17 @@ NEQ = 4
 """equations: joint balance (2), horizontal balance, kinematic closure"""
 NPAIR = 4
 PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
+
+
+def friction_margins(mu1, fn1, ft1, mu2, fn2, ft2) -> tuple:
+    """The four Coulomb margins (mu1 fn1 + ft1, mu1 fn1 - ft1, mu2 fn2 + ft2, mu2 fn2 - ft2).
+
+    ``ft_j`` is the tangential force on the robot at foot j along +x, ``fn_j`` the normal force (any
+    consistent unit: N, or scaled by M g); all four are >= 0 inside the friction cones, and margin
+    ``2 (j-1) + 0`` (``+ 1``) is zero when foot j is at its limit against -x (+x).  Works on floats,
+    numpy arrays and CasADi expressions alike.
+    """
+    return (mu1 * fn1 + ft1, mu1 * fn1 - ft1, mu2 * fn2 + ft2, mu2 * fn2 - ft2)
 
 
 def step_equations(phi_prev, w, tau_hat, p):
@@ -35,8 +46,9 @@ def step_equations(phi_prev, w, tau_hat, p):
     """
     sym = symbolic()
     phi, ft1, ft2, s, c = w[0:2], w[2], w[3], w[4:8], w[8:12]
-    M, L, mu1, mu2, g = p[0], p[1], p[4], p[5], p[6]
-    Mg = M * g
+    P = params(p)
+    L, mu1, mu2 = P.L, P.mu1, P.mu2
+    Mg = P.M * P.g
     kin1 = sym.kin(phi, p)
     kin0 = sym.kin(phi_prev, p)
     F = sym.residual(phi, tau_hat * Mg * L, ft1 * Mg, p) / (Mg * L)
@@ -44,5 +56,5 @@ def step_equations(phi_prev, w, tau_hat, p):
     closure = (kin1[KIN["d"]] - kin0[KIN["d"]]) / L - (dx2 - dx1)
     g_eq = cs.vertcat(F, ft1 + ft2, closure)
     fn1, fn2 = kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg
-    margins = cs.vertcat(mu1 * fn1 + ft1, mu1 * fn1 - ft1, mu2 * fn2 + ft2, mu2 * fn2 - ft2)
+    margins = cs.vertcat(*friction_margins(mu1, fn1, ft1, mu2, fn2, ft2))
     return g_eq, c - margins, s, c

@@ -1,6 +1,6 @@
 """The paper's studies: one function per study, each returning a small frozen result.
 
-Every grid is evaluated by :func:`ocp_crawl.sweep.run_sweep` (parallel workers, progress, an
+Every grid is evaluated by :func:`ocp_crawl.sweep.core.run_sweep` (parallel workers, progress, an
 optional journal on disk) through :class:`SweepOptions`; single gaits (the configuration and
 force figures) and the bisection of the friction threshold call the solvers directly.  Failed
 points are data: each result keeps the status of every point (``success``, ``fold``,
@@ -20,11 +20,13 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .model import Robot
-from .problem import Problem, paper_problem, run_problem
-from .pressure import FITTED_REST_DEG, PressureFit, evaluate_fit, fit_rest_angle, read_paper_csv
-from .result import CrawlResult
-from .sweep import SUCCESS, SweepResult, run_sweep
+from ocp_crawl.model.statics import Robot
+from ocp_crawl.problem.core import Problem, paper_problem, run_problem
+from ocp_crawl.io.paper_data import read_paper_csv
+from ocp_crawl.model.pressure import FITTED_REST_DEG
+from ocp_crawl.studies.pressure import PressureFit, evaluate_fit, fit_rest_angle
+from ocp_crawl.sim.result import CrawlResult
+from ocp_crawl.sweep.core import SUCCESS, SweepResult, run_sweep
 
 #: the paper's robot (Table I)
 PAPER_ROBOT = Robot.paper()
@@ -46,7 +48,7 @@ STUCK_TOL = 1e-6
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SweepOptions:
-    """How the studies evaluate grids: passed through to :func:`~ocp_crawl.sweep.run_sweep`."""
+    """How the studies evaluate grids: passed through to :func:`~ocp_crawl.sweep.core.run_sweep`."""
 
     jobs: int = 1
     """worker processes"""
@@ -610,7 +612,7 @@ class PressureStudy:
 
 def pressure_study(gravity: str = "paper", fit: bool = True, p0_bar=None, psi_deg=None,
                    phi_rest_deg: float | None = None, compare_flat: bool = False) -> PressureStudy:
-    """Fig. exp: the pressure-driven robot against p0 and psi (see :mod:`ocp_crawl.pressure`).
+    """Fig. exp: the pressure-driven robot against p0 and psi (see :mod:`ocp_crawl.studies.pressure`).
 
     ``fit``: fit the rest angle to the paper's simulated curves on the given grids (default: the
     paper's own points); otherwise evaluate ``phi_rest_deg`` (default: the stored fit).  The

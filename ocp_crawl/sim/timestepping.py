@@ -1,11 +1,11 @@
-"""Time-stepping simulation of the torque-driven crawler: one MPCC step (:mod:`ocp_crawl.mpcc`) per grid phase.
+"""Time-stepping simulation of the torque-driven crawler: one MPCC step (:mod:`ocp_crawl.sim.mpcc`) per grid phase.
 
 The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n takes the state at
 t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
 from step n-1.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
 with f_t = 0, stick-stick) and continues cycle by cycle until the state at the end of a cycle
 repeats (or for a given number of cycles); the last cycle is reported in a
-:class:`~ocp_crawl.result.CrawlResult` with the same fields as the event-driven result.
+:class:`~ocp_crawl.sim.result.CrawlResult` with the same fields as the event-driven result.
 
 Metrics on the grid of the reported cycle:
 
@@ -20,7 +20,7 @@ Metrics on the grid of the reported cycle:
 Failures stop the run with a status: a step that IPOPT cannot solve (after retries) gives
 ``SOLVER_FAILURE``, or ``LIFT_OFF`` if the mode-enumeration oracle finds that every equilibrium of
 the step has a normal force <= 0; the message names the step, its phase and the return status with
-its meaning from :data:`~ocp_crawl.mpcc.IPOPT_RETURN_STATUS`, and the result keeps the steps of the
+its meaning from :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`, and the result keeps the steps of the
 failing cycle solved before it.  A torque input that is not finite at a step gives ``SOLVER_FAILURE``
 too, and no released equilibrium at t = 0 gives ``NO_START`` (as the event-driven stepper).
 A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint at or below
@@ -35,12 +35,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hybrid import HybridStepper
-from .inputs import PeriodicSignal, as_signal
-from .model import Model
-from .mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
-from .result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
-from .step_oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.model.inputs import PeriodicSignal, as_signal
+from ocp_crawl.model.statics import Model
+from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
+from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
+from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,8 @@ class TimeSteppingOptions:
     """periodicity: max |phi change| [rad] and |f_t change|/(M g) between consecutive cycle ends"""
     max_dphi: float = 0.35
     """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
+    steps: int = 200
+    """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an argument)"""
 
     def __post_init__(self) -> None:
         if not isinstance(self.mpcc, MPCCOptions):
@@ -65,6 +67,8 @@ class TimeSteppingOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ValueError(f"TimeSteppingOptions.{name} must be a positive finite number, got {v!r}")
+        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 4:
+            raise ValueError(f"TimeSteppingOptions.steps must be an integer >= 4, got {self.steps!r}")
         if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, int) or self.max_cycles < 2:
             raise ValueError(f"TimeSteppingOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
         if isinstance(self.min_cycles, bool) or not isinstance(self.min_cycles, int) \
@@ -74,7 +78,7 @@ class TimeSteppingOptions:
 
 
 def event_kind(before: Mode, after: Mode) -> str:
-    """Name of a mode change, in the vocabulary of :class:`~ocp_crawl.result.Event` where it has one."""
+    """Name of a mode change, in the vocabulary of :class:`~ocp_crawl.sim.result.Event` where it has one."""
     if before == Mode.STICK:
         return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
     if after == Mode.STICK:

@@ -21,7 +21,7 @@ from pathlib import Path
 import casadi as cs
 import numpy as np
 
-from .files import remove_stale_temps, temp_prefix
+from ocp_crawl.io.files import remove_stale_temps, temp_prefix
 
 
 def cache_dir() -> Path:

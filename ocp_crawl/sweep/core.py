@@ -2,7 +2,7 @@
 
 A sweep evaluates every point of a rectangular grid (one axis per problem key, e.g.
 ``gait.psi_deg``; the first key varies slowest) by setting the point's values on the base problem,
-as ``--set`` would, and running :func:`~ocp_crawl.problem.run_problem`.  Each point gives one row:
+as ``--set`` would, and running :func:`~ocp_crawl.problem.core.run_problem`.  Each point gives one row:
 the grid values, ``S``, ``W_plus``, ``CoT_plus``, ``status`` (the status name: ``success``,
 ``fold``, ``lift_off``, ..., or ``bad_input`` for a point whose problem is invalid, ``error`` for
 an unexpected exception) and ``message``.  Failed points are data: they are recorded, never
@@ -24,7 +24,7 @@ directory the sweep writes:
     counts by status, the best point, timing.
 
 Nothing is lost when a sweep is killed (even by SIGKILL): settings.json, results.csv and
-summary.json are written atomically (temporary file and rename, :mod:`ocp_crawl.files`); a journal
+summary.json are written atomically (temporary file and rename, :mod:`ocp_crawl.io.files`); a journal
 line torn by the kill is not a finished point and is cut off by the resuming run; the lock
 (``.sweep.lock``, an advisory ``flock``) dies with its process, so a killed sweep never blocks its
 resume; temporary files of the killed run are removed when the sweep is resumed or started again.
@@ -54,10 +54,10 @@ from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from . import __version__
-from .files import atomic_write, jsonable, remove_stale_temps, write_json
-from .problem import SCHEMA, Key, Problem, ProblemError, apply_overrides, load_problem, problem_from_dict, run_problem
-from .result import ARRAY_FIELDS, CrawlResult
+from ocp_crawl import __version__
+from ocp_crawl.io.files import atomic_write, jsonable, remove_stale_temps, write_json
+from ocp_crawl.problem.core import SCHEMA, Key, Problem, ProblemError, apply_overrides, load_problem, problem_from_dict, run_problem
+from ocp_crawl.sim.result import ARRAY_FIELDS, CrawlResult
 
 #: columns of every row after the grid keys
 RESULT_COLUMNS = ("S", "W_plus", "CoT_plus", "status", "message")
@@ -403,7 +403,7 @@ class PointTask:
     extra_columns: tuple[str, ...] = ()
 
 
-# The compiled model functions keep their argument buffers per process (ocp_crawl.compiled), so two
+# The compiled model functions keep their argument buffers per process (ocp_crawl.model.compiled), so two
 # threads of one process must not run a point at once (a Dask worker may have several threads).
 _RUN_LOCK = threading.Lock()
 
@@ -847,7 +847,7 @@ def _mp_context():
         return multiprocessing.get_context("fork")
     if "forkserver" in methods:
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["ocp_crawl.problem"])
+        ctx.set_forkserver_preload(["ocp_crawl.problem.core"])
         return ctx
     return multiprocessing.get_context("spawn")
 

@@ -7,7 +7,7 @@ optimize, crosscheck, animate) with :func:`register` and touches nothing else he
 Exit codes: 0 success, 1 numerical failure (the result's status message goes to stderr),
 2 bad input (one line ``ocp-crawl: error: ...`` on stderr, never a traceback).
 
-Bad input is explicit: it is a :class:`~ocp_crawl.problem.ProblemError` (problem files, ``--set``,
+Bad input is explicit: it is a :class:`~ocp_crawl.problem.core.ProblemError` (problem files, ``--set``,
 ``--grid``) or a :class:`BadInput` (arguments, output directories, a robot that cannot stand at
 t = 0), raised before any long computation.  Any other exception escaping a command is a bug, not
 bad input: it is reported as one line ``ocp-crawl: internal error: <Type>: <message> (set
@@ -33,10 +33,10 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from . import __version__
-from .files import jsonable, write_json, write_npz
-from .problem import Problem, ProblemError, format_value, load_problem, paper_problem, run_problem
-from .result import STATUS_MESSAGES, CrawlResult, Status
+from ocp_crawl import __version__
+from ocp_crawl.io.files import jsonable, write_json, write_npz
+from ocp_crawl.problem.core import Problem, ProblemError, format_value, load_problem, paper_problem, run_problem
+from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Status
 
 PROG = "ocp-crawl"
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
@@ -95,7 +95,7 @@ def register(name: str, help: str, arguments: Callable[[argparse.ArgumentParser]
 
 #: solvers of ``simulate --solver``: name -> function(problem, args) -> CrawlResult
 def _run_mpcc(problem: Problem, args: argparse.Namespace) -> CrawlResult:
-    from .timestepping import simulate_mpcc
+    from ocp_crawl.sim.timestepping import simulate_mpcc
 
     if problem.drive != "torque":
         raise BadInput(f"{problem.source}: --solver mpcc needs the torque drive, got [gait] drive = "
@@ -217,7 +217,7 @@ def check_start(problem: Problem) -> None:
     checked before any long run, as bad input (cheap: one equilibrium solve)."""
     if problem.drive != "torque":
         return  # the prescribed-angle contact is checked over the whole cycle when the problem is loaded
-    from .hybrid import HybridStepper
+    from ocp_crawl.sim.event import HybridStepper
 
     try:
         HybridStepper(problem.model, problem.torque, problem.hybrid).initial_state(0.0)
@@ -302,7 +302,7 @@ RUN_FILES = ("arrays.npz", "summary.json", "gait.png", "gait.pdf")
 
 def write_outputs(out: Path, result: CrawlResult, problem: Problem, data: dict, stem: str = "") -> list[Path]:
     """arrays.npz, summary.json, gait.png and gait.pdf in ``out`` (each written atomically; see RUN_FILES)."""
-    from .plots import plot_gait, save_figure  # matplotlib only when figures are asked for
+    from ocp_crawl.viz.gait import plot_gait, save_figure  # matplotlib only when figures are asked for
 
     arrays, summary, png, pdf = (out / f"{stem}{name}" for name in RUN_FILES)
     files = [write_npz(arrays, result.arrays()), write_json(summary, data)]
@@ -419,7 +419,7 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
 
 @register("sweep", "map S, W+ and CoT+ over a grid of problem keys (parallel, resumable)", _sweep_args)
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .sweep import JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed, \
+    from ocp_crawl.sweep.core import JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed, \
         check_some_point_valid, default_jobs, grid_from_specs, run_sweep
 
     problem = load_problem(args.problem, args.overrides)
@@ -469,9 +469,9 @@ def _reproduce_args(p: argparse.ArgumentParser) -> None:
 @register("reproduce", "regenerate the paper's figures and report.md (both gravity conventions checked)",
           _reproduce_args)
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from . import reproduce as rp
-    from .studies import SweepOptions
-    from .sweep import SweepError, SweepFailed, default_jobs
+    from ocp_crawl.studies import reproduce as rp
+    from ocp_crawl.studies.core import SweepOptions
+    from ocp_crawl.sweep.core import SweepError, SweepFailed, default_jobs
 
     _check_scheduler(args.scheduler)
     names = [f"{stem}.{ext}" for stem in rp.FIGURES for ext in ("png", "pdf")]
@@ -515,7 +515,7 @@ def _animate_args(p: argparse.ArgumentParser) -> None:
 
 @register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
 def cmd_animate(args: argparse.Namespace) -> int:
-    from .animate import animate_problem
+    from ocp_crawl.viz.animate import animate_problem
 
     path = Path(args.out)
     if path.suffix.lower() != ".gif" or not path.stem:
@@ -547,7 +547,7 @@ def _crosscheck_args(p: argparse.ArgumentParser) -> None:
 
 @register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators", _crosscheck_args)
 def cmd_crosscheck(args: argparse.Namespace) -> int:
-    from .crosscheck import crosscheck
+    from ocp_crawl.sim.crosscheck import crosscheck
 
     problem = load_problem(args.problem, args.overrides)
     if problem.drive != "torque":
@@ -604,9 +604,9 @@ def format_optimize(s: dict) -> str:
 
 @register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
 def cmd_optimize(args: argparse.Namespace) -> int:
-    from .ocp import optimize_gait
-    from .ocp_output import write_outputs as write_ocp_outputs
-    from .problem import ocp_settings
+    from ocp_crawl.ocp.gait import optimize_gait
+    from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
+    from ocp_crawl.problem.core import ocp_settings
 
     problem = load_problem(args.problem, args.overrides)
     settings = ocp_settings(problem)

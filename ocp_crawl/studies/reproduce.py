@@ -1,12 +1,12 @@
 """Reproduce the paper's figures and check its statements: ``ocp-crawl reproduce``.
 
-Runs every study of :mod:`ocp_crawl.studies` in both gravity conventions (the statements table
+Runs every study of :mod:`ocp_crawl.studies.core` in both gravity conventions (the statements table
 needs both), draws the figures in the chosen convention (PNG and PDF), and writes ``report.md``:
 each figure with the numbers behind it, the relative difference wherever the paper publishes a
 number, and every statement of the paper checked in both conventions.  ``numbers.json`` holds the
 same numbers for scripts.
 
-Nothing is lost when a run is killed: every file is written atomically (:func:`ocp_crawl.files.atomic_write`:
+Nothing is lost when a run is killed: every file is written atomically (:func:`ocp_crawl.io.files.atomic_write`:
 a temporary file renamed over the target, so a reader sees the previous file or the new one, never a
 mix), and every grid is a journaled sweep under ``<out>/sweeps``.  ``resume`` (``--resume``) reuses
 the finished grid points there and recomputes the rest (the single gaits, the bisection of the
@@ -27,18 +27,20 @@ from typing import Callable
 
 import numpy as np
 
-from . import __version__
-from .files import atomic_write, remove_stale_temps, write_json
-from .model import GRAVITY_CONVENTIONS
-from .plots import save_figure
-from .pressure import FITTED_REST_DEG, P0_NORMALISE_BAR, paper_grids, read_paper_csv
-from .studies import (COT_K_LABELS, REALISTIC_K_RATIO, outcome_runs, STUCK_TOL, AmplitudeStudy, FrictionBand,
+from ocp_crawl import __version__
+from ocp_crawl.io.files import atomic_write, remove_stale_temps, write_json
+from ocp_crawl.model.statics import GRAVITY_CONVENTIONS
+from ocp_crawl.viz.gait import save_figure
+from ocp_crawl.io.paper_data import read_paper_csv
+from ocp_crawl.model.pressure import FITTED_REST_DEG
+from ocp_crawl.studies.pressure import P0_NORMALISE_BAR, paper_grids
+from ocp_crawl.studies.core import (COT_K_LABELS, REALISTIC_K_RATIO, outcome_runs, STUCK_TOL, AmplitudeStudy, FrictionBand,
                       GaitComparison, HigherFriction, PressureStudy, PsiGammaMap, StiffnessStudy, SweepOptions,
                       amplitude_study, friction_band, gait_comparison, higher_friction, pressure_study, psi_gamma_map,
                       stiffness_study)
-from .study_plots import (plot_amplitude, plot_configuration, plot_conventions, plot_forces, plot_friction_band,
+from ocp_crawl.studies.plots import (plot_amplitude, plot_configuration, plot_conventions, plot_forces, plot_friction_band,
                           plot_higher_friction, plot_parametric, plot_pressure, plot_stiffness)
-from .sweep import SUCCESS
+from ocp_crawl.sweep.core import SUCCESS
 
 MM = 1e3
 #: the paper's critical stiffness below which the robot stops, k/(M g L) (Section II-B)

@@ -25,11 +25,11 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 import numpy as np
 
-from .hybrid import HybridOptions, simulate_torque
-from .inputs import Harmonic, ReferenceTorque
-from .model import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
-from .prescribed import simulate_angles
-from .result import CrawlResult
+from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
+from ocp_crawl.sim.angles import simulate_angles
+from ocp_crawl.sim.result import CrawlResult
 
 Drive = Literal["torque", "angles"]
 DRIVES = ("torque", "angles")
@@ -204,7 +204,7 @@ SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
 
 def ocp_settings(problem: "Problem"):
     """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma."""
-    from .ocp import OCPSettings
+    from ocp_crawl.ocp.gait import OCPSettings
 
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:

@@ -22,11 +22,11 @@ from matplotlib.lines import Line2D
 
 from PIL import Image
 
-from .files import atomic_write
-from .model import Robot
-from .plots import robot_points
-from .problem import Problem, run_problem
-from .result import CrawlResult, Mode
+from ocp_crawl.io.files import atomic_write
+from ocp_crawl.model.statics import Robot
+from ocp_crawl.viz.gait import robot_points
+from ocp_crawl.problem.core import Problem, run_problem
+from ocp_crawl.sim.result import CrawlResult, Mode
 
 #: foot colours: sticking, slipping
 STICK_COLOR = "#1a9850"

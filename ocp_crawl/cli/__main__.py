@@ -1,0 +1,3 @@
+from ocp_crawl.cli.app import main
+
+raise SystemExit(main())

@@ -1,0 +1,1 @@
+"""Input and output: atomic files, JSON-safe values, the shipped paper data."""

@@ -1,0 +1,102 @@
+"""One entry to every simulator: :func:`simulate` and the solver registry :data:`SOLVERS`.
+
+In the manner of scipy's ``solve_ivp`` and its ``METHODS`` table: a solver is a name, the drive
+it simulates, its options dataclass and a function ``run(model, signal, options, t_eval)``.
+Adding a solver is adding a module and one row here; the problem files, the command line and
+the sweep look solvers up in this table and nowhere else.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ocp_crawl.model.statics import Model
+from ocp_crawl.sim.angles import simulate_angles
+from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.sim.result import CrawlResult
+from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
+
+
+@dataclass(frozen=True)
+class Solver:
+    """A row of the registry."""
+
+    name: str
+    drive: str
+    """the input it takes: ``"torque"`` (joint torques [N m]) or ``"angles"`` (prescribed joint angles [rad])"""
+    options: type
+    """its options dataclass (``options()`` gives the defaults)"""
+    run: Callable[[Model, Any, Any, Any], CrawlResult]
+    """``run(model, signal, options, t_eval) -> CrawlResult``"""
+    description: str
+
+
+def _run_event(model, signal, options, t_eval):
+    return simulate_torque(model, signal, options, t_eval=t_eval)
+
+
+def _run_mpcc(model, signal, options, t_eval):
+    return simulate_mpcc(model, signal, options.steps, options=options, t_eval=t_eval)
+
+
+def _run_angles(model, signal, options, t_eval):
+    return simulate_angles(model, signal, t_eval=t_eval, n_scan=options.n_scan)
+
+
+@dataclass(frozen=True)
+class AnglesOptions:
+    """Options of the prescribed-angle solver."""
+
+    n_scan: int = 512
+    """scan points per cycle used to bracket the events (each then located to round-off)"""
+
+
+SOLVERS: dict[str, Solver] = {
+    "event": Solver("event", "torque", HybridOptions, _run_event,
+                    "event-driven hybrid stepper: equilibrium continuation, events located to 1e-13 of a cycle"),
+    "mpcc": Solver("mpcc", "torque", TimeSteppingOptions, _run_mpcc,
+                   "MPCC time-stepping: one IPOPT solve of the incremental Coulomb problem per step"),
+    "angles": Solver("angles", "angles", AnglesOptions, _run_angles,
+                     "prescribed joint angles: kinematic contact modes, events by bracketing and root finding"),
+}
+
+#: the solver used for each drive when none is named
+DEFAULT_SOLVER = {"torque": "event", "angles": "angles"}
+
+
+def solver_named(name: str) -> Solver:
+    """The registry row of ``name``; ValueError naming the valid solvers otherwise."""
+    try:
+        return SOLVERS[name]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown solver {name!r}; valid: {', '.join(SOLVERS)}") from None
+
+
+def simulate(model: Model, signal, solver: str = "event", options=None, t_eval=None) -> CrawlResult:
+    """Simulate the crawler ``model`` driven by ``signal`` with the solver ``solver``.
+
+    Parameters
+    ----------
+    model : Model
+        robot and gravity convention.
+    signal : PeriodicSignal or callable
+        the periodic input over one cycle (phase t in cycles): joint torques [N m] for the torque
+        solvers (``"event"``, ``"mpcc"``), joint angles [rad] for ``"angles"``.
+    solver : str
+        a name of :data:`SOLVERS`.
+    options : the solver's options dataclass, optional
+        ``SOLVERS[solver].options``; None for its defaults.
+    t_eval : array_like, optional
+        output phases [cycles] inside the reported steady cycle; None for the solver's default sampling.
+
+    Returns
+    -------
+    CrawlResult
+        ``success``/``status``/``message`` and, on success, S [m], W+ [J], CoT+ [-] and the sampled trajectories.
+    """
+    spec = solver_named(solver)
+    if options is None:
+        options = spec.options()
+    elif not isinstance(options, spec.options):
+        raise TypeError(f"options of solver {solver!r} must be {spec.options.__name__}, got {type(options).__name__}")
+    return spec.run(model, signal, options, t_eval)

@@ -1,0 +1,1 @@
+"""The paper's studies, their figures, the statement checks and ``reproduce``."""

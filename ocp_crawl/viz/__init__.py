@@ -1,0 +1,1 @@
+"""Figures and animations: gait figure, OCP figure, crawl animation."""
