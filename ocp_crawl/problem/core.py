@@ -21,7 +21,7 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable, Literal, Mapping, Sequence
+from typing import Iterable, Any, Callable, Literal, Mapping, Sequence
 
 import numpy as np
 
@@ -302,6 +302,18 @@ class Problem:
         """The torque input tau = k (phi_ref - pi) of eq. (tau) [N m]."""
         return ReferenceTorque(self.gait, self.robot.k)
 
+    def with_values(self, values: Mapping[str, Any]) -> "Problem":
+        """A new problem with typed values set: ``problem.with_values({"robot.mu1": 0.35, "gait.psi_deg": 30.0})``.
+
+        Keys are ``SECTION.KEY`` of the schema (units as in the problem files); the new problem is
+        validated as a whole, so a bad value raises ProblemError naming the key.  No text round trip.
+        """
+        if not isinstance(values, Mapping):
+            raise TypeError(f"Problem.with_values needs a mapping of SECTION.KEY to values, got {type(values).__name__}")
+        items = [(*split_key(k, f"{self.source}: {k}"), v) for k, v in values.items()]
+        data, done = set_values(self.to_dict(), items, self.source)
+        return _validate(data, _Context(self.source, done))
+
     def to_dict(self) -> dict:
         """Plain dict of the problem's sections (JSON- and TOML-friendly; ``problem_from_dict`` accepts it)."""
         out = _thaw(self.sections)
@@ -508,17 +520,12 @@ def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
 _KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
 
 
-def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
-    """Parse ``SECTION.KEY=VALUE`` (VALUE a TOML value; a bare word is accepted for string keys)."""
-    if not isinstance(text, str):
-        raise ProblemError(f"{source}: --set {text!r} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
-    where = f"{source}: --set {_fmt(text)}"
-    if "=" not in text:
-        raise ProblemError(f"{where} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
-    lhs, rhs = text.split("=", 1)
-    m = _KEY_RE.match(lhs)
+def split_key(dotted: str, where: str) -> tuple[str, str]:
+    """``"SECTION.KEY"`` as (section, key) of the schema, or ProblemError naming ``where``."""
+    m = _KEY_RE.match(dotted) if isinstance(dotted, str) else None
     if not m:
-        raise ProblemError(f"{where} is invalid: the key {_fmt(lhs.strip())} must be SECTION.KEY, e.g. robot.k=0.05")
+        shown = _fmt(dotted.strip()) if isinstance(dotted, str) else repr(dotted)
+        raise ProblemError(f"{where} is invalid: the key {shown} must be SECTION.KEY, e.g. robot.k=0.05")
     section, name = m.groups()
     if section not in SCHEMA:
         hint = _suggest(section, list(SCHEMA))
@@ -527,7 +534,19 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
     if name not in keys:
         hint = _suggest(name, list(keys))
         raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid keys: {', '.join(keys)}")
-    key = keys[name]
+    return section, name
+
+
+def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
+    """Parse ``SECTION.KEY=VALUE`` (VALUE a TOML value; a bare word is accepted for string keys)."""
+    if not isinstance(text, str):
+        raise ProblemError(f"{source}: --set {text!r} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
+    where = f"{source}: --set {_fmt(text)}"
+    if "=" not in text:
+        raise ProblemError(f"{where} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
+    lhs, rhs = text.split("=", 1)
+    section, name = split_key(lhs, where)
+    key = SCHEMA[section].key_map[name]
     rhs = rhs.strip()
     if not rhs or "\n" in rhs or "\r" in rhs:
         raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. {section}.{name}="
@@ -545,27 +564,43 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
     return section, name, value
 
 
-def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str = "<dict>"
-                    ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
-    """Copy of ``data`` with ``SECTION.KEY=VALUE`` overrides applied; also returns the overridden keys."""
-    if isinstance(overrides, str):
-        overrides = [overrides]
+def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], source: str = "<dict>"
+               ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
+    """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value) triples.
+
+    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``) removes the other.  Returns the
+    new data and the set keys.  Values are validated later, when the problem is built.
+    """
     out = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
     done: set[tuple[str, str]] = set()
-    for text in overrides:
-        section, name, value = parse_override(text, source)
+    for section, name, value in items:
         sec = out.setdefault(section, {})
         if not isinstance(sec, dict):
-            raise ProblemError(f"{source}: --set {_fmt(text)} is invalid: {section} is not a section in the file")
-        # mu and mu1/mu2 are alternatives: setting one on the command line replaces the other
+            raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a section in the file")
         for other in SCHEMA[section].key_map[name].exclusive_with:
             sec.pop(other, None)
+        if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
+            # one foot's friction changed on a robot given one mu: the other foot keeps mu
+            sec.setdefault("mu1" if name == "mu2" else "mu2", sec["mu"])
         for key in SCHEMA[section].keys:
             if name in key.exclusive_with:
                 sec.pop(key.name, None)
-        sec[name] = value
+        sec[name] = value.item() if isinstance(value, np.generic) else value
         done.add((section, name))
     return out, done
+
+
+def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str = "<dict>"
+                    ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
+    """Copy of ``data`` with ``SECTION.KEY=VALUE`` overrides (text, as ``--set``) applied; also returns the
+    overridden keys."""
+    if isinstance(overrides, str):
+        overrides = [overrides]
+    items = [parse_override(text, source) for text in overrides]
+    for (section, _, _), text in zip(items, overrides):
+        if not isinstance(data.get(section, {}), Mapping):
+            raise ProblemError(f"{source}: --set {_fmt(text)} is invalid: {section} is not a section in the file")
+    return set_values(data, items, source)
 
 
 def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides: Sequence[str] = ()) -> Problem:
