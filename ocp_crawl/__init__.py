@@ -1,4 +1,5 @@
 """ocp_crawl: hybrid-quasistatic simulation, analysis and optimal control of soft inchworm crawlers."""
+from ocp_crawl.version import __version__
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.model.inputs import (CallableSignal, FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
                      PeriodicSpline, ReferenceTorque, as_signal)
@@ -13,4 +14,3 @@ __all__ = [
     "HybridOptions", "simulate_torque", "simulate_angles", "Problem", "ProblemError", "load_problem",
     "problem_from_dict", "run_problem",
 ]
-__version__ = "0.1.0"
