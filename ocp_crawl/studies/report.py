@@ -285,7 +285,7 @@ def _cot_against_paper(study: AmplitudeStudy) -> list[str]:
     rd = comp["rel_diff"]
     has = [np.isfinite(r).any() for r in rd]
     rows = [[f"{COT_K_LABELS[i]} ({study.k_ratios[i]:.2f} M g L)", str(int(np.isfinite(rd[i]).sum())),
-             f"{np.nanmedian(np.abs(rd[i])):.2%}" if has[i] else "-",
+             f"{_median_abs(rd[i]):.2%}" if has[i] else "-",
              f"{np.nanmax(np.abs(rd[i])):.2%}" if has[i] else "-",
              f"{study.A_deg[int(np.nanargmax(np.abs(rd[i])))]:.1f}" if has[i] else "-"] for i in range(3)]
     return [f"\nCoT+ against the paper's published values ({study.gravity} convention): relative difference "
@@ -294,9 +294,8 @@ def _cot_against_paper(study: AmplitudeStudy) -> list[str]:
 
 
 def _median_abs(x: np.ndarray) -> float:
-    """Median of |x| over its finite values (NaN if there are none)."""
-    x = np.abs(np.asarray(x, float))
-    return float(np.median(x[np.isfinite(x)])) if np.isfinite(x).any() else float("nan")
+    """Median of |x| ignoring NaN (NaN if no value is finite)."""
+    return float(np.nanmedian(np.abs(x))) if np.isfinite(x).any() else float("nan")
 
 
 def numbers(sets: dict[str, StudySet], statements: list[Statement]) -> dict:

@@ -70,12 +70,13 @@ def shade_modes(ax, runs, **kw) -> set[int]:
     return drawn
 
 
-def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"), lw: float = 1.0, scale: float = 1.0,
-                         labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
+def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"), lw: float | None = None,
+                         scale: float = 1.0, labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
     """The friction limits +-mu1 f_n1 and +-mu2 f_n2 as dashed lines over ``t``.
 
     ``f_n1``, ``f_n2``: normal forces [N]; ``scale``: factor of the plotted force (1e3: mN);
-    ``colors``, ``labels``: per foot (a label is given to the + line only).
+    ``lw``: line width (None: matplotlib's default); ``colors``, ``labels``: per foot (the label
+    goes to the + line only).
     """
     for mu, fn, color, label in zip((robot.mu1, robot.mu2), (f_n1, f_n2), colors, labels):
         lim = mu * np.asarray(fn, float) * scale
@@ -177,7 +178,7 @@ def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
 
 def _draw_forces(ax, result: CrawlResult, robot: Robot, phase) -> None:
     ax.plot(phase, np.asarray(result.f_t, float), color="k", label="$f_t$")
-    plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2)
+    plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2, lw=1.0)
     ax.set_ylabel("tangential force [N]")
     ax.set_title("(c) tangential force and friction limits", loc="left", fontsize="medium")
 
