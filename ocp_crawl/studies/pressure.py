@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.sim import simulate
+from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.io.paper_data import read_paper_csv
@@ -37,7 +38,7 @@ def simulate_pressure(model: Model, p0_bar: float, psi_deg: float, phi_rest_deg:
     [cycles] to sample.  Returns the :class:`~ocp_crawl.sim.result.CrawlResult`.
     """
     rest = FITTED_REST_DEG[model.gravity] if phi_rest_deg is None else phi_rest_deg
-    return simulate_torque(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), options, t_eval=t_eval)
+    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), "event", options, t_eval=t_eval)
 
 
 # --------------------------------------------------------------------------------------------
