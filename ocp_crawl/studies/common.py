@@ -22,6 +22,8 @@ from ocp_crawl.problem import Problem, paper_problem
 from ocp_crawl.status import Status
 from ocp_crawl.sweep import SweepResult, run_sweep
 
+#: metres to millimetres (the unit of S in figures and the report)
+MM = 1e3
 #: status label of a successful point (sweep rows and results)
 SUCCESS = Status.SUCCESS.label
 #: the paper's robot (Table I)

@@ -16,7 +16,7 @@ from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from ocp_crawl.sim.result import CrawlResult, Mode
-from ocp_crawl.studies.common import COT_K_LABELS, SUCCESS
+from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
 from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
 from ocp_crawl.studies.pressure import PressureStudy
@@ -38,7 +38,6 @@ FALLBACK_MARKER = "o"
 STATUS_LABELS = {"no_start": "no equilibrium to start from"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
-MM = 1e3
 #: top of the CoT+ axis, as in the paper's Fig. CoT
 COT_YMAX = 60.0
 

@@ -6,12 +6,12 @@ import numpy as np
 
 from ocp_crawl import __version__
 from ocp_crawl.model.pressure import FITTED_REST_DEG
-from ocp_crawl.studies.common import COT_K_LABELS, REALISTIC_K_RATIO, SUCCESS
+from ocp_crawl.studies.common import COT_K_LABELS, MM, REALISTIC_K_RATIO, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy
 from ocp_crawl.studies.pressure import P0_NORMALISE_BAR
 from ocp_crawl.studies.statements import PAPER_REALISTIC, PAPER_THRESHOLD, Statement, stiffness_runs_text
 from ocp_crawl.studies.suite import GRIDS, StudySet
-from ocp_crawl.studies.text import MM, counts_text, fmt_mm, num, rel, table
+from ocp_crawl.studies.text import counts_text, fmt_mm, num, rel, table
 
 
 def _fig(name: str, caption: str) -> str:

@@ -8,12 +8,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp_crawl.studies.common import COT_K_LABELS, REALISTIC_K_RATIO, STUCK_TOL, SUCCESS, non_increasing, outcome_runs
+from ocp_crawl.studies.common import COT_K_LABELS, MM, REALISTIC_K_RATIO, STUCK_TOL, SUCCESS, non_increasing, outcome_runs
 from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
 from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
 from ocp_crawl.studies.pressure import PressureStudy
 from ocp_crawl.studies.suite import StudySet
-from ocp_crawl.studies.text import MM, fmt_mm, runs_text
+from ocp_crawl.studies.text import fmt_mm, runs_text
 
 #: the paper's critical stiffness below which the robot stops, k/(M g L) (Section II-B)
 PAPER_THRESHOLD = 0.1

@@ -4,9 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ocp_crawl.checks import finite_or_none
-
-#: metres to millimetres
-MM = 1e3
+from ocp_crawl.studies.common import MM
 
 
 def num(x: float, fmt: str = ".3f") -> str:
