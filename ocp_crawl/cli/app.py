@@ -470,7 +470,7 @@ def _reproduce_args(p: argparse.ArgumentParser) -> None:
           _reproduce_args)
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from ocp_crawl.studies import reproduce as rp
-    from ocp_crawl.studies.core import SweepOptions
+    from ocp_crawl.studies import SweepOptions
     from ocp_crawl.sweep.core import SweepError, SweepFailed, default_jobs
 
     _check_scheduler(args.scheduler)

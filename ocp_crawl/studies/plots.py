@@ -1,4 +1,4 @@
-"""Figures of the paper's studies (:mod:`ocp_crawl.studies.core`), one function per figure.
+"""Figures of the paper's studies (:mod:`ocp_crawl.studies`), one function per figure.
 
 Every function returns a :class:`matplotlib.figure.Figure` on the Agg canvas (no pyplot state).
 Where a figure compares with the paper, the vertical axis is the progress per cycle -S: the
@@ -15,11 +15,12 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import MaxNLocator
 
-from ocp_crawl.viz.gait import mode_color, mode_runs, robot_points
 from ocp_crawl.sim.result import CrawlResult, Mode
-from ocp_crawl.studies.core import (COT_K_LABELS, AmplitudeStudy, FrictionBand, GaitComparison, HigherFriction, PressureStudy,
-                      PsiGammaMap, StiffnessStudy)
-from ocp_crawl.sweep.core import SUCCESS
+from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
+from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
+from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
+from ocp_crawl.studies.pressure import PressureStudy
+from ocp_crawl.viz.gait import mode_color, mode_runs, plot_friction_limits, robot_points, shade_modes
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
 BLUE = (0.0, 0.447, 0.741)
@@ -37,7 +38,6 @@ FALLBACK_MARKER = "o"
 STATUS_LABELS = {"no_start": "no equilibrium to start from"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
-MM = 1e3
 #: top of the CoT+ axis, as in the paper's Fig. CoT
 COT_YMAX = 60.0
 
@@ -171,15 +171,9 @@ def plot_forces(gc: GaitComparison) -> Figure:
         if res.t.size == 0:
             continue
         t = _phase(res)
-        for t0, t1, m in mode_runs(t, res.mode):
-            if t1 > t0:
-                a.axvspan(t0, t1, color=mode_color(m), lw=0, zorder=0)
-                modes_seen.add(int(m))
-        lim1, lim2 = robot.mu1 * res.f_n1, robot.mu2 * res.f_n2
+        modes_seen |= shade_modes(a, mode_runs(t, res.mode))
         a.plot(t, res.f_t, color="k", lw=1.6)
-        for s in (1, -1):
-            a.plot(t, s * lim1, color=BLUE, ls="--", lw=1.1)
-            a.plot(t, s * lim2, color=PURPLE, ls="--", lw=1.1)
+        plot_friction_limits(a, t, robot, res.f_n1, res.f_n2, colors=(BLUE, PURPLE), lw=1.1, labels=(None, None))
         if not res.success:
             a.plot(t[-1], res.f_t[-1], "X", color="0.2", ms=8)
     ax[-1, 0].set_xlabel("phase t/T [cycles]")

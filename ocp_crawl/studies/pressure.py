@@ -1,4 +1,5 @@
-"""The pressure-driven robot of the paper's experiments (Section III): its gaits, the paper's curves, the fit.
+"""The pressure-driven robot of the paper's experiments (Section III): its gaits, the paper's curves, the fit,
+and the study of Fig. exp.
 
 The actuator (bending map, assumed waveform, reference angles) is :mod:`ocp_crawl.model.pressure`,
 whose docstring states the assumptions the paper leaves open.
@@ -6,31 +7,38 @@ whose docstring states the assumptions the paper leaves open.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.sim import simulate
+from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.model.pressure import FITTED_REST_DEG, pressure_torque
+from ocp_crawl.status import Status
+from ocp_crawl.studies.common import SUCCESS, parabolic_max
 
 #: pressure at which the paper normalises its p0 curve, and the assumed operating points [bar, deg]
 P0_NORMALISE_BAR = 1.7
 PSI_FOR_P0_CURVE_DEG = 45.0
 P0_FOR_PSI_CURVE_BAR = 1.7
+#: rest angle of a flat robot [deg], the alternative to the fitted rest angle of the pressure-driven robot
+FLAT_REST_DEG = 180.0
 
 
 def simulate_pressure(model: Model, p0_bar: float, psi_deg: float, phi_rest_deg: float | None = None,
                       options: HybridOptions | None = None, t_eval=None) -> CrawlResult:
     """Hybrid-quasistatic gait of the pressure-driven robot (torque drive).
 
-    ``phi_rest_deg`` defaults to the stored fit of the model's gravity convention.
+    ``p0_bar``: peak pressure [bar]; ``psi_deg``: phase difference [deg]; ``phi_rest_deg``: rest
+    angle [deg], by default the stored fit of the model's gravity convention; ``t_eval``: phases
+    [cycles] to sample.  Returns the :class:`~ocp_crawl.sim.result.CrawlResult`.
     """
     rest = FITTED_REST_DEG[model.gravity] if phi_rest_deg is None else phi_rest_deg
-    return simulate_torque(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), options, t_eval=t_eval)
+    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), "event", options, t_eval=t_eval)
 
 
 # --------------------------------------------------------------------------------------------
@@ -74,13 +82,17 @@ def _run(model: Model, p0: float, psi: float, rest: float) -> tuple[float, str]:
         r = simulate_pressure(model, p0, psi, rest)
     except ValueError:
         # no released equilibrium at the start: the input cannot even start the robot
-        return float("nan"), "no_start"
+        return float("nan"), Status.NO_START.label
     return (r.S if r.success else float("nan")), r.status_name
 
 
-def pressure_curves(phi_rest_deg: float, gravity: str = "paper", p0_bar=None, psi_deg=None,
+def pressure_curves(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None,
                     robot: Robot | None = None) -> PressureCurves:
-    """S along the paper's p0 and psi curves for one rest angle (defaults: the paper's own grids)."""
+    """S along the paper's p0 and psi curves for one rest angle [deg] (defaults: the paper's own grids).
+
+    ``p0_bar``: pressures [bar] of the p0 curve; ``psi_deg``: phase differences [deg] of the psi
+    curve; ``robot``: default Table I.  Returns :class:`PressureCurves`.
+    """
     if gravity not in GRAVITY_CONVENTIONS:
         raise ValueError(f"gravity must be one of {GRAVITY_CONVENTIONS}, got {gravity!r}")
     model = Model(robot or Robot.paper(), gravity=gravity)
@@ -153,7 +165,7 @@ class PressureFit:
 
     @property
     def failures(self) -> int:
-        return sum(s != "success" for s in self.curves.status_p0 + self.curves.status_psi)
+        return sum(s != SUCCESS for s in self.curves.status_p0 + self.curves.status_psi)
 
 
 def _worst(err: np.ndarray, x: np.ndarray) -> tuple[float, float]:
@@ -179,18 +191,20 @@ def _reference(p0: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return np.interp(p0, d0["p0_bar"], d0["S_over_Smax"]), np.interp(psi, dp["psi_deg"], dp["S_over_Smax"])
 
 
-def evaluate_fit(phi_rest_deg: float, gravity: str = "paper", p0_bar=None, psi_deg=None) -> PressureFit:
-    """The fit error of a given rest angle on the given grids (default: the paper's points)."""
+def evaluate_fit(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None) -> PressureFit:
+    """The fit error of a given rest angle [deg] on the given grids (p0 [bar], psi [deg]; default: the
+    paper's points).  Returns a :class:`PressureFit` (``fitted`` False)."""
     curves = pressure_curves(phi_rest_deg, gravity, p0_bar, psi_deg)
     ref_p0, ref_psi = _reference(curves.p0_bar, curves.psi_deg)
     return PressureFit(curves, ref_p0, ref_psi, fitted=False)
 
 
-def fit_rest_angle(gravity: str = "paper", p0_bar=None, psi_deg=None, bounds=(95.0, 175.0),
+def fit_rest_angle(gravity: str = "physical", p0_bar=None, psi_deg=None, bounds=(95.0, 175.0),
                    xatol: float = 0.1) -> PressureFit:
     """Fit the rest angle phi_rest [deg] to the paper's simulated curves (bounded scalar minimisation).
 
-    Default grids: :func:`paper_grids`.
+    ``p0_bar`` [bar], ``psi_deg`` [deg]: the grids, default :func:`paper_grids`; ``bounds`` [deg]
+    and ``xatol`` [deg]: the search interval and tolerance.  Returns a :class:`PressureFit`.
     """
     calls = {"n": 0}
 
@@ -201,3 +215,61 @@ def fit_rest_angle(gravity: str = "paper", p0_bar=None, psi_deg=None, bounds=(95
     res = minimize_scalar(objective, bounds=bounds, method="bounded", options={"xatol": xatol})
     best = evaluate_fit(float(res.x), gravity, p0_bar, psi_deg)
     return PressureFit(best.curves, best.ref_p0, best.ref_psi, fitted=True, nfev=calls["n"] + 1)
+
+
+# --------------------------------------------------------------------------------------------
+# Fig. exp
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PressureStudy:
+    """Normalised progress of the pressure-driven robot against p0 and psi, with the paper's data."""
+
+    fit: PressureFit
+    experiment_p0: dict[str, np.ndarray] = field(repr=False)
+    """the paper's measured S/S_max against p0 with error bars (columns of the CSV file)"""
+    experiment_psi: dict[str, np.ndarray] = field(repr=False)
+    paper_p0: dict[str, np.ndarray] = field(repr=False)
+    """the paper's simulated curves"""
+    paper_psi: dict[str, np.ndarray] = field(repr=False)
+    flat: PressureFit | None = None
+    """the same curves with the flat rest shape (phi_rest = 180 deg), to show why the rest angle is fitted"""
+
+    @property
+    def gravity(self) -> str:
+        return self.fit.curves.gravity
+
+    def experiment_rms(self) -> tuple[float, float]:
+        """RMS of (model - experiment) in S/S_max at the measured points, for p0 and for psi."""
+        c = self.fit.curves
+        e0 = np.interp(self.experiment_p0["p0_bar"], c.p0_bar, c.progress_p0) - self.experiment_p0["S_over_Smax"]
+        psi_exp = self.experiment_psi["psi_deg"]
+        keep = (psi_exp >= c.psi_deg.min()) & (psi_exp <= c.psi_deg.max())
+        e1 = np.interp(psi_exp[keep], c.psi_deg, c.progress_psi) - self.experiment_psi["S_over_Smax"][keep]
+        return float(np.sqrt(np.nanmean(e0**2))), float(np.sqrt(np.nanmean(e1**2)))
+
+    @property
+    def psi_opt(self) -> tuple[float, float]:
+        """(psi [deg], S/S_max) of the largest progress on the psi curve (parabolic refinement)."""
+        return parabolic_max(self.fit.curves.psi_deg, self.fit.curves.progress_psi)
+
+
+def pressure_study(gravity: str = "physical", fit: bool = True, p0_bar=None, psi_deg=None,
+                   phi_rest_deg: float | None = None, compare_flat: bool = False) -> PressureStudy:
+    """Fig. exp: the pressure-driven robot against p0 and psi (the curves and the fit above).
+
+    ``fit``: fit the rest angle to the paper's simulated curves on the given grids (default: the
+    paper's own points); otherwise evaluate ``phi_rest_deg`` (default: the stored fit).  The
+    points run one after another in this process: the pressure input is not a problem-file key,
+    so the sweep engine cannot express it.  ``compare_flat`` also evaluates the flat rest shape.
+    ``gravity``: "physical" or "paper"; ``p0_bar`` [bar], ``psi_deg`` [deg]: the grids (None: the
+    paper's points).  Returns a :class:`PressureStudy`.
+    """
+    if fit:
+        result = fit_rest_angle(gravity, p0_bar, psi_deg)
+    else:
+        rest = FITTED_REST_DEG[gravity] if phi_rest_deg is None else phi_rest_deg
+        result = evaluate_fit(rest, gravity, p0_bar, psi_deg)
+    flat = evaluate_fit(FLAT_REST_DEG, gravity, p0_bar, psi_deg) if compare_flat else None
+    return PressureStudy(result, read_paper_csv("fig_exp_p0_experiment.csv"),
+                         read_paper_csv("fig_exp_psi_experiment.csv"), read_paper_csv("fig_exp_p0_simulation.csv"),
+                         read_paper_csv("fig_exp_psi_simulation.csv"), flat)

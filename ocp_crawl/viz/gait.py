@@ -57,10 +57,31 @@ def mode_runs(t: np.ndarray, mode: np.ndarray) -> list[tuple[float, float, int]]
     return runs
 
 
-def _shade(ax, runs) -> None:
+def shade_modes(ax, runs, **kw) -> set[int]:
+    """Shade the background of ``ax`` by contact mode over ``runs`` (from :func:`mode_runs`).
+
+    ``kw`` goes to ``axvspan`` (e.g. ``alpha``).  Returns the mode codes drawn (runs of positive length).
+    """
+    drawn: set[int] = set()
     for a, b, m in runs:
         if b > a:
-            ax.axvspan(a, b, color=mode_color(m), lw=0, zorder=0)
+            ax.axvspan(a, b, color=mode_color(m), lw=0, zorder=0, **kw)
+            drawn.add(int(m))
+    return drawn
+
+
+def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"), lw: float | None = None,
+                         scale: float = 1.0, labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
+    """The friction limits +-mu1 f_n1 and +-mu2 f_n2 as dashed lines over ``t``.
+
+    ``f_n1``, ``f_n2``: normal forces [N]; ``scale``: factor of the plotted force (1e3: mN);
+    ``lw``: line width (None: matplotlib's default); ``colors``, ``labels``: per foot (the label
+    goes to the + line only).
+    """
+    for mu, fn, color, label in zip((robot.mu1, robot.mu2), (f_n1, f_n2), colors, labels):
+        lim = mu * np.asarray(fn, float) * scale
+        ax.plot(t, lim, color=color, ls="--", lw=lw, label=label)
+        ax.plot(t, -lim, color=color, ls="--", lw=lw)
 
 
 def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) -> np.ndarray:
@@ -76,6 +97,15 @@ def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) 
     return np.stack([[x1, 0.0], j1, j2, [x2, 0.0]], axis=1)
 
 
+def _gait_title(result: CrawlResult) -> str:
+    title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
+    if np.isfinite(result.S):
+        title += f", S = {1e3 * result.S:.2f} mm/cycle"
+    if result.failure_t is not None:
+        title += f" at t = {result.failure_t:.4f}"
+    return title
+
+
 def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None = None, *,
               reference: PeriodicSignal | None = None, snapshots: int = 5, title: str | None = None) -> Figure:
     """Three panels over the phase of the reported cycle, background shaded by contact mode.
@@ -85,7 +115,7 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     (c) tangential force f_t [N] with the friction limits +-mu1 f_n1 and +-mu2 f_n2 dashed.
 
     Failed runs are drawn up to the failure.  If ``path`` is given the figure is also saved there
-    (format from the suffix, e.g. .png or .pdf; written atomically).
+    (format from the suffix, e.g. .png or .pdf; written atomically).  Returns the figure.
     """
     fig = Figure(figsize=(7.0, 9.0), layout="constrained")
     FigureCanvasAgg(fig)
@@ -93,13 +123,7 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     ax_a, ax_b, ax_s, ax_c = axes
     t = np.asarray(result.t, float)
     phase = t - result.t0
-    if title is None:
-        title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
-        if np.isfinite(result.S):
-            title += f", S = {1e3 * result.S:.2f} mm/cycle"
-        if result.failure_t is not None:
-            title += f" at t = {result.failure_t:.4f}"
-    fig.suptitle(title)
+    fig.suptitle(_gait_title(result) if title is None else title)
     if t.size == 0:
         for ax in axes:
             ax.text(0.5, 0.5, "no samples", ha="center", va="center", transform=ax.transAxes)
@@ -108,44 +132,16 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
 
     runs = mode_runs(phase, result.mode)
     for ax in (ax_a, ax_b, ax_c):
-        _shade(ax, runs)
+        shade_modes(ax, runs)
         ax.set_xlim(phase[0], max(phase[-1], phase[0] + 1e-9))
         ax.set_xlabel("phase t [cycles]")
         ax.grid(True, lw=0.3, alpha=0.6)
-
-    phi = np.degrees(np.asarray(result.phi, float))
-    ax_a.plot(phase, phi[0], color="C0", label=r"$\varphi_1$")
-    ax_a.plot(phase, phi[1], color="C3", label=r"$\varphi_2$")
-    if reference is not None:
-        ref = np.degrees(np.asarray(reference(t), float)).reshape(2, -1)
-        ax_a.plot(phase, ref[0], color="C0", ls=":", label=r"$\varphi_{1,\mathrm{ref}}$")
-        ax_a.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
-    ax_a.set_ylabel("joint angle [deg]")
-    ax_a.set_title("(a) joint angles", loc="left", fontsize="medium")
-    ax_a.legend(loc="upper right", fontsize="small", ncol=2)
-
-    x1 = np.asarray(result.x1, float)
-    x2 = np.asarray(result.x2, float)
+    _draw_angles(ax_a, result, phase, reference)
     # positions relative to foot 1 at the start of the plotted cycle, so that x1(end) = S
-    origin = x1[0]
-    ax_b.plot(phase, 1e3 * (x1 - origin), color="C0", label="$x_1$ (foot 1)")
-    ax_b.plot(phase, 1e3 * (x2 - origin), color="C3", label="$x_2$ (foot 2)")
-    ax_b.set_ylabel("contact position [mm]")
-    ax_b.set_title("(b) contact positions", loc="left", fontsize="medium")
-    ax_b.legend(loc="best", fontsize="small")
-
+    origin = float(np.asarray(result.x1, float)[0])
+    _draw_positions(ax_b, result, phase, origin)
     _draw_snapshots(ax_s, result, robot, phase, origin, snapshots)
-
-    ft = np.asarray(result.f_t, float)
-    lim1 = robot.mu1 * np.asarray(result.f_n1, float)
-    lim2 = robot.mu2 * np.asarray(result.f_n2, float)
-    ax_c.plot(phase, ft, color="k", label="$f_t$")
-    ax_c.plot(phase, lim1, color="C0", ls="--", lw=1, label=r"$\pm\mu_1 f_{n1}$")
-    ax_c.plot(phase, -lim1, color="C0", ls="--", lw=1)
-    ax_c.plot(phase, lim2, color="C3", ls="--", lw=1, label=r"$\pm\mu_2 f_{n2}$")
-    ax_c.plot(phase, -lim2, color="C3", ls="--", lw=1)
-    ax_c.set_ylabel("tangential force [N]")
-    ax_c.set_title("(c) tangential force and friction limits", loc="left", fontsize="medium")
+    _draw_forces(ax_c, result, robot, phase)
     handles, labels = ax_c.get_legend_handles_labels()
     present = sorted({m for _, _, m in runs})
     handles += [Patch(color=mode_color(m)) for m in present]
@@ -157,6 +153,34 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     fig.set_layout_engine("none")
     _save(fig, path)
     return fig
+
+
+def _draw_angles(ax, result: CrawlResult, phase, reference: PeriodicSignal | None) -> None:
+    phi = np.degrees(np.asarray(result.phi, float))
+    ax.plot(phase, phi[0], color="C0", label=r"$\varphi_1$")
+    ax.plot(phase, phi[1], color="C3", label=r"$\varphi_2$")
+    if reference is not None:
+        ref = np.degrees(np.asarray(reference(np.asarray(result.t, float)), float)).reshape(2, -1)
+        ax.plot(phase, ref[0], color="C0", ls=":", label=r"$\varphi_{1,\mathrm{ref}}$")
+        ax.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
+    ax.set_ylabel("joint angle [deg]")
+    ax.set_title("(a) joint angles", loc="left", fontsize="medium")
+    ax.legend(loc="upper right", fontsize="small", ncol=2)
+
+
+def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
+    ax.plot(phase, 1e3 * (np.asarray(result.x1, float) - origin), color="C0", label="$x_1$ (foot 1)")
+    ax.plot(phase, 1e3 * (np.asarray(result.x2, float) - origin), color="C3", label="$x_2$ (foot 2)")
+    ax.set_ylabel("contact position [mm]")
+    ax.set_title("(b) contact positions", loc="left", fontsize="medium")
+    ax.legend(loc="best", fontsize="small")
+
+
+def _draw_forces(ax, result: CrawlResult, robot: Robot, phase) -> None:
+    ax.plot(phase, np.asarray(result.f_t, float), color="k", label="$f_t$")
+    plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2, lw=1.0)
+    ax.set_ylabel("tangential force [N]")
+    ax.set_title("(c) tangential force and friction limits", loc="left", fontsize="medium")
 
 
 def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float, n: int) -> None:
