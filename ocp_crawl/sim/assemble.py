@@ -51,8 +51,9 @@ def success_message(cycles: int, t0: float, how: str = "") -> str:
 
 
 def new_result(model: Model, drive: str, status: Status, message: str = "", **fields) -> CrawlResult:
-    """A result with its status and message; ``fields``: any other :class:`CrawlResult` field."""
-    return CrawlResult(success=status == Status.SUCCESS, status=int(status), message=message, drive=drive,
+    """A result with its status (a :class:`~ocp_crawl.status.Status`) and message; ``fields``: any other
+    :class:`CrawlResult` field."""
+    return CrawlResult(success=status == Status.SUCCESS, status=Status(status), message=message, drive=drive,
                        gravity=model.gravity, **fields)
 
 
