@@ -9,7 +9,7 @@ import pytest
 
 from ocp_crawl import Model, Robot
 from ocp_crawl.model.statics import fast_newton, fast_newton_batch, solve_many, symbolic
-from ocp_crawl.sim.event import mode_q
+from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
 
 SCRIPT = """

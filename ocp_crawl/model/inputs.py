@@ -21,6 +21,8 @@ from typing import Callable
 import numpy as np
 from scipy.interpolate import CubicSpline, PchipInterpolator
 
+from ocp_crawl.checks import real
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -52,15 +54,6 @@ def _float_array(owner: str, name: str, value) -> np.ndarray:
     return arr
 
 
-def _finite_check(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name} must be a real number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return value
-
-
 @dataclass(frozen=True)
 class Harmonic(PeriodicSignal):
     """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 = gamma2 + A2 sin(2 pi t - psi/2)."""
@@ -78,10 +71,7 @@ class Harmonic(PeriodicSignal):
 
     def __post_init__(self) -> None:
         for name in ("gamma1", "gamma2", "A1", "A2", "psi"):
-            object.__setattr__(self, name, _finite_check(name, getattr(self, name)))
-        for name in ("A1", "A2"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, real(name, getattr(self, name), nonneg=name in ("A1", "A2")))
 
     @classmethod
     def from_degrees(cls, gamma_deg=90.0, A_deg=30.0, psi_deg=45.0, *, gamma1_deg=None, gamma2_deg=None,
@@ -303,7 +293,7 @@ class CallableSignal(PeriodicSignal):
             raise TypeError(f"CallableSignal needs a callable, got {type(f).__name__}")
         if df is not None and not callable(df):
             raise TypeError(f"CallableSignal: df must be callable or None, got {type(df).__name__}")
-        h = _finite_check("CallableSignal.h", h)
+        h = real("CallableSignal.h", h)
         if not 0 < h < 0.5:
             raise ValueError(f"CallableSignal: h must be in (0, 0.5), got {h!r}")
         self.f, self.df, self.h = f, df, h
@@ -345,10 +335,7 @@ class ReferenceTorque(PeriodicSignal):
     def __post_init__(self) -> None:
         if not isinstance(self.reference, PeriodicSignal):
             raise TypeError(f"ReferenceTorque.reference must be a PeriodicSignal, got {type(self.reference).__name__}")
-        k = _finite_check("ReferenceTorque.k", self.k)
-        if k <= 0:
-            raise ValueError(f"ReferenceTorque.k must be > 0, got {k!r}")
-        object.__setattr__(self, "k", k)
+        object.__setattr__(self, "k", real("ReferenceTorque.k", self.k, positive=True))
 
     def __call__(self, t):
         return self.k * (self.reference(t) - math.pi)

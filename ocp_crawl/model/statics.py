@@ -17,13 +17,14 @@ Conventions (see ``shared/MODEL_NOTES.md``):
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Literal, NamedTuple
 
 import casadi as cs
 import numpy as np
+
+from ocp_crawl.checks import real
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -56,19 +57,6 @@ Q_NAMES = ("e_ss", "sigma", "w", "d0")
 NQ = len(Q_NAMES)
 
 
-def _check_positive(name: str, value: float, strict: bool = True) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    if strict and value <= 0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-    if not strict and value < 0:
-        raise ValueError(f"{name} must be >= 0, got {value!r}")
-    return value
-
-
 @dataclass(frozen=True)
 class Robot:
     """Physical parameters of the three-link crawler (SI units)."""
@@ -89,10 +77,9 @@ class Robot:
     """gravitational acceleration [m/s^2]"""
 
     def __post_init__(self) -> None:
-        for name in ("M", "L", "beta", "k", "g"):
-            object.__setattr__(self, name, _check_positive(name, getattr(self, name)))
-        for name in ("mu1", "mu2"):
-            object.__setattr__(self, name, _check_positive(name, getattr(self, name), strict=False))
+        for name in ("M", "L", "beta", "k", "mu1", "mu2", "g"):
+            friction = name in ("mu1", "mu2")
+            object.__setattr__(self, name, real(name, getattr(self, name), positive=not friction, nonneg=friction))
 
     @classmethod
     def paper(cls, **overrides: float) -> "Robot":
@@ -193,24 +180,37 @@ def _geometry(phi, p):
 @lru_cache(maxsize=1)
 def symbolic() -> _Symbolic:
     """Build (once) and return the compiled CasADi functions of the model."""
-    phi = cs.SX.sym("phi", 2)
-    tau = cs.SX.sym("tau", 2)
-    dtau = cs.SX.sym("dtau", 2)
-    ft = cs.SX.sym("ft")
-    p = cs.SX.sym("p", NP)
-    q = cs.SX.sym("q", NQ)
-    M, L, beta, k, mu1, mu2, g, sgrav = params(p)
+    phi, tau, dtau, ft = cs.SX.sym("phi", 2), cs.SX.sym("tau", 2), cs.SX.sym("dtau", 2), cs.SX.sym("ft")
+    p, q = cs.SX.sym("p", NP), cs.SX.sym("q", NQ)
+    kin, residual, hold, F, grad_d = _statics(phi, tau, ft, p)
+    x = cs.SX.sym("x", 3)
+    G, J, evaluate, ddot2 = _mode_system(x, phi, tau, dtau, ft, p, q, F, grad_d)
+    system = cs.Function("system", [x, tau, q, p], [G, J], ["x", "tau", "q", "p"], ["G", "J"])
+    xn = cs.SX.sym("x0", 3)
+    xk = xn
+    for _ in range(NEWTON_ITERS):
+        Gk, Jk = system(xk, tau, q, p)
+        xk = xk - cs.solve(Jk, Gk)
+    newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
+                         ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
+    return _Symbolic(kin=kin, residual=residual, hold_torque=hold, evaluate=evaluate, system=system,
+                     fold=_fold_system(x, tau, dtau, p, q, G, J), newton=newton, ddot2=ddot2)
+
+
+def _statics(phi, tau, ft, p):
+    """The kinematics, the joint residual F and the holding torque as functions; F and grad d as expressions.
+
+    Virtual work: Pi(phi; tau) = U_el + sgrav U_g - tau.phi; friction does virtual work
+    f_t dx1 - f_t (dx1 + grad d . dphi) = -f_t grad d . dphi, so F = -dPi/dphi - f_t grad d.
+    """
+    sgrav = params(p).sgrav
     geo = _geometry(phi, p)
     d = geo["d"]
     grad_d = cs.gradient(d, phi)
     grad_Ug = cs.gradient(geo["U_g"], phi)
     Delta = geo["xc"] - d / 2
-
-    # virtual work: Pi(phi; tau) = U_el + sgrav U_g - tau.phi; friction does virtual work
-    # f_t dx1 - f_t (dx1 + grad d . dphi) = -f_t grad d . dphi  =>  F = -dPi/dphi - f_t grad d
     Pi = geo["U_el"] + sgrav * geo["U_g"] - cs.dot(tau, phi)
     F = -cs.gradient(Pi, phi) - ft * grad_d
-
     kin = cs.Function(
         "kin", [phi, p],
         [cs.vertcat(geo["theta"], d, geo["xc"], Delta, geo["fn1"], geo["fn2"], grad_d, grad_Ug,
@@ -221,11 +221,16 @@ def symbolic() -> _Symbolic:
     hold = cs.Function("hold_torque", [phi, ft, p],
                        [cs.gradient(geo["U_el"] + sgrav * geo["U_g"], phi) + ft * grad_d],
                        ["phi", "ft", "p"], ["tau"])
+    return kin, residual, hold, F, grad_d
 
-    # unified mode system in x = (phi1, phi2, f_t/(M g)); q selects the mode:
-    #   stick-stick (e_ss = 1): d(phi) = d0
-    #   slip (e_ss = 0):        f_t = sigma * (w mu1 fn1 + (1-w) mu2 fn2), sigma = sign(d')
-    x = cs.SX.sym("x", 3)
+
+def _mode_system(x, phi, tau, dtau, ft, p, q, F, grad_d):
+    """The unified mode system in x = (phi1, phi2, f_t/(M g)): (G, J) as expressions, ``evaluate`` and ``ddot2``.
+
+    q selects the mode: stick-stick (e_ss = 1): d(phi) = d0; slip (e_ss = 0):
+    f_t = sigma (w mu1 fn1 + (1-w) mu2 fn2), sigma = sign(d').
+    """
+    M, L, _, _, mu1, mu2, g, _ = params(p)
     e_ss, sigma, w, d0 = q[0], q[1], q[2], q[3]
     Mg = M * g
     geo_x = _geometry(x[0:2], p)
@@ -255,10 +260,12 @@ def symbolic() -> _Symbolic:
                         [cs.vertcat(cs.dot(cs.gradient(ddot, x), xdot) + cs.dot(cs.gradient(ddot, tau), dtau),
                                     cs.gradient(ddot, dtau))],
                         ["x", "tau", "dtau", "q", "p"], ["ab"])
-    system = cs.Function("system", [x, tau, q, p], [G, J], ["x", "tau", "q", "p"], ["G", "J"])
+    return G, J, evaluate, ddot2
 
-    # fold point: G(x, tau(t)) = 0 and J v = 0, |v| = 1, with tau(t) linearised around t0:
-    # tau = tau0 + (t - t0) dtau0 (the caller iterates, re-linearising at the new t)
+
+def _fold_system(x, tau, dtau, p, q, G, J):
+    """Fold point: G(x, tau(t)) = 0 and J v = 0, |v| = 1, with tau(t) linearised around t0:
+    tau = tau0 + (t - t0) dtau0 (the caller iterates, re-linearising at the new t)."""
     z = cs.SX.sym("z", 7)  # x[3], s = t - t0, v[3]
     v0 = cs.SX.sym("v0", 3)
     tau0 = cs.SX.sym("tau0", 2)
@@ -266,17 +273,8 @@ def symbolic() -> _Symbolic:
     Gz = cs.substitute(G, cs.vertcat(x, tau), cs.vertcat(xz, tau0 + sz * dtau))
     Jz = cs.substitute(J, cs.vertcat(x, tau), cs.vertcat(xz, tau0 + sz * dtau))
     Hz = cs.vertcat(Gz, Jz @ vz, cs.dot(v0, vz) - 1)
-    fold = cs.Function("fold", [z, v0, tau0, dtau, q, p], [Hz, cs.jacobian(Hz, z)],
+    return cs.Function("fold", [z, v0, tau0, dtau, q, p], [Hz, cs.jacobian(Hz, z)],
                        ["z", "v0", "tau0", "dtau", "q", "p"], ["H", "dH"])
-    xn = cs.SX.sym("x0", 3)
-    xk = xn
-    for _ in range(NEWTON_ITERS):
-        Gk, Jk = system(xk, tau, q, p)
-        xk = xk - cs.solve(Jk, Gk)
-    newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
-                         ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
-    return _Symbolic(kin=kin, residual=residual, hold_torque=hold, evaluate=evaluate,
-                     system=system, fold=fold, newton=newton, ddot2=ddot2)
 
 
 #: Newton iterations unrolled in ``newton``; callers repeat the call until the residual is small

@@ -18,7 +18,11 @@ from scipy.optimize import brentq, minimize_scalar
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import KIN, Model, call_mapped, symbolic
 from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
-from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
+from ocp_crawl.sim.assemble import (default_phases, failure_message, new_result, output_phases, set_cycle_metrics,
+                                    set_samples)
+from ocp_crawl.sim.result import CrawlResult, Event, Mode
+from ocp_crawl.status import Status
+
 
 class _Kinematic:
     """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
@@ -116,23 +120,31 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     angles = as_signal(angles)
     if isinstance(n_scan, bool) or not isinstance(n_scan, (int, np.integer)) or n_scan < 8:
         raise ValueError(f"simulate_angles: n_scan must be an integer >= 8, got {n_scan!r}")
-    n_scan = int(n_scan)
-    te = None
-    if t_eval is not None:
-        try:
-            te = np.asarray(t_eval, dtype=float).ravel()
-        except (TypeError, ValueError):
-            raise ValueError(f"simulate_angles: t_eval must be an array of phases in [0, 1], got {t_eval!r}") from None
-        if te.size == 0 or not np.all(np.isfinite(te)) or np.any(te < 0) or np.any(te > 1):
-            raise ValueError("simulate_angles: t_eval must be a non-empty array of finite phases in [0, 1], got "
-                             f"{np.array2string(te, threshold=6)}")
+    te = output_phases(t_eval)
+    ts = np.linspace(0.0, 1.0, int(n_scan) + 1)
+    _check_angles(model, angles, ts)
     kin = _Kinematic(model, angles)
-    robot = model.robot
-    Mg = robot.M * robot.g
-    res = CrawlResult(success=False, status=int(Status.SUCCESS), message="", drive="angles", gravity=model.gravity,
-                      cycles=1)
+    K = kin(ts)
+    failure = _first_failure(kin, ts, K, model.robot)
+    if failure is not None:
+        return _failure_result(model, kin, *failure)
+    switches = _switching_instants(kin, ts, K)
+    anchors, S = _anchors(kin, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
+    res = new_result(model, "angles", Status.SUCCESS, f"prescribed-angle gait: {len(switches)} switching instants "
+                     "per cycle", cycles=1, events=[_event(kin, t_ev, name) for t_ev, name in switches])
+    if te is None:
+        te = default_phases([e[0] for e in switches])
+    _store_samples(res, model, kin(te), te, anchors)
+    wplus, w_in, w_abs, diss = _cycle_integrals(model, kin, anchors, np.asarray(getattr(angles, "t_knots", ()), float))
+    dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
+    set_cycle_metrics(res, model.robot, S, wplus, w_in, dV, diss, w_abs)
+    res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
+    return res
 
-    ts = np.linspace(0.0, 1.0, n_scan + 1)
+
+def _check_angles(model: Model, angles: PeriodicSignal, ts: np.ndarray) -> None:
+    """ValueError unless the angles have shape (2, N), are finite with their derivative on the scan phases
+    ``ts``, are 1-periodic and give a two-foot contact at t = 0."""
     phi_scan = np.asarray(angles(ts), float)
     if phi_scan.shape != (2, ts.size):
         raise ValueError(f"simulate_angles: angles(t) must have shape (2, N) for N phases, got {phi_scan.shape}")
@@ -144,10 +156,14 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         raise ValueError(f"simulate_angles: angles must be 1-periodic in the phase, got |phi(1) - phi(0)| = {gap:.3g} rad")
     model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
 
-    K = kin(ts)
-    # validity first: the first phase at which the feet cross (d = 0), a foot lifts off (f_n = 0)
-    # or a joint reaches the ground ends the run; near d = 0 the normal forces x_c/d M g are
-    # singular, so the feet crossing is searched first and the others only before it
+
+def _first_failure(kin: _Kinematic, ts: np.ndarray, K: dict, robot) -> tuple | None:
+    """(phase, status, label, event kind) of the first loss of contact in the cycle, or None.
+
+    The feet crossing (d = 0) is searched first and the others only before it: near d = 0 the
+    normal forces x_c/d M g are singular.
+    """
+    Mg = robot.M * robot.g
     failure = None
     t_cross = _first_zero(kin.scalar("d"), ts, K["d"], robot.L)
     if t_cross is not None:
@@ -166,22 +182,23 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             status, label, kind = Status.FEET_CROSSED, "feet meet or cross", "feet_crossed"
         if failure is None or tf < failure[0]:
             failure = (tf, status, label, kind)
-    if failure is not None:
-        tf, status, label, kind = failure
-        res.status = int(status)
-        res.failure_t = tf
-        k0 = kin(max(tf - 1e-9, 0.0))
-        h0 = k0["h"][0]
-        res.failure_mode = Mode.slip(3 if abs(h0) <= TIE else (1 if h0 < 0 else 2), 1 if k0["ddot"][0] > 0 else -1).label
-        res.message = f"{STATUS_MESSAGES[status]}: {label} at phase t = {tf:.10f} (prescribed angles)"
-        res.events = [Event(tf, kind, "", "failure")]
-        return res
+    return failure
 
-    # switching instants: d' changes sign (slip reversal) or vanishes on a stretch (the input holds
-    # still: both feet stick); the smaller friction limit changes feet (slip switch), or both are
-    # equal on a stretch (|h| <= TIE: both feet slip)
+
+def _failure_result(model: Model, kin: _Kinematic, tf: float, status: Status, label: str, kind: str) -> CrawlResult:
+    """The result of a cycle that loses contact at phase tf, with the mode just before it."""
+    k0 = kin(max(tf - 1e-9, 0.0))
+    h0 = k0["h"][0]
+    mode = Mode.slip(3 if abs(h0) <= TIE else (1 if h0 < 0 else 2), 1 if k0["ddot"][0] > 0 else -1)
+    return new_result(model, "angles", status, failure_message(status, f"{label} at phase t = {tf:.10f} (prescribed "
+                      "angles)"), cycles=1, failure_t=tf, failure_mode=mode.label, events=[Event(tf, kind, "", "failure")])
+
+
+def _switching_instants(kin: _Kinematic, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
+    """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or vanishes on a
+    stretch (the input holds still: both feet stick); the smaller friction limit changes feet (slip switch),
+    or both are equal on a stretch (|h| <= TIE: both feet slip)."""
     events: list[tuple[float, str]] = []
-    rtol = 4 * np.finfo(float).eps
     for name in ("ddot", "h"):
         f = kin.scalar(name)
         c = _classes(name, K[name])
@@ -189,45 +206,53 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         runs = list(zip(c[starts], starts, np.concatenate([starts[1:] - 1, [c.size - 1]])))
         k = 0
         while k < len(runs) - 1:
-            (c0, _, e0), (c1, s1, e1) = runs[k], runs[k + 1]
-            if c0 and c1:
-                events.append((brentq(f, ts[e0], ts[s1], xtol=1e-14, rtol=rtol), name))
-                k += 1
-                continue
-            if c0 and s1 == e1 and k + 2 < len(runs) and runs[k + 2][0]:
-                # zero at a single scan phase: a crossing exactly there, or a touch (no event)
-                if runs[k + 2][0] == -c0:
-                    events.append((brentq(f, ts[e0], ts[runs[k + 2][1]], xtol=1e-14, rtol=rtol), name))
-                k += 2
-                continue
-            # into or out of a stretch on which the function is zero: bisection on the class
-            lo, hi = ts[e0], ts[s1]
-            while hi - lo > 1e-14:
-                mid = 0.5 * (lo + hi)
-                if _classes(name, np.array([f(mid)]))[0] == c0:
-                    lo = mid
-                else:
-                    hi = mid
-            events.append((0.5 * (lo + hi), name))
-            k += 1
+            t_ev, k = _next_switch(f, name, ts, runs, k)
+            if t_ev is not None:
+                events.append((t_ev, name))
     events.sort()
-    breaks = [0.0] + [e[0] for e in events] + [1.0]
+    return events
 
-    def mode_at(tm: float) -> Mode:
-        k1 = kin(tm)
-        h, dd = k1["h"][0], k1["ddot"][0]
-        if dd == 0:
-            return Mode.STICK
-        return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
 
-    # foot positions: the slipping foot follows d, the other stays
-    seg_modes = []
-    x1, x2 = 0.0, float(K["d"][0])
+def _next_switch(f, name: str, ts: np.ndarray, runs: list, k: int) -> tuple[float | None, int]:
+    """The switch between the runs k and k + 1 of sign classes of ``f`` (None for a touch) and the next k."""
+    rtol = 4 * np.finfo(float).eps
+    (c0, _, e0), (c1, s1, e1) = runs[k], runs[k + 1]
+    if c0 and c1:
+        return brentq(f, ts[e0], ts[s1], xtol=1e-14, rtol=rtol), k + 1
+    if c0 and s1 == e1 and k + 2 < len(runs) and runs[k + 2][0]:
+        # zero at a single scan phase: a crossing exactly there, or a touch (no event)
+        if runs[k + 2][0] == -c0:
+            return brentq(f, ts[e0], ts[runs[k + 2][1]], xtol=1e-14, rtol=rtol), k + 2
+        return None, k + 2
+    # into or out of a stretch on which the function is zero: bisection on the class
+    lo, hi = ts[e0], ts[s1]
+    while hi - lo > 1e-14:
+        mid = 0.5 * (lo + hi)
+        if _classes(name, np.array([f(mid)]))[0] == c0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi), k + 1
+
+
+def _mode_at(kin: _Kinematic, tm: float) -> Mode:
+    """Contact mode at phase tm: the foot with the smaller friction limit slips along sign(d')."""
+    k1 = kin(tm)
+    h, dd = k1["h"][0], k1["ddot"][0]
+    if dd == 0:
+        return Mode.STICK
+    return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
+
+
+def _anchors(kin: _Kinematic, breaks: list[float], d_start: float) -> tuple[list, float]:
+    """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's end [m]
+    (foot 1 starts at 0): the slipping foot follows d, the other stays."""
+    x1, x2 = 0.0, d_start
     anchors = []
     for a, b in zip(breaks[:-1], breaks[1:]):
         if b - a <= 0:
             continue
-        m = mode_at(0.5 * (a + b))
+        m = _mode_at(kin, 0.5 * (a + b))
         db = float(kin(b)["d"][0])
         anchors.append((a, b, m, x1, x2))
         if m.foot == 1:
@@ -238,40 +263,36 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
             mid = 0.5 * (x1 + x2)
             x1, x2 = mid - 0.5 * db, mid + 0.5 * db
         # stick-stick (d' = 0 on a stretch): neither foot moves
-        seg_modes.append(m)
-    res.S = x1 - 0.0
-    ev_objs = []
-    for (t_ev, name) in events:
-        before = mode_at(max(t_ev - 1e-9, 0.0))
-        after = mode_at(min(t_ev + 1e-9, 1.0))
-        if name == "h":
-            kind = "slip_switch"
-        elif after == Mode.STICK:
-            kind = "slip_to_stick"
-        elif before == Mode.STICK:
-            kind = {1: "slip_onset_1", 2: "slip_onset_2", 3: "slip_onset_both"}[after.foot]
-        else:
-            kind = "slip_reversal"
-        ev_objs.append(Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)[name][0])))
-    res.events = ev_objs
+    return anchors, x1 - 0.0
 
-    def seg_of(t):
-        for a, b, m, xa1, xa2 in anchors:
-            if a <= t <= b:
-                return a, b, m, xa1, xa2
-        return anchors[-1]
 
-    # output arrays
-    if te is None:
-        te = np.unique(np.concatenate([np.linspace(0, 1, 201), [e[0] for e in events]]))
-    Ko = kin(te)
-    modes = np.empty(len(te), int)
-    ft = np.empty(len(te))
-    x1o = np.empty(len(te))
-    x2o = np.empty(len(te))
-    mu = (robot.mu1, robot.mu2)
+def _event(kin: _Kinematic, t_ev: float, name: str) -> Event:
+    """The event of a switching instant of the function ``name`` ("ddot" or "h") at phase t_ev."""
+    before = _mode_at(kin, max(t_ev - 1e-9, 0.0))
+    after = _mode_at(kin, min(t_ev + 1e-9, 1.0))
+    if name == "h":
+        kind = "slip_switch"
+    elif after == Mode.STICK:
+        kind = "slip_to_stick"
+    elif before == Mode.STICK:
+        kind = {1: "slip_onset_1", 2: "slip_onset_2", 3: "slip_onset_both"}[after.foot]
+    else:
+        kind = "slip_reversal"
+    return Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)[name][0]))
+
+
+def _friction(mu, k1: dict, m: Mode):
+    """f_t [N] in mode m: the slipping foot's friction limit along sign(d') (foot 1's in slip-slip)."""
+    return (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
+
+
+def _store_samples(res: CrawlResult, model: Model, Ko: dict, te: np.ndarray, anchors: list) -> None:
+    """Output arrays at the phases te, with the kinematics Ko there."""
+    n = len(te)
+    modes, ft, x1o, x2o = np.empty(n, int), np.empty(n), np.empty(n), np.empty(n)
+    mu = (model.robot.mu1, model.robot.mu2)
     for j, t in enumerate(te):
-        a, b, m, xa1, xa2 = seg_of(t)
+        a, b, m, xa1, xa2 = next((s for s in anchors if s[0] <= t <= s[1]), anchors[-1])
         modes[j] = int(m)
         ft[j] = (mu[0] * Ko["fn1"][j] if m.foot in (1, 3) else mu[1] * Ko["fn2"][j]) * m.sigma
         if m.foot == 1:
@@ -285,18 +306,22 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         else:
             mid = 0.5 * (xa1 + xa2)
             x1o[j], x2o[j] = mid - 0.5 * Ko["d"][j], mid + 0.5 * Ko["d"][j]
-    res.t, res.phi, res.theta, res.d = te, Ko["phi"], Ko["theta"], Ko["d"]
-    res.x1, res.x2, res.f_t, res.f_n1, res.f_n2, res.mode = x1o, x2o, ft, Ko["fn1"], Ko["fn2"], modes
-    res.tau = model.hold_torque(Ko["phi"], ft)
+    set_samples(res, te, Ko["phi"], Ko["theta"], Ko["d"], x1o, x2o, ft, Ko["fn1"], Ko["fn2"],
+                model.hold_torque(Ko["phi"], ft), modes)
 
-    # energetics, segment by segment (f_t and the holding torques jump at the switching instants)
+
+def _cycle_integrals(model: Model, kin: _Kinematic, anchors: list, knots: np.ndarray) -> tuple:
+    """(W+ per actuator, input work, gross work, friction dissipation) [J] over the cycle, stretch by stretch
+    (f_t and the holding torques jump at the switching instants).
+
+    Sampled inputs (splines, PCHIP, piecewise linear) are smooth only between their ``knots``: the
+    quadrature panels end at the knots too, or its error grows from ~1e-12 to ~1e-6.
+    """
+    mu = (model.robot.mu1, model.robot.mu2)
     wplus = np.zeros(2)
     w_in = 0.0
     w_abs = 0.0
     diss = 0.0
-    # sampled inputs (splines, PCHIP, piecewise linear) are smooth only between their knots: the
-    # quadrature panels end at the knots too, or its error grows from ~1e-12 to ~1e-6
-    knots = np.asarray(getattr(angles, "t_knots", ()), float)
     pieces = []
     for a, b, m, _, _ in anchors:
         inner = knots[(knots > a) & (knots < b)]
@@ -305,26 +330,16 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     for a, b, m in pieces:
         def power(t, i, m=m):
             k1 = kin(t)
-            f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
-            tau = model.hold_torque(k1["phi"], f)
+            tau = model.hold_torque(k1["phi"], _friction(mu, k1, m))
             return tau[i] * k1["dphi"][i]
 
         for i in range(2):
             wplus[i] += positive_part_integral(a, b, lambda t, i=i: power(t, i), lambda t, i=i: float(power(t, i)[0]))
         tq, wq = gauss_nodes(a, b, 1.0 / 64, 5)
         k1 = kin(tq)
-        f = (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
+        f = _friction(mu, k1, m)
         tau = model.hold_torque(k1["phi"], f)
         w_in += float(np.sum(wq * np.sum(tau * k1["dphi"], axis=0)))
         w_abs += float(np.sum(wq * np.sum(np.abs(tau * k1["dphi"]), axis=0)))
         diss += float(np.sum(wq * np.abs(f * k1["ddot"])))
-    dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
-    res.energy = energy_balance(w_in, dV, diss, w_abs, robot)
-    res.W_plus_joint = wplus
-    res.W_plus = float(wplus.sum())
-    res.CoT_plus = cost_of_transport(res.W_plus, robot, res.S)
-    res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
-    res.success = True
-    res.status = int(Status.SUCCESS)
-    res.message = f"prescribed-angle gait: {len(events)} switching instants per cycle"
-    return res
+    return wplus, w_in, w_abs, diss

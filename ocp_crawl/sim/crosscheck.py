@@ -26,16 +26,18 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.checks import finite_or_none, real
 from ocp_crawl.model.inputs import as_signal
 from ocp_crawl.model.statics import Model
+from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.sim.mpcc import MPCCOptions
+from ocp_crawl.sim.registry import simulate
 from ocp_crawl.sim.result import CrawlResult, Mode
-from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
+from ocp_crawl.sim.timestepping import TimeSteppingOptions
 
 
 @dataclass(frozen=True)
@@ -58,15 +60,11 @@ class CrossCheckTolerances:
     """|S| below this [m] counts as no motion: relative differences of S and CoT+ use this instead"""
 
     def __post_init__(self) -> None:
-        for name in ("rel_S", "rel_W_plus", "rel_CoT_plus", "max_phi_dev", "S_floor"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"CrossCheckTolerances.{name} must be a positive finite number, got {v!r}")
-        if isinstance(self.min_order, bool) or not isinstance(self.min_order, (int, float)) \
-                or not math.isfinite(self.min_order):
-            raise ValueError(f"CrossCheckTolerances.min_order must be a finite number, got {self.min_order!r}")
-        lo, hi = self.event_lag_steps
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        for name in ("rel_S", "rel_W_plus", "rel_CoT_plus", "max_phi_dev", "S_floor", "min_order"):
+            object.__setattr__(self, name, real(f"CrossCheckTolerances.{name}", getattr(self, name),
+                                                positive=name != "min_order"))
+        lo, hi = (real("CrossCheckTolerances.event_lag_steps", v) for v in self.event_lag_steps)
+        if not lo < hi:
             raise ValueError(f"CrossCheckTolerances.event_lag_steps must be (lo, hi) with lo < hi, "
                              f"got {self.event_lag_steps!r}")
 
@@ -156,10 +154,8 @@ class CrossCheckResult:
         return self.rows[-1]
 
     def summary(self) -> dict:
-        def num(x):
-            x = float(x)
-            return x if math.isfinite(x) else None
-
+        """JSON-safe summary (non-finite numbers are None)."""
+        num = finite_or_none
         ev, fin = self.event, self.finest
         return {
             "passed": bool(self.passed),
@@ -171,16 +167,7 @@ class CrossCheckResult:
             "max_phi_dev": num(fin.max_phi_dev), "order": num(self.order),
             "event_status": ev.status_name, "event_message": ev.message,
             "modes_event": list(self.event_modes),
-            "per_steps": [{
-                "steps": r.steps, "success": r.success, "message": r.message, "S_mpcc": num(r.S),
-                "W_plus_mpcc": num(r.W_plus), "CoT_plus_mpcc": num(r.CoT_plus), "rel_diff_S": num(r.rel_diff_S),
-                "abs_diff_S": num(abs(r.S - ev.S)), "rel_diff_W_plus": num(r.rel_diff_W_plus),
-                "rel_diff_CoT_plus": num(r.rel_diff_CoT_plus), "max_phi_dev": num(r.max_phi_dev),
-                "modes_mpcc": list(r.modes), "modes_match": r.modes_match,
-                "event_lags": [{"kind": k, "mode_after": m, "event_phase": num(te),
-                                "step_phase": None if ts is None else num(ts),
-                                "lag_steps": None if lag is None else num(lag)} for k, m, te, ts, lag in r.event_lags],
-                "time": num(r.time)} for r in self.rows],
+            "per_steps": [_row_summary(r, ev) for r in self.rows],
             "checks": {k: {"value": num(v), "threshold": t if isinstance(t, str) else num(t), "passed": bool(p)}
                        for k, (v, t, p) in self.checks.items()},
             "tolerances": {"rel_S": self.tolerances.rel_S, "rel_W_plus": self.tolerances.rel_W_plus,
@@ -221,6 +208,20 @@ class CrossCheckResult:
         return "\n".join(lines)
 
 
+def _row_summary(r: CrossCheckRow, ev: CrawlResult) -> dict:
+    """JSON-safe summary of the comparison at one N (non-finite numbers are None)."""
+    num = finite_or_none
+    return {"steps": r.steps, "success": r.success, "message": r.message, "S_mpcc": num(r.S),
+            "W_plus_mpcc": num(r.W_plus), "CoT_plus_mpcc": num(r.CoT_plus), "rel_diff_S": num(r.rel_diff_S),
+            "abs_diff_S": num(abs(r.S - ev.S)), "rel_diff_W_plus": num(r.rel_diff_W_plus),
+            "rel_diff_CoT_plus": num(r.rel_diff_CoT_plus), "max_phi_dev": num(r.max_phi_dev),
+            "modes_mpcc": list(r.modes), "modes_match": r.modes_match,
+            "event_lags": [{"kind": k, "mode_after": m, "event_phase": num(te),
+                            "step_phase": None if ts is None else num(ts),
+                            "lag_steps": None if lag is None else num(lag)} for k, m, te, ts, lag in r.event_lags],
+            "time": num(r.time)}
+
+
 def _event_lags(ev: CrawlResult, res: CrawlResult, N: int) -> list[tuple]:
     """Match each steady event of the event-driven run with the time-stepping mode change of the same kind."""
     ts_events = [(e.t - res.t0, e.mode_before, e.mode_after) for e in res.events
@@ -253,18 +254,20 @@ def crosscheck(model: Model, torque, steps=(50, 100, 200, 400), tolerances: Cros
     if not isinstance(tol, CrossCheckTolerances):
         raise TypeError(f"tolerances must be CrossCheckTolerances, got {type(tol).__name__}")
     torque = as_signal(torque)
-    ev = simulate_torque(model, torque, hybrid_options)
+    if mpcc_options is None or isinstance(mpcc_options, MPCCOptions):
+        mpcc_options = TimeSteppingOptions() if mpcc_options is None else TimeSteppingOptions(mpcc=mpcc_options)
+    ev = simulate(model, torque, "event", hybrid_options)
     event_modes = tuple(mode_sequence(ev))
     rows = []
     for N in steps:
         t_start = time.perf_counter()
-        res = simulate_mpcc(model, torque, steps=N, options=mpcc_options)
+        res = simulate(model, torque, "mpcc", replace(mpcc_options, steps=N))
         elapsed = time.perf_counter() - t_start
         if not (res.success and ev.success):
             rows.append(CrossCheckRow(N, res.success, res.message, res.S, res.W_plus, res.CoT_plus, math.inf,
                                       math.inf, math.inf, math.inf, tuple(mode_sequence(res)), (), False, elapsed))
             continue
-        ev_n = simulate_torque(model, torque, hybrid_options, t_eval=(res.t - res.t0))
+        ev_n = simulate(model, torque, "event", hybrid_options, t_eval=res.t - res.t0)
         dev = float(np.max(np.abs(ev_n.phi - res.phi))) if ev_n.success else math.inf
         modes = tuple(mode_sequence(res))
         match = _same_cycle(_cyclic([m["mode"] for m in event_modes]), _cyclic([m["mode"] for m in modes]))

@@ -3,7 +3,9 @@
 In the manner of scipy's ``solve_ivp`` and its ``METHODS`` table: a solver is a name, the drive
 it simulates, its options dataclass and a function ``run(model, signal, options, t_eval)``.
 Adding a solver is adding a module and one row here; the problem files, the command line and
-the sweep look solvers up in this table and nowhere else.
+the sweep look solvers up in this table and nowhere else.  Every solver builds its result with
+:mod:`ocp_crawl.sim.assemble`, so every row returns a :class:`~ocp_crawl.sim.result.CrawlResult`
+whose ``status`` is a :class:`~ocp_crawl.status.Status`.
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from typing import Any, Callable
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.angles import simulate_angles
 from ocp_crawl.sim.event import HybridOptions, simulate_torque
+from ocp_crawl.sim.options import count
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 
@@ -27,7 +30,7 @@ class Solver:
     options: type
     """its options dataclass (``options()`` gives the defaults)"""
     run: Callable[[Model, Any, Any, Any], CrawlResult]
-    """``run(model, signal, options, t_eval) -> CrawlResult``"""
+    """``run(model, signal, options, t_eval) -> CrawlResult`` (``status`` a :class:`~ocp_crawl.status.Status`)"""
     description: str
 
 
@@ -49,6 +52,9 @@ class AnglesOptions:
 
     n_scan: int = 512
     """scan points per cycle used to bracket the events (each then located to round-off)"""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "n_scan", count("AnglesOptions.n_scan", self.n_scan, 8))
 
 
 SOLVERS: dict[str, Solver] = {

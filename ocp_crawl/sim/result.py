@@ -7,6 +7,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from ocp_crawl.checks import finite_or_none
 from ocp_crawl.status import STATUS_MESSAGES, Status  # noqa: F401 (re-exported: the results' status)
 
 
@@ -75,9 +76,9 @@ class Event:
     """name of the guard function that located the event (solver internal)"""
 
     def to_dict(self) -> dict:
-        guard = float(self.guard)
+        """JSON-safe dict of the event (a non-finite guard value is None)."""
         return {"t": float(self.t), "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
-                "guard": guard if np.isfinite(guard) else None, "guard_name": self.guard_name}
+                "guard": finite_or_none(self.guard), "guard_name": self.guard_name}
 
 
 def cost_of_transport(w_plus: float, robot, S: float) -> float:
@@ -116,7 +117,8 @@ class CrawlResult:
     """
 
     success: bool
-    status: int
+    status: Status
+    """the outcome (an IntEnum: equal to its integer code)"""
     message: str
     drive: str = "torque"
     gravity: str = "physical"
@@ -156,25 +158,23 @@ class CrawlResult:
 
     @property
     def status_name(self) -> str:
-        return Status(self.status).name.lower()
+        return Status(self.status).label
 
     def steady_events(self) -> list[Event]:
         """Events inside the reported steady cycle."""
         return [e for e in self.events if self.t0 - 1e-12 <= e.t <= self.t0 + 1 + 1e-12]
 
     def summary(self) -> dict:
-        """JSON-friendly summary (no arrays)."""
-        def num(x):
-            x = float(x)
-            return x if np.isfinite(x) else None
+        """JSON-friendly summary (no arrays; non-finite numbers are None)."""
         return {
             "status": int(self.status), "status_name": self.status_name, "success": bool(self.success),
             "message": self.message, "drive": self.drive, "gravity": self.gravity,
-            "S": num(self.S), "W_plus": num(self.W_plus), "W_plus_joint": [num(w) for w in self.W_plus_joint],
-            "CoT_plus": num(self.CoT_plus), "cycles": int(self.cycles), "t0": float(self.t0),
+            "S": finite_or_none(self.S), "W_plus": finite_or_none(self.W_plus),
+            "W_plus_joint": [finite_or_none(w) for w in self.W_plus_joint],
+            "CoT_plus": finite_or_none(self.CoT_plus), "cycles": int(self.cycles), "t0": float(self.t0),
             "events": [e.to_dict() for e in self.events],
-            "energy": {k: num(v) for k, v in self.energy.items()},
-            "periodicity_residual": num(self.periodicity_residual),
+            "energy": {k: finite_or_none(v) for k, v in self.energy.items()},
+            "periodicity_residual": finite_or_none(self.periodicity_residual),
             "nfev": int(self.nfev), "nsteps": int(self.nsteps),
             "failure_t": self.failure_t, "failure_mode": self.failure_mode,
         }

@@ -35,26 +35,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
+from ocp_crawl.sim.assemble import (failure_message, new_result, no_start_result, output_phases, set_cycle_metrics,
+                                    set_samples, success_message)
+from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
-from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
+from ocp_crawl.sim.options import CycleOptions, count
+from ocp_crawl.sim.result import CrawlResult, Event, Mode
+from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 
 
 @dataclass(frozen=True)
-class TimeSteppingOptions:
-    """Options of the time-stepping simulator."""
+class TimeSteppingOptions(CycleOptions):
+    """Options of the time-stepping simulator (and the cycle options of :class:`~ocp_crawl.sim.options.CycleOptions`;
+    ``max_cycles`` applies when ``cycles`` is not given)."""
 
     mpcc: MPCCOptions = field(default_factory=MPCCOptions)
     """options of the step solver"""
-    max_cycles: int = 10
-    """cycles to run before declaring the gait non-periodic (when ``cycles`` is not given)"""
-    min_cycles: int = 2
-    """cycles always run (the first one is a transient from the released start)"""
-    periodic_tol: float = 1e-8
-    """periodicity: max |phi change| [rad] and |f_t change|/(M g) between consecutive cycle ends"""
     max_dphi: float = 0.35
     """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
     steps: int = 200
@@ -63,18 +63,9 @@ class TimeSteppingOptions:
     def __post_init__(self) -> None:
         if not isinstance(self.mpcc, MPCCOptions):
             raise TypeError(f"TimeSteppingOptions.mpcc must be MPCCOptions, got {type(self.mpcc).__name__}")
-        for name in ("periodic_tol", "max_dphi"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ValueError(f"TimeSteppingOptions.{name} must be a positive finite number, got {v!r}")
-        if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 4:
-            raise ValueError(f"TimeSteppingOptions.steps must be an integer >= 4, got {self.steps!r}")
-        if isinstance(self.max_cycles, bool) or not isinstance(self.max_cycles, int) or self.max_cycles < 2:
-            raise ValueError(f"TimeSteppingOptions.max_cycles must be an integer >= 2, got {self.max_cycles!r}")
-        if isinstance(self.min_cycles, bool) or not isinstance(self.min_cycles, int) \
-                or not 1 <= self.min_cycles <= self.max_cycles:
-            raise ValueError(f"TimeSteppingOptions.min_cycles must be an integer in [1, max_cycles], "
-                             f"got {self.min_cycles!r}")
+        super().__post_init__()
+        self._set("max_dphi", real("TimeSteppingOptions.max_dphi", self.max_dphi, positive=True))
+        self._set("steps", count("TimeSteppingOptions.steps", self.steps, 4))
 
 
 def event_kind(before: Mode, after: Mode) -> str:
@@ -152,123 +143,121 @@ class TimeStepper:
         output arrays (linear interpolation between steps); by default the step phases."""
         if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1):
             raise ValueError(f"cycles must be a positive integer or None, got {cycles!r}")
-        opt = self.opt
-        N = self.steps
+        te = output_phases(t_eval)
         try:
             start = HybridStepper(self.model, self.torque).initial_state(0.0)
         except ValueError as exc:
             # as the event-driven stepper: no released equilibrium at t = 0 is a status, not an exception
-            return self._no_start(str(exc))
+            return no_start_result(self.model, str(exc), extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
         kin0 = self.model.kinematics(start.x[:2])
         state = StepState(start.x[:2], 0.0, float(kin0["d"]), 0.0)
-        rows = [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1, state.x2, 0.0,
-                 float(kin0["fn1"]), float(kin0["fn2"]), int(Mode.STICK))]
-        events: list[Event] = []
-        mode = Mode.STICK
-        det_ref = None
-        prev: StepResult | None = None
-        times, retries, comp_max, eq_max, polished = [], 0, 0.0, 0.0, 0
-        cycle_ends = []
+        run = _Run(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1, state.x2, 0.0,
+                            float(kin0["fn1"]), float(kin0["fn2"]), int(Mode.STICK))])
         status, detail, fail_t, fail_mode = Status.SUCCESS, "", None, None
-        n = 0
-        ncycles = 0
-        n_target = None if cycles is None else int(cycles)
-        periodic_dev = float("nan")
         calls0 = self.step.ncalls
         try:
-            while True:
-                n += 1
-                t1 = n / N
-                tau = np.asarray(self.torque(t1), float).reshape(2)
-                cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
-                where = f"step {n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
-                if not np.all(np.isfinite(tau)):
-                    raise _Stop(Status.SOLVER_FAILURE, "", f"{where}: the torque input is not finite "
-                                f"(tau = {tau.tolist()} N m); no IPOPT call was made", t1, mode)
-                res = self.step.solve(state, tau, warm_start=prev)
-                times.append(res.solve_time)
-                if not res.success:
-                    source = "IPOPT " if ipopt_status(res.status).source == "ipopt" else ""
-                    raise _Stop(*self._diagnose(state, tau, mode), f"{where} failed with {source}return status "
-                                f"{res.status} [{res.message}]", t1, mode)
-                retries += res.attempts > 1
-                comp_max = max(comp_max, res.comp_residual)
-                eq_max = max(eq_max, res.eq_residual)
-                polished += bool(res.extra.get("polished"))
-                if min(res.f_n1, res.f_n2) <= 0:
-                    raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N",
-                                t1, mode)
-                if res.d <= 0:
-                    raise _Stop(Status.FEET_CROSSED, "", f"{where}: d = {res.d:.4g} m", t1, mode)
-                kin = self.model.kinematics(res.phi)
-                for i in (1, 2):
-                    if f"zj{i}" in kin and not kin[f"zj{i}"] > 0:
-                        raise _Stop(Status.JOINT_ON_GROUND, "", f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m",
-                                    t1, mode)
-                jump = float(np.max(np.abs(res.phi - state.phi)))
-                if jump > opt.max_dphi:
-                    raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)",
-                                t1, mode)
-                det = self._det(res, state, tau)
-                if res.mode != mode:
-                    # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
-                    events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
-                                        "mode_change_between_steps"))
-                    det_ref = None
-                if det_ref is not None and np.sign(det) != det_ref:
-                    raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
-                                             "sign (fold of the equilibrium branch)", t1, res.mode)
-                det_ref = np.sign(det) or det_ref
-                mode = res.mode
-                rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
-                             int(res.mode)))
-                state, prev = res.next_state(), res
-                if n % N:
-                    continue
-                ncycles += 1
-                cycle_ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
-                if len(cycle_ends) >= 2:
-                    (pa, fa, _), (pb, fb, _) = cycle_ends[-2], cycle_ends[-1]
-                    periodic_dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
-                if n_target is not None:
-                    if ncycles >= n_target:
-                        break
-                    continue
-                if ncycles >= opt.min_cycles and len(cycle_ends) >= 2 and periodic_dev <= opt.periodic_tol \
-                        and cycle_ends[-1][2] == cycle_ends[-2][2]:
-                    break
-                if ncycles >= opt.max_cycles:
-                    raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {ncycles} cycles (last change "
-                                                     f"{periodic_dev:.3g})", t1, mode)
+            self._run_cycles(run, None if cycles is None else int(cycles))
         except _Stop as stop:
             status, detail, fail_t, fail_mode = stop.status, stop.detail, stop.t, stop.mode.label
-        stats = {"steps_per_cycle": N, "ipopt_calls": self.step.ncalls - calls0, "retried_steps": retries,
-                 "step_time_median": float(np.median(times)) if times else float("nan"),
-                 "step_time_total": float(np.sum(times)), "max_comp_residual": comp_max,
-                 "max_eq_residual": eq_max, "polished_steps": polished, "W_plus_rule": "midpoint",
-                 "periodicity_deviation": periodic_dev}
-        return self._build_result(rows, events, status, detail, fail_t, fail_mode, ncycles, t_eval, stats, n)
+        stats = {"steps_per_cycle": self.steps, "ipopt_calls": self.step.ncalls - calls0,
+                 "retried_steps": run.retries,
+                 "step_time_median": float(np.median(run.times)) if run.times else float("nan"),
+                 "step_time_total": float(np.sum(run.times)), "max_comp_residual": run.comp_max,
+                 "max_eq_residual": run.eq_max, "polished_steps": run.polished, "W_plus_rule": "midpoint",
+                 "periodicity_deviation": run.periodic_dev}
+        return self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
+
+    def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
+        """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end repeats."""
+        N = self.steps
+        while True:
+            res = self._step(run)
+            if run.n % N:
+                continue
+            run.ncycles += 1
+            ends = run.cycle_ends
+            ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
+            if len(ends) >= 2:
+                (pa, fa, _), (pb, fb, _) = ends[-2], ends[-1]
+                run.periodic_dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
+            if n_target is not None:
+                if run.ncycles >= n_target:
+                    return
+                continue
+            verdict = self.opt.cycle_verdict(run.ncycles, run.periodic_dev, len(ends) >= 2 and ends[-1][2] == ends[-2][2])
+            if verdict:
+                return
+            if verdict is False:
+                raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {run.ncycles} cycles (last change "
+                                                 f"{run.periodic_dev:.3g})", run.n / N, run.mode)
+
+    def _step(self, run: "_Run") -> StepResult:
+        """Solve step n + 1 from the run's state, check the solution and record it."""
+        run.n += 1
+        t1 = run.n / self.steps
+        mode, state = run.mode, run.state
+        tau = np.asarray(self.torque(t1), float).reshape(2)
+        cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
+        where = f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+        if not np.all(np.isfinite(tau)):
+            raise _Stop(Status.SOLVER_FAILURE, "", f"{where}: the torque input is not finite "
+                        f"(tau = {tau.tolist()} N m); no IPOPT call was made", t1, mode)
+        res = self.step.solve(state, tau, warm_start=run.prev)
+        run.times.append(res.solve_time)
+        if not res.success:
+            source = "IPOPT " if ipopt_status(res.status).source == "ipopt" else ""
+            raise _Stop(*self._diagnose(state, tau, mode), f"{where} failed with {source}return status "
+                        f"{res.status} [{res.message}]", t1, mode)
+        run.retries += res.attempts > 1
+        run.comp_max = max(run.comp_max, res.comp_residual)
+        run.eq_max = max(run.eq_max, res.eq_residual)
+        run.polished += bool(res.extra.get("polished"))
+        kin = self._check_contact(res, state, where, t1, mode)
+        det = self._det(res, state, tau)
+        if res.mode != mode:
+            # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
+            run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
+                                    "mode_change_between_steps"))
+            run.det_ref = None
+        if run.det_ref is not None and np.sign(det) != run.det_ref:
+            raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
+                                     "sign (fold of the equilibrium branch)", t1, res.mode)
+        run.det_ref = np.sign(det) or run.det_ref
+        run.mode = res.mode
+        run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
+                         int(res.mode)))
+        run.state, run.prev = res.next_state(), res
+        return res
+
+    def _check_contact(self, res: StepResult, state: StepState, where: str, t1: float, mode: Mode) -> dict:
+        """The kinematics of a step's solution; _Stop if a foot lifts off, the feet cross, a joint reaches
+        the ground or phi jumps by more than ``max_dphi`` (the branch was lost)."""
+        if min(res.f_n1, res.f_n2) <= 0:
+            raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N", t1, mode)
+        if res.d <= 0:
+            raise _Stop(Status.FEET_CROSSED, "", f"{where}: d = {res.d:.4g} m", t1, mode)
+        kin = self.model.kinematics(res.phi)
+        for i in (1, 2):
+            if f"zj{i}" in kin and not kin[f"zj{i}"] > 0:
+                raise _Stop(Status.JOINT_ON_GROUND, "", f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m", t1, mode)
+        jump = float(np.max(np.abs(res.phi - state.phi)))
+        if jump > self.opt.max_dphi:
+            raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)", t1, mode)
+        return kin
 
     # ------------------------------------------------------------------ output
-    def _no_start(self, detail: str) -> CrawlResult:
-        """Result of a run without a released start at t = 0 (status NO_START, no samples)."""
-        return CrawlResult(success=False, status=int(Status.NO_START), message=f"{STATUS_MESSAGES[Status.NO_START]}: "
-                           f"{detail}", drive="torque", gravity=self.model.gravity, failure_t=0.0,
-                           failure_mode="released start", extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
-
-    def _build_result(self, rows, events, status, detail, fail_t, fail_mode, ncycles, t_eval, stats, nsteps):
-        model, N = self.model, self.steps
-        res = CrawlResult(success=status == Status.SUCCESS, status=int(status), message="", drive="torque",
-                          gravity=model.gravity, events=events, cycles=ncycles, failure_t=fail_t,
-                          failure_mode=fail_mode, nfev=stats["ipopt_calls"], nsteps=nsteps, extra=stats)
+    def _build_result(self, run: "_Run", status, detail, fail_t, fail_mode, te, stats) -> CrawlResult:
+        """The reported cycle (the last one, or the one of the failure) on the step phases or ``te``."""
+        N, ncycles, rows = self.steps, run.ncycles, run.rows
+        res = new_result(self.model, "torque", status, events=run.events, cycles=ncycles, failure_t=fail_t,
+                         failure_mode=fail_mode, nfev=stats["ipopt_calls"], nsteps=run.n, extra=stats)
         if status == Status.SUCCESS:
             t0 = float(ncycles - 1)
-            res.message = (f"{STATUS_MESSAGES[status]} after {ncycles} cycles of {N} MPCC steps; "
-                           f"steady cycle t in [{t0:g}, {t0 + 1:g}]")
+            res.message = success_message(ncycles, t0, f" of {N} MPCC steps")
             lo, hi = (ncycles - 1) * N, ncycles * N
         else:
-            t0 = float(max(0, math.floor((fail_t - 1e-12) if fail_t is not None else 0.0)))
-            res.message = f"{STATUS_MESSAGES[status]}: {detail}"
+            t0 = float(max(0, math.floor(fail_t - 1e-12)))
+            res.message = failure_message(status, detail)
             lo, hi = int(round(t0 * N)), len(rows) - 1
         res.t0 = t0
         sel = rows[lo:hi + 1]
@@ -280,42 +269,58 @@ class TimeStepper:
         if status == Status.SUCCESS:
             self._metrics(res, t, phi, cols)
             res.periodicity_residual = stats["periodicity_deviation"]
-        if t_eval is not None:
-            te = t0 + np.asarray(t_eval, dtype=float).ravel()
-            if np.any(~np.isfinite(te)) or np.any(te < t0 - 1e-12) or np.any(te > t0 + 1 + 1e-12):
-                raise ValueError("t_eval must lie in [0, 1] (phase within the reported cycle)")
-            # a failed run reports the phases it reached
-            te = te[te <= t[-1] + 1e-12]
-            phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
-            cols = {k: np.interp(te, t, v) for k, v in cols.items()}
-            mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]
-            t = te
-        res.t, res.phi, res.mode = t, phi, mode
-        for k, v in cols.items():
-            setattr(res, k, v)
-        res.tau = np.asarray(self.torque(t), float).reshape(2, -1)
+        if te is not None:
+            t, phi, cols, mode = _resample(t0 + te, t, phi, cols, mode)
+        set_samples(res, t, phi, cols["theta"], cols["d"], cols["x1"], cols["x2"], cols["f_t"], cols["f_n1"],
+                    cols["f_n2"], np.asarray(self.torque(t), float).reshape(2, -1), mode)
         return res
 
     def _metrics(self, res: CrawlResult, t, phi, cols) -> None:
+        """S, W+ (midpoint rule), CoT+ and the energy balance (trapezoidal friction) on the step grid."""
         model = self.model
-        r = model.robot
         tau_mid = np.asarray(self.torque(0.5 * (t[1:] + t[:-1])), float).reshape(2, -1)
-        dphi = np.diff(phi, axis=1)
-        work = tau_mid * dphi
-        res.S = float(cols["x1"][-1] - cols["x1"][0])
-        res.W_plus_joint = np.maximum(work, 0.0).sum(axis=1)
-        res.W_plus = float(res.W_plus_joint.sum())
-        res.CoT_plus = cost_of_transport(res.W_plus, r, res.S)
+        work = tau_mid * np.diff(phi, axis=1)
         dx1, dx2 = np.diff(cols["x1"]), np.diff(cols["x2"])
         # friction on the robot is f_t at foot 1 and -f_t at foot 2, averaged over the step's ends (trapezoid:
         # second order like the work's midpoint rule; the end-of-step force alone leaves an O(1/N) balance error,
         # measured e.g. -0.89/N against 9/N^2 with the average)
         f_mid = 0.5 * (cols["f_t"][1:] + cols["f_t"][:-1])
         diss = float(np.sum(-(f_mid * dx1 - f_mid * dx2)))
-        w_in = float(work.sum())
-        gross = float(np.abs(work).sum())
         dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))
-        res.energy = energy_balance(w_in, dV, diss, gross, r)
+        set_cycle_metrics(res, model.robot, float(cols["x1"][-1] - cols["x1"][0]), np.maximum(work, 0.0).sum(axis=1),
+                          float(work.sum()), dV, diss, float(np.abs(work).sum()))
+
+
+def _resample(te: np.ndarray, t, phi, cols, mode):
+    """The step samples at the phases te [cycles] by linear interpolation (a failed run: the phases it reached)."""
+    te = te[te <= t[-1] + 1e-12]
+    phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
+    cols = {k: np.interp(te, t, v) for k, v in cols.items()}
+    mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]
+    return te, phi, cols, mode
+
+
+@dataclass
+class _Run:
+    """What a time-stepping run has built so far."""
+
+    state: StepState
+    rows: list
+    """(t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, mode) per step, the start first"""
+    events: list = field(default_factory=list)
+    mode: Mode = Mode.STICK
+    det_ref: float | None = None
+    prev: StepResult | None = None
+    n: int = 0
+    """steps done"""
+    ncycles: int = 0
+    cycle_ends: list = field(default_factory=list)
+    periodic_dev: float = float("nan")
+    times: list = field(default_factory=list)
+    retries: int = 0
+    comp_max: float = 0.0
+    eq_max: float = 0.0
+    polished: int = 0
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,

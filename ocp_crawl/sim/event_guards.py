@@ -1,0 +1,154 @@
+"""Guard functions of the event-driven stepper, their rates, the search for dips inside a step and the
+transition table (see :mod:`ocp_crawl.sim.event` for the table of guards and modes).
+
+:class:`GuardsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
+stepper's ``Mg``, ``L``, ``mu``, ``noise``, ``p``, ``torque`` and ``ddot2``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ocp_crawl.model.statics import AUX
+from ocp_crawl.sim.event_state import _Point
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
+
+#: largest |mu1 f_n1 - mu2 f_n2|/(M g) for which the slip-slip mode is kept
+SYMMETRY_TOL = 1e-8
+
+_S_GRID = np.linspace(0.0, 1.0, 33)[1:-1]
+_S_BUMP = (_S_GRID * (1 - _S_GRID)) ** 2
+
+
+def _cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]:
+    """Lowest interior local minimum (s, value) on (0, 1) of the cubic with values g0, g1 and slopes
+    m0, m1 (per unit s) at the ends; (nan, inf) if it has none."""
+    a = 2 * (g0 - g1) + m0 + m1
+    b = 3 * (g1 - g0) - 2 * m0 - m1
+    best = (math.nan, math.inf)
+    # critical points: 3 a s^2 + 2 b s + m0 = 0; a local minimum where 6 a s + 2 b > 0
+    if abs(a) < 1e-300:
+        roots = [-m0 / (2 * b)] if b > 0 else []
+    else:
+        disc = b * b - 3 * a * m0
+        if disc < 0:
+            return best
+        sq = math.sqrt(disc)
+        roots = [(-b - sq) / (3 * a), (-b + sq) / (3 * a)]
+    for s in roots:
+        if 0 < s < 1 and 6 * a * s + 2 * b > 0:
+            v = ((a * s + b) * s + m0) * s + g0
+            if v < best[1]:
+                best = (s, v)
+    return best
+
+
+class GuardsMixin:
+    """Guards, guard rates, dips and transitions of :class:`~ocp_crawl.sim.event.HybridStepper`."""
+
+    def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
+        """Guard functions of a mode (scaled, positive while the mode is valid)."""
+        Mg, L = self.Mg, self.L
+        g = {"lift_off_1": aux[AUX["fn1"]] / Mg, "lift_off_2": aux[AUX["fn2"]] / Mg, "feet_crossed": aux[AUX["d"]] / L,
+             "joint_1_on_ground": aux[AUX["zj1"]] / L, "joint_2_on_ground": aux[AUX["zj2"]] / L}
+        ft = aux[AUX["ft"]]
+        lim = {1: aux[AUX["lim1"]], 2: aux[AUX["lim2"]]}
+        if mode == Mode.STICK:
+            for i in (1, 2):
+                for s in (1, -1):
+                    g[f"slip_{i}{'+' if s > 0 else '-'}"] = (lim[i] - s * ft) / Mg
+        elif mode.foot == 3:
+            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
+            g["asymmetry"] = SYMMETRY_TOL - abs(lim[1] - lim[2]) / Mg
+        else:
+            i = mode.foot
+            j = 3 - i
+            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
+            g[f"switch_to_{j}"] = (lim[j] - lim[i]) / Mg
+        return g
+
+    def guard_rates(self, mode: Mode, pt: _Point, q: np.ndarray) -> dict[str, float]:
+        """Time derivatives [1/cycle] of :meth:`guards` along the mode's solution at pt.
+
+        The slip modes' ``stick`` guard sigma d'/L needs d'', which depends on the torque's second
+        derivative; that is taken by central differences of the torque's derivative.
+        """
+        aux = pt.aux
+        Mg, L = self.Mg, self.L
+        r = {"lift_off_1": aux[AUX["dfn1"]] / Mg, "lift_off_2": aux[AUX["dfn2"]] / Mg,
+             "feet_crossed": aux[AUX["ddot"]] / L,
+             "joint_1_on_ground": aux[AUX["dzj1"]] / L, "joint_2_on_ground": aux[AUX["dzj2"]] / L}
+        dft = aux[AUX["dft"]]
+        dlim = {1: self.mu[0] * aux[AUX["dfn1"]], 2: self.mu[1] * aux[AUX["dfn2"]]}
+        if mode == Mode.STICK:
+            for i in (1, 2):
+                for s in (1, -1):
+                    r[f"slip_{i}{'+' if s > 0 else '-'}"] = (dlim[i] - s * dft) / Mg
+            return r
+        if mode.foot == 3:
+            r["asymmetry"] = -math.copysign(1.0, aux[AUX["lim1"]] - aux[AUX["lim2"]]) * (dlim[1] - dlim[2]) / Mg
+        else:
+            i = mode.foot
+            j = 3 - i
+            r[f"switch_to_{j}"] = (dlim[j] - dlim[i]) / Mg
+        t, dt = pt.t, 1e-5
+        tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
+        ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0]
+        dd = np.asarray(self.torque.derivative(np.array([t + dt, t - dt]))).reshape(2, 2)
+        ddtau = (dd[:, 0] - dd[:, 1]) / (2 * dt)
+        r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
+        return r
+
+    def _dips(self, mode: Mode, q: np.ndarray, p0: _Point, p1: _Point, g0: dict,
+              g1: dict) -> tuple[list[tuple[str, float]], bool]:
+        """Look inside the step [p0.t, p1.t] for zeros of the guards that a sign test at its ends misses
+        (a guard dipping below zero and back: two events closer together than the step).
+
+        Each guard is interpolated by the cubic Hermite polynomial of its values and exact rates at
+        the ends.  Returns the guards whose interpolant dips below zero, with the phase of its
+        minimum, and whether the step is suspect: the interpolant stays positive but not by more
+        than an estimate of its error, E s^2 (1 - s)^2 with E = 6 |g1 - g0 - h (g0' + g1')/2|
+        (the trapezoid defect, of order h^3 times the third derivative), so the caller halves the step.
+        """
+        h = p1.t - p0.t
+        for pt in (p0, p1):
+            if pt.rates is None:
+                pt.rates = self.guard_rates(mode, pt, q)
+        r0, r1 = p0.rates, p1.rates
+        floor = -100 * self.noise
+        out = []
+        suspect = False
+        for name, rate0 in r0.items():
+            a, b, m0, m1 = g0[name], g1[name], h * rate0, h * r1[name]
+            err = 6.0 * abs(b - a - 0.5 * (m0 + m1))
+            # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
+            if min(a, b) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:
+                continue
+            s, v = _cubic_min(a, b, m0, m1)
+            if v < floor:
+                out.append((name, p0.t + s * h))
+                continue
+            c3, c2 = 2 * (a - b) + m0 + m1, 3 * (b - a) - 2 * m0 - m1
+            bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
+            suspect = suspect or bool(np.min(bound) < floor)
+        return sorted(out, key=lambda r: r[1]), suspect
+
+    def _transition(self, mode: Mode, kind: str) -> Mode | Status:
+        if kind.startswith("lift_off"):
+            return Status.LIFT_OFF
+        if kind == "feet_crossed":
+            return Status.FEET_CROSSED
+        if kind.startswith("joint_"):
+            return Status.JOINT_ON_GROUND
+        if kind.startswith("slip_"):
+            return Mode.slip(int(kind[5]), +1 if kind[6] == "+" else -1)
+        if kind == "stick":
+            return Mode.STICK
+        if kind.startswith("switch_to_"):
+            return Mode.slip(int(kind[-1]), mode.sigma)
+        if kind == "asymmetry":
+            return Mode.slip(1, mode.sigma)  # provisional: the consistency search picks the weaker foot
+        raise AssertionError(kind)
+

@@ -1,0 +1,133 @@
+"""Event location of the event-driven stepper: guard zeros by Brent's method, the consistency of a
+successor mode, and folds of the equilibrium branch by the augmented system.
+
+:class:`EventsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
+stepper's ``_solve``, ``guards``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ocp_crawl.sim.event_state import _Failure, _Point, hermite, mode_q
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
+
+EPS = np.finfo(float).eps
+
+
+class EventsMixin:
+    """Event location, mode consistency and fold location of :class:`~ocp_crawl.sim.event.HybridStepper`."""
+
+    @staticmethod
+    def _hermite(p0: _Point, p1: _Point, t: float) -> np.ndarray:
+        return hermite(p0.t, p0.x, p0.xdot, p1.t, p1.x, p1.xdot, t)
+
+    def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
+                start: bool = False) -> tuple[float, _Point]:
+        """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (Brent's method).
+        ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero."""
+        # the ends are known (a re-solve there could differ in the last bits and break the bracket)
+        cache: dict[float, _Point] = {p0.t: p0, p1.t: p1}
+
+        def g(t: float) -> float:
+            pt = cache.get(t)
+            if pt is None:
+                pt = self._solve(t, self._hermite(p0, p1, t), q)
+                if pt is None:
+                    raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
+                cache[t] = pt
+            return self.guards(mode, pt.aux)[name]
+
+        g0, g1 = self.guards(mode, p0.aux)[name], self.guards(mode, p1.aux)[name]
+        if g1 == 0.0:
+            return p1.t, p1
+        ta, tb = p0.t, p1.t
+        if g0 <= 0 or (start and g0 <= 100 * self.noise):
+            # the guard starts at zero (it fired the transition into this mode, or touches zero
+            # there): [p0, p1] holds that zero and the crossing, so bracket the crossing between the
+            # first sample where the guard is clearly positive and the next one where it is negative
+            hh = p1.t - p0.t
+            ta = None
+            for frac in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.05, *np.linspace(0, 1, 10)[1:-1], 1.0):
+                s = p0.t + frac * hh
+                v = g1 if frac == 1.0 else g(s)
+                if v > 10 * self.noise:
+                    ta = s
+                elif v < 0 and ta is not None:
+                    tb = s
+                    break
+            if ta is None:
+                raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
+                               f"guard {name} does not leave zero after the transition into {mode.label}")
+        ts = brentq(g, ta, tb, xtol=self.opt.event_xtol, rtol=4 * EPS)
+        pt = cache.get(ts)
+        if pt is None:
+            pt = self._solve(ts, self._hermite(p0, p1, ts), q)
+        return ts, pt
+
+    def _consistent(self, mode: Mode, pt: _Point, d0: float) -> _Point | None:
+        """Return the start point of ``mode`` at pt if the mode is consistent going forward, else None.
+
+        Guards that are clearly positive at the event stay positive over a short step.  Guards
+        that vanish at the event (the one that fired, seen from the new mode) may grow only
+        quadratically (slip -> stick at d' = 0 is tangential), so the trial step is enlarged
+        until their sign is resolved above round-off.
+        """
+        q = mode_q(mode, d0)
+        start = self._solve(pt.t, pt.x, q)
+        if start is None:
+            return None
+        g0 = self.guards(mode, start.aux)
+        noise = self.noise
+        if any(v < -100 * noise for v in g0.values()):
+            return None
+        pending = {k for k, v in g0.items() if v < 100 * noise}
+        for delta in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4):
+            nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
+            if nxt is None:
+                return None
+            g = self.guards(mode, nxt.aux)
+            for k in list(pending):
+                if g[k] < -10 * noise:
+                    return None
+                if g[k] > 10 * noise:
+                    pending.discard(k)
+            if not pending:
+                return start
+        return None
+
+    def _locate_fold(self, pt: _Point, q: np.ndarray, t_limit: float) -> tuple[float, np.ndarray, float] | None:
+        """Newton on the augmented fold system from pt; returns (t_fold, x_fold, sigma_min/sigma_max)."""
+        _, J = self.sym.system(pt.x, self.torque(pt.t), q, self.p)
+        J = np.asarray(J)
+        _, _, vt = np.linalg.svd(J)
+        v0 = vt[-1]
+        z = np.concatenate([pt.x, [0.0], v0])
+        t0 = pt.t
+        for _outer in range(8):
+            tau0, dtau0 = self.torque(t0), self.torque.derivative(t0)
+            for _ in range(40):
+                H, dH = self.sym.fold(z, v0, tau0, dtau0, q, self.p)
+                H = np.asarray(H).ravel()
+                dH = np.asarray(dH)
+                try:
+                    dz = np.linalg.solve(dH, -H)
+                except np.linalg.LinAlgError:
+                    return None
+                z = z + dz
+                if np.max(np.abs(dz)) < 1e-14 and np.max(np.abs(H)) < 1e-12:
+                    break
+            else:
+                return None
+            t0 = t0 + z[3]
+            done = abs(z[3]) < 1e-14
+            z[3] = 0.0
+            if done:
+                break
+        if not (pt.t - 1e-9 <= t0 <= t_limit + 1e-9):
+            return None
+        _, J = self.sym.system(z[:3], self.torque(t0), q, self.p)
+        s = np.linalg.svd(np.asarray(J), compute_uv=False)
+        return t0, z[:3], s[-1] / s[0]
+

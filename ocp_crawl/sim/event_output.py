@@ -1,0 +1,278 @@
+"""Output of the event-driven stepper: dense output of a segment, the cycle integrals by adaptive
+Gauss-Legendre panels, and the result (through :mod:`ocp_crawl.sim.assemble`).
+
+:class:`OutputMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
+stepper's ``_solve``, ``model``, ``opt``, ``torque``, ``p``, ``breakpoints`` and ``nfev``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ocp_crawl.model.statics import AUX, solve_many
+from ocp_crawl.sim.assemble import default_phases, failure_message, new_result, set_cycle_metrics, set_samples, \
+    success_message
+from ocp_crawl.sim.event_state import _Failure, _Point, _Run, _Segment, hermite
+from ocp_crawl.sim.quadrature import gauss_nodes
+from ocp_crawl.sim.result import CrawlResult, energy_balance
+from ocp_crawl.status import Status
+
+#: adaptive quadrature of the cycle integrals: tolerance on the Legendre tail of a panel's
+#: integrand (relative to the segment's largest value) and the number of halvings allowed
+QUAD_TOL = 1e-4
+QUAD_DEPTH = 8
+#: 5-point Gauss-Legendre nodes and weights on [-1, 1]; Legendre coefficients of the degree-4
+#: interpolant through values at the nodes (c = values @ _LEG_FIT) and its values at -1 and 1
+_XG, _WG = np.polynomial.legendre.leggauss(5)
+_LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
+_LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
+
+
+class OutputMixin:
+    """Dense output, cycle integrals and the result of :class:`~ocp_crawl.sim.event.HybridStepper`."""
+
+    def _evaluate_many(self, seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Solve the segment's mode at many phases (guesses by Hermite interpolation of its points).
+
+        Points that the batched Newton does not converge are solved again one by one.
+        """
+        pts = seg.points
+        ts = np.asarray(ts, float)
+        n = len(ts)
+        if len(pts) > 1:
+            tp = np.array([p.t for p in pts])
+            X = np.stack([p.x for p in pts], axis=1)
+            XD = np.stack([p.xdot for p in pts], axis=1)
+            i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
+            guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
+        else:
+            guesses = np.tile(pts[0].x[:, None], (1, n))
+        xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
+                             seg.q, self.p)
+        self.nfev += n
+        for j in np.nonzero(~(aux[AUX["res"]] <= self.opt.residual_tol))[0]:
+            pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
+            if pt is None:
+                pt = self._continue_to(seg, float(ts[j]))
+            if pt is None:
+                raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
+            xs[:, j], aux[:, j] = pt.x, pt.aux
+        return xs, aux
+
+    def _continue_to(self, seg: _Segment, t: float) -> _Point | None:
+        """Solve the segment's mode at t by continuation from the last stored point before t, in 4,
+        16, then 64 sub-steps (when the interpolated guess alone does not converge)."""
+        pts = seg.points
+        i = max(0, int(np.searchsorted([p.t for p in pts], t, side="right")) - 1)
+        for n in (4, 16, 64):
+            cur = pts[i]
+            for s in np.linspace(cur.t, t, n + 1)[1:]:
+                cur = self._solve(float(s), cur.x + (s - cur.t) * cur.xdot, seg.q)
+                if cur is None:
+                    break
+            else:
+                return cur
+        return None
+
+    def _panels(self, seg: _Segment, a: float, b: float):
+        """Adaptive Gauss-Legendre panels (5 nodes) on [a, b] of one smooth segment.
+
+        Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
+        two highest Legendre coefficients of the degree-4 interpolant of an integrand (actuator
+        powers, friction power) exceed QUAD_TOL times the largest integrand value on the segment, so
+        steep stretches (low stiffness, large amplitudes) are resolved.  Returns the panel edges
+        (lo, hi), nodes, weights and integrands (power (2, n, 5), friction power (n, 5)).
+        """
+        xg, wg = _XG, _WG
+        n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
+        edges = np.linspace(a, b, n + 1)
+        if self.breakpoints.size:
+            cuts = (self.breakpoints[None, :] + np.arange(math.floor(a), math.ceil(b) + 1)[:, None]).ravel()
+            edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
+        pending = np.stack([edges[:-1], edges[1:]], axis=1)
+        done = []
+        scale = 0.0
+        for depth in range(QUAD_DEPTH + 1):
+            mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
+            half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
+            t = (mid + half * xg).ravel()
+            _, aux = self._evaluate_many(seg, t)
+            power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
+            fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
+            f = np.concatenate([power, fric[None]], axis=0)  # (3, npan, 5)
+            scale = max(scale, float(np.max(np.abs(f))))
+            tail = np.abs(f.reshape(-1, 5) @ _LEG_FIT[:, 3:]).max(axis=1).reshape(3, -1)
+            ok = np.all(tail <= QUAD_TOL * scale, axis=0) | (depth == QUAD_DEPTH)
+            w = (half * wg).reshape(-1, 5)
+            done.append((pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
+            bad = pending[~ok]
+            if not bad.size:
+                break
+            m = 0.5 * (bad[:, 0] + bad[:, 1])
+            pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
+        return [np.concatenate(parts, axis=1 if k == 3 else 0) for k, parts in enumerate(zip(*done))]
+
+    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
+        """Input work, gross work, friction dissipation and per-actuator positive work over [ta, tb].
+
+        Adaptive Gauss-Legendre panels (:meth:`_panels`) on each smooth segment; for W+ a panel on
+        which an actuator's power changes sign is split at the roots of its interpolant.
+        """
+        w_in = 0.0
+        w_abs = 0.0
+        diss = 0.0
+        wplus = np.zeros(2)
+        xg = _XG
+        for seg in segments:
+            a = max(ta, seg.points[0].t)
+            b = min(tb, seg.points[-1].t)
+            if b <= a:
+                continue
+            edges, _, ww, pw, fric = self._panels(seg, a, b)
+            w_in += float(np.sum(ww[None] * pw))
+            w_abs += float(np.sum(ww[None] * np.abs(pw)))
+            diss += float(np.sum(ww * fric))
+            if not positive:
+                continue
+            npan = len(edges)
+            # values at the panel edges from each panel's degree-4 interpolant, so that a sign
+            # change between an edge and the nearest Gauss node is not missed
+            ends = (pw.reshape(-1, 5) @ _LEG_ENDS).reshape(2, npan, 2)
+            allv = np.concatenate([pw, ends], axis=2)
+            positive_panels = np.all(allv >= 0, axis=2)
+            wplus += np.sum(np.where(positive_panels[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
+            extra_t, extra_w, extra_i = [], [], []
+            for i, j in zip(*np.nonzero(mixed)):
+                # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+                coef = np.polynomial.legendre.legfit(xg, pw[i, j], 4)
+                r = np.polynomial.legendre.legroots(coef)
+                r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
+                lo, hi = edges[j]
+                cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
+                for c0, c1 in zip(cuts[:-1], cuts[1:]):
+                    if c1 - c0 <= 0:
+                        continue
+                    tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
+                    extra_t.append(tt)
+                    extra_w.append(w2)
+                    extra_i.append(np.full(len(tt), i))
+            if extra_t:
+                te = np.concatenate(extra_t)
+                we = np.concatenate(extra_w)
+                ie = np.concatenate(extra_i)
+                _, aux2 = self._evaluate_many(seg, te)
+                p2 = self.torque(te).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
+                pv = p2[ie, np.arange(len(te))]
+                for i in range(2):
+                    wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
+        return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
+
+    def _state_at(self, segments, t: float) -> _Point:
+        for seg in reversed(segments):
+            if seg.points[0].t <= t <= seg.points[-1].t + 1e-15:
+                for p in seg.points:
+                    if abs(p.t - t) < 1e-15:
+                        return p
+                xs, aux = self._evaluate_many(seg, np.array([t]))
+                return _Point(t, xs[:, 0], aux[:, 0])
+        raise ValueError(t)
+
+    def _build_result(self, run: _Run, status: Status, detail: str, fail_t: float | None, fail_mode: str | None,
+                      periodic_at: int | None, te: np.ndarray | None) -> CrawlResult:
+        """The result of a run: the steady cycle [t0, t0 + 1] of a periodic run, else the cycle of the failure.
+
+        ``te``: output phases in [0, 1] of that cycle, or None for the default ones (a failed run
+        then reports its accepted steps).
+        """
+        segments, events = run.segments, run.events
+        res = new_result(self.model, "torque", status, events=events, cycles=run.cycle, failure_t=fail_t,
+                         failure_mode=fail_mode, extra=run.extra)
+        success = status == Status.SUCCESS
+        if success:
+            t0 = float(periodic_at - 1)
+            res.message = success_message(run.cycle, t0)
+        else:
+            t0 = float(max(0, math.floor(fail_t)))
+            res.message = failure_message(status, f"{detail} at phase t = {fail_t:.10f} (cycle "
+                                                  f"{int(math.floor(fail_t)) + 1}, phase {fail_t % 1:.10f}) in mode "
+                                                  f"{fail_mode}")
+        res.t0 = t0
+        if te is None and success:
+            te = default_phases([e.t - t0 for e in events if t0 <= e.t <= t0 + 1])
+        if te is None:
+            blocks = self._stored_blocks(segments, t0, fail_t)
+        else:
+            blocks = self._sampled_blocks(segments, t0 + te)
+        if blocks:
+            self._store_samples(res, blocks)
+        if success:
+            self._steady_metrics(res, segments, t0)
+            res.periodicity_residual = run.extra.get("periodicity_deviation", float("nan"))
+        res.nfev = self.nfev
+        res.nsteps = self.nsteps
+        res.extra["segments"] = len(segments)
+        self._segments = segments
+        return res
+
+    @staticmethod
+    def _stored_blocks(segments, t0: float, t1: float) -> list:
+        """(phases, x, aux, segment) of the accepted points of each segment in [t0, t1]."""
+        blocks = []
+        for seg in segments:
+            pts = [p for p in seg.points if t0 - 1e-15 <= p.t <= t1 + 1e-15]
+            if pts:
+                blocks.append((np.array([p.t for p in pts]), np.stack([p.x for p in pts], axis=1),
+                               np.stack([p.aux for p in pts], axis=1), seg))
+        return blocks
+
+    def _sampled_blocks(self, segments, te: np.ndarray) -> list:
+        """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
+        (a phase on a segment boundary goes to the earlier segment)."""
+        blocks = []
+        free = np.ones(te.size, bool)
+        for seg in segments:
+            sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
+            if sel.size:
+                free[sel] = False
+                xs, aux = self._evaluate_many(seg, te[sel])
+                blocks.append((te[sel], xs, aux, seg))
+        return blocks
+
+    def _store_samples(self, res: CrawlResult, blocks: list) -> None:
+        """Output arrays of the blocks, in the order of their phases."""
+        t = np.concatenate([blk[0] for blk in blocks])
+        X = np.concatenate([blk[1] for blk in blocks], axis=1)
+        A = np.concatenate([blk[2] for blk in blocks], axis=1)
+        feet = [blk[3].foot_positions(blk[2][AUX["d"]]) for blk in blocks]
+        x1 = np.concatenate([f[0] for f in feet])
+        x2 = np.concatenate([f[1] for f in feet])
+        mode = np.concatenate([np.full(blk[0].size, int(blk[3].mode)) for blk in blocks])
+        order = np.argsort(t, kind="stable")
+        t, X, A, x1, x2, mode = t[order], X[:, order], A[:, order], x1[order], x2[order], mode[order]
+        set_samples(res, t, X[:2], A[AUX["theta"]], A[AUX["d"]], x1, x2, A[AUX["ft"]], A[AUX["fn1"]],
+                    A[AUX["fn2"]], self.torque(t).reshape(2, -1), mode)
+        res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
+
+    def _steady_metrics(self, res: CrawlResult, segments, t0: float) -> None:
+        """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1]."""
+        model = self.model
+        pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
+        sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t][-1]
+        sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t][-1]
+        x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
+        x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
+        ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True)
+        dV = float(model.potential(pb.x[:2]) - model.potential(pa.x[:2]))
+        set_cycle_metrics(res, model.robot, x1b - x1a, ints["W_plus_joint"], ints["input_work"], dV,
+                          ints["dissipation"], ints["gross_work"])
+
+    def cycle_energy(self, cycle: int) -> dict:
+        """Energy balance [J] of cycle ``cycle`` (0-based) of the last run: input work, potential change, dissipation."""
+        segs = self._segments
+        ta, tb = float(cycle), float(cycle + 1)
+        ints = self._cycle_integrals(segs, ta, tb, positive=False)
+        pa, pb = self._state_at(segs, ta), self._state_at(segs, tb)
+        dV = float(self.model.potential(pb.x[:2]) - self.model.potential(pa.x[:2]))
+        return energy_balance(ints["input_work"], dV, ints["dissipation"], ints["gross_work"], self.model.robot)
