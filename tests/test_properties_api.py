@@ -764,12 +764,15 @@ def load_or_contact_error(data: dict, source: str = "<dict>", overrides=()):
 
 
 def edited(data: dict, section: str, name: str, value) -> dict:
-    """The dict edit that ``--set section.name=value`` documents: set the key; mu and mu1/mu2 replace each other."""
+    """The dict edit that ``--set section.name=value`` documents: set the key; mu and mu1/mu2 replace each other,
+    and one foot's friction set on a robot given one mu leaves the other foot at mu."""
     out = {s: dict(v) for s, v in data.items()}
     sec = out.setdefault(section, {})
     key = SCHEMA[section].key_map[name]
     for other in key.exclusive_with:
         sec.pop(other, None)
+    if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
+        sec.setdefault("mu2" if name == "mu1" else "mu1", sec["mu"])
     for k in SCHEMA[section].keys:
         if name in k.exclusive_with:
             sec.pop(k.name, None)
