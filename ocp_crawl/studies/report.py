@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ocp_crawl import __version__
+from ocp_crawl.version import __version__
 from ocp_crawl.model.pressure import FITTED_REST_DEG
 from ocp_crawl.studies.common import COT_K_LABELS, MM, REALISTIC_K_RATIO, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy
