@@ -5,7 +5,7 @@ from ocp_crawl.model.inputs import (CallableSignal, FourierSeries, Harmonic, Per
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, SimulationError, Status
 from ocp_crawl.sim.event import HybridOptions, simulate_torque
 from ocp_crawl.sim.angles import simulate_angles
-from ocp_crawl.problem.core import Problem, ProblemError, load_problem, problem_from_dict, run_problem
+from ocp_crawl.problem import Problem, ProblemError, load_problem, problem_from_dict, run_problem
 
 __all__ = [
     "Model", "Robot", "Harmonic", "FourierSeries", "PeriodicSpline", "PeriodicLinear", "PeriodicPchip", "CallableSignal", "PeriodicSignal",

@@ -106,7 +106,7 @@ def test_demo(capsys, tmp_path, monkeypatch):
     s_phys, s_paper = summary["torque_physical"]["S"], summary["torque_paper"]["S"]
     assert 0.02 < abs(s_phys - s_paper) / abs(s_phys) < 0.10
     # --out guard: the figures of the --force run are not the point here (and cost most of the time)
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
     from ocp_crawl.io.files import atomic_write
 
     def cheap_outputs(out, result, problem, data, stem=""):
@@ -151,7 +151,7 @@ def one_line(err: str) -> str:
 @pytest.mark.parametrize("exc", [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
                                  TypeError("unsupported operand")])
 def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
 
     def broken(*args, **kwargs):
         raise exc
@@ -182,7 +182,7 @@ def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
 
 
 def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
 
     def full(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
@@ -198,8 +198,9 @@ def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
 # ------------------------------------------------------------------------------------------ no_start
 def test_no_start_check_agrees_with_the_solver():
     """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as no_start."""
-    from ocp_crawl.cli.app import BadInput, check_start
-    from ocp_crawl.problem.core import load_problem, run_problem
+    from ocp_crawl.cli.app import BadInput
+    from ocp_crawl.cli.run_commands import check_start
+    from ocp_crawl.problem import load_problem, run_problem
     from ocp_crawl.sim.result import Status
 
     for k, expect_start in ((0.00306, False), (0.0306, True), (0.1677, True)):

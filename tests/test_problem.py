@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ocp_crawl.sim.event import HybridOptions
-from ocp_crawl.problem.core import (PAPER_GAIT, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
+from ocp_crawl.problem import (PAPER_GAIT, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
                                parse_override, problem_from_dict, run_problem, schema_markdown)
 from ocp_crawl.sim.result import Status
 
@@ -270,7 +270,7 @@ def test_readme_status_table_is_current():
     ({"gamma_deg": 90.0, "gamma1_deg": 120.0, "gamma2_deg": 160.0}, 45.0),  # mean 140: 95 to 185
 ])
 def test_ocp_envelope_must_lie_in_0_180(gait, A_max):
-    from ocp_crawl.problem.core import ocp_settings
+    from ocp_crawl.problem import ocp_settings
 
     data = paper_dict(ocp__A_max_deg=A_max, **{f"gait__{k}": v for k, v in gait.items()})
     problem = problem_from_dict(data, source="p.toml")

@@ -1,6 +1,6 @@
 """The paper's studies: one function per study, each returning a small frozen result.
 
-Every grid is evaluated by :func:`ocp_crawl.sweep.core.run_sweep` (parallel workers, progress, an
+Every grid is evaluated by :func:`ocp_crawl.sweep.run_sweep` (parallel workers, progress, an
 optional journal on disk) through :class:`SweepOptions`; single gaits (the configuration and
 force figures) and the bisection of the friction threshold call the solvers directly.  Failed
 points are data: each result keeps the status of every point (``success``, ``fold``,
@@ -21,12 +21,12 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ocp_crawl.model.statics import Robot
-from ocp_crawl.problem.core import Problem, paper_problem, run_problem
+from ocp_crawl.problem import Problem, paper_problem, run_problem
 from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.model.pressure import FITTED_REST_DEG
 from ocp_crawl.studies.pressure import PressureFit, evaluate_fit, fit_rest_angle
 from ocp_crawl.sim.result import CrawlResult
-from ocp_crawl.sweep.core import SUCCESS, SweepResult, run_sweep
+from ocp_crawl.sweep import SUCCESS, SweepResult, run_sweep
 
 #: the paper's robot (Table I)
 PAPER_ROBOT = Robot.paper()
@@ -48,7 +48,7 @@ STUCK_TOL = 1e-6
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class SweepOptions:
-    """How the studies evaluate grids: passed through to :func:`~ocp_crawl.sweep.core.run_sweep`."""
+    """How the studies evaluate grids: passed through to :func:`~ocp_crawl.sweep.run_sweep`."""
 
     jobs: int = 1
     """worker processes"""

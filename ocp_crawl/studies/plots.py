@@ -19,7 +19,7 @@ from ocp_crawl.viz.gait import mode_color, mode_runs, robot_points
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.studies.core import (COT_K_LABELS, AmplitudeStudy, FrictionBand, GaitComparison, HigherFriction, PressureStudy,
                       PsiGammaMap, StiffnessStudy)
-from ocp_crawl.sweep.core import SUCCESS
+from ocp_crawl.sweep import SUCCESS
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
 BLUE = (0.0, 0.447, 0.741)

@@ -40,7 +40,7 @@ from ocp_crawl.studies.core import (COT_K_LABELS, REALISTIC_K_RATIO, outcome_run
                       stiffness_study)
 from ocp_crawl.studies.plots import (plot_amplitude, plot_configuration, plot_conventions, plot_forces, plot_friction_band,
                           plot_higher_friction, plot_parametric, plot_pressure, plot_stiffness)
-from ocp_crawl.sweep.core import SUCCESS
+from ocp_crawl.sweep import SUCCESS
 
 MM = 1e3
 #: the paper's critical stiffness below which the robot stops, k/(M g L) (Section II-B)

@@ -25,7 +25,7 @@ from PIL import Image
 from ocp_crawl.io.files import atomic_write
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.viz.gait import robot_points
-from ocp_crawl.problem.core import Problem, run_problem
+from ocp_crawl.problem import Problem, run_problem
 from ocp_crawl.sim.result import CrawlResult, Mode
 
 #: foot colours: sticking, slipping
