@@ -12,7 +12,8 @@ import numpy as np
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
 from ocp_crawl.cli.common import finish, force_arg, integer, prepare_out, real, steps_type
 from ocp_crawl.io.files import jsonable, write_json, write_npz
-from ocp_crawl.problem import SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, paper_problem, run_problem
+from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
+                               paper_problem, run_problem)
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import STATUS_MESSAGES, Status
 
@@ -33,14 +34,9 @@ def no_start_message(problem: Problem, detail: str) -> str:
 def check_start(problem: Problem) -> None:
     """A torque-driven problem must have a released equilibrium at t = 0 (status no_start otherwise):
     checked before any long run, as bad input (cheap: one equilibrium solve)."""
-    if problem.drive != "torque":
-        return  # the prescribed-angle contact is checked over the whole cycle when the problem is loaded
-    from ocp_crawl.sim.event import HybridStepper
-
-    try:
-        HybridStepper(problem.model, problem.torque, problem.hybrid).initial_state(0.0)
-    except ValueError as exc:
-        raise BadInput(no_start_message(problem, f"{STATUS_MESSAGES[Status.NO_START]}: {exc}")) from None
+    reason = no_start_reason(problem)
+    if reason is not None:
+        raise BadInput(no_start_message(problem, f"{STATUS_MESSAGES[Status.NO_START]}: {reason}"))
 
 
 def _simulate(problem: Problem) -> CrawlResult:

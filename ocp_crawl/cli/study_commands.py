@@ -71,7 +71,8 @@ def _reproduce_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gravity", choices=("paper", "physical"), default="paper",
                    help="convention of the figures (default: paper, the sign the published curves were computed "
                         "with); the statements are checked in both")
-    p.add_argument("--jobs", type=jobs_type, metavar="N", help="worker processes for the grids (default: the CPUs available)")
+    p.add_argument("--jobs", type=jobs_type, metavar="N",
+                   help="worker processes for the grids (default: the CPUs available)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true",
                        help="reuse the grid points finished by an interrupted run in DIR/sweeps (same grids only)")

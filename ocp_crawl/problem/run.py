@@ -8,6 +8,7 @@ from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.schema import SCHEMA, ProblemError, format_value
 from ocp_crawl.sim import simulate
+from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.result import CrawlResult
 
 
@@ -20,6 +21,21 @@ def run_problem(problem: Problem, t_eval=None) -> CrawlResult:
     if not isinstance(problem, Problem):
         raise TypeError(f"run_problem needs a Problem, got {type(problem).__name__}")
     return simulate(problem.model, problem.signal, problem.solver, problem.options, t_eval)
+
+
+def no_start_reason(problem: Problem) -> str | None:
+    """Why the torque-driven ``problem`` has no released equilibrium at t = 0 (status no_start), or None.
+
+    Cheap (one equilibrium solve), for checking before a long run; every torque solver starts there.
+    The angles drive returns None: its contact is checked over the whole cycle when the problem is built.
+    """
+    if problem.drive != "torque":
+        return None
+    try:
+        HybridStepper(problem.model, problem.torque, problem.hybrid).initial_state(0.0)
+    except ValueError as exc:
+        return str(exc)
+    return None
 
 
 def ocp_settings(problem: Problem) -> OCPSettings:

@@ -1,12 +1,12 @@
 """Parameter sweeps: S, W+ and CoT+ over a grid of problem keys, in parallel and resumable.
 
 A sweep evaluates every point of a rectangular grid (one axis per problem key, e.g.
-``gait.psi_deg``; the first key varies slowest) by setting the point's values on the base problem,
-with :meth:`~ocp_crawl.problem.Problem.with_values`, and running :func:`~ocp_crawl.problem.run_problem`
-(the problem's solver, or the grid key ``simulation.solver``).  Each point gives one row:
-the grid values, ``S``, ``W_plus``, ``CoT_plus``, ``status`` (the label of an :class:`ocp_crawl.status.Status`: ``success``,
-``fold``, ``lift_off``, ..., or ``bad_input`` for a point whose problem is invalid, ``error`` for
-an unexpected exception) and ``message``.  Failed points are data: they are recorded, never
+``gait.psi_deg``; the first key varies slowest) by setting the point's values on the base problem
+with :meth:`~ocp_crawl.problem.Problem.with_values` and running :func:`~ocp_crawl.problem.run_problem`
+(the problem's solver, or the grid key ``simulation.solver``).  Each point gives one row: the grid
+values, ``S``, ``W_plus``, ``CoT_plus``, ``status`` (the label of a :class:`ocp_crawl.status.Status`:
+``success``, ``fold``, ``lift_off``, ..., or ``bad_input`` for a point whose problem is invalid,
+``error`` for an unexpected exception) and ``message``.  Failed points are data: they are recorded, never
 dropped and never raised.
 
 Points run in worker processes (``jobs``), or on a Dask cluster (``scheduler``).  With an output
