@@ -1,12 +1,14 @@
 """One point of a sweep: the base problem with the point's values, simulated; failures become statuses."""
 from __future__ import annotations
 
+import functools
+import json
 import math
 import threading
 from dataclasses import dataclass, fields
 from typing import Any, Mapping
 
-from ocp_crawl.problem import ProblemError, problem_from_dict, run_problem
+from ocp_crawl.problem import Problem, ProblemError, problem_from_dict, run_problem
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import Status
 from ocp_crawl.sweep.cells import cell, parse_cell
@@ -31,6 +33,12 @@ class PointTask:
 _RUN_LOCK = threading.Lock()
 
 
+@functools.lru_cache(maxsize=4)
+def _base_problem(problem_json: str, source: str) -> Problem:
+    """The sweep's base problem, validated once per process (every point of a sweep shares it)."""
+    return problem_from_dict(json.loads(problem_json), source=source)
+
+
 def _extra_value(result: CrawlResult, name: str, summary: dict) -> Any:
     if name in {f.name for f in fields(CrawlResult)}:
         return getattr(result, name)
@@ -45,7 +53,8 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
     row.update({"S": math.nan, "W_plus": math.nan, "CoT_plus": math.nan})
     row.update({name: None for name in task.extra_columns})
     try:
-        problem = problem_from_dict(task.problem, source=task.source).with_values(dict(task.point))
+        base = _base_problem(json.dumps(task.problem), task.source)
+        problem = base.with_values(dict(task.point))
         with _RUN_LOCK:
             result = run_problem(problem)
         summary = result.summary() if task.extra_columns else {}
