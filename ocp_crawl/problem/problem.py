@@ -22,7 +22,6 @@ from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, 
 from ocp_crawl.problem.schema import (DRIVES, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError, Section,
                                       field_default, format_value, suggest, toml_type)
 from ocp_crawl.sim import DEFAULT_SOLVER, solver_named
-from ocp_crawl.sim.event import HybridOptions
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
 CONTACT_GRID = 721
@@ -102,10 +101,10 @@ class Problem:
         return self.torque if self.drive == "torque" else self.gait
 
     @property
-    def hybrid(self) -> HybridOptions:
-        """Options of the event-driven stepper: the solver's own for solver "event"; else those given in
+    def hybrid(self):
+        """Options of the event-driven stepper (HybridOptions): the solver's own for solver "event"; else those in
         ``[simulation]`` (the stepper also finds the released start of every torque solver)."""
-        if isinstance(self.options, HybridOptions):
+        if self.solver == "event":
             return self.options
         return solver_options("event", self.sections.get("simulation", {}))
 

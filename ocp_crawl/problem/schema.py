@@ -5,8 +5,8 @@ messages and the README's key table (:func:`schema_markdown`) are all driven by 
 section (e.g. ``[sweep]``), append a :class:`Section`; its validated values (defaults filled in)
 appear in ``Problem.sections[name]`` without any other change.
 
-Defaults are defined once, on the dataclass field the key feeds (``Robot``, the solvers' options,
-``OCPSettings``); the schema reads them from there with :func:`field_default`.
+Defaults are defined once, on the dataclass field the key feeds (``Robot``, ``Model``, the options of
+the registry's solvers, ``OCPSettings``); the schema reads them from there with :func:`field_default`.
 """
 from __future__ import annotations
 
@@ -21,8 +21,6 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
-from ocp_crawl.sim.event import HybridOptions
-from ocp_crawl.sim.timestepping import TimeSteppingOptions
 
 Drive = Literal["torque", "angles"]
 DRIVES = ("torque", "angles")
@@ -127,7 +125,7 @@ def _robot(name: str):
 
 
 def _hybrid(name: str):
-    return field_default(HybridOptions, name)
+    return field_default(SOLVERS["event"].options, name)
 
 
 def _ocp(name: str):
@@ -181,7 +179,7 @@ _SIMULATION = Section("simulation", "simulator of the torque drive and its optio
         default=_hybrid("max_cycles"), rule=CYCLES),
     Key("periodic_tol", float, "rad", "periodicity tolerance (angles; f_t/(M g) likewise)",
         default=_hybrid("periodic_tol"), rule=GT0),
-    Key("steps", int, "-", "mpcc solver: time steps per cycle", default=field_default(TimeSteppingOptions, "steps"),
+    Key("steps", int, "-", "mpcc solver: time steps per cycle", default=field_default(SOLVERS["mpcc"].options, "steps"),
         rule=STEPS),
 ))
 
