@@ -38,7 +38,7 @@ def cpu_seconds() -> float:
 
 
 def time_sweep(problem, n_psi: int, n_gamma: int, jobs: int) -> dict:
-    from ocp_crawl.sweep.core import run_sweep
+    from ocp_crawl.sweep import run_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
         c, t = cpu_seconds(), time.perf_counter()
@@ -71,7 +71,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     import numpy as np
 
-    from ocp_crawl.problem.core import load_problem, run_problem
+    from ocp_crawl.problem import load_problem, run_problem
 
     jobs_list = [int(j) for j in args.jobs.split(",")]
     small = tuple(int(n) for n in args.small.lower().split("x"))

@@ -17,12 +17,14 @@ import pytest
 
 import ocp_crawl.viz.animate
 import ocp_crawl.cli.app as cli
+import ocp_crawl.cli.run_commands
+import ocp_crawl.cli.study_commands
+import ocp_crawl.problem.run
 import ocp_crawl.sim.crosscheck
 import ocp_crawl.sim.event
 import ocp_crawl.ocp.gait
 import ocp_crawl.sim.angles
 import ocp_crawl.studies.reproduce
-import ocp_crawl.sweep.core
 import ocp_crawl.sim.timestepping
 
 REPO = Path(__file__).resolve().parent.parent
@@ -140,6 +142,12 @@ ROWS = {
                                             "gamma_deg = 90.0", "psi_deg = 45.0", "no equilibrium to start from"]),
     "simulate: cannot stand, mpcc": R("simulate", ["{paper}", "--set", SOFT, "--solver", "mpcc"],
                                       ["paper_gait.toml", "[robot] k = 0.00306", "no equilibrium to start from"]),
+    "simulate: mpcc with the angles drive": R("simulate", ["{paper}", "--drive", "angles", "--solver", "mpcc"],
+                                              ["paper_gait.toml", '[simulation] solver = "mpcc" (from --set)',
+                                               'drive = "angles"', "own solver"]),
+    "simulate: unknown solver in the file": R("simulate", ["{file}"], ["x.toml", '[simulation] solver = "rk4"',
+                                                                      'one of "event", "mpcc"'],
+                                              text=edit('solver = "event"', 'solver = "rk4"')),
     "simulate: --set syntax": R("simulate", ["{paper}", "--set", "robot.k"], ["robot.k", "SECTION.KEY=VALUE"]),
     "simulate: --set unknown key": R("simulate", ["{paper}", "--set", "robot.kay=1"], ["robot.kay=1", "did you mean k?"]),
     "simulate: --set string for a number": R("simulate", ["{paper}", "--set", "robot.k=soft"],
@@ -288,9 +296,10 @@ def _computed(*args, **kwargs):
 @pytest.fixture
 def nothing_computed(monkeypatch):
     """Every solver, sweep and study fails the test if called (bad input must be rejected first)."""
-    for module, name in ((cli, "run_problem"), (ocp_crawl.sim.event.HybridStepper, "run"),
+    for module, name in ((ocp_crawl.cli.run_commands, "run_problem"), (ocp_crawl.problem.run, "simulate"),
+                         (ocp_crawl.sim.event.HybridStepper, "run"),
                          (ocp_crawl.sim.angles, "simulate_angles"), (ocp_crawl.sim.timestepping, "simulate_mpcc"),
-                         (ocp_crawl.sweep.core, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
+                         (ocp_crawl.cli.study_commands, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
                          (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
                          (ocp_crawl.ocp.gait, "optimize_gait")):
         monkeypatch.setattr(module, name, _computed)
@@ -399,8 +408,8 @@ def test_the_guard_catches_a_computation(tmp_path, capsys, nothing_computed, mon
 
 
 def test_a_partly_valid_grid_is_data_not_bad_input():
-    from ocp_crawl.problem.core import ProblemError, load_problem
-    from ocp_crawl.sweep.core import check_some_point_valid, grid_from_specs
+    from ocp_crawl.problem import ProblemError, load_problem
+    from ocp_crawl.sweep import check_some_point_valid, grid_from_specs
 
     problem = load_problem(PAPER)
     # gamma 30 with psi 45 starts with foot 1 off the ground; gamma 90 is fine: the sweep records both

@@ -106,7 +106,7 @@ def test_demo(capsys, tmp_path, monkeypatch):
     s_phys, s_paper = summary["torque_physical"]["S"], summary["torque_paper"]["S"]
     assert 0.02 < abs(s_phys - s_paper) / abs(s_phys) < 0.10
     # --out guard: the figures of the --force run are not the point here (and cost most of the time)
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
     from ocp_crawl.io.files import atomic_write
 
     def cheap_outputs(out, result, problem, data, stem=""):
@@ -151,7 +151,7 @@ def one_line(err: str) -> str:
 @pytest.mark.parametrize("exc", [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
                                  TypeError("unsupported operand")])
 def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
 
     def broken(*args, **kwargs):
         raise exc
@@ -182,7 +182,7 @@ def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
 
 
 def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
-    import ocp_crawl.cli.app as cli
+    import ocp_crawl.cli.run_commands as cli
 
     def full(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
@@ -198,8 +198,9 @@ def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
 # ------------------------------------------------------------------------------------------ no_start
 def test_no_start_check_agrees_with_the_solver():
     """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as no_start."""
-    from ocp_crawl.cli.app import BadInput, check_start
-    from ocp_crawl.problem.core import load_problem, run_problem
+    from ocp_crawl.cli.app import BadInput
+    from ocp_crawl.cli.run_commands import check_start
+    from ocp_crawl.problem import load_problem, run_problem
     from ocp_crawl.sim.result import Status
 
     for k, expect_start in ((0.00306, False), (0.0306, True), (0.1677, True)):
@@ -310,3 +311,32 @@ def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, 
     assert run(capsys, *argv, "--resume")[0] == 0 and calls == [False, True]
     assert run(capsys, *argv, "--force")[0] == 0 and calls == [False, True, False]
     assert (out_dir / "report.md").read_text() == "run 3\n"
+
+
+# ------------------------------------------------------------------------------------------ solvers
+def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
+    """``--set simulation.solver=mpcc`` runs the MPCC time-stepping; ``--solver``/``--steps`` are shortcuts.
+
+    The event-driven and MPCC values of S agree to within n_events (2 h)^2, h = 1/steps: inside a
+    mode the time-stepping is exact, and each of the steady cycle's stick-slip transitions is taken
+    up to two steps late, the slip over that window (starting from zero slip rate) being quadratic
+    in its length (see ocp_crawl.sim.crosscheck).  The paper gait has 4 events per cycle: 4e-4 at
+    200 steps (measured: 6e-5).
+    """
+    from ocp_crawl.problem import load_problem, run_problem
+
+    code, out, err = run(capsys, "simulate", PAPER, "--set", "simulation.solver=mpcc", "--json")
+    assert code == 0, err
+    mpcc = json.loads(out)
+    assert mpcc["solver"] == "mpcc" and mpcc["status_name"] == "success" and "MPCC" in mpcc["message"]
+    assert mpcc["problem"]["simulation"]["solver"] == "mpcc" and mpcc["problem"]["simulation"]["steps"] == 200
+    event = run_problem(load_problem(PAPER))
+    n_events, h = len(event.steady_events()), 1 / 200
+    assert n_events == 4
+    assert abs(mpcc["S"] - event.S) <= n_events * (2 * h) ** 2 * abs(event.S)
+    # the shortcuts give the same run
+    code, out, err = run(capsys, "simulate", PAPER, "--solver", "mpcc", "--steps", "200", "--json")
+    assert code == 0, err
+    assert json.loads(out)["S"] == mpcc["S"]
+    code, out, err = run(capsys, "simulate", PAPER)
+    assert code == 0 and "(solver event)" in out

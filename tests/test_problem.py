@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ocp_crawl.sim.event import HybridOptions
-from ocp_crawl.problem.core import (PAPER_GAIT, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
+from ocp_crawl.problem import (PAPER_GAIT, SECTIONS, Problem, ProblemError, load_problem, paper_problem,
                                parse_override, problem_from_dict, run_problem, schema_markdown)
 from ocp_crawl.sim.result import Status
 
@@ -270,7 +270,7 @@ def test_readme_status_table_is_current():
     ({"gamma_deg": 90.0, "gamma1_deg": 120.0, "gamma2_deg": 160.0}, 45.0),  # mean 140: 95 to 185
 ])
 def test_ocp_envelope_must_lie_in_0_180(gait, A_max):
-    from ocp_crawl.problem.core import ocp_settings
+    from ocp_crawl.problem import ocp_settings
 
     data = paper_dict(ocp__A_max_deg=A_max, **{f"gait__{k}": v for k, v in gait.items()})
     problem = problem_from_dict(data, source="p.toml")
@@ -286,3 +286,69 @@ def test_ocp_envelope_must_lie_in_0_180(gait, A_max):
     assert "\n" not in msg
     for k, v in gait.items():  # the gait keys that set gamma, as given
         assert f"{k} = {v!r}" in msg
+
+
+# ------------------------------------------------------------------------------------------ solvers
+def test_solver_key_chooses_the_registry_solver():
+    from ocp_crawl.sim import SOLVERS
+    from ocp_crawl.sim.timestepping import TimeSteppingOptions
+
+    p = paper_problem()
+    assert p.solver == "event" and p.options == p.hybrid == HybridOptions()
+    q = paper_problem(["simulation.solver=mpcc", "simulation.steps=50", "simulation.max_cycles=6"])
+    assert q.solver == "mpcc" and isinstance(q.options, SOLVERS["mpcc"].options)
+    assert (q.options.steps, q.options.max_cycles) == (50, 6) and q.hybrid.max_cycles == 6
+    assert paper_problem(["simulation.solver=mpcc"]).options.steps == TimeSteppingOptions().steps
+    assert problem_from_dict(q.to_dict()) == q and q.with_values({"simulation.solver": "event"}).solver == "event"
+    a = paper_problem(["gait.drive=angles"])
+    assert a.solver == "angles" and problem_from_dict(a.to_dict()) == a
+    # built in code: the drive's default solver; a solver of another drive is refused
+    assert Problem(robot=p.robot, gait=p.gait, drive="angles").solver == "angles"
+    with pytest.raises(ValueError, match="simulates the torque drive"):
+        Problem(robot=p.robot, gait=p.gait, drive="angles", solver="mpcc")
+    with pytest.raises(TypeError, match="HybridOptions"):
+        Problem(robot=p.robot, gait=p.gait, options=TimeSteppingOptions())
+
+
+def test_mpcc_with_the_angles_drive_is_bad_input_naming_the_key():
+    with pytest.raises(ProblemError) as info:
+        paper_problem(["gait.drive=angles", "simulation.solver=mpcc"])
+    msg = str(info.value)
+    assert '[simulation] solver = "mpcc" (from --set) is invalid with [gait] drive = "angles"' in msg, msg
+    with pytest.raises(ProblemError, match=r"\[simulation\] solver = \"mpcc\""):
+        paper_problem().with_values({"gait.drive": "angles", "simulation.solver": "mpcc"})
+    with pytest.raises(ProblemError, match=r"\[simulation\] steps = 3 is invalid: must be >= 4"):
+        paper_problem().with_values({"simulation.steps": 3})
+
+
+def test_run_problem_goes_through_the_registry(monkeypatch):
+    import ocp_crawl.problem.run as run
+
+    calls = []
+    monkeypatch.setattr(run, "simulate", lambda *args: calls.append(args) or "result")
+    q = paper_problem(["simulation.solver=mpcc"])
+    assert run_problem(q, t_eval=[0.5]) == "result"
+    model, signal, solver, options, t_eval = calls[-1]
+    assert (model, signal, solver, options, t_eval) == (q.model, q.torque, "mpcc", q.options, [0.5])
+    a = paper_problem(["gait.drive=angles"])
+    run_problem(a)
+    assert calls[-1][1] == a.gait and calls[-1][2] == "angles"
+
+
+def test_schema_defaults_are_the_dataclass_defaults():
+    """Defaults are defined once, on the dataclass fields; the schema reads them from there."""
+    from ocp_crawl.model.statics import Robot
+    from ocp_crawl.ocp import OCPSettings
+    from ocp_crawl.problem import SCHEMA, ocp_settings
+    from ocp_crawl.sim.timestepping import TimeSteppingOptions
+
+    robot = SCHEMA["robot"].key_map
+    assert (robot["beta"].default, robot["g"].default) == (Robot().beta, Robot().g)
+    sim = SCHEMA["simulation"].key_map
+    for name in ("max_step", "event_xtol", "max_cycles", "periodic_tol"):
+        assert sim[name].default == getattr(HybridOptions(), name)
+    assert sim["steps"].default == TimeSteppingOptions().steps and sim["solver"].default == "event"
+    assert SCHEMA["model"].key_map["gravity"].default == "physical" == paper_problem().gravity
+    # a problem without an [ocp] section gets OCPSettings' own defaults (the envelope centred on its gait)
+    assert ocp_settings(paper_problem()) == OCPSettings(gamma_deg=90.0)
+    assert ocp_settings(Problem(robot=Robot(), gait=paper_problem().gait)) == OCPSettings(gamma_deg=90.0)

@@ -26,7 +26,7 @@ from scipy.optimize import brentq
 from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, Mode, Model, PeriodicLinear, PeriodicPchip,
                        PeriodicSpline, ReferenceTorque, Robot, Status)
 from ocp_crawl.sim.angles import TIE, simulate_angles
-from ocp_crawl.problem.core import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
+from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
 from ocp_crawl.sim.result import STATUS_MESSAGES
 

@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 from ocp_crawl.cli.app import main
-from ocp_crawl.problem.core import ProblemError, load_problem, run_problem
-from ocp_crawl.sweep.core import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, _Store,
-                             grid_from_specs, normalize_grid, parse_grid, run_sweep)
+from ocp_crawl.problem import ProblemError, load_problem, run_problem
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, grid_from_specs,
+                             normalize_grid, parse_grid, run_sweep)
+from ocp_crawl.sweep.journal import SweepStore
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -193,7 +194,7 @@ def test_failures_are_recorded_with_status_and_message(tmp_path):
 
 
 def test_an_unexpected_exception_is_recorded_as_error(monkeypatch):
-    import ocp_crawl.sweep.core as sweep
+    import ocp_crawl.sweep.point as sweep
 
     def flaky(problem):
         if problem.robot.k > 0.15:
@@ -330,7 +331,7 @@ def test_resume_after_a_kill_while_the_journal_header_was_written(tmp_path, monk
     grid = {"gait.psi_deg": [0.0, 45.0, 90.0]}
     ref = run_sweep(PAPER, grid, out_dir=out)
     expected = (out / RESULTS_FILE).read_text()
-    append = _Store.append
+    append = SweepStore.append
     for torn in ("", "index,gait.ps"):
         (out / RESULTS_FILE).unlink(missing_ok=True)
         (out / JOURNAL_FILE).write_text(torn)
@@ -342,7 +343,7 @@ def test_resume_after_a_kill_while_the_journal_header_was_written(tmp_path, monk
                 raise KeyboardInterrupt
             append(self, settings, index, row)
 
-        monkeypatch.setattr(_Store, "append", killed_at_the_second_row)
+        monkeypatch.setattr(SweepStore, "append", killed_at_the_second_row)
         with pytest.raises(KeyboardInterrupt):
             run_sweep(PAPER, grid, out_dir=out, resume=True)
         monkeypatch.undo()
@@ -418,3 +419,23 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     assert res.computed == 6
     assert_same_rows(res.rows, pool.rows)
     assert (tmp_path / "dask" / RESULTS_FILE).read_text() == (tmp_path / "pool" / RESULTS_FILE).read_text()
+
+
+def test_cli_sweep_over_the_solver(tmp_path, capsys):
+    """``--grid simulation.solver=event,mpcc``: both simulators in one sweep, S agreeing to n_events (2 h)^2
+    relative (h = 1/steps: each stick-slip transition is taken up to two MPCC steps late, the slip over
+    that window being quadratic in its length; 4 events per cycle, 200 steps: 4e-4)."""
+    out = tmp_path / "solvers"
+    code = main(["sweep", str(PAPER), "--grid", "simulation.solver=event,mpcc", "--grid", "gait.psi_deg=30,45",
+                 "--out", str(out), "--jobs", "1", "--no-progress"])
+    capsys.readouterr()
+    assert code == 0
+    res = SweepResult.read(out)
+    assert res.keys == ("simulation.solver", "gait.psi_deg") and res.shape == (2, 2)
+    assert (res.status_array() == "success").all()
+    S = res.array("S")
+    assert np.all(np.abs(S[1] - S[0]) <= 4 * (2 / 200) ** 2 * np.abs(S[0]))
+    # the event row is the run_problem of the point
+    assert S[0, 1] == run_problem(load_problem(PAPER, ["gait.psi_deg=45"])).S
+    settings = json.loads((out / SETTINGS_FILE).read_text())
+    assert settings["problem"]["simulation"]["solver"] == "event"

@@ -1,6 +1,10 @@
-"""Problem files: the schema (keys, units, rules), overrides and the validated Problem."""
-from ocp_crawl.problem.core import (SCHEMA, Problem, ProblemError, apply_overrides, load_problem, paper_problem,
-                                    problem_from_dict, run_problem, schema_markdown)
+"""Problem files: the schema (keys, units, rules), overrides, the validated Problem and running it."""
+from ocp_crawl.problem.overrides import apply_overrides, parse_override, read_toml, set_values
+from ocp_crawl.problem.problem import Problem, load_problem, problem_from_dict
+from ocp_crawl.problem.run import PAPER_GAIT, no_start_reason, ocp_settings, paper_problem, run_problem
+from ocp_crawl.problem.schema import (SCHEMA, SECTIONS, TORQUE_SOLVERS, Key, ProblemError, format_value,
+                                     schema_markdown)
 
-__all__ = ["SCHEMA", "Problem", "ProblemError", "apply_overrides", "load_problem", "paper_problem",
-           "problem_from_dict", "run_problem", "schema_markdown"]
+__all__ = ["PAPER_GAIT", "SCHEMA", "SECTIONS", "TORQUE_SOLVERS", "Key", "Problem", "ProblemError", "apply_overrides",
+           "format_value", "load_problem", "no_start_reason", "ocp_settings", "paper_problem", "parse_override",
+           "problem_from_dict", "read_toml", "run_problem", "schema_markdown", "set_values"]

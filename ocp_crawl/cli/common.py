@@ -1,0 +1,122 @@
+"""What the commands share: argument types, output directories, the exit code of a finished run."""
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Iterable
+
+from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, UsageError
+
+
+def _shown(text: str) -> str:
+    """An argument as the user wrote it (quoted only if it is empty or has spaces around it)."""
+    return text if text and text.strip() == text else repr(text)
+
+
+def integer(option: str, low: int, what: str = ""):
+    """argparse type of ``option``: an integer >= low.
+
+    A bad value ends parsing with a one-line usage error naming the option and the value as written
+    (raised directly: argparse would reword an ArgumentTypeError as "argument OPTION: ...").
+    """
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            n = None
+        if n is None or n < low:
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be an integer >= {low}{what}")
+        return n
+    return parse
+
+
+def real(option: str, low: float, high: float, what: str = ""):
+    """argparse type of ``option``: a finite number in (low, high]."""
+    def parse(text: str) -> float:
+        try:
+            x = float(text)
+        except ValueError:
+            x = math.nan
+        if not (math.isfinite(x) and low < x <= high):
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be a number in ({low:g}, {high:g}]{what}")
+        return x
+    return parse
+
+
+def address(text: str) -> str:
+    """argparse type of --scheduler: a non-empty Dask scheduler address or 'local'."""
+    if not text.strip():
+        raise UsageError(f"--scheduler {_shown(text)} is invalid: a Dask scheduler address (e.g. tcp://host:8786) "
+                          "or 'local'")
+    return text.strip()
+
+
+steps_type = integer("--steps", 4, " (steps per cycle)")
+jobs_type = integer("--jobs", 1, " (worker processes)")
+
+
+def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, resume: bool = False,
+                kind: str | None = None, label: str | None = None) -> Path:
+    """Check and create the output directory of a command, before any computation.
+
+    ``names``: the files (or directories) the command writes into ``path``.  If any of them exists,
+    the run would overwrite earlier results: refused (BadInput) unless ``force``, or ``resume`` (a
+    command that continues an interrupted run in place: its own code checks what it finds).  A
+    directory holding none of these names is fine.  Then the directory is created and checked to be
+    writable.  ``kind`` (e.g. "a sweep") says what a resumable directory holds; ``label`` replaces
+    ``--out PATH`` at the start of the messages (e.g. for a file given as --out).
+    """
+    out = Path(path)
+    label = label or f"--out {out}"
+    if not (force or resume):
+        existing = [n for n in names if _exists(out / n)]
+        if existing:
+            shown = ", ".join(existing[:3]) + (", ..." if len(existing) > 3 else "")
+            what = f"; it already holds {kind}: continue it with --resume," if kind else ";"
+            raise BadInput(f"{label}: would overwrite earlier results ({shown}){what} pass --force to overwrite "
+                           "or choose another directory")
+    where = label if label == f"--out {out}" else f"{label}: {out}"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except FileExistsError:
+        raise BadInput(f"{where}: exists and is not a directory") from None
+    except OSError as exc:
+        raise BadInput(f"{where}: output directory is not writable: {exc.strerror or exc}") from None
+    return out
+
+
+def _exists(path: Path) -> bool:
+    try:
+        return path.exists()
+    except OSError:  # e.g. a path under a regular file: nothing to overwrite there
+        return False
+
+
+def check_scheduler(address: str | None) -> None:
+    """``--scheduler ADDRESS`` needs dask.distributed installed: BadInput otherwise."""
+    if address is not None and importlib.util.find_spec("distributed") is None:
+        raise BadInput(f"--scheduler {address}: needs dask.distributed: pip install 'ocp-crawl[cluster]'")
+
+
+def finish(args: argparse.Namespace, files, success: bool, failure: str) -> int:
+    """List the written files (unless --json) and turn success into the exit code, with the failure on stderr."""
+    if files and not args.json:
+        print("wrote      " + ", ".join(str(f) for f in files))
+    if not success:
+        print(f"{PROG}: {failure}", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+def force_arg(p: argparse.ArgumentParser, what: str = "the results of an earlier run in DIR") -> None:
+    """Add ``--force`` (overwrite ``what``) to the parser ``p``."""
+    p.add_argument("--force", action="store_true",
+                   help=f"overwrite {what} (without it the command refuses, before computing anything)")
+

@@ -1,0 +1,267 @@
+"""Commands that simulate: simulate, demo, animate, crosscheck."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
+from ocp_crawl.cli.common import finish, force_arg, integer, prepare_out, real, steps_type
+from ocp_crawl.io.files import jsonable, write_json, write_npz
+from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
+                               paper_problem, run_problem)
+from ocp_crawl.sim.result import CrawlResult
+from ocp_crawl.status import STATUS_MESSAGES, Status
+
+#: units of the summary's numbers, written with every JSON summary
+UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J"}
+
+
+def no_start_message(problem: Problem, detail: str) -> str:
+    """One line for a torque-driven problem with no equilibrium to start from (bad input, exit 2)."""
+    d = problem.to_dict()
+    r, g = d.get("robot", {}), d.get("gait", {})
+    robot = ", ".join(f"{k} = {format_value(r[k])}" for k in ("k", "M", "L", "g") if k in r)
+    gait = ", ".join(f"{k} = {format_value(v)}" for k, v in g.items() if k.endswith("_deg"))
+    return (f"{problem.source}: [robot] {robot}; [model] gravity = {format_value(problem.gravity)}; [gait] {gait}: "
+            f"{detail}; stiffen the joints (robot.k) or change the gait")
+
+
+def check_start(problem: Problem) -> None:
+    """A torque-driven problem must have a released equilibrium at t = 0 (status no_start otherwise):
+    checked before any long run, as bad input (cheap: one equilibrium solve)."""
+    reason = no_start_reason(problem)
+    if reason is not None:
+        raise BadInput(no_start_message(problem, f"{STATUS_MESSAGES[Status.NO_START]}: {reason}"))
+
+
+def _simulate(problem: Problem) -> CrawlResult:
+    """``run_problem``, a start the solver could not find being bad input (as check_start's)."""
+    result = run_problem(problem)
+    if result.status == Status.NO_START:
+        # check_start has let it through: the same verdict, as bad input
+        raise BadInput(no_start_message(problem, result.message))
+    return result
+
+
+def shortcuts(args: argparse.Namespace) -> list[str]:
+    """``--set`` overrides of the command followed by those its shortcut options stand for
+    (``--drive``: gait.drive, ``--solver``: simulation.solver, ``--steps``: simulation.steps)."""
+    keys = (("drive", "gait.drive"), ("solver", "simulation.solver"), ("steps", "simulation.steps"))
+    return list(args.overrides) + [f"{key}={getattr(args, name)}" for name, key in keys
+                                   if getattr(args, name, None) is not None]
+
+
+def report(result: CrawlResult, problem: Problem) -> dict:
+    """The JSON report of a run: the result's summary plus the solver, the problem and the units."""
+    out = result.summary()
+    out["solver"] = problem.solver
+    out["problem_file"] = problem.source
+    out["problem"] = problem.to_dict()
+    out["units"] = UNITS
+    return jsonable(out)
+
+
+def _num(x, scale: float = 1.0, fmt: str = ".3f") -> str:
+    x = float(x)
+    if math.isnan(x):
+        return "-"
+    return "inf" if math.isinf(x) else format(scale * x, fmt)
+
+
+def format_summary(result: CrawlResult, problem: Problem) -> str:
+    """Readable summary: problem, status, S [mm], W+ [mJ], CoT+, events table, cycles."""
+    r = problem.robot
+    gait = problem.sections.get("gait", {})
+    gait_text = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in gait.items() if k.endswith("_deg"))
+    direction = ""
+    if np.isfinite(result.S) and result.S != 0:
+        direction = " (towards foot 1)" if result.S < 0 else " (towards foot 2)"
+    lines = [
+        f"problem    {problem.source}",
+        f"drive      {problem.drive} (solver {problem.solver}), gravity {problem.gravity}",
+        f"robot      M = {r.M:g} kg, L = {r.L:g} m, beta = {r.beta:g}, k = {r.k:g} N m/rad, "
+        f"mu1 = {r.mu1:g}, mu2 = {r.mu2:g}, g = {r.g:g} m/s^2",
+        f"gait       {gait_text}",
+        f"status     {result.status_name} ({result.status}): {result.message}",
+        f"S          {_num(result.S, 1e3)} mm per cycle{direction}",
+        f"W+         {_num(result.W_plus, 1e3)} mJ per cycle",
+        f"CoT+       {_num(result.CoT_plus)}",
+        f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),
+    ]
+    events = result.steady_events() if result.success else result.events
+    title = "events in the steady cycle" if result.success else "events"
+    lines.append(f"{title}: {len(events)}")
+    if events:
+        lines.append(f"  {'t [cycles]':>12}  {'phase':>8}  {'kind':<14}  mode before -> after")
+        for e in events:
+            phase = e.t - result.t0 if result.success else e.t % 1.0
+            lines.append(f"  {e.t:12.6f}  {phase:8.5f}  {e.kind:<14}  {e.mode_before} -> {e.mode_after}")
+    return "\n".join(lines)
+
+
+#: the files of one run written by :func:`write_outputs` (after a stem)
+RUN_FILES = ("arrays.npz", "summary.json", "gait.png", "gait.pdf")
+
+
+def write_outputs(out: Path, result: CrawlResult, problem: Problem, data: dict, stem: str = "") -> list[Path]:
+    """arrays.npz, summary.json, gait.png and gait.pdf in ``out`` (each written atomically; see RUN_FILES)."""
+    from ocp_crawl.viz.gait import plot_gait, save_figure  # matplotlib only when figures are asked for
+
+    arrays, summary, png, pdf = (out / f"{stem}{name}" for name in RUN_FILES)
+    files = [write_npz(arrays, result.arrays()), write_json(summary, data)]
+    fig = plot_gait(result, problem.robot, reference=problem.gait)
+    files += [save_figure(fig, png), save_figure(fig, pdf)]
+    return files
+
+
+# --------------------------------------------------------------------------------------------
+# simulate
+# --------------------------------------------------------------------------------------------
+def _simulate_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set robot.k=0.05 or --set gait.drive=angles (repeatable)")
+    p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
+    p.add_argument("--solver", choices=TORQUE_SOLVERS,
+                   help="shortcut for --set simulation.solver=...: event (event-driven hybrid solver, the default) "
+                        "or mpcc (MPCC time-stepping, IPOPT); torque drive only")
+    p.add_argument("--steps", type=steps_type, metavar="N",
+                   help="shortcut for --set simulation.steps=N: steps per cycle of --solver mpcc (default "
+                        f"{SCHEMA['simulation'].key_map['steps'].default})")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--out", metavar="DIR", help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
+    force_arg(p)
+
+
+@register("simulate", "simulate one problem file and report the gait", _simulate_args)
+def cmd_simulate(args: argparse.Namespace) -> int:
+    problem = load_problem(args.problem, shortcuts(args))
+    out = prepare_out(args.out, RUN_FILES, args.force) if args.out else None
+    check_start(problem)
+    result = _simulate(problem)
+    data = report(result, problem)
+    if args.json:
+        print(json.dumps(data, allow_nan=False))
+    else:
+        print(format_summary(result, problem))
+    files = write_outputs(out, result, problem, data) if out is not None else []
+    return finish(args, files, result.success, f"simulation failed: {result.message}")
+
+
+# --------------------------------------------------------------------------------------------
+# demo
+# --------------------------------------------------------------------------------------------
+#: the demo's cases: name, description, overrides of the paper problem
+DEMO_CASES = (
+    ("torque_physical", "torque drive, physical gravity", []),
+    ("torque_paper", "torque drive, paper's gravity sign", ["model.gravity=paper"]),
+    ("angles", "prescribed angles", ["gait.drive=angles"]),
+)
+
+
+def _demo_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_demo",
+                   help="directory for the figures and summaries (default: ./ocp_crawl_demo)")
+    force_arg(p)
+
+
+@register("demo", "run the paper's gait (torque drive, both gravity signs, prescribed angles)", _demo_args)
+def cmd_demo(args: argparse.Namespace) -> int:
+    names = [f"{case}_{name}" for case, _, _ in DEMO_CASES for name in RUN_FILES] + ["demo_summary.json"]
+    out = prepare_out(args.out, names, args.force)
+    print("The paper's gait (Table I robot; gamma = 90 deg, A = 30 deg, psi = 45 deg)\n")
+    header = f"{'case':<36} {'status':<10} {'S [mm]':>9} {'W+ [mJ]':>9} {'CoT+':>8} {'events/cycle':>12}"
+    print(header)
+    print("-" * len(header))
+    reports, failed = {}, []
+    for name, text, overrides in DEMO_CASES:
+        problem = paper_problem(overrides)
+        result = _simulate(problem)
+        n_events = len(result.steady_events()) if result.success else len(result.events)
+        print(f"{text:<36} {result.status_name:<10} {_num(result.S, 1e3):>9} {_num(result.W_plus, 1e3):>9} "
+              f"{_num(result.CoT_plus, fmt='.2f'):>8} {n_events:>12}")
+        reports[name] = data = report(result, problem)
+        write_outputs(out, result, problem, data, stem=f"{name}_")
+        if not result.success:
+            failed.append(f"{text}: {result.message}")
+    write_json(out / "demo_summary.json", reports)
+    print(f"\nfigures and summaries in {out}/ (<case>_gait.png, <case>_gait.pdf, <case>_summary.json, "
+          "<case>_arrays.npz)")
+    print("S < 0: the robot moves towards foot 1, the joint that leads in phase. The two gravity signs "
+          "differ by a few percent in S (see README, 'Gravity conventions').")
+    for f in failed:
+        print(f"{PROG}: simulation failed: {f}", file=sys.stderr)
+    return EXIT_FAILURE if failed else EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# animate
+# --------------------------------------------------------------------------------------------
+def _animate_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("--out", metavar="FILE.gif", default="crawl.gif", help="output GIF (default: ./crawl.gif)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set robot.k=0.05 (repeatable)")
+    p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
+    p.add_argument("--cycles", type=integer("--cycles", 1), default=2, metavar="N", help="cycles to show (default: 2)")
+    p.add_argument("--frames-per-cycle", type=integer("--frames-per-cycle", 2), default=48, metavar="N",
+                   help="frames per cycle (default: 48)")
+    p.add_argument("--fps", type=real("--fps", 0.0, 100.0), default=20.0, help="frames per second (default: 20)")
+    force_arg(p, "an existing FILE.gif")
+
+
+@register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
+def cmd_animate(args: argparse.Namespace) -> int:
+    from ocp_crawl.viz.animate import animate_problem
+
+    path = Path(args.out)
+    if path.suffix.lower() != ".gif" or not path.stem:
+        raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
+    problem = load_problem(args.problem, shortcuts(args))
+    prepare_out(path.parent, [path.name], args.force, label=f"--out {args.out}")
+    check_start(problem)
+    result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)
+    print(f"wrote {written}: {result.status_name}, "
+          + (f"S = {1e3 * result.S:.2f} mm per cycle" if result.success else result.message))
+    if not result.success:
+        print(f"{PROG}: simulation failed: {result.message} (animated up to the failure)", file=sys.stderr)
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# crosscheck
+# --------------------------------------------------------------------------------------------
+def _crosscheck_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (torque drive)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key (repeatable)")
+    p.add_argument("--steps", type=steps_type, nargs="+", default=[50, 100, 200, 400], metavar="N",
+                   help="increasing steps per cycle of the MPCC time-stepping (default 50 100 200 400)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the table")
+
+
+@register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators", _crosscheck_args)
+def cmd_crosscheck(args: argparse.Namespace) -> int:
+    from ocp_crawl.sim.crosscheck import crosscheck
+
+    problem = load_problem(args.problem, args.overrides)
+    if problem.drive != "torque":
+        raise BadInput(f"{problem.source}: crosscheck needs the torque drive, got [gait] drive = "
+                       f"{format_value(problem.drive)}")
+    steps = sorted(set(args.steps))
+    if len(steps) < 2:
+        raise BadInput(f"--steps {' '.join(map(str, args.steps))}: give at least two different step counts")
+    check_start(problem)
+    result = crosscheck(problem.model, problem.torque, steps=steps)
+    if args.json:
+        print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)), allow_nan=False))
+    else:
+        print(result.table())
+    return EXIT_OK if result.summary()["passed"] else EXIT_FAILURE
+

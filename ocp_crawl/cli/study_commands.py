@@ -1,0 +1,173 @@
+"""Commands over many problems: sweep, reproduce, optimize."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
+from ocp_crawl.cli.common import address, check_scheduler, finish, force_arg, jobs_type, prepare_out
+from ocp_crawl.cli.run_commands import check_start
+from ocp_crawl.io.files import jsonable
+from ocp_crawl.problem import load_problem, ocp_settings
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
+                             check_some_point_valid, default_jobs, grid_from_specs, run_sweep)
+
+
+# --------------------------------------------------------------------------------------------
+# sweep
+# --------------------------------------------------------------------------------------------
+def _sweep_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see README, 'Problem files')")
+    p.add_argument("--grid", action="append", required=True, metavar="KEY=START:STOP:NUM",
+                   help="an axis: NUM values from START to STOP inclusive, or a list KEY=A,B,C (repeatable; "
+                        "the first axis varies slowest), e.g. --grid gait.psi_deg=0:180:37")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key of the base problem (repeatable)")
+    p.add_argument("--jobs", type=jobs_type, metavar="N", help="worker processes (default: the CPUs available)")
+    p.add_argument("--out", metavar="DIR", help="output directory (default: ./sweep_<problem stem>)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="continue an interrupted sweep in DIR")
+    again.add_argument("--force", action="store_true",
+                       help="overwrite a sweep already in DIR (without it, or --resume, the command refuses)")
+    p.add_argument("--scheduler", metavar="ADDRESS", type=address,
+                   help="run on a Dask cluster (e.g. tcp://host:8786, or 'local'); needs the [cluster] extra")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
+@register("sweep", "map S, W+ and CoT+ over a grid of problem keys (parallel, resumable)", _sweep_args)
+def cmd_sweep(args: argparse.Namespace) -> int:
+    problem = load_problem(args.problem, args.overrides)
+    grid = grid_from_specs(args.grid)
+    check_some_point_valid(problem, grid)
+    check_scheduler(args.scheduler)
+    # --resume: run_sweep checks that the directory's settings.json is this sweep's
+    out = prepare_out(args.out or f"sweep_{Path(args.problem).stem}",
+                      (SETTINGS_FILE, RESULTS_FILE, JOURNAL_FILE, SUMMARY_FILE), args.force, resume=args.resume,
+                      kind="a sweep")
+    try:
+        result = run_sweep(problem, grid, out_dir=out, jobs=args.jobs or default_jobs(), resume=args.resume,
+                           force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
+                           scheduler=args.scheduler)
+    except SweepError as exc:
+        raise BadInput(str(exc)) from None
+    except SweepFailed as exc:
+        err(f"sweep incomplete: {exc}")
+        return EXIT_FAILURE
+    # failed points are data (their status is in results.csv): the command succeeded
+    print(json.dumps(result.summary(), allow_nan=False) if args.json else result.format_summary())
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# reproduce
+# --------------------------------------------------------------------------------------------
+def _reproduce_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_reproduce",
+                   help="directory for the figures, report.md and numbers.json (default: ./ocp_crawl_reproduce)")
+    p.add_argument("--quick", action="store_true", help="coarse grids (about a minute on 2 cores); default: full grids")
+    p.add_argument("--gravity", choices=("paper", "physical"), default="paper",
+                   help="convention of the figures (default: paper, the sign the published curves were computed "
+                        "with); the statements are checked in both")
+    p.add_argument("--jobs", type=jobs_type, metavar="N",
+                   help="worker processes for the grids (default: the CPUs available)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true",
+                       help="reuse the grid points finished by an interrupted run in DIR/sweeps (same grids only)")
+    again.add_argument("--force", action="store_true",
+                       help="overwrite the results of an earlier run in DIR (without it, or --resume, the command "
+                            "refuses, before computing anything)")
+    p.add_argument("--scheduler", metavar="ADDRESS", type=address,
+                   help="run the grids on a Dask cluster (needs the [cluster] extra)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars or step lines on stderr")
+
+
+@register("reproduce", "regenerate the paper's figures and report.md (both gravity conventions checked)",
+          _reproduce_args)
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from ocp_crawl.studies import reproduce as rp
+    from ocp_crawl.studies.core import SweepOptions
+
+    check_scheduler(args.scheduler)
+    names = [f"{stem}.{ext}" for stem in rp.FIGURES for ext in ("png", "pdf")]
+    names += ["report.md", "numbers.json", "sweeps"]
+    out = prepare_out(args.out, names, args.force, resume=args.resume, kind="a reproduce run")
+    quiet = args.no_progress or not sys.stderr.isatty()
+    sweep = SweepOptions(jobs=args.jobs or default_jobs(), progress=not quiet, out_dir=out / "sweeps",
+                         resume=args.resume, scheduler=args.scheduler)
+    log = None if args.no_progress else (lambda msg: print(f"{PROG}: {msg}", file=sys.stderr, flush=True))
+    try:
+        result = rp.reproduce(out, quick=args.quick, gravity=args.gravity, sweep=sweep, log=log)
+    except SweepError as exc:
+        raise BadInput(str(exc)) from None
+    except SweepFailed as exc:
+        err(f"reproduce incomplete: {exc}")
+        return EXIT_FAILURE
+    held = sum(all(s.holds.values()) for s in result.statements)
+    changed = [s.key for s in result.statements if s.changed]
+    print(f"{result.mode} run in {result.elapsed:.0f} s: {len(result.files)} files in {result.out_dir}/ "
+          f"(report: {result.report})")
+    print(f"statements of the paper: {held} of {len(result.statements)} hold in both conventions; "
+          f"changed by the physical convention: {', '.join(changed) if changed else 'none'}")
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------
+# optimize
+# --------------------------------------------------------------------------------------------
+def _optimize_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file with an [ocp] section (see README)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--out", metavar="DIR", help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+    force_arg(p)
+
+
+#: the files ocp_output.write_outputs writes
+OCP_FILES = ("torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
+
+
+def format_optimize(s: dict) -> str:
+    def mm(v):
+        return "-" if v is None else f"{1e3 * v:+.3f} mm"
+
+    h = s.get("best_harmonic") or {}
+    lines = [
+        f"status      {s['status']}: {s['message']}",
+        f"objective   {s['objective']} ({s['nodes']} nodes, {s['parametrization']} torques)",
+        f"S           OCP {mm(s['S_ocp']) if not isinstance(s['S_ocp'], list) else s['S_ocp']}, "
+        f"replay {mm(s['S_replay']) if not isinstance(s['S_replay'], list) else s['S_replay']}",
+        f"objective   OCP {s['objective_value_ocp']}, replay {s['objective_value_replay']} "
+        f"(relative difference {s['rel_diff_replay']})",
+        f"CoT+        replay {s['CoT_plus_replay']}",
+        f"harmonic    best of the envelope: psi = {h.get('psi_deg')} deg, A = {h.get('A_deg')} deg, "
+        f"objective {h.get('value')}; gain of the optimum (by replay) {s['gain']}",
+        f"residuals   complementarity {s['complementarity_residual']}, periodicity {s['periodicity_residual']}",
+        f"time        {s['solve_time_s']} s",
+    ]
+    return "\n".join(lines)
+
+
+@register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
+def cmd_optimize(args: argparse.Namespace) -> int:
+    from ocp_crawl.ocp.gait import optimize_gait
+    from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
+
+    problem = load_problem(args.problem, args.overrides)
+    settings = ocp_settings(problem)
+    out = prepare_out(args.out, OCP_FILES, args.force) if args.out else None
+    check_start(problem)
+    result = optimize_gait(problem.robot, problem.gravity, settings)
+    data = jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
+                         units={"S": "m", "W_plus": "J", "CoT_plus": "-", "tau": "N m", "solve_time_s": "s"}))
+    if args.json:
+        print(json.dumps(data, allow_nan=False))
+    else:
+        print(format_optimize(data))
+    files = write_ocp_outputs(result, problem.robot, out, data) if out is not None else []
+    return finish(args, files, result.success, f"optimisation failed: {result.message}")
+
+

@@ -1,0 +1,131 @@
+"""Setting keys of a problem: ``SECTION.KEY`` names, ``--set`` text, typed values, and reading TOML files.
+
+Values set in code (:func:`set_values`, ``Problem.with_values``) are typed: no text round trip.
+Only the command line's ``--set SECTION.KEY=VALUE`` is text, parsed here as one TOML value.
+Values are validated later, when the problem is built.
+"""
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, suggest
+
+_KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
+
+
+def split_key(dotted: str, where: str) -> tuple[str, str]:
+    """``"SECTION.KEY"`` as (section, key) of the schema, or ProblemError naming ``where``."""
+    m = _KEY_RE.match(dotted) if isinstance(dotted, str) else None
+    if not m:
+        shown = format_value(dotted.strip()) if isinstance(dotted, str) else repr(dotted)
+        raise ProblemError(f"{where} is invalid: the key {shown} must be SECTION.KEY, e.g. robot.k=0.05")
+    section, name = m.groups()
+    if section not in SCHEMA:
+        hint = suggest(section, list(SCHEMA))
+        raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid sections: {', '.join(SCHEMA)}")
+    keys = SCHEMA[section].key_map
+    if name not in keys:
+        hint = suggest(name, list(keys))
+        raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid keys: {', '.join(keys)}")
+    return section, name
+
+
+def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
+    """Parse ``SECTION.KEY=VALUE`` (VALUE a TOML value; a bare word is accepted for string keys).
+
+    Returns (section, key, value); bad text raises ProblemError naming ``source`` and the text.
+    """
+    if not isinstance(text, str):
+        raise ProblemError(f"{source}: --set {text!r} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
+    where = f"{source}: --set {format_value(text)}"
+    if "=" not in text:
+        raise ProblemError(f"{where} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
+    lhs, rhs = text.split("=", 1)
+    section, name = split_key(lhs, where)
+    key = SCHEMA[section].key_map[name]
+    rhs = rhs.strip()
+    if not rhs or "\n" in rhs or "\r" in rhs:
+        example = key.default if key.default is not None else (key.choices or (1.0,))[0]
+        raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. {section}.{name}="
+                           f"{format_value(example)}")
+    try:
+        parsed = tomllib.loads(f"v = {rhs}")
+        if set(parsed) != {"v"}:
+            raise tomllib.TOMLDecodeError("more than one value")
+        value = parsed["v"]
+    except tomllib.TOMLDecodeError:
+        if key.type is not str:
+            raise ProblemError(f"{where} is invalid: {format_value(rhs)} is not a TOML value; expected "
+                               f"{TYPE_WORDS[key.type]} ({key.what})") from None
+        value = rhs
+    return section, name, value
+
+
+def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], source: str = "<dict>"
+               ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
+    """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value) triples.
+
+    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``) removes the other.  Returns the
+    new data and the set keys.  Values are validated later, when the problem is built.
+    """
+    out = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
+    done: set[tuple[str, str]] = set()
+    for section, name, value in items:
+        sec = out.setdefault(section, {})
+        if not isinstance(sec, dict):
+            raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a section in the file")
+        for other in SCHEMA[section].key_map[name].exclusive_with:
+            sec.pop(other, None)
+        if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
+            # one foot's friction changed on a robot given one mu: the other foot keeps mu
+            sec.setdefault("mu1" if name == "mu2" else "mu2", sec["mu"])
+        for key in SCHEMA[section].keys:
+            if name in key.exclusive_with:
+                sec.pop(key.name, None)
+        sec[name] = value.item() if isinstance(value, np.generic) else value
+        done.add((section, name))
+    return out, done
+
+
+def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str = "<dict>"
+                    ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
+    """Copy of ``data`` with ``SECTION.KEY=VALUE`` overrides (text, as ``--set``) applied; also returns the
+    overridden keys."""
+    if isinstance(overrides, str):
+        overrides = [overrides]
+    items = [parse_override(text, source) for text in overrides]
+    for (section, _, _), text in zip(items, overrides):
+        if not isinstance(data.get(section, {}), Mapping):
+            raise ProblemError(f"{source}: --set {format_value(text)} is invalid: {section} is not a section in the file")
+    return set_values(data, items, source)
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file; unreadable files and malformed TOML raise ProblemError (with the offending line)."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ProblemError(f"{path}: cannot read the problem file: {reason}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ProblemError(f"{path}: cannot read the problem file: not UTF-8 text (byte {exc.start})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        m = re.search(r"line (\d+)", msg)
+        line = ""
+        if m:
+            lines = text.splitlines()
+            n = int(m.group(1))
+            if 1 <= n <= len(lines):
+                line = f": {format_value(lines[n - 1].strip())}"
+        raise ProblemError(f"{path}: malformed TOML: {msg}{line}") from None

@@ -1,0 +1,320 @@
+"""The validated :class:`Problem`: robot, gait, drive, gravity convention, solver and its options.
+
+Every bad input raises :class:`~ocp_crawl.problem.schema.ProblemError` with a one-line message that
+names the file, the ``[section] key``, the value given and what is valid, for example::
+
+    problems/x.toml: [robot] k = -1.0 is invalid: must be > 0 (torsion stiffness, N m/rad)
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
+from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
+from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
+from ocp_crawl.problem.schema import (DRIVES, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError, Section,
+                                      field_default, format_value, suggest, toml_type)
+from ocp_crawl.sim import DEFAULT_SOLVER, solver_named
+
+#: phases at which a prescribed-angle gait is checked for contact validity before simulating
+CONTACT_GRID = 721
+
+
+def freeze(d: Mapping) -> Mapping:
+    """A read-only copy of nested mappings."""
+    return MappingProxyType({k: freeze(v) if isinstance(v, Mapping) else v for k, v in d.items()})
+
+
+def thaw(d: Mapping) -> dict:
+    """A plain, mutable copy of nested mappings."""
+    return {k: thaw(v) if isinstance(v, Mapping) else v for k, v in d.items()}
+
+
+def solver_options(solver: str, values: Mapping[str, Any]):
+    """The options dataclass of the registry's ``solver`` from ``[simulation]`` values (its fields only;
+    the others keep their defaults)."""
+    cls = solver_named(solver).options
+    names = {f.name for f in dataclasses.fields(cls)}
+    return cls(**{k: v for k, v in values.items() if k in names})
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A validated simulation problem: robot, gait, drive, gravity convention, solver and its options."""
+
+    robot: Robot
+    """physical parameters (SI units)"""
+    gait: Harmonic
+    """reference angles [rad]; the degree values as given are in ``sections["gait"]``"""
+    drive: Drive = SCHEMA["gait"].key_map["drive"].default
+    """actuation: "torque" (tau = k (phi_ref - pi)) or "angles" (phi = phi_ref prescribed)"""
+    gravity: GravityConvention = field_default(Model, "gravity")
+    """sign convention of the gravity term (see MODEL_NOTES erratum)"""
+    solver: str | None = None
+    """name in the registry :data:`ocp_crawl.sim.SOLVERS`; None: the drive's default ("event" for the
+    torque drive, "angles" for the angles drive)"""
+    options: Any = None
+    """the solver's options dataclass (``SOLVERS[solver].options``); None: its defaults"""
+    sections: Mapping[str, Mapping[str, Any]] = field(default_factory=dict, hash=False)
+    """validated values of every section as given, defaults filled in (degrees for the gait)"""
+    source: str = field(default="<dict>", compare=False)
+    """where the problem came from (file name or "<dict>")"""
+
+    def __post_init__(self) -> None:
+        for name, cls in (("robot", Robot), ("gait", Harmonic)):
+            if not isinstance(getattr(self, name), cls):
+                raise TypeError(f"Problem.{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
+        if self.drive not in DRIVES:
+            raise ValueError(f"Problem.drive must be one of {DRIVES}, got {self.drive!r}")
+        if self.gravity not in GRAVITY_CONVENTIONS:
+            raise ValueError(f"Problem.gravity must be one of {GRAVITY_CONVENTIONS}, got {self.gravity!r}")
+        spec = solver_named(DEFAULT_SOLVER[self.drive] if self.solver is None else self.solver)
+        if spec.drive != self.drive:
+            raise ValueError(f"Problem.solver = {spec.name!r} simulates the {spec.drive} drive, not {self.drive!r}")
+        if self.options is not None and not isinstance(self.options, spec.options):
+            raise TypeError(f"Problem.options of solver {spec.name!r} must be {spec.options.__name__}, "
+                            f"got {type(self.options).__name__}")
+        object.__setattr__(self, "solver", spec.name)
+        object.__setattr__(self, "options", spec.options() if self.options is None else self.options)
+        object.__setattr__(self, "sections", freeze(self.sections))
+
+    @property
+    def model(self) -> Model:
+        """The robot with the problem's gravity convention."""
+        return Model(self.robot, gravity=self.gravity)
+
+    @property
+    def torque(self) -> ReferenceTorque:
+        """The torque input tau = k (phi_ref - pi) of eq. (tau) [N m]."""
+        return ReferenceTorque(self.gait, self.robot.k)
+
+    @property
+    def signal(self) -> PeriodicSignal:
+        """The input of the drive: joint torques [N m] (torque drive) or joint angles [rad] (angles drive)."""
+        return self.torque if self.drive == "torque" else self.gait
+
+    @property
+    def hybrid(self):
+        """Options of the event-driven stepper (HybridOptions): the solver's own for solver "event"; else those in
+        ``[simulation]`` (the stepper also finds the released start of every torque solver)."""
+        if self.solver == "event":
+            return self.options
+        return solver_options("event", self.sections.get("simulation", {}))
+
+    def with_values(self, values: Mapping[str, Any]) -> "Problem":
+        """A new problem with typed values set: ``problem.with_values({"robot.mu1": 0.35, "gait.psi_deg": 30.0})``.
+
+        Keys are ``SECTION.KEY`` of the schema (units as in the problem files); the new problem is
+        validated as a whole, so a bad value raises ProblemError naming the key.  No text round trip.
+        """
+        if not isinstance(values, Mapping):
+            raise TypeError(f"Problem.with_values needs a mapping of SECTION.KEY to values, got {type(values).__name__}")
+        items = [(*split_key(k, f"{self.source}: {k}"), v) for k, v in values.items()]
+        data, _ = set_values(self.to_dict(), items, self.source)
+        return _validate(data, _Context(self.source))
+
+    def to_dict(self) -> dict:
+        """Plain dict of the problem's sections (JSON- and TOML-friendly; ``problem_from_dict`` accepts it)."""
+        out = thaw(self.sections)
+        # problems built in code without sections: report the objects themselves
+        if "robot" not in out:
+            r = self.robot
+            out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1, "mu2": r.mu2, "g": r.g}
+        if "gait" not in out:
+            g = self.gait
+            out["gait"] = {"drive": self.drive, "gamma1_deg": math.degrees(g.gamma1), "gamma2_deg": math.degrees(g.gamma2),
+                           "A1_deg": math.degrees(g.A1), "A2_deg": math.degrees(g.A2), "psi_deg": math.degrees(g.psi)}
+        out.setdefault("model", {"gravity": self.gravity})
+        out.setdefault("simulation", self._simulation_values())
+        return out
+
+    def _simulation_values(self) -> dict[str, Any]:
+        """``[simulation]`` of a problem built in code: its solver's options, the others' defaults."""
+        out = {}
+        for key in SCHEMA["simulation"].keys:
+            if key.name == "solver":
+                out["solver"] = self.solver if self.drive == "torque" else key.default
+            else:
+                out[key.name] = getattr(self.options, key.name, getattr(self.hybrid, key.name, key.default))
+        return out
+
+
+# --------------------------------------------------------------------------------------------
+# validation
+# --------------------------------------------------------------------------------------------
+class _Context:
+    """Where values came from, for messages: the file, and which keys were set on the command line."""
+
+    def __init__(self, source: str, overridden: set[tuple[str, str]] | None = None):
+        self.source = source
+        self.overridden = overridden or set()
+
+    def at(self, section: str, key: str, value: Any) -> str:
+        origin = " (from --set)" if (section, key) in self.overridden else ""
+        return f"{self.source}: [{section}] {key} = {format_value(value)}{origin}"
+
+    def error(self, msg: str) -> ProblemError:
+        return ProblemError(f"{self.source}: {msg}")
+
+
+def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
+    where = ctx.at(section, key.name, value)
+    if key.type is str:
+        if not isinstance(value, str):
+            raise ProblemError(f"{where} is invalid: expected a string, {key.valid_text} ({key.what}), "
+                               f"got {toml_type(value)}")
+        if key.choices and value not in key.choices:
+            hint = suggest(value, key.choices)
+            raise ProblemError(f"{where} is invalid: {hint}must be {key.valid_text} ({key.what})")
+        return value
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if key.type is int and not (numeric and isinstance(value, int)):
+        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[int]} ({key.what}), got {toml_type(value)}")
+    if key.type is float and not numeric:
+        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[float]} ({key.what}), got {toml_type(value)}")
+    value = key.type(value)
+    if not math.isfinite(value):
+        raise ProblemError(f"{where} is invalid: must be finite ({key.what})")
+    if key.rule is not None and not key.rule.test(value):
+        raise ProblemError(f"{where} is invalid: must be {key.rule.text} ({key.what})")
+    return value
+
+
+def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) -> dict[str, Any]:
+    keys = section.key_map
+    for name, value in given.items():
+        if name not in keys:
+            hint = suggest(name, list(keys))
+            raise ctx.error(f"[{section.name}] unknown key {name} = {format_value(value)}; {hint}"
+                            f"valid keys: {', '.join(keys)}")
+    out: dict[str, Any] = {}
+    for key in section.keys:
+        if key.name in given:
+            out[key.name] = _check_value(ctx, section.name, key, given[key.name])
+    # pairing rules before missing keys: "mu1 without mu2" says more than "mu is missing"
+    for key in section.keys:
+        name = key.name
+        if name not in given:
+            continue
+        for other in key.exclusive_with:
+            if other in given:
+                raise ProblemError(f"{ctx.at(section.name, name, given[name])} and {other} = "
+                                   f"{format_value(given[other])} are mutually exclusive: give {name}, or "
+                                   f"{' and '.join(key.exclusive_with)}")
+        for other in key.requires:
+            if other not in given:
+                raise ProblemError(f"{ctx.at(section.name, name, given[name])} is given without {other}: "
+                                   f"give both {name} and {other} ({key.what})")
+    for key in section.keys:
+        name = key.name
+        if name in given:
+            continue
+        if key.required and not (key.required_unless and all(u in given for u in key.required_unless)):
+            alt = f" (or {' and '.join(key.required_unless)})" if key.required_unless else ""
+            raise ctx.error(f"[{section.name}] {name} is missing (no value given): required{alt}, "
+                            f"{key.valid_text} ({key.what})")
+        elif key.default is not None:
+            out[name] = key.default
+    return out
+
+
+def _check_contact(ctx: _Context, model: Model, gait: Harmonic, drive: str, values: Mapping) -> None:
+    """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad input."""
+    gait_keys = [k for k in values["gait"] if k.endswith("_deg")]
+    blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
+    blame = f"[gait] {blame} (with [robot] beta = {format_value(values['robot']['beta'])})"
+    try:
+        model.check_contact(gait(0.0), where="reference angles at phase 0")
+    except ValueError as exc:
+        raise ctx.error(f"{blame} are invalid: {exc}") from None
+    if drive != "angles":
+        return
+    t = np.linspace(0.0, 1.0, CONTACT_GRID)
+    kin = model.kinematics(gait(t))
+    bad = np.nonzero(~((kin["d"] > 0) & (kin["fn1"] > 0) & (kin["fn2"] > 0)))[0]
+    if bad.size:
+        j = int(bad[0])
+        try:
+            model.check_contact(gait(t[j]), where=f"prescribed angles at phase {t[j]:.4f}")
+            detail = f"prescribed angles at phase {t[j]:.4f}: contact lost"
+        except ValueError as exc:
+            detail = str(exc)
+        raise ctx.error(f"{blame} are invalid for the angles drive: {detail} (both feet must stay on the "
+                        "ground over the whole cycle)")
+
+
+
+def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[str, Any]]:
+    """Every section's values checked, defaults filled in; unknown and misplaced sections rejected."""
+    if not isinstance(data, Mapping):
+        raise ctx.error(f"a problem must be a table of sections, got {toml_type(data)}")
+    for name, value in data.items():
+        if name not in SCHEMA and not isinstance(value, Mapping):
+            raise ctx.error(f"top-level key {name} = {format_value(value)} is not in a section: keys belong in a "
+                            f"section, one of {', '.join(f'[{s}]' for s in SCHEMA)}")
+        if name not in SCHEMA:
+            hint = suggest(name, list(SCHEMA))
+            raise ctx.error(f"unknown section [{name}] = {format_value(value)}; {hint}valid sections: "
+                            f"{', '.join(SCHEMA)}")
+        if not isinstance(value, Mapping):
+            raise ctx.error(f"{name} = {format_value(value)} is not a section: keys belong in a table [{name}] "
+                            f"(got {toml_type(value)})")
+    values: dict[str, dict[str, Any]] = {}
+    for section in SECTIONS:
+        if section.name not in data and section.required:
+            need = ", ".join(k.name for k in section.keys if k.required)
+            raise ctx.error(f"section [{section.name}] is missing (no value given): required, with keys {need}")
+        values[section.name] = _check_section(ctx, section, data.get(section.name, {}))
+    return values
+
+
+def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any]) -> str:
+    """The registry name of the problem's solver: ``[simulation] solver`` for the torque drive; the
+    angles drive has its own (naming another torque solver there is bad input)."""
+    if drive == "torque":
+        return sim["solver"]
+    default = SCHEMA["simulation"].key_map["solver"].default
+    if sim["solver"] != default:
+        raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} is invalid with [gait] drive = "
+                           f"{format_value(drive)}: the {drive} drive has its own solver ({DEFAULT_SOLVER[drive]}); "
+                           f"[simulation] solver chooses the simulator of the torque drive")
+    return DEFAULT_SOLVER[drive]
+
+
+def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
+    values = _check_sections(data, ctx)
+    r, g, sim = values["robot"], values["gait"], values["simulation"]
+    mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
+    # the schema has checked every value the constructors check, so their errors would be internal bugs
+    robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
+    gait = Harmonic.from_degrees(g.get("gamma_deg"), g.get("A_deg"), g["psi_deg"], gamma1_deg=g.get("gamma1_deg"),
+                                 gamma2_deg=g.get("gamma2_deg"), A1_deg=g.get("A1_deg"), A2_deg=g.get("A2_deg"))
+    solver = _solver(ctx, g["drive"], sim)
+    problem = Problem(robot=robot, gait=gait, drive=g["drive"], gravity=values["model"]["gravity"], solver=solver,
+                      options=solver_options(solver, sim), sections=values, source=ctx.source)
+    _check_contact(ctx, problem.model, gait, problem.drive, values)
+    return problem
+
+
+def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides: Sequence[str] = ()) -> Problem:
+    """Validate a dict shaped like a problem file (sections of keys) and build the :class:`Problem`.
+
+    ``source`` names the origin in messages; ``overrides`` are ``SECTION.KEY=VALUE`` texts (``--set``).
+    Bad input raises ProblemError.
+    """
+    if not isinstance(data, Mapping):
+        raise ProblemError(f"{source}: a problem must be a table of sections, got {toml_type(data)}")
+    data, overridden = apply_overrides(data, overrides, source)
+    return _validate(data, _Context(source, overridden))
+
+
+def load_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
+    """Load and validate a TOML problem file, applying ``SECTION.KEY=VALUE`` overrides (``--set``)."""
+    return problem_from_dict(read_toml(path), source=str(path), overrides=overrides)

@@ -1,0 +1,83 @@
+"""Running a problem: the simulation through the solver registry, the OCP settings, the paper's problem."""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
+from ocp_crawl.problem.schema import SCHEMA, ProblemError, format_value
+from ocp_crawl.sim import simulate
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.sim.result import CrawlResult
+
+
+def run_problem(problem: Problem, t_eval=None) -> CrawlResult:
+    """Simulate the problem with its solver (``problem.solver`` of the registry, ``problem.options``).
+
+    ``t_eval``: output phases [cycles] in the steady cycle, or None for the solver's sampling.
+    Returns the :class:`CrawlResult` (S [m], W+ [J], CoT+ [-], status and trajectories).
+    """
+    if not isinstance(problem, Problem):
+        raise TypeError(f"run_problem needs a Problem, got {type(problem).__name__}")
+    return simulate(problem.model, problem.signal, problem.solver, problem.options, t_eval)
+
+
+def no_start_reason(problem: Problem) -> str | None:
+    """Why the torque-driven ``problem`` has no released equilibrium at t = 0 (status no_start), or None.
+
+    Cheap (one equilibrium solve), for checking before a long run; every torque solver starts there.
+    The angles drive returns None: its contact is checked over the whole cycle when the problem is built.
+    """
+    if problem.drive != "torque":
+        return None
+    try:
+        HybridStepper(problem.model, problem.torque, problem.hybrid).initial_state(0.0)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
+def ocp_settings(problem: Problem) -> OCPSettings:
+    """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma.
+
+    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError otherwise.
+    """
+    sec = dict(problem.sections.get("ocp", {}))
+    if not sec:  # a problem built in code: the schema's defaults
+        sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
+    if sec.get("rate_limit") == "max_rate" and sec.get("max_rate") is None:
+        raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
+    rate = {"harmonic": "harmonic", "none": None}.get(sec.get("rate_limit"), sec.get("max_rate"))
+    eps = sec["mu_ratio_eps"]
+    gamma = math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2))
+    if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
+        gait = problem.sections.get("gait", {})
+        given = ", ".join(f"{k} = {format_value(gait[k])}" for k in ("gamma_deg", "gamma1_deg", "gamma2_deg")
+                          if k in gait)
+        raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} with [gait] "
+                           f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
+                           f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
+    return OCPSettings(objective=sec["objective"], nodes=sec["nodes"], direction=sec["direction"], gamma_deg=gamma,
+                       A_max_deg=sec["A_max_deg"], parametrization=sec["parametrization"],
+                       fourier_order=sec["fourier_order"], rate_limit=rate,
+                       curvature_limit=None if sec["curvature_limit"] == "none" else "harmonic",
+                       regularization=sec["regularization"], tie_margin=sec["tie_margin"], S_min=sec["S_min"],
+                       mu_ratios=(1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,), robust=sec["robust"],
+                       harmonic_psi=sec["harmonic_psi"])
+
+
+#: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as problems/paper_gait.toml.
+PAPER_GAIT: Mapping[str, Mapping[str, Any]] = freeze({
+    "robot": {"M": 0.052, "L": 0.120, "beta": 2.0, "k": 0.1677, "mu": 0.389, "g": 9.81},
+    "gait": {"drive": "torque", "gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0},
+    "model": {"gravity": "physical"},
+})
+
+
+def paper_problem(overrides: Sequence[str] = ()) -> Problem:
+    """The paper's gait as a Problem, built in code (available without the problems/ directory).
+
+    ``overrides``: ``SECTION.KEY=VALUE`` texts as ``--set``.
+    """
+    return problem_from_dict(thaw(PAPER_GAIT), source="<paper gait>", overrides=overrides)

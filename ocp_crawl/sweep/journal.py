@@ -1,0 +1,176 @@
+"""The files of a sweep directory: settings.json, the journal, results.csv and summary.json.
+
+The journal (``results.partial.csv``) gets one line per finished point in completion order,
+flushed and fsync'd as it arrives, so that a killed run loses only the points in flight; a line
+torn by a kill is cut off by the resuming run.  One writer at a time (an advisory ``flock`` on
+``.sweep.lock``, released when its process dies).
+"""
+from __future__ import annotations
+
+import csv
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from ocp_crawl.io.files import remove_stale_temps, write_json
+from ocp_crawl.sweep.cells import cell, parse_rows, row_line
+from ocp_crawl.sweep.settings import SweepError, SweepSettings
+
+SETTINGS_FILE, JOURNAL_FILE, RESULTS_FILE, SUMMARY_FILE = (
+    "settings.json", "results.partial.csv", "results.csv", "summary.json")
+LOCK_FILE = ".sweep.lock"
+
+
+class SweepStore:
+    """The files of one sweep directory: settings, journal, results; one writer at a time."""
+
+    def __init__(self, out_dir: Path):
+        self.dir = out_dir
+        self.settings_path = out_dir / SETTINGS_FILE
+        self.journal_path = out_dir / JOURNAL_FILE
+        self.results_path = out_dir / RESULTS_FILE
+        self.summary_path = out_dir / SUMMARY_FILE
+        self._journal = None
+        self._lock = None
+
+    # ---- reading
+    def read_settings(self) -> SweepSettings:
+        """The settings.json of the directory; SweepError if absent or malformed."""
+        try:
+            data = json.loads(self.settings_path.read_text())
+        except FileNotFoundError:
+            raise SweepError(f"{self.dir}: no {SETTINGS_FILE}: not a sweep directory") from None
+        except (OSError, json.JSONDecodeError) as exc:
+            raise SweepError(f"{self.settings_path}: cannot read: {exc}") from None
+        return SweepSettings.from_dict(data, str(self.settings_path))
+
+    def read_done(self, settings: SweepSettings, repair: bool = False) -> dict[int, dict[str, Any]]:
+        """Finished rows by flat index: all of results.csv, else those of the journal.
+
+        ``repair`` (the writer only) cuts a line torn by a kill off the journal before appending to it.
+        """
+        done: dict[int, dict[str, Any]] = {}
+        if self.results_path.exists():
+            lines = self.results_path.read_text().splitlines(keepends=True)
+            if not lines or next(csv.reader(lines[:1])) != list(settings.columns):
+                raise SweepError(f"{self.results_path}: columns differ from {SETTINGS_FILE}; start again with --force")
+            rows = parse_rows(lines[1:], settings.columns, settings, str(self.results_path), 2)
+            if len(rows) != settings.size:
+                raise SweepError(f"{self.results_path}: {len(rows)} rows for {settings.size} points; "
+                                 "start again with --force")
+            for i, row in enumerate(rows):
+                self._check_point(settings, i, row, self.results_path)
+                done[i] = row
+        if self.journal_path.exists():
+            for i, row in self._read_journal(settings, repair).items():
+                done.setdefault(i, row)
+        return done
+
+    def _read_journal(self, settings: SweepSettings, repair: bool) -> dict[int, dict[str, Any]]:
+        raw = self.journal_path.read_bytes()
+        body, _, torn = raw.rpartition(b"\n")
+        if torn and repair:
+            # a run killed in the middle of writing a line: that point was not finished
+            with open(self.journal_path, "r+b") as fh:
+                fh.truncate(len(body) + 1 if body else 0)
+        lines = (body + b"\n").decode("utf-8").splitlines(keepends=True) if body else []
+        columns = ("index",) + settings.columns
+        if not lines:
+            return {}
+        if next(csv.reader(lines[:1])) != list(columns):
+            raise SweepError(f"{self.journal_path}: columns differ from {SETTINGS_FILE}; start again with --force")
+        done: dict[int, dict[str, Any]] = {}
+        for n, row in enumerate(parse_rows(lines[1:], columns, settings, str(self.journal_path), 2), 2):
+            index = row.pop("index")
+            if not isinstance(index, int) or not 0 <= index < settings.size:
+                raise SweepError(f"{self.journal_path}:{n}: index {index!r} is not a point of the grid")
+            self._check_point(settings, index, row, self.journal_path)
+            done.setdefault(index, row)
+        return done
+
+    @staticmethod
+    def _check_point(settings: SweepSettings, index: int, row: dict, path: Path) -> None:
+        expected = settings.point(index)
+        if any(row[k] != v for k, v in expected.items()):
+            raise SweepError(f"{path}: row of point {index} has grid values {[row[k] for k in expected]}, "
+                             f"expected {list(expected.values())}; start again with --force")
+
+    # ---- writing
+    def _acquire(self) -> None:
+        try:
+            import fcntl
+        except ImportError:  # no advisory locks (Windows): one writer is then the user's business
+            return
+        self._lock = open(self.dir / LOCK_FILE, "a")
+        try:
+            fcntl.flock(self._lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._lock.close()
+            self._lock = None
+            raise SweepError(f"{self.dir}: another sweep is writing to this directory") from None
+
+    def open(self, settings: SweepSettings, resume: bool, force: bool) -> dict[int, dict[str, Any]]:
+        """Start or resume the sweep's files; returns the finished rows (empty unless resuming)."""
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self._acquire()
+        try:
+            remove_stale_temps(self.dir)  # temporary files of a killed run (see files.atomic_write)
+            return self._open(settings, resume, force)
+        except BaseException:
+            self.close()
+            raise
+
+    def _open(self, settings: SweepSettings, resume: bool, force: bool) -> dict[int, dict[str, Any]]:
+        ours = [p for p in (self.settings_path, self.journal_path, self.results_path) if p.exists()]
+        done: dict[int, dict[str, Any]] = {}
+        if resume and self.settings_path.exists():
+            old = self.read_settings()
+            diff = settings.differences(old)
+            if diff:
+                raise SweepError(f"{self.dir}: cannot resume: this sweep differs from its {SETTINGS_FILE} "
+                                 f"(saved -> now: {'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); "
+                                 "use another output directory, or --force to start over")
+            done = self.read_done(settings, repair=True)
+        elif resume and ours:
+            raise SweepError(f"{self.dir}: cannot resume: no {SETTINGS_FILE} to check the settings against; "
+                             "use --force to start over")
+        elif ours and not force:
+            raise SweepError(f"{self.dir}: already holds a sweep ({', '.join(p.name for p in ours)}); "
+                             "continue it with --resume, or overwrite it with --force")
+        else:
+            for p in (self.journal_path, self.results_path, self.summary_path):
+                p.unlink(missing_ok=True)
+            write_json(self.settings_path, settings.to_dict())
+        # a journal killed before its header was complete is empty (repaired above): it needs the header
+        fresh = not self.journal_path.exists() or self.journal_path.stat().st_size == 0
+        self._journal = open(self.journal_path, "a", encoding="utf-8", newline="")
+        if fresh:
+            self._write_line(row_line(("index",) + settings.columns))
+        return done
+
+    def _write_line(self, line: str) -> None:
+        self._journal.write(line)
+        self._journal.flush()
+        os.fsync(self._journal.fileno())
+
+    def append(self, settings: SweepSettings, index: int, row: dict[str, Any]) -> None:
+        """Journal the finished row of point ``index`` (flushed and fsync'd)."""
+        self._write_line(row_line([str(index)] + [cell(row[c]) for c in settings.columns]))
+
+    def finish(self, result) -> None:
+        """Write results.csv and summary.json of the complete ``result`` (a SweepResult), then drop the journal."""
+        result.to_csv(self.results_path)
+        write_json(self.summary_path, result.summary())
+        # results.csv holds every row now; a kill before this unlink leaves a journal that resume ignores
+        self.journal_path.unlink(missing_ok=True)
+
+    def close(self) -> None:
+        """Close the journal and release the lock."""
+        if self._journal is not None:
+            self._journal.close()
+            self._journal = None
+        if self._lock is not None:
+            self._lock.close()  # releases the flock
+            self._lock = None
+
