@@ -22,7 +22,7 @@ from ocp_crawl.cli.app import main
 from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.model.pressure import FITTED_REST_DEG, BendingMap, PressureReference, PressureWaveform, pressure_torque
 from ocp_crawl.studies import FIGURES, GRIDS, STATEMENTS, evaluate_fit, fit_rest_angle
-from ocp_crawl.problem.core import paper_problem
+from ocp_crawl.problem import paper_problem
 from ocp_crawl.studies.plots import plot_amplitude, plot_friction_band, plot_parametric, plot_stiffness
 
 MM = 1e3

@@ -28,7 +28,7 @@ import sys
 from dataclasses import dataclass
 from typing import Callable
 
-from ocp_crawl import __version__
+from ocp_crawl.version import __version__
 from ocp_crawl.problem import ProblemError
 
 PROG = "ocp-crawl"

@@ -88,7 +88,7 @@ def _reproduce_args(p: argparse.ArgumentParser) -> None:
           _reproduce_args)
 def cmd_reproduce(args: argparse.Namespace) -> int:
     from ocp_crawl.studies import reproduce as rp
-    from ocp_crawl.studies.core import SweepOptions
+    from ocp_crawl.studies import SweepOptions
 
     check_scheduler(args.scheduler)
     names = [f"{stem}.{ext}" for stem in rp.FIGURES for ext in ("png", "pdf")]

@@ -8,7 +8,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ocp_crawl import __version__
+from ocp_crawl.version import __version__
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.problem import Problem
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
