@@ -204,7 +204,7 @@ SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
 
 def ocp_settings(problem: "Problem"):
     """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma."""
-    from ocp_crawl.ocp.gait import OCPSettings
+    from ocp_crawl.ocp import OCPSettings
 
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:

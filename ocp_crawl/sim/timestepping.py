@@ -38,7 +38,9 @@ import numpy as np
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
-from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
+from ocp_crawl.nlp.ipopt import ipopt_status
+from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
+from ocp_crawl.sim.step import StepResult, StepState, step_params
 from ocp_crawl.sim.result import STATUS_MESSAGES, CrawlResult, Event, Mode, Status, cost_of_transport, energy_balance
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 
