@@ -68,7 +68,12 @@ def _better(settings: OCPSettings, a: float, b: float) -> bool:
 
 
 def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings) -> HarmonicChoice | None:
-    """Best harmonic gait of the envelope (gamma fixed, psi and A <= A_max swept) for the objective."""
+    """Best harmonic gait of the envelope (gamma fixed, psi and A <= A_max swept) for the objective.
+
+    ``robot``: the robot (SI units); ``gravity``: its gravity convention; ``settings``: the envelope, the
+    sweep sizes and the objective.  Each gait is simulated with the event-driven stepper (every friction
+    scenario).  Returns the best :class:`HarmonicChoice` (for min_cot, when no gait reaches S_min, the one
+    closest to it, as an initial guess only), or None when no gait simulates successfully."""
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     psis = np.linspace(-180.0, 180.0, settings.harmonic_psi + 1)[1:]
     amps = np.linspace(settings.A_max_deg / settings.harmonic_A, settings.A_max_deg, settings.harmonic_A)

@@ -201,7 +201,9 @@ class GaitOCP:
     # ------------------------------------------------------------------ initial guess from a simulation
     def initial_guess(self, torque_signal) -> np.ndarray:
         """Variables sampled from event-driven simulations (one per scenario) of a torque input
-        (a gait that simulates successfully, e.g. the best harmonic of :func:`best_harmonic`)."""
+        (a gait that simulates successfully, e.g. the best harmonic of
+        :func:`~ocp_crawl.ocp.baseline.best_harmonic`): ``torque_signal(t)`` [N m] at phases t [cycles].
+        Returns the NLP's variable vector (scaled)."""
         s = self.settings
         N = s.nodes
         r = self.robot

@@ -28,14 +28,16 @@ NLP parameters, and reused for every step.  Complementarity is handled by one of
 * ``"fischer_burmeister"``: smoothed Fischer-Burmeister equations s + c - sqrt(s^2 + c^2 + 2 sigma) = 0,
   i.e. s c = sigma with s, c > 0, sigma driven to sigma_min.
 
-A step is accepted only when IPOPT's return status is usable by :data:`IPOPT_RETURN_STATUS` (the one table
-through which the step, the time-stepping and the gait OCP read every solver outcome, see :func:`call_ipopt`)
-and the complementarity and equation residuals are below tolerance; failed attempts are retried (cold
-start, non-monotone sigma schedule, then the fallback formulation :data:`FALLBACK_FORMULATION`), and a step
-that still fails returns a status of the table with NaN solution fields.  After the homotopy a polish can solve
-the tightened NLP (each pair fixed to its identified branch, s_j = 0 or c_j = 0, with the other kept
->= 0) with the same IPOPT solver; this removes the O(sigma/s) bias of the relaxation and resolves
-pairs near their corner (a slip that starts or stops within the step).
+A step is accepted only when IPOPT's return status is usable by
+:data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS` (the one table through which the step, the time-stepping
+and the gait OCP read every solver outcome) and the complementarity and equation residuals are below
+tolerance; failed attempts are retried (cold start, non-monotone sigma schedule, then the fallback
+formulation :data:`FALLBACK_FORMULATION`), and a step that still fails returns a status of the table with
+NaN solution fields.  The homotopy and the polish are those of :mod:`ocp_crawl.nlp.homotopy` (shared with
+the gait OCP): after the homotopy a polish can solve the tightened NLP (each pair fixed to its identified
+branch, s_j = 0 or c_j = 0, with the other kept >= 0) with the same IPOPT solver; this removes the
+O(sigma/s) bias of the relaxation and resolves pairs near their corner (a slip that starts or stops
+within the step).  The step's state and result types are in :mod:`ocp_crawl.sim.step`.
 
 Exact ties: when the friction limits of the two feet are equal (mirror-symmetric configurations)
 any split of the slip between the feet solves the step.  The small regularising objective then
@@ -281,7 +283,7 @@ class MPCCStep:
         homotopy then starts at ``sigma0_warm``) and whose slip is preferred at exact ties; failed
         attempts are retried from a cold start, then with a non-monotone sigma schedule, then with the
         fallback formulation (up to ``max_retries`` retries in all).  A failed step's status is that of the
-        last failed attempt of the primary formulation (:data:`IPOPT_RETURN_STATUS`, or
+        last failed attempt of the primary formulation (:data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`, or
         ``Residual_Check_Failed``); its solution fields are NaN.
         """
         if not isinstance(state, StepState):
