@@ -146,11 +146,6 @@ class Run:
     def ok(self) -> bool:
         return self.failed is None and self.last is not None
 
-    @property
-    def final(self) -> Solve:
-        """The solve that decided: the failed one, else the last accepted one."""
-        return self.failed if self.failed is not None else self.last
-
 
 Call = Callable[[cs.Function, Start, dict], Solve]
 
