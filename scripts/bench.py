@@ -57,7 +57,7 @@ def bench_prescribed(repeat: int) -> dict:
 def bench_ocp(repeat: int) -> dict:
     """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve each)."""
     from ocp_crawl import Robot
-    from ocp_crawl.ocp.gait import OCPSettings, optimize_gait
+    from ocp_crawl.ocp import OCPSettings, optimize_gait
 
     out = {}
     for name, kw in (("max_speed", {}), ("min_cot", {"S_min": 0.04}), ("robust_speed", {})):

@@ -24,7 +24,8 @@ def bench(steps: int, gravity: str, psi: float, formulation: str, repeat: int) -
 
     from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
     from ocp_crawl.sim.event import HybridStepper
-    from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepState
+    from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
+    from ocp_crawl.sim.step import StepState
     from ocp_crawl.sim.timestepping import TimeStepper
 
     model = Model(Robot.paper(), gravity=gravity)

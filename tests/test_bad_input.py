@@ -22,7 +22,7 @@ import ocp_crawl.cli.study_commands
 import ocp_crawl.problem.run
 import ocp_crawl.sim.crosscheck
 import ocp_crawl.sim.event
-import ocp_crawl.ocp.gait
+import ocp_crawl.ocp
 import ocp_crawl.sim.angles
 import ocp_crawl.studies.reproduce
 import ocp_crawl.sim.timestepping
@@ -301,7 +301,7 @@ def nothing_computed(monkeypatch):
                          (ocp_crawl.sim.angles, "simulate_angles"), (ocp_crawl.sim.timestepping, "simulate_mpcc"),
                          (ocp_crawl.cli.study_commands, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
                          (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
-                         (ocp_crawl.ocp.gait, "optimize_gait")):
+                         (ocp_crawl.ocp, "optimize_gait")):
         monkeypatch.setattr(module, name, _computed)
 
 

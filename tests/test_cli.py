@@ -169,13 +169,13 @@ def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
 
 
 def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
-    import ocp_crawl.ocp.gait
+    import ocp_crawl.ocp
 
     def broken(*args, **kwargs):
         return 1.0 / 0.0
 
     monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
-    monkeypatch.setattr(ocp_crawl.ocp.gait, "optimize_gait", broken)
+    monkeypatch.setattr(ocp_crawl.ocp, "optimize_gait", broken)
     code, out, err = run(capsys, "optimize", REPO / "problems" / "ocp_max_speed.toml")
     assert code == 1
     assert one_line(err).startswith("ocp-crawl: internal error: ZeroDivisionError: ")

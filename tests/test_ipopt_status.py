@@ -10,9 +10,10 @@ import pytest
 
 from ocp_crawl import CallableSignal, Model, Robot, Status
 from ocp_crawl.sim.event import HybridStepper
-from ocp_crawl.sim.mpcc import (FAILURE_KINDS, IPOPT_RETURN_STATUS, RESULT_FIELDS, MPCCOptions, MPCCStep, SolverOutcome,
-                            StepState, call_ipopt, ipopt_status)
-from ocp_crawl.ocp.gait import GaitOCP, OCPSettings, OCPStatus, optimize_gait
+from ocp_crawl.nlp.ipopt import FAILURE_KINDS, IPOPT_RETURN_STATUS, SolverOutcome, call_ipopt, ipopt_status
+from ocp_crawl.ocp import GaitOCP, OCPSettings, optimize_gait
+from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
+from ocp_crawl.sim.step import RESULT_FIELDS, StepState
 from ocp_crawl.sim.oracle import solve_step_enumerate
 from ocp_crawl.sim.timestepping import simulate_mpcc
 
@@ -71,11 +72,11 @@ def test_a_status_not_in_the_table_is_a_documented_failure(status):
 
 
 def test_solvers_read_outcomes_only_through_the_table():
-    """No module but mpcc.py calls nlpsol or reads solver stats, and no module compares status strings."""
+    """No module but nlp/ipopt.py calls nlpsol or reads solver stats, and no module compares status strings."""
     statuses = "|".join(IPOPT_DOCUMENTED)
-    for path in sorted(PACKAGE.glob("*.py")):
+    for path in sorted(PACKAGE.rglob("*.py")):
         src = path.read_text()
-        if path.name == "mpcc.py":
+        if path.relative_to(PACKAGE).as_posix() == "nlp/ipopt.py":
             # one nlpsol (build_ipopt) and one stats() (call_ipopt)
             assert len(re.findall(r"cs\.nlpsol\(", src)) == 1 and len(re.findall(r"\.stats\(\)", src)) == 1
             continue
@@ -258,10 +259,10 @@ def test_time_stepping_without_a_start_is_no_start():
 def test_cli_simulate_mpcc_solver_failure_exits_1(monkeypatch, capsys):
     """IPOPT's real failure through the CLI (iteration limit 0 in the step solver's defaults): exit code 1,
     the IPOPT status on stderr in one line, no traceback."""
-    import ocp_crawl.sim.mpcc as mpcc
+    import ocp_crawl.nlp.ipopt as nlp_ipopt
     from ocp_crawl.cli.app import main
 
-    monkeypatch.setitem(mpcc.DEFAULT_IPOPT, "max_iter", 0)
+    monkeypatch.setitem(nlp_ipopt.STEP_IPOPT, "max_iter", 0)
     problem = PACKAGE.parent / "problems" / "paper_gait.toml"
     code = main(["simulate", str(problem), "--solver", "mpcc", "--steps", "40", "--json"])
     captured = capsys.readouterr()
@@ -278,7 +279,7 @@ def test_cli_simulate_mpcc_solver_failure_exits_1(monkeypatch, capsys):
 SMALL = dict(objective="max_speed", nodes=16, harmonic_psi=4, harmonic_A=1)
 
 
-def assert_failed_ocp(res, status, ocp_status=OCPStatus.SOLVER_FAILURE):
+def assert_failed_ocp(res, status, ocp_status=Status.SOLVER_FAILURE):
     assert not res.success and res.status == ocp_status, res.message
     out = ipopt_status(status)
     assert status in res.message and out.message in res.message
@@ -302,7 +303,7 @@ def test_ocp_resource_limits_are_solver_failures(ipopt, status):
 
 def test_ocp_infeasible_speed_requirement_is_infeasible():
     res = optimize_gait(Robot.paper(), "physical", OCPSettings(**dict(SMALL, objective="min_cot", S_min=0.5)))
-    assert_failed_ocp(res, "Infeasible_Problem_Detected", OCPStatus.INFEASIBLE)
+    assert_failed_ocp(res, "Infeasible_Problem_Detected", Status.INFEASIBLE)
     assert res.message.startswith("infeasible: IPOPT Infeasible_Problem_Detected")
 
 
@@ -322,7 +323,7 @@ def test_ocp_nan_in_the_initial_guess_is_invalid_number(monkeypatch):
 
 def test_ocp_success_names_its_final_status():
     res = optimize_gait(Robot.paper(), "physical", OCPSettings(**SMALL), replay=False)
-    assert res.status == OCPStatus.SUCCESS and res.success, res.message
+    assert res.status == Status.SUCCESS and res.success, res.message
     m = re.search(r"final IPOPT status (\w+)", res.message)
     assert m and ipopt_status(m.group(1)).usable
     assert all(h.accepted == ipopt_status(h.return_status).usable for h in res.homotopy)

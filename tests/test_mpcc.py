@@ -6,8 +6,9 @@ import pytest
 
 from ocp_crawl import Mode, Model, Robot, Status, simulate_torque
 from ocp_crawl.sim.event import HybridStepper
-from ocp_crawl.sim.mpcc import (DEFAULT_IPOPT, MPCCOptions, MPCCStep, StepState, ipopt_status,
-                            mode_from_pairs)
+from ocp_crawl.nlp.ipopt import STEP_IPOPT, ipopt_status
+from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
+from ocp_crawl.sim.step import StepState, mode_from_pairs
 from ocp_crawl.sim.oracle import solve_step_enumerate
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 
@@ -171,9 +172,9 @@ def test_ipopt_options_are_copied_per_instance(paper_robot):
     opts = MPCCOptions(ipopt=user)
     user["max_iter"] = 1
     assert opts.ipopt == {"max_iter": 77}
-    before = dict(DEFAULT_IPOPT)
+    before = dict(STEP_IPOPT)
     MPCCStep(Model(paper_robot), opts)
-    assert DEFAULT_IPOPT == before
+    assert STEP_IPOPT == before
 
 
 def test_homotopy_schedule():

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.ocp.gait import OCPSettings, OCPStatus, optimize_gait
+from ocp_crawl import Status
+from ocp_crawl.ocp import OCPSettings, optimize_gait
 
 N = 200
 SETTINGS = {
@@ -71,7 +72,7 @@ def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
                         OCPSettings(objective="min_cot", S_min=0.5, nodes=24, harmonic_psi=12, harmonic_A=2))
     assert not res.success
-    assert res.status == OCPStatus.INFEASIBLE, res.message
+    assert res.status == Status.INFEASIBLE, res.message
     assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message
 
 

@@ -23,7 +23,9 @@ from hypothesis import HealthCheck, assume, event, example, given, note, setting
 from hypothesis import strategies as st
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
-from ocp_crawl.sim.mpcc import FAILURE_KINDS, RESULT_FIELDS, SLIP_EPS, MPCCStep, StepState, ipopt_status
+from ocp_crawl.nlp.ipopt import FAILURE_KINDS, ipopt_status
+from ocp_crawl.sim.mpcc import MPCCStep
+from ocp_crawl.sim.step import RESULT_FIELDS, SLIP_EPS, StepState
 from ocp_crawl.sim.result import STATUS_MESSAGES, Mode, Status
 from ocp_crawl.sim.oracle import solve_step_enumerate
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc

@@ -1,7 +1,7 @@
 """The incremental (time-stepping) equations of one quasistatic step, as CasADi expressions.
 
 Shared by the MPCC step solver (:mod:`ocp_crawl.sim.mpcc`) and the periodic-gait optimal control
-problem (:mod:`ocp_crawl.ocp.gait`), so both use the same compiled model functions and the same
+problem (:mod:`ocp_crawl.ocp.transcription`), so both use the same compiled model functions and the same
 complementarity formulation.
 
 Scaled step variables (forces by M g, lengths by L, torques by M g L):

@@ -28,9 +28,10 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.statics import KIN, NP, Model, symbolic
-from ocp_crawl.sim.mpcc import NPAIR, StepResult, StepState, _check_tau, failed_step_result, step_result_from_w
+from ocp_crawl.model.statics import KIN, NP, Model, params, symbolic
+from ocp_crawl.model.step_equations import NPAIR, friction_margins
 from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.step import StepResult, StepState, check_tau, failed_step_result, step_result_from_w
 
 #: modes enumerated, in the order of the selector vector; slip modes are indexed like the pairs
 ENUM_MODES = (Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
@@ -55,13 +56,13 @@ def mode_system() -> cs.Function:
     sel = cs.SX.sym("sel", len(ENUM_MODES))
     phi, ft = z[0:2], z[2]
     phi_k, tau_hat, p = P[0:2], P[2:4], P[4:4 + NP]
-    M, L, mu1, mu2, g = p[0], p[1], p[4], p[5], p[6]
-    Mg = M * g
+    prm = params(p)
+    L, Mg = prm.L, prm.M * prm.g
     kin1 = sym.kin(phi, p)
     kin0 = sym.kin(phi_k, p)
     fn1, fn2 = kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg
     dd = (kin1[KIN["d"]] - kin0[KIN["d"]]) / L
-    c = cs.vertcat(mu1 * fn1 + ft, mu1 * fn1 - ft, mu2 * fn2 - ft, mu2 * fn2 + ft)
+    c = cs.vertcat(*friction_margins(prm.mu1, fn1, ft, prm.mu2, fn2, -ft))  # f_t2 = -f_t on foot 2
     mode_eq = sel[0] * dd + cs.dot(sel[1:], c)
     G = cs.vertcat(sym.residual(phi, tau_hat * Mg * L, ft * Mg, p) / (Mg * L), mode_eq)
     return cs.Function("step_mode_system", [z, P, sel], [G, cs.jacobian(G, z), dd, c, cs.vertcat(fn1, fn2)],
@@ -110,8 +111,8 @@ def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray, max_iter: int = 4
 def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     """Solve the incremental step exactly by enumerating the contact modes with Newton.
 
-    Returns a :class:`~ocp_crawl.sim.mpcc.StepResult` with status ``"Enumeration_Succeeded"`` or
-    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`; a failed result has NaN
+    Returns a :class:`~ocp_crawl.sim.step.StepResult` with status ``"Enumeration_Succeeded"`` or
+    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`; a failed result has NaN
     solution fields); ``extra['candidates']`` lists every mode tried, ``extra['lift_off']``
     is True when no mode is consistent and a mode solution has a normal force <= 0.
     """
@@ -119,55 +120,20 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
         raise TypeError(f"model must be a Model, got {type(model).__name__}")
     if not isinstance(state, StepState):
         raise TypeError(f"state must be a StepState, got {type(state).__name__}")
-    tau = _check_tau(tau)
+    tau = check_tau(tau)
     t_start = time.perf_counter()
     r = model.robot
-    Mg, MgL = r.M * r.g, r.M * r.g * r.L
-    f = mode_system()
-    P = np.r_[state.phi, tau / MgL, model.p]
-    mus = (r.mu1, r.mu1, r.mu2, r.mu2)
+    P = np.r_[state.phi, tau / (r.M * r.g * r.L), model.p]
     candidates = []
     iterations = 0
     for mode in ENUM_MODES:
-        sel = selector(mode)
-        guesses = [np.r_[state.phi, state.f_t / Mg]]
-        if mode != Mode.STICK:
-            # start on the friction limit of the slipping foot at phi_k
-            fn = np.asarray(f(guesses[0], P, sel)[4]).ravel()
-            j = ENUM_MODES.index(mode) - 1
-            foot = 0 if j < 2 else 1
-            sign = (-1.0, 1.0, 1.0, -1.0)[j]  # f_t/(Mg) on the friction limit of pair j
-            guesses.append(np.r_[state.phi, sign * mus[j] * fn[foot]])
-        best = None
-        for z0 in guesses:
-            z, ok, its = _newton(f, z0, P, sel)
-            iterations += its
-            if ok:
-                best = z
-                break
-        if best is None:
-            candidates.append({"mode": mode.label, "converged": False})
-            continue
-        _, _, dd, c, fn = (np.asarray(a).ravel() for a in f(best, P, sel))
-        dd = float(dd[0])
-        s = np.zeros(NPAIR)
-        if mode != Mode.STICK:
-            j = ENUM_MODES.index(mode) - 1
-            # closure d - d_k = dx2 - dx1 with the partner foot fixed
-            dx = -dd if j < 2 else dd
-            s[j] = dx if j in (0, 2) else -dx
-        margins = np.r_[c, s]
-        if mode != Mode.STICK:
-            margins[ENUM_MODES.index(mode) - 1] = np.inf  # c_j = 0 holds by construction
-        consistent = bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)
-        w = np.r_[best[:2], best[2], -best[2], np.maximum(s, 0.0)]
-        candidates.append({"mode": mode.label, "converged": True, "consistent": consistent,
-                           "phi": best[:2].tolist(), "margin": float(np.min(margins)),
-                           "fn_min": float(np.min(fn)) * Mg, "_w": w})
+        cand, its = _solve_mode(mode, state, P, (r.mu1, r.mu1, r.mu2, r.mu2), r.M * r.g)
+        candidates.append(cand)
+        iterations += its
     consistent = [c for c in candidates if c.get("consistent")]
     distinct = []
-    for c in sorted(consistent, key=lambda c: np.max(np.abs(np.asarray(c["phi"]) - state.phi))):
-        if not any(np.max(np.abs(np.asarray(c["phi"]) - np.asarray(d["phi"]))) < DISTINCT_TOL for d in distinct):
+    for c in sorted(consistent, key=lambda c: _dphi(c["phi"], state.phi)):
+        if not any(_dphi(c["phi"], d["phi"]) < DISTINCT_TOL for d in distinct):
             distinct.append(c)
     public = [{k: v for k, v in c.items() if k != "_w"} for c in candidates]
     extra = {"candidates": public, "n_consistent": len(consistent), "n_distinct": len(distinct),
@@ -175,10 +141,8 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     elapsed = time.perf_counter() - t_start
     if distinct:
         # among coinciding consistent solutions (a mode boundary) prefer the one with the most margin
-        chosen = distinct[0]
-        same = [c for c in consistent
-                if np.max(np.abs(np.asarray(c["phi"]) - np.asarray(chosen["phi"]))) < DISTINCT_TOL]
-        chosen = max(same, key=lambda c: c["margin"])
+        chosen = max((c for c in consistent if _dphi(c["phi"], distinct[0]["phi"]) < DISTINCT_TOL),
+                     key=lambda c: c["margin"])
         msg = f"consistent mode {chosen['mode']}"
         if len(distinct) > 1:
             msg += f" (closest to phi_k of {len(distinct)} distinct consistent solutions)"
@@ -189,3 +153,43 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     msg = "no consistent contact mode" + (" (a normal force would be <= 0: lift-off)" if extra["lift_off"] else "")
     return failed_step_result(model, state, tau, status="No_Consistent_Mode", message=msg, iterations=iterations,
                               solve_time=elapsed, extra=extra)
+
+
+def _dphi(a, b) -> float:
+    """Largest angle difference [rad] of two configurations."""
+    return float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
+
+
+def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple, Mg: float) -> tuple[dict, int]:
+    """The candidate of one contact mode: Newton from phi_k (and, for a slip mode, from the slipping foot's
+    friction limit at phi_k), then its consistency.  Returns (candidate dict, Newton iterations)."""
+    f = mode_system()
+    sel = selector(mode)
+    guesses = [np.r_[state.phi, state.f_t / Mg]]
+    j = ENUM_MODES.index(mode) - 1  # the slipping pair (-1: stick)
+    if mode != Mode.STICK:
+        fn = np.asarray(f(guesses[0], P, sel)[4]).ravel()
+        sign = (-1.0, 1.0, 1.0, -1.0)[j]  # f_t/(Mg) on the friction limit of pair j
+        guesses.append(np.r_[state.phi, sign * mus[j] * fn[0 if j < 2 else 1]])
+    best, iterations = None, 0
+    for z0 in guesses:
+        z, ok, its = _newton(f, z0, P, sel)
+        iterations += its
+        if ok:
+            best = z
+            break
+    if best is None:
+        return {"mode": mode.label, "converged": False}, iterations
+    _, _, dd, c, fn = (np.asarray(a).ravel() for a in f(best, P, sel))
+    s = np.zeros(NPAIR)
+    if mode != Mode.STICK:
+        # closure d - d_k = dx2 - dx1 with the partner foot fixed
+        dx = -float(dd[0]) if j < 2 else float(dd[0])
+        s[j] = dx if j in (0, 2) else -dx
+    margins = np.r_[c, s]
+    if mode != Mode.STICK:
+        margins[j] = np.inf  # c_j = 0 holds by construction
+    consistent = bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)
+    w = np.r_[best[:2], best[2], -best[2], np.maximum(s, 0.0)]
+    return {"mode": mode.label, "converged": True, "consistent": consistent, "phi": best[:2].tolist(),
+            "margin": float(np.min(margins)), "fn_min": float(np.min(fn)) * Mg, "_w": w}, iterations

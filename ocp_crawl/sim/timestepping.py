@@ -20,7 +20,7 @@ Metrics on the grid of the reported cycle:
 Failures stop the run with a status: a step that IPOPT cannot solve (after retries) gives
 ``SOLVER_FAILURE``, or ``LIFT_OFF`` if the mode-enumeration oracle finds that every equilibrium of
 the step has a normal force <= 0; the message names the step, its phase and the return status with
-its meaning from :data:`~ocp_crawl.sim.mpcc.IPOPT_RETURN_STATUS`, and the result keeps the steps of the
+its meaning from :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`, and the result keeps the steps of the
 failing cycle solved before it.  A torque input that is not finite at a step gives ``SOLVER_FAILURE``
 too, and no released equilibrium at t = 0 gives ``NO_START`` (as the event-driven stepper).
 A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint at or below
@@ -41,7 +41,9 @@ from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.assemble import (failure_message, new_result, no_start_result, output_phases, set_cycle_metrics,
                                     set_samples, success_message)
 from ocp_crawl.sim.event import HybridStepper
-from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep, StepResult, StepState, ipopt_status, step_params
+from ocp_crawl.nlp.ipopt import ipopt_status
+from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
+from ocp_crawl.sim.step import StepResult, StepState, step_params
 from ocp_crawl.sim.options import CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status

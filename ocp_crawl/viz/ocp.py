@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
-from ocp_crawl.ocp.gait import OCPResult
+from ocp_crawl.ocp import OCPResult
 from ocp_crawl.viz.gait import mode_color, mode_runs, save_figure
 
 

@@ -1,0 +1,204 @@
+"""The one relaxation homotopy of the package, shared by the MPCC step and the gait OCP.
+
+A complementarity problem 0 <= s _|_ c >= 0 is relaxed by a parameter sigma (Scholtes: s c <= sigma; the
+step solver also knows an l1 penalty and Fischer-Burmeister smoothing) and solved by IPOPT along a
+decreasing :func:`schedule` of sigma: the first stage from a guess (the cold solver, or the warm one when
+the guess carries multipliers), each later stage warm-started from the previous stage's primal-dual point.
+A :meth:`Homotopy.polish` then solves the tightened NLP (each pair fixed to its identified branch) from the
+homotopy's point, trying candidate tightenings in turn.  Every IPOPT call is one :class:`Stage` record.
+
+The engine knows nothing of the problem: the caller gives the two IPOPT solvers and a function that makes
+one call, ``call(solver, start, data) -> Solve``, where ``data`` holds the NLP's parameters and bounds of the
+stage (``p``, ``lbx``, ``ubx``, ``lbg``, ``ubg``) and the returned :class:`Solve` carries the point, the
+status table's verdict and the caller's residuals.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+import casadi as cs
+import numpy as np
+
+from ocp_crawl.nlp.ipopt import IpoptCall, ipopt_status
+
+
+def schedule(sigma0: float, factor: float, sigma_min: float) -> tuple[float, ...]:
+    """Relaxation parameters sigma0, sigma0 factor, ... while above sigma_min, then sigma_min (the last one).
+
+    ``factor`` in (0, 1); all three dimensionless (the relaxation of the scaled complementarity)."""
+    out = []
+    s = sigma0
+    while s > sigma_min * (1 + 1e-9):
+        out.append(s)
+        s *= factor
+    out.append(sigma_min)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One IPOPT call of a homotopy: a relaxation stage or a polish."""
+
+    sigma: float
+    """relaxation parameter of the stage [-] (NaN for a polish)"""
+    return_status: str
+    """IPOPT's return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`)"""
+    accepted: bool
+    """the table says the point is usable and it is finite"""
+    iterations: int
+    comp_residual: float
+    """largest complementarity residual at the point [-] (the caller's measure)"""
+    time: float
+    """wall time of the call [s]"""
+    kind: str = "homotopy"
+    """'homotopy' (a relaxation stage) or 'polish' (the tightened NLP)"""
+    attempt: int = 0
+    """the caller's attempt number (the step solver's retries; 0 for the OCP)"""
+    objective: float = math.nan
+    """IPOPT's objective value at the point"""
+    S: tuple = ()
+    """body displacement per scenario [m] (the OCP; empty for the step solver)"""
+    message: str = ""
+    """the return status and its meaning from the table"""
+
+
+@dataclass
+class Solve:
+    """One IPOPT call as the homotopy reads it: the primal-dual point, the table's verdict, the caller's
+    residuals.  Mutable, so that a caller (or a test) may overrule the verdict."""
+
+    x: np.ndarray
+    lam_x: np.ndarray
+    lam_g: np.ndarray
+    status: str
+    accepted: bool
+    iterations: int
+    detail: str = ""
+    """CasADi's exception text when the call raised, else ''"""
+    objective: float = math.nan
+    comp: float = math.inf
+    """complementarity residual [-]"""
+    eq: float = math.inf
+    """equation residual [-]"""
+    S: tuple = ()
+    s: np.ndarray | None = None
+    """the complementarity pairs (s, c) at the point, when the caller measures them per pair"""
+    c: np.ndarray | None = None
+
+    @classmethod
+    def of(cls, call: IpoptCall, **measures) -> "Solve":
+        """The solve of a :func:`~ocp_crawl.nlp.ipopt.call_ipopt` outcome with the caller's ``measures``."""
+        return cls(call.x, call.lam_x, call.lam_g, call.status, call.usable, call.iterations, call.detail,
+                   call.f, **measures)
+
+    @property
+    def text(self) -> str:
+        """The status (with CasADi's exception text), for short failure reasons."""
+        usable = ipopt_status(self.status).usable
+        return self.status + (f": {self.detail}" if self.detail else "") + \
+            (", but the point is not finite" if usable and not np.all(np.isfinite(self.x)) else "")
+
+    def describe(self) -> str:
+        """The status with its meaning from the table (and CasADi's exception text)."""
+        out = ipopt_status(self.status)
+        text = out.describe()
+        if self.detail:
+            return f"{text}: {self.detail}"
+        return text + (", but the point is not finite" if out.usable and not np.all(np.isfinite(self.x)) else "")
+
+    def start(self) -> "Start":
+        """This point with its multipliers: the warm start of the next stage."""
+        return Start(self.x, self.lam_x, self.lam_g)
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where an IPOPT call starts: a primal point, with the multipliers of a previous solve (warm) or not."""
+
+    x: np.ndarray
+    lam_x: np.ndarray | None = None
+    lam_g: np.ndarray | None = None
+
+    @property
+    def warm(self) -> bool:
+        return self.lam_x is not None
+
+
+@dataclass
+class Run:
+    """Outcome of :meth:`Homotopy.relax`: the last accepted solve, and the failed one if a stage failed."""
+
+    last: Solve | None
+    """the last accepted stage's solve (None if the first stage failed)"""
+    failed: Solve | None = None
+    """the solve of the stage that failed (None when every stage was accepted)"""
+    stage: int = 0
+    """index of the failed stage (or of the last stage run)"""
+    stages: int = 0
+    """number of stages of the schedule"""
+    sigma: float = math.nan
+    """sigma of the failed (or the last) stage"""
+
+    @property
+    def ok(self) -> bool:
+        return self.failed is None and self.last is not None
+
+
+Call = Callable[[cs.Function, Start, dict], Solve]
+
+
+@dataclass
+class Homotopy:
+    """A relaxation homotopy over one NLP: its cold and warm IPOPT solvers and how to call them.
+
+    ``call(solver, start, data)`` makes one IPOPT call (``data``: the stage's ``p`` and bounds) and measures
+    the point; ``records`` collects a :class:`Stage` per call (a caller may share one list across runs)."""
+
+    cold: cs.Function
+    warm: cs.Function
+    call: Call
+    records: list = field(default_factory=list)
+
+    def _stage(self, solver, start: Start, data: dict, sigma: float, kind: str, attempt: int) -> Solve:
+        t0 = time.perf_counter()
+        sol = self.call(solver, start, data)
+        self.records.append(Stage(sigma, sol.status, sol.accepted, sol.iterations, sol.comp,
+                                  time.perf_counter() - t0, kind, attempt, sol.objective, tuple(sol.S),
+                                  sol.describe()))
+        return sol
+
+    def relax(self, sigmas: Iterable[float], start: Start, data: Callable[[float], dict], attempt: int = 0,
+              done: Callable[[Solve], bool] | None = None) -> Run:
+        """Solve along ``sigmas`` from ``start``: the cold solver first unless ``start`` is warm, then each stage
+        warm-started from the previous one.  ``data(sigma)``: parameters and bounds of the stage; ``done(sol)``:
+        True ends the homotopy early (e.g. an exact penalty already complementary).  Stops at the first stage
+        the table (or the caller) does not accept."""
+        sigmas = tuple(sigmas)
+        solver = self.warm if start.warm else self.cold
+        run = Run(None, stages=len(sigmas))
+        for k, sigma in enumerate(sigmas):
+            sol = self._stage(solver, start, data(sigma), sigma, "homotopy", attempt)
+            run.stage, run.sigma = k, sigma
+            if not sol.accepted:
+                run.failed = sol
+                return run
+            run.last, start, solver = sol, sol.start(), self.warm
+            if done is not None and done(sol):
+                break
+        return run
+
+    def polish(self, sol: Solve, candidates: Iterable[dict], accept: Callable[[Solve], bool],
+               attempt: int = 0) -> Solve | None:
+        """Tightened NLPs from the homotopy's solve ``sol``, warm-started with its multipliers, one per
+        candidate (``data`` with the starting point ``x0``, e.g. ``sol.x`` on the tightened bounds), in order;
+        the first accepted solve that passes ``accept`` is returned, else None (keep the homotopy's point)."""
+        for data in candidates:
+            data = dict(data)
+            start = Start(data.pop("x0"), sol.lam_x, sol.lam_g)
+            pol = self._stage(self.warm, start, data, math.nan, "polish", attempt)
+            if pol.accepted and accept(pol):
+                return pol
+        return None
