@@ -153,7 +153,7 @@ def format_optimize(s: dict) -> str:
 
 @register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
 def cmd_optimize(args: argparse.Namespace) -> int:
-    from ocp_crawl.ocp.gait import optimize_gait
+    from ocp_crawl.ocp import optimize_gait
     from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
 
     problem = load_problem(args.problem, args.overrides)

@@ -48,8 +48,6 @@ def ocp_settings(problem: Problem) -> OCPSettings:
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
     if sec.get("rate_limit") == "max_rate" and sec.get("max_rate") is None:
         raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
-    rate = {"harmonic": "harmonic", "none": None}.get(sec.get("rate_limit"), sec.get("max_rate"))
-    eps = sec["mu_ratio_eps"]
     gamma = math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2))
     if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
         gait = problem.sections.get("gait", {})
@@ -58,13 +56,7 @@ def ocp_settings(problem: Problem) -> OCPSettings:
         raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} with [gait] "
                            f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
                            f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
-    return OCPSettings(objective=sec["objective"], nodes=sec["nodes"], direction=sec["direction"], gamma_deg=gamma,
-                       A_max_deg=sec["A_max_deg"], parametrization=sec["parametrization"],
-                       fourier_order=sec["fourier_order"], rate_limit=rate,
-                       curvature_limit=None if sec["curvature_limit"] == "none" else "harmonic",
-                       regularization=sec["regularization"], tie_margin=sec["tie_margin"], S_min=sec["S_min"],
-                       mu_ratios=(1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,), robust=sec["robust"],
-                       harmonic_psi=sec["harmonic_psi"])
+    return OCPSettings(**sec, gamma_deg=gamma)
 
 
 #: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as problems/paper_gait.toml.

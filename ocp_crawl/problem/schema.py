@@ -133,11 +133,6 @@ def _ocp(name: str):
     return "none" if value is None else value
 
 
-def _mu_ratio_eps() -> float:
-    """``[ocp] mu_ratio_eps`` of the default scenarios ``OCPSettings.mu_ratios`` = (1 - eps, 1, 1 + eps)."""
-    return round(max(field_default(OCPSettings, "mu_ratios")) - 1.0, 12)
-
-
 _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, keys=(
     Key("M", float, "kg", "total mass", required=True, rule=GT0),
     Key("L", float, "m", "total length", required=True, rule=GT0),
@@ -207,7 +202,7 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
         default=_ocp("tie_margin"), rule=GE0),
     Key("S_min", float, "m", "min_cot: smallest progress direction * S per cycle", default=_ocp("S_min"), rule=GE0),
     Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}",
-        default=_mu_ratio_eps(), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+        default=_ocp("mu_ratio_eps"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
     Key("robust", str, "-", "robust_speed: maximise the mean or the worst S", default=_ocp("robust"),
         choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
