@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Harmonic, Mode, Model, Robot, Status
-from ocp_crawl.sim.angles import _Kinematic, simulate_angles
+from ocp_crawl.sim.angles import KinematicGait, simulate_angles
 
 
 @pytest.mark.parametrize("mu1,mu2", [(0.389, 0.389), (0.33, 0.45)])
@@ -37,7 +37,7 @@ def test_switching_instants_are_located(gravity):
     model = Model(robot, gravity=gravity)
     gait = Harmonic.from_degrees(90, 30, 45)
     res = simulate_angles(model, gait)
-    kin = _Kinematic(model, gait)
+    kin = KinematicGait(model, gait)
     kinds = {e.kind for e in res.events}
     assert kinds == {"slip_reversal", "slip_switch"}
     for ev in res.events:

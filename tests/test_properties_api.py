@@ -722,6 +722,10 @@ def section_values(draw, section, ranges=None):
             if name in given and any(r not in given for r in key.requires):
                 given |= set(key.requires)
                 changed = True
+    if section.name == "simulation":
+        # the solver choice is covered by tests/test_problem.py; here every problem runs the default
+        # solver of its drive (an MPCC run per example would be slow, and angles + mpcc is bad input)
+        given -= {"solver", "steps"}
     return {name: draw(valid_values(section.name, keys[name], ranges)) for name in (k.name for k in section.keys)
             if name in given}
 

@@ -5,7 +5,7 @@ import pytest
 
 from ocp_crawl import FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot, Status, simulate_torque
 from ocp_crawl.sim.event import HybridStepper, input_step
-from ocp_crawl.sim.event_guards import _cubic_min
+from ocp_crawl.sim.event_guards import cubic_min
 
 from conftest import paper_torque
 
@@ -144,7 +144,7 @@ def test_stepper_terminates_on_an_input_faster_than_it_can_follow():
     (0.1, 0.1, -0.5, 0.5, True),
 ])
 def test_cubic_minimum(g0, g1, m0, m1, dips):
-    s, v = _cubic_min(g0, g1, m0, m1)
+    s, v = cubic_min(g0, g1, m0, m1)
     grid = np.linspace(0, 1, 100001)
     a, b = 2 * (g0 - g1) + m0 + m1, 3 * (g1 - g0) - 2 * m0 - m1
     values = ((a * grid + b) * grid + m0) * grid + g0

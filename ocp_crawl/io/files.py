@@ -23,6 +23,8 @@ from typing import IO, Any, Callable
 
 import numpy as np
 
+from ocp_crawl.checks import finite_or_none
+
 #: tag of this host in temporary names: a leftover is only judged by its writer's pid on the same host
 HOST_TAG = hashlib.sha1(socket.gethostname().encode("utf-8", "replace")).hexdigest()[:8]
 #: ``.<name>.<pid>-<host>.<random>.tmp``: the temporary files of :func:`atomic_write` (and of temp_prefix)
@@ -143,8 +145,7 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, (int, np.integer)):
         return int(obj)
     if isinstance(obj, (float, np.floating)):
-        x = float(obj)
-        return x if np.isfinite(x) else None
+        return finite_or_none(obj)
     if obj is None or isinstance(obj, str):
         return obj
     if hasattr(obj, "items"):

@@ -24,7 +24,7 @@ from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
 
-class _Kinematic:
+class KinematicGait:
     """Vectorised evaluation of the prescribed gait's kinematics and guards at phases t."""
 
     def __init__(self, model: Model, angles: PeriodicSignal):
@@ -123,7 +123,7 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     te = output_phases(t_eval)
     ts = np.linspace(0.0, 1.0, int(n_scan) + 1)
     _check_angles(model, angles, ts)
-    kin = _Kinematic(model, angles)
+    kin = KinematicGait(model, angles)
     K = kin(ts)
     failure = _first_failure(kin, ts, K, model.robot)
     if failure is not None:
@@ -157,7 +157,7 @@ def _check_angles(model: Model, angles: PeriodicSignal, ts: np.ndarray) -> None:
     model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
 
 
-def _first_failure(kin: _Kinematic, ts: np.ndarray, K: dict, robot) -> tuple | None:
+def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple | None:
     """(phase, status, label, event kind) of the first loss of contact in the cycle, or None.
 
     The feet crossing (d = 0) is searched first and the others only before it: near d = 0 the
@@ -185,7 +185,7 @@ def _first_failure(kin: _Kinematic, ts: np.ndarray, K: dict, robot) -> tuple | N
     return failure
 
 
-def _failure_result(model: Model, kin: _Kinematic, tf: float, status: Status, label: str, kind: str) -> CrawlResult:
+def _failure_result(model: Model, kin: KinematicGait, tf: float, status: Status, label: str, kind: str) -> CrawlResult:
     """The result of a cycle that loses contact at phase tf, with the mode just before it."""
     k0 = kin(max(tf - 1e-9, 0.0))
     h0 = k0["h"][0]
@@ -194,7 +194,7 @@ def _failure_result(model: Model, kin: _Kinematic, tf: float, status: Status, la
                       "angles)"), cycles=1, failure_t=tf, failure_mode=mode.label, events=[Event(tf, kind, "", "failure")])
 
 
-def _switching_instants(kin: _Kinematic, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
+def _switching_instants(kin: KinematicGait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
     """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or vanishes on a
     stretch (the input holds still: both feet stick); the smaller friction limit changes feet (slip switch),
     or both are equal on a stretch (|h| <= TIE: both feet slip)."""
@@ -235,7 +235,7 @@ def _next_switch(f, name: str, ts: np.ndarray, runs: list, k: int) -> tuple[floa
     return 0.5 * (lo + hi), k + 1
 
 
-def _mode_at(kin: _Kinematic, tm: float) -> Mode:
+def _mode_at(kin: KinematicGait, tm: float) -> Mode:
     """Contact mode at phase tm: the foot with the smaller friction limit slips along sign(d')."""
     k1 = kin(tm)
     h, dd = k1["h"][0], k1["ddot"][0]
@@ -244,7 +244,7 @@ def _mode_at(kin: _Kinematic, tm: float) -> Mode:
     return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
 
 
-def _anchors(kin: _Kinematic, breaks: list[float], d_start: float) -> tuple[list, float]:
+def _anchors(kin: KinematicGait, breaks: list[float], d_start: float) -> tuple[list, float]:
     """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's end [m]
     (foot 1 starts at 0): the slipping foot follows d, the other stays."""
     x1, x2 = 0.0, d_start
@@ -266,7 +266,7 @@ def _anchors(kin: _Kinematic, breaks: list[float], d_start: float) -> tuple[list
     return anchors, x1 - 0.0
 
 
-def _event(kin: _Kinematic, t_ev: float, name: str) -> Event:
+def _event(kin: KinematicGait, t_ev: float, name: str) -> Event:
     """The event of a switching instant of the function ``name`` ("ddot" or "h") at phase t_ev."""
     before = _mode_at(kin, max(t_ev - 1e-9, 0.0))
     after = _mode_at(kin, min(t_ev + 1e-9, 1.0))
@@ -310,7 +310,7 @@ def _store_samples(res: CrawlResult, model: Model, Ko: dict, te: np.ndarray, anc
                 model.hold_torque(Ko["phi"], ft), modes)
 
 
-def _cycle_integrals(model: Model, kin: _Kinematic, anchors: list, knots: np.ndarray) -> tuple:
+def _cycle_integrals(model: Model, kin: KinematicGait, anchors: list, knots: np.ndarray) -> tuple:
     """(W+ per actuator, input work, gross work, friction dissipation) [J] over the cycle, stretch by stretch
     (f_t and the holding torques jump at the switching instants).
 

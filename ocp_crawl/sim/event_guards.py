@@ -22,7 +22,7 @@ _S_GRID = np.linspace(0.0, 1.0, 33)[1:-1]
 _S_BUMP = (_S_GRID * (1 - _S_GRID)) ** 2
 
 
-def _cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]:
+def cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]:
     """Lowest interior local minimum (s, value) on (0, 1) of the cubic with values g0, g1 and slopes
     m0, m1 (per unit s) at the ends; (nan, inf) if it has none."""
     a = 2 * (g0 - g1) + m0 + m1
@@ -126,7 +126,7 @@ class GuardsMixin:
             # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
             if min(a, b) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:
                 continue
-            s, v = _cubic_min(a, b, m0, m1)
+            s, v = cubic_min(a, b, m0, m1)
             if v < floor:
                 out.append((name, p0.t + s * h))
                 continue

@@ -13,7 +13,7 @@ from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
-from ocp_crawl.viz.gait import mode_color, mode_runs, save_figure
+from ocp_crawl.viz.gait import mode_color, mode_runs, plot_friction_limits, save_figure
 
 
 def torques_csv(result: OCPResult) -> str:
@@ -77,10 +77,8 @@ def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
     if rep is not None:
         tr = rep.t - rep.t0
         ax.plot(tr, rep.f_t * 1e3, "k", label="f_t")
-        ax.plot(tr, robot.mu1 * rep.f_n1 * 1e3, "--", color="tab:blue", label="+- mu1 f_n1")
-        ax.plot(tr, -robot.mu1 * rep.f_n1 * 1e3, "--", color="tab:blue")
-        ax.plot(tr, robot.mu2 * rep.f_n2 * 1e3, "--", color="tab:purple", label="+- mu2 f_n2")
-        ax.plot(tr, -robot.mu2 * rep.f_n2 * 1e3, "--", color="tab:purple")
+        plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=("tab:blue", "tab:purple"), scale=1e3,
+                             labels=("+- mu1 f_n1", "+- mu2 f_n2"))
     ax.set_xlabel("phase t [cycles]")
     ax.set_ylabel("tangential force [mN]")
     ax.set_title("forces and friction limits (replay)")
