@@ -28,7 +28,8 @@ Slip (``e_ss = 0``; one foot at its friction limit, ``f_t(phi) = sigma (w mu1 fn
     which is stable iff both eigenvalues of K have positive real parts, i.e. iff
     ``trace K > 0`` and ``det K > 0``.  **Assumption:** an identity damping (mobility) metric in the
     joint angles, i.e. equal viscous damping of the two joints and none coupled; the slipping foot
-    is assumed to keep slipping in the mode's direction ``sigma`` during the perturbation.  The
+    is assumed to keep slipping in the mode's direction ``sigma`` during the perturbation (a
+    perturbation that moves it against ``sigma`` makes it stick, where kappa decides).  The
     sign of ``det K`` does not depend on the metric (any positive-definite damping gives the
     same determinant sign), the sign of ``trace K`` can (complex eigenvalues of K).
     A perturbed *quasistatic* run cannot test this: Newton converges to the same root whatever
@@ -74,28 +75,35 @@ def stability_function() -> cs.Function:
     x = cs.SX.sym("x", 3)
     q = cs.SX.sym("q", NQ)
     p = cs.SX.sym("p", NP)
-    M, L, beta, k, mu1, mu2, g, sgrav = params(p)
+    pr = params(p)
     phi = x[0:2]
-    e_ss, sigma, w = q[0], q[1], q[2]
-    MgL = M * g * L
+    MgL = pr.M * pr.g * pr.L
     geo = _geometry(phi, p)
-    Pi = geo["U_el"] + sgrav * geo["U_g"]
+    Pi = geo["U_el"] + pr.sgrav * geo["U_g"]
     grad_d = cs.gradient(geo["d"], phi)
     grad_Pi = cs.gradient(Pi, phi)
     # stick-stick: Hessian of the Lagrangian Pi + f_t (d - d0) along the tangent of d = const
-    ft = x[2] * M * g
+    ft = x[2] * pr.M * pr.g
     H_lag = cs.jacobian(grad_Pi + ft * grad_d, phi)
     v = cs.vertcat(-grad_d[1], grad_d[0]) / cs.norm_2(grad_d)
     kappa = cs.dot(v, H_lag @ v) / MgL
     # slip: stiffness of the overdamped flow with f_t following the friction limit
-    ft_slip = sigma * (w * mu1 * geo["fn1"] + (1 - w) * mu2 * geo["fn2"])
-    K = cs.jacobian(grad_Pi + ft_slip * grad_d, phi) / MgL
+    K = _slip_stiffness(phi, q, p, geo) / MgL
     trK = K[0, 0] + K[1, 1]
     detK = K[0, 0] * K[1, 1] - K[0, 1] * K[1, 0]
     slip_margin = cs.fmin(trK, detK / cs.fmax(cs.fabs(trK), 1e-300))
-    margin = cs.if_else(e_ss > 0.5, kappa, slip_margin)
+    margin = cs.if_else(q[0] > 0.5, kappa, slip_margin)
     return cs.Function("ocp_crawl_stability", [x, q, p], [cs.vertcat(margin, kappa, trK, detK)],
                        ["x", "q", "p"], ["s"])
+
+
+@lru_cache(maxsize=1)
+def fast_stability():
+    """:func:`stability_function` as a low-overhead callable for hot loops (compiled C when a compiler is
+    available, see :mod:`ocp_crawl.model.compiled`): ``fast_stability()(x, q, p)[0]`` is ``s[4]``."""
+    from ocp_crawl.model.compiled import FastFunction
+
+    return FastFunction(stability_function())
 
 
 @lru_cache(maxsize=1)
@@ -104,11 +112,16 @@ def slip_stiffness_function() -> cs.Function:
     phi = cs.SX.sym("phi", 2)
     q = cs.SX.sym("q", NQ)
     p = cs.SX.sym("p", NP)
-    M, L, beta, k, mu1, mu2, g, sgrav = params(p)
-    geo = _geometry(phi, p)
-    ft_slip = q[1] * (q[2] * mu1 * geo["fn1"] + (1 - q[2]) * mu2 * geo["fn2"])
-    F = cs.gradient(geo["U_el"] + sgrav * geo["U_g"], phi) + ft_slip * cs.gradient(geo["d"], phi)
-    return cs.Function("ocp_crawl_slip_stiffness", [phi, q, p], [cs.jacobian(F, phi)], ["phi", "q", "p"], ["K"])
+    K = _slip_stiffness(phi, q, p, _geometry(phi, p))
+    return cs.Function("ocp_crawl_slip_stiffness", [phi, q, p], [K], ["phi", "q", "p"], ["K"])
+
+
+def _slip_stiffness(phi, q, p, geo):
+    """Symbolic K = d/dphi [grad Pi + f_t(phi) grad d] [N m/rad], f_t(phi) = sigma (w mu1 fn1 + (1-w) mu2 fn2)."""
+    pr = params(p)
+    ft_slip = q[1] * (q[2] * pr.mu1 * geo["fn1"] + (1 - q[2]) * pr.mu2 * geo["fn2"])
+    F = cs.gradient(geo["U_el"] + pr.sgrav * geo["U_g"], phi) + ft_slip * cs.gradient(geo["d"], phi)
+    return cs.jacobian(F, phi)
 
 
 def _mode_vector(q) -> np.ndarray:
