@@ -14,8 +14,9 @@ from ocp_crawl import Model, ReferenceTorque, simulate_torque
 from ocp_crawl.model.stability import (fast_stability, reduced_stiffness, slip_stiffness, stability, stability_function,
                                        stability_margin, stability_margins)
 from ocp_crawl.model.statics import symbolic
-from ocp_crawl.problem.core import paper_problem, problem_from_dict
-from ocp_crawl.sim.event import HybridStepper, mode_q
+from ocp_crawl.problem import paper_problem, problem_from_dict
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
 
 #: issue 11, found 1: a robot whose steady cycle the simulator reports with a jump (snap-through)
