@@ -24,6 +24,9 @@ class Status(IntEnum):
     SOLVER_FAILURE = 8
     JOINT_ON_GROUND = 9
     NO_START = 10
+    UNSTABLE = 15
+    SNAP_THROUGH = 16
+    ENERGY_IMBALANCE = 17
     # the periodic-gait OCP
     INFEASIBLE = 11
     NOT_COMPLEMENTARY = 12
@@ -68,6 +71,12 @@ STATUS_MESSAGES = {
                             "at the feet only is no longer valid",
     Status.NO_START: "no equilibrium to start from at t = 0 (the robot cannot stand on both feet with both joints "
                      "above the ground)",
+    Status.UNSTABLE: "the equilibrium is unstable (the stiffness of the contact mode is not positive definite): "
+                     "the real robot would leave it at once",
+    Status.SNAP_THROUGH: "the state jumps across an event while the input is continuous: the robot snaps through "
+                         "dynamically, which the quasistatic model cannot follow",
+    Status.ENERGY_IMBALANCE: "the energy balance of the steady cycle does not close within the tolerance (input work "
+                             "against potential change plus friction dissipation)",
     Status.INFEASIBLE: "the optimal control problem has no feasible point (locally): the constraints cannot all "
                        "be met",
     Status.NOT_COMPLEMENTARY: "the optimiser converged but the complementarity residual exceeds the tolerance",
