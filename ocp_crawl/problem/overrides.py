@@ -129,8 +129,8 @@ def read_bytes(path: Path, limit: int = MAX_PROBLEM_BYTES) -> bytes:
         reason = exc.strerror or type(exc).__name__
         raise ProblemError(f"{path}: cannot read the problem file: {reason}") from None
     if len(raw) > limit:
-        raise ProblemError(f"{path}: cannot read the problem file: larger than {limit // 1024} KiB, the limit of a "
-                           "problem file (problem files are a few hundred bytes)")
+        raise ProblemError(f"{path}: cannot read the problem file: larger than {limit} bytes ({limit / 2**20:g} MiB), "
+                           "the limit of a problem file (problem files are a few hundred bytes)")
     return raw
 
 
