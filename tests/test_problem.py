@@ -352,3 +352,58 @@ def test_schema_defaults_are_the_dataclass_defaults():
     # a problem without an [ocp] section gets OCPSettings' own defaults (the envelope centred on its gait)
     assert ocp_settings(paper_problem()) == OCPSettings(gamma_deg=90.0)
     assert ocp_settings(Problem(robot=Robot(), gait=paper_problem().gait)) == OCPSettings(gamma_deg=90.0)
+
+
+# ------------------------------------------------------------------------------------------ issue 11: bounds
+def test_problem_file_size_is_bounded(tmp_path):
+    """A problem file is read up to MAX_PROBLEM_BYTES: one byte more is bad input naming the file and the limit."""
+    from ocp_crawl.problem.overrides import MAX_PROBLEM_BYTES
+
+    text = (PROBLEMS / "paper_gait.toml").read_text()
+    path = tmp_path / "big.toml"
+    path.write_text(text + "#" * (MAX_PROBLEM_BYTES - len(text.encode())))
+    assert load_problem(path).robot.k == 0.1677
+    path.write_text(text + "#" * (MAX_PROBLEM_BYTES - len(text.encode()) + 1))
+    with pytest.raises(ProblemError, match=rf"big.toml: cannot read the problem file: larger than {MAX_PROBLEM_BYTES}"):
+        load_problem(path)
+
+
+def test_deep_nesting_is_one_line(tmp_path):
+    from ocp_crawl.problem import format_value
+
+    assert format_value([[[[[[1]]]]]]) == "[[[[...]]]]"
+    assert len(format_value([list(range(100))] * 100)) <= 60
+    path = tmp_path / "deep.toml"
+    path.write_text("[robot]\nk = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ProblemError, match="deep.toml: malformed TOML: arrays or tables nested too deeply"):
+        load_problem(path)
+
+
+@pytest.mark.parametrize("name, low, high", [("nodes", 8, 1000), ("fourier_order", 1, 25), ("harmonic_psi", 4, 180),
+                                             ("harmonic_A", 1, 20)])
+def test_ocp_settings_sizes_are_bounded(name, low, high):
+    """The bounds of the [ocp] keys hold in the API too (OCPSettings), and the schema states the same ones."""
+    from ocp_crawl.ocp import OCPSettings
+    from ocp_crawl.problem import SCHEMA
+
+    for ok in (low, high):
+        assert getattr(OCPSettings(**{name: ok}), name) == ok
+    for bad in (low - 1, high + 1):
+        with pytest.raises(ValueError, match=f"OCPSettings.{name} must be"):
+            OCPSettings(**{name: bad})
+    if name in SCHEMA["ocp"].key_map:
+        assert SCHEMA["ocp"].key_map[name].valid_text == f"in [{low}, {high}]"
+
+
+def test_every_robot_key_and_work_key_is_bounded_on_both_sides():
+    """Issue 11: the robot's parameters and every [simulation]/[ocp] key that sizes the work have an upper and a lower
+    bound, with a stated reason."""
+    from ocp_crawl.problem import SCHEMA
+
+    sized = {"robot": ("M", "L", "beta", "k", "mu", "mu1", "mu2", "g"),
+             "simulation": ("max_step", "event_xtol", "max_cycles", "steps"),
+             "ocp": ("nodes", "fourier_order", "harmonic_psi")}
+    for section, names in sized.items():
+        for name in names:
+            rule = SCHEMA[section].key_map[name].rule
+            assert rule.text.startswith("in ") and rule.why, (section, name, rule)
