@@ -116,12 +116,16 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
     try:
         _write_replace(path, write)
     except OSError as exc:
-        if exc.filename == str(path):
-            raise
         # name the target (a full disk says only "No space left on device"; mkstemp names its temporary file)
-        raise OSError(exc.errno, exc.strerror or " ".join(str(exc).split()) or type(exc).__name__, str(path)) from exc
+        raise naming(exc, path) from exc
     _fsync_dir(path.parent)
     return path
+
+
+def naming(exc: OSError, path: str | os.PathLike) -> OSError:
+    """A copy of ``exc`` with ``path`` as its file name (the same errno, hence the same OSError subclass, and reason),
+    so that its message names the file written."""
+    return OSError(exc.errno, exc.strerror or " ".join(str(exc).split()) or type(exc).__name__, str(path))
 
 
 def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
