@@ -6,10 +6,13 @@ run), and checks: exit code 2, stdout empty, stderr exactly one line ``ocp-crawl
 naming the file (for file errors), the key and the value as written, no traceback.  A few rows
 also run through a real ``python -m ocp_crawl`` subprocess.
 """
+import contextlib
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -80,29 +83,38 @@ class Row:
     """files to create under {tmp} first (name -> bytes): earlier results"""
     needs_permissions: bool = False
     """the row relies on file permissions, which root ignores"""
+    absent: tuple = ()
+    """words the message must not contain (e.g. blaming the gait for the robot's mass, nan for inf)"""
 
 
 def R(command, argv, words, **kw):
+    if "absent" in kw:
+        kw["absent"] = tuple(kw["absent"])
     return Row(command, tuple(argv), tuple(words), **kw)
+
+
+def nested(depth: int) -> str:
+    """A TOML array nested ``depth`` deep: [[[...]]]"""
+    return "[" * depth + "]" * depth
 
 
 ROWS = {
     # ------------------------------------------------------------------ simulate
-    "simulate: negative stiffness": R("simulate", ["{file}"], ["x.toml", "[robot] k = -1.0", "must be > 0"],
+    "simulate: negative stiffness": R("simulate", ["{file}"], ["x.toml", "[robot] k = -1.0", "must be in [1e-12, 1e12]"],
                                       text=edit("k = 0.1677", "k = -1.0")),
-    "simulate: zero mass": R("simulate", ["{file}"], ["x.toml", "[robot] M = 0", "must be > 0"],
+    "simulate: zero mass": R("simulate", ["{file}"], ["x.toml", "[robot] M = 0", "must be in [1e-12, 1e12]"],
                              text=edit("M = 0.052", "M = 0")),
-    "simulate: negative length": R("simulate", ["{file}"], ["x.toml", "[robot] L = -0.12", "must be > 0"],
+    "simulate: negative length": R("simulate", ["{file}"], ["x.toml", "[robot] L = -0.12", "must be in [1e-12, 1e12]"],
                                    text=edit("L = 0.120", "L = -0.12")),
-    "simulate: zero beta": R("simulate", ["{file}"], ["x.toml", "[robot] beta = 0.0", "must be > 0"],
+    "simulate: zero beta": R("simulate", ["{file}"], ["x.toml", "[robot] beta = 0.0", "must be in [0.01, 100]"],
                              text=edit("beta = 2.0", "beta = 0.0")),
-    "simulate: zero gravity": R("simulate", ["{file}"], ["x.toml", "[robot] g = 0.0", "must be > 0"],
+    "simulate: zero gravity": R("simulate", ["{file}"], ["x.toml", "[robot] g = 0.0", "must be in [1e-12, 1e12]"],
                                 text=edit("g = 9.81", "g = 0.0")),
     "simulate: infinite g": R("simulate", ["{file}"], ["x.toml", "[robot] g = inf", "finite"],
                               text=edit("g = 9.81", "g = inf")),
     "simulate: NaN amplitude": R("simulate", ["{file}"], ["x.toml", "[gait] A_deg = nan", "finite"],
                                  text=edit("A_deg = 30.0", "A_deg = nan")),
-    "simulate: negative friction": R("simulate", ["{file}"], ["x.toml", "[robot] mu = -0.2", ">= 0"],
+    "simulate: negative friction": R("simulate", ["{file}"], ["x.toml", "[robot] mu = -0.2", "in [1e-4, 1e4]"],
                                      text=edit("mu = 0.389", "mu = -0.2")),
     "simulate: bool for a number": R("simulate", ["{file}"], ["x.toml", "[robot] L = true", "expected a number"],
                                      text=edit("L = 0.120", "L = true")),
@@ -153,7 +165,7 @@ ROWS = {
     "simulate: --set string for a number": R("simulate", ["{paper}", "--set", "robot.k=soft"],
                                              ["robot.k=soft", "expected a number"]),
     "simulate: --set negative friction": R("simulate", ["{paper}", "--set", "robot.mu=-1"],
-                                           ["paper_gait.toml", "[robot] mu = -1 (from --set)", ">= 0"]),
+                                           ["paper_gait.toml", "[robot] mu = -1 (from --set)", "in [1e-4, 1e4]"]),
     "simulate: missing file": R("simulate", ["{missing}"], ["nope.toml", "cannot read", "No such file"]),
     "simulate: directory as problem file": R("simulate", ["{dir}"], ["adir", "cannot read", "directory"]),
     "simulate: unreadable file": R("simulate", ["{unreadable}"], ["locked.toml", "cannot read", "Permission denied"],
@@ -166,7 +178,7 @@ ROWS = {
     "simulate: --out holds results": R("simulate", ["{paper}", "--out", "{tmp}"],
                                        ["--out", "summary.json", "would overwrite", "--force"],
                                        files={"summary.json": b"{}"}),
-    "simulate: --steps too small": R("simulate", ["{paper}", "--solver", "mpcc", "--steps", "3"], ["--steps 3", ">= 4"]),
+    "simulate: --steps too small": R("simulate", ["{paper}", "--solver", "mpcc", "--steps", "3"], ["--steps 3", "in [4, 10000]"]),
     "simulate: --steps not an integer": R("simulate", ["{paper}", "--steps", "2.5"], ["--steps 2.5", "integer"]),
     "simulate: unknown option": R("simulate", ["{paper}", "--bogus"], ["unrecognized arguments: --bogus"]),
     "simulate: bad --drive": R("simulate", ["{paper}", "--drive", "walk"], ["--drive", "'walk'"]),
@@ -197,11 +209,11 @@ ROWS = {
     "sweep: duplicate axis": R("sweep", ["{paper}", "--grid", "robot.k=0.1", "--grid", "robot.k=0.2", "--out", "{tmp}"],
                                ["robot.k=0.2", "already a grid key"]),
     "sweep: negative stiffness on the grid": R("sweep", ["{paper}", "--grid", "robot.k=-1:1:3", "--out", "{tmp}"],
-                                               ["robot.k=-1:1:3", "robot.k = -1.0", "must be > 0"]),
+                                               ["robot.k=-1:1:3", "robot.k = -1.0", "must be in [1e-12, 1e12]"]),
     "sweep: every point invalid": R("sweep", ["{paper}", "--grid", "gait.gamma_deg=20,30", "--out", "{tmp}"],
                                     ["paper_gait.toml", "gamma_deg = 20.0", "every one of the 2 points"]),
     "sweep: --jobs 0": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--jobs", "0", "--out", "{tmp}"],
-                         ["--jobs 0", ">= 1"]),
+                         ["--jobs 0", "in [1, 256]"]),
     "sweep: --jobs not an integer": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--jobs", "1.5"],
                                       ["--jobs 1.5", "integer"]),
     "sweep: --resume with --force": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--resume", "--force"],
@@ -210,14 +222,15 @@ ROWS = {
     "sweep: empty --scheduler": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--scheduler", " "],
                                   ["--scheduler", "is invalid"]),
     "sweep: bad problem file": R("sweep", ["{file}", "--grid", "gait.psi_deg=45", "--out", "{tmp}"],
-                                 ["x.toml", "[robot] k = -1.0", "must be > 0"], text=edit("k = 0.1677", "k = -1.0")),
+                                 ["x.toml", "[robot] k = -1.0", "must be in [1e-12, 1e12]"],
+                                 text=edit("k = 0.1677", "k = -1.0")),
     "sweep: --out under a file": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--out", "{blocker}/s"],
                                    ["--out", "blocker/s", "not writable"]),
     "sweep: --out holds a sweep": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--out", "{tmp}"],
                                     ["--out", "results.csv", "already holds a sweep", "--resume", "--force"],
                                     files={"results.csv": b"x\n"}),
     # ------------------------------------------------------------------ reproduce
-    "reproduce: --jobs 0": R("reproduce", ["--jobs", "0", "--out", "{tmp}"], ["--jobs 0", ">= 1"]),
+    "reproduce: --jobs 0": R("reproduce", ["--jobs", "0", "--out", "{tmp}"], ["--jobs 0", "in [1, 256]"]),
     "reproduce: bad --gravity": R("reproduce", ["--gravity", "real", "--out", "{tmp}"], ["--gravity", "'real'"]),
     "reproduce: --out under a file": R("reproduce", ["--out", "{blocker}/r"], ["--out", "blocker/r", "not writable"]),
     "reproduce: --out holds a run": R("reproduce", ["--out", "{tmp}", "--quick"],
@@ -245,7 +258,7 @@ ROWS = {
                                           ["paper_gait.toml", "k = 0.00306", "no equilibrium to start from"]),
     "animate: missing file": R("animate", ["{missing}", "--out", "{tmp}/a.gif"], ["nope.toml", "cannot read"]),
     # ------------------------------------------------------------------ crosscheck
-    "crosscheck: --steps too small": R("crosscheck", ["{paper}", "--steps", "3", "50"], ["--steps 3", ">= 4"]),
+    "crosscheck: --steps too small": R("crosscheck", ["{paper}", "--steps", "3", "50"], ["--steps 3", "in [4, 10000]"]),
     "crosscheck: one step count": R("crosscheck", ["{paper}", "--steps", "100", "100"],
                                     ["--steps 100 100", "two different"]),
     "crosscheck: angles drive": R("crosscheck", ["{paper}", "--set", "gait.drive=angles"],
@@ -257,7 +270,7 @@ ROWS = {
     "crosscheck: --set bad value": R("crosscheck", ["{paper}", "--set", "robot.mu=nan"],
                                      ["paper_gait.toml", "[robot] mu = nan (from --set)", "finite"]),
     # ------------------------------------------------------------------ optimize
-    "optimize: too few nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 4", ">= 8"],
+    "optimize: too few nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 4", "in [8, 1000]"],
                                  text=ocp_edit("nodes = 100", "nodes = 4")),
     "optimize: float for int nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 10.5", "integer"],
                                        text=ocp_edit("nodes = 100", "nodes = 10.5")),
@@ -288,6 +301,116 @@ ROWS = {
     "unknown command": R(None, ["crawl"], ["invalid choice: 'crawl'"]),
 }
 
+#: issue 11: every key and option that sizes the work is bounded, and every bad input is one line (the rows that
+#: used to hang or end as internal errors are guarded by HANG_GUARD_S)
+ROWS.update({
+    # ---- bounds on work
+    "simulate: max_step 1e-300 (hung)": R("simulate", ["{file}"], ["x.toml", "[simulation] max_step = 1e-300",
+                                                                   "in [1e-4, 0.25]", "continuation steps per cycle"],
+                                          text=edit("max_step = 0.015625", "max_step = 1e-300")),
+    "simulate: --set max_step 1e-300": R("simulate", ["{paper}", "--set", "simulation.max_step=1e-300"],
+                                         ["[simulation] max_step = 1e-300 (from --set)", "in [1e-4, 0.25]"]),
+    "simulate: --steps 1e9 (hung)": R("simulate", ["{paper}", "--solver", "mpcc", "--steps", "1000000000"],
+                                      ["--steps 1000000000", "in [4, 10000]", "IPOPT solve"]),
+    "simulate: steps 1e9 in the file": R("simulate", ["{file}"], ["x.toml", "[simulation] steps = 1000000000",
+                                                                  "in [4, 10000]"],
+                                         text=edit("steps = 200", "steps = 1000000000")),
+    "simulate: max_cycles 1e5": R("simulate", ["{paper}", "--set", "simulation.max_cycles=100000"],
+                                  ["[simulation] max_cycles = 100000 (from --set)", "in [2, 500]"]),
+    "simulate: event_xtol 0.5": R("simulate", ["{paper}", "--set", "simulation.event_xtol=0.5"],
+                                  ["[simulation] event_xtol = 0.5 (from --set)", "in (0, 1e-6]"]),
+    "simulate: /dev/zero (hung)": R("simulate", ["/dev/zero"], ["/dev/zero", "larger than 1048576 bytes (1 MiB)"]),
+    "simulate: 2 MiB problem file": R("simulate", ["{file}"], ["x.toml", "larger than 1048576 bytes (1 MiB)"],
+                                      text=PAPER_TEXT + ("# padding\n" * 220_000)),
+    # ---- bad input that ended as an internal error or with more than one line
+    "simulate: TOML nested 5000 deep (RecursionError)": R("simulate", ["{file}"], ["x.toml", "malformed TOML",
+                                                                                   "nested too deeply"],
+                                                          text=edit("k = 0.1677", "k = " + nested(5000))),
+    "simulate: --set nested 5000 deep": R("simulate", ["{paper}", "--set", "robot.k=" + nested(5000)],
+                                          ["--set \"robot.k=[[[[", "nested too deeply"]),
+    "simulate: array nested 400 deep": R("simulate", ["{file}"], ["x.toml", "[robot] k = [[[[...]]]]",
+                                                                  "expected a number"],
+                                         text=edit("k = 0.1677", "k = " + nested(400))),
+    "simulate: k = 1e308 (RuntimeWarnings)": R("simulate", ["{paper}", "--set", "robot.k=1e308"],
+                                               ["[robot] k = 1e+308 (from --set)", "in [1e-12, 1e12]", "N m/rad"]),
+    "simulate: M = 1e308 (blamed the gait)": R("simulate", ["{file}"], ["x.toml", "[robot] M = 1e+308",
+                                                                        "in [1e-12, 1e12]", "kg"],
+                                               text=edit("M = 0.052", "M = 1e308"), absent=["[gait]", "nan"]),
+    "simulate: L = 1e-300": R("simulate", ["{paper}", "--set", "robot.L=1e-300"],
+                              ["[robot] L = 1e-300 (from --set)", "in [1e-12, 1e12]"]),
+    "simulate: g = 1e300": R("simulate", ["{paper}", "--set", "robot.g=1e300"],
+                             ["[robot] g = 1e+300 (from --set)", "in [1e-12, 1e12]"]),
+    "simulate: beta = 1e6": R("simulate", ["{paper}", "--set", "robot.beta=1e6"],
+                              ["[robot] beta = 1000000.0 (from --set)", "in [0.01, 100]", "degenerate"]),
+    "simulate: frictionless mu = 0 (no_consistent_mode)": R("simulate", ["{file}"],
+                                                            ["x.toml", "[robot] mu = 0", "in [1e-4, 1e4]", "frictionless"],
+                                                            text=edit("mu = 0.389", "mu = 0")),
+    "simulate: mu = 1e-300": R("simulate", ["{paper}", "--set", "robot.mu=1e-300"],
+                               ["[robot] mu = 1e-300 (from --set)", "in [1e-4, 1e4]", "frictionless"]),
+    "simulate: one frictionless foot": R("simulate", ["{paper}", "--set", "robot.mu1=0"],
+                                         ["[robot] mu1 = 0 (from --set)", "in [1e-4, 1e4]"]),
+    "simulate: --out empty (exit 0, wrote nothing)": R("simulate", ["{paper}", "--out", ""], ["--out ''", "empty path"]),
+    "demo: --out empty": R("demo", ["--out", ""], ["--out ''", "empty path"]),
+    "demo: --out blank": R("demo", ["--out", "  "], ["--out '  '", "empty path"]),
+    # ---- sweep
+    "sweep: NUM 1e20 (ValueError)": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180:99999999999999999999",
+                                                "--out", "{tmp}"],
+                                      ["gait.psi_deg=0:180:99999999999999999999", "NUM = 99999999999999999999",
+                                       "20000 points"]),
+    "sweep: STOP inf (said nan)": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:inf:3", "--out", "{tmp}"],
+                                    ["gait.psi_deg=0:inf:3", "must be finite", "STOP = inf"], absent=["nan"]),
+    "sweep: START -inf": R("sweep", ["{paper}", "--grid", "gait.psi_deg=-inf:0:3", "--out", "{tmp}"],
+                           ["gait.psi_deg=-inf:0:3", "START = -inf"], absent=["nan"]),
+    "sweep: inf in a list": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0,inf", "--out", "{tmp}"],
+                              ["gait.psi_deg=0,inf", "gait.psi_deg = inf must be finite"], absent=["nan"]),
+    "sweep: 1e6 points (hung)": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180:1000", "--grid",
+                                            "gait.gamma_deg=60:120:1000", "--out", "{tmp}"],
+                                  ["1000000 points", "1000 (gait.psi_deg) x 1000 (gait.gamma_deg)", "20000 points"]),
+    "sweep: list nested 5000 deep": R("sweep", ["{paper}", "--grid", "robot.k=" + nested(5000), "--out", "{tmp}"],
+                                      ["--grid 'robot.k=[[[[", "nested too deeply"]),
+    "sweep: k = 1e308 on the grid": R("sweep", ["{paper}", "--grid", "robot.k=0.1,1e308", "--out", "{tmp}"],
+                                      ["robot.k=0.1,1e308", "robot.k = 1e+308", "in [1e-12, 1e12]"]),
+    "sweep: frictionless on the grid": R("sweep", ["{paper}", "--grid", "robot.mu=0,0.4", "--out", "{tmp}"],
+                                         ["robot.mu=0,0.4", "robot.mu = 0", "in [1e-4, 1e4]"]),
+    "sweep: --jobs 1e5": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--jobs", "100000", "--out", "{tmp}"],
+                           ["--jobs 100000", "in [1, 256]"]),
+    "sweep: --out empty": R("sweep", ["{paper}", "--grid", "gait.psi_deg=45", "--out", ""], ["--out ''", "empty path"]),
+    "reproduce: --out empty": R("reproduce", ["--out", ""], ["--out ''", "empty path"]),
+    "reproduce: --jobs 1e5": R("reproduce", ["--jobs", "100000", "--out", "{tmp}"], ["--jobs 100000", "in [1, 256]"]),
+    # ---- animate
+    "animate: --cycles 1e9 (MemoryError)": R("animate", ["{paper}", "--cycles", "1000000000", "--out", "{tmp}/a.gif"],
+                                             ["--cycles 1000000000", "in [1, 10]", "memory"]),
+    "animate: --frames-per-cycle 1e9 (MemoryError)": R("animate", ["{paper}", "--frames-per-cycle", "1000000000",
+                                                                   "--out", "{tmp}/a.gif"],
+                                                       ["--frames-per-cycle 1000000000", "in [2, 100]", "memory"]),
+    "animate: --out x.gif/ (wrote x.gif)": R("animate", ["{paper}", "--out", "{tmp}/x.gif/"],
+                                             ["--out", "x.gif/", "names a directory", ".gif"]),
+    "animate: --out empty": R("animate", ["{paper}", "--out", ""], ["--out ''", "empty path"]),
+    "animate: /dev/zero": R("animate", ["/dev/zero", "--out", "{tmp}/a.gif"], ["/dev/zero", "1 MiB"]),
+    # ---- crosscheck
+    "crosscheck: --steps 1e9": R("crosscheck", ["{paper}", "--steps", "50", "1000000000"],
+                                 ["--steps 1000000000", "in [4, 10000]"]),
+    "crosscheck: nine step counts": R("crosscheck", ["{paper}", "--steps", *map(str, range(10, 100, 10))],
+                                      ["--steps 10 20 30 40 50 60 70 80 90", "at most 8"]),
+    "crosscheck: mu = 0": R("crosscheck", ["{paper}", "--set", "robot.mu=0"],
+                            ["paper_gait.toml", "[robot] mu = 0 (from --set)", "frictionless"]),
+    # ---- optimize
+    "optimize: nodes 1e5 (hung)": R("optimize", ["{ocp}", "--set", "ocp.nodes=100000"],
+                                    ["ocp_max_speed.toml", "[ocp] nodes = 100000 (from --set)", "in [8, 1000]"]),
+    "optimize: harmonic_psi 1e5 (hung)": R("optimize", ["{file}"], ["x.toml", "[ocp] harmonic_psi = 100000",
+                                                                    "in [4, 180]"],
+                                           text=ocp_edit("nodes = 100", "nodes = 100\nharmonic_psi = 100000")),
+    "optimize: fourier_order 1e5 (hung)": R("optimize", ["{ocp}", "--set", "ocp.parametrization=fourier", "--set",
+                                                         "ocp.fourier_order=100000"],
+                                            ["[ocp] fourier_order = 100000 (from --set)", "in [1, 25]"]),
+    "optimize: --out empty": R("optimize", ["{ocp}", "--out", ""], ["--out ''", "empty path"]),
+    "optimize: k = 1e308": R("optimize", ["{ocp}", "--set", "robot.k=1e308"],
+                             ["[robot] k = 1e+308 (from --set)", "in [1e-12, 1e12]"]),
+})
+
+#: generous time limit of one row: a hang guard, not a timing assertion (every row takes well under a second)
+HANG_GUARD_S = 120
+
 
 def _computed(*args, **kwargs):
     raise AssertionError("a long computation started before the bad input was rejected")
@@ -303,6 +426,29 @@ def nothing_computed(monkeypatch):
                          (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
                          (ocp_crawl.ocp, "optimize_gait")):
         monkeypatch.setattr(module, name, _computed)
+
+
+class Hang(Exception):
+    """A row ran past HANG_GUARD_S."""
+
+
+@contextlib.contextmanager
+def hang_guard(case: str, seconds: int = HANG_GUARD_S):
+    """Fail the row (instead of hanging the suite) if it runs longer than ``seconds`` (SIGALRM; POSIX main thread)."""
+    if not hasattr(signal, "SIGALRM") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def alarm(signum, frame):
+        raise Hang(f"{case}: still running after {seconds} s (a hang: the bad input was not rejected)")
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def materialise(row: Row, tmp_path: Path) -> tuple[list[str], list[str]]:
@@ -340,7 +486,7 @@ def materialise(row: Row, tmp_path: Path) -> tuple[list[str], list[str]]:
     return argv, [fill(w) for w in row.words]
 
 
-def check_one_line(code: int, out: str, err: str, words) -> str:
+def check_one_line(code: int, out: str, err: str, words, absent=()) -> str:
     assert code == 2, (code, out, err)
     assert out == ""
     assert "Traceback" not in err
@@ -350,6 +496,8 @@ def check_one_line(code: int, out: str, err: str, words) -> str:
     assert line.startswith("ocp-crawl: error: "), line
     for w in words:
         assert w in line, (w, line)
+    for w in absent:
+        assert w not in line, (w, line)
     return line
 
 
@@ -366,12 +514,15 @@ def test_bad_input_matrix(case, tmp_path, capsys, nothing_computed):
     row = ROWS[case]
     if row.needs_permissions and ROOT:
         pytest.skip("root ignores file permissions")
+    if any(a == "/dev/zero" for a in row.argv) and not Path("/dev/zero").exists():
+        pytest.skip("no /dev/zero here")
     try:
         argv, words = materialise(row, tmp_path)
         before = {p: p.read_bytes() for p in (tmp_path / "work").rglob("*") if p.is_file()}
-        code = cli.main(argv)
+        with hang_guard(case):
+            code = cli.main(argv)
         out, err = capsys.readouterr()
-        check_one_line(code, out, err, words)
+        check_one_line(code, out, err, words, row.absent)
         # the refused run wrote nothing: earlier results are untouched, no new file appeared
         after = {p: p.read_bytes() for p in (tmp_path / "work").rglob("*") if p.is_file()}
         assert after == before
@@ -382,7 +533,9 @@ def test_bad_input_matrix(case, tmp_path, capsys, nothing_computed):
 
 
 #: rows run again through a real subprocess: no traceback reaches stderr
-SUBPROCESS_ROWS = ("sweep: NUM < 1", "optimize: unknown [ocp] key", "simulate: cannot stand (no_start)")
+SUBPROCESS_ROWS = ("sweep: NUM < 1", "optimize: unknown [ocp] key", "simulate: cannot stand (no_start)",
+                   "simulate: k = 1e308 (RuntimeWarnings)", "sweep: STOP inf (said nan)", "simulate: /dev/zero (hung)",
+                   "simulate: TOML nested 5000 deep (RecursionError)")
 
 
 @pytest.mark.parametrize("case", SUBPROCESS_ROWS)
@@ -391,8 +544,8 @@ def test_bad_input_in_a_real_process(case, tmp_path):
     env = dict(os.environ, MPLBACKEND="Agg")
     env.pop("OCP_CRAWL_TRACEBACK", None)
     proc = subprocess.run([sys.executable, "-m", "ocp_crawl", *argv], capture_output=True, text=True, env=env,
-                          timeout=120, cwd=tmp_path)
-    check_one_line(proc.returncode, proc.stdout, proc.stderr, words)
+                          timeout=HANG_GUARD_S, cwd=tmp_path)
+    check_one_line(proc.returncode, proc.stdout, proc.stderr, words, ROWS[case].absent)
 
 
 def test_the_guard_catches_a_computation(tmp_path, capsys, nothing_computed, monkeypatch):

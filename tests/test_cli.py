@@ -1,9 +1,11 @@
 """The ocp-crawl command line: outputs, exit codes and one-line errors for bad input."""
 import json
+import math
 import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -133,8 +135,9 @@ def test_real_subprocess_bad_input_and_json(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "ocp_crawl.cli", "simulate", str(bad)], capture_output=True,
                           text=True, env=env, timeout=120)
     assert proc.returncode == 2
-    assert proc.stderr.strip() == (f"ocp-crawl: error: {bad}: [robot] k = -1.0 is invalid: must be > 0 "
-                                   "(torsion stiffness, N m/rad)")
+    assert proc.stderr.strip() == (f"ocp-crawl: error: {bad}: [robot] k = -1.0 is invalid: must be in [1e-12, 1e12] "
+                                   "(torsion stiffness, N m/rad): so that M g L, k/(M g L) and their squares stay far "
+                                   "inside the floating-point range")
     proc = subprocess.run([sys.executable, "-m", "ocp_crawl", "simulate", str(PAPER), "--json"],
                           capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 0, proc.stderr
@@ -340,3 +343,61 @@ def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
     assert json.loads(out)["S"] == mpcc["S"]
     code, out, err = run(capsys, "simulate", PAPER)
     assert code == 0 and "(solver event)" in out
+
+
+# ------------------------------------------------------------------------------------------ issue 11: files, frames
+def test_a_full_disk_names_the_file(capsys, monkeypatch, tmp_path):
+    """A real full disk raises OSError(ENOSPC) without a file name (from write or fsync): the one line names the file,
+    exit 1 (not bad input), and no temporary file is left."""
+    import errno
+
+    import ocp_crawl.io.files as files
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    monkeypatch.setattr(files.os, "fsync", full)
+    out_dir = tmp_path / "o"
+    code, out, err = run(capsys, "simulate", PAPER, "--out", out_dir)
+    assert code == 1
+    target = out_dir / "arrays.npz"  # the first file written
+    assert one_line(err) == f"ocp-crawl: I/O error: {target}: {os.strerror(errno.ENOSPC)}"
+    assert list(out_dir.iterdir()) == []
+
+
+def test_atomic_write_names_its_target(tmp_path):
+    import errno
+
+    from ocp_crawl.io.files import atomic_write
+
+    target = tmp_path / "x.json"
+    target.write_text("old")
+
+    def failing(fh):
+        fh.write(b"partial")
+        raise OSError(errno.EIO, "Input/output error")
+
+    with pytest.raises(OSError) as info:
+        atomic_write(target, failing)
+    assert info.value.filename == str(target) and info.value.errno == errno.EIO
+    assert target.read_text() == "old" and sorted(p.name for p in tmp_path.iterdir()) == ["x.json"]
+
+
+def test_animation_frames_are_bounded():
+    """frames_of refuses sizes beyond its bounds, and a failed run is shown over its last ``cycles`` cycles only."""
+    from ocp_crawl.problem import load_problem, run_problem
+    from ocp_crawl.viz.animate import MAX_CYCLES, MAX_FRAMES_PER_CYCLE, frames_of
+
+    ok = run_problem(load_problem(PAPER))
+    assert ok.success
+    assert len(frames_of(ok, MAX_CYCLES, MAX_FRAMES_PER_CYCLE).t) == MAX_CYCLES * MAX_FRAMES_PER_CYCLE + 1
+    for cycles, per_cycle in ((MAX_CYCLES + 1, 48), (2, MAX_FRAMES_PER_CYCLE + 1), (10**9, 48), (2, 10**9)):
+        with pytest.raises(ValueError, match="cycles must be in"):
+            frames_of(ok, cycles, per_cycle)
+    # a run that failed after 400 cycles (samples of the shape as data): shown over its last cycle, 10 frames + 1
+    n = 4001
+    failed = SimpleNamespace(success=False, S=math.nan, t=np.linspace(0.0, 400.0, n), t0=0.0, x1=np.zeros(n),
+                             x2=np.full(n, 0.05), phi=np.full((2, n), 1.5), theta=np.zeros(n), mode=np.zeros(n, int))
+    fr = frames_of(failed, 1, 10)
+    assert len(fr.t) == 11 and fr.t[0] == 399.0 and fr.t[-1] == 400.0

@@ -128,7 +128,7 @@ def test_schema_is_one_table_with_units():
         for key in section.keys:
             assert key.unit and key.help
     table = schema_markdown()
-    assert "`robot.k` | float | N m/rad | required | > 0" in table
+    assert "`robot.k` | float | N m/rad | required | in [1e-12, 1e12] (so that M g L" in table
     # the README documents the same table
     assert table in (REPO / "README.md").read_text(encoding="utf-8")
 
@@ -136,12 +136,12 @@ def test_schema_is_one_table_with_units():
 # ------------------------------------------------------------------------------------------ errors
 BAD = [
     # (changes to the paper problem, words the one-line message must contain)
-    (dict(robot__k=-1.0), ["[robot] k = -1.0", "> 0", "N m/rad"]),
-    (dict(robot__M=0), ["[robot] M = 0", "> 0", "kg"]),
+    (dict(robot__k=-1.0), ["[robot] k = -1.0", "in [1e-12, 1e12]", "N m/rad"]),
+    (dict(robot__M=0), ["[robot] M = 0", "in [1e-12, 1e12]", "kg"]),
     (dict(robot__L=True), ["[robot] L = true", "number", "boolean"]),
     (dict(robot__beta=math.nan), ["[robot] beta = nan", "finite"]),
     (dict(robot__g=math.inf), ["[robot] g = inf", "finite"]),
-    (dict(robot__mu=-0.1), ["[robot] mu = -0.1", ">= 0"]),
+    (dict(robot__mu=-0.1), ["[robot] mu = -0.1", "in [1e-4, 1e4]"]),
     (dict(robot__mu1=0.3), ["mu = 0.389", "mu1 = 0.3", "mutually exclusive"]),
     (dict(robot__mu=None, robot__mu1=0.3), ["[robot] mu1 = 0.3", "without mu2"]),
     (dict(robot__k=None), ["[robot] k is missing", "required"]),
@@ -151,7 +151,7 @@ BAD = [
     (dict(gait__psi_deg="45"), ['[gait] psi_deg = "45"', "number", "string"]),
     (dict(model__gravity="real"), ['[model] gravity = "real"', '"physical", "paper"']),
     (dict(simulation__max_cycles=2.5), ["[simulation] max_cycles = 2.5", "integer"]),
-    (dict(simulation__max_step=1.0), ["[simulation] max_step = 1.0", "(0, 0.25]"]),
+    (dict(simulation__max_step=1.0), ["[simulation] max_step = 1.0", "in [1e-4, 0.25]"]),
     (dict(gait__gamma_deg=30.0), ["[gait] gamma_deg = 30.0", "foot 1 off the ground"]),
     (dict(gait__drive="angles", gait__A_deg=75.0), ["A_deg = 75.0", "angles drive", "below the ground"]),
 ]
@@ -210,12 +210,12 @@ def test_bad_overrides(text, match):
 
 
 def test_override_values_are_validated_and_marked():
-    with pytest.raises(ProblemError, match=r"\[robot\] k = -1 \(from --set\) is invalid: must be > 0"):
+    with pytest.raises(ProblemError, match=r"\[robot\] k = -1 \(from --set\) is invalid: must be in \[1e-12, 1e12\]"):
         load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=-1"])
 
 
 @settings(max_examples=25, deadline=None)
-@given(M=st.floats(1e-3, 10), L=st.floats(1e-2, 2), k=st.floats(1e-3, 10), mu=st.floats(0, 2),
+@given(M=st.floats(1e-3, 10), L=st.floats(1e-2, 2), k=st.floats(1e-3, 10), mu=st.floats(1e-4, 2),
        beta=st.floats(1.5, 4), psi=st.floats(-180, 180))
 def test_valid_values_load_and_round_trip(M, L, k, mu, beta, psi):
     data = paper_dict(robot__M=M, robot__L=L, robot__k=k, robot__mu=mu, robot__beta=beta, gait__psi_deg=psi,
@@ -317,7 +317,7 @@ def test_mpcc_with_the_angles_drive_is_bad_input_naming_the_key():
     assert '[simulation] solver = "mpcc" (from --set) is invalid with [gait] drive = "angles"' in msg, msg
     with pytest.raises(ProblemError, match=r"\[simulation\] solver = \"mpcc\""):
         paper_problem().with_values({"gait.drive": "angles", "simulation.solver": "mpcc"})
-    with pytest.raises(ProblemError, match=r"\[simulation\] steps = 3 is invalid: must be >= 4"):
+    with pytest.raises(ProblemError, match=r"\[simulation\] steps = 3 is invalid: must be in \[4, 10000\]"):
         paper_problem().with_values({"simulation.steps": 3})
 
 
@@ -352,3 +352,58 @@ def test_schema_defaults_are_the_dataclass_defaults():
     # a problem without an [ocp] section gets OCPSettings' own defaults (the envelope centred on its gait)
     assert ocp_settings(paper_problem()) == OCPSettings(gamma_deg=90.0)
     assert ocp_settings(Problem(robot=Robot(), gait=paper_problem().gait)) == OCPSettings(gamma_deg=90.0)
+
+
+# ------------------------------------------------------------------------------------------ issue 11: bounds
+def test_problem_file_size_is_bounded(tmp_path):
+    """A problem file is read up to MAX_PROBLEM_BYTES: one byte more is bad input naming the file and the limit."""
+    from ocp_crawl.problem.overrides import MAX_PROBLEM_BYTES
+
+    text = (PROBLEMS / "paper_gait.toml").read_text()
+    path = tmp_path / "big.toml"
+    path.write_text(text + "#" * (MAX_PROBLEM_BYTES - len(text.encode())))
+    assert load_problem(path).robot.k == 0.1677
+    path.write_text(text + "#" * (MAX_PROBLEM_BYTES - len(text.encode()) + 1))
+    with pytest.raises(ProblemError, match=rf"big.toml: cannot read the problem file: larger than {MAX_PROBLEM_BYTES}"):
+        load_problem(path)
+
+
+def test_deep_nesting_is_one_line(tmp_path):
+    from ocp_crawl.problem import format_value
+
+    assert format_value([[[[[[1]]]]]]) == "[[[[...]]]]"
+    assert len(format_value([list(range(100))] * 100)) <= 60
+    path = tmp_path / "deep.toml"
+    path.write_text("[robot]\nk = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ProblemError, match="deep.toml: malformed TOML: arrays or tables nested too deeply"):
+        load_problem(path)
+
+
+@pytest.mark.parametrize("name, low, high", [("nodes", 8, 1000), ("fourier_order", 1, 25), ("harmonic_psi", 4, 180),
+                                             ("harmonic_A", 1, 20)])
+def test_ocp_settings_sizes_are_bounded(name, low, high):
+    """The bounds of the [ocp] keys hold in the API too (OCPSettings), and the schema states the same ones."""
+    from ocp_crawl.ocp import OCPSettings
+    from ocp_crawl.problem import SCHEMA
+
+    for ok in (low, high):
+        assert getattr(OCPSettings(**{name: ok}), name) == ok
+    for bad in (low - 1, high + 1):
+        with pytest.raises(ValueError, match=f"OCPSettings.{name} must be"):
+            OCPSettings(**{name: bad})
+    if name in SCHEMA["ocp"].key_map:
+        assert SCHEMA["ocp"].key_map[name].valid_text == f"in [{low}, {high}]"
+
+
+def test_every_robot_key_and_work_key_is_bounded_on_both_sides():
+    """Issue 11: the robot's parameters and every [simulation]/[ocp] key that sizes the work have an upper and a lower
+    bound, with a stated reason."""
+    from ocp_crawl.problem import SCHEMA
+
+    sized = {"robot": ("M", "L", "beta", "k", "mu", "mu1", "mu2", "g"),
+             "simulation": ("max_step", "event_xtol", "max_cycles", "steps"),
+             "ocp": ("nodes", "fourier_order", "harmonic_psi")}
+    for section, names in sized.items():
+        for name in names:
+            rule = SCHEMA[section].key_map[name].rule
+            assert rule.text.startswith("in ") and rule.why, (section, name, rule)

@@ -441,3 +441,23 @@ def test_cli_sweep_over_the_solver(tmp_path, capsys):
     assert S[0, 1] == run_problem(load_problem(PAPER, ["gait.psi_deg=45"])).S
     settings = json.loads((out / SETTINGS_FILE).read_text())
     assert settings["problem"]["simulation"]["solver"] == "event"
+
+
+# ------------------------------------------------------------------------------------------ issue 11: grid size
+def test_grid_size_is_bounded():
+    """A grid of MAX_GRID_POINTS points is fine; one more, in one axis or in the product, is bad input naming the
+    keys and the limit (checked through the API too, not only on the command line)."""
+    from ocp_crawl.sweep import normalize_grid, parse_grid
+    from ocp_crawl.sweep.grid import MAX_GRID_POINTS
+
+    name, values = parse_grid(f"gait.psi_deg=-180:180:{MAX_GRID_POINTS}")
+    assert len(values) == MAX_GRID_POINTS
+    with pytest.raises(ProblemError, match=f"NUM = {MAX_GRID_POINTS + 1} is more than the {MAX_GRID_POINTS} points"):
+        parse_grid(f"gait.psi_deg=-180:180:{MAX_GRID_POINTS + 1}")
+    side = math.isqrt(MAX_GRID_POINTS) + 1
+    grid = {"gait.psi_deg": np.linspace(0, 180, side), "gait.gamma_deg": np.linspace(60, 120, side)}
+    with pytest.raises(ProblemError, match=rf"the grid has {side * side} points, {side} \(gait.psi_deg\) x {side} "
+                                           rf"\(gait.gamma_deg\): more than the {MAX_GRID_POINTS}"):
+        normalize_grid(grid)
+    with pytest.raises(ProblemError, match="START and STOP must be finite, got STOP = inf"):
+        parse_grid("gait.psi_deg=0:inf:3")

@@ -25,8 +25,11 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from dataclasses import dataclass
 from typing import Callable
+
+import numpy as np
 
 from ocp_crawl.version import __version__
 from ocp_crawl.problem import ProblemError
@@ -99,6 +102,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command with numpy's floating-point warnings silenced: a result carries its status, and
+    stderr holds one line at most (an overflow warning before an error message would break that)."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return COMMANDS[args.command].run(args)
+
+
+def io_message(exc: OSError) -> str:
+    """An I/O failure in one line naming the file: ``PATH: reason`` (``cannot write PATH: No space left on device``)."""
+    reason = exc.strerror or " ".join(str(exc).split()) or type(exc).__name__
+    if exc.filename is None:
+        return reason
+    files = f"{exc.filename} -> {exc.filename2}" if exc.filename2 is not None else f"{exc.filename}"
+    return f"{files}: {reason}"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (never calls sys.exit itself)."""
     parser = build_parser()
@@ -110,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help and --version end argparse this way
         return int(exc.code or 0) if isinstance(exc.code, (int, type(None))) else EXIT_BAD_INPUT
     try:
-        return COMMANDS[args.command].run(args)
+        return _run(args)
     except (ProblemError, BadInput) as exc:
         err(str(exc))
         return EXIT_BAD_INPUT
@@ -129,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
             raise
         text = " ".join(str(exc).split())
         if isinstance(exc, OSError):
-            print(f"{PROG}: I/O error: {text}", file=sys.stderr)
+            print(f"{PROG}: I/O error: {io_message(exc)}", file=sys.stderr)
         else:
             print(f"{PROG}: internal error: {type(exc).__name__}: {text} (set OCP_CRAWL_TRACEBACK=1 for the "
                   "traceback)", file=sys.stderr)

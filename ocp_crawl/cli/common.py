@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Iterable
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, UsageError
+from ocp_crawl.problem.schema import STEPS_BOUNDS
 
 
 def _shown(text: str) -> str:
@@ -18,20 +19,44 @@ def _shown(text: str) -> str:
     return text if text and text.strip() == text else repr(text)
 
 
-def integer(option: str, low: int, what: str = ""):
-    """argparse type of ``option``: an integer >= low.
+def integer(option: str, low: int, what: str = "", high: int | None = None, why: str = ""):
+    """argparse type of ``option``: an integer >= low (and <= high, ``why`` giving the reason of the bound).
 
     A bad value ends parsing with a one-line usage error naming the option and the value as written
     (raised directly: argparse would reword an ArgumentTypeError as "argument OPTION: ...").
     """
+    valid = f">= {low}" if high is None else f"in [{low}, {high}]"
+
     def parse(text: str) -> int:
         try:
             n = int(text)
         except ValueError:
             n = None
-        if n is None or n < low:
-            raise UsageError(f"{option} {_shown(text)} is invalid: must be an integer >= {low}{what}")
+        if n is None or n < low or (high is not None and n > high):
+            reason = f": {why}" if why and n is not None and high is not None and n > high else ""
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be an integer {valid}{what}{reason}")
         return n
+    return parse
+
+
+def out_dir(text: str) -> str:
+    """argparse type of ``--out DIR``: a non-empty path (an empty one would write nothing, or into the current
+    directory, silently)."""
+    if not text.strip():
+        raise UsageError(f"--out {_shown(text)} is invalid: an empty path; give a directory")
+    return text
+
+
+def out_file(suffix: str):
+    """argparse type of ``--out FILE``: a non-empty path to a file, not ending in a path separator (``x.gif/`` names
+    a directory, which the command would otherwise silently drop)."""
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise UsageError(f"--out {_shown(text)} is invalid: an empty path; give a file name ending in {suffix}")
+        if text.endswith(("/", os.sep)) or (os.altsep and text.endswith(os.altsep)):
+            raise UsageError(f"--out {text} is invalid: it ends with {text[-1]!r}, which names a directory; give a "
+                             f"file name ending in {suffix}")
+        return text
     return parse
 
 
@@ -56,8 +81,12 @@ def address(text: str) -> str:
     return text.strip()
 
 
-steps_type = integer("--steps", 4, " (steps per cycle)")
-jobs_type = integer("--jobs", 1, " (worker processes)")
+steps_type = integer("--steps", STEPS_BOUNDS[0], " (steps per cycle)", high=STEPS_BOUNDS[1],
+                     why="each step is an IPOPT solve of about 2 ms")
+#: most worker processes (each holds its own compiled functions and solver state)
+MAX_JOBS = 256
+jobs_type = integer("--jobs", 1, " (worker processes)", high=MAX_JOBS,
+                    why="each worker process holds its own compiled functions and solver")
 
 
 def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, resume: bool = False,

@@ -10,12 +10,15 @@ from pathlib import Path
 import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
-from ocp_crawl.cli.common import finish, force_arg, integer, prepare_out, real, steps_type
+from ocp_crawl.cli.common import finish, force_arg, integer, out_dir, out_file, prepare_out, real, steps_type
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
                                paper_problem, run_problem)
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import STATUS_MESSAGES, Status
+
+#: most step counts of crosscheck (one MPCC run each)
+MAX_STEP_COUNTS = 8
 
 #: units of the summary's numbers, written with every JSON summary
 UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J"}
@@ -134,14 +137,15 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                    help="shortcut for --set simulation.steps=N: steps per cycle of --solver mpcc (default "
                         f"{SCHEMA['simulation'].key_map['steps'].default})")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
-    p.add_argument("--out", metavar="DIR", help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
+    p.add_argument("--out", metavar="DIR", type=out_dir,
+                   help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
     force_arg(p)
 
 
 @register("simulate", "simulate one problem file and report the gait", _simulate_args)
 def cmd_simulate(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, shortcuts(args))
-    out = prepare_out(args.out, RUN_FILES, args.force) if args.out else None
+    out = prepare_out(args.out, RUN_FILES, args.force) if args.out is not None else None
     check_start(problem)
     result = _simulate(problem)
     data = report(result, problem)
@@ -165,7 +169,7 @@ DEMO_CASES = (
 
 
 def _demo_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", metavar="DIR", default="ocp_crawl_demo",
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_demo", type=out_dir,
                    help="directory for the figures and summaries (default: ./ocp_crawl_demo)")
     force_arg(p)
 
@@ -204,21 +208,28 @@ def cmd_demo(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------------------------
 def _animate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
-    p.add_argument("--out", metavar="FILE.gif", default="crawl.gif", help="output GIF (default: ./crawl.gif)")
+    p.add_argument("--out", metavar="FILE.gif", default="crawl.gif", type=out_file(".gif"),
+                   help="output GIF (default: ./crawl.gif)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set robot.k=0.05 (repeatable)")
     p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
-    p.add_argument("--cycles", type=integer("--cycles", 1), default=2, metavar="N", help="cycles to show (default: 2)")
+    p.add_argument("--cycles", type=integer("--cycles", 1), default=2, metavar="N",
+                   help="cycles to show, at most 10 (default: 2)")
     p.add_argument("--frames-per-cycle", type=integer("--frames-per-cycle", 2), default=48, metavar="N",
-                   help="frames per cycle (default: 48)")
+                   help="frames per cycle, at most 100 (default: 48)")
     p.add_argument("--fps", type=real("--fps", 0.0, 100.0), default=20.0, help="frames per second (default: 20)")
     force_arg(p, "an existing FILE.gif")
 
 
 @register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
 def cmd_animate(args: argparse.Namespace) -> int:
-    from ocp_crawl.viz.animate import animate_problem
+    from ocp_crawl.viz.animate import FRAME_BOUNDS, animate_problem
 
+    for option, value in (("--cycles", args.cycles), ("--frames-per-cycle", args.frames_per_cycle)):
+        low, high = FRAME_BOUNDS[option]
+        if not low <= value <= high:
+            raise BadInput(f"{option} {value} is invalid: must be an integer in [{low}, {high}]: every frame is an "
+                           "image held in memory until the GIF is written")
     path = Path(args.out)
     if path.suffix.lower() != ".gif" or not path.stem:
         raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
@@ -242,7 +253,8 @@ def _crosscheck_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key (repeatable)")
     p.add_argument("--steps", type=steps_type, nargs="+", default=[50, 100, 200, 400], metavar="N",
-                   help="increasing steps per cycle of the MPCC time-stepping (default 50 100 200 400)")
+                   help="increasing steps per cycle of the MPCC time-stepping (default 50 100 200 400; at most "
+                        f"{MAX_STEP_COUNTS} counts)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the table")
 
 
@@ -257,6 +269,9 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     steps = sorted(set(args.steps))
     if len(steps) < 2:
         raise BadInput(f"--steps {' '.join(map(str, args.steps))}: give at least two different step counts")
+    if len(steps) > MAX_STEP_COUNTS:
+        raise BadInput(f"--steps {' '.join(map(str, args.steps))}: {len(steps)} step counts, at most "
+                       f"{MAX_STEP_COUNTS} (one MPCC run each)")
     check_start(problem)
     result = crosscheck(problem.model, problem.torque, steps=steps)
     if args.json:

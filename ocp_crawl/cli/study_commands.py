@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
-from ocp_crawl.cli.common import address, check_scheduler, finish, force_arg, jobs_type, prepare_out
+from ocp_crawl.cli.common import address, check_scheduler, finish, force_arg, jobs_type, out_dir, prepare_out
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.problem import load_problem, ocp_settings
@@ -26,7 +26,7 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the base problem (repeatable)")
     p.add_argument("--jobs", type=jobs_type, metavar="N", help="worker processes (default: the CPUs available)")
-    p.add_argument("--out", metavar="DIR", help="output directory (default: ./sweep_<problem stem>)")
+    p.add_argument("--out", metavar="DIR", type=out_dir, help="output directory (default: ./sweep_<problem stem>)")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue an interrupted sweep in DIR")
     again.add_argument("--force", action="store_true",
@@ -65,7 +65,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 # reproduce
 # --------------------------------------------------------------------------------------------
 def _reproduce_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", metavar="DIR", default="ocp_crawl_reproduce",
+    p.add_argument("--out", metavar="DIR", default="ocp_crawl_reproduce", type=out_dir,
                    help="directory for the figures, report.md and numbers.json (default: ./ocp_crawl_reproduce)")
     p.add_argument("--quick", action="store_true", help="coarse grids (about a minute on 2 cores); default: full grids")
     p.add_argument("--gravity", choices=("paper", "physical"), default="paper",
@@ -122,7 +122,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
-    p.add_argument("--out", metavar="DIR", help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+    p.add_argument("--out", metavar="DIR", type=out_dir,
+                   help="write torques.csv, arrays.npz, summary.json and figures to DIR")
     force_arg(p)
 
 
@@ -158,7 +159,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
 
     problem = load_problem(args.problem, args.overrides)
     settings = ocp_settings(problem)
-    out = prepare_out(args.out, OCP_FILES, args.force) if args.out else None
+    out = prepare_out(args.out, OCP_FILES, args.force) if args.out is not None else None
     check_start(problem)
     result = optimize_gait(problem.robot, problem.gravity, settings)
     data = jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),

@@ -109,9 +109,27 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
 
     The temporary file lives in the same directory so that ``os.replace`` is a rename on one file
     system (atomic on POSIX and Windows); on any error it is removed and the target is untouched.
-    Leftovers of earlier writers of ``path`` that were killed are removed first.
+    Leftovers of earlier writers of ``path`` that were killed are removed first.  An OSError (a full disk, ...)
+    is raised again with ``path`` as its file name, so that the message names the file.
     """
     path = Path(path)
+    try:
+        _write_replace(path, write)
+    except OSError as exc:
+        # name the target (a full disk says only "No space left on device"; mkstemp names its temporary file)
+        raise naming(exc, path) from exc
+    _fsync_dir(path.parent)
+    return path
+
+
+def naming(exc: OSError, path: str | os.PathLike) -> OSError:
+    """A copy of ``exc`` with ``path`` as its file name (the same errno, hence the same OSError subclass, and reason),
+    so that its message names the file written."""
+    return OSError(exc.errno, exc.strerror or " ".join(str(exc).split()) or type(exc).__name__, str(path))
+
+
+def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
+    """The temporary file of :func:`atomic_write`, written and renamed over ``path`` (removed on any error)."""
     remove_stale_temps(path.parent, path.name)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=temp_prefix(path.name), suffix=".tmp")
     try:
@@ -128,8 +146,6 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> 
         except OSError:
             pass
         raise
-    _fsync_dir(path.parent)
-    return path
 
 
 def jsonable(obj: Any) -> Any:

@@ -21,6 +21,13 @@ RATE_LIMITS = ("harmonic", "none", "max_rate")
 #: values of :attr:`OCPSettings.curvature_limit` besides a number [N m per cycle^2]
 CURVATURE_LIMITS = ("harmonic", "none")
 
+#: bounds of the settings that size the work (a solve within minutes; see the README's "Bounds"): the nodes
+#: of the transcription, the Fourier order, the psi values and amplitudes of the harmonic sweep
+NODES_BOUNDS = (8, 1000)
+FOURIER_ORDER_BOUNDS = (1, 25)
+HARMONIC_PSI_BOUNDS = (4, 180)
+HARMONIC_A_BOUNDS = (1, 20)
+
 #: default curvature limit in units of the peak curvature of the envelope's harmonic gait
 CURVATURE_FACTOR = 4.0
 
@@ -31,7 +38,7 @@ class OCPSettings:
 
     objective: Objective = "max_speed"
     nodes: int = 100
-    """steps per cycle N (>= 8)"""
+    """steps per cycle N, in NODES_BOUNDS"""
     direction: int = -1
     """sign of S to pursue: -1 towards foot 1 (the direction of psi > 0 gaits), +1 towards foot 2"""
     gamma_deg: float = 90.0
@@ -106,9 +113,9 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.robust must be 'mean' or 'worst', got {self.robust!r}")
 
     def _check_numbers(self) -> None:
-        self._set("nodes", real("OCPSettings.nodes", self.nodes, integer=True, low=8))
-        for name in ("fourier_order", "harmonic_psi", "harmonic_A"):
-            self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True, integer=True))
+        for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
+                                  ("harmonic_psi", HARMONIC_PSI_BOUNDS), ("harmonic_A", HARMONIC_A_BOUNDS)):
+            self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
         for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "comp_tol", "periodic_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
         for name in ("regularization", "S_min", "tie_margin", "mu_ratio_eps"):

@@ -54,7 +54,7 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
         raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. {section}.{name}="
                            f"{format_value(example)}")
     try:
-        parsed = tomllib.loads(f"v = {rhs}")
+        parsed = toml_loads(f"v = {rhs}", f"{where} is invalid")
         if set(parsed) != {"v"}:
             raise tomllib.TOMLDecodeError("more than one value")
         value = parsed["v"]
@@ -105,20 +105,46 @@ def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: s
     return set_values(data, items, source)
 
 
-def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file; unreadable files and malformed TOML raise ProblemError (with the offending line)."""
-    path = Path(path)
+#: largest problem file read [bytes]: problem files are a few hundred bytes; a path such as /dev/zero must not hang
+MAX_PROBLEM_BYTES = 1 << 20
+
+
+def toml_loads(text: str, where: str) -> dict[str, Any]:
+    """``tomllib.loads``, nesting deeper than Python's recursion limit (arrays of arrays ...) a ProblemError
+    naming ``where`` instead of a RecursionError."""
     try:
-        raw = path.read_bytes()
+        return tomllib.loads(text)
+    except RecursionError:
+        raise ProblemError(f"{where}: malformed TOML: arrays or tables nested too deeply (problem values are "
+                           "numbers and strings)") from None
+
+
+def read_bytes(path: Path, limit: int = MAX_PROBLEM_BYTES) -> bytes:
+    """The bytes of a problem file, at most ``limit`` (a larger file, or an endless one such as /dev/zero, is a
+    ProblemError naming the file and the limit)."""
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(limit + 1)
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ProblemError(f"{path}: cannot read the problem file: {reason}") from None
+    if len(raw) > limit:
+        raise ProblemError(f"{path}: cannot read the problem file: larger than {limit} bytes ({limit / 2**20:g} MiB), "
+                           "the limit of a problem file (problem files are a few hundred bytes)")
+    return raw
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file (at most :data:`MAX_PROBLEM_BYTES`); unreadable or oversized files and malformed TOML raise
+    ProblemError (with the offending line)."""
+    path = Path(path)
+    raw = read_bytes(path)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ProblemError(f"{path}: cannot read the problem file: not UTF-8 text (byte {exc.start})") from None
     try:
-        return tomllib.loads(text)
+        return toml_loads(text, str(path))
     except tomllib.TOMLDecodeError as exc:
         msg = str(exc)
         m = re.search(r"line (\d+)", msg)

@@ -183,7 +183,8 @@ def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
     if not math.isfinite(value):
         raise ProblemError(f"{where} is invalid: must be finite ({key.what})")
     if key.rule is not None and not key.rule.test(value):
-        raise ProblemError(f"{where} is invalid: must be {key.rule.text} ({key.what})")
+        why = f": {key.rule.why}" if key.rule.why else ""
+        raise ProblemError(f"{where} is invalid: must be {key.rule.text} ({key.what}){why}")
     return value
 
 

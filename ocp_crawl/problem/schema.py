@@ -20,6 +20,7 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.ocp.settings import FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
 Drive = Literal["torque", "angles"]
@@ -50,19 +51,61 @@ def field_default(cls: type, name: str) -> Any:
 
 @dataclass(frozen=True)
 class Rule:
-    """A value constraint: ``test(value)`` must hold; ``text`` says what is valid (e.g. "> 0")."""
+    """A value constraint: ``test(value)`` must hold; ``text`` says what is valid (e.g. "> 0"); ``why`` gives the
+    reason of a bound (README table and error messages)."""
 
     test: Callable[[Any], bool]
     text: str
+    why: str = ""
+
+    @property
+    def explained(self) -> str:
+        """``text`` followed by the reason, if any."""
+        return f"{self.text} ({self.why})" if self.why else self.text
+
+
+def _num(x: float) -> str:
+    """A bound as the rule's text writes it: ``1e-12``, ``0.25``, ``500`` (no ``+`` in exponents)."""
+    if isinstance(x, int) or not (abs(x) < 1e-3 or abs(x) >= 1e4):
+        return format(x, "g")
+    mantissa, exponent = f"{x:e}".split("e")
+    return f"{mantissa.rstrip('0').rstrip('.')}e{int(exponent)}"
+
+
+def within(low: float, high: float, why: str) -> Rule:
+    """The rule ``low <= value <= high`` ("in [low, high]") with the reason of the bounds."""
+    return Rule(lambda v: low <= v <= high, f"in [{_num(low)}, {_num(high)}]", why)
 
 
 GT0 = Rule(lambda v: v > 0, "> 0")
 GE0 = Rule(lambda v: v >= 0, ">= 0")
 ANGLE = Rule(lambda v: 0 < v < 360, "in (0, 360)")
 PHASE = Rule(lambda v: -360 <= v <= 360, "in [-360, 360]")
-MAX_STEP = Rule(lambda v: 0 < v <= 0.25, "in (0, 0.25]")
-CYCLES = Rule(lambda v: v >= 2, ">= 2")
-STEPS = Rule(lambda v: v >= 4, ">= 4")
+
+# ---- bounds of the robot's parameters and of every key that sizes work (README, "Bounds") ----
+#: magnitude bounds of M [kg], L [m], k [N m/rad], g [m/s^2]: products and ratios of four such numbers
+#: (M g L, k/(M g L), their squares) stay far inside the floating-point range (1e-308 .. 1e308)
+MAGNITUDE = (1e-12, 1e12)
+_MAGNITUDE_WHY = "so that M g L, k/(M g L) and their squares stay far inside the floating-point range"
+#: friction coefficients
+MU_BOUNDS = (1e-4, 1e4)
+_MU_WHY = ("a frictionless foot, mu = 0, is outside the quasistatic model (README, Bounds); friction forces below "
+           "1e-4 M g sink into the solvers' force tolerances")
+#: body-to-leg length ratio
+BETA_BOUNDS = (0.01, 100.0)
+#: event solver: smallest largest-step [cycles]; max_cycles; mpcc steps per cycle
+MAX_STEP_BOUNDS = (1e-4, 0.25)
+MAX_CYCLES_BOUNDS = (2, 500)
+STEPS_BOUNDS = (4, 10_000)
+
+MAGNITUDE_RULE = within(*MAGNITUDE, _MAGNITUDE_WHY)
+MU_RULE = within(*MU_BOUNDS, _MU_WHY)
+BETA_RULE = within(*BETA_BOUNDS, "a link shorter than 1 % of another makes the geometry degenerate")
+MAX_STEP = within(*MAX_STEP_BOUNDS, "at most 1e4 continuation steps per cycle, about 0.3 s per cycle of the paper "
+                  "gait; events are located to event_xtol whatever the step")
+CYCLES = within(*MAX_CYCLES_BOUNDS, "periodic gaits settle in a few cycles; 500 cycles of the smallest max_step take "
+                "a few minutes")
+STEPS = within(*STEPS_BOUNDS, "each step is an IPOPT solve of about 2 ms: 1e4 steps take about 20 s per cycle")
 
 TYPE_WORDS = {float: "a number", int: "an integer", str: "a string"}
 
@@ -134,15 +177,15 @@ def _ocp(name: str):
 
 
 _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, keys=(
-    Key("M", float, "kg", "total mass", required=True, rule=GT0),
-    Key("L", float, "m", "total length", required=True, rule=GT0),
-    Key("beta", float, "-", "body-to-leg length ratio", default=_robot("beta"), rule=GT0),
-    Key("k", float, "N m/rad", "torsion stiffness", required=True, rule=GT0),
-    Key("mu", float, "-", "friction coefficient of both feet", required=True, rule=GE0,
+    Key("M", float, "kg", "total mass", required=True, rule=MAGNITUDE_RULE),
+    Key("L", float, "m", "total length", required=True, rule=MAGNITUDE_RULE),
+    Key("beta", float, "-", "body-to-leg length ratio", default=_robot("beta"), rule=BETA_RULE),
+    Key("k", float, "N m/rad", "torsion stiffness", required=True, rule=MAGNITUDE_RULE),
+    Key("mu", float, "-", "friction coefficient of both feet", required=True, rule=MU_RULE,
         required_unless=("mu1", "mu2"), exclusive_with=("mu1", "mu2")),
-    Key("mu1", float, "-", "friction coefficient of foot 1 (left)", rule=GE0, requires=("mu2",)),
-    Key("mu2", float, "-", "friction coefficient of foot 2 (right)", rule=GE0, requires=("mu1",)),
-    Key("g", float, "m/s^2", "gravitational acceleration", default=_robot("g"), rule=GT0),
+    Key("mu1", float, "-", "friction coefficient of foot 1 (left)", rule=MU_RULE, requires=("mu2",)),
+    Key("mu2", float, "-", "friction coefficient of foot 2 (right)", rule=MU_RULE, requires=("mu1",)),
+    Key("g", float, "m/s^2", "gravitational acceleration", default=_robot("g"), rule=MAGNITUDE_RULE),
 ))
 
 _GAIT = Section("gait", "harmonic reference angles, eq. (ref)", required=True, keys=(
@@ -169,7 +212,8 @@ _SIMULATION = Section("simulation", "simulator of the torque drive and its optio
     Key("max_step", float, "cycles", "event solver: largest continuation step", default=_hybrid("max_step"),
         rule=MAX_STEP),
     Key("event_xtol", float, "cycles", "event solver: event location tolerance", default=_hybrid("event_xtol"),
-        rule=GT0),
+        rule=Rule(lambda v: 0 < v <= 1e-6, "in (0, 1e-6]", "events located less precisely leave the contact mode "
+                  "after them unreliable")),
     Key("max_cycles", int, "-", "cycles before the gait is declared non-periodic",
         default=_hybrid("max_cycles"), rule=CYCLES),
     Key("periodic_tol", float, "rad", "periodicity tolerance (angles; f_t/(M g) likewise)",
@@ -182,7 +226,7 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("objective", str, "-", "what to optimise", default=_ocp("objective"),
         choices=("max_speed", "min_cot", "robust_speed")),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
-        rule=Rule(lambda v: v >= 8, ">= 8")),
+        rule=within(*NODES_BOUNDS, "100 nodes solve in 3 to 30 s; the cost grows at least linearly")),
     Key("direction", int, "-", "sign of S to pursue (-1: towards foot 1, as psi > 0 gaits)", default=_ocp("direction"),
         rule=Rule(lambda v: v in (-1, 1), "-1 or 1")),
     Key("A_max_deg", float, "deg", "half-width of the reference-angle envelope around gait.gamma_deg",
@@ -190,7 +234,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("parametrization", str, "-", "torques free at every node or a Fourier series",
         default=_ocp("parametrization"), choices=("free", "fourier")),
     Key("fourier_order", int, "-", "order of the Fourier series", default=_ocp("fourier_order"),
-        rule=Rule(lambda v: v >= 1, ">= 1")),
+        rule=within(*FOURIER_ORDER_BOUNDS, "dense coefficient columns slow every IPOPT iteration; for finer "
+                    "profiles use the free parametrization")),
     Key("rate_limit", str, "-", "torque rate limit: the harmonic envelope's peak rate, none, or max_rate",
         default=_ocp("rate_limit"), choices=("harmonic", "none", "max_rate")),
     Key("max_rate", float, "N m/cycle", "largest |d tau/dt| when rate_limit = \"max_rate\"", rule=GT0),
@@ -206,7 +251,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("robust", str, "-", "robust_speed: maximise the mean or the worst S", default=_ocp("robust"),
         choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
-        default=_ocp("harmonic_psi"), rule=Rule(lambda v: v >= 4, ">= 4")),
+        default=_ocp("harmonic_psi"), rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
+                                                  "and friction scenario; 180 is a 2 deg grid")),
 ))
 
 #: The schema: every section and key of a problem file, in the order they are validated and reported.
@@ -237,25 +283,29 @@ def schema_markdown() -> str:
     for sec in SECTIONS:
         for k in sec.keys:
             kind = {float: "float", int: "int", str: "string"}[k.type]
-            rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k)} | {k.valid_text} | {k.help} |")
+            valid = k.rule.explained if k.rule is not None and not k.choices else k.valid_text
+            rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k)} | {valid} | {k.help} |")
     return "\n".join(rows)
 
 
 # --------------------------------------------------------------------------------------------
 # values in messages
 # --------------------------------------------------------------------------------------------
-def format_value(value: Any) -> str:
-    """A value as it would be written in TOML (strings quoted), shortened to keep messages on one line."""
-    if isinstance(value, bool):
+def format_value(value: Any, _depth: int = 0) -> str:
+    """A value as it would be written in TOML (strings quoted), shortened to keep messages on one line
+    (arrays and tables nested more than 3 deep shown as ``...``)."""
+    if _depth > 3 and isinstance(value, (Mapping, list, tuple)):
+        s = "..."
+    elif isinstance(value, bool):
         s = "true" if value else "false"
     elif isinstance(value, str):
         s = json.dumps(value)
     elif isinstance(value, float):
         s = "nan" if math.isnan(value) else ("inf" if value == math.inf else "-inf" if value == -math.inf else repr(value))
     elif isinstance(value, Mapping):
-        s = "{" + ", ".join(f"{k} = {format_value(v)}" for k, v in value.items()) + "}"
+        s = "{" + ", ".join(f"{k} = {format_value(v, _depth + 1)}" for k, v in list(value.items())[:20]) + "}"
     elif isinstance(value, (list, tuple)):
-        s = "[" + ", ".join(format_value(v) for v in value) + "]"
+        s = "[" + ", ".join(format_value(v, _depth + 1) for v in value[:20]) + "]"
     else:
         s = str(value)
     return s if len(s) <= 60 else s[:57] + "..."

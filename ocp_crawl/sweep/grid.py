@@ -16,10 +16,14 @@ from typing import Any, Iterable, Mapping, Sequence
 import numpy as np
 
 from ocp_crawl.problem import SCHEMA, Key, Problem, ProblemError
+from ocp_crawl.problem.overrides import toml_loads
 
 _GRID_KEY_RE = re.compile(r"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)$")
 #: numpy dtype of the values of a key of each schema type
 VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
+#: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event solver, so 20,000
+#: points are 10 to 20 minutes of the paper's gaits on 2 cores (the full reproduce grids have 777 at most)
+MAX_GRID_POINTS = 20_000
 _GRID_HELP = "expected SECTION.KEY=START:STOP:NUM or SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37"
 
 
@@ -83,7 +87,7 @@ def _list_item(text: str, key: Key, where: str) -> Any:
     if not text:
         raise ProblemError(f"{where} is invalid: empty value in the list ({_GRID_HELP})")
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        return toml_loads(f"v = {text}", f"{where} is invalid")["v"]
     except tomllib.TOMLDecodeError:
         if key.type is str:
             return text  # bare words for string keys, as --set accepts them
@@ -91,6 +95,28 @@ def _list_item(text: str, key: Key, where: str) -> Any:
             return float(text)  # Python spellings TOML lacks, e.g. "1e3" is TOML but "1." is not
         except ValueError:
             raise ProblemError(f"{where} is invalid: {text!r} is not a number") from None
+
+
+def _range(parts: Sequence[str], where: str) -> tuple[float, float, int]:
+    """START, STOP (finite numbers) and NUM (an integer in [1, MAX_GRID_POINTS]) of a range, as written."""
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise ProblemError(f"{where} is invalid: START and STOP must be numbers, got {parts[0]!r}, "
+                           f"{parts[1]!r}") from None
+    for name, text, value in (("START", parts[0], start), ("STOP", parts[1], stop)):
+        if not math.isfinite(value):
+            raise ProblemError(f"{where} is invalid: START and STOP must be finite, got {name} = {text}")
+    try:
+        num = int(parts[2])
+    except ValueError:
+        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {parts[2]!r}") from None
+    if num < 1:
+        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {num}")
+    if num > MAX_GRID_POINTS:
+        raise ProblemError(f"{where} is invalid: NUM = {parts[2]} is more than the {MAX_GRID_POINTS} points a sweep "
+                           "may have (about 10 to 20 minutes on 2 cores); split the sweep")
+    return start, stop, num
 
 
 def parse_grid(spec: str) -> tuple[str, np.ndarray]:
@@ -102,7 +128,8 @@ def parse_grid(spec: str) -> tuple[str, np.ndarray]:
     """
     if not isinstance(spec, str):
         raise ProblemError(f"--grid {spec!r} is invalid: {_GRID_HELP}")
-    where = f"--grid {spec.strip()!r}"
+    shown = spec.strip() if len(spec.strip()) <= 80 else spec.strip()[:77] + "..."
+    where = f"--grid {shown!r}"
     if "=" not in spec:
         raise ProblemError(f"{where} is invalid: {_GRID_HELP}")
     lhs, rhs = (s.strip() for s in spec.split("=", 1))
@@ -113,17 +140,7 @@ def parse_grid(spec: str) -> tuple[str, np.ndarray]:
         parts = [p.strip() for p in rhs.split(":")]
         if len(parts) != 3:
             raise ProblemError(f"{where} is invalid: a range is START:STOP:NUM, got {len(parts)} fields")
-        try:
-            start, stop = float(parts[0]), float(parts[1])
-        except ValueError:
-            raise ProblemError(f"{where} is invalid: START and STOP must be numbers, got {parts[0]!r}, "
-                               f"{parts[1]!r}") from None
-        try:
-            num = int(parts[2])
-        except ValueError:
-            raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {parts[2]!r}") from None
-        if num < 1:
-            raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {num}")
+        start, stop, num = _range(parts, where)
         if num == 1 and start != stop:
             raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
                                f"write {lhs}={parts[0]} for a single value")
@@ -143,6 +160,7 @@ def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
         if arr.ndim > 1:
             raise ProblemError(f"{where} is invalid: values must be 1-D, got shape {arr.shape}")
         out[str(name)] = _coerce(list(np.atleast_1d(arr)), key, str(name), where)
+    _check_size(out)
     names = list(out)
     for name in names:
         section, key = name.split(".")
@@ -150,6 +168,15 @@ def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
             if f"{section}.{other}" in out:
                 raise ProblemError(f"grid keys {name} and {section}.{other} are alternatives: sweep one of them")
     return out
+
+
+def _check_size(grid: Mapping[str, np.ndarray]) -> None:
+    """A grid of more than MAX_GRID_POINTS points is a ProblemError stating the limit."""
+    points = math.prod(len(v) for v in grid.values())
+    if points > MAX_GRID_POINTS:
+        shape = " x ".join(f"{len(v)} ({k})" for k, v in grid.items())
+        raise ProblemError(f"the grid has {points} points, {shape}: more than the {MAX_GRID_POINTS} points a sweep "
+                           "may have (about 10 to 20 minutes on 2 cores); coarsen it or split the sweep")
 
 
 def grid_from_specs(specs: Iterable[str]) -> dict[str, np.ndarray]:

@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ocp_crawl.io.files import remove_stale_temps, write_json
+from ocp_crawl.io.files import naming, remove_stale_temps, write_json
 from ocp_crawl.sweep.cells import cell, parse_rows, row_line
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
@@ -150,9 +150,12 @@ class SweepStore:
         return done
 
     def _write_line(self, line: str) -> None:
-        self._journal.write(line)
-        self._journal.flush()
-        os.fsync(self._journal.fileno())
+        try:
+            self._journal.write(line)
+            self._journal.flush()
+            os.fsync(self._journal.fileno())
+        except OSError as exc:  # a full disk says only "No space left on device": name the journal
+            raise naming(exc, self.journal_path) from exc
 
     def append(self, settings: SweepSettings, index: int, row: dict[str, Any]) -> None:
         """Journal the finished row of point ``index`` (flushed and fsync'd)."""

@@ -8,6 +8,8 @@ import threading
 from dataclasses import dataclass, fields
 from typing import Any, Mapping
 
+import numpy as np
+
 from ocp_crawl.problem import Problem, ProblemError, problem_from_dict, run_problem
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import Status
@@ -55,7 +57,8 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
     try:
         base = _base_problem(json.dumps(task.problem), task.source)
         problem = base.with_values(dict(task.point))
-        with _RUN_LOCK:
+        # a point's result carries its status: numpy's floating-point warnings would only clutter the workers' stderr
+        with _RUN_LOCK, np.errstate(all="ignore"):
             result = run_problem(problem)
         summary = result.summary() if task.extra_columns else {}
         row.update({name: _extra_value(result, name, summary) for name in task.extra_columns})

@@ -32,6 +32,10 @@ from ocp_crawl.sim.result import CrawlResult, Mode
 STICK_COLOR = "#1a9850"
 SLIP_COLOR = "#d73027"
 MM = 1e3
+#: bounds of the cycles shown and of the frames per cycle (``--cycles``, ``--frames-per-cycle``): every frame is an
+#: image of about 0.2 MB held in memory until the GIF is written, so at most 1,000 frames (about 200 MB)
+MAX_CYCLES, MAX_FRAMES_PER_CYCLE = 10, 100
+FRAME_BOUNDS = {"--cycles": (1, MAX_CYCLES), "--frames-per-cycle": (2, MAX_FRAMES_PER_CYCLE)}
 
 
 @dataclass(frozen=True)
@@ -64,10 +68,12 @@ def frames_of(result: CrawlResult, cycles: int = 2, frames_per_cycle: int = 48) 
     """Sample a result for animation: ``cycles`` repetitions of a steady cycle, or the run up to its failure.
 
     The result should be sampled densely (e.g. ``t_eval`` of a few hundred phases); frames take
-    the nearest sample.
+    the nearest sample.  ``cycles`` in [1, MAX_CYCLES], ``frames_per_cycle`` in [2, MAX_FRAMES_PER_CYCLE]; a failed
+    run is shown over its last ``cycles`` cycles up to the failure.
     """
-    if cycles < 1 or frames_per_cycle < 2:
-        raise ValueError(f"cycles must be >= 1 and frames_per_cycle >= 2, got {cycles}, {frames_per_cycle}")
+    if not (1 <= cycles <= MAX_CYCLES and 2 <= frames_per_cycle <= MAX_FRAMES_PER_CYCLE):
+        raise ValueError(f"cycles must be in [1, {MAX_CYCLES}] and frames_per_cycle in [2, {MAX_FRAMES_PER_CYCLE}], "
+                         f"got {cycles}, {frames_per_cycle}")
     t = np.asarray(result.t, float) - result.t0
     if t.size == 0:
         raise ValueError("the result has no samples to animate")
@@ -78,8 +84,9 @@ def frames_of(result: CrawlResult, cycles: int = 2, frames_per_cycle: int = 48) 
         local = tf - rep
         shift = rep * result.S
     else:
-        n = max(2, int(round((t[-1] - t[0]) * frames_per_cycle)) + 1)
-        tf = np.linspace(t[0], t[-1], n)
+        start = max(t[0], t[-1] - cycles)  # the last cycles before the failure: at most cycles * frames_per_cycle
+        n = max(2, int(round((t[-1] - start) * frames_per_cycle)) + 1)
+        tf = np.linspace(start, t[-1], n)
         local, shift = tf, np.zeros(n)
     idx = np.clip(np.searchsorted(t, local), 0, t.size - 1)
     prev = np.clip(idx - 1, 0, t.size - 1)
