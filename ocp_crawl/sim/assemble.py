@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ocp_crawl.model.stability import stability_margins
+from functools import lru_cache
+
+from ocp_crawl.model.compiled import FastFunction
+from ocp_crawl.model.stability import stability_function
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import CrawlResult, Mode, cost_of_transport, energy_balance
@@ -22,6 +25,8 @@ from ocp_crawl.status import STATUS_MESSAGES, Status
 
 #: phases of the default output grid over the steady cycle (the event phases are added)
 DEFAULT_OUTPUT_POINTS = 201
+#: columns of one call of the compiled, mapped stability function of :func:`sample_margins`
+MARGIN_BATCH = 256
 
 
 def output_phases(t_eval) -> np.ndarray | None:
@@ -122,10 +127,32 @@ def stability_gate(res: CrawlResult, model: Model) -> None:
     modes = np.asarray(res.mode, dtype=int)
     table = {m: mode_q(Mode(int(m))) for m in np.unique(modes)}
     Q = np.stack([table[m] for m in modes], axis=1)
-    margin = np.asarray(stability_margins(model, X, Q)).ravel()
+    margin = sample_margins(model, X, Q)
     bad = np.nonzero(~(margin > 0))[0]
     if bad.size:
         j = bad[0]
         t, mode = float(res.t[j]), Mode(int(modes[j])).label
         demote(res, Status.UNSTABLE, f"stability margin {margin[j]:.4g} <= 0 at the sampled phase t = {t:.10f} "
                f"(cycle {int(np.floor(t)) + 1}, phase {t % 1:.10f}) in mode {mode}", t, mode)
+
+
+@lru_cache(maxsize=1)
+def _mapped_stability() -> FastFunction:
+    return FastFunction(stability_function().map(MARGIN_BATCH))
+
+
+def sample_margins(model: Model, X: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Stability margins (nondimensional, > 0 <=> stable) of the equilibria ``X`` (3, n) = (phi1, phi2 [rad],
+    f_t/(M g)) in the modes ``Q`` (4, n) = (e_ss, sigma, w, d0): the values of
+    :func:`ocp_crawl.model.stability.stability_margins`, by a compiled function mapped over MARGIN_BATCH columns
+    (about 0.05 ms per batch instead of 0.7 ms for 200 points), the last batch padded with its last column."""
+    n = X.shape[1]
+    out = np.empty(n)
+    f = _mapped_stability()
+    P = np.tile(np.asarray(model.p, float)[:, None], (1, MARGIN_BATCH)).ravel(order="F")
+    for a in range(0, n, MARGIN_BATCH):
+        b = min(n, a + MARGIN_BATCH)
+        cols = np.r_[a:b, np.full(MARGIN_BATCH - (b - a), b - 1)]
+        s = f(X[:, cols].ravel(order="F"), Q[:, cols].ravel(order="F"), P)[0].reshape(4, MARGIN_BATCH, order="F")
+        out[a:b] = s[0, :b - a]
+    return out
