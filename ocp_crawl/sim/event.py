@@ -29,7 +29,9 @@ A fold is located exactly by the augmented system G(x, t) = 0, J v = 0, v0.v = 1
 This module holds the options, the continuation and the cycle loop; the guards and the transition
 table are in :mod:`ocp_crawl.sim.event_guards`, event and fold location in
 :mod:`ocp_crawl.sim.event_locate`, dense output and the cycle integrals in
-:mod:`ocp_crawl.sim.event_output`, the points and segments in :mod:`ocp_crawl.sim.event_state`.
+:mod:`ocp_crawl.sim.event_output`, the points and segments in :mod:`ocp_crawl.sim.event_state`, and the physical checks (stability of the
+start, of every mode after an event and of every accepted step; continuity of the state across events;
+see :mod:`ocp_crawl.sim.event_checks`) in their own module.
 """
 from __future__ import annotations
 
