@@ -77,10 +77,10 @@ class HybridOptions(CycleOptions):
     quad_h: float = 1.0 / 32
     """largest Gauss-Legendre panel for the per-cycle integrals [cycles]"""
     jump_tol: float = 1e-6
-    """largest change of the state (phi1, phi2 [rad], f_t/(M g), d/L) across an event with a continuous
-    input; a larger one ends the run with status ``snap_through``.  The state is continuous across a
-    true event up to the Newton tolerance (measured <= 3e-14 on the paper's gaits), while a snap moves
-    it by O(0.01-0.1)"""
+    """largest change of the state (phi1, phi2 [rad], f_t/(M g)/(1 + k/(M g L)), d/L) across an event with a
+    continuous input; a larger one ends the run with status ``snap_through``.  The state is continuous
+    across a true event up to round-off (measured <= 4e-12 over 3,100 events of 500 random problems),
+    while a snap moves it by O(0.01-0.1) (>= 0.06 in the same sample)"""
     energy_tol: float = 1e-6
     """largest |energy balance residual| (relative to the gross work) of a successful steady cycle;
     a larger one is ``energy_imbalance``.  The cycle integrals are exact to the quadrature tolerance

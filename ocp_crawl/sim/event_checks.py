@@ -9,7 +9,8 @@ continuity of the state across events.
   detects as a fold; along a slip branch ``det K`` likewise, but ``tr K`` can change sign anywhere,
   hence the check at every step (one compiled call, about 2 us).
 * **Jumps**: across an event the state (phi1, phi2 [rad], f_t/(M g), d/L) of the successor mode's start
-  must equal the state at the event of the mode before, within ``HybridOptions.jump_tol``, when the input
+  must equal the state at the event of the mode before, within ``HybridOptions.jump_tol`` (f_t's change
+  divided by 1 + k/(M g L), the growth of its round-off with the stiffness ratio), when the input
   is continuous there; otherwise the mode change needs a dynamic snap-through, which the quasistatic
   model cannot follow (``snap_through``, with the phase, the modes before and after and the jump).  An
   input with a discontinuity at the event's phase is exempt: the state may jump where the input does.
@@ -77,10 +78,12 @@ class ChecksMixin:
 
     def _check_jump(self, ev_pt: _Point, start: _Point, before: Mode, after: Mode, kind: str) -> None:
         """Raise ``_Failure(SNAP_THROUGH)`` if the successor's start differs from the event state by more than
-        ``jump_tol`` in phi1, phi2 [rad], f_t/(M g) or d/L while the input is continuous at the event."""
+        ``jump_tol`` in phi1, phi2 [rad], f_t/(M g)/(1 + k/(M g L)) or d/L while the input is continuous at the
+        event.  f_t's change is divided by 1 + k/(M g L): its round-off grows with the stiffness ratio (as the
+        guards' noise, about 2e-15 (1 + k/(M g L)) measured up to k/(M g L) = 1e5) while phi and d stay at round-off."""
         dx = np.abs(start.x - ev_pt.x)
         dd = abs(start.aux[AUX["d"]] - ev_pt.aux[AUX["d"]]) / self.L
-        size = max(float(np.max(dx)), dd)
+        size = max(float(np.max(dx[:2])), float(dx[2]) / (1.0 + self.model.robot.k / self.model.robot.MgL), dd)
         if size <= self.opt.jump_tol or self._input_jumps(ev_pt.t):
             return
         deg = np.degrees(dx[:2])
