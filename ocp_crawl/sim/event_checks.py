@@ -15,6 +15,12 @@ continuity of the state across events.
   model cannot follow (``snap_through``, with the phase, the modes before and after and the jump).  An
   input with a discontinuity at the event's phase is exempt: the state may jump where the input does.
 
+At an event the jump is checked before the successor's stability.  A jump is the observable outcome of a
+loss of equilibrium at a friction limit: in the issue-11 robot the stick-stick branch is stable when it
+reaches foot 2's limit (no fold: kappa > 0), its slip continuation is a saddle (det K < 0, hence
+inconsistent), and the only consistent mode lies 8 deg away (and is unstable too).  ``snap_through`` with
+the jump's size says what the robot does; ``fold`` is kept for a singular Jacobian of the tracked branch.
+
 :class:`ChecksMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the stepper's
 ``model``, ``p``, ``L``, ``Mg``, ``opt`` and ``torque``.
 """
