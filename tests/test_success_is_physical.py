@@ -6,7 +6,6 @@ against short damped (overdamped) dynamics runs built from the model's joint bal
 against the equilibria on both sides of it, the energy gate against the run's own residual, the repaired
 dense output against a run with a finer continuation step.
 """
-import json
 import math
 
 import numpy as np
@@ -14,7 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ocp_crawl import Model, simulate_torque
-from ocp_crawl.model.inputs import CallableSignal, Harmonic, ReferenceTorque
+from ocp_crawl.model.inputs import CallableSignal, ReferenceTorque
 from ocp_crawl.model.stability import stability_margin
 from ocp_crawl.problem import paper_problem, problem_from_dict
 from ocp_crawl.sim.assemble import energy_gate, new_result, set_cycle_metrics
@@ -101,6 +100,26 @@ def test_start_verdict_agrees_with_damped_dynamics(values, stable):
         _failure_is_reported(res, Status.NO_START)
 
 
+def test_start_skips_an_unstable_released_equilibrium():
+    """k = 0.0354 M g L (paper gait, physical gravity): the first released equilibrium found (near 84, 99 deg)
+    is a maximum along the constraint; a later guess finds a stable one, which the run starts from (it used
+    to start from the unstable one).  Both verdicts checked by damped runs."""
+    pr = paper_problem()
+    r = pr.robot.with_stiffness_ratio(0.035416325837244335)
+    m = Model(r)
+    torque = ReferenceTorque(pr.gait, r.k)
+    st = HybridStepper(m, torque)
+    found = list(st.released_states(0.0))
+    margins = [stability_margin(m, p.x, (1, 0, 0)) for p in found]
+    assert margins[0] < 0 < max(margins)
+    start = HybridStepper(m, torque).initial_state(0.0)
+    assert stability_margin(m, start.x, (1, 0, 0)) > 0
+    for pt, mg in ((found[0], margins[0]), (start, stability_margin(m, start.x, (1, 0, 0)))):
+        growth = _stick_growth(m, pt.x[:2], torque(0.0), 5.0 / abs(mg))
+        assert (growth > 20) if mg < 0 else (growth < 0.05), growth
+    assert simulate_torque(m, torque).success
+
+
 # ------------------------------------------------------------------ issue 11, found 2: soft springs, heavy robot
 @pytest.mark.parametrize("values", [{"robot.k": 0.002}, {"robot.k": 1e-3}, {"robot.k": 1e-6}, {"robot.M": 1e9}])
 def test_soft_spring_counterexamples_are_no_start_in_both_torque_solvers(values):
@@ -185,6 +204,20 @@ def test_near_fold_dense_output_stays_on_the_branch(i):
     assert res.success and fine.success, (res.message, fine.message)
     assert abs(res.energy["balance_residual"]) < 1e-9
     assert res.W_plus == pytest.approx(fine.W_plus, rel=1e-8)
+
+
+def test_cycle_integrals_resolve_a_near_fold():
+    """k = 0.43325 M g L (paper gait, physical gravity), just above a fold at phase 0.75: phi' spikes there.
+    The energy balance closes (8 panel halvings used to leave -9e-6, now caught as energy_imbalance) and W+
+    agrees with 32 times finer panels."""
+    pr = paper_problem()
+    r = pr.robot.with_stiffness_ratio(0.43325)
+    torque = ReferenceTorque(pr.gait, r.k)
+    res = simulate_torque(Model(r), torque)
+    fine = simulate_torque(Model(r), torque, HybridOptions(quad_h=1 / 1024))
+    assert res.success and fine.success, (res.message, fine.message)
+    assert abs(res.energy["balance_residual"]) < 1e-9
+    assert res.W_plus == pytest.approx(fine.W_plus, rel=1e-9)
 
 
 # ------------------------------------------------------------------ the energy gate
