@@ -217,7 +217,8 @@ def test_one_mpcc_step_succeeds_with_the_invariants_or_reports_a_status(case):
 RUN_OPTIONS = TimeSteppingOptions(max_cycles=3)
 #: statuses a time-stepping run may end with
 RUN_STATUSES = {Status.SUCCESS, Status.LIFT_OFF, Status.FEET_CROSSED, Status.FOLD, Status.NOT_PERIODIC,
-                Status.SOLVER_FAILURE, Status.JOINT_ON_GROUND, Status.NO_START}
+                Status.SOLVER_FAILURE, Status.JOINT_ON_GROUND, Status.NO_START, Status.UNSTABLE,
+                Status.ENERGY_IMBALANCE}
 
 
 @st.composite
