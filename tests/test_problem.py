@@ -255,7 +255,7 @@ def test_run_problem_t_eval():
 
 
 def test_readme_status_table_is_current():
-    from ocp_crawl.sim.result import STATUS_MESSAGES
+    from ocp_crawl.status import STATUS_MESSAGES
 
     text = (REPO / "README.md").read_text(encoding="utf-8")
     for status, message in STATUS_MESSAGES.items():

@@ -28,7 +28,7 @@ from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, Mode, Model, Per
 from ocp_crawl.sim.angles import TIE, simulate_angles
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
-from ocp_crawl.sim.result import STATUS_MESSAGES
+from ocp_crawl.status import STATUS_MESSAGES
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
 #: expensive properties (one or more simulations per example)

@@ -15,7 +15,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from ocp_crawl import FourierSeries, Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot, simulate_torque
-from ocp_crawl.sim.result import STATUS_MESSAGES, Mode, Status
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import STATUS_MESSAGES, Status
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None, derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,

@@ -26,7 +26,8 @@ from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
 from ocp_crawl.nlp.ipopt import FAILURE_KINDS, ipopt_status
 from ocp_crawl.sim.mpcc import MPCCStep
 from ocp_crawl.sim.step import RESULT_FIELDS, SLIP_EPS, StepState
-from ocp_crawl.sim.result import STATUS_MESSAGES, Mode, Status
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import STATUS_MESSAGES, Status
 from ocp_crawl.sim.oracle import solve_step_enumerate
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 

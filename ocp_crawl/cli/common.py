@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Iterable
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, UsageError
-from ocp_crawl.problem.schema import STEPS_BOUNDS
+from ocp_crawl.sim.options import STEPS_BOUNDS
 
 
 def _shown(text: str) -> str:

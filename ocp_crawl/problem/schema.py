@@ -20,6 +20,7 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.ocp.settings import FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
@@ -93,10 +94,6 @@ _MU_WHY = ("a frictionless foot, mu = 0, is outside the quasistatic model (READM
            "1e-4 M g sink into the solvers' force tolerances")
 #: body-to-leg length ratio
 BETA_BOUNDS = (0.01, 100.0)
-#: event solver: smallest largest-step [cycles]; max_cycles; mpcc steps per cycle
-MAX_STEP_BOUNDS = (1e-4, 0.25)
-MAX_CYCLES_BOUNDS = (2, 500)
-STEPS_BOUNDS = (4, 10_000)
 
 MAGNITUDE_RULE = within(*MAGNITUDE, _MAGNITUDE_WHY)
 MU_RULE = within(*MU_BOUNDS, _MU_WHY)

@@ -49,7 +49,7 @@ from ocp_crawl.sim.event_guards import GuardsMixin
 from ocp_crawl.sim.event_locate import EventsMixin
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q
-from ocp_crawl.sim.options import CycleOptions, count
+from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
@@ -91,9 +91,12 @@ class HybridOptions(CycleOptions):
         super().__post_init__()
         for name in ("max_step", "min_step", "event_xtol", "residual_tol", "trial_step", "quad_h", "jump_tol",
                      "energy_tol"):
-            self._set(name, real(f"HybridOptions.{name}", getattr(self, name), positive=True,
-                                 high=0.25 if name == "max_step" else None))
-        self._set("max_events_per_cycle", count("HybridOptions.max_events_per_cycle", self.max_events_per_cycle, 1))
+            self._set(name, real(f"HybridOptions.{name}", getattr(self, name), positive=True))
+        self._set("max_step", real("HybridOptions.max_step", self.max_step, low=MAX_STEP_BOUNDS[0],
+                                   high=MAX_STEP_BOUNDS[1]))
+        self._set("max_events_per_cycle", count("HybridOptions.max_events_per_cycle", self.max_events_per_cycle,
+                                                *MAX_EVENTS_BOUNDS))
+        self._set("quad_h", real("HybridOptions.quad_h", self.quad_h, low=MAX_STEP_BOUNDS[0], high=MAX_STEP_BOUNDS[1]))
         if not isinstance(self.resolve_input, bool):
             raise ValueError(f"HybridOptions.resolve_input must be True or False, got {self.resolve_input!r}")
 

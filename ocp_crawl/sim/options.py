@@ -11,15 +11,25 @@ from dataclasses import dataclass
 
 from ocp_crawl.checks import real
 
+#: bounds on the options that size a run's work (README, "Bounds"), checked here and read by the problem schema:
+#: the event solver's largest step and quadrature panel [cycles] (at most 1e4 per cycle), the cycles a run may
+#: take, and the MPCC's steps per cycle (each an IPOPT solve of about 2 ms)
+MAX_STEP_BOUNDS = (1e-4, 0.25)
+MAX_CYCLES_BOUNDS = (2, 500)
+STEPS_BOUNDS = (4, 10_000)
+#: events per cycle before a run ends as too_many_events (each costs a few event locations)
+MAX_EVENTS_BOUNDS = (1, 100_000)
 
-def count(name: str, value, low: int) -> int:
-    """``value`` as an integer >= ``low`` (:func:`~ocp_crawl.checks.real`); a bool is refused as not an integer.
 
-    Raises ValueError for a bool, a non-integer or a value below ``low``, TypeError for a non-number.
+def count(name: str, value, low: int, high: int | None = None) -> int:
+    """``value`` as an integer in [``low``, ``high``] (:func:`~ocp_crawl.checks.real`); a bool is refused as not an
+    integer.
+
+    Raises ValueError for a bool, a non-integer or a value out of range, TypeError for a non-number.
     """
     if isinstance(value, bool):
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return real(name, value, integer=True, low=low)
+    return real(name, value, integer=True, low=low, high=high)
 
 
 @dataclass(frozen=True)
@@ -36,7 +46,8 @@ class CycleOptions:
     def __post_init__(self) -> None:
         owner = type(self).__name__
         self._set("periodic_tol", real(f"{owner}.periodic_tol", self.periodic_tol, positive=True))
-        self._set("max_cycles", count(f"{owner}.max_cycles", self.max_cycles, 2))
+        self._set("max_cycles", count(f"{owner}.max_cycles", self.max_cycles, MAX_CYCLES_BOUNDS[0],
+                                      MAX_CYCLES_BOUNDS[1]))
         self._set("min_cycles", count(f"{owner}.min_cycles", self.min_cycles, 1))
         if self.min_cycles > self.max_cycles:
             raise ValueError(f"{owner}.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")

@@ -8,7 +8,7 @@ from enum import IntEnum
 import numpy as np
 
 from ocp_crawl.checks import finite_or_none
-from ocp_crawl.status import STATUS_MESSAGES, Status  # noqa: F401 (re-exported: the results' status)
+from ocp_crawl.status import Status
 
 
 class Mode(IntEnum):

@@ -50,7 +50,7 @@ from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import StepResult, StepState, step_params
-from ocp_crawl.sim.options import CycleOptions, count
+from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
@@ -78,7 +78,7 @@ class TimeSteppingOptions(CycleOptions):
             raise TypeError(f"TimeSteppingOptions.mpcc must be MPCCOptions, got {type(self.mpcc).__name__}")
         super().__post_init__()
         self._set("max_dphi", real("TimeSteppingOptions.max_dphi", self.max_dphi, positive=True))
-        self._set("steps", count("TimeSteppingOptions.steps", self.steps, 4))
+        self._set("steps", count("TimeSteppingOptions.steps", self.steps, *STEPS_BOUNDS))
         self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
 
 
@@ -111,8 +111,10 @@ class TimeStepper:
                  options: TimeSteppingOptions | MPCCOptions | None = None):
         if not isinstance(model, Model):
             raise TypeError(f"model must be a Model, got {type(model).__name__}")
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 4:
-            raise ValueError(f"steps must be an integer >= 4 (steps per cycle), got {steps!r}")
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) \
+                or not STEPS_BOUNDS[0] <= steps <= STEPS_BOUNDS[1]:
+            raise ValueError(f"steps must be an integer in [{STEPS_BOUNDS[0]}, {STEPS_BOUNDS[1]}] (steps per cycle), "
+                             f"got {steps!r}")
         if options is None:
             options = TimeSteppingOptions()
         elif isinstance(options, MPCCOptions):
