@@ -136,6 +136,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin):
             x, aux = self.newton(x, tau, dtau, q, self.p)
             self.nfev += 1
             res = aux[AUX["res"]]
+            if not np.all(np.isfinite(x)):  # (the compiled max norm of a NaN residual can read 0)
+                return None
             if not res <= self.res_tol:  # also catches NaN
                 if not np.isfinite(res) or res > 1e3:
                     return None

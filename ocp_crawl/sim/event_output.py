@@ -51,7 +51,7 @@ class OutputMixin:
         xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
                              seg.q, self.p)
         self.nfev += n
-        for j in np.nonzero(~(aux[AUX["res"]] <= self.res_tol))[0]:
+        for j in np.nonzero(~(aux[AUX["res"]] <= self.res_tol) | ~np.all(np.isfinite(xs), axis=0))[0]:
             pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
             if pt is None:
                 pt = self._continue_to(seg, float(ts[j]))
