@@ -278,7 +278,16 @@ UNSTABLE = {"robot": {"M": 0.052, "L": 0.120, "beta": 2.0, "k": 0.002, "mu": 0.3
             "model": {"gravity": "physical"}}
 
 
+#: found by this test: a Newton iterate went NaN while its compiled residual norm read 0, and the run ended
+#: in an internal error (brentq: "function value is NaN"; with A = 21 deg: "SVD did not converge")
+NAN_ITERATE = {"robot": {"M": 1.0, "L": 1.0, "beta": 1.0, "k": 9.81, "g": 9.81, "mu": 1.0},
+               "gait": {"drive": "torque", "gamma_deg": 61.0, "A_deg": 20.0, "psi_deg": 0.0},
+               "model": {"gravity": "paper"}}
+
+
 @SETTINGS
+@example(data=NAN_ITERATE)
+@example(data={**NAN_ITERATE, "gait": {**NAN_ITERATE["gait"], "A_deg": 21.0}})
 @given(data=problem_dicts())
 def test_success_satisfies_the_static_invariants(data):
     """Hard: periodicity, contact, friction cone, equilibrium.  Counted (events): stability, continuity and
