@@ -132,6 +132,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         # round-off level of the scaled guards: the mode equations are scaled by M g L, so the
         # conditioning (and the noise in f_t) grows with k/(M g L)
         self.noise = 1e-13 * (1.0 + model.robot.k / model.robot.MgL)
+        # accepted residual of a mode solve: residual_tol, or 10 noise when the stiffness makes the
+        # round-off floor of the scaled joint balance (about 1e-16 k/(M g L)) reach it (stiff limit)
+        self.res_tol = max(self.opt.residual_tol, 10 * self.noise)
         self.mu = (model.robot.mu1, model.robot.mu2)
         self.max_step = self.opt.max_step
         # phases where a sampled input's derivative may have a kink (its knots): quadrature panel edges
@@ -150,7 +153,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             x, aux = self.newton(x, tau, dtau, q, self.p)
             self.nfev += 1
             res = aux[AUX["res"]]
-            if not res <= self.opt.residual_tol:  # also catches NaN
+            if not np.all(np.isfinite(x)):  # (the compiled max norm of a NaN residual can read 0)
+                return None
+            if not res <= self.res_tol:  # also catches NaN
                 if not np.isfinite(res) or res > 1e3:
                     return None
                 continue

@@ -14,6 +14,21 @@ from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
 EPS = np.finfo(float).eps
+#: round-off level of the scaled guards that depend on the angles (and d') only, whatever k/(M g L)
+ANGLE_NOISE = 1e-13
+
+
+def guard_noise(name: str, noise: float) -> float:
+    """Round-off level of the scaled guard ``name`` for the consistency test of a successor mode.
+
+    ``noise``: the stepper's round-off level of f_t/(M g) [-], which grows with k/(M g L) (stiff joints
+    fix the angles to O(M g L/k), so f_t absorbs the round-off of the joint balance).  Only the
+    stick-stick friction guards ``slip_*`` contain f_t; the others (normal forces, d, joint heights,
+    d', the friction limits of the slip modes) are functions of the angles and their rates, which stay
+    accurate to round-off in the stiff limit: their level is ANGLE_NOISE, so that a guard of 1e-6 (a
+    reversal of d' just before a stiff event) is not taken for noise when k/(M g L) = 1e8.
+    """
+    return noise if name.startswith("slip_") else ANGLE_NOISE
 
 
 class EventsMixin:
@@ -79,19 +94,19 @@ class EventsMixin:
         if start is None:
             return None
         g0 = self.guards(mode, start.aux)
-        noise = self.noise
-        if any(v < -100 * noise for v in g0.values()):
+        noise = {k: guard_noise(k, self.noise) for k in g0}
+        if any(v < -100 * noise[k] for k, v in g0.items()):
             return None
-        pending = {k for k, v in g0.items() if v < 100 * noise}
+        pending = {k for k, v in g0.items() if v < 100 * noise[k]}
         for delta in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4):
             nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
             if nxt is None:
                 return None
             g = self.guards(mode, nxt.aux)
             for k in list(pending):
-                if g[k] < -10 * noise:
+                if g[k] < -10 * noise[k]:
                     return None
-                if g[k] > 10 * noise:
+                if g[k] > 10 * noise[k]:
                     pending.discard(k)
             if not pending:
                 return start

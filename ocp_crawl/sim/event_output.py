@@ -59,7 +59,7 @@ class OutputMixin:
                              seg.q, self.p)
         self.nfev += n
         off = ~(np.max(np.abs(xs[:2] - guesses[:2]), axis=0) <= reach)  # also NaN
-        for j in np.nonzero(~(aux[AUX["res"]] <= self.opt.residual_tol) | off)[0]:
+        for j in np.nonzero(~(aux[AUX["res"]] <= self.res_tol) | off | ~np.all(np.isfinite(xs), axis=0))[0]:
             pt = None
             if not off[j]:
                 pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
