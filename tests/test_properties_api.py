@@ -28,6 +28,7 @@ from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, Mode, Model, Per
 from ocp_crawl.sim.angles import TIE, simulate_angles
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
+from ocp_crawl.problem.problem import MAX_STIFFNESS_RATIO
 from ocp_crawl.status import STATUS_MESSAGES
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
@@ -763,6 +764,12 @@ def load_or_contact_error(data: dict, source: str = "<dict>", overrides=()):
         return problem_from_dict(data, source=source, overrides=overrides)
     except ProblemError as exc:
         msg = str(exc)
+        if msg.startswith(f"{source}: [robot] k = ") and "k/(M g L)" in msg and not overrides:
+            # the torque drive's documented bound on the nondimensional stiffness, recomputed from the data
+            r = data["robot"]
+            assert r["k"] / (r["M"] * r.get("g", Robot.paper().g) * r["L"]) > MAX_STIFFNESS_RATIO, msg
+            assert "\n" not in msg
+            return None
         assert "\n" not in msg and msg.startswith(f"{source}: [gait] ") and " are invalid" in msg, msg
         return None
 

@@ -289,12 +289,30 @@ def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any]) -> str:
     return DEFAULT_SOLVER[drive]
 
 
+#: largest nondimensional stiffness k/(M g L) of the torque drive: the joint balance subtracts spring torques of
+#: order k from inputs of order k, so round-off in the contact forces grows like 1e-16 k/(M g L) (M g); at 1e10
+#: that is 1e-6 M g, the solvers' force tolerance.  The stiff limit is the prescribed-angle gait (gait.drive =
+#: "angles"), which S approaches as M g L/k (tests/test_scaling.py measures the first order up to 1e8).
+MAX_STIFFNESS_RATIO = 1e10
+
+
+def _check_stiffness_ratio(ctx: _Context, robot: Robot, drive: str) -> None:
+    """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the keys."""
+    ratio = robot.k / robot.MgL
+    if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
+        raise ctx.error(f"[robot] k = {format_value(robot.k)} with M = {format_value(robot.M)}, L = "
+                        f"{format_value(robot.L)}, g = {format_value(robot.g)} is invalid: k/(M g L) = {ratio:.3g} "
+                        f"exceeds {MAX_STIFFNESS_RATIO:g}, beyond which round-off in double precision swamps the "
+                        "contact forces; the stiff limit is the prescribed-angle gait: set gait.drive = \"angles\"")
+
+
 def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
     # the schema has checked every value the constructors check, so their errors would be internal bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
+    _check_stiffness_ratio(ctx, robot, g["drive"])
     gait = Harmonic.from_degrees(g.get("gamma_deg"), g.get("A_deg"), g["psi_deg"], gamma1_deg=g.get("gamma1_deg"),
                                  gamma2_deg=g.get("gamma2_deg"), A1_deg=g.get("A1_deg"), A2_deg=g.get("A2_deg"))
     solver = _solver(ctx, g["drive"], sim)
