@@ -33,9 +33,13 @@ from ocp_crawl.status import STATUS_MESSAGES
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
 #: expensive properties (one or more simulations per example)
-SIMS = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+#: (a small fixed set by default, as the README says, so that CI is deterministic; random with the variable set)
+DERANDOMIZE = "OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ
+SIMS = settings(max_examples=EXAMPLES, deadline=None, derandomize=DERANDOMIZE,
+                suppress_health_check=[HealthCheck.too_slow])
 #: cheap properties (microseconds to milliseconds per example) get more examples for the same time
-CHEAP = settings(max_examples=4 * EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+CHEAP = settings(max_examples=4 * EXAMPLES, deadline=None, derandomize=DERANDOMIZE,
+                 suppress_health_check=[HealthCheck.too_slow])
 
 EPS = np.finfo(float).eps
 DEG = math.pi / 180
@@ -389,7 +393,8 @@ def test_prescribed_mirror_and_time_reversal(model, angles):
         else:
             assert mir.failure_t == pytest.approx(res.failure_t, abs=1e-8)
             swap = str.maketrans("12", "21")
-            assert mir.events[-1].kind == res.events[-1].kind.translate(swap)
+            if (mm, ma) != (model, angles):  # a mirror-symmetric problem is its own mirror: no label to swap
+                assert mir.events[-1].kind == res.events[-1].kind.translate(swap)
     ra = reversed_in_time(angles)
     rev = run_prescribed(model, ra)
     if res is not None and rev is not None:
