@@ -393,7 +393,9 @@ def test_prescribed_mirror_and_time_reversal(model, angles):
         else:
             assert mir.failure_t == pytest.approx(res.failure_t, abs=1e-8)
             swap = str.maketrans("12", "21")
-            if (mm, ma) != (model, angles):  # a mirror-symmetric problem is its own mirror: no label to swap
+            t = np.linspace(0.0, 1.0, 65)
+            own_mirror = mm == model and np.array_equal(ma(t), angles(t))
+            if not own_mirror:  # a mirror-symmetric problem is its own mirror: no label to swap
                 assert mir.events[-1].kind == res.events[-1].kind.translate(swap)
     ra = reversed_in_time(angles)
     rev = run_prescribed(model, ra)
