@@ -33,6 +33,7 @@ import numpy as np
 
 from ocp_crawl.version import __version__
 from ocp_crawl.problem import ProblemError
+from ocp_crawl.io.tables import TableError
 
 PROG = "ocp-crawl"
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
@@ -131,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.code or 0) if isinstance(exc.code, (int, type(None))) else EXIT_BAD_INPUT
     try:
         return _run(args)
-    except (ProblemError, BadInput) as exc:
+    except (ProblemError, BadInput, TableError) as exc:
         err(str(exc))
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
