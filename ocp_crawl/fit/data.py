@@ -1,0 +1,167 @@
+"""Measurement files of a calibration: which experiment a CSV table holds, read and checked.
+
+Every file follows the package's CSV convention (:mod:`ocp_crawl.io.tables`: units in the header,
+``#`` comments, errors naming file and line).  A file holds one observable with its standard
+uncertainty (one sigma, same unit) and the operating point of every row:
+
+============  ==================================  ==========================================================
+kind          columns                             model of a row
+============  ==================================  ==========================================================
+``gait``      ``S`` or ``S_norm``, and any of     S per cycle of the problem's gait (its drive), with the
+              ``psi``, ``A``, ``gamma`` [angle]   row's values of ``gait.psi_deg``, ``gait.A_deg``,
+                                                  ``gait.gamma_deg``
+``pressure``  ``S`` or ``S_norm``, ``p0``         S per cycle of the pressure-driven robot
+              [pressure] and ``psi`` [angle]      (:mod:`ocp_crawl.model.pressure`) at peak pressure p0
+                                                  and phase difference psi
+``stiffness`` ``phi`` [angle], ``tau`` [torque]   clamped segment: edge angle phi = tau / k
+``bending``   ``phi`` [angle], ``p`` [pressure],  clamped segment: phi = a_i p^2 + b_i p (Table I map)
+              ``segment`` [-] (1 or 2)
+============  ==================================  ==========================================================
+
+``S_norm`` is S divided by S at the file's reference row, the row of the largest ``S_norm``
+(normally 1): the model is normalised the same way, by its own S at that row, so that the
+(unknown) scale of the measured S drops out, and with it whatever sets only that scale.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from ocp_crawl.io.tables import Table, TableError, read_table
+
+#: observable column -> its dimension (each file holds exactly one, with ``sigma_<name>``)
+OBSERVABLES = {"S": "length", "S_norm": "dimensionless", "phi": "angle"}
+#: operating-point columns -> dimension
+INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "tau": "torque", "p": "pressure",
+          "segment": "dimensionless"}
+#: gait columns -> the problem key they set (degrees, as in problem files)
+GAIT_KEYS = {"psi": "gait.psi_deg", "A": "gait.A_deg", "gamma": "gait.gamma_deg"}
+#: kind -> (observables allowed, inputs required, inputs allowed)
+KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
+    "pressure": (("S", "S_norm"), ("p0", "psi"), ("p0", "psi")),
+    "gait": (("S", "S_norm"), (), ("psi", "A", "gamma")),
+    "stiffness": (("phi",), ("tau",), ("tau",)),
+    "bending": (("phi",), ("p", "segment"), ("p", "segment")),
+}
+#: units in which observables are reported and plotted (name -> (unit, factor from SI))
+DISPLAY = {"S": ("mm", 1e3), "S_norm": ("-", 1.0), "phi": ("deg", 180.0 / np.pi)}
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """One measurement file, checked: the observable, its sigma and the operating point of every row (SI)."""
+
+    table: Table = field(repr=False)
+    kind: str
+    """``gait``, ``pressure``, ``stiffness`` or ``bending`` (see the module docstring)"""
+    observable: str
+    """``S`` [m], ``S_norm`` [-] or ``phi`` [rad]"""
+
+    @property
+    def path(self) -> str:
+        return self.table.path
+
+    @property
+    def y(self) -> np.ndarray:
+        """measured values (SI)"""
+        return self.table[self.observable]
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """their standard uncertainties (SI, > 0)"""
+        return self.table["sigma_" + self.observable]
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return tuple(n for n in INPUTS if n in self.table)
+
+    @property
+    def reference_row(self) -> int | None:
+        """Row whose model S normalises the others (``S_norm`` files), else None."""
+        return int(np.argmax(self.y)) if self.observable == "S_norm" else None
+
+    @property
+    def abscissa(self) -> str:
+        """The input varying most across the rows (the x axis of the figure)."""
+        spans = {n: float(np.ptp(self.table[n])) for n in self.inputs if n != "segment"}
+        return max(spans, key=spans.get) if spans else self.inputs[0]
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+
+def _kind(path: str, present: set[str]) -> tuple[str, str]:
+    observables = [o for o in OBSERVABLES if o in present]
+    if len(observables) != 1:
+        raise TableError(path, f"a measurement file holds exactly one observable column of {', '.join(OBSERVABLES)} "
+                               f"(found {', '.join(observables) or 'none'})")
+    obs = observables[0]
+    inputs = present & set(INPUTS)
+    for kind, (allowed_obs, required, allowed) in KINDS.items():
+        if obs in allowed_obs and set(required) <= inputs and inputs <= set(allowed) and inputs:
+            return kind, obs
+    valid = "; ".join(f"{k}: {'/'.join(o)} with {', '.join(r) or 'any of ' + ', '.join(a)}"
+                      for k, (o, r, a) in KINDS.items())
+    raise TableError(path, f"columns {', '.join(sorted(inputs)) or '(no operating point)'} with {obs} match no "
+                           f"measurement kind ({valid})")
+
+
+def _check_rows(m: Measurements) -> None:
+    for j, s in enumerate(m.sigma):
+        if not s > 0:
+            raise m.table.error(f"sigma_{m.observable} = {m.table.columns['sigma_' + m.observable][j]!r}: "
+                                "an uncertainty must be > 0", j)
+    if m.kind == "bending":
+        for j, seg in enumerate(m.table["segment"]):
+            if seg not in (1.0, 2.0):
+                raise m.table.error(f"segment = {seg!r}: must be 1 or 2", j)
+    if m.observable == "S_norm":
+        ref = m.reference_row
+        if not m.y[ref] > 0:
+            raise m.table.error(f"S_norm: the largest value, {m.y[ref]!r}, must be > 0 (it is the normalising "
+                                "row)", ref)
+    if m.kind == "pressure":
+        for j, p0 in enumerate(m.table["p0"]):
+            if p0 < 0:
+                raise m.table.error(f"p0 = {p0:g} Pa: a peak gauge pressure must be >= 0", j)
+
+
+def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurements:
+    """Read and check one measurement file (see the module docstring for the kinds).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The CSV file, e.g. with header ``psi [deg],S [mm],sigma_S [mm]``.
+    min_rows : int
+        The fewest rows accepted (``S_norm`` files need one more: the reference row fits nothing).
+
+    Returns
+    -------
+    Measurements
+
+    Raises
+    ------
+    TableError
+        One line naming the file and, for a bad row, its line: a missing or unknown column, a unit
+        of the wrong dimension, a value that is not a finite number (NaN), an uncertainty <= 0, too
+        few rows.
+    """
+    columns: Mapping[str, str] = {**OBSERVABLES, **{"sigma_" + k: v for k, v in OBSERVABLES.items()}, **INPUTS}
+    table = read_table(path, {}, columns, min_rows=1)
+    kind, obs = _kind(table.path, set(table.columns))
+    if "sigma_" + obs not in table:
+        raise TableError(table.path, f"missing column 'sigma_{obs}': every measurement needs its standard "
+                                     f"uncertainty (same unit as {obs})")
+    extra = [c for c in table.columns if c.startswith("sigma_") and c != "sigma_" + obs]
+    if extra:
+        raise TableError(table.path, f"column {extra[0]!r} has no observable {extra[0][6:]!r} in this file")
+    need = min_rows + (obs == "S_norm")
+    if len(table) < need:
+        raise TableError(table.path, f"{len(table)} data row(s); a {kind} fit of {obs} needs at least {need}")
+    m = Measurements(table, kind, obs)
+    _check_rows(m)
+    return m

@@ -1,0 +1,126 @@
+"""The model of every measurement row at a parameter vector: simulations (or closed forms), failures as statuses.
+
+Rows are independent, so they are evaluated as picklable tasks (:class:`RowTask`), one after the
+other in this process or in worker processes (:func:`evaluate_rows`).
+"""
+from __future__ import annotations
+
+import functools
+import json
+import math
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ocp_crawl.fit.data import GAIT_KEYS, Measurements
+from ocp_crawl.model.pressure import BendingMap, pressure_torque
+from ocp_crawl.problem import Problem, ProblemError, problem_from_dict, run_problem
+from ocp_crawl.sim import simulate
+from ocp_crawl.status import Status
+
+SUCCESS = Status.SUCCESS.label
+PA_PER_BAR = 1e5
+
+
+@dataclass(frozen=True)
+class RowTask:
+    """One row to evaluate: plain data only (sent to worker processes)."""
+
+    kind: str
+    problem_json: str
+    """the base problem as JSON of its sections"""
+    values: tuple[tuple[str, float], ...]
+    """problem keys of the fitted parameters -> values"""
+    pressure: tuple[tuple[str, float], ...]
+    """all pressure constants (a1, a2, b1, b2, phi_rest_deg)"""
+    inputs: tuple[tuple[str, float], ...]
+    """the row's operating point, SI (angles in rad, pressures in Pa, torques in N m)"""
+
+
+@functools.lru_cache(maxsize=8)
+def _base(problem_json: str) -> Problem:
+    return problem_from_dict(json.loads(problem_json), source="<fit>")
+
+
+def _problem(task: RowTask, extra: Mapping[str, float]) -> Problem:
+    values = {**dict(task.values), **extra}
+    base = _base(task.problem_json)
+    return base.with_values(values) if values else base
+
+
+def _simulated(task: RowTask) -> tuple[float, str]:
+    inputs = dict(task.inputs)
+    if task.kind == "gait":
+        problem = _problem(task, {GAIT_KEYS[n]: math.degrees(v) for n, v in inputs.items()})
+        result = run_problem(problem)
+    else:
+        problem = _problem(task, {})
+        c = dict(task.pressure)
+        bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
+        try:
+            signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
+                                     c["phi_rest_deg"], bmap)
+            result = simulate(problem.model, signal, "event", problem.hybrid)
+        except ValueError as exc:  # no released equilibrium at t = 0
+            return math.nan, f"{Status.NO_START.label}: {exc}"
+    if not result.success:
+        return math.nan, f"{result.status_name}: {result.message}"
+    return float(result.S), SUCCESS
+
+
+def _closed_form(task: RowTask) -> float:
+    inputs = dict(task.inputs)
+    if task.kind == "stiffness":
+        return inputs["tau"] / _problem(task, {}).robot.k
+    c = dict(task.pressure)
+    seg = "1" if inputs["segment"] == 1.0 else "2"
+    p = inputs["p"] / PA_PER_BAR
+    return c["a" + seg] * p**2 + c["b" + seg] * p
+
+
+def evaluate_row(task: RowTask) -> tuple[float, str]:
+    """The model's value of one row (SI: S [m] or phi [rad]) and ``"success"``, or (NaN, ``"status: message"``).
+
+    A failure of the simulation, a parameter value the problem rejects, or any error is a status, never raised.
+    """
+    try:
+        with np.errstate(all="ignore"):
+            if task.kind in ("gait", "pressure"):
+                return _simulated(task)
+            return _closed_form(task), SUCCESS
+    except ProblemError as exc:
+        return math.nan, f"{Status.BAD_INPUT.label}: {exc}"
+    except Exception as exc:  # noqa: BLE001 - a failed point is a status of the fit, not a crash
+        return math.nan, f"{Status.ERROR.label}: {type(exc).__name__}: {exc}"
+
+
+def row_tasks(problem: Problem, data: Measurements, values: Mapping[str, float],
+              pressure: Mapping[str, float]) -> list[RowTask]:
+    """The tasks of every row of ``data`` at the given problem values and pressure constants."""
+    pj = json.dumps(problem.to_dict(), sort_keys=True)
+    vals, pres = tuple(sorted(values.items())), tuple(sorted(pressure.items()))
+    names = data.inputs
+    return [RowTask(data.kind, pj, vals, pres, tuple((n, float(data.table[n][j])) for n in names))
+            for j in range(len(data))]
+
+
+def evaluate_rows(tasks: Sequence[RowTask], executor: Executor | None = None) -> list[tuple[float, str]]:
+    """:func:`evaluate_row` of every task, in this process (``executor`` None) or by ``executor.map``."""
+    if executor is None:
+        return [evaluate_row(t) for t in tasks]
+    return list(executor.map(evaluate_row, tasks, chunksize=max(1, len(tasks) // 8)))
+
+
+def model_values(data: Measurements, results: Sequence[tuple[float, str]]) -> np.ndarray:
+    """The model's values in the file's observable: S [m], phi [rad], or S normalised at the reference row."""
+    y = np.array([r[0] for r in results], dtype=float)
+    ref = data.reference_row
+    return y / y[ref] if ref is not None else y
+
+
+def describe(value: Any) -> str:
+    """A status text shortened to one line."""
+    text = " ".join(str(value).split())
+    return text if len(text) <= 200 else text[:197] + "..."

@@ -1,0 +1,160 @@
+"""The parameters a calibration can fit: problem-file keys and the pressure actuator's constants.
+
+A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.mu``, ``robot.mu1``,
+``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections), or ``pressure.NAME``
+for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`, which problem files do not
+describe: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar]
+(Table I's map) and ``pressure.phi_rest_deg`` [deg] (the rest angle).  Values are in the units
+of the problem files (degrees for angles).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+from ocp_crawl.model.pressure import FITTED_REST_DEG, BendingMap
+from ocp_crawl.problem import Problem, ProblemError
+from ocp_crawl.problem.schema import SCHEMA, suggest
+
+#: pressure parameters -> unit
+PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg"}
+#: sections whose numbers can be fitted
+FIT_SECTIONS = ("robot", "gait")
+#: default bounds: x0 +- this for angles [deg]; x0 / and * this factor for the others
+ANGLE_SPAN_DEG, SCALE_FACTOR = 45.0, 10.0
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One fitted parameter: its name, unit, start value and bounds (problem-file units)."""
+
+    name: str
+    unit: str
+    x0: float
+    low: float
+    high: float
+
+
+def fittable_names() -> list[str]:
+    """Every name :func:`resolve_parameters` accepts."""
+    keys = [f"{s}.{k.name}" for s in FIT_SECTIONS for k in SCHEMA[s].keys if k.type is float]
+    return keys + [f"pressure.{n}" for n in PRESSURE_UNITS]
+
+
+def pressure_defaults(gravity: str) -> dict[str, float]:
+    """The pressure constants used when not fitted: Table I's map and the stored rest angle [deg]."""
+    return {**{f.name: getattr(BendingMap(), f.name) for f in dataclasses.fields(BendingMap)},
+            "phi_rest_deg": FITTED_REST_DEG[gravity]}
+
+
+def _current(problem: Problem, name: str) -> tuple[float | None, str]:
+    section, key = name.split(".", 1)
+    if section == "pressure":
+        return pressure_defaults(problem.gravity)[key], PRESSURE_UNITS[key]
+    values = problem.sections.get(section, {})
+    unit = SCHEMA[section].key_map[key].unit
+    value = values.get(key)
+    if value is None and key in ("mu1", "mu2"):
+        value = values.get("mu")
+    if value is None and key.endswith(("1_deg", "2_deg")):
+        value = values.get(key[:-5] + "_deg")
+    return value, unit
+
+
+def _default_bounds(x0: float, unit: str) -> tuple[float, float]:
+    if unit == "deg":
+        return x0 - ANGLE_SPAN_DEG, x0 + ANGLE_SPAN_DEG
+    if x0 > 0:
+        return x0 / SCALE_FACTOR, x0 * SCALE_FACTOR
+    span = max(abs(x0) * SCALE_FACTOR, 1.0)
+    return x0 - span, x0 + span
+
+
+def _pairs(items: Sequence[str], option: str) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ProblemError(f"{option} {item!r}: expected NAME=VALUE")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        x = math.nan
+    if not math.isfinite(x):
+        raise ProblemError(f"{what}: {text!r} is not a finite number")
+    return x
+
+
+def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[str] = (),
+                       bounds: Sequence[str] = ()) -> list[Parameter]:
+    """The parameters to fit, checked: names, start values and bounds.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem whose values are the start values (pressure constants: :func:`pressure_defaults`).
+    names : sequence of str
+        ``SECTION.KEY`` names (see the module docstring), each once.
+    start : sequence of str
+        ``NAME=VALUE`` start values replacing the problem's (problem-file units).
+    bounds : sequence of str
+        ``NAME=LOW:HIGH`` bounds; default x0 +- 45 deg for angles, [x0/10, 10 x0] for positive numbers.
+
+    Returns
+    -------
+    list of Parameter
+
+    Raises
+    ------
+    ProblemError
+        An unknown or repeated name (with a suggestion), a start or bound that is not a number, a
+        start outside its bounds.
+    """
+    valid = fittable_names()
+    if not names:
+        raise ProblemError(f"no parameter to fit: give --param NAME (one of {', '.join(valid)})")
+    starts = {k: _number(v, f"--start {k}") for k, v in _pairs(start, "--start").items()}
+    limits = _pairs(bounds, "--bounds")
+    for name in [*names, *starts, *limits]:
+        if name not in valid:
+            raise ProblemError(f"--param {name}: unknown parameter; {suggest(name, valid)}fittable: {', '.join(valid)}")
+    for name in [*starts, *limits]:
+        if name not in names:
+            raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add --param {name})")
+    if len(set(names)) != len(names):
+        raise ProblemError(f"--param: a parameter named twice in {', '.join(names)}")
+    return [_parameter(problem, name, starts, limits) for name in names]
+
+
+def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits: Mapping[str, str]) -> Parameter:
+    value, unit = _current(problem, name)
+    if name in starts:
+        value = starts[name]
+    if value is None:
+        raise ProblemError(f"--param {name}: the problem file gives no value to start from; give --start {name}=VALUE")
+    low, high = _default_bounds(float(value), unit)
+    if name in limits:
+        lo, sep, hi = limits[name].partition(":")
+        if not sep:
+            raise ProblemError(f"--bounds {name}={limits[name]}: expected LOW:HIGH")
+        low, high = _number(lo, f"--bounds {name} low"), _number(hi, f"--bounds {name} high")
+    if not low < high or not low <= value <= high:
+        raise ProblemError(f"--param {name}: start value {value:g} {unit} must lie within bounds [{low:g}, {high:g}] "
+                           "with low < high")
+    return Parameter(name, unit, float(value), float(low), float(high))
+
+
+def split_values(params: Sequence[Parameter], x: Sequence[float]) -> tuple[dict[str, float], dict[str, float]]:
+    """(problem key -> value, pressure constant -> value) of the parameter vector ``x``."""
+    keys, pressure = {}, {}
+    for p, v in zip(params, x):
+        section, key = p.name.split(".", 1)
+        (pressure if section == "pressure" else keys)[key if section == "pressure" else p.name] = float(v)
+    return keys, pressure

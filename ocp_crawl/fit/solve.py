@@ -1,0 +1,302 @@
+"""Weighted least squares of chosen parameters on simulated measurements: :func:`fit_measurements`.
+
+The residual of row j of a file is r_j = (model_j - y_j) / sigma_j (the normalising row of an
+``S_norm`` file is left out: it is 1 - 1 = 0 whatever the parameters).  ``scipy.optimize.least_squares``
+(trust-region reflective, bounds) minimises sum r_j^2 over the parameters, scaled by their start
+values so that every variable is of order 1 (its finite-difference Jacobian then steps every
+parameter by about 1e-4 of its size, far above the simulations' round-off).
+
+Uncertainties.  J is the Jacobian of r at the solution (per unit of each parameter).  With
+``absolute_sigma`` (default) the sigmas are taken as the data's standard uncertainties and the
+covariance is (J^T J)^-1; otherwise it is scaled by the reduced chi-square s^2 = chi^2 / (n - p)
+(the sigmas are then only relative weights).  Both are reported through ``chi2_red``.
+
+Identifiability.  The singular values s_i of J D, D = diag(|x|) (a relative change of every
+parameter), say what the data fix: along the right singular vector v_i, a relative change of
+the parameters is determined to 1 / s_i.  Directions with s_i <= ``rcond`` s_max are numerically
+unidentifiable (the rank is the number of the others); directions with 1 / s_i > 1 are fixed
+to no better than 100 %.  Both are listed (:class:`Direction`), the parameters involved get an
+infinite sigma, and the correlation matrix (from the covariance of the identifiable directions)
+shows the trade-offs.
+"""
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ocp_crawl.fit.data import Measurements
+from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_tasks
+from ocp_crawl.fit.params import Parameter, pressure_defaults, split_values
+from ocp_crawl.io.tables import TableError
+from ocp_crawl.problem import Problem
+from ocp_crawl.status import Status
+from ocp_crawl.sweep.executors import _mp_context
+
+#: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from it
+FAILED_RESIDUAL = 1e3
+#: singular values below RCOND * the largest are numerically zero (finite differences are good to ~1e-6)
+RCOND = 1e-4
+#: a direction fixed to worse than this relative standard deviation is reported as not determined
+POOR = 1.0
+DIFF_STEP = 1e-4
+
+
+@dataclass(frozen=True)
+class FileFit:
+    """Data and model of one measurement file at the fitted parameters."""
+
+    data: Measurements = field(repr=False)
+    model: np.ndarray
+    """model values (SI, as the observable)"""
+    statuses: tuple[str, ...]
+
+    @property
+    def residuals(self) -> np.ndarray:
+        """(model - data) / sigma per row (0 at the normalising row)"""
+        return (self.model - self.data.y) / self.data.sigma
+
+
+@dataclass(frozen=True)
+class Direction:
+    """A combination of relative parameter changes that the data do not fix."""
+
+    singular_ratio: float
+    """s_i / s_max"""
+    relative_sd: float
+    """1 / s_i: standard deviation of the relative change along this direction"""
+    components: dict[str, float]
+    """parameter -> component of the unit vector (in relative changes d x / x)"""
+
+    def text(self) -> str:
+        terms = " ".join(f"{c:+.2f} dlog({n})" for n, c in self.components.items() if abs(c) >= 0.05)
+        return f"{terms} (s/s_max = {self.singular_ratio:.1e}, relative sd {self.relative_sd:.2g})"
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Outcome of :func:`fit_measurements`; values in problem-file units (angles in degrees)."""
+
+    parameters: tuple[Parameter, ...]
+    x: np.ndarray
+    sigma: np.ndarray
+    """standard uncertainties (inf: not identifiable)"""
+    covariance: np.ndarray
+    correlation: np.ndarray
+    singular_values: np.ndarray
+    """of J D (see the module docstring), largest first"""
+    rank: int
+    unidentified: tuple[Direction, ...]
+    files: tuple[FileFit, ...]
+    chi2: float
+    dof: int
+    nfev: int
+    status: Status
+    message: str
+    absolute_sigma: bool
+    problem: Problem = field(repr=False)
+    """the input problem with the fitted problem keys"""
+    pressure: dict[str, float] = field(default_factory=dict)
+    """the pressure constants of the fit (fitted or not)"""
+
+    @property
+    def success(self) -> bool:
+        return self.status == Status.SUCCESS
+
+    @property
+    def chi2_red(self) -> float:
+        return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+    @property
+    def identifiable(self) -> bool:
+        return not self.unidentified
+
+    def values(self) -> dict[str, float]:
+        return {p.name: float(v) for p, v in zip(self.parameters, self.x)}
+
+
+class _Objective:
+    """r(z) of the scaled parameters z = x / scale, with the last evaluation kept (statuses, failures)."""
+
+    def __init__(self, problem, datasets, params, executor):
+        self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
+        self.scale = np.array([abs(p.x0) or 1.0 for p in params])
+        self.failed_evaluations = 0
+        self.last: tuple[np.ndarray, list] | None = None
+
+    def evaluate(self, x: np.ndarray) -> list[tuple[np.ndarray, tuple[str, ...]]]:
+        keys, pressure = split_values(self.params, x)
+        constants = {**pressure_defaults(self.problem.gravity), **pressure}
+        tasks = [row_tasks(self.problem, d, keys, constants) for d in self.datasets]
+        flat = evaluate_rows([t for ts in tasks for t in ts], self.executor)
+        out, start = [], 0
+        for d in self.datasets:
+            rows = flat[start:start + len(d)]
+            start += len(d)
+            out.append((model_values(d, rows), tuple(r[1] for r in rows)))
+        return out
+
+    def __call__(self, z: np.ndarray) -> np.ndarray:
+        per_file = self.evaluate(z * self.scale)
+        self.last = (np.array(z, copy=True), per_file)
+        r = []
+        for d, (model, _) in zip(self.datasets, per_file):
+            res = (model - d.y) / d.sigma
+            keep = np.arange(len(d)) != (d.reference_row if d.reference_row is not None else -1)
+            r.append(res[keep])
+        r = np.concatenate(r)
+        bad = ~np.isfinite(r)
+        if bad.any():
+            self.failed_evaluations += 1
+            r[bad] = FAILED_RESIDUAL
+        return r
+
+
+def _n_residuals(datasets: Sequence[Measurements]) -> int:
+    return sum(len(d) - (d.reference_row is not None) for d in datasets)
+
+
+def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: float = 1.0,
+                rcond: float = RCOND) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, tuple[Direction, ...]]:
+    """Covariance, correlation, singular values, rank and undetermined directions of a weighted Jacobian.
+
+    Parameters
+    ----------
+    jac : numpy.ndarray, shape (n, p)
+        d r / d x of the weighted residuals r = (model - y) / sigma, per unit of each parameter.
+    x : numpy.ndarray, shape (p,)
+        The parameter values (the relative scale D = diag(|x|); 1 where x = 0).
+    names : sequence of str
+        Parameter names, for the directions.
+    scale2 : float
+        Factor of the covariance: 1 for absolute sigmas, the reduced chi-square otherwise.
+    rcond : float
+        Singular values <= rcond * the largest are zero.
+
+    Returns
+    -------
+    covariance (p, p), correlation (p, p), singular values of J D (largest first), rank, directions
+    not determined (numerically zero, or relative sd > 1).  A parameter with a component >= 0.05 on
+    a zero direction has infinite variance and NaN correlations.
+    """
+    d = np.where(x != 0, np.abs(x), 1.0)
+    _, s, vt = np.linalg.svd(jac * d, full_matrices=False)
+    smax = s[0] if s.size and s[0] > 0 else 1.0
+    zero = s <= rcond * smax
+    rank = int(np.sum(~zero))
+    inv2 = np.where(zero, 0.0, 1.0 / np.where(zero, 1.0, s) ** 2) * scale2
+    cov_rel = (vt.T * inv2) @ vt
+    cov = cov_rel * np.outer(d, d)
+    lost = np.any(np.abs(vt[zero]) >= 0.05, axis=0) if zero.any() else np.zeros(len(x), bool)
+    sd = np.sqrt(np.diag(cov))
+    with np.errstate(all="ignore"):
+        corr = cov / np.outer(sd, sd)
+    corr[lost, :] = corr[:, lost] = np.nan
+    np.fill_diagonal(corr, 1.0)
+    cov[lost, :] = cov[:, lost] = np.inf
+    dirs = tuple(Direction(float(si / smax), math.inf if z else float(math.sqrt(scale2) / si),
+                           {n: float(c) for n, c in zip(names, v * np.sign(v[np.argmax(np.abs(v))]))})
+                 for si, v, z in zip(s, vt, zero) if z or math.sqrt(scale2) / si > POOR)
+    return cov, corr, s, rank, dirs
+
+
+def _check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) -> None:
+    n = _n_residuals(datasets)
+    if n < len(params) + 1:
+        names = ", ".join(d.path for d in datasets)
+        raise TableError(datasets[0].path, f"too few points: {n} measurement(s) in {names} (normalising rows not "
+                                           f"counted) for {len(params)} parameter(s); at least {len(params) + 1} needed")
+
+
+def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int) -> tuple[Status, str]:
+    failed = [(f.data.table.line_of(j), f.data.path, s) for f in files for j, s in enumerate(f.statuses)
+              if s != SUCCESS]
+    if failed:
+        line, path, text = failed[0]
+        label = text.split(":", 1)[0]
+        try:
+            status = Status.from_label(label)
+        except (KeyError, ValueError):
+            status = Status.ERROR
+        return status, (f"{len(failed)} point(s) fail at the fitted parameters; the first, {path}:{line}: "
+                        f"{' '.join(text.split())}")
+    if ls_status <= 0:
+        return Status.NO_CONVERGENCE, f"least squares stopped after {nfev} evaluations without converging"
+    return Status.SUCCESS, f"converged after {nfev} evaluations"
+
+
+def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter], *,
+                     absolute_sigma: bool = True, max_nfev: int = 100, jobs: int = 1,
+                     rcond: float = RCOND) -> FitResult:
+    """Fit ``params`` to the measurements by weighted least squares on simulations.
+
+    Parameters
+    ----------
+    problem : Problem
+        The robot, gait, gravity convention and solver options of every simulation.
+    datasets : sequence of Measurements
+        The measurement files (:func:`ocp_crawl.fit.data.read_measurements`).
+    params : sequence of Parameter
+        What to fit, with start values and bounds (:func:`ocp_crawl.fit.params.resolve_parameters`).
+    absolute_sigma : bool
+        True: the sigmas are standard uncertainties, covariance (J^T J)^-1; False: relative weights,
+        covariance scaled by the reduced chi-square.
+    max_nfev : int
+        Most evaluations of all rows by the least-squares search (finite differences excluded).
+    jobs : int
+        Worker processes evaluating the rows (1: this process).
+    rcond : float
+        Relative singular value below which a direction is unidentifiable.
+
+    Returns
+    -------
+    FitResult
+        Its ``status`` is ``success``, ``no_convergence``, or the status of the first point whose
+        simulation fails at the fitted (or, if the start fails, the start) parameters: never raised.
+
+    Raises
+    ------
+    TableError
+        Fewer measurements than parameters + 1.
+    """
+    _check_counts(datasets, params)
+    executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
+    try:
+        obj = _Objective(problem, datasets, params, executor)
+        z0 = np.array([p.x0 for p in params]) / obj.scale
+        r0 = obj(z0)
+        if obj.failed_evaluations:
+            files = [FileFit(d, m, s) for d, (m, s) in zip(datasets, obj.last[1])]
+            status, msg = _final_status(files, 1, 1)
+            return _result(obj, z0, np.zeros((len(r0), len(params))), r0, files, status,
+                           "at the start values: " + msg, 1, absolute_sigma, rcond)
+        lo = np.array([p.low for p in params]) / obj.scale
+        hi = np.array([p.high for p in params]) / obj.scale
+        res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev, method="trf",
+                            x_scale=1.0)
+        if obj.last is None or not np.array_equal(obj.last[0], res.x):
+            obj(res.x)
+        files = [FileFit(d, m, s) for d, (m, s) in zip(datasets, obj.last[1])]
+        status, msg = _final_status(files, res.status, res.nfev)
+        return _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev, absolute_sigma, rcond)
+    finally:
+        if executor is not None:
+            executor.shutdown(cancel_futures=True)
+
+
+def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_sigma, rcond) -> FitResult:
+    x = z * obj.scale
+    chi2 = float(np.sum(np.asarray(r) ** 2))
+    dof = len(r) - len(x)
+    scale2 = 1.0 if absolute_sigma or dof <= 0 else chi2 / dof
+    names = [p.name for p in obj.params]
+    cov, corr, s, rank, dirs = uncertainty(np.asarray(jac), x, names, scale2, rcond)
+    keys, pressure = split_values(obj.params, x)
+    fitted = obj.problem.with_values(keys) if keys else obj.problem
+    constants = {**pressure_defaults(obj.problem.gravity), **pressure}
+    return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs, tuple(files), chi2, dof,
+                     nfev, status, message, absolute_sigma, fitted, constants)
