@@ -158,3 +158,10 @@ def split_values(params: Sequence[Parameter], x: Sequence[float]) -> tuple[dict[
         section, key = p.name.split(".", 1)
         (pressure if section == "pressure" else keys)[key if section == "pressure" else p.name] = float(v)
     return keys, pressure
+
+
+def at_bound(p: Parameter, x: float, rtol: float = 1e-4) -> bool:
+    """True if ``x`` lies within ``rtol`` of the bound interval's width from a bound of ``p`` (the fit was stopped
+    there: its uncertainty is not a confidence interval)."""
+    tol = rtol * (p.high - p.low)
+    return x <= p.low + tol or x >= p.high - tol

@@ -297,6 +297,7 @@ def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_s
     cov, corr, s, rank, dirs = uncertainty(np.asarray(jac), x, names, scale2, rcond)
     keys, pressure = split_values(obj.params, x)
     fitted = obj.problem.with_values(keys) if keys else obj.problem
-    constants = {**pressure_defaults(obj.problem.gravity), **pressure}
+    uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)
+    constants = {**pressure_defaults(obj.problem.gravity), **pressure} if uses else {}
     return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs, tuple(files), chi2, dof,
                      nfev, status, message, absolute_sigma, fitted, constants)

@@ -1,0 +1,64 @@
+"""The calibration command: fit."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from ocp_crawl.cli.app import register
+from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
+from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
+from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
+from ocp_crawl.problem import load_problem
+
+#: most least-squares evaluations (each runs every measurement's simulation)
+MAX_NFEV = 10000
+nfev_type = integer("--max-nfev", 1, " (evaluations of all rows)", high=MAX_NFEV,
+                    why="each evaluation simulates every row; more is a runaway, not a fit")
+
+
+def _fit_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file: robot, gait, gravity, solver options")
+    p.add_argument("data", metavar="DATA.csv", nargs="+",
+                   help="measurement files (README, 'Calibration'): e.g. 'psi [deg],S [mm],sigma_S [mm]'")
+    p.add_argument("--param", dest="params", action="append", default=[], metavar="NAME", required=True,
+                   help="a parameter to fit, named by its problem key (robot.k, robot.mu, robot.mu1, gait.gamma_deg, "
+                        "...) or pressure.a1/a2/b1/b2/phi_rest_deg (repeatable)")
+    p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
+                   help="start value of a fitted parameter (default: the problem's value; Table I for pressure.*)")
+    p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
+                   help="bounds of a fitted parameter (default: start +- 45 deg for angles, [start/10, 10 start] "
+                        "otherwise)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key of the problem (repeatable)")
+    p.add_argument("--relative-sigma", action="store_true",
+                   help="the sigmas are relative weights: scale the covariance by chi2/dof (default: they are "
+                        "standard uncertainties)")
+    p.add_argument("--max-nfev", type=nfev_type, default=100, metavar="N",
+                   help="most least-squares evaluations (default 100)")
+    p.add_argument("--jobs", type=jobs_type, default=1, metavar="N",
+                   help="worker processes simulating the rows (default 1; a row takes ~20 ms)")
+    p.add_argument("--out", metavar="DIR", type=out_dir,
+                   help="directory for fitted_problem.toml, fit.json, residuals.csv, fit.png "
+                        "(default: ./fit_<problem stem>)")
+    p.add_argument("--no-figure", action="store_true", help="do not draw fit.png")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the report")
+    force_arg(p)
+
+
+@register("fit", "calibrate parameters (k, friction, pressure map, ...) to measurements by weighted least squares",
+          _fit_args)
+def cmd_fit(args: argparse.Namespace) -> int:
+    problem = load_problem(args.problem, args.overrides)
+    params = resolve_parameters(problem, args.params, args.start, args.bounds)
+    datasets = [read_measurements(path) for path in args.data]
+    names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
+    out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
+    result = fit_measurements(problem, datasets, params, absolute_sigma=not args.relative_sigma,
+                              max_nfev=args.max_nfev, jobs=args.jobs)
+    files = write_fit(result, out, figure=not args.no_figure)
+    if args.json:
+        print(json.dumps(dict(fit_dict(result), written=[str(f) for f in files]), allow_nan=False))
+    else:
+        print(fit_report(result))
+    return finish(args, files, result.success, f"fit failed: {result.message}")

@@ -1,0 +1,75 @@
+"""The figure of a fit: every measurement file's data with error bars against the fitted model, and the residuals."""
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ocp_crawl.fit.data import DISPLAY, INPUTS
+from ocp_crawl.fit.solve import FitResult
+from ocp_crawl.io.files import atomic_write
+
+#: display unit and factor from SI of the operating-point columns
+INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "torque": ("N m", 1.0),
+                 "dimensionless": ("-", 1.0)}
+LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
+
+
+def _title(fit: FitResult) -> str:
+    values = "; ".join(f"{p.name.split('.', 1)[1]} = {x:.4g} +- {s:.2g}" if math.isfinite(s)
+                       else f"{p.name.split('.', 1)[1]} = {x:.4g} (not identifiable)"
+                       for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
+    return (f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), "
+            f"rank {fit.rank} of {len(fit.parameters)}")
+
+
+def fit_figure(fit: FitResult) -> Figure:
+    """Data (error bars: one sigma) and model (fitted parameters) per file, residuals in sigmas below."""
+    n = len(fit.files)
+    fig = Figure(figsize=(5.2 * n, 5.6), constrained_layout=True)
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
+    for j, f in enumerate(fit.files):
+        d = f.data
+        name = d.abscissa
+        xunit, xf = INPUT_DISPLAY[INPUTS[name]]
+        yunit, yf = DISPLAY[d.observable]
+        x = d.table[name] * xf
+        order = np.argsort(x)
+        ax, axr = axes[0, j], axes[1, j]
+        ax.errorbar(x, d.y * yf, yerr=d.sigma * yf, fmt="o", color="k", ms=4, capsize=3, label="data (+- 1 sigma)")
+        ok = np.isfinite(f.model)
+        ax.plot(x[order][ok[order]], (f.model * yf)[order][ok[order]], "-s", color="tab:blue", ms=4,
+                label="model at the fitted parameters")
+        if (~ok).any():
+            ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2, label="simulation failed")
+        ref = d.reference_row
+        if ref is not None:
+            ax.plot(x[ref], d.y[ref] * yf, "o", mfc="none", mec="tab:orange", ms=11, mew=1.5,
+                    label="normalising row")
+        others = [f"{c} = {v:g} {INPUT_DISPLAY[INPUTS[c]][0]}" for c in d.inputs if c != name
+                  for v in [np.unique(np.round(d.table[c] * INPUT_DISPLAY[INPUTS[c]][1], 6))] if v.size == 1
+                  for v in [v[0]]]
+        ax.set_title(f"{Path(d.path).name} ({d.kind}" + (", " + ", ".join(others) if others else "") + ")",
+                     fontsize=9)
+        ax.set_ylabel(f"{LABELS[d.observable]} [{yunit}]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        axr.axhline(0, color="0.5", lw=0.8)
+        axr.plot(x, f.residuals, "o", color="tab:blue", ms=4, label="(model - data) / sigma")
+        axr.set_xlabel(f"{name} [{xunit}]")
+        axr.set_ylabel("residual [sigma]")
+        axr.grid(alpha=0.3)
+        axr.legend(fontsize=8)
+    fig.suptitle(_title(fit), fontsize=10)
+    return fig
+
+
+def plot_fit(fit: FitResult, path: str | os.PathLike) -> Path:
+    """Save :func:`fit_figure` as a PNG at ``path`` (atomically); returns the path."""
+    fig = fit_figure(fit)
+    return atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
