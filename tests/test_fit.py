@@ -1,0 +1,184 @@
+"""Calibration (``ocp_crawl.fit``, ``ocp-crawl fit``): recovery of known parameters, uncertainties, identifiability.
+
+Independent checks: the reported sigma of a closed-form fit against the weighted linear regression
+and against the spread of many noisy repetitions; the sigma of a simulated fit against the curvature
+of chi^2 scanned with direct simulations; the rank deficiency k-M against the scaling of the model
+(S depends on k/(M g L) only); the k-map trade-off of normalised pressure data against direct
+simulations along the reported direction.
+"""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocp_crawl.cli.app import main
+from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
+from ocp_crawl.fit.report import fit_report, write_fit
+from ocp_crawl.io.tables import write_table
+from ocp_crawl.model.pressure import BendingMap, pressure_torque
+from ocp_crawl.problem import load_problem, run_problem
+from ocp_crawl.sim import simulate
+from ocp_crawl.status import Status
+
+REPO = Path(__file__).resolve().parent.parent
+PAPER = REPO / "problems" / "paper_gait.toml"
+PAPER_GRAVITY = REPO / "problems" / "paper_gait_paper_gravity.toml"
+PRESSURE_DATA = [REPO / "examples" / "data" / "paper_pressure_p0.csv", REPO / "examples" / "data" / "paper_pressure_psi.csv"]
+TRUE = {"robot.k": 0.15, "robot.mu": 0.35}
+AMPLITUDES = np.array([15.0, 22.0, 30.0, 38.0])
+SIGMA_MM = 0.2
+
+
+def _s_vs_amplitude(problem, tmp_path, seed=1, name="a.csv"):
+    """Noisy S [mm] against A [deg] simulated with TRUE (fixed seed); returns (path, noiseless S [mm])."""
+    truth = problem.with_values(TRUE)
+    s = np.array([run_problem(truth.with_values({"gait.A_deg": a})).S for a in AMPLITUDES]) * 1e3
+    y = s + np.random.default_rng(seed).normal(0.0, SIGMA_MM, s.size)
+    path = write_table(tmp_path / name, [("A", "deg", AMPLITUDES), ("S", "mm", y),
+                                         ("sigma_S", "mm", np.full(s.size, SIGMA_MM))])
+    return path, s
+
+
+def test_recovers_k_and_mu_within_their_uncertainties(tmp_path):
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path)
+    fit = fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, list(TRUE)))
+    assert fit.success, fit.message
+    assert fit.rank == 2 and fit.identifiable
+    for p, x, s in zip(fit.parameters, fit.x, fit.sigma):
+        assert 0 < s < 0.3 * TRUE[p.name], (p.name, s)
+        assert abs(x - TRUE[p.name]) < 3 * s, (p.name, x, s)
+    # the fitted problem file holds the fitted values and loads back
+    write_fit(fit, tmp_path / "out", figure=False)
+    back = load_problem(tmp_path / "out" / "fitted_problem.toml")
+    assert back.robot.k == pytest.approx(fit.x[0], rel=1e-9) and back.robot.mu1 == pytest.approx(fit.x[1], rel=1e-9)
+
+
+def test_sigma_of_k_matches_the_curvature_of_chi2(tmp_path):
+    """1-parameter fit: sigma_k from the Jacobian against chi^2(k) scanned by direct simulations (parabola)."""
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path, seed=3)
+    data = read_measurements(path)
+    fit = fit_measurements(problem, [data], resolve_parameters(problem, ["robot.k"]))
+    assert fit.success
+    k, sk = fit.x[0], fit.sigma[0]
+    assert abs(k - TRUE["robot.k"]) < 3 * sk
+    ks = k + sk * np.array([-1.0, 0.0, 1.0])
+
+    def chi2(kk):
+        q = problem.with_values({"robot.k": kk})
+        s = np.array([run_problem(q.with_values({"gait.A_deg": a})).S for a in AMPLITUDES])
+        return float(np.sum(((s - data.y) / data.sigma) ** 2))
+
+    c = np.polyfit(ks, [chi2(v) for v in ks], 2)
+    sigma_scan = math.sqrt(1.0 / c[0])  # chi2 = chi2_min + (k - k*)^2 / sigma^2
+    assert sk == pytest.approx(sigma_scan, rel=0.1)
+
+
+def test_closed_form_sigma_and_coverage(tmp_path):
+    """Stiffness data phi = tau / k: the reported sigma equals the weighted linear regression's, and over
+    many noisy repetitions about 68 % of the fits lie within one reported sigma of the truth."""
+    problem = load_problem(PAPER)
+    k_true, tau = 0.1677, np.linspace(0.002, 0.02, 6)
+    sig = np.full(tau.size, math.radians(0.5))
+    params = resolve_parameters(problem, ["robot.k"])
+    rng = np.random.default_rng(7)
+    inside, estimates, sigmas = 0, [], []
+    for i in range(40):
+        phi = tau / k_true + rng.normal(0.0, sig)
+        path = write_table(tmp_path / f"s{i}.csv", [("tau", "N m", tau), ("phi", "rad", phi), ("sigma_phi", "rad", sig)])
+        fit = fit_measurements(problem, [read_measurements(path)], params)
+        assert fit.success
+        c_sigma = 1.0 / math.sqrt(np.sum(tau**2 / sig**2))  # regression phi = c tau, k = 1/c
+        assert fit.sigma[0] == pytest.approx(fit.x[0] ** 2 * c_sigma, rel=1e-3)
+        inside += abs(fit.x[0] - k_true) < fit.sigma[0]
+        estimates.append(fit.x[0])
+        sigmas.append(fit.sigma[0])
+    assert 0.5 <= inside / 40 <= 0.86, inside
+    assert np.std(estimates) == pytest.approx(np.mean(sigmas), rel=0.35)
+
+
+def test_k_and_mass_together_are_reported_rank_deficient(tmp_path):
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path)
+    # the model's own scaling, independently: S depends on k / (M g L) only
+    a = run_problem(problem.with_values({"robot.k": 0.2, "robot.M": 0.06})).S
+    b = run_problem(problem.with_values({"robot.k": 0.3, "robot.M": 0.09})).S
+    assert a == pytest.approx(b, rel=1e-7)
+    fit = fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, ["robot.k", "robot.M"]),
+                           max_nfev=10)
+    assert fit.rank == 1 and len(fit.unidentified) == 1
+    d = fit.unidentified[0]
+    assert math.isinf(d.relative_sd) and d.singular_ratio < 1e-4
+    assert d.components["robot.k"] == pytest.approx(d.components["robot.M"], abs=0.01)
+    assert np.all(np.isinf(fit.sigma))
+    text = fit_report(fit)
+    assert "rank 1 of 2" in text and "unidentifiable (rank-deficient)" in text and "dlog(robot.M)" in text
+
+
+def _s_norm_pressure(problem, k, bmap):
+    """S / S_ref of the two paper pressure files, simulated directly (not through the fit)."""
+    out, sig = [], []
+    for path in PRESSURE_DATA:
+        d = read_measurements(path)
+        model = problem.with_values({"robot.k": k}).model
+        s = np.array([simulate(model, pressure_torque(model.robot, p0 / 1e5, math.degrees(psi), 131.3, bmap),
+                               "event").S for p0, psi in zip(d.table["p0"], d.table["psi"])])
+        out.append(s / s[d.reference_row])
+        sig.append(d.sigma)
+    return np.concatenate(out), np.concatenate(sig)
+
+
+def test_normalised_data_cannot_fix_k_and_the_pressure_map_together():
+    problem = load_problem(PAPER_GRAVITY)
+    names = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
+    datasets = [read_measurements(p) for p in PRESSURE_DATA]
+    # the Jacobian at Table I (one evaluation of the search is enough for the report)
+    fit = fit_measurements(problem, datasets, resolve_parameters(problem, names), max_nfev=1)
+    assert fit.unidentified, fit_report(fit)
+    d = fit.unidentified[0]
+    assert d.relative_sd > 5
+    k_part = d.components["robot.k"]
+    map_parts = [d.components[n] for n in names[1:]]
+    assert abs(k_part) > 0.3 and all(m * k_part < 0 for m in map_parts)  # k down, the whole map up
+    assert all(fit.correlation[0, j] < -0.9 for j in range(1, 5))
+    assert "not determined" in fit_report(fit) and "dlog(robot.k)" in fit_report(fit)
+    # independently: moving k and the map along that trade-off changes S/S_ref far less than moving k alone
+    base, sig = _s_norm_pressure(problem, 0.1677, BendingMap())
+    traded, _ = _s_norm_pressure(problem, 0.1677 / 1.2, BendingMap(*(1.2 * v for v in (0.092, 0.089, 0.127, 0.144))))
+    k_only, _ = _s_norm_pressure(problem, 0.1677 / 1.2, BendingMap())
+    assert np.sum(((traded - base) / sig) ** 2) < 0.1 * np.sum(((k_only - base) / sig) ** 2)
+
+
+def test_a_failing_start_is_a_status_not_a_crash(tmp_path):
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path)
+    soft = problem.with_values({"robot.k": 0.00306})  # k = 0.05 M g L: cannot stand at t = 0
+    fit = fit_measurements(soft, [read_measurements(path)], resolve_parameters(soft, ["robot.k"]))
+    assert not fit.success and fit.status == Status.NO_START
+    assert "at the start values" in fit.message and "a.csv:" in fit.message
+
+
+def test_cli_fit_writes_the_fit_and_refuses_to_overwrite(tmp_path, capsys):
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path)
+    out = tmp_path / "out"
+    argv = ["fit", str(PAPER), str(path), "--param", "robot.k", "--out", str(out), "--json"]
+    assert main(argv) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["status"] == "success" and data["rank"] == 1 and data["parameters"][0]["name"] == "robot.k"
+    assert {p.name for p in out.iterdir()} == {"fitted_problem.toml", "fit.json", "residuals.csv", "fit.png"}
+    assert main(argv) == 2 and "--force" in capsys.readouterr().err
+    assert main(argv + ["--force", "--no-figure"]) == 0
+
+
+@pytest.mark.slow
+def test_worked_example_fits_the_paper_experiments(tmp_path):
+    """The paper's experimental curves: the rest angle fits them to chi2/dof < 3, and k with the map is reported
+    undetermined (the constants stay consistent with Table I within their uncertainties)."""
+    problem = load_problem(PAPER_GRAVITY)
+    datasets = [read_measurements(p) for p in PRESSURE_DATA]
+    fit = fit_measurements(problem, datasets, resolve_parameters(problem, ["pressure.phi_rest_deg"]), max_nfev=30)
+    assert fit.success and fit.chi2_red < 3 and fit.identifiable
