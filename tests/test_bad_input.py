@@ -22,6 +22,7 @@ import ocp_crawl.viz.animate
 import ocp_crawl.cli.app as cli
 import ocp_crawl.cli.run_commands
 import ocp_crawl.cli.study_commands
+import ocp_crawl.cli.fit_commands
 import ocp_crawl.problem.run
 import ocp_crawl.sim.crosscheck
 import ocp_crawl.sim.event
@@ -413,6 +414,37 @@ ROWS.update({
                              ["[robot] k = 1e+308 (from --set)", "in [1e-12, 1e12]"]),
 })
 
+# ---- fit: measurement files (the CSV convention) and parameters
+_FIT_HEAD = b"A [deg],S [mm],sigma_S [mm]\n"
+_FIT_ROWS = b"15,-27.7,0.2\n22,-41.1,0.2\n30,-56.0,0.2\n"
+
+
+def _fit(words, *extra, data=_FIT_HEAD + _FIT_ROWS, params=("robot.k",)):
+    argv = ["{paper}", "{tmp}/d.csv", *(a for p in params for a in ("--param", p)), "--out", "{tmp}/out", *extra]
+    return R("fit", argv, words, files={"d.csv": data})
+
+
+ROWS.update({
+    "fit: NaN measurement": _fit(["d.csv:3", "'S [mm]'", "not a finite number"],
+                                 data=_FIT_HEAD + b"15,-27.7,0.2\n22,nan,0.2\n30,-56.0,0.2\n"),
+    "fit: too few points": _fit(["d.csv", "too few points", "2 parameter(s)"], params=("robot.k", "robot.mu"),
+                                data=_FIT_HEAD + b"15,-27.7,0.2\n22,-41.1,0.2\n"),
+    "fit: unknown parameter": _fit(["--param robot.kk", "unknown parameter", "did you mean robot.k?"],
+                                   params=("robot.kk",)),
+    "fit: zero uncertainty": _fit(["d.csv:4", "sigma_S", "must be > 0"],
+                                  data=_FIT_HEAD + b"15,-27.7,0.2\n22,-41.1,0.2\n30,-56.0,0\n"),
+    "fit: negative uncertainty": _fit(["d.csv:2", "sigma_S", "must be > 0"],
+                                      data=_FIT_HEAD + b"15,-27.7,-0.2\n22,-41.1,0.2\n30,-56.0,0.2\n"),
+    "fit: unit mismatch": _fit(["d.csv:1", "'S'", "[deg] is not a length unit"],
+                               data=b"A [deg],S [deg],sigma_S [mm]\n" + _FIT_ROWS),
+    "fit: no uncertainty column": _fit(["d.csv", "missing column 'sigma_S'"], data=b"A [deg],S [mm]\n15,-27.7\n22,-4\n"),
+    "fit: start outside the bounds": _fit(["--param robot.k", "within bounds"], "--bounds", "robot.k=0.2:0.3"),
+    "fit: --max-nfev 0": _fit(["--max-nfev 0", "in [1, 10000]"], "--max-nfev", "0"),
+})
+ROWS["fit: earlier results"] = R("fit", ["{paper}", "{tmp}/d.csv", "--param", "robot.k", "--out", "{tmp}/out"],
+                                 ["--out", "would overwrite", "--force"],
+                                 files={"d.csv": _FIT_HEAD + _FIT_ROWS, "out/fit.json": b"{}"})
+
 #: generous time limit of one row: a hang guard, not a timing assertion (every row takes well under a second)
 HANG_GUARD_S = 120
 
@@ -429,7 +461,7 @@ def nothing_computed(monkeypatch):
                          (ocp_crawl.sim.angles, "simulate_angles"), (ocp_crawl.sim.timestepping, "simulate_mpcc"),
                          (ocp_crawl.cli.study_commands, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
                          (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
-                         (ocp_crawl.ocp, "optimize_gait")):
+                         (ocp_crawl.ocp, "optimize_gait"), (ocp_crawl.cli.fit_commands, "fit_measurements")):
         monkeypatch.setattr(module, name, _computed)
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 from ocp_crawl.cli.app import register
 from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
 from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
+from ocp_crawl.fit.solve import check_counts
 from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 from ocp_crawl.problem import load_problem
 
@@ -52,6 +53,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, args.overrides)
     params = resolve_parameters(problem, args.params, args.start, args.bounds)
     datasets = [read_measurements(path) for path in args.data]
+    check_counts(datasets, params)
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
     result = fit_measurements(problem, datasets, params, absolute_sigma=not args.relative_sigma,

@@ -122,9 +122,11 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
         raise ProblemError(f"no parameter to fit: give --param NAME (one of {', '.join(valid)})")
     starts = {k: _number(v, f"--start {k}") for k, v in _pairs(start, "--start").items()}
     limits = _pairs(bounds, "--bounds")
-    for name in [*names, *starts, *limits]:
-        if name not in valid:
-            raise ProblemError(f"--param {name}: unknown parameter; {suggest(name, valid)}fittable: {', '.join(valid)}")
+    for option, given in (("--param", names), ("--start", starts), ("--bounds", limits)):
+        for name in given:
+            if name not in valid:
+                raise ProblemError(f"{option} {name}: unknown parameter; {suggest(name, valid)}fittable: "
+                                   f"{', '.join(valid)}")
     for name in [*starts, *limits]:
         if name not in names:
             raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add --param {name})")

@@ -29,7 +29,7 @@ from typing import Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from ocp_crawl.fit.data import Measurements
+from ocp_crawl.fit.data import GAIT_KEYS, Measurements
 from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_tasks
 from ocp_crawl.fit.params import Parameter, pressure_defaults, split_values
 from ocp_crawl.io.tables import TableError
@@ -204,7 +204,14 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
     return cov, corr, s, rank, dirs
 
 
-def _check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) -> None:
+def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) -> None:
+    """TableError naming a file: fewer measurements than parameters + 1, or a fitted gait key that a file's column sets."""
+    for d in datasets:
+        for name in d.inputs:
+            key = GAIT_KEYS.get(name)
+            if d.kind == "gait" and key in {p.name for p in params}:
+                raise TableError(d.path, f"column {name!r} sets {key} in every row: it cannot also be fitted "
+                                         f"(--param {key})")
     n = _n_residuals(datasets)
     if n < len(params) + 1:
         names = ", ".join(d.path for d in datasets)
@@ -263,7 +270,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     TableError
         Fewer measurements than parameters + 1.
     """
-    _check_counts(datasets, params)
+    check_counts(datasets, params)
     executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor)
