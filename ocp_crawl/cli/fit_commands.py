@@ -8,6 +8,7 @@ from pathlib import Path
 from ocp_crawl.cli.app import register
 from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
 from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
+from ocp_crawl.fit.params import fixed_pressure
 from ocp_crawl.fit.solve import check_counts
 from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 from ocp_crawl.problem import load_problem
@@ -30,6 +31,9 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
                    help="bounds of a fitted parameter (default: start +- 45 deg for angles, [start/10, 10 start] "
                         "otherwise)")
+    p.add_argument("--pressure", action="append", default=[], metavar="NAME=VALUE",
+                   help="a pressure constant held fixed (a1, a2, b1, b2 [rad/bar^2, rad/bar], phi_rest_deg [deg]; "
+                        "default Table I and the stored rest angle)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the problem (repeatable)")
     p.add_argument("--relative-sigma", action="store_true",
@@ -52,11 +56,12 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, args.overrides)
     params = resolve_parameters(problem, args.params, args.start, args.bounds)
+    pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
     check_counts(datasets, params)
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
-    result = fit_measurements(problem, datasets, params, absolute_sigma=not args.relative_sigma,
+    result = fit_measurements(problem, datasets, params, pressure=pressure, absolute_sigma=not args.relative_sigma,
                               max_nfev=args.max_nfev, jobs=args.jobs)
     files = write_fit(result, out, figure=not args.no_figure)
     if args.json:

@@ -167,3 +167,16 @@ def at_bound(p: Parameter, x: float, rtol: float = 1e-4) -> bool:
     there: its uncertainty is not a confidence interval)."""
     tol = rtol * (p.high - p.low)
     return x <= p.low + tol or x >= p.high - tol
+
+
+def fixed_pressure(items: Sequence[str]) -> dict[str, float]:
+    """``NAME=VALUE`` texts of pressure constants held fixed (``a1``, ..., ``phi_rest_deg``) -> values; ProblemError
+    for an unknown name or a value that is not a number."""
+    out = {}
+    for name, text in _pairs(items, "--pressure").items():
+        key = name.removeprefix("pressure.")
+        if key not in PRESSURE_UNITS:
+            raise ProblemError(f"--pressure {name}: unknown pressure constant; {suggest(key, list(PRESSURE_UNITS))}"
+                               f"one of {', '.join(PRESSURE_UNITS)}")
+        out[key] = _number(text, f"--pressure {name}")
+    return out

@@ -23,8 +23,10 @@ def _title(fit: FitResult) -> str:
     values = "; ".join(f"{p.name.split('.', 1)[1]} = {x:.4g} +- {s:.2g}" if math.isfinite(s)
                        else f"{p.name.split('.', 1)[1]} = {x:.4g} (not identifiable)"
                        for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
+    n = len(fit.unidentified)
+    said = f"; {n} direction(s) not determined by the data (see the report)" if n else ""
     return (f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), "
-            f"rank {fit.rank} of {len(fit.parameters)}")
+            f"rank {fit.rank} of {len(fit.parameters)}{said}")
 
 
 def fit_figure(fit: FitResult) -> Figure:

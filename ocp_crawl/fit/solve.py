@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -122,15 +122,16 @@ class FitResult:
 class _Objective:
     """r(z) of the scaled parameters z = x / scale, with the last evaluation kept (statuses, failures)."""
 
-    def __init__(self, problem, datasets, params, executor):
+    def __init__(self, problem, datasets, params, executor, pressure):
         self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
+        self.constants = {**pressure_defaults(problem.gravity), **pressure}
         self.scale = np.array([abs(p.x0) or 1.0 for p in params])
         self.failed_evaluations = 0
         self.last: tuple[np.ndarray, list] | None = None
 
     def evaluate(self, x: np.ndarray) -> list[tuple[np.ndarray, tuple[str, ...]]]:
         keys, pressure = split_values(self.params, x)
-        constants = {**pressure_defaults(self.problem.gravity), **pressure}
+        constants = {**self.constants, **pressure}
         tasks = [row_tasks(self.problem, d, keys, constants) for d in self.datasets]
         flat = evaluate_rows([t for ts in tasks for t in ts], self.executor)
         out, start = [], 0
@@ -237,8 +238,8 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int) -> tuple[
 
 
 def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter], *,
-                     absolute_sigma: bool = True, max_nfev: int = 100, jobs: int = 1,
-                     rcond: float = RCOND) -> FitResult:
+                     pressure: Mapping[str, float] | None = None, absolute_sigma: bool = True,
+                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND) -> FitResult:
     """Fit ``params`` to the measurements by weighted least squares on simulations.
 
     Parameters
@@ -249,6 +250,9 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         The measurement files (:func:`ocp_crawl.fit.data.read_measurements`).
     params : sequence of Parameter
         What to fit, with start values and bounds (:func:`ocp_crawl.fit.params.resolve_parameters`).
+    pressure : mapping of str to float, optional
+        Pressure constants held fixed (``a1``, ``a2``, ``b1``, ``b2`` [rad/bar^2, rad/bar], ``phi_rest_deg``
+        [deg]); default Table I and the stored rest angle (:func:`ocp_crawl.fit.params.pressure_defaults`).
     absolute_sigma : bool
         True: the sigmas are standard uncertainties, covariance (J^T J)^-1; False: relative weights,
         covariance scaled by the reduced chi-square.
@@ -273,7 +277,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     check_counts(datasets, params)
     executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
     try:
-        obj = _Objective(problem, datasets, params, executor)
+        obj = _Objective(problem, datasets, params, executor, dict(pressure or {}))
         z0 = np.array([p.x0 for p in params]) / obj.scale
         r0 = obj(z0)
         if obj.failed_evaluations:
@@ -305,6 +309,6 @@ def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_s
     keys, pressure = split_values(obj.params, x)
     fitted = obj.problem.with_values(keys) if keys else obj.problem
     uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)
-    constants = {**pressure_defaults(obj.problem.gravity), **pressure} if uses else {}
+    constants = {**obj.constants, **pressure} if uses else {}
     return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs, tuple(files), chi2, dof,
                      nfev, status, message, absolute_sigma, fitted, constants)
