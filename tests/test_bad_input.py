@@ -440,6 +440,8 @@ ROWS.update({
     "fit: no uncertainty column": _fit(["d.csv", "missing column 'sigma_S'"], data=b"A [deg],S [mm]\n15,-27.7\n22,-4\n"),
     "fit: start outside the bounds": _fit(["--param robot.k", "within bounds"], "--bounds", "robot.k=0.2:0.3"),
     "fit: --max-nfev 0": _fit(["--max-nfev 0", "in [1, 10000]"], "--max-nfev", "0"),
+    "fit: unknown pressure constant": _fit(["--pressure pressure.c1", "unknown pressure constant"], "--pressure",
+                                           "pressure.c1=0.1"),
 })
 ROWS["fit: earlier results"] = R("fit", ["{paper}", "{tmp}/d.csv", "--param", "robot.k", "--out", "{tmp}/out"],
                                  ["--out", "would overwrite", "--force"],
@@ -606,3 +608,13 @@ def test_a_partly_valid_grid_is_data_not_bad_input():
     check_some_point_valid(problem, grid_from_specs(["gait.gamma_deg=30,90"]))
     with pytest.raises(ProblemError, match="every one of the 4 points"):
         check_some_point_valid(problem, grid_from_specs(["gait.gamma_deg=20,30", "gait.A_deg=30,40"]))
+
+
+def test_the_guard_catches_a_fit(tmp_path, capsys, nothing_computed, monkeypatch):
+    """Valid fit input reaches the (replaced) fit, which ends as an internal error: the rows above are rejected
+    before it."""
+    monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
+    (tmp_path / "d.csv").write_bytes(_FIT_HEAD + _FIT_ROWS)
+    code = cli.main(["fit", str(PAPER), str(tmp_path / "d.csv"), "--param", "robot.k", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 1 and err.startswith("ocp-crawl: internal error: AssertionError: a long computation started"), err

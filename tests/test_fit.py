@@ -182,3 +182,36 @@ def test_worked_example_fits_the_paper_experiments(tmp_path):
     datasets = [read_measurements(p) for p in PRESSURE_DATA]
     fit = fit_measurements(problem, datasets, resolve_parameters(problem, ["pressure.phi_rest_deg"]), max_nfev=30)
     assert fit.success and fit.chi2_red < 3 and fit.identifiable
+
+
+def test_bending_map_matches_weighted_linear_least_squares(tmp_path):
+    """Clamped-segment bending phi = a_i p^2 + b_i p is linear in (a_i, b_i): the fit and its covariance equal
+    numpy's weighted linear least squares; sigmas as weights scale the covariance by chi2/dof; two worker
+    processes give the same fit."""
+    problem = load_problem(PAPER_GRAVITY)
+    p = np.tile(np.linspace(0.2, 1.7, 6), 2)
+    seg = np.repeat([1.0, 2.0], 6)
+    truth = {1.0: (0.092, 0.127), 2.0: (0.089, 0.144)}
+    phi = np.array([truth[s][0] * x**2 + truth[s][1] * x for x, s in zip(p, seg)])
+    sig = np.where(seg == 1, 0.01, 0.02)
+    phi = phi + np.random.default_rng(5).normal(0.0, sig)
+    path = write_table(tmp_path / "b.csv", [("p", "bar", p), ("segment", "-", seg), ("phi", "rad", phi),
+                                            ("sigma_phi", "rad", sig)])
+    data = [read_measurements(path)]
+    names = ["pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
+    fit = fit_measurements(problem, data, resolve_parameters(problem, names))
+    assert fit.success and fit.rank == 4
+    design = np.zeros((p.size, 4))
+    for j, (x, s) in enumerate(zip(p, seg)):
+        design[j, (0, 1) if s == 1 else (2, 3)] = (x**2, x)
+    w = design / sig[:, None]
+    coef, *_ = np.linalg.lstsq(w, phi / sig, rcond=None)
+    cov = np.linalg.inv(w.T @ w)
+    assert fit.x == pytest.approx(coef, rel=1e-6)
+    assert fit.covariance == pytest.approx(cov, rel=1e-3)
+    for name, x, s in zip(names, fit.x, fit.sigma):
+        assert abs(x - {"a1": 0.092, "b1": 0.127, "a2": 0.089, "b2": 0.144}[name[9:]]) < 3 * s
+    weights = fit_measurements(problem, data, resolve_parameters(problem, names), absolute_sigma=False)
+    assert weights.sigma == pytest.approx(fit.sigma * math.sqrt(fit.chi2_red), rel=1e-6)
+    pooled = fit_measurements(problem, data, resolve_parameters(problem, names), jobs=2)
+    assert pooled.x == pytest.approx(fit.x, rel=1e-12)
