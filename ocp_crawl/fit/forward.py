@@ -10,7 +10,7 @@ import json
 import math
 from concurrent.futures import Executor
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -119,8 +119,3 @@ def model_values(data: Measurements, results: Sequence[tuple[float, str]]) -> np
     ref = data.reference_row
     return y / y[ref] if ref is not None else y
 
-
-def describe(value: Any) -> str:
-    """A status text shortened to one line."""
-    text = " ".join(str(value).split())
-    return text if len(text) <= 200 else text[:197] + "..."
