@@ -164,6 +164,7 @@ def test_a_failing_start_is_a_status_not_a_crash(tmp_path):
     fit = fit_measurements(soft, [read_measurements(path)], resolve_parameters(soft, ["robot.k"]))
     assert not fit.success and fit.status == Status.NO_START
     assert "at the start values" in fit.message and "a.csv:" in fit.message
+    assert np.all(np.isnan(fit.sigma)) and "search did not run" in fit_report(fit)
 
 
 def test_cli_fit_writes_the_fit_and_refuses_to_overwrite(tmp_path, capsys):

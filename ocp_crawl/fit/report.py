@@ -26,6 +26,8 @@ def _num(v: float) -> str:
 def identifiability_text(fit: FitResult) -> list[str]:
     """Lines saying the rank and every direction the data do not fix (empty list never: rank is always said)."""
     p = len(fit.parameters)
+    if fit.singular_values.size == 0:
+        return ["weighted Jacobian: none (the search did not run; no uncertainties)"]
     sv = ", ".join(f"{s:.3g}" for s in fit.singular_values)
     lines = [f"weighted Jacobian (relative parameters): rank {fit.rank} of {p}; singular values {sv}"]
     for d in fit.unidentified:
@@ -62,7 +64,8 @@ def fit_report(fit: FitResult) -> str:
         lines += ["correlations"] + ["  " + r for r in correlation_text(fit)]
     for f in fit.files:
         unit, factor = DISPLAY[f.data.observable]
-        rms = float(np.sqrt(np.nanmean(f.residuals ** 2)))
+        finite = f.residuals[np.isfinite(f.residuals)]
+        rms = float(np.sqrt(np.mean(finite ** 2))) if finite.size else math.nan
         failed = sum(s != "success" for s in f.statuses)
         lines.append(f"data       {f.data.path}: {len(f.data)} {f.data.kind} rows of {f.data.observable} [{unit}], "
                      f"RMS residual {rms:.3g} sigma" + (f", {failed} failed" if failed else ""))

@@ -220,7 +220,8 @@ def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) 
                                            f"counted) for {len(params)} parameter(s); at least {len(params) + 1} needed")
 
 
-def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int) -> tuple[Status, str]:
+def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: str = "the fitted parameters"
+                  ) -> tuple[Status, str]:
     failed = [(f.data.table.line_of(j), f.data.path, s) for f in files for j, s in enumerate(f.statuses)
               if s != SUCCESS]
     if failed:
@@ -230,7 +231,7 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int) -> tuple[
             status = Status.from_label(label)
         except (KeyError, ValueError):
             status = Status.ERROR
-        return status, (f"{len(failed)} point(s) fail at the fitted parameters; the first, {path}:{line}: "
+        return status, (f"{len(failed)} point(s) fail at {where}; the first, {path}:{line}: "
                         f"{' '.join(text.split())}")
     if ls_status <= 0:
         return Status.NO_CONVERGENCE, f"least squares stopped after {nfev} evaluations without converging"
@@ -282,9 +283,8 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         r0 = obj(z0)
         if obj.failed_evaluations:
             files = [FileFit(d, m, s) for d, (m, s) in zip(datasets, obj.last[1])]
-            status, msg = _final_status(files, 1, 1)
-            return _result(obj, z0, np.zeros((len(r0), len(params))), r0, files, status,
-                           "at the start values: " + msg, 1, absolute_sigma, rcond)
+            status, msg = _final_status(files, 1, 1, "the start values")
+            return _result(obj, z0, None, r0, files, status, msg, 1, absolute_sigma, rcond)
         lo = np.array([p.low for p in params]) / obj.scale
         hi = np.array([p.high for p in params]) / obj.scale
         res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev, method="trf",
@@ -301,11 +301,16 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
 
 def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_sigma, rcond) -> FitResult:
     x = z * obj.scale
-    chi2 = float(np.sum(np.asarray(r) ** 2))
+    # a failed row's residual is a penalty, not a misfit: no chi-square then
+    chi2 = math.nan if any(s != SUCCESS for f in files for s in f.statuses) else float(np.sum(np.asarray(r) ** 2))
     dof = len(r) - len(x)
     scale2 = 1.0 if absolute_sigma or dof <= 0 else chi2 / dof
     names = [p.name for p in obj.params]
-    cov, corr, s, rank, dirs = uncertainty(np.asarray(jac), x, names, scale2, rcond)
+    if jac is None:  # the search did not run: no Jacobian, nothing known about the uncertainties
+        nan = np.full((len(x), len(x)), np.nan)
+        cov, corr, s, rank, dirs = nan, nan.copy(), np.empty(0), 0, ()
+    else:
+        cov, corr, s, rank, dirs = uncertainty(np.asarray(jac), x, names, scale2, rcond)
     keys, pressure = split_values(obj.params, x)
     fitted = obj.problem.with_values(keys) if keys else obj.problem
     uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)
