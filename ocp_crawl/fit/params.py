@@ -1,7 +1,8 @@
 """The parameters a calibration can fit: problem-file keys and the pressure actuator's constants.
 
 A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.mu``, ``robot.mu1``,
-``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections), or ``pressure.NAME``
+``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections, and of any section the
+schema gains that is not a numerics setting), or ``pressure.NAME``
 for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`, which problem files do not
 describe: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar]
 (Table I's map) and ``pressure.phi_rest_deg`` [deg] (the rest angle).  Values are in the units
@@ -20,8 +21,10 @@ from ocp_crawl.problem.schema import SCHEMA, suggest
 
 #: pressure parameters -> unit
 PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg"}
-#: sections whose numbers can be fitted
-FIT_SECTIONS = ("robot", "gait")
+#: sections whose numbers are settings of the numerics, not properties of the robot or its input
+NOT_FITTED = ("model", "simulation", "ocp")
+#: sections whose numbers can be fitted (every other section of the schema, e.g. ones added for new inputs)
+FIT_SECTIONS = tuple(name for name in SCHEMA if name not in NOT_FITTED)
 #: default bounds: x0 +- this for angles [deg]; x0 / and * this factor for the others
 ANGLE_SPAN_DEG, SCALE_FACTOR = 45.0, 10.0
 
