@@ -35,9 +35,19 @@ class Parameter:
 
     name: str
     unit: str
+    """unit of the values (problem-file units, e.g. N m/rad, deg)"""
     x0: float
+    """start value"""
     low: float
+    """lower bound"""
     high: float
+    """upper bound"""
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low <= self.x0 <= self.high
+                and self.low < self.high):
+            raise ValueError(f"Parameter {self.name}: start {self.x0!r} must lie in bounds [{self.low!r}, "
+                             f"{self.high!r}] with low < high, all finite")
 
 
 def fittable_names() -> list[str]:
