@@ -43,15 +43,21 @@ def fit_figure(fit: FitResult) -> Figure:
         x = d.table[name] * xf
         order = np.argsort(x)
         ax, axr = axes[0, j], axes[1, j]
-        ax.errorbar(x, d.y * yf, yerr=d.sigma * yf, fmt="o", color="k", ms=4, capsize=3, label="data (+- 1 sigma)")
         ok = np.isfinite(f.model)
-        ax.plot(x[order][ok[order]], (f.model * yf)[order][ok[order]], "-s", color="tab:blue", ms=4,
-                label="model at the fitted parameters")
+        segments = d.table["segment"] if "segment" in d.inputs else np.zeros(len(d))
+        for i, seg in enumerate(np.unique(segments)):
+            rows = order[segments[order] == seg]
+            rows = rows[ok[rows]]
+            which = f" (segment {seg:g})" if "segment" in d.inputs else ""
+            ax.errorbar(x[segments == seg], d.y[segments == seg] * yf, yerr=d.sigma[segments == seg] * yf, fmt="o",
+                        color=("k", "tab:purple")[i % 2], ms=4, capsize=3, label=f"data (+- 1 sigma){which}")
+            ax.plot(x[rows], f.model[rows] * yf, "-s", color=("tab:blue", "tab:orange")[i % 2], ms=4,
+                    label=f"model at the fitted parameters{which}")
         if (~ok).any():
-            ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2, label="simulation failed")
+            ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2, label="simulation failed (data shown)")
         ref = d.reference_row
         if ref is not None:
-            ax.plot(x[ref], d.y[ref] * yf, "o", mfc="none", mec="tab:orange", ms=11, mew=1.5,
+            ax.plot(x[ref], d.y[ref] * yf, "o", mfc="none", mec="tab:red", ms=11, mew=1.5,
                     label="normalising row")
         others = [f"{c} = {v:g} {INPUT_DISPLAY[INPUTS[c]][0]}" for c in d.inputs if c != name
                   for v in [np.unique(np.round(d.table[c] * INPUT_DISPLAY[INPUTS[c]][1], 6))] if v.size == 1
