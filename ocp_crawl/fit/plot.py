@@ -19,14 +19,20 @@ INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "
 LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
 
 
+def _value(name: str, x: float, s: float) -> str:
+    short = name.split(".", 1)[1]
+    if math.isnan(s):
+        return f"{short} = {x:.4g} (no uncertainty)"
+    return f"{short} = {x:.4g} +- {s:.2g}" if math.isfinite(s) else f"{short} = {x:.4g} (not identifiable)"
+
+
 def _title(fit: FitResult) -> str:
-    values = "; ".join(f"{p.name.split('.', 1)[1]} = {x:.4g} +- {s:.2g}" if math.isfinite(s)
-                       else f"{p.name.split('.', 1)[1]} = {x:.4g} (not identifiable)"
-                       for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
+    values = "; ".join(_value(p.name, x, s) for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
     n = len(fit.unidentified)
     said = f"; {n} direction(s) not determined by the data (see the report)" if n else ""
-    return (f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), "
-            f"rank {fit.rank} of {len(fit.parameters)}{said}")
+    rank = (f"rank {fit.rank} of {len(fit.parameters)}{said}" if fit.singular_values.size
+            else "the search did not run")
+    return f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}"
 
 
 def fit_figure(fit: FitResult) -> Figure:
