@@ -10,10 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import BoundaryNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
@@ -55,6 +56,14 @@ def _finish(fig: Figure) -> Figure:
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
     return fig
+
+
+def plain_log_ticks(axis) -> None:
+    """Ticks of a log ``axis`` (``ax.xaxis``/``ax.yaxis``) at 1, 2 and 5 per decade, labelled as plain numbers
+    (0.5, 2, 40) instead of matplotlib's 2x10^0 ... 4x10^1."""
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def _gravity_text(gravity: str) -> str:
@@ -201,36 +210,42 @@ def _cell_edges(v: np.ndarray) -> np.ndarray:
 
 
 def plot_parametric(m: PsiGammaMap) -> Figure:
-    """Fig. parametric: progress -S [mm] over (psi, gamma); failed points as hatched cells, marked by status."""
-    fig, ax = _figure((8.0, 6.5))
+    """Fig. parametric: progress -S [mm] over (psi, gamma), one coloured cell per grid point (no
+    interpolation); failed points as hatched cells, marked by status; the best gamma at each psi and the
+    largest progress (also in the title)."""
+    fig, ax = _figure((8.0, 6.8))
     a = ax[0, 0]
-    P, G = np.meshgrid(m.psi_deg, m.gamma_deg)
     prog = MM * m.progress
     finite = prog[np.isfinite(prog)]
-    levels = MaxNLocator(14).tick_values(min(0.0, finite.min()), finite.max()) if finite.size else 10
-    cs = a.contourf(P, G, np.ma.masked_invalid(prog), levels=levels, cmap="viridis")
-    fig.colorbar(cs, ax=a, label="progress per cycle -S [mm]")
+    xe, ye = _cell_edges(m.psi_deg), _cell_edges(m.gamma_deg)
+    levels = MaxNLocator(14).tick_values(min(0.0, finite.min()), finite.max()) if finite.size else np.arange(11.0)
+    norm = BoundaryNorm(levels, ncolors=256)
+    mesh = a.pcolormesh(xe, ye, np.ma.masked_invalid(prog), cmap="viridis", norm=norm, shading="flat")
+    fig.colorbar(mesh, ax=a, label="progress per cycle $-S$ [mm]")
     handles = []
     failed = m.status != SUCCESS
     if failed.any():
-        xe, ye = _cell_edges(m.psi_deg), _cell_edges(m.gamma_deg)
         for i, j in zip(*np.nonzero(failed)):
             a.add_patch(Rectangle((xe[j], ye[i]), xe[j + 1] - xe[j], ye[i + 1] - ye[i], facecolor="white",
                                   edgecolor="0.45", hatch="///", lw=0.0, zorder=3))
-        handles.append(Patch(facecolor="white", edgecolor="0.45", hatch="///", label="failed point (cell)"))
+        handles.append(Patch(facecolor="white", edgecolor="0.45", hatch="///", label="failed point (its cell)"))
+        P, G = np.meshgrid(m.psi_deg, m.gamma_deg)
         handles += mark_failures(a, P, G, m.status, color=FAIL_COLOR, size=30)
-    a.set_xlim(m.psi_deg.min(), m.psi_deg.max())
-    a.set_ylim(m.gamma_deg.min(), m.gamma_deg.max())
+    a.set_xlim(xe[0], xe[-1])
+    a.set_ylim(ye[0], ye[-1])
     a.plot(m.psi_deg, m.gamma_opt, "w--", lw=1.5, zorder=4)
-    handles.append(Line2D([], [], color="0.2", ls="--", label="best gamma at each psi"))
+    handles.append(Line2D([], [], color="0.2", ls="--", label=r"best $\gamma$ at each $\psi$ (white)"))
     g, p, s = m.best
     a.plot(p, g, "*", color="orange", ms=14, mec="k", zorder=6)
     handles.append(Line2D([], [], ls="none", marker="*", color="orange", mec="k", ms=10,
-                          label=f"largest: {MM * -s:.1f} mm at psi {p:g}, gamma {g:g} deg"))
+                          label=rf"largest: {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg"))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
     a.set_ylabel(r"nominal angle $\gamma$ [deg]")
-    a.set_title(f"Progress per cycle over psi and gamma, A = {m.A_deg:g} deg ({_gravity_text(m.gravity)})")
-    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncol=3)
+    n_failed = int(failed.sum())
+    fig.suptitle(rf"Progress per cycle over $\psi$ and $\gamma$, $A$ = {m.A_deg:g} deg ({_gravity_text(m.gravity)})"
+                 "\n" + rf"largest $-S$ = {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg; "
+                 f"{n_failed} of {failed.size} points failed")
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncol=2)
     return _finish(fig)
 
 
@@ -345,14 +360,24 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
 # --------------------------------------------------------------------------------------------
 # stiffness
 # --------------------------------------------------------------------------------------------
+def _threshold_text(value: float) -> str:
+    """A threshold k/(M g L), or "not bracketed" when the bisection found none (NaN)."""
+    return f"{value:.3f} M g L" if np.isfinite(value) else "not bracketed"
+
+
 def plot_stiffness(s: StiffnessStudy) -> Figure:
-    """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line."""
+    """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line.  The
+    title gives the friction threshold and the largest progress."""
     fig, ax = _figure((8.0, 7.5), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
-    fig.suptitle(f"Stiffness, gamma 90, A 30, psi 45 deg ({_gravity_text(s.gravity)})")
-    a_s.semilogx(s.k_ratios, -MM * s.S, color=BLUE, lw=2, marker=".", label="-S")
+    prog = -MM * np.asarray(s.S, float)
+    best = f"largest $-S$ = {np.nanmax(prog):.1f} mm" if np.isfinite(prog).any() else "no successful point"
+    fig.suptitle(rf"Stiffness, $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(s.gravity)})" "\n"
+                 f"friction threshold {_threshold_text(s.threshold)}; {best}")
+    a_s.semilogx(s.k_ratios, prog, color=BLUE, lw=2, marker=".", label="$-S$")
     fails = mark_failures(a_s, s.k_ratios, np.zeros(len(s.k_ratios)), s.status)
-    a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".")
+    a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".",
+               label="CoT$^+$ (moving points)")
     lines = []
     if np.isfinite(s.threshold):
         for a in (a_s, a_c):
@@ -362,14 +387,17 @@ def plot_stiffness(s: StiffnessStudy) -> Figure:
         for a in (a_s, a_c):
             a.axvline(s.onset, color="tab:green", ls=":", lw=1.5)
         lines.append(Line2D([], [], color="tab:green", ls=":", label=f"crawls at every k from {s.onset:.3f} M g L"))
-    a_s.set_ylabel("progress per cycle -S [mm]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress", loc="left", fontsize="medium")
-    a_s.legend(handles=[Line2D([], [], color=BLUE, marker=".", label="-S")] + lines + fails, fontsize="small")
+    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + lines + fails, fontsize="small")
     a_c.set_ylabel("CoT$^+$ [-]")
-    a_c.set_xlabel("stiffness k/(M g L) [-]")
+    a_c.set_xlabel("stiffness $k/(M g L)$ [-]")
     a_c.set_title("(b) positive cost of transport", loc="left", fontsize="medium")
+    a_c.legend(handles=a_c.get_legend_handles_labels()[0] + lines, fontsize="small")
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
+        plain_log_ticks(a.xaxis)
+    plain_log_ticks(a_c.yaxis)
     return _finish(fig)
 
 
@@ -377,7 +405,9 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
     """The two gravity conventions side by side: progress against k, and CoT+ against A."""
     fig, ax = _figure((8.0, 8.0), 2, 1)
     a_s, a_c = ax[:, 0]
-    fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)")
+    thresholds = ", ".join(f"{g} {_threshold_text(st.threshold)}" for g, st in stiff.items())
+    fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)"
+                 + (f"\nfriction thresholds: {thresholds}" if thresholds else ""))
     seen: set = set()
     fails = []
     for gravity, ls, color in (("paper", "-", BLUE), ("physical", "--", "tab:red")):
@@ -391,15 +421,17 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
             for i, k in enumerate(am.k_ratios):
                 a_c.plot(am.A_deg, am.CoT_moving[i], color=K_COLORS[i % 3], ls=ls, lw=1.8,
                          label=f"{gravity}, {_k_label(i, k)}")
-    a_s.set_xlabel("stiffness k/(M g L) [-]")
-    a_s.set_ylabel("progress per cycle -S [mm]")
-    a_s.set_title("(a) progress against stiffness (gamma 90, A 30, psi 45 deg)", loc="left", fontsize="medium")
+    a_s.set_xlabel("stiffness $k/(M g L)$ [-]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
+    plain_log_ticks(a_s.xaxis)
+    a_s.set_title(r"(a) progress against stiffness ($\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg)", loc="left",
+                  fontsize="medium")
     # above the failure markers, which sit just below zero at low stiffness
     a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", ncol=2, loc="center right")
-    a_c.set_xlabel("amplitude A [deg]")
+    a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_ylabel("CoT$^+$ [-]")
     a_c.set_ylim(0, COT_YMAX)
-    a_c.set_title("(b) CoT+ against amplitude (gamma 90, psi 45 deg)", loc="left", fontsize="medium")
+    a_c.set_title(r"(b) CoT$^+$ against amplitude ($\gamma$ = 90, $\psi$ = 45 deg)", loc="left", fontsize="medium")
     a_c.legend(fontsize="x-small", ncol=2)
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
