@@ -16,12 +16,13 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
-from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
 from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
 from ocp_crawl.studies.pressure import PressureStudy
-from ocp_crawl.viz.gait import mode_color, mode_runs, plot_friction_limits, robot_points, shade_modes
+from ocp_crawl.studies.text import threshold_text
+from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, robot_points, shade_modes
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
 BLUE = (0.0, 0.447, 0.741)
@@ -90,7 +91,7 @@ def mark_failures(ax, x, y, status, *, color="0.3", size=36, seen: set | None = 
 
 def _run_label(name: str, res: CrawlResult) -> str:
     if res.success:
-        return f"{name}: S = {MM * res.S:.1f} mm"
+        return f"{name}: $S$ = {MM * res.S:.1f} mm"
     return f"{name}: {res.status_name.replace('_', ' ')} at t = {res.failure_t:.3f}"
 
 
@@ -114,9 +115,14 @@ def plot_configuration(gc: GaitComparison, snapshots: int = 5) -> Figure:
     """
     fig, ax = _figure((8.0, 9.0), 3, 1, gridspec_kw={"height_ratios": [1.0, 1.0, 0.9]})
     ax_a, ax_b, ax_s = ax[:, 0]
-    fig.suptitle(f"Configuration over a cycle: gamma 90, A 30, psi 45 deg ({_gravity_text(gc.gravity)})")
+    runs = _comparison_runs(gc)
+    fig.suptitle(fr"Configuration over a cycle: $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(gc.gravity)})"
+                 "\n$S$ [mm]: " + ", ".join(
+                     f"{name.replace('torque, ', '').replace(' M g L', '')} "
+                     + (f"{MM * res.S:.1f}" if res.success else res.status_name.replace("_", " "))
+                     for name, res, _ in runs) + r" ($k$ in $M g L$)")
     handles = []
-    for name, res, ls in _comparison_runs(gc):
+    for name, res, ls in runs:
         if res.t.size == 0:
             continue
         t = _phase(res)
@@ -173,7 +179,9 @@ def plot_forces(gc: GaitComparison) -> Figure:
     runs = [("prescribed angles", gc.prescribed, gc.robot)] + \
         [(f"hybrid, k = {r:.2f} M g L", res, gc.robot_at(i)) for i, (r, res) in enumerate(zip(gc.k_ratios, gc.torque))]
     fig, ax = _figure((8.0, 3.0 * len(runs)), len(runs), 1, sharex=True)
-    fig.suptitle(f"Tangential force and friction limits ({_gravity_text(gc.gravity)})")
+    jumps = ", ".join(f"{name.split(',')[0]} {gc.force_jump(res):.2g} N" for name, res, _ in runs[:2])
+    fig.suptitle(f"Tangential force and friction limits ({_gravity_text(gc.gravity)})\n"
+                 f"largest jump of $f_t$ at an event: {jumps}")
     modes_seen: set[int] = set()
     for (name, res, robot), a, letter in zip(runs, ax[:, 0], "abcdef"):
         a.set_title(f"({letter}) {_run_label(name, res)}", loc="left", fontsize="medium")
@@ -192,8 +200,9 @@ def plot_forces(gc: GaitComparison) -> Figure:
     handles = [Line2D([], [], color="k", label="$f_t$ (on foot 1, along +x)"),
                Line2D([], [], color=BLUE, ls="--", label=r"$\pm\mu_1 f_{n1}$"),
                Line2D([], [], color=PURPLE, ls="--", label=r"$\pm\mu_2 f_{n2}$")]
-    handles += [Patch(color=mode_color(m), label=Mode(m).label) for m in sorted(modes_seen)]
-    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize="small")
+    patches, names = mode_legend(modes_seen)
+    fig.legend(handles=handles + patches, labels=[h.get_label() for h in handles] + names, loc="outside lower center",
+               ncol=2, fontsize="small")
     return _finish(fig)
 
 
@@ -264,7 +273,7 @@ def plot_friction_band(b: FrictionBand) -> Figure:
     psi_opt, prog = b.psi_opt
     if np.isfinite(psi_opt):
         a.plot([psi_opt], [MM * prog], "o", color="orange", mec="k", zorder=6,
-               label=fr"best average: $\psi$ = {psi_opt:.1f} deg, -S = {MM * prog:.1f} mm")
+               label=fr"best average: $\psi$ = {psi_opt:.1f} deg, $-S$ = {MM * prog:.1f} mm")
         psi_n, s_n = b.psi_opt_negative
         if np.isfinite(psi_n):
             a.plot([psi_n], [-MM * s_n], "o", color="orange", mec="k", zorder=6)
@@ -274,8 +283,11 @@ def plot_friction_band(b: FrictionBand) -> Figure:
     a.set_xlim(-180, 180)
     a.set_xticks(np.arange(-180, 181, 45))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
-    a.set_ylabel("progress towards foot 1 per cycle, -S [mm]")
-    a.set_title(f"Friction sensitivity, gamma 90, A 30 deg ({_gravity_text(b.gravity)})")
+    a.set_ylabel("progress towards foot 1 per cycle, $-S$ [mm]")
+    best = (fr"best average $-S$ = {MM * prog:.1f} mm at $\psi$ = {psi_opt:.1f} deg" if np.isfinite(psi_opt)
+            else "no best average")
+    fig.suptitle(fr"Friction sensitivity, $\gamma$ = 90, $A$ = 30 deg ({_gravity_text(b.gravity)})" "\n"
+                 fr"{best}; $\mu_1/\mu_2 \in [{1 - b.eps:g}, {1 + b.eps:g}]$")
     a.grid(True, lw=0.3, alpha=0.6)
     a.legend(handles=handles + fails, fontsize="small", loc="lower right")
     return _finish(fig)
@@ -299,7 +311,11 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
     comparison = s.paper_comparison() if overlay else None
     fig, ax = _figure((8.0, 8.0), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
-    fig.suptitle(f"Amplitude study, gamma 90, psi 45 deg ({_gravity_text(s.gravity)})")
+    least = ", ".join(f"{COT_K_LABELS[i]} k {s.CoT_min[i]:.1f}" + (f" at {s.A_opt[i]:.0f} deg"
+                                                                   if np.isfinite(s.A_opt[i]) else " (grid end)")
+                      for i in range(len(s.k_ratios)) if np.isfinite(s.CoT_min[i]))
+    fig.suptitle(rf"Amplitude study, $\gamma$ = 90, $\psi$ = 45 deg ({_gravity_text(s.gravity)})"
+                 + (f"\nleast CoT$^+$ over $A$: {least}" if least else ""))
     seen: set = set()
     fails = []
     for i, k in enumerate(s.k_ratios):
@@ -310,11 +326,11 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
         if comparison is not None:
             a_c.plot(s.A_deg, comparison["paper"][i], "o", ms=6, mfc="none", mec=color,
                      label=f"paper, {COT_K_LABELS[i]} k")
-    a_s.set_ylabel("progress per cycle -S [mm]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress against amplitude", loc="left", fontsize="medium")
     a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", loc="upper left")
-    a_c.set_ylabel("CoT$^+$ = W$^+$/(M g |S|) [-]")
-    a_c.set_xlabel("amplitude A [deg]")
+    a_c.set_ylabel(r"CoT$^+ = W^+/(M g |S|)$ [-]")
+    a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_title("(b) positive cost of transport (Fig. CoT)" + (" with the paper's values (circles)" if comparison
                                                                 is not None else ""), loc="left", fontsize="medium")
     # the paper's axis: CoT+ diverges where the robot barely moves (S -> 0 near the onset of motion)
@@ -342,16 +358,20 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
     fails = []
     for i, f in enumerate(h.factors):
         stop = h.psi_stop[i]
-        extra = f", stops from psi = {stop:.0f} deg" if np.isfinite(stop) else ""
+        extra = fr", stops from $\psi$ = {stop:.0f} deg" if np.isfinite(stop) else ""
+        # markers at psi = 0 and 180 sit on the frame: not clipped
         a.plot(h.psi_deg, -MM * h.S[i], color=colors[i % len(colors)], lw=2 if f == 1 else 1.5, marker=".",
-               label=fr"$\mu$ = {f:g} x 0.389{extra}")
+               clip_on=False, label=fr"$\mu$ = {f:g} $\times$ 0.389{extra}")
         fails += mark_failures(a, h.psi_deg, np.zeros(len(h.psi_deg)), h.status[i], color=colors[i % len(colors)],
                                seen=seen)
     a.set_xlim(0, 180)
     a.set_xticks(np.arange(0, 181, 30))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
-    a.set_ylabel("progress per cycle -S [mm]")
-    a.set_title(f"Higher friction, gamma 90, A 30 deg ({_gravity_text(h.gravity)})")
+    a.set_ylabel("progress per cycle $-S$ [mm]")
+    largest = ", ".join(f"{f:g}x {np.nanmax(-MM * h.S[i]):.1f}" for i, f in enumerate(h.factors)
+                        if np.isfinite(h.S[i]).any())
+    fig.suptitle(fr"Higher friction, $\gamma$ = 90, $A$ = 30 deg ({_gravity_text(h.gravity)})" "\n"
+                 fr"largest $-S$ [mm] per friction factor: {largest or 'none'}")
     a.grid(True, lw=0.3, alpha=0.6)
     a.legend(handles=a.get_legend_handles_labels()[0] + fails, fontsize="small")
     return _finish(fig)
@@ -360,11 +380,6 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
 # --------------------------------------------------------------------------------------------
 # stiffness
 # --------------------------------------------------------------------------------------------
-def _threshold_text(value: float) -> str:
-    """A threshold k/(M g L), or "not bracketed" when the bisection found none (NaN)."""
-    return f"{value:.3f} M g L" if np.isfinite(value) else "not bracketed"
-
-
 def plot_stiffness(s: StiffnessStudy) -> Figure:
     """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line.  The
     title gives the friction threshold and the largest progress."""
@@ -373,7 +388,7 @@ def plot_stiffness(s: StiffnessStudy) -> Figure:
     prog = -MM * np.asarray(s.S, float)
     best = f"largest $-S$ = {np.nanmax(prog):.1f} mm" if np.isfinite(prog).any() else "no successful point"
     fig.suptitle(rf"Stiffness, $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(s.gravity)})" "\n"
-                 f"friction threshold {_threshold_text(s.threshold)}; {best}")
+                 f"friction threshold {threshold_text(s.threshold, 3)}; {best}")
     a_s.semilogx(s.k_ratios, prog, color=BLUE, lw=2, marker=".", label="$-S$")
     fails = mark_failures(a_s, s.k_ratios, np.zeros(len(s.k_ratios)), s.status)
     a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".",
@@ -405,7 +420,7 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
     """The two gravity conventions side by side: progress against k, and CoT+ against A."""
     fig, ax = _figure((8.0, 8.0), 2, 1)
     a_s, a_c = ax[:, 0]
-    thresholds = ", ".join(f"{g} {_threshold_text(st.threshold)}" for g, st in stiff.items())
+    thresholds = ", ".join(f"{g} {threshold_text(st.threshold, 3)}" for g, st in stiff.items())
     fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)"
                  + (f"\nfriction thresholds: {thresholds}" if thresholds else ""))
     seen: set = set()
@@ -446,15 +461,17 @@ def plot_pressure(p: PressureStudy) -> Figure:
     fig, ax = _figure((11.0, 4.8), 1, 2)
     a0, a1 = ax[0]
     c = p.fit.curves
-    fig.suptitle(f"Pressure-driven robot: rest angle {c.phi_rest_deg:.1f} deg "
-                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}")
+    fig.suptitle(fr"Pressure-driven robot: rest angle $\varphi_\mathrm{{rest}}$ = {c.phi_rest_deg:.1f} deg "
+                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}\n"
+                 fr"RMS error against the paper's simulation: {p.fit.rms_p0:.3f} ($p_0$), {p.fit.rms_psi:.3f} ($\psi$); "
+                 fr"best $\psi$ = {p.psi_opt[0]:.1f} deg")
     a0.plot(p.paper_p0["p0_bar"], p.paper_p0["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
     a0.plot(c.p0_bar, c.progress_p0, color=BLUE, lw=2, marker=".", label=f"this model (RMS error {p.fit.rms_p0:.3f})")
     e = p.experiment_p0
     a0.errorbar(e["p0_bar"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
     a0.set_xlabel("nominal (peak) pressure $p_0$ [bar]")
-    a0.set_ylabel(f"S / S(p0 = 1.7 bar) [-]  (psi = {c.psi_for_p0_deg:g} deg)")
+    a0.set_ylabel(fr"$S / S(p_0 = 1.7$ bar) [-]  ($\psi$ = {c.psi_for_p0_deg:g} deg)")
     a0.set_title("(a) against nominal pressure", loc="left", fontsize="medium")
     a1.plot(p.paper_psi["psi_deg"], p.paper_psi["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
     a1.plot(c.psi_deg, c.progress_psi, color=BLUE, lw=2, marker=".", label=f"this model (RMS error {p.fit.rms_psi:.3f})")
@@ -462,7 +479,7 @@ def plot_pressure(p: PressureStudy) -> Figure:
     a1.errorbar(e["psi_deg"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
     a1.set_xlabel(r"phase difference $\psi$ [deg]")
-    a1.set_ylabel(f"S / max S [-]  (p0 = {c.p0_for_psi_bar:g} bar)")
+    a1.set_ylabel(fr"$S / \max S$ [-]  ($p_0$ = {c.p0_for_psi_bar:g} bar)")
     a1.set_title("(b) against phase difference", loc="left", fontsize="medium")
     a1.set_xlim(-3, 180)
     for a in (a0, a1):

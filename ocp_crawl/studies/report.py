@@ -171,7 +171,7 @@ def _amplitude_section(s: StudySet, o: StudySet | None) -> list[str]:
             cell = f"{a.CoT_plus[i, j]:.2f}" if np.isfinite(a.CoT_plus[i, j]) else (
                 "inf (no motion)" if a.status[i, j] == SUCCESS else a.status[i, j])
             if comp is not None and np.isfinite(comp["paper"][i, j]):
-                cell += f" (paper {comp['paper'][i, j]:.2f}, {comp['rel_diff'][i, j]:+.1%})" \
+                cell += f" (paper {comp['paper'][i, j]:.2f}, {num(comp['rel_diff'][i, j], '+.1%')})" \
                     if np.isfinite(comp["rel_diff"][i, j]) else f" (paper {comp['paper'][i, j]:.2f})"
             row.append(cell)
         rows.append(row)
