@@ -24,8 +24,9 @@ from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_
 def _sweep_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see README, 'Problem files')")
     p.add_argument("--grid", action="append", required=True, metavar="KEY=START:STOP:NUM",
-                   help="an axis: NUM values from START to STOP inclusive, or a list KEY=A,B,C (repeatable; "
-                        "the first axis varies slowest), e.g. --grid gait.psi_deg=0:180:37")
+                   help="an axis: NUM values from START to STOP inclusive, KEY=START:STOP:step=STEP (START, "
+                        "START+STEP, ... up to STOP), or a list KEY=A,B,C (repeatable; the first axis varies "
+                        "slowest), e.g. --grid gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5 (the same)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the base problem (repeatable)")
     p.add_argument("--jobs", type=jobs_type, metavar="N", help="worker processes (default: the CPUs available)")
