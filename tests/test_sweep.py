@@ -405,6 +405,8 @@ def test_cli_sweep_echoes_the_resolved_values(tmp_path, capsys):
     assert main(argv + ["--out", str(tmp_path / "a"), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["grid"] == {"gait.psi_deg": [30.0, 45.0, 60.0], "robot.k": [0.1, 0.2]}
+    assert data["units"] == {"gait.psi_deg": "deg", "robot.k": "N m/rad", "S": "m", "W_plus": "J", "CoT_plus": "-",
+                             "elapsed_s": "s"}
     assert main(argv + ["--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
     assert "  gait.psi_deg = 30, 45, 60 (3 values, step 15)" in out.splitlines()

@@ -134,7 +134,7 @@ class SweepResult:
             "counts": counts, "best": self.best(), "lowest_CoT_plus": self.lowest_cot(),
             "elapsed_s": self.elapsed, "computed": self.computed,
             "s_per_point": self.elapsed / self.computed if self.computed else None,
-            "units": {k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "elapsed_s")},
+            "units": dict(self.column_units(), elapsed_s=units.UNITS["elapsed_s"]),
         })
 
     def column_units(self) -> dict[str, str]:
