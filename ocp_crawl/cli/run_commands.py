@@ -69,6 +69,11 @@ def report(result: CrawlResult, problem: Problem) -> dict:
     return jsonable(out)
 
 
+def _per_cycle(text: str) -> str:
+    """A per-cycle quantity as text ("-" alone when it was not computed)."""
+    return text if text == units.MISSING else f"{text} per cycle"
+
+
 def format_summary(result: CrawlResult, problem: Problem) -> str:
     """Readable summary: problem, status, S [mm], W+ [mJ], CoT+, events table, cycles."""
     r = problem.robot
@@ -84,8 +89,8 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
         f"mu1 = {r.mu1:g}, mu2 = {r.mu2:g}, g = {r.g:g} m/s^2",
         f"gait       {gait_text}",
         f"status     {result.status_name} ({result.status}): {result.message}",
-        f"S          {units.distance(result.S)} per cycle{direction}",
-        f"W+         {units.work(result.W_plus)} per cycle",
+        f"S          {_per_cycle(units.distance(result.S))}{direction}",
+        f"W+         {_per_cycle(units.work(result.W_plus))}",
         f"CoT+       {units.cot(result.CoT_plus)}",
         f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),
     ]
