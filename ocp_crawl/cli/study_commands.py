@@ -182,6 +182,7 @@ def _progress_bar(wanted: bool):
     @contextlib.contextmanager
     def shown():
         with tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True) as bar:
+            bar.set_postfix_str("best harmonic gait of the envelope (the initial guess)")
             calls = []
 
             def update(stage) -> None:
