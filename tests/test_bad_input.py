@@ -270,6 +270,9 @@ ROWS = {
     "crosscheck: --set bad value": R("crosscheck", ["{paper}", "--set", "robot.mu=nan"],
                                      ["paper_gait.toml", "[robot] mu = nan (from --set)", "finite"]),
     # ------------------------------------------------------------------ optimize
+    "optimize: no [ocp] section": R("optimize", ["{paper}"], ["paper_gait.toml", "no [ocp] section"]),
+    "optimize: no [ocp] section, --set ocp.*": R("optimize", ["{paper}", "--set", "ocp.nodes=20"],
+                                                ["paper_gait.toml", "no [ocp] section"]),
     "optimize: too few nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 4", "in [8, 1000]"],
                                  text=ocp_edit("nodes = 100", "nodes = 4")),
     "optimize: float for int nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 10.5", "integer"],
