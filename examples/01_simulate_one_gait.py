@@ -11,7 +11,7 @@ Run: ``python examples/01_simulate_one_gait.py [OUT_DIR]``; writes ``OUT_DIR/gai
 from _common import output_dir, save
 
 from ocp_crawl import load_problem, run_problem
-from ocp_crawl.problem.shipped import shipped_problem
+from ocp_crawl.problem import shipped_problem
 from ocp_crawl.viz import plot_gait
 
 

@@ -1,5 +1,6 @@
 """``ocp-crawl init``: the shipped problem files written out; the repository's problems/ is that copy."""
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -72,3 +73,10 @@ def test_write_problems_python_api(tmp_path):
         write_problems(tmp_path / "new" / "dir")
     assert info.value.filename == str(files[0])
     assert write_problems(tmp_path / "new" / "dir", force=True) == files
+
+
+def test_every_problem_file_the_readme_names_is_shipped():
+    """The README's commands name problems/X; `ocp-crawl init` must write each of them (a wheel install has no other)."""
+    named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", (REPO / "README.md").read_text(encoding="utf-8")))
+    assert "paper_gait.toml" in named
+    assert named <= set(shipped_problems()), named - set(shipped_problems())
