@@ -50,7 +50,8 @@ def main() -> None:
         ax.plot(levels, S[RATIOS.index(r)], "C0" + ls, marker="o" if r == 1.0 else None, ms=4,
                 label=rf"$\mu_1/\mu_2$ = {r:g}")
     ax.axvline(MU_PAPER, color="gray", lw=0.8, label=rf"paper's $\mu$ = {MU_PAPER}")
-    ax.set(xlabel=r"friction coefficient $\mu = \sqrt{\mu_1 \mu_2}$ [-]", ylabel="S [mm per cycle] (< 0: towards foot 1)")
+    ax.set(xlabel=r"friction coefficient $\mu = \sqrt{\mu_1 \mu_2}$ [-]",
+           ylabel="S [mm per cycle] (< 0: towards foot 1)")
     ax.grid(True, lw=0.3)
     ax.legend(fontsize="small", loc="center right")
     i = int(np.argmin(np.abs(levels - MU_PAPER)))

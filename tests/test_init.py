@@ -76,7 +76,8 @@ def test_write_problems_python_api(tmp_path):
 
 
 def test_every_problem_file_the_readme_names_is_shipped():
-    """The README's commands name problems/X; `ocp-crawl init` must write each of them (a wheel install has no other)."""
-    named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", (REPO / "README.md").read_text(encoding="utf-8")))
+    """The README's commands name problems/X; `ocp-crawl init` must write each (a wheel install has no other)."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", readme))
     assert "paper_gait.toml" in named
     assert named <= set(shipped_problems()), named - set(shipped_problems())

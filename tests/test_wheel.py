@@ -71,7 +71,8 @@ def venv(wheel, tmp_path_factory) -> Path:
 
 def _clean_env() -> dict:
     """The environment without anything that would put the checkout on the path."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "OCP_CRAWL_PAPER_DATA")}
+    dropped = ("PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "OCP_CRAWL_PAPER_DATA")
+    env = {k: v for k, v in os.environ.items() if k not in dropped}
     env["MPLBACKEND"] = "Agg"
     return env
 
