@@ -5,9 +5,10 @@ reference angle follows a trapezoid between gamma - A and gamma + A (gamma = 90 
 the paper's range) with rise and fall taking a quarter cycle each, joint 1 leading joint 2 by
 psi = 90 deg: a sequential actuation, one joint moves while the other holds.  The trapezoid is
 sampled at 40 phases and interpolated periodically with :class:`~ocp_crawl.PeriodicPchip` (shape
-preserving: no overshoot at the corners); a 3rd-order :class:`~ocp_crawl.FourierSeries` fit of the same samples gives a smoothed version.  Each reference
-drives the robot through the torque law tau = k (phi_ref - pi) (:class:`~ocp_crawl.ReferenceTorque`)
-in the event-driven simulator, next to the paper's harmonic gait of the same range and phase lead.
+preserving: no overshoot at the corners); a 3rd-order :class:`~ocp_crawl.FourierSeries` fit of
+the same samples gives a smoothed version.  Each reference drives the robot through the torque law
+tau = k (phi_ref - pi) (:class:`~ocp_crawl.ReferenceTorque`) in the event-driven simulator, next to
+the paper's harmonic gait of the same range and phase lead.
 
 Run: ``python examples/06_custom_waveform.py [OUT_DIR]``; writes ``OUT_DIR/custom_waveform.png``.
 """
