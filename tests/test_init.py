@@ -1,4 +1,7 @@
-"""``ocp-crawl init``: the shipped problem files written out; the repository's problems/ is that copy."""
+"""``ocp-crawl init``: the shipped problem files and examples written out.
+
+The repository's problems/ and examples/ folders are that copy, file for file.
+"""
 import json
 import re
 from pathlib import Path
@@ -7,7 +10,7 @@ import pytest
 
 import ocp_crawl.cli.app as cli
 from ocp_crawl import load_problem
-from ocp_crawl.problem.shipped import SHIPPED_DIR, shipped_problem, shipped_problems, write_problems
+from ocp_crawl.problem.shipped import SHIPPED_DIR, SHIPPED_FOLDERS, shipped_problem, shipped_problems, write_problems
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -16,18 +19,20 @@ def _files(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
 
 
-def test_repository_problems_are_what_init_writes(tmp_path, capsys):
-    """One source of truth: problems/ at the repository root equals `ocp-crawl init` output, file for file."""
+@pytest.mark.parametrize("folder", sorted(SHIPPED_FOLDERS))
+def test_repository_copy_is_what_init_writes(folder, tmp_path, capsys):
+    """One source of truth: problems/ and examples/ at the repository root equal `ocp-crawl init` output."""
     assert cli.main(["init", str(tmp_path)]) == 0
-    written, repo = _files(tmp_path / "problems"), _files(REPO / "problems")
-    assert set(written) == set(repo), (
-        f"problems/ and ocp_crawl/data/problems/ hold different files: only in problems/: {set(repo) - set(written)}, "
-        f"only shipped: {set(written) - set(repo)}; add new problem files to ocp_crawl/data/problems/ and run "
-        "'ocp-crawl init --force' at the repository root")
+    written, repo = _files(tmp_path / folder), _files(REPO / folder)
+    repo = {n: b for n, b in repo.items() if not n.endswith(".pyc")}
+    refresh = (f"edit ocp_crawl/data/{folder}/ (the shipped copy; new files go there too) and run "
+               "'ocp-crawl init --force' at the repository root")
+    assert set(written) == set(repo), (f"{folder}/ and ocp_crawl/data/{folder}/ hold different files: only in "
+                                       f"{folder}/: {set(repo) - set(written)}, only shipped: "
+                                       f"{set(written) - set(repo)}; {refresh}")
     differ = [n for n in written if written[n] != repo[n]]
-    assert not differ, (f"problems/ differs from ocp_crawl/data/problems/ in {differ}: edit the package copy and run "
-                        "'ocp-crawl init --force' at the repository root")
-    assert "paper_gait.toml" in written and len(written) >= 6
+    assert not differ, f"{folder}/ differs from ocp_crawl/data/{folder}/ in {differ}: {refresh}"
+    assert len(written) >= 6
 
 
 def test_every_shipped_problem_is_valid():
@@ -45,9 +50,11 @@ def test_init_default_is_the_current_directory_and_json_lists_the_files(tmp_path
     out, err = capsys.readouterr()
     data = json.loads(out)
     assert err == "" and data["directory"] == "."
-    assert sorted(data["files"]) == sorted(f"problems/{n}" for n in shipped_problems())
+    expected = [f"{folder}/{n}" for folder, src in SHIPPED_FOLDERS.items() for n in sorted(_files(src))]
+    assert data["files"] == expected and any(f.startswith("examples/") for f in expected)
     assert all((tmp_path / f).is_file() for f in data["files"])
-    assert sorted(p.name for p in (tmp_path / "problems").iterdir()) == sorted(shipped_problems())  # no temp files
+    for folder in SHIPPED_FOLDERS:  # nothing else, no temporary files
+        assert sorted(p.name for p in (tmp_path / folder).iterdir()) == sorted(_files(SHIPPED_FOLDERS[folder]))
 
 
 def test_init_refuses_to_overwrite_before_writing_anything(tmp_path, capsys):
@@ -62,13 +69,14 @@ def test_init_refuses_to_overwrite_before_writing_anything(tmp_path, capsys):
     assert sorted(p.name for p in (tmp_path / "problems").iterdir()) == [names[-1]]
     assert mine.read_text() == "# my own edits\n"
     # --force overwrites with the shipped bytes
+    assert not (tmp_path / "examples").exists()
     assert cli.main(["init", str(tmp_path), "--force"]) == 0
     assert _files(tmp_path / "problems") == _files(SHIPPED_DIR)
 
 
 def test_write_problems_python_api(tmp_path):
     files = write_problems(tmp_path / "new" / "dir")
-    assert [f.name for f in files] == list(shipped_problems())
+    assert [f.name for f in files if f.parent.name == "problems"] == list(shipped_problems())
     with pytest.raises(FileExistsError) as info:
         write_problems(tmp_path / "new" / "dir")
     assert info.value.filename == str(files[0])

@@ -1,5 +1,6 @@
 """A wheel install works as a new user meets it: build the wheel, install it into a fresh virtual
-environment, run the README's quick start (``ocp-crawl init``, ``ocp-crawl simulate problems/...``).
+environment, run the README's quick start (``ocp-crawl init``, ``ocp-crawl simulate problems/...``,
+an example script).
 
 The wheel is built from a copy of the files a build reads (pyproject.toml, README.md, LICENSE,
 ocp_crawl/), so that nothing is written into the checkout, with pip's ordinary isolated build (as CI's
@@ -19,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from ocp_crawl import load_problem, run_problem
-from ocp_crawl.problem.shipped import shipped_problems
+from ocp_crawl.problem.shipped import SHIPPED_FOLDERS, shipped_files
 
 REPO = Path(__file__).resolve().parent.parent
 #: what a build reads
@@ -83,19 +84,19 @@ def _bin(venv: Path, name: str) -> Path:
 
 def test_wheel_holds_the_data_files(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    problems = {f"ocp_crawl/data/problems/{n}" for n in shipped_problems()}
+    shipped = {f"ocp_crawl/data/{folder}/{n}" for folder in SHIPPED_FOLDERS for n in shipped_files(folder)}
     paper = {f"ocp_crawl/data/paper/{p.name}" for p in (REPO / "ocp_crawl" / "data" / "paper").iterdir()
              if p.is_file()}
-    assert problems and paper
-    assert problems <= names, problems - names
+    assert shipped and paper
+    assert shipped <= names, shipped - names
     assert paper <= names, paper - names
     assert "ocp_crawl/py.typed" in names
     licenses = [n for n in names if re.fullmatch(r"ocp_crawl-[^/]+\.dist-info/(licenses/)?LICENSE", n)]
     assert licenses, sorted(n for n in names if "dist-info" in n)
     with zipfile.ZipFile(wheel) as z:
         assert z.read(licenses[0]) == (REPO / "LICENSE").read_bytes()
-        for n in shipped_problems():  # byte for byte as in the package
-            assert z.read(f"ocp_crawl/data/problems/{n}") == (REPO / "ocp_crawl" / "data" / "problems" / n).read_bytes()
+        for name in shipped:  # byte for byte as in the package
+            assert z.read(name) == (REPO / name).read_bytes(), name
     # no test or checkout file slipped in
     assert not [n for n in names if n.startswith(("tests/", "problems/", "scripts/", "examples/"))]
 
@@ -114,9 +115,9 @@ def test_quick_start_from_a_wheel_install(venv, tmp_path):
 
     init = _run([_bin(venv, "ocp-crawl"), "init", "--json"], cwd=work, env=env)
     written = json.loads(init.stdout)["files"]
-    assert sorted(Path(f).name for f in written) == sorted(shipped_problems())
-    for name in shipped_problems():
-        assert (work / "problems" / name).read_bytes() == (REPO / "problems" / name).read_bytes()
+    assert written == [f"{folder}/{n}" for folder in SHIPPED_FOLDERS for n in shipped_files(folder)]
+    for name in written:
+        assert (work / name).read_bytes() == (REPO / name).read_bytes(), name
     again = _run([_bin(venv, "ocp-crawl"), "init"], cwd=work, env=env, check=False)
     assert again.returncode == 2 and "--force" in again.stderr, again
 
@@ -130,18 +131,19 @@ def test_quick_start_from_a_wheel_install(venv, tmp_path):
 
     fresh = tmp_path / "readme"  # the README's quick start, as written, in an empty directory
     fresh.mkdir()
+    path = dict(env, PATH=f"{_bin(venv, '')}{os.pathsep}{env.get('PATH', '')}")  # the venv's ocp-crawl and python
     for line in _readme_quick_start():
-        proc = _run(line.split(), cwd=fresh, env=dict(env, PATH=f"{_bin(venv, '')}{os.pathsep}{env.get('PATH', '')}"),
-                    check=False)
+        proc = _run(line.split(), cwd=fresh, env=path, check=False)
         assert proc.returncode == 0, (line, proc.stdout[-2000:], proc.stderr[-2000:])
 
 
 def _readme_quick_start() -> list[str]:
-    """The ``ocp-crawl ...`` lines of the README's wheel quick start (the block after 'From a wheel')."""
+    """The `ocp-crawl ...` and `python examples/...` lines of the README's quick start after 'From a wheel'."""
     text = (REPO / "README.md").read_text(encoding="utf-8")
     block = re.search(r"From a wheel.*?```\n(.*?)```", text, re.S)
     assert block, "README: no 'From a wheel' block"
     lines = [re.sub(r"\s+#.*", "", ln).strip() for ln in block.group(1).splitlines()]
-    lines = [ln for ln in lines if ln.startswith("ocp-crawl ")]
-    assert any(ln.startswith("ocp-crawl init") for ln in lines) and any("simulate" in ln for ln in lines), lines
+    lines = [ln for ln in lines if ln.startswith(("ocp-crawl ", "python examples/"))]
+    assert lines[0].startswith("ocp-crawl init") and any("simulate" in ln for ln in lines), lines
+    assert any(ln.startswith("python examples/") for ln in lines), lines
     return lines

@@ -1,10 +1,11 @@
-"""The example problem files shipped inside the package, and writing them out (``ocp-crawl init``).
+"""The example problem files and scripts shipped inside the package, and writing them out (``ocp-crawl init``).
 
-The package data folder ``ocp_crawl/data/problems/`` is the one source of the example problems
-(``paper_gait.toml``, ``ocp_max_speed.toml``, ...).  :func:`write_problems` copies them into
-``DIR/problems/``, so that the README's commands (``ocp-crawl simulate problems/paper_gait.toml``)
-work from any install; the repository's top-level ``problems/`` folder is exactly what
-``ocp-crawl init`` writes at the repository root (a test checks that the two never differ).
+The package data folders ``ocp_crawl/data/problems/`` (``paper_gait.toml``, ``ocp_max_speed.toml``,
+...) and ``ocp_crawl/data/examples/`` (the examples gallery) are the one source of these files.
+:func:`write_problems` copies them into ``DIR/problems/`` and ``DIR/examples/``, so that the README's
+commands (``ocp-crawl simulate problems/paper_gait.toml``, ``python examples/01_simulate_one_gait.py``)
+work from any install; the repository's top-level ``problems/`` and ``examples/`` folders are exactly
+what ``ocp-crawl init`` writes at the repository root (a test checks that they never differ).
 """
 from __future__ import annotations
 
@@ -15,22 +16,36 @@ from pathlib import Path
 
 from ocp_crawl.io.files import atomic_write
 
+DATA_DIR = Path(__file__).resolve().parent.parent / "data"
+#: the folders written by ``ocp-crawl init``: name in DIR -> the package data folder it copies
+SHIPPED_FOLDERS = {"problems": DATA_DIR / "problems", "examples": DATA_DIR / "examples"}
 #: the shipped example problems (package data)
-SHIPPED_DIR = Path(__file__).resolve().parent.parent / "data" / "problems"
-#: the folder of DIR into which :func:`write_problems` writes them
-INIT_SUBDIR = "problems"
+SHIPPED_DIR = SHIPPED_FOLDERS["problems"]
 
 
-def shipped_problems() -> dict[str, Path]:
-    """The shipped example problem files.
+def shipped_files(folder: str = "problems") -> dict[str, Path]:
+    """The files of one shipped folder.
+
+    Parameters
+    ----------
+    folder : {"problems", "examples"}
+        The example problem files, or the examples gallery (Python scripts).
 
     Returns
     -------
     dict of str to Path
         File name (``"paper_gait.toml"``, ...) to its path inside the installed package, sorted by
-        name.  Every file of the folder is listed (problem files and any data files they name).
+        name (hidden files and folders such as ``__pycache__`` left out).
     """
-    return {p.name: p for p in sorted(SHIPPED_DIR.iterdir()) if p.is_file() and not p.name.startswith(".")}
+    if folder not in SHIPPED_FOLDERS:
+        raise KeyError(f"no shipped folder {folder!r}; shipped: {', '.join(SHIPPED_FOLDERS)}")
+    return {p.name: p for p in sorted(SHIPPED_FOLDERS[folder].iterdir())
+            if p.is_file() and not p.name.startswith(".") and not p.name.endswith(".pyc")}
+
+
+def shipped_problems() -> dict[str, Path]:
+    """The shipped example problem files: file name -> path inside the installed package (see :func:`shipped_files`)."""
+    return shipped_files("problems")
 
 
 def shipped_problem(name: str) -> Path:
@@ -59,45 +74,46 @@ def shipped_problem(name: str) -> Path:
 
 
 def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> list[tuple[Path, Path]]:
-    """Check that the shipped problems can be written into ``directory/problems/``, writing nothing.
+    """Check that the shipped files can be written into ``directory/problems/`` and ``directory/examples/``.
 
     Parameters
     ----------
     directory : str or path-like
-        Where to create (or fill) the ``problems/`` folder; default the current directory.
+        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current directory.
     force : bool
         Allow overwriting files that already exist there.
 
     Returns
     -------
     list of (Path, Path)
-        (shipped file, target) pairs, in name order.
+        (shipped file, target) pairs: the problems, then the examples, each in name order.
 
     Raises
     ------
     FileExistsError
         A target exists and ``force`` is false (``filename`` is the first such file).
-    OSError
-        ``directory/problems`` cannot be created or written (not a directory, no permission, ...).
-        The folder is created if needed; no file is written.
+    NotADirectoryError, OSError
+        ``directory`` or one of its two folders is not a directory, or cannot be created or written.
+        The folders are created if needed; no file is written.
     """
-    out = Path(directory) / INIT_SUBDIR
-    for folder in (Path(directory), out):
-        if os.path.lexists(folder) and not folder.is_dir():
-            raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(folder))
-    plan = [(src, out / name) for name, src in shipped_problems().items()]
+    root = Path(directory)
+    plan = [(src, root / folder / name) for folder in SHIPPED_FOLDERS for name, src in shipped_files(folder).items()]
+    for path in (root, *(root / folder for folder in SHIPPED_FOLDERS)):
+        if os.path.lexists(path) and not path.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(path))
     if not force:
         for _, target in plan:
             if os.path.lexists(target):
                 raise FileExistsError(errno.EEXIST, "exists", str(target))
-    out.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryFile(dir=out):  # writable: refused now rather than after the first file
-        pass
+    for folder in SHIPPED_FOLDERS:
+        (root / folder).mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=root / folder):  # writable: refused now rather than after the first file
+            pass
     return plan
 
 
 def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -> list[Path]:
-    """Write the shipped example problems into ``directory/problems/`` (what ``ocp-crawl init`` does).
+    """Write the shipped problems and examples into ``directory`` (what ``ocp-crawl init`` does).
 
     Every check (:func:`init_plan`) comes before the first file is written; each file is written
     atomically (:func:`~ocp_crawl.io.files.atomic_write`), byte for byte as shipped.
@@ -105,14 +121,14 @@ def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -
     Parameters
     ----------
     directory : str or path-like
-        Where to create (or fill) the ``problems/`` folder; default the current directory.
+        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current directory.
     force : bool
         Overwrite files that already exist (without it a FileExistsError is raised and nothing is written).
 
     Returns
     -------
     list of Path
-        The files written, in name order.
+        The files written: ``directory/problems/...`` then ``directory/examples/...``, each in name order.
     """
     written = []
     for src, target in init_plan(directory, force=force):
