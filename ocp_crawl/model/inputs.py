@@ -279,10 +279,8 @@ class PeriodicLinear(_Sampled):
 
     Parameters
     ----------
-    t_knots : array_like, shape (N,)
-        Strictly increasing phases [cycles] in [0, 1), N >= 2 (the closing knot t_knots[0] + 1 is implied).
-    values : array_like, shape (2, N)
-        The two joints' values at the knots, in the signal's unit (angles [rad] or torques [N m]).
+    t_knots, values : array_like, shapes (N,) and (2, N)
+        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 2.
     """
 
     def __init__(self, t_knots, values):
@@ -315,10 +313,8 @@ class PeriodicPchip(_Sampled):
 
     Parameters
     ----------
-    t_knots : array_like, shape (N,)
-        Strictly increasing phases [cycles] in [0, 1), N >= 3 (the closing knot t_knots[0] + 1 is implied).
-    values : array_like, shape (2, N)
-        The two joints' values at the knots, in the signal's unit (angles [rad] or torques [N m]).
+    t_knots, values : array_like, shapes (N,) and (2, N)
+        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 3.
     """
 
     def __init__(self, t_knots, values):
