@@ -414,6 +414,17 @@ ROWS.update({
     "optimize: --out empty": R("optimize", ["{ocp}", "--out", ""], ["--out ''", "empty path"]),
     "optimize: k = 1e308": R("optimize", ["{ocp}", "--set", "robot.k=1e308"],
                              ["[robot] k = 1e+308 (from --set)", "in [1e-12, 1e12]"]),
+    # ---- init
+    "init: a problem file exists (no --force)": R("init", ["{tmp}"], ["{tmp}/problems/unequal_friction.toml", "exists",
+                                                                       "--force", "nothing was written"],
+                                                  files={"problems/unequal_friction.toml": b"# mine\n"}),
+    "init: DIR is a regular file": R("init", ["{blocker}"], ["DIR {blocker}", "not a directory"]),
+    "init: DIR/problems is a regular file": R("init", ["{tmp}"], ["{tmp}/problems", "not a directory"],
+                                              files={"problems": b"a file\n"}),
+    "init: DIR empty": R("init", [""], ["DIR ''", "empty path"]),
+    "init: DIR not writable": R("init", ["{readonly}"], ["DIR {readonly}", "Permission denied"],
+                                needs_permissions=True),
+    "init: two directories": R("init", ["{tmp}", "{dir}"], ["unrecognized arguments", "{dir}"]),
 })
 
 #: generous time limit of one row: a hang guard, not a timing assertion (every row takes well under a second)
