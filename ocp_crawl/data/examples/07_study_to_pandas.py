@@ -1,8 +1,9 @@
 """A study from Python into pandas.
 
 Runs a small sweep of the paper's gait over the amplitude A and the phase difference psi with
-:func:`ocp_crawl.sweep.run_sweep` and hands its rows (one dict per grid point: the grid keys, then
-S [m], W_plus [J], CoT_plus [-], status, message) to a :class:`pandas.DataFrame`, where the usual
+:func:`ocp_crawl.sweep.run_sweep` and hands its rows (one per grid point: the grid keys, then
+S [m], W_plus [J], CoT_plus [-], status, message) to a :class:`pandas.DataFrame` with
+:meth:`~ocp_crawl.sweep.SweepResult.to_pandas` (units in ``df.attrs["units"]``), where the usual
 tools apply: units converted in columns, the failed points counted by status, the best psi per
 amplitude found with ``groupby``, a pivot table plotted.  Needs pandas (``pip install
 'ocp-crawl[examples]'``).
@@ -11,7 +12,6 @@ Run: ``python examples/07_study_to_pandas.py [OUT_DIR]``; writes ``OUT_DIR/study
 ``OUT_DIR/study.png``.
 """
 import numpy as np
-import pandas as pd
 from _common import output_dir, save
 from matplotlib.figure import Figure
 
@@ -24,7 +24,8 @@ GRID = {"gait.A_deg": [10.0, 20.0, 30.0], "gait.psi_deg": list(np.linspace(0.0, 
 def main() -> None:
     out = output_dir()
     sweep = run_sweep(paper_problem(), GRID, jobs=1)
-    df = pd.DataFrame(sweep.rows)
+    df = sweep.to_pandas()
+    assert df.attrs["units"]["S"] == "m" and df.attrs["units"]["W_plus"] == "J"
     df["S_mm"] = 1e3 * df["S"]                    # [mm per cycle]
     df["W_plus_mJ"] = 1e3 * df["W_plus"]          # [mJ per cycle]
     df.to_csv(out / "study.csv", index=False)
