@@ -1,5 +1,6 @@
 """Shared problem factories for the tests (the paper's robot and gaits)."""
 import os
+import re
 
 import matplotlib
 import pytest
@@ -9,6 +10,26 @@ matplotlib.use("Agg")
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot  # noqa: E402
 
 PAPER_DATA = os.path.join(os.path.dirname(__file__), os.pardir, "ocp_crawl", "data", "paper")
+
+
+def _cells(line: str) -> int:
+    """Cells of a markdown table row (escaped bars stay inside their cell)."""
+    return len(re.split(r"(?<!\\)\|", line.strip())) - 2
+
+
+def markdown_table_shapes(text: str) -> list[tuple[int, list[int]]]:
+    """(header cells, [cells of each row]) of every markdown table in ``text``."""
+    lines = text.splitlines()
+    out = []
+    for i, line in enumerate(lines[:-1]):
+        if line.startswith("|") and re.fullmatch(r"\|(---\|)+", lines[i + 1]):
+            rows = []
+            for row in lines[i + 1:]:
+                if not row.startswith("|"):
+                    break
+                rows.append(_cells(row))
+            out.append((_cells(line), rows))
+    return out
 
 
 def paper_torque(robot: Robot, gamma=90.0, A=30.0, psi=45.0, **per_joint):

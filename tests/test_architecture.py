@@ -22,7 +22,8 @@ MAX_FUNCTION_LINES = 80
 
 
 def _modules():
-    return sorted(p for p in PKG.rglob("*.py"))
+    # ocp_crawl/data/ holds shipped files (the examples gallery's scripts, written out by `ocp-crawl init`), not modules
+    return sorted(p for p in PKG.rglob("*.py") if p.relative_to(PKG).parts[0] != "data")
 
 
 def _dotted(path: Path) -> str:

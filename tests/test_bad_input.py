@@ -271,6 +271,9 @@ ROWS = {
     "crosscheck: --set bad value": R("crosscheck", ["{paper}", "--set", "robot.mu=nan"],
                                      ["paper_gait.toml", "[robot] mu = nan (from --set)", "finite"]),
     # ------------------------------------------------------------------ optimize
+    "optimize: no [ocp] section": R("optimize", ["{paper}"], ["paper_gait.toml", "no [ocp] section"]),
+    "optimize: no [ocp] section, --set ocp.*": R("optimize", ["{paper}", "--set", "ocp.nodes=20"],
+                                                ["paper_gait.toml", "no [ocp] section"]),
     "optimize: too few nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 4", "in [8, 1000]"],
                                  text=ocp_edit("nodes = 100", "nodes = 4")),
     "optimize: float for int nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 10.5", "integer"],
@@ -412,6 +415,17 @@ ROWS.update({
     "optimize: --out empty": R("optimize", ["{ocp}", "--out", ""], ["--out ''", "empty path"]),
     "optimize: k = 1e308": R("optimize", ["{ocp}", "--set", "robot.k=1e308"],
                              ["[robot] k = 1e+308 (from --set)", "in [1e-12, 1e12]"]),
+    # ---- init
+    "init: a problem file exists (no --force)": R("init", ["{tmp}"], ["{tmp}/problems/unequal_friction.toml", "exists",
+                                                                       "--force", "nothing was written"],
+                                                  files={"problems/unequal_friction.toml": b"# mine\n"}),
+    "init: DIR is a regular file": R("init", ["{blocker}"], ["DIR {blocker}", "not a directory"]),
+    "init: DIR/problems is a regular file": R("init", ["{tmp}"], ["{tmp}/problems", "not a directory"],
+                                              files={"problems": b"a file\n"}),
+    "init: DIR empty": R("init", [""], ["DIR ''", "empty path"]),
+    "init: DIR not writable": R("init", ["{readonly}"], ["DIR {readonly}", "Permission denied"],
+                                needs_permissions=True),
+    "init: two directories": R("init", ["{tmp}", "{dir}"], ["unrecognized arguments", "{dir}"]),
 })
 
 # ---- fit: measurement files (the CSV convention) and parameters

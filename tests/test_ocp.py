@@ -99,9 +99,13 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
     out = tmp_path / "opt"
     code = main(["optimize", str(problem), "--set", "ocp.nodes=40", "--set", "ocp.harmonic_psi=8", "--json",
-                 "--out", str(out)])
-    data = json.loads(capsys.readouterr().out)
+                 "--out", str(out), "--progress"])
+    captured = capsys.readouterr()
+    data = json.loads(captured.out)  # the progress bar never mixes into the JSON on stdout
     assert code == (0 if data["success"] else 1)
+    # the bar on stderr counts every IPOPT iteration of the homotopy's calls
+    iterations = sum(stage["iterations"] for stage in data["homotopy"])
+    assert f"optimize: {iterations} IPOPT it" in captured.err and "polish" in captured.err
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
         assert key in data, key
@@ -112,6 +116,25 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
     assert phase[0] == 0.0 and np.all(np.diff(phase) > 0) and phase[-1] < 1.0
     for name in ("arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"):
         assert (out / name).stat().st_size > 0
+
+
+def test_optimize_text_of_a_failed_run_has_no_raw_values():
+    """A run that found nothing (no replay, no harmonic gait) reads "-" where a number is missing, never
+    None or nan; numbers carry their units."""
+    from ocp_crawl.cli.study_commands import format_optimize
+    from ocp_crawl.ocp import OCPResult, OCPSettings
+    from ocp_crawl.status import Status
+
+    empty = OCPResult(success=False, status=Status.REPLAY_FAILED, message="the replay failed",
+                      objective="max_speed", settings=OCPSettings()).summary()
+    text = format_optimize(empty)
+    assert "None" not in text and "nan" not in text.lower()
+    assert "replay -" in text and "(relative difference -)" in text
+    done = dict(empty, S_ocp=-0.0791484, S_replay=-0.0778866, objective_value_replay=0.0778866, gain=0.2987,
+                rel_diff_replay=0.01620, solve_time_s=4.1098)
+    text = format_optimize(done)
+    assert "S           OCP -79.148 mm, replay -77.887 mm" in text
+    assert "+29.9 %" in text and "(relative difference +1.62 %)" in text and "time        4.1 s" in text
 
 
 def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):

@@ -25,6 +25,8 @@ from ocp_crawl.studies import FIGURES, GRIDS, STATEMENTS, evaluate_fit, fit_rest
 from ocp_crawl.problem import paper_problem
 from ocp_crawl.studies.plots import plot_amplitude, plot_friction_band, plot_parametric, plot_stiffness
 
+from conftest import markdown_table_shapes
+
 MM = 1e3
 L = 0.120
 #: |S| at round-off: the robot does not move
@@ -319,6 +321,14 @@ def test_reproduce_quick(reproduced):
     for _, _, claim in STATEMENTS:
         assert claim in report
     assert "Statements the physical convention changes" in report
+    # every table row has as many cells as its header; no signed zero, no nan, no |x| written /x/
+    shapes = markdown_table_shapes(report)
+    assert len(shapes) >= 10
+    for header, rows in shapes:
+        assert rows == [header] * len(rows), (header, rows)
+    assert not re.search(r"(?<![\d.])-0\.0+(?![\d])", report), re.search(r".{40}-0\.0+.{10}", report)
+    assert not re.search(r"\bnan\b", report, re.I)
+    assert "max /S" not in report and "median \\|rel. diff.\\|" in report
     numbers = json.loads((out / "numbers.json").read_text())
     holds = {k: v["holds"] for k, v in numbers["statements"].items()}
     # every statement holds with the paper's own sign; the physical sign changes the stiffness ones

@@ -60,6 +60,10 @@ def read_csv(path):
     ("model.gravity=physical,paper", "model.gravity", ["physical", "paper"]),
     ('model.gravity="paper"', "model.gravity", ["paper"]),
     ("gait.drive=torque,angles", "gait.drive", ["torque", "angles"]),
+    ("gait.psi_deg=0:180:num=5", "gait.psi_deg", [0.0, 45.0, 90.0, 135.0, 180.0]),
+    ("simulation.max_cycles=4:8:step=2", "simulation.max_cycles", [4, 6, 8]),
+    ("gait.psi_deg=180:0:step=-45", "gait.psi_deg", [180.0, 135.0, 90.0, 45.0, 0.0]),
+    ("gait.A_deg=30:30:step=5", "gait.A_deg", [30.0]),
 ])
 def test_parse_grid(spec, key, values):
     name, arr = parse_grid(spec)
@@ -79,7 +83,13 @@ def test_parse_grid(spec, key, values):
     ("gait.psi=0:180:3", "did you mean gait.psi_deg"),
     ("gaitt.psi_deg=0:180:3", "unknown section \\[gaitt\\]; did you mean gait"),
     ("gait.psi_deg=", "no values"),
-    ("gait.psi_deg=0:180", "START:STOP:NUM, got 2 fields"),
+    ("gait.psi_deg=0:180", "START:STOP:step=STEP, got 2 fields"),
+    ("gait.psi_deg=0:180:step=7", "STEP = 7 does not divide STOP - START = 180; the last value would be 175"),
+    ("gait.psi_deg=0:180:step=-5", "goes away from STOP; use step=5"),
+    ("gait.psi_deg=0:180:step=0", "finite non-zero"),
+    ("gait.psi_deg=0:180:step=x", "STEP must be a number"),
+    ("gait.psi_deg=0:180:stp=5", "the third field is NUM, num=NUM or step=STEP"),
+    ("gait.psi_deg=0:180:step=0.001", "gives 180001 values, more than the 20000"),
     ("gait.psi_deg=0:180:3:4", "got 4 fields"),
     ("gait.psi_deg=a:180:3", "START and STOP must be numbers"),
     ("gait.psi_deg=0:180:2.5", "NUM must be an integer >= 1"),
@@ -100,6 +110,20 @@ def test_parse_grid_rejects(spec, match):
         parse_grid(spec)
     assert "\n" not in str(info.value)
     assert "--grid" in str(info.value)
+
+
+@pytest.mark.parametrize("start, stop, step", [(0, 180, 5), (0.3, 0.5, 0.05), (-45, 45, 7.5), (1, 2, 0.1),
+                                                (180, 0, -10)])
+def test_step_form_is_the_arange_of_numpy_with_stop_included(start, stop, step):
+    """START:STOP:step=STEP gives start, start + step, ... up to STOP, as numpy.arange would with the
+    end included (the count form START:STOP:NUM keeps meaning NUM values)."""
+    _, values = parse_grid(f"gait.psi_deg={start}:{stop}:step={step}")
+    ref = np.arange(start, stop + step / 2, step)
+    assert values.shape == ref.shape
+    np.testing.assert_allclose(values, ref, rtol=0, atol=1e-12 * max(abs(start), abs(stop)))
+    assert values[0] == start and values[-1] == stop
+    _, counted = parse_grid(f"gait.psi_deg={start}:{stop}:{len(ref)}")
+    np.testing.assert_array_equal(values, counted)
 
 
 def test_grids_of_several_keys():
@@ -373,6 +397,66 @@ def test_cli_sweep_json_and_summary(tmp_path, capsys):
     captured = capsys.readouterr()
     assert code == 0
     assert "2 points" in captured.out and "success 1" in captured.out and "best S" in captured.out
+
+
+def test_cli_sweep_echoes_the_resolved_values(tmp_path, capsys):
+    """Every value of every axis is echoed, in the text summary and in --json (the step form included)."""
+    argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=30:60:step=15", "--grid", "robot.k=0.1,0.2", "--jobs", "1"]
+    assert main(argv + ["--out", str(tmp_path / "a"), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["grid"] == {"gait.psi_deg": [30.0, 45.0, 60.0], "robot.k": [0.1, 0.2]}
+    assert data["units"] == {"gait.psi_deg": "deg", "robot.k": "N m/rad", "S": "m", "W_plus": "J", "CoT_plus": "-",
+                             "elapsed_s": "s"}
+    assert main(argv + ["--out", str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    assert "  gait.psi_deg = 30, 45, 60 (3 values, step 15)" in out.splitlines()
+    assert "  robot.k = 0.1, 0.2 (2 values)" in out.splitlines()
+    # a long axis: its ends, its length and its step
+    assert main(["sweep", str(PAPER), "--grid", "gait.psi_deg=0:44:step=2", "--set", "robot.k=0.5", "--jobs", "1",
+                 "--out", str(tmp_path / "c")]) == 0
+    assert "  gait.psi_deg = 0, 2, 4, 6, ..., 42, 44 (23 values, step 2)" in capsys.readouterr().out.splitlines()
+
+
+def test_sweep_over_one_foot_expands_mu(tmp_path, capsys):
+    """A file giving mu swept over robot.mu1 (or mu2): the other foot keeps mu.  Each row equals the run of
+    the file with both feet set explicitly, through the command line as through run_sweep."""
+    values = [0.3, 0.35]
+    for key, other in (("mu1", "mu2"), ("mu2", "mu1")):
+        res = run_sweep(load_problem(PAPER), {f"robot.{key}": values}, jobs=1)
+        for row, v in zip(res.rows, values):
+            ref = run_problem(load_problem(PAPER, [f"robot.{key}={v}", f"robot.{other}=0.389"]))
+            assert ref.success and row["status"] == "success"
+            assert row["S"] == ref.S and row["W_plus"] == ref.W_plus
+        # the two feet are not the same: friction on one foot changes S differently than on the other
+        assert res.array("S")[0] != run_problem(load_problem(PAPER, ["robot.mu=0.3"])).S
+    for extra in ([], ["--set", "robot.mu2=0.389"]):
+        out = tmp_path / f"cli{len(extra)}"
+        assert main(["sweep", str(PAPER), "--grid", "robot.mu1=0.3,0.35", *extra, "--jobs", "1", "--out", str(out),
+                     "--json"]) == 0
+        data = json.loads(capsys.readouterr().out)
+        assert data["successes"] == 2
+        rows = SweepResult.read(out).rows
+        ref = run_problem(load_problem(PAPER, ["robot.mu1=0.35", "robot.mu2=0.389"]))
+        assert rows[1]["S"] == ref.S
+
+
+def test_to_pandas_keeps_rows_and_units(tmp_path):
+    pd = pytest.importorskip("pandas")
+    res = run_sweep(load_problem(PAPER), {"gait.psi_deg": [30.0, 45.0], "robot.mu": [0.3, 0.389]},
+                    out_dir=tmp_path / "p", jobs=1)
+    df = res.to_pandas()
+    assert isinstance(df, pd.DataFrame) and list(df.columns) == list(res.columns) and len(df) == 4
+    for i, row in enumerate(res.rows):
+        for col in res.columns:
+            assert df[col].iloc[i] == row[col] or (isinstance(row[col], float) and math.isnan(row[col]))
+    # units from the schema (grid keys) and SI units of the results, as results.csv holds them
+    assert df.attrs["units"] == {"gait.psi_deg": "deg", "robot.mu": "-", "S": "m", "W_plus": "J", "CoT_plus": "-"}
+    assert df.attrs["grid"] == {"gait.psi_deg": [30.0, 45.0], "robot.mu": [0.3, 0.389]}
+    # the same frame from the directory, and S in mm by the unit it carries
+    again = SweepResult.read(tmp_path / "p").to_pandas()
+    assert again.equals(df) and again.attrs["units"] == df.attrs["units"]
+    ref = run_problem(load_problem(PAPER, ["gait.psi_deg=45", "robot.mu=0.389"])).S
+    assert df.loc[(df["gait.psi_deg"] == 45.0) & (df["robot.mu"] == 0.389), "S"].item() == ref
 
 
 def test_cli_default_output_directory(tmp_path, capsys, monkeypatch):

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -11,6 +10,7 @@ import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
 from ocp_crawl.cli.common import finish, force_arg, integer, out_dir, out_file, prepare_out, real, steps_type
+from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
                                paper_problem, run_problem)
@@ -21,7 +21,7 @@ from ocp_crawl.status import STATUS_MESSAGES, Status
 MAX_STEP_COUNTS = 8
 
 #: units of the summary's numbers, written with every JSON summary
-UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J"}
+UNITS = {k: units.UNITS[k] for k in ("S", "W_plus", "W_plus_joint", "CoT_plus", "t", "energy")}
 
 
 def no_start_message(problem: Problem, detail: str) -> str:
@@ -69,11 +69,9 @@ def report(result: CrawlResult, problem: Problem) -> dict:
     return jsonable(out)
 
 
-def _num(x, scale: float = 1.0, fmt: str = ".3f") -> str:
-    x = float(x)
-    if math.isnan(x):
-        return "-"
-    return "inf" if math.isinf(x) else format(scale * x, fmt)
+def _per_cycle(text: str) -> str:
+    """A per-cycle quantity as text ("-" alone when it was not computed)."""
+    return text if text == units.MISSING else f"{text} per cycle"
 
 
 def format_summary(result: CrawlResult, problem: Problem) -> str:
@@ -91,9 +89,9 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
         f"mu1 = {r.mu1:g}, mu2 = {r.mu2:g}, g = {r.g:g} m/s^2",
         f"gait       {gait_text}",
         f"status     {result.status_name} ({result.status}): {result.message}",
-        f"S          {_num(result.S, 1e3)} mm per cycle{direction}",
-        f"W+         {_num(result.W_plus, 1e3)} mJ per cycle",
-        f"CoT+       {_num(result.CoT_plus)}",
+        f"S          {_per_cycle(units.distance(result.S))}{direction}",
+        f"W+         {_per_cycle(units.work(result.W_plus))}",
+        f"CoT+       {units.cot(result.CoT_plus)}",
         f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),
     ]
     events = result.steady_events() if result.success else result.events
@@ -187,8 +185,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         problem = paper_problem(overrides)
         result = _simulate(problem)
         n_events = len(result.steady_events()) if result.success else len(result.events)
-        print(f"{text:<36} {result.status_name:<10} {_num(result.S, 1e3):>9} {_num(result.W_plus, 1e3):>9} "
-              f"{_num(result.CoT_plus, fmt='.2f'):>8} {n_events:>12}")
+        print(f"{text:<36} {result.status_name:<10} {units.fixed(result.S, scale=1e3):>9} "
+              f"{units.fixed(result.W_plus, scale=1e3):>9} {units.cot(result.CoT_plus):>8} {n_events:>12}")
         reports[name] = data = report(result, problem)
         write_outputs(out, result, problem, data, stem=f"{name}_")
         if not result.success:
@@ -238,7 +236,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
     check_start(problem)
     result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)
     print(f"wrote {written}: {result.status_name}, "
-          + (f"S = {1e3 * result.S:.2f} mm per cycle" if result.success else result.message))
+          + (f"S = {units.distance(result.S, 2)} per cycle" if result.success else result.message))
     if not result.success:
         print(f"{PROG}: simulation failed: {result.message} (animated up to the failure)", file=sys.stderr)
         return EXIT_FAILURE

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -9,8 +10,10 @@ from pathlib import Path
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
 from ocp_crawl.cli.common import address, check_scheduler, finish, force_arg, jobs_type, out_dir, prepare_out
 from ocp_crawl.cli.run_commands import check_start
+from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.problem import load_problem, ocp_settings
+from ocp_crawl.problem.overrides import read_toml
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
                              check_some_point_valid, default_jobs, grid_from_specs, run_sweep)
 
@@ -21,8 +24,9 @@ from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_
 def _sweep_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see README, 'Problem files')")
     p.add_argument("--grid", action="append", required=True, metavar="KEY=START:STOP:NUM",
-                   help="an axis: NUM values from START to STOP inclusive, or a list KEY=A,B,C (repeatable; "
-                        "the first axis varies slowest), e.g. --grid gait.psi_deg=0:180:37")
+                   help="an axis: NUM values from START to STOP inclusive, KEY=START:STOP:step=STEP (START, "
+                        "START+STEP, ... up to STOP), or a list KEY=A,B,C (repeatable; the first axis varies "
+                        "slowest), e.g. --grid gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5 (the same)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the base problem (repeatable)")
     p.add_argument("--jobs", type=jobs_type, metavar="N", help="worker processes (default: the CPUs available)")
@@ -107,7 +111,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         return EXIT_FAILURE
     held = sum(all(s.holds.values()) for s in result.statements)
     changed = [s.key for s in result.statements if s.changed]
-    print(f"{result.mode} run in {result.elapsed:.0f} s: {len(result.files)} files in {result.out_dir}/ "
+    print(f"{result.mode} run in {units.seconds(result.elapsed)}: {len(result.files)} files in {result.out_dir}/ "
           f"(report: {result.report})")
     print(f"statements of the paper: {held} of {len(result.statements)} hold in both conventions; "
           f"changed by the physical convention: {', '.join(changed) if changed else 'none'}")
@@ -124,6 +128,9 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--out", metavar="DIR", type=out_dir,
                    help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+    p.add_argument("--progress", action="store_true",
+                   help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
+                        "not a terminal (it is shown on a terminal anyway)")
     force_arg(p)
 
 
@@ -131,25 +138,61 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
 OCP_FILES = ("torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 
-def format_optimize(s: dict) -> str:
-    def mm(v):
-        return "-" if v is None else f"{1e3 * v:+.3f} mm"
+#: objectives whose value is a distance per cycle [m] (the others are a cost of transport [-])
+SPEED_OBJECTIVES = ("max_speed", "robust_speed")
 
+
+def _each(value, text) -> str:
+    """One number, or one per scenario (a list), as text; "-" when missing."""
+    return ", ".join(text(v) for v in value) if isinstance(value, list) else text(value)
+
+
+def format_optimize(s: dict) -> str:
+    """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, W+ in
+    mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed replay)."""
+    value = units.distance if s["objective"] in SPEED_OBJECTIVES else units.cot
     h = s.get("best_harmonic") or {}
+    harmonic = "-" if not h else (f"psi = {units.significant(h.get('psi_deg'))} deg, A = "
+                                  f"{units.significant(h.get('A_deg'))} deg, value {value(h.get('value'))}")
     lines = [
         f"status      {s['status']}: {s['message']}",
         f"objective   {s['objective']} ({s['nodes']} nodes, {s['parametrization']} torques)",
-        f"S           OCP {mm(s['S_ocp']) if not isinstance(s['S_ocp'], list) else s['S_ocp']}, "
-        f"replay {mm(s['S_replay']) if not isinstance(s['S_replay'], list) else s['S_replay']}",
-        f"objective   OCP {s['objective_value_ocp']}, replay {s['objective_value_replay']} "
-        f"(relative difference {s['rel_diff_replay']})",
-        f"CoT+        replay {s['CoT_plus_replay']}",
-        f"harmonic    best of the envelope: psi = {h.get('psi_deg')} deg, A = {h.get('A_deg')} deg, "
-        f"objective {h.get('value')}; gain of the optimum (by replay) {s['gain']}",
-        f"residuals   complementarity {s['complementarity_residual']}, periodicity {s['periodicity_residual']}",
-        f"time        {s['solve_time_s']} s",
+        f"S           OCP {_each(s['S_ocp'], units.distance)}, replay {_each(s['S_replay'], units.distance)}",
+        f"W+          OCP {_each(s['W_plus_ocp'], units.work)}, replay {_each(s['W_plus_replay'], units.work)}",
+        f"CoT+        OCP {_each(s['CoT_plus_ocp'], units.cot)}, replay {_each(s['CoT_plus_replay'], units.cot)}",
+        f"value       OCP {value(s['objective_value_ocp'])}, replay {value(s['objective_value_replay'])} "
+        f"(relative difference {units.ratio(s['rel_diff_replay'])})",
+        f"harmonic    best of the envelope: {harmonic}; gain of the optimum (by replay) {units.ratio(s['gain'])}",
+        f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
+        f"{units.scientific(s['periodicity_residual'])}",
+        f"time        {units.seconds(s['solve_time_s'])}",
     ]
     return "\n".join(lines)
+
+
+def _progress_bar(wanted: bool):
+    """A context manager showing the homotopy's IPOPT calls on stderr (tqdm: stage, sigma, IPOPT iterations),
+    or doing nothing unless ``wanted``."""
+    if not wanted:
+        return contextlib.nullcontext()
+    from tqdm import tqdm
+
+    from ocp_crawl.nlp.homotopy import observe
+
+    @contextlib.contextmanager
+    def shown():
+        with tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True) as bar:
+            bar.set_postfix_str("best harmonic gait of the envelope (the initial guess)")
+            calls = []
+
+            def update(stage) -> None:
+                calls.append(stage)
+                sigma = "" if stage.kind == "polish" else f" sigma {units.scientific(stage.sigma)}"
+                bar.set_postfix_str(f"{stage.kind} stage {len(calls)}{sigma}, {stage.return_status}", refresh=False)
+                bar.update(stage.iterations)
+            with observe(update):
+                yield
+    return shown()
 
 
 @register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
@@ -158,12 +201,16 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
 
     problem = load_problem(args.problem, args.overrides)
+    if "ocp" not in read_toml(args.problem):
+        raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
+                       "'Problem files', and problems/ocp_max_speed.toml)")
     settings = ocp_settings(problem)
     out = prepare_out(args.out, OCP_FILES, args.force) if args.out is not None else None
     check_start(problem)
-    result = optimize_gait(problem.robot, problem.gravity, settings)
+    with _progress_bar(args.progress or sys.stderr.isatty()):
+        result = optimize_gait(problem.robot, problem.gravity, settings)
     data = jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
-                         units={"S": "m", "W_plus": "J", "CoT_plus": "-", "tau": "N m", "solve_time_s": "s"}))
+                         units={k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")}))
     if args.json:
         print(json.dumps(data, allow_nan=False))
     else:

@@ -56,7 +56,20 @@ def _float_array(owner: str, name: str, value) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Harmonic(PeriodicSignal):
-    """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 = gamma2 + A2 sin(2 pi t - psi/2)."""
+    """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 = gamma2 + A2 sin(2 pi t - psi/2).
+
+    Parameters
+    ----------
+    gamma1, gamma2 : float
+        Nominal angles of joints 1 and 2 [rad] (pi/2: the upright Pi shape; pi: flat).
+    A1, A2 : float
+        Amplitudes [rad] (>= 0).
+    psi : float
+        Phase difference [rad], joint 1 leading for psi > 0.
+
+    Called with a phase t [cycles] it returns the angles, shape (2,) (or (2, N) for N phases).
+    :meth:`from_degrees` takes the same values in degrees.
+    """
 
     gamma1: float = math.pi / 2
     """nominal angle of joint 1 [rad]"""
@@ -76,6 +89,20 @@ class Harmonic(PeriodicSignal):
     @classmethod
     def from_degrees(cls, gamma_deg=90.0, A_deg=30.0, psi_deg=45.0, *, gamma1_deg=None, gamma2_deg=None,
                      A1_deg=None, A2_deg=None) -> "Harmonic":
+        """The harmonic reference from angles in degrees, as in the problem files' ``[gait]`` section.
+
+        Parameters
+        ----------
+        gamma_deg, A_deg, psi_deg : float
+            Nominal angle, amplitude and phase lead of joint 1 over joint 2 [deg] (the paper's gait:
+            90, 30, 45).
+        gamma1_deg, gamma2_deg, A1_deg, A2_deg : float, optional
+            Per-joint values [deg] that override ``gamma_deg`` / ``A_deg``.
+
+        Returns
+        -------
+        Harmonic
+        """
         g1 = gamma_deg if gamma1_deg is None else gamma1_deg
         g2 = gamma_deg if gamma2_deg is None else gamma2_deg
         a1 = A_deg if A1_deg is None else A1_deg
@@ -111,7 +138,14 @@ class Harmonic(PeriodicSignal):
 class FourierSeries(PeriodicSignal):
     """u_i(t) = a0_i + sum_n (a_n,i cos(2 pi n t) + b_n,i sin(2 pi n t)).
 
-    ``a0``: shape (2,); ``a`` and ``b``: shape (2, N) for harmonics n = 1..N.
+    Parameters
+    ----------
+    a0 : array_like, shape (2,)
+        Mean of each joint's signal, in the signal's unit (angles [rad] or torques [N m]).
+    a, b : array_like, shape (2, N)
+        Cosine and sine coefficients of the harmonics n = 1..N (same unit); t is the phase [cycles].
+
+    :meth:`fit` builds the series from equally spaced samples.
     """
 
     a0: np.ndarray
@@ -209,7 +243,15 @@ class _Sampled(PeriodicSignal):
 
 
 class PeriodicSpline(_Sampled):
-    """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N))."""
+    """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N)).
+
+    Parameters
+    ----------
+    t_knots : array_like, shape (N,)
+        Strictly increasing phases [cycles] in [0, 1), N >= 3 (the closing knot t_knots[0] + 1 is implied).
+    values : array_like, shape (2, N)
+        The two joints' values at the knots, in the signal's unit (angles [rad] or torques [N m]).
+    """
 
     def __init__(self, t_knots, values):
         t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
@@ -232,8 +274,13 @@ class PeriodicSpline(_Sampled):
 class PeriodicLinear(_Sampled):
     """Periodic piecewise-linear interpolation of samples at phases ``t_knots`` in [0, 1) (values (2, N)).
 
-    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot),
-    which is why the optimal-control replay uses it; the derivative is piecewise constant.
+    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot);
+    the derivative is piecewise constant.
+
+    Parameters
+    ----------
+    t_knots, values : array_like, shapes (N,) and (2, N)
+        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 2.
     """
 
     def __init__(self, t_knots, values):
@@ -261,7 +308,13 @@ class PeriodicPchip(_Sampled):
     """Periodic shape-preserving cubic (PCHIP) interpolation of samples at phases ``t_knots`` in [0, 1).
 
     C1 (continuous derivative, unlike :class:`PeriodicLinear`) and without overshoot: it stays within
-    the range of neighbouring samples, so bounds the samples satisfy hold between them too.
+    the range of neighbouring samples, so bounds the samples satisfy hold between them too.  The
+    optimal-control replay uses it.
+
+    Parameters
+    ----------
+    t_knots, values : array_like, shapes (N,) and (2, N)
+        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 3.
     """
 
     def __init__(self, t_knots, values):
@@ -326,7 +379,15 @@ class CallableSignal(PeriodicSignal):
 
 @dataclass(frozen=True)
 class ReferenceTorque(PeriodicSignal):
-    """Torque input of eq. (tau): tau_i = k (phi_ref,i(t) - pi) [N m], i.e. a spring whose rest angle is phi_ref."""
+    """Torque input of eq. (tau): tau_i = k (phi_ref,i(t) - pi) [N m], i.e. a spring whose rest angle is phi_ref.
+
+    Parameters
+    ----------
+    reference : PeriodicSignal
+        The reference angles phi_ref(t) [rad] (e.g. :class:`Harmonic`, or a sampled signal of angles).
+    k : float
+        Joint stiffness [N m/rad] (> 0), normally the robot's ``k``.
+    """
 
     reference: PeriodicSignal
     k: float
@@ -348,7 +409,23 @@ class ReferenceTorque(PeriodicSignal):
 
 
 def as_signal(u) -> PeriodicSignal:
-    """Accept a PeriodicSignal or any callable of phase."""
+    """Accept a PeriodicSignal or any callable of phase.
+
+    Parameters
+    ----------
+    u : PeriodicSignal or callable
+        A signal, or a function ``f(t) -> (2,)`` of the phase t [cycles], assumed 1-periodic.
+
+    Returns
+    -------
+    PeriodicSignal
+        ``u`` itself, or a :class:`CallableSignal` wrapping it (derivative by central differences).
+
+    Raises
+    ------
+    TypeError
+        If ``u`` is neither.
+    """
     if isinstance(u, PeriodicSignal):
         return u
     if callable(u):

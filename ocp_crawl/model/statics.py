@@ -59,7 +59,26 @@ NQ = len(Q_NAMES)
 
 @dataclass(frozen=True)
 class Robot:
-    """Physical parameters of the three-link crawler (SI units)."""
+    """Physical parameters of the three-link crawler (SI units), frozen and validated.
+
+    Parameters
+    ----------
+    M : float
+        Total mass [kg] (> 0).
+    L : float
+        Total length [m] (> 0); legs of length l = L / (2 + beta), body beta l.
+    beta : float
+        Body-to-leg length ratio [-] (> 0).
+    k : float
+        Torsion spring stiffness of each joint [N m/rad] (> 0).
+    mu1, mu2 : float
+        Coulomb friction coefficients of foot 1 (left) and foot 2 (right) [-] (>= 0).
+    g : float
+        Gravitational acceleration [m/s^2] (> 0).
+
+    The defaults are the paper's Table I robot (:meth:`paper`).  A non-finite or out-of-range value
+    raises ValueError naming the field; ``robot.replace(k=0.2)`` gives a modified copy.
+    """
 
     M: float = 0.052
     """total mass [kg]"""
@@ -376,7 +395,18 @@ KIN = {n: i for i, n in enumerate(KIN_NAMES)}
 
 @dataclass(frozen=True)
 class Model:
-    """A robot together with the gravity convention; numeric front end to the compiled functions."""
+    """A robot together with the gravity convention; numeric front end to the compiled functions.
+
+    Parameters
+    ----------
+    robot : Robot
+        The physical parameters (default: the paper's Table I robot).
+    gravity : {"physical", "paper"}
+        Sign of the gravity term: "physical" (virtual work, the default) or "paper" (as printed in
+        the paper; see README, "Gravity conventions").
+
+    The model is what every simulator takes: ``simulate(Model(robot), signal, solver)``.
+    """
 
     robot: Robot = field(default_factory=Robot.paper)
     gravity: GravityConvention = "physical"

@@ -14,15 +14,32 @@ status table's verdict and the caller's residuals.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Iterator
 
 import casadi as cs
 import numpy as np
 
 from ocp_crawl.nlp.ipopt import IpoptCall, ipopt_status
+
+
+#: callbacks told of every IPOPT call of every homotopy (see :func:`observe`)
+_OBSERVERS: contextvars.ContextVar[tuple] = contextvars.ContextVar("homotopy_observers", default=())
+
+
+@contextlib.contextmanager
+def observe(callback: Callable[["Stage"], None]) -> Iterator[None]:
+    """Call ``callback(stage)`` with the :class:`Stage` record of every IPOPT call made by a homotopy inside
+    the ``with`` block (for progress displays: ``stage.kind``, ``stage.sigma``, ``stage.iterations``)."""
+    token = _OBSERVERS.set(_OBSERVERS.get() + (callback,))
+    try:
+        yield
+    finally:
+        _OBSERVERS.reset(token)
 
 
 def schedule(sigma0: float, factor: float, sigma_min: float) -> tuple[float, ...]:
@@ -168,6 +185,8 @@ class Homotopy:
         self.records.append(Stage(sigma, sol.status, sol.accepted, sol.iterations, sol.comp,
                                   time.perf_counter() - t0, kind, attempt, sol.objective, tuple(sol.S),
                                   sol.describe()))
+        for callback in _OBSERVERS.get():
+            callback(self.records[-1])
         return sol
 
     def relax(self, sigmas: Iterable[float], start: Start, data: Callable[[float], dict], attempt: int = 0,

@@ -325,8 +325,26 @@ def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
 def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides: Sequence[str] = ()) -> Problem:
     """Validate a dict shaped like a problem file (sections of keys) and build the :class:`Problem`.
 
-    ``source`` names the origin in messages; ``overrides`` are ``SECTION.KEY=VALUE`` texts (``--set``).
-    Bad input raises ProblemError.
+    Parameters
+    ----------
+    data : mapping
+        Sections of keys as in a TOML problem file, e.g. ``{"robot": {"M": 0.052, "L": 0.12, "k": 0.1677,
+        "mu": 0.389}, "gait": {"gamma_deg": 90, "A_deg": 30, "psi_deg": 45}}``; every key in the unit of the
+        README's key table (kg, m, N m/rad, deg, ...); missing optional keys take their defaults.
+    source : str
+        Names the origin at the start of every error message (default ``"<dict>"``).
+    overrides : sequence of str
+        ``SECTION.KEY=VALUE`` texts applied on top of ``data``, as ``--set`` (the value parsed as TOML).
+
+    Returns
+    -------
+    Problem
+        The validated problem (``problem.model``, ``problem.signal``, ``problem.solver``, ...).
+
+    Raises
+    ------
+    ProblemError
+        Bad input (a ValueError), with a one-line message naming the source, key, value and what is valid.
     """
     if not isinstance(data, Mapping):
         raise ProblemError(f"{source}: a problem must be a table of sections, got {toml_type(data)}")
@@ -335,5 +353,25 @@ def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides
 
 
 def load_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
-    """Load and validate a TOML problem file, applying ``SECTION.KEY=VALUE`` overrides (``--set``)."""
+    """Load and validate a TOML problem file, applying ``SECTION.KEY=VALUE`` overrides (``--set``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The problem file (TOML, at most 1 MiB); the shipped examples are written out by
+        ``ocp-crawl init`` or found with :func:`ocp_crawl.problem.shipped.shipped_problem`.
+    overrides : sequence of str
+        ``SECTION.KEY=VALUE`` texts, e.g. ``["robot.k=0.2", "gait.drive=angles"]`` (values parsed as TOML,
+        in the units of the file's keys).
+
+    Returns
+    -------
+    Problem
+        The validated problem; ``problem.source`` is ``str(path)``.
+
+    Raises
+    ------
+    ProblemError
+        An unreadable or malformed file, or an invalid key or value (one line naming the file and key).
+    """
     return problem_from_dict(read_toml(path), source=str(path), overrides=overrides)

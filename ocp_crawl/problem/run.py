@@ -15,8 +15,19 @@ from ocp_crawl.sim.result import CrawlResult
 def run_problem(problem: Problem, t_eval=None) -> CrawlResult:
     """Simulate the problem with its solver (``problem.solver`` of the registry, ``problem.options``).
 
-    ``t_eval``: output phases [cycles] in the steady cycle, or None for the solver's sampling.
-    Returns the :class:`CrawlResult` (S [m], W+ [J], CoT+ [-], status and trajectories).
+    Parameters
+    ----------
+    problem : Problem
+        A validated problem (:func:`load_problem`, :func:`problem_from_dict`, :func:`paper_problem`).
+    t_eval : array_like of float, optional
+        Output phases [cycles] in the steady cycle (in [0, 1]); None for the solver's own sampling.
+
+    Returns
+    -------
+    CrawlResult
+        ``status``/``success``/``message``, the displacement per cycle ``S`` [m] (< 0: towards foot 1),
+        the positive work ``W_plus`` [J], the cost of transport ``CoT_plus`` [-], the events and the sampled
+        trajectories.  A numerical failure (fold, lift-off, ...) is a status, not an exception.
     """
     if not isinstance(problem, Problem):
         raise TypeError(f"run_problem needs a Problem, got {type(problem).__name__}")
@@ -70,6 +81,18 @@ PAPER_GAIT: Mapping[str, Mapping[str, Any]] = freeze({
 def paper_problem(overrides: Sequence[str] = ()) -> Problem:
     """The paper's gait as a Problem, built in code (available without the problems/ directory).
 
-    ``overrides``: ``SECTION.KEY=VALUE`` texts as ``--set``.
+    The Table I robot (M = 0.052 kg, L = 0.120 m, beta = 2, k = 0.1677 N m/rad, mu = 0.389,
+    g = 9.81 m/s^2) with the gait gamma = 90 deg, A = 30 deg, psi = 45 deg, torque drive, physical
+    gravity: the values of ``problems/paper_gait.toml`` (:data:`PAPER_GAIT`).
+
+    Parameters
+    ----------
+    overrides : sequence of str
+        ``SECTION.KEY=VALUE`` texts as ``--set``, e.g. ``["model.gravity=paper"]``.
+
+    Returns
+    -------
+    Problem
+        The validated problem, ``source`` ``"<paper gait>"``.
     """
     return problem_from_dict(thaw(PAPER_GAIT), source="<paper gait>", overrides=overrides)

@@ -105,9 +105,22 @@ def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | N
 def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> CrawlResult:
     """Prescribed-angle gait over one cycle (it is periodic after one cycle).
 
-    ``angles``: 1-periodic signal of the joint angles [rad] (e.g. :class:`~ocp_crawl.model.inputs.Harmonic`).
-    ``t_eval``: output phases in [0, 1]; by default 201 equally spaced phases plus the switching instants.
-    ``n_scan``: phases scanned for sign changes of the switching functions before Brent's method.
+    Parameters
+    ----------
+    model : Model
+        The robot and the gravity convention.
+    angles : PeriodicSignal or callable
+        1-periodic joint angles (phi1, phi2) [rad] of the phase t [cycles], interior angles below the
+        body (pi = flat), e.g. :class:`~ocp_crawl.model.inputs.Harmonic`.
+    t_eval : array_like of float, optional
+        Output phases in [0, 1] [cycles]; by default 201 equally spaced phases plus the switching instants.
+    n_scan : int
+        Phases scanned for sign changes of the switching functions before Brent's method (>= 8).
+
+    Returns
+    -------
+    CrawlResult
+        S [m] (< 0: towards foot 1), W+ [J], CoT+ [-], the events and trajectories of the cycle.
 
     A loss of contact during the cycle (a foot lifting off, a joint reaching the ground, the feet
     meeting) is returned as a failure status with its phase (``failure_t``) and the contact mode

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ocp_crawl.checks import finite_or_none, real
+from ocp_crawl.io import units
 from ocp_crawl.model.inputs import as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.event import HybridOptions
@@ -38,6 +39,9 @@ from ocp_crawl.sim.mpcc import MPCCOptions
 from ocp_crawl.sim.registry import simulate
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.sim.timestepping import TimeSteppingOptions
+
+#: significant digits of CoT+ in the cross-check table (more than the 3 of a summary: it compares two solvers)
+CROSSCHECK_DIGITS = 5
 
 
 @dataclass(frozen=True)
@@ -181,14 +185,17 @@ class CrossCheckResult:
         ev = self.event
         lines = [f"Cross-check: MPCC time-stepping vs event-driven ({ev.gravity} gravity)",
                  f"event-driven: {ev.message}",
-                 f"  S = {ev.S * 1e3:.6f} mm, W+ = {ev.W_plus:.6g} J, CoT+ = {ev.CoT_plus:.6g}",
+                 f"  S = {units.distance(ev.S, 6)}, W+ = {units.work(ev.W_plus, 6)}, "
+                 f"CoT+ = {units.cot(ev.CoT_plus, CROSSCHECK_DIGITS)}",
                  "",
-                 f"{'N':>6} {'S_mpcc [mm]':>14} {'rel dS':>10} {'W+_mpcc [J]':>13} {'rel dW+':>10} "
+                 f"{'N':>6} {'S_mpcc [mm]':>14} {'rel dS':>10} {'W+_mpcc [mJ]':>13} {'rel dW+':>10} "
                  f"{'CoT+_mpcc':>11} {'rel dCoT+':>10} {'max|dphi| [rad]':>16} {'modes':>6} {'time [s]':>9}"]
         for r in self.rows:
-            lines.append(f"{r.steps:>6d} {r.S * 1e3:>14.6f} {r.rel_diff_S:>10.2e} {r.W_plus:>13.6g} "
-                         f"{r.rel_diff_W_plus:>10.2e} {r.CoT_plus:>11.5g} {r.rel_diff_CoT_plus:>10.2e} "
-                         f"{r.max_phi_dev:>16.2e} {'same' if r.modes_match else 'DIFF':>6} {r.time:>9.2f}")
+            lines.append(f"{r.steps:>6d} {units.fixed(r.S, 6, 1e3):>14} {units.scientific(r.rel_diff_S, 3):>10} "
+                         f"{units.fixed(r.W_plus, 6, 1e3):>13} {units.scientific(r.rel_diff_W_plus, 3):>10} "
+                         f"{units.cot(r.CoT_plus, CROSSCHECK_DIGITS):>11} "
+                         f"{units.scientific(r.rel_diff_CoT_plus, 3):>10} {units.scientific(r.max_phi_dev, 3):>16} "
+                         f"{'same' if r.modes_match else 'DIFF':>6} {units.fixed(r.time, 2):>9}")
             if not r.success:
                 lines.append(f"       run failed: {r.message}")
         lines.append(f"measured convergence order of S: {self.order:.3f}")

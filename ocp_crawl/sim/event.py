@@ -382,8 +382,24 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
 def simulate_torque(model: Model, torque, options: HybridOptions | None = None, t_eval=None) -> CrawlResult:
     """Event-driven hybrid-quasistatic simulation of a torque-driven gait (see module docstring).
 
-    ``model``: robot and gravity convention; ``torque``: periodic joint torques [N m] over one cycle
-    (phase in cycles); ``options``: :class:`HybridOptions` (None: defaults); ``t_eval``: output phases
-    in [0, 1] of the steady cycle.  Returns a :class:`~ocp_crawl.sim.result.CrawlResult`.
+    The same as ``simulate(model, torque, "event", options, t_eval)``.
+
+    Parameters
+    ----------
+    model : Model
+        The robot and the gravity convention.
+    torque : PeriodicSignal or callable
+        1-periodic joint torques tau(t) = (tau1, tau2) [N m] of the phase t [cycles], e.g.
+        ``ReferenceTorque(Harmonic.from_degrees(90, 30, 45), robot.k)``.
+    options : HybridOptions, optional
+        Step size, event tolerance, cycle limits, ... (None: the defaults).
+    t_eval : array_like of float, optional
+        Output phases in [0, 1] of the steady cycle [cycles]; None: the solver's steps and events.
+
+    Returns
+    -------
+    CrawlResult
+        Runs cycles from a released start until the gait is periodic: S [m], W+ [J], CoT+ [-], the
+        events of the steady cycle, trajectories; a failure (fold, lift-off, not periodic, ...) is a status.
     """
     return HybridStepper(model, torque, options).run(t_eval=t_eval)

@@ -114,6 +114,27 @@ class CrawlResult:
     ``mode`` holds :class:`Mode` codes. ``S`` [m] is the displacement of the robot over the steady
     cycle along +x (from foot 1 to foot 2); ``W_plus`` [J] the positive work per cycle summed over
     the two actuators (``W_plus_joint`` per actuator); ``CoT_plus`` = W+/(M g |S|).
+
+    Attributes
+    ----------
+    success : bool
+        True if a periodic gait was found and passed the checks (stability, continuity, energy).
+    status : Status
+        The outcome; ``status_name`` its label, ``message`` why (one line).
+    t : ndarray, shape (N,)
+        Output phases [cycles], counted from the start of the run.
+    phi, tau : ndarray, shape (2, N)
+        Joint angles [rad] and actuator torques [N m].
+    x1, x2, d : ndarray, shape (N,)
+        Contact positions of the feet and their distance [m].
+    f_t, f_n1, f_n2 : ndarray, shape (N,)
+        Tangential force and normal forces at the feet [N].
+    S, W_plus, CoT_plus : float
+        Displacement per cycle [m], positive work per cycle [J], cost of transport [-]; NaN on failure.
+    events : list of Event
+        The located contact events (``steady_events()``: those of the steady cycle).
+
+    ``summary()`` gives the numbers as JSON types, ``arrays()`` the trajectories.
     """
 
     success: bool

@@ -354,6 +354,27 @@ def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = N
                   options: TimeSteppingOptions | MPCCOptions | None = None, t_eval=None) -> CrawlResult:
     """MPCC time-stepping simulation of a torque-driven gait with ``steps`` steps per cycle (see module docstring).
 
-    ``cycles``: number of cycles to run, or None to run until periodic (at most ``options.max_cycles``).
+    Every step is an IPOPT solve of the incremental Coulomb problem with complementarity constraints
+    (relaxation homotopy); the result converges to the event-driven one as ``steps`` grows.
+
+    Parameters
+    ----------
+    model : Model
+        The robot and the gravity convention.
+    torque : PeriodicSignal or callable
+        1-periodic joint torques (tau1, tau2) [N m] of the phase t [cycles].
+    steps : int
+        Time steps per cycle (in [4, 10000]; each is an IPOPT solve of about 2 ms).
+    cycles : int, optional
+        Number of cycles to run, or None to run until periodic (at most ``options.max_cycles``).
+    options : TimeSteppingOptions or MPCCOptions, optional
+        Solver and cycle options (None: the defaults).
+    t_eval : array_like of float, optional
+        Output phases in [0, 1] of the steady cycle [cycles].
+
+    Returns
+    -------
+    CrawlResult
+        S [m], W+ [J], CoT+ [-], the trajectories at the step phases, and the status.
     """
     return TimeStepper(model, torque, steps, options).run(cycles=cycles, t_eval=t_eval)

@@ -10,17 +10,19 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import BoundaryNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
-from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
 from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
 from ocp_crawl.studies.pressure import PressureStudy
-from ocp_crawl.viz.gait import mode_color, mode_runs, plot_friction_limits, robot_points, shade_modes
+from ocp_crawl.studies.text import threshold_text
+from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, robot_points, shade_modes
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
 BLUE = (0.0, 0.447, 0.741)
@@ -57,6 +59,14 @@ def _finish(fig: Figure) -> Figure:
     return fig
 
 
+def plain_log_ticks(axis) -> None:
+    """Ticks of a log ``axis`` (``ax.xaxis``/``ax.yaxis``) at 1, 2 and 5 per decade, labelled as plain numbers
+    (0.5, 2, 40) instead of matplotlib's 2x10^0 ... 4x10^1."""
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
+
+
 def _gravity_text(gravity: str) -> str:
     return "paper's printed gravity sign" if gravity == "paper" else "physical gravity sign"
 
@@ -81,7 +91,7 @@ def mark_failures(ax, x, y, status, *, color="0.3", size=36, seen: set | None = 
 
 def _run_label(name: str, res: CrawlResult) -> str:
     if res.success:
-        return f"{name}: S = {MM * res.S:.1f} mm"
+        return f"{name}: $S$ = {MM * res.S:.1f} mm"
     return f"{name}: {res.status_name.replace('_', ' ')} at t = {res.failure_t:.3f}"
 
 
@@ -105,9 +115,14 @@ def plot_configuration(gc: GaitComparison, snapshots: int = 5) -> Figure:
     """
     fig, ax = _figure((8.0, 9.0), 3, 1, gridspec_kw={"height_ratios": [1.0, 1.0, 0.9]})
     ax_a, ax_b, ax_s = ax[:, 0]
-    fig.suptitle(f"Configuration over a cycle: gamma 90, A 30, psi 45 deg ({_gravity_text(gc.gravity)})")
+    runs = _comparison_runs(gc)
+    fig.suptitle(fr"Configuration over a cycle: $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(gc.gravity)})"
+                 "\n$S$ [mm]: " + ", ".join(
+                     f"{name.replace('torque, ', '').replace(' M g L', '')} "
+                     + (f"{MM * res.S:.1f}" if res.success else res.status_name.replace("_", " "))
+                     for name, res, _ in runs) + r" ($k$ in $M g L$)")
     handles = []
-    for name, res, ls in _comparison_runs(gc):
+    for name, res, ls in runs:
         if res.t.size == 0:
             continue
         t = _phase(res)
@@ -164,7 +179,9 @@ def plot_forces(gc: GaitComparison) -> Figure:
     runs = [("prescribed angles", gc.prescribed, gc.robot)] + \
         [(f"hybrid, k = {r:.2f} M g L", res, gc.robot_at(i)) for i, (r, res) in enumerate(zip(gc.k_ratios, gc.torque))]
     fig, ax = _figure((8.0, 3.0 * len(runs)), len(runs), 1, sharex=True)
-    fig.suptitle(f"Tangential force and friction limits ({_gravity_text(gc.gravity)})")
+    jumps = ", ".join(f"{name.split(',')[0]} {gc.force_jump(res):.2g} N" for name, res, _ in runs[:2])
+    fig.suptitle(f"Tangential force and friction limits ({_gravity_text(gc.gravity)})\n"
+                 f"largest jump of $f_t$ at an event: {jumps}")
     modes_seen: set[int] = set()
     for (name, res, robot), a, letter in zip(runs, ax[:, 0], "abcdef"):
         a.set_title(f"({letter}) {_run_label(name, res)}", loc="left", fontsize="medium")
@@ -183,8 +200,9 @@ def plot_forces(gc: GaitComparison) -> Figure:
     handles = [Line2D([], [], color="k", label="$f_t$ (on foot 1, along +x)"),
                Line2D([], [], color=BLUE, ls="--", label=r"$\pm\mu_1 f_{n1}$"),
                Line2D([], [], color=PURPLE, ls="--", label=r"$\pm\mu_2 f_{n2}$")]
-    handles += [Patch(color=mode_color(m), label=Mode(m).label) for m in sorted(modes_seen)]
-    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize="small")
+    patches, names = mode_legend(modes_seen)
+    fig.legend(handles=handles + patches, labels=[h.get_label() for h in handles] + names, loc="outside lower center",
+               ncol=2, fontsize="small")
     return _finish(fig)
 
 
@@ -201,36 +219,42 @@ def _cell_edges(v: np.ndarray) -> np.ndarray:
 
 
 def plot_parametric(m: PsiGammaMap) -> Figure:
-    """Fig. parametric: progress -S [mm] over (psi, gamma); failed points as hatched cells, marked by status."""
-    fig, ax = _figure((8.0, 6.5))
+    """Fig. parametric: progress -S [mm] over (psi, gamma), one coloured cell per grid point (no
+    interpolation); failed points as hatched cells, marked by status; the best gamma at each psi and the
+    largest progress (also in the title)."""
+    fig, ax = _figure((8.0, 6.8))
     a = ax[0, 0]
-    P, G = np.meshgrid(m.psi_deg, m.gamma_deg)
     prog = MM * m.progress
     finite = prog[np.isfinite(prog)]
-    levels = MaxNLocator(14).tick_values(min(0.0, finite.min()), finite.max()) if finite.size else 10
-    cs = a.contourf(P, G, np.ma.masked_invalid(prog), levels=levels, cmap="viridis")
-    fig.colorbar(cs, ax=a, label="progress per cycle -S [mm]")
+    xe, ye = _cell_edges(m.psi_deg), _cell_edges(m.gamma_deg)
+    levels = MaxNLocator(14).tick_values(min(0.0, finite.min()), finite.max()) if finite.size else np.arange(11.0)
+    norm = BoundaryNorm(levels, ncolors=256)
+    mesh = a.pcolormesh(xe, ye, np.ma.masked_invalid(prog), cmap="viridis", norm=norm, shading="flat")
+    fig.colorbar(mesh, ax=a, label="progress per cycle $-S$ [mm]")
     handles = []
     failed = m.status != SUCCESS
     if failed.any():
-        xe, ye = _cell_edges(m.psi_deg), _cell_edges(m.gamma_deg)
         for i, j in zip(*np.nonzero(failed)):
             a.add_patch(Rectangle((xe[j], ye[i]), xe[j + 1] - xe[j], ye[i + 1] - ye[i], facecolor="white",
                                   edgecolor="0.45", hatch="///", lw=0.0, zorder=3))
-        handles.append(Patch(facecolor="white", edgecolor="0.45", hatch="///", label="failed point (cell)"))
+        handles.append(Patch(facecolor="white", edgecolor="0.45", hatch="///", label="failed point (its cell)"))
+        P, G = np.meshgrid(m.psi_deg, m.gamma_deg)
         handles += mark_failures(a, P, G, m.status, color=FAIL_COLOR, size=30)
-    a.set_xlim(m.psi_deg.min(), m.psi_deg.max())
-    a.set_ylim(m.gamma_deg.min(), m.gamma_deg.max())
+    a.set_xlim(xe[0], xe[-1])
+    a.set_ylim(ye[0], ye[-1])
     a.plot(m.psi_deg, m.gamma_opt, "w--", lw=1.5, zorder=4)
-    handles.append(Line2D([], [], color="0.2", ls="--", label="best gamma at each psi"))
+    handles.append(Line2D([], [], color="0.2", ls="--", label=r"best $\gamma$ at each $\psi$ (white)"))
     g, p, s = m.best
     a.plot(p, g, "*", color="orange", ms=14, mec="k", zorder=6)
     handles.append(Line2D([], [], ls="none", marker="*", color="orange", mec="k", ms=10,
-                          label=f"largest: {MM * -s:.1f} mm at psi {p:g}, gamma {g:g} deg"))
+                          label=rf"largest: {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg"))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
     a.set_ylabel(r"nominal angle $\gamma$ [deg]")
-    a.set_title(f"Progress per cycle over psi and gamma, A = {m.A_deg:g} deg ({_gravity_text(m.gravity)})")
-    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncol=3)
+    n_failed = int(failed.sum())
+    fig.suptitle(rf"Progress per cycle over $\psi$ and $\gamma$, $A$ = {m.A_deg:g} deg ({_gravity_text(m.gravity)})"
+                 "\n" + rf"largest $-S$ = {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg; "
+                 f"{n_failed} of {failed.size} points failed")
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncol=2)
     return _finish(fig)
 
 
@@ -249,7 +273,7 @@ def plot_friction_band(b: FrictionBand) -> Figure:
     psi_opt, prog = b.psi_opt
     if np.isfinite(psi_opt):
         a.plot([psi_opt], [MM * prog], "o", color="orange", mec="k", zorder=6,
-               label=fr"best average: $\psi$ = {psi_opt:.1f} deg, -S = {MM * prog:.1f} mm")
+               label=fr"best average: $\psi$ = {psi_opt:.1f} deg, $-S$ = {MM * prog:.1f} mm")
         psi_n, s_n = b.psi_opt_negative
         if np.isfinite(psi_n):
             a.plot([psi_n], [-MM * s_n], "o", color="orange", mec="k", zorder=6)
@@ -259,8 +283,11 @@ def plot_friction_band(b: FrictionBand) -> Figure:
     a.set_xlim(-180, 180)
     a.set_xticks(np.arange(-180, 181, 45))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
-    a.set_ylabel("progress towards foot 1 per cycle, -S [mm]")
-    a.set_title(f"Friction sensitivity, gamma 90, A 30 deg ({_gravity_text(b.gravity)})")
+    a.set_ylabel("progress towards foot 1 per cycle, $-S$ [mm]")
+    best = (fr"best average $-S$ = {MM * prog:.1f} mm at $\psi$ = {psi_opt:.1f} deg" if np.isfinite(psi_opt)
+            else "no best average")
+    fig.suptitle(fr"Friction sensitivity, $\gamma$ = 90, $A$ = 30 deg ({_gravity_text(b.gravity)})" "\n"
+                 fr"{best}; $\mu_1/\mu_2 \in [{1 - b.eps:g}, {1 + b.eps:g}]$")
     a.grid(True, lw=0.3, alpha=0.6)
     a.legend(handles=handles + fails, fontsize="small", loc="lower right")
     return _finish(fig)
@@ -284,7 +311,11 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
     comparison = s.paper_comparison() if overlay else None
     fig, ax = _figure((8.0, 8.0), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
-    fig.suptitle(f"Amplitude study, gamma 90, psi 45 deg ({_gravity_text(s.gravity)})")
+    least = ", ".join(f"{COT_K_LABELS[i]} k {s.CoT_min[i]:.1f}" + (f" at {s.A_opt[i]:.0f} deg"
+                                                                   if np.isfinite(s.A_opt[i]) else " (grid end)")
+                      for i in range(len(s.k_ratios)) if np.isfinite(s.CoT_min[i]))
+    fig.suptitle(rf"Amplitude study, $\gamma$ = 90, $\psi$ = 45 deg ({_gravity_text(s.gravity)})"
+                 + (f"\nleast CoT$^+$ over $A$: {least}" if least else ""))
     seen: set = set()
     fails = []
     for i, k in enumerate(s.k_ratios):
@@ -295,11 +326,11 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
         if comparison is not None:
             a_c.plot(s.A_deg, comparison["paper"][i], "o", ms=6, mfc="none", mec=color,
                      label=f"paper, {COT_K_LABELS[i]} k")
-    a_s.set_ylabel("progress per cycle -S [mm]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress against amplitude", loc="left", fontsize="medium")
     a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", loc="upper left")
-    a_c.set_ylabel("CoT$^+$ = W$^+$/(M g |S|) [-]")
-    a_c.set_xlabel("amplitude A [deg]")
+    a_c.set_ylabel(r"CoT$^+ = W^+/(M g |S|)$ [-]")
+    a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_title("(b) positive cost of transport (Fig. CoT)" + (" with the paper's values (circles)" if comparison
                                                                 is not None else ""), loc="left", fontsize="medium")
     # the paper's axis: CoT+ diverges where the robot barely moves (S -> 0 near the onset of motion)
@@ -327,16 +358,20 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
     fails = []
     for i, f in enumerate(h.factors):
         stop = h.psi_stop[i]
-        extra = f", stops from psi = {stop:.0f} deg" if np.isfinite(stop) else ""
+        extra = fr", stops from $\psi$ = {stop:.0f} deg" if np.isfinite(stop) else ""
+        # markers at psi = 0 and 180 sit on the frame: not clipped
         a.plot(h.psi_deg, -MM * h.S[i], color=colors[i % len(colors)], lw=2 if f == 1 else 1.5, marker=".",
-               label=fr"$\mu$ = {f:g} x 0.389{extra}")
+               clip_on=False, label=fr"$\mu$ = {f:g} $\times$ 0.389{extra}")
         fails += mark_failures(a, h.psi_deg, np.zeros(len(h.psi_deg)), h.status[i], color=colors[i % len(colors)],
                                seen=seen)
     a.set_xlim(0, 180)
     a.set_xticks(np.arange(0, 181, 30))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
-    a.set_ylabel("progress per cycle -S [mm]")
-    a.set_title(f"Higher friction, gamma 90, A 30 deg ({_gravity_text(h.gravity)})")
+    a.set_ylabel("progress per cycle $-S$ [mm]")
+    largest = ", ".join(f"{f:g}x {np.nanmax(-MM * h.S[i]):.1f}" for i, f in enumerate(h.factors)
+                        if np.isfinite(h.S[i]).any())
+    fig.suptitle(fr"Higher friction, $\gamma$ = 90, $A$ = 30 deg ({_gravity_text(h.gravity)})" "\n"
+                 fr"largest $-S$ [mm] per friction factor: {largest or 'none'}")
     a.grid(True, lw=0.3, alpha=0.6)
     a.legend(handles=a.get_legend_handles_labels()[0] + fails, fontsize="small")
     return _finish(fig)
@@ -346,13 +381,18 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
 # stiffness
 # --------------------------------------------------------------------------------------------
 def plot_stiffness(s: StiffnessStudy) -> Figure:
-    """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line."""
+    """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line.  The
+    title gives the friction threshold and the largest progress."""
     fig, ax = _figure((8.0, 7.5), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
-    fig.suptitle(f"Stiffness, gamma 90, A 30, psi 45 deg ({_gravity_text(s.gravity)})")
-    a_s.semilogx(s.k_ratios, -MM * s.S, color=BLUE, lw=2, marker=".", label="-S")
+    prog = -MM * np.asarray(s.S, float)
+    best = f"largest $-S$ = {np.nanmax(prog):.1f} mm" if np.isfinite(prog).any() else "no successful point"
+    fig.suptitle(rf"Stiffness, $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(s.gravity)})" "\n"
+                 f"friction threshold {threshold_text(s.threshold, 3)}; {best}")
+    a_s.semilogx(s.k_ratios, prog, color=BLUE, lw=2, marker=".", label="$-S$")
     fails = mark_failures(a_s, s.k_ratios, np.zeros(len(s.k_ratios)), s.status)
-    a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".")
+    a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".",
+               label="CoT$^+$ (moving points)")
     lines = []
     if np.isfinite(s.threshold):
         for a in (a_s, a_c):
@@ -362,14 +402,17 @@ def plot_stiffness(s: StiffnessStudy) -> Figure:
         for a in (a_s, a_c):
             a.axvline(s.onset, color="tab:green", ls=":", lw=1.5)
         lines.append(Line2D([], [], color="tab:green", ls=":", label=f"crawls at every k from {s.onset:.3f} M g L"))
-    a_s.set_ylabel("progress per cycle -S [mm]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress", loc="left", fontsize="medium")
-    a_s.legend(handles=[Line2D([], [], color=BLUE, marker=".", label="-S")] + lines + fails, fontsize="small")
+    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + lines + fails, fontsize="small")
     a_c.set_ylabel("CoT$^+$ [-]")
-    a_c.set_xlabel("stiffness k/(M g L) [-]")
+    a_c.set_xlabel("stiffness $k/(M g L)$ [-]")
     a_c.set_title("(b) positive cost of transport", loc="left", fontsize="medium")
+    a_c.legend(handles=a_c.get_legend_handles_labels()[0] + lines, fontsize="small")
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
+        plain_log_ticks(a.xaxis)
+    plain_log_ticks(a_c.yaxis)
     return _finish(fig)
 
 
@@ -377,7 +420,9 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
     """The two gravity conventions side by side: progress against k, and CoT+ against A."""
     fig, ax = _figure((8.0, 8.0), 2, 1)
     a_s, a_c = ax[:, 0]
-    fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)")
+    thresholds = ", ".join(f"{g} {threshold_text(st.threshold, 3)}" for g, st in stiff.items())
+    fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)"
+                 + (f"\nfriction thresholds: {thresholds}" if thresholds else ""))
     seen: set = set()
     fails = []
     for gravity, ls, color in (("paper", "-", BLUE), ("physical", "--", "tab:red")):
@@ -391,15 +436,17 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
             for i, k in enumerate(am.k_ratios):
                 a_c.plot(am.A_deg, am.CoT_moving[i], color=K_COLORS[i % 3], ls=ls, lw=1.8,
                          label=f"{gravity}, {_k_label(i, k)}")
-    a_s.set_xlabel("stiffness k/(M g L) [-]")
-    a_s.set_ylabel("progress per cycle -S [mm]")
-    a_s.set_title("(a) progress against stiffness (gamma 90, A 30, psi 45 deg)", loc="left", fontsize="medium")
+    a_s.set_xlabel("stiffness $k/(M g L)$ [-]")
+    a_s.set_ylabel("progress per cycle $-S$ [mm]")
+    plain_log_ticks(a_s.xaxis)
+    a_s.set_title(r"(a) progress against stiffness ($\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg)", loc="left",
+                  fontsize="medium")
     # above the failure markers, which sit just below zero at low stiffness
     a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", ncol=2, loc="center right")
-    a_c.set_xlabel("amplitude A [deg]")
+    a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_ylabel("CoT$^+$ [-]")
     a_c.set_ylim(0, COT_YMAX)
-    a_c.set_title("(b) CoT+ against amplitude (gamma 90, psi 45 deg)", loc="left", fontsize="medium")
+    a_c.set_title(r"(b) CoT$^+$ against amplitude ($\gamma$ = 90, $\psi$ = 45 deg)", loc="left", fontsize="medium")
     a_c.legend(fontsize="x-small", ncol=2)
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
@@ -414,15 +461,17 @@ def plot_pressure(p: PressureStudy) -> Figure:
     fig, ax = _figure((11.0, 4.8), 1, 2)
     a0, a1 = ax[0]
     c = p.fit.curves
-    fig.suptitle(f"Pressure-driven robot: rest angle {c.phi_rest_deg:.1f} deg "
-                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}")
+    fig.suptitle(fr"Pressure-driven robot: rest angle $\varphi_\mathrm{{rest}}$ = {c.phi_rest_deg:.1f} deg "
+                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}\n"
+                 fr"RMS error against the paper's simulation: {p.fit.rms_p0:.3f} ($p_0$), {p.fit.rms_psi:.3f} ($\psi$); "
+                 fr"best $\psi$ = {p.psi_opt[0]:.1f} deg")
     a0.plot(p.paper_p0["p0_bar"], p.paper_p0["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
     a0.plot(c.p0_bar, c.progress_p0, color=BLUE, lw=2, marker=".", label=f"this model (RMS error {p.fit.rms_p0:.3f})")
     e = p.experiment_p0
     a0.errorbar(e["p0_bar"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
     a0.set_xlabel("nominal (peak) pressure $p_0$ [bar]")
-    a0.set_ylabel(f"S / S(p0 = 1.7 bar) [-]  (psi = {c.psi_for_p0_deg:g} deg)")
+    a0.set_ylabel(fr"$S / S(p_0 = 1.7$ bar) [-]  ($\psi$ = {c.psi_for_p0_deg:g} deg)")
     a0.set_title("(a) against nominal pressure", loc="left", fontsize="medium")
     a1.plot(p.paper_psi["psi_deg"], p.paper_psi["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
     a1.plot(c.psi_deg, c.progress_psi, color=BLUE, lw=2, marker=".", label=f"this model (RMS error {p.fit.rms_psi:.3f})")
@@ -430,7 +479,7 @@ def plot_pressure(p: PressureStudy) -> Figure:
     a1.errorbar(e["psi_deg"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
     a1.set_xlabel(r"phase difference $\psi$ [deg]")
-    a1.set_ylabel(f"S / max S [-]  (p0 = {c.p0_for_psi_bar:g} bar)")
+    a1.set_ylabel(fr"$S / \max S$ [-]  ($p_0$ = {c.p0_for_psi_bar:g} bar)")
     a1.set_title("(b) against phase difference", loc="left", fontsize="medium")
     a1.set_xlim(-3, 180)
     for a in (a0, a1):

@@ -11,7 +11,7 @@ from ocp_crawl.studies.cot import AmplitudeStudy
 from ocp_crawl.studies.pressure import P0_NORMALISE_BAR
 from ocp_crawl.studies.statements import PAPER_REALISTIC, PAPER_THRESHOLD, Statement, stiffness_runs_text
 from ocp_crawl.studies.suite import GRIDS, StudySet
-from ocp_crawl.studies.text import counts_text, fmt_mm, num, rel, table
+from ocp_crawl.studies.text import counts_text, dec, fmt_mm, num, rel, table, threshold_text
 
 
 def _fig(name: str, caption: str) -> str:
@@ -98,8 +98,8 @@ def _gait_section(s: StudySet) -> list[str]:
     for name, r in (("prescribed angles", gc.prescribed), ("torque, k = 2.74 M g L", gc.torque[0]),
                     ("torque, k = 0.3 M g L", gc.torque[1])):
         rows.append([name, r.status_name, fmt_mm(r.S) if r.success else f"at t = {r.failure_t:.4f} ({r.failure_mode})",
-                     f"{gc.stick_fraction(r):.3f}" if r.success else "-", f"{MM * gc.d_max(r):.2f}",
-                     f"{r.W_plus * MM:.2f}" if r.success else "-", f"{r.CoT_plus:.2f}" if r.success else "-"])
+                     f"{gc.stick_fraction(r):.3f}" if r.success else "-", dec(MM * gc.d_max(r)),
+                     dec(r.W_plus * MM) if r.success else "-", dec(r.CoT_plus) if r.success else "-"])
     w(table(["run", "status", "S", "stick-stick fraction", "largest d [mm]", "W+ [mJ]", "CoT+"], rows))
     w("\n## Fig. simu_forces: tangential force and friction limits\n")
     w(_fig("simu_forces", "f_t (black) and +-mu_i f_ni (dashed), background by contact mode"))
@@ -119,7 +119,7 @@ def _parametric_section(s: StudySet, o: StudySet | None) -> list[str]:
     w(f"\nLargest progress {fmt_mm(-sb)} at gamma {gb:g}, psi {pb:g} deg. Points: {counts_text(m.counts)}.\n")
     w(table(["psi [deg]"] + [f"{p:g}" for p in m.psi_deg],
              [["best gamma [deg]"] + [f"{v:.1f}" if np.isfinite(v) else "-" for v in m.gamma_opt],
-              ["-S at gamma 90 [mm]"] + [f"{MM * v:.2f}" if np.isfinite(v) else "-" for v in
+              ["-S at gamma 90 [mm]"] + [dec(MM * v) for v in
                                          -m.S[int(np.argmin(np.abs(m.gamma_deg - 90)))]]]))
     if o is not None:
         w(f"\n{o.gravity} convention: points {counts_text(o.parametric.counts)}; largest progress "
@@ -141,7 +141,7 @@ def _band_section(s: StudySet, o: StudySet | None) -> list[str]:
     lo, hi = b.band
     sel = b.psi_deg >= 0
     w(table(["psi [deg]", "-S, mu1 = mu2 [mm]", "-S band [mm]", "-S average [mm]"],
-             [[f"{p:g}", f"{-MM * n:.2f}", f"{-MM * h:.2f} .. {-MM * l:.2f}", f"{-MM * a:.2f}"]
+             [[f"{p:g}", dec(-MM * n), f"{dec(-MM * h)} .. {dec(-MM * l)}", dec(-MM * a)]
               for p, n, l, h, a in zip(b.psi_deg[sel], b.nominal[sel], lo[sel], hi[sel], b.average[sel])]))
     if o is not None:
         w(f"\n{o.gravity} convention: optimal psi of the average {o.band.psi_opt[0]:.1f} deg "
@@ -167,11 +167,11 @@ def _amplitude_section(s: StudySet, o: StudySet | None) -> list[str]:
     for j, A in enumerate(a.A_deg):
         row = [f"{A:.2f}"]
         for i in range(len(a.k_ratios)):
-            row.append(f"{-MM * a.S[i, j]:.2f}" if np.isfinite(a.S[i, j]) else a.status[i, j])
+            row.append(dec(-MM * a.S[i, j]) if np.isfinite(a.S[i, j]) else a.status[i, j])
             cell = f"{a.CoT_plus[i, j]:.2f}" if np.isfinite(a.CoT_plus[i, j]) else (
                 "inf (no motion)" if a.status[i, j] == SUCCESS else a.status[i, j])
             if comp is not None and np.isfinite(comp["paper"][i, j]):
-                cell += f" (paper {comp['paper'][i, j]:.2f}, {comp['rel_diff'][i, j]:+.1%})" \
+                cell += f" (paper {comp['paper'][i, j]:.2f}, {num(comp['rel_diff'][i, j], '+.1%')})" \
                     if np.isfinite(comp["rel_diff"][i, j]) else f" (paper {comp['paper'][i, j]:.2f})"
             row.append(cell)
         rows.append(row)
@@ -189,7 +189,7 @@ def _friction_section(s: StudySet) -> list[str]:
     w(_fig("s_psi_mu", "Progress against psi for mu = 1, 2, 3, 4 x 0.389"))
     w(f"\nPoints: {counts_text(h.counts)}.\n")
     w(table(["mu", "largest -S [mm]", "progress non-increasing in psi", "stops from psi [deg]"],
-             [[f"{f:g} x 0.389", f"{np.nanmax(-MM * h.S[i]):.2f}", str(bool(h.monotone()[i])),
+             [[f"{f:g} x 0.389", dec(np.nanmax(-MM * h.S[i])), str(bool(h.monotone()[i])),
                f"{h.psi_stop[i]:.1f}" if np.isfinite(h.psi_stop[i]) else "moves up to 180"]
               for i, f in enumerate(h.factors)]))
     return out
@@ -202,16 +202,17 @@ def _stiffness_section(s: StudySet, o: StudySet | None) -> list[str]:
     st = s.stiffness
     w("\n## Stiffness and the friction threshold\n")
     w(_fig("stiffness", "Progress and CoT+ against k/(M g L); the dashed line is the friction threshold"))
-    w(f"\nFriction threshold: **k = {st.threshold:.4f} M g L** (bisection bracket {st.threshold_bracket[0]:.5f} .. "
-      f"{st.threshold_bracket[1]:.5f}); the robot crawls at every k from {st.onset:.4f} M g L on. The paper says ~{PAPER_THRESHOLD} M g L: relative difference "
-      f"{st.threshold / PAPER_THRESHOLD - 1:+.1%}. The realistic stiffness of Table I is {REALISTIC_K_RATIO:.3f} M g L "
+    w(f"\nFriction threshold: **k = {threshold_text(st.threshold)}** (bisection bracket {num(st.threshold_bracket[0], '.5f')}"
+      f" .. {num(st.threshold_bracket[1], '.5f')}); the robot crawls at every k from {threshold_text(st.onset)} on. "
+      f"The paper says ~{PAPER_THRESHOLD} M g L: relative difference {num(st.threshold / PAPER_THRESHOLD - 1, '+.1%')}. "
+      f"The realistic stiffness of Table I is {REALISTIC_K_RATIO:.3f} M g L "
       f"(the paper rounds it to {PAPER_REALISTIC}: {REALISTIC_K_RATIO / PAPER_REALISTIC - 1:+.1%}).\n")
     w("Outcomes along k: " + stiffness_runs_text(st) + f". Points: {counts_text(st.counts)}.\n")
     if o is not None:
-        w(f"{o.gravity} convention: threshold {o.stiffness.threshold:.4f} M g L, crawls at every k from "
-          f"{o.stiffness.onset:.4f} M g L on; outcomes: {stiffness_runs_text(o.stiffness)}.\n")
+        w(f"{o.gravity} convention: threshold {threshold_text(o.stiffness.threshold)}, crawls at every k from "
+          f"{threshold_text(o.stiffness.onset)} on; outcomes: {stiffness_runs_text(o.stiffness)}.\n")
     w(table(["k/(M g L)", "status", "-S [mm]", "CoT+"],
-             [[f"{k:.4g}", stt, f"{-MM * v:.2f}" if np.isfinite(v) else "-", f"{c:.2f}" if np.isfinite(c) else "-"]
+             [[f"{k:.4g}", stt, dec(-MM * v), dec(c) if np.isfinite(c) else "-"]
               for k, stt, v, c in zip(st.k_ratios, st.status, st.S, st.CoT_plus)]))
     return out
 

@@ -1,4 +1,5 @@
-"""Grids of a sweep: axes ``SECTION.KEY=START:STOP:NUM`` or ``SECTION.KEY=A,B,C``, typed by the schema.
+"""Grids of a sweep: axes ``SECTION.KEY=START:STOP:NUM``, ``SECTION.KEY=START:STOP:step=STEP`` or
+``SECTION.KEY=A,B,C``, typed by the schema.
 
 A grid is ``{key: values}``, one axis per problem key (the first key varies slowest); its values
 are typed after the schema (float, int or str), checked against the key's rule, and set on the
@@ -24,7 +25,12 @@ VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
 #: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event solver, so 20,000
 #: points are 10 to 20 minutes of the paper's gaits on 2 cores (the full reproduce grids have 777 at most)
 MAX_GRID_POINTS = 20_000
-_GRID_HELP = "expected SECTION.KEY=START:STOP:NUM or SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37"
+_GRID_HELP = ("expected SECTION.KEY=START:STOP:NUM (NUM values), SECTION.KEY=START:STOP:step=STEP or "
+              "SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5")
+#: relative tolerance of "STEP divides STOP - START" (decimal steps such as 0.1 are not exact in binary)
+STEP_RTOL = 1e-9
+#: values of an axis echoed one by one; longer axes are shown by their first and last values and step
+ECHO_ALL = 20
 
 
 def schema_key(name: str, where: str) -> Key:
@@ -97,8 +103,8 @@ def _list_item(text: str, key: Key, where: str) -> Any:
             raise ProblemError(f"{where} is invalid: {text!r} is not a number") from None
 
 
-def _range(parts: Sequence[str], where: str) -> tuple[float, float, int]:
-    """START, STOP (finite numbers) and NUM (an integer in [1, MAX_GRID_POINTS]) of a range, as written."""
+def _endpoints(parts: Sequence[str], where: str) -> tuple[float, float]:
+    """START and STOP of a range as finite numbers."""
     try:
         start, stop = float(parts[0]), float(parts[1])
     except ValueError:
@@ -107,21 +113,71 @@ def _range(parts: Sequence[str], where: str) -> tuple[float, float, int]:
     for name, text, value in (("START", parts[0], start), ("STOP", parts[1], stop)):
         if not math.isfinite(value):
             raise ProblemError(f"{where} is invalid: START and STOP must be finite, got {name} = {text}")
+    return start, stop
+
+
+def _count(text: str, where: str) -> int:
+    """NUM of a range: an integer in [1, MAX_GRID_POINTS]."""
     try:
-        num = int(parts[2])
+        num = int(text)
     except ValueError:
-        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {parts[2]!r}") from None
+        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {text!r} (for a step "
+                           f"write START:STOP:step=STEP)") from None
     if num < 1:
         raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {num}")
     if num > MAX_GRID_POINTS:
-        raise ProblemError(f"{where} is invalid: NUM = {parts[2]} is more than the {MAX_GRID_POINTS} points a sweep "
+        raise ProblemError(f"{where} is invalid: NUM = {text} is more than the {MAX_GRID_POINTS} points a sweep "
                            "may have (about 10 to 20 minutes on 2 cores); split the sweep")
-    return start, stop, num
+    return num
+
+
+def _step_count(start: float, stop: float, text: str, where: str) -> int:
+    """The number of values of ``START:STOP:step=STEP``: STEP must be a non-zero number that divides
+    STOP - START (to :data:`STEP_RTOL`) and points from START towards STOP."""
+    try:
+        step = float(text)
+    except ValueError:
+        raise ProblemError(f"{where} is invalid: STEP must be a number, got {text!r}") from None
+    if not math.isfinite(step) or step == 0:
+        raise ProblemError(f"{where} is invalid: STEP must be a finite non-zero number, got {text}")
+    span = stop - start
+    if span != 0 and (span > 0) != (step > 0):
+        raise ProblemError(f"{where} is invalid: STEP = {text} goes away from STOP; use step={-step:g}")
+    intervals = span / step
+    n = round(intervals)
+    if abs(intervals - n) > STEP_RTOL * max(1.0, abs(intervals)):
+        below = start + math.floor(intervals) * step
+        raise ProblemError(f"{where} is invalid: STEP = {text} does not divide STOP - START = {span:g}; "
+                           f"the last value would be {below:g}, not STOP: change STOP or STEP")
+    if n + 1 > MAX_GRID_POINTS:
+        raise ProblemError(f"{where} is invalid: STEP = {text} gives {n + 1} values, more than the {MAX_GRID_POINTS} "
+                           "points a sweep may have (about 10 to 20 minutes on 2 cores); take a larger STEP")
+    return n + 1
+
+
+def _range(rhs: str, where: str) -> np.ndarray:
+    """The values of a range ``START:STOP:NUM`` or ``START:STOP:step=STEP`` (both ends included)."""
+    parts = [p.strip() for p in rhs.split(":")]
+    if len(parts) != 3:
+        raise ProblemError(f"{where} is invalid: a range is START:STOP:NUM or START:STOP:step=STEP, got "
+                           f"{len(parts)} fields")
+    start, stop = _endpoints(parts, where)
+    form, _, value = parts[2].rpartition("=")
+    form = form.strip().lower()
+    if form not in ("", "num", "step"):
+        raise ProblemError(f"{where} is invalid: the third field is NUM, num=NUM or step=STEP, got {parts[2]!r}")
+    num = _step_count(start, stop, value.strip(), where) if form == "step" else _count(value.strip(), where)
+    if num == 1 and start != stop:
+        raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
+                           f"write a single value instead")
+    return np.linspace(start, stop, num)
 
 
 def parse_grid(spec: str) -> tuple[str, np.ndarray]:
     """Parse one axis: ``SECTION.KEY=START:STOP:NUM`` (NUM values, both ends included, like
-    ``numpy.linspace``) or ``SECTION.KEY=A,B,C`` (a list; one value is a list of one).
+    ``numpy.linspace``; ``num=NUM`` says the same), ``SECTION.KEY=START:STOP:step=STEP`` (START,
+    START + STEP, ... up to STOP included; STEP must divide STOP - START) or ``SECTION.KEY=A,B,C`` (a
+    list; one value is a list of one).
 
     Returns the key and its values (float, int or str array after the schema type of the key).
     Bad specs raise :class:`ProblemError` with a one-line message naming the spec.
@@ -137,14 +193,7 @@ def parse_grid(spec: str) -> tuple[str, np.ndarray]:
     if not rhs:
         raise ProblemError(f"{where} is invalid: no values ({_GRID_HELP})")
     if ":" in rhs and "," not in rhs and key.type is not str:
-        parts = [p.strip() for p in rhs.split(":")]
-        if len(parts) != 3:
-            raise ProblemError(f"{where} is invalid: a range is START:STOP:NUM, got {len(parts)} fields")
-        start, stop, num = _range(parts, where)
-        if num == 1 and start != stop:
-            raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
-                               f"write {lhs}={parts[0]} for a single value")
-        return lhs, _coerce(np.linspace(start, stop, num), key, lhs, where)
+        return lhs, _coerce(_range(rhs, where), key, lhs, where)
     return lhs, _coerce([_list_item(t, key, where) for t in rhs.split(",")], key, lhs, where)
 
 
@@ -205,3 +254,21 @@ def check_some_point_valid(problem: Problem, grid: Mapping[str, Any]) -> None:
             first = first or exc
     raise ProblemError(f"{first} (every one of the {n} points of the grid is invalid; grid: "
                        f"{', '.join(f'{k} = {len(v)} values' for k, v in grid.items())})")
+
+
+def _value_text(v: Any) -> str:
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def axis_text(values: Sequence[Any]) -> str:
+    """The values of one axis as text, e.g. "0, 45, 90, 135, 180 (5 values, step 45)": every value up to
+    :data:`ECHO_ALL` of them, else the first four and the last two (and the step of an evenly spaced axis)."""
+    vals = list(values)
+    texts = [_value_text(v) for v in vals]
+    text = ", ".join(texts if len(vals) <= ECHO_ALL else texts[:4] + ["..."] + texts[-2:])
+    extra = f"{len(vals)} value{'s' if len(vals) != 1 else ''}"
+    if len(vals) > 2 and all(isinstance(v, (int, float)) for v in vals):
+        steps = np.diff(np.asarray(vals, float))
+        if np.allclose(steps, steps[0], rtol=1e-9, atol=0.0):
+            extra += f", step {float(steps[0]):g}"
+    return f"{text} ({extra})"

@@ -9,9 +9,12 @@ from typing import Any
 
 import numpy as np
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable
+from ocp_crawl.problem import SCHEMA
 from ocp_crawl.status import Status
 from ocp_crawl.sweep.cells import cell, row_line
+from ocp_crawl.sweep.grid import axis_text
 from ocp_crawl.sweep.journal import RESULTS_FILE, SweepStore
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
@@ -126,23 +129,51 @@ class SweepResult:
         return jsonable({
             "out_dir": str(self.out_dir) if self.out_dir is not None else None,
             "problem": self.settings.source, "keys": list(self.keys), "shape": list(self.shape),
+            "grid": {k: list(v) for k, v in self.settings.grid},
             "points": self.settings.size, "successes": n_ok, "failures": self.settings.size - n_ok,
             "counts": counts, "best": self.best(), "lowest_CoT_plus": self.lowest_cot(),
             "elapsed_s": self.elapsed, "computed": self.computed,
             "s_per_point": self.elapsed / self.computed if self.computed else None,
-            "units": {"S": "m", "W_plus": "J", "CoT_plus": "-", "elapsed_s": "s"},
+            "units": dict(self.column_units(), elapsed_s=units.UNITS["elapsed_s"]),
         })
 
+    def column_units(self) -> dict[str, str]:
+        """The unit of every numeric column: grid keys from the problem schema, results in SI units
+        (S [m], W_plus [J], CoT_plus [-]); extra columns from :data:`~ocp_crawl.io.units.UNITS` where known."""
+        out = {}
+        for name in self.columns:
+            if name in self.keys:
+                section, key = name.split(".")
+                out[name] = SCHEMA[section].key_map[key].unit
+            elif name in units.UNITS:
+                out[name] = units.UNITS[name]
+        return out
+
+    def to_pandas(self):
+        """The rows as a :class:`pandas.DataFrame` in grid order, one column per grid key and result.
+
+        Numbers are in SI units as in ``results.csv``; ``df.attrs["units"]`` maps each column to its
+        unit (e.g. ``{"gait.psi_deg": "deg", "S": "m", "W_plus": "J", ...}``), ``df.attrs["grid"]`` the
+        axes and ``df.attrs["problem"]`` the base problem file.  Needs pandas (``pip install
+        'ocp-crawl[pandas]'``); raises ImportError naming the extra otherwise.
+        """
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("SweepResult.to_pandas needs pandas: pip install 'ocp-crawl[pandas]'") from None
+        df = pd.DataFrame([{c: r[c] for c in self.columns} for r in self.rows], columns=list(self.columns))
+        df.attrs["units"] = self.column_units()
+        df.attrs["grid"] = {k: list(v) for k, v in self.settings.grid}
+        df.attrs["problem"] = self.settings.source
+        return df
+
     def format_summary(self) -> str:
-        """Readable summary (the CLI's output)."""
-        def fmt(v) -> str:
-            return f"{v:g}" if isinstance(v, float) else str(v)
-
+        """Readable summary (the CLI's output): every axis with its values, counts, best points, timing."""
         def at(p) -> str:
-            return ", ".join(f"{k} = {fmt(v)}" for k, v in p["point"].items())
+            return ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}" for k, v in p["point"].items())
 
-        axes = " x ".join(f"{k} ({len(v)} values, {fmt(v[0])} .. {fmt(v[-1])})" for k, v in self.settings.grid)
-        lines = [f"sweep      {self.settings.source}: {axes} = {self.settings.size} points"]
+        lines = [f"sweep      {self.settings.source}: {self.settings.size} points"]
+        lines += [f"  {k} = {axis_text(v)}" for k, v in self.settings.grid]
         if self.out_dir is not None:
             lines.append(f"results    {Path(self.out_dir) / RESULTS_FILE}")
         lines.append("status     " + ", ".join(f"{k} {v}" for k, v in self.counts().items()))
@@ -150,14 +181,14 @@ class SweepResult:
         if best is None:
             lines.append("best S     - (no successful point)")
         else:
-            lines.append(f"best S     {1e3 * best['S']:.3f} mm per cycle at {at(best)} "
-                         f"(W+ {1e3 * best['W_plus']:.3f} mJ, CoT+ {best['CoT_plus']:.3f})")
+            lines.append(f"best S     {units.distance(best['S'])} per cycle at {at(best)} "
+                         f"(W+ {units.work(best['W_plus'])}, CoT+ {units.cot(best['CoT_plus'])})")
         if low is not None:
-            lines.append(f"lowest CoT+ {low['CoT_plus']:.3f} at {at(low)} (S {1e3 * low['S']:.3f} mm)")
+            lines.append(f"lowest CoT+ {units.cot(low['CoT_plus'])} at {at(low)} (S {units.distance(low['S'])})")
         if np.isfinite(self.elapsed):
-            per = f", {1e3 * self.elapsed / self.computed:.1f} ms per point" if self.computed else ""
+            per = f", {units.seconds(self.elapsed / self.computed)} per point" if self.computed else ""
             resumed = self.settings.size - self.computed
-            lines.append(f"time       {self.elapsed:.1f} s ({self.computed} points computed{per}"
+            lines.append(f"time       {units.seconds(self.elapsed)} ({self.computed} points computed{per}"
                          + (f"; {resumed} from the previous run" if resumed else "") + ")")
         return "\n".join(lines)
 

@@ -22,6 +22,7 @@ from matplotlib.lines import Line2D
 
 from PIL import Image
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.viz.gait import robot_points
@@ -123,11 +124,13 @@ class CrawlScene:
         ax.set_ylabel("z [mm]")
         if title is None:
             title = f"{result.drive} drive, {result.gravity} gravity: " + \
-                (f"S = {MM * result.S:.1f} mm per cycle" if result.success else
+                (f"S = {units.distance(result.S, 1)} per cycle, W$^+$ = {units.work(result.W_plus, 1)}, "
+                 f"CoT$^+$ = {units.cot(result.CoT_plus)}" if result.success else
                  f"{result.status_name.replace('_', ' ')} at t = {result.failure_t:.3f}")
         ax.set_title(title, fontsize="medium")
         ax.legend(handles=[Line2D([], [], ls="none", marker="o", mfc=STICK_COLOR, mec="k", label="foot sticks"),
-                           Line2D([], [], ls="none", marker="o", mfc=SLIP_COLOR, mec="k", label="foot slips")],
+                           Line2D([], [], ls="none", marker="o", mfc=SLIP_COLOR, mec="k", label="foot slips"),
+                           Line2D([], [], color="0.75", lw=1, label="path of the joints")],
                   loc="upper right", fontsize="small")
         # the moving artists are "animated": a full draw leaves them out, so the static background
         # is drawn once and each frame only blits them (a full draw per frame is ~30x slower)

@@ -14,6 +14,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write
 from ocp_crawl.model.inputs import PeriodicSignal
 from ocp_crawl.model.statics import Robot
@@ -37,11 +38,35 @@ def mode_color(code: int) -> str:
     return MODE_COLORS.get(mode, _FALLBACK_COLORS[int(mode) % len(_FALLBACK_COLORS)])
 
 
+#: what each contact mode means, for legends (foot i slips along -x or +x while the other foot sticks)
+MODE_MEANINGS = {
+    Mode.STICK: "both feet stick",
+    Mode.SLIP1_POS: "foot 1 slips towards +x", Mode.SLIP1_NEG: "foot 1 slips towards -x",
+    Mode.SLIP2_POS: "foot 2 slips towards +x", Mode.SLIP2_NEG: "foot 2 slips towards -x",
+    Mode.SLIP_BOTH_POS: "both feet slip apart", Mode.SLIP_BOTH_NEG: "both feet slip together",
+}
+
+
 def mode_label(code: int) -> str:
+    """The short name of a mode code (e.g. "slip1-")."""
     try:
         return Mode(int(code)).label
     except ValueError:
         return f"mode {int(code)}"
+
+
+def mode_legend(codes, alpha: float = 1.0) -> tuple[list[Patch], list[str]]:
+    """Legend handles (background patches of opacity ``alpha``) and labels of the contact modes ``codes``,
+    each explained, e.g. "mode slip1-: foot 1 slips towards -x"."""
+    codes = sorted({int(c) for c in codes})
+    labels = []
+    for c in codes:
+        try:
+            meaning = MODE_MEANINGS.get(Mode(c), "")
+        except ValueError:
+            meaning = ""
+        labels.append(f"mode {mode_label(c)}: {meaning}" if meaning else f"mode {mode_label(c)}")
+    return [Patch(color=mode_color(c), alpha=alpha) for c in codes], labels
 
 
 def mode_runs(t: np.ndarray, mode: np.ndarray) -> list[tuple[float, float, int]]:
@@ -100,7 +125,8 @@ def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) 
 def _gait_title(result: CrawlResult) -> str:
     title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
     if np.isfinite(result.S):
-        title += f", S = {1e3 * result.S:.2f} mm/cycle"
+        title += (f"\nS = {units.distance(result.S, 2)} per cycle, W$^+$ = {units.work(result.W_plus, 1)}, "
+                  f"CoT$^+$ = {units.cot(result.CoT_plus)}")
     if result.failure_t is not None:
         title += f" at t = {result.failure_t:.4f}"
     return title
@@ -111,8 +137,9 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     """Three panels over the phase of the reported cycle, background shaded by contact mode.
 
     (a) joint angles phi1, phi2 [deg] (and the reference angles if ``reference`` is given),
-    (b) contact positions x1, x2 [mm], with ``snapshots`` robot configurations drawn in gray below,
-    (c) tangential force f_t [N] with the friction limits +-mu1 f_n1 and +-mu2 f_n2 dashed.
+    (b) contact positions x1, x2 [mm], (c) ``snapshots`` robot configurations drawn in gray,
+    (d) tangential force f_t [N] with the friction limits +-mu1 f_n1 and +-mu2 f_n2 dashed.
+    The title gives S [mm], W+ [mJ] and CoT+; the legend names and explains every contact mode.
 
     Failed runs are drawn up to the failure.  If ``path`` is given the figure is also saved there
     (format from the suffix, e.g. .png or .pdf; written atomically).  Returns the figure.
@@ -143,11 +170,9 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     _draw_snapshots(ax_s, result, robot, phase, origin, snapshots)
     _draw_forces(ax_c, result, robot, phase)
     handles, labels = ax_c.get_legend_handles_labels()
-    present = sorted({m for _, _, m in runs})
-    handles += [Patch(color=mode_color(m)) for m in present]
-    labels += [f"mode {mode_label(m)}" for m in present]
-    # below the panels: inside (c) the legend would hide the force at the friction limits
-    fig.legend(handles, labels, loc="outside lower center", fontsize="small", ncol=4)
+    patches, names = mode_legend(m for a, b, m in runs if b > a)
+    # below the panels: inside (d) the legend would hide the force at the friction limits
+    fig.legend(handles + patches, labels + names, loc="outside lower center", fontsize="small", ncol=2)
     # lay out once and freeze: constrained layout would otherwise rerun (slowly) at every save
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
@@ -159,7 +184,8 @@ def _draw_angles(ax, result: CrawlResult, phase, reference: PeriodicSignal | Non
     phi = np.degrees(np.asarray(result.phi, float))
     ax.plot(phase, phi[0], color="C0", label=r"$\varphi_1$")
     ax.plot(phase, phi[1], color="C3", label=r"$\varphi_2$")
-    if reference is not None:
+    # the angles drive prescribes phi = phi_ref: the reference would only hide under the angles
+    if reference is not None and result.drive != "angles":
         ref = np.degrees(np.asarray(reference(np.asarray(result.t, float)), float)).reshape(2, -1)
         ax.plot(phase, ref[0], color="C0", ls=":", label=r"$\varphi_{1,\mathrm{ref}}$")
         ax.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
@@ -180,11 +206,11 @@ def _draw_forces(ax, result: CrawlResult, robot: Robot, phase) -> None:
     ax.plot(phase, np.asarray(result.f_t, float), color="k", label="$f_t$")
     plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2, lw=1.0)
     ax.set_ylabel("tangential force [N]")
-    ax.set_title("(c) tangential force and friction limits", loc="left", fontsize="medium")
+    ax.set_title("(d) tangential force and friction limits", loc="left", fontsize="medium")
 
 
 def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float, n: int) -> None:
-    ax.set_title("(b) robot snapshots", loc="left", fontsize="medium")
+    ax.set_title("(c) robot snapshots (later is darker)", loc="left", fontsize="medium")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("z [mm]")
     ax.set_aspect("equal", adjustable="datalim")

@@ -9,11 +9,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
-from ocp_crawl.viz.gait import mode_color, mode_runs, plot_friction_limits, save_figure
+from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
 
 
 def torques_csv(result: OCPResult) -> str:
@@ -24,66 +25,108 @@ def torques_csv(result: OCPResult) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: colours of joint/foot 1 and 2
+JOINT_COLORS = ("tab:blue", "tab:purple")
+
+
+def _title(result: OCPResult) -> str:
+    """Headline: objective, status, S, W+ and CoT+ of the replay, gain over the best harmonic gait."""
+    rep = result.replay[0] if result.replay else None
+    head = f"Optimal {result.objective} gait ({result.settings.nodes} nodes): {result.status.label}"
+    if rep is None or not rep.success:
+        return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
+                       else "")
+    return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, W$^+$ = {units.work(rep.W_plus, 1)}, "
+            f"CoT$^+$ = {units.cot(rep.CoT_plus)}; gain over the best harmonic gait {units.ratio(result.gain)}")
+
+
 def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
-    """Torques and angles over the cycle against the best harmonic gait, contact positions and modes,
-    and the tangential force with the friction limits, all from the event-driven replay."""
-    fig = Figure(figsize=(11, 9), constrained_layout=True)
+    """Four panels over the cycle: (a) the optimal torques [mN m] against the best harmonic gait's, (b) the
+    joint angles [deg] of the replay with the OCP's nodes and the harmonic reference, (c) the contact
+    positions [mm] over the contact modes of the replay, (d) the tangential force [mN] with the friction
+    limits.  The title gives S, W+ and CoT+ of the event-driven replay and the gain over the best harmonic
+    gait.  Returns the figure (Agg canvas)."""
+    fig = Figure(figsize=(11, 9.5), layout="constrained")
     FigureCanvasAgg(fig)
     axs = fig.subplots(2, 2)
+    fig.suptitle(_title(result))
     rep = result.replay[0] if result.replay else None
     h = result.harmonic
-    harm_sig = ReferenceTorque(Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg), robot.k) if h else None
-    tt = np.linspace(0, 1, 401)
-    ax = axs[0, 0]
-    for i, c in enumerate(("tab:blue", "tab:purple")):
-        ax.plot(np.r_[result.phase, 1.0], np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".",
-                label=f"optimal tau{i + 1}")
-        if harm_sig is not None:
-            ax.plot(tt, harm_sig(tt)[i] * 1e3, color=c, ls="--", label=f"harmonic tau{i + 1}")
-    ax.set_xlabel("phase t [cycles]")
-    ax.set_ylabel("joint torque [mN m]")
-    ax.set_title(f"torques ({result.objective})")
-    ax.legend(fontsize=7)
-    ax = axs[0, 1]
-    if rep is not None:
-        tr = rep.t - rep.t0
-        for i, c in enumerate(("tab:blue", "tab:purple")):
-            ax.plot(tr, np.degrees(rep.phi[i]), color=c, label=f"optimal phi{i + 1} (replay)")
-        phi_ocp = result.phi[0]
-        ax.plot(np.arange(phi_ocp.shape[1]) / (phi_ocp.shape[1] - 1), np.degrees(phi_ocp[0]), "k.", ms=3,
-                label="OCP nodes")
-        ax.plot(np.arange(phi_ocp.shape[1]) / (phi_ocp.shape[1] - 1), np.degrees(phi_ocp[1]), "k.", ms=3)
-    if h is not None:
-        ax.plot(tt, np.degrees(Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg)(tt)).T, ls="--", color="gray",
-                lw=0.8, label="harmonic reference")
-    ax.set_xlabel("phase t [cycles]")
-    ax.set_ylabel("joint angle [deg]")
-    ax.set_title("angles")
-    ax.legend(fontsize=7)
-    ax = axs[1, 0]
-    if rep is not None:
-        tr = rep.t - rep.t0
-        for a, b, code in mode_runs(tr, rep.mode):
-            ax.axvspan(a, b, color=mode_color(code), alpha=0.15, lw=0)
-        ax.plot(tr, (rep.x1 - rep.x1[0]) * 1e3, color="tab:blue", label="x1 (replay)")
-        ax.plot(tr, (rep.x2 - rep.x1[0]) * 1e3, color="tab:purple", label="x2 (replay)")
-        ax.plot(np.arange(len(result.x1[0])) / (len(result.x1[0]) - 1), (result.x1[0] - result.x1[0][0]) * 1e3,
-                "k.", ms=3, label="x1 (OCP nodes)")
-    ax.set_xlabel("phase t [cycles]")
-    ax.set_ylabel("contact position [mm]")
-    ax.set_title("contact positions (shading: contact mode)")
-    ax.legend(fontsize=7)
+    gait = Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg) if h else None
+    _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None)
+    _angles(axs[0, 1], result, rep, gait)
+    modes = _positions(axs[1, 0], result, rep)
     ax = axs[1, 1]
     if rep is not None:
         tr = rep.t - rep.t0
-        ax.plot(tr, rep.f_t * 1e3, "k", label="f_t")
-        plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=("tab:blue", "tab:purple"), scale=1e3,
-                             labels=("+- mu1 f_n1", "+- mu2 f_n2"))
-    ax.set_xlabel("phase t [cycles]")
-    ax.set_ylabel("tangential force [mN]")
-    ax.set_title("forces and friction limits (replay)")
-    ax.legend(fontsize=7)
+        ax.plot(tr, rep.f_t * 1e3, "k", label="$f_t$")
+        plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=JOINT_COLORS, scale=1e3)
+    _label(ax, "(d) tangential force and friction limits (replay)", "tangential force [mN]")
+    if modes:
+        patches, names = mode_legend(modes, alpha=MODE_ALPHA)
+        fig.legend(patches, names, loc="outside lower center", ncol=min(len(names), 3), fontsize="small",
+                   title="shading of (c): contact mode of the replay", title_fontsize="small")
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
     return fig
+
+
+#: opacity of the contact-mode shading of panel (c)
+MODE_ALPHA = 0.45
+
+
+def _label(ax, title: str, ylabel: str) -> None:
+    ax.set_xlabel("phase t [cycles]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, loc="left", fontsize="medium")
+    ax.grid(True, lw=0.3, alpha=0.6)
+    ax.legend(fontsize="small")
+
+
+def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None) -> None:
+    tt = np.linspace(0, 1, 401)
+    for i, c in enumerate(JOINT_COLORS):
+        ax.plot(np.r_[result.phase, 1.0], np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".",
+                ms=4, label=f"optimal $\\tau_{i + 1}$ (nodes)")
+        if harmonic is not None:
+            ax.plot(tt, harmonic(tt)[i] * 1e3, color=c, ls="--", lw=1.0, label=f"best harmonic $\\tau_{i + 1}$")
+    _label(ax, f"(a) joint torques ({result.objective})", "joint torque [mN m]")
+
+
+def _angles(ax, result: OCPResult, rep, gait) -> None:
+    if rep is not None:
+        tr = rep.t - rep.t0
+        # joint 1 wide and below, joint 2 dashed on top: optimal gaits often move both joints alike
+        ax.plot(tr, np.degrees(rep.phi[0]), color=JOINT_COLORS[0], lw=3.0, alpha=0.8, zorder=3,
+                label="optimal $\\varphi_1$ (replay)")
+        ax.plot(tr, np.degrees(rep.phi[1]), color=JOINT_COLORS[1], lw=1.4, ls="--", zorder=4,
+                label="optimal $\\varphi_2$ (replay)")
+    phi = result.phi[0]
+    nodes = np.arange(phi.shape[1]) / (phi.shape[1] - 1)
+    for i, marker in enumerate(("o", "s")):
+        ax.plot(nodes, np.degrees(phi[i]), ls="none", marker=marker, ms=3.0, mfc="none", mec="0.35", mew=0.6,
+                zorder=2, label=f"OCP nodes $\\varphi_{i + 1}$")
+    if gait is not None:
+        tt = np.linspace(0, 1, 401)
+        ref = np.degrees(gait(tt))
+        for i, c in enumerate(JOINT_COLORS):
+            ax.plot(tt, ref[i], ls=":", color=c, lw=1.0, label=f"harmonic reference $\\varphi_{{{i + 1},\\mathrm{{ref}}}}$")
+    _label(ax, "(b) joint angles", "joint angle [deg]")
+
+
+def _positions(ax, result: OCPResult, rep) -> set[int]:
+    """Panel (c); returns the contact modes shaded."""
+    drawn: set[int] = set()
+    if rep is not None:
+        tr = rep.t - rep.t0
+        drawn = shade_modes(ax, mode_runs(tr, rep.mode), alpha=MODE_ALPHA)
+        ax.plot(tr, (rep.x1 - rep.x1[0]) * 1e3, color=JOINT_COLORS[0], label="$x_1$ (replay)")
+        ax.plot(tr, (rep.x2 - rep.x1[0]) * 1e3, color=JOINT_COLORS[1], label="$x_2$ (replay)")
+    x1 = result.x1[0]
+    ax.plot(np.arange(len(x1)) / (len(x1) - 1), (x1 - x1[0]) * 1e3, ls="none", marker="o", ms=3.0, mfc="none",
+            mec="0.35", mew=0.6, label="$x_1$ (OCP nodes)")
+    _label(ax, "(c) contact positions", "contact position [mm]")
+    return drawn
 
 
 def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, summary: dict) -> list[Path]:

@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/01_simulate_one_gait.py

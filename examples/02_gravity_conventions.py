@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/02_gravity_conventions.py

@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/03_design_map.py

@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/04_friction_band.py

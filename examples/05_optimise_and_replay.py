@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/05_optimise_and_replay.py

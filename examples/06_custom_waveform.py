@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/06_custom_waveform.py

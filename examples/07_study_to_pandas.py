@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/07_study_to_pandas.py

@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/_common.py

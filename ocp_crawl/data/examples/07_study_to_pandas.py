@@ -1,0 +1,58 @@
+"""A study from Python into pandas.
+
+Runs a small sweep of the paper's gait over the amplitude A and the phase difference psi with
+:func:`ocp_crawl.sweep.run_sweep` and hands its rows (one per grid point: the grid keys, then
+S [m], W_plus [J], CoT_plus [-], status, message) to a :class:`pandas.DataFrame` with
+:meth:`~ocp_crawl.sweep.SweepResult.to_pandas` (units in ``df.attrs["units"]``), where the usual
+tools apply: units converted in columns, the failed points counted by status, the best psi per
+amplitude found with ``groupby``, a pivot table plotted.  Needs pandas (``pip install
+'ocp-crawl[examples]'``).
+
+Run: ``python examples/07_study_to_pandas.py [OUT_DIR]``; writes ``OUT_DIR/study.csv`` and
+``OUT_DIR/study.png``.
+"""
+import numpy as np
+from _common import output_dir, save
+from matplotlib.figure import Figure
+
+from ocp_crawl import paper_problem
+from ocp_crawl.sweep import run_sweep
+
+GRID = {"gait.A_deg": [10.0, 20.0, 30.0], "gait.psi_deg": list(np.linspace(0.0, 120.0, 9))}
+
+
+def main() -> None:
+    out = output_dir()
+    sweep = run_sweep(paper_problem(), GRID, jobs=1)
+    df = sweep.to_pandas()
+    assert df.attrs["units"]["S"] == "m" and df.attrs["units"]["W_plus"] == "J"
+    df["S_mm"] = 1e3 * df["S"]                    # [mm per cycle]
+    df["W_plus_mJ"] = 1e3 * df["W_plus"]          # [mJ per cycle]
+    df.to_csv(out / "study.csv", index=False)
+    print(f"wrote {out / 'study.csv'}")
+    print(df.groupby("status").size().rename("points").to_string())
+    ok = df[df["status"] == "success"]
+    best = ok.loc[ok.groupby("gait.A_deg")["S_mm"].idxmin(), ["gait.A_deg", "gait.psi_deg", "S_mm", "CoT_plus"]]
+    print("fastest psi per amplitude (largest progress towards foot 1):")
+    print(best.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+
+    table = df.pivot(index="gait.psi_deg", columns="gait.A_deg", values="S_mm")   # NaN where a point failed
+    fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+    ax = fig.subplots()
+    for A, color in zip(table.columns, ("C0", "C1", "C2")):
+        ax.plot(table.index, table[A], color + "-o", ms=4, label=f"A = {A:g} deg")
+        row = best[best["gait.A_deg"] == A]
+        ax.plot(row["gait.psi_deg"], row["S_mm"], color + "*", ms=12, clip_on=False)
+    ax.plot([], [], "k*", ms=10, label="fastest psi of each A")
+    ax.set(xlabel=r"phase difference $\psi$ [deg]", ylabel="S [mm per cycle] (< 0: towards foot 1)")
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize="small")
+    top = best.loc[best["S_mm"].idxmin()]
+    ax.set_title(f"Paper robot: S over psi for three amplitudes ({len(ok)} of {len(df)} points succeeded)\n"
+                 f"fastest: S = {top['S_mm']:.1f} mm/cycle at A = {top['gait.A_deg']:g} deg, "
+                 f"psi = {top['gait.psi_deg']:g} deg", fontsize="medium")
+    save(fig, out / "study.png")
+
+
+if __name__ == "__main__":
+    main()

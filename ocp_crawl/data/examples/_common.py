@@ -1,0 +1,28 @@
+"""What the example scripts share: where they write, and saving a figure.
+
+Each example takes one optional argument, the output directory (created if needed); without it the
+example writes into a fresh temporary directory and prints its path.  Figures are drawn on
+``matplotlib.figure.Figure`` objects (no pyplot), so the examples run headless.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+
+from ocp_crawl.viz.gait import save_figure
+
+
+def output_dir(argv: list[str] | None = None) -> Path:
+    """The directory given as the first argument, or a fresh temporary one."""
+    argv = sys.argv[1:] if argv is None else argv
+    out = Path(argv[0]) if argv else Path(tempfile.mkdtemp(prefix="ocp_crawl_example_"))
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def save(fig, path: Path) -> Path:
+    """Write ``fig`` to ``path`` (atomically) and say so."""
+    save_figure(fig, path)
+    print(f"wrote {path}")
+    return path

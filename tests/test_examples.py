@@ -1,0 +1,52 @@
+"""The examples gallery: every script in examples/ runs headless in a fresh process and writes its outputs.
+
+A script that is not listed in :data:`OUTPUTS` fails the test (add it with the files it must write), so
+no example goes untested.
+"""
+import ast
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+EXAMPLES = REPO / "examples"
+#: script -> files it writes into its output directory
+OUTPUTS = {
+    "01_simulate_one_gait.py": ["gait.png"],
+    "02_gravity_conventions.py": ["gravity_conventions.png"],
+    "03_design_map.py": ["design_map.png", "design_map.csv"],
+    "04_friction_band.py": ["friction_band.png"],
+    "05_optimise_and_replay.py": ["optimise_and_replay.png"],
+    "06_custom_waveform.py": ["custom_waveform.png"],
+    "07_study_to_pandas.py": ["study.png", "study.csv"],
+}
+SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
+TIMEOUT_S = 300
+
+
+def test_every_example_is_covered():
+    assert SCRIPTS == sorted(OUTPUTS), f"examples without a test entry: {set(SCRIPTS) - set(OUTPUTS)}; " \
+                                       f"entries without a script: {set(OUTPUTS) - set(SCRIPTS)}"
+    for name in SCRIPTS:  # each says what it shows
+        doc = ast.get_docstring(ast.parse((EXAMPLES / name).read_text(encoding="utf-8")))
+        assert doc and len(doc.split()) >= 30 and "Run:" in doc, name
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(OUTPUTS))
+def test_example_runs(name, tmp_path):
+    out = tmp_path / "out"
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join(
+        p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p))
+    proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(out)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=TIMEOUT_S)
+    assert proc.returncode == 0, (proc.stdout[-3000:], proc.stderr[-3000:])
+    for f in OUTPUTS[name]:
+        path = out / f
+        assert path.is_file() and path.stat().st_size > 1000, path
+        if f.endswith(".png"):
+            assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]  # written atomically, nothing left over
