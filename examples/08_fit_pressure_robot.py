@@ -7,20 +7,22 @@ derived and which operating points are assumed).  Model: the Table I robot, pape
 convention, pressure actuator of ``ocp_crawl.model.pressure``.
 
 1. The rest angle phi_rest alone (the actuator constant the paper does not state).
-2. k and the four pressure-map constants a_i, b_i together, from the rest angle of step 1, and
-   the comparison with Table I: normalised data fix the product k x (map) only, which the fit
-   reports as an undetermined direction (correlations near -1).
+2. k and the four pressure-map constants a_i, b_i together, at the rest angle of step 1, and
+   the comparison with Table I.  Normalised data cannot fix k and the map together, and the fit
+   says so: it lists the directions the data do not determine (here k itself, stiff enough that
+   S/S_ref hardly depends on it, and a trade-off of b1, a2, b2 with correlations down to -1; at
+   Table I's values, k down with the whole map up, tests/test_fit.py).
 
 Same as the command line:
     ocp-crawl fit problems/paper_gait_paper_gravity.toml examples/data/paper_pressure_p0.csv \\
         examples/data/paper_pressure_psi.csv --param pressure.phi_rest_deg --out fit_rest
 
-Usage: python examples/fit_pressure_robot.py [OUT_DIR]   (default: a temporary directory)
-Writes OUT_DIR/rest/ and OUT_DIR/k_and_map/ (fitted_problem.toml, fit.json, residuals.csv, fit.png).
+Run: ``python examples/08_fit_pressure_robot.py [OUT_DIR]``; writes ``OUT_DIR/rest/`` and
+``OUT_DIR/k_and_map/`` (fitted_problem.toml, fit.json, residuals.csv, fit.png each); about 35 s of CPU.
 """
-import sys
-import tempfile
 from pathlib import Path
+
+from _common import output_dir
 
 from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
 from ocp_crawl.fit.report import fit_report, write_fit
@@ -53,5 +55,4 @@ def main(out: Path) -> None:
 
 
 if __name__ == "__main__":
-    target = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp(prefix="fit_pressure_"))
-    main(target)
+    main(output_dir())
