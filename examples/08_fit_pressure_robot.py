@@ -2,7 +2,7 @@
 
 Data: the paper's measured S/max S against the peak pressure p0 and the phase difference psi
 (Fig. exp), as measurement files of the package's CSV convention with stated uncertainties
-(examples/data/paper_pressure_p0.csv and paper_pressure_psi.csv; their comments say how they were
+(examples/paper_pressure_p0.csv and paper_pressure_psi.csv; their comments say how they were
 derived and which operating points are assumed).  Model: the Table I robot, paper gravity
 convention, pressure actuator of ``ocp_crawl.model.pressure``.
 
@@ -14,8 +14,8 @@ convention, pressure actuator of ``ocp_crawl.model.pressure``.
    Table I's values, k down with the whole map up, tests/test_fit.py).
 
 Same as the command line:
-    ocp-crawl fit problems/paper_gait_paper_gravity.toml examples/data/paper_pressure_p0.csv \\
-        examples/data/paper_pressure_psi.csv --param pressure.phi_rest_deg --out fit_rest
+    ocp-crawl fit problems/paper_gait_paper_gravity.toml examples/paper_pressure_p0.csv \\
+        examples/paper_pressure_psi.csv --param pressure.phi_rest_deg --out fit_rest
 
 Run: ``python examples/08_fit_pressure_robot.py [OUT_DIR]``; writes ``OUT_DIR/rest/`` and
 ``OUT_DIR/k_and_map/`` (fitted_problem.toml, fit.json, residuals.csv, fit.png each); about 35 s of CPU.
@@ -31,7 +31,7 @@ from ocp_crawl.problem import load_problem
 
 HERE = Path(__file__).resolve().parent
 PROBLEM = HERE.parent / "problems" / "paper_gait_paper_gravity.toml"
-DATA = [HERE / "data" / "paper_pressure_p0.csv", HERE / "data" / "paper_pressure_psi.csv"]
+DATA = [HERE / "paper_pressure_p0.csv", HERE / "paper_pressure_psi.csv"]
 
 
 def main(out: Path) -> None:

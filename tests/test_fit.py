@@ -27,7 +27,7 @@ from ocp_crawl.status import Status
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
 PAPER_GRAVITY = REPO / "problems" / "paper_gait_paper_gravity.toml"
-PRESSURE_DATA = [REPO / "examples" / "data" / "paper_pressure_p0.csv", REPO / "examples" / "data" / "paper_pressure_psi.csv"]
+PRESSURE_DATA = [REPO / "examples" / "paper_pressure_p0.csv", REPO / "examples" / "paper_pressure_psi.csv"]
 TRUE = {"robot.k": 0.15, "robot.mu": 0.35}
 AMPLITUDES = np.array([15.0, 22.0, 30.0, 38.0])
 SIGMA_MM = 0.2
