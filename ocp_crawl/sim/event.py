@@ -53,6 +53,8 @@ from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptio
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
+_RES = AUX["res"]
+
 
 @dataclass(frozen=True)
 class HybridOptions(CycleOptions):
@@ -149,14 +151,15 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         tau = self.torque(t)
         dtau = self.torque.derivative(t)
         x = x0
+        newton, p, tol = self.newton, self.p, self.res_tol
         for _ in range(4):
-            x, aux = self.newton(x, tau, dtau, q, self.p)
+            x, aux = newton(x, tau, dtau, q, p)
             self.nfev += 1
-            res = aux[AUX["res"]]
-            if not np.all(np.isfinite(x)):  # (the compiled max norm of a NaN residual can read 0)
+            res = aux[_RES]
+            if not math.isfinite(x[0] + x[1] + x[2]):  # (the compiled max norm of a NaN residual can read 0)
                 return None
-            if not res <= self.res_tol:  # also catches NaN
-                if not np.isfinite(res) or res > 1e3:
+            if not res <= tol:  # also catches NaN
+                if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
             return _Point(t, x, aux, tau=tau, dtau=dtau)
@@ -310,8 +313,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         A guard dipping below zero and back inside the step (possibly before another guard's
         crossing), which the sign test at its ends misses, ends the step inside the dip.
         """
-        g_old = self.guards(seg.mode, pt.aux)
-        g_new = self.guards(seg.mode, new.aux)
+        g_old = self.guards(seg.mode, pt.a)
+        g_new = self.guards(seg.mode, new.a)
         crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -100 * self.noise]
         dips, refine = self._dips(seg.mode, seg.q, pt, new, g_old, g_new)
         for name, t_min in dips:
@@ -319,7 +322,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             if pm is None:
                 refine = True
                 break
-            g_min = self.guards(seg.mode, pm.aux)
+            g_min = self.guards(seg.mode, pm.a)
             in_dip = [k for k in g_min if g_min[k] < 0 and g_old[k] > -100 * self.noise]
             if in_dip:
                 new, crossed = pm, in_dip  # the step now ends inside the dip
@@ -335,7 +338,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         (t_ev, ev_pt), kind = min(located, key=lambda r: r[0][0])
         if ev_pt is None:
             raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
-        g_ev = self.guards(seg.mode, ev_pt.aux)[kind]
+        g_ev = self.guards(seg.mode, ev_pt.a)[kind]
         if ev_pt.t > pt.t:
             seg.points.append(ev_pt)
         target = self._transition(seg.mode, kind)

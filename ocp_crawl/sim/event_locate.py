@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from ocp_crawl.sim.event_state import _Failure, _Point, hermite, mode_q
+from ocp_crawl.sim.event_state import _Failure, _Point, hermite_point, mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
@@ -36,7 +36,7 @@ class EventsMixin:
 
     @staticmethod
     def _hermite(p0: _Point, p1: _Point, t: float) -> np.ndarray:
-        return hermite(p0.t, p0.x, p0.xdot, p1.t, p1.x, p1.xdot, t)
+        return hermite_point(p0, p1, t)
 
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
                 start: bool = False) -> tuple[float, _Point]:
@@ -52,9 +52,9 @@ class EventsMixin:
                 if pt is None:
                     raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
                 cache[t] = pt
-            return self.guards(mode, pt.aux)[name]
+            return self.guards(mode, pt.a)[name]
 
-        g0, g1 = self.guards(mode, p0.aux)[name], self.guards(mode, p1.aux)[name]
+        g0, g1 = self.guards(mode, p0.a)[name], self.guards(mode, p1.a)[name]
         if g1 == 0.0:
             return p1.t, p1
         ta, tb = p0.t, p1.t
@@ -93,7 +93,7 @@ class EventsMixin:
         start = self._solve(pt.t, pt.x, q)
         if start is None:
             return None
-        g0 = self.guards(mode, start.aux)
+        g0 = self.guards(mode, start.a)
         noise = {k: guard_noise(k, self.noise) for k in g0}
         if any(v < -100 * noise[k] for k, v in g0.items()):
             return None
@@ -102,7 +102,7 @@ class EventsMixin:
             nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
             if nxt is None:
                 return None
-            g = self.guards(mode, nxt.aux)
+            g = self.guards(mode, nxt.a)
             for k in list(pending):
                 if g[k] < -10 * noise[k]:
                     return None

@@ -13,6 +13,8 @@ from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.result import Event, Mode
 from ocp_crawl.status import Status
 
+_DPHI1, _DPHI2, _DFT = AUX["dphi1"], AUX["dphi2"], AUX["dft"]
+
 
 def hermite(t0, x0, xd0, t1, x1, xd1, t):
     """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of phases."""
@@ -43,21 +45,46 @@ def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
 Q_RELEASED = np.array([0.0, 0.0, 1.0, 0.0])
 
 
-@dataclass
 class _Point:
-    t: float
-    x: np.ndarray
-    aux: np.ndarray
-    rates: dict | None = None
-    """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
-    tau: np.ndarray | None = None
-    """torque and its derivative at t (kept from the solve)"""
-    dtau: np.ndarray | None = None
+    """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
+    (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
+
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a")
+
+    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None):
+        self.t, self.x, self.aux = t, x, aux
+        self.rates = rates
+        """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
+        self.tau, self.dtau = tau, dtau
+        """torque and its derivative at t (kept from the solve)"""
+        self._xdot = None
+        self._a = None
+
+    @property
+    def a(self) -> list:
+        """aux as a list of Python floats (fast scalar access in the guards)"""
+        if self._a is None:
+            self._a = self.aux.tolist()
+        return self._a
 
     @property
     def xdot(self) -> np.ndarray:
-        a = self.aux
-        return np.array([a[AUX["dphi1"]], a[AUX["dphi2"]], a[AUX["dft"]]])
+        if self._xdot is None:
+            a = self.a
+            self._xdot = np.array([a[_DPHI1], a[_DPHI2], a[_DFT]])
+        return self._xdot
+
+
+def hermite_point(p0: _Point, p1: _Point, t: float) -> np.ndarray:
+    """:func:`hermite` between two points at one phase t, in scalar arithmetic (the same formula)."""
+    h = p1.t - p0.t
+    s = (t - p0.t) / h if h > 0 else 0.0
+    s2 = s * s
+    s3 = s2 * s
+    h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
+    a, b = h10 * h, h11 * h
+    x0, x1, d0, d1 = p0.x.tolist(), p1.x.tolist(), p0.xdot.tolist(), p1.xdot.tolist()
+    return np.array([h00 * x0[k] + a * d0[k] + h01 * x1[k] + b * d1[k] for k in range(3)])
 
 
 @dataclass
