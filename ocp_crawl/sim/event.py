@@ -48,7 +48,8 @@ from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
 from ocp_crawl.sim.event_locate import EventsMixin
 from ocp_crawl.sim.event_output import OutputMixin
-from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q
+from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q, \
+    torque_pair
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -122,6 +123,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
     def __init__(self, model: Model, torque, options: HybridOptions | None = None):
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
+        self.torque_at = torque_pair(self.torque)
         self.opt = options or HybridOptions()
         self.sym = symbolic()
         self.newton = fast_newton()
@@ -148,8 +150,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
     # ------------------------------------------------------------------ primitive evaluations
     def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
         """Newton solve of the mode q at phase t from x0; None if it does not converge."""
-        tau = self.torque(t)
-        dtau = self.torque.derivative(t)
+        tau, dtau = self.torque_at(float(t))
         x = x0
         newton, p, tol = self.newton, self.p, self.res_tol
         for _ in range(4):

@@ -5,10 +5,12 @@ event location and output modules).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ocp_crawl.model.inputs import TWO_PI, Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.result import Event, Mode
 from ocp_crawl.status import Status
@@ -23,6 +25,27 @@ def hermite(t0, x0, xd0, t1, x1, xd1, t):
     h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
     h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
     return h00 * x0 + h10 * h * xd0 + h01 * x1 + h11 * h * xd1
+
+
+def torque_pair(signal):
+    """A function t -> (tau(t), tau'(t)) [N m, N m/cycle] at one phase t [cycles] of the input ``signal``.
+
+    For the common torque input k (phi_ref(t) - pi) of a :class:`~ocp_crawl.model.inputs.Harmonic` reference
+    both come from one scalar evaluation in the same arithmetic as the signal's own methods (the stepper
+    calls this before every solve); any other signal is called as it is.
+    """
+    ref = getattr(signal, "reference", None)
+    if not (isinstance(signal, ReferenceTorque) and type(ref) is Harmonic):
+        return lambda t: (signal(t), signal.derivative(t))
+    k, g1, g2, a1, a2, half = signal.k, ref.gamma1, ref.gamma2, ref.A1, ref.A2, ref.psi / 2
+    pi, two_pi, sin, cos, array = math.pi, TWO_PI, math.sin, math.cos, np.array
+
+    def pair(t: float):
+        w = two_pi * t
+        w1, w2 = w + half, w - half
+        return (array([k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi)]),
+                array([k * (two_pi * a1 * cos(w1)), k * (two_pi * a2 * cos(w2))]))
+    return pair
 
 
 def event_kind(guard: str) -> str:
