@@ -46,9 +46,7 @@ class OutputMixin:
         ts = np.asarray(ts, float)
         n = len(ts)
         if len(pts) > 1:
-            tp = np.array([p.t for p in pts])
-            X = np.stack([p.x for p in pts], axis=1)
-            XD = np.stack([p.xdot for p in pts], axis=1)
+            tp, X, XD = seg.arrays()
             i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
             guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
             reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
@@ -161,7 +159,7 @@ class OutputMixin:
             extra_t, extra_w, extra_i = [], [], []
             for i, j in zip(*np.nonzero(mixed)):
                 # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
-                coef = np.polynomial.legendre.legfit(xg, pw[i, j], 4)
+                coef = pw[i, j] @ _LEG_FIT  # (the interpolant's Legendre coefficients)
                 r = np.polynomial.legendre.legroots(coef)
                 r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
                 lo, hi = edges[j]

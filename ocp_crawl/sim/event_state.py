@@ -120,6 +120,16 @@ class _Segment:
     x2_fixed: float
     points: list = field(default_factory=list)
 
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Phases (n,), states (3, n) and their rates (3, n) of the stored points (kept until a point is added)."""
+        cache = getattr(self, "_arrays", None)
+        if cache is None or cache[0].size != len(self.points):
+            pts = self.points
+            cache = (np.array([p.t for p in pts]), np.stack([p.x for p in pts], axis=1),
+                     np.stack([p.xdot for p in pts], axis=1))
+            self._arrays = cache
+        return cache
+
     def foot_positions(self, d):
         d = np.asarray(d, float)
         if self.mode == Mode.STICK:
