@@ -42,6 +42,7 @@ import numpy as np
 
 from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal
+from ocp_crawl.model.stability import fast_step
 from ocp_crawl.model.statics import AUX, Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
@@ -128,6 +129,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         self.sym = symbolic()
         self.newton = fast_newton()
         self.ddot2 = fast_ddot2()
+        self.step_fn = fast_step()
         self.p = model.p
         self.Mg = model.robot.M * model.robot.g
         self.L = model.robot.L
@@ -148,13 +150,16 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             self.max_step = min(self.max_step, max(input_step(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
-    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
-        """Newton solve of the mode q at phase t from x0; None if it does not converge."""
+    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray, step: bool = False) -> _Point | None:
+        """Newton solve of the mode q at phase t from x0; None if it does not converge.  ``step``: a continuation
+        step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then carries its stability
+        numbers and d'' coefficients)."""
         tau, dtau = self.torque_at(float(t))
         x = x0
-        newton, p, tol = self.newton, self.p, self.res_tol
+        newton, p, tol = self.step_fn if step else self.newton, self.p, self.res_tol
         for _ in range(4):
-            x, aux = newton(x, tau, dtau, q, p)
+            out = newton(x, tau, dtau, q, p)
+            x, aux = out[0], out[1]
             self.nfev += 1
             res = aux[_RES]
             if not math.isfinite(x[0] + x[1] + x[2]):  # (the compiled max norm of a NaN residual can read 0)
@@ -163,7 +168,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
                 if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, x, aux, tau=tau, dtau=dtau)
+            return _Point(t, x, aux, tau=tau, dtau=dtau, q=q, extra=out[2] if step else None)
         return None
 
     def initial_state(self, t0: float = 0.0) -> _Point:
@@ -285,7 +290,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         the solve fails, jumps or crosses a fold (a fold close enough is located and ends the run)."""
         pt, seg = run.pt, run.seg
         guess = pt.x + hh * pt.xdot
-        new = self._solve(t_new, guess, seg.q)
+        new = self._solve(t_new, guess, seg.q, step=True)
         ok = new is not None
         if ok:
             nx, gx, px = new.x, guess, pt.x

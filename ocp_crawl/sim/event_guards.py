@@ -101,10 +101,12 @@ class GuardsMixin:
         else:
             r["switch_to_1"] = (dlim1 - dlim2) / Mg
         t, dt = pt.t, 1e-5
-        tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
-        ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
-        dd = np.asarray(self.torque.derivative(np.array([t + dt, t - dt]))).reshape(2, 2)
-        ddtau = ((dd[:, 0] - dd[:, 1]) / (2 * dt)).tolist()
+        if pt.extra is not None and pt.q is q:
+            ab = pt.extra[4:].tolist()
+        else:
+            tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
+            ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
+        ddtau = ((self.torque_at(t + dt)[1] - self.torque_at(t - dt)[1]) / (2 * dt)).tolist()
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         return r
 

@@ -72,10 +72,14 @@ class _Point:
     """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
     (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
 
-    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a")
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra")
 
-    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None):
+    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
+                 extra=None):
         self.t, self.x, self.aux = t, x, aux
+        self.q, self.extra = q, extra
+        """mode parameters of the solve, and the stability numbers and d'' coefficients computed with it
+        (:func:`~ocp_crawl.model.stability.fast_step`; None when the solve did not compute them)"""
         self.rates = rates
         """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
         self.tau, self.dtau = tau, dtau
