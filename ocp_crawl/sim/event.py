@@ -5,7 +5,7 @@ In each contact mode the configuration solves three equations in x = (phi1, phi2
 the joint balance F = 0 and one mode equation (stick-stick: d = d0; slip of foot i with
 sign(d') = sigma: f_t = sigma mu_i f_n,i).  Every point is a Newton solve of the compiled
 mode system (no integration drift); events are guard functions of the mode, detected by a
-sign change between steps, located by Brent's method on the guard of the solved state
+sign change between steps, located by a safeguarded Newton method on the guard of the solved state
 (xtol 1e-13 in phase) and applied by a transition table:
 
 =============  ==========================================  ======================
@@ -319,8 +319,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         A guard dipping below zero and back inside the step (possibly before another guard's
         crossing), which the sign test at its ends misses, ends the step inside the dip.
         """
-        g_old = self.guards(seg.mode, pt.a)
-        g_new = self.guards(seg.mode, new.a)
+        g_old = self.point_guards(seg.mode, pt)
+        g_new = self.point_guards(seg.mode, new)
         crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -100 * self.noise]
         dips, refine = self._dips(seg.mode, seg.q, pt, new, g_old, g_new)
         for name, t_min in dips:
@@ -328,7 +328,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             if pm is None:
                 refine = True
                 break
-            g_min = self.guards(seg.mode, pm.a)
+            g_min = self.point_guards(seg.mode, pm)
             in_dip = [k for k in g_min if g_min[k] < 0 and g_old[k] > -100 * self.noise]
             if in_dip:
                 new, crossed = pm, in_dip  # the step now ends inside the dip
@@ -344,7 +344,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         (t_ev, ev_pt), kind = min(located, key=lambda r: r[0][0])
         if ev_pt is None:
             raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
-        g_ev = self.guards(seg.mode, ev_pt.a)[kind]
+        g_ev = self.point_guards(seg.mode, ev_pt)[kind]
         if ev_pt.t > pt.t:
             seg.points.append(ev_pt)
         target = self._transition(seg.mode, kind)

@@ -75,6 +75,13 @@ class GuardsMixin:
             g["switch_to_1"] = (lim1 - lim2) / Mg
         return g
 
+    def point_guards(self, mode: Mode, pt: _Point) -> dict[str, float]:
+        """:meth:`guards` of the mode at the solved point pt, computed once per point and mode."""
+        cached = pt.guards
+        if cached is None or cached[0] is not mode:
+            cached = pt.guards = (mode, self.guards(mode, pt.a))
+        return cached[1]
+
     def guard_rates(self, mode: Mode, pt: _Point, q: np.ndarray) -> dict[str, float]:
         """Time derivatives [1/cycle] of :meth:`guards` along the mode's solution at pt.
 

@@ -72,7 +72,7 @@ class _Point:
     """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
     (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
 
-    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra")
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards")
 
     def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
                  extra=None):
@@ -86,6 +86,8 @@ class _Point:
         """torque and its derivative at t (kept from the solve)"""
         self._xdot = None
         self._a = None
+        self.guards = None
+        """(mode, guard values of that mode) once computed (``HybridStepper.point_guards``)"""
 
     @property
     def a(self) -> list:
