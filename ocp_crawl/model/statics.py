@@ -327,27 +327,26 @@ def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray,
     Each column is the same compiled Newton kernel as :func:`fast_newton` (results independent of the batching);
     chunks of BATCH columns, the last ones in chunks of SMALL_BATCH (less padding)."""
     n = x0.shape[1]
+    widths = []
+    while sum(widths) < n:
+        widths.append(BATCH if n - sum(widths) > 3 * SMALL_BATCH else SMALL_BATCH)
+    total = sum(widths)
+    # the inputs padded with copies of the last column, column-major
+    last = np.full(total - n, n - 1, dtype=int)
     q = np.asarray(q, float)
-    if q.ndim == 1:
-        q = np.tile(q[:, None], (1, n))
-    xs = np.empty((3, n))
-    aux = np.empty((NAUX, n))
+    Q = np.repeat(q[:, None], total, axis=1) if q.ndim == 1 else np.concatenate([q, q[:, last]], axis=1)
+    cols = [np.concatenate([np.asarray(a, float), np.asarray(a, float)[:, last]], axis=1).ravel("F")
+            for a in (x0, tau, dtau)]
+    cols.append(Q.ravel("F"))
+    xs = np.empty(3 * total)
+    aux = np.empty(NAUX * total)
     s = 0
-    while s < n:
-        width = BATCH if n - s > 3 * SMALL_BATCH else SMALL_BATCH
-        f = fast_newton_batch(width)
-        e = min(s + width, n)
-        pad = width - (e - s)
-
-        def chunk(a):
-            a = a[:, s:e]
-            return np.concatenate([a, np.repeat(a[:, -1:], pad, axis=1)], axis=1) if pad else a
-
-        xi, ai = f(chunk(x0).ravel("F"), chunk(tau).ravel("F"), chunk(dtau).ravel("F"), chunk(q).ravel("F"), p)
-        xs[:, s:e] = xi.reshape(3, width, order="F")[:, :e - s]
-        aux[:, s:e] = ai.reshape(NAUX, width, order="F")[:, :e - s]
-        s = e
-    return xs, aux
+    for width in widths:
+        xi, ai = fast_newton_batch(width)(*(c[r * s:r * (s + width)] for c, r in zip(cols, (3, 2, 2, NQ))), p)
+        xs[3 * s:3 * (s + width)] = xi
+        aux[NAUX * s:NAUX * (s + width)] = ai
+        s += width
+    return xs.reshape(3, total, order="F")[:, :n], aux.reshape(NAUX, total, order="F")[:, :n]
 
 
 _MAPS: dict[tuple[str, int], cs.Function] = {}

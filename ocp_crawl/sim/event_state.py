@@ -22,8 +22,10 @@ def hermite(t0, x0, xd0, t1, x1, xd1, t):
     """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of phases."""
     h = np.asarray(t1 - t0, float)
     s = np.where(h > 0, (np.asarray(t, float) - t0) / np.where(h > 0, h, 1.0), 0.0)
-    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    s2 = s * s
+    s3 = s2 * s
+    h00, h10 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s
+    h01, h11 = -2 * s3 + 3 * s2, s3 - s2
     return h00 * x0 + h10 * h * xd0 + h01 * x1 + h11 * h * xd1
 
 
