@@ -55,7 +55,7 @@ from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptio
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
-_RES = AUX["res"]
+_RES, _DET = AUX["res"], AUX["det"]
 
 
 @dataclass(frozen=True)
@@ -293,12 +293,13 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         new = self._solve(t_new, guess, seg.q, step=True)
         ok = new is not None
         if ok:
-            nx, gx, px = new.x, guess, pt.x
+            nx, gx, px = new.x.tolist(), guess.tolist(), pt.x.tolist()
             jump = max(abs(nx[0] - gx[0]), abs(nx[1] - gx[1]))
             ok = jump <= 0.05 + 0.5 * max(abs(gx[0] - px[0]), abs(gx[1] - px[1])) and \
                 max(abs(nx[0] - px[0]), abs(nx[1] - px[1])) < 0.35
-        if ok and np.sign(new.aux[AUX["det"]]) != run.det_sign:
-            ok = False  # crossed a fold onto another branch: treat as failure and locate it
+        if ok:
+            det = new.a[_DET]
+            ok = (det > 0) - (det < 0) == run.det_sign  # else it crossed a fold onto another branch: locate it
         if ok:
             return new
         if hh < 1e-3:
