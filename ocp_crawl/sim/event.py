@@ -341,8 +341,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
     def _take_event(self, run: _Run, new: _Point, crossed: list[str]) -> None:
         """Locate the first of the crossed guards, record the event and start the successor mode's segment."""
         pt, seg = run.pt, run.seg
-        located = [(self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k) for k in crossed]
-        (t_ev, ev_pt), kind = min(located, key=lambda r: r[0][0])
+        (t_ev, ev_pt), kind = self._first_crossing(pt, new, seg, crossed)
         if ev_pt is None:
             raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
         g_ev = self.point_guards(seg.mode, ev_pt)[kind]
@@ -367,6 +366,26 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         run.pt = trial
         run.det_sign = np.sign(trial.aux[AUX["det"]]) or 1.0
         run.h = self.max_step
+
+    def _first_crossing(self, pt: _Point, new: _Point, seg: _Segment, crossed: list[str]):
+        """((t, point), guard) of the first zero in the step [pt, new] of the guards ``crossed``: they are
+        located in the order of their secant estimates, and a guard still positive at the earliest zero found
+        so far is not located (it crosses later; a guard that dips and returns inside the step ends the step
+        in its dip beforehand, see ``_crossings``)."""
+        g0, g1 = self.point_guards(seg.mode, pt), self.point_guards(seg.mode, new)
+
+        def estimate(k: str) -> float:
+            a, b = g0[k], g1[k]
+            return pt.t + (new.t - pt.t) * a / (a - b) if a > 0 > b else pt.t
+
+        best = None
+        for k in sorted(crossed, key=estimate):
+            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > 0:
+                continue
+            found = (self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k)
+            if best is None or found[0][0] < best[0][0]:
+                best = found
+        return best
 
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
