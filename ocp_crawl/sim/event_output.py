@@ -287,16 +287,16 @@ class OutputMixin:
 
     def _sampled_blocks(self, segments, te: np.ndarray) -> list:
         """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
-        (a phase on a segment boundary goes to the earlier segment)."""
-        blocks = []
+        (a phase on a segment boundary goes to the earlier segment), solved in one batch."""
+        requests = []
         free = np.ones(te.size, bool)
         for seg in segments:
             sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
             if sel.size:
                 free[sel] = False
-                xs, aux = self._evaluate_many(seg, te[sel])
-                blocks.append((te[sel], xs, aux, seg))
-        return blocks
+                requests.append((seg, te[sel]))
+        solved = self._evaluate_batch(requests) if requests else []
+        return [(ts, xs, aux, seg) for (seg, ts), (xs, aux) in zip(requests, solved)]
 
     def _store_samples(self, res: CrawlResult, blocks: list) -> None:
         """Output arrays of the blocks, in the order of their phases."""
