@@ -48,6 +48,16 @@ def cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]
     return best
 
 
+def _add_slip_guards(out: dict, lim1: float, lim2: float, ft: float, Mg: float) -> dict:
+    """Add the stick-stick friction guards (lim_i - sigma f_t)/(M g) of both feet and signs to ``out`` (their
+    rates, given the rates of lim_i and f_t); returns ``out``."""
+    out["slip_1+"] = (lim1 - ft) / Mg
+    out["slip_1-"] = (lim1 + ft) / Mg
+    out["slip_2+"] = (lim2 - ft) / Mg
+    out["slip_2-"] = (lim2 + ft) / Mg
+    return out
+
+
 class GuardsMixin:
     """Guards, guard rates, dips and transitions of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
@@ -60,11 +70,7 @@ class GuardsMixin:
              "joint_1_on_ground": a[_ZJ1] / L, "joint_2_on_ground": a[_ZJ2] / L}
         ft, lim1, lim2 = a[_FT], a[_LIM1], a[_LIM2]
         if mode is Mode.STICK:
-            g["slip_1+"] = (lim1 - ft) / Mg
-            g["slip_1-"] = (lim1 + ft) / Mg
-            g["slip_2+"] = (lim2 - ft) / Mg
-            g["slip_2-"] = (lim2 + ft) / Mg
-            return g
+            return _add_slip_guards(g, lim1, lim2, ft, Mg)
         g["stick"] = mode.sigma * a[_DDOT] / L
         foot = mode.foot
         if foot == 3:
@@ -95,11 +101,7 @@ class GuardsMixin:
         dft = a[_DFT]
         dlim1, dlim2 = self.mu[0] * a[_DFN1], self.mu[1] * a[_DFN2]
         if mode is Mode.STICK:
-            r["slip_1+"] = (dlim1 - dft) / Mg
-            r["slip_1-"] = (dlim1 + dft) / Mg
-            r["slip_2+"] = (dlim2 - dft) / Mg
-            r["slip_2-"] = (dlim2 + dft) / Mg
-            return r
+            return _add_slip_guards(r, dlim1, dlim2, dft, Mg)
         foot = mode.foot
         if foot == 3:
             r["asymmetry"] = -math.copysign(1.0, a[_LIM1] - a[_LIM2]) * (dlim1 - dlim2) / Mg
