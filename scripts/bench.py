@@ -8,7 +8,9 @@
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
-warm-up builds or loads the compiled functions, which happens once per process).
+warm-up builds or loads the compiled functions, which happens once per process); ``hybrid`` reports
+CPU time (min and median) of this tree and of an older commit (``--old``, exported with ``git archive``)
+measured in alternating subprocesses of the same run, and their ratio.
 """
 from __future__ import annotations
 
