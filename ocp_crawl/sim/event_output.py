@@ -48,13 +48,12 @@ class OutputMixin:
         it, the acceptance rule of a continuation step: near a fold Newton from a poor guess can land on
         another root), are solved again one by one, by continuation from the stored point before them.
         """
-        parts = [self._guesses(seg, np.asarray(ts, float)) for seg, ts in requests]
-        ts = np.concatenate([np.asarray(r[1], float) for r in requests])
-        guesses = np.concatenate([g for g, _ in parts], axis=1)
-        reach = np.concatenate([r for _, r in parts])
-        owner = np.repeat(np.arange(len(requests)), [len(r) for _, r in parts])
+        counts = [len(ts) for _, ts in requests]
+        ts = np.concatenate([np.asarray(t, float) for _, t in requests])
+        guesses, reach = self._guesses(requests, ts)
+        owner = np.repeat(np.arange(len(requests)), counts)
         n = len(ts)
-        Q = np.concatenate([np.tile(seg.q[:, None], (1, len(r))) for (seg, _), (_, r) in zip(requests, parts)], axis=1)
+        Q = np.repeat(np.stack([seg.q for seg, _ in requests], axis=1), counts, axis=1)
         xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n), Q,
                              self.p)
         self.nfev += n
@@ -69,23 +68,29 @@ class OutputMixin:
             if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
-        cuts = np.cumsum([len(r) for _, r in parts])[:-1]
+        cuts = np.cumsum(counts)[:-1]
         return list(zip(np.split(xs, cuts, axis=1), np.split(aux, cuts, axis=1)))
 
     @staticmethod
-    def _guesses(seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Newton guesses (3, n) at the phases ts on a segment (Hermite interpolation of its points) and the
-        largest accepted move of phi from each guess [rad] (see :meth:`_evaluate_batch`)."""
-        pts = seg.points
-        n = len(ts)
-        if len(pts) > 1:
+    def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Newton guesses (3, n) at the phases ``ts`` (the requests' phases in order) by Hermite interpolation of
+        each request's segment points (a segment of one point: that point), and the largest accepted move of phi
+        from each guess [rad] (see :meth:`_evaluate_batch`)."""
+        tps, xs, xds, idx = [], [], [], []
+        start = off = 0
+        for seg, t in requests:
             tp, X, XD = seg.arrays()
-            i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
-            guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
-            reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
-        else:
-            guesses = np.tile(pts[0].x[:, None], (1, n))
-            reach = np.full(n, 0.05)
+            if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
+                tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
+            stop = start + len(t)
+            idx.append(off + np.clip(np.searchsorted(tp, ts[start:stop], side="right") - 1, 0, tp.size - 2))
+            tps.append(tp)
+            xs.append(X)
+            xds.append(XD)
+            start, off = stop, off + tp.size
+        tp, X, XD, i = np.concatenate(tps), np.concatenate(xs, axis=1), np.concatenate(xds, axis=1), np.concatenate(idx)
+        guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
+        reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
         return guesses, reach
 
     def _continue_to(self, seg: _Segment, t: float) -> _Point | None:
