@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Point
+from ocp_crawl.sim.event_state import _Point, torque_curvature
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
@@ -115,7 +115,7 @@ class GuardsMixin:
         else:
             tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
             ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
-        ddtau = ((self.torque_at(t + dt)[1] - self.torque_at(t - dt)[1]) / (2 * dt)).tolist()
+        ddtau = torque_curvature(self.torque_at, t, dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         return r
 

@@ -47,7 +47,23 @@ def torque_pair(signal):
         w1, w2 = w + half, w - half
         return (array([k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi)]),
                 array([k * (two_pi * a1 * cos(w1)), k * (two_pi * a2 * cos(w2))]))
+
+    def rate(t: float) -> list:
+        w = two_pi * t
+        return [k * (two_pi * a1 * cos(w + half)), k * (two_pi * a2 * cos(w - half))]
+
+    pair.rate = rate
     return pair
+
+
+def torque_curvature(torque_at, t: float, dt: float = 1e-5) -> list:
+    """tau''(t) [N m/cycle^2] by central differences of tau' over +-dt [cycles], with ``torque_at`` from
+    :func:`torque_pair` (floats; the same arithmetic as on arrays)."""
+    rate = getattr(torque_at, "rate", None)
+    if rate is None:
+        return ((torque_at(t + dt)[1] - torque_at(t - dt)[1]) / (2 * dt)).tolist()
+    a, b = rate(t + dt), rate(t - dt)
+    return [(a[0] - b[0]) / (2 * dt), (a[1] - b[1]) / (2 * dt)]
 
 
 def event_kind(guard: str) -> str:
