@@ -119,6 +119,7 @@ class FastFunction:
         self._w = (ctypes.c_double * max(sz_w, 1))()
         self._f = getattr(lib, name)
         self._f.restype = ctypes.c_int
+        self._call_args = (self._arg, self._res, self._iw, self._w, 0)
         self._lib = lib
 
     def __call__(self, *inputs) -> list[np.ndarray]:
@@ -128,7 +129,7 @@ class FastFunction:
                 out = [out]
             return [np.asarray(o, float).ravel(order="F") for o in out]
         for buf, x in zip(self._in, inputs):
-            buf[:] = x
-        if self._f(self._arg, self._res, self._iw, self._w, 0) != 0:
+            np.copyto(buf, x)
+        if self._f(*self._call_args) != 0:
             raise FloatingPointError(f"compiled {self.fun.name()} failed")
         return [o.copy() for o in self._out]
