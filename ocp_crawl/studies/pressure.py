@@ -30,15 +30,18 @@ FLAT_REST_DEG = 180.0
 
 
 def simulate_pressure(model: Model, p0_bar: float, psi_deg: float, phi_rest_deg: float | None = None,
-                      options: HybridOptions | None = None, t_eval=None) -> CrawlResult:
+                      options: HybridOptions | None = None, t_eval=None, amplitude_bar: float | None = None) -> CrawlResult:
     """Hybrid-quasistatic gait of the pressure-driven robot (torque drive).
 
     ``p0_bar``: peak pressure [bar]; ``psi_deg``: phase difference [deg]; ``phi_rest_deg``: rest
     angle [deg], by default the stored fit of the model's gravity convention; ``t_eval``: phases
-    [cycles] to sample.  Returns the :class:`~ocp_crawl.sim.result.CrawlResult`.
+    [cycles] to sample; ``amplitude_bar``: None for the raised sine from 0 to ``p0_bar``, else the
+    pressure amplitude [bar] of the paper's form (ref) around the nominal ``p0_bar``.  Returns the
+    :class:`~ocp_crawl.sim.result.CrawlResult`.
     """
     rest = FITTED_REST_DEG[model.gravity] if phi_rest_deg is None else phi_rest_deg
-    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), "event", options, t_eval=t_eval)
+    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest, amplitude_bar=amplitude_bar), "event",
+                    options, t_eval=t_eval)
 
 
 # --------------------------------------------------------------------------------------------
@@ -77,9 +80,9 @@ class PressureCurves:
         return prog / np.nanmax(prog)
 
 
-def _run(model: Model, p0: float, psi: float, rest: float) -> tuple[float, str]:
+def _run(model: Model, p0: float, psi: float, rest: float, amplitude: float | None = None) -> tuple[float, str]:
     try:
-        r = simulate_pressure(model, p0, psi, rest)
+        r = simulate_pressure(model, p0, psi, rest, amplitude_bar=amplitude)
     except ValueError:
         # no released equilibrium at the start: the input cannot even start the robot
         return float("nan"), Status.NO_START.label
@@ -87,11 +90,14 @@ def _run(model: Model, p0: float, psi: float, rest: float) -> tuple[float, str]:
 
 
 def pressure_curves(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None,
-                    robot: Robot | None = None) -> PressureCurves:
+                    robot: Robot | None = None, amplitude_p0_bar: float | None = None,
+                    amplitude_psi_bar: float | None = None) -> PressureCurves:
     """S along the paper's p0 and psi curves for one rest angle [deg] (defaults: the paper's own grids).
 
     ``p0_bar``: pressures [bar] of the p0 curve; ``psi_deg``: phase differences [deg] of the psi
-    curve; ``robot``: default Table I.  Returns :class:`PressureCurves`.
+    curve; ``robot``: default Table I; ``amplitude_p0_bar``, ``amplitude_psi_bar``: pressure
+    amplitudes [bar] of the paper's form (ref) on each curve (None: the raised sine, p0 the peak).
+    Returns :class:`PressureCurves`.
     """
     if gravity not in GRAVITY_CONVENTIONS:
         raise ValueError(f"gravity must be one of {GRAVITY_CONVENTIONS}, got {gravity!r}")
@@ -99,9 +105,9 @@ def pressure_curves(phi_rest_deg: float, gravity: str = "physical", p0_bar=None,
     default_p0, default_psi = paper_grids()
     p0 = default_p0 if p0_bar is None else np.asarray(p0_bar, float)
     psi = default_psi if psi_deg is None else np.asarray(psi_deg, float)
-    run_p0 = [_run(model, p, PSI_FOR_P0_CURVE_DEG, phi_rest_deg) for p in p0]
-    run_psi = [_run(model, P0_FOR_PSI_CURVE_BAR, s, phi_rest_deg) for s in psi]
-    s_norm, _ = _run(model, P0_NORMALISE_BAR, PSI_FOR_P0_CURVE_DEG, phi_rest_deg)
+    run_p0 = [_run(model, p, PSI_FOR_P0_CURVE_DEG, phi_rest_deg, amplitude_p0_bar) for p in p0]
+    run_psi = [_run(model, P0_FOR_PSI_CURVE_BAR, s, phi_rest_deg, amplitude_psi_bar) for s in psi]
+    s_norm, _ = _run(model, P0_NORMALISE_BAR, PSI_FOR_P0_CURVE_DEG, phi_rest_deg, amplitude_p0_bar)
     return PressureCurves(gravity, float(phi_rest_deg), p0, np.array([r[0] for r in run_p0]), psi,
                           np.array([r[0] for r in run_psi]), s_norm, tuple(r[1] for r in run_p0),
                           tuple(r[1] for r in run_psi))
@@ -191,10 +197,13 @@ def _reference(p0: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return np.interp(p0, d0["p0_bar"], d0["S_over_Smax"]), np.interp(psi, dp["psi_deg"], dp["S_over_Smax"])
 
 
-def evaluate_fit(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None) -> PressureFit:
+def evaluate_fit(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None,
+                 amplitude_p0_bar: float | None = None, amplitude_psi_bar: float | None = None) -> PressureFit:
     """The fit error of a given rest angle [deg] on the given grids (p0 [bar], psi [deg]; default: the
-    paper's points).  Returns a :class:`PressureFit` (``fitted`` False)."""
-    curves = pressure_curves(phi_rest_deg, gravity, p0_bar, psi_deg)
+    paper's points); ``amplitude_*_bar``: as :func:`pressure_curves`.  Returns a :class:`PressureFit`
+    (``fitted`` False)."""
+    curves = pressure_curves(phi_rest_deg, gravity, p0_bar, psi_deg, amplitude_p0_bar=amplitude_p0_bar,
+                             amplitude_psi_bar=amplitude_psi_bar)
     ref_p0, ref_psi = _reference(curves.p0_bar, curves.psi_deg)
     return PressureFit(curves, ref_p0, ref_psi, fitted=False)
 
