@@ -18,6 +18,7 @@ from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.model.pressure import FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR, PressureWaveform
 from ocp_crawl.problem import run_problem
 from ocp_crawl.studies.common import COT_K_RATIOS, PAPER_ROBOT, base_problem
+from ocp_crawl.studies.paper_points import PaperCurve, PaperPoints, markdown
 from ocp_crawl.studies.pressure import evaluate_fit, paper_grids, simulate_pressure
 from ocp_crawl.model.statics import Model
 
@@ -122,3 +123,15 @@ def test_paper_form_waveform():
     assert np.allclose(w.derivative(0.3), (w(0.3 + h) - w(0.3 - h)) / (2 * h), rtol=1e-6)
     with pytest.raises(ValueError, match="amplitude"):
         PressureWaveform(0.3, 0.0, 0.4)
+
+
+def test_paper_curve_summary_and_markdown():
+    """Median and worst over the points that have a value; a missing value counts as missing and beyond 2 %;
+    every table row of the report section has as many cells as its header."""
+    c = PaperCurve("cot_low", "CoT+ low k", "A [deg]", np.array([10.0, 20.0, 30.0]), np.array([2.0, 2.0, 2.0]),
+                   np.array([2.02, 1.9, np.nan]), ("success", "success", "fold"))
+    assert c.median == pytest.approx(0.03) and c.worst == (pytest.approx(-0.05), 20.0)
+    assert c.missing == 1 and c.beyond(0.02) == 2
+    text = markdown({"paper": PaperPoints("paper", (c,), {})})
+    rows = [ln for ln in text.splitlines() if ln.startswith("|")]
+    assert len({ln.count("|") for ln in rows}) == 1 and "-5.00%" in text and "20 deg" in text

@@ -203,9 +203,10 @@ def markdown(points: dict[str, PaperPoints]) -> str:
     for g, pts in points.items():
         for c in pts.curves:
             w, at = c.worst
-            rows.append([g, c.label, str(c.x.size), _pc(c.median), _pc(w, "+"), num(at, ".4g") + " " + c.x_name.split()[-1],
+            unit = c.x_name.split()[-1].strip("[]")
+            rows.append([g, c.label, str(c.x.size), _pc(c.median), _pc(w, "+"), f"{num(at, '.4g')} {unit}",
                          str(c.beyond(COT_TOL)), str(c.missing)])
-    out.append(table(["convention", "curve", "points", "median |rel|", "worst rel", "at", "beyond 2 %", "missing"],
+    out.append(table(["convention", "curve", "points", "median abs. rel.", "worst rel.", "at", "beyond 2 %", "missing"],
                      rows))
     for g, pts in points.items():
         for key, rows_v in pts.verdicts.items():
