@@ -10,8 +10,9 @@ so the torque input is that of eq. (tau) with the reference angle
 
     phi_ref,i(t) = phi_rest - bending_i(p_i(t)),      tau_i = k (phi_ref,i - pi).
 
-**Assumptions (the paper does not state them).**  The paper says only that the pressures are
-"periodic inputs of the form (ref)" with nominal pressure p0 and phase difference psi. We assume
+**Earlier assumptions** (``PressureWaveform(amplitude=None)``, the study's ``form="raised"``; the paper's
+form (ref) below is the default of the pressure study since issue 15).  Reading "periodic inputs of
+the form (ref)" with nominal pressure p0 loosely, we assumed
 
 * a raised sine between zero and the peak pressure p0 (a pressure controller cannot go below
   atmospheric, and the largest experimental p0 = 1.7 bar gives a plausible 28 deg of bending):

@@ -24,7 +24,7 @@ from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR
 from ocp_crawl.problem import run_problem
 from ocp_crawl.studies.common import COT_K_LABELS, COT_K_RATIOS, PAPER_ROBOT, SUCCESS, base_problem
-from ocp_crawl.studies.pressure import evaluate_fit
+from ocp_crawl.studies.pressure import PSI_CURVE_AMPLITUDE_BAR, evaluate_fit
 from ocp_crawl.studies.text import num, table
 
 #: relative tolerance on a published CoT+ value (issue 15)
@@ -35,9 +35,6 @@ ILL_CONDITIONED_PER_DEG = 0.05
 MATCH_WINDOW_DEG = 0.2
 #: amplitude step [deg] of the central difference that measures the conditioning
 SLOPE_STEP_DEG = 0.1
-#: pressure amplitude [bar] of the paper's form (ref) on its psi curve (at p0 = 1.7 bar, flat rest, paper's
-#: sign): the paper does not state it; fitted to the published psi curve (bounded scalar fit over 0.4..1.7 bar)
-PSI_CURVE_AMPLITUDE_BAR = 0.99
 #: the columns of ``fig_cot_vs_amplitude.csv`` in the order of COT_K_RATIOS
 COT_COLUMNS = ("CoT_plus_large_k", "CoT_plus_realistic_k", "CoT_plus_low_k")
 
@@ -160,7 +157,8 @@ def pressure_points(gravity: str, phi_rest_deg: float, amplitudes: tuple[float, 
     a0, a1 = (None, None) if amplitudes is None else amplitudes
     fit = evaluate_fit(phi_rest_deg, gravity, amplitude_p0_bar=a0, amplitude_psi_bar=a1)
     c = fit.curves
-    how = f", rest {phi_rest_deg:g} deg" + ("" if amplitudes is None else f", form (ref) A_p {a0:g}/{a1:g} bar")
+    how = (f", raised sine, rest {phi_rest_deg:g} deg" if amplitudes is None else
+           f", form (ref), A_p {a0:g}/{a1:.3g} bar")
     return [PaperCurve("exp_p0" + tag, "S/S(1.7 bar) against p0" + how, "p0 [bar]", c.p0_bar, fit.ref_p0,
                        c.progress_p0, c.status_p0),
             PaperCurve("exp_psi" + tag, "S/max S against psi" + how, "psi [deg]", c.psi_deg, fit.ref_psi,
@@ -181,16 +179,21 @@ class PaperPoints:
                                           else {})} for c in self.curves}
 
 
-def paper_points(gravity: str = "paper", phi_rest_deg: float | None = None) -> PaperPoints:
-    """Our values at every published point of Figs. CoT and exp in ``gravity`` ("paper" or "physical");
-    ``phi_rest_deg``: rest angle of the pressure-driven robot [deg] (None: the stored fit).  A few seconds."""
+def paper_points(gravity: str = "paper", psi_amplitude_bar: float | None = None) -> PaperPoints:
+    """Our values at every published point of Figs. CoT and exp in ``gravity`` ("paper" or "physical").
+
+    Fig. exp twice: with the paper's form (ref) of the pressure input (flat rest, amplitude 0.4 bar on the
+    p0 curve, ``psi_amplitude_bar`` [bar] on the psi curve, None: the stored fit), and with the raised
+    sine and the stored fitted rest angle (the assumption before issue 15).  Some tens of seconds.
+    """
     cot = cot_curves(gravity)
     # the verdicts are for the paper's convention, in which its figures were computed
     verdicts = {c.key: point_verdicts(c, gravity, ratio) for c, ratio in zip(cot, COT_K_RATIOS)} \
         if gravity == "paper" else {}
-    rest = FITTED_REST_DEG[gravity] if phi_rest_deg is None else phi_rest_deg
-    form = pressure_points(gravity, FLAT_REST_DEG, (PAPER_FORM_AMPLITUDE_BAR, PSI_CURVE_AMPLITUDE_BAR), "_form")
-    return PaperPoints(gravity, tuple(cot + pressure_points(gravity, rest) + form), verdicts)
+    amp = PSI_CURVE_AMPLITUDE_BAR if psi_amplitude_bar is None else psi_amplitude_bar
+    form = pressure_points(gravity, FLAT_REST_DEG, (PAPER_FORM_AMPLITUDE_BAR, amp))
+    raised = pressure_points(gravity, FITTED_REST_DEG[gravity], None, "_raised")
+    return PaperPoints(gravity, tuple(cot + form + raised), verdicts)
 
 
 def markdown(points: dict[str, PaperPoints]) -> str:
@@ -241,9 +244,10 @@ What the differences are (issue 15, measured at every published point, paper's c
 - **Pressure robot**: the paper's "nominal pressure p0" of "inputs of the form (ref)" read literally
   (p_i = p0 + A_p sin(2 pi t +- psi/2), flat rest, bending from the clamped-segment calibration) with
   A_p = 0.4 bar (the p0 curve starts at 0.4 bar, where p_i reaches 0) reproduces the p0 curve with no
-  fitted parameter (rows `_form`; RMS 0.024 over 0.4..3 bar, 0.0013 up to 1.7 bar; the physical sign
+  fitted parameter (RMS 0.024 over 0.4..3 bar, 0.0013 up to 1.7 bar; the physical sign
   does not: 0.05 up to 1.7 bar).  The psi curve's operating point is not stated (at p0 = 1.7 bar the
-  amplitude fitted to it is 0.99 bar).  Its RMS <= 0.03 is out of reach of this input family, for a
+  amplitude fitted to it is 0.99 bar).  This input is the pressure study's default since issue 15; the rows
+  `_raised` show the earlier assumption (raised sine from 0 to a peak p0, fitted rest angle).  Its RMS <= 0.03 is out of reach of this input family, for a
   measured reason: near psi = 0 the model's S is a friction threshold.  Where the robot is stuck at
   psi = 1 deg (every amplitude up to p0 at p0 = 1.7 bar) the published 0.33 there alone gives RMS >=
   0.334/sqrt(49) = 0.048; where a larger input makes it move at 1 deg (p0 = A_p >= 2.2 bar) it reaches

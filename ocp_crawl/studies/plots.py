@@ -414,14 +414,17 @@ def plot_pressure(p: PressureStudy) -> Figure:
     fig, ax = _figure((11.0, 4.8), 1, 2)
     a0, a1 = ax[0]
     c = p.fit.curves
-    fig.suptitle(f"Pressure-driven robot: rest angle {c.phi_rest_deg:.1f} deg "
-                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}")
+    how = "fitted" if p.fit.fitted else "stored fit"
+    inp = (f"rest angle {c.phi_rest_deg:.1f} deg ({how})" if c.amplitude_p0_bar is None else
+           f"p = p0 + A_p sin, A_p {c.amplitude_p0_bar:g} bar (p0 curve) / {c.amplitude_psi_bar:.2f} bar ({how}, psi curve)")
+    fig.suptitle(f"Pressure-driven robot: {inp}, {_gravity_text(c.gravity)}")
     a0.plot(p.paper_p0["p0_bar"], p.paper_p0["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
     a0.plot(c.p0_bar, c.progress_p0, color=BLUE, lw=2, marker=".", label=f"this model (RMS error {p.fit.rms_p0:.3f})")
     e = p.experiment_p0
     a0.errorbar(e["p0_bar"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
-    a0.set_xlabel("nominal (peak) pressure $p_0$ [bar]")
+    a0.set_xlabel("nominal (mean) pressure $p_0$ [bar]" if c.amplitude_p0_bar is not None else
+                  "nominal (peak) pressure $p_0$ [bar]")
     a0.set_ylabel(f"S / S(p0 = 1.7 bar) [-]  (psi = {c.psi_for_p0_deg:g} deg)")
     a0.set_title("(a) against nominal pressure", loc="left", fontsize="medium")
     a1.plot(p.paper_psi["psi_deg"], p.paper_psi["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")

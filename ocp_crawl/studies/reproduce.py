@@ -94,7 +94,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, gravity: str = "physical
     sets = {g: run_studies(g, grids, sweep, say) for g in order}
     statements = check_statements(sets)
     say("every published point ...")
-    points = {g: paper_points(g, sets[g].pressure.fit.phi_rest_deg) for g in order}
+    points = {g: paper_points(g, sets[g].pressure.fit.curves.amplitude_psi_bar) for g in order}
     files: list[Path] = []
     say("figures ...")
     for stem, draw in FIGURES.items():
