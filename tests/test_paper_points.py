@@ -19,7 +19,7 @@ from ocp_crawl.model.pressure import FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR, Pr
 from ocp_crawl.problem import run_problem
 from ocp_crawl.studies.common import COT_K_RATIOS, PAPER_ROBOT, base_problem
 from ocp_crawl.studies.paper_points import PaperCurve, PaperPoints, markdown
-from ocp_crawl.studies.pressure import evaluate_fit, paper_grids, simulate_pressure
+from ocp_crawl.studies.pressure import PSI_CURVE_AMPLITUDE_BAR, evaluate_fit, paper_grids, simulate_pressure
 from ocp_crawl.model.statics import Model
 
 COLUMNS = ("CoT_plus_large_k", "CoT_plus_realistic_k", "CoT_plus_low_k")
@@ -100,6 +100,19 @@ def test_paper_form_p0_curve():
     physical = evaluate_fit(FLAT_REST_DEG, "physical", p0_bar=p0[p0 <= 1.7], psi_deg=[45.0],
                             amplitude_p0_bar=PAPER_FORM_AMPLITUDE_BAR, amplitude_psi_bar=PAPER_FORM_AMPLITUDE_BAR)
     assert physical.rms_p0 > 0.03
+
+
+def test_stored_psi_amplitude_is_the_fit():
+    """The stored amplitude of the psi curve is the minimum of its RMS error on the paper's 49 points (paper's
+    convention), which the 1 deg point bounds below by 0.334/7."""
+    _, psi = paper_grids()
+
+    def rms(amp):
+        return evaluate_fit(FLAT_REST_DEG, "paper", [1.7], psi, PAPER_FORM_AMPLITUDE_BAR, amp).rms_psi
+
+    best = rms(PSI_CURVE_AMPLITUDE_BAR)
+    assert 0.334 / 7 <= best < 0.06
+    assert best < rms(PSI_CURVE_AMPLITUDE_BAR - 0.1) and best < rms(PSI_CURVE_AMPLITUDE_BAR + 0.1)
 
 
 def test_paper_psi_curve_first_point_not_reachable():
