@@ -7,7 +7,6 @@ stepper's ``_solve``, ``guards``, ``noise``, ``opt``, ``sym``, ``torque`` and ``
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ocp_crawl.sim.event_state import _Failure, _Point, hermite, mode_q
 from ocp_crawl.sim.result import Mode
@@ -42,6 +41,8 @@ class EventsMixin:
                 start: bool = False) -> tuple[float, _Point]:
         """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (Brent's method).
         ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero."""
+        from scipy.optimize import brentq  # scipy when an event is located, not at import (start-up time)
+
         # the ends are known (a re-solve there could differ in the last bits and break the bracket)
         cache: dict[float, _Point] = {p0.t: p0, p1.t: p1}
 
