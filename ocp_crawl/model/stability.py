@@ -55,6 +55,7 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
+from ocp_crawl.model.compiled import compiled_function
 from ocp_crawl.model.statics import NP, NQ, _geometry, call_mapped, params
 
 #: names of the outputs of :func:`stability_function`
@@ -97,6 +98,7 @@ def stability_function() -> cs.Function:
                        ["x", "q", "p"], ["s"])
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_stability():
     """:func:`stability_function` as a low-overhead callable for hot loops (compiled C when a compiler is

@@ -25,6 +25,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.checks import real
+from ocp_crawl.model.compiled import compiled_function
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -281,6 +282,7 @@ def _fold_system(x, tau, dtau, p, q, G, J):
 NEWTON_ITERS = 4
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_newton():
     """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
@@ -289,6 +291,7 @@ def fast_newton():
     return FastFunction(symbolic().newton)
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_ddot2():
     """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
@@ -301,6 +304,7 @@ def fast_ddot2():
 BATCH = 64
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_newton_batch():
     """``newton`` mapped over BATCH columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
