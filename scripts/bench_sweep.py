@@ -113,10 +113,10 @@ def main(argv=None) -> int:
                 r = time_sweep(problem, n_psi, n_gamma, jobs)
                 r["run"], r["machine"] = run, machine_scaling(jobs) if jobs > 1 else 1.0
                 rows.append(r)
-            print(f"{r['grid']:>8} = {r['points']:5d} points, jobs {jobs}: {r['wall_s']:7.2f} s, "
-                  f"{r['ms_per_point']:6.2f} ms per point (CPU {r['cpu_ms_per_point']:.2f} ms per point; "
-                  f"load {os.getloadavg()[0]:.1f})  ({', '.join(f'{k} {v}' for k, v in r['counts'].items())})",
-                  flush=True)
+                print(f"{r['grid']:>8} = {r['points']:5d} points, jobs {jobs}: {r['wall_s']:7.2f} s, "
+                      f"{r['ms_per_point']:6.2f} ms per point (CPU {r['cpu_ms_per_point']:.2f} ms per point; "
+                      f"load {os.getloadavg()[0]:.1f})  ({', '.join(f'{k} {v}' for k, v in r['counts'].items())})",
+                      flush=True)
     print("\nscaling")
     for n_psi, n_gamma in grids:
         same = [r for r in rows if r["grid"] == f"{n_psi} x {n_gamma}"]
