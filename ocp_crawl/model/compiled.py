@@ -17,11 +17,24 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 import casadi as cs
 import numpy as np
 
 from ocp_crawl.io.files import remove_stale_temps, temp_prefix
+
+
+#: zero-argument builders of the package's compiled functions ("module.qualname" -> builder returning a
+#: FastFunction), registered by :func:`compiled_function`; ``ocp-crawl warmup`` builds them all, and
+#: tests/test_warmup.py checks that every FastFunction of the package is made by a registered builder
+BUILDERS: dict[str, Callable[[], "FastFunction"]] = {}
+
+
+def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "FastFunction"]:
+    """Decorator: register ``builder`` (no arguments, returns a :class:`FastFunction`) in :data:`BUILDERS`."""
+    BUILDERS[f"{builder.__module__}.{builder.__qualname__}"] = builder
+    return builder
 
 
 def cache_dir() -> Path:
@@ -90,13 +103,15 @@ class FastFunction:
         self.n_in = [fun.nnz_in(i) for i in range(fun.n_in())]
         self.n_out = [fun.nnz_out(i) for i in range(fun.n_out())]
         self.compiled = False
+        self.library: Path | None = None
+        """the shared library in the cache (None: evaluated by CasADi)"""
         if os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0"):
             return
         try:
             lib_path = _build(fun)
             if lib_path is not None:
                 self._load(lib_path)
-                self.compiled = True
+                self.compiled, self.library = True, lib_path
         except OSError:
             self.compiled = False
 

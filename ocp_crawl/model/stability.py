@@ -55,6 +55,7 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
+from ocp_crawl.model.compiled import compiled_function
 from ocp_crawl.model.statics import NP, NQ, _geometry, call_mapped, params, symbolic
 
 #: names of the outputs of :func:`stability_function`
@@ -97,6 +98,7 @@ def stability_function() -> cs.Function:
                        ["x", "q", "p"], ["s"])
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_stability():
     """:func:`stability_function` as a low-overhead callable for hot loops (compiled C when a compiler is
@@ -106,6 +108,7 @@ def fast_stability():
     return FastFunction(stability_function())
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_step():
     """One call per continuation step of the event-driven stepper (compiled C when available):

@@ -25,6 +25,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.checks import real
+from ocp_crawl.model.compiled import compiled_function
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -300,6 +301,7 @@ def _fold_system(x, tau, dtau, p, q, G, J):
 NEWTON_ITERS = 4
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_newton():
     """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
@@ -308,6 +310,7 @@ def fast_newton():
     return FastFunction(symbolic().newton)
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_ddot2():
     """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
@@ -322,6 +325,7 @@ BATCH = 64
 SMALL_BATCH = 16
 
 
+@compiled_function
 @lru_cache(maxsize=2)
 def fast_newton_batch(width: int = BATCH):
     """``newton`` mapped over ``width`` columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
@@ -338,6 +342,12 @@ def fast_newton_batch(width: int = BATCH):
     xs, aux = f(x0, tau, dtau, q, cs.repmat(p, 1, width))
     name = "ocp_crawl_newton_batch" if width == BATCH else f"ocp_crawl_newton_batch{width}"
     return FastFunction(cs.Function(name, [x0, tau, dtau, q, p], [xs, aux]))
+
+
+@compiled_function
+def fast_newton_batch_small():
+    """The narrow (:data:`SMALL_BATCH` columns) :func:`fast_newton_batch`, registered so that warm-up builds it."""
+    return fast_newton_batch(SMALL_BATCH)
 
 
 def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):

@@ -43,6 +43,7 @@ class EventsMixin:
                 start: bool = False) -> tuple[float, _Point]:
         """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (:meth:`_root`).
         ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero."""
+
         # the ends are known (a re-solve there could differ in the last bits and break the bracket)
         cache: dict[float, _Point] = {p0.t: p0, p1.t: p1}
 
