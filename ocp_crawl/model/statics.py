@@ -345,6 +345,7 @@ def fast_newton_batch(width: int = BATCH):
 
 
 @compiled_function
+@lru_cache(maxsize=1)
 def fast_newton_batch_small():
     """The narrow (:data:`SMALL_BATCH` columns) :func:`fast_newton_batch`, registered so that warm-up builds it."""
     return fast_newton_batch(SMALL_BATCH)
