@@ -52,11 +52,8 @@ def _compiler() -> str | None:
     return None
 
 
-def _build(fun: cs.Function) -> Path | None:
-    """C source for ``fun`` compiled into a shared library in the cache; None if not possible."""
-    cc = _compiler()
-    if cc is None:
-        return None
+def _generate(fun: cs.Function) -> str:
+    """The C source of ``fun`` (CasADi's code generator, no header)."""
     with tempfile.TemporaryDirectory() as tmp:
         cwd = os.getcwd()
         try:
@@ -64,14 +61,29 @@ def _build(fun: cs.Function) -> Path | None:
             gen = cs.CodeGenerator(f"{fun.name()}.c", {"with_header": False})
             gen.add(fun)
             gen.generate()
-            src = Path(tmp, f"{fun.name()}.c").read_text()
+            return Path(tmp, f"{fun.name()}.c").read_text()
         finally:
             os.chdir(cwd)
-    key = hashlib.sha256((src + cs.__version__ + sys.platform + cc).encode()).hexdigest()[:16]
+
+
+def _key(fun: cs.Function, cc: str) -> str:
+    """Cache key of ``fun``'s library: a hash of its serialised expression graph (a few ms, against 10-20 ms
+    for generating the C source, which a warm run thus never does), the CasADi version, platform and compiler."""
+    tag = "|".join(("codegen-v1", cs.__version__, sys.platform, cc))
+    return hashlib.sha256(fun.serialize().encode() + tag.encode()).hexdigest()[:16]
+
+
+def _build(fun: cs.Function) -> Path | None:
+    """The shared library of ``fun`` in the cache, compiled from its C source if not there yet; None if not
+    possible (no compiler, a failed build)."""
+    cc = _compiler()
+    if cc is None:
+        return None
     out_dir = cache_dir()
-    lib = out_dir / f"{fun.name()}_{key}.so"
+    lib = out_dir / f"{fun.name()}_{_key(fun, cc)}.so"
     if lib.exists():
         return lib
+    src = _generate(fun)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         # the source and the library are built in a private directory and the library is renamed into
