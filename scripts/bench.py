@@ -1,16 +1,21 @@
 """Benchmarks (run by hand; figures go into the closing notes, never into timed tests).
 
     python scripts/bench.py                # all benchmarks (several minutes)
-    python scripts/bench.py hybrid         # one steady cycle of the paper gait, event-driven
+    python scripts/bench.py hybrid         # paper gait and one steady cycle, CPU, against an old commit
+    python scripts/bench.py hybrid --old 3a581df --repeat 20
+    python scripts/bench.py hybrid_accuracy  # the paper gait against a refined run, both gravities
     python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
-warm-up builds or loads the compiled functions, which happens once per process).
+warm-up builds or loads the compiled functions, which happens once per process); ``hybrid`` reports
+CPU time (min and median) of this tree and of an older commit (``--old``, exported with ``git archive``)
+measured in alternating subprocesses of the same run, and their ratio.
 """
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -26,8 +31,104 @@ def _median_time(fn, repeat: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
-def bench_hybrid(repeat: int) -> dict:
-    """One steady cycle of the paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive)."""
+#: commit whose event-driven stepper ``hybrid`` times against the working tree (issue 12's starting point)
+OLD_COMMIT = "3a581df"
+
+
+def hybrid_cpu(repeat: int) -> dict:
+    """CPU times [ms] (time.process_time) of the warm paper gait (released start + confirming cycle, output,
+    checks: one ``simulate_torque``) and of one steady cycle (one more cycle of the stepper, events and checks,
+    from the periodic state), after a warm-up run; lists of ``repeat`` samples each.  Uses only names that the
+    old code has too (it runs in a subprocess on an exported old tree, see :func:`bench_hybrid`)."""
+    from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot, simulate_torque
+    from ocp_crawl.sim.event import HybridStepper
+
+    model = Model(Robot.paper(), gravity="paper")
+    torque = ReferenceTorque(Harmonic.from_degrees(90, 30, 45), model.robot.k)
+    res = simulate_torque(model, torque)
+    gait, cycle = [], []
+    for _ in range(repeat):
+        t = time.process_time()
+        simulate_torque(model, torque)
+        gait.append(1e3 * (time.process_time() - t))
+    st = HybridStepper(model, torque)
+    run = st._start_run(st.initial_state(0.0))
+    st._run_cycles(run)
+    for _ in range(repeat):
+        t = time.process_time()
+        st._advance_cycle(run)
+        cycle.append(1e3 * (time.process_time() - t))
+        run.cycle += 1
+        run.events_in_cycle = 0
+    return {"gait_ms": gait, "cycle_ms": cycle, "S": res.S, "W_plus": res.W_plus, "nfev": res.nfev,
+            "events": [e.t for e in res.events]}
+
+
+def _old_tree(commit: str) -> str:
+    """The package ``ocp_crawl`` of ``commit`` exported (git archive) into a temporary directory; its path."""
+    import subprocess
+    import tempfile
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    tmp = tempfile.mkdtemp(prefix="ocp_crawl_old_")
+    archive = subprocess.run(["git", "-C", str(root), "archive", commit, "ocp_crawl"], capture_output=True,
+                             check=True).stdout
+    subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+    return tmp
+
+
+def _worker(tree: str, repeat: int) -> dict:
+    """:func:`hybrid_cpu` in a fresh process with ``tree`` first on the path."""
+    import json
+    import os
+    import subprocess
+
+    env = dict(os.environ, PYTHONPATH=tree)
+    out = subprocess.run([sys.executable, __file__, "--hybrid-worker", str(repeat)], env=env, capture_output=True,
+                         text=True, check=True).stdout
+    return json.loads(out.splitlines()[-1])
+
+
+def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
+    """Warm paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive, paper gravity) and one steady
+    cycle, CPU time, for the working tree and for commit ``old`` in the same run: ``rounds`` alternating pairs
+    of subprocesses of ``repeat`` timed runs each; min and median [ms] over all samples, their ratios, and the
+    largest differences of S, W+ and the event phases between the two codes."""
+    import shutil
+    from pathlib import Path
+
+    new_tree = str(Path(__file__).resolve().parent.parent)
+    old_tree = _old_tree(old)
+    samples = {"new": [], "old": []}
+    try:
+        for _ in range(rounds):
+            samples["new"].append(_worker(new_tree, repeat))
+            samples["old"].append(_worker(old_tree, repeat))
+    finally:
+        shutil.rmtree(old_tree, ignore_errors=True)
+    out = {}
+    for which in ("gait_ms", "cycle_ms"):
+        for code in ("new", "old"):
+            v = [x for s in samples[code] for x in s[which]]
+            out[f"{which[:-3]}_{code}_ms"] = {"min": round(min(v), 3), "median": round(statistics.median(v), 3)}
+        for stat in ("min", "median"):
+            out[f"{which[:-3]}_ratio_old_over_new_{stat}"] = round(
+                out[f"{which[:-3]}_old_ms"][stat] / out[f"{which[:-3]}_new_ms"][stat], 2)
+    a, b = samples["new"][0], samples["old"][0]
+    out["old_commit"] = old
+    out["S_abs_diff"] = abs(a["S"] - b["S"])
+    out["W_plus_abs_diff"] = abs(a["W_plus"] - b["W_plus"])
+    out["event_phase_max_diff"] = max(abs(x - y) for x, y in zip(a["events"], b["events"])) \
+        if len(a["events"]) == len(b["events"]) else "event count differs"
+    out["nfev_new_old"] = (a["nfev"], b["nfev"])
+    out["load_average"] = os.getloadavg()
+    return out
+
+
+def bench_hybrid_accuracy(repeat: int) -> dict:
+    """The paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive): median wall time and S, W+ against
+    a refined run (max_step 1/512, event_xtol 1e-15, quad_h 1/256), both gravity conventions."""
     from ocp_crawl import Harmonic, HybridOptions, Model, ReferenceTorque, Robot, simulate_torque
     from ocp_crawl.model.statics import fast_newton
 
@@ -127,7 +228,7 @@ def bench_sweep(repeat: int) -> str:
     return "see above"
 
 
-BENCHMARKS = {"hybrid": bench_hybrid, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
+BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
               "sweep": bench_sweep, "ocp": bench_ocp}
 
 
@@ -136,15 +237,20 @@ def main(argv=None) -> int:
     ap.add_argument("which", nargs="*", metavar="NAME", default=[],
                     help=f"benchmarks to run: {', '.join(BENCHMARKS)} (default: all)")
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
+    ap.add_argument("--old", default=OLD_COMMIT, help="commit that `hybrid` compares against (default: %(default)s)")
+    ap.add_argument("--hybrid-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.hybrid_worker:
+        import json
+        print(json.dumps(hybrid_cpu(args.hybrid_worker)))
+        return 0
     names = args.which or list(BENCHMARKS)
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
         ap.error(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}")
-    import os
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
-        result = BENCHMARKS[name](args.repeat)
+        result = bench_hybrid(args.repeat, args.old) if name == "hybrid" else BENCHMARKS[name](args.repeat)
         print(f"{name}: {result}")
     return 0
 

@@ -3,6 +3,7 @@
     python scripts/bench_sweep.py                     # 37 x 31 psi-gamma map and a 10 x 8 map, jobs 1 and 2
     python scripts/bench_sweep.py --jobs 1,2,4 --small-only
     python scripts/bench_sweep.py --cli               # also the command line end to end (imports included)
+    python scripts/bench_sweep.py --repeat 3          # each sweep 3 times, jobs interleaved: min and median
 
 The map is the paper robot (Table I) with A = 30 deg, psi 0..180 deg, gamma 60..120 deg, event-driven
 stepper.  Each sweep writes its journal and results.csv into a temporary directory, as the command
@@ -15,6 +16,7 @@ import argparse
 import json
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -49,6 +51,28 @@ def time_sweep(problem, n_psi: int, n_gamma: int, jobs: int) -> dict:
             "cpu_ms_per_point": 1e3 * cpu / n, "counts": res.counts(), "S": res.array("S", successful_only=False)}
 
 
+def _spin(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i
+    return total
+
+
+def machine_scaling(jobs: int, tasks_per_process: int = 4, n: int = 2_000_000) -> float:
+    """Throughput of ``jobs`` processes over one, on busy loops (pure Python, no I/O, nothing shared): what the
+    machine itself gives to parallel processes now, the ceiling of a sweep's speed-up in the same run."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    rates = []
+    for procs in (1, jobs):
+        start = time.perf_counter()
+        with ctx.Pool(procs) as pool:
+            pool.map(_spin, [n] * procs * tasks_per_process)
+        rates.append(procs * tasks_per_process / (time.perf_counter() - start))
+    return rates[1] / rates[0]
+
+
 def time_cli(n_psi: int, n_gamma: int, jobs: int) -> tuple[float, dict]:
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PROBLEM), "--grid", f"gait.psi_deg=0:180:{n_psi}",
@@ -68,6 +92,7 @@ def main(argv=None) -> int:
     ap.add_argument("--small", default="10x8", help="the smaller grid, PSIxGAMMA (default 10x8)")
     ap.add_argument("--small-only", action="store_true", help="skip the 37 x 31 map")
     ap.add_argument("--cli", action="store_true", help="also time 'ocp-crawl sweep' on the full map (largest --jobs)")
+    ap.add_argument("--repeat", type=int, default=1, help="runs of each sweep, the jobs interleaved (default 1)")
     args = ap.parse_args(argv)
     import numpy as np
 
@@ -83,23 +108,33 @@ def main(argv=None) -> int:
     print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at start")
     rows = []
     for n_psi, n_gamma in grids:
-        for jobs in jobs_list:
-            r = time_sweep(problem, n_psi, n_gamma, jobs)
-            rows.append(r)
-            print(f"{r['grid']:>8} = {r['points']:5d} points, jobs {jobs}: {r['wall_s']:7.2f} s, "
-                  f"{r['ms_per_point']:6.2f} ms per point (CPU {r['cpu_ms_per_point']:.2f} ms per point; "
-                  f"load {os.getloadavg()[0]:.1f})  ({', '.join(f'{k} {v}' for k, v in r['counts'].items())})",
-                  flush=True)
+        for run in range(args.repeat):
+            for jobs in jobs_list:
+                r = time_sweep(problem, n_psi, n_gamma, jobs)
+                r["run"], r["machine"] = run, machine_scaling(jobs) if jobs > 1 else 1.0
+                rows.append(r)
+                print(f"{r['grid']:>8} = {r['points']:5d} points, jobs {jobs}: {r['wall_s']:7.2f} s, "
+                      f"{r['ms_per_point']:6.2f} ms per point (CPU {r['cpu_ms_per_point']:.2f} ms per point; "
+                      f"load {os.getloadavg()[0]:.1f})  ({', '.join(f'{k} {v}' for k, v in r['counts'].items())})",
+                      flush=True)
     print("\nscaling")
     for n_psi, n_gamma in grids:
         same = [r for r in rows if r["grid"] == f"{n_psi} x {n_gamma}"]
-        base = same[0]
-        for r in same[1:]:
-            agree = np.array_equal(r["S"], base["S"], equal_nan=True)
-            print(f"{r['grid']:>8}: jobs {r['jobs']} vs {base['jobs']}: speed-up {base['wall_s'] / r['wall_s']:.2f} "
-                  f"(ideal {r['jobs'] / base['jobs']:.0f}); rows identical: {agree}")
+        base = [r for r in same if r["jobs"] == jobs_list[0]]
+        for jobs in jobs_list[1:]:
+            other = [r for r in same if r["jobs"] == jobs]
+            # the ratio within each run (the runs see different loads); min and median over the runs
+            ratios = [b["wall_s"] / o["wall_s"] for b, o in zip(base, other)]
+            machine = [o["machine"] for o in other]
+            walls = {j: [r["wall_s"] for r in same if r["jobs"] == j] for j in (jobs_list[0], jobs)}
+            agree = all(np.array_equal(o["S"], base[0]["S"], equal_nan=True) for o in other)
+            print(f"{n_psi:>3} x {n_gamma:<3}: jobs {jobs} vs {jobs_list[0]}: speed-up median {statistics.median(ratios):.2f}, "
+                  f"max {max(ratios):.2f} over {len(ratios)} runs (ideal {jobs / jobs_list[0]:.0f}; the machine's own, "
+                  f"busy loops in {jobs} processes vs 1 in the same runs: median {statistics.median(machine):.2f}); wall jobs "
+                  f"{jobs_list[0]} min {min(walls[jobs_list[0]]):.2f} median {statistics.median(walls[jobs_list[0]]):.2f} s, "
+                  f"jobs {jobs} min {min(walls[jobs]):.2f} median {statistics.median(walls[jobs]):.2f} s; rows identical: {agree}")
     for jobs in jobs_list:
-        by_size = sorted((r for r in rows if r["jobs"] == jobs), key=lambda r: r["points"])
+        by_size = sorted((r for r in rows if r["jobs"] == jobs and r["run"] == 0), key=lambda r: r["points"])
         if len(by_size) == 2:
             a, b = by_size
             per = (b["wall_s"] - a["wall_s"]) / (b["points"] - a["points"])

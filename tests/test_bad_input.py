@@ -23,12 +23,14 @@ import ocp_crawl.cli.app as cli
 import ocp_crawl.cli.run_commands
 import ocp_crawl.cli.study_commands
 import ocp_crawl.cli.fit_commands
+import ocp_crawl.fit.solve
 import ocp_crawl.problem.run
 import ocp_crawl.sim.crosscheck
 import ocp_crawl.sim.event
 import ocp_crawl.ocp
 import ocp_crawl.sim.angles
 import ocp_crawl.studies.reproduce
+import ocp_crawl.sweep.warmup
 import ocp_crawl.sim.timestepping
 
 REPO = Path(__file__).resolve().parent.parent
@@ -191,6 +193,11 @@ ROWS = {
     "demo: --out holds results": R("demo", ["--out", "{tmp}"], ["--out", "demo_summary.json", "would overwrite"],
                                    files={"demo_summary.json": b"{}"}),
     "demo: unexpected argument": R("demo", ["{paper}"], ["unrecognized arguments", "paper_gait.toml"]),
+    # ------------------------------------------------------------------ warmup
+    "warmup: unexpected argument": R("warmup", ["{paper}"], ["unrecognized arguments", "paper_gait.toml"]),
+    "warmup: unknown option": R("warmup", ["--jobs", "2"], ["unrecognized arguments", "--jobs 2"]),
+    "warmup: --json with a value": R("warmup", ["--json=yes"], ["--json", "ignored explicit argument 'yes'"]),
+    "warmup: --out": R("warmup", ["--out", "{tmp}"], ["unrecognized arguments", "--out"]),
     # ------------------------------------------------------------------ sweep
     "sweep: NUM < 1": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:180:0", "--out", "{tmp}"],
                         ["gait.psi_deg=0:180:0", "NUM must be an integer >= 1, got 0"]),
@@ -477,7 +484,8 @@ def nothing_computed(monkeypatch):
                          (ocp_crawl.sim.angles, "simulate_angles"), (ocp_crawl.sim.timestepping, "simulate_mpcc"),
                          (ocp_crawl.cli.study_commands, "run_sweep"), (ocp_crawl.studies.reproduce, "reproduce"),
                          (ocp_crawl.viz.animate, "animate_problem"), (ocp_crawl.sim.crosscheck, "crosscheck"),
-                         (ocp_crawl.ocp, "optimize_gait"), (ocp_crawl.cli.fit_commands, "fit_measurements")):
+                         (ocp_crawl.ocp, "optimize_gait"), (ocp_crawl.sweep.warmup, "warmup"),
+                         (ocp_crawl.fit.solve, "fit_measurements")):
         monkeypatch.setattr(module, name, _computed)
 
 
@@ -606,7 +614,8 @@ def test_the_guard_catches_a_computation(tmp_path, capsys, nothing_computed, mon
     monkeypatch.delenv("OCP_CRAWL_TRACEBACK", raising=False)
     for argv in (["simulate", str(PAPER)], ["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--out", str(tmp_path / "s")],
                  ["optimize", str(OCP)], ["crosscheck", str(PAPER)], ["reproduce", "--out", str(tmp_path / "r")],
-                 ["animate", str(PAPER), "--out", str(tmp_path / "a.gif")], ["demo", "--out", str(tmp_path / "d")]):
+                 ["animate", str(PAPER), "--out", str(tmp_path / "a.gif")], ["demo", "--out", str(tmp_path / "d")],
+                 ["warmup"]):
         code = cli.main(argv)
         err = capsys.readouterr().err
         assert code == 1, (argv, err)

@@ -263,7 +263,9 @@ def test_pressure_curves_follow_the_paper(gravity):
     assert fit.rms_psi < 0.25  # dominated by psi = 1 deg, where the paper has 0.33 and the model ~0
 
 
-def test_flat_rest_shape_does_not_reproduce_the_p0_curve():
+def test_raised_sine_with_flat_rest_does_not_reproduce_the_p0_curve():
+    """The earlier assumption (raised sine, p0 the peak) needs a fitted rest angle; the paper's form (ref) with
+    the flat rest does not (tests/test_paper_points.py)."""
     flat = evaluate_fit(180.0, "paper", p0_bar=[0.4, 1.0, 2.0, 3.0], psi_deg=[45.0])
     fitted = evaluate_fit(FITTED_REST_DEG["paper"], "paper", p0_bar=[0.4, 1.0, 2.0, 3.0], psi_deg=[45.0])
     assert flat.rms_p0 > 10 * fitted.rms_p0

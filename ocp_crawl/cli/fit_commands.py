@@ -7,10 +7,6 @@ from pathlib import Path
 
 from ocp_crawl.cli.app import register
 from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
-from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
-from ocp_crawl.fit.params import fixed_pressure
-from ocp_crawl.fit.solve import check_counts
-from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 from ocp_crawl.problem import load_problem
 
 #: most least-squares evaluations (each runs every measurement's simulation)
@@ -54,15 +50,21 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
 @register("fit", "calibrate parameters (k, friction, pressure map, ...) to measurements by weighted least squares",
           _fit_args)
 def cmd_fit(args: argparse.Namespace) -> int:
+    # scipy and matplotlib are imported when the command runs, not when the parser is built (start-up time)
+    from ocp_crawl.fit import solve
+    from ocp_crawl.fit.data import read_measurements
+    from ocp_crawl.fit.params import fixed_pressure, resolve_parameters
+    from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
+
     problem = load_problem(args.problem, args.overrides)
     params = resolve_parameters(problem, args.params, args.start, args.bounds)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
-    check_counts(datasets, params)
+    solve.check_counts(datasets, params)
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
-    result = fit_measurements(problem, datasets, params, pressure=pressure, absolute_sigma=not args.relative_sigma,
-                              max_nfev=args.max_nfev, jobs=args.jobs)
+    result = solve.fit_measurements(problem, datasets, params, pressure=pressure,
+                                    absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev, jobs=args.jobs)
     files = write_fit(result, out, figure=not args.no_figure)
     if args.json:
         print(json.dumps(dict(fit_dict(result), written=[str(f) for f in files]), allow_nan=False))

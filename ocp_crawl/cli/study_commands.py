@@ -65,6 +65,33 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _warmup_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the list")
+
+
+@register("warmup", "prebuild the compiled-library cache (e.g. before a sweep on a fresh cluster node)", _warmup_args)
+def cmd_warmup(args: argparse.Namespace) -> int:
+    from ocp_crawl.sweep.warmup import warmup
+
+    result = warmup()
+    counts = {state: result.count(state) for state in ("built", "cached", "not compiled")}
+    if args.json:
+        print(json.dumps(jsonable({"cache": str(result.cache), "disabled": result.disabled, **counts,
+                                   "seconds": round(result.seconds, 3), "functions": [vars(f) for f in result.functions]})))
+    else:
+        print(f"compiled-library cache {result.cache}")
+        for f in result.functions:
+            print(f"  {f.state:<12} {f.function:<28} {f.library.name if f.library else '-'} ({f.seconds:.2f} s)")
+        print(f"{len(result.functions)} compiled functions: {counts['built']} built, {counts['cached']} already "
+              f"cached, {counts['not compiled']} not compiled ({result.seconds:.1f} s)")
+    if result.disabled:
+        print(f"{PROG}: OCP_CRAWL_NO_COMPILE is set: nothing compiled (CasADi evaluates the functions)", file=sys.stderr)
+    elif not result.ok:
+        err("no working C compiler (cc, gcc, clang or $CC): the functions are evaluated by CasADi, which is slower")
+        return EXIT_FAILURE
+    return EXIT_OK
+
+
 # --------------------------------------------------------------------------------------------
 # reproduce
 # --------------------------------------------------------------------------------------------

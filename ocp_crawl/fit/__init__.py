@@ -4,9 +4,18 @@
 ``fit_measurements`` (weighted least squares on simulations, uncertainties, identifiability),
 ``fit_report`` / ``write_fit`` (text, JSON, the fitted problem file, the figure).
 """
-from ocp_crawl.fit.data import Measurements, read_measurements
-from ocp_crawl.fit.params import Parameter, fittable_names, resolve_parameters
-from ocp_crawl.fit.solve import Direction, FileFit, FitResult, fit_measurements, uncertainty
+from ocp_crawl.io.lazy import lazy_exports
 
-__all__ = ["Direction", "FileFit", "FitResult", "Measurements", "Parameter", "fit_measurements", "fittable_names",
-           "read_measurements", "resolve_parameters", "uncertainty"]
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "Measurements": "ocp_crawl.fit.data", "read_measurements": "ocp_crawl.fit.data",
+    "Parameter": "ocp_crawl.fit.params", "fittable_names": "ocp_crawl.fit.params",
+    "resolve_parameters": "ocp_crawl.fit.params",
+    "Direction": "ocp_crawl.fit.solve", "FileFit": "ocp_crawl.fit.solve", "FitResult": "ocp_crawl.fit.solve",
+    "fit_measurements": "ocp_crawl.fit.solve", "uncertainty": "ocp_crawl.fit.solve",
+    "fit_report": "ocp_crawl.fit.report", "write_fit": "ocp_crawl.fit.report",
+}
+
+__all__ = ["Direction", "FileFit", "FitResult", "Measurements", "Parameter", "fit_measurements", "fit_report",
+           "fittable_names", "read_measurements", "resolve_parameters", "uncertainty", "write_fit"]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

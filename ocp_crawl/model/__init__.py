@@ -1,7 +1,18 @@
 """The robot: named parameters, kinematics and statics, contact modes, step equations, input signals."""
-from ocp_crawl.model.statics import Model, Robot
-from ocp_crawl.model.inputs import (CallableSignal, FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip,
-                                    PeriodicSignal, PeriodicSpline, ReferenceTorque, as_signal)
+from ocp_crawl.io.lazy import lazy_exports
 
-__all__ = ["Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear", "PeriodicPchip",
-           "PeriodicSignal", "PeriodicSpline", "ReferenceTorque", "as_signal"]
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "Model": "ocp_crawl.model.statics", "Robot": "ocp_crawl.model.statics",
+    "CallableSignal": "ocp_crawl.model.inputs", "FourierSeries": "ocp_crawl.model.inputs",
+    "Harmonic": "ocp_crawl.model.inputs", "PeriodicLinear": "ocp_crawl.model.inputs",
+    "PeriodicPchip": "ocp_crawl.model.inputs", "PeriodicSignal": "ocp_crawl.model.inputs",
+    "PeriodicSpline": "ocp_crawl.model.inputs", "ReferenceTorque": "ocp_crawl.model.inputs",
+    "as_signal": "ocp_crawl.model.inputs",
+}
+
+__all__ = [
+    "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear", "PeriodicPchip",
+    "PeriodicSignal", "PeriodicSpline", "ReferenceTorque", "as_signal",
+]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

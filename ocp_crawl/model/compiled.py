@@ -17,11 +17,24 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 import casadi as cs
 import numpy as np
 
 from ocp_crawl.io.files import remove_stale_temps, temp_prefix
+
+
+#: zero-argument builders of the package's compiled functions ("module.qualname" -> builder returning a
+#: FastFunction), registered by :func:`compiled_function`; ``ocp-crawl warmup`` builds them all, and
+#: tests/test_warmup.py checks that every FastFunction of the package is made by a registered builder
+BUILDERS: dict[str, Callable[[], "FastFunction"]] = {}
+
+
+def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "FastFunction"]:
+    """Decorator: register ``builder`` (no arguments, returns a :class:`FastFunction`) in :data:`BUILDERS`."""
+    BUILDERS[f"{builder.__module__}.{builder.__qualname__}"] = builder
+    return builder
 
 
 def cache_dir() -> Path:
@@ -39,11 +52,8 @@ def _compiler() -> str | None:
     return None
 
 
-def _build(fun: cs.Function) -> Path | None:
-    """C source for ``fun`` compiled into a shared library in the cache; None if not possible."""
-    cc = _compiler()
-    if cc is None:
-        return None
+def _generate(fun: cs.Function) -> str:
+    """The C source of ``fun`` (CasADi's code generator, no header)."""
     with tempfile.TemporaryDirectory() as tmp:
         cwd = os.getcwd()
         try:
@@ -51,14 +61,29 @@ def _build(fun: cs.Function) -> Path | None:
             gen = cs.CodeGenerator(f"{fun.name()}.c", {"with_header": False})
             gen.add(fun)
             gen.generate()
-            src = Path(tmp, f"{fun.name()}.c").read_text()
+            return Path(tmp, f"{fun.name()}.c").read_text()
         finally:
             os.chdir(cwd)
-    key = hashlib.sha256((src + cs.__version__ + sys.platform + cc).encode()).hexdigest()[:16]
+
+
+def _key(fun: cs.Function, cc: str) -> str:
+    """Cache key of ``fun``'s library: a hash of its serialised expression graph (a few ms, against 10-20 ms
+    for generating the C source, which a warm run thus never does), the CasADi version, platform and compiler."""
+    tag = "|".join(("codegen-v1", cs.__version__, sys.platform, cc))
+    return hashlib.sha256(fun.serialize().encode() + tag.encode()).hexdigest()[:16]
+
+
+def _build(fun: cs.Function) -> Path | None:
+    """The shared library of ``fun`` in the cache, compiled from its C source if not there yet; None if not
+    possible (no compiler, a failed build)."""
+    cc = _compiler()
+    if cc is None:
+        return None
     out_dir = cache_dir()
-    lib = out_dir / f"{fun.name()}_{key}.so"
+    lib = out_dir / f"{fun.name()}_{_key(fun, cc)}.so"
     if lib.exists():
         return lib
+    src = _generate(fun)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         # the source and the library are built in a private directory and the library is renamed into
@@ -90,13 +115,15 @@ class FastFunction:
         self.n_in = [fun.nnz_in(i) for i in range(fun.n_in())]
         self.n_out = [fun.nnz_out(i) for i in range(fun.n_out())]
         self.compiled = False
+        self.library: Path | None = None
+        """the shared library in the cache (None: evaluated by CasADi)"""
         if os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0"):
             return
         try:
             lib_path = _build(fun)
             if lib_path is not None:
                 self._load(lib_path)
-                self.compiled = True
+                self.compiled, self.library = True, lib_path
         except OSError:
             self.compiled = False
 
@@ -119,6 +146,7 @@ class FastFunction:
         self._w = (ctypes.c_double * max(sz_w, 1))()
         self._f = getattr(lib, name)
         self._f.restype = ctypes.c_int
+        self._call_args = (self._arg, self._res, self._iw, self._w, 0)
         self._lib = lib
 
     def __call__(self, *inputs) -> list[np.ndarray]:
@@ -128,7 +156,7 @@ class FastFunction:
                 out = [out]
             return [np.asarray(o, float).ravel(order="F") for o in out]
         for buf, x in zip(self._in, inputs):
-            buf[:] = x
-        if self._f(self._arg, self._res, self._iw, self._w, 0) != 0:
+            np.copyto(buf, x)
+        if self._f(*self._call_args) != 0:
             raise FloatingPointError(f"compiled {self.fun.name()} failed")
         return [o.copy() for o in self._out]

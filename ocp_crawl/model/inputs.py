@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.interpolate import CubicSpline, PchipInterpolator
 
 from ocp_crawl.checks import real
 
@@ -254,6 +253,8 @@ class PeriodicSpline(_Sampled):
     """
 
     def __init__(self, t_knots, values):
+        from scipy.interpolate import CubicSpline  # scipy only when a spline is built (start-up time)
+
         t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
         tt = np.append(t, t[0] + 1.0)
         vv = np.concatenate([v, v[:, :1]], axis=1)
@@ -318,6 +319,8 @@ class PeriodicPchip(_Sampled):
     """
 
     def __init__(self, t_knots, values):
+        from scipy.interpolate import PchipInterpolator  # scipy only when a PCHIP is built (start-up time)
+
         t, v = _check_samples("PeriodicPchip", t_knots, values, min_knots=3)
         self.t_knots, self.values = t, v
         # three periods, so that the interpolant of the middle one sees its periodic neighbours

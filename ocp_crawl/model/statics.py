@@ -25,6 +25,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.checks import real
+from ocp_crawl.model.compiled import compiled_function
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -300,6 +301,7 @@ def _fold_system(x, tau, dtau, p, q, G, J):
 NEWTON_ITERS = 4
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_newton():
     """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
@@ -308,6 +310,7 @@ def fast_newton():
     return FastFunction(symbolic().newton)
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_ddot2():
     """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
@@ -316,48 +319,64 @@ def fast_ddot2():
     return FastFunction(symbolic().ddot2)
 
 
-#: width of the compiled vectorised Newton solve
+#: width of the compiled vectorised Newton solve, and of a narrow one for the last few columns (a call costs
+#: about 1 us per column, padding included)
 BATCH = 64
+SMALL_BATCH = 16
 
 
-@lru_cache(maxsize=1)
-def fast_newton_batch():
-    """``newton`` mapped over BATCH columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
+@compiled_function
+@lru_cache(maxsize=2)
+def fast_newton_batch(width: int = BATCH):
+    """``newton`` mapped over ``width`` columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
     from ocp_crawl.model.compiled import FastFunction
 
     # MX symbols keep the map as a loop over one copy of the SX kernel in the generated C
     # (SX symbols would inline BATCH copies: a large library that takes long to compile)
-    f = symbolic().newton.map(BATCH)
-    x0 = cs.MX.sym("x0", 3, BATCH)
-    tau = cs.MX.sym("tau", 2, BATCH)
-    dtau = cs.MX.sym("dtau", 2, BATCH)
-    q = cs.MX.sym("q", NQ, BATCH)
+    f = symbolic().newton.map(width)
+    x0 = cs.MX.sym("x0", 3, width)
+    tau = cs.MX.sym("tau", 2, width)
+    dtau = cs.MX.sym("dtau", 2, width)
+    q = cs.MX.sym("q", NQ, width)
     p = cs.MX.sym("p", NP)
-    xs, aux = f(x0, tau, dtau, q, cs.repmat(p, 1, BATCH))
-    return FastFunction(cs.Function("ocp_crawl_newton_batch", [x0, tau, dtau, q, p], [xs, aux]))
+    xs, aux = f(x0, tau, dtau, q, cs.repmat(p, 1, width))
+    name = "ocp_crawl_newton_batch" if width == BATCH else f"ocp_crawl_newton_batch{width}"
+    return FastFunction(cs.Function(name, [x0, tau, dtau, q, p], [xs, aux]))
+
+
+@compiled_function
+@lru_cache(maxsize=1)
+def fast_newton_batch_small():
+    """The narrow (:data:`SMALL_BATCH` columns) :func:`fast_newton_batch`, registered so that warm-up builds it."""
+    return fast_newton_batch(SMALL_BATCH)
 
 
 def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
-    """Mode solves at n points (columns; q may be one vector for all): returns x (3, n) and aux (NAUX, n)."""
-    f = fast_newton_batch()
+    """Mode solves at n points (columns; q may be one vector for all): returns x (3, n) and aux (NAUX, n).
+
+    Each column is the same compiled Newton kernel as :func:`fast_newton` (results independent of the batching);
+    chunks of BATCH columns, the last ones in chunks of SMALL_BATCH (less padding)."""
     n = x0.shape[1]
+    widths = []
+    while sum(widths) < n:
+        widths.append(BATCH if n - sum(widths) > 3 * SMALL_BATCH else SMALL_BATCH)
+    total = sum(widths)
+    # the inputs padded with copies of the last column, column-major
+    last = np.full(total - n, n - 1, dtype=int)
     q = np.asarray(q, float)
-    if q.ndim == 1:
-        q = np.tile(q[:, None], (1, n))
-    xs = np.empty((3, n))
-    aux = np.empty((NAUX, n))
-    for s in range(0, n, BATCH):
-        e = min(s + BATCH, n)
-        pad = BATCH - (e - s)
-
-        def chunk(a):
-            a = a[:, s:e]
-            return np.concatenate([a, np.repeat(a[:, -1:], pad, axis=1)], axis=1) if pad else a
-
-        xi, ai = f(chunk(x0).ravel("F"), chunk(tau).ravel("F"), chunk(dtau).ravel("F"), chunk(q).ravel("F"), p)
-        xs[:, s:e] = xi.reshape(3, BATCH, order="F")[:, :e - s]
-        aux[:, s:e] = ai.reshape(NAUX, BATCH, order="F")[:, :e - s]
-    return xs, aux
+    Q = np.repeat(q[:, None], total, axis=1) if q.ndim == 1 else np.concatenate([q, q[:, last]], axis=1)
+    cols = [np.concatenate([np.asarray(a, float), np.asarray(a, float)[:, last]], axis=1).ravel("F")
+            for a in (x0, tau, dtau)]
+    cols.append(Q.ravel("F"))
+    xs = np.empty(3 * total)
+    aux = np.empty(NAUX * total)
+    s = 0
+    for width in widths:
+        xi, ai = fast_newton_batch(width)(*(c[r * s:r * (s + width)] for c, r in zip(cols, (3, 2, 2, NQ))), p)
+        xs[3 * s:3 * (s + width)] = xi
+        aux[NAUX * s:NAUX * (s + width)] = ai
+        s += width
+    return xs.reshape(3, total, order="F")[:, :n], aux.reshape(NAUX, total, order="F")[:, :n]
 
 
 _MAPS: dict[tuple[str, int], cs.Function] = {}

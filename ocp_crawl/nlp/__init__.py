@@ -1,9 +1,19 @@
 """NLP layer (above ``model``, below ``sim``): IPOPT plumbing (the status table, building and calling a
 solver, the option sets) and the one relaxation homotopy shared by the MPCC step and the gait OCP."""
-from ocp_crawl.nlp.homotopy import Homotopy, Run, Solve, Stage, Start, schedule
-from ocp_crawl.nlp.ipopt import (FAILURE_KINDS, IPOPT_RETURN_STATUS, IpoptCall, SolverOutcome, call_ipopt,
-                                 check_ipopt_options, ipopt_solvers, ipopt_status, result_status)
+from ocp_crawl.io.lazy import lazy_exports
 
-__all__ = ["Homotopy", "Run", "Solve", "Stage", "Start", "schedule", "FAILURE_KINDS", "IPOPT_RETURN_STATUS",
-           "IpoptCall", "SolverOutcome", "call_ipopt", "check_ipopt_options", "ipopt_solvers", "ipopt_status",
-           "result_status"]
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "Homotopy": "ocp_crawl.nlp.homotopy", "Run": "ocp_crawl.nlp.homotopy", "Solve": "ocp_crawl.nlp.homotopy",
+    "Stage": "ocp_crawl.nlp.homotopy", "Start": "ocp_crawl.nlp.homotopy", "schedule": "ocp_crawl.nlp.homotopy",
+    "FAILURE_KINDS": "ocp_crawl.nlp.ipopt", "IPOPT_RETURN_STATUS": "ocp_crawl.nlp.ipopt",
+    "IpoptCall": "ocp_crawl.nlp.ipopt", "SolverOutcome": "ocp_crawl.nlp.ipopt", "call_ipopt": "ocp_crawl.nlp.ipopt",
+    "check_ipopt_options": "ocp_crawl.nlp.ipopt", "ipopt_solvers": "ocp_crawl.nlp.ipopt",
+    "ipopt_status": "ocp_crawl.nlp.ipopt", "result_status": "ocp_crawl.nlp.ipopt",
+}
+
+__all__ = [
+    "Homotopy", "Run", "Solve", "Stage", "Start", "schedule", "FAILURE_KINDS", "IPOPT_RETURN_STATUS", "IpoptCall",
+    "SolverOutcome", "call_ipopt", "check_ipopt_options", "ipopt_solvers", "ipopt_status", "result_status",
+]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,8 +1,18 @@
 """The periodic-gait optimal control problem: settings, harmonic baseline, transcription, solve and replay."""
-from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, objective_value
-from ocp_crawl.ocp.settings import OBJECTIVES, OCPSettings
-from ocp_crawl.ocp.solve import OCPResult, optimize_gait, replay_signal
-from ocp_crawl.ocp.transcription import GaitOCP
+from ocp_crawl.io.lazy import lazy_exports
 
-__all__ = ["GaitOCP", "HarmonicChoice", "OBJECTIVES", "OCPResult", "OCPSettings", "best_harmonic", "objective_value",
-           "optimize_gait", "replay_signal"]
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "GaitOCP": "ocp_crawl.ocp.transcription",
+    "HarmonicChoice": "ocp_crawl.ocp.baseline", "best_harmonic": "ocp_crawl.ocp.baseline",
+    "objective_value": "ocp_crawl.ocp.baseline",
+    "OBJECTIVES": "ocp_crawl.ocp.settings", "OCPSettings": "ocp_crawl.ocp.settings",
+    "OCPResult": "ocp_crawl.ocp.solve", "optimize_gait": "ocp_crawl.ocp.solve",
+    "replay_signal": "ocp_crawl.ocp.solve",
+}
+
+__all__ = [
+    "GaitOCP", "HarmonicChoice", "OBJECTIVES", "OCPResult", "OCPSettings", "best_harmonic", "objective_value",
+    "optimize_gait", "replay_signal",
+]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

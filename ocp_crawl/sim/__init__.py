@@ -1,10 +1,20 @@
 """Simulators of the hybrid-quasistatic crawler, their one entry :func:`simulate` and the result they share."""
-from ocp_crawl.sim.event import HybridOptions
-from ocp_crawl.sim.options import CycleOptions
-from ocp_crawl.sim.registry import DEFAULT_SOLVER, SOLVERS, AnglesOptions, Solver, simulate, solver_named
-from ocp_crawl.sim.result import CrawlResult, Event, Mode, SimulationError, Status
-from ocp_crawl.sim.timestepping import TimeSteppingOptions
+from ocp_crawl.io.lazy import lazy_exports
 
-__all__ = ["DEFAULT_SOLVER", "SOLVERS", "AnglesOptions", "CycleOptions", "HybridOptions", "Solver",
-           "TimeSteppingOptions", "simulate", "solver_named", "CrawlResult", "Event", "Mode", "SimulationError",
-           "Status"]
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "DEFAULT_SOLVER": "ocp_crawl.sim.registry", "SOLVERS": "ocp_crawl.sim.registry",
+    "AnglesOptions": "ocp_crawl.sim.registry", "Solver": "ocp_crawl.sim.registry",
+    "simulate": "ocp_crawl.sim.registry", "solver_named": "ocp_crawl.sim.registry",
+    "CycleOptions": "ocp_crawl.sim.options",
+    "HybridOptions": "ocp_crawl.sim.event",
+    "TimeSteppingOptions": "ocp_crawl.sim.timestepping",
+    "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result", "Mode": "ocp_crawl.sim.result",
+    "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
+}
+
+__all__ = [
+    "DEFAULT_SOLVER", "SOLVERS", "AnglesOptions", "CycleOptions", "HybridOptions", "Solver", "TimeSteppingOptions",
+    "simulate", "solver_named", "CrawlResult", "Event", "Mode", "SimulationError", "Status",
+]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

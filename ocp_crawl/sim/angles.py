@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import KIN, Model, call_mapped, symbolic
@@ -71,6 +70,8 @@ def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | N
     dips below it and back): every local minimum of the scan below 5 % of ``scale`` (cycle ends
     included) is refined by minimisation, and a minimum at or below TOUCH * scale is a zero too.
     """
+    from scipy.optimize import brentq, minimize_scalar  # scipy only where used (start-up time)
+
     limit = 1.0 if t_end is None else t_end
     n = v.size
     found = None
@@ -228,6 +229,8 @@ def _switching_instants(kin: KinematicGait, ts: np.ndarray, K: dict) -> list[tup
 
 def _next_switch(f, name: str, ts: np.ndarray, runs: list, k: int) -> tuple[float | None, int]:
     """The switch between the runs k and k + 1 of sign classes of ``f`` (None for a touch) and the next k."""
+    from scipy.optimize import brentq  # scipy only where used (start-up time)
+
     rtol = 4 * np.finfo(float).eps
     (c0, _, e0), (c1, s1, e1) = runs[k], runs[k + 1]
     if c0 and c1:

@@ -16,7 +16,7 @@ import numpy as np
 
 from functools import lru_cache
 
-from ocp_crawl.model.compiled import FastFunction
+from ocp_crawl.model.compiled import FastFunction, compiled_function
 from ocp_crawl.model.stability import stability_function
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.event_state import mode_q
@@ -136,6 +136,7 @@ def stability_gate(res: CrawlResult, model: Model) -> None:
                f"(cycle {int(np.floor(t)) + 1}, phase {t % 1:.10f}) in mode {mode}", t, mode)
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def _mapped_stability() -> FastFunction:
     return FastFunction(stability_function().map(MARGIN_BATCH))

@@ -5,7 +5,7 @@ In each contact mode the configuration solves three equations in x = (phi1, phi2
 the joint balance F = 0 and one mode equation (stick-stick: d = d0; slip of foot i with
 sign(d') = sigma: f_t = sigma mu_i f_n,i).  Every point is a Newton solve of the compiled
 mode system (no integration drift); events are guard functions of the mode, detected by a
-sign change between steps, located by Brent's method on the guard of the solved state
+sign change between steps, located by a safeguarded Newton method on the guard of the solved state
 (xtol 1e-13 in phase) and applied by a transition table:
 
 =============  ==========================================  ======================
@@ -42,16 +42,20 @@ import numpy as np
 
 from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal
+from ocp_crawl.model.stability import fast_step
 from ocp_crawl.model.statics import AUX, Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
 from ocp_crawl.sim.event_locate import EventsMixin
 from ocp_crawl.sim.event_output import OutputMixin
-from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q
+from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q, \
+    torque_pair
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
+
+_RES, _DET = AUX["res"], AUX["det"]
 
 
 @dataclass(frozen=True)
@@ -120,10 +124,12 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
     def __init__(self, model: Model, torque, options: HybridOptions | None = None):
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
+        self.torque_at = torque_pair(self.torque)
         self.opt = options or HybridOptions()
         self.sym = symbolic()
         self.newton = fast_newton()
         self.ddot2 = fast_ddot2()
+        self.step_fn = fast_step()
         self.p = model.p
         self.Mg = model.robot.M * model.robot.g
         self.L = model.robot.L
@@ -144,22 +150,25 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             self.max_step = min(self.max_step, max(input_step(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
-    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray) -> _Point | None:
-        """Newton solve of the mode q at phase t from x0; None if it does not converge."""
-        tau = self.torque(t)
-        dtau = self.torque.derivative(t)
+    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray, step: bool = False) -> _Point | None:
+        """Newton solve of the mode q at phase t from x0; None if it does not converge.  ``step``: a continuation
+        step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then carries its stability
+        numbers and d'' coefficients)."""
+        tau, dtau = self.torque_at(float(t))
         x = x0
+        newton, p, tol = self.step_fn if step else self.newton, self.p, self.res_tol
         for _ in range(4):
-            x, aux = self.newton(x, tau, dtau, q, self.p)
+            out = newton(x, tau, dtau, q, p)
+            x, aux = out[0], out[1]
             self.nfev += 1
-            res = aux[AUX["res"]]
-            if not np.all(np.isfinite(x)):  # (the compiled max norm of a NaN residual can read 0)
+            res = aux[_RES]
+            if not math.isfinite(x[0] + x[1] + x[2]):  # (the compiled max norm of a NaN residual can read 0)
                 return None
-            if not res <= self.res_tol:  # also catches NaN
-                if not np.isfinite(res) or res > 1e3:
+            if not res <= tol:  # also catches NaN
+                if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, x, aux, tau=tau, dtau=dtau)
+            return _Point(t, x, aux, tau=tau, dtau=dtau, q=q, extra=out[2] if step else None)
         return None
 
     def initial_state(self, t0: float = 0.0) -> _Point:
@@ -281,15 +290,16 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         the solve fails, jumps or crosses a fold (a fold close enough is located and ends the run)."""
         pt, seg = run.pt, run.seg
         guess = pt.x + hh * pt.xdot
-        new = self._solve(t_new, guess, seg.q)
+        new = self._solve(t_new, guess, seg.q, step=True)
         ok = new is not None
         if ok:
-            nx, gx, px = new.x, guess, pt.x
+            nx, gx, px = new.x.tolist(), guess.tolist(), pt.x.tolist()
             jump = max(abs(nx[0] - gx[0]), abs(nx[1] - gx[1]))
             ok = jump <= 0.05 + 0.5 * max(abs(gx[0] - px[0]), abs(gx[1] - px[1])) and \
                 max(abs(nx[0] - px[0]), abs(nx[1] - px[1])) < 0.35
-        if ok and np.sign(new.aux[AUX["det"]]) != run.det_sign:
-            ok = False  # crossed a fold onto another branch: treat as failure and locate it
+        if ok:
+            det = new.a[_DET]
+            ok = (det > 0) - (det < 0) == run.det_sign  # else it crossed a fold onto another branch: locate it
         if ok:
             return new
         if hh < 1e-3:
@@ -310,8 +320,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         A guard dipping below zero and back inside the step (possibly before another guard's
         crossing), which the sign test at its ends misses, ends the step inside the dip.
         """
-        g_old = self.guards(seg.mode, pt.aux)
-        g_new = self.guards(seg.mode, new.aux)
+        g_old = self.point_guards(seg.mode, pt)
+        g_new = self.point_guards(seg.mode, new)
         crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -100 * self.noise]
         dips, refine = self._dips(seg.mode, seg.q, pt, new, g_old, g_new)
         for name, t_min in dips:
@@ -319,7 +329,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             if pm is None:
                 refine = True
                 break
-            g_min = self.guards(seg.mode, pm.aux)
+            g_min = self.point_guards(seg.mode, pm)
             in_dip = [k for k in g_min if g_min[k] < 0 and g_old[k] > -100 * self.noise]
             if in_dip:
                 new, crossed = pm, in_dip  # the step now ends inside the dip
@@ -331,11 +341,10 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
     def _take_event(self, run: _Run, new: _Point, crossed: list[str]) -> None:
         """Locate the first of the crossed guards, record the event and start the successor mode's segment."""
         pt, seg = run.pt, run.seg
-        located = [(self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k) for k in crossed]
-        (t_ev, ev_pt), kind = min(located, key=lambda r: r[0][0])
+        (t_ev, ev_pt), kind = self._first_crossing(pt, new, seg, crossed)
         if ev_pt is None:
             raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
-        g_ev = self.guards(seg.mode, ev_pt.aux)[kind]
+        g_ev = self.point_guards(seg.mode, ev_pt)[kind]
         if ev_pt.t > pt.t:
             seg.points.append(ev_pt)
         target = self._transition(seg.mode, kind)
@@ -357,6 +366,26 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         run.pt = trial
         run.det_sign = np.sign(trial.aux[AUX["det"]]) or 1.0
         run.h = self.max_step
+
+    def _first_crossing(self, pt: _Point, new: _Point, seg: _Segment, crossed: list[str]):
+        """((t, point), guard) of the first zero in the step [pt, new] of the guards ``crossed``: they are
+        located in the order of their secant estimates, and a guard still positive at the earliest zero found
+        so far is not located (it crosses later; a guard that dips and returns inside the step ends the step
+        in its dip beforehand, see ``_crossings``)."""
+        g0, g1 = self.point_guards(seg.mode, pt), self.point_guards(seg.mode, new)
+
+        def estimate(k: str) -> float:
+            a, b = g0[k], g1[k]
+            return pt.t + (new.t - pt.t) * a / (a - b) if a > 0 > b else pt.t
+
+        best = None
+        for k in sorted(crossed, key=estimate):
+            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > 0:
+                continue
+            found = (self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k)
+            if best is None or found[0][0] < best[0][0]:
+                best = found
+        return best
 
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,

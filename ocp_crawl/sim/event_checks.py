@@ -51,7 +51,7 @@ class ChecksMixin:
 
     def _require_stable(self, pt: _Point, mode: Mode, q: np.ndarray, where: str) -> None:
         """Raise ``_Failure(UNSTABLE)`` unless the equilibrium pt of ``mode`` has a positive margin."""
-        s = self._stability(pt.x, q)
+        s = pt.extra[:4] if pt.extra is not None and pt.q is q else self._stability(pt.x, q)
         if not s[0] > 0:  # also NaN
             raise _Failure(Status.UNSTABLE, pt.t, mode, f"{where}: the {mode.label} equilibrium is unstable "
                            f"({describe_margin(s, mode)})", {"stability": dict(zip(STABILITY_NAMES, map(float, s)))})

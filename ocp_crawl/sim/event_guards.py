@@ -11,9 +11,12 @@ import math
 import numpy as np
 
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Point
+from ocp_crawl.sim.event_state import _Point, torque_curvature
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
+
+_FN1, _FN2, _D, _ZJ1, _ZJ2, _FT, _LIM1, _LIM2, _DDOT, _DFT, _DFN1, _DFN2, _DZJ1, _DZJ2 = (AUX[n] for n in (
+    "fn1", "fn2", "d", "zj1", "zj2", "ft", "lim1", "lim2", "ddot", "dft", "dfn1", "dfn2", "dzj1", "dzj2"))
 
 #: largest |mu1 f_n1 - mu2 f_n2|/(M g) for which the slip-slip mode is kept
 SYMMETRY_TOL = 1e-8
@@ -45,29 +48,45 @@ def cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]
     return best
 
 
+def _add_slip_guards(out: dict, lim1: float, lim2: float, ft: float, Mg: float) -> dict:
+    """Add the stick-stick friction guards (lim_i - sigma f_t)/(M g) of both feet and signs to ``out`` (their
+    rates, given the rates of lim_i and f_t); returns ``out``."""
+    out["slip_1+"] = (lim1 - ft) / Mg
+    out["slip_1-"] = (lim1 + ft) / Mg
+    out["slip_2+"] = (lim2 - ft) / Mg
+    out["slip_2-"] = (lim2 + ft) / Mg
+    return out
+
+
 class GuardsMixin:
     """Guards, guard rates, dips and transitions of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
-    def guards(self, mode: Mode, aux: np.ndarray) -> dict[str, float]:
-        """Guard functions of a mode (scaled, positive while the mode is valid)."""
+    def guards(self, mode: Mode, aux) -> dict[str, float]:
+        """Guard functions of a mode (scaled, positive while the mode is valid); ``aux``: the compiled outputs
+        of a solve (array, or the list :attr:`~ocp_crawl.sim.event_state._Point.a`)."""
+        a = aux.tolist() if isinstance(aux, np.ndarray) else aux
         Mg, L = self.Mg, self.L
-        g = {"lift_off_1": aux[AUX["fn1"]] / Mg, "lift_off_2": aux[AUX["fn2"]] / Mg, "feet_crossed": aux[AUX["d"]] / L,
-             "joint_1_on_ground": aux[AUX["zj1"]] / L, "joint_2_on_ground": aux[AUX["zj2"]] / L}
-        ft = aux[AUX["ft"]]
-        lim = {1: aux[AUX["lim1"]], 2: aux[AUX["lim2"]]}
-        if mode == Mode.STICK:
-            for i in (1, 2):
-                for s in (1, -1):
-                    g[f"slip_{i}{'+' if s > 0 else '-'}"] = (lim[i] - s * ft) / Mg
-        elif mode.foot == 3:
-            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
-            g["asymmetry"] = SYMMETRY_TOL - abs(lim[1] - lim[2]) / Mg
+        g = {"lift_off_1": a[_FN1] / Mg, "lift_off_2": a[_FN2] / Mg, "feet_crossed": a[_D] / L,
+             "joint_1_on_ground": a[_ZJ1] / L, "joint_2_on_ground": a[_ZJ2] / L}
+        ft, lim1, lim2 = a[_FT], a[_LIM1], a[_LIM2]
+        if mode is Mode.STICK:
+            return _add_slip_guards(g, lim1, lim2, ft, Mg)
+        g["stick"] = mode.sigma * a[_DDOT] / L
+        foot = mode.foot
+        if foot == 3:
+            g["asymmetry"] = SYMMETRY_TOL - abs(lim1 - lim2) / Mg
+        elif foot == 1:
+            g["switch_to_2"] = (lim2 - lim1) / Mg
         else:
-            i = mode.foot
-            j = 3 - i
-            g["stick"] = mode.sigma * aux[AUX["ddot"]] / L
-            g[f"switch_to_{j}"] = (lim[j] - lim[i]) / Mg
+            g["switch_to_1"] = (lim1 - lim2) / Mg
         return g
+
+    def point_guards(self, mode: Mode, pt: _Point) -> dict[str, float]:
+        """:meth:`guards` of the mode at the solved point pt, computed once per point and mode."""
+        cached = pt.guards
+        if cached is None or cached[0] is not mode:
+            cached = pt.guards = (mode, self.guards(mode, pt.a))
+        return cached[1]
 
     def guard_rates(self, mode: Mode, pt: _Point, q: np.ndarray) -> dict[str, float]:
         """Time derivatives [1/cycle] of :meth:`guards` along the mode's solution at pt.
@@ -75,29 +94,28 @@ class GuardsMixin:
         The slip modes' ``stick`` guard sigma d'/L needs d'', which depends on the torque's second
         derivative; that is taken by central differences of the torque's derivative.
         """
-        aux = pt.aux
+        a = pt.a
         Mg, L = self.Mg, self.L
-        r = {"lift_off_1": aux[AUX["dfn1"]] / Mg, "lift_off_2": aux[AUX["dfn2"]] / Mg,
-             "feet_crossed": aux[AUX["ddot"]] / L,
-             "joint_1_on_ground": aux[AUX["dzj1"]] / L, "joint_2_on_ground": aux[AUX["dzj2"]] / L}
-        dft = aux[AUX["dft"]]
-        dlim = {1: self.mu[0] * aux[AUX["dfn1"]], 2: self.mu[1] * aux[AUX["dfn2"]]}
-        if mode == Mode.STICK:
-            for i in (1, 2):
-                for s in (1, -1):
-                    r[f"slip_{i}{'+' if s > 0 else '-'}"] = (dlim[i] - s * dft) / Mg
-            return r
-        if mode.foot == 3:
-            r["asymmetry"] = -math.copysign(1.0, aux[AUX["lim1"]] - aux[AUX["lim2"]]) * (dlim[1] - dlim[2]) / Mg
+        r = {"lift_off_1": a[_DFN1] / Mg, "lift_off_2": a[_DFN2] / Mg, "feet_crossed": a[_DDOT] / L,
+             "joint_1_on_ground": a[_DZJ1] / L, "joint_2_on_ground": a[_DZJ2] / L}
+        dft = a[_DFT]
+        dlim1, dlim2 = self.mu[0] * a[_DFN1], self.mu[1] * a[_DFN2]
+        if mode is Mode.STICK:
+            return _add_slip_guards(r, dlim1, dlim2, dft, Mg)
+        foot = mode.foot
+        if foot == 3:
+            r["asymmetry"] = -math.copysign(1.0, a[_LIM1] - a[_LIM2]) * (dlim1 - dlim2) / Mg
+        elif foot == 1:
+            r["switch_to_2"] = (dlim2 - dlim1) / Mg
         else:
-            i = mode.foot
-            j = 3 - i
-            r[f"switch_to_{j}"] = (dlim[j] - dlim[i]) / Mg
+            r["switch_to_1"] = (dlim1 - dlim2) / Mg
         t, dt = pt.t, 1e-5
-        tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
-        ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0]
-        dd = np.asarray(self.torque.derivative(np.array([t + dt, t - dt]))).reshape(2, 2)
-        ddtau = (dd[:, 0] - dd[:, 1]) / (2 * dt)
+        if pt.extra is not None and pt.q is q:
+            ab = pt.extra[4:].tolist()
+        else:
+            tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
+            ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
+        ddtau = torque_curvature(self.torque_at, t, dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         return r
 

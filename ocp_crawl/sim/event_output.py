@@ -35,31 +35,31 @@ class OutputMixin:
     """Dense output, cycle integrals and the result of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
     def _evaluate_many(self, seg: _Segment, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Solve the segment's mode at many phases (guesses by Hermite interpolation of its points).
+        """Solve the segment's mode at many phases: (x (3, n), aux (NAUX, n)); see :meth:`_evaluate_batch`."""
+        return self._evaluate_batch([(seg, ts)])[0]
+
+    def _evaluate_batch(self, requests) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Solve each segment's mode at many phases, ``requests`` = [(segment, phases), ...], in one batched
+        compiled call (each column is an independent Newton solve); the guesses are the Hermite interpolants
+        of the segments' points.  Returns [(x (3, n), aux (NAUX, n)), ...] in the order of the requests.
 
         Points that the batched Newton does not converge, or converges off the segment's branch (phi
         farther from the guess than 0.05 rad + half the change of phi between the stored points around
         it, the acceptance rule of a continuation step: near a fold Newton from a poor guess can land on
         another root), are solved again one by one, by continuation from the stored point before them.
         """
-        pts = seg.points
-        ts = np.asarray(ts, float)
+        counts = [len(ts) for _, ts in requests]
+        ts = np.concatenate([np.asarray(t, float) for _, t in requests])
+        guesses, reach = self._guesses(requests, ts)
+        owner = np.repeat(np.arange(len(requests)), counts)
         n = len(ts)
-        if len(pts) > 1:
-            tp = np.array([p.t for p in pts])
-            X = np.stack([p.x for p in pts], axis=1)
-            XD = np.stack([p.xdot for p in pts], axis=1)
-            i = np.clip(np.searchsorted(tp, ts, side="right") - 1, 0, len(pts) - 2)
-            guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
-            reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
-        else:
-            guesses = np.tile(pts[0].x[:, None], (1, n))
-            reach = np.full(n, 0.05)
-        xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n),
-                             seg.q, self.p)
+        Q = np.repeat(np.stack([seg.q for seg, _ in requests], axis=1), counts, axis=1)
+        xs, aux = solve_many(guesses, self.torque(ts).reshape(2, n), self.torque.derivative(ts).reshape(2, n), Q,
+                             self.p)
         self.nfev += n
         off = ~(np.max(np.abs(xs[:2] - guesses[:2]), axis=0) <= reach)  # also NaN
         for j in np.nonzero(~(aux[AUX["res"]] <= self.res_tol) | off | ~np.all(np.isfinite(xs), axis=0))[0]:
+            seg = requests[owner[j]][0]
             pt = None
             if not off[j]:
                 pt = self._solve(ts[j], xs[:, j] if np.all(np.isfinite(xs[:, j])) else guesses[:, j], seg.q)
@@ -68,7 +68,30 @@ class OutputMixin:
             if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
-        return xs, aux
+        cuts = np.cumsum(counts)[:-1]
+        return list(zip(np.split(xs, cuts, axis=1), np.split(aux, cuts, axis=1)))
+
+    @staticmethod
+    def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Newton guesses (3, n) at the phases ``ts`` (the requests' phases in order) by Hermite interpolation of
+        each request's segment points (a segment of one point: that point), and the largest accepted move of phi
+        from each guess [rad] (see :meth:`_evaluate_batch`)."""
+        tps, xs, xds, idx = [], [], [], []
+        start = off = 0
+        for seg, t in requests:
+            tp, X, XD = seg.arrays()
+            if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
+                tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
+            stop = start + len(t)
+            idx.append(off + np.clip(np.searchsorted(tp, ts[start:stop], side="right") - 1, 0, tp.size - 2))
+            tps.append(tp)
+            xs.append(X)
+            xds.append(XD)
+            start, off = stop, off + tp.size
+        tp, X, XD, i = np.concatenate(tps), np.concatenate(xs, axis=1), np.concatenate(xds, axis=1), np.concatenate(idx)
+        guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
+        reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
+        return guesses, reach
 
     def _continue_to(self, seg: _Segment, t: float) -> _Point | None:
         """Solve the segment's mode at t by continuation from the last stored point before t, in 4,
@@ -90,43 +113,61 @@ class OutputMixin:
                 return cur
         return None
 
-    def _panels(self, seg: _Segment, a: float, b: float):
-        """Adaptive Gauss-Legendre panels (5 nodes) on [a, b] of one smooth segment.
+    def _panels(self, spans):
+        """Adaptive Gauss-Legendre panels (5 nodes) on the smooth pieces ``spans`` = [(segment, a, b), ...].
 
         Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
         two highest Legendre coefficients of the degree-4 interpolant of an integrand (actuator
-        powers, friction power) exceed QUAD_TOL times the largest integrand value on the segment, so
-        steep stretches (low stiffness, large amplitudes) are resolved.  Returns the panel edges
-        (lo, hi), nodes, weights and integrands (power (2, n, 5), friction power (n, 5)).
+        powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece, so
+        steep stretches (low stiffness, large amplitudes) are resolved.  The pieces are refined together
+        (one batched solve per depth).  Returns per piece the panel edges (lo, hi), nodes, weights and
+        integrands (power (2, n, 5), friction power (n, 5)).
         """
         xg, wg = _XG, _WG
-        n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
-        edges = np.linspace(a, b, n + 1)
-        if self.breakpoints.size:
-            cuts = (self.breakpoints[None, :] + np.arange(math.floor(a), math.ceil(b) + 1)[:, None]).ravel()
-            edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
-        pending = np.stack([edges[:-1], edges[1:]], axis=1)
+        pending, owner = [], []
+        for k, (_, a, b) in enumerate(spans):
+            edges = self._panel_edges(a, b)
+            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
+            owner.append(np.full(len(edges) - 1, k))
+        pending, owner = np.concatenate(pending), np.concatenate(owner)
         done = []
-        scale = 0.0
+        scale = np.zeros(len(spans))
         for depth in range(QUAD_DEPTH + 1):
             mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
             half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
-            t = (mid + half * xg).ravel()
-            _, aux = self._evaluate_many(seg, t)
+            t = (mid + half * xg)
+            sel = [np.nonzero(owner == k)[0] for k in range(len(spans))]
+            out = self._evaluate_batch([(spans[k][0], t[idx].ravel()) for k, idx in enumerate(sel) if idx.size])
+            aux = np.empty((out[0][1].shape[0], t.size))
+            for idx, (_, ak) in zip([i for i in sel if i.size], out):
+                aux[:, (idx[:, None] * 5 + np.arange(5)).ravel()] = ak
+            t = t.ravel()
             power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
             f = np.concatenate([power, fric[None]], axis=0)  # (3, npan, 5)
-            scale = max(scale, float(np.max(np.abs(f))))
+            np.maximum.at(scale, owner, np.abs(f).max(axis=(0, 2)))
             tail = np.abs(f.reshape(-1, 5) @ _LEG_FIT[:, 3:]).max(axis=1).reshape(3, -1)
-            ok = np.all(tail <= QUAD_TOL * scale, axis=0) | (depth == QUAD_DEPTH)
+            ok = np.all(tail <= QUAD_TOL * scale[owner], axis=0) | (depth == QUAD_DEPTH)
             w = (half * wg).reshape(-1, 5)
-            done.append((pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
+            done.append((owner[ok], pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
             bad = pending[~ok]
             if not bad.size:
                 break
             m = 0.5 * (bad[:, 0] + bad[:, 1])
             pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
-        return [np.concatenate(parts, axis=1 if k == 3 else 0) for k, parts in enumerate(zip(*done))]
+            owner = np.concatenate([owner[~ok], owner[~ok]])
+        return [[np.concatenate([part[k + 1][part[0] == j] if k != 3 else part[k + 1][:, part[0] == j]
+                                 for part in done], axis=1 if k == 3 else 0) for k in range(5)]
+                for j in range(len(spans))]
+
+    def _panel_edges(self, a: float, b: float) -> np.ndarray:
+        """Initial panel edges on [a, b]: no longer than ``quad_h``, with the input's knots as edges."""
+        n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
+        edges = np.linspace(a, b, n + 1)
+        if self.breakpoints.size:
+            cuts = (self.breakpoints[None, :] + np.arange(math.floor(a), math.ceil(b) + 1)[:, None]).ravel()
+            edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
+        return edges
 
     def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
         """Input work, gross work, friction dissipation and per-actuator positive work over [ta, tb].
@@ -134,55 +175,60 @@ class OutputMixin:
         Adaptive Gauss-Legendre panels (:meth:`_panels`) on each smooth segment; for W+ a panel on
         which an actuator's power changes sign is split at the roots of its interpolant.
         """
+        spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
+        spans = [sp for sp in spans if sp[2] > sp[1]]
+        panels = self._panels(spans) if spans else []
+        extras = [self._sign_split(edges, pw) if positive else None for edges, _, _, pw, _ in panels]
+        todo = [(sp[0], ex[0]) for sp, ex in zip(spans, extras) if ex is not None and ex[0].size]
+        solved = iter(self._evaluate_batch(todo)) if todo else iter(())
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
         wplus = np.zeros(2)
-        xg = _XG
-        for seg in segments:
-            a = max(ta, seg.points[0].t)
-            b = min(tb, seg.points[-1].t)
-            if b <= a:
-                continue
-            edges, _, ww, pw, fric = self._panels(seg, a, b)
+        for (edges, _, ww, pw, fric), ex in zip(panels, extras):
             w_in += float(np.sum(ww[None] * pw))
             w_abs += float(np.sum(ww[None] * np.abs(pw)))
             diss += float(np.sum(ww * fric))
             if not positive:
                 continue
-            npan = len(edges)
-            # values at the panel edges from each panel's degree-4 interpolant, so that a sign
-            # change between an edge and the nearest Gauss node is not missed
-            ends = (pw.reshape(-1, 5) @ _LEG_ENDS).reshape(2, npan, 2)
-            allv = np.concatenate([pw, ends], axis=2)
-            positive_panels = np.all(allv >= 0, axis=2)
-            wplus += np.sum(np.where(positive_panels[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
-            mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
-            extra_t, extra_w, extra_i = [], [], []
-            for i, j in zip(*np.nonzero(mixed)):
-                # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
-                coef = np.polynomial.legendre.legfit(xg, pw[i, j], 4)
-                r = np.polynomial.legendre.legroots(coef)
-                r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
-                lo, hi = edges[j]
-                cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
-                for c0, c1 in zip(cuts[:-1], cuts[1:]):
-                    if c1 - c0 <= 0:
-                        continue
-                    tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
-                    extra_t.append(tt)
-                    extra_w.append(w2)
-                    extra_i.append(np.full(len(tt), i))
-            if extra_t:
-                te = np.concatenate(extra_t)
-                we = np.concatenate(extra_w)
-                ie = np.concatenate(extra_i)
-                _, aux2 = self._evaluate_many(seg, te)
+            wplus += np.sum(np.where(ex[3][:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            if ex[0].size:
+                te, we, ie = ex[0], ex[1], ex[2]
+                _, aux2 = next(solved)
                 p2 = self.torque(te).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
                 pv = p2[ie, np.arange(len(te))]
                 for i in range(2):
                     wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
+
+    def _sign_split(self, edges: np.ndarray, pw: np.ndarray):
+        """The panels of one piece on which an actuator's power stays >= 0, and the
+        extra Gauss nodes (phases, weights, actuator) of the panels on which it changes sign, split at the
+        real roots in the panel of its degree-4 interpolant: (phases, weights, actuator, whether the power of
+        each actuator (2, npan) keeps a positive sign on the panel)."""
+        npan = len(edges)
+        # values at the panel edges from each panel's degree-4 interpolant, so that a sign
+        # change between an edge and the nearest Gauss node is not missed
+        ends = (pw.reshape(-1, 5) @ _LEG_ENDS).reshape(2, npan, 2)
+        allv = np.concatenate([pw, ends], axis=2)
+        positive_panels = np.all(allv >= 0, axis=2)
+        mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
+        extra_t, extra_w, extra_i = [np.zeros(0)], [np.zeros(0)], [np.zeros(0, int)]
+        for i, j in zip(*np.nonzero(mixed)):
+            # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+            coef = pw[i, j] @ _LEG_FIT  # (the interpolant's Legendre coefficients)
+            r = np.polynomial.legendre.legroots(coef)
+            r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
+            lo, hi = edges[j]
+            cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
+            for c0, c1 in zip(cuts[:-1], cuts[1:]):
+                if c1 - c0 <= 0:
+                    continue
+                tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
+                extra_t.append(tt)
+                extra_w.append(w2)
+                extra_i.append(np.full(len(tt), i))
+        return np.concatenate(extra_t), np.concatenate(extra_w), np.concatenate(extra_i), positive_panels
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):
@@ -246,16 +292,16 @@ class OutputMixin:
 
     def _sampled_blocks(self, segments, te: np.ndarray) -> list:
         """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
-        (a phase on a segment boundary goes to the earlier segment)."""
-        blocks = []
+        (a phase on a segment boundary goes to the earlier segment), solved in one batch."""
+        requests = []
         free = np.ones(te.size, bool)
         for seg in segments:
             sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
             if sel.size:
                 free[sel] = False
-                xs, aux = self._evaluate_many(seg, te[sel])
-                blocks.append((te[sel], xs, aux, seg))
-        return blocks
+                requests.append((seg, te[sel]))
+        solved = self._evaluate_batch(requests) if requests else []
+        return [(ts, xs, aux, seg) for (seg, ts), (xs, aux) in zip(requests, solved)]
 
     def _store_samples(self, res: CrawlResult, blocks: list) -> None:
         """Output arrays of the blocks, in the order of their phases."""

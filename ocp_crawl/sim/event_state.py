@@ -5,22 +5,65 @@ event location and output modules).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ocp_crawl.model.inputs import TWO_PI, Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.result import Event, Mode
 from ocp_crawl.status import Status
+
+_DPHI1, _DPHI2, _DFT = AUX["dphi1"], AUX["dphi2"], AUX["dft"]
 
 
 def hermite(t0, x0, xd0, t1, x1, xd1, t):
     """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of phases."""
     h = np.asarray(t1 - t0, float)
     s = np.where(h > 0, (np.asarray(t, float) - t0) / np.where(h > 0, h, 1.0), 0.0)
-    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
-    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    s2 = s * s
+    s3 = s2 * s
+    h00, h10 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s
+    h01, h11 = -2 * s3 + 3 * s2, s3 - s2
     return h00 * x0 + h10 * h * xd0 + h01 * x1 + h11 * h * xd1
+
+
+def torque_pair(signal):
+    """A function t -> (tau(t), tau'(t)) [N m, N m/cycle] at one phase t [cycles] of the input ``signal``.
+
+    For the common torque input k (phi_ref(t) - pi) of a :class:`~ocp_crawl.model.inputs.Harmonic` reference
+    both come from one scalar evaluation in the same arithmetic as the signal's own methods (the stepper
+    calls this before every solve); any other signal is called as it is.
+    """
+    ref = getattr(signal, "reference", None)
+    if not (isinstance(signal, ReferenceTorque) and type(ref) is Harmonic):
+        return lambda t: (signal(t), signal.derivative(t))
+    k, g1, g2, a1, a2, half = signal.k, ref.gamma1, ref.gamma2, ref.A1, ref.A2, ref.psi / 2
+    pi, two_pi, sin, cos, array = math.pi, TWO_PI, math.sin, math.cos, np.array
+
+    def pair(t: float):
+        w = two_pi * t
+        w1, w2 = w + half, w - half
+        return (array([k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi)]),
+                array([k * (two_pi * a1 * cos(w1)), k * (two_pi * a2 * cos(w2))]))
+
+    def rate(t: float) -> list:
+        w = two_pi * t
+        return [k * (two_pi * a1 * cos(w + half)), k * (two_pi * a2 * cos(w - half))]
+
+    pair.rate = rate
+    return pair
+
+
+def torque_curvature(torque_at, t: float, dt: float = 1e-5) -> list:
+    """tau''(t) [N m/cycle^2] by central differences of tau' over +-dt [cycles], with ``torque_at`` from
+    :func:`torque_pair` (floats; the same arithmetic as on arrays)."""
+    rate = getattr(torque_at, "rate", None)
+    if rate is None:
+        return ((torque_at(t + dt)[1] - torque_at(t - dt)[1]) / (2 * dt)).tolist()
+    a, b = rate(t + dt), rate(t - dt)
+    return [(a[0] - b[0]) / (2 * dt), (a[1] - b[1]) / (2 * dt)]
 
 
 def event_kind(guard: str) -> str:
@@ -43,21 +86,52 @@ def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
 Q_RELEASED = np.array([0.0, 0.0, 1.0, 0.0])
 
 
-@dataclass
 class _Point:
-    t: float
-    x: np.ndarray
-    aux: np.ndarray
-    rates: dict | None = None
-    """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
-    tau: np.ndarray | None = None
-    """torque and its derivative at t (kept from the solve)"""
-    dtau: np.ndarray | None = None
+    """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
+    (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
+
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards")
+
+    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
+                 extra=None):
+        self.t, self.x, self.aux = t, x, aux
+        self.q, self.extra = q, extra
+        """mode parameters of the solve, and the stability numbers and d'' coefficients computed with it
+        (:func:`~ocp_crawl.model.stability.fast_step`; None when the solve did not compute them)"""
+        self.rates = rates
+        """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
+        self.tau, self.dtau = tau, dtau
+        """torque and its derivative at t (kept from the solve)"""
+        self._xdot = None
+        self._a = None
+        self.guards = None
+        """(mode, guard values of that mode) once computed (``HybridStepper.point_guards``)"""
+
+    @property
+    def a(self) -> list:
+        """aux as a list of Python floats (fast scalar access in the guards)"""
+        if self._a is None:
+            self._a = self.aux.tolist()
+        return self._a
 
     @property
     def xdot(self) -> np.ndarray:
-        a = self.aux
-        return np.array([a[AUX["dphi1"]], a[AUX["dphi2"]], a[AUX["dft"]]])
+        if self._xdot is None:
+            a = self.a
+            self._xdot = np.array([a[_DPHI1], a[_DPHI2], a[_DFT]])
+        return self._xdot
+
+
+def hermite_point(p0: _Point, p1: _Point, t: float) -> np.ndarray:
+    """:func:`hermite` between two points at one phase t, in scalar arithmetic (the same formula)."""
+    h = p1.t - p0.t
+    s = (t - p0.t) / h if h > 0 else 0.0
+    s2 = s * s
+    s3 = s2 * s
+    h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
+    a, b = h10 * h, h11 * h
+    x0, x1, d0, d1 = p0.x.tolist(), p1.x.tolist(), p0.xdot.tolist(), p1.xdot.tolist()
+    return np.array([h00 * x0[k] + a * d0[k] + h01 * x1[k] + b * d1[k] for k in range(3)])
 
 
 @dataclass
@@ -69,6 +143,16 @@ class _Segment:
     x1_fixed: float
     x2_fixed: float
     points: list = field(default_factory=list)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Phases (n,), states (3, n) and their rates (3, n) of the stored points (kept until a point is added)."""
+        cache = getattr(self, "_arrays", None)
+        if cache is None or cache[0].size != len(self.points):
+            pts = self.points
+            cache = (np.array([p.t for p in pts]), np.stack([p.x for p in pts], axis=1),
+                     np.stack([p.xdot for p in pts], axis=1))
+            self._arrays = cache
+        return cache
 
     def foot_positions(self, d):
         d = np.asarray(d, float)

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 _GL = {n: np.polynomial.legendre.leggauss(n) for n in (3, 5, 8)}
 
@@ -25,6 +24,8 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
 
     ``f_vec(t_array)`` evaluates f on many points at once; ``f_scalar(t)`` one point (root refinement).
     """
+    from scipy.optimize import brentq  # scipy only where used (start-up time)
+
     if b <= a:
         return 0.0
     n_pieces = max(1, int(np.ceil((b - a) / h - 1e-12)))

@@ -32,12 +32,12 @@ class Mode(IntEnum):
     @property
     def foot(self) -> int:
         """slipping foot: 0 for stick-stick, 1 or 2, 3 for both"""
-        return {0: 0, 1: 1, 2: 1, 3: 2, 4: 2, 5: 3, 6: 3}[int(self)]
+        return (0, 1, 1, 2, 2, 3, 3)[self]
 
     @property
     def sigma(self) -> int:
         """sign of d' in this mode (0 for stick-stick)"""
-        return {0: 0, 1: -1, 2: +1, 3: +1, 4: -1, 5: +1, 6: -1}[int(self)]
+        return (0, -1, 1, 1, -1, 1, -1)[self]
 
     @classmethod
     def from_label(cls, label: str) -> "Mode":

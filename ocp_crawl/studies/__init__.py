@@ -9,16 +9,30 @@ writes ``report.md`` and :func:`ocp_crawl.studies.reproduce.reproduce` runs it a
 The function ``reproduce`` is not re-exported here: the name is its module's, which the CLI and the
 tests use.
 """
-from ocp_crawl.studies.common import (COT_K_LABELS, COT_K_RATIOS, LOW_K_RATIO, REALISTIC_K_RATIO, STUCK_TOL, SweepOptions,
-                                      base_problem)
-from ocp_crawl.studies.cot import (AmplitudeStudy, HigherFriction, StiffnessStudy, amplitude_study, higher_friction,
-                                   stiffness_study)
-from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap, friction_band, gait_comparison, psi_gamma_map
-from ocp_crawl.studies.pressure import (PressureFit, PressureStudy, evaluate_fit, fit_rest_angle, pressure_curves,
-                                        pressure_study, simulate_pressure)
-from ocp_crawl.studies.reproduce import FIGURES, ReproduceResult
-from ocp_crawl.studies.statements import STATEMENTS, Statement, check_statements
-from ocp_crawl.studies.suite import GRIDS, Grids, StudySet, run_studies
+from ocp_crawl.io.lazy import lazy_exports
+
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "SweepOptions": "ocp_crawl.studies.common", "base_problem": "ocp_crawl.studies.common",
+    "REALISTIC_K_RATIO": "ocp_crawl.studies.common", "COT_K_RATIOS": "ocp_crawl.studies.common",
+    "COT_K_LABELS": "ocp_crawl.studies.common", "LOW_K_RATIO": "ocp_crawl.studies.common",
+    "STUCK_TOL": "ocp_crawl.studies.common",
+    "GaitComparison": "ocp_crawl.studies.gaits", "gait_comparison": "ocp_crawl.studies.gaits",
+    "PsiGammaMap": "ocp_crawl.studies.gaits", "psi_gamma_map": "ocp_crawl.studies.gaits",
+    "FrictionBand": "ocp_crawl.studies.gaits", "friction_band": "ocp_crawl.studies.gaits",
+    "AmplitudeStudy": "ocp_crawl.studies.cot", "amplitude_study": "ocp_crawl.studies.cot",
+    "HigherFriction": "ocp_crawl.studies.cot", "higher_friction": "ocp_crawl.studies.cot",
+    "StiffnessStudy": "ocp_crawl.studies.cot", "stiffness_study": "ocp_crawl.studies.cot",
+    "PressureFit": "ocp_crawl.studies.pressure", "PressureStudy": "ocp_crawl.studies.pressure",
+    "pressure_study": "ocp_crawl.studies.pressure", "pressure_curves": "ocp_crawl.studies.pressure",
+    "evaluate_fit": "ocp_crawl.studies.pressure", "fit_rest_angle": "ocp_crawl.studies.pressure",
+    "simulate_pressure": "ocp_crawl.studies.pressure",
+    "GRIDS": "ocp_crawl.studies.suite", "Grids": "ocp_crawl.studies.suite", "StudySet": "ocp_crawl.studies.suite",
+    "run_studies": "ocp_crawl.studies.suite",
+    "STATEMENTS": "ocp_crawl.studies.statements", "Statement": "ocp_crawl.studies.statements",
+    "check_statements": "ocp_crawl.studies.statements",
+    "FIGURES": "ocp_crawl.studies.reproduce", "ReproduceResult": "ocp_crawl.studies.reproduce",
+}
 
 __all__ = [
     "SweepOptions", "base_problem", "REALISTIC_K_RATIO", "COT_K_RATIOS", "COT_K_LABELS", "LOW_K_RATIO", "STUCK_TOL",
@@ -28,3 +42,4 @@ __all__ = [
     "simulate_pressure", "GRIDS", "Grids", "StudySet", "run_studies", "STATEMENTS", "Statement", "check_statements",
     "FIGURES", "ReproduceResult",
 ]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -461,8 +461,10 @@ def plot_pressure(p: PressureStudy) -> Figure:
     fig, ax = _figure((11.0, 4.8), 1, 2)
     a0, a1 = ax[0]
     c = p.fit.curves
-    fig.suptitle(fr"Pressure-driven robot: rest angle $\varphi_\mathrm{{rest}}$ = {c.phi_rest_deg:.1f} deg "
-                 f"({'fitted' if p.fit.fitted else 'stored fit'}), {_gravity_text(c.gravity)}\n"
+    how = "fitted" if p.fit.fitted else "stored fit"
+    inp = (fr"rest angle $\varphi_\mathrm{{rest}}$ = {c.phi_rest_deg:.1f} deg ({how})" if c.amplitude_p0_bar is None else
+           fr"$p = p_0 + A_p \sin$, $A_p$ = {c.amplitude_p0_bar:g} bar ($p_0$ curve) / {c.amplitude_psi_bar:.2f} bar ({how}, $\psi$ curve)")
+    fig.suptitle(f"Pressure-driven robot: {inp}, {_gravity_text(c.gravity)}\n"
                  fr"RMS error against the paper's simulation: {p.fit.rms_p0:.3f} ($p_0$), {p.fit.rms_psi:.3f} ($\psi$); "
                  fr"best $\psi$ = {p.psi_opt[0]:.1f} deg")
     a0.plot(p.paper_p0["p0_bar"], p.paper_p0["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")
@@ -470,7 +472,8 @@ def plot_pressure(p: PressureStudy) -> Figure:
     e = p.experiment_p0
     a0.errorbar(e["p0_bar"], e["S_over_Smax"], yerr=[e["err_minus"], e["err_plus"]], color="k", ecolor="red",
                 capsize=3, lw=1.5, label="experiment")
-    a0.set_xlabel("nominal (peak) pressure $p_0$ [bar]")
+    a0.set_xlabel("nominal (mean) pressure $p_0$ [bar]" if c.amplitude_p0_bar is not None else
+                  "nominal (peak) pressure $p_0$ [bar]")
     a0.set_ylabel(fr"$S / S(p_0 = 1.7$ bar) [-]  ($\psi$ = {c.psi_for_p0_deg:g} deg)")
     a0.set_title("(a) against nominal pressure", loc="left", fontsize="medium")
     a1.plot(p.paper_psi["psi_deg"], p.paper_psi["S_over_Smax"], color="0.55", ls="--", lw=1.5, label="paper's simulation")

@@ -17,7 +17,7 @@ from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.io.paper_data import read_paper_csv
-from ocp_crawl.model.pressure import FITTED_REST_DEG, pressure_torque
+from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR, pressure_torque
 from ocp_crawl.status import Status
 from ocp_crawl.studies.common import SUCCESS, parabolic_max
 
@@ -25,20 +25,24 @@ from ocp_crawl.studies.common import SUCCESS, parabolic_max
 P0_NORMALISE_BAR = 1.7
 PSI_FOR_P0_CURVE_DEG = 45.0
 P0_FOR_PSI_CURVE_BAR = 1.7
-#: rest angle of a flat robot [deg], the alternative to the fitted rest angle of the pressure-driven robot
-FLAT_REST_DEG = 180.0
+#: pressure amplitude [bar] of the paper's form (ref) on its psi curve (at p0 = 1.7 bar, flat rest): the paper does
+#: not state it; :func:`fit_psi_amplitude` on the paper's full psi curve gives 0.99 (paper's sign; physical: 0.95)
+PSI_CURVE_AMPLITUDE_BAR = 0.99
 
 
 def simulate_pressure(model: Model, p0_bar: float, psi_deg: float, phi_rest_deg: float | None = None,
-                      options: HybridOptions | None = None, t_eval=None) -> CrawlResult:
+                      options: HybridOptions | None = None, t_eval=None, amplitude_bar: float | None = None) -> CrawlResult:
     """Hybrid-quasistatic gait of the pressure-driven robot (torque drive).
 
     ``p0_bar``: peak pressure [bar]; ``psi_deg``: phase difference [deg]; ``phi_rest_deg``: rest
     angle [deg], by default the stored fit of the model's gravity convention; ``t_eval``: phases
-    [cycles] to sample.  Returns the :class:`~ocp_crawl.sim.result.CrawlResult`.
+    [cycles] to sample; ``amplitude_bar``: None for the raised sine from 0 to ``p0_bar``, else the
+    pressure amplitude [bar] of the paper's form (ref) around the nominal ``p0_bar``.  Returns the
+    :class:`~ocp_crawl.sim.result.CrawlResult`.
     """
     rest = FITTED_REST_DEG[model.gravity] if phi_rest_deg is None else phi_rest_deg
-    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest), "event", options, t_eval=t_eval)
+    return simulate(model, pressure_torque(model.robot, p0_bar, psi_deg, rest, amplitude_bar=amplitude_bar), "event",
+                    options, t_eval=t_eval)
 
 
 # --------------------------------------------------------------------------------------------
@@ -64,6 +68,10 @@ class PressureCurves:
     status_psi: tuple[str, ...]
     psi_for_p0_deg: float = PSI_FOR_P0_CURVE_DEG
     p0_for_psi_bar: float = P0_FOR_PSI_CURVE_BAR
+    amplitude_p0_bar: float | None = None
+    """pressure amplitude [bar] of the form (ref) on the p0 curve (None: raised sine, p0 the peak)"""
+    amplitude_psi_bar: float | None = None
+    """pressure amplitude [bar] of the form (ref) on the psi curve (None: raised sine)"""
 
     @property
     def progress_p0(self) -> np.ndarray:
@@ -77,9 +85,9 @@ class PressureCurves:
         return prog / np.nanmax(prog)
 
 
-def _run(model: Model, p0: float, psi: float, rest: float) -> tuple[float, str]:
+def _run(model: Model, p0: float, psi: float, rest: float, amplitude: float | None = None) -> tuple[float, str]:
     try:
-        r = simulate_pressure(model, p0, psi, rest)
+        r = simulate_pressure(model, p0, psi, rest, amplitude_bar=amplitude)
     except ValueError:
         # no released equilibrium at the start: the input cannot even start the robot
         return float("nan"), Status.NO_START.label
@@ -87,11 +95,14 @@ def _run(model: Model, p0: float, psi: float, rest: float) -> tuple[float, str]:
 
 
 def pressure_curves(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None,
-                    robot: Robot | None = None) -> PressureCurves:
+                    robot: Robot | None = None, amplitude_p0_bar: float | None = None,
+                    amplitude_psi_bar: float | None = None) -> PressureCurves:
     """S along the paper's p0 and psi curves for one rest angle [deg] (defaults: the paper's own grids).
 
     ``p0_bar``: pressures [bar] of the p0 curve; ``psi_deg``: phase differences [deg] of the psi
-    curve; ``robot``: default Table I.  Returns :class:`PressureCurves`.
+    curve; ``robot``: default Table I; ``amplitude_p0_bar``, ``amplitude_psi_bar``: pressure
+    amplitudes [bar] of the paper's form (ref) on each curve (None: the raised sine, p0 the peak).
+    Returns :class:`PressureCurves`.
     """
     if gravity not in GRAVITY_CONVENTIONS:
         raise ValueError(f"gravity must be one of {GRAVITY_CONVENTIONS}, got {gravity!r}")
@@ -99,12 +110,13 @@ def pressure_curves(phi_rest_deg: float, gravity: str = "physical", p0_bar=None,
     default_p0, default_psi = paper_grids()
     p0 = default_p0 if p0_bar is None else np.asarray(p0_bar, float)
     psi = default_psi if psi_deg is None else np.asarray(psi_deg, float)
-    run_p0 = [_run(model, p, PSI_FOR_P0_CURVE_DEG, phi_rest_deg) for p in p0]
-    run_psi = [_run(model, P0_FOR_PSI_CURVE_BAR, s, phi_rest_deg) for s in psi]
-    s_norm, _ = _run(model, P0_NORMALISE_BAR, PSI_FOR_P0_CURVE_DEG, phi_rest_deg)
+    run_p0 = [_run(model, p, PSI_FOR_P0_CURVE_DEG, phi_rest_deg, amplitude_p0_bar) for p in p0]
+    run_psi = [_run(model, P0_FOR_PSI_CURVE_BAR, s, phi_rest_deg, amplitude_psi_bar) for s in psi]
+    s_norm, _ = _run(model, P0_NORMALISE_BAR, PSI_FOR_P0_CURVE_DEG, phi_rest_deg, amplitude_p0_bar)
     return PressureCurves(gravity, float(phi_rest_deg), p0, np.array([r[0] for r in run_p0]), psi,
                           np.array([r[0] for r in run_psi]), s_norm, tuple(r[1] for r in run_p0),
-                          tuple(r[1] for r in run_psi))
+                          tuple(r[1] for r in run_psi), amplitude_p0_bar=amplitude_p0_bar,
+                          amplitude_psi_bar=amplitude_psi_bar)
 
 
 @dataclass(frozen=True)
@@ -191,10 +203,13 @@ def _reference(p0: np.ndarray, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return np.interp(p0, d0["p0_bar"], d0["S_over_Smax"]), np.interp(psi, dp["psi_deg"], dp["S_over_Smax"])
 
 
-def evaluate_fit(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None) -> PressureFit:
+def evaluate_fit(phi_rest_deg: float, gravity: str = "physical", p0_bar=None, psi_deg=None,
+                 amplitude_p0_bar: float | None = None, amplitude_psi_bar: float | None = None) -> PressureFit:
     """The fit error of a given rest angle [deg] on the given grids (p0 [bar], psi [deg]; default: the
-    paper's points).  Returns a :class:`PressureFit` (``fitted`` False)."""
-    curves = pressure_curves(phi_rest_deg, gravity, p0_bar, psi_deg)
+    paper's points); ``amplitude_*_bar``: as :func:`pressure_curves`.  Returns a :class:`PressureFit`
+    (``fitted`` False)."""
+    curves = pressure_curves(phi_rest_deg, gravity, p0_bar, psi_deg, amplitude_p0_bar=amplitude_p0_bar,
+                             amplitude_psi_bar=amplitude_psi_bar)
     ref_p0, ref_psi = _reference(curves.p0_bar, curves.psi_deg)
     return PressureFit(curves, ref_p0, ref_psi, fitted=False)
 
@@ -217,6 +232,26 @@ def fit_rest_angle(gravity: str = "physical", p0_bar=None, psi_deg=None, bounds=
     return PressureFit(best.curves, best.ref_p0, best.ref_psi, fitted=True, nfev=calls["n"] + 1)
 
 
+def fit_psi_amplitude(gravity: str = "paper", p0_bar=None, psi_deg=None, bounds=(PAPER_FORM_AMPLITUDE_BAR, 1.7),
+                      xatol: float = 0.01) -> PressureFit:
+    """The paper's form (ref) with the flat rest shape: the p0 curve at amplitude 0.4 bar, the psi curve's
+    amplitude [bar] (at p0 = 1.7 bar; unstated by the paper) fitted to the published psi curve (bounded
+    scalar minimisation of its RMS error; ``bounds`` [bar] keep the pressure >= 0).
+
+    ``p0_bar`` [bar], ``psi_deg`` [deg]: the grids, default :func:`paper_grids`.  Returns a
+    :class:`PressureFit` (``fitted`` True).
+    """
+    calls = {"n": 0}
+
+    def objective(amp: float) -> float:
+        calls["n"] += 1
+        return evaluate_fit(FLAT_REST_DEG, gravity, [P0_NORMALISE_BAR], psi_deg, PAPER_FORM_AMPLITUDE_BAR, amp).rms_psi
+
+    res = minimize_scalar(objective, bounds=bounds, method="bounded", options={"xatol": xatol})
+    best = evaluate_fit(FLAT_REST_DEG, gravity, p0_bar, psi_deg, PAPER_FORM_AMPLITUDE_BAR, float(res.x))
+    return PressureFit(best.curves, best.ref_p0, best.ref_psi, fitted=True, nfev=calls["n"] + 1)
+
+
 # --------------------------------------------------------------------------------------------
 # Fig. exp
 # --------------------------------------------------------------------------------------------
@@ -232,7 +267,7 @@ class PressureStudy:
     """the paper's simulated curves"""
     paper_psi: dict[str, np.ndarray] = field(repr=False)
     flat: PressureFit | None = None
-    """the same curves with the flat rest shape (phi_rest = 180 deg), to show why the rest angle is fitted"""
+    """the same curves with a raised sine and the flat rest shape (phi_rest = 180 deg), for comparison"""
 
     @property
     def gravity(self) -> str:
@@ -254,17 +289,25 @@ class PressureStudy:
 
 
 def pressure_study(gravity: str = "physical", fit: bool = True, p0_bar=None, psi_deg=None,
-                   phi_rest_deg: float | None = None, compare_flat: bool = False) -> PressureStudy:
+                   phi_rest_deg: float | None = None, compare_flat: bool = False, form: str = "paper") -> PressureStudy:
     """Fig. exp: the pressure-driven robot against p0 and psi (the curves and the fit above).
 
-    ``fit``: fit the rest angle to the paper's simulated curves on the given grids (default: the
-    paper's own points); otherwise evaluate ``phi_rest_deg`` (default: the stored fit).  The
-    points run one after another in this process: the pressure input is not a problem-file key,
-    so the sweep engine cannot express it.  ``compare_flat`` also evaluates the flat rest shape.
-    ``gravity``: "physical" or "paper"; ``p0_bar`` [bar], ``psi_deg`` [deg]: the grids (None: the
-    paper's points).  Returns a :class:`PressureStudy`.
+    ``form`` "paper" (default): the paper's form (ref), p_i = p0 + A_p sin(2 pi t +- psi/2) with the
+    flat rest shape (:mod:`ocp_crawl.model.pressure`): A_p = 0.4 bar on the p0 curve; on the psi curve
+    ``fit`` fits A_p (:func:`fit_psi_amplitude`), else the stored :data:`PSI_CURVE_AMPLITUDE_BAR`.
+    ``form`` "raised": raised sines from 0 to the peak p0 with a rest angle: ``fit`` fits it to the
+    paper's simulated curves, else ``phi_rest_deg`` (default: the stored fit) is evaluated.
+    The points run one after another in this process: the pressure input is not a problem-file key,
+    so the sweep engine cannot express it.  ``compare_flat`` also evaluates the raised sine with the
+    flat rest shape.  ``gravity``: "physical" or "paper"; ``p0_bar`` [bar], ``psi_deg`` [deg]: the
+    grids (None: the paper's points).  Returns a :class:`PressureStudy`.
     """
-    if fit:
+    if form not in ("paper", "raised"):
+        raise ValueError(f"form must be 'paper' or 'raised', got {form!r}")
+    if form == "paper":
+        result = fit_psi_amplitude(gravity, p0_bar, psi_deg) if fit else evaluate_fit(
+            FLAT_REST_DEG, gravity, p0_bar, psi_deg, PAPER_FORM_AMPLITUDE_BAR, PSI_CURVE_AMPLITUDE_BAR)
+    elif fit:
         result = fit_rest_angle(gravity, p0_bar, psi_deg)
     else:
         rest = FITTED_REST_DEG[gravity] if phi_rest_deg is None else phi_rest_deg

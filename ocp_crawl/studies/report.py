@@ -227,19 +227,12 @@ def _pressure_section(s: StudySet) -> list[str]:
     w("\n## Fig. exp: the pressure-driven robot\n")
     w(_fig("exp", "S/Smax against p0 and psi: this model (blue), the paper's simulation (gray dashed), "
                   "experiments (black, red error bars)"))
-    w("\n**Assumptions** (the paper does not state the waveform): pressures are raised sines from 0 to the peak p0, "
-      "p_i(t) = p0 (1 + sin(2 pi t +- psi/2))/2; the calibrated bending a_i p^2 + b_i p (Table I) lowers the joint's "
-      "reference angle from a rest angle phi_rest, phi_ref,i = phi_rest - bending_i(p_i), with tau_i = k (phi_ref,i - pi). "
-      "phi_rest is the one fitted parameter: with a flat rest shape (180 deg) the robot stays nearly flat and S grows "
-      "like p0^3 instead of the paper's ~p0^1.8"
-      + (f" (flat rest shape on the same grids: RMS error {num(p.flat.rms_p0)} on the p0 curve, {num(p.flat.rms_psi)} "
-         f"on the psi curve, {p.flat.failures} failed points)" if p.flat is not None else "")
-      + ". The p0 curve is assumed computed at psi = "
-      f"{c.psi_for_p0_deg:g} deg and normalised at p0 = {P0_NORMALISE_BAR:g} bar (as the paper's), the psi curve at "
-      f"p0 = {c.p0_for_psi_bar:g} bar and normalised by its maximum.\n")
-    w(f"Rest angle: **{c.phi_rest_deg:.2f} deg** ({'fitted in this run' if p.fit.fitted else 'stored fit'}, "
-      f"{c.gravity} convention; stored fits: " + ", ".join(f"{k} {v:g}" for k, v in FITTED_REST_DEG.items())
-      + f"). Fit error in S/Smax (model - paper's simulation): RMS {p.fit.rms_p0:.4f} on the p0 curve (largest "
+    w(_pressure_assumptions(p))
+    fitted = "fitted in this run" if p.fit.fitted else "stored fit"
+    w((f"Rest angle: **{c.phi_rest_deg:.2f} deg** ({fitted}, {c.gravity} convention; stored fits: "
+       + ", ".join(f"{k} {v:g}" for k, v in FITTED_REST_DEG.items()) + ")" if c.amplitude_p0_bar is None else
+       f"Pressure amplitude of the psi curve: **{c.amplitude_psi_bar:.3f} bar** ({fitted}, {c.gravity} convention)")
+      + f". Fit error in S/Smax (model - paper's simulation): RMS {p.fit.rms_p0:.4f} on the p0 curve (largest "
       f"{p.fit.max_p0[0]:.4f} at p0 = {p.fit.max_p0[1]:g} bar), RMS {p.fit.rms_psi:.4f} on the psi curve (largest "
       f"{p.fit.max_psi[0]:.4f} at psi = {p.fit.max_psi[1]:g} deg); failed points {p.fit.failures}. "
       f"Against the experiments: RMS {e_p0:.3f} (p0), {e_psi:.3f} (psi). Best psi {p.psi_opt[0]:.1f} deg "
@@ -255,6 +248,26 @@ def _pressure_section(s: StudySet) -> list[str]:
              [[f"{x:.2f}", f"{round(v, 4) + 0.0:.4f}", f"{r:.4f}", f"{v - r:+.4f}", rel(v, r), stt] for x, v, r, stt in
               zip(c.psi_deg, c.progress_psi, p.fit.ref_psi, c.status_psi)]))
     return out
+
+
+def _pressure_assumptions(p) -> str:
+    """The pressure input of the study: the paper's form (ref) or the raised sine with a fitted rest angle."""
+    c = p.fit.curves
+    where = (f"The p0 curve is computed at psi = {c.psi_for_p0_deg:g} deg and normalised at p0 = {P0_NORMALISE_BAR:g} "
+             f"bar (as the paper's), the psi curve at p0 = {c.p0_for_psi_bar:g} bar and normalised by its maximum.\n")
+    flat = (f" (raised sine with the flat rest shape on the same grids: RMS error {num(p.flat.rms_p0)} on the p0 "
+            f"curve, {num(p.flat.rms_psi)} on the psi curve, {p.flat.failures} failed points)" if p.flat is not None else "")
+    if c.amplitude_p0_bar is not None:
+        return ("\n**Input** (issue 15): the paper's \"inputs of the form (ref)\" with \"nominal pressure p0\", read "
+                f"literally: p_i(t) = p0 + A_p sin(2 pi t +- psi/2); the calibrated bending a_i p^2 + b_i p (Table I, "
+                "measured from the flat clamped beam) lowers the joint's reference angle from the flat shape, "
+                "phi_ref,i = 180 deg - bending_i(p_i), tau_i = k (phi_ref,i - pi). A_p = "
+                f"{c.amplitude_p0_bar:g} bar on the p0 curve (it starts at 0.4 bar, where p_i reaches 0; no fitted "
+                "parameter); the psi curve's amplitude is not stated and is fitted" + flat + ". " + where)
+    return ("\n**Assumptions** (the paper does not state the waveform): pressures are raised sines from 0 to the peak "
+            "p0, p_i(t) = p0 (1 + sin(2 pi t +- psi/2))/2; the calibrated bending a_i p^2 + b_i p (Table I) lowers the "
+            "joint's reference angle from a rest angle phi_rest, phi_ref,i = phi_rest - bending_i(p_i), with "
+            "tau_i = k (phi_ref,i - pi). phi_rest is the one fitted parameter" + flat + ". " + where)
 
 
 def _failures_section(s: StudySet, sets: dict[str, StudySet]) -> list[str]:

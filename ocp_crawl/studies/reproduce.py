@@ -3,7 +3,8 @@
 Runs every study of :mod:`ocp_crawl.studies` in both gravity conventions (the statements table
 needs both), draws the figures in the chosen convention (PNG and PDF), and writes ``report.md``:
 each figure with the numbers behind it, the relative difference wherever the paper publishes a
-number, and every statement of the paper checked in both conventions.  ``numbers.json`` holds the
+number, every statement of the paper checked in both conventions, and every point the paper publishes
+(Figs. CoT and exp) evaluated at its own abscissa in both conventions (:mod:`~ocp_crawl.studies.paper_points`).  ``numbers.json`` holds the
 same numbers for scripts.
 
 Nothing is lost when a run is killed: every file is written atomically (:func:`ocp_crawl.io.files.atomic_write`:
@@ -32,6 +33,7 @@ from ocp_crawl.studies.common import SweepOptions
 from ocp_crawl.studies.plots import (plot_amplitude, plot_configuration, plot_conventions, plot_forces,
                                      plot_friction_band, plot_higher_friction, plot_parametric, plot_pressure,
                                      plot_stiffness)
+from ocp_crawl.studies.paper_points import markdown as points_markdown, paper_points
 from ocp_crawl.studies.report import numbers, report
 from ocp_crawl.studies.statements import Statement, check_statements
 from ocp_crawl.studies.suite import GRIDS, StudySet, run_studies
@@ -91,6 +93,8 @@ def reproduce(out_dir: str | Path, quick: bool = False, gravity: str = "physical
     order = [gravity] + [g for g in GRAVITY_CONVENTIONS if g != gravity]
     sets = {g: run_studies(g, grids, sweep, say) for g in order}
     statements = check_statements(sets)
+    say("every published point ...")
+    points = {g: paper_points(g, sets[g].pressure.fit.curves.amplitude_psi_bar) for g in order}
     files: list[Path] = []
     say("figures ...")
     for stem, draw in FIGURES.items():
@@ -98,9 +102,10 @@ def reproduce(out_dir: str | Path, quick: bool = False, gravity: str = "physical
         for ext in ("png", "pdf"):
             files.append(save_figure(fig, out / f"{stem}.{ext}"))
     elapsed = time.perf_counter() - start
-    text = report(sets, gravity, mode, statements, elapsed, sweep.jobs)
+    text = report(sets, gravity, mode, statements, elapsed, sweep.jobs) + points_markdown(points)
     report_md = atomic_write(out / "report.md", lambda fh: fh.write(text.encode("utf-8")))
-    files.append(write_json(out / "numbers.json", numbers(sets, statements)))
+    nums = {**numbers(sets, statements), "paper_points": {g: p.numbers() for g, p in points.items()}}
+    files.append(write_json(out / "numbers.json", nums))
     files.append(report_md)
     say(f"done in {elapsed:.0f} s")
     return ReproduceResult(out, mode, gravity, tuple(files), report_md, sets, tuple(statements), elapsed)

@@ -6,7 +6,7 @@ import json
 import math
 import threading
 from dataclasses import dataclass, fields
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -73,3 +73,8 @@ def evaluate_point(task: PointTask) -> tuple[int, dict[str, Any]]:
     return task.index, {k: parse_cell(cell(v)) if k in task.extra_columns else cell(v) if k == "message" else v
                         for k, v in row.items()}
 
+
+def evaluate_points(tasks: Sequence[PointTask]) -> list[tuple[int, dict[str, Any]]]:
+    """:func:`evaluate_point` on each of ``tasks`` in turn: one call per chunk of points sent to a worker
+    (a round trip to a worker process costs ~0.2 ms, as much as a fast point)."""
+    return [evaluate_point(task) for task in tasks]

@@ -16,8 +16,9 @@ directory the sweep writes:
     the base problem, the grid, the solver and the package version; written first, and compared
     on ``resume`` so that a resumed sweep never mixes results of different settings.
 ``results.partial.csv``
-    the journal: one line per finished point in completion order, flushed and fsync'd as it
-    arrives, so that a killed run loses only the points in flight.
+    the journal: one line per finished point in completion order, flushed as it arrives (fsync'd
+    about once a second, :mod:`ocp_crawl.sweep.journal`), so that a killed run loses only the
+    points in flight (in the workers' chunks of points, :func:`ocp_crawl.sweep.executors.chunk_size`).
 ``results.csv``
     one row per point in grid order, written atomically when the sweep completes (the journal is
     then removed).  A resumed sweep writes the same file as an uninterrupted one.

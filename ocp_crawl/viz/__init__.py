@@ -1,7 +1,14 @@
 """Figures and animations: the gait figure (:mod:`~ocp_crawl.viz.gait`), the OCP figure
 (:mod:`~ocp_crawl.viz.ocp`) and the crawl animation (:mod:`~ocp_crawl.viz.animate`)."""
-from ocp_crawl.viz.animate import animate_problem, crawl_animation, save_gif
-from ocp_crawl.viz.gait import plot_gait, save_figure
-from ocp_crawl.viz.ocp import plot_optimal_gait
+from ocp_crawl.io.lazy import lazy_exports
+
+#: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
+_EXPORTS = {
+    "animate_problem": "ocp_crawl.viz.animate", "crawl_animation": "ocp_crawl.viz.animate",
+    "save_gif": "ocp_crawl.viz.animate",
+    "plot_gait": "ocp_crawl.viz.gait", "save_figure": "ocp_crawl.viz.gait",
+    "plot_optimal_gait": "ocp_crawl.viz.ocp",
+}
 
 __all__ = ["animate_problem", "crawl_animation", "plot_gait", "plot_optimal_gait", "save_figure", "save_gif"]
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
