@@ -20,7 +20,7 @@ from ocp_crawl.fit.params import pressure_defaults
 from ocp_crawl.fit.report import fit_report, write_fit
 from ocp_crawl.io.tables import write_table
 from ocp_crawl.model.pressure import BendingMap, pressure_torque
-from ocp_crawl.problem import load_problem, run_problem
+from ocp_crawl.problem import ProblemError, load_problem, run_problem
 from ocp_crawl.sim import simulate
 from ocp_crawl.status import Status
 
@@ -221,3 +221,22 @@ def test_bending_map_matches_weighted_linear_least_squares(tmp_path):
     assert weights.sigma == pytest.approx(fit.sigma * math.sqrt(fit.chi2_red), rel=1e-6)
     pooled = fit_measurements(problem, data, resolve_parameters(problem, names), jobs=2)
     assert pooled.x == pytest.approx(fit.x, rel=1e-12)
+
+
+def test_recovers_the_waveform_amplitude_of_the_paper_form(tmp_path):
+    """Pressure rows with the paper's form (ref) (nominal p0, amplitude A_p, flat rest): A_p recovered within
+    3 sigma from S simulated at A_p = 0.4 bar with known noise."""
+    problem = load_problem(PAPER_GRAVITY)
+    model, p0 = problem.model, np.array([0.6, 0.9, 1.2, 1.5])
+    s = np.array([simulate(model, pressure_torque(model.robot, p, 45.0, 180.0, None, 0.4), "event").S for p in p0])
+    sig = 0.02 * np.max(np.abs(s))
+    y = s + np.random.default_rng(11).normal(0.0, sig, s.size)
+    path = write_table(tmp_path / "w.csv", [("p0", "bar", p0), ("psi", "deg", np.full(4, 45.0)), ("S", "m", y),
+                                            ("sigma_S", "m", np.full(4, sig))])
+    params = resolve_parameters(problem, ["pressure.amplitude_bar"], ["pressure.amplitude_bar=0.3"],
+                                ["pressure.amplitude_bar=0.05:0.6"])
+    fit = fit_measurements(problem, [read_measurements(path)], params, pressure={"phi_rest_deg": 180.0})
+    assert fit.success, fit.message
+    assert 0 < fit.sigma[0] < 0.1 and abs(fit.x[0] - 0.4) < 3 * fit.sigma[0]
+    with pytest.raises(ProblemError, match="--start pressure.amplitude_bar"):
+        resolve_parameters(problem, ["pressure.amplitude_bar"])  # the default waveform has no amplitude

@@ -21,15 +21,15 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
                    help="measurement files (README, 'Calibration'): e.g. 'psi [deg],S [mm],sigma_S [mm]'")
     p.add_argument("--param", dest="params", action="append", default=[], metavar="NAME", required=True,
                    help="a parameter to fit, named by its problem key (robot.k, robot.mu, robot.mu1, gait.gamma_deg, "
-                        "...) or pressure.a1/a2/b1/b2/phi_rest_deg (repeatable)")
+                        "...) or pressure.a1/a2/b1/b2/phi_rest_deg/amplitude_bar (repeatable)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                    help="start value of a fitted parameter (default: the problem's value; Table I for pressure.*)")
     p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
                    help="bounds of a fitted parameter (default: start +- 45 deg for angles, [start/10, 10 start] "
                         "otherwise)")
     p.add_argument("--pressure", action="append", default=[], metavar="NAME=VALUE",
-                   help="a pressure constant held fixed (a1, a2, b1, b2 [rad/bar^2, rad/bar], phi_rest_deg [deg]; "
-                        "default Table I and the stored rest angle)")
+                   help="a pressure constant held fixed (a1, a2, b1, b2 [rad/bar^2, rad/bar], phi_rest_deg [deg], "
+                        "amplitude_bar [bar]; default Table I, the stored rest angle and the raised sine)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the problem (repeatable)")
     p.add_argument("--relative-sigma", action="store_true",

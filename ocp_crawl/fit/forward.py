@@ -59,9 +59,13 @@ def _simulated(task: RowTask) -> tuple[float, str]:
         problem = _problem(task, {})
         c = dict(task.pressure)
         bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
+        amplitude = c.get("amplitude_bar", math.nan)
         try:
             signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
-                                     c["phi_rest_deg"], bmap)
+                                     c["phi_rest_deg"], bmap, None if math.isnan(amplitude) else amplitude)
+        except ValueError as exc:  # e.g. an amplitude above the nominal pressure: a negative gauge pressure
+            return math.nan, f"{Status.BAD_INPUT.label}: {exc}"
+        try:
             result = simulate(problem.model, signal, "event", problem.hybrid)
         except ValueError as exc:  # no released equilibrium at t = 0
             return math.nan, f"{Status.NO_START.label}: {exc}"

@@ -5,7 +5,9 @@ A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.m
 schema gains that is not a numerics setting), or ``pressure.NAME``
 for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`, which problem files do not
 describe: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar]
-(Table I's map) and ``pressure.phi_rest_deg`` [deg] (the rest angle).  Values are in the units
+(Table I's map), ``pressure.phi_rest_deg`` [deg] (the rest angle) and ``pressure.amplitude_bar`` [bar]
+(the waveform: NaN, the default, is the raised sine from 0 to the peak p0; a number A_p is the
+paper's form (ref), p0 + A_p sin(...) with p0 the nominal pressure, :mod:`ocp_crawl.model.pressure`).  Values are in the units
 of the problem files (degrees for angles).
 """
 from __future__ import annotations
@@ -20,7 +22,8 @@ from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.problem.schema import SCHEMA, suggest
 
 #: pressure parameters -> unit
-PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg"}
+PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg",
+                  "amplitude_bar": "bar"}
 #: sections whose numbers are settings of the numerics, not properties of the robot or its input
 NOT_FITTED = ("model", "simulation", "ocp")
 #: sections whose numbers can be fitted (every other section of the schema, e.g. ones added for new inputs)
@@ -59,7 +62,7 @@ def fittable_names() -> list[str]:
 def pressure_defaults(gravity: str) -> dict[str, float]:
     """The pressure constants used when not fitted: Table I's map and the stored rest angle [deg]."""
     return {**{f.name: getattr(BendingMap(), f.name) for f in dataclasses.fields(BendingMap)},
-            "phi_rest_deg": FITTED_REST_DEG[gravity]}
+            "phi_rest_deg": FITTED_REST_DEG[gravity], "amplitude_bar": math.nan}
 
 
 def _current(problem: Problem, name: str) -> tuple[float | None, str]:
@@ -152,8 +155,9 @@ def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits:
     value, unit = _current(problem, name)
     if name in starts:
         value = starts[name]
-    if value is None:
-        raise ProblemError(f"--param {name}: the problem file gives no value to start from; give --start {name}=VALUE")
+    if value is None or math.isnan(value):
+        raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the default "
+                           f"waveform has no such constant); give --start {name}=VALUE")
     low, high = _default_bounds(float(value), unit)
     if name in limits:
         lo, sep, hi = limits[name].partition(":")
