@@ -83,8 +83,8 @@ def test_low_k_first_point_ill_conditioned_and_matched():
 def test_low_k_curve_is_psi_42():
     """The paper's low-stiffness curve is the gait with phase difference 42 deg (not stated in the paper; its other
     two curves are at 45 deg): every published point within 2 % or, the first (ill-conditioned), matched within
-    0.2 deg; the 29 others within 1 %, while at 45 deg they are up to +6 %; and 42 deg is the best fit to 0.5 deg
-    (the rms error over the 29 points is larger at 41.5 and at 42.5 deg)."""
+    0.2 deg; the 32 others within 1 %, while at 45 deg they are up to +6 %; and 42 deg is the best fit to 0.5 deg
+    (the rms error over the 32 points is larger at 41.5 and at 42.5 deg)."""
     A, paper = _published(2)
     bad = [why for a, p in zip(A, paper) if (why := _point_ok(COT_K_RATIOS[2], a, p, LOW_K_PAPER_PSI_DEG))]
     assert not bad, bad

@@ -253,12 +253,12 @@ What the differences are (issue 15, measured at every published point, paper's c
   about in proportion to k here: +0.96 % per +1 % of k).  Not a modelling error; the software keeps Table I.
 - **Low stiffness (0.3 M g L): the paper's curve was computed with psi = 42 deg, not 45.**  Its text
   states no phase difference for Fig. CoT; its other two curves are at 45 deg (CoT+ changes 0.33 % per
-  degree of psi at k = 5).  With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 29 points
+  degree of psi at k = 5).  With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 32 points
   after the first are within 0.63 % (rms 0.21 %; the k = 5 curve at its stated inputs, measured the same way: 0.19 %; least squares:
   psi = 42.03 deg); the first (A = 11.59 deg, 46 %/deg) is -2.7 % and matched by an amplitude within
   0.2 deg.  With psi = 45 the same points are +1.0 .. +6.0 % (ours higher: our robot moves less, CoT+
   near the friction threshold falls steeply as psi decreases).  Least squares with k free: k x 0.998,
-  psi 42.15 deg, rms 0.15 %.  Ruled out, single inputs at their best fit (rms / worst over the same 29
+  psi 42.15 deg, rms 0.15 %.  Ruled out, single inputs at their best fit (rms / worst over the same 32
   points): amplitude offset +0.68 deg 1.53 / 3.2 %; amplitude scale x1.053 1.08 / 3.4 %; k 0.2954
   2.1 / 8.0 %; mu 0.370 0.99 / 3.3 %; gamma 92.5 deg 1.19 / 4.0 %; beta 1.946 2.1 / 7.7 %; actuator
   gain tau = s k (phi_ref - pi) (s 0.988) 2.3 / 7.9 %; unequal amplitudes A (1 -+ 0.02) 2.3 / 6.2 %;
