@@ -64,9 +64,10 @@ def test_cot_within_2pc_at_every_published_point(i):
     assert not bad, bad
 
 
-@pytest.mark.xfail(strict=True, reason="issue 15: the paper's low-stiffness curve was computed with psi = 42 deg, not the "
-                                       "45 deg of its other curves (test_low_k_curve_is_psi_42); at 45 deg it is "
-                                       "+1 .. +6 % above ours at 12 points, see paper_points.FINDINGS")
+@pytest.mark.xfail(strict=True, reason="issue 15: the paper's low-stiffness curve was computed with psi = 42 deg, "
+                                       "not the 45 deg of its other curves (test_low_k_curve_is_psi_42); at 45 deg "
+                                       "ours is 2..6 % above it at 12 well- or ill-conditioned points, "
+                                       "see paper_points.FINDINGS")
 def test_cot_low_k_within_2pc_at_every_published_point():
     A, paper = _published(2)
     bad = [why for a, p in zip(A, paper) if (why := _point_ok(COT_K_RATIOS[2], a, p))]

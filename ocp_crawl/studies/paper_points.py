@@ -251,25 +251,25 @@ What the differences are (issue 15, measured at every published point, paper's c
   the k = 5 curve, 0.10 %) by k/(M g L) = 2.717 instead of Table I's 0.1677/(0.052 * 9.81 * 0.12) = 2.740:
   the paper's realistic curve was computed with a k/(M g L) 0.84 % smaller than its Table I (CoT+ grows
   about in proportion to k here: +0.96 % per +1 % of k).  Not a modelling error; the software keeps Table I.
-- **Low stiffness (0.3 M g L): the paper's curve was computed with psi = 42 deg, not 45.**  Its text
-  states no phase difference for Fig. CoT; its other two curves are at 45 deg (CoT+ changes 0.33 % per
-  degree of psi at k = 5).  With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 32 points
-  after the first are within 0.63 % (rms 0.21 %; the k = 5 curve at its stated inputs, measured the same way: 0.19 %; least squares:
-  psi = 42.03 deg); the first (A = 11.59 deg, 46 %/deg) is -2.7 % and matched by an amplitude within
-  0.2 deg.  With psi = 45 the same points are +1.0 .. +6.0 % (ours higher: our robot moves less, CoT+
-  near the friction threshold falls steeply as psi decreases).  Least squares with k free: k x 0.998,
-  psi 42.15 deg, rms 0.15 %.  Ruled out, single inputs at their best fit (rms / worst over the same 32
-  points): amplitude offset +0.68 deg 1.53 / 3.2 %; amplitude scale x1.053 1.08 / 3.4 %; k 0.2954
-  2.1 / 8.0 %; mu 0.370 0.99 / 3.3 %; gamma 92.5 deg 1.19 / 4.0 %; beta 1.946 2.1 / 7.7 %; actuator
-  gain tau = s k (phi_ref - pi) (s 0.988) 2.3 / 7.9 %; unequal amplitudes A (1 -+ 0.02) 2.3 / 6.2 %;
-  unequal gamma or mu: no gain (2.45 %); the gravity term's strength x0.8 .. 1.4: 2.3 .. 2.6 %.  Pairs
-  without psi: (k, mu) 0.42 / 1.0 %, (k, gamma) 0.47 / 1.1 %, (mu, gamma) 0.44 / 1.1 %.  Numerics:
-  MPCC time stepping with 20 or 30 steps per cycle moves CoT+ by -0.3 .. -2.1 % irregularly in A (and
-  k = 5 by up to -1.3 %); a fixed-step scheme that detects the contact events one step late (N = 30 ..
-  120) moves it by 0 .. +3.5 % at both stiffnesses, the wrong sign (the same scheme without the lag
-  converges to the event solver, within 0.005 % at 2000 steps).  Earlier (helper F): the first instead
-  of the steady cycle, the start phase, the W+ definition and unequal friction.  The default stays
-  psi = 45 deg: at it the low-stiffness curve is not within 2 % (table above), an input of the paper's.
+- **Low stiffness (0.3 M g L): the paper's curve was computed with psi = 42 deg, not 45.** Its text states
+  no phase difference for Fig. CoT; its other two curves are at 45 deg (CoT+ changes 0.34 % per degree of
+  psi at k = 5). With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 32 points after the
+  first are within 0.63 % (rms 0.21 %; the k = 5 curve at its stated inputs, measured the same way: 0.19
+  %; least squares: psi = 42.03 deg); the first (A = 11.59 deg, 40 %/deg) is -2.7 % and matched at A =
+  11.52 deg, within 0.2 deg. With psi = 45 the same points are +1.0 .. +6.0 % (ours higher: our robot
+  moves less, CoT+ near the friction threshold falls steeply as psi decreases). Least squares with k free:
+  k x 0.998, psi 42.15 deg, rms 0.15 %. Ruled out, single inputs at their best fit (rms / worst over the
+  same 32 points): amplitude offset +0.68 deg 1.53 / 3.2 %; amplitude scale x1.053 1.08 / 3.4 %; k 0.2954
+  2.1 / 8.0 %; mu 0.370 0.99 / 3.3 %; gamma 92.5 deg 1.19 / 4.0 %; beta 1.946 2.1 / 7.7 %; actuator gain
+  tau = s k (phi_ref - pi) (s 0.988) 2.3 / 7.9 %; unequal amplitudes A (1 -+ 0.02) 2.3 / 6.2 %; unequal
+  gamma or mu: no gain (2.45 %); the gravity term's strength x0.8 .. 1.4: 2.3 .. 2.6 %. Pairs without psi:
+  (k, mu) 0.42 / 1.0 %, (k, gamma) 0.47 / 1.1 %, (mu, gamma) 0.44 / 1.1 %. Numerics: MPCC time stepping
+  with 20 or 30 steps per cycle moves CoT+ by -0.3 .. -2.1 % irregularly in A (and k = 5 by up to -1.3 %);
+  a fixed-step scheme that detects the contact events one step late (N = 30 .. 120) moves it by 0 .. +3.5
+  % at both stiffnesses, the wrong sign (the same scheme without the lag converges to the event solver,
+  within 0.005 % at 2000 steps). Earlier (helper F): the first instead of the steady cycle, the start
+  phase, the W+ definition and unequal friction. The default stays psi = 45 deg: at it the low-stiffness
+  curve is not within 2 % (table above), an input of the paper's.
 - **Pressure robot**: the paper's "nominal pressure p0" of "inputs of the form (ref)" read literally
   (p_i = p0 + A_p sin(2 pi t +- psi/2), flat rest, bending from the clamped-segment calibration) with
   A_p = 0.4 bar (the p0 curve starts at 0.4 bar, where p_i reaches 0) reproduces the p0 curve with no
