@@ -31,6 +31,22 @@ _LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 
 
+def legendre_roots(coefs: np.ndarray) -> list[np.ndarray]:
+    """Roots (complex) of the Legendre series with the coefficients in the rows of ``coefs`` (k, m): the
+    values of ``numpy.polynomial.legendre.legroots`` of each row, the eigenvalues of the rotated companion
+    matrices taken in one batched call (a row whose leading coefficient is 0 goes through legroots itself)."""
+    coefs = np.atleast_2d(coefs)
+    full = coefs[:, -1] != 0
+    out = [None] * len(coefs)
+    if np.any(full):
+        comp = np.stack([np.polynomial.legendre.legcompanion(c)[::-1, ::-1] for c in coefs[full]])
+        for j, r in zip(np.nonzero(full)[0], np.linalg.eigvals(comp)):
+            out[j] = r
+    for j in np.nonzero(~full)[0]:
+        out[j] = np.polynomial.legendre.legroots(coefs[j])
+    return out
+
+
 class OutputMixin:
     """Dense output, cycle integrals and the result of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
@@ -68,8 +84,8 @@ class OutputMixin:
             if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
-        cuts = np.cumsum(counts)[:-1]
-        return list(zip(np.split(xs, cuts, axis=1), np.split(aux, cuts, axis=1)))
+        ends = np.cumsum(counts).tolist()
+        return [(xs[:, a:b], aux[:, a:b]) for a, b in zip([0] + ends[:-1], ends)]
 
     @staticmethod
     def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -83,7 +99,8 @@ class OutputMixin:
             if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
                 tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
             stop = start + len(t)
-            idx.append(off + np.clip(np.searchsorted(tp, ts[start:stop], side="right") - 1, 0, tp.size - 2))
+            i = np.searchsorted(tp, ts[start:stop], side="right")  # (the np.clip of i - 1 to [0, n - 2], cheaper)
+            idx.append(off + np.minimum(np.maximum(i - 1, 0), tp.size - 2))
             tps.append(tp)
             xs.append(X)
             xds.append(XD)
@@ -213,22 +230,29 @@ class OutputMixin:
         allv = np.concatenate([pw, ends], axis=2)
         positive_panels = np.all(allv >= 0, axis=2)
         mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
-        extra_t, extra_w, extra_i = [np.zeros(0)], [np.zeros(0)], [np.zeros(0, int)]
-        for i, j in zip(*np.nonzero(mixed)):
-            # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
-            coef = pw[i, j] @ _LEG_FIT  # (the interpolant's Legendre coefficients)
-            r = np.polynomial.legendre.legroots(coef)
+        ii, jj = np.nonzero(mixed)
+        if not ii.size:
+            return np.zeros(0), np.zeros(0), np.zeros(0, int), positive_panels
+        # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+        roots = legendre_roots(pw[ii, jj] @ _LEG_FIT)  # (the interpolants' Legendre coefficients)
+        lo_all, hi_all = edges[jj, 0], edges[jj, 1]
+        c0s, c1s, owners = [], [], []
+        for r, lo, hi, i in zip(roots, lo_all, hi_all, ii):
             r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
-            lo, hi = edges[j]
             cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
-            for c0, c1 in zip(cuts[:-1], cuts[1:]):
-                if c1 - c0 <= 0:
-                    continue
-                tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
-                extra_t.append(tt)
-                extra_w.append(w2)
-                extra_i.append(np.full(len(tt), i))
-        return np.concatenate(extra_t), np.concatenate(extra_w), np.concatenate(extra_i), positive_panels
+            keep = cuts[1:] - cuts[:-1] > 0
+            c0s.append(cuts[:-1][keep])
+            c1s.append(cuts[1:][keep])
+            owners.append(np.full(int(keep.sum()), i))
+        c0, c1, owner = np.concatenate(c0s), np.concatenate(c1s), np.concatenate(owners)
+        if np.all(c1 - c0 <= self.opt.quad_h * (1 - 1e-9)):
+            # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h, 5), at once
+            mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
+            return ((mid + half * _XG).ravel(), (half * _WG).ravel(), np.repeat(owner, _XG.size),
+                    positive_panels)
+        pieces = [gauss_nodes(a, b, self.opt.quad_h, 5) for a, b in zip(c0, c1)]
+        return (np.concatenate([tt for tt, _ in pieces]), np.concatenate([w2 for _, w2 in pieces]),
+                np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]), positive_panels)
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):
