@@ -173,9 +173,14 @@ class OutputMixin:
             m = 0.5 * (bad[:, 0] + bad[:, 1])
             pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
             owner = np.concatenate([owner[~ok], owner[~ok]])
-        return [[np.concatenate([part[k + 1][part[0] == j] if k != 3 else part[k + 1][:, part[0] == j]
-                                 for part in done], axis=1 if k == 3 else 0) for k in range(5)]
-                for j in range(len(spans))]
+        # regroup by piece, each piece's panels in the order found (depth by depth): a stable sort by owner
+        owner = np.concatenate([part[0] for part in done])
+        order = np.argsort(owner, kind="stable")
+        fields = [np.concatenate([part[k + 1] for part in done], axis=1 if k == 3 else 0) for k in range(5)]
+        fields = [f[:, order] if k == 3 else f[order] for k, f in enumerate(fields)]
+        ends = np.cumsum(np.bincount(owner, minlength=len(spans))).tolist()
+        return [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
+                for a, b in zip([0] + ends[:-1], ends)]
 
     def _panel_edges(self, a: float, b: float) -> np.ndarray:
         """Initial panel edges on [a, b]: no longer than ``quad_h``, with the input's knots as edges."""
@@ -195,34 +200,46 @@ class OutputMixin:
         spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
         spans = [sp for sp in spans if sp[2] > sp[1]]
         panels = self._panels(spans) if spans else []
-        extras = [self._sign_split(edges, pw) if positive else None for edges, _, _, pw, _ in panels]
-        todo = [(sp[0], ex[0]) for sp, ex in zip(spans, extras) if ex is not None and ex[0].size]
-        solved = iter(self._evaluate_batch(todo)) if todo else iter(())
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
-        wplus = np.zeros(2)
-        for (edges, _, ww, pw, fric), ex in zip(panels, extras):
+        for _, _, ww, pw, fric in panels:
             w_in += float(np.sum(ww[None] * pw))
             w_abs += float(np.sum(ww[None] * np.abs(pw)))
             diss += float(np.sum(ww * fric))
-            if not positive:
-                continue
-            wplus += np.sum(np.where(ex[3][:, :, None], pw * ww[None], 0.0), axis=(1, 2))
-            if ex[0].size:
-                te, we, ie = ex[0], ex[1], ex[2]
-                _, aux2 = next(solved)
-                p2 = self.torque(te).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
-                pv = p2[ie, np.arange(len(te))]
-                for i in range(2):
-                    wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
+        wplus = self._positive_work(spans, panels) if positive and panels else np.zeros(2)
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
 
+    def _positive_work(self, spans, panels) -> np.ndarray:
+        """Positive work [J] of each actuator on the panels of the pieces ``spans`` (:meth:`_panels`): the Gauss
+        sums of the panels on which its power keeps a positive sign, plus those of the sub-panels of the panels on
+        which it changes sign (:meth:`_sign_split`, all pieces at once; their nodes solved in one batch)."""
+        counts = [len(p[0]) for p in panels]
+        first = np.cumsum([0] + counts)
+        te, we, ie, je, positive_panels = self._sign_split(np.concatenate([p[0] for p in panels]),
+                                                           np.concatenate([p[3] for p in panels], axis=1))
+        node_span = np.searchsorted(first, je, side="right") - 1
+        sel = [np.nonzero(node_span == k)[0] for k in range(len(spans))]
+        todo = [(spans[k][0], te[idx]) for k, idx in enumerate(sel) if idx.size]
+        solved = iter(self._evaluate_batch(todo) if todo else ())
+        wplus = np.zeros(2)
+        for k, (_, _, ww, pw, _) in enumerate(panels):
+            pos = positive_panels[:, first[k]:first[k + 1]]
+            wplus += np.sum(np.where(pos[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            if sel[k].size:
+                t_k, w_k, i_k = te[sel[k]], we[sel[k]], ie[sel[k]]
+                _, aux2 = next(solved)
+                p2 = self.torque(t_k).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
+                pv = p2[i_k, np.arange(len(t_k))]
+                for i in range(2):
+                    wplus[i] += float(np.sum((w_k * np.maximum(pv, 0.0))[i_k == i]))
+        return wplus
+
     def _sign_split(self, edges: np.ndarray, pw: np.ndarray):
-        """The panels of one piece on which an actuator's power stays >= 0, and the
-        extra Gauss nodes (phases, weights, actuator) of the panels on which it changes sign, split at the
-        real roots in the panel of its degree-4 interpolant: (phases, weights, actuator, whether the power of
-        each actuator (2, npan) keeps a positive sign on the panel)."""
+        """The panels (edges (npan, 2), powers (2, npan, 5) at their Gauss nodes) on which an actuator's power stays
+        >= 0, and the extra Gauss nodes (phases, weights, actuator, panel) of the panels on which it changes sign,
+        split at the real roots in the panel of its degree-4 interpolant: (phases, weights, actuator, panel index,
+        whether the power of each actuator (2, npan) keeps a positive sign on the panel)."""
         npan = len(edges)
         # values at the panel edges from each panel's degree-4 interpolant, so that a sign
         # change between an edge and the nearest Gauss node is not missed
@@ -232,27 +249,29 @@ class OutputMixin:
         mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
         ii, jj = np.nonzero(mixed)
         if not ii.size:
-            return np.zeros(0), np.zeros(0), np.zeros(0, int), positive_panels
+            return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
         # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
         roots = legendre_roots(pw[ii, jj] @ _LEG_FIT)  # (the interpolants' Legendre coefficients)
         lo_all, hi_all = edges[jj, 0], edges[jj, 1]
-        c0s, c1s, owners = [], [], []
-        for r, lo, hi, i in zip(roots, lo_all, hi_all, ii):
+        c0s, c1s, owners, panels = [], [], [], []
+        for r, lo, hi, i, j in zip(roots, lo_all, hi_all, ii, jj):
             r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
             cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
             keep = cuts[1:] - cuts[:-1] > 0
             c0s.append(cuts[:-1][keep])
             c1s.append(cuts[1:][keep])
             owners.append(np.full(int(keep.sum()), i))
-        c0, c1, owner = np.concatenate(c0s), np.concatenate(c1s), np.concatenate(owners)
+            panels.append(np.full(int(keep.sum()), j))
+        c0, c1, owner, panel = (np.concatenate(v) for v in (c0s, c1s, owners, panels))
         if np.all(c1 - c0 <= self.opt.quad_h * (1 - 1e-9)):
             # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h, 5), at once
             mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
             return ((mid + half * _XG).ravel(), (half * _WG).ravel(), np.repeat(owner, _XG.size),
-                    positive_panels)
+                    np.repeat(panel, _XG.size), positive_panels)
         pieces = [gauss_nodes(a, b, self.opt.quad_h, 5) for a, b in zip(c0, c1)]
         return (np.concatenate([tt for tt, _ in pieces]), np.concatenate([w2 for _, w2 in pieces]),
-                np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]), positive_panels)
+                np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]),
+                np.concatenate([np.full(len(tt), j) for (tt, _), j in zip(pieces, panel)]), positive_panels)
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):
