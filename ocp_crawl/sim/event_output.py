@@ -31,19 +31,28 @@ _LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 
 
-def legendre_roots(coefs: np.ndarray) -> list[np.ndarray]:
-    """Roots (complex) of the Legendre series with the coefficients in the rows of ``coefs`` (k, m): the
-    values of ``numpy.polynomial.legendre.legroots`` of each row, the eigenvalues of the rotated companion
-    matrices taken in one batched call (a row whose leading coefficient is 0 goes through legroots itself)."""
-    coefs = np.atleast_2d(coefs)
+def legendre_roots(coefs: np.ndarray) -> np.ndarray:
+    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
+    ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
+    its rotated companion matrix, built here as ``legcompanion`` does, for all rows at once, and taken in one
+    batched call); a row whose leading coefficient is 0 goes through legroots itself."""
+    coefs = np.atleast_2d(np.asarray(coefs, float))
     full = coefs[:, -1] != 0
-    out = [None] * len(coefs)
+    out = np.full((len(coefs), coefs.shape[1] - 1), np.nan, dtype=complex)
     if np.any(full):
-        comp = np.stack([np.polynomial.legendre.legcompanion(c)[::-1, ::-1] for c in coefs[full]])
-        for j, r in zip(np.nonzero(full)[0], np.linalg.eigvals(comp)):
-            out[j] = r
+        c = coefs[full]
+        n = c.shape[1] - 1
+        scl = 1. / np.sqrt(2 * np.arange(n) + 1)
+        base = np.zeros((n, n))
+        top = base.reshape(-1)[1::n + 1]
+        top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
+        base.reshape(-1)[n::n + 1] = top
+        comp = np.repeat(base[None], len(c), axis=0)
+        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * (scl / scl[-1]) * (n / (2 * n - 1))
+        out[full] = np.linalg.eigvals(comp[:, ::-1, ::-1])
     for j in np.nonzero(~full)[0]:
-        out[j] = np.polynomial.legendre.legroots(coefs[j])
+        r = np.polynomial.legendre.legroots(coefs[j])
+        out[j, :r.size] = r
     return out
 
 
@@ -55,9 +64,15 @@ class OutputMixin:
         return self._evaluate_batch([(seg, ts)])[0]
 
     def _evaluate_batch(self, requests) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`_evaluate_joined`, split by request: [(x (3, n), aux (NAUX, n)), ...] in the order of the requests."""
+        xs, aux = self._evaluate_joined(requests)
+        ends = np.cumsum([len(ts) for _, ts in requests]).tolist()
+        return [(xs[:, a:b], aux[:, a:b]) for a, b in zip([0] + ends[:-1], ends)]
+
+    def _evaluate_joined(self, requests) -> tuple[np.ndarray, np.ndarray]:
         """Solve each segment's mode at many phases, ``requests`` = [(segment, phases), ...], in one batched
         compiled call (each column is an independent Newton solve); the guesses are the Hermite interpolants
-        of the segments' points.  Returns [(x (3, n), aux (NAUX, n)), ...] in the order of the requests.
+        of the segments' points.  Returns x (3, n) and aux (NAUX, n), the requests' columns one after the other.
 
         Points that the batched Newton does not converge, or converges off the segment's branch (phi
         farther from the guess than 0.05 rad + half the change of phi between the stored points around
@@ -84,8 +99,7 @@ class OutputMixin:
             if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
-        ends = np.cumsum(counts).tolist()
-        return [(xs[:, a:b], aux[:, a:b]) for a, b in zip([0] + ends[:-1], ends)]
+        return xs, aux
 
     @staticmethod
     def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -153,11 +167,7 @@ class OutputMixin:
             mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
             half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
             t = (mid + half * xg)
-            sel = [np.nonzero(owner == k)[0] for k in range(len(spans))]
-            out = self._evaluate_batch([(spans[k][0], t[idx].ravel()) for k, idx in enumerate(sel) if idx.size])
-            aux = np.empty((out[0][1].shape[0], t.size))
-            for idx, (_, ak) in zip([i for i in sel if i.size], out):
-                aux[:, (idx[:, None] * 5 + np.arange(5)).ravel()] = ak
+            aux = self._solve_panels(spans, owner, t)
             t = t.ravel()
             power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
@@ -181,6 +191,21 @@ class OutputMixin:
         ends = np.cumsum(np.bincount(owner, minlength=len(spans))).tolist()
         return [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
                 for a, b in zip([0] + ends[:-1], ends)]
+
+    def _solve_panels(self, spans, owner: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """aux (NAUX, 5 npan) at the Gauss nodes ``t`` (npan, 5) of panels of the pieces ``owner`` (npan,), in the
+        order of ``t``: one batched solve of the panels sorted by piece (already sorted at the first depth)."""
+        order = np.argsort(owner, kind="stable")
+        srt = owner[order]
+        bounds = np.searchsorted(srt, np.arange(len(spans) + 1)).tolist()
+        ts = t[order]
+        _, aux = self._evaluate_joined([(spans[k][0], ts[a:b].ravel()) for k, (a, b) in
+                                        enumerate(zip(bounds[:-1], bounds[1:])) if b > a])
+        if np.all(order[1:] > order[:-1]):
+            return aux
+        out = np.empty_like(aux)
+        out[:, (order[:, None] * 5 + np.arange(5)).ravel()] = aux
+        return out
 
     def _panel_edges(self, a: float, b: float) -> np.ndarray:
         """Initial panel edges on [a, b]: no longer than ``quad_h``, with the input's knots as edges."""
@@ -252,17 +277,16 @@ class OutputMixin:
             return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
         # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
         roots = legendre_roots(pw[ii, jj] @ _LEG_FIT)  # (the interpolants' Legendre coefficients)
-        lo_all, hi_all = edges[jj, 0], edges[jj, 1]
-        c0s, c1s, owners, panels = [], [], [], []
-        for r, lo, hi, i, j in zip(roots, lo_all, hi_all, ii, jj):
-            r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
-            cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
-            keep = cuts[1:] - cuts[:-1] > 0
-            c0s.append(cuts[:-1][keep])
-            c1s.append(cuts[1:][keep])
-            owners.append(np.full(int(keep.sum()), i))
-            panels.append(np.full(int(keep.sum()), j))
-        c0, c1, owner, panel = (np.concatenate(v) for v in (c0s, c1s, owners, panels))
+        lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
+        r = np.where((np.abs(roots.imag) < 1e-9) & (np.abs(roots.real) < 1), roots.real, np.nan)
+        r.sort(axis=1)  # (the real roots in the panel in increasing order, then nan)
+        # cuts lo, the roots, hi (hi also in place of the missing roots: the pieces of length 0 are dropped)
+        cuts = np.concatenate([lo, lo + (r + 1) * (hi - lo) / 2, hi], axis=1)
+        cuts = np.where(np.isnan(cuts), hi, cuts)
+        c0, c1 = cuts[:, :-1], cuts[:, 1:]
+        keep = c1 - c0 > 0
+        c0, c1 = c0[keep], c1[keep]
+        owner, panel = np.broadcast_to(ii[:, None], keep.shape)[keep], np.broadcast_to(jj[:, None], keep.shape)[keep]
         if np.all(c1 - c0 <= self.opt.quad_h * (1 - 1e-9)):
             # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h, 5), at once
             mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
