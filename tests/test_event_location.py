@@ -39,22 +39,3 @@ def test_event_phases_match_an_independent_brent_root(gravity, gamma, amp, psi, 
     # measured: <= 4e-15 at k/(M g L) <= 5, 3e-14 at 1e4 (the guards' round-off grows with k/(M g L));
     # with event_xtol = 1e-8 the same check reads 7e-12 to 6e-10
     assert worst <= 1e-13, worst
-
-
-def test_hermite_zero_is_the_zero_of_the_cubic_interpolant():
-    """The start of the event Newton: the zero in the bracket of the cubic with the guard's end values and rates,
-    checked against numpy's roots of the same cubic; the start point when Newton cannot proceed."""
-    from ocp_crawl.sim.event_locate import hermite_zero
-
-    ta, tb = 0.25, 0.3125
-    h = tb - ta
-    for fa, fb, ra, rb in [(1e-3, -2e-3, -0.01, -0.05), (0.3, -0.1, 2.0, -9.0), (5e-9, -1e-9, -1e-7, -2e-8)]:
-        m0, m1 = h * ra, h * rb
-        cubic = [2 * (fa - fb) + m0 + m1, 3 * (fb - fa) - 2 * m0 - m1, m0, fa]
-        s_ref = [r.real for r in np.roots(cubic) if abs(r.imag) < 1e-12 and 0 < r.real < 1]
-        secant = ta + h * fa / (fa - fb)
-        t = hermite_zero(ta, fa, ra, tb, fb, rb, secant)
-        assert len(s_ref) == 1 and t == pytest.approx(ta + h * s_ref[0], abs=1e-14)
-    # a start at the cubic's maximum (zero slope): Newton cannot step, the start is kept
-    fa, fb, ra, rb = 1.0, -1.0, 0.0, 0.0  # cubic 4 s^3 - 6 s^2 + 1: slope 0 at s = 0 and s = 1 only
-    assert hermite_zero(ta, fa, ra, tb, fb, rb, ta) == ta

@@ -2,7 +2,7 @@
 successor mode, and folds of the equilibrium branch by the augmented system.
 
 :class:`EventsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
-stepper's ``_solve``, ``guards``, ``noise``, ``opt``, ``sym``, ``torque``, ``breakpoints`` and ``p``.
+stepper's ``_solve``, ``guards``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
 """
 from __future__ import annotations
 
@@ -30,29 +30,6 @@ def guard_noise(name: str, noise: float) -> float:
     reversal of d' just before a stiff event) is not taken for noise when k/(M g L) = 1e8.
     """
     return noise if name.startswith("slip_") else ANGLE_NOISE
-
-
-def hermite_zero(ta: float, fa: float, ra: float, tb: float, fb: float, rb: float, t: float) -> float:
-    """Zero in (ta, tb) of the cubic Hermite interpolant of a guard with values fa > 0 > fb and rates ra, rb
-    [1/cycle] at the ends, by Newton's method on the cubic from t (a point of the bracket); t itself if the
-    iteration leaves the bracket or does not settle in 8 steps.  The start of :meth:`EventsMixin._root`: its error
-    is O(h^4) against O(h^2) for the secant point, which saves a mode solve or two per event."""
-    h = tb - ta
-    m0, m1 = h * ra, h * rb
-    c3, c2 = 2 * (fa - fb) + m0 + m1, 3 * (fb - fa) - 2 * m0 - m1
-    s = (t - ta) / h
-    for _ in range(8):
-        v = ((c3 * s + c2) * s + m0) * s + fa
-        dv = (3 * c3 * s + 2 * c2) * s + m0
-        if not dv != 0.0:
-            return t
-        step = v / dv
-        s -= step
-        if not 0.0 < s < 1.0:
-            return t
-        if abs(step) <= 1e-15:
-            return ta + s * h
-    return t
 
 
 class EventsMixin:
@@ -114,11 +91,6 @@ class EventsMixin:
         t = ta + (tb - ta) * fa / (fa - fb)
         if not ta < t < tb:
             t = 0.5 * (ta + tb)
-        pa, pb = point_at(ta), point_at(tb)  # (the ends are cached: no solve)
-        # a smooth input (no knots, where a sampled input's derivative and the guards' rates may jump): start from
-        # the zero of the guard's cubic Hermite interpolant
-        if pa.rates is not None and pb.rates is not None and not self.breakpoints.size:
-            t = hermite_zero(ta, fa, pa.rates[name], tb, fb, pb.rates[name], t)
         dx_old = dx = tb - ta
         for _ in range(200):
             pt = point_at(t)
