@@ -31,6 +31,14 @@ _LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 
 
+def _gauss_nodes(pending: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """5-point Gauss-Legendre nodes (npan, 5) of the panels (lo, hi) ``pending`` (npan, 2), and their half widths
+    (npan, 1)."""
+    mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
+    half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
+    return mid + half * _XG, half
+
+
 def legendre_roots(coefs: np.ndarray) -> np.ndarray:
     """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
     ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
@@ -54,6 +62,12 @@ def legendre_roots(coefs: np.ndarray) -> np.ndarray:
         r = np.polynomial.legendre.legroots(coefs[j])
         out[j, :r.size] = r
     return out
+
+
+def _spans(segments, ta: float, tb: float) -> list:
+    """[(segment, a, b), ...]: the stretches of positive length of the segments inside [ta, tb] [cycles]."""
+    spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
+    return [sp for sp in spans if sp[2] > sp[1]]
 
 
 class OutputMixin:
@@ -144,7 +158,7 @@ class OutputMixin:
                 return cur
         return None
 
-    def _panels(self, spans):
+    def _panels(self, spans, first: np.ndarray | None = None):
         """Adaptive Gauss-Legendre panels (5 nodes) on the smooth pieces ``spans`` = [(segment, a, b), ...].
 
         Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
@@ -152,22 +166,16 @@ class OutputMixin:
         powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece, so
         steep stretches (low stiffness, large amplitudes) are resolved.  The pieces are refined together
         (one batched solve per depth).  Returns per piece the panel edges (lo, hi), nodes, weights and
-        integrands (power (2, n, 5), friction power (n, 5)).
+        integrands (power (2, n, 5), friction power (n, 5)).  ``first``: the aux of the first depth's nodes
+        when they are solved already (:meth:`_first_requests`, solved with the samples).
         """
-        xg, wg = _XG, _WG
-        pending, owner = [], []
-        for k, (_, a, b) in enumerate(spans):
-            edges = self._panel_edges(a, b)
-            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
-            owner.append(np.full(len(edges) - 1, k))
-        pending, owner = np.concatenate(pending), np.concatenate(owner)
+        wg = _WG
+        pending, owner = self._first_panels(spans)
         done = []
         scale = np.zeros(len(spans))
         for depth in range(QUAD_DEPTH + 1):
-            mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
-            half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
-            t = (mid + half * xg)
-            aux = self._solve_panels(spans, owner, t)
+            t, half = _gauss_nodes(pending)
+            aux = first if depth == 0 and first is not None else self._solve_panels(spans, owner, t)
             t = t.ravel()
             power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
@@ -191,6 +199,26 @@ class OutputMixin:
         ends = np.cumsum(np.bincount(owner, minlength=len(spans))).tolist()
         return [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
                 for a, b in zip([0] + ends[:-1], ends)]
+
+    def _first_panels(self, spans) -> tuple[np.ndarray, np.ndarray]:
+        """The panels (lo, hi) (npan, 2) of the first depth on the pieces ``spans`` and their pieces (npan,), piece
+        by piece (:meth:`_panel_edges`)."""
+        pending, owner = [], []
+        for k, (_, a, b) in enumerate(spans):
+            edges = self._panel_edges(a, b)
+            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
+            owner.append(np.full(len(edges) - 1, k))
+        return np.concatenate(pending), np.concatenate(owner)
+
+    def _first_requests(self, spans) -> list:
+        """[(segment, phases), ...] of the Gauss nodes of the first depth of :meth:`_panels` on the pieces
+        ``spans``, in the order of its batched solve (to be solved with other points in one batch)."""
+        if not spans:
+            return []
+        pending, owner = self._first_panels(spans)
+        t = _gauss_nodes(pending)[0]
+        bounds = np.searchsorted(owner, np.arange(len(spans) + 1)).tolist()
+        return [(spans[k][0], t[a:b].ravel()) for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])) if b > a]
 
     def _solve_panels(self, spans, owner: np.ndarray, t: np.ndarray) -> np.ndarray:
         """aux (NAUX, 5 npan) at the Gauss nodes ``t`` (npan, 5) of panels of the pieces ``owner`` (npan,), in the
@@ -216,15 +244,15 @@ class OutputMixin:
             edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
         return edges
 
-    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
+    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool, first: np.ndarray | None = None) -> dict:
         """Input work, gross work, friction dissipation and per-actuator positive work over [ta, tb].
 
         Adaptive Gauss-Legendre panels (:meth:`_panels`) on each smooth segment; for W+ a panel on
-        which an actuator's power changes sign is split at the roots of its interpolant.
+        which an actuator's power changes sign is split at the roots of its interpolant.  ``first``: see
+        :meth:`_panels`.
         """
-        spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
-        spans = [sp for sp in spans if sp[2] > sp[1]]
-        panels = self._panels(spans) if spans else []
+        spans = _spans(segments, ta, tb)
+        panels = self._panels(spans, first) if spans else []
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
@@ -329,14 +357,16 @@ class OutputMixin:
         res.t0 = t0
         if te is None and success:
             te = default_phases([e.t - t0 for e in events if t0 <= e.t <= t0 + 1])
+        first = None
         if te is None:
             blocks = self._stored_blocks(segments, t0, fail_t)
-        else:
-            blocks = self._sampled_blocks(segments, t0 + te)
+        else:  # (with the first quadrature panels of a steady cycle: one batched solve)
+            blocks, first = self._sampled_blocks(segments, t0 + te,
+                                                 self._first_requests(_spans(segments, t0, t0 + 1)) if success else [])
         if blocks:
             self._store_samples(res, blocks)
         if success:
-            self._steady_metrics(res, segments, t0)
+            self._steady_metrics(res, segments, t0, first)
             res.periodicity_residual = run.extra.get("periodicity_deviation", float("nan"))
             stability_gate(res, self.model)
             energy_gate(res, self.opt.energy_tol, "HybridOptions.energy_tol")
@@ -357,9 +387,10 @@ class OutputMixin:
                                np.stack([p.aux for p in pts], axis=1), seg))
         return blocks
 
-    def _sampled_blocks(self, segments, te: np.ndarray) -> list:
+    def _sampled_blocks(self, segments, te: np.ndarray, also=()) -> tuple[list, np.ndarray | None]:
         """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
-        (a phase on a segment boundary goes to the earlier segment), solved in one batch."""
+        (a phase on a segment boundary goes to the earlier segment), solved in one batch with the requests
+        ``also`` [(segment, phases), ...]; and the aux (NAUX, n) of ``also`` (None if there are none)."""
         requests = []
         free = np.ones(te.size, bool)
         for seg in segments:
@@ -367,8 +398,12 @@ class OutputMixin:
             if sel.size:
                 free[sel] = False
                 requests.append((seg, te[sel]))
-        solved = self._evaluate_batch(requests) if requests else []
-        return [(ts, xs, aux, seg) for (seg, ts), (xs, aux) in zip(requests, solved)]
+        if not requests and not also:
+            return [], None
+        xs, aux = self._evaluate_joined(requests + list(also))
+        ends = np.cumsum([len(ts) for _, ts in requests]).tolist()
+        blocks = [(ts, xs[:, a:b], aux[:, a:b], seg) for (seg, ts), a, b in zip(requests, [0] + ends[:-1], ends)]
+        return blocks, aux[:, (ends[-1] if ends else 0):] if also else None
 
     def _store_samples(self, res: CrawlResult, blocks: list) -> None:
         """Output arrays of the blocks, in the order of their phases."""
@@ -385,15 +420,15 @@ class OutputMixin:
                     A[AUX["fn2"]], self.torque(t).reshape(2, -1), mode)
         res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
 
-    def _steady_metrics(self, res: CrawlResult, segments, t0: float) -> None:
-        """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1]."""
+    def _steady_metrics(self, res: CrawlResult, segments, t0: float, first: np.ndarray | None = None) -> None:
+        """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1] (``first``: see :meth:`_panels`)."""
         model = self.model
         pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
         sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t][-1]
         sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t][-1]
         x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
         x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
-        ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True)
+        ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True, first=first)
         dV = float(model.potential(pb.x[:2]) - model.potential(pa.x[:2]))
         set_cycle_metrics(res, model.robot, x1b - x1a, ints["W_plus_joint"], ints["input_work"], dV,
                           ints["dissipation"], ints["gross_work"])
