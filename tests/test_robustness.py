@@ -51,7 +51,7 @@ def test_chattering_input_loses_no_event():
 
 def test_input_step_resolves_the_fastest_harmonic():
     robot = Robot.paper()
-    assert input_step(paper_torque(robot)) == 0.125  # one harmonic: the default step (1/64) stays
+    assert input_step(paper_torque(robot)) == 0.125  # one harmonic: the default step (1/16) stays
     assert input_step(chattering(robot, 80, 0.01)) == pytest.approx(1 / 640)
     # a ripple far below the significance threshold does not shrink the step
     assert input_step(chattering(robot, 80, 1e-8)) == 0.125
@@ -59,7 +59,7 @@ def test_input_step_resolves_the_fastest_harmonic():
 
 def test_events_closer_than_the_step_are_located_inside_it():
     """The paper's robot at k = 1.3 M g L with an amplitude just above its slip threshold: the slip
-    onset and the return to stick are much closer together than one step (1/64 cycle).  The
+    onset and the return to stick are much closer together than one step (1/16 cycle).  The
     threshold is found with an 8x finer step; the default run must find the same short slips
     (the guard is positive at both ends of the step that holds them)."""
     robot = Robot.paper().with_stiffness_ratio(1.3)

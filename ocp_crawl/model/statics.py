@@ -319,6 +319,15 @@ def fast_ddot2():
     return FastFunction(symbolic().ddot2)
 
 
+@lru_cache(maxsize=1)
+def fast_kin():
+    """:attr:`_Symbolic.kin` as a low-overhead callable (compiled C when available), for the scalar
+    :meth:`Model.kinematics` calls of the stepper (start check, potential at the cycle ends)."""
+    from ocp_crawl.model.compiled import FastFunction
+
+    return FastFunction(symbolic().kin)
+
+
 #: width of the compiled vectorised Newton solve, and of a narrow one for the last few columns (a call costs
 #: about 1 us per column, padding included)
 BATCH = 64
@@ -455,7 +464,7 @@ class Model:
         """theta, d, x_c, Delta, normal forces, grad d, grad U_g, U_el, U_g at phi (shape (2,) or (2, N))."""
         phi = np.asarray(phi, dtype=float)
         if phi.ndim == 1:
-            out = np.asarray(self.sym.kin(phi, self.p)).ravel()
+            out = fast_kin()(phi, self.p)[0]
             return {n: out[i] for n, i in KIN.items()}
         out = call_mapped(self.sym.kin, phi, self.p)
         return {n: out[i] for n, i in KIN.items()}

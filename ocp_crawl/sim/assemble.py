@@ -125,8 +125,8 @@ def stability_gate(res: CrawlResult, model: Model) -> None:
     r = model.robot
     X = np.vstack([res.phi, res.f_t / (r.M * r.g)])
     modes = np.asarray(res.mode, dtype=int)
-    table = {m: mode_q(Mode(int(m))) for m in np.unique(modes)}
-    Q = np.stack([table[m] for m in modes], axis=1)
+    kinds, which = np.unique(modes, return_inverse=True)
+    Q = np.stack([mode_q(Mode(int(m))) for m in kinds], axis=1)[:, which.ravel()]
     margin = sample_margins(model, X, Q)
     bad = np.nonzero(~(margin > 0))[0]
     if bad.size:

@@ -148,6 +148,8 @@ class GuardsMixin:
             if v < floor:
                 out.append((name, p0.t + s * h))
                 continue
+            if min(a, b, v) - err / 16 >= floor:
+                continue  # the grid test below cannot fail: the cubic >= min(a, b, v) and err s^2 (1 - s)^2 <= err/16
             c3, c2 = 2 * (a - b) + m0 + m1, 3 * (b - a) - 2 * m0 - m1
             bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
             suspect = suspect or bool(np.min(bound) < floor)

@@ -31,6 +31,45 @@ _LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 
 
+def _gauss_nodes(pending: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """5-point Gauss-Legendre nodes (npan, 5) of the panels (lo, hi) ``pending`` (npan, 2), and their half widths
+    (npan, 1)."""
+    mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
+    half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
+    return mid + half * _XG, half
+
+
+def legendre_roots(coefs: np.ndarray) -> np.ndarray:
+    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
+    ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
+    its rotated companion matrix, built here as ``legcompanion`` does, for all rows at once, and taken in one
+    batched call); a row whose leading coefficient is 0 goes through legroots itself."""
+    coefs = np.atleast_2d(np.asarray(coefs, float))
+    full = coefs[:, -1] != 0
+    out = np.full((len(coefs), coefs.shape[1] - 1), np.nan, dtype=complex)
+    if np.any(full):
+        c = coefs[full]
+        n = c.shape[1] - 1
+        scl = 1. / np.sqrt(2 * np.arange(n) + 1)
+        base = np.zeros((n, n))
+        top = base.reshape(-1)[1::n + 1]
+        top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
+        base.reshape(-1)[n::n + 1] = top
+        comp = np.repeat(base[None], len(c), axis=0)
+        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * (scl / scl[-1]) * (n / (2 * n - 1))
+        out[full] = np.linalg.eigvals(comp[:, ::-1, ::-1])
+    for j in np.nonzero(~full)[0]:
+        r = np.polynomial.legendre.legroots(coefs[j])
+        out[j, :r.size] = r
+    return out
+
+
+def _spans(segments, ta: float, tb: float) -> list:
+    """[(segment, a, b), ...]: the stretches of positive length of the segments inside [ta, tb] [cycles]."""
+    spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
+    return [sp for sp in spans if sp[2] > sp[1]]
+
+
 class OutputMixin:
     """Dense output, cycle integrals and the result of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
@@ -39,9 +78,15 @@ class OutputMixin:
         return self._evaluate_batch([(seg, ts)])[0]
 
     def _evaluate_batch(self, requests) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`_evaluate_joined`, split by request: [(x (3, n), aux (NAUX, n)), ...] in the order of the requests."""
+        xs, aux = self._evaluate_joined(requests)
+        ends = np.cumsum([len(ts) for _, ts in requests]).tolist()
+        return [(xs[:, a:b], aux[:, a:b]) for a, b in zip([0] + ends[:-1], ends)]
+
+    def _evaluate_joined(self, requests) -> tuple[np.ndarray, np.ndarray]:
         """Solve each segment's mode at many phases, ``requests`` = [(segment, phases), ...], in one batched
         compiled call (each column is an independent Newton solve); the guesses are the Hermite interpolants
-        of the segments' points.  Returns [(x (3, n), aux (NAUX, n)), ...] in the order of the requests.
+        of the segments' points.  Returns x (3, n) and aux (NAUX, n), the requests' columns one after the other.
 
         Points that the batched Newton does not converge, or converges off the segment's branch (phi
         farther from the guess than 0.05 rad + half the change of phi between the stored points around
@@ -68,8 +113,7 @@ class OutputMixin:
             if pt is None:
                 raise _Failure(Status.NO_CONVERGENCE, float(ts[j]), seg.mode, "dense output solve failed")
             xs[:, j], aux[:, j] = pt.x, pt.aux
-        cuts = np.cumsum(counts)[:-1]
-        return list(zip(np.split(xs, cuts, axis=1), np.split(aux, cuts, axis=1)))
+        return xs, aux
 
     @staticmethod
     def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -83,7 +127,8 @@ class OutputMixin:
             if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
                 tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
             stop = start + len(t)
-            idx.append(off + np.clip(np.searchsorted(tp, ts[start:stop], side="right") - 1, 0, tp.size - 2))
+            i = np.searchsorted(tp, ts[start:stop], side="right")  # (the np.clip of i - 1 to [0, n - 2], cheaper)
+            idx.append(off + np.minimum(np.maximum(i - 1, 0), tp.size - 2))
             tps.append(tp)
             xs.append(X)
             xds.append(XD)
@@ -113,7 +158,7 @@ class OutputMixin:
                 return cur
         return None
 
-    def _panels(self, spans):
+    def _panels(self, spans, first: np.ndarray | None = None):
         """Adaptive Gauss-Legendre panels (5 nodes) on the smooth pieces ``spans`` = [(segment, a, b), ...].
 
         Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
@@ -121,26 +166,16 @@ class OutputMixin:
         powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece, so
         steep stretches (low stiffness, large amplitudes) are resolved.  The pieces are refined together
         (one batched solve per depth).  Returns per piece the panel edges (lo, hi), nodes, weights and
-        integrands (power (2, n, 5), friction power (n, 5)).
+        integrands (power (2, n, 5), friction power (n, 5)).  ``first``: the aux of the first depth's nodes
+        when they are solved already (:meth:`_first_requests`, solved with the samples).
         """
-        xg, wg = _XG, _WG
-        pending, owner = [], []
-        for k, (_, a, b) in enumerate(spans):
-            edges = self._panel_edges(a, b)
-            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
-            owner.append(np.full(len(edges) - 1, k))
-        pending, owner = np.concatenate(pending), np.concatenate(owner)
+        wg = _WG
+        pending, owner = self._first_panels(spans)
         done = []
         scale = np.zeros(len(spans))
         for depth in range(QUAD_DEPTH + 1):
-            mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
-            half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
-            t = (mid + half * xg)
-            sel = [np.nonzero(owner == k)[0] for k in range(len(spans))]
-            out = self._evaluate_batch([(spans[k][0], t[idx].ravel()) for k, idx in enumerate(sel) if idx.size])
-            aux = np.empty((out[0][1].shape[0], t.size))
-            for idx, (_, ak) in zip([i for i in sel if i.size], out):
-                aux[:, (idx[:, None] * 5 + np.arange(5)).ravel()] = ak
+            t, half = _gauss_nodes(pending)
+            aux = first if depth == 0 and first is not None else self._solve_panels(spans, owner, t)
             t = t.ravel()
             power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
@@ -156,9 +191,49 @@ class OutputMixin:
             m = 0.5 * (bad[:, 0] + bad[:, 1])
             pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
             owner = np.concatenate([owner[~ok], owner[~ok]])
-        return [[np.concatenate([part[k + 1][part[0] == j] if k != 3 else part[k + 1][:, part[0] == j]
-                                 for part in done], axis=1 if k == 3 else 0) for k in range(5)]
-                for j in range(len(spans))]
+        # regroup by piece, each piece's panels in the order found (depth by depth): a stable sort by owner
+        owner = np.concatenate([part[0] for part in done])
+        order = np.argsort(owner, kind="stable")
+        fields = [np.concatenate([part[k + 1] for part in done], axis=1 if k == 3 else 0) for k in range(5)]
+        fields = [f[:, order] if k == 3 else f[order] for k, f in enumerate(fields)]
+        ends = np.cumsum(np.bincount(owner, minlength=len(spans))).tolist()
+        return [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
+                for a, b in zip([0] + ends[:-1], ends)]
+
+    def _first_panels(self, spans) -> tuple[np.ndarray, np.ndarray]:
+        """The panels (lo, hi) (npan, 2) of the first depth on the pieces ``spans`` and their pieces (npan,), piece
+        by piece (:meth:`_panel_edges`)."""
+        pending, owner = [], []
+        for k, (_, a, b) in enumerate(spans):
+            edges = self._panel_edges(a, b)
+            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
+            owner.append(np.full(len(edges) - 1, k))
+        return np.concatenate(pending), np.concatenate(owner)
+
+    def _first_requests(self, spans) -> list:
+        """[(segment, phases), ...] of the Gauss nodes of the first depth of :meth:`_panels` on the pieces
+        ``spans``, in the order of its batched solve (to be solved with other points in one batch)."""
+        if not spans:
+            return []
+        pending, owner = self._first_panels(spans)
+        t = _gauss_nodes(pending)[0]
+        bounds = np.searchsorted(owner, np.arange(len(spans) + 1)).tolist()
+        return [(spans[k][0], t[a:b].ravel()) for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])) if b > a]
+
+    def _solve_panels(self, spans, owner: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """aux (NAUX, 5 npan) at the Gauss nodes ``t`` (npan, 5) of panels of the pieces ``owner`` (npan,), in the
+        order of ``t``: one batched solve of the panels sorted by piece (already sorted at the first depth)."""
+        order = np.argsort(owner, kind="stable")
+        srt = owner[order]
+        bounds = np.searchsorted(srt, np.arange(len(spans) + 1)).tolist()
+        ts = t[order]
+        _, aux = self._evaluate_joined([(spans[k][0], ts[a:b].ravel()) for k, (a, b) in
+                                        enumerate(zip(bounds[:-1], bounds[1:])) if b > a])
+        if np.all(order[1:] > order[:-1]):
+            return aux
+        out = np.empty_like(aux)
+        out[:, (order[:, None] * 5 + np.arange(5)).ravel()] = aux
+        return out
 
     def _panel_edges(self, a: float, b: float) -> np.ndarray:
         """Initial panel edges on [a, b]: no longer than ``quad_h``, with the input's knots as edges."""
@@ -169,43 +244,55 @@ class OutputMixin:
             edges = np.unique(np.concatenate([edges, cuts[(cuts > a + 1e-12) & (cuts < b - 1e-12)]]))
         return edges
 
-    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool) -> dict:
+    def _cycle_integrals(self, segments, ta: float, tb: float, positive: bool, first: np.ndarray | None = None) -> dict:
         """Input work, gross work, friction dissipation and per-actuator positive work over [ta, tb].
 
         Adaptive Gauss-Legendre panels (:meth:`_panels`) on each smooth segment; for W+ a panel on
-        which an actuator's power changes sign is split at the roots of its interpolant.
+        which an actuator's power changes sign is split at the roots of its interpolant.  ``first``: see
+        :meth:`_panels`.
         """
-        spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
-        spans = [sp for sp in spans if sp[2] > sp[1]]
-        panels = self._panels(spans) if spans else []
-        extras = [self._sign_split(edges, pw) if positive else None for edges, _, _, pw, _ in panels]
-        todo = [(sp[0], ex[0]) for sp, ex in zip(spans, extras) if ex is not None and ex[0].size]
-        solved = iter(self._evaluate_batch(todo)) if todo else iter(())
+        spans = _spans(segments, ta, tb)
+        panels = self._panels(spans, first) if spans else []
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
-        wplus = np.zeros(2)
-        for (edges, _, ww, pw, fric), ex in zip(panels, extras):
+        for _, _, ww, pw, fric in panels:
             w_in += float(np.sum(ww[None] * pw))
             w_abs += float(np.sum(ww[None] * np.abs(pw)))
             diss += float(np.sum(ww * fric))
-            if not positive:
-                continue
-            wplus += np.sum(np.where(ex[3][:, :, None], pw * ww[None], 0.0), axis=(1, 2))
-            if ex[0].size:
-                te, we, ie = ex[0], ex[1], ex[2]
-                _, aux2 = next(solved)
-                p2 = self.torque(te).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
-                pv = p2[ie, np.arange(len(te))]
-                for i in range(2):
-                    wplus[i] += float(np.sum((we * np.maximum(pv, 0.0))[ie == i]))
+        wplus = self._positive_work(spans, panels) if positive and panels else np.zeros(2)
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
 
+    def _positive_work(self, spans, panels) -> np.ndarray:
+        """Positive work [J] of each actuator on the panels of the pieces ``spans`` (:meth:`_panels`): the Gauss
+        sums of the panels on which its power keeps a positive sign, plus those of the sub-panels of the panels on
+        which it changes sign (:meth:`_sign_split`, all pieces at once; their nodes solved in one batch)."""
+        counts = [len(p[0]) for p in panels]
+        first = np.cumsum([0] + counts)
+        te, we, ie, je, positive_panels = self._sign_split(np.concatenate([p[0] for p in panels]),
+                                                           np.concatenate([p[3] for p in panels], axis=1))
+        node_span = np.searchsorted(first, je, side="right") - 1
+        sel = [np.nonzero(node_span == k)[0] for k in range(len(spans))]
+        todo = [(spans[k][0], te[idx]) for k, idx in enumerate(sel) if idx.size]
+        solved = iter(self._evaluate_batch(todo) if todo else ())
+        wplus = np.zeros(2)
+        for k, (_, _, ww, pw, _) in enumerate(panels):
+            pos = positive_panels[:, first[k]:first[k + 1]]
+            wplus += np.sum(np.where(pos[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            if sel[k].size:
+                t_k, w_k, i_k = te[sel[k]], we[sel[k]], ie[sel[k]]
+                _, aux2 = next(solved)
+                p2 = self.torque(t_k).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
+                pv = p2[i_k, np.arange(len(t_k))]
+                for i in range(2):
+                    wplus[i] += float(np.sum((w_k * np.maximum(pv, 0.0))[i_k == i]))
+        return wplus
+
     def _sign_split(self, edges: np.ndarray, pw: np.ndarray):
-        """The panels of one piece on which an actuator's power stays >= 0, and the
-        extra Gauss nodes (phases, weights, actuator) of the panels on which it changes sign, split at the
-        real roots in the panel of its degree-4 interpolant: (phases, weights, actuator, whether the power of
-        each actuator (2, npan) keeps a positive sign on the panel)."""
+        """The panels (edges (npan, 2), powers (2, npan, 5) at their Gauss nodes) on which an actuator's power stays
+        >= 0, and the extra Gauss nodes (phases, weights, actuator, panel) of the panels on which it changes sign,
+        split at the real roots in the panel of its degree-4 interpolant: (phases, weights, actuator, panel index,
+        whether the power of each actuator (2, npan) keeps a positive sign on the panel)."""
         npan = len(edges)
         # values at the panel edges from each panel's degree-4 interpolant, so that a sign
         # change between an edge and the nearest Gauss node is not missed
@@ -213,22 +300,30 @@ class OutputMixin:
         allv = np.concatenate([pw, ends], axis=2)
         positive_panels = np.all(allv >= 0, axis=2)
         mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
-        extra_t, extra_w, extra_i = [np.zeros(0)], [np.zeros(0)], [np.zeros(0, int)]
-        for i, j in zip(*np.nonzero(mixed)):
-            # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
-            coef = pw[i, j] @ _LEG_FIT  # (the interpolant's Legendre coefficients)
-            r = np.polynomial.legendre.legroots(coef)
-            r = np.sort(r[(np.abs(r.imag) < 1e-9) & (np.abs(r.real) < 1)].real)
-            lo, hi = edges[j]
-            cuts = np.concatenate([[lo], lo + (r + 1) * (hi - lo) / 2, [hi]])
-            for c0, c1 in zip(cuts[:-1], cuts[1:]):
-                if c1 - c0 <= 0:
-                    continue
-                tt, w2 = gauss_nodes(c0, c1, self.opt.quad_h, 5)
-                extra_t.append(tt)
-                extra_w.append(w2)
-                extra_i.append(np.full(len(tt), i))
-        return np.concatenate(extra_t), np.concatenate(extra_w), np.concatenate(extra_i), positive_panels
+        ii, jj = np.nonzero(mixed)
+        if not ii.size:
+            return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
+        # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+        roots = legendre_roots(pw[ii, jj] @ _LEG_FIT)  # (the interpolants' Legendre coefficients)
+        lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
+        r = np.where((np.abs(roots.imag) < 1e-9) & (np.abs(roots.real) < 1), roots.real, np.nan)
+        r.sort(axis=1)  # (the real roots in the panel in increasing order, then nan)
+        # cuts lo, the roots, hi (hi also in place of the missing roots: the pieces of length 0 are dropped)
+        cuts = np.concatenate([lo, lo + (r + 1) * (hi - lo) / 2, hi], axis=1)
+        cuts = np.where(np.isnan(cuts), hi, cuts)
+        c0, c1 = cuts[:, :-1], cuts[:, 1:]
+        keep = c1 - c0 > 0
+        c0, c1 = c0[keep], c1[keep]
+        owner, panel = np.broadcast_to(ii[:, None], keep.shape)[keep], np.broadcast_to(jj[:, None], keep.shape)[keep]
+        if np.all(c1 - c0 <= self.opt.quad_h * (1 - 1e-9)):
+            # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h, 5), at once
+            mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
+            return ((mid + half * _XG).ravel(), (half * _WG).ravel(), np.repeat(owner, _XG.size),
+                    np.repeat(panel, _XG.size), positive_panels)
+        pieces = [gauss_nodes(a, b, self.opt.quad_h, 5) for a, b in zip(c0, c1)]
+        return (np.concatenate([tt for tt, _ in pieces]), np.concatenate([w2 for _, w2 in pieces]),
+                np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]),
+                np.concatenate([np.full(len(tt), j) for (tt, _), j in zip(pieces, panel)]), positive_panels)
 
     def _state_at(self, segments, t: float) -> _Point:
         for seg in reversed(segments):
@@ -262,14 +357,16 @@ class OutputMixin:
         res.t0 = t0
         if te is None and success:
             te = default_phases([e.t - t0 for e in events if t0 <= e.t <= t0 + 1])
+        first = None
         if te is None:
             blocks = self._stored_blocks(segments, t0, fail_t)
-        else:
-            blocks = self._sampled_blocks(segments, t0 + te)
+        else:  # (with the first quadrature panels of a steady cycle: one batched solve)
+            blocks, first = self._sampled_blocks(segments, t0 + te,
+                                                 self._first_requests(_spans(segments, t0, t0 + 1)) if success else [])
         if blocks:
             self._store_samples(res, blocks)
         if success:
-            self._steady_metrics(res, segments, t0)
+            self._steady_metrics(res, segments, t0, first)
             res.periodicity_residual = run.extra.get("periodicity_deviation", float("nan"))
             stability_gate(res, self.model)
             energy_gate(res, self.opt.energy_tol, "HybridOptions.energy_tol")
@@ -290,9 +387,10 @@ class OutputMixin:
                                np.stack([p.aux for p in pts], axis=1), seg))
         return blocks
 
-    def _sampled_blocks(self, segments, te: np.ndarray) -> list:
+    def _sampled_blocks(self, segments, te: np.ndarray, also=()) -> tuple[list, np.ndarray | None]:
         """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
-        (a phase on a segment boundary goes to the earlier segment), solved in one batch."""
+        (a phase on a segment boundary goes to the earlier segment), solved in one batch with the requests
+        ``also`` [(segment, phases), ...]; and the aux (NAUX, n) of ``also`` (None if there are none)."""
         requests = []
         free = np.ones(te.size, bool)
         for seg in segments:
@@ -300,8 +398,12 @@ class OutputMixin:
             if sel.size:
                 free[sel] = False
                 requests.append((seg, te[sel]))
-        solved = self._evaluate_batch(requests) if requests else []
-        return [(ts, xs, aux, seg) for (seg, ts), (xs, aux) in zip(requests, solved)]
+        if not requests and not also:
+            return [], None
+        xs, aux = self._evaluate_joined(requests + list(also))
+        ends = np.cumsum([len(ts) for _, ts in requests]).tolist()
+        blocks = [(ts, xs[:, a:b], aux[:, a:b], seg) for (seg, ts), a, b in zip(requests, [0] + ends[:-1], ends)]
+        return blocks, aux[:, (ends[-1] if ends else 0):] if also else None
 
     def _store_samples(self, res: CrawlResult, blocks: list) -> None:
         """Output arrays of the blocks, in the order of their phases."""
@@ -318,15 +420,15 @@ class OutputMixin:
                     A[AUX["fn2"]], self.torque(t).reshape(2, -1), mode)
         res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
 
-    def _steady_metrics(self, res: CrawlResult, segments, t0: float) -> None:
-        """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1]."""
+    def _steady_metrics(self, res: CrawlResult, segments, t0: float, first: np.ndarray | None = None) -> None:
+        """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1] (``first``: see :meth:`_panels`)."""
         model = self.model
         pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
         sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t][-1]
         sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t][-1]
         x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
         x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
-        ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True)
+        ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True, first=first)
         dV = float(model.potential(pb.x[:2]) - model.potential(pa.x[:2]))
         set_cycle_metrics(res, model.robot, x1b - x1a, ints["W_plus_joint"], ints["input_work"], dV,
                           ints["dissipation"], ints["gross_work"])
