@@ -319,6 +319,7 @@ def fast_ddot2():
     return FastFunction(symbolic().ddot2)
 
 
+@compiled_function
 @lru_cache(maxsize=1)
 def fast_kin():
     """:attr:`_Symbolic.kin` as a low-overhead callable (compiled C when available), for the scalar
