@@ -34,7 +34,7 @@ cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is ``ENERGY_
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -49,7 +49,8 @@ from ocp_crawl.sim.event_checks import describe_margin
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
-from ocp_crawl.sim.step import StepResult, StepState, step_params
+from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
+from ocp_crawl.sim.step_split import locate_event
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -67,6 +68,10 @@ class TimeSteppingOptions(CycleOptions):
     """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
     steps: int = 200
     """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an argument)"""
+    switch_exact: bool = True
+    """split a step whose contact mode changes at the event located inside it (:mod:`ocp_crawl.sim.step_split`),
+    so that every event falls on a step boundary; False: the plain incremental step (the whole step in its
+    end mode: an O(1/N) error in S per change of the slipping foot)"""
     energy_tol_n2: float = 10.0
     """a successful cycle's |energy balance residual| (relative to the gross work) must be <= energy_tol_n2 / N^2
     (N steps per cycle), else ``energy_imbalance``.  The midpoint work and trapezoid dissipation rules leave
@@ -79,6 +84,8 @@ class TimeSteppingOptions(CycleOptions):
         super().__post_init__()
         self._set("max_dphi", real("TimeSteppingOptions.max_dphi", self.max_dphi, positive=True))
         self._set("steps", count("TimeSteppingOptions.steps", self.steps, *STEPS_BOUNDS))
+        if not isinstance(self.switch_exact, bool):
+            raise TypeError(f"TimeSteppingOptions.switch_exact must be a bool, got {self.switch_exact!r}")
         self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
 
 
@@ -180,7 +187,9 @@ class TimeStepper:
                  "step_time_median": float(np.median(run.times)) if run.times else float("nan"),
                  "step_time_total": float(np.sum(run.times)), "max_comp_residual": run.comp_max,
                  "max_eq_residual": run.eq_max, "polished_steps": run.polished, "W_plus_rule": "midpoint",
-                 "periodicity_deviation": run.periodic_dev}
+                 "periodicity_deviation": run.periodic_dev,
+                 "split_steps": sum(e.guard_name != "mode_change_between_steps" for e in run.events),
+                 "split_ipopt_calls": run.split_calls, "unsplit_mode_changes": run.unsplit}
         return self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
 
     def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
@@ -208,32 +217,100 @@ class TimeStepper:
                                                  f"{run.periodic_dev:.3g})", run.n / N, run.mode)
 
     def _step(self, run: "_Run") -> StepResult:
-        """Solve step n + 1 from the run's state, check the solution and record it."""
+        """Solve step n + 1 from the run's state, check the solution and record it; a step whose mode
+        changes is split at the located event (:mod:`ocp_crawl.sim.step_split`) when ``switch_exact``."""
         run.n += 1
         t1 = run.n / self.steps
         mode, state = run.mode, run.state
-        tau = np.asarray(self.torque(t1), float).reshape(2)
+        tau = self._tau(t1, run)
+        res = self._solve(run, state, tau, t1)
+        located = None
+        if res.mode != mode and self.opt.switch_exact:
+            moved, located = self._split(run, mode, state)
+            if moved:
+                state = run.state
+                res = self._solve(run, state, tau, t1)
+        self._record(run, res, state, tau, t1, located)
+        run.prev = res
+        return res
+
+    def _split(self, run: "_Run", mode: Mode, state: StepState) -> tuple[bool, tuple | None]:
+        """Locate the event of ``mode`` in step n (or, for an event the previous step passed without a
+        change of mode, in step n - 1) and record the (sub)steps up to it.  Returns (whether the run's state
+        moved, so that step n must be solved again; the event (phase, guard name, guard value) when it is in
+        step n, else None); when no event is located the reason is kept in the run's statistics."""
+        N = self.steps
+        t0 = (run.n - 1) / N
+        # the previous step may be redone when it was a plain step in the same mode within this cycle
+        rewind = (run.n - 1) % N != 0 and len(run.rows) >= 2 and run.rows[-1][0] == t0 and run.prev is not None
+        split, why = locate_event(self.step, state, mode, lambda th: self._tau(t0 + th / N, run),
+                                  None if run.prev is None else run.prev.w, lo=-1.0 if rewind else 0.0)
+        run.split_calls += self.step.ncalls - run.calls_mark
+        ta = None if split is None else t0 + split.theta / N
+        if split is not None and split.theta < 0 and not ta > run.rows[-2][0] + 1e-12:
+            split, why = None, f"the event at t = {ta:.9f} precedes the previous step's start"
+        if split is None:
+            run.unsplit.append(f"t = {t0 + 1 / N:.6f}: {why}")
+            return False, None
+        tau_a = self._tau(ta, run)
+        res_a = replace(step_result_from_w(self.model, state, split.solve.x, tau_a, success=True,
+                                           status=split.solve.status, message="event point",
+                                           iterations=split.solve.iterations, solve_time=0.0), mode=mode)
+        if split.theta < 0:
+            run.rows.pop()
+            run.state = StepState(run.rows[-1][1], run.rows[-1][4], run.rows[-1][5], run.rows[-1][6])
+        self._record(run, res_a, run.state, tau_a, ta, None)
+        located = (ta, split.guard, split.value)
+        if split.theta < 0:
+            # redo the rest of the previous step from the event, in the mode after it
+            tau0 = self._tau(t0, run)
+            res0 = self._solve(run, run.state, tau0, t0)
+            self._record(run, res0, run.state, tau0, t0, located)
+            located = None
+        return True, located
+
+    def _where(self, run: "_Run", t1: float) -> str:
         cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
-        where = f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+        return f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+
+    def _tau(self, t: float, run: "_Run") -> np.ndarray:
+        """The torque [N m] at phase t; _Stop with SOLVER_FAILURE when it is not finite."""
+        tau = np.asarray(self.torque(t), float).reshape(2)
         if not np.all(np.isfinite(tau)):
-            raise _Stop(Status.SOLVER_FAILURE, "", f"{where}: the torque input is not finite "
-                        f"(tau = {tau.tolist()} N m); no IPOPT call was made", t1, mode)
+            raise _Stop(Status.SOLVER_FAILURE, "", f"{self._where(run, t)}: the torque input is not finite "
+                        f"(tau = {tau.tolist()} N m at t = {t:.9g}); no IPOPT call was made", t, run.mode)
+        return tau
+
+    def _solve(self, run: "_Run", state: StepState, tau: np.ndarray, t1: float) -> StepResult:
+        """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it fails."""
         res = self.step.solve(state, tau, warm_start=run.prev)
+        run.calls_mark = self.step.ncalls
         run.times.append(res.solve_time)
         if not res.success:
             source = "IPOPT " if ipopt_status(res.status).source == "ipopt" else ""
-            raise _Stop(*self._diagnose(state, tau, mode), f"{where} failed with {source}return status "
-                        f"{res.status} [{res.message}]", t1, mode)
+            raise _Stop(*self._diagnose(state, tau, run.mode), f"{self._where(run, t1)} failed with {source}"
+                        f"return status {res.status} [{res.message}]", t1, run.mode)
         run.retries += res.attempts > 1
         run.comp_max = max(run.comp_max, res.comp_residual)
         run.eq_max = max(run.eq_max, res.eq_residual)
         run.polished += bool(res.extra.get("polished"))
+        return res
+
+    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray, t1: float,
+                located: tuple | None) -> None:
+        """Check a solved (sub)step ending at phase t1, record it and its mode change (at the located
+        event (phase, guard name, guard value) if any, else at t1)."""
+        mode, where = run.mode, self._where(run, t1)
         kin = self._check_contact(res, state, where, t1, mode)
         det = self._det(res, state, tau)
         if res.mode != mode:
-            # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
-            run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
-                                    "mode_change_between_steps"))
+            if located is None:
+                # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
+                run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
+                                        "mode_change_between_steps"))
+            else:
+                run.events.append(Event(located[0], event_kind(mode, res.mode), mode.label, res.mode.label,
+                                        located[2], located[1]))
             run.det_ref = None
         if run.det_ref is not None and np.sign(det) != run.det_ref:
             raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
@@ -243,8 +320,7 @@ class TimeStepper:
         run.mode = res.mode
         run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
                          int(res.mode)))
-        run.state, run.prev = res.next_state(), res
-        return res
+        run.state = res.next_state()
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
         """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its mode (the same
@@ -279,13 +355,14 @@ class TimeStepper:
         if status == Status.SUCCESS:
             t0 = float(ncycles - 1)
             res.message = success_message(ncycles, t0, f" of {N} MPCC steps")
-            lo, hi = (ncycles - 1) * N, ncycles * N
+            t_end = t0 + 1.0
         else:
             t0 = float(max(0, math.floor(fail_t - 1e-12)))
             res.message = failure_message(status, detail)
-            lo, hi = int(round(t0 * N)), len(rows) - 1
+            t_end = math.inf
         res.t0 = t0
-        sel = rows[lo:hi + 1]
+        # the step phases and the located events of the cycle
+        sel = [r for r in rows if t0 - 1e-12 <= r[0] <= t_end + 1e-12]
         t = np.array([r[0] for r in sel])
         phi = np.stack([r[1] for r in sel], axis=1)
         cols = {name: np.array([r[i] for r in sel]) for i, name in
@@ -348,6 +425,11 @@ class _Run:
     comp_max: float = 0.0
     eq_max: float = 0.0
     polished: int = 0
+    split_calls: int = 0
+    """IPOPT calls of the event searches"""
+    calls_mark: int = 0
+    unsplit: list = field(default_factory=list)
+    """why steps with a mode change were not split"""
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,
