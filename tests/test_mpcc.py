@@ -320,12 +320,17 @@ def test_time_stepping_result(paper_run):
     N = 100
     assert res.success, res.message
     assert res.status == Status.SUCCESS and res.cycles >= 2
-    assert res.t.shape == (N + 1,) and res.phi.shape == (2, N + 1) and res.tau.shape == (2, N + 1)
-    np.testing.assert_allclose(res.t, res.t0 + np.arange(N + 1) / N, rtol=0, atol=1e-12)
+    # the samples are the step phases and the located events of the cycle (switch-exact steps), in order
+    events = sorted(e.t for e in res.events if res.t0 < e.t < res.t0 + 1 and not (e.t * N) % 1 == 0)
+    assert len(events) == 4  # the paper gait's slip-to-stick and slip onsets
+    n = N + 1 + len(events)
+    assert res.t.shape == (n,) and res.phi.shape == (2, n) and res.tau.shape == (2, n)
+    np.testing.assert_allclose(res.t, np.sort(np.concatenate([res.t0 + np.arange(N + 1) / N, events])),
+                               rtol=0, atol=1e-12)
     np.testing.assert_allclose(res.x2 - res.x1, res.d, rtol=0, atol=1e-12)
     kin = model.kinematics(res.phi)
     np.testing.assert_allclose(res.d, kin["d"], rtol=0, atol=1e-12)
-    for j in range(N + 1):
+    for j in range(n):
         F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
         assert np.max(np.abs(F)) < 1e-9 * r.M * r.g * r.L
     slack = 1e-10 * r.M * r.g

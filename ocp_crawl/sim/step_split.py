@@ -59,6 +59,8 @@ class Split:
     """name of the guard: '<pair> margin' or '<pair> slip rate'"""
     value: float
     """the guard's value at the event (about 0)"""
+    mode_after: Mode
+    """the mode the guard leads to: slip of the pair whose margin reached zero, stick when the slip rate did"""
     calls: int
     """IPOPT calls of the search"""
 
@@ -162,4 +164,5 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
         sol = g.solve(theta)
     except _SearchFailed as exc:
         return None, str(exc)
-    return Split(theta, sol, name, value, step.ncalls - calls0), ""
+    after = Mode.STICK if name.endswith("slip rate") else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])]
+    return Split(theta, sol, name, value, after, step.ncalls - calls0), ""

@@ -104,6 +104,10 @@ def event_kind(before: Mode, after: Mode) -> str:
     return "slip_reversal"
 
 
+#: most events located inside one step (further changes of mode in the step are taken at its end)
+MAX_SPLITS = 3
+
+
 class _Stop(Exception):
     def __init__(self, status: Status, diagnosis: str, detail: str, t: float, mode: Mode):
         detail = f"{detail}; {diagnosis}" if diagnosis else detail
@@ -217,57 +221,61 @@ class TimeStepper:
                                                  f"{run.periodic_dev:.3g})", run.n / N, run.mode)
 
     def _step(self, run: "_Run") -> StepResult:
-        """Solve step n + 1 from the run's state, check the solution and record it; a step whose mode
-        changes is split at the located event (:mod:`ocp_crawl.sim.step_split`) when ``switch_exact``."""
+        """Solve step n + 1 from the run's state, check the solution and record it."""
         run.n += 1
-        t1 = run.n / self.steps
-        mode, state = run.mode, run.state
-        tau = self._tau(t1, run)
-        res = self._solve(run, state, tau, t1)
-        located = None
-        if res.mode != mode and self.opt.switch_exact:
-            moved, located = self._split(run, mode, state)
-            if moved:
-                state = run.state
-                res = self._solve(run, state, tau, t1)
-        self._record(run, res, state, tau, t1, located)
+        N = self.steps
+        return self._advance(run, (run.n - 1) / N, run.n / N, rewind=True)
+
+    def _advance(self, run: "_Run", ta: float, tb: float, rewind: bool) -> StepResult:
+        """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with ``switch_exact``,
+        when the step's mode changes, sub-steps split at the events located inside it
+        (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the previous step
+        passed without a change of mode (slip-to-stick) may be traced back into it, and the previous step
+        redone from there."""
+        tau = self._tau(tb, run)
+        for k in range(MAX_SPLITS + 1):
+            state, mode = run.state, run.mode
+            res = self._solve(run, state, tau, tb)
+            if res.mode == mode or not self.opt.switch_exact or k == MAX_SPLITS:
+                break
+            t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
+                and round(ta * self.steps) % self.steps != 0 else None
+            split, why = locate_event(self.step, state, mode, lambda th: self._tau(ta + th * (tb - ta), run),
+                                      None if run.prev is None else run.prev.w, lo=-1.0 if t_prev is not None else 0.0)
+            run.split_calls += self.step.ncalls - run.calls_mark
+            te = None if split is None else ta + split.theta * (tb - ta)
+            if split is not None and split.theta < 0 and not te > t_prev + 1e-12:
+                split, why = None, f"the event at t = {te:.9f} precedes the previous step's start"
+            if split is None:
+                run.unsplit.append(f"t = {tb:.6f}: {why}")
+                break
+            if split.theta < 0:
+                # the event is in the previous step: drop its end and redo it from the event
+                run.rows.pop()
+                row = run.rows[-1]
+                run.state = StepState(row[1], row[4], row[5], row[6])
+            self._event_point(run, split, state, te)
+            if split.theta < 0:
+                self._advance(run, te, ta, rewind=False)
+            else:
+                ta = te
+            rewind = False
+        self._record(run, res, state, tau, tb)
         run.prev = res
         return res
 
-    def _split(self, run: "_Run", mode: Mode, state: StepState) -> tuple[bool, tuple | None]:
-        """Locate the event of ``mode`` in step n (or, for an event the previous step passed without a
-        change of mode, in step n - 1) and record the (sub)steps up to it.  Returns (whether the run's state
-        moved, so that step n must be solved again; the event (phase, guard name, guard value) when it is in
-        step n, else None); when no event is located the reason is kept in the run's statistics."""
-        N = self.steps
-        t0 = (run.n - 1) / N
-        # the previous step may be redone when it was a plain step in the same mode within this cycle
-        rewind = (run.n - 1) % N != 0 and len(run.rows) >= 2 and run.rows[-1][0] == t0 and run.prev is not None
-        split, why = locate_event(self.step, state, mode, lambda th: self._tau(t0 + th / N, run),
-                                  None if run.prev is None else run.prev.w, lo=-1.0 if rewind else 0.0)
-        run.split_calls += self.step.ncalls - run.calls_mark
-        ta = None if split is None else t0 + split.theta / N
-        if split is not None and split.theta < 0 and not ta > run.rows[-2][0] + 1e-12:
-            split, why = None, f"the event at t = {ta:.9f} precedes the previous step's start"
-        if split is None:
-            run.unsplit.append(f"t = {t0 + 1 / N:.6f}: {why}")
-            return False, None
-        tau_a = self._tau(ta, run)
-        res_a = replace(step_result_from_w(self.model, state, split.solve.x, tau_a, success=True,
-                                           status=split.solve.status, message="event point",
-                                           iterations=split.solve.iterations, solve_time=0.0), mode=mode)
-        if split.theta < 0:
-            run.rows.pop()
-            run.state = StepState(run.rows[-1][1], run.rows[-1][4], run.rows[-1][5], run.rows[-1][6])
-        self._record(run, res_a, run.state, tau_a, ta, None)
-        located = (ta, split.guard, split.value)
-        if split.theta < 0:
-            # redo the rest of the previous step from the event, in the mode after it
-            tau0 = self._tau(t0, run)
-            res0 = self._solve(run, run.state, tau0, t0)
-            self._record(run, res0, run.state, tau0, t0, located)
-            located = None
-        return True, located
+    def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
+        """Record the located event at phase ``te``: the sub-step to it in the old mode (its positions from
+        ``state``, the start of the searched step) and the change to the guard's mode."""
+        mode = run.mode
+        tau = self._tau(te, run)
+        res = replace(step_result_from_w(self.model, state, split.solve.x, tau, success=True,
+                                         status=split.solve.status, message="event point",
+                                         iterations=split.solve.iterations, solve_time=0.0), mode=mode)
+        self._record(run, res, run.state, tau, te)
+        run.events.append(Event(te, event_kind(mode, split.mode_after), mode.label, split.mode_after.label,
+                                split.value, split.guard))
+        run.mode, run.det_ref = split.mode_after, None
 
     def _where(self, run: "_Run", t1: float) -> str:
         cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
@@ -296,21 +304,16 @@ class TimeStepper:
         run.polished += bool(res.extra.get("polished"))
         return res
 
-    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray, t1: float,
-                located: tuple | None) -> None:
-        """Check a solved (sub)step ending at phase t1, record it and its mode change (at the located
-        event (phase, guard name, guard value) if any, else at t1)."""
+    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray, t1: float) -> None:
+        """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of mode not
+        located before (:meth:`_advance`) is recorded as an event at t1."""
         mode, where = run.mode, self._where(run, t1)
         kin = self._check_contact(res, state, where, t1, mode)
         det = self._det(res, state, tau)
         if res.mode != mode:
-            if located is None:
-                # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
-                run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
-                                        "mode_change_between_steps"))
-            else:
-                run.events.append(Event(located[0], event_kind(mode, res.mode), mode.label, res.mode.label,
-                                        located[2], located[1]))
+            # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
+            run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
+                                    "mode_change_between_steps"))
             run.det_ref = None
         if run.det_ref is not None and np.sign(det) != run.det_ref:
             raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
