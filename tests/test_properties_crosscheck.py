@@ -15,7 +15,7 @@ import math
 import os
 
 import pytest
-from hypothesis import HealthCheck, assume, event, given, note, settings
+from hypothesis import HealthCheck, assume, event, example, given, note, settings
 from hypothesis import strategies as st
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
@@ -48,19 +48,31 @@ def log_uniform(lo, hi):
 
 @st.composite
 def cases(draw):
-    """A physical robot with mu1 != mu2 (ratio 1.05-2 either way) and a harmonic torque gait."""
+    """A physical robot with mu1 != mu2 (ratio 1.05-1.6 either way, where the friction limits of the feet can
+    cross during a slip) and a harmonic torque gait (stiffness 2-20 M g L, amplitude 10-30 deg: softer robots and
+    larger strokes mostly end in a fold or a lift-off in both simulators)."""
     mu1 = draw(log_uniform(0.2, 0.8))
-    ratio = draw(log_uniform(1.05, 2.0)) ** draw(st.sampled_from([-1, 1]))
+    ratio = draw(log_uniform(1.05, 1.6)) ** draw(st.sampled_from([-1, 1]))
     robot = Robot(M=draw(log_uniform(0.01, 1.0)), L=draw(log_uniform(0.05, 0.5)), beta=draw(log_uniform(0.5, 4.0)),
-                  k=1.0, mu1=mu1, mu2=mu1 * ratio, g=9.81).with_stiffness_ratio(draw(log_uniform(1.0, 20.0)))
+                  k=1.0, mu1=mu1, mu2=mu1 * ratio, g=9.81).with_stiffness_ratio(draw(log_uniform(2.0, 20.0)))
     gamma = draw(st.floats(75.0, 105.0))
-    gait = Harmonic.from_degrees(gamma, draw(st.floats(10.0, 35.0)), draw(st.floats(-180.0, 180.0)),
+    gait = Harmonic.from_degrees(gamma, draw(st.floats(10.0, 30.0)), draw(st.floats(-180.0, 180.0)),
                                  gamma2_deg=gamma + draw(st.floats(-5.0, 5.0)))
     return Model(robot), ReferenceTorque(gait, robot.k)
 
 
 @SETTINGS
 @given(cases())
+# found by a large run: a slip-to-stick and a slip onset half a step apart (two events in one step)
+@example((Model(Robot(M=1.0, L=0.05945954869842906, beta=1.0, k=0.6699692343691755, mu1=0.6432790403035406,
+                      mu2=0.7274170303986905, g=9.81)),
+          ReferenceTorque(Harmonic(gamma1=1.763421778001652, gamma2=1.6936086079218788, A1=0.4485838430945467,
+                                   A2=0.4485838430945467, psi=1.4597499003155), k=0.6699692343691755)))
+# found by a large run: psi = 0, the slip stops exactly at the step phases 1/4 and 3/4 (an event on a boundary)
+@example((Model(Robot(M=1.0, L=math.exp(-1.0), beta=1.0, k=26.666344737183238, mu1=math.exp(-1.0),
+                      mu2=0.4723665527410147, g=9.81)),
+          ReferenceTorque(Harmonic(gamma1=1.4311699866353502, gamma2=1.4660765716752369, A1=0.17453292519943295,
+                                   A2=0.17453292519943295, psi=0.0), k=26.666344737183238)))
 def test_switch_exact_time_stepping_matches_the_event_driven_s(case):
     model, torque = case
     note(f"robot {model.robot}, gait {torque}")
@@ -81,9 +93,11 @@ def test_switch_exact_time_stepping_matches_the_event_driven_s(case):
     COUNTS[f"compared ({label})"] += 1
     event(label)
     if abs(ev.S) < cc.tolerances.S_floor:
+        COUNTS["of them without net motion"] += 1
         return  # no net motion: nothing to compare relatively
     row = next(r for r in cc.rows if r.steps == 200)
     ERRORS.append(row.rel_diff_S)
+    note(cc.table())
     assert row.rel_diff_S <= REL_S, cc.table()
     assert row.modes_match, cc.table()
     lo, hi = cc.tolerances.event_lag_steps

@@ -67,9 +67,9 @@ class CrossCheckTolerances:
     min_order: float = 1.0
     """smallest accepted convergence order of S [-], fitted over the errors above ``rel_S_floor``"""
     rel_S_floor: float = 1e-7
-    """relative S error [-] below which a difference is the solvers' round-off (the per-step IPOPT tolerance
-    accumulated over the run; measured <= 2e-8 at N = 400 on the shipped gaits): such errors need not
-    decrease with N and carry no order"""
+    """S errors below rel_S_floor max(|S|, L) [m] are the solvers' round-off (the per-step IPOPT tolerance
+    accumulated over the run; measured <= 2e-8 |S| at N = 400 on the shipped gaits, about 1e-8 L on gaits with
+    little net motion): such errors need not decrease with N and carry no order"""
     event_lag_steps: tuple[float, float] = (-1e-3, 1e-3)
     """window of the lag (step phase - event phase) of a mode change, in steps (switch-exact steps put each
     event on a step boundary: measured |lag| <= 1e-6 steps)"""
@@ -211,7 +211,7 @@ class CrossCheckResult:
                 lines.append(f"       run failed: {r.message}")
         lines.append(f"measured convergence order of S: {self.order:.3f}" if math.isfinite(self.order) else
                      "measured convergence order of S: none (fewer than two errors above the round-off floor "
-                     f"{self.tolerances.rel_S_floor:g} relative: no discretisation error left)")
+                     f"{self.tolerances.rel_S_floor:g} max(|S|, L): no discretisation error left)")
         lines.append("")
         lines.append(f"mode sequence over the steady cycle, event phases (event-driven) vs step phases "
                      f"(N = {self.finest.steps}):")
@@ -260,12 +260,12 @@ def _event_lags(ev: CrawlResult, res: CrawlResult, N: int) -> list[tuple]:
     return out
 
 
-def _checks(ev: CrawlResult, rows: list, tol: CrossCheckTolerances) -> tuple[float, dict]:
-    """The measured order of S (over the errors above the round-off floor) and the named checks
-    (value, threshold, passed) of a cross-check (see the module docstring)."""
+def _checks(ev: CrawlResult, rows: list, tol: CrossCheckTolerances, L: float) -> tuple[float, dict]:
+    """The measured order of S (over the errors above the round-off floor, ``rel_S_floor`` max(|S|, L) with the
+    robot's length L [m]) and the named checks (value, threshold, passed) of a cross-check (module docstring)."""
     errors = [abs(r.S - ev.S) for r in rows]
     steps = [r.steps for r in rows]
-    floor = tol.rel_S_floor * max(abs(ev.S), tol.S_floor)
+    floor = tol.rel_S_floor * max(abs(ev.S), L)
     above = [(n, e) for n, e in zip(steps, errors) if not e <= floor]
     order = convergence_order(*zip(*above)) if len(above) >= 2 else float("nan")
     fin = rows[-1]
@@ -279,7 +279,7 @@ def _checks(ev: CrawlResult, rows: list, tol: CrossCheckTolerances) -> tuple[flo
     checks = {
         "all runs succeeded": (float(all_ok), "1", all_ok),
         f"max rel diff S at N >= {judged[0].steps}": (worst.rel_diff_S, tol.rel_S, worst.rel_diff_S <= tol.rel_S),
-        f"S error decreasing in N (or <= {tol.rel_S_floor:g} relative)": (float(decreasing), "1", decreasing),
+        f"S error decreasing in N (or <= {tol.rel_S_floor:g} max(|S|, L))": (float(decreasing), "1", decreasing),
         f"rel diff W+ at N={fin.steps}": (fin.rel_diff_W_plus, tol.rel_W_plus, fin.rel_diff_W_plus <= tol.rel_W_plus),
         f"max |phi dev| at N={fin.steps} [rad]": (fin.max_phi_dev, tol.max_phi_dev, fin.max_phi_dev <= tol.max_phi_dev),
         "mode sequences agree": (float(fin.modes_match), "1", fin.modes_match),
@@ -333,6 +333,6 @@ def crosscheck(model: Model, torque, steps=(50, 100, 200, 400), tolerances: Cros
             N, True, res.message, res.S, res.W_plus, res.CoT_plus, _rel(res.S, ev.S, tol.S_floor),
             _rel(res.W_plus, ev.W_plus), _rel(res.CoT_plus, ev.CoT_plus) if abs(ev.S) >= tol.S_floor else math.nan,
             dev, modes, tuple(_event_lags(ev, res, N)), match, elapsed))
-    order, checks = _checks(ev, rows, tol)
+    order, checks = _checks(ev, rows, tol, model.robot.L)
     passed = all(ok for *_, ok in checks.values())
     return CrossCheckResult(ev, tuple(rows), order, tol, checks, passed, event_modes)

@@ -39,7 +39,7 @@ from ocp_crawl.sim.step import SLIP_PAIR_MODES, StepState
 
 #: half width of the central difference of the slip rate [step fraction]
 RATE_DELTA = 1e-3
-#: roots closer than this to the step's start [step fraction] are not split (the event is at the boundary)
+#: roots closer than this to the step's start [step fraction] are the start itself (the event is on the boundary)
 MIN_FRACTION = 1e-9
 #: a guard counts as violated at the step's end when below -GUARD_TOL (scaled margin or slip rate)
 GUARD_TOL = 1e-10
@@ -52,7 +52,7 @@ class Split:
     """A located event: step fraction, the solution in the old mode there, the guard that crossed."""
 
     theta: float
-    """fraction of the step at the event, in (lo, 1) (negative: in the previous step)"""
+    """fraction of the step at the event, in (lo, 1) (negative: in the previous step; 0: at the step's start)"""
     solve: Solve
     """the step to the event solved in the mode it started in (its point w is the state at the event)"""
     guard: str
@@ -130,8 +130,8 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
     Returns
     -------
     (split or None, reason): None when no guard of ``mode`` is violated at the step's end (the change of
-    mode seen by the MPCC is not an event of ``mode``, e.g. a tie), when the root is at the step's start,
-    or when a mode solve fails; ``reason`` then says which.
+    mode seen by the MPCC is not an event of ``mode``, e.g. a tie), or when a mode solve fails; ``reason``
+    then says which.  A root within ``MIN_FRACTION`` of the step's start is returned as theta = 0.
     """
     try:
         slip_pair(mode)
@@ -158,7 +158,7 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
         return None, "the violated guards are not positive at the start of the step"
     theta, name = min(roots)
     if abs(theta) < MIN_FRACTION:
-        return None, f"the event is at the start of the step (theta = {theta:.3g})"
+        theta = 0.0  # the event is the step's start (e.g. a slip that stops exactly at a step phase)
     try:
         value = g.value(name, theta)
         sol = g.solve(theta)

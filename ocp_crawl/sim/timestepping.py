@@ -2,12 +2,19 @@
 
 The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n takes the state at
 t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
-from step n-1.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
+from step n-1.  Steps are switch-exact (``switch_exact``, default): when a step's solution ends in
+another contact mode than it started in, the event is located inside the step as the root of a guard
+of the starting mode in the step fraction (:mod:`ocp_crawl.sim.step_split`: the step NLP solved in that
+mode, with the friction margins and the slip rate as guards) and the step is split there, so that every
+event (slip onset, slip-to-stick, change of the slipping foot, direction reversal) is a step boundary and
+a sample of the result (up to ``MAX_SPLITS`` events per step; a slip-to-stick that the previous step
+passed with a positive net slip is traced back into it and that step redone).  The foot positions, and
+so S, then carry no discretisation error.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
 with f_t = 0, stick-stick) and continues cycle by cycle until the state at the end of a cycle
 repeats (or for a given number of cycles); the last cycle is reported in a
 :class:`~ocp_crawl.sim.result.CrawlResult` with the same fields as the event-driven result.
 
-Metrics on the grid of the reported cycle:
+Metrics on the samples of the reported cycle (the step phases and the located events):
 
 * S = x1(t0 + 1) - x1(t0) [m];
 * W+ by the midpoint rule on each step: sum_n sum_i max(0, tau_i(t_{n-1/2}) (phi_i,n - phi_i,n-1)) [J]
@@ -249,6 +256,10 @@ class TimeStepper:
             if split is None:
                 run.unsplit.append(f"t = {tb:.6f}: {why}")
                 break
+            if split.theta == 0:
+                # the event is the step's start, already a sample: only the mode changes there
+                self._mode_change(run, split, te)
+                continue
             if split.theta < 0:
                 # the event is in the previous step: drop its end and redo it from the event
                 run.rows.pop()
@@ -273,6 +284,12 @@ class TimeStepper:
                                          status=split.solve.status, message="event point",
                                          iterations=split.solve.iterations, solve_time=0.0), mode=mode)
         self._record(run, res, run.state, tau, te)
+        self._mode_change(run, split, te)
+
+    @staticmethod
+    def _mode_change(run: "_Run", split, te: float) -> None:
+        """Record the located event at phase ``te`` and continue in the guard's mode."""
+        mode = run.mode
         run.events.append(Event(te, event_kind(mode, split.mode_after), mode.label, split.mode_after.label,
                                 split.value, split.guard))
         run.mode, run.det_ref = split.mode_after, None
