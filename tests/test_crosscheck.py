@@ -6,19 +6,23 @@ import pytest
 
 from ocp_crawl import Model, Robot
 from ocp_crawl.sim.crosscheck import CrossCheckTolerances, convergence_order, crosscheck
+from ocp_crawl.sim.timestepping import TimeSteppingOptions
 
 from conftest import paper_torque
 
 STEPS = (50, 100, 200, 400)
-REL_S_AT_400 = 5e-3
-"""the issue's requirement: |S_mpcc/S_event - 1| <= 0.5 % at N = 400"""
+REL_S_AT_200 = 1e-4
+"""the issue's requirement: |S_mpcc/S_event - 1| <= 1e-4 at N = 200 (and beyond)"""
+ROUND_OFF = 1e-7
+"""relative S error below which the difference is the solvers' tolerance accumulated over the run"""
 
 
-@pytest.fixture(scope="module", params=[("physical", 45.0), ("physical", 90.0), ("paper", 90.0)],
-                ids=["paper-gait", "psi90", "psi90-paper-gravity"])
+@pytest.fixture(scope="module", params=[("physical", 45.0, None), ("physical", 90.0, None), ("paper", 90.0, None),
+                                        ("physical", 45.0, (0.35, 0.43))],
+                ids=["paper-gait", "psi90", "psi90-paper-gravity", "unequal-friction"])
 def checked(request):
-    gravity, psi = request.param
-    robot = Robot.paper()
+    gravity, psi, mus = request.param
+    robot = Robot.paper() if mus is None else Robot.paper(mu1=mus[0], mu2=mus[1])
     return crosscheck(Model(robot, gravity=gravity), paper_torque(robot, psi=psi), steps=STEPS)
 
 
@@ -27,13 +31,37 @@ def test_s_converges_to_the_event_driven_value(checked):
     assert checked.event.success, checked.event.message
     assert all(r.success for r in rows), [r.message for r in rows]
     assert [r.steps for r in rows] == list(STEPS)
-    errors = np.array([abs(r.S - checked.event.S) for r in rows])
-    assert checked.finest.rel_diff_S <= REL_S_AT_400
-    assert errors[-1] < errors[0]
-    # order recomputed here from the rows, by the least-squares slope of log error against log N
-    slope = np.polyfit(np.log(STEPS), np.log(errors), 1)[0]
-    assert checked.order == pytest.approx(-slope, rel=1e-12)
-    assert checked.order >= 1.0
+    errors = np.array([abs(r.S / checked.event.S - 1) for r in rows])
+    assert np.all(errors[2:] <= REL_S_AT_200), errors
+    # decreasing in N, or at the round-off floor (switch-exact steps leave no discretisation error in S)
+    assert all(b < a or b <= ROUND_OFF for a, b in zip(errors, errors[1:])), errors
+    # the order is fitted only over errors above the floor; recomputed here by the least-squares slope
+    above = errors > ROUND_OFF
+    if np.count_nonzero(above) >= 2:
+        slope = np.polyfit(np.log(np.array(STEPS)[above]), np.log(errors[above]), 1)[0]
+        assert checked.order == pytest.approx(-slope, rel=1e-9)
+        assert checked.order >= 1.0
+    else:
+        assert np.isnan(checked.order)
+
+
+def test_unequal_friction_has_foot_switches_that_plain_steps_get_wrong():
+    """The unequal-friction gait (problems/unequal_friction.toml) switches the slipping foot during slip twice
+    per cycle: the plain incremental step (no event location) gives the whole slip of the straddling step to
+    one foot, an error far above the switch-exact one (measured 1.2 % and 2.5 % at N = 50, 100 against
+    < 1e-8)."""
+    robot = Robot.paper(mu1=0.35, mu2=0.43)
+    model, torque = Model(robot), paper_torque(robot)
+    exact = crosscheck(model, torque, steps=(50, 100))
+    plain = crosscheck(model, torque, steps=(50, 100), mpcc_options=TimeSteppingOptions(switch_exact=False))
+    assert [e.kind for e in exact.event.steady_events()].count("slip_switch") == 2
+    assert all(r.success for r in plain.rows + exact.rows)
+    for r_plain, r_exact in zip(plain.rows, exact.rows):
+        assert r_plain.rel_diff_S > 1e-3 > 1e3 * r_exact.rel_diff_S
+    assert exact.passed and not plain.passed
+    # the plain steps take each event at the end of its step; switch-exact steps at the event
+    assert max(abs(lag) for *_, lag in exact.finest.event_lags) < 1e-3
+    assert max(abs(lag) for *_, lag in plain.finest.event_lags) > 0.1
 
 
 def test_crosscheck_report(checked):
@@ -62,7 +90,7 @@ def test_crosscheck_can_fail():
     cc = crosscheck(Model(robot), paper_torque(robot), steps=(8, 16), tolerances=tight)
     assert cc.finest.rel_diff_S > 1e-12
     assert not cc.passed and cc.summary()["passed"] is False
-    assert "overall: FAIL" in cc.table() and "[FAIL] rel diff S" in cc.table()
+    assert "overall: FAIL" in cc.table() and "[FAIL] max rel diff S" in cc.table()
 
 
 def test_convergence_order_of_synthetic_errors():

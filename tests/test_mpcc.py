@@ -320,12 +320,17 @@ def test_time_stepping_result(paper_run):
     N = 100
     assert res.success, res.message
     assert res.status == Status.SUCCESS and res.cycles >= 2
-    assert res.t.shape == (N + 1,) and res.phi.shape == (2, N + 1) and res.tau.shape == (2, N + 1)
-    np.testing.assert_allclose(res.t, res.t0 + np.arange(N + 1) / N, rtol=0, atol=1e-12)
+    # the samples are the step phases and the located events of the cycle (switch-exact steps), in order
+    events = sorted(e.t for e in res.events if res.t0 < e.t < res.t0 + 1 and not (e.t * N) % 1 == 0)
+    assert len(events) == 4  # the paper gait's slip-to-stick and slip onsets
+    n = N + 1 + len(events)
+    assert res.t.shape == (n,) and res.phi.shape == (2, n) and res.tau.shape == (2, n)
+    np.testing.assert_allclose(res.t, np.sort(np.concatenate([res.t0 + np.arange(N + 1) / N, events])),
+                               rtol=0, atol=1e-12)
     np.testing.assert_allclose(res.x2 - res.x1, res.d, rtol=0, atol=1e-12)
     kin = model.kinematics(res.phi)
     np.testing.assert_allclose(res.d, kin["d"], rtol=0, atol=1e-12)
-    for j in range(N + 1):
+    for j in range(n):
         F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
         assert np.max(np.abs(F)) < 1e-9 * r.M * r.g * r.L
     slack = 1e-10 * r.M * r.g
@@ -348,23 +353,29 @@ def test_time_stepping_result(paper_run):
     assert res.extra["max_comp_residual"] <= 1e-8 and res.extra["retried_steps"] == 0
 
 
-def test_events_are_the_mode_changes_between_steps(paper_run):
-    _, _, res = paper_run
-    N = 100
-    changes = [res.t[j] for j in range(1, res.t.size) if res.mode[j] != res.mode[j - 1]]
+def test_events_are_located_on_step_boundaries(paper_run):
+    """Switch-exact steps: every mode change of the samples starts at a located event, which is a sample
+    (a step boundary) and agrees with the event-driven stepper's event phase (an independent locator)."""
+    model, torque, res = paper_run
+    changes = [res.t[j - 1] for j in range(1, res.t.size) if res.mode[j] != res.mode[j - 1]]
     steady = [e.t for e in res.steady_events() if e.t > res.t0 + 1e-12]
     np.testing.assert_allclose(steady, changes, rtol=0, atol=1e-12)
     for e in res.events:
         assert e.mode_before != e.mode_after
-        assert abs(e.t * N - round(e.t * N)) < 1e-9  # on the step grid
+        assert e.guard_name != "mode_change_between_steps" and abs(e.guard) < 1e-8, e
+    ev = simulate_torque(model, torque)
+    np.testing.assert_allclose(sorted(e.t - ev.t0 for e in ev.steady_events()),
+                               sorted(t - res.t0 for t in steady), rtol=0, atol=1e-8)
 
 
 def test_t_eval_and_fixed_cycles(paper_run):
     model, torque, res = paper_run
     part = simulate_mpcc(model, torque, steps=100, t_eval=[0.0, 0.25, 0.5, 1.0])
-    np.testing.assert_allclose(part.phi, res.phi[:, [0, 25, 50, 100]], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(part.x1, res.x1[[0, 25, 50, 100]], rtol=0, atol=1e-15)
-    assert list(part.mode) == list(res.mode[[0, 25, 50, 100]])
+    idx = [int(np.argmin(np.abs(res.t - res.t0 - s))) for s in (0.0, 0.25, 0.5, 1.0)]
+    np.testing.assert_allclose(res.t[idx] - res.t0, [0.0, 0.25, 0.5, 1.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(part.phi, res.phi[:, idx], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(part.x1, res.x1[idx], rtol=0, atol=1e-15)
+    assert list(part.mode) == list(res.mode[idx])
     assert part.S == res.S
     with pytest.raises(ValueError, match="t_eval"):
         simulate_mpcc(model, torque, steps=100, cycles=1, t_eval=[1.5])
@@ -437,3 +448,27 @@ def test_ipopt_failure_ends_the_run_with_solver_failure(paper_robot):
     part = simulate_mpcc(model, paper_torque(paper_robot), steps=N, t_eval=[0.0, 0.5],
                          options=MPCCOptions(ipopt={"max_iter": 1}, max_retries=0))
     assert part.status == Status.SOLVER_FAILURE and list(part.t) == [0.0]
+
+
+def test_switch_exact_event_points_satisfy_their_event_condition():
+    """Unequal friction (problems/unequal_friction.toml): at each located event the sample satisfies the event's
+    condition recomputed from the model's kinematics: at a change of the slipping foot both feet are on their
+    friction limits (mu1 f_n1 = mu2 f_n2 = |f_t|); at a slip onset the new foot is on its limit."""
+    robot = Robot.paper(mu1=0.35, mu2=0.43)
+    model = Model(robot)
+    res = simulate_mpcc(model, paper_torque(robot), steps=50)
+    assert res.success, res.message
+    Mg = robot.M * robot.g
+    kinds = []
+    for e in res.steady_events():
+        j = int(np.argmin(np.abs(res.t - e.t)))
+        assert abs(res.t[j] - e.t) < 1e-12
+        kin = model.kinematics(res.phi[:, j])
+        lim1, lim2 = robot.mu1 * kin["fn1"], robot.mu2 * kin["fn2"]
+        ft = abs(res.f_t[j])
+        if e.kind == "slip_switch":
+            assert abs(lim1 - lim2) < 1e-8 * Mg and abs(ft - lim1) < 1e-8 * Mg
+        elif e.kind.startswith("slip_onset_"):
+            assert abs(ft - (lim1 if e.kind.endswith("1") else lim2)) < 1e-8 * Mg
+        kinds.append(e.kind)
+    assert kinds.count("slip_switch") == 2 and "slip_to_stick" in kinds

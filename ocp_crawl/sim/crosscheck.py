@@ -8,19 +8,31 @@ time-stepping result is compared with the event-driven one on the step phases of
 * the largest deviation of phi over the cycle at the step phases;
 * the contact-mode sequence of each over the steady cycle, and for each event of the event-driven
   stepper the phase of the step where the time-stepping changes mode (its lag, in steps);
-* the convergence order of S: the least-squares slope p of log|S_N - S_event| against log N (|error| ~ N^-p).
+* the convergence of S: the errors |S_N - S_event| must decrease with N until they reach the solver's
+  round-off floor, and the least-squares slope p of log|S_N - S_event| against log N (|error| ~ N^-p) over
+  the errors above that floor.
 
 What to expect.  Inside a mode the step equations are the mode's equations at t_n, so the
-time-stepping is exact there; errors come from transitions.  A change of mode is taken at the first
-step after the event (slip -> stick up to two steps late, because the step can only stop when the
-slip of a whole step reverses); the stick distance then carries an O(h^2) error (h = 1/N), so S
-converges with order about 2 when the gait has only stick-slip transitions.  When the slipping foot
-changes during slip (unequal friction), the step straddling the switch attributes its whole slip
-to one foot: an O(h) error in S whose size depends on where the event falls inside the step.
+time-stepping is exact there; errors come from transitions.  With the default switch-exact steps
+(:mod:`ocp_crawl.sim.step_split`) every contact event (slip onset, slip-to-stick, change of the slipping
+foot, direction reversal) is located inside its step as the root of the starting mode's guard in the
+step fraction and the step is split there, so S carries no discretisation error at all: what remains
+is the solvers' tolerance accumulated over the steps (measured |dS|/|S| <= 2e-8 at N = 50..400 on
+the shipped gaits, growing about like N), and the event phases agree to about 1e-6 steps.  The errors
+that remain are those of the cycle metrics' quadrature on the step grid: W+ by the midpoint rule and
+the energy balance are O(h^2) (h = 1/N; W+ about 6e-4 relative at N = 50, 6e-6 at N = 400 on the paper
+gait).  Without switch-exact steps (``TimeSteppingOptions(switch_exact=False)``) a change of mode is
+taken at the first step after the event (slip -> stick up to two steps late); the stick distance then
+carries an O(h^2) error, and when the slipping foot changes during slip (unequal friction) the step
+straddling the switch attributes its whole slip to one foot: an O(h) error in S whose size depends on
+where the event falls inside the step (1.2 / 2.5 / 0.7 / 0.9 % at N = 50 / 100 / 200 / 400 on
+problems/unequal_friction.toml); such runs need looser tolerances than the defaults.
 
-``passed`` is True when, at the finest N, every difference is within :class:`CrossCheckTolerances`,
-the mode sequences agree and every event is matched within the lag window, and the measured order
-is at least ``min_order``.
+``passed`` is True when every run succeeded, the relative S error is at most ``rel_S`` at every N >= 200
+(at the finest N if all are smaller), the S errors decrease with N (or are below the round-off floor),
+every other difference at the finest N is within :class:`CrossCheckTolerances`, the mode sequences agree
+and every event is matched within the lag window, and the measured order over the errors above the
+floor (when at least two are) is at least ``min_order``.
 """
 from __future__ import annotations
 
@@ -48,8 +60,8 @@ CROSSCHECK_DIGITS = 5
 class CrossCheckTolerances:
     """PASS/FAIL thresholds of the cross-check (all applied at the finest N)."""
 
-    rel_S: float = 5e-3
-    """largest relative difference of S [-]"""
+    rel_S: float = 1e-4
+    """largest relative difference of S at every N >= 200 (at the finest N if all are smaller) [-]"""
     rel_W_plus: float = 5e-3
     """largest relative difference of W+ [-]"""
     rel_CoT_plus: float = 1e-2
@@ -57,14 +69,19 @@ class CrossCheckTolerances:
     max_phi_dev: float = 5e-3
     """largest deviation of phi over the steady cycle at the step phases [rad]"""
     min_order: float = 1.0
-    """smallest accepted convergence order of S [-]"""
-    event_lag_steps: tuple[float, float] = (-0.25, 2.25)
-    """window of the lag (step phase - event phase) of a mode change, in steps"""
+    """smallest accepted convergence order of S [-], fitted over the errors above ``rel_S_floor``"""
+    rel_S_floor: float = 1e-7
+    """S errors below rel_S_floor max(|S|, L) [m] are the solvers' round-off (the per-step IPOPT tolerance
+    accumulated over the run; measured <= 2e-8 |S| at N = 400 on the shipped gaits, about 1e-8 L on gaits with
+    little net motion): such errors need not decrease with N and carry no order"""
+    event_lag_steps: tuple[float, float] = (-1e-3, 1e-3)
+    """window of the lag (step phase - event phase) of a mode change, in steps (switch-exact steps put each
+    event on a step boundary: measured |lag| <= 1e-6 steps)"""
     S_floor: float = 1e-6
     """|S| below this [m] counts as no motion: relative differences of S and CoT+ use this instead"""
 
     def __post_init__(self) -> None:
-        for name in ("rel_S", "rel_W_plus", "rel_CoT_plus", "max_phi_dev", "S_floor", "min_order"):
+        for name in ("rel_S", "rel_W_plus", "rel_CoT_plus", "max_phi_dev", "S_floor", "min_order", "rel_S_floor"):
             object.__setattr__(self, name, real(f"CrossCheckTolerances.{name}", getattr(self, name),
                                                 positive=name != "min_order"))
         lo, hi = (real("CrossCheckTolerances.event_lag_steps", v) for v in self.event_lag_steps)
@@ -178,6 +195,7 @@ class CrossCheckResult:
                            "rel_CoT_plus": self.tolerances.rel_CoT_plus,
                            "max_phi_dev": self.tolerances.max_phi_dev, "min_order": self.tolerances.min_order,
                            "event_lag_steps": list(self.tolerances.event_lag_steps),
+                           "rel_S_floor": self.tolerances.rel_S_floor,
                            "S_floor": self.tolerances.S_floor},
         }
 
@@ -198,7 +216,9 @@ class CrossCheckResult:
                          f"{'same' if r.modes_match else 'DIFF':>6} {units.fixed(r.time, 2):>9}")
             if not r.success:
                 lines.append(f"       run failed: {r.message}")
-        lines.append(f"measured convergence order of S: {self.order:.3f}")
+        lines.append(f"measured convergence order of S: {self.order:.3f}" if math.isfinite(self.order) else
+                     "measured convergence order of S: none (fewer than two errors above the round-off floor "
+                     f"{self.tolerances.rel_S_floor:g} max(|S|, L): no discretisation error left)")
         lines.append("")
         lines.append(f"mode sequence over the steady cycle, event phases (event-driven) vs step phases "
                      f"(N = {self.finest.steps}):")
@@ -247,6 +267,44 @@ def _event_lags(ev: CrawlResult, res: CrawlResult, N: int) -> list[tuple]:
     return out
 
 
+def _checks(ev: CrawlResult, rows: list, tol: CrossCheckTolerances, L: float) -> tuple[float, dict]:
+    """The measured order of S (over the errors above the round-off floor, ``rel_S_floor`` max(|S|, L) with the
+    robot's length L [m]) and the named checks (value, threshold, passed) of a cross-check (module docstring)."""
+    errors = [abs(r.S - ev.S) for r in rows]
+    steps = [r.steps for r in rows]
+    floor = tol.rel_S_floor * max(abs(ev.S), L)
+    above = [(n, e) for n, e in zip(steps, errors) if not e <= floor]
+    order = convergence_order(*zip(*above)) if len(above) >= 2 else float("nan")
+    fin = rows[-1]
+    judged = [r for r in rows if r.steps >= min(200, fin.steps)]
+    worst = max(judged, key=lambda r: r.rel_diff_S)
+    lo, hi = tol.event_lag_steps
+    lags = [lag for *_, lag in fin.event_lags]
+    lags_ok = all(lag is not None and lo <= lag <= hi for lag in lags)
+    all_ok = ev.success and all(r.success for r in rows)
+    decreasing = all(b < a or b <= floor for a, b in zip(errors, errors[1:]))
+    checks = {
+        "all runs succeeded": (float(all_ok), "1", all_ok),
+        f"max rel diff S at N >= {judged[0].steps}": (worst.rel_diff_S, tol.rel_S, worst.rel_diff_S <= tol.rel_S),
+        f"S error decreasing in N (or <= {tol.rel_S_floor:g} max(|S|, L))": (float(decreasing), "1", decreasing),
+        f"rel diff W+ at N={fin.steps}": (fin.rel_diff_W_plus, tol.rel_W_plus, fin.rel_diff_W_plus <= tol.rel_W_plus),
+        f"max |phi dev| at N={fin.steps} [rad]": (fin.max_phi_dev, tol.max_phi_dev, fin.max_phi_dev <= tol.max_phi_dev),
+        "mode sequences agree": (float(fin.modes_match), "1", fin.modes_match),
+        f"event lags within {list(tol.event_lag_steps)} steps": (
+            max((abs(x) for x in lags if x is not None), default=0.0) if lags_ok else math.inf,
+            f"{lo}..{hi}", lags_ok),
+    }
+    if abs(ev.S) >= tol.S_floor:
+        checks[f"rel diff CoT+ at N={fin.steps}"] = (fin.rel_diff_CoT_plus, tol.rel_CoT_plus,
+                                                     fin.rel_diff_CoT_plus <= tol.rel_CoT_plus)
+        if len(above) >= 2:
+            checks["convergence order of S"] = (order, tol.min_order, bool(order >= tol.min_order))
+    else:
+        # no net motion: CoT+ is infinite for both, and the errors of S are round-off without an order
+        checks["convergence order of S (no motion: S errors)"] = (max(errors), tol.S_floor, max(errors) <= tol.S_floor)
+    return order, checks
+
+
 def crosscheck(model: Model, torque, steps=(50, 100, 200, 400), tolerances: CrossCheckTolerances | None = None,
                mpcc_options: TimeSteppingOptions | MPCCOptions | None = None,
                hybrid_options: HybridOptions | None = None) -> CrossCheckResult:
@@ -282,30 +340,6 @@ def crosscheck(model: Model, torque, steps=(50, 100, 200, 400), tolerances: Cros
             N, True, res.message, res.S, res.W_plus, res.CoT_plus, _rel(res.S, ev.S, tol.S_floor),
             _rel(res.W_plus, ev.W_plus), _rel(res.CoT_plus, ev.CoT_plus) if abs(ev.S) >= tol.S_floor else math.nan,
             dev, modes, tuple(_event_lags(ev, res, N)), match, elapsed))
-    errors = [abs(r.S - ev.S) for r in rows]
-    order = convergence_order(steps, errors)
-    fin = rows[-1]
-    lo, hi = tol.event_lag_steps
-    lags = [lag for *_, lag in fin.event_lags]
-    lags_ok = all(lag is not None and lo <= lag <= hi for lag in lags)
-    moving = abs(ev.S) >= tol.S_floor
-    all_ok = ev.success and all(r.success for r in rows)
-    checks = {
-        "all runs succeeded": (float(all_ok), "1", all_ok),
-        f"rel diff S at N={fin.steps}": (fin.rel_diff_S, tol.rel_S, fin.rel_diff_S <= tol.rel_S),
-        f"rel diff W+ at N={fin.steps}": (fin.rel_diff_W_plus, tol.rel_W_plus, fin.rel_diff_W_plus <= tol.rel_W_plus),
-        f"max |phi dev| at N={fin.steps} [rad]": (fin.max_phi_dev, tol.max_phi_dev, fin.max_phi_dev <= tol.max_phi_dev),
-        "mode sequences agree": (float(fin.modes_match), "1", fin.modes_match),
-        f"event lags within {list(tol.event_lag_steps)} steps": (
-            max((abs(x) for x in lags if x is not None), default=0.0) if lags_ok else math.inf,
-            f"{lo}..{hi}", lags_ok),
-    }
-    if moving:
-        checks[f"rel diff CoT+ at N={fin.steps}"] = (fin.rel_diff_CoT_plus, tol.rel_CoT_plus,
-                                                     fin.rel_diff_CoT_plus <= tol.rel_CoT_plus)
-        checks["convergence order of S"] = (order, tol.min_order, bool(order >= tol.min_order))
-    else:
-        # no net motion: CoT+ is infinite for both, and the errors of S are round-off without an order
-        checks["convergence order of S (no motion: S errors)"] = (max(errors), tol.S_floor, max(errors) <= tol.S_floor)
+    order, checks = _checks(ev, rows, tol, model.robot.L)
     passed = all(ok for *_, ok in checks.values())
     return CrossCheckResult(ev, tuple(rows), order, tol, checks, passed, event_modes)

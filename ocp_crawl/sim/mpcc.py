@@ -192,6 +192,8 @@ class MPCCStep:
         comp = cs.mmax(cs.fabs(cs.fmin(s, margins)))
         self._check = cs.Function("mpcc_check", [w, P], [cs.vertcat(eq, comp, margins)])
         self._margins = cs.Function("mpcc_margins", [w, P], [margins])
+        # equations only (no sign bounds): the residual of a point of :meth:`solve_in_mode`
+        self._eq_only = cs.Function("mpcc_eq", [w, P], [cs.mmax(cs.fabs(cs.vertcat(g_eq, g_lift)))])
 
         self._solver_cold, self._solver_warm = ipopt_solvers(
             "mpcc_step", {"x": w, "p": P, "f": f, "g": g}, nlp_ipopt.STEP_IPOPT, nlp_ipopt.STEP_WARM_IPOPT,
@@ -414,6 +416,32 @@ class MPCCStep:
                     lbg[NEQ + NPAIR + j], ubg[NEQ + NPAIR + j] = -np.inf, np.inf
             out.append({"x0": w0, "p": P, "lbx": self._lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg})
         return out
+
+    def solve_in_mode(self, state: StepState, tau, slip_pair: int | None, x0: np.ndarray | None = None) -> Solve:
+        """The step with its contact mode imposed (one IPOPT call on this step's NLP, tightened bounds).
+
+        ``slip_pair``: index j of the slipping pair (s1+, s1-, s2+, s2-), or None for stick-stick.  The
+        slipping pair's margin is fixed to zero and its slip is free in sign (a slip that reverses shows
+        as s_j < 0); every other pair has s = 0 and a margin free in sign (a violated friction limit shows
+        as c < 0).  The system is square (8 equations, 8 unknowns), so the point is the mode's
+        equilibrium at the torque ``tau`` [N m]; the guards of the event search
+        (:mod:`ocp_crawl.sim.step_split`) read s and c from the returned :class:`~ocp_crawl.nlp.homotopy.Solve`
+        (``accepted`` and ``eq`` tell whether it is usable).
+        """
+        tau = check_tau(tau)
+        P = self._params(state, tau, 1.0)
+        lbx, ubx = self._lbx.copy(), self._ubx.copy()
+        lbg, ubg = self._lbg.copy(), self._ubg.copy()
+        lbg[NEQ + NPAIR:], ubg[NEQ + NPAIR:] = -np.inf, np.inf
+        w0 = self.initial_guess(state, tau) if x0 is None else np.asarray(x0, float).copy()
+        for j in range(NPAIR):
+            if j == slip_pair:
+                lbx[4 + j], lbx[8 + j], ubx[8 + j], w0[8 + j] = -np.inf, 0.0, 0.0, 0.0
+            else:
+                lbx[8 + j], ubx[4 + j], w0[4 + j] = -np.inf, 0.0, 0.0
+        sol = self._call(self._solver_cold, w0, None, None, P, lbx, ubx, lbg, ubg)
+        sol.eq = float(self._eq_only(sol.x, P))
+        return sol
 
     @staticmethod
     def _branches(sol: Solve) -> list[str]:

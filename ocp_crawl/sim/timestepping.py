@@ -2,12 +2,19 @@
 
 The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n takes the state at
 t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
-from step n-1.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
+from step n-1.  Steps are switch-exact (``switch_exact``, default): when a step's solution ends in
+another contact mode than it started in, the event is located inside the step as the root of a guard
+of the starting mode in the step fraction (:mod:`ocp_crawl.sim.step_split`: the step NLP solved in that
+mode, with the friction margins and the slip rate as guards) and the step is split there, so that every
+event (slip onset, slip-to-stick, change of the slipping foot, direction reversal) is a step boundary and
+a sample of the result (up to ``MAX_SPLITS`` events per step; a slip-to-stick that the previous step
+passed with a positive net slip is traced back into it and that step redone).  The foot positions, and
+so S, then carry no discretisation error.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
 with f_t = 0, stick-stick) and continues cycle by cycle until the state at the end of a cycle
 repeats (or for a given number of cycles); the last cycle is reported in a
 :class:`~ocp_crawl.sim.result.CrawlResult` with the same fields as the event-driven result.
 
-Metrics on the grid of the reported cycle:
+Metrics on the samples of the reported cycle (the step phases and the located events):
 
 * S = x1(t0 + 1) - x1(t0) [m];
 * W+ by the midpoint rule on each step: sum_n sum_i max(0, tau_i(t_{n-1/2}) (phi_i,n - phi_i,n-1)) [J]
@@ -34,7 +41,7 @@ cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is ``ENERGY_
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -49,7 +56,8 @@ from ocp_crawl.sim.event_checks import describe_margin
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
-from ocp_crawl.sim.step import StepResult, StepState, step_params
+from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
+from ocp_crawl.sim.step_split import locate_event
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -67,6 +75,10 @@ class TimeSteppingOptions(CycleOptions):
     """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
     steps: int = 200
     """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an argument)"""
+    switch_exact: bool = True
+    """split a step whose contact mode changes at the event located inside it (:mod:`ocp_crawl.sim.step_split`),
+    so that every event falls on a step boundary; False: the plain incremental step (the whole step in its
+    end mode: an O(1/N) error in S per change of the slipping foot)"""
     energy_tol_n2: float = 10.0
     """a successful cycle's |energy balance residual| (relative to the gross work) must be <= energy_tol_n2 / N^2
     (N steps per cycle), else ``energy_imbalance``.  The midpoint work and trapezoid dissipation rules leave
@@ -79,6 +91,8 @@ class TimeSteppingOptions(CycleOptions):
         super().__post_init__()
         self._set("max_dphi", real("TimeSteppingOptions.max_dphi", self.max_dphi, positive=True))
         self._set("steps", count("TimeSteppingOptions.steps", self.steps, *STEPS_BOUNDS))
+        if not isinstance(self.switch_exact, bool):
+            raise TypeError(f"TimeSteppingOptions.switch_exact must be a bool, got {self.switch_exact!r}")
         self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
 
 
@@ -95,6 +109,10 @@ def event_kind(before: Mode, after: Mode) -> str:
     if after.foot != before.foot:
         return "slip_switch"
     return "slip_reversal"
+
+
+#: most events located inside one step (further changes of mode in the step are taken at its end)
+MAX_SPLITS = 3
 
 
 class _Stop(Exception):
@@ -180,7 +198,9 @@ class TimeStepper:
                  "step_time_median": float(np.median(run.times)) if run.times else float("nan"),
                  "step_time_total": float(np.sum(run.times)), "max_comp_residual": run.comp_max,
                  "max_eq_residual": run.eq_max, "polished_steps": run.polished, "W_plus_rule": "midpoint",
-                 "periodicity_deviation": run.periodic_dev}
+                 "periodicity_deviation": run.periodic_dev,
+                 "split_steps": sum(e.guard_name != "mode_change_between_steps" for e in run.events),
+                 "split_ipopt_calls": run.split_calls, "unsplit_mode_changes": run.unsplit}
         return self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
 
     def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
@@ -210,24 +230,101 @@ class TimeStepper:
     def _step(self, run: "_Run") -> StepResult:
         """Solve step n + 1 from the run's state, check the solution and record it."""
         run.n += 1
-        t1 = run.n / self.steps
-        mode, state = run.mode, run.state
-        tau = np.asarray(self.torque(t1), float).reshape(2)
+        N = self.steps
+        return self._advance(run, (run.n - 1) / N, run.n / N, rewind=True)
+
+    def _advance(self, run: "_Run", ta: float, tb: float, rewind: bool) -> StepResult:
+        """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with ``switch_exact``,
+        when the step's mode changes, sub-steps split at the events located inside it
+        (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the previous step
+        passed without a change of mode (slip-to-stick) may be traced back into it, and the previous step
+        redone from there."""
+        tau = self._tau(tb, run)
+        for k in range(MAX_SPLITS + 1):
+            state, mode = run.state, run.mode
+            res = self._solve(run, state, tau, tb)
+            if res.mode == mode or not self.opt.switch_exact or k == MAX_SPLITS:
+                break
+            t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
+                and round(ta * self.steps) % self.steps != 0 else None
+            split, why = locate_event(self.step, state, mode, lambda th: self._tau(ta + th * (tb - ta), run),
+                                      None if run.prev is None else run.prev.w, lo=-1.0 if t_prev is not None else 0.0)
+            run.split_calls += self.step.ncalls - run.calls_mark
+            te = None if split is None else ta + split.theta * (tb - ta)
+            if split is not None and split.theta < 0 and not te > t_prev + 1e-12:
+                split, why = None, f"the event at t = {te:.9f} precedes the previous step's start"
+            if split is None:
+                run.unsplit.append(f"t = {tb:.6f}: {why}")
+                break
+            if split.theta == 0:
+                # the event is the step's start, already a sample: only the mode changes there
+                self._mode_change(run, split, te)
+                continue
+            if split.theta < 0:
+                # the event is in the previous step: drop its end and redo it from the event
+                run.rows.pop()
+                row = run.rows[-1]
+                run.state = StepState(row[1], row[4], row[5], row[6])
+            self._event_point(run, split, state, te)
+            if split.theta < 0:
+                self._advance(run, te, ta, rewind=False)
+            else:
+                ta = te
+            rewind = False
+        self._record(run, res, state, tau, tb)
+        run.prev = res
+        return res
+
+    def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
+        """Record the located event at phase ``te``: the sub-step to it in the old mode (its positions from
+        ``state``, the start of the searched step) and the change to the guard's mode."""
+        mode = run.mode
+        tau = self._tau(te, run)
+        res = replace(step_result_from_w(self.model, state, split.solve.x, tau, success=True,
+                                         status=split.solve.status, message="event point",
+                                         iterations=split.solve.iterations, solve_time=0.0), mode=mode)
+        self._record(run, res, run.state, tau, te)
+        self._mode_change(run, split, te)
+
+    @staticmethod
+    def _mode_change(run: "_Run", split, te: float) -> None:
+        """Record the located event at phase ``te`` and continue in the guard's mode."""
+        mode = run.mode
+        run.events.append(Event(te, event_kind(mode, split.mode_after), mode.label, split.mode_after.label,
+                                split.value, split.guard))
+        run.mode, run.det_ref = split.mode_after, None
+
+    def _where(self, run: "_Run", t1: float) -> str:
         cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
-        where = f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+        return f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
+
+    def _tau(self, t: float, run: "_Run") -> np.ndarray:
+        """The torque [N m] at phase t; _Stop with SOLVER_FAILURE when it is not finite."""
+        tau = np.asarray(self.torque(t), float).reshape(2)
         if not np.all(np.isfinite(tau)):
-            raise _Stop(Status.SOLVER_FAILURE, "", f"{where}: the torque input is not finite "
-                        f"(tau = {tau.tolist()} N m); no IPOPT call was made", t1, mode)
+            raise _Stop(Status.SOLVER_FAILURE, "", f"{self._where(run, t)}: the torque input is not finite "
+                        f"(tau = {tau.tolist()} N m at t = {t:.9g}); no IPOPT call was made", t, run.mode)
+        return tau
+
+    def _solve(self, run: "_Run", state: StepState, tau: np.ndarray, t1: float) -> StepResult:
+        """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it fails."""
         res = self.step.solve(state, tau, warm_start=run.prev)
+        run.calls_mark = self.step.ncalls
         run.times.append(res.solve_time)
         if not res.success:
             source = "IPOPT " if ipopt_status(res.status).source == "ipopt" else ""
-            raise _Stop(*self._diagnose(state, tau, mode), f"{where} failed with {source}return status "
-                        f"{res.status} [{res.message}]", t1, mode)
+            raise _Stop(*self._diagnose(state, tau, run.mode), f"{self._where(run, t1)} failed with {source}"
+                        f"return status {res.status} [{res.message}]", t1, run.mode)
         run.retries += res.attempts > 1
         run.comp_max = max(run.comp_max, res.comp_residual)
         run.eq_max = max(run.eq_max, res.eq_residual)
         run.polished += bool(res.extra.get("polished"))
+        return res
+
+    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray, t1: float) -> None:
+        """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of mode not
+        located before (:meth:`_advance`) is recorded as an event at t1."""
+        mode, where = run.mode, self._where(run, t1)
         kin = self._check_contact(res, state, where, t1, mode)
         det = self._det(res, state, tau)
         if res.mode != mode:
@@ -243,8 +340,7 @@ class TimeStepper:
         run.mode = res.mode
         run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
                          int(res.mode)))
-        run.state, run.prev = res.next_state(), res
-        return res
+        run.state = res.next_state()
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
         """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its mode (the same
@@ -279,13 +375,14 @@ class TimeStepper:
         if status == Status.SUCCESS:
             t0 = float(ncycles - 1)
             res.message = success_message(ncycles, t0, f" of {N} MPCC steps")
-            lo, hi = (ncycles - 1) * N, ncycles * N
+            t_end = t0 + 1.0
         else:
             t0 = float(max(0, math.floor(fail_t - 1e-12)))
             res.message = failure_message(status, detail)
-            lo, hi = int(round(t0 * N)), len(rows) - 1
+            t_end = math.inf
         res.t0 = t0
-        sel = rows[lo:hi + 1]
+        # the step phases and the located events of the cycle
+        sel = [r for r in rows if t0 - 1e-12 <= r[0] <= t_end + 1e-12]
         t = np.array([r[0] for r in sel])
         phi = np.stack([r[1] for r in sel], axis=1)
         cols = {name: np.array([r[i] for r in sel]) for i, name in
@@ -348,6 +445,11 @@ class _Run:
     comp_max: float = 0.0
     eq_max: float = 0.0
     polished: int = 0
+    split_calls: int = 0
+    """IPOPT calls of the event searches"""
+    calls_mark: int = 0
+    unsplit: list = field(default_factory=list)
+    """why steps with a mode change were not split"""
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,
