@@ -25,7 +25,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.compiled import compiled_function
+from ocp_crawl.model.compiled import FastFunction, compiled_function
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -305,8 +305,6 @@ NEWTON_ITERS = 4
 @lru_cache(maxsize=1)
 def fast_newton():
     """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
-    from ocp_crawl.model.compiled import FastFunction
-
     return FastFunction(symbolic().newton)
 
 
@@ -314,8 +312,6 @@ def fast_newton():
 @lru_cache(maxsize=1)
 def fast_ddot2():
     """:attr:`_Symbolic.ddot2` as a low-overhead callable (compiled C when available)."""
-    from ocp_crawl.model.compiled import FastFunction
-
     return FastFunction(symbolic().ddot2)
 
 
@@ -324,8 +320,6 @@ def fast_ddot2():
 def fast_kin():
     """:attr:`_Symbolic.kin` as a low-overhead callable (compiled C when available), for the scalar
     :meth:`Model.kinematics` calls of the stepper (start check, potential at the cycle ends)."""
-    from ocp_crawl.model.compiled import FastFunction
-
     return FastFunction(symbolic().kin)
 
 
@@ -339,8 +333,6 @@ SMALL_BATCH = 16
 @lru_cache(maxsize=2)
 def fast_newton_batch(width: int = BATCH):
     """``newton`` mapped over ``width`` columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
-    from ocp_crawl.model.compiled import FastFunction
-
     # MX symbols keep the map as a loop over one copy of the SX kernel in the generated C
     # (SX symbols would inline BATCH copies: a large library that takes long to compile)
     f = symbolic().newton.map(width)
