@@ -222,13 +222,18 @@ class OutputMixin:
 
     def _first_panels(self, spans) -> tuple[np.ndarray, np.ndarray]:
         """The panels (lo, hi) (npan, 2) of the first depth on the pieces ``spans`` and their pieces (npan,), piece
-        by piece (:meth:`_panel_edges`)."""
+        by piece (:meth:`_panel_edges`); the last answer is kept (it depends only on the pieces' ends)."""
+        key = [(a, b) for _, a, b in spans]
+        memo = getattr(self, "_first_memo", None)
+        if memo is not None and memo[0] == key:
+            return memo[1]
         pending, owner = [], []
         for k, (_, a, b) in enumerate(spans):
             edges = self._panel_edges(a, b)
             pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
             owner.append(np.full(len(edges) - 1, k))
-        return np.concatenate(pending), np.concatenate(owner)
+        self._first_memo = (key, (np.concatenate(pending), np.concatenate(owner)))
+        return self._first_memo[1]
 
     def _first_requests(self, spans) -> list:
         """[(segment, phases), ...] of the Gauss nodes of the first depth of :meth:`_panels` on the pieces
