@@ -25,6 +25,7 @@ from ocp_crawl.status import STATUS_MESSAGES, Status
 
 #: phases of the default output grid over the steady cycle (the event phases are added)
 DEFAULT_OUTPUT_POINTS = 201
+_DEFAULT_GRID = np.linspace(0.0, 1.0, DEFAULT_OUTPUT_POINTS)
 #: columns of one call of the compiled, mapped stability function of :func:`sample_margins`
 MARGIN_BATCH = 256
 
@@ -49,7 +50,7 @@ def output_phases(t_eval) -> np.ndarray | None:
 
 def default_phases(event_phases) -> np.ndarray:
     """The default output phases [cycles]: DEFAULT_OUTPUT_POINTS equally spaced in [0, 1] and the event phases."""
-    return np.unique(np.concatenate([np.linspace(0.0, 1.0, DEFAULT_OUTPUT_POINTS), event_phases]))
+    return np.unique(np.concatenate([_DEFAULT_GRID, event_phases]))
 
 
 def failure_message(status: Status, detail: str) -> str:

@@ -14,7 +14,7 @@ from ocp_crawl.model.statics import AUX, solve_many
 from ocp_crawl.sim.assemble import default_phases, energy_gate, failure_message, new_result, set_cycle_metrics, \
     set_samples, stability_gate, success_message
 from ocp_crawl.sim.event_state import _Failure, _Point, _Run, _Segment, hermite
-from ocp_crawl.sim.quadrature import gauss_nodes
+from ocp_crawl.sim.quadrature import gauss_nodes, legendre_roots
 from ocp_crawl.sim.result import CrawlResult, energy_balance
 from ocp_crawl.status import Status
 
@@ -37,31 +37,6 @@ def _gauss_nodes(pending: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     mid = 0.5 * (pending[:, 0] + pending[:, 1])[:, None]
     half = 0.5 * (pending[:, 1] - pending[:, 0])[:, None]
     return mid + half * _XG, half
-
-
-def legendre_roots(coefs: np.ndarray) -> np.ndarray:
-    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
-    ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
-    its rotated companion matrix, built here as ``legcompanion`` does, for all rows at once, and taken in one
-    batched call); a row whose leading coefficient is 0 goes through legroots itself."""
-    coefs = np.atleast_2d(np.asarray(coefs, float))
-    full = coefs[:, -1] != 0
-    out = np.full((len(coefs), coefs.shape[1] - 1), np.nan, dtype=complex)
-    if np.any(full):
-        c = coefs[full]
-        n = c.shape[1] - 1
-        scl = 1. / np.sqrt(2 * np.arange(n) + 1)
-        base = np.zeros((n, n))
-        top = base.reshape(-1)[1::n + 1]
-        top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
-        base.reshape(-1)[n::n + 1] = top
-        comp = np.repeat(base[None], len(c), axis=0)
-        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * (scl / scl[-1]) * (n / (2 * n - 1))
-        out[full] = np.linalg.eigvals(comp[:, ::-1, ::-1])
-    for j in np.nonzero(~full)[0]:
-        r = np.polynomial.legendre.legroots(coefs[j])
-        out[j, :r.size] = r
-    return out
 
 
 def _spans(segments, ta: float, tb: float) -> list:
@@ -158,7 +133,7 @@ class OutputMixin:
                 return cur
         return None
 
-    def _panels(self, spans, first: np.ndarray | None = None):
+    def _panels(self, spans, first: np.ndarray | None = None, positive: bool = False):
         """Adaptive Gauss-Legendre panels (5 nodes) on the smooth pieces ``spans`` = [(segment, a, b), ...].
 
         Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
@@ -166,16 +141,18 @@ class OutputMixin:
         powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece, so
         steep stretches (low stiffness, large amplitudes) are resolved.  The pieces are refined together
         (one batched solve per depth).  Returns per piece the panel edges (lo, hi), nodes, weights and
-        integrands (power (2, n, 5), friction power (n, 5)).  ``first``: the aux of the first depth's nodes
-        when they are solved already (:meth:`_first_requests`, solved with the samples).
+        integrands (power (2, n, 5), friction power (n, 5)), and (``positive``) the W+ sign split of all
+        panels (:meth:`_merge_splits`; the split nodes of the panels accepted at one depth are solved with
+        the next depth's nodes), else None.  ``first``: the aux of the first depth's nodes when they are
+        solved already (:meth:`_first_requests`, solved with the samples).
         """
         wg = _WG
         pending, owner = self._first_panels(spans)
-        done = []
+        done, splits, todo = [], [], None
         scale = np.zeros(len(spans))
         for depth in range(QUAD_DEPTH + 1):
             t, half = _gauss_nodes(pending)
-            aux = first if depth == 0 and first is not None else self._solve_panels(spans, owner, t)
+            aux = first if depth == 0 and first is not None else self._solve_panels(spans, owner, t, todo)
             t = t.ravel()
             power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
@@ -184,6 +161,9 @@ class OutputMixin:
             tail = np.abs(f.reshape(-1, 5) @ _LEG_FIT[:, 3:]).max(axis=1).reshape(3, -1)
             ok = np.all(tail <= QUAD_TOL * scale[owner], axis=0) | (depth == QUAD_DEPTH)
             w = (half * wg).reshape(-1, 5)
+            if positive:  # (offset: the index of the first accepted panel among all accepted ones)
+                todo = self._split_group(spans, owner[ok], pending[ok], power[:, ok], sum(len(d[0]) for d in done))
+                splits.append(todo)
             done.append((owner[ok], pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
             bad = pending[~ok]
             if not bad.size:
@@ -191,24 +171,69 @@ class OutputMixin:
             m = 0.5 * (bad[:, 0] + bad[:, 1])
             pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
             owner = np.concatenate([owner[~ok], owner[~ok]])
+        if todo is not None and todo["pv"] is None:
+            self._split_values(todo, self._evaluate_joined(todo["requests"])[1] if todo["requests"] else None)
         # regroup by piece, each piece's panels in the order found (depth by depth): a stable sort by owner
         owner = np.concatenate([part[0] for part in done])
         order = np.argsort(owner, kind="stable")
         fields = [np.concatenate([part[k + 1] for part in done], axis=1 if k == 3 else 0) for k in range(5)]
         fields = [f[:, order] if k == 3 else f[order] for k, f in enumerate(fields)]
         ends = np.cumsum(np.bincount(owner, minlength=len(spans))).tolist()
-        return [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
-                for a, b in zip([0] + ends[:-1], ends)]
+        pieces = [[np.ascontiguousarray(f[:, a:b]) if k == 3 else f[a:b] for k, f in enumerate(fields)]
+                  for a, b in zip([0] + ends[:-1], ends)]
+        return pieces, self._merge_splits(splits, order) if positive else None
+
+    def _split_group(self, spans, owner: np.ndarray, edges: np.ndarray, pw: np.ndarray, offset: int) -> dict:
+        """The W+ sign split (:meth:`_sign_split`) of the panels (edges (n, 2), powers (2, n, 5)) of the pieces
+        ``owner`` (n,) accepted at one depth, ``offset``: the index of their first among all accepted panels.
+        Returns a dict: positive (2, n), the split nodes' phases te, weights we, actuators ie, accepted-panel
+        indices c, sorted by piece, the requests [(segment, phases), ...] to solve them, and pv (None until
+        :meth:`_split_values`)."""
+        te, we, ie, je, pos = self._sign_split(edges, pw)
+        piece = owner[je]
+        srt = np.argsort(piece, kind="stable")
+        te, we, ie, je, piece = te[srt], we[srt], ie[srt], je[srt], piece[srt]
+        bounds = np.searchsorted(piece, np.arange(len(spans) + 1)).tolist()
+        requests = [(spans[k][0], te[a:b]) for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])) if b > a]
+        return {"positive": pos, "te": te, "we": we, "ie": ie, "c": je + offset, "requests": requests, "pv": None}
+
+    def _split_values(self, group: dict, aux: np.ndarray | None) -> None:
+        """Store in ``group`` (:meth:`_split_group`) the power of its actuator at each split node, from the aux
+        (NAUX, n) solved at its nodes (None: no nodes)."""
+        if aux is None:
+            group["pv"] = np.zeros(0)
+            return
+        te, ie = group["te"], group["ie"]
+        p2 = self.torque(te).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]
+        group["pv"] = p2[ie, np.arange(len(te))]
+
+    @staticmethod
+    def _merge_splits(splits: list, order: np.ndarray):
+        """The sign split of all accepted panels in their final order (``order``: the accepted panels' stable
+        sort by piece, see :meth:`_panels`): (positive (2, npan), te, we, ie, panel index, pv), the nodes in
+        the order of actuator, then panel, then their order in the panel."""
+        inv = np.empty_like(order)
+        inv[order] = np.arange(len(order))
+        pos = np.concatenate([g["positive"] for g in splits], axis=1)[:, order]
+        te, we, ie, c, pv = (np.concatenate([g[k] for g in splits]) for k in ("te", "we", "ie", "c", "pv"))
+        jf = inv[c]
+        srt = np.argsort(ie * len(order) + jf, kind="stable")
+        return pos, te[srt], we[srt], ie[srt], jf[srt], pv[srt]
 
     def _first_panels(self, spans) -> tuple[np.ndarray, np.ndarray]:
         """The panels (lo, hi) (npan, 2) of the first depth on the pieces ``spans`` and their pieces (npan,), piece
-        by piece (:meth:`_panel_edges`)."""
+        by piece (:meth:`_panel_edges`); the last answer is kept (it depends only on the pieces' ends)."""
+        key = [(a, b) for _, a, b in spans]
+        memo = getattr(self, "_first_memo", None)
+        if memo is not None and memo[0] == key:
+            return memo[1]
         pending, owner = [], []
         for k, (_, a, b) in enumerate(spans):
             edges = self._panel_edges(a, b)
             pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
             owner.append(np.full(len(edges) - 1, k))
-        return np.concatenate(pending), np.concatenate(owner)
+        self._first_memo = (key, (np.concatenate(pending), np.concatenate(owner)))
+        return self._first_memo[1]
 
     def _first_requests(self, spans) -> list:
         """[(segment, phases), ...] of the Gauss nodes of the first depth of :meth:`_panels` on the pieces
@@ -220,15 +245,20 @@ class OutputMixin:
         bounds = np.searchsorted(owner, np.arange(len(spans) + 1)).tolist()
         return [(spans[k][0], t[a:b].ravel()) for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])) if b > a]
 
-    def _solve_panels(self, spans, owner: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def _solve_panels(self, spans, owner: np.ndarray, t: np.ndarray, split: dict | None = None) -> np.ndarray:
         """aux (NAUX, 5 npan) at the Gauss nodes ``t`` (npan, 5) of panels of the pieces ``owner`` (npan,), in the
-        order of ``t``: one batched solve of the panels sorted by piece (already sorted at the first depth)."""
+        order of ``t``: one batched solve of the panels sorted by piece (already sorted at the first depth), with
+        the split nodes of ``split`` (:meth:`_split_group`; their powers stored by :meth:`_split_values`)."""
         order = np.argsort(owner, kind="stable")
         srt = owner[order]
         bounds = np.searchsorted(srt, np.arange(len(spans) + 1)).tolist()
         ts = t[order]
-        _, aux = self._evaluate_joined([(spans[k][0], ts[a:b].ravel()) for k, (a, b) in
-                                        enumerate(zip(bounds[:-1], bounds[1:])) if b > a])
+        requests = [(spans[k][0], ts[a:b].ravel()) for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])) if b > a]
+        extra = split["requests"] if split is not None else []
+        _, aux = self._evaluate_joined(requests + extra)
+        if split is not None:
+            self._split_values(split, aux[:, 5 * len(t):] if extra else None)
+            aux = aux[:, :5 * len(t)]
         if np.all(order[1:] > order[:-1]):
             return aux
         out = np.empty_like(aux)
@@ -252,7 +282,7 @@ class OutputMixin:
         :meth:`_panels`.
         """
         spans = _spans(segments, ta, tb)
-        panels = self._panels(spans, first) if spans else []
+        panels, split = self._panels(spans, first, positive) if spans else ([], None)
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
@@ -260,32 +290,27 @@ class OutputMixin:
             w_in += float(np.sum(ww[None] * pw))
             w_abs += float(np.sum(ww[None] * np.abs(pw)))
             diss += float(np.sum(ww * fric))
-        wplus = self._positive_work(spans, panels) if positive and panels else np.zeros(2)
+        wplus = self._positive_work(panels, split) if positive and panels else np.zeros(2)
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
 
-    def _positive_work(self, spans, panels) -> np.ndarray:
-        """Positive work [J] of each actuator on the panels of the pieces ``spans`` (:meth:`_panels`): the Gauss
-        sums of the panels on which its power keeps a positive sign, plus those of the sub-panels of the panels on
-        which it changes sign (:meth:`_sign_split`, all pieces at once; their nodes solved in one batch)."""
+    @staticmethod
+    def _positive_work(panels, split) -> np.ndarray:
+        """Positive work [J] of each actuator on the panels of the pieces (:meth:`_panels`): the Gauss sums of the
+        panels on which its power keeps a positive sign, plus those of the sub-panels of the panels on which it
+        changes sign (``split``: :meth:`_merge_splits`, the powers at their nodes solved by :meth:`_panels`)."""
         counts = [len(p[0]) for p in panels]
         first = np.cumsum([0] + counts)
-        te, we, ie, je, positive_panels = self._sign_split(np.concatenate([p[0] for p in panels]),
-                                                           np.concatenate([p[3] for p in panels], axis=1))
+        positive_panels, te, we, ie, je, pv = split
         node_span = np.searchsorted(first, je, side="right") - 1
-        sel = [np.nonzero(node_span == k)[0] for k in range(len(spans))]
-        todo = [(spans[k][0], te[idx]) for k, idx in enumerate(sel) if idx.size]
-        solved = iter(self._evaluate_batch(todo) if todo else ())
         wplus = np.zeros(2)
         for k, (_, _, ww, pw, _) in enumerate(panels):
             pos = positive_panels[:, first[k]:first[k + 1]]
             wplus += np.sum(np.where(pos[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
-            if sel[k].size:
-                t_k, w_k, i_k = te[sel[k]], we[sel[k]], ie[sel[k]]
-                _, aux2 = next(solved)
-                p2 = self.torque(t_k).reshape(2, -1) * aux2[[AUX["dphi1"], AUX["dphi2"]]]
-                pv = p2[i_k, np.arange(len(t_k))]
+            sel = np.nonzero(node_span == k)[0]
+            if sel.size:
+                w_k, i_k, pv_k = we[sel], ie[sel], pv[sel]
                 for i in range(2):
-                    wplus[i] += float(np.sum((w_k * np.maximum(pv, 0.0))[i_k == i]))
+                    wplus[i] += float(np.sum((w_k * np.maximum(pv_k, 0.0))[i_k == i]))
         return wplus
 
     def _sign_split(self, edges: np.ndarray, pw: np.ndarray):

@@ -43,3 +43,28 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
     t = np.concatenate(nodes)
     w = np.concatenate(weights)
     return float(np.sum(w * np.maximum(f_vec(t), 0.0)))
+
+
+def legendre_roots(coefs: np.ndarray) -> np.ndarray:
+    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
+    ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
+    its rotated companion matrix, built here as ``legcompanion`` does, for all rows at once, and taken in one
+    batched call); a row whose leading coefficient is 0 goes through legroots itself."""
+    coefs = np.atleast_2d(np.asarray(coefs, float))
+    full = coefs[:, -1] != 0
+    out = np.full((len(coefs), coefs.shape[1] - 1), np.nan, dtype=complex)
+    if np.any(full):
+        c = coefs[full]
+        n = c.shape[1] - 1
+        scl = 1. / np.sqrt(2 * np.arange(n) + 1)
+        base = np.zeros((n, n))
+        top = base.reshape(-1)[1::n + 1]
+        top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
+        base.reshape(-1)[n::n + 1] = top
+        comp = np.repeat(base[None], len(c), axis=0)
+        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * (scl / scl[-1]) * (n / (2 * n - 1))
+        out[full] = np.linalg.eigvals(comp[:, ::-1, ::-1])
+    for j in np.nonzero(~full)[0]:
+        r = np.polynomial.legendre.legroots(coefs[j])
+        out[j, :r.size] = r
+    return out
