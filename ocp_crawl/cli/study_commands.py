@@ -123,12 +123,13 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate), arrays.npz, "
+                        "summary.json and figures to DIR")
     force_arg(p)
 
 
 #: the files ocp_output.write_outputs writes
-OCP_FILES = ("torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
+OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 
 def format_optimize(s: dict) -> str:
