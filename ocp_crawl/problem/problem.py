@@ -181,8 +181,8 @@ class _Context:
         return ProblemError(f"{self.source}: {msg}")
 
 
-def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> tuple[float, ...]:
-    """An array key's value as a tuple of floats, each finite and passing the key's rule."""
+def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> list[float]:
+    """An array key's value as a list of floats (JSON's and TOML's arrays), each finite and passing the key's rule."""
     where = ctx.at(section, key.name, value)
     if not isinstance(value, (list, tuple)):
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[list]} ({key.what}), got {toml_type(value)}")
@@ -195,7 +195,7 @@ def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> tuple[flo
             raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be finite ({key.what})")
         if key.rule is not None and not key.rule.test(v):
             raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be {key.rule.text} ({key.what})")
-    return tuple(float(v) for v in value)
+    return [float(v) for v in value]
 
 
 def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
@@ -278,7 +278,7 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
             raise ctx.error(f"[{section.name}] {name} is missing (no value given): required{alt}, "
                             f"{key.valid_text} ({key.what})")
         elif key.default is not None:
-            out[name] = key.default
+            out[name] = list(key.default) if key.type is list else key.default
     return out
 
 
