@@ -84,7 +84,8 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], s
         schema = SCHEMA[section]
         dropped = [other for other in schema.key_map[name].exclusive_with if sec.pop(other, None) is not None]
         if name == schema.selector:  # another waveform: the keys of the others go
-            dropped += [k.name for k in schema.keys if not schema.applies(k, value) and sec.pop(k.name, None) is not None]
+            dropped += [k.name for k in schema.keys
+                        if not schema.applies(k, value) and sec.pop(k.name, None) is not None]
         for key in schema.keys:  # and the keys that only made sense with them (inline samples with their phases)
             if set(key.requires) & set(dropped):
                 sec.pop(key.name, None)

@@ -194,7 +194,8 @@ def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> list[floa
         if not math.isfinite(v):
             raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be finite ({key.what})")
         if key.rule is not None and not key.rule.test(v):
-            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be {key.rule.text} ({key.what})")
+            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be {key.rule.text} "
+                               f"({key.what})")
     return [float(v) for v in value]
 
 

@@ -131,17 +131,19 @@ def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
     t, v = s.phase, s.values
     for j in range(t.size):
         if not 0 <= t[j] <= 1:
-            raise ProblemError(f"{s.where(j)}: phase {t[j]!r} outside [0, 1] (phases of one cycle)")
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} outside [0, 1] (phases of one cycle)")
         if j and not t[j] > t[j - 1]:
-            raise ProblemError(f"{s.where(j)}: phase {t[j]!r} after {t[j - 1]!r}: phases must be sorted and unique")
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be sorted "
+                               "and unique")
     if t[-1] == 1.0:
         scale = max(float(np.max(np.abs(v))), np.finfo(float).tiny)
         gap = np.abs(v[:, -1] - v[:, 0])
         if t[0] != 0.0 or np.any(gap > CLOSING_RTOL * scale):
-            first = ", ".join(f"{n} {a!r}" for n, a in zip(s.names, v[:, 0]))
-            last = ", ".join(f"{n} {a!r}" for n, a in zip(s.names, v[:, -1]))
+            first = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, 0]))
+            last = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, -1]))
             raise ProblemError(f"{s.where(t.size - 1)}: not periodic: the sample at phase 1 must repeat the sample at "
-                               f"phase 0 (phase {t[0]!r}: {first}; phase 1: {last}), or give phases in [0, 1) only")
+                               f"phase 0 (phase {float(t[0])!r}: {first}; phase 1: {last}), or give phases in [0, 1) "
+                               "only")
         t, v = t[:-1], v[:, :-1]
     cls, fewest = INTERPOLANTS[interpolation]
     if t.size < fewest:
@@ -155,7 +157,8 @@ def _check_angles(s: _Samples) -> None:
     bad = np.argwhere(~((s.values > 0) & (s.values < 2 * math.pi)))
     if bad.size:
         i, j = (int(x) for x in bad[0])
-        raise ProblemError(f"{s.where(j)}: {s.names[i]} = {math.degrees(s.values[i, j])!r} deg outside (0, 360) deg "
+        angle = math.degrees(float(s.values[i, j]))
+        raise ProblemError(f"{s.where(j)}: {s.names[i]} = {angle!r} deg outside (0, 360) deg "
                            "(an interior joint angle)")
 
 
