@@ -136,6 +136,32 @@ def test_trapezoid_pulse_is_the_linear_interpolant_of_its_corners(tmp_path):
     np.testing.assert_allclose(square.gait(t)[0][away], np.radians(np.where(high, 115.0, 75.0))[away], atol=1e-12)
 
 
+def test_trapezoid_pulse_simulates_as_the_linear_samples_of_its_corners(tmp_path):
+    """The same trapezoid as a pulse (closed form) and as linear samples at its corners: the same S."""
+    pulse = {"waveform": "pulse", "gamma_deg": GAMMA, "A_deg": A, "psi_deg": 90.0, "rise": 0.35, "hold": 0.1}
+    problem = load_problem(write_problem(tmp_path / "p.toml", pulse))
+    t = problem.gait.t_knots
+    phi = np.degrees(problem.gait(t))
+    samples = load_problem(write_problem(tmp_path / "s.toml", {
+        "waveform": "samples", "interpolation": "linear", "phase": t.tolist(), "phi1_ref_deg": phi[0].tolist(),
+        "phi2_ref_deg": phi[1].tolist()}))
+    a, b = run_problem(problem), run_problem(samples)
+    assert a.success and b.success, (a.message, b.message)
+    assert abs(a.S - b.S) <= 1e-10 * abs(b.S), (a.S, b.S)
+
+
+def test_pulse_edges_do_not_matter_when_one_joint_moves_at_a_time(tmp_path):
+    """rise = hold = 1/4 and psi = 90 deg: the joints take turns, so both edge shapes drive the robot along the
+    same path of reference angles; a quasistatic gait is rate independent, so S is the same."""
+    gait = {"waveform": "pulse", "gamma_deg": GAMMA, "A_deg": A, "psi_deg": 90.0, "rise": 0.25, "hold": 0.25}
+    S = []
+    for ramp in ("linear", "cosine"):
+        result = run_problem(load_problem(write_problem(tmp_path / f"{ramp}.toml", dict(gait, ramp=ramp))))
+        assert result.success, result.message
+        S.append(result.S)
+    assert abs(S[0] - S[1]) <= 1e-9 * abs(S[1]), S
+
+
 def test_cosine_pulse_of_rise_half_is_the_harmonic_a_quarter_cycle_later(tmp_path, harmonic):
     """Cosine edges, rise 0.5, hold 0: p(s) = (1 - cos 2 pi s)/2, so phi = gamma - A cos(2 pi t +- psi/2), the
     harmonic delayed by 1/4 cycle; the steady gait, hence S, does not depend on where the cycle starts."""

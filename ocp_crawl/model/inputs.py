@@ -344,6 +344,14 @@ class Pulse(PeriodicSignal):
         shift = self.psi / (2.0 * TWO_PI)
         return t + shift, t - shift
 
+    @property
+    def t_knots(self) -> np.ndarray:
+        """Phases of the corners of both joints' pulses [cycles], sorted in [0, 1): the slope jumps there (linear
+        edges; the curvature, cosine edges), so the simulators' quadratures split their panels there."""
+        corners = np.array([0.0, self.rise, self.rise + self.hold, 2 * self.rise + self.hold])
+        shift = self.psi / (2.0 * TWO_PI)
+        return np.unique(np.mod(np.concatenate([corners - shift, corners + shift]), 1.0))
+
     def __call__(self, t):
         s1, s2 = self._shifts(t)
         return np.array([self.gamma1 + self.A1 * (2.0 * self._unit(s1)[0] - 1.0),
