@@ -234,8 +234,8 @@ class PeriodicSpline(_Sampled):
 class PeriodicLinear(_Sampled):
     """Periodic piecewise-linear interpolation of samples at phases ``t_knots`` in [0, 1) (values (2, N)).
 
-    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot),
-    which is why the optimal-control replay uses it; the derivative is piecewise constant.
+    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot); the
+    derivative is piecewise constant (the simulators split their quadrature at the knots, ``t_knots``).
     """
 
     def __init__(self, t_knots, values):
