@@ -237,7 +237,8 @@ OCP_CHEAP = ["--set", "ocp.nodes=8", "--set", "ocp.harmonic_psi=4"]
 #: (simulate and demo: in test_simulate_out_writes_the_files and test_demo)
 FORCE_CASES = {
     "optimize": ([REPO / "problems" / "ocp_max_speed.toml", *OCP_CHEAP],
-                 {"torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"}),
+                 {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png",
+                  "optimal_gait.pdf"}),
     "sweep": ([PAPER, "--grid", "gait.psi_deg=45", "--jobs", "1", "--no-progress"],
               {"settings.json", "results.csv", "summary.json"}),
 }

@@ -240,7 +240,8 @@ def test_every_output_file_is_renamed_into_place(tmp_path):
     expected = {"simulate": {"arrays.npz", "summary.json", "gait.png", "gait.pdf"},
                 "animate": {"crawl.gif"},
                 "sweep": {"settings.json", "results.csv", "summary.json"},
-                "optimize": {"torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"}}
+                "optimize": {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png",
+                             "optimal_gait.pdf"}}
     for name, want in expected.items():
         assert want <= {p.name for p in (out / name).iterdir()}, name
     assert len(list((out / "demo").glob("*_gait.png"))) >= 2 and (out / "demo" / "demo_summary.json").exists()

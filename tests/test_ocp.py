@@ -110,8 +110,8 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
         assert key in data, key
     assert data["objective"] == "max_speed" and data["best_harmonic"]["A_deg"] == 30.0
-    lines = (out / "torques.csv").read_text().splitlines()
-    assert lines[0] == "phase,tau1,tau2" and len(lines) == 41
+    lines = [r for r in (out / "torques.csv").read_text().splitlines() if not r.startswith("#")]
+    assert lines[0] == "phase [-],tau1 [N m],tau2 [N m]" and len(lines) == 41
     phase = np.array([float(r.split(",")[0]) for r in lines[1:]])
     assert phase[0] == 0.0 and np.all(np.diff(phase) > 0) and phase[-1] < 1.0
     for name in ("arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"):

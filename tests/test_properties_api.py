@@ -705,10 +705,11 @@ PHYSICAL = {**PLAUSIBLE, ("robot", "M"): st.floats(0.005, 5.0), ("robot", "L"): 
 
 @st.composite
 def section_values(draw, section, ranges=None):
-    """A valid set of keys for one section: required keys, a random choice of optional ones, pairing rules kept."""
+    """A valid set of keys for one section: required keys, a random choice of optional ones, pairing rules kept
+    (the default waveform's keys: the other waveforms have their own tests, tests/test_waveforms.py)."""
     keys = section.key_map
     given = set()
-    for key in section.keys:
+    for key in default_variant_keys(section):
         if key.required:
             if key.required_unless and draw(st.booleans()):
                 given |= set(key.required_unless)
@@ -798,8 +799,16 @@ def edited(data: dict, section: str, name: str, value) -> dict:
     return out
 
 
+def default_variant_keys(section):
+    """The keys of a section with its selector (``[gait] waveform``) at its default, the selector left out."""
+    if section.selector is None:
+        return list(section.keys)
+    default = section.key_map[section.selector].default
+    return [k for k in section.keys if k.name != section.selector and section.applies(k, default)]
+
+
 def schema_keys(numeric_only=False):
-    return [(s.name, k) for s in SECTIONS for k in s.keys if not numeric_only or k.type in (int, float)]
+    return [(s.name, k) for s in SECTIONS for k in default_variant_keys(s) if not numeric_only or k.type in (int, float)]
 
 
 @CHEAP
@@ -880,7 +889,7 @@ def test_invalid_numeric_values_name_the_key_and_value(data, st_key, st_data):
 
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from([(s.name, k) for s in SECTIONS if s.required
-                                                     for k in s.keys if k.required]))
+                                                     for k in default_variant_keys(s) if k.required]))
 def test_missing_required_key_is_named(data, st_key):
     section, key = st_key
     bad = {s: dict(v) for s, v in data.items()}

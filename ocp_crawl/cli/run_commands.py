@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 from pathlib import Path
 
@@ -14,6 +16,7 @@ from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
                                paper_problem, run_problem)
+from ocp_crawl.problem.waveforms import waveform_text
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import STATUS_MESSAGES, Status
 
@@ -53,10 +56,13 @@ def _simulate(problem: Problem) -> CrawlResult:
 
 def shortcuts(args: argparse.Namespace) -> list[str]:
     """``--set`` overrides of the command followed by those its shortcut options stand for
-    (``--drive``: gait.drive, ``--solver``: simulation.solver, ``--steps``: simulation.steps)."""
+    (``--drive``: gait.drive, ``--solver``: simulation.solver, ``--steps``: simulation.steps, ``--input``:
+    gait.waveform = "samples" with gait.file, the file's path made absolute: relative to the current directory)."""
     keys = (("drive", "gait.drive"), ("solver", "simulation.solver"), ("steps", "simulation.steps"))
-    return list(args.overrides) + [f"{key}={getattr(args, name)}" for name, key in keys
-                                   if getattr(args, name, None) is not None]
+    out = list(args.overrides)
+    if getattr(args, "input", None) is not None:
+        out += ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(args.input))}"]
+    return out + [f"{key}={getattr(args, name)}" for name, key in keys if getattr(args, name, None) is not None]
 
 
 def report(result: CrawlResult, problem: Problem) -> dict:
@@ -78,7 +84,7 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
     """Readable summary: problem, status, S [mm], W+ [mJ], CoT+, events table, cycles."""
     r = problem.robot
     gait = problem.sections.get("gait", {})
-    gait_text = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in gait.items() if k.endswith("_deg"))
+    gait_text = waveform_text(gait)
     direction = ""
     if np.isfinite(result.S) and result.S != 0:
         direction = " (towards foot 1)" if result.S < 0 else " (towards foot 2)"
@@ -128,6 +134,11 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set robot.k=0.05 or --set gait.drive=angles (repeatable)")
     p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
+    p.add_argument("--input", metavar="FILE.csv",
+                   help="drive the problem's robot with a table of torques or reference angles over one cycle, e.g. "
+                        "the torques.csv of optimize --out (columns 'phase [-]' and 'tau1 [N m]', 'tau2 [N m]' or "
+                        "'phi1_ref [deg]', 'phi2_ref [deg]'): shortcut for --set gait.waveform=samples --set "
+                        "gait.file=FILE.csv")
     p.add_argument("--solver", choices=TORQUE_SOLVERS,
                    help="shortcut for --set simulation.solver=...: event (event-driven hybrid solver, the default) "
                         "or mpcc (MPCC time-stepping, IPOPT); torque drive only")

@@ -154,7 +154,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, arrays.npz, summary.json and figures to DIR")
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate), arrays.npz, "
+                        "summary.json and figures to DIR")
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
@@ -162,7 +163,7 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
 
 
 #: the files ocp_output.write_outputs writes
-OCP_FILES = ("torques.csv", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
+OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 
 #: objectives whose value is a distance per cycle [m] (the others are a cost of transport [-])

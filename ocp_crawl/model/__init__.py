@@ -8,11 +8,12 @@ _EXPORTS = {
     "Harmonic": "ocp_crawl.model.inputs", "PeriodicLinear": "ocp_crawl.model.inputs",
     "PeriodicPchip": "ocp_crawl.model.inputs", "PeriodicSignal": "ocp_crawl.model.inputs",
     "PeriodicSpline": "ocp_crawl.model.inputs", "ReferenceTorque": "ocp_crawl.model.inputs",
+    "Pulse": "ocp_crawl.model.inputs", "TorqueReference": "ocp_crawl.model.inputs",
     "as_signal": "ocp_crawl.model.inputs",
 }
 
 __all__ = [
     "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear", "PeriodicPchip",
-    "PeriodicSignal", "PeriodicSpline", "ReferenceTorque", "as_signal",
+    "PeriodicSignal", "PeriodicSpline", "Pulse", "ReferenceTorque", "TorqueReference", "as_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -91,6 +91,11 @@ class OCPResult:
         })
 
 
+#: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
+#: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
+REPLAY_INTERPOLATION = "pchip"
+
+
 def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicPchip:
     """Torque input of the event-driven replay: periodic shape-preserving cubic (PCHIP) through the node
     torques [N m] at ``phase`` [cycles]: it keeps the envelope (no overshoot, unlike a cubic spline) and has a

@@ -6,6 +6,7 @@ Values are validated later, when the problem is built.
 """
 from __future__ import annotations
 
+import json
 import re
 import tomllib
 from pathlib import Path
@@ -70,7 +71,8 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], s
                ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
     """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value) triples.
 
-    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``) removes the other.  Returns the
+    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``) removes the other, and setting
+    ``gait.waveform`` removes the keys of the other waveforms.  Returns the
     new data and the set keys.  Values are validated later, when the problem is built.
     """
     out = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
@@ -79,8 +81,14 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], s
         sec = out.setdefault(section, {})
         if not isinstance(sec, dict):
             raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a section in the file")
-        for other in SCHEMA[section].key_map[name].exclusive_with:
-            sec.pop(other, None)
+        schema = SCHEMA[section]
+        dropped = [other for other in schema.key_map[name].exclusive_with if sec.pop(other, None) is not None]
+        if name == schema.selector:  # another waveform: the keys of the others go
+            dropped += [k.name for k in schema.keys
+                        if not schema.applies(k, value) and sec.pop(k.name, None) is not None]
+        for key in schema.keys:  # and the keys that only made sense with them (inline samples with their phases)
+            if set(key.requires) & set(dropped):
+                sec.pop(key.name, None)
         if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
             # one foot's friction changed on a robot given one mu: the other foot keeps mu
             sec.setdefault("mu1" if name == "mu2" else "mu2", sec["mu"])
@@ -155,3 +163,27 @@ def read_toml(path: str | Path) -> dict[str, Any]:
             if 1 <= n <= len(lines):
                 line = f": {format_value(lines[n - 1].strip())}"
         raise ProblemError(f"{path}: malformed TOML: {msg}{line}") from None
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a TOML basic string
+    if isinstance(value, (int, float)):
+        return repr(value) if isinstance(value, int) or np.isfinite(value) else ("nan" if np.isnan(value) else
+                                                                                 ("inf" if value > 0 else "-inf"))
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML form for {type(value).__name__}")
+
+
+def toml_text(sections: Mapping[str, Mapping[str, Any]], comments: Sequence[str] = ()) -> str:
+    """A problem file's text: ``# comments``, then one ``[section]`` of ``key = value`` lines per entry of
+    ``sections`` (floats with full precision, strings quoted); :func:`read_toml` reads the same values back."""
+    lines = [f"# {c}" for c in comments]
+    for name, values in sections.items():
+        lines += ["", f"[{name}]"] + [f"{key} = {_toml_value(v)}" for key, v in values.items()]
+    return "\n".join(lines).lstrip("\n") + "\n"

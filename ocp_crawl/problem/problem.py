@@ -17,10 +17,11 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
+from ocp_crawl.problem.waveforms import gait_input
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
 from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
-from ocp_crawl.problem.schema import (DRIVES, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError, Section,
-                                      field_default, format_value, suggest, toml_type)
+from ocp_crawl.problem.schema import (DRIVES, MAX_ARRAY, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError,
+                                      Section, field_default, format_value, suggest, toml_type)
 from ocp_crawl.sim import DEFAULT_SOLVER, solver_named
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
@@ -51,8 +52,9 @@ class Problem:
 
     robot: Robot
     """physical parameters (SI units)"""
-    gait: Harmonic
-    """reference angles [rad]; the degree values as given are in ``sections["gait"]``"""
+    gait: PeriodicSignal
+    """reference angles [rad] (a :class:`Harmonic` for the default waveform); the values as given are in
+    ``sections["gait"]``"""
     drive: Drive = SCHEMA["gait"].key_map["drive"].default
     """actuation: "torque" (tau = k (phi_ref - pi)) or "angles" (phi = phi_ref prescribed)"""
     gravity: GravityConvention = field_default(Model, "gravity")
@@ -66,13 +68,20 @@ class Problem:
     """validated values of every section as given, defaults filled in (degrees for the gait)"""
     source: str = field(default="<dict>", compare=False)
     """where the problem came from (file name or "<dict>")"""
+    input_torque: PeriodicSignal | None = None
+    """joint torques [N m] given directly (samples of torques, e.g. an ``optimize`` result); None: the torque
+    drive's tau = k (phi_ref - pi) of ``gait``"""
 
     def __post_init__(self) -> None:
-        for name, cls in (("robot", Robot), ("gait", Harmonic)):
+        for name, cls in (("robot", Robot), ("gait", PeriodicSignal)):
             if not isinstance(getattr(self, name), cls):
                 raise TypeError(f"Problem.{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
         if self.drive not in DRIVES:
             raise ValueError(f"Problem.drive must be one of {DRIVES}, got {self.drive!r}")
+        if self.input_torque is not None and (self.drive != "torque" or not isinstance(self.input_torque,
+                                                                                       PeriodicSignal)):
+            raise ValueError("Problem.input_torque must be a PeriodicSignal of the torque drive, got "
+                             f"{type(self.input_torque).__name__} with drive {self.drive!r}")
         if self.gravity not in GRAVITY_CONVENTIONS:
             raise ValueError(f"Problem.gravity must be one of {GRAVITY_CONVENTIONS}, got {self.gravity!r}")
         spec = solver_named(DEFAULT_SOLVER[self.drive] if self.solver is None else self.solver)
@@ -91,9 +100,9 @@ class Problem:
         return Model(self.robot, gravity=self.gravity)
 
     @property
-    def torque(self) -> ReferenceTorque:
-        """The torque input tau = k (phi_ref - pi) of eq. (tau) [N m]."""
-        return ReferenceTorque(self.gait, self.robot.k)
+    def torque(self) -> PeriodicSignal:
+        """The torque input [N m]: ``input_torque`` if given, else tau = k (phi_ref - pi) of eq. (tau)."""
+        return self.input_torque if self.input_torque is not None else ReferenceTorque(self.gait, self.robot.k)
 
     @property
     def signal(self) -> PeriodicSignal:
@@ -129,6 +138,9 @@ class Problem:
             out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1, "mu2": r.mu2, "g": r.g}
         if "gait" not in out:
             g = self.gait
+            if not isinstance(g, Harmonic):
+                raise TypeError(f"a problem built in code with a {type(g).__name__} gait has no problem-file form; "
+                                "build it from a problem file or dict (gait.waveform)")
             out["gait"] = {"drive": self.drive, "gamma1_deg": math.degrees(g.gamma1), "gamma2_deg": math.degrees(g.gamma2),
                            "A1_deg": math.degrees(g.A1), "A2_deg": math.degrees(g.A2), "psi_deg": math.degrees(g.psi)}
         out.setdefault("model", {"gravity": self.gravity})
@@ -156,6 +168,11 @@ class _Context:
         self.source = source
         self.overridden = overridden or set()
 
+    @property
+    def base(self) -> Path:
+        """The directory relative file names in the problem are read from: the problem file's (else the current)."""
+        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+
     def at(self, section: str, key: str, value: Any) -> str:
         origin = " (from --set)" if (section, key) in self.overridden else ""
         return f"{self.source}: [{section}] {key} = {format_value(value)}{origin}"
@@ -164,8 +181,28 @@ class _Context:
         return ProblemError(f"{self.source}: {msg}")
 
 
+def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> list[float]:
+    """An array key's value as a list of floats (JSON's and TOML's arrays), each finite and passing the key's rule."""
+    where = ctx.at(section, key.name, value)
+    if not isinstance(value, (list, tuple)):
+        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[list]} ({key.what}), got {toml_type(value)}")
+    if len(value) > MAX_ARRAY:
+        raise ProblemError(f"{where} is invalid: {len(value)} entries, at most {MAX_ARRAY} ({key.what})")
+    for j, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ProblemError(f"{where} is invalid: entry {j} is {toml_type(v)}, expected a number ({key.what})")
+        if not math.isfinite(v):
+            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be finite ({key.what})")
+        if key.rule is not None and not key.rule.test(v):
+            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be {key.rule.text} "
+                               f"({key.what})")
+    return [float(v) for v in value]
+
+
 def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
     where = ctx.at(section, key.name, value)
+    if key.type is list:
+        return _check_array(ctx, section, key, value)
     if key.type is str:
         if not isinstance(value, str):
             raise ProblemError(f"{where} is invalid: expected a string, {key.valid_text} ({key.what}), "
@@ -188,6 +225,23 @@ def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
     return value
 
 
+def _variant(ctx: _Context, section: Section, given: Mapping[str, Any]) -> str | None:
+    """The value of the section's selector key (``[gait] waveform``); keys of other variants are errors."""
+    if section.selector is None:
+        return None
+    selector = section.key_map[section.selector]
+    variant = _check_value(ctx, section.name, selector, given.get(selector.name, selector.default))
+    for name, value in given.items():
+        key = section.key_map[name]
+        if not section.applies(key, variant):
+            own = [k.name for k in section.keys if k.variants and section.applies(k, variant)]
+            raise ProblemError(f"{ctx.at(section.name, name, value)} is invalid with {selector.name} = "
+                               f"{format_value(variant)}: it is a key of {selector.name} = "
+                               f"{' or '.join(format_value(v) for v in key.variants)} ({key.what}); the keys of "
+                               f"{selector.name} = {format_value(variant)} are {', '.join(own) or 'none'}")
+    return variant
+
+
 def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) -> dict[str, Any]:
     keys = section.key_map
     for name, value in given.items():
@@ -195,6 +249,7 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
             hint = suggest(name, list(keys))
             raise ctx.error(f"[{section.name}] unknown key {name} = {format_value(value)}; {hint}"
                             f"valid keys: {', '.join(keys)}")
+    variant = _variant(ctx, section, given)
     out: dict[str, Any] = {}
     for key in section.keys:
         if key.name in given:
@@ -215,20 +270,22 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
                                    f"give both {name} and {other} ({key.what})")
     for key in section.keys:
         name = key.name
-        if name in given:
+        if name in given or not section.applies(key, variant):
             continue
         if key.required and not (key.required_unless and all(u in given for u in key.required_unless)):
             alt = f" (or {' and '.join(key.required_unless)})" if key.required_unless else ""
+            if key.variants and section.selector is not None:
+                alt += f" with {section.selector} = {format_value(variant)}"
             raise ctx.error(f"[{section.name}] {name} is missing (no value given): required{alt}, "
                             f"{key.valid_text} ({key.what})")
         elif key.default is not None:
-            out[name] = key.default
+            out[name] = list(key.default) if key.type is list else key.default
     return out
 
 
-def _check_contact(ctx: _Context, model: Model, gait: Harmonic, drive: str, values: Mapping) -> None:
+def _check_contact(ctx: _Context, model: Model, gait: PeriodicSignal, drive: str, values: Mapping) -> None:
     """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad input."""
-    gait_keys = [k for k in values["gait"] if k.endswith("_deg")]
+    gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
     blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
     blame = f"[gait] {blame} (with [robot] beta = {format_value(values['robot']['beta'])})"
     try:
@@ -313,12 +370,13 @@ def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
     # the schema has checked every value the constructors check, so their errors would be internal bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
     _check_stiffness_ratio(ctx, robot, g["drive"])
-    gait = Harmonic.from_degrees(g.get("gamma_deg"), g.get("A_deg"), g["psi_deg"], gamma1_deg=g.get("gamma1_deg"),
-                                 gamma2_deg=g.get("gamma2_deg"), A1_deg=g.get("A1_deg"), A2_deg=g.get("A2_deg"))
+    signals = gait_input(g, robot.k, ctx.at, ctx.base)
+    values["gait"] = signals.values
     solver = _solver(ctx, g["drive"], sim)
-    problem = Problem(robot=robot, gait=gait, drive=g["drive"], gravity=values["model"]["gravity"], solver=solver,
-                      options=solver_options(solver, sim), sections=values, source=ctx.source)
-    _check_contact(ctx, problem.model, gait, problem.drive, values)
+    problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=values["model"]["gravity"],
+                      solver=solver, options=solver_options(solver, sim), sections=values, source=ctx.source,
+                      input_torque=signals.torque)
+    _check_contact(ctx, problem.model, problem.gait, problem.drive, values)
     return problem
 
 

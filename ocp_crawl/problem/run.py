@@ -4,6 +4,9 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping, Sequence
 
+import numpy as np
+
+from ocp_crawl.model.inputs import Harmonic, Pulse
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.schema import SCHEMA, ProblemError, format_value
@@ -49,6 +52,19 @@ def no_start_reason(problem: Problem) -> str | None:
     return None
 
 
+#: phases at which a sampled or Fourier reference is averaged for its centre (exact for Fourier orders below it)
+CENTRE_GRID = 720
+
+
+def centre_deg(problem: Problem) -> float:
+    """The centre of the problem's reference angles [deg], mean of both joints: (gamma1 + gamma2)/2 for the
+    harmonic and pulse waveforms, else the mean over the cycle (the OCP's envelope is centred there)."""
+    gait = problem.gait
+    if isinstance(gait, (Harmonic, Pulse)):
+        return math.degrees(0.5 * (gait.gamma1 + gait.gamma2))
+    return math.degrees(float(np.mean(gait(np.arange(CENTRE_GRID) / CENTRE_GRID))))
+
+
 def ocp_settings(problem: Problem) -> OCPSettings:
     """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma.
 
@@ -59,7 +75,7 @@ def ocp_settings(problem: Problem) -> OCPSettings:
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
     if sec.get("rate_limit") == "max_rate" and sec.get("max_rate") is None:
         raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
-    gamma = math.degrees(0.5 * (problem.gait.gamma1 + problem.gait.gamma2))
+    gamma = centre_deg(problem)
     if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
         gait = problem.sections.get("gait", {})
         given = ", ".join(f"{k} = {format_value(gait[k])}" for k in ("gamma_deg", "gamma1_deg", "gamma2_deg")

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Literal, Mapping, Sequence
 
+from ocp_crawl.model.inputs import PULSE_RAMPS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
@@ -104,7 +105,9 @@ CYCLES = within(*MAX_CYCLES_BOUNDS, "periodic gaits settle in a few cycles; 500 
                 "a few minutes")
 STEPS = within(*STEPS_BOUNDS, "each step is an IPOPT solve of about 2 ms: 1e4 steps take about 20 s per cycle")
 
-TYPE_WORDS = {float: "a number", int: "an integer", str: "a string"}
+TYPE_WORDS = {float: "a number", int: "an integer", str: "a string", list: "an array of numbers"}
+#: most entries of an array key (inline samples, Fourier coefficients)
+MAX_ARRAY = 100_000
 
 
 @dataclass(frozen=True)
@@ -113,7 +116,7 @@ class Key:
 
     name: str
     type: type
-    """float, int or str (ints are accepted for floats; bools are never numbers)"""
+    """float, int, str or list (an array of numbers; ints are accepted for floats; bools are never numbers)"""
     unit: str
     help: str
     required: bool = False
@@ -126,10 +129,12 @@ class Key:
     exclusive_with: tuple[str, ...] = ()
     requires: tuple[str, ...] = ()
     """keys that must be given together with this one"""
+    variants: tuple[str, ...] = ()
+    """the values of the section's selector key (``[gait] waveform``) this key belongs to; () for every one"""
 
     def __post_init__(self) -> None:
         if self.type not in TYPE_WORDS:
-            raise TypeError(f"Key {self.name}: type must be one of float, int, str, got {self.type!r}")
+            raise TypeError(f"Key {self.name}: type must be one of float, int, str, list, got {self.type!r}")
 
     @property
     def what(self) -> str:
@@ -141,6 +146,8 @@ class Key:
         """What is valid, in words (README table and error messages)."""
         if self.choices:
             return "one of " + ", ".join(json.dumps(c) for c in self.choices)
+        if self.type is list:
+            return "an array of numbers, each " + (self.rule.text if self.rule is not None else "finite")
         if self.rule is not None:
             return self.rule.text
         return "any finite number" if self.type in (float, int) else "any string"
@@ -154,10 +161,16 @@ class Section:
     help: str
     keys: tuple[Key, ...]
     required: bool = False
+    selector: str | None = None
+    """the key whose value selects which of the keys with ``variants`` apply (``[gait] waveform``)"""
 
     @property
     def key_map(self) -> dict[str, Key]:
         return {k.name: k for k in self.keys}
+
+    def applies(self, key: Key, variant: str | None) -> bool:
+        """Whether ``key`` belongs to the section when its selector has the value ``variant``."""
+        return not key.variants or variant in key.variants
 
 
 def _robot(name: str):
@@ -185,17 +198,60 @@ _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, 
     Key("g", float, "m/s^2", "gravitational acceleration", default=_robot("g"), rule=MAGNITUDE_RULE),
 ))
 
-_GAIT = Section("gait", "harmonic reference angles, eq. (ref)", required=True, keys=(
+#: the waveforms of ``[gait] waveform``: the reference angles (or torques) over one cycle
+WAVEFORMS = ("harmonic", "fourier", "samples", "pulse")
+#: interpolations of ``[gait] waveform = "samples"`` (the classes of ocp_crawl.model.inputs)
+INTERPOLATIONS = ("pchip", "linear", "spline")
+_HFP, _HP = ("harmonic", "fourier", "pulse"), ("harmonic", "pulse")
+_FOURIER_WHY = "harmonics n = 1, 2, ... of the reference angle; at most 100"
+_SAMPLES_WHY = "samples over one cycle at the phases of gait.phase"
+
+_GAIT = Section("gait", "reference angles (eq. (ref)) or torques over one cycle", required=True, selector="waveform",
+                keys=(
     Key("drive", str, "-", "actuation: spring torque tau = k (phi_ref - pi), or prescribed angles",
         default=DRIVES[0], choices=DRIVES),
-    Key("gamma_deg", float, "deg", "nominal joint angle", required=True, rule=ANGLE,
-        required_unless=("gamma1_deg", "gamma2_deg")),
-    Key("A_deg", float, "deg", "amplitude", required=True, rule=GE0, required_unless=("A1_deg", "A2_deg")),
-    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2", required=True, rule=PHASE),
-    Key("gamma1_deg", float, "deg", "nominal angle of joint 1 (overrides gamma_deg)", rule=ANGLE),
-    Key("gamma2_deg", float, "deg", "nominal angle of joint 2 (overrides gamma_deg)", rule=ANGLE),
-    Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0),
-    Key("A2_deg", float, "deg", "amplitude of joint 2 (overrides A_deg)", rule=GE0),
+    Key("waveform", str, "-", "shape of the input over one cycle: harmonic (eq. (ref)), Fourier series, samples "
+        "(inline or a CSV file), or pulses of soft actuators", default=WAVEFORMS[0], choices=WAVEFORMS),
+    Key("gamma_deg", float, "deg", "nominal joint angle (Fourier: mean; pulse: centre of the swing)", required=True,
+        rule=ANGLE, required_unless=("gamma1_deg", "gamma2_deg"), variants=_HFP),
+    Key("A_deg", float, "deg", "amplitude (pulse: half swing)", required=True, rule=GE0,
+        required_unless=("A1_deg", "A2_deg"), variants=_HP),
+    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2", required=True, rule=PHASE, variants=_HP),
+    Key("gamma1_deg", float, "deg", "nominal angle of joint 1 (overrides gamma_deg)", rule=ANGLE, variants=_HFP),
+    Key("gamma2_deg", float, "deg", "nominal angle of joint 2 (overrides gamma_deg)", rule=ANGLE, variants=_HFP),
+    Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0, variants=_HP),
+    Key("A2_deg", float, "deg", "amplitude of joint 2 (overrides A_deg)", rule=GE0, variants=_HP),
+    Key("cos1_deg", list, "deg", f"fourier: cosine amplitudes of joint 1 ({_FOURIER_WHY})",
+        default=(), variants=("fourier",)),
+    Key("sin1_deg", list, "deg", f"fourier: sine amplitudes of joint 1 ({_FOURIER_WHY})", default=(),
+        variants=("fourier",)),
+    Key("cos2_deg", list, "deg", f"fourier: cosine amplitudes of joint 2 ({_FOURIER_WHY})", default=(),
+        variants=("fourier",)),
+    Key("sin2_deg", list, "deg", f"fourier: sine amplitudes of joint 2 ({_FOURIER_WHY})", default=(),
+        variants=("fourier",)),
+    Key("rise", float, "cycles", "pulse: duration of each edge (rise and fall)", required=True,
+        rule=Rule(lambda v: 0 < v <= 0.5, "in (0, 0.5]", "an edge takes time; rise -> 0 tends to a square wave"),
+        variants=("pulse",)),
+    Key("hold", float, "cycles", "pulse: duration at the high level (2 rise + hold <= 1)", required=True,
+        rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)"), variants=("pulse",)),
+    Key("ramp", str, "-", "pulse: edge shape, straight (trapezoid) or half-cosine (continuous slope)",
+        default=PULSE_RAMPS[0], choices=PULSE_RAMPS, variants=("pulse",)),
+    Key("file", str, "-", "samples: CSV file with 'phase [-]' and 'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', "
+        "'phi2_ref [deg]' (relative to the problem file)", variants=("samples",), exclusive_with=("phase",)),
+    Key("phase", list, "cycles", "samples: phases in [0, 1), increasing (a last sample at 1 must repeat the first)",
+        rule=Rule(lambda v: 0 <= v <= 1, "in [0, 1]"), variants=("samples",)),
+    Key("phi1_ref_deg", list, "deg", f"samples: reference angle of joint 1 ({_SAMPLES_WHY})", rule=ANGLE,
+        variants=("samples",),
+        requires=("phase", "phi2_ref_deg"), exclusive_with=("tau1", "tau2")),
+    Key("phi2_ref_deg", list, "deg", f"samples: reference angle of joint 2 ({_SAMPLES_WHY})", rule=ANGLE,
+        variants=("samples",),
+        requires=("phase", "phi1_ref_deg")),
+    Key("tau1", list, "N m", f"samples: torque of joint 1 ({_SAMPLES_WHY}); torque drive", variants=("samples",),
+        requires=("phase", "tau2")),
+    Key("tau2", list, "N m", f"samples: torque of joint 2 ({_SAMPLES_WHY}); torque drive", variants=("samples",),
+        requires=("phase", "tau1")),
+    Key("interpolation", str, "-", "samples: periodic interpolation between the samples", default=INTERPOLATIONS[0],
+        choices=INTERPOLATIONS, variants=("samples",)),
 ))
 
 _MODEL = Section("model", "model conventions", keys=(
@@ -271,6 +327,8 @@ def _requirement(k: Key) -> str:
         req = f"default `{format_value(k.default)}`"
     if k.exclusive_with:
         req += "; not with " + ", ".join(f"`{e}`" for e in k.exclusive_with)
+    if k.variants:
+        req += "; waveform " + ", ".join(f"`{format_value(v)}`" for v in k.variants)
     return req
 
 
@@ -279,8 +337,8 @@ def schema_markdown() -> str:
     rows = ["| key | type | unit | required / default | valid | meaning |", "|---|---|---|---|---|---|"]
     for sec in SECTIONS:
         for k in sec.keys:
-            kind = {float: "float", int: "int", str: "string"}[k.type]
-            valid = k.rule.explained if k.rule is not None and not k.choices else k.valid_text
+            kind = {float: "float", int: "int", str: "string", list: "array"}[k.type]
+            valid = k.rule.explained if k.rule is not None and not k.choices and k.type is not list else k.valid_text
             rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k)} | {valid} | {k.help} |")
     return "\n".join(rows)
 

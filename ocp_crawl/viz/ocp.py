@@ -1,4 +1,4 @@
-"""Files and figures of an optimal-gait solve: torques.csv, arrays.npz, summary.json, figures."""
+"""Files and figures of an optimal-gait solve: torques.csv, optimal_gait.toml, arrays.npz, summary.json, figures."""
 from __future__ import annotations
 
 import io
@@ -11,18 +11,37 @@ from matplotlib.figure import Figure
 
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
+from ocp_crawl.io.tables import table_text
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
+from ocp_crawl.ocp.solve import REPLAY_INTERPOLATION
+from ocp_crawl.problem.overrides import toml_text
+from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
 
 
 def torques_csv(result: OCPResult) -> str:
-    """CSV text: phase in [0, 1), tau1, tau2 [N m], one row per node."""
-    lines = ["phase,tau1,tau2"]
-    for t, a, b in zip(result.phase, result.tau[0], result.tau[1]):
-        lines.append(f"{t:.10g},{a:.17g},{b:.17g}")
-    return "\n".join(lines) + "\n"
+    """CSV text of the optimal torques in the package's table convention (:mod:`ocp_crawl.io.tables`):
+    ``phase [-]`` in [0, 1), ``tau1 [N m]``, ``tau2 [N m]``, one row per node, full precision (read back, the
+    numbers are the very same, so that ``simulate`` of :data:`OPTIMAL_GAIT_TOML` reproduces the replay)."""
+    return table_text([("phase", "-", result.phase), ("tau1", "N m", result.tau[0]), ("tau2", "N m", result.tau[1])],
+                      comments=[f"optimal {result.objective} torques at the {result.phase.size} nodes of one cycle "
+                                f"(status {result.status.label}); replay: ocp-crawl simulate {OPTIMAL_GAIT_TOML}"])
+
+
+#: the problem file ``write_outputs`` writes next to torques.csv: the robot driven by the optimal torques
+OPTIMAL_GAIT_TOML = "optimal_gait.toml"
+
+
+def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
+    """A problem file replaying the optimum: ``problem``'s robot and gravity convention (sections as
+    ``Problem.to_dict()``), the samples waveform reading torques.csv with the replay's interpolation."""
+    sections = samples_problem(problem, "torques.csv", REPLAY_INTERPOLATION)
+    return toml_text(sections, comments=[
+        f"The optimal {result.objective} torque profile ({result.status.label}), written by ocp-crawl optimize.",
+        f"Run:  ocp-crawl simulate {OPTIMAL_GAIT_TOML}  (S reproduces the optimize replay, S_replay).",
+        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full precision."])
 
 
 #: colours of joint/foot 1 and 2
@@ -130,9 +149,14 @@ def _positions(ax, result: OCPResult, rep) -> set[int]:
 
 
 def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, summary: dict) -> list[Path]:
-    """Write torques.csv, arrays.npz, summary.json and the figure (PNG, PDF) atomically into out_dir."""
+    """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary`` holds the
+    ``problem`` as ``Problem.to_dict()``), arrays.npz, summary.json and the figure (PNG, PDF) atomically into
+    out_dir; returns the paths written."""
     out = Path(out_dir)
     written = [atomic_write(out / "torques.csv", lambda fh: fh.write(torques_csv(result).encode()))]
+    if result.phase.size and "problem" in summary:
+        text = optimal_gait_toml(result, summary["problem"]).encode()
+        written.append(atomic_write(out / OPTIMAL_GAIT_TOML, lambda fh: fh.write(text)))
     arrays = {"phase": result.phase, "tau": result.tau}
     for j, (phi, x1, ft) in enumerate(zip(result.phi, result.x1, result.f_t)):
         arrays[f"phi_{j}"] = phi

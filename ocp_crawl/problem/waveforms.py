@@ -1,0 +1,250 @@
+"""The input of a problem's ``[gait]`` section: harmonic, Fourier series, samples (inline or a CSV file), pulses.
+
+``[gait] waveform`` selects the keys (schema: ``Key.variants``); :func:`gait_input` turns the validated
+values into the reference angles [rad] and, for torque samples, the joint torques [N m] themselves.
+Sample files follow the package's CSV convention (:mod:`ocp_crawl.io.tables`): a header with the unit
+in every column name, ``phase [-]`` and either ``tau1 [N m]``, ``tau2 [N m]`` or ``phi1_ref [deg]``,
+``phi2_ref [deg]``; an error names the file and the line.  Relative file names are read from the
+directory of the problem file.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ocp_crawl.io.tables import TableError, read_table
+from ocp_crawl.model.inputs import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
+                                    PeriodicSpline, Pulse, TorqueReference)
+from ocp_crawl.problem.schema import ProblemError, format_value
+
+#: the interpolations of sampled waveforms and the fewest samples each needs over one period
+INTERPOLANTS = {"pchip": (PeriodicPchip, 3), "linear": (PeriodicLinear, 2), "spline": (PeriodicSpline, 3)}
+#: most harmonics of a Fourier waveform (per joint and kind)
+MAX_HARMONICS = 100
+#: the columns of a sample file: the phase, and one pair of torques or reference angles
+PHASE_COLUMN = {"phase": "dimensionless"}
+TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
+ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
+#: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17 digits)
+CLOSING_RTOL = 1e-9
+
+#: ``at(section, key, value)``: the message prefix naming the file, the key and the value
+At = Callable[[str, str, Any], str]
+
+
+@dataclass(frozen=True)
+class GaitInput:
+    """The signals of a ``[gait]`` section."""
+
+    reference: PeriodicSignal
+    """reference angles phi_ref [rad] (for torque samples: pi + tau/k)"""
+    torque: PeriodicSignal | None
+    """joint torques [N m] when the waveform gives them directly; None: tau = k (phi_ref - pi)"""
+    values: dict
+    """the section's values as validated (a sample file's name resolved to an absolute path)"""
+
+
+def _joint(g: Mapping[str, Any], name: str) -> tuple[float, float]:
+    """Per-joint degrees of ``name`` (``gamma``, ``A``): ``name1_deg`` / ``name2_deg`` over ``name_deg``."""
+    return tuple(g.get(f"{name}{i}_deg", g.get(f"{name}_deg")) for i in (1, 2))
+
+
+def _fourier(g: Mapping[str, Any], at: At) -> FourierSeries:
+    arrays = [np.radians(g[f"{kind}{i}_deg"]) for i in (1, 2) for kind in ("cos", "sin")]
+    for (i, kind), arr in zip(((1, "cos"), (1, "sin"), (2, "cos"), (2, "sin")), arrays):
+        if arr.size > MAX_HARMONICS:
+            raise ProblemError(f"{at('gait', f'{kind}{i}_deg', g[f'{kind}{i}_deg'])} is invalid: {arr.size} "
+                               f"harmonics, at most {MAX_HARMONICS}")
+    n = max(1, max(arr.size for arr in arrays))
+    a, b = np.zeros((2, n)), np.zeros((2, n))
+    for i in (0, 1):
+        a[i, :arrays[2 * i].size] = arrays[2 * i]
+        b[i, :arrays[2 * i + 1].size] = arrays[2 * i + 1]
+    return FourierSeries(np.radians(_joint(g, "gamma")), a, b)
+
+
+def _pulse(g: Mapping[str, Any], at: At) -> Pulse:
+    if not 2 * g["rise"] + g["hold"] <= 1:
+        raise ProblemError(f"{at('gait', 'rise', g['rise'])} and hold = {format_value(g['hold'])} are invalid: "
+                           f"2 rise + hold = {2 * g['rise'] + g['hold']:g} must be <= 1 (two edges and the high level "
+                           "fit in one cycle)")
+    (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
+    return Pulse(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2), math.radians(g["psi_deg"]),
+                 g["rise"], g["hold"], g["ramp"])
+
+
+@dataclass(frozen=True)
+class _Samples:
+    """Samples over one period before the checks: phases, values (2, N) in SI units, and where row j is."""
+
+    phase: np.ndarray
+    values: np.ndarray
+    torque: bool
+    """True: joint torques [N m]; False: reference angles [rad]"""
+    where: Callable[[int], str]
+    """the message prefix naming row j (file and line, or the key and the entry)"""
+    names: tuple[str, str]
+
+
+def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str]:
+    path = Path(g["file"]).expanduser()
+    path = path if path.is_absolute() else base / path
+    try:
+        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS}, min_rows=2)
+    except TableError as exc:
+        raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {exc}") from None
+    pairs = [cols for cols in (TORQUE_COLUMNS, ANGLE_COLUMNS) if any(c in table for c in cols)]
+    if len(pairs) != 1 or not all(c in table for c in pairs[0]):
+        have = ", ".join(f"'{n} [{u}]'" for n, u in table.units.items())
+        raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {path}: needs 'phase [-]' and either "
+                           f"'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', 'phi2_ref [deg]' (header has {have})")
+    cols = list(pairs[0])
+    samples = _Samples(table["phase"], np.array([table[c] for c in cols]), pairs[0] is TORQUE_COLUMNS,
+                       lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}",
+                       (cols[0], cols[1]))
+    return samples, str(path.resolve())
+
+
+def _inline(g: Mapping[str, Any], at: At) -> _Samples:
+    pair = ("tau1", "tau2") if "tau1" in g else ("phi1_ref_deg", "phi2_ref_deg") if "phi1_ref_deg" in g else None
+    if "phase" not in g or pair is None:
+        given = ", ".join(k for k in ("phase", "tau1", "tau2", "phi1_ref_deg", "phi2_ref_deg") if k in g)
+        raise ProblemError(f"{at('gait', 'waveform', 'samples')} needs file, or phase with tau1 and tau2 (or "
+                           f"phi1_ref_deg and phi2_ref_deg) (given: {given or 'none of them'})")
+    for name in pair:
+        if len(g[name]) != len(g["phase"]):
+            raise ProblemError(f"{at('gait', name, g[name])} is invalid: {len(g[name])} entries where phase has "
+                               f"{len(g['phase'])} (one value per phase)")
+    torque = pair[0] == "tau1"
+    values = np.array([g[pair[0]], g[pair[1]]], dtype=float)
+    return _Samples(np.array(g["phase"], dtype=float), values if torque else np.radians(values), torque,
+                    lambda j: f"{at('gait', 'phase', g['phase'])} is invalid: entry {j}", pair)
+
+
+def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
+    """Phases in [0, 1) and values of one period: sorted, unique, a closing sample at phase 1 repeating the
+    sample at phase 0 dropped; anything else is a ProblemError naming the row."""
+    t, v = s.phase, s.values
+    for j in range(t.size):
+        if not 0 <= t[j] <= 1:
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} outside [0, 1] (phases of one cycle)")
+        if j and not t[j] > t[j - 1]:
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be sorted "
+                               "and unique")
+    if t[-1] == 1.0:
+        scale = max(float(np.max(np.abs(v))), np.finfo(float).tiny)
+        gap = np.abs(v[:, -1] - v[:, 0])
+        if t[0] != 0.0 or np.any(gap > CLOSING_RTOL * scale):
+            first = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, 0]))
+            last = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, -1]))
+            raise ProblemError(f"{s.where(t.size - 1)}: not periodic: the sample at phase 1 must repeat the sample at "
+                               f"phase 0 (phase {float(t[0])!r}: {first}; phase 1: {last}), or give phases in [0, 1) "
+                               "only")
+        t, v = t[:-1], v[:, :-1]
+    cls, fewest = INTERPOLANTS[interpolation]
+    if t.size < fewest:
+        raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period; interpolation "
+                           f"{format_value(interpolation)} needs at least {fewest}")
+    return t, v
+
+
+def _check_angles(s: _Samples) -> None:
+    """Reference angles inside the geometry: each in (0, 360) deg, the limits of the harmonic keys."""
+    bad = np.argwhere(~((s.values > 0) & (s.values < 2 * math.pi)))
+    if bad.size:
+        i, j = (int(x) for x in bad[0])
+        angle = math.degrees(float(s.values[i, j]))
+        raise ProblemError(f"{s.where(j)}: {s.names[i]} = {angle!r} deg outside (0, 360) deg "
+                           "(an interior joint angle)")
+
+
+def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> GaitInput:
+    values = dict(g)
+    if "file" in g:
+        samples, values["file"] = _from_file(g, at, base)
+    else:
+        samples = _inline(g, at)
+    if samples.torque and drive != "torque":
+        raise ProblemError(f"{at('gait', 'drive', drive)} is invalid with torque samples ({', '.join(samples.names)}):"
+                           " prescribed angles need reference angles (phi1_ref, phi2_ref)")
+    if not samples.torque:
+        _check_angles(samples)
+    t, v = _periodic(samples, g["interpolation"])
+    signal = INTERPOLANTS[g["interpolation"]][0](t, v)
+    if samples.torque:
+        return GaitInput(TorqueReference(signal, k), signal, values)
+    return GaitInput(signal, None, values)
+
+
+def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path) -> GaitInput:
+    """The signals of the validated ``[gait]`` values ``g`` (schema checked, defaults filled in).
+
+    Parameters
+    ----------
+    g : mapping
+        The section's values (degrees, cycles, N m as in the problem file).
+    k : float
+        Joint stiffness [N m/rad] (reference angles of torque samples: pi + tau/k).
+    at : callable
+        ``at(section, key, value)``: the message prefix naming the file, key and value.
+    base : Path
+        Directory that relative sample-file names are read from (the problem file's).
+
+    Returns
+    -------
+    GaitInput
+        Reference angles [rad], the torques [N m] if the waveform gives them, the values (file resolved).
+
+    Raises
+    ------
+    ProblemError
+        A waveform that is not periodic, not finite, unsorted, outside the geometry or an unreadable file.
+    """
+    waveform = g["waveform"]
+    if waveform == "samples":
+        return _samples(g, k, g["drive"], at, base)
+    if waveform == "fourier":
+        return GaitInput(_fourier(g, at), None, dict(g))
+    if waveform == "pulse":
+        return GaitInput(_pulse(g, at), None, dict(g))
+    (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
+    gait = Harmonic.from_degrees(gamma1_deg=g1, gamma2_deg=g2, A1_deg=a1, A2_deg=a2, psi_deg=g["psi_deg"])
+    return GaitInput(gait, None, dict(g))
+
+
+def samples_problem(problem: Mapping[str, Mapping[str, Any]], file: str, interpolation: str = "pchip") -> dict:
+    """A problem dict that drives ``problem``'s robot (and gravity convention) with the torques or reference
+    angles of the sample file ``file`` (the ``samples`` waveform, torque drive, default simulation options).
+
+    ``problem``: sections as ``Problem.to_dict()``; ``file``: the CSV file, relative to where the problem file
+    will be written; ``interpolation``: one of :data:`INTERPOLANTS`.  Returns the sections ``robot``, ``gait``
+    and ``model``.
+    """
+    if interpolation not in INTERPOLANTS:
+        raise ValueError(f"interpolation must be one of {tuple(INTERPOLANTS)}, got {interpolation!r}")
+    return {"robot": dict(problem["robot"]),
+            "gait": {"drive": "torque", "waveform": "samples", "file": str(file), "interpolation": interpolation},
+            "model": dict(problem.get("model", {}))}
+
+
+def waveform_text(g: Mapping[str, Any]) -> str:
+    """One line describing a ``[gait]`` section's input: the harmonic keys in degrees (``gamma = 90 deg, ...``),
+    preceded by the waveform's name and its own settings for the other waveforms."""
+    degrees = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in g.items() if k.endswith("_deg") and
+                        isinstance(v, (int, float)))
+    waveform = g.get("waveform", "harmonic")
+    if waveform == "harmonic":
+        return degrees
+    if waveform == "fourier":
+        order = max(len(g.get(f"{kind}{i}_deg", ())) for kind in ("cos", "sin") for i in (1, 2))
+        own = f"order {order}"
+    elif waveform == "pulse":
+        own = f"rise {g['rise']:g}, hold {g['hold']:g} cycles, {g['ramp']} edges"
+    else:
+        where = g["file"] if "file" in g else f"{len(g.get('phase', ()))} inline samples"
+        own = f"{where}, {g.get('interpolation')} interpolation"
+    return f"{waveform} ({own})" + (f": {degrees}" if degrees else "")
