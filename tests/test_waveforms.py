@@ -15,7 +15,8 @@ import pytest
 
 from ocp_crawl.cli.app import main
 from ocp_crawl.io.tables import read_table, write_table
-from ocp_crawl.model.inputs import PeriodicLinear, PeriodicPchip, Pulse
+from ocp_crawl.model.inputs import PeriodicLinear, PeriodicPchip
+from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.ocp.solve import REPLAY_INTERPOLATION, replay_signal
 from ocp_crawl.problem import load_problem, paper_problem, run_problem
 from ocp_crawl.problem.overrides import toml_text

@@ -8,7 +8,7 @@ _EXPORTS = {
     "Harmonic": "ocp_crawl.model.inputs", "PeriodicLinear": "ocp_crawl.model.inputs",
     "PeriodicPchip": "ocp_crawl.model.inputs", "PeriodicSignal": "ocp_crawl.model.inputs",
     "PeriodicSpline": "ocp_crawl.model.inputs", "ReferenceTorque": "ocp_crawl.model.inputs",
-    "Pulse": "ocp_crawl.model.inputs", "TorqueReference": "ocp_crawl.model.inputs",
+    "Pulse": "ocp_crawl.model.pulse", "TorqueReference": "ocp_crawl.model.inputs",
     "as_signal": "ocp_crawl.model.inputs",
 }
 

@@ -6,7 +6,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ocp_crawl.model.inputs import Harmonic, Pulse
+from ocp_crawl.model.inputs import Harmonic
+from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.schema import SCHEMA, ProblemError, format_value

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Literal, Mapping, Sequence
 
-from ocp_crawl.model.inputs import PULSE_RAMPS
+from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS

@@ -18,7 +18,8 @@ import numpy as np
 
 from ocp_crawl.io.tables import TableError, read_table
 from ocp_crawl.model.inputs import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
-                                    PeriodicSpline, Pulse, TorqueReference)
+                                    PeriodicSpline, TorqueReference)
+from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.problem.schema import ProblemError, format_value
 
 #: the interpolations of sampled waveforms and the fewest samples each needs over one period

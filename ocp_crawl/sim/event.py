@@ -48,7 +48,7 @@ from ocp_crawl.model.statics import AUX, Model, fast_ddot2, fast_newton, symboli
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_locate import EventsMixin
+from ocp_crawl.sim.event_locate import EPS, EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q, \
     torque_pair
@@ -402,12 +402,22 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
 
         best = None
         for k in sorted(crossed, key=estimate):
-            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > 0:
+            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > guard_noise(k, self.noise):
                 continue
             found = (self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k)
-            if best is None or found[0][0] < best[0][0]:
+            if best is None or self._earlier(found, best, crossed):
                 best = found
         return best
+
+    def _earlier(self, found, best, crossed: list[str]) -> bool:
+        """Whether the located zero ``found`` comes before ``best``; zeros within the location tolerance are
+        simultaneous (e.g. at a kink of a sampled or pulse input, where the slip stops as another friction
+        limit is reached) and then the guard first in ``crossed`` (the guards' table order) comes first."""
+        t_f, t_b = found[0][0], best[0][0]
+        tol = self.opt.event_xtol + 4 * EPS * abs(t_b)
+        if abs(t_f - t_b) <= tol:
+            return crossed.index(found[1]) < crossed.index(best[1])
+        return t_f < t_b
 
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
