@@ -373,8 +373,9 @@ def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray,
     xs = np.empty(3 * total)
     aux = np.empty(NAUX * total)
     s = 0
+    wide, narrow = fast_newton_batch(), fast_newton_batch_small()  # one cache key each (built once)
     for width in widths:
-        xi, ai = fast_newton_batch(width)(*(c[r * s:r * (s + width)] for c, r in zip(cols, (3, 2, 2, NQ))), p)
+        xi, ai = (wide if width == BATCH else narrow)(*(c[r * s:r * (s + width)] for c, r in zip(cols, (3, 2, 2, NQ))), p)
         xs[3 * s:3 * (s + width)] = xi
         aux[NAUX * s:NAUX * (s + width)] = ai
         s += width

@@ -29,7 +29,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ocp_crawl.model.step_equations import NPAIR, PAIR_NAMES
 from ocp_crawl.nlp.homotopy import Solve
@@ -143,6 +142,8 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
         crossed = [n for n in g.names() if g.value(n, 1.0) < -GUARD_TOL]
         if not crossed:
             return None, "no guard of the starting mode is violated at the end of the step"
+        from scipy.optimize import brentq  # scipy only where used (start-up time)
+
         roots = []
         for name in crossed:
             if g.value(name, 0.0) > 0:

@@ -19,17 +19,19 @@ def _fig(name: str, caption: str) -> str:
 
 
 def report(sets: dict[str, StudySet], gravity: str, mode: str, statements: list[Statement], elapsed: float,
-           jobs: int) -> str:
+           jobs: int, extra: str = "") -> str:
     """The markdown of ``report.md``.
 
     ``sets``: the studies by convention ({gravity: StudySet}); ``gravity``: the convention of the
-    figures; ``mode``: "quick" or "full"; ``elapsed``: wall time [s]; ``jobs``: worker processes.
+    figures; ``mode``: "quick" or "full"; ``elapsed``: wall time [s]; ``jobs``: worker processes;
+    ``extra``: markdown sections placed after the studies, before the failed points and the timing (last).
     """
     s = sets[gravity]
     o = sets.get("physical" if gravity == "paper" else "paper")
     out = _intro(gravity, mode, elapsed, jobs) + _statements_section(sets, statements)
     out += _gait_section(s) + _parametric_section(s, o) + _band_section(s, o) + _amplitude_section(s, o)
-    out += _friction_section(s) + _stiffness_section(s, o) + _pressure_section(s) + _failures_section(s, sets)
+    out += _friction_section(s) + _stiffness_section(s, o) + _pressure_section(s) + [extra]
+    out += _failures_section(s, sets)
     return "\n".join(out) + "\n"
 
 

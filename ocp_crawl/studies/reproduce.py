@@ -102,7 +102,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, gravity: str = "physical
         for ext in ("png", "pdf"):
             files.append(save_figure(fig, out / f"{stem}.{ext}"))
     elapsed = time.perf_counter() - start
-    text = report(sets, gravity, mode, statements, elapsed, sweep.jobs) + points_markdown(points)
+    text = report(sets, gravity, mode, statements, elapsed, sweep.jobs, extra=points_markdown(points))
     report_md = atomic_write(out / "report.md", lambda fh: fh.write(text.encode("utf-8")))
     nums = {**numbers(sets, statements), "paper_points": {g: p.numbers() for g, p in points.items()}}
     files.append(write_json(out / "numbers.json", nums))
