@@ -120,41 +120,79 @@ def test_k_and_mass_together_are_reported_rank_deficient(tmp_path):
     assert "rank 1 of 2" in text and "unidentifiable (rank-deficient)" in text and "dlog(robot.M)" in text
 
 
-def _s_norm_pressure(problem, k, bmap):
-    """S / S_ref of the two paper pressure files, simulated directly (not through the fit)."""
+def _s_norm_pressure(problem, k, bmap, form):
+    """S / S_ref of the two paper pressure files in the input ``form``, simulated directly (not through the fit)."""
     out, sig = [], []
+    constants = pressure_defaults(problem.gravity, form)
+    rest, amp = constants["phi_rest_deg"], constants["amplitude_bar"]
+    amp = None if math.isnan(amp) else amp
     for path in PRESSURE_DATA:
         d = read_measurements(path)
         model = problem.with_values({"robot.k": k}).model
-        rest = pressure_defaults(problem.gravity)["phi_rest_deg"]
-        s = np.array([simulate(model, pressure_torque(model.robot, p0 / 1e5, math.degrees(psi), rest, bmap),
+        s = np.array([simulate(model, pressure_torque(model.robot, p0 / 1e5, math.degrees(psi), rest, bmap, amp),
                                "event").S for p0, psi in zip(d.table["p0"], d.table["psi"])])
         out.append(s / s[d.reference_row])
         sig.append(d.sigma)
     return np.concatenate(out), np.concatenate(sig)
 
 
-def test_normalised_data_cannot_fix_k_and_the_pressure_map_together():
-    problem = load_problem(PAPER_GRAVITY)
-    names = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
+MAP_AND_K = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
+
+
+def _jacobian_at_table_i(problem, form):
     datasets = [read_measurements(p) for p in PRESSURE_DATA]
     # the Jacobian at Table I (one evaluation of the search is enough for the report)
-    fit = fit_measurements(problem, datasets, resolve_parameters(problem, names), max_nfev=1)
+    fit = fit_measurements(problem, datasets, resolve_parameters(problem, MAP_AND_K, form=form), max_nfev=1,
+                           form=form)
     assert fit.unidentified, fit_report(fit)
-    d = fit.unidentified[0]
+    assert "not determined" in fit_report(fit) and "dlog(robot.k)" in fit_report(fit)
+    return fit, fit.unidentified[0]
+
+
+def _moved(problem, log_step, form):
+    """S / S_ref with k and the map moved by relative (log) steps ``log_step`` (order of MAP_AND_K)."""
+    table = BendingMap()
+    factors = dict(zip(MAP_AND_K, np.exp(log_step)))
+    bmap = dataclasses.replace(table, **{f.name: factors[f"pressure.{f.name}"] * getattr(table, f.name)
+                                         for f in dataclasses.fields(table)})
+    return _s_norm_pressure(problem, 0.1677 * factors["robot.k"], bmap, form)[0]
+
+
+def test_normalised_data_cannot_fix_k_and_the_pressure_map_together_raised_sine():
+    """The earlier raised sine (peak p0, stored rest angle): k down with the whole map up is not determined."""
+    problem = load_problem(PAPER_GRAVITY)
+    fit, d = _jacobian_at_table_i(problem, "raised")
     assert d.relative_sd > 5
     k_part = d.components["robot.k"]
-    map_parts = [d.components[n] for n in names[1:]]
+    map_parts = [d.components[n] for n in MAP_AND_K[1:]]
     assert abs(k_part) > 0.3 and all(m * k_part < 0 for m in map_parts)  # k down, the whole map up
     assert all(fit.correlation[0, j] < -0.9 for j in range(1, 5))
-    assert "not determined" in fit_report(fit) and "dlog(robot.k)" in fit_report(fit)
     # independently: moving k and the map along that trade-off changes S/S_ref far less than moving k alone
-    base, sig = _s_norm_pressure(problem, 0.1677, BendingMap())
-    table = BendingMap()
-    scaled = dataclasses.replace(table, **{f.name: 1.2 * getattr(table, f.name) for f in dataclasses.fields(table)})
-    traded, _ = _s_norm_pressure(problem, 0.1677 / 1.2, scaled)
-    k_only, _ = _s_norm_pressure(problem, 0.1677 / 1.2, BendingMap())
+    base, sig = _s_norm_pressure(problem, 0.1677, BendingMap(), "raised")
+    step = math.log(1.2)
+    traded = _moved(problem, [-step] + [step] * 4, "raised")
+    k_only = _moved(problem, [-step, 0, 0, 0, 0], "raised")
     assert np.sum(((traded - base) / sig) ** 2) < 0.1 * np.sum(((k_only - base) / sig) ** 2)
+
+
+def test_normalised_data_cannot_fix_the_scale_of_the_pressure_map():
+    """The paper's form (ref), the default (nominal p0, A_p = 0.4 bar, flat rest): the angles follow the map and k
+    only sets the sag under gravity, so k is determined (to better than 100 %) but the overall scale of the map,
+    with k slightly down, is not."""
+    problem = load_problem(PAPER_GRAVITY)
+    fit, d = _jacobian_at_table_i(problem, "paper")
+    assert len(fit.unidentified) == 1 and d.relative_sd > 1
+    k_part = d.components["robot.k"]
+    map_parts = np.array([d.components[n] for n in MAP_AND_K[1:]])
+    assert np.all(map_parts * map_parts[0] > 0) and np.all(np.abs(map_parts) > 2 * abs(k_part))  # the map scale
+    assert fit.sigma[0] < fit.x[0] and np.all(fit.correlation[1:, 1:] > 0.9)
+    # independently: the whole map 10 % up changes S/S_ref far less than k alone by a step of equal size (0.2 in
+    # log); the k part of the reported direction is imprecise (finite differences of event-located gaits)
+    base, sig = _s_norm_pressure(problem, 0.1677, BendingMap(), "paper")
+    step = math.log(1.1)
+    scaled = _moved(problem, [0, step, step, step, step], "paper")
+    k_only = _moved(problem, [2 * step, 0, 0, 0, 0], "paper")
+    assert np.sum(((scaled - base) / sig) ** 2) < 0.1 * np.sum(((k_only - base) / sig) ** 2)
 
 
 def test_a_failing_start_is_a_status_not_a_crash(tmp_path):
@@ -239,4 +277,4 @@ def test_recovers_the_waveform_amplitude_of_the_paper_form(tmp_path):
     assert fit.success, fit.message
     assert 0 < fit.sigma[0] < 0.1 and abs(fit.x[0] - 0.4) < 3 * fit.sigma[0]
     with pytest.raises(ProblemError, match="--start pressure.amplitude_bar"):
-        resolve_parameters(problem, ["pressure.amplitude_bar"])  # the default waveform has no amplitude
+        resolve_parameters(problem, ["pressure.amplitude_bar"], form="raised")  # the raised sine has no amplitude
