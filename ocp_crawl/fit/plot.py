@@ -19,20 +19,34 @@ INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "
 LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
 
 
-def _value(name: str, x: float, s: float) -> str:
+def _value(name: str, unit: str, x: float, s: float) -> str:
     short = name.split(".", 1)[1]
     if math.isnan(s):
-        return f"{short} = {x:.4g} (no uncertainty)"
-    return f"{short} = {x:.4g} +- {s:.2g}" if math.isfinite(s) else f"{short} = {x:.4g} (not identifiable)"
+        return f"{short} = {x:.4g} {unit} (no uncertainty)"
+    if not math.isfinite(s):
+        return f"{short} = {x:.4g} {unit} (not identifiable)"
+    return f"{short} = {x:.4g} +- {s:.2g} {unit}"
+
+
+def _inputs(fit: FitResult) -> str:
+    """The pressure input form of a fit with pressure rows (amplitude and rest angle), else empty."""
+    c = fit.constants
+    if not any(f.data.kind == "pressure" for f in fit.files) or "amplitude_bar" not in c:
+        return ""
+    rest = f"rest angle {c['phi_rest_deg']:.4g} deg"
+    if math.isnan(c["amplitude_bar"]):
+        return f"\ninputs: raised sine from 0 to the peak p0, {rest}"
+    return (f"\ninputs: paper's form p0 + A_p sin(2 pi t +- psi/2), A_p = {c['amplitude_bar']:.4g} bar "
+            f"(unless a file gives A_p), {rest}")
 
 
 def _title(fit: FitResult) -> str:
-    values = "; ".join(_value(p.name, x, s) for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
+    values = "; ".join(_value(p.name, p.unit, x, s) for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
     n = len(fit.unidentified)
     said = f"; {n} direction(s) not determined by the data (see the report)" if n else ""
     rank = (f"rank {fit.rank} of {len(fit.parameters)}{said}" if fit.singular_values.size
             else "the search did not run")
-    return f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}"
+    return f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}{_inputs(fit)}"
 
 
 def fit_figure(fit: FitResult) -> Figure:
