@@ -307,3 +307,16 @@ def test_recovers_the_waveform_amplitude_of_the_paper_form(tmp_path):
     assert 0 < fit.sigma[0] < 0.1 and abs(fit.x[0] - 0.4) < 3 * fit.sigma[0]
     with pytest.raises(ProblemError, match="--start pressure.amplitude_bar"):
         resolve_parameters(problem, ["pressure.amplitude_bar"], form="raised")  # the raised sine has no amplitude
+
+
+def test_cli_form_option_chooses_the_default_constants(tmp_path, capsys):
+    """``--form raised`` has no amplitude to start from (exit 2 naming --start); the default form has 0.4 bar."""
+    path = write_table(tmp_path / "p.csv", [("p0", "bar", [1.0, 1.5, 1.7]), ("psi", "deg", [45.0] * 3),
+                                            ("S_norm", "-", [0.4, 0.7, 1.0]), ("sigma_S_norm", "-", [0.05] * 3)])
+    argv = ["fit", str(PAPER_GRAVITY), str(path), "--param", "pressure.amplitude_bar", "--out", str(tmp_path / "o")]
+    assert main(argv + ["--form", "raised"]) == 2
+    assert "--start pressure.amplitude_bar" in capsys.readouterr().err
+    assert main(argv + ["--form", "square"]) == 2
+    problem = load_problem(PAPER_GRAVITY)
+    assert resolve_parameters(problem, ["pressure.amplitude_bar"])[0].x0 == pytest.approx(0.4)
+    assert resolve_parameters(problem, ["pressure.phi_rest_deg"])[0].x0 == pytest.approx(180.0)

@@ -30,7 +30,7 @@ def _value(name: str, unit: str, x: float, s: float) -> str:
 
 def _inputs(fit: FitResult) -> str:
     """The pressure input form of a fit with pressure rows (amplitude and rest angle), else empty."""
-    c = fit.constants
+    c = fit.pressure
     if not any(f.data.kind == "pressure" for f in fit.files) or "amplitude_bar" not in c:
         return ""
     rest = f"rest angle {c['phi_rest_deg']:.4g} deg"
