@@ -206,9 +206,13 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
     return cov, corr, s, rank, dirs
 
 
-def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) -> None:
-    """TableError naming a file: fewer measurements than parameters + 1, or a fitted gait key that a file's column sets."""
+def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter], form: str = DEFAULT_FORM) -> None:
+    """TableError naming a file: fewer measurements than parameters + 1, a fitted gait key that a file's column sets,
+    or an amplitude column ``A_p`` (the paper's form) with ``form`` "raised"."""
     for d in datasets:
+        if form == "raised" and "A_p" in d.inputs:
+            raise TableError(d.path, "column 'A_p' is an amplitude of the paper's form (ref): it cannot be used with "
+                                     "the raised sine (--form raised)")
         for name in d.inputs:
             key = GAIT_KEYS.get(name)
             if d.kind == "gait" and key in {p.name for p in params}:
@@ -281,7 +285,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     TableError
         Fewer measurements than parameters + 1.
     """
-    check_counts(datasets, params)
+    check_counts(datasets, params, form)
     executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)
