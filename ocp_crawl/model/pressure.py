@@ -10,9 +10,9 @@ so the torque input is that of eq. (tau) with the reference angle
 
     phi_ref,i(t) = phi_rest - bending_i(p_i(t)),      tau_i = k (phi_ref,i - pi).
 
-**Earlier assumptions** (``PressureWaveform(amplitude=None)``, the study's ``form="raised"``; the paper's
-form (ref) below is the default of the pressure study since issue 15).  Reading "periodic inputs of
-the form (ref)" with nominal pressure p0 loosely, we assumed
+**Earlier assumptions** (``PressureWaveform(amplitude=None)``, ``form="raised"`` of the pressure study and of
+the calibration; the paper's form (ref) below is the default of both, :data:`DEFAULT_FORM`, since issue 15).
+Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we assumed
 
 * a raised sine between zero and the peak pressure p0 (a pressure controller cannot go below
   atmospheric, and the largest experimental p0 = 1.7 bar gives a plausible 28 deg of bending):

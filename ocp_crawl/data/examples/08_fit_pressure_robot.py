@@ -50,7 +50,7 @@ def main(out: Path) -> None:
     print("wrote", ", ".join(str(p) for p in write_fit(amp, out / "amplitude")), "\n")
 
     names = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
-    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=100, jobs=2,
+    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=150, jobs=2,
                             pressure={"amplitude_bar": float(amp.x[0])})
     print("== 2. k and the pressure map ==\n" + fit_report(both))
     print("wrote", ", ".join(str(p) for p in write_fit(both, out / "k_and_map")))
