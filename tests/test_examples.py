@@ -22,7 +22,7 @@ OUTPUTS = {
     "05_optimise_and_replay.py": ["optimise_and_replay.png"],
     "06_custom_waveform.py": ["custom_waveform.png"],
     "07_study_to_pandas.py": ["study.png", "study.csv"],
-    "08_fit_pressure_robot.py": ["rest/fit.png", "rest/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
+    "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
 }
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
 TIMEOUT_S = 300

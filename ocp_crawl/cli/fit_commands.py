@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ocp_crawl.cli.app import register
 from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
+from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
 
 #: most least-squares evaluations (each runs every measurement's simulation)
@@ -29,7 +30,11 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
                         "otherwise)")
     p.add_argument("--pressure", action="append", default=[], metavar="NAME=VALUE",
                    help="a pressure constant held fixed (a1, a2, b1, b2 [rad/bar^2, rad/bar], phi_rest_deg [deg], "
-                        "amplitude_bar [bar]; default Table I, the stored rest angle and the raised sine)")
+                        "amplitude_bar [bar]; default Table I and the constants of --form)")
+    p.add_argument("--form", choices=PRESSURE_FORMS, default=DEFAULT_FORM,
+                   help="pressure input form: 'paper' (default), the paper's form (ref) p0 + A_p sin(2 pi t +- psi/2), "
+                        "p0 the nominal pressure, A_p 0.4 bar, rest angle 180 deg; 'raised', the raised sine from 0 to "
+                        "the peak p0 with the stored fitted rest angle")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the problem (repeatable)")
     p.add_argument("--relative-sigma", action="store_true",
@@ -57,14 +62,15 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 
     problem = load_problem(args.problem, args.overrides)
-    params = resolve_parameters(problem, args.params, args.start, args.bounds)
+    params = resolve_parameters(problem, args.params, args.start, args.bounds, args.form)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
-    solve.check_counts(datasets, params)
+    solve.check_counts(datasets, params, args.form)
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
     result = solve.fit_measurements(problem, datasets, params, pressure=pressure,
-                                    absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev, jobs=args.jobs)
+                                    absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev, jobs=args.jobs,
+                                    form=args.form)
     files = write_fit(result, out, figure=not args.no_figure)
     if args.json:
         print(json.dumps(dict(fit_dict(result), written=[str(f) for f in files]), allow_nan=False))

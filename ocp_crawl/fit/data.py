@@ -11,8 +11,10 @@ kind          columns                             model of a row
               ``psi``, ``A``, ``gamma`` [angle]   row's values of ``gait.psi_deg``, ``gait.A_deg``,
                                                   ``gait.gamma_deg``
 ``pressure``  ``S`` or ``S_norm``, ``p0``         S per cycle of the pressure-driven robot
-              [pressure] and ``psi`` [angle]      (:mod:`ocp_crawl.model.pressure`) at peak pressure p0
-                                                  and phase difference psi
+              [pressure] and ``psi`` [angle],     (:mod:`ocp_crawl.model.pressure`) at nominal pressure p0
+              optionally ``A_p`` [pressure]       (the peak of the raised sine) and phase difference psi;
+                                                  ``A_p``: the row's amplitude of the paper's form (ref),
+                                                  in place of the constant ``pressure.amplitude_bar``
 ``stiffness`` ``phi`` [angle], ``tau`` [torque]   clamped segment: edge angle phi = tau / k
 ``bending``   ``phi`` [angle], ``p`` [pressure],  clamped segment: phi = a_i p^2 + b_i p (Table I map)
               ``segment`` [-] (1 or 2)
@@ -35,13 +37,13 @@ from ocp_crawl.io.tables import Table, TableError, read_table
 #: observable column -> its dimension (each file holds exactly one, with ``sigma_<name>``)
 OBSERVABLES = {"S": "length", "S_norm": "dimensionless", "phi": "angle"}
 #: operating-point columns -> dimension
-INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "tau": "torque", "p": "pressure",
-          "segment": "dimensionless"}
+INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "A_p": "pressure", "tau": "torque",
+          "p": "pressure", "segment": "dimensionless"}
 #: gait columns -> the problem key they set (degrees, as in problem files)
 GAIT_KEYS = {"psi": "gait.psi_deg", "A": "gait.A_deg", "gamma": "gait.gamma_deg"}
 #: kind -> (observables allowed, inputs required, inputs allowed)
 KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
-    "pressure": (("S", "S_norm"), ("p0", "psi"), ("p0", "psi")),
+    "pressure": (("S", "S_norm"), ("p0", "psi"), ("p0", "psi", "A_p")),
     "gait": (("S", "S_norm"), (), ("psi", "A", "gamma")),
     "stiffness": (("phi",), ("tau",), ("tau",)),
     "bending": (("phi",), ("p", "segment"), ("p", "segment")),
@@ -124,9 +126,13 @@ def _check_rows(m: Measurements) -> None:
             raise m.table.error(f"S_norm: the largest value, {m.y[ref]!r}, must be > 0 (it is the normalising "
                                 "row)", ref)
     if m.kind == "pressure":
-        for j, p0 in enumerate(m.table["p0"]):
+        amplitudes = m.table["A_p"] if "A_p" in m.inputs else np.zeros(len(m))
+        for j, (p0, amp) in enumerate(zip(m.table["p0"], amplitudes)):
             if p0 < 0:
-                raise m.table.error(f"p0 = {p0:g} Pa: a peak gauge pressure must be >= 0", j)
+                raise m.table.error(f"p0 = {p0:g} Pa: a nominal gauge pressure must be >= 0", j)
+            if not 0 <= amp <= p0:
+                raise m.table.error(f"A_p = {amp:g} Pa: the amplitude must lie in [0, p0] (a gauge pressure "
+                                    "p0 - A_p >= 0)", j)
 
 
 def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurements:

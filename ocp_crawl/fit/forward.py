@@ -34,7 +34,7 @@ class RowTask:
     values: tuple[tuple[str, float], ...]
     """problem keys of the fitted parameters -> values"""
     pressure: tuple[tuple[str, float], ...]
-    """all pressure constants (a1, a2, b1, b2, phi_rest_deg)"""
+    """all pressure constants (a1, a2, b1, b2, phi_rest_deg, amplitude_bar)"""
     inputs: tuple[tuple[str, float], ...]
     """the row's operating point, SI (angles in rad, pressures in Pa, torques in N m)"""
 
@@ -59,7 +59,7 @@ def _simulated(task: RowTask) -> tuple[float, str]:
         problem = _problem(task, {})
         c = dict(task.pressure)
         bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
-        amplitude = c.get("amplitude_bar", math.nan)
+        amplitude = inputs["A_p"] / PA_PER_BAR if "A_p" in inputs else c.get("amplitude_bar", math.nan)
         try:
             signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
                                      c["phi_rest_deg"], bmap, None if math.isnan(amplitude) else amplitude)

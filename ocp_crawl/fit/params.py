@@ -6,9 +6,11 @@ schema gains that is not a numerics setting), or ``pressure.NAME``
 for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`, which problem files do not
 describe: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar]
 (Table I's map), ``pressure.phi_rest_deg`` [deg] (the rest angle) and ``pressure.amplitude_bar`` [bar]
-(the waveform: NaN, the default, is the raised sine from 0 to the peak p0; a number A_p is the
-paper's form (ref), p0 + A_p sin(...) with p0 the nominal pressure, :mod:`ocp_crawl.model.pressure`).  Values are in the units
-of the problem files (degrees for angles).
+(the waveform's amplitude A_p).  Their defaults are those of the input ``form``
+(:func:`ocp_crawl.model.pressure.form_constants`): the default form is the pressure study's, the paper's
+form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0 the nominal (mean) pressure, A_p = 0.4 bar and the flat
+rest shape, 180 deg; ``form="raised"`` is the earlier raised sine from 0 to the peak p0 (no amplitude, NaN)
+with the stored fitted rest angle.  Values are in the units of the problem files (degrees for angles).
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
-from ocp_crawl.model.pressure import FITTED_REST_DEG, BendingMap
+from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS, BendingMap, form_constants
 from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.problem.schema import SCHEMA, suggest
 
@@ -59,16 +61,18 @@ def fittable_names() -> list[str]:
     return keys + [f"pressure.{n}" for n in PRESSURE_UNITS]
 
 
-def pressure_defaults(gravity: str) -> dict[str, float]:
-    """The pressure constants used when not fitted: Table I's map and the stored rest angle [deg]."""
+def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float]:
+    """The pressure constants used when not fitted: Table I's map and the waveform constants of ``form``
+    (:func:`ocp_crawl.model.pressure.form_constants`: rest angle [deg], amplitude [bar] or NaN); ValueError for an
+    unknown form."""
     return {**{f.name: getattr(BendingMap(), f.name) for f in dataclasses.fields(BendingMap)},
-            "phi_rest_deg": FITTED_REST_DEG[gravity], "amplitude_bar": math.nan}
+            **form_constants(form, gravity)}
 
 
-def _current(problem: Problem, name: str) -> tuple[float | None, str]:
+def _current(problem: Problem, name: str, form: str) -> tuple[float | None, str]:
     section, key = name.split(".", 1)
     if section == "pressure":
-        return pressure_defaults(problem.gravity)[key], PRESSURE_UNITS[key]
+        return pressure_defaults(problem.gravity, form)[key], PRESSURE_UNITS[key]
     values = problem.sections.get(section, {})
     unit = SCHEMA[section].key_map[key].unit
     value = values.get(key)
@@ -109,7 +113,7 @@ def _number(text: str, what: str) -> float:
 
 
 def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[str] = (),
-                       bounds: Sequence[str] = ()) -> list[Parameter]:
+                       bounds: Sequence[str] = (), form: str = DEFAULT_FORM) -> list[Parameter]:
     """The parameters to fit, checked: names, start values and bounds.
 
     Parameters
@@ -122,6 +126,9 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
         ``NAME=VALUE`` start values replacing the problem's (problem-file units).
     bounds : sequence of str
         ``NAME=LOW:HIGH`` bounds; default x0 +- 45 deg for angles, [x0/10, 10 x0] for positive numbers.
+    form : str
+        The pressure input form whose constants are the default start values of ``pressure.*``
+        (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`, default the paper's form (ref)).
 
     Returns
     -------
@@ -131,8 +138,10 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     ------
     ProblemError
         An unknown or repeated name (with a suggestion), a start or bound that is not a number, a
-        start outside its bounds.
+        start outside its bounds, an unknown form.
     """
+    if form not in PRESSURE_FORMS:
+        raise ProblemError(f"--form {form}: unknown pressure input form; one of {', '.join(PRESSURE_FORMS)}")
     valid = fittable_names()
     if not names:
         raise ProblemError(f"no parameter to fit: give --param NAME (one of {', '.join(valid)})")
@@ -148,16 +157,17 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
             raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add --param {name})")
     if len(set(names)) != len(names):
         raise ProblemError(f"--param: a parameter named twice in {', '.join(names)}")
-    return [_parameter(problem, name, starts, limits) for name in names]
+    return [_parameter(problem, name, starts, limits, form) for name in names]
 
 
-def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits: Mapping[str, str]) -> Parameter:
-    value, unit = _current(problem, name)
+def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits: Mapping[str, str],
+               form: str) -> Parameter:
+    value, unit = _current(problem, name, form)
     if name in starts:
         value = starts[name]
     if value is None or math.isnan(value):
-        raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the default "
-                           f"waveform has no such constant); give --start {name}=VALUE")
+        raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the "
+                           f"{form} form has no such constant); give --start {name}=VALUE")
     low, high = _default_bounds(float(value), unit)
     if name in limits:
         lo, sep, hi = limits[name].partition(":")

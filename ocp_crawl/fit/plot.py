@@ -17,22 +17,51 @@ from ocp_crawl.io.files import atomic_write
 INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "torque": ("N m", 1.0),
                  "dimensionless": ("-", 1.0)}
 LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
+#: characters of a 10-point title line per inch of figure width (a little less than fits)
+TITLE_CHARS_PER_INCH = 14
 
 
-def _value(name: str, x: float, s: float) -> str:
+def _value(name: str, unit: str, x: float, s: float) -> str:
     short = name.split(".", 1)[1]
     if math.isnan(s):
-        return f"{short} = {x:.4g} (no uncertainty)"
-    return f"{short} = {x:.4g} +- {s:.2g}" if math.isfinite(s) else f"{short} = {x:.4g} (not identifiable)"
+        return f"{short} = {x:.4g} {unit} (no uncertainty)"
+    if not math.isfinite(s):
+        return f"{short} = {x:.4g} {unit} (not identifiable)"
+    return f"{short} = {x:.4g} +- {s:.2g} {unit}"
 
 
-def _title(fit: FitResult) -> str:
-    values = "; ".join(_value(p.name, x, s) for p, x, s in zip(fit.parameters, fit.x, fit.sigma))
+def _inputs(fit: FitResult) -> str:
+    """The pressure input form of a fit with pressure rows (amplitude and rest angle), else empty."""
+    c = fit.pressure
+    if not any(f.data.kind == "pressure" for f in fit.files) or "amplitude_bar" not in c:
+        return ""
+    rest = f"rest angle {c['phi_rest_deg']:.4g} deg"
+    if math.isnan(c["amplitude_bar"]):
+        return f"\ninputs: raised sine from 0 to the peak p0, {rest}"
+    return (f"\ninputs: paper's form p0 + A_p sin(2 pi t +- psi/2), A_p = {c['amplitude_bar']:.4g} bar "
+            f"(unless a file gives A_p), {rest}")
+
+
+def _packed(head: str, items: list[str], width: int) -> str:
+    """``head`` and ``items`` joined by "; ", a new line before an item that would pass ``width`` characters."""
+    lines = [head]
+    for item in items:
+        if len(lines[-1]) + 2 + len(item) > width:
+            lines[-1] += ";"
+            lines.append(item)
+        else:
+            lines[-1] += ("; " if lines[-1] != head else " ") + item
+    return "\n".join(lines)
+
+
+def _title(fit: FitResult, width: int) -> str:
+    values = _packed(f"fit ({fit.status.label}):", [_value(p.name, p.unit, x, s)
+                                                    for p, x, s in zip(fit.parameters, fit.x, fit.sigma)], width)
     n = len(fit.unidentified)
     said = f"; {n} direction(s) not determined by the data (see the report)" if n else ""
     rank = (f"rank {fit.rank} of {len(fit.parameters)}{said}" if fit.singular_values.size
             else "the search did not run")
-    return f"fit ({fit.status.label}): {values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}"
+    return f"{values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}{_inputs(fit)}"
 
 
 def fit_figure(fit: FitResult) -> Figure:
@@ -79,7 +108,7 @@ def fit_figure(fit: FitResult) -> Figure:
         axr.set_ylabel("residual [sigma]")
         axr.grid(alpha=0.3)
         axr.legend(fontsize=8)
-    fig.suptitle(_title(fit), fontsize=10)
+    fig.suptitle(_title(fit, TITLE_CHARS_PER_INCH * int(5.2 * n)), fontsize=10)
     return fig
 
 

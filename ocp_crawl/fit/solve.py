@@ -32,6 +32,7 @@ from scipy.optimize import least_squares
 from ocp_crawl.fit.data import GAIT_KEYS, Measurements
 from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_tasks
 from ocp_crawl.fit.params import Parameter, pressure_defaults, split_values
+from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem
 from ocp_crawl.status import Status
@@ -122,9 +123,9 @@ class FitResult:
 class _Objective:
     """r(z) of the scaled parameters z = x / scale, with the last evaluation kept (statuses, failures)."""
 
-    def __init__(self, problem, datasets, params, executor, pressure):
+    def __init__(self, problem, datasets, params, executor, pressure, form):
         self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
-        self.constants = {**pressure_defaults(problem.gravity), **pressure}
+        self.constants = {**pressure_defaults(problem.gravity, form), **pressure}
         self.scale = np.array([abs(p.x0) or 1.0 for p in params])
         self.failed_evaluations = 0
         self.last: tuple[np.ndarray, list] | None = None
@@ -205,9 +206,13 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
     return cov, corr, s, rank, dirs
 
 
-def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter]) -> None:
-    """TableError naming a file: fewer measurements than parameters + 1, or a fitted gait key that a file's column sets."""
+def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter], form: str = DEFAULT_FORM) -> None:
+    """TableError naming a file: fewer measurements than parameters + 1, a fitted gait key that a file's column sets,
+    or an amplitude column ``A_p`` (the paper's form) with ``form`` "raised"."""
     for d in datasets:
+        if form == "raised" and "A_p" in d.inputs:
+            raise TableError(d.path, "column 'A_p' is an amplitude of the paper's form (ref): it cannot be used with "
+                                     "the raised sine (--form raised)")
         for name in d.inputs:
             key = GAIT_KEYS.get(name)
             if d.kind == "gait" and key in {p.name for p in params}:
@@ -240,7 +245,7 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: st
 
 def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter], *,
                      pressure: Mapping[str, float] | None = None, absolute_sigma: bool = True,
-                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND) -> FitResult:
+                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND, form: str = DEFAULT_FORM) -> FitResult:
     """Fit ``params`` to the measurements by weighted least squares on simulations.
 
     Parameters
@@ -253,7 +258,8 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         What to fit, with start values and bounds (:func:`ocp_crawl.fit.params.resolve_parameters`).
     pressure : mapping of str to float, optional
         Pressure constants held fixed (``a1``, ``a2``, ``b1``, ``b2`` [rad/bar^2, rad/bar], ``phi_rest_deg``
-        [deg]); default Table I and the stored rest angle (:func:`ocp_crawl.fit.params.pressure_defaults`).
+        [deg], ``amplitude_bar`` [bar]); default Table I and the constants of ``form``
+        (:func:`ocp_crawl.fit.params.pressure_defaults`).
     absolute_sigma : bool
         True: the sigmas are standard uncertainties, covariance (J^T J)^-1; False: relative weights,
         covariance scaled by the reduced chi-square.
@@ -263,6 +269,10 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         Worker processes evaluating the rows (1: this process).
     rcond : float
         Relative singular value below which a direction is unidentifiable.
+    form : str
+        The pressure input form (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`): "paper" (default, as the
+        pressure study), the paper's form (ref) with nominal p0, amplitude 0.4 bar and rest angle 180 deg;
+        "raised", the raised sine from 0 to the peak p0 with the stored fitted rest angle.
 
     Returns
     -------
@@ -275,10 +285,10 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     TableError
         Fewer measurements than parameters + 1.
     """
-    check_counts(datasets, params)
+    check_counts(datasets, params, form)
     executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
     try:
-        obj = _Objective(problem, datasets, params, executor, dict(pressure or {}))
+        obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)
         z0 = np.array([p.x0 for p in params]) / obj.scale
         r0 = obj(z0)
         if obj.failed_evaluations:

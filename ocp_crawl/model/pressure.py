@@ -10,9 +10,9 @@ so the torque input is that of eq. (tau) with the reference angle
 
     phi_ref,i(t) = phi_rest - bending_i(p_i(t)),      tau_i = k (phi_ref,i - pi).
 
-**Earlier assumptions** (``PressureWaveform(amplitude=None)``, the study's ``form="raised"``; the paper's
-form (ref) below is the default of the pressure study since issue 15).  Reading "periodic inputs of
-the form (ref)" with nominal pressure p0 loosely, we assumed
+**Earlier assumptions** (``PressureWaveform(amplitude=None)``, ``form="raised"`` of the pressure study and of
+the calibration; the paper's form (ref) below is the default of both, :data:`DEFAULT_FORM`, since issue 15).
+Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we assumed
 
 * a raised sine between zero and the peak pressure p0 (a pressure controller cannot go below
   atmospheric, and the largest experimental p0 = 1.7 bar gives a plausible 28 deg of bending):
@@ -60,6 +60,40 @@ FLAT_REST_DEG = 180.0
 #: rest angle [deg] fitted by :func:`ocp_crawl.studies.pressure.fit_rest_angle` on the paper's full curves,
 #: per gravity convention (used when a run does not fit again, e.g. ``reproduce --quick``)
 FITTED_REST_DEG = {"paper": 131.3, "physical": 128.9}
+#: the waveforms of the pressure inputs: "paper", the paper's form (ref) with nominal (mean) p0, flat rest shape
+#: and amplitude :data:`PAPER_FORM_AMPLITUDE_BAR`; "raised", the earlier raised sine from 0 to the peak p0 with
+#: the fitted rest angle :data:`FITTED_REST_DEG`
+PRESSURE_FORMS = ("paper", "raised")
+#: the default waveform of the pressure study and of the calibration (``ocp_crawl.fit``)
+DEFAULT_FORM = "paper"
+
+
+def form_constants(form: str = DEFAULT_FORM, gravity: str = "paper") -> dict[str, float]:
+    """The waveform constants of a pressure-input form.
+
+    Parameters
+    ----------
+    form : str
+        One of :data:`PRESSURE_FORMS`.
+    gravity : str
+        Gravity convention ("paper" or "physical"): the stored rest angle of the raised sine depends on it.
+
+    Returns
+    -------
+    dict
+        ``phi_rest_deg`` [deg], the rest angle, and ``amplitude_bar`` [bar], the pressure amplitude A_p of
+        the paper's form (NaN for the raised sine, whose p0 is the peak pressure).
+
+    Raises
+    ------
+    ValueError
+        An unknown form.
+    """
+    if form not in PRESSURE_FORMS:
+        raise ValueError(f"form must be one of {', '.join(PRESSURE_FORMS)}, got {form!r}")
+    if form == "paper":
+        return {"phi_rest_deg": FLAT_REST_DEG, "amplitude_bar": PAPER_FORM_AMPLITUDE_BAR}
+    return {"phi_rest_deg": FITTED_REST_DEG[gravity], "amplitude_bar": math.nan}
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,8 @@ from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.io.paper_data import read_paper_csv
-from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR, pressure_torque
+from ocp_crawl.model.pressure import (DEFAULT_FORM, FITTED_REST_DEG, FLAT_REST_DEG, PAPER_FORM_AMPLITUDE_BAR,
+                                      PRESSURE_FORMS, pressure_torque)
 from ocp_crawl.status import Status
 from ocp_crawl.studies.common import SUCCESS, parabolic_max
 
@@ -289,7 +290,7 @@ class PressureStudy:
 
 
 def pressure_study(gravity: str = "physical", fit: bool = True, p0_bar=None, psi_deg=None,
-                   phi_rest_deg: float | None = None, compare_flat: bool = False, form: str = "paper") -> PressureStudy:
+                   phi_rest_deg: float | None = None, compare_flat: bool = False, form: str = DEFAULT_FORM) -> PressureStudy:
     """Fig. exp: the pressure-driven robot against p0 and psi (the curves and the fit above).
 
     ``form`` "paper" (default): the paper's form (ref), p_i = p0 + A_p sin(2 pi t +- psi/2) with the
@@ -302,8 +303,8 @@ def pressure_study(gravity: str = "physical", fit: bool = True, p0_bar=None, psi
     flat rest shape.  ``gravity``: "physical" or "paper"; ``p0_bar`` [bar], ``psi_deg`` [deg]: the
     grids (None: the paper's points).  Returns a :class:`PressureStudy`.
     """
-    if form not in ("paper", "raised"):
-        raise ValueError(f"form must be 'paper' or 'raised', got {form!r}")
+    if form not in PRESSURE_FORMS:
+        raise ValueError(f"form must be one of {', '.join(PRESSURE_FORMS)}, got {form!r}")
     if form == "paper":
         result = fit_psi_amplitude(gravity, p0_bar, psi_deg) if fit else evaluate_fit(
             FLAT_REST_DEG, gravity, p0_bar, psi_deg, PAPER_FORM_AMPLITUDE_BAR, PSI_CURVE_AMPLITUDE_BAR)
