@@ -300,10 +300,12 @@ def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
     """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last, then
     --resume to the end: the same file as an uninterrupted run, and nothing left behind."""
     rng = random.Random(20240611)
-    specs = ["gait.psi_deg=0:180:20", "gait.gamma_deg=80:100:3"]
-    # ~70 ms per point, 60 points: four kills after at most a few rows each can never reach the end of the
-    # sweep (the first kill may come after ~1 s of rows)
-    args = ["--set", "simulation.max_step=0.004"]
+    specs = ["gait.psi_deg=0:180:40", "gait.gamma_deg=80:100:4"]
+    n_points = 160
+    # ~40 ms per point (500 continuation steps per cycle), 160 points sent in chunks of ~50 ms of work: four
+    # kills after at most a few rows each can never reach the end of the sweep (the first kill may come after
+    # ~1 s of rows)
+    args = ["--set", "simulation.max_step=0.002"]
     out = tmp_path / "killed"
     cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), *[a for s in specs for a in ("--grid", s)],
            *args, "--jobs", "2", "--out", str(out), "--no-progress"]
@@ -331,18 +333,18 @@ def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
         if (out / SETTINGS_FILE).exists():
             finished = SweepResult.read(out, partial=True)  # a torn journal line is not a finished point
             done_now = int((finished.status_array() != "missing").sum())
-            assert n_done <= done_now < 60
+            assert n_done <= done_now < n_points
             n_done = done_now
     assert n_done >= 3
 
     code = main(cmd[3:] + ["--resume", "--json"])
     assert code == 0
-    ref = run_sweep(load_problem(PAPER, ["simulation.max_step=0.004"]), grid_from_specs(specs),
+    ref = run_sweep(load_problem(PAPER, ["simulation.max_step=0.002"]), grid_from_specs(specs),
                     out_dir=tmp_path / "ref", jobs=2)
     got, want = read_csv(out / RESULTS_FILE), read_csv(tmp_path / "ref" / RESULTS_FILE)
-    assert got[0] == want[0] and len(got) == len(want) == 61
+    assert got[0] == want[0] and len(got) == len(want) == n_points + 1
     keys = [tuple(r[:2]) for r in got[1:]]
-    assert len(set(keys)) == 60 and keys == [tuple(r[:2]) for r in want[1:]]
+    assert len(set(keys)) == n_points and keys == [tuple(r[:2]) for r in want[1:]]
     assert_same_rows(SweepResult.read(out).rows, ref.rows)
     assert (out / RESULTS_FILE).read_bytes() == (tmp_path / "ref" / RESULTS_FILE).read_bytes()
     assert not journal.exists()

@@ -53,9 +53,11 @@ def test_compiled_functions_are_built_once_per_process_not_per_point(constructio
     res = run_sweep(PAPER, GRID, jobs=2)
     parallel = constructions()
     # forked workers inherit the parent's functions (it runs the first points); without fork (a thread of an
-    # earlier test still running) the parent runs no point, and the workers, which do not inherit the logging
-    # either, build their own (once each)
-    assert parallel[os.getpid()] == (2 if forked else 1) * n_functions
+    # earlier test still running) the parent runs no point but may build what its own checks of the problem
+    # use (at most once each), and the workers, which do not inherit the logging either, build their own
+    # (once each)
+    parent = parallel[os.getpid()] - n_functions
+    assert parent == n_functions if forked else 0 <= parent <= n_functions
     workers = {pid: n for pid, n in parallel.items() if pid != os.getpid()}
     assert not workers if forked else all(n <= n_functions for n in workers.values())
     assert res.counts().get("success", 0) >= 6
