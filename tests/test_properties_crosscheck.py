@@ -3,7 +3,10 @@ with unequal friction at the feet (mu1 != mu2, where the slipping foot can chang
 
 Whenever both simulators succeed, the relative S error of the time-stepping is at most 1e-4 at N = 200 (the
 bound of ``ocp-crawl crosscheck``), the mode sequences of the steady cycle agree and every event of the
-event-driven stepper falls on a step boundary (lag within 1e-3 steps).  The two simulators are independent:
+event-driven stepper falls on a step boundary (lag within 1e-3 steps), except the one thing the time-stepping
+does not resolve (README, "crosscheck"): an excursion into another mode and back inside one step (shorter than
+1/N of a cycle: the step starts and ends in the same mode, so nothing tells it to split).  Such excursions are
+taken out of the event-driven sequence before the comparison, and counted; the S bound holds with them.  The two simulators are independent:
 the time-stepping locates events with its own step NLP (:mod:`ocp_crawl.sim.step_split`).
 
 The example count is small by default (fast CI, derandomised examples); set ``OCP_CRAWL_HYPOTHESIS_EXAMPLES``
@@ -19,7 +22,7 @@ from hypothesis import HealthCheck, assume, event, example, given, note, setting
 from hypothesis import strategies as st
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
-from ocp_crawl.sim.crosscheck import crosscheck
+from ocp_crawl.sim.crosscheck import _cyclic, _same_cycle, crosscheck
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "3"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None, database=None,
@@ -40,6 +43,18 @@ def report_counts():
         print(f"\noutcomes ({sum(COUNTS.values())} examples): " + ", ".join(f"{k}: {v}" for k, v in COUNTS.most_common()))
     if ERRORS:
         print(f"relative S error at N = 200 over {len(ERRORS)} compared runs: max {max(ERRORS):.3g}")
+
+
+def short_excursions(events, N: int) -> set[int]:
+    """Indices of the events that enter and leave a mode within one step (1/N of a cycle) and return to the
+    mode before it (A -> B, then B -> A less than a step later)."""
+    out = set()
+    for i in range(len(events) - 1):
+        a, b = events[i], events[i + 1]
+        if (b.t - a.t < 1.0 / N and a.mode_after == b.mode_before and a.mode_before == b.mode_after
+                and i not in out):
+            out |= {i, i + 1}
+    return out
 
 
 def log_uniform(lo, hi):
@@ -73,6 +88,11 @@ def cases(draw):
                       mu2=0.4723665527410147, g=9.81)),
           ReferenceTorque(Harmonic(gamma1=1.4311699866353502, gamma2=1.4660765716752369, A1=0.17453292519943295,
                                    A2=0.17453292519943295, psi=0.0), k=26.666344737183238)))
+# found by a large run: a slip1+ excursion of 3.4e-4 cycle from stick-stick and back, inside one step at N = 200
+@example((Model(Robot(M=1.0, L=math.exp(-1.0), beta=math.exp(0.390625), k=56.45265225161622, mu1=math.exp(-1.0),
+                      mu2=0.44029404111717807, g=9.81)),
+          ReferenceTorque(Harmonic(gamma1=1.5009831567151235, gamma2=1.5664330036649108, A1=0.3665191429188092,
+                                   A2=0.3665191429188092, psi=1.2740903539558606), k=56.45265225161622)))
 def test_switch_exact_time_stepping_matches_the_event_driven_s(case):
     model, torque = case
     note(f"robot {model.robot}, gait {torque}")
@@ -99,6 +119,14 @@ def test_switch_exact_time_stepping_matches_the_event_driven_s(case):
     ERRORS.append(row.rel_diff_S)
     note(cc.table())
     assert row.rel_diff_S <= REL_S, cc.table()
-    assert row.modes_match, cc.table()
+    steady = ev.steady_events()
+    skip = short_excursions(steady, row.steps)
+    if skip:
+        COUNTS["of them with a mode excursion shorter than a step"] += 1
+    kept = [e for i, e in enumerate(steady) if i not in skip]
+    modes = _cyclic([kept[-1].mode_after] + [e.mode_after for e in kept]) if kept else []
+    stepped = _cyclic([m["mode"] for m in row.modes])
+    assert row.modes_match or (skip and _same_cycle(modes, stepped)), cc.table()
     lo, hi = cc.tolerances.event_lag_steps
-    assert all(lag is not None and lo <= lag <= hi for *_, lag in row.event_lags), cc.table()
+    lags = [lag for i, (*_, lag) in enumerate(row.event_lags) if i not in skip]
+    assert all(lag is not None and lo <= lag <= hi for lag in lags), cc.table()
