@@ -49,7 +49,7 @@ def test_compiled_functions_are_built_once_per_process_not_per_point(constructio
 
     for builder in compiled.BUILDERS.values():
         builder.cache_clear()
-    forked = executors._mp_context().get_start_method() == "fork"
+    forked = executors.mp_context().get_start_method() == "fork"
     res = run_sweep(PAPER, GRID, jobs=2)
     parallel = constructions()
     # forked workers inherit the parent's functions (it runs the first points); without fork (a thread of an
@@ -75,7 +75,7 @@ def test_points_go_to_the_workers_in_chunks_with_the_same_rows(monkeypatch):
     monkeypatch.setattr(executors, "CHUNK_SECONDS", 100.0)  # as if every point took a microsecond
     monkeypatch.setattr(executors, "CHUNKS_PER_WORKER", 1)
     chunked = run_sweep(PAPER, GRID, jobs=2)
-    first_here = 2 if executors._mp_context().get_start_method() == "fork" else 0
+    first_here = 2 if executors.mp_context().get_start_method() == "fork" else 0
     assert sizes == [(len(GRID["gait.psi_deg"]) - first_here) // 2]
     assert _rows(chunked) == _rows(run_sweep(PAPER, GRID, jobs=1))
 

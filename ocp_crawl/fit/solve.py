@@ -36,7 +36,7 @@ from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem
 from ocp_crawl.status import Status
-from ocp_crawl.sweep.executors import _mp_context
+from ocp_crawl.sweep.executors import mp_context
 
 #: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from it
 FAILED_RESIDUAL = 1e3
@@ -286,7 +286,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         Fewer measurements than parameters + 1.
     """
     check_counts(datasets, params, form)
-    executor = ProcessPoolExecutor(jobs, mp_context=_mp_context()) if jobs > 1 else None
+    executor = ProcessPoolExecutor(jobs, mp_context=mp_context()) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)
         z0 = np.array([p.x0 for p in params]) / obj.scale

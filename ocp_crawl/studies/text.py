@@ -5,7 +5,6 @@ import numpy as np
 
 from ocp_crawl.checks import finite_or_none
 from ocp_crawl.io import units
-from ocp_crawl.studies.common import MM
 
 
 def num(x: float, fmt: str = ".3f") -> str:
@@ -37,8 +36,7 @@ def rel(ours: float, paper: float) -> str:
 
 def fmt_mm(S: float) -> str:
     """A distance S [m] in mm with two decimals, or "failed" when it is not finite."""
-    # + 0.0 turns a rounded -0.00 into 0.00
-    return "failed" if not np.isfinite(S) else f"{round(MM * S, 2) + 0.0:.2f} mm"
+    return units.distance(S, 2) if np.isfinite(S) else "failed"
 
 
 def runs_text(runs, var: str) -> str:

@@ -17,7 +17,8 @@ from ocp_crawl.sweep.point import PointTask, evaluate_point, evaluate_points
 from ocp_crawl.sweep.settings import SweepError, SweepFailed
 
 
-def _mp_context():
+def mp_context():
+    """The multiprocessing context of the package's worker pools (sweeps, fits): fork when safe, else forkserver."""
     methods = multiprocessing.get_all_start_methods()
     # fork is the fastest start: workers inherit the imported modules and the loaded compiled
     # functions (measured ~1 s less per worker than forkserver), but forking a process with other
@@ -70,7 +71,7 @@ def _chunks(tasks: Sequence[PointTask], size: int) -> list[Sequence[PointTask]]:
 
 def pool_runner(tasks: Sequence[PointTask], jobs: int) -> Iterator[tuple[int, dict]]:
     """The points in ``jobs`` worker processes, in chunks (:func:`chunk_size`); SweepFailed if a worker dies."""
-    ctx = _mp_context()
+    ctx = mp_context()
     first, tasks, seconds = _first_points(tasks) if ctx.get_start_method() == "fork" else ([], tasks, 0.0)
     if not tasks:
         yield from first
@@ -145,7 +146,7 @@ class _NoBar:
 def progress_bar(progress: bool, total: int, initial: int):
     """A tqdm bar on stderr of ``total`` points, ``initial`` done; a bar that shows nothing unless ``progress``."""
     if not progress:
-        # not even a disabled tqdm: any tqdm starts a monitor thread, and threads rule out fork (_mp_context)
+        # not even a disabled tqdm: any tqdm starts a monitor thread, and threads rule out fork (mp_context)
         return _NoBar()
     from tqdm import tqdm
 
