@@ -39,3 +39,22 @@ def test_event_phases_match_an_independent_brent_root(gravity, gamma, amp, psi, 
     # measured: <= 4e-15 at k/(M g L) <= 5, 3e-14 at 1e4 (the guards' round-off grows with k/(M g L));
     # with event_xtol = 1e-8 the same check reads 7e-12 to 6e-10
     assert worst <= 1e-13, worst
+
+
+def test_the_steppers_scalar_torque_is_the_signals_own():
+    """sim/event_state.torque_pair re-states the harmonic torque k (phi_ref - pi) in scalar arithmetic for speed:
+    it must give the signal's own value and rate bit for bit, and its curvature the same as the generic path."""
+    import numpy as np
+
+    from ocp_crawl import Harmonic, ReferenceTorque
+    from ocp_crawl.sim.event_state import torque_curvature, torque_pair
+
+    signal = ReferenceTorque(Harmonic.from_degrees(87.0, 31.0, 52.0, gamma2_deg=93.0, A2_deg=24.0), 0.1677)
+    fast = torque_pair(signal)
+    assert hasattr(fast, "rate")  # the specialised path is the one under test
+    generic = lambda t: (signal(t), signal.derivative(t))  # noqa: E731
+    for t in np.random.default_rng(7).uniform(-2.0, 3.0, 2000):
+        t = float(t)
+        (a, da), (b, db) = fast(t), generic(t)
+        assert a.tolist() == b.tolist() and da.tolist() == db.tolist()
+        assert torque_curvature(fast, t) == torque_curvature(generic, t)
