@@ -44,7 +44,7 @@ import numpy as np
 from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import CallableSignal, PeriodicSignal, ReferenceTorque, as_signal
 from ocp_crawl.model.stability import fast_step
-from ocp_crawl.model.statics import AUX, Model, fast_ddot2, fast_newton, symbolic
+from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
@@ -57,6 +57,8 @@ from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
 _RES, _DET = AUX["res"], AUX["det"]
+#: positions in the flat output (x (3), aux (NAUX)[, extra]) of a compiled solve: the residual, the end of aux
+_RES3, _EXTRA3 = 3 + _RES, 3 + NAUX
 
 
 @dataclass(frozen=True)
@@ -153,6 +155,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         self.ddot2 = fast_ddot2()
         self.step_fn = fast_step()
         self.p = model.p
+        self.p_list = np.asarray(model.p, float).ravel().tolist()
         self.Mg = model.robot.M * model.robot.g
         self.L = model.robot.L
         self.nfev = 0
@@ -172,25 +175,27 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
-    def _solve(self, t: float, x0: np.ndarray, q: np.ndarray, step: bool = False) -> _Point | None:
-        """Newton solve of the mode q at phase t from x0; None if it does not converge.  ``step``: a continuation
+    def _solve(self, t: float, x0: np.ndarray | list, q: np.ndarray, step: bool = False) -> _Point | None:
+        """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.  ``step``: a continuation
         step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then carries its stability
         numbers and d'' coefficients)."""
-        tau, dtau = self.torque_at(float(t))
-        x = x0
-        newton, p, tol = self.step_fn if step else self.newton, self.p, self.res_tol
+        tq = self.torque_at.values(float(t))
+        fn, tol = self.step_fn if step else self.newton, self.res_tol
+        tail = tq + q.tolist() + self.p_list
+        xl = x0 if type(x0) is list else x0.tolist()
         for _ in range(4):
-            out = newton(x, tau, dtau, q, p)
-            x, aux = out[0], out[1]
+            out = fn.flat(xl + tail)  # x (3), aux (NAUX)[, extra]
             self.nfev += 1
-            res = aux[_RES]
-            if not math.isfinite(x[0] + x[1] + x[2]):  # (the compiled max norm of a NaN residual can read 0)
+            lst = out.tolist()
+            xl, res = lst[:3], lst[_RES3]
+            if not math.isfinite(xl[0] + xl[1] + xl[2]):  # (the compiled max norm of a NaN residual can read 0)
                 return None
             if not res <= tol:  # also catches NaN
                 if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, x, aux, tau=tau, dtau=dtau, q=q, extra=out[2] if step else None)
+            return _Point(t, out[:3], out[3:_EXTRA3], tau=tq[:2], dtau=tq[2:], q=q,
+                          extra=out[_EXTRA3:] if step else None, a=lst[3:_EXTRA3], xl=xl)
         return None
 
     def initial_state(self, t0: float = 0.0) -> _Point:
@@ -311,11 +316,12 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         """The mode's solution at t_new from the current point, or None after shrinking the step when
         the solve fails, jumps or crosses a fold (a fold close enough is located and ends the run)."""
         pt, seg = run.pt, run.seg
-        guess = pt.x + hh * pt.xdot
-        new = self._solve(t_new, guess, seg.q, step=True)
+        px, xd = pt.xl, pt.xdl
+        gx = [px[0] + hh * xd[0], px[1] + hh * xd[1], px[2] + hh * xd[2]]  # (as pt.x + hh pt.x')
+        new = self._solve(t_new, gx, seg.q, step=True)
         ok = new is not None
         if ok:
-            nx, gx, px = new.x.tolist(), guess.tolist(), pt.x.tolist()
+            nx = new.xl
             jump = max(abs(nx[0] - gx[0]), abs(nx[1] - gx[1]))
             ok = jump <= 0.05 + 0.5 * max(abs(gx[0] - px[0]), abs(gx[1] - px[1])) and \
                 max(abs(nx[0] - px[0]), abs(nx[1] - px[1])) < 0.35
@@ -344,7 +350,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         """
         g_old = self.point_guards(seg.mode, pt)
         g_new = self.point_guards(seg.mode, new)
-        crossed = [k for k in g_new if g_new[k] < 0 and g_old[k] > -100 * self.noise]
+        floor = -100 * self.noise
+        crossed = [k for k, v in g_new.items() if v < 0 and g_old[k] > floor]
         dips, refine = self._dips(seg.mode, seg.q, pt, new, g_old, g_new)
         for name, t_min in dips:
             pm = self._solve(t_min, self._hermite(pt, new, t_min), seg.q)
@@ -352,7 +359,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
                 refine = True
                 break
             g_min = self.point_guards(seg.mode, pm)
-            in_dip = [k for k in g_min if g_min[k] < 0 and g_old[k] > -100 * self.noise]
+            in_dip = [k for k, v in g_min.items() if v < 0 and g_old[k] > floor]
             if in_dip:
                 new, crossed = pm, in_dip  # the step now ends inside the dip
                 break

@@ -89,7 +89,8 @@ class GuardsMixin:
         return cached[1]
 
     def guard_rates(self, mode: Mode, pt: _Point, q: np.ndarray) -> dict[str, float]:
-        """Time derivatives [1/cycle] of :meth:`guards` along the mode's solution at pt.
+        """Time derivatives [1/cycle] of :meth:`guards` along the mode's solution at pt (the same keys in the same
+        order).
 
         The slip modes' ``stick`` guard sigma d'/L needs d'', which depends on the torque's second
         derivative; that is taken by central differences of the torque's derivative.
@@ -102,13 +103,6 @@ class GuardsMixin:
         dlim1, dlim2 = self.mu[0] * a[_DFN1], self.mu[1] * a[_DFN2]
         if mode is Mode.STICK:
             return _add_slip_guards(r, dlim1, dlim2, dft, Mg)
-        foot = mode.foot
-        if foot == 3:
-            r["asymmetry"] = -math.copysign(1.0, a[_LIM1] - a[_LIM2]) * (dlim1 - dlim2) / Mg
-        elif foot == 1:
-            r["switch_to_2"] = (dlim2 - dlim1) / Mg
-        else:
-            r["switch_to_1"] = (dlim1 - dlim2) / Mg
         t, dt = pt.t, 1e-5
         if pt.extra is not None and pt.q is q:
             ab = pt.extra[4:].tolist()
@@ -117,6 +111,13 @@ class GuardsMixin:
             ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
         ddtau = torque_curvature(self.torque_at, t, dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
+        foot = mode.foot  # (the guards in the order of :meth:`guards`)
+        if foot == 3:
+            r["asymmetry"] = -math.copysign(1.0, a[_LIM1] - a[_LIM2]) * (dlim1 - dlim2) / Mg
+        elif foot == 1:
+            r["switch_to_2"] = (dlim2 - dlim1) / Mg
+        else:
+            r["switch_to_1"] = (dlim1 - dlim2) / Mg
         return r
 
     def _dips(self, mode: Mode, q: np.ndarray, p0: _Point, p1: _Point, g0: dict,
@@ -134,12 +135,12 @@ class GuardsMixin:
         for pt in (p0, p1):
             if pt.rates is None:
                 pt.rates = self.guard_rates(mode, pt, q)
-        r0, r1 = p0.rates, p1.rates
         floor = -100 * self.noise
         out = []
         suspect = False
-        for name, rate0 in r0.items():
-            a, b, m0, m1 = g0[name], g1[name], h * rate0, h * r1[name]
+        # (the guards and their rates have the same keys in the same order)
+        for name, a, b, rate0, rate1 in zip(g0, g0.values(), g1.values(), p0.rates.values(), p1.rates.values()):
+            m0, m1 = h * rate0, h * rate1
             err = 6.0 * abs(b - a - 0.5 * (m0 + m1))
             # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
             if min(a, b) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:

@@ -36,7 +36,7 @@ class EventsMixin:
     """Event location, mode consistency and fold location of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
     @staticmethod
-    def _hermite(p0: _Point, p1: _Point, t: float) -> np.ndarray:
+    def _hermite(p0: _Point, p1: _Point, t: float) -> list:
         return hermite_point(p0, p1, t)
 
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
@@ -137,7 +137,7 @@ class EventsMixin:
             return None
         pending = {k for k, v in g0.items() if v < 100 * noise[k]}
         for delta in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4):
-            nxt = self._solve(pt.t + delta, start.x + delta * start.xdot, q)
+            nxt = self._solve(pt.t + delta, [x + delta * xd for x, xd in zip(start.xl, start.xdl)], q)
             if nxt is None:
                 return None
             g = self.point_guards(mode, nxt)

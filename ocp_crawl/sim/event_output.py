@@ -94,23 +94,36 @@ class OutputMixin:
     def _guesses(requests, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Newton guesses (3, n) at the phases ``ts`` (the requests' phases in order) by Hermite interpolation of
         each request's segment points (a segment of one point: that point), and the largest accepted move of phi
-        from each guess [rad] (see :meth:`_evaluate_batch`)."""
-        tps, xs, xds, idx = [], [], [], []
-        start = off = 0
-        for seg, t in requests:
-            tp, X, XD = seg.arrays()
-            if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
-                tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
-            stop = start + len(t)
-            i = np.searchsorted(tp, ts[start:stop], side="right")  # (the np.clip of i - 1 to [0, n - 2], cheaper)
-            idx.append(off + np.minimum(np.maximum(i - 1, 0), tp.size - 2))
-            tps.append(tp)
-            xs.append(X)
-            xds.append(XD)
-            start, off = stop, off + tp.size
-        tp, X, XD, i = np.concatenate(tps), np.concatenate(xs, axis=1), np.concatenate(xds, axis=1), np.concatenate(idx)
-        guesses = hermite(tp[i], X[:, i], XD[:, i], tp[i + 1], X[:, i + 1], XD[:, i + 1], ts)
-        reach = 0.05 + 0.5 * np.max(np.abs(X[:2, i + 1] - X[:2, i]), axis=0)
+        from each guess [rad] (see :meth:`_evaluate_batch`).
+
+        The points of the requests' segments are joined into one table, and the interval of each phase in its
+        segment is found by one ``searchsorted`` on the keys (segment, phase) (complex numbers, which numpy orders
+        lexicographically): the same interval as a search in the segment's own phases."""
+        which: dict[int, int] = {}
+        tables = []
+        for seg, _ in requests:
+            if id(seg) not in which:
+                which[id(seg)] = len(tables)
+                tp, X, XD = seg.arrays()
+                if tp.size == 1:  # Hermite between two copies of the point (h = 0) gives the point, reach 0.05
+                    tp, X, XD = np.repeat(tp, 2), np.repeat(X, 2, axis=1), np.zeros((3, 2))
+                tables.append((tp, X, XD))
+        sizes = np.array([tp.size for tp, _, _ in tables])
+        offsets = np.cumsum(sizes) - sizes
+        tp = np.concatenate([t[0] for t in tables])
+        X, XD = np.concatenate([t[1] for t in tables], axis=1), np.concatenate([t[2] for t in tables], axis=1)
+        keys = np.empty(tp.size, complex)
+        keys.real, keys.imag = np.repeat(np.arange(len(tables)), sizes), tp
+        k = np.repeat([which[id(seg)] for seg, _ in requests], [len(t) for _, t in requests])
+        query = np.empty(ts.size, complex)
+        query.real, query.imag = k, ts
+        off = offsets[k]
+        i = np.searchsorted(keys, query, side="right") - off  # (the np.clip of i - 1 to [0, n - 2], cheaper)
+        i = off + np.minimum(np.maximum(i - 1, 0), sizes[k] - 2)
+        j = i + 1
+        X0, X1 = X.take(i, axis=1), X.take(j, axis=1)  # (take: the same as X[:, i], faster)
+        guesses = hermite(tp[i], X0, XD.take(i, axis=1), tp[j], X1, XD.take(j, axis=1), ts)
+        reach = 0.05 + 0.5 * np.max(np.abs(X1[:2] - X0[:2]), axis=0)
         return guesses, reach
 
     def _continue_to(self, seg: _Segment, t: float) -> _Point | None:

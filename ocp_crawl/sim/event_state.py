@@ -34,11 +34,16 @@ def torque_pair(signal):
 
     For the common torque input k (phi_ref(t) - pi) of a :class:`~ocp_crawl.model.inputs.Harmonic` reference
     both come from one scalar evaluation in the same arithmetic as the signal's own methods (the stepper
-    calls this before every solve); any other signal is called as it is.
+    calls this before every solve); any other signal is called as it is.  The function has the attribute
+    ``values``: t -> [tau1, tau2, tau1', tau2'] as a list of floats (the same numbers).
     """
     ref = getattr(signal, "reference", None)
     if not (isinstance(signal, ReferenceTorque) and type(ref) is Harmonic):
-        return lambda t: (signal(t), signal.derivative(t))
+        def generic(t: float):
+            return signal(t), signal.derivative(t)
+
+        generic.values = lambda t: [*np.ravel(signal(t)).tolist(), *np.ravel(signal.derivative(t)).tolist()]
+        return generic
     k, g1, g2, a1, a2, half = signal.k, ref.gamma1, ref.gamma2, ref.A1, ref.A2, ref.psi / 2
     pi, two_pi, sin, cos, array = math.pi, TWO_PI, math.sin, math.cos, np.array
 
@@ -52,7 +57,13 @@ def torque_pair(signal):
         w = two_pi * t
         return [k * (two_pi * a1 * cos(w + half)), k * (two_pi * a2 * cos(w - half))]
 
-    pair.rate = rate
+    def values(t: float) -> list:
+        w = two_pi * t
+        w1, w2 = w + half, w - half
+        return [k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi), k * (two_pi * a1 * cos(w1)),
+                k * (two_pi * a2 * cos(w2))]
+
+    pair.rate, pair.values = rate, values
     return pair
 
 
@@ -90,11 +101,13 @@ class _Point:
     """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
     (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
 
-    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards")
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards", "_xl")
 
     def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
-                 extra=None):
+                 extra=None, a: list | None = None, xl: list | None = None):
         self.t, self.x, self.aux = t, x, aux
+        self._xl = xl
+        """x as a list (None until asked for; see :attr:`xl`)"""
         self.q, self.extra = q, extra
         """mode parameters of the solve, and the stability numbers and d'' coefficients computed with it
         (:func:`~ocp_crawl.model.stability.fast_step`; None when the solve did not compute them)"""
@@ -103,7 +116,8 @@ class _Point:
         self.tau, self.dtau = tau, dtau
         """torque and its derivative at t (kept from the solve)"""
         self._xdot = None
-        self._a = None
+        self._a = a
+        """aux as a list (None until asked for; see :attr:`a`)"""
         self.guards = None
         """(mode, guard values of that mode) once computed (``HybridStepper.point_guards``)"""
 
@@ -115,23 +129,35 @@ class _Point:
         return self._a
 
     @property
+    def xl(self) -> list:
+        """x as a list of Python floats"""
+        if self._xl is None:
+            self._xl = self.x.tolist()
+        return self._xl
+
+    @property
+    def xdl(self) -> list:
+        """the rate x' [1/cycle] as a list of Python floats"""
+        a = self.a
+        return [a[_DPHI1], a[_DPHI2], a[_DFT]]
+
+    @property
     def xdot(self) -> np.ndarray:
         if self._xdot is None:
-            a = self.a
-            self._xdot = np.array([a[_DPHI1], a[_DPHI2], a[_DFT]])
+            self._xdot = np.array(self.xdl)
         return self._xdot
 
 
-def hermite_point(p0: _Point, p1: _Point, t: float) -> np.ndarray:
-    """:func:`hermite` between two points at one phase t, in scalar arithmetic (the same formula)."""
+def hermite_point(p0: _Point, p1: _Point, t: float) -> list:
+    """:func:`hermite` between two points at one phase t, in scalar arithmetic (the same formula); a list of 3 floats."""
     h = p1.t - p0.t
     s = (t - p0.t) / h if h > 0 else 0.0
     s2 = s * s
     s3 = s2 * s
     h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
     a, b = h10 * h, h11 * h
-    x0, x1, d0, d1 = p0.x.tolist(), p1.x.tolist(), p0.xdot.tolist(), p1.xdot.tolist()
-    return np.array([h00 * x0[k] + a * d0[k] + h01 * x1[k] + b * d1[k] for k in range(3)])
+    x0, x1, d0, d1 = p0.xl, p1.xl, p0.xdl, p1.xdl
+    return [h00 * x0[k] + a * d0[k] + h01 * x1[k] + b * d1[k] for k in range(3)]
 
 
 @dataclass
