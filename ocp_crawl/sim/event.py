@@ -56,7 +56,7 @@ from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptio
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
-_RES, _DET = AUX["res"], AUX["det"]
+_RES, _DET, _D = AUX["res"], AUX["det"], AUX["d"]
 #: positions in the flat output (x (3), aux (NAUX)[, extra]) of a compiled solve: the residual, the end of aux
 _RES3, _EXTRA3 = 3 + _RES, 3 + NAUX
 
@@ -160,6 +160,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         self.L = model.robot.L
         self.nfev = 0
         self.nsteps = 0
+        self._noise_table: dict = {}
         # round-off level of the scaled guards: the mode equations are scaled by M g L, so the
         # conditioning (and the noise in f_t) grows with k/(M g L)
         self.noise = 1e-13 * (1.0 + model.robot.k / model.robot.MgL)
@@ -380,17 +381,16 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         if isinstance(target, Status):
             run.events.append(Event(t_ev, event_kind(kind), seg.mode.label, "failure", g_ev, kind))
             raise _Failure(target, t_ev, seg.mode, f"{kind.replace('_', ' ')}")
-        new_d0 = ev_pt.aux[AUX["d"]]
         chosen, trial, kind_out = self._successor(seg.mode, target, kind, ev_pt, t_ev)
         run.events.append(Event(t_ev, kind_out, seg.mode.label, chosen.label, g_ev, kind))
         self._check_jump(ev_pt, trial, seg.mode, chosen, kind_out)
-        self._require_stable(trial, chosen, mode_q(chosen, new_d0), f"after the event {kind_out}")
+        self._require_stable(trial, chosen, trial.q, f"after the event {kind_out}")  # (trial.q: mode_q(chosen, d at the event))
         run.events_in_cycle += 1
         if run.events_in_cycle > self.opt.max_events_per_cycle:
             raise _Failure(Status.TOO_MANY_EVENTS, t_ev, chosen,
                            f"more than {self.opt.max_events_per_cycle} events in cycle {run.cycle + 1}")
-        x1, x2 = (a.item() for a in seg.foot_positions(ev_pt.aux[AUX["d"]]))
-        run.seg = _Segment(chosen, mode_q(chosen, new_d0), x1, x2, [trial])
+        x1, x2 = seg.feet(ev_pt.a[_D])
+        run.seg = _Segment(chosen, trial.q, x1, x2, [trial])
         run.segments.append(run.seg)
         run.pt = trial
         run.det_sign = np.sign(trial.aux[AUX["det"]]) or 1.0

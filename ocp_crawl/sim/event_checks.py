@@ -34,6 +34,8 @@ from ocp_crawl.sim.event_state import _Failure, _Point, mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
+_D = AUX["d"]
+
 
 def describe_margin(s, mode: Mode) -> str:
     """The stability numbers ``s = (margin, kappa, trK, detK)`` (nondimensional, by M g L) in words."""
@@ -51,7 +53,12 @@ class ChecksMixin:
 
     def _require_stable(self, pt: _Point, mode: Mode, q: np.ndarray, where: str) -> None:
         """Raise ``_Failure(UNSTABLE)`` unless the equilibrium pt of ``mode`` has a positive margin."""
-        s = pt.extra[:4] if pt.extra is not None and pt.q is q else self._stability(pt.x, q)
+        if pt.extra is not None and pt.q is q:
+            if pt.extra[0] > 0:  # (the margin computed with the solve)
+                return
+            s = pt.extra[:4]
+        else:
+            s = self._stability(pt.x, q)
         if not s[0] > 0:  # also NaN
             raise _Failure(Status.UNSTABLE, pt.t, mode, f"{where}: the {mode.label} equilibrium is unstable "
                            f"({describe_margin(s, mode)})", {"stability": dict(zip(STABILITY_NAMES, map(float, s)))})
@@ -87,11 +94,13 @@ class ChecksMixin:
         ``jump_tol`` in phi1, phi2 [rad], f_t/(M g)/(1 + k/(M g L)) or d/L while the input is continuous at the
         event.  f_t's change is divided by 1 + k/(M g L): its round-off grows with the stiffness ratio (as the
         guards' noise, about 2e-15 (1 + k/(M g L)) measured up to k/(M g L) = 1e5) while phi and d stay at round-off."""
-        dx = np.abs(start.x - ev_pt.x)
-        dd = abs(start.aux[AUX["d"]] - ev_pt.aux[AUX["d"]]) / self.L
-        size = max(float(np.max(dx[:2])), float(dx[2]) / (1.0 + self.model.robot.k / self.model.robot.MgL), dd)
+        a, b = start.xl, ev_pt.xl
+        dd = abs(start.a[_D] - ev_pt.a[_D]) / self.L
+        size = max(abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2]) / (1.0 + self.model.robot.k / self.model.robot.MgL),
+                   dd)  # (finite: the solves return finite states)
         if size <= self.opt.jump_tol or self._input_jumps(ev_pt.t):
             return
+        dx = np.abs(start.x - ev_pt.x)
         deg = np.degrees(dx[:2])
         raise _Failure(Status.SNAP_THROUGH, ev_pt.t, before,
                        f"{kind.replace('_', ' ')} from {before.label} to {after.label} needs a jump of the state "

@@ -143,7 +143,7 @@ class GuardsMixin:
             m0, m1 = h * rate0, h * rate1
             err = 6.0 * abs(b - a - 0.5 * (m0 + m1))
             # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
-            if min(a, b) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:
+            if (b if b < a else a) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:  # (min(a, b))
                 continue
             s, v = cubic_min(a, b, m0, m1)
             if v < floor:

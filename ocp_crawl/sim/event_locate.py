@@ -128,11 +128,13 @@ class EventsMixin:
         until their sign is resolved above round-off.
         """
         q = mode_q(mode, d0)
-        start = self._solve(pt.t, pt.x, q)
+        start = self._solve(pt.t, pt.xl, q)
         if start is None:
             return None
         g0 = self.point_guards(mode, start)
-        noise = {k: guard_noise(k, self.noise) for k in g0}
+        noise = self._noise_table.get(mode)
+        if noise is None:  # (the round-off levels of the mode's guards, once per stepper and mode)
+            noise = self._noise_table[mode] = {k: guard_noise(k, self.noise) for k in g0}
         if any(v < -100 * noise[k] for k, v in g0.items()):
             return None
         pending = {k for k, v in g0.items() if v < 100 * noise[k]}

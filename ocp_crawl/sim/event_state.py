@@ -101,12 +101,13 @@ class _Point:
     """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
     (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
 
-    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards", "_xl")
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards", "_xl", "_xdl")
 
     def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
                  extra=None, a: list | None = None, xl: list | None = None):
         self.t, self.x, self.aux = t, x, aux
         self._xl = xl
+        self._xdl = None
         """x as a list (None until asked for; see :attr:`xl`)"""
         self.q, self.extra = q, extra
         """mode parameters of the solve, and the stability numbers and d'' coefficients computed with it
@@ -138,8 +139,10 @@ class _Point:
     @property
     def xdl(self) -> list:
         """the rate x' [1/cycle] as a list of Python floats"""
-        a = self.a
-        return [a[_DPHI1], a[_DPHI2], a[_DFT]]
+        if self._xdl is None:
+            a = self.a
+            self._xdl = [a[_DPHI1], a[_DPHI2], a[_DFT]]
+        return self._xdl
 
     @property
     def xdot(self) -> np.ndarray:
@@ -180,16 +183,21 @@ class _Segment:
             self._arrays = cache
         return cache
 
-    def foot_positions(self, d):
-        d = np.asarray(d, float)
+    def feet(self, d):
+        """Foot positions (x1, x2) [m] at the foot distance d [m] (a float or an array; a fixed foot is its float)."""
         if self.mode == Mode.STICK:
-            return np.full_like(d, self.x1_fixed), np.full_like(d, self.x2_fixed)
+            return self.x1_fixed, self.x2_fixed
         if self.mode.foot == 1:  # foot 2 sticks
-            return self.x2_fixed - d, np.full_like(d, self.x2_fixed)
+            return self.x2_fixed - d, self.x2_fixed
         if self.mode.foot == 2:
-            return np.full_like(d, self.x1_fixed), self.x1_fixed + d
+            return self.x1_fixed, self.x1_fixed + d
         mid = 0.5 * (self.x1_fixed + self.x2_fixed)  # slip-slip: symmetric split about the midpoint
         return mid - 0.5 * d, mid + 0.5 * d
+
+    def foot_positions(self, d):
+        """:meth:`feet` as two arrays of the shape of d."""
+        d = np.asarray(d, float)
+        return tuple(np.full_like(d, v) if np.ndim(v) == 0 else v for v in self.feet(d))
 
 
 @dataclass(slots=True)
