@@ -126,15 +126,18 @@ def stability_gate(res: CrawlResult, model: Model) -> None:
     r = model.robot
     X = np.vstack([res.phi, res.f_t / (r.M * r.g)])
     modes = np.asarray(res.mode, dtype=int)
-    kinds, which = np.unique(modes, return_inverse=True)
-    Q = np.stack([mode_q(Mode(int(m))) for m in kinds], axis=1)[:, which.ravel()]
-    margin = sample_margins(model, X, Q)
+    Mode(int(modes.min())), Mode(int(modes.max()))  # (ValueError for a code that is not a mode: they are 0, 1, ...)
+    margin = sample_margins(model, X, _MODE_Q.take(modes.ravel(), axis=1))
     bad = np.nonzero(~(margin > 0))[0]
     if bad.size:
         j = bad[0]
         t, mode = float(res.t[j]), Mode(int(modes[j])).label
         demote(res, Status.UNSTABLE, f"stability margin {margin[j]:.4g} <= 0 at the sampled phase t = {t:.10f} "
                f"(cycle {int(np.floor(t)) + 1}, phase {t % 1:.10f}) in mode {mode}", t, mode)
+
+
+#: mode_q of each mode (4, number of modes), by mode code
+_MODE_Q = np.stack([mode_q(m) for m in Mode], axis=1)
 
 
 @compiled_function
@@ -152,9 +155,10 @@ def sample_margins(model: Model, X: np.ndarray, Q: np.ndarray) -> np.ndarray:
     out = np.empty(n)
     f = _mapped_stability()
     P = np.tile(np.asarray(model.p, float)[:, None], (1, MARGIN_BATCH)).ravel(order="F")
+    XT, QT = X.T, Q.T  # (the columns as rows: a selection of rows, raveled, is column-major)
     for a in range(0, n, MARGIN_BATCH):
         b = min(n, a + MARGIN_BATCH)
-        cols = np.r_[a:b, np.full(MARGIN_BATCH - (b - a), b - 1)]
-        s = f(X[:, cols].ravel(order="F"), Q[:, cols].ravel(order="F"), P)[0].reshape(4, MARGIN_BATCH, order="F")
-        out[a:b] = s[0, :b - a]
+        cols = np.minimum(np.arange(a, a + MARGIN_BATCH), b - 1)  # (the last column repeated as padding)
+        s = f(XT.take(cols, axis=0).ravel(), QT.take(cols, axis=0).ravel(), P)[0]
+        out[a:b] = s[:4 * (b - a):4]  # (the margins: the first of the 4 numbers of each column)
     return out

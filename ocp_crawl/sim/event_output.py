@@ -451,9 +451,10 @@ class OutputMixin:
         feet = [blk[3].foot_positions(blk[2][AUX["d"]]) for blk in blocks]
         x1 = np.concatenate([f[0] for f in feet])
         x2 = np.concatenate([f[1] for f in feet])
-        mode = np.concatenate([np.full(blk[0].size, int(blk[3].mode)) for blk in blocks])
-        order = np.argsort(t, kind="stable")
-        t, X, A, x1, x2, mode = t[order], X[:, order], A[:, order], x1[order], x2[order], mode[order]
+        mode = np.repeat([int(blk[3].mode) for blk in blocks], [blk[0].size for blk in blocks])
+        if not np.all(t[1:] >= t[:-1]):  # (the blocks of consecutive segments are in order already)
+            order = np.argsort(t, kind="stable")
+            t, X, A, x1, x2, mode = t[order], X[:, order], A[:, order], x1[order], x2[order], mode[order]
         set_samples(res, t, X[:2], A[AUX["theta"]], A[AUX["d"]], x1, x2, A[AUX["ft"]], A[AUX["fn1"]],
                     A[AUX["fn2"]], self.torque(t).reshape(2, -1), mode)
         res.extra["max_residual_scaled"] = float(np.max(A[AUX["res"]]))
