@@ -29,6 +29,10 @@ QUAD_DEPTH = 16
 _XG, _WG = np.polynomial.legendre.leggauss(5)
 _LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
+#: the columns of _LEG_FIT of the two highest coefficients (the tail of a panel's interpolant)
+_LEG_TAIL = _LEG_FIT[:, 3:]
+#: rows of the actuators' rates phi1', phi2' in aux (adjacent)
+_DPHI12 = slice(AUX["dphi1"], AUX["dphi2"] + 1)
 
 
 def _gauss_nodes(pending: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -167,20 +171,24 @@ class OutputMixin:
             t, half = _gauss_nodes(pending)
             aux = first if depth == 0 and first is not None else self._solve_panels(spans, owner, t, todo)
             t = t.ravel()
-            power = (self.torque(t).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]).reshape(2, -1, 5)
+            power = (self.torque(t).reshape(2, -1) * aux[_DPHI12]).reshape(2, -1, 5)
             fric = np.abs(aux[AUX["ft"]] * aux[AUX["ddot"]]).reshape(-1, 5)
             f = np.concatenate([power, fric[None]], axis=0)  # (3, npan, 5)
             np.maximum.at(scale, owner, np.abs(f).max(axis=(0, 2)))
-            tail = np.abs(f.reshape(-1, 5) @ _LEG_FIT[:, 3:]).max(axis=1).reshape(3, -1)
+            tail = np.abs(f.reshape(-1, 5) @ _LEG_TAIL).max(axis=1).reshape(3, -1)
             ok = np.all(tail <= QUAD_TOL * scale[owner], axis=0) | (depth == QUAD_DEPTH)
             w = (half * wg).reshape(-1, 5)
+            t = t.reshape(-1, 5)
+            every = bool(ok.all())  # (then the accepted panels are all of them, in order: no selection)
+            acc = [owner, pending, t, w, power, fric] if every else \
+                [owner[ok], pending[ok], t[ok], w[ok], power[:, ok], fric[ok]]
             if positive:  # (offset: the index of the first accepted panel among all accepted ones)
-                todo = self._split_group(spans, owner[ok], pending[ok], power[:, ok], sum(len(d[0]) for d in done))
+                todo = self._split_group(spans, acc[0], acc[1], acc[4], sum(len(d[0]) for d in done))
                 splits.append(todo)
-            done.append((owner[ok], pending[ok], t.reshape(-1, 5)[ok], w[ok], power[:, ok], fric[ok]))
-            bad = pending[~ok]
-            if not bad.size:
+            done.append(acc)
+            if every:
                 break
+            bad = pending[~ok]
             m = 0.5 * (bad[:, 0] + bad[:, 1])
             pending = np.concatenate([np.stack([bad[:, 0], m], 1), np.stack([m, bad[:, 1]], 1)])
             owner = np.concatenate([owner[~ok], owner[~ok]])
@@ -217,7 +225,7 @@ class OutputMixin:
             group["pv"] = np.zeros(0)
             return
         te, ie = group["te"], group["ie"]
-        p2 = self.torque(te).reshape(2, -1) * aux[[AUX["dphi1"], AUX["dphi2"]]]
+        p2 = self.torque(te).reshape(2, -1) * aux[_DPHI12]
         group["pv"] = p2[ie, np.arange(len(te))]
 
     @staticmethod
@@ -299,10 +307,10 @@ class OutputMixin:
         w_in = 0.0
         w_abs = 0.0
         diss = 0.0
-        for _, _, ww, pw, fric in panels:
-            w_in += float(np.sum(ww[None] * pw))
-            w_abs += float(np.sum(ww[None] * np.abs(pw)))
-            diss += float(np.sum(ww * fric))
+        for _, _, ww, pw, fric in panels:  # (x.sum(): np.sum(x) without its Python wrapper)
+            w_in += float((ww[None] * pw).sum())
+            w_abs += float((ww[None] * np.abs(pw)).sum())
+            diss += float((ww * fric).sum())
         wplus = self._positive_work(panels, split) if positive and panels else np.zeros(2)
         return {"input_work": w_in, "gross_work": w_abs, "dissipation": diss, "W_plus_joint": wplus}
 
@@ -315,15 +323,16 @@ class OutputMixin:
         first = np.cumsum([0] + counts)
         positive_panels, te, we, ie, je, pv = split
         node_span = np.searchsorted(first, je, side="right") - 1
+        first = first.tolist()
         wplus = np.zeros(2)
         for k, (_, _, ww, pw, _) in enumerate(panels):
             pos = positive_panels[:, first[k]:first[k + 1]]
-            wplus += np.sum(np.where(pos[:, :, None], pw * ww[None], 0.0), axis=(1, 2))
+            wplus += np.where(pos[:, :, None], pw * ww[None], 0.0).sum(axis=(1, 2))
             sel = np.nonzero(node_span == k)[0]
             if sel.size:
-                w_k, i_k, pv_k = we[sel], ie[sel], pv[sel]
+                i_k, pos_k = ie[sel], we[sel] * np.maximum(pv[sel], 0.0)
                 for i in range(2):
-                    wplus[i] += float(np.sum((w_k * np.maximum(pv_k, 0.0))[i_k == i]))
+                    wplus[i] += float(pos_k[i_k == i].sum())
         return wplus
 
     def _sign_split(self, edges: np.ndarray, pw: np.ndarray):

@@ -178,8 +178,7 @@ class _Segment:
         cache = getattr(self, "_arrays", None)
         if cache is None or cache[0].size != len(self.points):
             pts = self.points
-            cache = (np.array([p.t for p in pts]), np.stack([p.x for p in pts], axis=1),
-                     np.stack([p.xdot for p in pts], axis=1))
+            cache = (np.array([p.t for p in pts]), np.array([p.xl for p in pts]).T, np.array([p.xdl for p in pts]).T)
             self._arrays = cache
         return cache
 
