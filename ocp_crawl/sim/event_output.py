@@ -248,12 +248,10 @@ class OutputMixin:
         memo = getattr(self, "_first_memo", None)
         if memo is not None and memo[0] == key:
             return memo[1]
-        pending, owner = [], []
-        for k, (_, a, b) in enumerate(spans):
-            edges = self._panel_edges(a, b)
-            pending.append(np.stack([edges[:-1], edges[1:]], axis=1))
-            owner.append(np.full(len(edges) - 1, k))
-        self._first_memo = (key, (np.concatenate(pending), np.concatenate(owner)))
+        edges = [self._panel_edges(a, b) for _, a, b in spans]
+        pending = np.stack([np.concatenate([e[:-1] for e in edges]), np.concatenate([e[1:] for e in edges])], axis=1)
+        owner = np.repeat(np.arange(len(spans)), [len(e) - 1 for e in edges])
+        self._first_memo = (key, (pending, owner))
         return self._first_memo[1]
 
     def _first_requests(self, spans) -> list:
@@ -288,7 +286,7 @@ class OutputMixin:
 
     def _panel_edges(self, a: float, b: float) -> np.ndarray:
         """Initial panel edges on [a, b]: no longer than ``quad_h``, with the input's knots as edges."""
-        n = max(1, int(np.ceil((b - a) / self.opt.quad_h - 1e-12)))
+        n = max(1, math.ceil((b - a) / self.opt.quad_h - 1e-12))
         edges = np.linspace(a, b, n + 1)
         if self.breakpoints.size:
             cuts = (self.breakpoints[None, :] + np.arange(math.floor(a), math.ceil(b) + 1)[:, None]).ravel()
@@ -361,7 +359,8 @@ class OutputMixin:
         c0, c1 = cuts[:, :-1], cuts[:, 1:]
         keep = c1 - c0 > 0
         c0, c1 = c0[keep], c1[keep]
-        owner, panel = np.broadcast_to(ii[:, None], keep.shape)[keep], np.broadcast_to(jj[:, None], keep.shape)[keep]
+        rows = np.nonzero(keep)[0]  # (the row of each kept piece, in the order of c0[keep])
+        owner, panel = ii[rows], jj[rows]
         if np.all(c1 - c0 <= self.opt.quad_h * (1 - 1e-9)):
             # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h, 5), at once
             mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]

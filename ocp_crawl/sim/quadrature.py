@@ -1,6 +1,8 @@
 """Quadrature over piecewise-smooth trajectories (integrals per cycle: work, dissipation, W+)."""
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 _GL = {n: np.polynomial.legendre.leggauss(n) for n in (3, 5, 8)}
@@ -56,15 +58,25 @@ def legendre_roots(coefs: np.ndarray) -> np.ndarray:
     if np.any(full):
         c = coefs[full]
         n = c.shape[1] - 1
-        scl = 1. / np.sqrt(2 * np.arange(n) + 1)
-        base = np.zeros((n, n))
-        top = base.reshape(-1)[1::n + 1]
-        top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
-        base.reshape(-1)[n::n + 1] = top
+        base, ratio = _companion_base(n)
         comp = np.repeat(base[None], len(c), axis=0)
-        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * (scl / scl[-1]) * (n / (2 * n - 1))
+        comp[:, :, -1] -= (c[:, :-1] / c[:, -1:]) * ratio * (n / (2 * n - 1))
         out[full] = np.linalg.eigvals(comp[:, ::-1, ::-1])
     for j in np.nonzero(~full)[0]:
         r = np.polynomial.legendre.legroots(coefs[j])
         out[j, :r.size] = r
     return out
+
+
+@lru_cache(maxsize=8)
+def _companion_base(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The part of the scaled Legendre companion matrix (n, n) of ``legcompanion`` that does not depend on the
+    coefficients, and the ratios scl/scl[-1] (n,) of the last column's coefficient term (read-only: shared)."""
+    scl = 1. / np.sqrt(2 * np.arange(n) + 1)
+    base = np.zeros((n, n))
+    top = base.reshape(-1)[1::n + 1]
+    top[...] = np.arange(1, n) * scl[:n - 1] * scl[1:n]
+    base.reshape(-1)[n::n + 1] = top
+    ratio = scl / scl[-1]
+    base.flags.writeable = ratio.flags.writeable = False
+    return base, ratio
