@@ -50,8 +50,8 @@ from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
 from ocp_crawl.sim.event_locate import EPS, EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
-from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, mode_q, \
-    torque_pair
+from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, hermite_point, \
+    mode_q, torque_pair
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -149,6 +149,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
         self.torque_at = torque_pair(self.torque)
+        self._torque_values = self.torque_at.values
         self.opt = options or HybridOptions()
         self.sym = symbolic()
         self.newton = fast_newton()
@@ -180,7 +181,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.  ``step``: a continuation
         step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then carries its stability
         numbers and d'' coefficients)."""
-        tq = self.torque_at.values(float(t))
+        tq = self._torque_values(float(t))
         fn, tol = self.step_fn if step else self.newton, self.res_tol
         tail = tq + q.tolist() + self.p_list
         xl = x0 if type(x0) is list else x0.tolist()
@@ -355,7 +356,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         crossed = [k for k, v in g_new.items() if v < 0 and g_old[k] > floor]
         dips, refine = self._dips(seg.mode, seg.q, pt, new, g_old, g_new)
         for name, t_min in dips:
-            pm = self._solve(t_min, self._hermite(pt, new, t_min), seg.q)
+            pm = self._solve(t_min, hermite_point(pt, new, t_min), seg.q)
             if pm is None:
                 refine = True
                 break

@@ -14,7 +14,7 @@ from ocp_crawl.sim.event_state import _Failure, _Point, hermite_point, mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
-EPS = np.finfo(float).eps
+EPS = float(np.finfo(float).eps)
 #: round-off level of the scaled guards that depend on the angles (and d') only, whatever k/(M g L)
 ANGLE_NOISE = 1e-13
 
@@ -35,10 +35,6 @@ def guard_noise(name: str, noise: float) -> float:
 class EventsMixin:
     """Event location, mode consistency and fold location of :class:`~ocp_crawl.sim.event.HybridStepper`."""
 
-    @staticmethod
-    def _hermite(p0: _Point, p1: _Point, t: float) -> list:
-        return hermite_point(p0, p1, t)
-
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
                 start: bool = False) -> tuple[float, _Point]:
         """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (:meth:`_root`).
@@ -50,7 +46,7 @@ class EventsMixin:
         def point_at(t: float) -> _Point:
             pt = cache.get(t)
             if pt is None:
-                pt = self._solve(t, self._hermite(p0, p1, t), q, step=True)
+                pt = self._solve(t, hermite_point(p0, p1, t), q, step=True)
                 if pt is None:
                     raise _Failure(Status.NO_CONVERGENCE, t, mode, f"mode solve failed while locating event {name}")
                 cache[t] = pt
