@@ -124,7 +124,7 @@ class EventsMixin:
         until their sign is resolved above round-off.
         """
         q = mode_q(mode, d0)
-        start = self._solve(pt.t, pt.xl, q)
+        start = self._solve(pt.t, pt.xl, q, step=True)  # (step: with its stability numbers, for the event check)
         if start is None:
             return None
         g0 = self.point_guards(mode, start)
