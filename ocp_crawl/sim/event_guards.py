@@ -154,7 +154,7 @@ class GuardsMixin:
             c3, c2 = 2 * (a - b) + m0 + m1, 3 * (b - a) - 2 * m0 - m1
             bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
             suspect = suspect or bool(np.min(bound) < floor)
-        return sorted(out, key=lambda r: r[1]), suspect
+        return (sorted(out, key=lambda r: r[1]) if len(out) > 1 else out), suspect
 
     def _transition(self, mode: Mode, kind: str) -> Mode | Status:
         if kind.startswith("lift_off"):

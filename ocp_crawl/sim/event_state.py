@@ -45,23 +45,21 @@ def torque_pair(signal):
         generic.values = lambda t: [*np.ravel(signal(t)).tolist(), *np.ravel(signal.derivative(t)).tolist()]
         return generic
     k, g1, g2, a1, a2, half = signal.k, ref.gamma1, ref.gamma2, ref.A1, ref.A2, ref.psi / 2
-    pi, two_pi, sin, cos, array = math.pi, TWO_PI, math.sin, math.cos, np.array
-
-    def pair(t: float):
-        w = two_pi * t
-        w1, w2 = w + half, w - half
-        return (array([k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi)]),
-                array([k * (two_pi * a1 * cos(w1)), k * (two_pi * a2 * cos(w2))]))
-
-    def rate(t: float) -> list:
-        w = two_pi * t
-        return [k * (two_pi * a1 * cos(w + half)), k * (two_pi * a2 * cos(w - half))]
+    pi, two_pi, sin, cos = math.pi, TWO_PI, math.sin, math.cos
 
     def values(t: float) -> list:
         w = two_pi * t
         w1, w2 = w + half, w - half
         return [k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi), k * (two_pi * a1 * cos(w1)),
                 k * (two_pi * a2 * cos(w2))]
+
+    def pair(t: float):
+        v = values(t)
+        return np.array(v[:2]), np.array(v[2:])
+
+    def rate(t: float) -> list:
+        w = two_pi * t
+        return [k * (two_pi * a1 * cos(w + half)), k * (two_pi * a2 * cos(w - half))]
 
     pair.rate, pair.values = rate, values
     return pair
