@@ -263,3 +263,30 @@ def test_grazing_friction_limit_keeps_the_mode():
         assert ev.kind.startswith("graze_") and ev.mode_before == ev.mode_after == "stick-stick"
         assert abs(ev.guard) < 1e-9
     assert abs(res.S) < 1e-12 * robot.L  # the paper: S vanishes as psi -> 180 deg
+
+
+def test_output_phases_go_to_the_first_segment_that_holds_them():
+    """The one-search assignment of sorted output phases to consecutive segments (event_output._owners) against
+    the rule itself, phase by phase: the first segment whose [first, last] point phases hold it (boundaries, phases
+    on no segment, one-point segments and unsorted phases included)."""
+    from types import SimpleNamespace
+
+    from ocp_crawl.sim.event_output import _owners
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        cuts = np.sort(rng.choice(np.linspace(0, 2, 41), size=rng.integers(2, 8), replace=False))
+        segs = [SimpleNamespace(points=[SimpleNamespace(t=float(a)), SimpleNamespace(t=float(b))])
+                for a, b in zip(cuts[:-1], cuts[1:])]
+        if rng.random() < 0.3:  # a one-point segment at a boundary (an event followed by another at once)
+            k = int(rng.integers(0, len(segs)))
+            segs.insert(k, SimpleNamespace(points=[segs[k].points[0]]))
+        te = np.unique(np.concatenate([rng.uniform(-0.2, 2.2, 30), rng.choice(cuts, 3)]))
+        for phases in (te, rng.permutation(te)):
+            got = {id(seg): ts.tolist() for seg, ts in _owners(segs, phases)}
+            want = {}
+            for t in phases.tolist():
+                seg = next((s for s in segs if s.points[0].t <= t <= s.points[-1].t), None)
+                if seg is not None:
+                    want.setdefault(id(seg), []).append(t)
+            assert got == want
