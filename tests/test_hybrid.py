@@ -266,12 +266,12 @@ def test_grazing_friction_limit_keeps_the_mode():
 
 
 def test_output_phases_go_to_the_first_segment_that_holds_them():
-    """The one-search assignment of sorted output phases to consecutive segments (event_output._owners) against
+    """The one-search assignment of sorted output phases to consecutive segments (event_state.phase_owners) against
     the rule itself, phase by phase: the first segment whose [first, last] point phases hold it (boundaries, phases
     on no segment, one-point segments and unsorted phases included)."""
     from types import SimpleNamespace
 
-    from ocp_crawl.sim.event_output import _owners
+    from ocp_crawl.sim.event_state import phase_owners
 
     rng = np.random.default_rng(7)
     for _ in range(200):
@@ -283,7 +283,7 @@ def test_output_phases_go_to_the_first_segment_that_holds_them():
             segs.insert(k, SimpleNamespace(points=[segs[k].points[0]]))
         te = np.unique(np.concatenate([rng.uniform(-0.2, 2.2, 30), rng.choice(cuts, 3)]))
         for phases in (te, rng.permutation(te)):
-            got = {id(seg): ts.tolist() for seg, ts in _owners(segs, phases)}
+            got = {id(seg): ts.tolist() for seg, ts in phase_owners(segs, phases)}
             want = {}
             for t in phases.tolist():
                 seg = next((s for s in segs if s.points[0].t <= t <= s.points[-1].t), None)

@@ -13,7 +13,7 @@ import numpy as np
 from ocp_crawl.model.statics import AUX, solve_many
 from ocp_crawl.sim.assemble import default_phases, energy_gate, failure_message, new_result, set_cycle_metrics, \
     set_samples, stability_gate, success_message
-from ocp_crawl.sim.event_state import _Failure, _Point, _Run, _Segment, hermite
+from ocp_crawl.sim.event_state import _Failure, _Point, _Run, _Segment, hermite, phase_owners
 from ocp_crawl.sim.quadrature import gauss_nodes, legendre_roots
 from ocp_crawl.sim.result import CrawlResult, energy_balance
 from ocp_crawl.status import Status
@@ -47,26 +47,6 @@ def _spans(segments, ta: float, tb: float) -> list:
     """[(segment, a, b), ...]: the stretches of positive length of the segments inside [ta, tb] [cycles]."""
     spans = [(seg, max(ta, seg.points[0].t), min(tb, seg.points[-1].t)) for seg in segments]
     return [sp for sp in spans if sp[2] > sp[1]]
-
-
-def _owners(segments, te: np.ndarray) -> list:
-    """[(segment, its phases), ...]: the phases ``te`` [cycles] on each segment, a phase on a boundary on the earlier
-    segment (and a phase on none on none).  Sorted phases on consecutive segments (the default output) by one
-    search for all segments: the phases of segment k are those in its span after the ones of the segments before."""
-    starts = np.array([seg.points[0].t for seg in segments])
-    ends = np.array([seg.points[-1].t for seg in segments])
-    if te.size and len(segments) and np.all(te[1:] >= te[:-1]) and np.all(starts[1:] >= ends[:-1]):
-        lo, hi = np.searchsorted(te, starts, side="left"), np.searchsorted(te, ends, side="right")
-        lo = np.maximum(lo, np.maximum.accumulate(np.concatenate([[0], hi[:-1]])))
-        return [(seg, te[a:b]) for seg, a, b in zip(segments, lo.tolist(), hi.tolist()) if b > a]
-    requests = []
-    free = np.ones(te.size, bool)
-    for seg in segments:
-        sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
-        if sel.size:
-            free[sel] = False
-            requests.append((seg, te[sel]))
-    return requests
 
 
 class OutputMixin:
@@ -457,7 +437,7 @@ class OutputMixin:
         """(phases, x, aux, segment) of the solutions at the phases ``te`` [cycles], segment by segment
         (a phase on a segment boundary goes to the earlier segment), solved in one batch with the requests
         ``also`` [(segment, phases), ...]; and the aux (NAUX, n) of ``also`` (None if there are none)."""
-        requests = _owners(segments, te)
+        requests = phase_owners(segments, te)
         if not requests and not also:
             return [], None
         xs, aux = self._evaluate_joined(requests + list(also))

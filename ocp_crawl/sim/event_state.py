@@ -218,3 +218,37 @@ class _Failure(Exception):
     def __init__(self, status: Status, t: float, mode: Mode, detail: str, extra: dict | None = None):
         super().__init__(detail)
         self.status, self.t, self.mode, self.detail, self.extra = status, t, mode, detail, extra or {}
+
+
+def phase_owners(segments, te: np.ndarray) -> list:
+    """The phases ``te`` on each segment: a phase on a boundary goes to the earlier segment, a phase on none to none.
+
+    Sorted phases on consecutive segments (the default output) are assigned by one search for all segments (the
+    phases of segment k are those in its span after the ones of the segments before); others one segment at a time.
+
+    Parameters
+    ----------
+    segments : list of _Segment
+        The run's segments, in the order of the run.
+    te : ndarray, shape (n,)
+        Phases [cycles].
+
+    Returns
+    -------
+    list of (_Segment, ndarray)
+        Each segment that holds phases, with its phases in the order of ``te``.
+    """
+    starts = np.array([seg.points[0].t for seg in segments])
+    ends = np.array([seg.points[-1].t for seg in segments])
+    if te.size and len(segments) and np.all(te[1:] >= te[:-1]) and np.all(starts[1:] >= ends[:-1]):
+        lo, hi = np.searchsorted(te, starts, side="left"), np.searchsorted(te, ends, side="right")
+        lo = np.maximum(lo, np.maximum.accumulate(np.concatenate([[0], hi[:-1]])))
+        return [(seg, te[a:b]) for seg, a, b in zip(segments, lo.tolist(), hi.tolist()) if b > a]
+    requests = []
+    free = np.ones(te.size, bool)
+    for seg in segments:
+        sel = np.nonzero(free & (te >= seg.points[0].t) & (te <= seg.points[-1].t))[0]
+        if sel.size:
+            free[sel] = False
+            requests.append((seg, te[sel]))
+    return requests
