@@ -171,9 +171,19 @@ class FastFunction:
         return [o.copy() for o in self._out]
 
     def flat(self, values: list) -> np.ndarray:
-        """All inputs as one list of floats (the inputs one after the other, ``sum(n_in)`` values) -> all outputs
-        as one new 1-D array (the outputs one after the other, ``sum(n_out)`` values): the same numbers as
-        ``__call__``, with the least Python work per call (for the stepper's hot loop)."""
+        """The function at flat inputs: the same numbers as ``__call__``, with the least Python work per call (one
+        assignment of the inputs, one copy of the outputs; for the stepper's hot loop).
+
+        Parameters
+        ----------
+        values : list of float
+            All inputs one after the other (``sum(n_in)`` values, each input in column-major order).
+
+        Returns
+        -------
+        ndarray, shape (sum(n_out),)
+            All outputs one after the other, in a new array.
+        """
         if not self.compiled:
             ends = np.cumsum(self.n_in).tolist()
             return np.concatenate(self(*(values[a:b] for a, b in zip([0] + ends[:-1], ends))))
