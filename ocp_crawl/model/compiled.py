@@ -157,6 +157,8 @@ class FastFunction:
         self._f.restype = ctypes.c_int
         self._call_args = (self._arg, self._res, self._iw, self._w, 0)
         self._lib = lib
+        self._kept: tuple | None = None
+        """(list, position) of the inputs that :meth:`flat` keeps in the input buffer, None if none"""
 
     def __call__(self, *inputs) -> list[np.ndarray]:
         if not self.compiled:
@@ -164,20 +166,25 @@ class FastFunction:
             if not isinstance(out, (list, tuple)):
                 out = [out]
             return [np.asarray(o, float).ravel(order="F") for o in out]
+        self._kept = None
         for buf, x in zip(self._in, inputs):
             np.copyto(buf, x)
         if self._f(*self._call_args) != 0:
             raise FloatingPointError(f"compiled {self.fun.name()} failed")
         return [o.copy() for o in self._out]
 
-    def flat(self, values: list) -> np.ndarray:
+    def flat(self, values: list, kept: list | None = None) -> np.ndarray:
         """The function at flat inputs: the same numbers as ``__call__``, with the least Python work per call (one
         assignment of the inputs, one copy of the outputs; for the stepper's hot loop).
 
         Parameters
         ----------
         values : list of float
-            All inputs one after the other (``sum(n_in)`` values, each input in column-major order).
+            All inputs one after the other (``sum(n_in)`` values, each input in column-major order), or the first
+            ones if ``kept`` is given.
+        kept : list of float, optional
+            The last inputs, as a list that the caller never changes: while the same list (the same object) comes
+            again after the same number of ``values``, it is still in the input buffer and not written anew.
 
         Returns
         -------
@@ -185,9 +192,19 @@ class FastFunction:
             All outputs one after the other, in a new array.
         """
         if not self.compiled:
+            values = values + kept if kept is not None else values
             ends = np.cumsum(self.n_in).tolist()
             return np.concatenate(self(*(values[a:b] for a, b in zip([0] + ends[:-1], ends))))
-        self._cin[:] = values
+        if kept is None:
+            self._cin[:] = values
+            self._kept = None
+        else:
+            n = len(values)
+            self._cin[:n] = values
+            k = self._kept
+            if k is None or k[0] is not kept or k[1] != n:
+                self._cin[n:] = kept
+                self._kept = (kept, n)
         if self._f(*self._call_args) != 0:
             raise FloatingPointError(f"compiled {self.fun.name()} failed")
         return self._outbuf.copy()

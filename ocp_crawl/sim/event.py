@@ -162,6 +162,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         self.nfev = 0
         self.nsteps = 0
         self._noise_table: dict = {}
+        self._tails: dict = {}
+        """id(q) -> (q, the solves' last inputs (q, p) as a list) of the mode parameters q of the run (see _solve)"""
         # round-off level of the scaled guards: the mode equations are scaled by M g L, so the
         # conditioning (and the noise in f_t) grows with k/(M g L)
         self.noise = 1e-13 * (1.0 + model.robot.k / model.robot.MgL)
@@ -183,10 +185,12 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         numbers and d'' coefficients)."""
         tq = self._torque_values(float(t))
         fn, tol = self.step_fn if step else self.newton, self.res_tol
-        tail = tq + q.tolist() + self.p_list
+        tail = self._tails.get(id(q))
+        if tail is None or tail[0] is not q:  # (q, its inputs q and p as a list, kept in the compiled buffer)
+            tail = self._tails[id(q)] = (q, q.tolist() + self.p_list)
         xl = x0 if type(x0) is list else x0.tolist()
         for _ in range(4):
-            out = fn.flat(xl + tail)  # x (3), aux (NAUX)[, extra]
+            out = fn.flat(xl + tq, tail[1])  # x (3), aux (NAUX)[, extra]
             self.nfev += 1
             lst = out.tolist()
             xl, res = lst[:3], lst[_RES3]
@@ -243,6 +247,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         te = output_phases(t_eval)
         self.nfev = 0
         self.nsteps = 0
+        self._tails.clear()
         try:
             start = self.initial_state(0.0)
         except ValueError as exc:
