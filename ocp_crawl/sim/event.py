@@ -180,9 +180,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
 
     # ------------------------------------------------------------------ primitive evaluations
     def _solve(self, t: float, x0: np.ndarray | list, q: np.ndarray, step: bool = False) -> _Point | None:
-        """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.  ``step``: a continuation
-        step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then carries its stability
-        numbers and d'' coefficients)."""
+        """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.
+        ``step``: a continuation step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then
+        carries its stability numbers and d'' coefficients)."""
         tq = self._torque_values(float(t))
         fn, tol = self.step_fn if step else self.newton, self.res_tol
         tail = self._tails.get(id(q))
@@ -390,7 +390,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         chosen, trial, kind_out = self._successor(seg.mode, target, kind, ev_pt, t_ev)
         run.events.append(Event(t_ev, kind_out, seg.mode.label, chosen.label, g_ev, kind))
         self._check_jump(ev_pt, trial, seg.mode, chosen, kind_out)
-        self._require_stable(trial, chosen, trial.q, f"after the event {kind_out}")  # (trial.q: mode_q(chosen, d at the event))
+        # (trial.q: mode_q(chosen, d at the event))
+        self._require_stable(trial, chosen, trial.q, f"after the event {kind_out}")
         run.events_in_cycle += 1
         if run.events_in_cycle > self.opt.max_events_per_cycle:
             raise _Failure(Status.TOO_MANY_EVENTS, t_ev, chosen,

@@ -96,8 +96,8 @@ class ChecksMixin:
         guards' noise, about 2e-15 (1 + k/(M g L)) measured up to k/(M g L) = 1e5) while phi and d stay at round-off."""
         a, b = start.xl, ev_pt.xl
         dd = abs(start.a[_D] - ev_pt.a[_D]) / self.L
-        size = max(abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2]) / (1.0 + self.model.robot.k / self.model.robot.MgL),
-                   dd)  # (finite: the solves return finite states)
+        ft_scale = 1.0 + self.model.robot.k / self.model.robot.MgL
+        size = max(abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2]) / ft_scale, dd)  # (finite states: the solves')
         if size <= self.opt.jump_tol or self._input_jumps(ev_pt.t):
             return
         dx = np.abs(start.x - ev_pt.x)

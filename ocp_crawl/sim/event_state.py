@@ -150,7 +150,7 @@ class _Point:
 
 
 def hermite_point(p0: _Point, p1: _Point, t: float) -> list:
-    """:func:`hermite` between two points at one phase t, in scalar arithmetic (the same formula); a list of 3 floats."""
+    """:func:`hermite` between two points at one phase t in scalar arithmetic (the same formula): a list of 3 floats."""
     h = p1.t - p0.t
     s = (t - p0.t) / h if h > 0 else 0.0
     s2 = s * s
