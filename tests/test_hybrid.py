@@ -290,3 +290,16 @@ def test_output_phases_go_to_the_first_segment_that_holds_them():
                 if seg is not None:
                     want.setdefault(id(seg), []).append(t)
             assert got == want
+
+
+def test_cycle_ending_a_rounding_error_short_of_its_phase():
+    """A gait whose steady cycle ends 2e-16 before t = 2 (an event found at 1.9999999999999998) reports its
+    metrics (it raised IndexError), and they continue those of a neighbouring psi (a limit, not a stored value)."""
+    model = Model(Robot.paper(), gravity="physical")
+    kw = dict(gamma1_deg=91.6456826619305, gamma2_deg=90.44124551349091, A1_deg=27.92683794884863,
+              A2_deg=29.296200647806213)
+    res = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(psi_deg=180, **kw), model.robot.k))
+    near = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(psi_deg=179.999, **kw), model.robot.k))
+    assert res.success and near.success, (res.message, near.message)
+    assert abs(res.W_plus - near.W_plus) <= 1e-5 * abs(near.W_plus)
+    assert abs(res.S - near.S) <= 1e-5 * abs(near.S)

@@ -465,8 +465,9 @@ class OutputMixin:
         """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1] (``first``: see :meth:`_panels`)."""
         model = self.model
         pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
-        sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t][-1]
-        sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t][-1]
+        # (the segments of pa and pb, found as _state_at finds them: a cycle can end 2e-16 short of its phase)
+        sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t + 1e-15][-1]
+        sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t + 1e-15][-1]
         x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
         x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
         ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True, first=first)
