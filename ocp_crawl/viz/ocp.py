@@ -15,7 +15,7 @@ from ocp_crawl.io.tables import table_text
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
-from ocp_crawl.ocp.solve import REPLAY_INTERPOLATION
+from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
