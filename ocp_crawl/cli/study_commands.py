@@ -176,7 +176,9 @@ OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "
 
 def _each(value, text) -> str:
     """One number, or one per scenario (a list), as text; "-" when missing."""
-    return ", ".join(text(v) for v in value) if isinstance(value, list) else text(value)
+    if isinstance(value, list):
+        return ", ".join(text(v) for v in value) if value else units.MISSING
+    return text(value)
 
 
 def _value(objective: str, v, digits: int = 3) -> str:
@@ -231,10 +233,10 @@ def format_convergence(table: dict) -> str:
     the OCP's and the replay's objective (speeds in mm/s, CoT+ to 6 significant digits), their relative
     difference, the change of the replayed objective from the previous N and the observed order p."""
     obj = table["objective"]
-    head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'OCP/replay':>11}  {'change':>14}  "
+    head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  {'change':>14}  "
             f"{'change':>10}  {'p':>6}  {'time':>7}")
-    lines = [f"convergence in N: {obj} (objective by the event-driven replay; change from the previous N; "
-             f"p = observed order)", head]
+    lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: |OCP - replay| / |replay|; "
+             f"change: replay minus the previous N's, absolute and relative; p: observed order)", head]
     for r in table["rows"]:
         lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  {_value(obj, r['value_ocp'], 5):>14}  "
                      f"{_value(obj, r['value_replay'], 5):>14}  {units.ratio(r['rel_diff_replay']):>11}  "
