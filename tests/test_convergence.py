@@ -50,7 +50,7 @@ def test_check_nodes_rejects(bad, match):
 def _fake_result(settings, tau, T, value):
     N = tau.shape[1]
     return OCPResult(success=True, status=Status.SUCCESS, message="fake", objective=settings.objective,
-                     settings=settings, phase=np.arange(N) / N, tau=tau, T=T, value_ocp=value * 1.001,
+                     settings=settings, phase=np.arange(N) / N, tau=tau, T_ocp=T, value_ocp=value * 1.001,
                      value_replay=value, rel_diff_replay=1e-3)
 
 

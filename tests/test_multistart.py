@@ -90,12 +90,10 @@ class StandInOCP:
     def unpack(self, x):
         n = self.settings.nodes
         res = simulate(self.scen[0], PeriodicLinear(np.arange(n) / n, x["tau"]), "mpcc", TimeSteppingOptions(steps=n))
-        sc = {"phi": res.phi, "x1": res.x1, "f_t": res.f_t, "modes": [], "S": res.S * x["claim"], "comp": 0.0,
-              "periodic": 0.0, "W": res.W_plus}
+        S = res.S * x["claim"]
+        sc = {"phi": res.phi, "x1": res.x1, "f_t": res.f_t, "modes": [], "theta": np.full(n, 0.5), "S": S,
+              "v": self.settings.direction * S / x["T"], "W_plus": res.W_plus, "comp": 0.0, "periodic": 0.0}
         return {"tau": x["tau"], "T": x["T"], "scen": [sc]}
-
-    def positive_work(self, tau, phi):
-        return 1.0
 
     def equation_residual(self, x):
         return 0.0
@@ -105,7 +103,8 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     st = OCPSettings(starts=4, nodes=N, direction=-1)
     signal, T = baseline(st)
     harm_S = simulate(solve.Model(ROBOT, gravity="physical"), signal).S
-    harm = SimpleNamespace(signal=signal, T=T, value=-harm_S / T, to_dict=lambda: {"value": -harm_S / T})
+    harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T,
+                           to_dict=lambda: {"value": -harm_S / T})
     monkeypatch.setattr(solve, "best_harmonic", lambda robot, gravity, settings: harm)
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
     monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start (second harmonic) overclaims by 20 %

@@ -208,7 +208,7 @@ def format_optimize(s: dict) -> str:
               if starts else "-")
     lines = [
         f"status      {s['status']}: {s['message']}",
-        f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T {units.seconds(s.get('T'))}",
+        f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T {units.seconds(s.get('T_ocp'))}",
         f"S           OCP {_each(s['S_ocp'], units.distance)}, replay {_each(s['S_replay'], units.distance)}",
         f"speed       OCP {_each(s.get('v_ocp'), units.speed)}, replay {_each(s.get('v_replay'), units.speed)}",
         f"W+          OCP {_each(s['W_plus_ocp'], units.work)}, replay {_each(s['W_plus_replay'], units.work)}",
@@ -303,8 +303,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
 def _optimize_data(result, problem) -> dict:
     """The JSON summary of an optimize result, with the problem and the units of its numbers."""
     return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
-                         units={k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s", "T",
-                                                            "v")}))
+                         units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
+                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"])))
 
 
 def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:

@@ -149,9 +149,9 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
         t0 = time.perf_counter()
         s = replace(settings, nodes=N)
         res = optimize_gait(robot, gravity, s) if warm is None else _warm_solve(robot, gravity, s, warm)
-        if res.tau.size and np.all(np.isfinite(res.tau)) and math.isfinite(res.T):
+        if res.tau.size and np.all(np.isfinite(res.tau)) and math.isfinite(res.T_ocp):
             warm = res
-        rows.append(ConvergenceRow(N, res.status, res.message, res.T, res.value_ocp, res.value_replay,
+        rows.append(ConvergenceRow(N, res.status, res.message, res.T_ocp, res.value_ocp, res.value_replay,
                                    res.rel_diff_replay, solve_time_s=time.perf_counter() - t0, result=res))
         if log is not None:
             log(f"N = {N}: {res.status.label} ({time.perf_counter() - t0:.1f} s)")
@@ -163,7 +163,7 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
     ocp = GaitOCP(robot, gravity, settings)
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
-    res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T, prev.harmonic)
+    res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
     return res
 

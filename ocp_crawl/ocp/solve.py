@@ -66,16 +66,18 @@ class OCPResult:
     phase: np.ndarray = field(default_factory=lambda: np.zeros(0))
     tau: np.ndarray = field(default_factory=lambda: np.zeros((2, 0)))
     """optimal torques [N m] at the node phases (2, N)"""
-    T: float = float("nan")
-    """the OCP's period [s]"""
     phi: list = field(default_factory=list)
     """per scenario: angles (2, N+1) [rad] at phases k/N, k = 0..N"""
     x1: list = field(default_factory=list)
     f_t: list = field(default_factory=list)
     modes: list = field(default_factory=list)
     S_ocp: list = field(default_factory=list)
+    T_ocp: float = float("nan")
+    """period of the optimal gait [s]"""
     v_ocp: list = field(default_factory=list)
-    """per scenario: mean speed direction * S / T [m/s] of the OCP"""
+    """per scenario: mean speed direction * S / T [m/s]"""
+    theta: list = field(default_factory=list)
+    """per scenario: the interior points of the intervals (N,) [fraction of the interval]"""
     W_plus_ocp: list = field(default_factory=list)
     CoT_plus_ocp: list = field(default_factory=list)
     value_ocp: float = float("nan")
@@ -128,9 +130,9 @@ class OCPResult:
         return jsonable({
             "status": self.status.label, "success": bool(self.success), "message": self.message,
             "objective": self.objective, "nodes": self.settings.nodes,
-            "parametrization": self.settings.parametrization, "T": self.T,
+            "parametrization": self.settings.parametrization,
             "S_ocp": per_scenario(self.S_ocp), "S_replay": per_scenario(self.S_replay),
-            "v_ocp": per_scenario(self.v_ocp), "v_replay": per_scenario(self.v_replay),
+            "T_ocp": self.T_ocp, "v_ocp": per_scenario(self.v_ocp), "v_replay": per_scenario(self.v_replay),
             "W_plus_ocp": self.W_plus_ocp, "W_plus_replay": self.W_plus_replay,
             "CoT_plus_ocp": self.CoT_plus_ocp, "CoT_plus_replay": per_scenario(self.CoT_plus_replay),
             "objective_value_ocp": self.value_ocp, "objective_value_replay": self.value_replay,
@@ -149,10 +151,10 @@ class OCPResult:
         })
 
 
-def baseline_gait(harm: HarmonicChoice) -> tuple:
+def baseline_gait(harm: HarmonicChoice, robot: Robot) -> tuple:
     """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t [cycles]) and its
     period T [s]."""
-    return harm.signal, harm.T
+    return harm.torque_signal(robot.k), harm.T
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
@@ -187,7 +189,7 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
                          message="no harmonic gait of the family simulates successfully: no initial guess")
     ocp = GaitOCP(robot, gravity, settings)
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
-    signal, T0 = baseline_gait(harm)
+    signal, T0 = baseline_gait(harm, robot)
     N = settings.nodes
     guesses = start_guesses(settings, robot, signal(np.arange(N) / N).reshape(2, N), T0)
     runs = []
@@ -293,31 +295,32 @@ def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) ->
 
 
 def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
-    """The profile, period, trajectories, S, W+, CoT+ and residuals of the NLP point x."""
+    """The profile, period, trajectories, S, v, W+, CoT+ and residuals of the NLP point x."""
     un = ocp.unpack(x)
     res.phase = np.arange(ocp.settings.nodes) / ocp.settings.nodes
     res.tau = un["tau"]
-    res.T = float(un["T"])
+    res.T_ocp = un["T"]
     for sc, model in zip(un["scen"], ocp.scen):
         res.phi.append(sc["phi"])
         res.x1.append(sc["x1"])
         res.f_t.append(sc["f_t"])
         res.modes.append(sc["modes"])
+        res.theta.append(sc["theta"])
         res.S_ocp.append(sc["S"])
-        res.v_ocp.append(ocp.settings.direction * sc["S"] / res.T)
-        w = ocp.positive_work(res.tau, sc["phi"])
+        res.v_ocp.append(sc["v"])
+        w = sc["W_plus"]
         res.W_plus_ocp.append(w)
         res.CoT_plus_ocp.append(cost_of_transport(w, model.robot, sc["S"]))
     res.complementarity_residual = max(sc["comp"] for sc in un["scen"])
     res.periodicity_residual = max(sc["periodic"] for sc in un["scen"])
     res.equation_residual = ocp.equation_residual(x)
-    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, res.T)
+    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, res.T_ocp)
 
 
 def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     """False (with the status and message set) if the accepted point has non-finite values or is not
     complementary."""
-    numbers = [res.T, *res.S_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
+    numbers = [*res.S_ocp, res.T_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
                res.equation_residual, *np.ravel(res.tau)]
     if not all(math.isfinite(v) for v in numbers):
         res.status = Status.SOLVER_FAILURE
@@ -333,7 +336,7 @@ def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
 
 def _judge(res: OCPResult, models: list[Model]) -> None:
     """Replay the optimal profile (every scenario) and let the judge decide; the gain over the baseline."""
-    verdict = judge_replay(models, res.settings, res.tau, res.T, res.value_ocp, res.S_ocp)
+    verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
     res.replay = verdict.replay
     res.envelope_excess, res.rate_ratio = verdict.envelope_excess, verdict.rate_ratio
     res.S_replay, res.v_replay = verdict.S, verdict.speed
