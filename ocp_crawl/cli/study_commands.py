@@ -200,8 +200,10 @@ def format_optimize(s: dict) -> str:
     replay)."""
     obj = s["objective"]
     h = s.get("best_harmonic") or {}
-    harmonic = "-" if not h else (f"psi = {units.significant(h.get('psi_deg'))} deg, A = "
-                                  f"{units.significant(h.get('A_deg'))} deg, value {_value(obj, h.get('value'))}")
+    deg = lambda key: units.significant(h.get(key))  # noqa: E731
+    harmonic = "-" if not h else (f"gamma = {deg('gamma1_deg')}, {deg('gamma2_deg')} deg, A = {deg('A1_deg')}, "
+                                  f"{deg('A2_deg')} deg, psi = {deg('psi_deg')} deg, T = {units.seconds(h.get('T'))}, "
+                                  f"value {_value(obj, h.get('value'))}")
     starts = s.get("starts") or []
     spread = (f"{len(starts)} starts, {s.get('starts_converged')} converged, replayed objective "
               f"{_value(obj, s.get('objective_value_replay_min'))} to {_value(obj, s.get('objective_value_replay_max'))}"

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import table_text
-from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.inputs import ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
 from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION
@@ -71,7 +71,7 @@ def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
     fig.suptitle(_title(result))
     rep = result.replay[0] if result.replay else None
     h = result.harmonic
-    gait = Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg) if h else None
+    gait = h.gait() if h else None
     _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None)
     _angles(axs[0, 1], result, rep, gait)
     modes = _positions(axs[1, 0], result, rep)
