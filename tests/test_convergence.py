@@ -3,6 +3,7 @@
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -160,3 +161,27 @@ def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
     data = json.loads(out)
     assert code == 0 and data["unit"] == "m/s" and [r["nodes"] for r in data["rows"]] == [50, 100, 200]
     assert data["rows"][1]["order"] == pytest.approx(2.0, rel=1e-9) and data["finest"]["nodes"] == 200
+
+
+def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
+    """An N whose optimum failed in the replay does not seed the next N: that one starts afresh from the
+    baseline (optimize_gait), and the first replayed optimum seeds the rest."""
+    seen = []
+
+    def fresh(robot, gravity, s):
+        seen.append(("fresh", s.nodes))
+        res = _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
+        if s.nodes == 50:
+            res.status, res.success, res.value_replay = Status.REPLAY_FAILED, False, math.nan
+        return res
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        seen.append(("warm", ocp.settings.nodes))
+        return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05)
+
+    monkeypatch.setattr(convergence, "optimize_gait", fresh)
+    monkeypatch.setattr(convergence, "solve_from", warm)
+    monkeypatch.setattr(convergence, "GaitOCP", lambda robot, gravity, settings: SimpleNamespace(settings=settings))
+    table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200])
+    assert seen == [("fresh", 50), ("fresh", 100), ("warm", 200)]
+    assert not table.success and table.rows[0].status == Status.REPLAY_FAILED

@@ -3,7 +3,7 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly).  Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
+exactly), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.  Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
     p = log(|d_i| / |d_i+1|) / log(r),   d_i = J(N_i) - J(N_i-1),   r = N_i / N_i-1 = N_i+1 / N_i
@@ -149,8 +149,8 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
         t0 = time.perf_counter()
         s = replace(settings, nodes=N)
         res = optimize_gait(robot, gravity, s) if warm is None else _warm_solve(robot, gravity, s, warm)
-        if res.tau.size and np.all(np.isfinite(res.tau)) and math.isfinite(res.T_ocp):
-            warm = res
+        if math.isfinite(res.value_replay):
+            warm = res  # a profile the simulator follows (a failed replay would not start the next N)
         rows.append(ConvergenceRow(N, res.status, res.message, res.T_ocp, res.value_ocp, res.value_replay,
                                    res.rel_diff_replay, solve_time_s=time.perf_counter() - t0, result=res))
         if log is not None:
