@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
@@ -346,5 +347,8 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
         res.success = False
         res.status = verdict.status
         res.message = verdict.message
+    else:
+        res.message += (f"; confirmed by the event-driven replay (objective within {units.ratio(verdict.rel_diff)}, "
+                        f"replay_tol {units.ratio(res.settings.replay_tol)})")
     if res.harmonic is not None:
         res.gain = gain_over(res.settings.objective, res.value_replay, res.harmonic.value)
