@@ -160,6 +160,7 @@ def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
     code, out, err = run(capsys, "optimize", OCP_FILE, "--nodes", "50", "100", "200", "--json")
     data = json.loads(out)
     assert code == 0 and data["unit"] == "m/s" and [r["nodes"] for r in data["rows"]] == [50, 100, 200]
+    assert data["units"]["change"] == "m/s" and data["units"]["T"] == "s"
     assert data["rows"][1]["order"] == pytest.approx(2.0, rel=1e-9) and data["finest"]["nodes"] == 200
 
 

@@ -100,9 +100,11 @@ class ConvergenceTable:
         return bool(self.rows) and all(r.status == Status.SUCCESS for r in self.rows)
 
     def to_dict(self) -> dict:
-        """JSON-able: the objective, its unit and the rows."""
+        """JSON-able: the objective, its unit, the units of the rows' numbers and the rows."""
         unit = "-" if self.objective == "min_cot" else "m/s"
-        return jsonable({"objective": self.objective, "unit": unit, "success": self.success,
+        units = {"T": "s", "value_ocp": unit, "value_replay": unit, "change": unit, "rel_diff_replay": "-",
+                 "rel_change": "-", "order": "-", "order_ocp": "-", "solve_time_s": "s"}
+        return jsonable({"objective": self.objective, "unit": unit, "units": units, "success": self.success,
                          "rows": [r.to_dict() for r in self.rows]})
 
 
