@@ -125,6 +125,22 @@ def test_period_shorter_than_the_bandwidth_allows_is_a_mismatch(claim, objective
     assert ("times the bandwidth" in v.message) == flagged
 
 
+@pytest.mark.parametrize("change, flagged", [(-1e-7, True), (1e-7, False)])
+def test_second_difference_beyond_max_accel_is_a_mismatch(claim, objective_values, change, flagged):
+    """With the optional max_accel_deg_s2 = a: the triangle's second difference, 2 |d tau| = 16 k A_max / N at
+    its peaks (zero elsewhere), against k a (T/N)^2 at T = 4 A_max / R: met exactly by a* = N R^2 / (2 A_max)."""
+    tau, T, ts = claim
+    st0 = OCPSettings()
+    a_star = N * st0.max_rate_deg_s ** 2 / (2 * st0.A_max_deg)
+    st = settings_for(ts, max_accel_deg_s2=a_star * (1 + change))
+    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    v = judge.judge_replay([MODEL], st, tau, T, value)
+    assert v.accel_ratio == pytest.approx(1 / (1 + change), rel=1e-12)
+    assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
+    assert ("max_accel_deg_s2" in v.message) == flagged
+    assert math.isnan(judge.judge_replay([MODEL], settings_for(ts), tau, T, value).accel_ratio)
+
+
 @pytest.mark.parametrize("factor, flagged", [(1 + 2 * 5e-3, True), (1 + 0.5 * 5e-3, False)])
 def test_speed_requirement_missed_by_the_replay_is_a_mismatch(claim, objective_values, factor, flagged):
     tau, T, ts = claim

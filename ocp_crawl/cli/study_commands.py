@@ -205,12 +205,13 @@ def format_optimize(s: dict) -> str:
                                   f"{deg('A2_deg')} deg, psi = {deg('psi_deg')} deg, T = {units.seconds(h.get('T'))}, "
                                   f"value {_value(obj, h.get('value'))}")
     starts = s.get("starts") or []
+    low, high = s.get("objective_value_replay_min"), s.get("objective_value_replay_max")
     spread = (f"{len(starts)} starts, {s.get('starts_converged')} converged, replayed objective "
-              f"{_value(obj, s.get('objective_value_replay_min'))} to {_value(obj, s.get('objective_value_replay_max'))}"
-              if starts else "-")
+              f"{_value(obj, low)} to {_value(obj, high)}" if starts else "-")
     lines = [
         f"status      {s['status']}: {s['message']}",
-        f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T {units.seconds(s.get('T_ocp'))}",
+        f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T "
+        f"{units.seconds(s.get('T_ocp'))}",
         f"S           OCP {_each(s['S_ocp'], units.distance)}, replay {_each(s['S_replay'], units.distance)}",
         f"speed       OCP {_each(s.get('v_ocp'), units.speed)}, replay {_each(s.get('v_replay'), units.speed)}",
         f"W+          OCP {_each(s['W_plus_ocp'], units.work)}, replay {_each(s['W_plus_replay'], units.work)}",
@@ -240,7 +241,8 @@ def format_convergence(table: dict) -> str:
     lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: |OCP - replay| / |replay|; "
              f"change: replay minus the previous N's, absolute and relative; p: observed order)", head]
     for r in table["rows"]:
-        lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  {_value(obj, r['value_ocp'], 5):>14}  "
+        lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  "
+                     f"{_value(obj, r['value_ocp'], 5):>14}  "
                      f"{_value(obj, r['value_replay'], 5):>14}  {units.ratio(r['rel_diff_replay']):>11}  "
                      f"{_value(obj, r['change'], 5):>14}  {units.ratio(r['rel_change']):>10}  "
                      f"{units.fixed(r['order'], 2):>6}  {units.seconds(r['solve_time_s']):>7}")

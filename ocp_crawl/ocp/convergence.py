@@ -3,7 +3,8 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.  Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
+exactly), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.
+Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
     p = log(|d_i| / |d_i+1|) / log(r),   d_i = J(N_i) - J(N_i-1),   r = N_i / N_i-1 = N_i+1 / N_i

@@ -7,7 +7,8 @@ friction scenario and accepts the optimum only when
 
 * every replay succeeds (else ``REPLAY_FAILED``);
 * the profile stays in the envelope gamma +- A_max and within the bandwidth |d tau_i/dt| <= k R, both to
-  :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its nodes);
+  :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its nodes), and, with
+  the optional ``max_accel_deg_s2`` = a, its second differences within k a (T/N)^2;
 * min_cot: the replayed mean speed direction * S / T meets ``speed_min`` within ``replay_tol`` (relative);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
 
@@ -77,13 +78,13 @@ def gain_over(objective: str, value: float, baseline: float) -> float:
     return (baseline - value) / baseline if objective == "min_cot" else (value - baseline) / abs(baseline)
 
 
-def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> tuple[float, float]:
+def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> tuple[float, float, float]:
     """How far a node profile goes to its limits.
 
     Parameters
     ----------
     settings : OCPSettings
-        The envelope (gamma, A_max) and the bandwidth (max_rate_deg_s).
+        The envelope (gamma, A_max), the bandwidth (max_rate_deg_s) and the optional max_accel_deg_s2.
     robot : Robot
         The robot (its stiffness k [N m/rad] turns angles into torques).
     tau : array_like, shape (2, N)
@@ -93,16 +94,22 @@ def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float)
 
     Returns
     -------
-    (float, float)
-        The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside), and
-        the largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the bandwidth).
+    (float, float, float)
+        The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside); the
+        largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the bandwidth);
+        the largest second difference over its bound k a (T/N)^2 (<= 1 within it; NaN without max_accel_deg_s2).
     """
     tau = np.asarray(tau, float)
+    N = tau.shape[1]
     lo, hi = settings.torque_bounds(robot)
     excess = float(np.max(np.maximum(lo - tau, tau - hi))) / (0.5 * (hi - lo))
-    steps = np.abs(np.diff(np.c_[tau, tau[:, :1]], axis=1))
-    slope = float(np.max(steps)) * tau.shape[1] / T if T > 0 else math.inf
-    return excess, slope / settings.rate_bound(robot)
+    steps = np.diff(np.c_[tau, tau[:, :1]], axis=1)  # tau_k+1 - tau_k, periodic
+    rate = float(np.max(np.abs(steps))) * N / T / settings.rate_bound(robot) if T > 0 else math.inf
+    accel = settings.accel_bound(robot)
+    if accel is None:
+        return excess, rate, math.nan
+    second = np.diff(np.c_[steps[:, -1:], steps], axis=1)  # tau_k+1 - 2 tau_k + tau_k-1
+    return excess, rate, float(np.max(np.abs(second))) / (accel * (T / N) ** 2) if T > 0 else math.inf
 
 
 @dataclass
@@ -127,6 +134,8 @@ class Verdict:
     """|value_replay - value_ocp| / |value_replay| [-]"""
     envelope_excess: float = float("nan")
     rate_ratio: float = float("nan")
+    accel_ratio: float = float("nan")
+    """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
 
     @property
     def ok(self) -> bool:
@@ -162,7 +171,7 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     tau = np.asarray(tau, float)
     N = tau.shape[1]
     v = Verdict(Status.SUCCESS, "the replay confirms the optimum")
-    v.envelope_excess, v.rate_ratio = bound_ratios(settings, models[0].robot, tau, T)
+    v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, models[0].robot, tau, T)
     sig = replay_signal(np.arange(N) / N, tau)
     v.replay = [simulate_torque(m, sig) for m in models]
     bad = next((r for r in v.replay if not r.success), None)
@@ -196,6 +205,10 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
     if not v.rate_ratio <= 1 + BOUND_RTOL:
         out.append(f"the torque rate reaches {units.significant(v.rate_ratio, 10)} times the bandwidth "
                    f"{units.significant(settings.max_rate_deg_s)} deg/s (tolerance {units.scientific(BOUND_RTOL)})")
+    if not (math.isnan(v.accel_ratio) or v.accel_ratio <= 1 + BOUND_RTOL):
+        out.append(f"the torque's second difference reaches {units.significant(v.accel_ratio, 10)} times the bound "
+                   f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
+                   f"{units.scientific(BOUND_RTOL)})")
     if settings.objective == "min_cot" and settings.speed_min > 0 and not v.speed[0] >= settings.speed_min * (1 - tol):
         out.append(f"the replayed speed {units.speed(v.speed[0])} misses speed_min {units.speed(settings.speed_min)} "
                    f"by more than replay_tol {units.ratio(tol)}")

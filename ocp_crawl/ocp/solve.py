@@ -104,6 +104,8 @@ class OCPResult:
     """largest excursion of the torques beyond the envelope, relative to its half-width (<= 0: inside)"""
     rate_ratio: float = float("nan")
     """largest torque rate of the replayed profile over the bandwidth k R (<= 1: within)"""
+    accel_ratio: float = float("nan")
+    """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such bound)"""
     gain: float = float("nan")
     """relative gain by replay over the harmonic baseline (positive: better)"""
     starts: list = field(default_factory=list)
@@ -139,6 +141,7 @@ class OCPResult:
             "objective_value_ocp": self.value_ocp, "objective_value_replay": self.value_replay,
             "rel_diff_replay": self.rel_diff_replay, "replay_tol": self.settings.replay_tol,
             "envelope_excess": self.envelope_excess, "rate_ratio": self.rate_ratio,
+            "accel_ratio": self.accel_ratio,
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
             "gain": self.gain, "gain_significant": self.gain_significant,
             "starts": [s.to_dict() for s in self.starts], "starts_converged": converged,
@@ -340,6 +343,7 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
     res.replay = verdict.replay
     res.envelope_excess, res.rate_ratio = verdict.envelope_excess, verdict.rate_ratio
+    res.accel_ratio = verdict.accel_ratio
     res.S_replay, res.v_replay = verdict.S, verdict.speed
     res.W_plus_replay, res.CoT_plus_replay = verdict.W_plus, verdict.CoT_plus
     res.value_replay, res.rel_diff_replay = verdict.value, verdict.rel_diff
