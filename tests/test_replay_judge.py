@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import judge
 from ocp_crawl.ocp.baseline import value_from
@@ -173,3 +173,38 @@ def test_gain_over_the_baseline(objective, value, base, gain):
     assert (math.isnan(got) and math.isnan(gain)) or got == pytest.approx(gain, rel=1e-12)
     if math.isfinite(gain) and gain != 0:
         assert judge.is_better(objective, value, base) == (gain > 0)
+
+
+@pytest.mark.slow
+def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_is_not():
+    """The real path: the transcription with its torques and period fixed to a harmonic gait's (it then only
+    simulates the profile, by its own sub-steps) is judged by the event-driven replay: confirmed; the same
+    result with its objective or its period forged beyond the tolerances is not."""
+    import dataclasses
+
+    from ocp_crawl.ocp import solve
+    from ocp_crawl.ocp.transcription import GaitOCP
+
+    if "fix_profile" not in inspect.signature(GaitOCP.solve).parameters:
+        pytest.skip("the transcription cannot fix the profile yet")
+    st = OCPSettings(nodes=N, starts=1)
+    gait = Harmonic.from_degrees(90.0, 30.0, 90.0)  # tau1 peaks at t = 1/8: node N/8 (the phase pin: node 0)
+    tt = np.arange(N) / N
+    start = PeriodicLinear(tt, ReferenceTorque(gait, ROBOT.k)(tt + 0.125))
+    T = st.min_period(30.0, 30.0)
+    ocp = GaitOCP(ROBOT, "physical", st)
+    x, hist, failed, status = ocp.solve(ocp.initial_guess(start, T), fix_profile=True)
+    res = solve.OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=st.objective,
+                          settings=st)
+    assert solve._accept(res, ocp, x, failed, status), res.message
+    assert res.T_ocp == pytest.approx(T, rel=1e-12)
+    honest = dataclasses.replace(res)
+    solve._judge(honest, [MODEL])
+    assert honest.status == Status.SUCCESS and honest.rel_diff_replay <= 1e-6, honest.message
+    assert honest.S_replay[0] == pytest.approx(res.S_ocp[0], rel=1e-6)
+    forged = dataclasses.replace(res, value_ocp=res.value_ocp * (1 + 2 * st.replay_tol))
+    solve._judge(forged, [MODEL])
+    assert forged.status == Status.REPLAY_MISMATCH and not forged.success and "objective differs" in forged.message
+    faster = dataclasses.replace(res, T_ocp=0.9 * res.T_ocp)  # the same strokes 10 % faster: beyond the bandwidth
+    solve._judge(faster, [MODEL])
+    assert faster.status == Status.REPLAY_MISMATCH and "times the bandwidth" in faster.message
