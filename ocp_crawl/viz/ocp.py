@@ -58,8 +58,8 @@ def _title(result: OCPResult) -> str:
     significance = "" if result.gain_significant else " (not significant)"
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
-            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}; gain over the best harmonic gait "
-            f"{units.ratio(result.gain)}{significance}")
+            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\ngain over the best harmonic gait "
+            f"(by replay) {units.ratio(result.gain)}{significance}")
 
 
 def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
