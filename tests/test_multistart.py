@@ -52,7 +52,9 @@ def test_starts_are_in_the_envelope_and_the_bandwidth_and_reproducible():
     guesses = start_guesses(st, ROBOT, base, T)
     assert [g.label for g in guesses] == ["harmonic baseline", "second harmonic"] + [f"perturbed {i}" for i in
                                                                                       range(1, 5)]
-    assert guesses[0].T == T and np.array_equal(guesses[0].tau, base)
+    # the baseline's nodes, shifted so that node 0 is tau_1's largest (the phase pin): the same samples
+    shift = int(np.argmax(base[0]))
+    assert guesses[0].T == T and np.array_equal(guesses[0].tau, np.roll(base, -shift, axis=1)) and shift > 0
     lo, hi = st.torque_bounds(ROBOT)
     rate = ROBOT.k * math.radians(st.max_rate_deg_s)  # k R [N m/s]
     for g in guesses:
@@ -60,12 +62,38 @@ def test_starts_are_in_the_envelope_and_the_bandwidth_and_reproducible():
         steepest = np.max(np.abs(np.diff(np.c_[g.tau, g.tau[:, :1]], axis=1))) * N / g.T
         assert steepest <= rate * (1 + 1e-12), g.label
         assert g.T >= T
+        assert g.tau[0, 0] == np.max(g.tau[0]), g.label
     # the starts differ from the baseline and from each other; the same settings give the same starts
     for a, b in zip(guesses, guesses[1:]):
         assert np.max(np.abs(a.tau - b.tau)) > 1e-3 * (hi - lo)
     again = start_guesses(st, ROBOT, base, T)
     assert all(np.array_equal(a.tau, b.tau) and a.T == b.T for a, b in zip(guesses, again))
     assert len(start_guesses(OCPSettings(starts=1, nodes=N), ROBOT, base, T)) == 1
+
+
+def test_a_start_the_simulator_does_not_follow_is_drawn_again_smaller():
+    from ocp_crawl.ocp.starts import ATTEMPTS, perturbed_start, pinned, second_harmonic_start
+
+    st = OCPSettings(starts=3, nodes=N)
+    signal, T = baseline(st)
+    base = signal(np.arange(N) / N)
+    calls = []
+
+    def follows(tau):  # refuses the first two draws of every start
+        calls.append(tau)
+        return len(calls) % 3 == 0
+    guesses = start_guesses(st, ROBOT, base, T, follows)
+    assert len(calls) == 6
+    assert np.array_equal(guesses[1].tau, second_harmonic_start(st, ROBOT, pinned(base), T, 2).tau)
+    assert np.array_equal(guesses[2].tau, perturbed_start(st, ROBOT, pinned(base), T, 1, 2).tau)
+    # the third draw is nearer the baseline than the first
+    first = perturbed_start(st, ROBOT, pinned(base), T, 1, 0).tau
+    assert np.max(np.abs(guesses[2].tau - pinned(base))) < np.max(np.abs(first - pinned(base)))
+    # never followed: ATTEMPTS draws, the last kept
+    calls.clear()
+    never = start_guesses(st, ROBOT, base, T, lambda tau: calls.append(tau) and False)
+    assert len(calls) == 2 * ATTEMPTS
+    assert np.array_equal(never[2].tau, perturbed_start(st, ROBOT, pinned(base), T, 1, ATTEMPTS - 1).tau)
 
 
 class StandInOCP:
@@ -107,21 +135,26 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
                            to_dict=lambda: {"value": -harm_S / T})
     monkeypatch.setattr(solve, "best_harmonic", lambda robot, gravity, settings: harm)
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
-    monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start (second harmonic) overclaims by 20 %
+    monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start solved overclaims by 20 %
     res = solve.optimize_gait(ROBOT, "physical", st)
-    starts = {s.label: s for s in res.starts}
-    assert len(res.starts) == 4 and starts["second harmonic"].status == Status.REPLAY_MISMATCH
-    assert all(s.status == Status.SUCCESS for k, s in starts.items() if k != "second harmonic")
+    assert len(res.starts) == 4 and res.starts[0].label == "harmonic baseline"
+    statuses = [s.status for s in res.starts]
+    # a start whose gait the simulator cannot follow is not solved; the second one solved is forged
+    assert set(statuses) <= {Status.SUCCESS, Status.REPLAY_MISMATCH, Status.NO_INITIAL_GUESS}
+    solved = [s for s in res.starts if s.status != Status.NO_INITIAL_GUESS]
+    assert len(solved) == 4 and solved[1].status == Status.REPLAY_MISMATCH  # every start followed (redrawn if not)
+    assert all(s.status == Status.SUCCESS for s in solved if s is not solved[1])
     accepted = [s.value_replay for s in res.starts if s.status == Status.SUCCESS]
     assert res.success and res.value_replay == max(accepted)  # speeds: larger is better
     low, high, converged = res.spread
-    assert converged == 4 and low == min(s.value_replay for s in res.starts)
-    assert high == max(s.value_replay for s in res.starts)
-    assert "best of 4 starts (4 converged" in res.message
+    assert converged == len(solved) and low == min(s.value_replay for s in solved)
+    assert high == max(s.value_replay for s in solved)
+    assert f"best of 4 starts ({len(solved)} converged" in res.message
+    starts = {s.label: s for s in res.starts}
     # the baseline start replays the harmonic gait's linear interpolant: its speed is the harmonic one to O(1/N^2)
     assert starts["harmonic baseline"].value_replay == pytest.approx(harm.value, rel=5e-3)
     assert res.gain == pytest.approx((res.value_replay - harm.value) / abs(harm.value), rel=1e-12)
     assert res.gain_significant == (abs(res.gain) > st.replay_tol)
     summary = res.summary()
-    assert summary["starts_converged"] == 4 and summary["gain_significant"] == res.gain_significant
+    assert summary["starts_converged"] == len(solved) and summary["gain_significant"] == res.gain_significant
     assert [s["label"] for s in summary["starts"]][0] == "harmonic baseline"

@@ -195,11 +195,14 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal, T0 = baseline_gait(harm, robot)
     N = settings.nodes
-    guesses = start_guesses(settings, robot, signal(np.arange(N) / N).reshape(2, N), T0)
+    phase = np.arange(N) / N
+
+    def follows(tau: np.ndarray) -> bool:
+        return all(simulate_torque(m, replay_signal(phase, tau)).success for m in models)
+    guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
     runs = []
-    for i, guess in enumerate(guesses):
-        sig = signal if i == 0 else replay_signal(np.arange(N) / N, guess.tau)
-        runs.append(solve_from(ocp, models, sig, guess.T, harm, replay))
+    for guess in guesses:
+        runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay))
     res = _pick(runs, settings, replay)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message)
                   for g, r in zip(guesses, runs)]
