@@ -42,6 +42,8 @@ class StartRecord:
     value_ocp: float = float("nan")
     value_replay: float = float("nan")
     message: str = ""
+    iterations: int = 0
+    """IPOPT iterations of the start's homotopies"""
 
     @property
     def converged(self) -> bool:
@@ -204,8 +206,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     for guess in guesses:
         runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay))
     res = _pick(runs, settings, replay)
-    res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message)
-                  for g, r in zip(guesses, runs)]
+    res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
+                              sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
     low, high, converged = res.spread
     if len(guesses) > 1:
         res.message += (f"; best of {len(guesses)} starts ({converged} converged, replayed objective from "
