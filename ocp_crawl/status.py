@@ -32,6 +32,7 @@ class Status(IntEnum):
     NOT_COMPLEMENTARY = 12
     NO_INITIAL_GUESS = 13
     REPLAY_FAILED = 14
+    REPLAY_MISMATCH = 18
     # sweep rows only: a point whose values break a rule, a point that raised, a point not computed yet
     BAD_INPUT = 20
     ERROR = 21
@@ -82,6 +83,9 @@ STATUS_MESSAGES = {
     Status.NOT_COMPLEMENTARY: "the optimiser converged but the complementarity residual exceeds the tolerance",
     Status.NO_INITIAL_GUESS: "no initial guess: the harmonic gait used to start the optimiser failed",
     Status.REPLAY_FAILED: "the optimal profile failed when replayed in the event-driven simulator",
+    Status.REPLAY_MISMATCH: "the event-driven replay of the optimal profile does not confirm the optimiser: it misses "
+                            "a constraint (speed requirement, envelope, bandwidth) or disagrees with the OCP's "
+                            "objective beyond the tolerance",
     Status.BAD_INPUT: "the point's values break a rule of the problem schema",
     Status.ERROR: "an unexpected exception while computing the point (a bug: please report it)",
     Status.MISSING: "the point has not been computed",

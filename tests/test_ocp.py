@@ -103,8 +103,9 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
     captured = capsys.readouterr()
     data = json.loads(captured.out)  # the progress bar never mixes into the JSON on stdout
     assert code == (0 if data["success"] else 1)
-    # the bar on stderr counts every IPOPT iteration of the homotopy's calls
-    iterations = sum(stage["iterations"] for stage in data["homotopy"])
+    # the bar on stderr counts every IPOPT iteration of the homotopies' calls, over every start
+    iterations = sum(start["iterations"] for start in data["starts"])
+    assert sum(stage["iterations"] for stage in data["homotopy"]) in [s["iterations"] for s in data["starts"]]
     assert f"optimize: {iterations} IPOPT it" in captured.err and "polish" in captured.err
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):

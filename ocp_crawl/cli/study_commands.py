@@ -5,13 +5,16 @@ import argparse
 import contextlib
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
-from ocp_crawl.cli.common import address, check_scheduler, finish, force_arg, jobs_type, out_dir, prepare_out
+from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, out_dir,
+                                  prepare_out)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
+from ocp_crawl.ocp.settings import NODES_BOUNDS
 from ocp_crawl.problem import load_problem, ocp_settings
 from ocp_crawl.problem.overrides import read_toml
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
@@ -153,9 +156,14 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--nodes", nargs="+", metavar="N", type=integer("--nodes", NODES_BOUNDS[0], high=NODES_BOUNDS[1]),
+                   help="numbers of nodes (overrides ocp.nodes); several, strictly increasing (e.g. --nodes 50 100 "
+                        "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
+                        "convergence table (objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
                    help="write torques.csv, optimal_gait.toml (replays the optimum with simulate), arrays.npz, "
-                        "summary.json and figures to DIR")
+                        "summary.json and figures to DIR (with several --nodes: of the finest N, and "
+                        "convergence.json)")
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
@@ -166,35 +174,78 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
 OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 
-#: objectives whose value is a distance per cycle [m] (the others are a cost of transport [-])
-SPEED_OBJECTIVES = ("max_speed", "robust_speed")
-
-
 def _each(value, text) -> str:
     """One number, or one per scenario (a list), as text; "-" when missing."""
-    return ", ".join(text(v) for v in value) if isinstance(value, list) else text(value)
+    if isinstance(value, list):
+        return ", ".join(text(v) for v in value) if value else units.MISSING
+    return text(value)
+
+
+def _value(objective: str, v, digits: int = 3) -> str:
+    """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] to ``digits + 1`` significant digits."""
+    return units.significant(v, digits + 1) if objective == "min_cot" else units.speed(v, digits)
+
+
+def _gain(s: dict) -> str:
+    """The gain by replay over the baseline, and whether it is significant (beyond replay_tol)."""
+    if s.get("gain") is None:
+        return "-"
+    verdict = "significant" if s.get("gain_significant") else "no significant gain"
+    return f"{units.ratio(s['gain'])} ({verdict}: replay_tol {units.ratio(s.get('replay_tol'))})"
 
 
 def format_optimize(s: dict) -> str:
-    """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, W+ in
-    mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed replay)."""
-    value = units.distance if s["objective"] in SPEED_OBJECTIVES else units.cot
+    """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, speeds in
+    mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
+    replay)."""
+    obj = s["objective"]
     h = s.get("best_harmonic") or {}
-    harmonic = "-" if not h else (f"psi = {units.significant(h.get('psi_deg'))} deg, A = "
-                                  f"{units.significant(h.get('A_deg'))} deg, value {value(h.get('value'))}")
+    deg = lambda key: units.significant(h.get(key))  # noqa: E731
+    harmonic = "-" if not h else (f"gamma = {deg('gamma1_deg')}, {deg('gamma2_deg')} deg, A = {deg('A1_deg')}, "
+                                  f"{deg('A2_deg')} deg, psi = {deg('psi_deg')} deg, T = {units.seconds(h.get('T'))}, "
+                                  f"value {_value(obj, h.get('value'))}")
+    starts = s.get("starts") or []
+    low, high = s.get("objective_value_replay_min"), s.get("objective_value_replay_max")
+    spread = (f"{len(starts)} starts, {s.get('starts_converged')} converged, replayed objective "
+              f"{_value(obj, low)} to {_value(obj, high)}" if starts else "-")
     lines = [
         f"status      {s['status']}: {s['message']}",
-        f"objective   {s['objective']} ({s['nodes']} nodes, {s['parametrization']} torques)",
+        f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T "
+        f"{units.seconds(s.get('T_ocp'))}",
         f"S           OCP {_each(s['S_ocp'], units.distance)}, replay {_each(s['S_replay'], units.distance)}",
+        f"speed       OCP {_each(s.get('v_ocp'), units.speed)}, replay {_each(s.get('v_replay'), units.speed)}",
         f"W+          OCP {_each(s['W_plus_ocp'], units.work)}, replay {_each(s['W_plus_replay'], units.work)}",
         f"CoT+        OCP {_each(s['CoT_plus_ocp'], units.cot)}, replay {_each(s['CoT_plus_replay'], units.cot)}",
-        f"value       OCP {value(s['objective_value_ocp'])}, replay {value(s['objective_value_replay'])} "
+        f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
-        f"harmonic    best of the envelope: {harmonic}; gain of the optimum (by replay) {units.ratio(s['gain'])}",
+        f"harmonic    best of the family: {harmonic}; gain of the optimum (by replay) {_gain(s)}",
+        f"starts      {spread}",
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",
         f"time        {units.seconds(s['solve_time_s'])}",
     ]
+    return "\n".join(lines)
+
+
+#: the convergence table ``optimize --nodes N1 N2 ... --out DIR`` writes next to the finest optimum's files
+CONVERGENCE_FILE = "convergence.json"
+
+
+def format_convergence(table: dict) -> str:
+    """The convergence table (``ConvergenceTable.to_dict()``, SI units) as text: per N the status, the period,
+    the OCP's and the replay's objective (speeds in mm/s, CoT+ to 6 significant digits), their relative
+    difference, the change of the replayed objective from the previous N and the observed order p."""
+    obj = table["objective"]
+    head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  {'change':>14}  "
+            f"{'change':>10}  {'p':>6}  {'time':>7}")
+    lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: |OCP - replay| / |replay|; "
+             f"change: replay minus the previous N's, absolute and relative; p: observed order)", head]
+    for r in table["rows"]:
+        lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  "
+                     f"{_value(obj, r['value_ocp'], 5):>14}  "
+                     f"{_value(obj, r['value_replay'], 5):>14}  {units.ratio(r['rel_diff_replay']):>11}  "
+                     f"{_value(obj, r['change'], 5):>14}  {units.ratio(r['rel_change']):>10}  "
+                     f"{units.fixed(r['order'], 2):>6}  {units.seconds(r['solve_time_s']):>7}")
     return "\n".join(lines)
 
 
@@ -233,12 +284,18 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
                        "'Problem files', and problems/ocp_max_speed.toml)")
     settings = ocp_settings(problem)
+    nodes = args.nodes or [settings.nodes]
+    if any(b <= a for a, b in zip(nodes, nodes[1:])):
+        raise BadInput(f"--nodes {' '.join(str(n) for n in nodes)} is invalid: the numbers of nodes must increase "
+                       "strictly (each N is warm-started from the previous one)")
+    settings = replace(settings, nodes=nodes[0])
+    if len(nodes) > 1:
+        return _optimize_nodes(args, problem, settings, nodes)
     out = prepare_out(args.out, OCP_FILES, args.force) if args.out is not None else None
     check_start(problem)
     with _progress_bar(args.progress or sys.stderr.isatty()):
         result = optimize_gait(problem.robot, problem.gravity, settings)
-    data = jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
-                         units={k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")}))
+    data = _optimize_data(result, problem)
     if args.json:
         print(json.dumps(data, allow_nan=False))
     else:
@@ -247,3 +304,36 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     return finish(args, files, result.success, f"optimisation failed: {result.message}")
 
 
+def _optimize_data(result, problem) -> dict:
+    """The JSON summary of an optimize result, with the problem and the units of its numbers."""
+    return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
+                         units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
+                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"])))
+
+
+def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:
+    """``optimize --nodes N1 N2 ...``: the convergence table (and the finest optimum's summary and files)."""
+    from ocp_crawl.io.files import write_json
+    from ocp_crawl.ocp.convergence import converge_in_nodes
+    from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
+
+    out = prepare_out(args.out, (*OCP_FILES, CONVERGENCE_FILE), args.force) if args.out is not None else None
+    check_start(problem)
+    shown = args.progress or sys.stderr.isatty()
+    log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None
+    with _progress_bar(shown):
+        table = converge_in_nodes(problem.robot, problem.gravity, settings, nodes, log=log)
+    finest = table.rows[-1].result
+    data = _optimize_data(finest, problem)
+    conv = table.to_dict()
+    if args.json:
+        print(json.dumps(jsonable(dict(conv, finest=data, problem_file=problem.source)), allow_nan=False))
+    else:
+        print(format_convergence(conv) + f"\n\nfinest N = {nodes[-1]}:\n" + format_optimize(data))
+    files = write_ocp_outputs(finest, problem.robot, out, data) if out is not None else []
+    if out is not None:
+        files.append(write_json(out / CONVERGENCE_FILE, dict(conv, problem_file=problem.source)))
+    bad = [r for r in table.rows if r.status.label != "success"]
+    failure = "" if not bad else (f"optimisation not confirmed at N = {', '.join(str(r.nodes) for r in bad)}: "
+                                  f"{bad[0].message}")
+    return finish(args, files, table.success, failure)

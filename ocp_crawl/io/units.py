@@ -11,7 +11,7 @@ from typing import Any
 
 #: SI unit of each number of a summary (JSON output and data frames carry these)
 UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J",
-         "tau": "N m", "solve_time_s": "s", "elapsed_s": "s"}
+         "tau": "N m", "solve_time_s": "s", "elapsed_s": "s", "T": "s", "v": "m/s"}
 #: what stands for a number that could not be computed
 MISSING = "-"
 
@@ -57,6 +57,12 @@ def distance(S: Any, decimals: int = 3, sign: bool = False) -> str:
     """A distance [m] in mm, e.g. ``distance(-0.0558)`` -> "-55.800 mm"."""
     text = fixed(S, decimals, 1e3, sign)
     return text if text == MISSING else f"{text} mm"
+
+
+def speed(v: Any, decimals: int = 3) -> str:
+    """A speed [m/s] in mm/s, e.g. ``speed(-0.0124)`` -> "-12.400 mm/s"."""
+    text = fixed(v, decimals, 1e3)
+    return text if text == MISSING else f"{text} mm/s"
 
 
 def work(W: Any, decimals: int = 3) -> str:

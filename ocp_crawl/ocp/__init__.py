@@ -8,11 +8,13 @@ _EXPORTS = {
     "objective_value": "ocp_crawl.ocp.baseline",
     "OBJECTIVES": "ocp_crawl.ocp.settings", "OCPSettings": "ocp_crawl.ocp.settings",
     "OCPResult": "ocp_crawl.ocp.solve", "optimize_gait": "ocp_crawl.ocp.solve",
-    "replay_signal": "ocp_crawl.ocp.solve",
+    "replay_signal": "ocp_crawl.ocp.judge", "judge_replay": "ocp_crawl.ocp.judge",
+    "ConvergenceRow": "ocp_crawl.ocp.convergence", "converge_in_nodes": "ocp_crawl.ocp.convergence",
+    "observed_orders": "ocp_crawl.ocp.convergence",
 }
 
 __all__ = [
-    "GaitOCP", "HarmonicChoice", "OBJECTIVES", "OCPResult", "OCPSettings", "best_harmonic", "objective_value",
-    "optimize_gait", "replay_signal",
+    "ConvergenceRow", "GaitOCP", "HarmonicChoice", "OBJECTIVES", "OCPResult", "OCPSettings", "best_harmonic",
+    "converge_in_nodes", "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -16,20 +16,23 @@ from ocp_crawl.nlp.ipopt import check_ipopt_options
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
 OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
 PARAMETRIZATIONS = ("free", "fourier")
-#: values of :attr:`OCPSettings.rate_limit` besides a number [N m per cycle]
-RATE_LIMITS = ("harmonic", "none", "max_rate")
-#: values of :attr:`OCPSettings.curvature_limit` besides a number [N m per cycle^2]
-CURVATURE_LIMITS = ("harmonic", "none")
+#: keys of earlier versions that no longer exist, and what replaces each (problem files and OCPSettings)
+REMOVED_KEYS = {
+    "S_min": "speed_min [m/s], the smallest mean speed direction * S / T (a per-cycle S rewarded packing strokes)",
+    "rate_limit": "max_rate_deg_s [deg/s], the actuators' largest reference-angle rate (a physical bandwidth)",
+    "max_rate": "max_rate_deg_s [deg/s], the actuators' largest reference-angle rate (a physical bandwidth)",
+    "curvature_limit": "max_accel_deg_s2 [deg/s^2], an optional physical smoothness bound, off by default",
+    "tie_margin": "nothing: the switch-exact transcription places every change of the slipping foot on a sub-step "
+                  "boundary",
+}
 
 #: bounds of the settings that size the work (a solve within minutes; see the README's "Bounds"): the nodes
-#: of the transcription, the Fourier order, the psi values and amplitudes of the harmonic sweep
+#: of the transcription, the Fourier order, the psi values and amplitudes of the harmonic scan
 NODES_BOUNDS = (8, 1000)
 FOURIER_ORDER_BOUNDS = (1, 25)
 HARMONIC_PSI_BOUNDS = (4, 180)
 HARMONIC_A_BOUNDS = (1, 20)
-
-#: default curvature limit in units of the peak curvature of the envelope's harmonic gait
-CURVATURE_FACTOR = 4.0
+STARTS_BOUNDS = (1, 20)
 
 
 @dataclass(frozen=True)
@@ -49,27 +52,20 @@ class OCPSettings:
     """'free' torque at every node (default, sparse), or 'fourier' series of order fourier_order
     (band-limited, but its dense coefficient columns make IPOPT iterations much slower)"""
     fourier_order: int = 4
-    rate_limit: float | str | None = "harmonic"
-    """largest |d tau/d t| [N m per cycle]; "harmonic" (default): the peak rate 2 pi k A_max of the
-    envelope's harmonic gait, so that the optimum cannot gain by packing several strokes into one
-    cycle (a higher actuation frequency); "max_rate": the value of max_rate; "none" or None: no limit"""
-    max_rate: float | None = None
-    """largest |d tau/d t| [N m per cycle] when rate_limit = "max_rate" """
-    curvature_limit: float | str | None = "harmonic"
-    """largest |d^2 tau/d t^2| [N m per cycle^2]; "harmonic" (default): CURVATURE_FACTOR times the
-    peak (2 pi)^2 k A_max of the envelope's harmonic gait.  Without a limit free profiles chatter:
-    micro-strokes every few steps, each carrying an O(1/N) transition error of the transcription
-    that the optimiser exploits and that does not vanish as N grows (the strokes multiply).  With
-    the factor 1 the full-amplitude sine is about the only admissible stroke, hence 4 (room for a
-    second harmonic at full amplitude).  "none" or None: no limit"""
-    tie_margin: float = 0.0005
-    """a foot may slip only while its friction limit is below the other foot's by tie_margin M g:
-    at a tie the incremental Coulomb law leaves free which foot slips, which an optimiser would
-    exploit and the continuous system does not allow (it slips both feet symmetrically)"""
+    max_rate_deg_s: float = 180.0
+    """bandwidth of each joint's actuator: the largest reference-angle rate |d phi_ref,i / d t| [deg/s]
+    (a torque rate k times it).  Time is explicit: a gait of period T [s] (a variable of the OCP) moves its
+    reference at most this fast, so the mean speed S/T is what max_speed maximises and a profile repeated
+    twice per cycle (period doubled) is neither better nor worse than once"""
+    max_accel_deg_s2: float | None = None
+    """optional smoothness bound: the largest reference-angle acceleration |d^2 phi_ref,i / d t^2| [deg/s^2]
+    of each actuator; None (default): no bound (the formulation and the switch-exact transcription prevent
+    chattering without it)"""
     regularization: float = 1e-5
-    """weight of N * sum_k |tau_k - tau_{k-1}|^2/(M g L)^2 in the objective"""
-    S_min: float = 0.0
-    """min_cot: smallest direction * S [m]"""
+    """weight of N * sum_k |tau_k - tau_{k-1}|^2/(M g L)^2 in the objective (a tie-breaker where the
+    objective is flat, e.g. during stick phases; its share of the objective is reported)"""
+    speed_min: float = 0.0
+    """min_cot: smallest mean speed direction * S / T [m/s]"""
     mu_ratio_eps: float = 0.1
     """robust_speed: friction scenarios mu1/mu2 in {1 - eps, 1, 1 + eps} (just 1 when eps = 0), in [0, 1)"""
     mu_ratios: tuple | None = None
@@ -87,9 +83,15 @@ class OCPSettings:
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
     periodic_tol: float = 1e-8
     harmonic_psi: int = 36
-    """psi values of the harmonic sweep (initial guess and comparison), over (-180, 180] deg"""
+    """psi values of the coarse harmonic scan that seeds the harmonic-family optimisation, over (-180, 180] deg"""
     harmonic_A: int = 4
-    """amplitudes of the harmonic sweep, up to A_max"""
+    """amplitudes of the coarse harmonic scan, up to A_max"""
+    starts: int = 4
+    """starts of the OCP (multi-start): the harmonic baseline first, then perturbed and Fourier-order starts;
+    the best replayed optimum is reported with the spread of the others"""
+    replay_tol: float = 5e-3
+    """relative tolerance of the replay judge: the event-driven replay must agree with the OCP's objective
+    and meet speed_min within this fraction (envelope and bandwidth within 1e-9 relative)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False
@@ -97,7 +99,7 @@ class OCPSettings:
     def __post_init__(self) -> None:
         self._check_choices()
         self._check_numbers()
-        self._check_limits()
+        self._check_bandwidth()
         object.__setattr__(self, "ipopt", check_ipopt_options("OCPSettings.ipopt", self.ipopt))
 
     def _set(self, name: str, value) -> None:
@@ -114,11 +116,13 @@ class OCPSettings:
 
     def _check_numbers(self) -> None:
         for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
-                                  ("harmonic_psi", HARMONIC_PSI_BOUNDS), ("harmonic_A", HARMONIC_A_BOUNDS)):
+                                  ("harmonic_psi", HARMONIC_PSI_BOUNDS), ("harmonic_A", HARMONIC_A_BOUNDS),
+                                  ("starts", STARTS_BOUNDS)):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
-        for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "comp_tol", "periodic_tol"):
+        for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "comp_tol", "periodic_tol",
+                     "max_rate_deg_s", "replay_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
-        for name in ("regularization", "S_min", "tie_margin", "mu_ratio_eps"):
+        for name in ("regularization", "speed_min", "mu_ratio_eps"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), nonneg=True))
         if not 0 < self.A_max_deg < 90:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
@@ -138,20 +142,12 @@ class OCPSettings:
                 raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
             self._set("mu_ratios", ratios)
 
-    def _check_limits(self) -> None:
-        """rate_limit and curvature_limit: "harmonic", None ("none"), or a number > 0 (rate: "max_rate")."""
-        if self.max_rate is not None:
-            self._set("max_rate", real("OCPSettings.max_rate", self.max_rate, positive=True))
-        if self.rate_limit == "max_rate" and self.max_rate is None:
-            raise ValueError('OCPSettings.rate_limit = "max_rate" needs OCPSettings.max_rate')
-        for name, words in (("rate_limit", RATE_LIMITS), ("curvature_limit", CURVATURE_LIMITS)):
-            value = getattr(self, name)
-            if value == "none":
-                self._set(name, None)
-            elif isinstance(value, str) and value not in words:
-                raise ValueError(f"OCPSettings.{name} must be one of {words} or a number, got {value!r}")
-            elif value is not None and not isinstance(value, str):
-                self._set(name, real(f"OCPSettings.{name}", value, positive=True))
+    def _check_bandwidth(self) -> None:
+        """max_accel_deg_s2: None or a number > 0; replay_tol below 1."""
+        if self.max_accel_deg_s2 is not None:
+            self._set("max_accel_deg_s2", real("OCPSettings.max_accel_deg_s2", self.max_accel_deg_s2, positive=True))
+        if not self.replay_tol < 1:
+            raise ValueError(f"OCPSettings.replay_tol must be in (0, 1), got {self.replay_tol!r}")
 
     def scenarios(self, robot: Robot) -> list[Robot]:
         """The robots of the friction scenarios (robust_speed; else just ``robot``)."""
@@ -169,17 +165,23 @@ class OCPSettings:
         eps = self.mu_ratio_eps
         return (1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,)
 
-    def rate_bound(self, robot: Robot) -> float | None:
-        """Largest |d tau / d t| [N m per cycle] or None."""
-        if self.rate_limit == "harmonic":
-            return 2 * math.pi * robot.k * math.radians(self.A_max_deg)
-        return self.max_rate if self.rate_limit == "max_rate" else self.rate_limit
+    def rate_bound(self, robot: Robot) -> float:
+        """Largest torque rate |d tau_i / d t| [N m/s]: k times the reference-angle rate bound."""
+        return robot.k * math.radians(self.max_rate_deg_s)
 
-    def curvature_bound(self, robot: Robot) -> float | None:
-        """Largest |d^2 tau / d t^2| [N m per cycle^2] or None."""
-        if self.curvature_limit == "harmonic":
-            return CURVATURE_FACTOR * (2 * math.pi) ** 2 * robot.k * math.radians(self.A_max_deg)
-        return self.curvature_limit
+    def accel_bound(self, robot: Robot) -> float | None:
+        """Largest torque acceleration |d^2 tau_i / d t^2| [N m/s^2], or None (no bound)."""
+        return None if self.max_accel_deg_s2 is None else robot.k * math.radians(self.max_accel_deg_s2)
+
+    def period_ref(self) -> float:
+        """Reference period [s]: the shortest period of the envelope's full harmonic gait (amplitude A_max)
+        under the bandwidth, 2 pi A_max / max_rate (the OCP scales its period variable by it)."""
+        return 2 * math.pi * self.A_max_deg / self.max_rate_deg_s
+
+    def min_period(self, A1_deg: float, A2_deg: float) -> float:
+        """Shortest period [s] of a harmonic gait of amplitudes A1, A2 [deg] under the bandwidth:
+        2 pi max(A1, A2) / max_rate (its peak reference rate 2 pi A / T equals the bound)."""
+        return 2 * math.pi * max(A1_deg, A2_deg) / self.max_rate_deg_s
 
     def torque_bounds(self, robot: Robot) -> tuple[float, float]:
         """Torque range [N m] that keeps phi_ref = pi + tau/k inside the envelope."""

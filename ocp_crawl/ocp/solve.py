@@ -1,9 +1,12 @@
 """Solve the periodic-gait OCP and prove the optimum by replay: :func:`optimize_gait` and :class:`OCPResult`.
 
-The initial guess is the best harmonic gait of the envelope (:func:`~ocp_crawl.ocp.baseline.best_harmonic`);
-the transcription (:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy,
-every stage read through the IPOPT status table; the optimal profile is then replayed in the event-driven
-simulator (periodic shape-preserving cubic through the node torques) and compared with the harmonic gait.
+The first start is the best harmonic gait of the family (:func:`~ocp_crawl.ocp.baseline.best_harmonic`), then
+a Fourier-order start and perturbed starts (:mod:`~ocp_crawl.ocp.starts`, ``settings.starts`` in all); from each,
+the transcription (:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy, every
+stage read through the IPOPT status table, and the optimum is judged by its event-driven replay
+(:func:`~ocp_crawl.ocp.judge.judge_replay`: the transcription's own linear interpolant, the OCP's period).
+The reported optimum is the best by replay among the starts the judge accepts, with the spread of the others;
+its gain is measured by replay against the harmonic baseline.
 """
 from __future__ import annotations
 
@@ -13,12 +16,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.model.inputs import Harmonic, PeriodicPchip, ReferenceTorque
-from ocp_crawl.model.statics import Robot
+from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
-from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, objective_value, value_from
+from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, value_from
+from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, replay_signal, value_text
 from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.sim.result import cost_of_transport
@@ -26,9 +31,34 @@ from ocp_crawl.status import Status
 
 
 @dataclass
+class StartRecord:
+    """One start of the multi-start OCP and what became of it."""
+
+    label: str
+    """which start: 'harmonic baseline', 'second harmonic' or 'perturbed i'"""
+    status: Status
+    T_start: float
+    """the start's period [s]"""
+    value_ocp: float = float("nan")
+    value_replay: float = float("nan")
+    message: str = ""
+    iterations: int = 0
+    """IPOPT iterations of the start's homotopies"""
+
+    @property
+    def converged(self) -> bool:
+        """The OCP converged from this start and its optimum was replayed (judged or not)."""
+        return math.isfinite(self.value_replay) and self.status in (Status.SUCCESS, Status.REPLAY_MISMATCH)
+
+    def to_dict(self) -> dict:
+        """JSON-able (the status as its lower-case label)."""
+        return jsonable(dict(asdict(self), status=self.status.label, converged=self.converged))
+
+
+@dataclass
 class OCPResult:
     """Outcome of :func:`optimize_gait`: the optimal profile, its transcription residuals, the harmonic
-    baseline and the replay (per scenario lists: one entry unless robust_speed)."""
+    baseline, the replay that judges it (per scenario lists: one entry unless robust_speed) and the starts."""
 
     success: bool
     status: Status
@@ -45,25 +75,54 @@ class OCPResult:
     f_t: list = field(default_factory=list)
     modes: list = field(default_factory=list)
     S_ocp: list = field(default_factory=list)
+    T_ocp: float = float("nan")
+    """period of the optimal gait [s]"""
+    v_ocp: list = field(default_factory=list)
+    """per scenario: mean speed direction * S / T [m/s]"""
+    theta: list = field(default_factory=list)
+    """per scenario: the interior points of the intervals (N,) [fraction of the interval]"""
     W_plus_ocp: list = field(default_factory=list)
     CoT_plus_ocp: list = field(default_factory=list)
     value_ocp: float = float("nan")
+    """the OCP's objective value (max_speed, robust_speed: a speed [m/s]; min_cot: CoT+ [-])"""
     complementarity_residual: float = float("nan")
     periodicity_residual: float = float("nan")
     equation_residual: float = float("nan")
     homotopy: list = field(default_factory=list)
-    """:class:`~ocp_crawl.nlp.homotopy.Stage` records of every IPOPT call"""
+    """:class:`~ocp_crawl.nlp.homotopy.Stage` records of every IPOPT call (of the reported start)"""
     failed_stage: str | None = None
     solve_time_s: float = float("nan")
     harmonic: HarmonicChoice | None = None
     replay: list = field(default_factory=list)
     """per scenario: CrawlResult of the event-driven replay"""
     S_replay: list = field(default_factory=list)
+    v_replay: list = field(default_factory=list)
+    """per scenario: replayed mean speed direction * S / T [m/s]"""
     W_plus_replay: list = field(default_factory=list)
     CoT_plus_replay: list = field(default_factory=list)
     value_replay: float = float("nan")
     rel_diff_replay: float = float("nan")
+    envelope_excess: float = float("nan")
+    """largest excursion of the torques beyond the envelope, relative to its half-width (<= 0: inside)"""
+    rate_ratio: float = float("nan")
+    """largest torque rate of the replayed profile over the bandwidth k R (<= 1: within)"""
+    accel_ratio: float = float("nan")
+    """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such bound)"""
     gain: float = float("nan")
+    """relative gain by replay over the harmonic baseline (positive: better)"""
+    starts: list = field(default_factory=list)
+    """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
+
+    @property
+    def gain_significant(self) -> bool:
+        """Whether the gain exceeds the replay tolerance (|gain| > replay_tol)."""
+        return math.isfinite(self.gain) and abs(self.gain) > self.settings.replay_tol
+
+    @property
+    def spread(self) -> tuple[float, float, int]:
+        """(min, max) of the replayed objective over the converged starts and how many converged (NaNs if none)."""
+        values = [s.value_replay for s in self.starts if s.converged]
+        return (min(values), max(values), len(values)) if values else (float("nan"), float("nan"), 0)
 
     def summary(self) -> dict:
         """The result as strict JSON types (non-finite numbers None; the status as its lower-case label)."""
@@ -72,17 +131,24 @@ class OCPResult:
         def per_scenario(values):
             return (values[0] if one else values) if values else None
 
+        low, high, converged = self.spread
         return jsonable({
             "status": self.status.label, "success": bool(self.success), "message": self.message,
             "objective": self.objective, "nodes": self.settings.nodes,
             "parametrization": self.settings.parametrization,
             "S_ocp": per_scenario(self.S_ocp), "S_replay": per_scenario(self.S_replay),
+            "T_ocp": self.T_ocp, "v_ocp": per_scenario(self.v_ocp), "v_replay": per_scenario(self.v_replay),
             "W_plus_ocp": self.W_plus_ocp, "W_plus_replay": self.W_plus_replay,
             "CoT_plus_ocp": self.CoT_plus_ocp, "CoT_plus_replay": per_scenario(self.CoT_plus_replay),
             "objective_value_ocp": self.value_ocp, "objective_value_replay": self.value_replay,
-            "rel_diff_replay": self.rel_diff_replay,
+            "rel_diff_replay": self.rel_diff_replay, "replay_tol": self.settings.replay_tol,
+            "envelope_excess": self.envelope_excess, "rate_ratio": self.rate_ratio,
+            "accel_ratio": self.accel_ratio,
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
-            "gain": self.gain, "solve_time_s": self.solve_time_s,
+            "gain": self.gain, "gain_significant": self.gain_significant,
+            "starts": [s.to_dict() for s in self.starts], "starts_converged": converged,
+            "objective_value_replay_min": low, "objective_value_replay_max": high,
+            "solve_time_s": self.solve_time_s,
             "complementarity_residual": self.complementarity_residual,
             "periodicity_residual": self.periodicity_residual,
             "equation_residual": self.equation_residual,
@@ -91,43 +157,127 @@ class OCPResult:
         })
 
 
-#: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
-#: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
-REPLAY_INTERPOLATION = "pchip"
-
-
-def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicPchip:
-    """Torque input of the event-driven replay: periodic shape-preserving cubic (PCHIP) through the node
-    torques [N m] at ``phase`` [cycles]: it keeps the envelope (no overshoot, unlike a cubic spline) and has a
-    continuous derivative (unlike linear interpolation, whose jumps of d tau/dt make d' jump at every node)."""
-    return PeriodicPchip(phase, tau)
+def baseline_gait(harm: HarmonicChoice, robot: Robot) -> tuple:
+    """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t [cycles]) and its
+    period T [s]."""
+    return harm.torque_signal(robot.k), harm.T
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
                   replay: bool = True) -> OCPResult:
-    """Solve the periodic-gait OCP, replay the optimum in the event-driven simulator, compare with harmonics.
+    """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the best.
 
-    ``robot``: the robot (SI units); ``gravity``: the gravity convention ("physical" or "paper");
-    ``settings``: the OCP's settings (defaults: :class:`OCPSettings`); ``replay``: replay the optimum.
-    Returns an :class:`OCPResult` whose ``status`` says whether an optimum was found (SUCCESS), the problem
-    is infeasible (INFEASIBLE), IPOPT failed (SOLVER_FAILURE), complementarity was not reached
-    (NOT_COMPLEMENTARY), no harmonic gait gave an initial guess (NO_INITIAL_GUESS) or the replay failed
-    (REPLAY_FAILED)."""
+    Parameters
+    ----------
+    robot : Robot
+        The robot (SI units).
+    gravity : str
+        The gravity convention ("physical" or "paper").
+    settings : OCPSettings, optional
+        The OCP's settings (None: the defaults), ``settings.starts`` starts.
+    replay : bool
+        Judge each optimum by its event-driven replay (default).  False: the OCP's own verdict only, the
+        best start by the OCP's value (a solver test; the message says that nothing was replayed).
+
+    Returns
+    -------
+    OCPResult
+        The best start by replay among those the judge accepts (else the best replayed, else the first
+        start's failure): SUCCESS, INFEASIBLE, SOLVER_FAILURE, NOT_COMPLEMENTARY, NO_INITIAL_GUESS (no
+        harmonic gait simulates), REPLAY_FAILED or REPLAY_MISMATCH; ``starts`` holds every start's outcome.
+    """
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
-    res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
-                    settings=settings)
     harm = best_harmonic(robot, gravity, settings)
-    res.harmonic = harm
     if harm is None:
-        res.status = Status.NO_INITIAL_GUESS
-        res.message = "no harmonic gait of the envelope simulates successfully: no initial guess"
-        return res
+        return OCPResult(success=False, status=Status.NO_INITIAL_GUESS, objective=settings.objective,
+                         settings=settings,
+                         message="no harmonic gait of the family simulates successfully: no initial guess")
     ocp = GaitOCP(robot, gravity, settings)
-    gait = Harmonic.from_degrees(harm.gamma_deg, harm.A_deg, harm.psi_deg)
-    x, hist, failed, status = ocp.solve(ocp.initial_guess(ReferenceTorque(gait, robot.k)))
-    res.homotopy = hist
+    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
+    signal, T0 = baseline_gait(harm, robot)
+    N = settings.nodes
+    phase = np.arange(N) / N
+
+    def follows(tau: np.ndarray) -> bool:
+        return all(simulate_torque(m, replay_signal(phase, tau)).success for m in models)
+    guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
+    runs = []
+    for guess in guesses:
+        runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay))
+    res = _pick(runs, settings, replay)
+    res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
+                              sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
+    low, high, converged = res.spread
+    if len(guesses) > 1:
+        res.message += (f"; best of {len(guesses)} starts ({converged} converged, replayed objective from "
+                        f"{value_text(settings.objective, low)} to {value_text(settings.objective, high)})")
     res.solve_time_s = time.perf_counter() - t_start
+    return res
+
+
+def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResult:
+    """The reported start: the best by replay among the judged successes (by the OCP's value without
+    replay), else the best replayed one, else the first start."""
+    key = "value_replay" if replay else "value_ocp"
+    for pool in ([r for r in runs if r.success], [r for r in runs if math.isfinite(r.value_replay)]):
+        best = None
+        for r in pool:
+            if best is None or is_better(settings.objective, getattr(r, key), getattr(best, key)):
+                best = r
+        if best is not None:
+            return best
+    return runs[0]
+
+
+def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: HarmonicChoice | None = None,
+               replay: bool = True) -> OCPResult:
+    """Solve the OCP from one start and judge its optimum by replay.
+
+    Parameters
+    ----------
+    ocp : GaitOCP
+        The transcription (built once for its settings).
+    models : list of Model
+        The friction scenarios' models (the judge's replays), in the order of ``ocp.settings.scenarios``.
+    signal : callable
+        The start's torques ``signal(t)`` [N m] at phases t [cycles] (must simulate successfully).
+    T : float
+        The start's period [s].
+    harmonic : HarmonicChoice, optional
+        The harmonic baseline (the gain is measured against its value).
+    replay : bool
+        Judge the optimum by replay (default).
+
+    Returns
+    -------
+    OCPResult
+        The start's outcome (``starts`` empty; ``solve_time_s`` of this start).
+    """
+    settings = ocp.settings
+    t_start = time.perf_counter()
+    res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
+                    settings=settings, harmonic=harmonic)
+    bad = next((r for r in (simulate_torque(m, signal) for m in models) if not r.success), None)
+    if bad is not None:
+        res.status = Status.NO_INITIAL_GUESS
+        res.message = f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: {bad.message}"
+        return res
+    x, hist, failed, status = ocp.solve(ocp.initial_guess(signal, T))
+    res.homotopy = hist
+    if not _accept(res, ocp, x, failed, status):
+        res.solve_time_s = time.perf_counter() - t_start
+        return res
+    if replay:
+        _judge(res, models)
+    else:
+        res.message += "; not replayed (the judge did not run)"
+    res.solve_time_s = time.perf_counter() - t_start
+    return res
+
+
+def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) -> bool:
+    """Fill res from the solve's outcome; True if the OCP converged to a usable, complementary point."""
     outcome = ipopt_status(status)
     if failed is not None:
         # every homotopy failed: the status table decides infeasible vs solver failure
@@ -136,50 +286,50 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         res.message = (f"{'infeasible' if res.status == Status.INFEASIBLE else 'IPOPT failed'}: "
                        f"IPOPT {outcome.describe()} at {failed}")
     if x is None:
-        return res
+        return False
     _fill_solution(res, ocp, x)
     if failed is not None:
         res.message += "; the last accepted iterate is reported (not an optimum)"
-        return res
-    if not _check_solution(res, settings, outcome):
-        return res
+        return False
+    if not _check_solution(res, ocp.settings, outcome):
+        return False
     res.success = True
     res.status = Status.SUCCESS
-    res.message = f"optimal {settings.objective} profile found ({len(hist)} IPOPT calls, final IPOPT status " \
-                  f"{status})"
+    res.message = (f"optimal {ocp.settings.objective} profile found ({len(res.homotopy)} IPOPT calls, final IPOPT "
+                   f"status {status})")
     last = ocp.kept_run[-1] if ocp.kept_run else None
     if last is not None and last.kind == "polish" and not last.accepted:
         res.message += f"; polish not kept: IPOPT {last.message}"
-    if replay:
-        _replay(res, settings, ocp)
-    res.solve_time_s = time.perf_counter() - t_start
-    return res
+    return True
 
 
 def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
-    """The profile, trajectories, S, W+, CoT+ and residuals of the NLP point x."""
+    """The profile, period, trajectories, S, v, W+, CoT+ and residuals of the NLP point x."""
     un = ocp.unpack(x)
     res.phase = np.arange(ocp.settings.nodes) / ocp.settings.nodes
     res.tau = un["tau"]
+    res.T_ocp = un["T"]
     for sc, model in zip(un["scen"], ocp.scen):
         res.phi.append(sc["phi"])
         res.x1.append(sc["x1"])
         res.f_t.append(sc["f_t"])
         res.modes.append(sc["modes"])
+        res.theta.append(sc["theta"])
         res.S_ocp.append(sc["S"])
-        w = ocp.positive_work(res.tau, sc["phi"])
+        res.v_ocp.append(sc["v"])
+        w = sc["W_plus"]
         res.W_plus_ocp.append(w)
         res.CoT_plus_ocp.append(cost_of_transport(w, model.robot, sc["S"]))
     res.complementarity_residual = max(sc["comp"] for sc in un["scen"])
     res.periodicity_residual = max(sc["periodic"] for sc in un["scen"])
     res.equation_residual = ocp.equation_residual(x)
-    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp)
+    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, res.T_ocp)
 
 
 def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     """False (with the status and message set) if the accepted point has non-finite values or is not
     complementary."""
-    numbers = [*res.S_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
+    numbers = [*res.S_ocp, res.T_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
                res.equation_residual, *np.ravel(res.tau)]
     if not all(math.isfinite(v) for v in numbers):
         res.status = Status.SOLVER_FAILURE
@@ -193,23 +343,21 @@ def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     return True
 
 
-def _replay(res: OCPResult, settings: OCPSettings, ocp: GaitOCP) -> None:
-    """Replay the optimal profile in the event-driven simulator (each scenario) and compare."""
-    sig = replay_signal(res.phase, res.tau)
-    sims = [simulate_torque(m, sig) for m in ocp.scen]
-    res.replay = sims
-    if any(not r.success for r in sims):
-        bad = next(r for r in sims if not r.success)
+def _judge(res: OCPResult, models: list[Model]) -> None:
+    """Replay the optimal profile (every scenario) and let the judge decide; the gain over the baseline."""
+    verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
+    res.replay = verdict.replay
+    res.envelope_excess, res.rate_ratio = verdict.envelope_excess, verdict.rate_ratio
+    res.accel_ratio = verdict.accel_ratio
+    res.S_replay, res.v_replay = verdict.S, verdict.speed
+    res.W_plus_replay, res.CoT_plus_replay = verdict.W_plus, verdict.CoT_plus
+    res.value_replay, res.rel_diff_replay = verdict.value, verdict.rel_diff
+    if not verdict.ok:
         res.success = False
-        res.status = Status.REPLAY_FAILED
-        res.message = f"the replay of the optimal profile failed: {bad.message}"
-        return
-    res.S_replay = [r.S for r in sims]
-    res.W_plus_replay = [r.W_plus for r in sims]
-    res.CoT_plus_replay = [r.CoT_plus for r in sims]
-    res.value_replay = objective_value(settings, sims, enforce_s_min=False)
-    res.rel_diff_replay = (abs(res.value_replay - res.value_ocp) / abs(res.value_replay) if res.value_replay != 0
-                           else float("nan"))
-    if res.harmonic is not None and math.isfinite(res.harmonic.value) and res.harmonic.value != 0:
-        h = res.harmonic.value
-        res.gain = (h - res.value_replay) / h if settings.objective == "min_cot" else (res.value_replay - h) / abs(h)
+        res.status = verdict.status
+        res.message = verdict.message
+    else:
+        res.message += (f"; confirmed by the event-driven replay (objective within {units.ratio(verdict.rel_diff)}, "
+                        f"replay_tol {units.ratio(res.settings.replay_tol)})")
+    if res.harmonic is not None:
+        res.gain = gain_over(res.settings.objective, res.value_replay, res.harmonic.value)

@@ -12,10 +12,10 @@ from matplotlib.figure import Figure
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import table_text
-from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.inputs import ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult
-from ocp_crawl.ocp.solve import REPLAY_INTERPOLATION
+from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
@@ -55,8 +55,11 @@ def _title(result: OCPResult) -> str:
     if rep is None or not rep.success:
         return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
                        else "")
-    return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, W$^+$ = {units.work(rep.W_plus, 1)}, "
-            f"CoT$^+$ = {units.cot(rep.CoT_plus)}; gain over the best harmonic gait {units.ratio(result.gain)}")
+    significance = "" if result.gain_significant else " (not significant)"
+    return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
+            f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
+            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\ngain over the best harmonic gait "
+            f"(by replay) {units.ratio(result.gain)}{significance}")
 
 
 def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
@@ -71,7 +74,7 @@ def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
     fig.suptitle(_title(result))
     rep = result.replay[0] if result.replay else None
     h = result.harmonic
-    gait = Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg) if h else None
+    gait = h.gait() if h else None
     _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None)
     _angles(axs[0, 1], result, rep, gait)
     modes = _positions(axs[1, 0], result, rep)

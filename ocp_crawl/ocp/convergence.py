@@ -1,0 +1,182 @@
+"""Convergence in the number of nodes N, shown rather than assumed: :func:`converge_in_nodes`.
+
+The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
+(harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
+profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
+exactly), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.
+Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
+replay's objective, the change from the previous N and the observed order
+
+    p = log(|d_i| / |d_i+1|) / log(r),   d_i = J(N_i) - J(N_i-1),   r = N_i / N_i-1 = N_i+1 / N_i
+
+(p = log2(|d_(N/2 -> N)| / |d_(N -> 2N)|) for doubling), defined where three successive N have a constant ratio
+and both changes are finite and non-zero.  If J(N) = J* + C N^-p, this p is exact.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ocp_crawl.io.files import jsonable
+from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.ocp.judge import replay_signal
+from ocp_crawl.ocp.settings import NODES_BOUNDS, OCPSettings
+from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
+from ocp_crawl.ocp.transcription import GaitOCP
+from ocp_crawl.status import Status
+
+
+def observed_orders(nodes: list[int], values: list[float]) -> list[float]:
+    """Observed order of convergence at each N (NaN where undefined; see the module docstring).
+
+    Parameters
+    ----------
+    nodes : list of int
+        Increasing numbers of nodes N_0 < N_1 < ...
+    values : list of float
+        The objective J(N_i) at each (any unit).
+
+    Returns
+    -------
+    list of float
+        p_i = log(|d_i| / |d_i+1|) / log(r) at index i (the middle N of the three), NaN at the ends, where the
+        ratio N_i / N_i-1 differs from N_i+1 / N_i, or where a change is zero or not finite.
+    """
+    out = [math.nan] * len(nodes)
+    for i in range(1, len(nodes) - 1):
+        r = nodes[i] / nodes[i - 1]
+        d0, d1 = values[i] - values[i - 1], values[i + 1] - values[i]
+        if not (r > 1 and math.isclose(nodes[i + 1] / nodes[i], r, rel_tol=1e-12)):
+            continue
+        if math.isfinite(d0) and math.isfinite(d1) and d0 != 0 and d1 != 0:
+            out[i] = math.log(abs(d0) / abs(d1)) / math.log(r)
+    return out
+
+
+@dataclass
+class ConvergenceRow:
+    """One N of the convergence table."""
+
+    nodes: int
+    status: Status
+    message: str
+    T: float
+    """period [s]"""
+    value_ocp: float
+    """the OCP's objective (speeds [m/s], CoT+ [-])"""
+    value_replay: float
+    """the replay's objective (same unit)"""
+    rel_diff_replay: float
+    change: float = math.nan
+    """value_replay minus the previous N's (same unit)"""
+    rel_change: float = math.nan
+    """change / |value_replay| [-]"""
+    order: float = math.nan
+    """observed order p of the replayed objective at this N (see :func:`observed_orders`)"""
+    order_ocp: float = math.nan
+    """observed order of the OCP's objective"""
+    solve_time_s: float = math.nan
+    result: OCPResult | None = field(default=None, repr=False)
+    """the full result at this N"""
+
+    def to_dict(self) -> dict:
+        """JSON-able (the status as its label, without the full result)."""
+        data = {k: v for k, v in vars(self).items() if k != "result"}
+        return jsonable(dict(data, status=self.status.label))
+
+
+@dataclass
+class ConvergenceTable:
+    """The OCP solved at each N: :class:`ConvergenceRow` per N, in increasing N."""
+
+    objective: str
+    rows: list
+
+    @property
+    def success(self) -> bool:
+        """True when the judge accepted the optimum at every N."""
+        return bool(self.rows) and all(r.status == Status.SUCCESS for r in self.rows)
+
+    def to_dict(self) -> dict:
+        """JSON-able: the objective, its unit, the units of the rows' numbers and the rows."""
+        unit = "-" if self.objective == "min_cot" else "m/s"
+        units = {"T": "s", "value_ocp": unit, "value_replay": unit, "change": unit, "rel_diff_replay": "-",
+                 "rel_change": "-", "order": "-", "order_ocp": "-", "solve_time_s": "s"}
+        return jsonable({"objective": self.objective, "unit": unit, "units": units, "success": self.success,
+                         "rows": [r.to_dict() for r in self.rows]})
+
+
+def check_nodes(nodes) -> list[int]:
+    """The list of N, validated: integers in NODES_BOUNDS, strictly increasing, at least one; ValueError naming
+    the first bad value otherwise."""
+    out = []
+    for n in nodes:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not NODES_BOUNDS[0] <= n <= NODES_BOUNDS[1]:
+            raise ValueError(f"nodes: {n!r} is not an integer in [{NODES_BOUNDS[0]}, {NODES_BOUNDS[1]}]")
+        if out and n <= out[-1]:
+            raise ValueError(f"nodes must increase strictly, got {n} after {out[-1]}")
+        out.append(int(n))
+    if not out:
+        raise ValueError("nodes: give at least one N")
+    return out
+
+
+def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, log=None) -> ConvergenceTable:
+    """Solve the OCP at each N of ``nodes``, warm-starting each from the previous optimum, replay each.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (SI units).
+    gravity : str
+        The gravity convention ("physical" or "paper").
+    settings : OCPSettings
+        The OCP's settings; ``nodes`` replaces its N.
+    nodes : list of int
+        Strictly increasing N (each in NODES_BOUNDS), e.g. [50, 100, 200, 400].
+    log : callable, optional
+        ``log(text)`` after each N (progress).
+
+    Returns
+    -------
+    ConvergenceTable
+        One row per N: status, period [s], OCP and replayed objective, change from the previous N, observed
+        order, time [s], and the full :class:`~ocp_crawl.ocp.solve.OCPResult`.
+    """
+    nodes = check_nodes(nodes)
+    rows, warm = [], None
+    for N in nodes:
+        t0 = time.perf_counter()
+        s = replace(settings, nodes=N)
+        res = optimize_gait(robot, gravity, s) if warm is None else _warm_solve(robot, gravity, s, warm)
+        if math.isfinite(res.value_replay):
+            warm = res  # a profile the simulator follows (a failed replay would not start the next N)
+        rows.append(ConvergenceRow(N, res.status, res.message, res.T_ocp, res.value_ocp, res.value_replay,
+                                   res.rel_diff_replay, solve_time_s=time.perf_counter() - t0, result=res))
+        if log is not None:
+            log(f"N = {N}: {res.status.label} ({time.perf_counter() - t0:.1f} s)")
+    _changes(rows)
+    return ConvergenceTable(settings.objective, rows)
+
+
+def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
+    """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
+    ocp = GaitOCP(robot, gravity, settings)
+    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
+    res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T_ocp, prev.harmonic)
+    res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
+    return res
+
+
+def _changes(rows: list[ConvergenceRow]) -> None:
+    """Fill each row's change from the previous N and the observed orders."""
+    for prev, row in zip(rows, rows[1:]):
+        row.change = row.value_replay - prev.value_replay
+        row.rel_change = row.change / abs(row.value_replay) if row.value_replay else math.nan
+    nodes = [r.nodes for r in rows]
+    for row, p, q in zip(rows, observed_orders(nodes, [r.value_replay for r in rows]),
+                         observed_orders(nodes, [r.value_ocp for r in rows])):
+        row.order, row.order_ocp = p, q

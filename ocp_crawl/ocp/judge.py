@@ -1,0 +1,221 @@
+"""Replay is the judge: the OCP's optimum counts only when the event-driven simulator confirms it.
+
+The replay signal is the transcription's own interpolant: the node torques tau_k at phases k/N, linear in
+phase between nodes (:class:`~ocp_crawl.model.inputs.PeriodicLinear`, the ``[gait] waveform = "samples"``
+with ``interpolation = "linear"``), run with the OCP's period T.  :func:`judge_replay` replays it in every
+friction scenario and accepts the optimum only when
+
+* every replay succeeds (else ``REPLAY_FAILED``);
+* the profile stays in the envelope gamma +- A_max and within the bandwidth |d tau_i/dt| <= k R, both to
+  :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its nodes), and, with
+  the optional ``max_accel_deg_s2`` = a, its second differences within k a (T/N)^2;
+* min_cot: the replayed mean speed direction * S / T meets ``speed_min`` within ``replay_tol`` (relative);
+* the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
+
+otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
+itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ocp_crawl.io import units
+from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.status import Status
+
+#: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
+#: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
+REPLAY_INTERPOLATION = "linear"
+#: relative tolerance of the envelope and bandwidth checks (the NLP meets its bounds to round-off)
+BOUND_RTOL = 1e-9
+
+
+def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
+    """Torque input of the event-driven replay: the transcription's own interpolant, linear in phase.
+
+    Parameters
+    ----------
+    phase : array_like, shape (N,)
+        Node phases [cycles] in [0, 1) (k/N).
+    tau : array_like, shape (2, N)
+        Joint torques [N m] at the nodes.
+
+    Returns
+    -------
+    PeriodicLinear
+        tau(t) [N m] of the phase t [cycles]; its extremes and slopes are those of the nodes.
+    """
+    return PeriodicLinear(phase, tau)
+
+
+def value_text(objective: str, value: float) -> str:
+    """An objective value with its unit: a speed [m/s] in mm/s (max_speed, robust_speed), else CoT+ [-]."""
+    return units.cot(value) if objective == "min_cot" else units.speed(value)
+
+
+def is_better(objective: str, a: float, b: float) -> bool:
+    """Whether objective value ``a`` is strictly better than ``b`` (CoT+ smaller, speeds larger); NaN never is."""
+    if math.isnan(a):
+        return False
+    if math.isnan(b):
+        return True
+    return a < b if objective == "min_cot" else a > b
+
+
+def gain_over(objective: str, value: float, baseline: float) -> float:
+    """Relative gain [-] of ``value`` over the ``baseline`` value (positive: better), NaN if undefined.
+
+    min_cot: (CoT_baseline - CoT) / CoT_baseline; speeds: (v - v_baseline) / |v_baseline|."""
+    if not (math.isfinite(value) and math.isfinite(baseline)) or baseline == 0:
+        return float("nan")
+    return (baseline - value) / baseline if objective == "min_cot" else (value - baseline) / abs(baseline)
+
+
+def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> tuple[float, float, float]:
+    """How far a node profile goes to its limits.
+
+    Parameters
+    ----------
+    settings : OCPSettings
+        The envelope (gamma, A_max), the bandwidth (max_rate_deg_s) and the optional max_accel_deg_s2.
+    robot : Robot
+        The robot (its stiffness k [N m/rad] turns angles into torques).
+    tau : array_like, shape (2, N)
+        Node torques [N m] at phases k/N (periodic).
+    T : float
+        Period [s].
+
+    Returns
+    -------
+    (float, float, float)
+        The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside); the
+        largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the bandwidth);
+        the largest second difference over its bound k a (T/N)^2 (<= 1 within it; NaN without max_accel_deg_s2).
+    """
+    tau = np.asarray(tau, float)
+    N = tau.shape[1]
+    lo, hi = settings.torque_bounds(robot)
+    excess = float(np.max(np.maximum(lo - tau, tau - hi))) / (0.5 * (hi - lo))
+    steps = np.diff(np.c_[tau, tau[:, :1]], axis=1)  # tau_k+1 - tau_k, periodic
+    rate = float(np.max(np.abs(steps))) * N / T / settings.rate_bound(robot) if T > 0 else math.inf
+    accel = settings.accel_bound(robot)
+    if accel is None:
+        return excess, rate, math.nan
+    second = np.diff(np.c_[steps[:, -1:], steps], axis=1)  # tau_k+1 - 2 tau_k + tau_k-1
+    return excess, rate, float(np.max(np.abs(second))) / (accel * (T / N) ** 2) if T > 0 else math.inf
+
+
+@dataclass
+class Verdict:
+    """The judge's findings on one profile: its status, the replayed numbers and the margins."""
+
+    status: Status
+    message: str
+    replay: list = field(default_factory=list)
+    """per scenario: the CrawlResult of the event-driven replay"""
+    S: list = field(default_factory=list)
+    """per scenario: replayed displacement per cycle [m]"""
+    W_plus: list = field(default_factory=list)
+    """per scenario: replayed positive work per cycle [J]"""
+    CoT_plus: list = field(default_factory=list)
+    """per scenario: replayed CoT+ [-]"""
+    speed: list = field(default_factory=list)
+    """per scenario: replayed mean speed direction * S / T [m/s]"""
+    value: float = float("nan")
+    """replayed objective value (speeds [m/s], CoT+ [-])"""
+    rel_diff: float = float("nan")
+    """|value_replay - value_ocp| / |value_replay| [-]"""
+    envelope_excess: float = float("nan")
+    rate_ratio: float = float("nan")
+    accel_ratio: float = float("nan")
+    """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
+
+    @property
+    def ok(self) -> bool:
+        """True when the replay confirms the OCP."""
+        return self.status == Status.SUCCESS
+
+
+def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T: float, value_ocp: float,
+                 S_ocp: list | None = None) -> Verdict:
+    """Replay node torques in the event-driven simulator and judge the OCP's claim (see the module docstring).
+
+    Parameters
+    ----------
+    models : list of Model
+        One model per friction scenario (the OCP's scenarios, in its order).
+    settings : OCPSettings
+        Objective, envelope, bandwidth, speed_min and replay_tol.
+    tau : array_like, shape (2, N)
+        Node torques [N m] at phases k/N.
+    T : float
+        The OCP's period [s].
+    value_ocp : float
+        The OCP's own objective value (speeds [m/s], CoT+ [-]).
+    S_ocp : list of float, optional
+        The OCP's S per scenario [m], quoted in the message.
+
+    Returns
+    -------
+    Verdict
+        ``SUCCESS``, ``REPLAY_FAILED`` or ``REPLAY_MISMATCH`` (the message gives the OCP's and the replay's
+        numbers), with the replayed numbers and the envelope and bandwidth margins.
+    """
+    tau = np.asarray(tau, float)
+    N = tau.shape[1]
+    v = Verdict(Status.SUCCESS, "the replay confirms the optimum")
+    v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, models[0].robot, tau, T)
+    sig = replay_signal(np.arange(N) / N, tau)
+    v.replay = [simulate_torque(m, sig) for m in models]
+    bad = next((r for r in v.replay if not r.success), None)
+    if bad is not None:
+        v.status = Status.REPLAY_FAILED
+        v.message = f"{Status.REPLAY_FAILED.text}: {bad.message}"
+        return v
+    v.S = [r.S for r in v.replay]
+    v.W_plus = [r.W_plus for r in v.replay]
+    v.CoT_plus = [r.CoT_plus for r in v.replay]
+    v.speed = [settings.direction * s / T for s in v.S]
+    v.value = value_from(settings, v.S, v.CoT_plus, T)
+    problems = _problems(v, settings, value_ocp)
+    if problems:
+        v.status = Status.REPLAY_MISMATCH
+        S_text = ", ".join(units.distance(s) for s in (S_ocp or []))
+        v.message = (f"{Status.REPLAY_MISMATCH.text}: {'; '.join(problems)} (OCP: value "
+                     f"{value_text(settings.objective, value_ocp)}{', S ' + S_text if S_text else ''}; replay: value "
+                     f"{value_text(settings.objective, v.value)}, S {', '.join(units.distance(s) for s in v.S)}, "
+                     f"speed {', '.join(units.speed(s) for s in v.speed)}; T = {units.seconds(T)})")
+    return v
+
+
+def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
+    """What the replay misses: the envelope, the bandwidth, speed_min, the agreement with the OCP."""
+    tol = settings.replay_tol
+    out = []
+    if not v.envelope_excess <= BOUND_RTOL:
+        out.append(f"the torques leave the envelope by {units.scientific(v.envelope_excess)} of its half-width "
+                   f"(tolerance {units.scientific(BOUND_RTOL)})")
+    if not v.rate_ratio <= 1 + BOUND_RTOL:
+        out.append(f"the torque rate reaches {units.significant(v.rate_ratio, 10)} times the bandwidth "
+                   f"{units.significant(settings.max_rate_deg_s)} deg/s (tolerance {units.scientific(BOUND_RTOL)})")
+    if not (math.isnan(v.accel_ratio) or v.accel_ratio <= 1 + BOUND_RTOL):
+        out.append(f"the torque's second difference reaches {units.significant(v.accel_ratio, 10)} times the bound "
+                   f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
+                   f"{units.scientific(BOUND_RTOL)})")
+    if settings.objective == "min_cot" and settings.speed_min > 0 and not v.speed[0] >= settings.speed_min * (1 - tol):
+        out.append(f"the replayed speed {units.speed(v.speed[0])} misses speed_min {units.speed(settings.speed_min)} "
+                   f"by more than replay_tol {units.ratio(tol)}")
+    if v.value != 0:
+        v.rel_diff = abs(v.value - value_ocp) / abs(v.value)
+    else:
+        v.rel_diff = 0.0 if value_ocp == 0 else math.inf
+    if not v.rel_diff <= tol:
+        out.append(f"the objective differs by {units.ratio(v.rel_diff)} (replay_tol {units.ratio(tol)})")
+    return out

@@ -1,0 +1,127 @@
+"""The starts of the multi-start OCP: the harmonic baseline, a Fourier-order start and perturbed starts.
+
+Every start is a node profile (torques at phases k/N, shifted by whole nodes so that node 0 is where tau_1
+is largest: the OCP's phase pin) with a period chosen so that it lies inside the envelope and within the
+bandwidth: the perturbed profiles are clipped to the envelope (clipping never
+steepens a profile) and their period is the baseline's or, if the perturbation steepened the profile, the
+shortest one that keeps |d tau_i/dt| <= k R for the linear interpolant.  The perturbations are drawn from a
+seeded generator (:data:`START_SEED`): the same settings give the same starts.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ocp_crawl.model.statics import Robot
+from ocp_crawl.ocp.settings import OCPSettings
+
+#: seed of the perturbed starts (start i uses the generator seeded with (START_SEED, i))
+START_SEED = 13
+#: largest perturbation of a perturbed start, relative to the envelope's half-width k A_max
+PERTURBATION = 0.2
+#: Fourier orders of the perturbations (smooth profiles: the OCP starts from gaits that simulate)
+PERTURBATION_ORDERS = 3
+#: amplitude of the second harmonic of the Fourier-order start, relative to each joint's half-range
+SECOND_HARMONIC = 0.25
+#: draws of a start the simulator does not follow (each with half the amplitude of the previous one)
+ATTEMPTS = 4
+
+
+@dataclass(frozen=True)
+class StartGuess:
+    """One start of the OCP: a label, node torques and a period."""
+
+    label: str
+    tau: np.ndarray
+    """torques [N m] at the node phases k/N, shape (2, N)"""
+    T: float
+    """period [s]"""
+
+
+def feasible_period(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> float:
+    """The period [s] of the node profile ``tau`` (2, N) [N m]: ``T`` [s], or longer when the profile's linear
+    interpolant would exceed the bandwidth k R at ``T`` (max |tau_k - tau_k-1| N / T <= k R)."""
+    steps = np.abs(np.diff(np.c_[tau, tau[:, :1]], axis=1))
+    return max(T, float(np.max(steps)) * tau.shape[1] / settings.rate_bound(robot))
+
+
+def pinned(tau: np.ndarray) -> np.ndarray:
+    """The node profile (2, N) shifted by whole nodes so that node 0 is where tau_1 is largest (the OCP's phase
+    pin, tau_1,k <= tau_1,0): the same periodic gait, started at another phase."""
+    return np.roll(tau, -int(np.argmax(tau[0])), axis=1)
+
+
+def _profile(settings: OCPSettings, robot: Robot, label: str, tau: np.ndarray, T: float) -> StartGuess:
+    """The profile clipped to the envelope and pinned, with the period that keeps it within the bandwidth."""
+    lo, hi = settings.torque_bounds(robot)
+    tau = pinned(np.clip(tau, lo, hi))
+    return StartGuess(label, tau, feasible_period(settings, robot, tau, T))
+
+
+def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
+                          attempt: int = 0) -> StartGuess:
+    """The baseline plus a second harmonic: each joint's profile plus SECOND_HARMONIC / 2^attempt times its
+    half-range times sin(4 pi t) (clipped to the envelope, the period lengthened if the bandwidth requires)."""
+    N = base.shape[1]
+    half = 0.5 * (base.max(axis=1) - base.min(axis=1)) * SECOND_HARMONIC / 2**attempt
+    wave = np.sin(4 * math.pi * np.arange(N) / N)
+    return _profile(settings, robot, "second harmonic", base + half[:, None] * wave, T)
+
+
+def perturbed_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float, i: int,
+                    attempt: int = 0) -> StartGuess:
+    """The baseline plus a smooth random perturbation (Fourier orders 1..PERTURBATION_ORDERS, random
+    coefficients of the generator seeded with (START_SEED, i, attempt)), scaled to at most PERTURBATION /
+    2^attempt times the envelope's half-width k A_max, clipped to the envelope, the period lengthened if the
+    bandwidth requires."""
+    N = base.shape[1]
+    rng = np.random.default_rng((START_SEED, i, attempt))
+    t = np.arange(N) / N
+    n = np.arange(1, PERTURBATION_ORDERS + 1)[:, None]
+    coef = rng.normal(size=(2, 2, PERTURBATION_ORDERS)) / n.T  # (joint, cos/sin, order), decaying with order
+    delta = coef[:, 0] @ np.cos(2 * math.pi * n * t) + coef[:, 1] @ np.sin(2 * math.pi * n * t)
+    half_width = robot.k * math.radians(settings.A_max_deg)
+    delta *= PERTURBATION / 2**attempt * half_width / np.max(np.abs(delta))
+    return _profile(settings, robot, f"perturbed {i}", base + delta, T)
+
+
+def start_guesses(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
+                  follows: Callable[[np.ndarray], bool] | None = None) -> list[StartGuess]:
+    """The ``settings.starts`` starts of the multi-start OCP.
+
+    Parameters
+    ----------
+    settings : OCPSettings
+        Number of starts, envelope and bandwidth.
+    robot : Robot
+        The robot (stiffness k).
+    base : array_like, shape (2, N)
+        The harmonic baseline's torques [N m] at the node phases k/N.
+    T : float
+        The baseline's period [s].
+    follows : callable, optional
+        ``follows(tau)``: whether the simulator follows the node profile tau (2, N) [N m] (the OCP's initial
+        guess simulates its start).  A start it does not follow is drawn again, up to ATTEMPTS times, each
+        with half the amplitude (perturbed starts: a new draw of their generator); the last is kept if none
+        is followed.  None: the first draw.
+
+    Returns
+    -------
+    list of StartGuess
+        The baseline first, then (if starts >= 2) the Fourier-order start (second harmonic), then perturbed
+        starts 1, 2, ... up to ``settings.starts`` in all; each pinned (node 0 where tau_1 is largest).
+    """
+    base = pinned(np.asarray(base, float))
+    makers = [lambda a: second_harmonic_start(settings, robot, base, T, a)] if settings.starts >= 2 else []
+    makers += [lambda a, i=i: perturbed_start(settings, robot, base, T, i, a) for i in range(1, settings.starts - 1)]
+    out = [StartGuess("harmonic baseline", base, T)]
+    for make in makers:
+        for attempt in range(ATTEMPTS if follows is not None else 1):
+            guess = make(attempt)
+            if follows is None or follows(guess.tau):
+                break
+        out.append(guess)
+    return out

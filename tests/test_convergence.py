@@ -1,0 +1,189 @@
+"""Convergence in N: the observed order on sequences of known order, the warm start from the previous N, and
+``optimize --nodes`` (parsing, bad values, the table's text and JSON)."""
+import json
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from ocp_crawl import Robot
+from ocp_crawl.ocp import convergence
+from ocp_crawl.ocp.convergence import check_nodes, converge_in_nodes, observed_orders
+from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.solve import OCPResult
+from ocp_crawl.status import Status
+
+REPO = Path(__file__).resolve().parents[1]
+OCP_FILE = REPO / "problems" / "ocp_max_speed.toml"
+
+
+@pytest.mark.parametrize("nodes, p", [([50, 100, 200, 400], 2.0), ([50, 100, 200, 400], 1.0),
+                                      ([25, 50, 100, 200, 400], 1.5), ([10, 30, 90, 270], 3.0)])
+def test_observed_order_of_a_sequence_of_known_order(nodes, p):
+    """J(N) = J* + C N^-p: the changes shrink by r^p per refinement by r, so the observed order is p exactly
+    (to round-off) at every inner N, undefined (NaN) at the ends."""
+    values = [0.0513 - 0.37 * n ** -p for n in nodes]
+    orders = observed_orders(nodes, values)
+    assert math.isnan(orders[0]) and math.isnan(orders[-1])
+    for q in orders[1:-1]:
+        assert q == pytest.approx(p, rel=1e-9)
+
+
+def test_observed_order_is_undefined_where_it_has_no_meaning():
+    # the ratio of successive N changes (100/50 != 150/100); a zero change; a missing value
+    assert all(math.isnan(q) for q in observed_orders([50, 100, 150, 300], [1.0, 1.5, 1.7, 1.8]))
+    assert math.isnan(observed_orders([50, 100, 200], [1.0, 1.0, 2.0])[1])
+    assert math.isnan(observed_orders([50, 100, 200], [1.0, math.nan, 2.0])[1])
+    # an oscillating sequence still has an order (|changes|): 1, -1/4 -> log2(4) = 2
+    assert observed_orders([50, 100, 200], [0.0, 1.0, 0.75])[1] == pytest.approx(2.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("bad, match", [([], "at least one"), ([50, 50], "increase strictly"),
+                                        ([100, 50], "increase strictly"), ([4], "not an integer in"),
+                                        ([50.0], "not an integer in"), ([True], "not an integer in")])
+def test_check_nodes_rejects(bad, match):
+    with pytest.raises(ValueError, match=match):
+        check_nodes(bad)
+
+
+def _fake_result(settings, tau, T, value):
+    N = tau.shape[1]
+    return OCPResult(success=True, status=Status.SUCCESS, message="fake", objective=settings.objective,
+                     settings=settings, phase=np.arange(N) / N, tau=tau, T_ocp=T, value_ocp=value * 1.001,
+                     value_replay=value, rel_diff_replay=1e-3)
+
+
+def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
+    """The first N is solved from scratch (optimize_gait), every further N from the previous N's node profile
+    (linear in phase: at doubled N the previous nodes exactly, midpoints in between) and period; the rows carry
+    the changes and the observed order of the replayed objective."""
+    profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t) ** 3])  # noqa: E731
+    value = lambda n: 0.05 - 0.4 / n**2  # noqa: E731  (second order)
+    seen = []
+
+    def fresh(robot, gravity, s):
+        seen.append(("fresh", s.nodes))
+        return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, value(s.nodes))
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        N, prev = ocp.settings.nodes, seen[-1][1]
+        t = np.arange(N) / N
+        got = signal(t)
+        # the previous nodes are reproduced, the new ones lie on the chords between them
+        np.testing.assert_allclose(got[:, ::N // prev], profile(np.arange(prev) / prev), rtol=0, atol=1e-15)
+        mid = 0.5 * (profile(t[::2]) + profile(t[::2] + 1 / prev))
+        np.testing.assert_allclose(got[:, 1::2], mid, rtol=0, atol=1e-15)
+        assert T == pytest.approx(0.7 + 0.01 * (len(seen) - 1), rel=1e-12)
+        seen.append(("warm", N))
+        return _fake_result(ocp.settings, profile(t), T + 0.01, value(N))
+
+    class FakeOCP:
+        def __init__(self, robot, gravity, settings):
+            self.settings = settings
+    monkeypatch.setattr(convergence, "optimize_gait", fresh)
+    monkeypatch.setattr(convergence, "solve_from", warm)
+    monkeypatch.setattr(convergence, "GaitOCP", FakeOCP)
+    table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200, 400])
+    assert seen == [("fresh", 50), ("warm", 100), ("warm", 200), ("warm", 400)]
+    assert table.success and [r.nodes for r in table.rows] == [50, 100, 200, 400]
+    assert math.isnan(table.rows[0].change)
+    assert table.rows[1].change == pytest.approx(value(100) - value(50), rel=1e-12)
+    assert [round(r.order, 9) for r in table.rows[1:3]] == [2.0, 2.0]
+    data = table.to_dict()
+    assert data["unit"] == "m/s" and data["rows"][1]["status"] == "success" and "result" not in data["rows"][1]
+    json.dumps(data, allow_nan=False)
+
+
+# ------------------------------------------------------------------ the command line
+def run(capsys, *argv):
+    from ocp_crawl.cli.app import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--nodes", "4"], ["--nodes 4 is invalid", "in [8, 1000]"]),
+    (["--nodes", "50", "abc"], ["--nodes abc is invalid", "integer"]),
+    (["--nodes", "100", "2000"], ["--nodes 2000 is invalid"]),
+    (["--nodes"], ["--nodes", "expected at least one argument"]),
+    (["--nodes", "100", "50"], ["--nodes 100 50 is invalid", "increase strictly"]),
+    (["--nodes", "50", "50"], ["--nodes 50 50 is invalid", "increase strictly"]),
+])
+def test_optimize_bad_nodes_exit_2_with_one_line(capsys, argv, words):
+    code, out, err = run(capsys, "optimize", OCP_FILE, *argv)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and err.startswith("ocp-crawl: error:"), err
+    for w in words:
+        assert w in err, (w, err)
+
+
+def test_optimize_nodes_is_parsed_as_a_list():
+    from ocp_crawl.cli.app import build_parser
+
+    args = build_parser().parse_args(["optimize", str(OCP_FILE), "--nodes", "50", "100", "200", "400"])
+    assert args.nodes == [50, 100, 200, 400]
+    assert build_parser().parse_args(["optimize", str(OCP_FILE)]).nodes is None
+
+
+def _fake_table(settings, nodes):
+    rows = []
+    for n in nodes:
+        res = _fake_result(OCPSettings(nodes=n), np.zeros((2, n)), 0.5236, 0.0452 - 0.3 / n**2)
+        rows.append(convergence.ConvergenceRow(n, Status.SUCCESS, "fake", 0.5236, res.value_ocp, res.value_replay,
+                                               1e-3, solve_time_s=1.5, result=res))
+    convergence._changes(rows)
+    return convergence.ConvergenceTable(settings.objective, rows)
+
+
+def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
+    seen = {}
+
+    def fake(robot, gravity, settings, nodes, log=None):
+        seen["nodes"], seen["N0"] = nodes, settings.nodes
+        return _fake_table(settings, nodes)
+    monkeypatch.setattr(convergence, "converge_in_nodes", fake)
+    code, out, err = run(capsys, "optimize", OCP_FILE, "--nodes", "50", "100", "200")
+    assert code == 0, err
+    assert seen == {"nodes": [50, 100, 200], "N0": 50}
+    lines = out.splitlines()
+    assert lines[0].startswith("convergence in N: max_speed")
+    assert lines[1].split() == ["N", "status", "T", "OCP", "replay", "diff", "change", "change", "p", "time"]
+    row100 = lines[3].split()
+    # 0.0452 - 0.3/100^2 = 0.04517 m/s; change from N = 50: 0.3 (1/50^2 - 1/100^2) = 9e-5 m/s; p = 2
+    assert row100[:2] == ["100", "success"] and "45.17000" in lines[3] and "0.09000 mm/s" in lines[3]
+    assert row100[-3:] == ["2.00", "1.5", "s"]
+    assert "finest N = 200:" in out and "period T 0.524 s" in out
+    code, out, err = run(capsys, "optimize", OCP_FILE, "--nodes", "50", "100", "200", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["unit"] == "m/s" and [r["nodes"] for r in data["rows"]] == [50, 100, 200]
+    assert data["units"]["change"] == "m/s" and data["units"]["T"] == "s"
+    assert data["rows"][1]["order"] == pytest.approx(2.0, rel=1e-9) and data["finest"]["nodes"] == 200
+
+
+def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
+    """An N whose optimum failed in the replay does not seed the next N: that one starts afresh from the
+    baseline (optimize_gait), and the first replayed optimum seeds the rest."""
+    seen = []
+
+    def fresh(robot, gravity, s):
+        seen.append(("fresh", s.nodes))
+        res = _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
+        if s.nodes == 50:
+            res.status, res.success, res.value_replay = Status.REPLAY_FAILED, False, math.nan
+        return res
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        seen.append(("warm", ocp.settings.nodes))
+        return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05)
+
+    monkeypatch.setattr(convergence, "optimize_gait", fresh)
+    monkeypatch.setattr(convergence, "solve_from", warm)
+    monkeypatch.setattr(convergence, "GaitOCP", lambda robot, gravity, settings: SimpleNamespace(settings=settings))
+    table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200])
+    assert seen == [("fresh", 50), ("fresh", 100), ("warm", 200)]
+    assert not table.success and table.rows[0].status == Status.REPLAY_FAILED
+
