@@ -177,3 +177,15 @@ def test_min_cot_unreachable_speed_gives_a_fallback():
     assert choice is not None and not choice.feasible and choice.value == math.inf
     assert 0.04 < choice.v[0] < 1.0
     assert choice.torque_signal(Robot.paper().k)(0.0).shape == (2,)
+
+
+def test_pinned_torque_is_the_gait_shifted_to_the_peak_of_tau1():
+    """pinned_torque(t) = torque_signal(t + peak_phase), and tau_1 is largest at t = 0 (the OCP's phase pin)."""
+    settings = shipped_settings(harmonic_A=1, harmonic_psi=4)
+    choice = best_harmonic(Robot.paper(), "physical", settings, local_starts=0)
+    choice.gamma1_deg, choice.gamma2_deg, choice.A1_deg, choice.A2_deg, choice.psi_deg = 95.0, 88.0, 12.0, 20.0, 70.0
+    k = Robot.paper().k
+    t = np.linspace(0.0, 1.0, 1001)
+    pinned, plain = choice.pinned_torque(k)(t), choice.torque_signal(k)((t + choice.peak_phase) % 1.0)
+    assert np.allclose(pinned, plain, rtol=0, atol=1e-14)
+    assert np.argmax(pinned[0]) in (0, len(t) - 1)

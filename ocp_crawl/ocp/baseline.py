@@ -14,6 +14,14 @@ The family (``ocp/family.py``): gamma_i +- A_i inside the envelope gamma +- A_ma
 T = ``settings.min_period(A1, A2)`` (the shortest the bandwidth allows, which is always the best one: see
 the family module).  :func:`best_harmonic` seeds with a coarse scan of symmetric gaits (gamma1 = gamma2,
 A1 = A2) and refines the best seeds by a bounded Nelder-Mead search over (gamma1, gamma2, A1, A2, psi).
+
+On a robot with equal feet (max_speed, min_cot of the shipped problems) the best members are nearly
+mirror-symmetric: gamma1 = gamma2, A1 = A2 and psi -> 0+ (towards foot 1; 0- the other way).  The value there
+is a one-sided limit: at psi = 0 exactly the two feet tie and S = 0, while for any small psi > 0 the foot with
+the lower friction limit slips and S, W+ tend to finite limits with an O(psi) error (e.g. the full-envelope
+gait: S = -60.1879 mm at psi = 0.001 and 0.01 deg, -60.1857 mm at 1 deg).  The search stops at a psi of about
+1e-3 deg; such a gait holds its anchoring foot by a tiny margin, so it is the best of the family in the model
+but fragile on a real robot (robust_speed, with unequal friction, chooses psi near 43 deg).
 """
 from __future__ import annotations
 
@@ -24,7 +32,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.inputs import FourierSeries, Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp.family import BOX, Evaluation, HarmonicFamily, HarmonicParams
 from ocp_crawl.ocp.settings import OCPSettings
@@ -134,6 +142,21 @@ class HarmonicChoice:
         the joint stiffness ``k`` [N m/rad]: the OCP's initial guess."""
         return self.params.torque(k)
 
+    @property
+    def peak_phase(self) -> float:
+        """The phase [cycles] in [0, 1) where tau_1 (the reference angle of joint 1) is largest: 1/4 - psi/720."""
+        return (0.25 - self.psi_deg / 720.0) % 1.0
+
+    def pinned_torque(self, k: float) -> ReferenceTorque:
+        """The gait's torque [N m] shifted in phase so that phase 0 is where tau_1 is largest (the OCP's phase
+        pin): phi_ref,1 = gamma1 + A1 cos(2 pi t), phi_ref,2 = gamma2 + A2 cos(2 pi t - psi), exactly
+        :meth:`torque_signal` at t + :attr:`peak_phase`, as a one-harmonic Fourier series."""
+        g1, g2, a1, a2, psi = (math.radians(v) for v in (self.gamma1_deg, self.gamma2_deg, self.A1_deg,
+                                                           self.A2_deg, self.psi_deg))
+        ref = FourierSeries(np.array([g1, g2]), np.array([[a1], [a2 * math.cos(psi)]]),
+                            np.array([[0.0], [a2 * math.sin(psi)]]))
+        return ReferenceTorque(ref, k)
+
     def to_dict(self) -> dict:
         """JSON-able (strict: a non-finite number, e.g. the infinite value of a gait short of speed_min, is None)."""
         return jsonable(asdict(self))
@@ -161,13 +184,12 @@ def scan_points(settings: OCPSettings) -> list[np.ndarray]:
 
 def _seeds(scored: list[tuple[float, np.ndarray]], count: int, min_dist: float) -> list[tuple[float, np.ndarray]]:
     """The ``count`` best scan points (rank, z) at least ``min_dist`` apart in box coordinates."""
-    chosen = []
+    chosen: list = []
     for rank, z in sorted(scored, key=lambda x: x[0]):
-        if rank >= _FAIL or any(np.linalg.norm(z - c) < min_dist for _, c in chosen):
-            continue
-        chosen.append((rank, z))
-        if len(chosen) == count:
+        if len(chosen) >= count:
             break
+        if rank < _FAIL and all(np.linalg.norm(z - c) >= min_dist for _, c in chosen):
+            chosen.append((rank, z))
     return chosen
 
 

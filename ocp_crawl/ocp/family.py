@@ -140,8 +140,10 @@ class HarmonicFamily:
         for m in self.models:
             try:
                 r = simulate_torque(m, params.torque(m.robot.k))
-            except ValueError as exc:  # the stepper rejects the input (e.g. a shape it cannot start from)
-                return Evaluation(params, T, nan, nan, nan, False, str(exc))
+            except (ValueError, IndexError) as exc:
+                # ValueError: the stepper rejects the input; IndexError: a stepper bug on some psi = 180 gaits
+                # (e.g. gamma 91.65/90.44, A 27.93/29.30 deg: its steady-cycle metrics find no segment)
+                return Evaluation(params, T, nan, nan, nan, False, f"{type(exc).__name__}: {exc}")
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)
             sims.append(r)
