@@ -12,7 +12,7 @@ import os
 import numpy as np
 import pytest
 
-from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
+from ocp_crawl import CallableSignal, Harmonic, Model, ReferenceTorque, Robot
 from ocp_crawl.ocp.baseline import best_harmonic, value_from
 from ocp_crawl.ocp.family import BOX, HarmonicParams
 from ocp_crawl.ocp.settings import OCPSettings
@@ -189,3 +189,22 @@ def test_pinned_torque_is_the_gait_shifted_to_the_peak_of_tau1():
     pinned, plain = choice.pinned_torque(k)(t), choice.torque_signal(k)((t + choice.peak_phase) % 1.0)
     assert np.allclose(pinned, plain, rtol=0, atol=1e-14)
     assert np.argmax(pinned[0]) in (0, len(t) - 1)
+
+
+@pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
+def test_twice_per_cycle_has_the_same_value(objective):
+    """A harmonic gait run twice per cycle at twice the period: S and W+ double, and value_from is unchanged
+    (v = direction S / T and CoT+ are both invariant), as ISSUE13's formulation requires."""
+    robot = Robot.paper()
+    model = Model(robot, gravity="physical")
+    once = ReferenceTorque(Harmonic.from_degrees(psi_deg=30.0, gamma1_deg=100.0, gamma2_deg=96.0, A1_deg=12.0,
+                                                 A2_deg=15.0), robot.k)
+    twice = CallableSignal(lambda t: once((2.0 * t) % 1.0), lambda t: 2.0 * once.derivative((2.0 * t) % 1.0))
+    r1, r2 = simulate_torque(model, once), simulate_torque(model, twice)
+    assert r1.success and r2.success
+    assert r2.S == pytest.approx(2 * r1.S, rel=1e-9) and r2.W_plus == pytest.approx(2 * r1.W_plus, rel=1e-9)
+    settings = shipped_settings(objective=objective, speed_min=0.01)
+    T = 2 * math.pi * 15.0 / RATE
+    v1 = value_from(settings, [r1.S], [r1.CoT_plus], T, enforce_speed_min=True)
+    v2 = value_from(settings, [r2.S], [r2.CoT_plus], 2 * T, enforce_speed_min=True)
+    assert math.isfinite(v1) and v2 == pytest.approx(v1, rel=1e-9)
