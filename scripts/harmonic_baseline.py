@@ -40,7 +40,8 @@ def report(name: str, settings: OCPSettings):
     old, n_old = old_scan(settings)
     v_old = value_from(settings, old.S, old.CoT_plus, old.T, enforce_speed_min=True)
     print(f"{name}: gamma {c.gamma1_deg:.4f}/{c.gamma2_deg:.4f} A {c.A1_deg:.4f}/{c.A2_deg:.4f} psi {c.psi_deg:.3g} "
-          f"deg, T {c.T:.4f} s, S {np.round(np.array(c.S) * 1e3, 4)} mm, W+ {np.round(np.array(c.W_plus) * 1e3, 3)} mJ, "
+          f"deg, T {c.T:.4f} s, S {np.round(np.array(c.S) * 1e3, 4)} mm, "
+          f"W+ {np.round(np.array(c.W_plus) * 1e3, 3)} mJ, "
           f"CoT+ {np.round(c.CoT_plus, 4)}, v {np.round(np.array(c.v) * 1e3, 4)} mm/s; value {c.value:.6g} "
           f"({c.evaluated} simulated gaits, {dt:.2f} s)")
     print(f"    one-stroke scan: A {old.params.A1_deg} psi {old.params.psi_deg:.0f} deg, value {v_old:.6g} "

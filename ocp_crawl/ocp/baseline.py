@@ -164,7 +164,7 @@ class HarmonicChoice:
 
 def _choice(settings: OCPSettings, ev: Evaluation) -> HarmonicChoice:
     p = ev.params
-    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, enforce_speed_min=True)
+    value = _value(settings, ev)
     return HarmonicChoice(p.gamma1_deg, p.gamma2_deg, p.A1_deg, p.A2_deg, p.psi_deg, ev.T, list(ev.S),
                           list(ev.W_plus), list(ev.CoT_plus), speeds(settings, ev.S, ev.T), value,
                           math.isfinite(value), settings.objective)
@@ -217,7 +217,7 @@ def _local(fam: HarmonicFamily, z0: np.ndarray, maxfev: int) -> dict:
     symmetric sub-family (w, u, p) with half of ``maxfev`` evaluations, then in all five coordinates from
     its end point with the rest (a small first simplex: the symmetric optimum is a good start, and the
     3-D search converges in far fewer evaluations than the 5-D one from the scan's seed).
-    Returns the start's summary (seed and end point [deg], their ranks, evaluations)."""
+    Returns the start's summary (seed and end point [deg], their objective values, evaluations)."""
     from scipy.optimize import minimize
 
     settings = fam.settings
@@ -235,10 +235,14 @@ def _local(fam: HarmonicFamily, z0: np.ndarray, maxfev: int) -> dict:
     out = minimize(rank, z1, method="Nelder-Mead", bounds=BOX, options={
         **options, "maxfev": max(maxfev - sym.nfev, 1),
         "initial_simplex": _simplex(z1, (0.05, 0.05, 0.02, 0.02, 0.01), BOX)})
-    end = out.x if out.fun <= sym.fun else z1
-    return {"seed": HarmonicParams.from_box(settings, z0).as_dict(), "seed_rank": rank(z0),
-            "end": HarmonicParams.from_box(settings, end).as_dict(), "end_rank": float(min(out.fun, sym.fun)),
-            "evaluations": fam.evaluations - n0}
+    seed, end = (fam.evaluate(HarmonicParams.from_box(settings, z)) for z in (z0, out.x if out.fun <= sym.fun else z1))
+    return {"seed": seed.params.as_dict(), "seed_value": _value(settings, seed),
+            "end": end.params.as_dict(), "end_value": _value(settings, end), "evaluations": fam.evaluations - n0}
+
+
+def _value(settings: OCPSettings, ev: Evaluation) -> float:
+    """The objective value of an evaluation (speed requirement enforced), NaN for a failed simulation."""
+    return value_from(settings, ev.S, ev.CoT_plus, ev.T, enforce_speed_min=True) if ev.success else math.nan
 
 
 def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int = 2,
