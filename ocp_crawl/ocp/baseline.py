@@ -40,6 +40,8 @@ from ocp_crawl.sim.result import CrawlResult
 
 #: search ranks (smaller is better) of members that miss speed_min (plus the shortfall) and that fail
 _MISS, _FAIL = 1e6, 1e9
+#: Nelder-Mead's stopping tolerances (box coordinates; search ranks, i.e. m/s or CoT+): both must hold
+NM_TOL = {"xatol": 1e-7, "fatol": 1e-12}
 #: centre offsets w of the coarse scan (gamma_i = gamma + w (A_max - A_i)): both edges and the middle
 SCAN_W = (-1.0, 0.0, 1.0)
 
@@ -226,7 +228,7 @@ def _local(fam: HarmonicFamily, z0: np.ndarray, maxfev: int) -> dict:
         return search_rank(settings, fam.evaluate(HarmonicParams.from_box(settings, z)))
 
     n0 = fam.evaluations
-    options = {"xatol": 1e-7, "fatol": 1e-12}
+    options = dict(NM_TOL)
     y0 = z0[[0, 2, 4]]
     sym = minimize(lambda y: rank(_full(y)), y0, method="Nelder-Mead", bounds=_SYM, options={
         **options, "maxfev": maxfev // 2,
