@@ -35,19 +35,21 @@ class HarmonicChoice:
         return jsonable(asdict(self))
 
 
-def value_from(settings: OCPSettings, S: list, CoT: list, enforce_s_min: bool = False) -> float:
-    """Objective value from S [m] and CoT+ per scenario (see :func:`objective_value`)."""
-    dS = [settings.direction * v for v in S]
+def value_from(settings: OCPSettings, S: list, CoT: list, enforce_s_min: bool = False, period: float = 1.0) -> float:
+    """Objective value from S [m] and CoT+ per scenario and the period [s] (see :func:`objective_value`):
+    max_speed/robust_speed the mean speed direction S / T [m/s] (mean or worst), min_cot the CoT+ [-]."""
+    v = [settings.direction * s / period for s in S]
     if settings.objective == "max_speed":
-        return dS[0]
+        return v[0]
     if settings.objective == "robust_speed":
-        return float(np.mean(dS) if settings.robust == "mean" else np.min(dS))
-    if dS[0] <= 0 or (enforce_s_min and dS[0] < settings.S_min):
+        return float(np.mean(v) if settings.robust == "mean" else np.min(v))
+    if v[0] <= 0 or (enforce_s_min and v[0] < settings.speed_min):
         return float("inf")
     return CoT[0]
 
 
-def objective_value(settings: OCPSettings, results: list[CrawlResult], enforce_s_min: bool = True) -> float:
+def objective_value(settings: OCPSettings, results: list[CrawlResult], enforce_s_min: bool = True,
+                    period: float = 1.0) -> float:
     """Objective of a set of simulations (one per scenario); larger is better for speeds, smaller for CoT.
 
     Failed simulations give NaN.  min_cot of a gait that misses S_min gives +inf when
@@ -55,7 +57,7 @@ def objective_value(settings: OCPSettings, results: list[CrawlResult], enforce_s
     """
     if any(not r.success for r in results):
         return float("nan")
-    return value_from(settings, [r.S for r in results], [r.CoT_plus for r in results], enforce_s_min)
+    return value_from(settings, [r.S for r in results], [r.CoT_plus for r in results], enforce_s_min, period)
 
 
 def _better(settings: OCPSettings, a: float, b: float) -> bool:
@@ -92,7 +94,8 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings) -> Harmonic
             n += 1
             if any(not r.success for r in res):
                 continue
-            choice = HarmonicChoice(float(psi), float(A), settings.gamma_deg, objective_value(settings, res),
+            value = objective_value(settings, res, period=settings.min_period(A, A))
+            choice = HarmonicChoice(float(psi), float(A), settings.gamma_deg, value,
                                     [r.S for r in res], [r.W_plus for r in res], [r.CoT_plus for r in res], 0)
             if math.isfinite(choice.value) and (best is None or _better(settings, choice.value, best.value)):
                 best = choice

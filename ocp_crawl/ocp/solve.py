@@ -3,7 +3,8 @@
 The initial guess is the best harmonic gait of the envelope (:func:`~ocp_crawl.ocp.baseline.best_harmonic`);
 the transcription (:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy,
 every stage read through the IPOPT status table; the optimal profile is then replayed in the event-driven
-simulator (periodic shape-preserving cubic through the node torques) and compared with the harmonic gait.
+simulator (the transcription's own interpolant: torque linear in phase between the nodes, period T) and
+compared with the harmonic gait.
 """
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.model.inputs import Harmonic, PeriodicPchip, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, objective_value, value_from
@@ -45,6 +46,12 @@ class OCPResult:
     f_t: list = field(default_factory=list)
     modes: list = field(default_factory=list)
     S_ocp: list = field(default_factory=list)
+    T_ocp: float = float("nan")
+    """period of the optimal gait [s]"""
+    v_ocp: list = field(default_factory=list)
+    """per scenario: mean speed direction * S / T [m/s]"""
+    theta: list = field(default_factory=list)
+    """per scenario: the interior points of the intervals (N,) [fraction of the interval]"""
     W_plus_ocp: list = field(default_factory=list)
     CoT_plus_ocp: list = field(default_factory=list)
     value_ocp: float = float("nan")
@@ -59,6 +66,8 @@ class OCPResult:
     replay: list = field(default_factory=list)
     """per scenario: CrawlResult of the event-driven replay"""
     S_replay: list = field(default_factory=list)
+    v_replay: list = field(default_factory=list)
+    """per scenario: replayed mean speed direction * S / T [m/s] (the replay at the OCP's period)"""
     W_plus_replay: list = field(default_factory=list)
     CoT_plus_replay: list = field(default_factory=list)
     value_replay: float = float("nan")
@@ -77,6 +86,7 @@ class OCPResult:
             "objective": self.objective, "nodes": self.settings.nodes,
             "parametrization": self.settings.parametrization,
             "S_ocp": per_scenario(self.S_ocp), "S_replay": per_scenario(self.S_replay),
+            "T_ocp": self.T_ocp, "v_ocp": per_scenario(self.v_ocp), "v_replay": per_scenario(self.v_replay),
             "W_plus_ocp": self.W_plus_ocp, "W_plus_replay": self.W_plus_replay,
             "CoT_plus_ocp": self.CoT_plus_ocp, "CoT_plus_replay": per_scenario(self.CoT_plus_replay),
             "objective_value_ocp": self.value_ocp, "objective_value_replay": self.value_replay,
@@ -93,14 +103,13 @@ class OCPResult:
 
 #: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
 #: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
-REPLAY_INTERPOLATION = "pchip"
+REPLAY_INTERPOLATION = "linear"
 
 
-def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicPchip:
-    """Torque input of the event-driven replay: periodic shape-preserving cubic (PCHIP) through the node
-    torques [N m] at ``phase`` [cycles]: it keeps the envelope (no overshoot, unlike a cubic spline) and has a
-    continuous derivative (unlike linear interpolation, whose jumps of d tau/dt make d' jump at every node)."""
-    return PeriodicPchip(phase, tau)
+def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
+    """Torque input of the event-driven replay: the transcription's own interpolant, linear in phase between
+    the node torques [N m] at ``phase`` [cycles] (it keeps the envelope and the bandwidth of the nodes)."""
+    return PeriodicLinear(phase, tau)
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
@@ -125,7 +134,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         return res
     ocp = GaitOCP(robot, gravity, settings)
     gait = Harmonic.from_degrees(harm.gamma_deg, harm.A_deg, harm.psi_deg)
-    x, hist, failed, status = ocp.solve(ocp.initial_guess(ReferenceTorque(gait, robot.k)))
+    period = settings.min_period(harm.A_deg, harm.A_deg)  # the harmonic gait at the bandwidth
+    x, hist, failed, status = ocp.solve(ocp.initial_guess(ReferenceTorque(gait, robot.k), period))
     res.homotopy = hist
     res.solve_time_s = time.perf_counter() - t_start
     outcome = ipopt_status(status)
@@ -161,25 +171,28 @@ def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
     un = ocp.unpack(x)
     res.phase = np.arange(ocp.settings.nodes) / ocp.settings.nodes
     res.tau = un["tau"]
+    res.T_ocp = un["T"]
     for sc, model in zip(un["scen"], ocp.scen):
         res.phi.append(sc["phi"])
         res.x1.append(sc["x1"])
         res.f_t.append(sc["f_t"])
         res.modes.append(sc["modes"])
+        res.theta.append(sc["theta"])
         res.S_ocp.append(sc["S"])
-        w = ocp.positive_work(res.tau, sc["phi"])
+        res.v_ocp.append(sc["v"])
+        w = sc["W_plus"]
         res.W_plus_ocp.append(w)
         res.CoT_plus_ocp.append(cost_of_transport(w, model.robot, sc["S"]))
     res.complementarity_residual = max(sc["comp"] for sc in un["scen"])
     res.periodicity_residual = max(sc["periodic"] for sc in un["scen"])
     res.equation_residual = ocp.equation_residual(x)
-    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp)
+    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, period=res.T_ocp)
 
 
 def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     """False (with the status and message set) if the accepted point has non-finite values or is not
     complementary."""
-    numbers = [*res.S_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
+    numbers = [*res.S_ocp, res.T_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
                res.equation_residual, *np.ravel(res.tau)]
     if not all(math.isfinite(v) for v in numbers):
         res.status = Status.SOLVER_FAILURE
@@ -205,9 +218,10 @@ def _replay(res: OCPResult, settings: OCPSettings, ocp: GaitOCP) -> None:
         res.message = f"the replay of the optimal profile failed: {bad.message}"
         return
     res.S_replay = [r.S for r in sims]
+    res.v_replay = [settings.direction * r.S / res.T_ocp for r in sims]
     res.W_plus_replay = [r.W_plus for r in sims]
     res.CoT_plus_replay = [r.CoT_plus for r in sims]
-    res.value_replay = objective_value(settings, sims, enforce_s_min=False)
+    res.value_replay = objective_value(settings, sims, enforce_s_min=False, period=res.T_ocp)
     res.rel_diff_replay = (abs(res.value_replay - res.value_ocp) / abs(res.value_replay) if res.value_replay != 0
                            else float("nan"))
     if res.harmonic is not None and math.isfinite(res.harmonic.value) and res.harmonic.value != 0:
