@@ -180,7 +180,7 @@ def test_cosine_pulse_of_rise_half_is_the_harmonic_a_quarter_cycle_later(tmp_pat
 
 def test_replay_interpolation_is_the_ocp_replays():
     t, tau = np.arange(5) / 5, np.random.default_rng(1).normal(size=(2, 5))
-    assert INTERPOLANTS[REPLAY_INTERPOLATION][0] is type(replay_signal(t, tau)) is PeriodicPchip
+    assert INTERPOLANTS[REPLAY_INTERPOLATION][0] is type(replay_signal(t, tau)) is PeriodicLinear
 
 
 def test_optimize_torques_replayed_by_simulate(tmp_path, capsys):

@@ -10,9 +10,17 @@ k is column 2k-2, b column 2k-1).  Cross conditions (relaxed by the homotopy's s
 complementarity products, each scaled by N so that it is of the size of a product s c):
 
 * no sub-step has both feet slipping: ``N s1_j s2_j <= sigma`` with ``s_i = s_i+ + s_i-``;
-* the slipping foot changes between consecutive sub-steps j, j+1 (cyclically) only at the friction tie:
+* the slipping foot changes at a sub-step boundary j (cyclically) only at the friction tie:
   ``N s1_j (s2+_j+1 c2+_j + s2-_j+1 c2-_j) <= sigma`` and the same with the feet exchanged: foot 2 starts
   slipping in a direction only where its margin in that direction is already zero at the end of sub-step j.
+  A sub-step of zero length (theta = 0 or 1) has no slip of its own: sitting between two slips it would let
+  the slipping foot change inside the next sub-step, away from the tie (an O(h) error per switch, which the
+  optimiser exploits).  So the slip before boundary j is s_j plus the slips of its predecessors passed through
+  short sub-steps with the weight max(0, 1 - l/SHORT)^2 (l the sub-step's length as a fraction of its interval,
+  SHORT = 0.1): s_j + w_j (s_j-1 + w_j-1 s_j-2) (three sub-steps always span a whole interval).  The price: a
+  slip of one foot, a stick shorter than SHORT h and a slip of the other without a tie is excluded.  A torque
+  that stands still over a whole interval (allowed by the bandwidth) is not covered: it, too, makes a sub-step
+  without slip.
 
 A change of the slipping foot thus falls on a sub-step boundary (the interior point moves to it), so the
 only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
@@ -33,6 +41,9 @@ from ocp_crawl.sim.step import SLIP_PAIR_MODES
 
 #: the guess's interior points: fraction of the interval when no foot switch is simulated inside it
 THETA_GUESS = 0.5
+#: a sub-step shorter than this fraction of its interval passes its predecessor's slip on to the switch condition
+#: (a sub-step of zero length, theta = 0 or 1, has no slip of its own and would hide a change of the slipping foot)
+SHORT = 0.1
 #: a simulated switch closer than this to a node [interval fraction] keeps the interior point off the node
 THETA_EDGE = 1e-6
 
@@ -60,32 +71,58 @@ def substep_torques(T, theta):
     return cs.reshape(cs.vertcat(Ta, Tn), 2, -1)
 
 
-def cross_products(W, N: int):
-    """The cross conditions' products of the (NW, 2N) sub-step variables (CasADi or numpy): both feet
-    slipping per sub-step, then foot 1 -> foot 2 and foot 2 -> foot 1 switches between sub-steps j and j+1,
-    each scaled by N (see the module docstring).  Returns (3, 2N)."""
-    if isinstance(W, np.ndarray):
-        nxt = np.roll(W, -1, axis=1)
-        cat = np.vstack
-    else:
-        nxt = cs.horzcat(W[:, 1:], W[:, 0])
-        cat = cs.vertcat
+def _roll(x, n: int):
+    """Cyclic shift along the sub-steps: element j of the result is element j - n of ``x`` (numpy or CasADi)."""
+    if isinstance(x, np.ndarray):
+        return np.roll(x, n, axis=-1)
+    n %= x.shape[1]
+    return x if n == 0 else cs.horzcat(x[:, -n:], x[:, :-n])
+
+
+def pass_weights(theta):
+    """Weight (2N,) of each sub-step's predecessor in the switch condition: 1 for a sub-step of zero length,
+    falling as max(0, 1 - l/SHORT)^2 to 0 at the length l = SHORT (fraction of the interval); ``theta`` (N,)
+    (numpy or CasADi column)."""
+    if isinstance(theta, np.ndarray):
+        length = np.column_stack([theta, 1.0 - theta]).ravel()
+        return np.maximum(0.0, 1.0 - length / SHORT) ** 2
+    length = cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1)
+    return cs.fmax(0.0, 1.0 - length / SHORT) ** 2
+
+
+def switch_windows(W, theta):
+    """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j plus its
+    predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j (s_j-1 + w_j-1 s_j-2)),
+    and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+, s2-).  Returns (s1, s2, before, after)."""
     s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
+    w = pass_weights(theta)
+    before = [s + w * (_roll(s, 1) + _roll(w, 1) * _roll(s, 2)) for s in (s1, s2)]
+    after = [_roll(W[4 + q, :], -1) for q in range(NPAIR)]
+    return s1, s2, before, after
+
+
+def cross_products(W, theta, N: int):
+    """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions (N,)
+    (CasADi or numpy): both feet slipping per sub-step, then foot 1 -> foot 2 and foot 2 -> foot 1 switches at
+    boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).  Returns (3, 2N)."""
+    s1, s2, before, after = switch_windows(W, theta)
     both = N * s1 * s2
-    to2 = N * s1 * (nxt[6, :] * W[10, :] + nxt[7, :] * W[11, :])
-    to1 = N * s2 * (nxt[4, :] * W[8, :] + nxt[5, :] * W[9, :])
-    return cat((both, to2, to1)) if cat is np.vstack else cat(both, to2, to1)
+    to2 = N * before[0] * (after[2] * W[10, :] + after[3] * W[11, :])
+    to1 = N * before[1] * (after[0] * W[8, :] + after[1] * W[9, :])
+    if isinstance(W, np.ndarray):
+        return np.vstack((both, to2, to1))
+    return cs.vertcat(both, to2, to1)
 
 
-def cross_residual(W: np.ndarray) -> float:
+def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
     """Largest violation of the cross conditions as a min-residual (like the complementarity residual):
-    min(s1_j, s2_j) and min(s1_j, s2d_j+1, c2d_j) (both switch directions, d = +, -) [-]."""
-    nxt = np.roll(W, -1, axis=1)
-    s1, s2 = W[4] + W[5], W[6] + W[7]
+    min(s1_j, s2_j) and min(slip before boundary j of one foot, slip after it of the other in direction d,
+    that foot's margin c_d at j) (both switch directions, d = +, -) [-]."""
+    s1, s2, before, after = switch_windows(W, theta)
     res = [np.minimum(s1, s2)]
     for d in range(2):
-        res.append(np.minimum(np.minimum(s1, nxt[6 + d]), W[10 + d]))
-        res.append(np.minimum(np.minimum(s2, nxt[4 + d]), W[8 + d]))
+        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[10 + d]))
+        res.append(np.minimum(np.minimum(before[1], after[d]), W[8 + d]))
     return float(np.max(np.abs(np.vstack(res))))
 
 
@@ -113,7 +150,7 @@ class Scenario:
         eqs, comp = step_map(PHI[:, :-1], W, Tsub, cs.repmat(cs.DM(model.p), 1, 2 * N))
         nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0)
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
-        nlp.con(f"cross_{j}", cs.vec(cross_products(W, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
+        nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
         # S and W+ are lifted into scalar variables defined by linear constraints, so that a nonlinear
         # objective in them (W+/S, S/T) keeps the Hessian sparse
@@ -142,17 +179,18 @@ def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:
 
 def switch_fractions(res, N: int) -> np.ndarray:
     """Interior fractions of the guess: theta_k at the simulated change of the slipping foot inside interval
-    k (the first one), else THETA_GUESS.  ``res``: an event-driven CrawlResult; returns (N,)."""
+    k, else at another contact event there (slip onset, slip-to-stick: the sub-step boundary then makes it exact
+    too), else THETA_GUESS.  ``res``: an event-driven CrawlResult; returns (N,)."""
     theta = np.full(N, THETA_GUESS)
-    seen = np.zeros(N, bool)
+    rank = np.full(N, 3)  # 0: a foot switch placed, 1: another event placed
     for ev in res.steady_events():
-        if ev.kind != "slip_switch":
+        if ev.kind.startswith("graze"):
             continue
         pos = (ev.t - res.t0) * N
         k = min(int(math.floor(pos)), N - 1)
-        if 0 <= k < N and not seen[k]:
-            theta[k] = float(np.clip(pos - k, THETA_EDGE, 1 - THETA_EDGE))
-            seen[k] = True
+        r = 0 if ev.kind == "slip_switch" else 1
+        if 0 <= k < N and r < rank[k] and THETA_EDGE < pos - k < 1 - THETA_EDGE:
+            theta[k], rank[k] = pos - k, r
     return theta
 
 

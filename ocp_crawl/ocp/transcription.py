@@ -31,11 +31,14 @@ from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, guess_block, modes_of, positive_work, sample_phases,
-                                    step_function, substep_torques, switch_fractions)
+                                    step_function, substep_torques, switch_fractions,
+                                    switch_windows, THETA_GUESS)
 from ocp_crawl.sim.event import simulate_torque
 
 #: bounds of the scaled period variable T_hat = T / period_ref
 PERIOD_HAT_BOUNDS = (1e-3, 1e3)
+#: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
+PIN_GRID = 16
 
 
 def fourier_basis(N: int, K: int) -> np.ndarray:
@@ -156,26 +159,42 @@ class GaitOCP:
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
-        self.solver, self.solver_warm = ipopt_solvers(
-            "gait_ocp", {"x": X, "f": f, "g": G}, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt,
-            "OCPSettings.ipopt", s.verbose)
+        self.solver, self.solver_warm = self._solvers("gait_ocp", X, f, G)
+        # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
+        # from those of the start: no incentive to leave the physical solution through the relaxation
+        theta = cs.vertcat(*[sc.theta for sc in scen])
+        theta_ref = cs.MX.sym("theta_ref", theta.numel())
+        self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G, theta_ref)
+        self._sim_solvers = None
+        self._fixed: np.ndarray | None = None
+        self._fixed_x = np.zeros(0)
+
+    def _solvers(self, name: str, X, f, G, p=None) -> tuple:
+        s = self.settings
+        nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
+        return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
+                             s.verbose)
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
         return float(self._f(x))
 
     # ------------------------------------------------------------------ initial guess from simulations
-    def initial_guess(self, torque_signal, period: float) -> np.ndarray:
+    def initial_guess(self, torque_signal, period: float, switches: bool = True) -> np.ndarray:
         """Variables sampled from event-driven simulations (one per scenario) of a torque input.
 
         Parameters
         ----------
         torque_signal : callable
             ``torque_signal(t)`` [N m] (shape (2, n)) at phases t [cycles], e.g. the best harmonic gait of the
-            baseline; it is sampled at the N nodes and simulated as the transcription sees it, linear in phase
-            between the nodes (its interior points at the simulated foot switches, else mid-interval).
+            baseline; it is sampled at the N nodes, shifted in phase so that node 0 is where tau_1 is largest
+            (the phase pin, on a grid PIN_GRID times finer), and simulated as the transcription sees it, linear in
+            phase between the nodes (its interior points at the simulated foot switches, else mid-interval).
         period : float
             The gait's period T [s].
+        switches : bool
+            Place the interior points at the simulated changes of the slipping foot (default); False: every
+            interior point mid-interval (a guess that the solve must correct where a foot switch falls).
 
         Returns
         -------
@@ -187,7 +206,9 @@ class GaitOCP:
         MgL = r.M * r.g * r.L
         x = np.zeros(self.nx)
         t_nodes = np.arange(N) / N
-        tau_nodes = np.asarray(torque_signal(t_nodes), float).reshape(2, N)
+        fine = np.arange(PIN_GRID * N) / (PIN_GRID * N)
+        shift = fine[np.argmax(np.asarray(torque_signal(fine), float).reshape(2, -1)[0])]  # the phase pin
+        tau_nodes = np.asarray(torque_signal((shift + t_nodes) % 1.0), float).reshape(2, N)
         if s.parametrization == "free":
             x[self._slices["tau"]] = (tau_nodes / MgL).ravel(order="F")
         else:
@@ -198,7 +219,7 @@ class GaitOCP:
         signal = PeriodicLinear(t_nodes, tau_nodes)
         speeds = []
         for j, model in enumerate(self.scen):
-            theta = switch_fractions(simulate_torque(model, signal), N)
+            theta = switch_fractions(simulate_torque(model, signal), N) if switches else np.full(N, THETA_GUESS)
             res = simulate_torque(model, signal, t_eval=sample_phases(theta))
             blk = guess_block(res, model, N)
             speeds.append(s.direction * blk["S"] / x[self._slices["T_hat"]][0])
@@ -240,7 +261,7 @@ class GaitOCP:
             ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[2]] * Mg
             x1_sub = np.r_[0.0, np.cumsum(W[4] - W[5])] * r.L
             tau_sub = substep_torques(tau, theta)
-            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W))
+            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W, theta))
             modes_sub = modes_of(W)
             S = float(x1_sub[-1])
             out["scen"].append({
@@ -265,8 +286,9 @@ class GaitOCP:
     def solve(self, x0: np.ndarray, fix_profile: bool = False) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
 
-        ``fix_profile``: the torques and the period are fixed to those of x0 by their bounds (the transcription
-        then only simulates the profile: a check against the event-driven simulator).
+        ``fix_profile``: the torques and the period are fixed to those of x0 by their bounds and the objective is
+        only the regularisation of the interior points (the transcription then simulates the profile: a check
+        against the event-driven simulator).
         ``status`` is the return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`) of the solve that
         decided: the last accepted stage or polish of the kept homotopy, else the failed stage of the last
         homotopy, whose ``failed`` then names the stage (``x`` is that homotopy's last accepted iterate or None).
@@ -276,7 +298,9 @@ class GaitOCP:
             self._fixed = np.zeros(self.nx, bool)
             self._fixed[self._slices["tau"]] = self._fixed[self._slices["T_hat"]] = True
             self._fixed_x = np.asarray(x0, float)
-        hom = Homotopy(self.solver, self.solver_warm, self._call)
+        if fix_profile and self._sim_solvers is None:
+            self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
+        hom = Homotopy(*(self._sim_solvers if fix_profile else (self.solver, self.solver_warm)), self._call)
         best = None
         runs = []
         f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
@@ -311,7 +335,7 @@ class GaitOCP:
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Variable bounds, with the profile fixed when :meth:`solve` was asked to."""
         lbx, ubx = self._lbx.copy(), self._ubx.copy()
-        if getattr(self, "_fixed", None) is not None:
+        if self._fixed is not None:
             lbx[self._fixed] = ubx[self._fixed] = self._fixed_x[self._fixed]
         return lbx, ubx
 
@@ -322,7 +346,10 @@ class GaitOCP:
             ubg[self._slices[f"g_comp_{j}"]] = sigma
             ubg[self._slices[f"g_cross_{j}"]] = sigma if cross_sigma is None else cross_sigma
         lbx, ubx = self._bounds()
-        return {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
+        data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
+        if self._fixed is not None:
+            data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
+        return data
 
     def _polish_data(self, x: np.ndarray) -> dict:
         """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
@@ -339,11 +366,12 @@ class GaitOCP:
             fix = np.zeros((NW, 2 * N), bool)
             fix[4:8] = ~slip
             fix[8:12] = slip
-            nxt = np.roll(slip, -1, axis=1)
-            foot1, foot2 = slip[0] | slip[1], slip[2] | slip[3]
+            ident = np.zeros((NW, 2 * N))
+            ident[4:8] = slip
+            _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
             for d in range(2):
-                fix[10 + d] |= foot1 & ~foot2 & nxt[2 + d]  # foot 1 -> foot 2: c2d = 0 at the boundary
-                fix[8 + d] |= foot2 & ~foot1 & nxt[d]  # foot 2 -> foot 1: c1d = 0 at the boundary
+                fix[10 + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
+                fix[8 + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
             ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
             ub[fix] = 0.0
             ubx[sl] = ub.ravel(order="F")
