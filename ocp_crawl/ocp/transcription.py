@@ -379,10 +379,17 @@ class GaitOCP:
 
     def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
-        raise the complementarity residual): (x or None, failed stage or None, status)."""
+        raise the complementarity residual; after a failed stage, only if it is within comp_tol):
+        (x or None, failed stage or None, status)."""
         s = self.settings
         run = hom.relax(schedule(sigma0, s.sigma_factor, s.sigma_min), Start(x0), self._stage_data)
         if not run.ok:
+            if run.last is not None:
+                # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
+                # the polish from the last accepted stage, kept only if it is complementary
+                pol = hom.polish(run.last, [self._polish_data(run.last.x)], lambda p: p.comp <= s.comp_tol)
+                if pol is not None:
+                    return pol.x, None, pol.status
             x = run.last.x if run.last is not None else None
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
