@@ -314,8 +314,8 @@ def test_ocp_nan_in_the_initial_guess_is_invalid_number(monkeypatch):
     a solver failure, never as an optimum."""
     original = GaitOCP.initial_guess
 
-    def with_nan(self, signal):
-        x = original(self, signal)
+    def with_nan(self, signal, period, **kw):
+        x = original(self, signal, period, **kw)
         x[self._slices["w_0"].start] = np.nan
         return x
     monkeypatch.setattr(GaitOCP, "initial_guess", with_nan)

@@ -351,7 +351,12 @@ class GaitOCP:
             data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
         return data
 
-    def _polish_data(self, x: np.ndarray) -> dict:
+    def _polish_candidates(self, x: np.ndarray) -> list[dict]:
+        """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified foot switches
+        fixed, then the pairs' branches alone (the cross products keep the bound sigma_min)."""
+        return [self._polish_data(x), self._polish_data(x, ties=False)]
+
+    def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
         """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
         c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs; where the slipping foot
         changes between consecutive sub-steps, the new foot's margin in its slip direction is fixed to 0 at
@@ -369,7 +374,7 @@ class GaitOCP:
             ident = np.zeros((NW, 2 * N))
             ident[4:8] = slip
             _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
-            for d in range(2):
+            for d in range(2 if ties else 0):
                 fix[10 + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
                 fix[8 + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
             ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
@@ -387,11 +392,11 @@ class GaitOCP:
             if run.last is not None:
                 # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
                 # the polish from the last accepted stage, kept only if it is complementary
-                pol = hom.polish(run.last, [self._polish_data(run.last.x)], lambda p: p.comp <= s.comp_tol)
+                pol = hom.polish(run.last, self._polish_candidates(run.last.x), lambda p: p.comp <= s.comp_tol)
                 if pol is not None:
                     return pol.x, None, pol.status
             x = run.last.x if run.last is not None else None
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
-        pol = hom.polish(sol, [self._polish_data(sol.x)], lambda p: p.comp <= sol.comp)
+        pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
         return (pol.x, None, pol.status) if pol is not None else (sol.x, None, sol.status)
