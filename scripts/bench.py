@@ -162,7 +162,7 @@ def bench_ocp(repeat: int) -> dict:
     from ocp_crawl.ocp import OCPSettings, optimize_gait
 
     out = {}
-    for name, kw in (("max_speed", {}), ("min_cot", {"S_min": 0.04}), ("robust_speed", {})):
+    for name, kw in (("max_speed", {}), ("min_cot", {"speed_min": 0.04}), ("robust_speed", {})):
         for nodes in (100,):
             t = time.perf_counter()
             res = optimize_gait(Robot.paper(), "physical", OCPSettings(objective=name, nodes=nodes, **kw))

@@ -304,7 +304,7 @@ def test_ocp_resource_limits_are_solver_failures(ipopt, status):
 
 
 def test_ocp_infeasible_speed_requirement_is_infeasible():
-    res = optimize_gait(Robot.paper(), "physical", OCPSettings(**dict(SMALL, objective="min_cot", S_min=0.5)))
+    res = optimize_gait(Robot.paper(), "physical", OCPSettings(**dict(SMALL, objective="min_cot", speed_min=5.0)))
     assert_failed_ocp(res, "Infeasible_Problem_Detected", Status.INFEASIBLE)
     assert res.message.startswith("infeasible: IPOPT Infeasible_Problem_Detected")
 
@@ -314,8 +314,8 @@ def test_ocp_nan_in_the_initial_guess_is_invalid_number(monkeypatch):
     a solver failure, never as an optimum."""
     original = GaitOCP.initial_guess
 
-    def with_nan(self, signal):
-        x = original(self, signal)
+    def with_nan(self, signal, period, **kw):
+        x = original(self, signal, period, **kw)
         x[self._slices["w_0"].start] = np.nan
         return x
     monkeypatch.setattr(GaitOCP, "initial_guess", with_nan)

@@ -1,46 +1,50 @@
 """Direct transcription of the periodic-gait OCP: the NLP's variables, constraints and objective, its
-initial guess from a simulation, the residuals of a solution, and its solve by the relaxation homotopy.
+initial guess from simulations, the residuals of a solution, and its solve by the relaxation homotopy.
 
-Node k sits at phase t_k = k/N; node 0 carries the free initial state and steps k = 1..N are the
-incremental step equations of :mod:`ocp_crawl.model.step_equations` (the same compiled model functions
-and complementarity formulation as the MPCC step solver), with the torque of node k (node N uses the
-torque of node 0: the profile is periodic).  Periodicity (angles and tangential force of node N equal to
-those of node 0) is a constraint.  The body displacement over the cycle is S = sum of the slips of foot 1.
-Scholtes' relaxation s_j c_j <= sigma is driven to sigma_min by the homotopy engine of
-:mod:`ocp_crawl.nlp.homotopy`, then polished on the identified branches.
+Time is explicit.  The period T [s] of the gait is a variable, scaled as ``T_hat = T / period_ref``
+(:meth:`~ocp_crawl.ocp.settings.OCPSettings.period_ref`).  Node k sits at phase k/N (k = 0..N-1) and carries
+the torques tau_k; between nodes the torque is linear in phase (the replay's own interpolant).  The
+actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R = max_rate_deg_s), the optional
+smoothness bound ``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k``
+within gamma +- A_max, and the phase pin ``tau_1,k <= tau_1,0``.  Each interval is two switch-exact
+sub-steps (:mod:`ocp_crawl.ocp.substeps`); periodicity (angles and tangential force) is a constraint and
+the body displacement over the cycle is S = sum of the slips of foot 1.
+
+Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
+``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; robust_speed ``-mean_j v_j`` or ``-min_j v_j`` over the friction
+scenarios (one profile and one T).  Each adds ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean
+squared torque rate, a tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without
+an event are otherwise free); both are invariant under repeating the profile k times with T multiplied by k,
+as the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma) is driven to
+sigma_min by the homotopy engine of :mod:`ocp_crawl.nlp.homotopy`, then polished on the identified branches.
 """
 from __future__ import annotations
-
-import math
 
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.statics import NP, Model, Robot
-from ocp_crawl.model.step_equations import NPAIR, NW, friction_margins, step_equations
+from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.step_equations import NW
 from ocp_crawl.nlp import ipopt as nlp_ipopt
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.substeps import (Scenario, cross_residual, guess_block, modes_of, positive_work, sample_phases,
+                                    step_function, substep_torques, switch_fractions,
+                                    switch_windows, THETA_GUESS)
 from ocp_crawl.sim.event import simulate_torque
-from ocp_crawl.sim.result import Mode
-from ocp_crawl.sim.step import SLIP_PAIR_MODES
+
+#: bounds of the scaled period variable T_hat = T / period_ref
+PERIOD_HAT_BOUNDS = (1e-3, 1e3)
+#: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
+PIN_GRID = 16
 
 
 def fourier_basis(N: int, K: int) -> np.ndarray:
     """(2K+1, N) values of 1, cos(2 pi n t), sin(2 pi n t), n = 1..K, at the node phases t = k/N."""
     t = np.arange(N) / N
     return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
-
-
-def step_function() -> cs.Function:
-    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p)."""
-    phi_prev = cs.SX.sym("phi_prev", 2)
-    w = cs.SX.sym("w", NW)
-    th = cs.SX.sym("tau_hat", 2)
-    p = cs.SX.sym("p", NP)
-    g_eq, g_lift, sv, cv = step_equations(phi_prev, w, th, p)
-    return cs.Function("ocp_step", [phi_prev, w, th, p], [cs.vertcat(g_eq, g_lift), sv * cv])
 
 
 class Layout:
@@ -88,8 +92,8 @@ class GaitOCP:
         return cs.reshape(z_tau, 2, 2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
 
     def _torques(self, nlp: Layout, MgL: float):
-        """Torque variables, envelope, rate and curvature limits; returns the scaled node torques T (2, N) and
-        their periodic differences dT."""
+        """Torque and period variables, envelope, bandwidth, optional smoothness bound and phase pin; returns
+        the scaled node torques T (2, N), their periodic differences dT and the scaled period Th."""
         s, N, r = self.settings, self.settings.nodes, self.robot
         ntau = 2 * N if s.parametrization == "free" else 2 * (2 * s.fourier_order + 1)
         z_tau = cs.MX.sym("tau", ntau)
@@ -100,91 +104,52 @@ class GaitOCP:
         else:
             nlp.var("tau", z_tau, -np.inf, np.inf)
             nlp.con("tau_bounds", cs.vec(T), tau_lo, tau_hi)
+        Th = cs.MX.sym("T_hat")
+        nlp.var("T_hat", Th, *PERIOD_HAT_BOUNDS)
+        Tref = s.period_ref()
         dT = T - cs.horzcat(T[:, -1], T[:, :-1])  # periodic differences tau_k - tau_{k-1}
-        rate = s.rate_bound(r)
-        if rate is not None:
-            lim = rate / MgL / N
-            nlp.con("rate", cs.vec(dT), -lim, lim)
-        curv = s.curvature_bound(r)
-        if curv is not None:
-            lim = curv / MgL / N**2
-            d2T = cs.horzcat(dT[:, 1:], dT[:, 0]) - dT  # periodic second differences
-            nlp.con("curvature", cs.vec(d2T), -lim, lim)
-        return T, dT
+        c_rate = s.rate_bound(r) * Tref / (MgL * N)  # |dT| <= c_rate T_hat
+        nlp.con("rate_up", cs.vec(dT) - c_rate * Th, -np.inf, 0.0)
+        nlp.con("rate_down", cs.vec(dT) + c_rate * Th, 0.0, np.inf)
+        accel = s.accel_bound(r)
+        if accel is not None:
+            c_acc = accel * Tref**2 / (MgL * N**2)  # |d2T| <= c_acc T_hat^2
+            d2T = cs.vec(cs.horzcat(dT[:, 1:], dT[:, 0]) - dT)  # periodic second differences
+            nlp.con("accel_up", d2T - c_acc * Th**2, -np.inf, 0.0)
+            nlp.con("accel_down", d2T + c_acc * Th**2, 0.0, np.inf)
+        nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)  # node 0 is where tau_1 is largest
+        return T, dT, Th
 
-    def _scenario(self, nlp: Layout, j: int, model: Model, T, step_map):
-        """Variables and constraints of scenario j: initial state, steps, periodicity, tie rule, S (and W+ for
-        min_cot).  Returns the scaled S variable and the W+ variable (None unless min_cot)."""
-        s, N, inf = self.settings, self.settings.nodes, np.inf
-        phi0 = cs.MX.sym(f"phi0_{j}", 2)
-        ft0 = cs.MX.sym(f"ft0_{j}")
-        W = cs.MX.sym(f"w_{j}", NW, N)
-        nlp.var(f"phi0_{j}", phi0, 0.0, math.pi)
-        nlp.var(f"ft0_{j}", ft0, -inf, inf)
-        lbw = np.r_[0.0, 0.0, -inf, -inf, np.zeros(2 * NPAIR)]
-        ubw = np.r_[math.pi, math.pi, inf, inf, np.full(2 * NPAIR, inf)]
-        nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, N), np.tile(ubw, N))
-        PHI = cs.horzcat(phi0, W[0:2, :])  # (2, N+1)
-        Tstep = cs.horzcat(T[:, 1:], T[:, 0])  # step k (1..N) uses the torque of node k mod N
-        eqs, comp = step_map(PHI[:, :-1], W, Tstep, cs.repmat(cs.DM(model.p), 1, N))
-        nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0)
-        nlp.con(f"comp_{j}", cs.vec(comp), -inf, 0.0)  # upper bound sigma, set per stage
-        nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
-        if s.tie_margin > 0:
-            # friction limits mu_i f_n,i/(M g) from the lifted margins: c_i+ + c_i- = 2 mu_i f_n,i/(M g)
-            lim1 = 0.5 * (W[8, :] + W[9, :])
-            lim2 = 0.5 * (W[10, :] + W[11, :])
-            tie = cs.vertcat((W[4, :] + W[5, :]) * (lim2 - lim1 - s.tie_margin),
-                             (W[6, :] + W[7, :]) * (lim1 - lim2 - s.tie_margin))
-            nlp.con(f"tie_{j}", cs.vec(tie), -inf, inf)  # lower bound -sigma, set per stage
-        # S and W+ are lifted into scalar variables defined by linear constraints, so that a
-        # nonlinear objective in them (W+/S) keeps the Hessian sparse
-        S_var = cs.MX.sym(f"S_{j}")
-        nlp.var(f"S_{j}", S_var, -inf, inf)
-        nlp.con(f"S_def_{j}", S_var - cs.sum2(W[4, :] - W[5, :]), 0.0, 0.0)  # foot-1 displacement / L
-        if s.objective != "min_cot":
-            return S_var, None
-        # positive work per actuator with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
-        V = cs.MX.sym(f"v_{j}", 2, N)
-        nlp.var(f"v_{j}", cs.vec(V), 0.0, inf)
-        tau_mid = 0.5 * (T + Tstep)
-        nlp.con(f"wplus_{j}", cs.vec(V - tau_mid * (PHI[:, 1:] - PHI[:, :-1])), 0.0, inf)
-        W_var = cs.MX.sym(f"Wp_{j}")
-        nlp.var(f"Wp_{j}", W_var, 0.0, inf)
-        nlp.con(f"W_def_{j}", W_var - cs.sum1(cs.sum2(V)), 0.0, 0.0)
-        return S_var, W_var
-
-    def _objective(self, nlp: Layout, S_list: list, W_list: list, dT):
-        """The objective (to minimise) with the torque-change regularisation, and its extra constraints."""
-        s, inf = self.settings, np.inf
+    def _objective(self, nlp: Layout, scen: list[Scenario], dT, Th):
+        """The objective (to minimise) with the regularisation, and its extra constraints."""
+        s, inf, N = self.settings, np.inf, self.settings.nodes
         d = s.direction
-        reg = s.regularization * s.nodes * cs.sumsqr(dT)
+        theta = cs.vertcat(*[sc.theta for sc in scen])
+        reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
+        S_list = [sc.S for sc in scen]
         if s.objective == "max_speed":
-            return -d * S_list[0] + reg
+            return -d * S_list[0] / Th + reg
         if s.objective == "robust_speed":
             if s.robust == "mean":
-                return -d * sum(S_list) / len(S_list) + reg
-            zeta = cs.MX.sym("zeta")
+                return -d * sum(S_list) / (len(S_list) * Th) + reg
+            zeta = cs.MX.sym("zeta")  # the worst scaled speed
             nlp.var("zeta", zeta, -inf, inf)
-            nlp.con("worst", cs.vertcat(*[d * Sj - zeta for Sj in S_list]), 0.0, inf)
+            nlp.con("worst", cs.vertcat(*[d * Sj - zeta * Th for Sj in S_list]), 0.0, inf)
             return -zeta + reg
-        nlp.con("S_min", d * S_list[0], s.S_min / self.robot.L, inf)
+        v_min = s.speed_min * s.period_ref() / self.robot.L  # scaled speed S_hat / T_hat
+        nlp.con("speed_min", d * S_list[0] - v_min * Th, 0.0, inf)
         # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
-        return W_list[0] / (d * S_list[0]) + reg
+        return scen[0].W_plus / (d * S_list[0]) + reg
 
     def _build(self) -> None:
         s, r = self.settings, self.robot
         MgL = r.M * r.g * r.L
         nlp = Layout()
-        T, dT = self._torques(nlp, MgL)
-        step_map = step_function().map(s.nodes)
-        S_list, W_list = [], []
-        for j, model in enumerate(self.scen):
-            S_var, W_var = self._scenario(nlp, j, model, T, step_map)
-            S_list.append(S_var)
-            if W_var is not None:
-                W_list.append(W_var)
-        f = self._objective(nlp, S_list, W_list, dT)
+        T, dT, Th = self._torques(nlp, MgL)
+        step_map = step_function().map(2 * s.nodes)
+        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot")
+                for j, model in enumerate(self.scen)]
+        f = self._objective(nlp, scen, dT, Th)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
         G = cs.vertcat(*nlp.g)
         self._slices = nlp.slices
@@ -194,86 +159,117 @@ class GaitOCP:
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
-        self.solver, self.solver_warm = ipopt_solvers(
-            "gait_ocp", {"x": X, "f": f, "g": G}, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt,
-            "OCPSettings.ipopt", s.verbose)
+        self.solver, self.solver_warm = self._solvers("gait_ocp", X, f, G)
+        # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
+        # from those of the start: no incentive to leave the physical solution through the relaxation
+        theta = cs.vertcat(*[sc.theta for sc in scen])
+        theta_ref = cs.MX.sym("theta_ref", theta.numel())
+        self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G, theta_ref)
+        self._sim_solvers = None
+        self._fixed: np.ndarray | None = None
+        self._fixed_x = np.zeros(0)
 
-    # ------------------------------------------------------------------ initial guess from a simulation
-    def initial_guess(self, torque_signal) -> np.ndarray:
-        """Variables sampled from event-driven simulations (one per scenario) of a torque input
-        (a gait that simulates successfully, e.g. the best harmonic of
-        :func:`~ocp_crawl.ocp.baseline.best_harmonic`): ``torque_signal(t)`` [N m] at phases t [cycles].
-        Returns the NLP's variable vector (scaled)."""
+    def _solvers(self, name: str, X, f, G, p=None) -> tuple:
         s = self.settings
+        nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
+        return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
+                             s.verbose)
+
+    def objective(self, x: np.ndarray) -> float:
+        """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
+        return float(self._f(x))
+
+    # ------------------------------------------------------------------ initial guess from simulations
+    def initial_guess(self, torque_signal, period: float, switches: bool = True) -> np.ndarray:
+        """Variables sampled from event-driven simulations (one per scenario) of a torque input.
+
+        Parameters
+        ----------
+        torque_signal : callable
+            ``torque_signal(t)`` [N m] (shape (2, n)) at phases t [cycles], e.g. the best harmonic gait of the
+            baseline; it is sampled at the N nodes, shifted in phase so that node 0 is where tau_1 is largest
+            (the phase pin, on a grid PIN_GRID times finer), and simulated as the transcription sees it, linear in
+            phase between the nodes (its interior points at the simulated foot switches, else mid-interval).
+        period : float
+            The gait's period T [s].
+        switches : bool
+            Place the interior points at the simulated changes of the slipping foot (default); False: every
+            interior point mid-interval (a guess that the solve must correct where a foot switch falls).
+
+        Returns
+        -------
+        np.ndarray
+            The NLP's variable vector (scaled).
+        """
+        s, r = self.settings, self.robot
         N = s.nodes
-        r = self.robot
-        MgL, Mg, L = r.M * r.g * r.L, r.M * r.g, r.L
+        MgL = r.M * r.g * r.L
         x = np.zeros(self.nx)
         t_nodes = np.arange(N) / N
-        tau_nodes = torque_signal(t_nodes).reshape(2, N) / MgL
+        fine = np.arange(PIN_GRID * N) / (PIN_GRID * N)
+        shift = fine[np.argmax(np.asarray(torque_signal(fine), float).reshape(2, -1)[0])]  # the phase pin
+        tau_nodes = np.asarray(torque_signal((shift + t_nodes) % 1.0), float).reshape(2, N)
         if s.parametrization == "free":
-            x[self._slices["tau"]] = tau_nodes.ravel(order="F")
+            x[self._slices["tau"]] = (tau_nodes / MgL).ravel(order="F")
         else:
             basis = fourier_basis(N, s.fourier_order)
-            coef, *_ = np.linalg.lstsq(basis.T, tau_nodes.T, rcond=None)
+            coef, *_ = np.linalg.lstsq(basis.T, tau_nodes.T / MgL, rcond=None)
             x[self._slices["tau"]] = coef.T.ravel(order="F")
-        dS = []
+        x[self._slices["T_hat"]] = period / s.period_ref()
+        signal = PeriodicLinear(t_nodes, tau_nodes)
+        speeds = []
         for j, model in enumerate(self.scen):
-            te = np.arange(N + 1) / N
-            res = simulate_torque(model, torque_signal, t_eval=te)
-            dS.append(self.settings.direction * res.S)
-            phi, ft, x1, x2 = res.phi, res.f_t / Mg, res.x1, res.x2
-            rb = model.robot
-            W = np.zeros((NW, N))
-            W[0:2] = phi[:, 1:]
-            W[2] = ft[1:]
-            W[3] = -ft[1:]
-            dx1, dx2 = np.diff(x1) / L, np.diff(x2) / L
-            W[4], W[5] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
-            W[6], W[7] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
-            fn1, fn2 = res.f_n1[1:] / Mg, res.f_n2[1:] / Mg
-            # lifted margins at the simulated points (f_t2 = -f_t on foot 2), clipped to >= 0
-            W[8:12] = np.maximum(np.vstack(friction_margins(rb.mu1, fn1, ft[1:], rb.mu2, fn2, -ft[1:])), 0.0)
-            x[self._slices[f"phi0_{j}"]] = phi[:, 0]
-            x[self._slices[f"ft0_{j}"]] = ft[0]
-            x[self._slices[f"w_{j}"]] = W.ravel(order="F")
-            x[self._slices[f"S_{j}"]] = np.sum(W[4] - W[5])
+            theta = switch_fractions(simulate_torque(model, signal), N) if switches else np.full(N, THETA_GUESS)
+            res = simulate_torque(model, signal, t_eval=sample_phases(theta))
+            blk = guess_block(res, model, N)
+            speeds.append(s.direction * blk["S"] / x[self._slices["T_hat"]][0])
+            for name in ("phi0", "ft0", "S"):
+                x[self._slices[f"{name}_{j}"]] = blk[name]
+            x[self._slices[f"w_{j}"]] = blk["w"].ravel(order="F")
+            x[self._slices[f"theta_{j}"]] = theta
             if f"v_{j}" in self._slices:
-                tau = torque_signal(te).reshape(2, -1) / MgL
-                tau_mid = 0.5 * (tau[:, :-1] + tau[:, 1:])
-                V = np.maximum(tau_mid * np.diff(phi, axis=1), 0.0)
+                tau_sub = substep_torques(tau_nodes, theta) / MgL
+                tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
+                V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][0:2]], axis=1), 0.0)
                 x[self._slices[f"v_{j}"]] = V.ravel(order="F")
                 x[self._slices[f"Wp_{j}"]] = V.sum()
         if "zeta" in self._slices:
-            x[self._slices["zeta"]] = min(dS) / L
+            x[self._slices["zeta"]] = min(speeds)
         return x
 
-    # ------------------------------------------------------------------ residuals of a solution
+    # ------------------------------------------------------------------ the solution in physical units
     def unpack(self, x: np.ndarray) -> dict:
-        """The solution x in physical units: ``tau`` (2, N) [N m] and per scenario (``scen``) the angles ``phi``
-        (2, N+1) [rad], ``f_t`` [N], ``x1`` [m], ``S`` [m], the contact ``modes``, and the complementarity
-        (``comp``) and periodicity (``periodic``) residuals [-]."""
-        N = self.settings.nodes
-        r = self.robot
-        out = {"tau": np.asarray(self._T(x)).reshape(2, N), "scen": []}
-        for j, model in enumerate(self.scen):
-            W = x[self._slices[f"w_{j}"]].reshape(NW, N, order="F")
-            phi = np.c_[x[self._slices[f"phi0_{j}"]], W[0:2]]
-            ft = np.r_[x[self._slices[f"ft0_{j}"]], W[2]] * r.M * r.g
-            sv, cv = W[4:8], W[8:12]
-            x1 = np.r_[0.0, np.cumsum(sv[0] - sv[1])] * r.L
-            comp = float(np.max(np.abs(np.minimum(sv, cv))))
-            modes = []
-            for k in range(N):
-                sl = [i for i in range(4) if sv[i, k] > cv[i, k]]
-                if not sl:
-                    modes.append(int(Mode.STICK))
-                else:
-                    i = max(sl, key=lambda q: sv[q, k])
-                    modes.append(int(SLIP_PAIR_MODES[i]))
-            out["scen"].append({"phi": phi, "f_t": ft, "x1": x1, "S": float(x1[-1]), "comp": comp, "modes": modes,
-                                "periodic": float(max(np.max(np.abs(phi[:, -1] - phi[:, 0])),
-                                                      abs(ft[-1] - ft[0]) / (r.M * r.g)))})
+        """The solution x in physical units.
+
+        Returns a dict: ``tau`` (2, N) node torques [N m], ``T`` period [s], and per scenario (``scen``): ``theta``
+        (N,) interior fractions [-], ``phi`` (2, N+1) node angles [rad] (node N = node 0 after one cycle),
+        ``phi_sub`` (2, 2N+1) the angles at node 0 and every sub-step end, ``tau_sub`` (2, 2N) [N m] the torques
+        at the sub-step ends, ``f_t`` (N+1,) [N], ``x1`` (N+1,) and ``x1_sub`` (2N+1,) foot-1 positions [m],
+        ``S`` [m], ``v = direction S / T`` [m/s], ``W_plus`` [J] (midpoint rule per sub-step), the contact ``modes``
+        per interval and ``modes_sub`` per sub-step, and the complementarity (``comp``, including the cross
+        conditions) and periodicity (``periodic``) residuals [-].
+        """
+        s, r = self.settings, self.robot
+        N, Mg = s.nodes, r.M * r.g
+        tau = np.asarray(self._T(x)).reshape(2, N)
+        period = float(x[self._slices["T_hat"]][0]) * s.period_ref()
+        out = {"tau": tau, "T": period, "scen": []}
+        for j in range(len(self.scen)):
+            W = x[self._slices[f"w_{j}"]].reshape(NW, 2 * N, order="F")
+            theta = x[self._slices[f"theta_{j}"]].copy()
+            phi_sub = np.c_[x[self._slices[f"phi0_{j}"]], W[0:2]]
+            ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[2]] * Mg
+            x1_sub = np.r_[0.0, np.cumsum(W[4] - W[5])] * r.L
+            tau_sub = substep_torques(tau, theta)
+            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W, theta))
+            modes_sub = modes_of(W)
+            S = float(x1_sub[-1])
+            out["scen"].append({
+                "theta": theta, "phi": phi_sub[:, ::2], "phi_sub": phi_sub, "tau_sub": tau_sub, "f_t": ft_sub[::2],
+                "x1": x1_sub[::2], "x1_sub": x1_sub, "S": S, "v": s.direction * S / period,
+                "W_plus": positive_work(tau_sub, phi_sub), "comp": comp, "modes_sub": modes_sub,
+                "modes": [a if a != 0 else b for a, b in zip(modes_sub[::2], modes_sub[1::2])],
+                "periodic": float(max(np.max(np.abs(phi_sub[:, -1] - phi_sub[:, 0])), abs(ft_sub[-1] - ft_sub[0]) / Mg))})
         return out
 
     def equation_residual(self, x: np.ndarray) -> float:
@@ -286,30 +282,34 @@ class GaitOCP:
                 worst = max(worst, float(np.max(np.abs(g[sl] - self._lbg[sl]))))
         return worst
 
-    def positive_work(self, tau_nodes: np.ndarray, phi: np.ndarray) -> float:
-        """Discrete W+ [J] of the transcription: sum over actuators and steps of max(0, tau_mid dphi)."""
-        tau_step = np.c_[tau_nodes[:, 1:], tau_nodes[:, 0]]
-        tau_mid = 0.5 * (tau_nodes + tau_step)
-        return float(np.sum(np.maximum(tau_mid * np.diff(phi, axis=1), 0.0)))
-
     # ------------------------------------------------------------------ solve: the relaxation homotopy
-    def solve(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
+    def solve(self, x0: np.ndarray, fix_profile: bool = False) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
 
+        ``fix_profile``: the torques and the period are fixed to those of x0 by their bounds and the objective is
+        only the regularisation of the interior points (the transcription then simulates the profile: a check
+        against the event-driven simulator).
         ``status`` is the return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`) of the solve that
         decided: the last accepted stage or polish of the kept homotopy, else the failed stage of the last
         homotopy, whose ``failed`` then names the stage (``x`` is that homotopy's last accepted iterate or None).
         """
-        hom = Homotopy(self.solver, self.solver_warm, self._call)
+        self._fixed = None
+        if fix_profile:
+            self._fixed = np.zeros(self.nx, bool)
+            self._fixed[self._slices["tau"]] = self._fixed[self._slices["T_hat"]] = True
+            self._fixed_x = np.asarray(x0, float)
+        if fix_profile and self._sim_solvers is None:
+            self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
+        hom = Homotopy(*(self._sim_solvers if fix_profile else (self.solver, self.solver_warm)), self._call)
         best = None
         runs = []
-        f0 = float(self._f(x0))  # objective of the (nearly feasible) initial guess
+        f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
         for sigma0 in self.settings.sigma0:
             n0 = len(hom.records)
             x, failed, status = self._homotopy(hom, x0, sigma0)
             runs.append((x, hom.records[n0:], failed, status))
             if x is not None and failed is None:
-                f = float(self._f(x))
+                f = self.objective(x)
                 if best is None or f < best[0]:
                     best = (f, x, hom.records[n0:], status)
             if best is not None and best[0] < f0:
@@ -332,41 +332,71 @@ class GaitOCP:
         scen = self.unpack(call.x)["scen"]
         return Solve.of(call, comp=max(sc["comp"] for sc in scen), S=tuple(sc["S"] for sc in scen))
 
-    def _stage_data(self, sigma: float, tie_sigma: float | None = None) -> dict:
-        """Bounds of a relaxation stage: s_j c_j <= sigma, tie products >= -sigma (``tie_sigma`` if given)."""
-        ubg, lbg = self._ubg.copy(), self._lbg.copy()
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Variable bounds, with the profile fixed when :meth:`solve` was asked to."""
+        lbx, ubx = self._lbx.copy(), self._ubx.copy()
+        if self._fixed is not None:
+            lbx[self._fixed] = ubx[self._fixed] = self._fixed_x[self._fixed]
+        return lbx, ubx
+
+    def _stage_data(self, sigma: float, cross_sigma: float | None = None) -> dict:
+        """Bounds of a relaxation stage: s_j c_j <= sigma, cross products <= sigma (``cross_sigma`` if given)."""
+        ubg = self._ubg.copy()
         for j in range(len(self.scen)):
             ubg[self._slices[f"g_comp_{j}"]] = sigma
-        for name, sl in self._slices.items():
-            if name.startswith("g_tie_"):
-                lbg[sl] = -(sigma if tie_sigma is None else tie_sigma)
-        return {"lbx": self._lbx, "ubx": self._ubx, "lbg": lbg, "ubg": ubg}
+            ubg[self._slices[f"g_cross_{j}"]] = sigma if cross_sigma is None else cross_sigma
+        lbx, ubx = self._bounds()
+        data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
+        if self._fixed is not None:
+            data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
+        return data
 
-    def _polish_data(self, x: np.ndarray) -> dict:
+    def _polish_candidates(self, x: np.ndarray) -> list[dict]:
+        """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified foot switches
+        fixed, then the pairs' branches alone (the cross products keep the bound sigma_min)."""
+        return [self._polish_data(x), self._polish_data(x, ties=False)]
+
+    def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
         """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
-        c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs."""
+        c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs; where the slipping foot
+        changes between consecutive sub-steps, the new foot's margin in its slip direction is fixed to 0 at
+        the boundary (the tie); the cross products keep the bound sigma_min."""
         N = self.settings.nodes
-        data = self._stage_data(0.0, tie_sigma=self.settings.sigma_min)
-        ubx = self._ubx.copy()
+        data = self._stage_data(0.0, cross_sigma=self.settings.sigma_min)
+        ubx = data["ubx"].copy()
         for j in range(len(self.scen)):
             sl = self._slices[f"w_{j}"]
-            W = x[sl].reshape(NW, N, order="F")
-            fix = np.zeros((NW, N), bool)
-            fix[4:8] = W[4:8] <= W[8:12]
-            fix[8:12] = ~fix[4:8]
-            ub = ubx[sl].reshape(NW, N, order="F").copy()
+            W = x[sl].reshape(NW, 2 * N, order="F")
+            slip = W[4:8] > W[8:12]
+            fix = np.zeros((NW, 2 * N), bool)
+            fix[4:8] = ~slip
+            fix[8:12] = slip
+            ident = np.zeros((NW, 2 * N))
+            ident[4:8] = slip
+            _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
+            for d in range(2 if ties else 0):
+                fix[10 + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
+                fix[8 + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
+            ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
             ub[fix] = 0.0
             ubx[sl] = ub.ravel(order="F")
         return dict(data, ubx=ubx, x0=np.minimum(x, ubx))
 
     def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
-        raise the complementarity residual): (x or None, failed stage or None, status)."""
+        raise the complementarity residual; after a failed stage, only if it is within comp_tol):
+        (x or None, failed stage or None, status)."""
         s = self.settings
         run = hom.relax(schedule(sigma0, s.sigma_factor, s.sigma_min), Start(x0), self._stage_data)
         if not run.ok:
+            if run.last is not None:
+                # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
+                # the polish from the last accepted stage, kept only if it is complementary
+                pol = hom.polish(run.last, self._polish_candidates(run.last.x), lambda p: p.comp <= s.comp_tol)
+                if pol is not None:
+                    return pol.x, None, pol.status
             x = run.last.x if run.last is not None else None
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
-        pol = hom.polish(sol, [self._polish_data(sol.x)], lambda p: p.comp <= sol.comp)
+        pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
         return (pol.x, None, pol.status) if pol is not None else (sol.x, None, sol.status)

@@ -14,7 +14,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, suggest
+from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, removed_key, suggest
 
 _KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
 
@@ -31,6 +31,9 @@ def split_key(dotted: str, where: str) -> tuple[str, str]:
         raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid sections: {', '.join(SCHEMA)}")
     keys = SCHEMA[section].key_map
     if name not in keys:
+        removed = removed_key(section, name)
+        if removed is not None:
+            raise ProblemError(f"{where} is invalid: {removed}")
         hint = suggest(name, list(keys))
         raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid keys: {', '.join(keys)}")
     return section, name

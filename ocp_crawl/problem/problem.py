@@ -21,7 +21,8 @@ from ocp_crawl.problem.waveforms import gait_input
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
 from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
 from ocp_crawl.problem.schema import (DRIVES, MAX_ARRAY, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError,
-                                      Section, field_default, format_value, suggest, toml_type)
+                                      Section, field_default, format_value, removed_key, suggest,
+                                      toml_type)
 from ocp_crawl.sim import DEFAULT_SOLVER, solver_named
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
@@ -246,6 +247,9 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
     keys = section.key_map
     for name, value in given.items():
         if name not in keys:
+            removed = removed_key(section.name, name)
+            if removed is not None:
+                raise ctx.error(f"{removed} (here {name} = {format_value(value)})")
             hint = suggest(name, list(keys))
             raise ctx.error(f"[{section.name}] unknown key {name} = {format_value(value)}; {hint}"
                             f"valid keys: {', '.join(keys)}")

@@ -74,8 +74,6 @@ def ocp_settings(problem: Problem) -> OCPSettings:
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:  # a problem built in code: the schema's defaults
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
-    if sec.get("rate_limit") == "max_rate" and sec.get("max_rate") is None:
-        raise ProblemError(f"{problem.source}: [ocp] rate_limit = \"max_rate\" needs [ocp] max_rate (N m/cycle)")
     gamma = centre_deg(problem)
     if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
         gait = problem.sections.get("gait", {})

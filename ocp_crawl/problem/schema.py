@@ -22,7 +22,8 @@ from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
-from ocp_crawl.ocp.settings import FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS
+from ocp_crawl.ocp.settings import (FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS, REMOVED_KEYS,
+                                   STARTS_BOUNDS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
 Drive = Literal["torque", "angles"]
@@ -289,24 +290,34 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("fourier_order", int, "-", "order of the Fourier series", default=_ocp("fourier_order"),
         rule=within(*FOURIER_ORDER_BOUNDS, "dense coefficient columns slow every IPOPT iteration; for finer "
                     "profiles use the free parametrization")),
-    Key("rate_limit", str, "-", "torque rate limit: the harmonic envelope's peak rate, none, or max_rate",
-        default=_ocp("rate_limit"), choices=("harmonic", "none", "max_rate")),
-    Key("max_rate", float, "N m/cycle", "largest |d tau/dt| when rate_limit = \"max_rate\"", rule=GT0),
-    Key("curvature_limit", str, "-", "limit on d^2 tau/dt^2: 4 x the harmonic envelope's peak, or none",
-        default=_ocp("curvature_limit"), choices=("harmonic", "none")),
-    Key("regularization", float, "-", "weight of the torque-change regularisation", default=_ocp("regularization"),
+    Key("max_rate_deg_s", float, "deg/s", "actuator bandwidth: largest reference-angle rate |d phi_ref/dt| of each joint",
+        default=_ocp("max_rate_deg_s"), rule=GT0),
+    Key("max_accel_deg_s2", float, "deg/s^2", "optional smoothness bound: largest reference-angle acceleration "
+        "(absent: no bound)", rule=GT0),
+    Key("regularization", float, "-", "weight of the torque-rate regularisation", default=_ocp("regularization"),
         rule=GE0),
-    Key("tie_margin", float, "-", "friction-limit margin (fraction of M g) required for a foot to slip",
-        default=_ocp("tie_margin"), rule=GE0),
-    Key("S_min", float, "m", "min_cot: smallest progress direction * S per cycle", default=_ocp("S_min"), rule=GE0),
+    Key("speed_min", float, "m/s", "min_cot: smallest mean speed direction * S / T", default=_ocp("speed_min"),
+        rule=GE0),
     Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}",
         default=_ocp("mu_ratio_eps"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
-    Key("robust", str, "-", "robust_speed: maximise the mean or the worst S", default=_ocp("robust"),
+    Key("robust", str, "-", "robust_speed: maximise the mean or the worst speed", default=_ocp("robust"),
         choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
         default=_ocp("harmonic_psi"), rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
                                                   "and friction scenario; 180 is a 2 deg grid")),
+    Key("starts", int, "-", "starts of the OCP (harmonic baseline, perturbed, Fourier-order)", default=_ocp("starts"),
+        rule=within(*STARTS_BOUNDS, "each start is a full homotopy of the NLP")),
+    Key("replay_tol", float, "-", "relative tolerance of the replay judge (objective, speed requirement)",
+        default=_ocp("replay_tol"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
 ))
+
+
+def removed_key(section: str, name: str) -> str | None:
+    """The message for a key that earlier versions had and this one no longer has (``[ocp]`` keys of
+    :data:`~ocp_crawl.ocp.settings.REMOVED_KEYS`): what replaces it; None for any other key."""
+    if section != "ocp" or name not in REMOVED_KEYS:
+        return None
+    return f"[ocp] {name} no longer exists; use {REMOVED_KEYS[name]}"
 
 #: The schema: every section and key of a problem file, in the order they are validated and reported.
 SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP)

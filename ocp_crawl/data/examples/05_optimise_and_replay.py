@@ -18,7 +18,7 @@ import numpy as np
 from _common import output_dir, save
 from matplotlib.figure import Figure
 
-from ocp_crawl import Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot, simulate
+from ocp_crawl import Harmonic, Model, PeriodicLinear, ReferenceTorque, Robot, simulate
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 
 SETTINGS = OCPSettings(objective="max_speed", nodes=24, harmonic_psi=12)
@@ -33,7 +33,7 @@ def main() -> None:
         raise SystemExit(1)
     h = opt.harmonic
     harmonic = simulate(Model(robot), ReferenceTorque(Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg), robot.k))
-    mine = simulate(Model(robot), PeriodicPchip(opt.phase, opt.tau))   # the optimal torques [N m] as a signal
+    mine = simulate(Model(robot), PeriodicLinear(opt.phase, opt.tau))   # the optimal torques [N m] as a signal
     if not (mine.success and math.isclose(mine.S, opt.S_replay[0], rel_tol=1e-9)):
         raise SystemExit(f"replay through simulate: {mine.status_name}, S = {mine.S} m, optimize_gait's replay "
                          f"S = {opt.S_replay[0]} m")
@@ -44,7 +44,7 @@ def main() -> None:
     fig = Figure(figsize=(10.0, 4.0), layout="constrained")
     ax_tau, ax_x = fig.subplots(1, 2)
     tt = np.linspace(0.0, 1.0, 401)
-    tau_opt = PeriodicPchip(opt.phase, opt.tau)(tt)
+    tau_opt = PeriodicLinear(opt.phase, opt.tau)(tt)
     tau_h = ReferenceTorque(Harmonic.from_degrees(h.gamma_deg, h.A_deg, h.psi_deg), robot.k)(tt)
     for i, (color, lw, marker) in enumerate((("C0", 3.5, "s"), ("C3", 1.2, "o"))):  # tau1 wide: tau2 may cover it
         ax_tau.plot(tt, 1e3 * tau_opt[i], color, lw=lw, alpha=0.8, label=rf"optimal $\tau_{i + 1}$")

@@ -1,0 +1,229 @@
+"""Switch-exact sub-steps of the gait OCP: one friction scenario's variables and constraints, its initial
+guess from an event-driven simulation and its solution in physical units.
+
+Interval k (k = 1..N, from node k-1 at phase (k-1)/N to node k at phase k/N, node N = node 0) is split into
+two sub-steps, ``a`` from node k-1 to an interior point at the torque ``tau_k-1 + theta_k (tau_k - tau_k-1)``
+(``theta_k`` in [0, 1] a variable, the phase (k-1+theta_k)/N on the linear-in-phase interpolant) and ``b``
+from there to node k.  Each sub-step carries the full incremental step equations and complementarity of
+:mod:`ocp_crawl.model.step_equations`.  Sub-step j is column j of the (NW, 2N) step variables (a of interval
+k is column 2k-2, b column 2k-1).  Cross conditions (relaxed by the homotopy's sigma like the
+complementarity products, each scaled by N so that it is of the size of a product s c):
+
+* no sub-step has both feet slipping: ``N s1_j s2_j <= sigma`` with ``s_i = s_i+ + s_i-``;
+* the slipping foot changes at a sub-step boundary j (cyclically) only at the friction tie:
+  ``N s1_j (s2+_j+1 c2+_j + s2-_j+1 c2-_j) <= sigma`` and the same with the feet exchanged: foot 2 starts
+  slipping in a direction only where its margin in that direction is already zero at the end of sub-step j.
+  A sub-step of zero length (theta = 0 or 1) has no slip of its own: sitting between two slips it would let
+  the slipping foot change inside the next sub-step, away from the tie (an O(h) error per switch, which the
+  optimiser exploits).  So the slip before boundary j is s_j plus the slips of its predecessors passed through
+  short sub-steps with the weight max(0, 1 - l/SHORT)^2 (l the sub-step's length as a fraction of its interval,
+  SHORT = 0.1): s_j + w_j (s_j-1 + w_j-1 s_j-2) (three sub-steps always span a whole interval).  The price: a
+  slip of one foot, a stick shorter than SHORT h and a slip of the other without a tie is excluded.  A torque
+  that stands still over a whole interval (allowed by the bandwidth) is not covered: it, too, makes a sub-step
+  without slip.
+
+A change of the slipping foot thus falls on a sub-step boundary (the interior point moves to it), so the
+only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
+per event.  Both feet slipping at once (the event-driven simulator's slip-slip mode, possible only when
+mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
+"""
+from __future__ import annotations
+
+import math
+
+import casadi as cs
+import numpy as np
+
+from ocp_crawl.model.statics import NP, Model
+from ocp_crawl.model.step_equations import NPAIR, NW, friction_margins, step_equations
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.step import SLIP_PAIR_MODES
+
+#: the guess's interior points: fraction of the interval when no foot switch is simulated inside it
+THETA_GUESS = 0.5
+#: a sub-step shorter than this fraction of its interval passes its predecessor's slip on to the switch condition
+#: (a sub-step of zero length, theta = 0 or 1, has no slip of its own and would hide a change of the slipping foot)
+SHORT = 0.1
+#: a simulated switch closer than this to a node [interval fraction] keeps the interior point off the node
+THETA_EDGE = 1e-6
+
+
+def step_function() -> cs.Function:
+    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p)."""
+    phi_prev = cs.SX.sym("phi_prev", 2)
+    w = cs.SX.sym("w", NW)
+    th = cs.SX.sym("tau_hat", 2)
+    p = cs.SX.sym("p", NP)
+    g_eq, g_lift, sv, cv = step_equations(phi_prev, w, th, p)
+    return cs.Function("ocp_step", [phi_prev, w, th, p], [cs.vertcat(g_eq, g_lift), sv * cv])
+
+
+def substep_torques(T, theta):
+    """Scaled torques at the ends of the 2N sub-steps (2, 2N): interior point of interval k at
+    ``T_k-1 + theta_k (T_k - T_k-1)``, then node k (node N = node 0).  ``T``: node torques (2, N);
+    ``theta``: (N,) or (1, N) interval fractions (CasADi or numpy)."""
+    if isinstance(T, np.ndarray):
+        Tn = np.roll(T, -1, axis=1)
+        Ta = T + np.reshape(theta, (1, -1)) * (Tn - T)
+        return np.stack([Ta, Tn], axis=2).reshape(2, -1)
+    Tn = cs.horzcat(T[:, 1:], T[:, 0])
+    Ta = T + cs.repmat(cs.reshape(theta, 1, -1), 2, 1) * (Tn - T)
+    return cs.reshape(cs.vertcat(Ta, Tn), 2, -1)
+
+
+def _roll(x, n: int):
+    """Cyclic shift along the sub-steps: element j of the result is element j - n of ``x`` (numpy or CasADi)."""
+    if isinstance(x, np.ndarray):
+        return np.roll(x, n, axis=-1)
+    n %= x.shape[1]
+    return x if n == 0 else cs.horzcat(x[:, -n:], x[:, :-n])
+
+
+def pass_weights(theta):
+    """Weight (2N,) of each sub-step's predecessor in the switch condition: 1 for a sub-step of zero length,
+    falling as max(0, 1 - l/SHORT)^2 to 0 at the length l = SHORT (fraction of the interval); ``theta`` (N,)
+    (numpy or CasADi column)."""
+    if isinstance(theta, np.ndarray):
+        length = np.column_stack([theta, 1.0 - theta]).ravel()
+        return np.maximum(0.0, 1.0 - length / SHORT) ** 2
+    length = cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1)
+    return cs.fmax(0.0, 1.0 - length / SHORT) ** 2
+
+
+def switch_windows(W, theta):
+    """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j plus its
+    predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j (s_j-1 + w_j-1 s_j-2)),
+    and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+, s2-).  Returns (s1, s2, before, after)."""
+    s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
+    w = pass_weights(theta)
+    before = [s + w * (_roll(s, 1) + _roll(w, 1) * _roll(s, 2)) for s in (s1, s2)]
+    after = [_roll(W[4 + q, :], -1) for q in range(NPAIR)]
+    return s1, s2, before, after
+
+
+def cross_products(W, theta, N: int):
+    """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions (N,)
+    (CasADi or numpy): both feet slipping per sub-step, then foot 1 -> foot 2 and foot 2 -> foot 1 switches at
+    boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).  Returns (3, 2N)."""
+    s1, s2, before, after = switch_windows(W, theta)
+    both = N * s1 * s2
+    to2 = N * before[0] * (after[2] * W[10, :] + after[3] * W[11, :])
+    to1 = N * before[1] * (after[0] * W[8, :] + after[1] * W[9, :])
+    if isinstance(W, np.ndarray):
+        return np.vstack((both, to2, to1))
+    return cs.vertcat(both, to2, to1)
+
+
+def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
+    """Largest violation of the cross conditions as a min-residual (like the complementarity residual):
+    min(s1_j, s2_j) and min(slip before boundary j of one foot, slip after it of the other in direction d,
+    that foot's margin c_d at j) (both switch directions, d = +, -) [-]."""
+    s1, s2, before, after = switch_windows(W, theta)
+    res = [np.minimum(s1, s2)]
+    for d in range(2):
+        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[10 + d]))
+        res.append(np.minimum(np.minimum(before[1], after[d]), W[8 + d]))
+    return float(np.max(np.abs(np.vstack(res))))
+
+
+class Scenario:
+    """The sub-step variables and constraints of one friction scenario, added to a Layout."""
+
+    def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool):
+        """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross conditions, S
+        and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node torques (2, N); ``Th``: the
+        scaled period, which divides the relaxed products (a relaxation per unit time: the spurious slip that a
+        relaxation sigma allows then cannot buy speed by shrinking the period)."""
+        inf = np.inf
+        self.j, self.model, self.N = j, model, N
+        phi0, ft0 = cs.MX.sym(f"phi0_{j}", 2), cs.MX.sym(f"ft0_{j}")
+        theta = cs.MX.sym(f"theta_{j}", N)
+        W = cs.MX.sym(f"w_{j}", NW, 2 * N)
+        nlp.var(f"phi0_{j}", phi0, 0.0, math.pi)
+        nlp.var(f"ft0_{j}", ft0, -inf, inf)
+        nlp.var(f"theta_{j}", theta, 0.0, 1.0)
+        lbw = np.r_[0.0, 0.0, -inf, -inf, np.zeros(2 * NPAIR)]
+        ubw = np.r_[math.pi, math.pi, inf, inf, np.full(2 * NPAIR, inf)]
+        nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, 2 * N), np.tile(ubw, 2 * N))
+        PHI = cs.horzcat(phi0, W[0:2, :])  # (2, 2N+1)
+        Tsub = substep_torques(T, theta)
+        eqs, comp = step_map(PHI[:, :-1], W, Tsub, cs.repmat(cs.DM(model.p), 1, 2 * N))
+        nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0)
+        nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
+        nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
+        nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
+        # S and W+ are lifted into scalar variables defined by linear constraints, so that a nonlinear
+        # objective in them (W+/S, S/T) keeps the Hessian sparse
+        self.S = cs.MX.sym(f"S_{j}")
+        nlp.var(f"S_{j}", self.S, -inf, inf)
+        nlp.con(f"S_def_{j}", self.S - cs.sum2(W[4, :] - W[5, :]), 0.0, 0.0)  # foot-1 displacement / L
+        self.theta, self.W_plus = theta, None
+        if with_work:
+            # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
+            V = cs.MX.sym(f"v_{j}", 2, 2 * N)
+            nlp.var(f"v_{j}", cs.vec(V), 0.0, inf)
+            tau_mid = 0.5 * (Tsub + cs.horzcat(Tsub[:, -1], Tsub[:, :-1]))
+            nlp.con(f"wplus_{j}", cs.vec(V - tau_mid * (PHI[:, 1:] - PHI[:, :-1])), 0.0, inf)
+            self.W_plus = cs.MX.sym(f"Wp_{j}")
+            nlp.var(f"Wp_{j}", self.W_plus, 0.0, inf)
+            nlp.con(f"W_def_{j}", self.W_plus - cs.sum1(cs.sum2(V)), 0.0, 0.0)
+
+
+def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:
+    """Discrete W+ of the transcription (the units of the inputs: [J] from [N m] and [rad]): the midpoint
+    rule per sub-step, sum over actuators and sub-steps of max(0, tau_mid dphi).  ``tau_sub``: torques at
+    the sub-step ends (2, 2N) (the last one is node 0's); ``phi_sub``: angles (2, 2N+1) from node 0."""
+    tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
+    return float(np.sum(np.maximum(tau_mid * np.diff(phi_sub, axis=1), 0.0)))
+
+
+def switch_fractions(res, N: int) -> np.ndarray:
+    """Interior fractions of the guess: theta_k at the simulated change of the slipping foot inside interval
+    k, else at another contact event there (slip onset, slip-to-stick: the sub-step boundary then makes it exact
+    too), else THETA_GUESS.  ``res``: an event-driven CrawlResult; returns (N,)."""
+    theta = np.full(N, THETA_GUESS)
+    rank = np.full(N, 3)  # 0: a foot switch placed, 1: another event placed
+    for ev in res.steady_events():
+        if ev.kind.startswith("graze"):
+            continue
+        pos = (ev.t - res.t0) * N
+        k = min(int(math.floor(pos)), N - 1)
+        r = 0 if ev.kind == "slip_switch" else 1
+        if 0 <= k < N and r < rank[k] and THETA_EDGE < pos - k < 1 - THETA_EDGE:
+            theta[k], rank[k] = pos - k, r
+    return theta
+
+
+def guess_block(res, model: Model, N: int) -> dict:
+    """Scaled variables of one scenario sampled from an event-driven simulation ``res`` whose output phases
+    are node 0 and the 2N sub-step ends: the state of node 0, the (NW, 2N) sub-step variables and S."""
+    r = model.robot
+    Mg, L = r.M * r.g, r.L
+    phi, ft = res.phi, res.f_t / Mg
+    W = np.zeros((NW, 2 * N))
+    W[0:2] = phi[:, 1:]
+    W[2], W[3] = ft[1:], -ft[1:]
+    dx1, dx2 = np.diff(res.x1) / L, np.diff(res.x2) / L
+    W[4], W[5] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
+    W[6], W[7] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
+    fn1, fn2 = res.f_n1[1:] / Mg, res.f_n2[1:] / Mg
+    # lifted margins at the simulated points (f_t2 = -f_t on foot 2), clipped to >= 0
+    W[8:12] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2, -ft[1:])), 0.0)
+    return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[4] - W[5]))}
+
+
+def sample_phases(theta: np.ndarray) -> np.ndarray:
+    """Phases [cycles] of node 0 and the 2N sub-step ends for the interior fractions ``theta`` (N,)."""
+    N = theta.size
+    k = np.arange(N)
+    return np.r_[0.0, np.column_stack([(k + theta) / N, (k + 1) / N]).ravel()]
+
+
+def modes_of(W: np.ndarray) -> list[int]:
+    """Contact mode of each sub-step (the pair that slips most, stick when none slips beyond its margin)."""
+    sv, cv = W[4:8], W[8:12]
+    modes = []
+    for k in range(W.shape[1]):
+        sl = [i for i in range(NPAIR) if sv[i, k] > cv[i, k]]
+        modes.append(int(Mode.STICK) if not sl else int(SLIP_PAIR_MODES[max(sl, key=lambda q: sv[q, k])]))
+    return modes
