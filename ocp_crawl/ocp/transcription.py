@@ -27,6 +27,7 @@ from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.model.step_equations import NW
 from ocp_crawl.nlp import ipopt as nlp_ipopt
+from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
@@ -146,7 +147,7 @@ class GaitOCP:
         MgL = r.M * r.g * r.L
         nlp = Layout()
         T, dT, Th = self._torques(nlp, MgL)
-        step_map = step_function().map(2 * s.nodes)
+        step_map = compiled_kernel(step_function()).map(2 * s.nodes)
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot")
                 for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, dT, Th)
