@@ -15,13 +15,13 @@ T = ``settings.min_period(A1, A2)`` (the shortest the bandwidth allows, which is
 the family module).  :func:`best_harmonic` seeds with a coarse scan of symmetric gaits (gamma1 = gamma2,
 A1 = A2) and refines the best seeds by a bounded Nelder-Mead search over (gamma1, gamma2, A1, A2, psi).
 
-On a robot with equal feet (max_speed, min_cot of the shipped problems) the best members are nearly
-mirror-symmetric: gamma1 = gamma2, A1 = A2 and psi -> 0+ (towards foot 1; 0- the other way).  The value there
-is a one-sided limit: at psi = 0 exactly the two feet tie and S = 0, while for any small psi > 0 the foot with
-the lower friction limit slips and S, W+ tend to finite limits with an O(psi) error (e.g. the full-envelope
-gait: S = -60.1879 mm at psi = 0.001 and 0.01 deg, -60.1857 mm at 1 deg).  The search stops at a psi of about
-1e-3 deg; such a gait holds its anchoring foot by a tiny margin, so it is the best of the family in the model
-but fragile on a real robot (robust_speed, with unequal friction, chooses psi near 43 deg).
+On a robot with equal feet (max_speed, min_cot of the shipped problems) the fastest members in the model are
+nearly mirror-symmetric: gamma1 = gamma2, A1 = A2 and psi -> 0+ (towards foot 1; 0- the other way), a one-sided
+limit (at psi = 0 exactly the feet tie and S = 0) in which the anchoring foot holds by a margin O(psi): which
+foot slips there depends on friction coefficients known only approximately.  The family admits only members
+whose slip-weighted friction margin is at least ``friction_tol`` (:mod:`ocp_crawl.ocp.slip_margin`; the same rule
+judges the OCP's replay): on the paper's robot, about 0.007 psi/deg for small psi, so psi >~ 7 deg at the default
+0.05 (full-envelope gait: S = -60.19 mm at psi = 1 deg, -59.97 mm at 10 deg, -55.84 mm at 45 deg).
 """
 from __future__ import annotations
 

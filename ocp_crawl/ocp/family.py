@@ -4,7 +4,10 @@ A member is the reference gait phi_ref,i = gamma_i + A_i sin(2 pi t/T +- psi/2) 
 tau_i = k (phi_ref,i - pi) (:class:`~ocp_crawl.model.inputs.Harmonic`, :class:`ReferenceTorque`).  It belongs
 to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints stay inside the envelope,
 |gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates 2 pi A_i / T stay within the bandwidth R
-(``max_rate_deg_s``), i.e. T >= ``settings.min_period(A1, A2)`` = 2 pi max(A1, A2) / R.
+(``max_rate_deg_s``), i.e. T >= ``settings.min_period(A1, A2)`` = 2 pi max(A1, A2) / R.  A member is admissible
+only when which foot slips does not depend on the friction coefficients within +-friction_tol/2 (its
+slip-weighted friction margin, :mod:`ocp_crawl.ocp.slip_margin`, is at least ``settings.friction_tol``): this
+excludes the near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
 
 Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and CoT+
 of a harmonic gait do not depend on T.  The mean speed direction * S / T is then largest at the smallest
@@ -25,6 +28,7 @@ import numpy as np
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
 
 #: bounds of the box coordinates z = (w1, w2, u1, u2, p) (see the module docstring)
@@ -92,8 +96,9 @@ class HarmonicParams:
 class Evaluation:
     """The simulations of one member (one per friction scenario) at its period T [s].
 
-    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed); ``success``
-    when every scenario simulated successfully; ``message`` the first failure's message."""
+    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the member is
+    not admissible); ``success`` when every scenario simulated successfully with a slip-weighted friction
+    margin of at least ``friction_tol``; ``message`` the first failure's message."""
 
     params: HarmonicParams
     T: float
@@ -102,6 +107,9 @@ class Evaluation:
     CoT_plus: tuple
     success: bool
     message: str = ""
+    margin: tuple = ()
+    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a member below
+    ``settings.friction_tol`` is not admissible (``success`` False)"""
 
 
 class HarmonicFamily:
@@ -147,8 +155,13 @@ class HarmonicFamily:
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)
             sims.append(r)
+        margins = tuple(result_margins(r, m.robot)[0] for r, m in zip(sims, self.models))
+        eps = self.settings.friction_tol
+        low = next((x for x in margins if not x >= eps), None)
+        if low is not None:  # not admissible: which foot slips depends on friction known only to +-eps/2
+            return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
         return Evaluation(params, T, tuple(r.S for r in sims), tuple(r.W_plus for r in sims),
-                          tuple(r.CoT_plus for r in sims), True)
+                          tuple(r.CoT_plus for r in sims), True, margin=margins)
 
     def evaluated(self) -> list[Evaluation]:
         """Every evaluation so far (successful or not), in the order of their first request."""

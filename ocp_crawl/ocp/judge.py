@@ -11,6 +11,8 @@ friction scenario and accepts the optimum only when
   the optional ``max_accel_deg_s2`` = a, its second differences within k a (T/N)^2;
 * min_cot: the replayed mean speed direction * S / T meets ``speed_min`` within ``replay_tol`` (relative);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
+* which foot slips does not depend on friction coefficients known only to +-friction_tol/2: the replay's
+  slip-weighted friction margin (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol``;
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
 itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
@@ -27,6 +29,7 @@ from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.baseline import value_from
 from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.status import Status
 
@@ -136,6 +139,8 @@ class Verdict:
     rate_ratio: float = float("nan")
     accel_ratio: float = float("nan")
     """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
+    margin: list = field(default_factory=list)
+    """per scenario: the replay's slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`)"""
 
     @property
     def ok(self) -> bool:
@@ -184,6 +189,7 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.CoT_plus = [r.CoT_plus for r in v.replay]
     v.speed = [settings.direction * s / T for s in v.S]
     v.value = value_from(settings, v.S, v.CoT_plus, T)
+    v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
     problems = _problems(v, settings, value_ocp)
     if problems:
         v.status = Status.REPLAY_MISMATCH
@@ -196,7 +202,8 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
 
 
 def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
-    """What the replay misses: the envelope, the bandwidth, speed_min, the agreement with the OCP."""
+    """What the replay misses: the envelope, the bandwidth, speed_min, the friction tolerance, the agreement with
+    the OCP."""
     tol = settings.replay_tol
     out = []
     if not v.envelope_excess <= BOUND_RTOL:
@@ -212,6 +219,9 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
     if settings.objective == "min_cot" and settings.speed_min > 0 and not v.speed[0] >= settings.speed_min * (1 - tol):
         out.append(f"the replayed speed {units.speed(v.speed[0])} misses speed_min {units.speed(settings.speed_min)} "
                    f"by more than replay_tol {units.ratio(tol)}")
+    low = min(v.margin, default=math.inf)
+    if not low >= settings.friction_tol:
+        out.append(admissible_text(low, settings.friction_tol))
     if v.value != 0:
         v.rel_diff = abs(v.value - value_ocp) / abs(v.value)
     else:

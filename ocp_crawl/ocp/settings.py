@@ -92,6 +92,11 @@ class OCPSettings:
     replay_tol: float = 5e-3
     """relative tolerance of the replay judge: the event-driven replay must agree with the OCP's objective
     and meet speed_min within this fraction (envelope and bandwidth within 1e-9 relative)"""
+    friction_tol: float = 0.05
+    """relative tolerance eps of the friction coefficients: which foot slips must not depend on friction
+    coefficients known only to +-eps/2, so a gait is admissible (baseline, replay judge) only when its
+    slip-weighted friction margin (lim_anchor - lim_slip) / mean(lim) is at least eps
+    (:mod:`ocp_crawl.ocp.slip_margin`); 0 admits every gait, in [0, 1)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False
@@ -143,9 +148,12 @@ class OCPSettings:
             self._set("mu_ratios", ratios)
 
     def _check_bandwidth(self) -> None:
-        """max_accel_deg_s2: None or a number > 0; replay_tol below 1."""
+        """max_accel_deg_s2: None or a number > 0; replay_tol below 1; friction_tol in [0, 1)."""
         if self.max_accel_deg_s2 is not None:
             self._set("max_accel_deg_s2", real("OCPSettings.max_accel_deg_s2", self.max_accel_deg_s2, positive=True))
+        self._set("friction_tol", real("OCPSettings.friction_tol", self.friction_tol, nonneg=True))
+        if not self.friction_tol < 1:
+            raise ValueError(f"OCPSettings.friction_tol must be in [0, 1), got {self.friction_tol!r}")
         if not self.replay_tol < 1:
             raise ValueError(f"OCPSettings.replay_tol must be in (0, 1), got {self.replay_tol!r}")
 

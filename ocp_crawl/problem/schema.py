@@ -307,6 +307,9 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
                                                   "and friction scenario; 180 is a 2 deg grid")),
     Key("starts", int, "-", "starts of the OCP (harmonic baseline, perturbed, Fourier-order)", default=_ocp("starts"),
         rule=within(*STARTS_BOUNDS, "each start is a full homotopy of the NLP")),
+    Key("friction_tol", float, "-", "relative tolerance of the friction coefficients: a gait is admissible only "
+        "when which foot slips does not depend on them within +-friction_tol/2 (slip-weighted margin)",
+        default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
     Key("replay_tol", float, "-", "relative tolerance of the replay judge (objective, speed requirement)",
         default=_ocp("replay_tol"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
 ))

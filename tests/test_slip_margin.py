@@ -1,0 +1,92 @@
+"""The friction tolerance (ocp.friction_tol): which foot slips must not depend on friction coefficients known
+only to +-eps/2.  The slip-weighted margin of a simulation is checked against an independent computation from
+the result arrays on a fine output grid (the slipping foot read from ``mode``, not from the displacements;
+rectangle rule instead of the trapezoid), and the rule against the harmonic family and the replay judge."""
+import math
+
+import numpy as np
+import pytest
+
+from ocp_crawl import Robot
+from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.statics import Model
+from ocp_crawl.ocp import judge
+from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.family import HarmonicFamily, HarmonicParams
+from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.slip_margin import result_margins, slip_margins
+from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
+
+ROBOT = Robot.paper()
+MODEL = Model(ROBOT, gravity="physical")
+
+
+def harmonic(psi_deg: float, robot: Robot = ROBOT) -> ReferenceTorque:
+    return ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, psi_deg), robot.k)
+
+
+def margin_from_modes(res, robot: Robot) -> float:
+    """Independent: on output samples, the foot that slips after sample k is ``Mode(mode[k]).foot``; its slip is
+    |x_foot,k+1 - x_foot,k|; the limits are taken at sample k (rectangle rule)."""
+    l1, l2 = robot.mu1 * res.f_n1, robot.mu2 * res.f_n2
+    num = den = 0.0
+    for k in range(res.t.size - 1):
+        foot = Mode(int(res.mode[k])).foot
+        if foot == 0:
+            continue
+        for i, (x, own, other) in enumerate(((res.x1, l1, l2), (res.x2, l2, l1)), start=1):
+            if foot in (i, 3):
+                slip = abs(x[k + 1] - x[k])
+                num += slip * (other[k] - own[k])
+                den += slip * 0.5 * (own[k] + other[k])
+    return num / den
+
+
+@pytest.mark.parametrize("psi, robot", [(45.0, ROBOT), (-30.0, ROBOT), (45.0, ROBOT.replace(mu1=0.35, mu2=0.43))])
+def test_margin_of_a_simulation_matches_the_independent_computation(psi, robot):
+    model = Model(robot, gravity="physical")
+    res = simulate_torque(model, harmonic(psi, robot))
+    fine = simulate_torque(model, harmonic(psi, robot), t_eval=np.linspace(0.0, 1.0, 20001))
+    assert res.success and fine.success
+    m, low = result_margins(res, robot)
+    assert -1e-12 < low < m  # unequal friction: a direct change of the slipping foot passes the tie (low = 0)
+    assert m == pytest.approx(margin_from_modes(fine, robot), rel=2e-3)
+
+
+def test_margin_is_zero_at_the_tie_and_infinite_without_slip():
+    n = np.linspace(1.0, 2.0, 5)
+    x = np.cumsum(np.r_[0.0, np.ones(4)])
+    assert slip_margins(ROBOT, n, n, x, np.zeros(5)) == (0.0, 0.0)
+    assert slip_margins(ROBOT, n, n, np.zeros(5), np.zeros(5)) == (math.inf, math.inf)
+    # foot 2 slips with the lower limit: margin (lim1 - lim2) / mean = 2 (2 - 1) / 3
+    m, low = slip_margins(ROBOT, np.full(5, 2.0), np.ones(5), np.zeros(5), x)
+    assert m == pytest.approx(2 / 3) and low == pytest.approx(2 / 3)
+
+
+def test_near_mirror_symmetric_harmonic_gait_is_rejected_and_psi_45_accepted():
+    settings = OCPSettings(friction_tol=0.05)
+    fam = HarmonicFamily(ROBOT, "physical", settings)
+    tie = fam.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 0.01))
+    ok = fam.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 45.0))
+    assert not tie.success and "friction_tol" in tie.message and tie.margin[0] < 1e-3
+    assert ok.success and ok.margin[0] > 0.05
+    # without the tolerance the near-symmetric gait is a member (the faster one)
+    free = HarmonicFamily(ROBOT, "physical", OCPSettings(friction_tol=0.0))
+    assert free.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 0.01)).success
+
+
+@pytest.mark.parametrize("psi, status", [(0.01, Status.REPLAY_MISMATCH), (45.0, Status.SUCCESS)])
+def test_judge_rejects_a_replay_that_holds_the_tie(psi, status):
+    settings = OCPSettings(friction_tol=0.05)
+    N = 100
+    phase = np.arange(N) / N
+    tau = np.asarray(harmonic(psi)(phase), float).reshape(2, N)
+    T = 2.0 * settings.min_period(30.0, 30.0)  # well inside the bandwidth
+    ref = simulate_torque(MODEL, PeriodicLinear(phase, tau))
+    claim = value_from(settings, [ref.S], [ref.CoT_plus], T)  # an honest claim: only the margin can fail
+    verdict = judge.judge_replay([MODEL], settings, tau, T, claim)
+    assert verdict.status == status, verdict.message
+    if status == Status.REPLAY_MISMATCH:
+        assert "friction_tol" in verdict.message and verdict.margin[0] < 0.05
