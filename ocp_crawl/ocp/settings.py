@@ -96,7 +96,8 @@ class OCPSettings:
     """relative tolerance eps of the friction coefficients: which foot slips must not depend on friction
     coefficients known only to +-eps/2, so a gait is admissible (baseline, replay judge) only when its
     slip-weighted friction margin (lim_anchor - lim_slip) / mean(lim) is at least eps
-    (:mod:`ocp_crawl.ocp.slip_margin`); 0 admits every gait, in [0, 1)"""
+    (:mod:`ocp_crawl.ocp.slip_margin`); the OCP has the same rule as a constraint on its sub-steps
+    (:func:`ocp_crawl.ocp.substeps.friction_rows`); 0 admits every gait, in [0, 1)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False

@@ -26,6 +26,12 @@ A change of the slipping foot thus falls on a sub-step boundary (the interior po
 only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
 per event.  Both feet slipping at once (the event-driven simulator's slip-slip mode, possible only when
 mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
+
+Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction coefficients known
+only to +-eps/2, so ``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
+(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's end): the slip-weighted margin rule of the harmonic
+baseline and the replay judge (:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one
+foot slipping (margin 0).
 """
 from __future__ import annotations
 
@@ -129,11 +135,13 @@ def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
 class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
-    def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool):
+    def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool,
+                 friction_tol: float = 0.0):
         """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross conditions, S
         and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node torques (2, N); ``Th``: the
         scaled period, which divides the relaxed products (a relaxation per unit time: the spurious slip that a
-        relaxation sigma allows then cannot buy speed by shrinking the period)."""
+        relaxation sigma allows then cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the
+        friction-tolerance constraint (:func:`friction_rows`)."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
         phi0, ft0 = cs.MX.sym(f"phi0_{j}", 2), cs.MX.sym(f"ft0_{j}")
@@ -152,6 +160,8 @@ class Scenario:
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
+        if friction_tol > 0:
+            nlp.con(f"friction_{j}", cs.sum2(friction_rows(W, friction_tol)), 0.0, inf)
         # S and W+ are lifted into scalar variables defined by linear constraints, so that a nonlinear
         # objective in them (W+/S, S/T) keeps the Hessian sparse
         self.S = cs.MX.sym(f"S_{j}")
@@ -167,6 +177,17 @@ class Scenario:
             self.W_plus = cs.MX.sym(f"Wp_{j}")
             nlp.var(f"Wp_{j}", self.W_plus, 0.0, inf)
             nlp.con(f"W_def_{j}", self.W_plus - cs.sum1(cs.sum2(V)), 0.0, 0.0)
+
+
+def friction_rows(W, eps: float):
+    """Terms (1, 2N) of the friction-tolerance constraint sum_j terms_j >= 0, the transcription's form of the
+    slip-weighted margin rule of :mod:`ocp_crawl.ocp.slip_margin` (the same rule as the replay judge's):
+    ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with s_i the slip of foot i in
+    sub-step j and lim_i = (c_i+ + c_i-)/2 = mu_i f_n,i at its end (scaled by M g).  ``W``: (NW, 2N) sub-step
+    variables (CasADi or numpy)."""
+    s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
+    l1, l2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
+    return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
 
 
 def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:

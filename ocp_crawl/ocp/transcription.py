@@ -148,7 +148,7 @@ class GaitOCP:
         nlp = Layout()
         T, dT, Th = self._torques(nlp, MgL)
         step_map = compiled_kernel(step_function()).map(2 * s.nodes)
-        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot")
+        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot", s.friction_tol)
                 for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, dT, Th)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
@@ -347,7 +347,12 @@ class GaitOCP:
             ubg[self._slices[f"g_comp_{j}"]] = sigma
             ubg[self._slices[f"g_cross_{j}"]] = sigma if cross_sigma is None else cross_sigma
         lbx, ubx = self._bounds()
-        data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
+        lbg = self._lbg
+        if self._fixed is not None and "g_friction_0" in self._slices:
+            lbg = lbg.copy()  # a profile given to be simulated need not meet the friction tolerance
+            for j in range(len(self.scen)):
+                lbg[self._slices[f"g_friction_{j}"]] = -np.inf
+        data = {"lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
         if self._fixed is not None:
             data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
         return data
