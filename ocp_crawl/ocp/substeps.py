@@ -160,8 +160,9 @@ class Scenario:
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
-        if friction_tol > 0:
-            nlp.con(f"friction_{j}", cs.sum2(friction_rows(W, friction_tol)), 0.0, inf)
+        if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
+            total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
+            nlp.con(f"friction_{j}", total, 0.0, inf)
         # S and W+ are lifted into scalar variables defined by linear constraints, so that a nonlinear
         # objective in them (W+/S, S/T) keeps the Hessian sparse
         self.S = cs.MX.sym(f"S_{j}")
@@ -188,6 +189,16 @@ def friction_rows(W, eps: float):
     s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
     l1, l2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
+
+
+def _running_sum(nlp, var: str, con: str, terms):
+    """Add the running sums c_m = c_m-1 + terms_m (c_-1 = 0) of a (1, n) row of expressions as the variables
+    ``var`` (n,), defined by the equality constraints ``con``; returns the total c_n-1 (a scalar expression)."""
+    n = terms.numel()
+    c = cs.MX.sym(var, n)
+    nlp.var(var, c, -np.inf, np.inf)
+    nlp.con(con, c - cs.vertcat(0.0, c[:-1]) - cs.vec(terms), 0.0, 0.0)
+    return c[-1]
 
 
 def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:

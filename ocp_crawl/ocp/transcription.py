@@ -31,9 +31,9 @@ from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.substeps import (Scenario, cross_residual, guess_block, modes_of, positive_work, sample_phases,
-                                    step_function, substep_torques, switch_fractions,
-                                    switch_windows, THETA_GUESS)
+from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, positive_work,
+                                    sample_phases, step_function, substep_torques, switch_fractions, switch_windows,
+                                    THETA_GUESS)
 from ocp_crawl.sim.event import simulate_torque
 
 #: bounds of the scaled period variable T_hat = T / period_ref
@@ -227,6 +227,8 @@ class GaitOCP:
             for name in ("phi0", "ft0", "S"):
                 x[self._slices[f"{name}_{j}"]] = blk[name]
             x[self._slices[f"w_{j}"]] = blk["w"].ravel(order="F")
+            if f"Fc_{j}" in self._slices:
+                x[self._slices[f"Fc_{j}"]] = np.cumsum(friction_rows(blk["w"], s.friction_tol))
             x[self._slices[f"theta_{j}"]] = theta
             if f"v_{j}" in self._slices:
                 tau_sub = substep_torques(tau_nodes, theta) / MgL
@@ -279,7 +281,7 @@ class GaitOCP:
         g = np.asarray(self._g(x)).ravel()
         worst = 0.0
         for name, sl in self._slices.items():
-            if name.startswith(("g_eq_", "g_periodic_", "g_S_def_", "g_W_def_")):
+            if name.startswith(("g_eq_", "g_periodic_", "g_S_def_", "g_W_def_", "g_F_def_")):
                 worst = max(worst, float(np.max(np.abs(g[sl] - self._lbg[sl]))))
         return worst
 
