@@ -12,7 +12,8 @@ friction scenario and accepts the optimum only when
 * min_cot: the replayed mean speed direction * S / T meets ``speed_min`` within ``replay_tol`` (relative);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
 * which foot slips does not depend on friction coefficients known only to +-friction_tol/2: the replay's
-  slip-weighted friction margin (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol``;
+  slip-weighted friction margin (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol`` within
+  ``replay_tol`` (relative: the OCP's constraint holds it at friction_tol to its discretisation error);
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
 itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
@@ -227,8 +228,8 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
         out.append(f"the replayed speed {units.speed(v.speed[0])} misses speed_min {units.speed(settings.speed_min)} "
                    f"by more than replay_tol {units.ratio(tol)}")
     low = min(v.margin, default=math.inf)
-    if not low >= settings.friction_tol:
-        out.append(admissible_text(low, settings.friction_tol))
+    if not low >= settings.friction_tol * (1 - tol):
+        out.append(admissible_text(low, settings.friction_tol) + f" by more than replay_tol {units.ratio(tol)}")
     if v.value != 0:
         v.rel_diff = abs(v.value - value_ocp) / abs(v.value)
     else:

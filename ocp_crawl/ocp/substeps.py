@@ -29,7 +29,7 @@ mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
 
 Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction coefficients known
 only to +-eps/2, so ``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
-(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's end): the slip-weighted margin rule of the harmonic
+(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's midpoint by the trapezoid rule): the slip-weighted margin rule of the harmonic
 baseline and the replay judge (:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one
 foot slipping (margin 0).
 """
@@ -184,10 +184,12 @@ def friction_rows(W, eps: float):
     """Terms (1, 2N) of the friction-tolerance constraint sum_j terms_j >= 0, the transcription's form of the
     slip-weighted margin rule of :mod:`ocp_crawl.ocp.slip_margin` (the same rule as the replay judge's):
     ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with s_i the slip of foot i in
-    sub-step j and lim_i = (c_i+ + c_i-)/2 = mu_i f_n,i at its end (scaled by M g).  ``W``: (NW, 2N) sub-step
-    variables (CasADi or numpy)."""
+    sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled by M g) at its two ends (the trapezoid
+    rule of the simulation's margin; the start of sub-step 0 is the end of the last one, periodicity).  ``W``:
+    (NW, 2N) sub-step variables (CasADi or numpy)."""
     s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
-    l1, l2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
+    e1, e2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
+    l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
 
 
