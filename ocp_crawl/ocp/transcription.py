@@ -224,8 +224,9 @@ class GaitOCP:
             res = simulate_torque(model, signal, t_eval=sample_phases(theta))
             blk = guess_block(res, model, N)
             speeds.append(s.direction * blk["S"] / x[self._slices["T_hat"]][0])
-            for name in ("phi0", "ft0", "S"):
+            for name in ("phi0", "ft0"):
                 x[self._slices[f"{name}_{j}"]] = blk[name]
+            x[self._slices[f"Sc_{j}"]] = np.cumsum(blk["w"][4] - blk["w"][5])
             x[self._slices[f"w_{j}"]] = blk["w"].ravel(order="F")
             if f"Fc_{j}" in self._slices:
                 x[self._slices[f"Fc_{j}"]] = np.cumsum(friction_rows(blk["w"], s.friction_tol))
@@ -235,7 +236,7 @@ class GaitOCP:
                 tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
                 V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][0:2]], axis=1), 0.0)
                 x[self._slices[f"v_{j}"]] = V.ravel(order="F")
-                x[self._slices[f"Wp_{j}"]] = V.sum()
+                x[self._slices[f"Wc_{j}"]] = np.cumsum(V.sum(axis=0))
         if "zeta" in self._slices:
             x[self._slices["zeta"]] = min(speeds)
         return x
