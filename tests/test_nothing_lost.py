@@ -267,7 +267,7 @@ def test_a_killed_library_build_is_cleaned_up_and_rebuilt(tmp_path, monkeypatch)
     monkeypatch.setenv("OCP_CRAWL_CACHE", str(tmp_path))
     x = cs.SX.sym("x", 2)
     fun = cs.Function("nothing_lost_f", [x], [cs.vertcat(x[0] * x[1], cs.sin(x[0]))])
-    lib = compiled._build(fun)
+    lib = compiled.build_library(fun)
     assert lib is not None and lib.parent == tmp_path
     # the state after a build killed by SIGKILL: no library, the dead builder's directory with a partial file
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
@@ -276,7 +276,7 @@ def test_a_killed_library_build_is_cleaned_up_and_rebuilt(tmp_path, monkeypatch)
     stale = tmp_path / f".{lib.name}.{dead.pid}-{files.HOST_TAG}.k1ll3d.tmp"
     stale.mkdir()
     (stale / "f.c").write_text("/* half a source")
-    rebuilt = compiled._build(fun)
+    rebuilt = compiled.build_library(fun)
     assert rebuilt == lib and lib.exists() and not stale.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == [lib.name]
     f = compiled.FastFunction(fun)

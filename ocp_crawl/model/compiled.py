@@ -17,7 +17,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 import casadi as cs
 import numpy as np
@@ -58,38 +58,52 @@ def _compiler() -> str | None:
     return None
 
 
-def _generate(fun: cs.Function) -> str:
-    """The C source of ``fun`` (CasADi's code generator, no header)."""
+def _generate(funs: Sequence[cs.Function]) -> str:
+    """The C source of ``funs`` in one file (CasADi's code generator, no header)."""
     with tempfile.TemporaryDirectory() as tmp:
         cwd = os.getcwd()
         try:
             os.chdir(tmp)
-            gen = cs.CodeGenerator(f"{fun.name()}.c", {"with_header": False})
-            gen.add(fun)
+            gen = cs.CodeGenerator(f"{funs[0].name()}.c", {"with_header": False})
+            for fun in funs:
+                gen.add(fun)
             gen.generate()
-            return Path(tmp, f"{fun.name()}.c").read_text()
+            return Path(tmp, f"{funs[0].name()}.c").read_text()
         finally:
             os.chdir(cwd)
 
 
-def _key(fun: cs.Function, cc: str) -> str:
+def _key(fun: cs.Function, cc: str, tag: str = "") -> str:
     """Cache key of ``fun``'s library: a hash of its serialised expression graph (a few ms, against 10-20 ms
-    for generating the C source, which a warm run thus never does), the CasADi version, platform and compiler."""
-    tag = "|".join(("codegen-v2", " ".join(CFLAGS), cs.__version__, sys.platform, cc))
+    for generating the C source, which a warm run thus never does), the CasADi version, platform, compiler and
+    flags, and ``tag`` (what else the library holds, see :func:`build_library`)."""
+    tag = "|".join(("codegen-v2", " ".join(CFLAGS), cs.__version__, sys.platform, cc)) + (f"|{tag}" if tag else "")
     return hashlib.sha256(fun.serialize().encode() + tag.encode()).hexdigest()[:16]
 
 
-def _build(fun: cs.Function) -> Path | None:
-    """The shared library of ``fun`` in the cache, compiled from its C source if not there yet; None if not
-    possible (no compiler, a failed build)."""
+def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Function]] | None = None,
+                  tag: str = "") -> Path | None:
+    """The shared library of ``fun`` in the cache, compiled from its C source if not there yet.
+
+    Parameters
+    ----------
+    fun : the function; the library is named after it and keyed by its expression graph.
+    companions : called only when the library is built: the functions it holds (``fun`` first; default
+        ``[fun]``), e.g. ``fun`` and its derivatives, which are functions of ``fun`` alone.
+    tag : names what ``companions`` adds (part of the cache key; empty for ``fun`` alone).
+
+    Returns
+    -------
+    Path or None : the library, or None if not possible (no compiler, a failed build).
+    """
     cc = _compiler()
     if cc is None:
         return None
     out_dir = cache_dir()
-    lib = out_dir / f"{fun.name()}_{_key(fun, cc)}.so"
+    lib = out_dir / f"{fun.name()}_{_key(fun, cc, tag)}.so"
     if lib.exists():
         return lib
-    src = _generate(fun)
+    src = _generate(companions() if companions is not None else [fun])
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         # the source and the library are built in a private directory and the library is renamed into
@@ -126,7 +140,7 @@ class FastFunction:
         if os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0"):
             return
         try:
-            lib_path = _build(fun)
+            lib_path = build_library(fun)
             if lib_path is not None:
                 self._load(lib_path)
                 self.compiled, self.library = True, lib_path

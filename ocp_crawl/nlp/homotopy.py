@@ -80,6 +80,8 @@ class Stage:
     """body displacement per scenario [m] (the OCP; empty for the step solver)"""
     message: str = ""
     """the return status and its meaning from the table"""
+    eval_time: float = math.nan
+    """wall time [s] of the call spent in the NLP's function and derivative evaluations"""
 
 
 @dataclass
@@ -104,12 +106,14 @@ class Solve:
     s: np.ndarray | None = None
     """the complementarity pairs (s, c) at the point, when the caller measures them per pair"""
     c: np.ndarray | None = None
+    eval_time: float = math.nan
+    """wall time [s] IPOPT spent in function and derivative evaluations"""
 
     @classmethod
     def of(cls, call: IpoptCall, **measures) -> "Solve":
         """The solve of a :func:`~ocp_crawl.nlp.ipopt.call_ipopt` outcome with the caller's ``measures``."""
         return cls(call.x, call.lam_x, call.lam_g, call.status, call.usable, call.iterations, call.detail,
-                   call.f, **measures)
+                   call.f, **measures, eval_time=call.eval_time)
 
     @property
     def text(self) -> str:
@@ -184,7 +188,7 @@ class Homotopy:
         sol = self.call(solver, start, data)
         self.records.append(Stage(sigma, sol.status, sol.accepted, sol.iterations, sol.comp,
                                   time.perf_counter() - t0, kind, attempt, sol.objective, tuple(sol.S),
-                                  sol.describe()))
+                                  sol.describe(), sol.eval_time))
         for callback in _OBSERVERS.get():
             callback(self.records[-1])
         return sol

@@ -130,6 +130,8 @@ class IpoptCall:
     iterations: int
     detail: str = ""
     """the exception text when CasADi raised (status Solver_Exception), else ''"""
+    eval_time: float = math.nan
+    """wall time [s] IPOPT spent in the NLP's function and derivative evaluations (CasADi's t_wall_nlp_*)"""
 
     @property
     def status(self) -> str:
@@ -164,7 +166,8 @@ def call_ipopt(solver: cs.Function, nx: int, ng: int, **args) -> IpoptCall:
     st = solver.stats()
     return IpoptCall(ipopt_status(st.get("return_status", "Unknown")), np.asarray(sol["x"], float).ravel(),
                      np.asarray(sol["lam_x"], float).ravel(), np.asarray(sol["lam_g"], float).ravel(),
-                     float(sol["f"]), int(st.get("iter_count", 0)))
+                     float(sol["f"]), int(st.get("iter_count", 0)),
+                     eval_time=sum(v for k, v in st.items() if k.startswith("t_wall_nlp_")))
 
 
 #: types of IPOPT option values
