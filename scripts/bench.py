@@ -5,6 +5,7 @@
     python scripts/bench.py hybrid --old 3a581df --repeat 20
     python scripts/bench.py hybrid_accuracy  # the paper gait against a refined run, both gravities
     python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
+    python scripts/bench.py ocp_kernel --repeat 5  # OCP solves: SX step kernel against the compiled one
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -173,6 +174,69 @@ def bench_ocp(repeat: int) -> dict:
     return out
 
 
+#: the problem files of ``ocp_kernel`` (beside this script's package, problems/)
+KERNEL_PROBLEMS = ("ocp_max_speed", "ocp_min_cot")
+
+
+def _ocp_run(problem, settings, compiled: bool) -> dict:
+    """One ``optimize_gait`` of ``problem`` with the OCP's step kernel compiled or evaluated by CasADi's virtual
+    machine (``OCP_CRAWL_NO_COMPILE`` is read when the kernel is built; the simulator's compiled functions are
+    already loaded): the whole time, IPOPT's time and its function-evaluation time [s], iterations, optimum."""
+    from ocp_crawl.ocp import optimize_gait
+
+    if compiled:
+        os.environ.pop("OCP_CRAWL_NO_COMPILE", None)
+    else:
+        os.environ["OCP_CRAWL_NO_COMPILE"] = "1"
+    try:
+        t = time.perf_counter()
+        res = optimize_gait(problem.robot, problem.gravity, settings)
+        wall = time.perf_counter() - t
+    finally:
+        os.environ.pop("OCP_CRAWL_NO_COMPILE", None)
+    return {"whole_s": wall, "ipopt_s": sum(h.time for h in res.homotopy),
+            "eval_s": sum(h.eval_time for h in res.homotopy), "iterations": sum(h.iterations for h in res.homotopy),
+            "status": res.status.name, "value_ocp": res.value_ocp}
+
+
+def bench_ocp_kernel(repeat: int) -> dict:
+    """The OCP problem files at their default N: IPOPT's function-evaluation time against IPOPT's whole time and
+    the whole ``optimize_gait`` (baseline, solve, replay) with the step kernel evaluated by CasADi's virtual
+    machine ("sx") and compiled (nlp/codegen.py, "compiled"), alternating in one process, ``min(repeat, 5)``
+    rounds after a warm-up of each: min and median [s], the evaluation share of IPOPT's time, the speed-ups
+    sx/compiled, and whether both found the same optimum (iterations, objective)."""
+    from pathlib import Path
+
+    from ocp_crawl.problem import load_problem, ocp_settings
+
+    root = Path(__file__).resolve().parent.parent
+    out = {"load_average_start": os.getloadavg()}
+    for name in KERNEL_PROBLEMS:
+        problem = load_problem(root / "problems" / f"{name}.toml")
+        settings = ocp_settings(problem)
+        runs = {"sx": [], "compiled": []}
+        for k in range(min(repeat, 5) + 1):
+            for mode in runs:
+                run = _ocp_run(problem, settings, mode == "compiled")
+                if k:  # the first round builds and loads (the kernel's library, the simulator's functions)
+                    runs[mode].append(run)
+        row = {}
+        for mode, rs in runs.items():
+            for key in ("whole_s", "ipopt_s", "eval_s"):
+                v = [r[key] for r in rs]
+                row[f"{mode}_{key}"] = {"min": round(min(v), 3), "median": round(statistics.median(v), 3)}
+            row[f"{mode}_eval_share_of_ipopt"] = round(statistics.median([r["eval_s"] / r["ipopt_s"] for r in rs]), 3)
+        for key in ("whole_s", "ipopt_s", "eval_s"):
+            row[f"speedup_{key}_median"] = round(row[f"sx_{key}"]["median"] / row[f"compiled_{key}"]["median"], 2)
+        a, b = runs["sx"][0], runs["compiled"][0]
+        row["iterations_sx_compiled"] = (a["iterations"], b["iterations"])
+        row["status_sx_compiled"] = (a["status"], b["status"])
+        row["value_rel_diff"] = abs(a["value_ocp"] - b["value_ocp"]) / abs(a["value_ocp"])
+        out[name] = row
+    out["load_average_end"] = os.getloadavg()
+    return out
+
+
 def bench_paper(repeat: int) -> dict:
     """Accuracy checks behind the notes: stiff limit vs prescribed angles, CoT+ vs the published curve."""
     import csv
@@ -229,7 +293,7 @@ def bench_sweep(repeat: int) -> str:
 
 
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
-              "sweep": bench_sweep, "ocp": bench_ocp}
+              "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel}
 
 
 def main(argv=None) -> int:
