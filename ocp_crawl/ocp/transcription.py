@@ -12,13 +12,16 @@ Scholtes' relaxation s_j c_j <= sigma is driven to sigma_min by the homotopy eng
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.statics import NP, Model, Robot
 from ocp_crawl.model.step_equations import NPAIR, NW, friction_margins, step_equations
+from ocp_crawl.model.compiled import compiled_function
 from ocp_crawl.nlp import ipopt as nlp_ipopt
+from ocp_crawl.nlp.codegen import KernelBuild, compiled_kernel, kernel_library
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
@@ -33,14 +36,23 @@ def fourier_basis(N: int, K: int) -> np.ndarray:
     return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
 
 
+@lru_cache(maxsize=1)
 def step_function() -> cs.Function:
-    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p)."""
+    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p): the
+    N-independent kernel of the transcription (compiled with its derivatives, :func:`step_kernel`)."""
     phi_prev = cs.SX.sym("phi_prev", 2)
     w = cs.SX.sym("w", NW)
     th = cs.SX.sym("tau_hat", 2)
     p = cs.SX.sym("p", NP)
     g_eq, g_lift, sv, cv = step_equations(phi_prev, w, th, p)
     return cs.Function("ocp_step", [phi_prev, w, th, p], [cs.vertcat(g_eq, g_lift), sv * cv])
+
+
+@compiled_function
+def step_kernel() -> KernelBuild:
+    """The compiled step kernel and its derivatives (:func:`ocp_crawl.nlp.codegen.kernel_library`; registered so
+    that ``ocp-crawl warmup`` builds it)."""
+    return kernel_library(step_function())
 
 
 class Layout:
@@ -177,7 +189,7 @@ class GaitOCP:
         MgL = r.M * r.g * r.L
         nlp = Layout()
         T, dT = self._torques(nlp, MgL)
-        step_map = step_function().map(s.nodes)
+        step_map = compiled_kernel(step_function()).map(s.nodes)
         S_list, W_list = [], []
         for j, model in enumerate(self.scen):
             S_var, W_var = self._scenario(nlp, j, model, T, step_map)
