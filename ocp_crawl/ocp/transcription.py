@@ -49,6 +49,7 @@ def step_function() -> cs.Function:
 
 
 @compiled_function
+@lru_cache(maxsize=1)
 def step_kernel() -> KernelBuild:
     """The compiled step kernel and its derivatives (:func:`ocp_crawl.nlp.codegen.kernel_library`; registered so
     that ``ocp-crawl warmup`` builds it)."""
