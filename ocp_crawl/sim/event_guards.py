@@ -2,7 +2,7 @@
 transition table (see :mod:`ocp_crawl.sim.event` for the table of guards and modes).
 
 :class:`GuardsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
-stepper's ``Mg``, ``L``, ``mu``, ``noise``, ``p``, ``torque`` and ``ddot2``.
+stepper's ``Mg``, ``L``, ``mu``, ``noise``, ``p``, ``torque``, ``ddot2`` and ``curvature``.
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Point, torque_curvature
+from ocp_crawl.sim.event_state import _Point
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
@@ -93,7 +93,8 @@ class GuardsMixin:
         order).
 
         The slip modes' ``stick`` guard sigma d'/L needs d'', which depends on the torque's second
-        derivative; that is taken by central differences of the torque's derivative.
+        derivative; that is taken by central differences of the torque's derivative (inside the point's piece
+        when the input has kinks, :meth:`~ocp_crawl.sim.event_kinks.KinksMixin.curvature`).
         """
         a = pt.a
         Mg, L = self.Mg, self.L
@@ -109,7 +110,7 @@ class GuardsMixin:
         else:
             tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
             ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
-        ddtau = torque_curvature(self.torque_at, t, dt)
+        ddtau = self.curvature(t, pt.left, dt)  # (inside the point's piece of a piecewise input)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         foot = mode.foot  # (the guards in the order of :meth:`guards`)
         if foot == 3:
