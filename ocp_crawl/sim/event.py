@@ -308,10 +308,12 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
             t_new = min(pt.t + h, t_end)
             if t_end - t_new < 1e-12:
                 t_new = t_end
-            kink = self.next_kink(pt.t)  # (inf without kinks) a step ends at the next kink of the input
-            at_kink = kink - t_new < 1e-12
-            if at_kink:
-                t_new = kink
+            at_kink = False
+            if self._kink_list:  # a step ends at the next kink of the input
+                kink = self.next_kink(pt.t)
+                at_kink = kink - t_new < 1e-12
+                if at_kink:
+                    t_new = kink
             hh = t_new - pt.t
             new = self._continuation_step(run, t_new, hh, at_kink)
             if new is None:

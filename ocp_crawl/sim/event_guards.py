@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Point
+from ocp_crawl.sim.event_state import _Point, torque_curvature
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
@@ -110,7 +110,8 @@ class GuardsMixin:
         else:
             tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
             ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
-        ddtau = self.curvature(t, pt.left, dt)  # (inside the point's piece of a piecewise input)
+        # (with kinks: inside the point's piece of the input)
+        ddtau = self.curvature(t, pt.left, dt) if self._kink_list else torque_curvature(self.torque_at, t, dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         foot = mode.foot  # (the guards in the order of :meth:`guards`)
         if foot == 3:

@@ -92,7 +92,7 @@ class KinksMixin:
 
     def next_kink(self, t: float) -> float:
         """The first kink after phase t [cycles] (later than t + KINK_GAP); inf for an input without kinks."""
-        if not self.kinks.size:
+        if not self._kink_list:
             return math.inf
         if math.floor(t) + 1 > self._kink_upto:
             self._extend_kinks(math.floor(t) + 1)
@@ -108,7 +108,7 @@ class KinksMixin:
     def curvature(self, t: float, left: bool = False, dt: float = 1e-5) -> list:
         """tau''(t) [N m/cycle^2] (:func:`~ocp_crawl.sim.event_state.torque_curvature`) differenced inside the piece
         between kinks that holds t (for t at a kink: the piece before it when ``left``, else the one after it)."""
-        if self.kinks.size:
+        if self._kink_list:
             if math.floor(t) + 1 > self._kink_upto:
                 self._extend_kinks(math.floor(t) + 1)
             kl = self._kink_list
