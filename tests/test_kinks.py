@@ -114,3 +114,22 @@ def test_rounded_corners_converge_to_the_kinked_result(graze_case):
     assert 0.4 < errors[1] / errors[0] < 0.6 and 0.4 < errors[2] / errors[1] < 0.6  # ... to first order in sigma
     extrapolated = (8 * s[1e-3] - 6 * s[2e-3] + s[4e-3]) / 3  # (errors c1 sigma + c2 sigma^2 cancel)
     assert extrapolated == pytest.approx(res.S, rel=1e-5)  # (1.8e-6 measured)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("gravity", ["physical", "paper"])
+def test_triangle_phase_sweep_is_antisymmetric(gravity):
+    """Equal triangles with joint 2 shifted by j/24 cycle, j = 0..23 (the turning points on samples, so that slips
+    stop at kinks; 8 of these 48 runs failed before): all succeed, and the mirror symmetry of the robot (swapping
+    the joints is the shift -j/24, a time shift apart) reverses the step: S(j) = -S(24 - j), S(0) = S(12) = 0."""
+    robot = Robot.paper()
+    model = Model(robot, gravity=gravity)
+    s = []
+    for j in range(24):
+        res = simulate_torque(model, triangle_gait(24, j / 24, robot))
+        assert res.success, (j, res.message)
+        s.append(res.S)
+    assert abs(s[0]) <= 1e-12 * robot.L and abs(s[12]) <= 1e-12 * robot.L
+    for j in range(1, 12):
+        assert s[j] == pytest.approx(-s[24 - j], rel=1e-9, abs=1e-13 * robot.L), j
+    assert max(np.abs(s)) > 0.01 * robot.L

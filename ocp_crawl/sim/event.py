@@ -26,6 +26,9 @@ foot takes half of it (the symmetric solution). It leaves slip-slip when the lim
 
 A fold is located exactly by the augmented system G(x, t) = 0, J v = 0, v0.v = 1.
 
+At a kink of the input (a knot of piecewise-linear samples, where tau' jumps) a step ends; the state is
+continuous there and the mode after it is decided by the rates after it (:mod:`ocp_crawl.sim.event_kinks`).
+
 This module holds the options, the continuation and the cycle loop; the guards and the transition
 table are in :mod:`ocp_crawl.sim.event_guards`, event and fold location in
 :mod:`ocp_crawl.sim.event_locate`, dense output and the cycle integrals in
