@@ -469,7 +469,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
             found = [f for f in found if self._jump(ev_pt, f[1])[0] <= self.opt.jump_tol] or found  # the state wins
         if len(found) != 1:
             raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, mode, f"after event {kind}: {len(found)} consistent "
-                           f"successor modes (table successor {target.label} is inconsistent)")
+                           f"successor modes (table successor {target.label} is inconsistent){self.tie_note(ev_pt)}")
         chosen, trial = found[0]
         return chosen, trial, f"graze_{event_kind(kind)}" if chosen == mode else event_kind(kind)
 

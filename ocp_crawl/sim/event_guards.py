@@ -158,6 +158,17 @@ class GuardsMixin:
             suspect = suspect or bool(np.min(bound) < floor)
         return (sorted(out, key=lambda r: r[1]) if len(out) > 1 else out), suspect
 
+    def tie_note(self, pt: _Point) -> str:
+        """A note for a failure at pt: '' unless f_t is at both feet's friction limits, equal to SYMMETRY_TOL (the
+        tie mu1 f_n1 = mu2 f_n2, e.g. a mirror-symmetric state of a symmetric robot), where the contact mode is
+        physically ambiguous (which foot slips is not decided by the statics)."""
+        a, Mg = pt.a, self.Mg
+        lim1, lim2, ft = a[_LIM1], a[_LIM2], abs(a[_FT])
+        if abs(lim1 - lim2) > SYMMETRY_TOL * Mg or abs(ft - lim1) > SYMMETRY_TOL * Mg:
+            return ""
+        return (f"; both feet are at their friction limits and the limits tie (|mu1 f_n1 - mu2 f_n2|/(M g) = "
+                f"{abs(lim1 - lim2) / Mg:.2g}): which foot slips is physically ambiguous")
+
     def _transition(self, mode: Mode, kind: str) -> Mode | Status:
         if kind.startswith("lift_off"):
             return Status.LIFT_OFF

@@ -3,7 +3,7 @@ safeguarded Newton method, the consistency of a successor mode, and folds of the
 augmented system.
 
 :class:`EventsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
-stepper's ``_solve``, ``guards``, ``point_guards``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
+stepper's ``_solve``, ``guards``, ``point_guards``, ``tie_note``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
 """
 from __future__ import annotations
 
@@ -103,7 +103,8 @@ class EventsMixin:
                     break
             if ta is None:
                 raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
-                               f"guard {name} does not leave zero after the transition into {mode.label}")
+                               f"guard {name} does not leave zero after the transition into {mode.label}"
+                               f"{self.tie_note(p0)}")
         return self._root(point_at, mode, q, name, (ta, ga), (tb, g1))
 
     def _root(self, point_at, mode: Mode, q: np.ndarray, name: str, a: tuple[float, float],
