@@ -54,8 +54,8 @@ from ocp_crawl.sim.event_guards import GuardsMixin
 from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
-from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, hermite_point, \
-    mode_q, torque_pair
+from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
+    hermite_point, mode_q, torque_pair
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -190,9 +190,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         ``step``: a continuation step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then
         carries its stability numbers and d'' coefficients).  At a kink of the input the rates are those after
         it, or before it with ``left`` (:mod:`ocp_crawl.sim.event_kinks`)."""
-        tq = self._torque_values(float(t))
-        if self._kink_table:
-            tq = self.kink_values(t, left) or tq
+        tq = self._torque_values(float(t)) if not left else self.kink_values(t, True) or self._torque_values(float(t))
         fn, tol = self.step_fn if step else self.newton, self.res_tol
         tail = self._tails.get(id(q))
         if tail is None or tail[0] is not q:  # (q, its inputs q and p as a list, kept in the compiled buffer)
@@ -209,8 +207,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
                 if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, out[:3], out[3:_EXTRA3], tau=tq[:2], dtau=tq[2:], q=q,
-                          extra=out[_EXTRA3:] if step else None, a=lst[3:_EXTRA3], xl=xl, left=left)
+            return (_LeftPoint if left else _Point)(t, out[:3], out[3:_EXTRA3], tau=tq[:2], dtau=tq[2:], q=q,
+                                                    extra=out[_EXTRA3:] if step else None, a=lst[3:_EXTRA3], xl=xl)
         return None
 
     def initial_state(self, t0: float = 0.0) -> _Point:
@@ -421,7 +419,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
             raise _Failure(Status.NO_CONVERGENCE, pt.t, seg.mode, "mode solve failed at a kink of the input")
         run.pt = right
         g, g_left = self.point_guards(seg.mode, right), self.point_guards(seg.mode, pt)
-        jumped = [kind] if kind else [k for k, v in g.items() if v < -100 * guard_noise(k, self.noise) and g_left[k] >= 0]
+        jumped = [kind] if kind else [k for k, v in g.items()
+                                      if v < -100 * guard_noise(k, self.noise) and g_left[k] >= 0]
         if jumped:
             self._enter(run, right, jumped[0], pt.t)
 

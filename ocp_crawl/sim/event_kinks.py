@@ -68,7 +68,8 @@ class KinksMixin:
     """Kinks of the input for :class:`~ocp_crawl.sim.event.HybridStepper` (see the module docstring)."""
 
     def _init_kinks(self) -> None:
-        """Find the input's kinks; the table of their absolute phases starts with cycles -1, 0 and 1."""
+        """Find the input's kinks; the table of their absolute phases starts with cycles -1, 0 and 1.  With kinks, the
+        stepper's ``_torque_values`` gives the rate after a kink at the kink's phase."""
         self.kinks, self._kink_e = input_kinks(self.torque, self.breakpoints)
         self._kink_table: dict[float, tuple[list, list]] = {}
         """absolute phase of a kink -> (torque values with the left rate, with the right rate), each as
@@ -77,6 +78,13 @@ class KinksMixin:
         self._kink_upto = -2
         if self.kinks.size:
             self._extend_kinks(1)
+            base, table = self._torque_values, self._kink_table
+
+            def values(t: float) -> list:  # (the stepper's torque values: at a kink with the rate after it)
+                kv = table.get(t)
+                return base(t) if kv is None else kv[1]
+
+            self._torque_values = values
 
     def _extend_kinks(self, cycle: int) -> None:
         """Add the kinks of the cycles up to ``cycle`` to the table (the torque and both rates at each)."""
