@@ -26,6 +26,9 @@ foot takes half of it (the symmetric solution). It leaves slip-slip when the lim
 
 A fold is located exactly by the augmented system G(x, t) = 0, J v = 0, v0.v = 1.
 
+At a kink of the input (a knot of piecewise-linear samples, where tau' jumps) a step ends; the state is
+continuous there and the mode after it is decided by the rates after it (:mod:`ocp_crawl.sim.event_kinks`).
+
 This module holds the options, the continuation and the cycle loop; the guards and the transition
 table are in :mod:`ocp_crawl.sim.event_guards`, event and fold location in
 :mod:`ocp_crawl.sim.event_locate`, dense output and the cycle integrals in
@@ -48,10 +51,11 @@ from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, s
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_locate import EPS, EventsMixin, guard_noise
+from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin
+from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
-from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _Point, _Run, _Segment, event_kind, hermite_point, \
-    mode_q, torque_pair
+from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
+    hermite_point, mode_q, torque_pair
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -142,7 +146,7 @@ def step_limit(signal: PeriodicSignal) -> float:
         return input_step(signal)
 
 
-class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
+class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMixin):
     """Event-driven simulation of the torque-driven crawler.  Build once, call :meth:`run`."""
 
     def __init__(self, model: Model, torque, options: HybridOptions | None = None):
@@ -175,15 +179,18 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         # phases where a sampled input's derivative may have a kink (its knots): quadrature panel edges
         signal = self.torque.reference if isinstance(self.torque, ReferenceTorque) else self.torque
         self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
+        self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
         if self.opt.resolve_input:
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
-    def _solve(self, t: float, x0: np.ndarray | list, q: np.ndarray, step: bool = False) -> _Point | None:
+    def _solve(self, t: float, x0: np.ndarray | list, q: np.ndarray, step: bool = False,
+               left: bool = False) -> _Point | None:
         """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.
         ``step``: a continuation step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then
-        carries its stability numbers and d'' coefficients)."""
-        tq = self._torque_values(float(t))
+        carries its stability numbers and d'' coefficients).  At a kink of the input the rates are those after
+        it, or before it with ``left`` (:mod:`ocp_crawl.sim.event_kinks`)."""
+        tq = self._torque_values(float(t)) if not left else self.kink_values(t, True) or self._torque_values(float(t))
         fn, tol = self.step_fn if step else self.newton, self.res_tol
         tail = self._tails.get(id(q))
         if tail is None or tail[0] is not q:  # (q, its inputs q and p as a list, kept in the compiled buffer)
@@ -200,8 +207,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
                 if not math.isfinite(res) or res > 1e3:
                     return None
                 continue
-            return _Point(t, out[:3], out[3:_EXTRA3], tau=tq[:2], dtau=tq[2:], q=q,
-                          extra=out[_EXTRA3:] if step else None, a=lst[3:_EXTRA3], xl=xl)
+            return (_LeftPoint if left else _Point)(t, out[:3], out[3:_EXTRA3], tau=tq[:2], dtau=tq[2:], q=q,
+                                                    extra=out[_EXTRA3:] if step else None, a=lst[3:_EXTRA3], xl=xl)
         return None
 
     def initial_state(self, t0: float = 0.0) -> _Point:
@@ -302,8 +309,14 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             t_new = min(pt.t + h, t_end)
             if t_end - t_new < 1e-12:
                 t_new = t_end
+            at_kink = False
+            if self._kink_list:  # a step ends at the next kink of the input
+                kink = self.next_kink(pt.t)
+                at_kink = kink - t_new < 1e-12
+                if at_kink:
+                    t_new = kink
             hh = t_new - pt.t
-            new = self._continuation_step(run, t_new, hh)
+            new = self._continuation_step(run, t_new, hh, at_kink)
             if new is None:
                 continue
             self.nsteps += 1
@@ -316,16 +329,19 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
                 run.pt = new
                 seg.points.append(new)
                 run.h = min(self.max_step, 2 * h) if hh >= h * 0.999 else h
+                if at_kink:
+                    self._pass_kink(run)
                 continue
             self._take_event(run, new, crossed)
 
-    def _continuation_step(self, run: _Run, t_new: float, hh: float) -> _Point | None:
+    def _continuation_step(self, run: _Run, t_new: float, hh: float, left: bool = False) -> _Point | None:
         """The mode's solution at t_new from the current point, or None after shrinking the step when
-        the solve fails, jumps or crosses a fold (a fold close enough is located and ends the run)."""
+        the solve fails, jumps or crosses a fold (a fold close enough is located and ends the run).
+        ``left``: t_new is a kink of the input, solved with the rate before it (the end of the step's piece)."""
         pt, seg = run.pt, run.seg
         px, xd = pt.xl, pt.xdl
         gx = [px[0] + hh * xd[0], px[1] + hh * xd[1], px[2] + hh * xd[2]]  # (as pt.x + hh pt.x')
-        new = self._solve(t_new, gx, seg.q, step=True)
+        new = self._solve(t_new, gx, seg.q, step=True, left=left)
         ok = new is not None
         if ok:
             nx = new.xl
@@ -380,9 +396,39 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         (t_ev, ev_pt), kind = self._first_crossing(pt, new, seg, crossed)
         if ev_pt is None:
             raise _Failure(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
-        g_ev = self.point_guards(seg.mode, ev_pt)[kind]
+        if new.left and new.t - t_ev <= KINK_GAP:
+            # located at the kink that ends the step (to round-off): the event is at the kink, where the rates
+            # after it decide the successor
+            run.pt = new
+            seg.points.append(new)
+            self._pass_kink(run, kind)
+            return
         if ev_pt.t > pt.t:
             seg.points.append(ev_pt)
+        self._enter(run, ev_pt, kind, t_ev)
+
+    def _pass_kink(self, run: _Run, kind: str | None = None) -> None:
+        """At a kink of the input (run.pt, solved with the rate before it): the same state with the rate after it
+        continues the segment, unless a guard that was positive before the kink is negative after it (sigma d'
+        of a slip that stops or reverses exactly there), or ``kind`` names a guard found at zero there: then that
+        event happens at the kink, and the successor mode is decided by the rates after it
+        (:mod:`ocp_crawl.sim.event_kinks`)."""
+        pt, seg = run.pt, run.seg
+        right = self._solve(pt.t, pt.xl, seg.q, step=True)
+        if right is None:
+            raise _Failure(Status.NO_CONVERGENCE, pt.t, seg.mode, "mode solve failed at a kink of the input")
+        run.pt = right
+        g, g_left = self.point_guards(seg.mode, right), self.point_guards(seg.mode, pt)
+        jumped = [kind] if kind else [k for k, v in g.items()
+                                      if v < -100 * guard_noise(k, self.noise) and g_left[k] >= 0]
+        if jumped:
+            self._enter(run, right, jumped[0], pt.t)
+
+    def _enter(self, run: _Run, ev_pt: _Point, kind: str, t_ev: float) -> None:
+        """Record the event ``kind`` at t_ev (state ev_pt, of the current segment's mode) and start the successor
+        mode's segment, or end the run with the table's failure status."""
+        seg = run.seg
+        g_ev = self.point_guards(seg.mode, ev_pt)[kind]
         target = self._transition(seg.mode, kind)
         if isinstance(target, Status):
             run.events.append(Event(t_ev, event_kind(kind), seg.mode.label, "failure", g_ev, kind))
@@ -403,39 +449,10 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
         run.det_sign = np.sign(trial.aux[AUX["det"]]) or 1.0
         run.h = self.max_step
 
-    def _first_crossing(self, pt: _Point, new: _Point, seg: _Segment, crossed: list[str]):
-        """((t, point), guard) of the first zero in the step [pt, new] of the guards ``crossed``: they are
-        located in the order of their secant estimates, and a guard still positive at the earliest zero found
-        so far is not located (it crosses later; a guard that dips and returns inside the step ends the step
-        in its dip beforehand, see ``_crossings``)."""
-        g0, g1 = self.point_guards(seg.mode, pt), self.point_guards(seg.mode, new)
-
-        def estimate(k: str) -> float:
-            a, b = g0[k], g1[k]
-            return pt.t + (new.t - pt.t) * a / (a - b) if a > 0 > b else pt.t
-
-        best = None
-        for k in sorted(crossed, key=estimate):
-            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > guard_noise(k, self.noise):
-                continue
-            found = (self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k)
-            if best is None or self._earlier(found, best, crossed):
-                best = found
-        return best
-
-    def _earlier(self, found, best, crossed: list[str]) -> bool:
-        """Whether the located zero ``found`` comes before ``best``; zeros within the location tolerance are
-        simultaneous (e.g. at a kink of a sampled or pulse input, where the slip stops as another friction
-        limit is reached) and then the guard first in ``crossed`` (the guards' table order) comes first."""
-        t_f, t_b = found[0][0], best[0][0]
-        tol = self.opt.event_xtol + 4 * EPS * abs(t_b)
-        if abs(t_f - t_b) <= tol:
-            return crossed.index(found[1]) < crossed.index(best[1])
-        return t_f < t_b
-
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
-        else the one other consistent mode (the current one for a grazing event); (mode, its start, event kind)."""
+        else the one other consistent mode (the current one for a grazing event), or of several the one that starts
+        from the event's state without a jump (:meth:`_jump`); (mode, its start, event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
         trial = self._consistent(target, ev_pt, new_d0)
         if trial is not None:
@@ -447,9 +464,11 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin):
             tr = self._consistent(m, ev_pt, new_d0)
             if tr is not None:
                 found.append((m, tr))
+        if len(found) > 1 and not self._input_jumps(t_ev):  # (e.g. at a kink of the input) a mode that continues
+            found = [f for f in found if self._jump(ev_pt, f[1])[0] <= self.opt.jump_tol] or found  # the state wins
         if len(found) != 1:
             raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, mode, f"after event {kind}: {len(found)} consistent "
-                           f"successor modes (table successor {target.label} is inconsistent)")
+                           f"successor modes (table successor {target.label} is inconsistent){self.tie_note(ev_pt)}")
         chosen, trial = found[0]
         return chosen, trial, f"graze_{event_kind(kind)}" if chosen == mode else event_kind(kind)
 

@@ -89,15 +89,20 @@ class ChecksMixin:
         scale = np.max(np.abs(tau)) + self.model.robot.MgL
         return bool(np.max(np.abs(tau[:, 1] - tau[:, 0])) > 100 * eps * rate + 1e-9 * scale)
 
+    def _jump(self, ev_pt: _Point, start: _Point) -> tuple[float, float]:
+        """Size of the change of the state from ev_pt to start (the largest of |d phi1|, |d phi2| [rad],
+        |d f_t|/(M g)/(1 + k/(M g L)) and |d d|/L, see :meth:`_check_jump`), and |d d|/L."""
+        a, b = start.xl, ev_pt.xl
+        dd = abs(start.a[_D] - ev_pt.a[_D]) / self.L
+        ft_scale = 1.0 + self.model.robot.k / self.model.robot.MgL
+        return max(abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2]) / ft_scale, dd), dd  # (finite: the solves')
+
     def _check_jump(self, ev_pt: _Point, start: _Point, before: Mode, after: Mode, kind: str) -> None:
         """Raise ``_Failure(SNAP_THROUGH)`` if the successor's start differs from the event state by more than
         ``jump_tol`` in phi1, phi2 [rad], f_t/(M g)/(1 + k/(M g L)) or d/L while the input is continuous at the
         event.  f_t's change is divided by 1 + k/(M g L): its round-off grows with the stiffness ratio (as the
         guards' noise, about 2e-15 (1 + k/(M g L)) measured up to k/(M g L) = 1e5) while phi and d stay at round-off."""
-        a, b = start.xl, ev_pt.xl
-        dd = abs(start.a[_D] - ev_pt.a[_D]) / self.L
-        ft_scale = 1.0 + self.model.robot.k / self.model.robot.MgL
-        size = max(abs(a[0] - b[0]), abs(a[1] - b[1]), abs(a[2] - b[2]) / ft_scale, dd)  # (finite states: the solves')
+        size, dd = self._jump(ev_pt, start)
         if size <= self.opt.jump_tol or self._input_jumps(ev_pt.t):
             return
         dx = np.abs(start.x - ev_pt.x)

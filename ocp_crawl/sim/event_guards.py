@@ -2,7 +2,7 @@
 transition table (see :mod:`ocp_crawl.sim.event` for the table of guards and modes).
 
 :class:`GuardsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
-stepper's ``Mg``, ``L``, ``mu``, ``noise``, ``p``, ``torque`` and ``ddot2``.
+stepper's ``Mg``, ``L``, ``mu``, ``noise``, ``p``, ``torque``, ``ddot2`` and ``curvature``.
 """
 from __future__ import annotations
 
@@ -93,7 +93,8 @@ class GuardsMixin:
         order).
 
         The slip modes' ``stick`` guard sigma d'/L needs d'', which depends on the torque's second
-        derivative; that is taken by central differences of the torque's derivative.
+        derivative; that is taken by central differences of the torque's derivative (inside the point's piece
+        when the input has kinks, :meth:`~ocp_crawl.sim.event_kinks.KinksMixin.curvature`).
         """
         a = pt.a
         Mg, L = self.Mg, self.L
@@ -109,7 +110,8 @@ class GuardsMixin:
         else:
             tau, dtau = (pt.tau, pt.dtau) if pt.tau is not None else (self.torque(t), self.torque.derivative(t))
             ab = self.ddot2(pt.x, tau, dtau, q, self.p)[0].tolist()
-        ddtau = torque_curvature(self.torque_at, t, dt)
+        # (with kinks: inside the point's piece of the input)
+        ddtau = self.curvature(t, pt.left, dt) if self._kink_list else torque_curvature(self.torque_at, t, dt)
         r["stick"] = mode.sigma * (ab[0] + ab[1] * ddtau[0] + ab[2] * ddtau[1]) / L
         foot = mode.foot  # (the guards in the order of :meth:`guards`)
         if foot == 3:
@@ -155,6 +157,17 @@ class GuardsMixin:
             bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
             suspect = suspect or bool(np.min(bound) < floor)
         return (sorted(out, key=lambda r: r[1]) if len(out) > 1 else out), suspect
+
+    def tie_note(self, pt: _Point) -> str:
+        """A note for a failure at pt: '' unless f_t is at both feet's friction limits, equal to SYMMETRY_TOL (the
+        tie mu1 f_n1 = mu2 f_n2, e.g. a mirror-symmetric state of a symmetric robot), where the contact mode is
+        physically ambiguous (which foot slips is not decided by the statics)."""
+        a, Mg = pt.a, self.Mg
+        lim1, lim2, ft = a[_LIM1], a[_LIM2], abs(a[_FT])
+        if abs(lim1 - lim2) > SYMMETRY_TOL * Mg or abs(ft - lim1) > SYMMETRY_TOL * Mg:
+            return ""
+        return (f"; both feet are at their friction limits and the limits tie (|mu1 f_n1 - mu2 f_n2|/(M g) = "
+                f"{abs(lim1 - lim2) / Mg:.2g}): which foot slips is physically ambiguous")
 
     def _transition(self, mode: Mode, kind: str) -> Mode | Status:
         if kind.startswith("lift_off"):

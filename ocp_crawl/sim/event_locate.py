@@ -1,8 +1,9 @@
-"""Event location of the event-driven stepper: guard zeros by a safeguarded Newton method, the consistency of a
-successor mode, and folds of the equilibrium branch by the augmented system.
+"""Event location of the event-driven stepper: the first of the guards crossing zero in a step, guard zeros by a
+safeguarded Newton method, the consistency of a successor mode, and folds of the equilibrium branch by the
+augmented system.
 
 :class:`EventsMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the
-stepper's ``_solve``, ``guards``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
+stepper's ``_solve``, ``guards``, ``point_guards``, ``tie_note``, ``noise``, ``opt``, ``sym``, ``torque`` and ``p``.
 """
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import math
 
 import numpy as np
 
-from ocp_crawl.sim.event_state import _Failure, _Point, hermite_point, mode_q
+from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, hermite_point, mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
@@ -34,6 +35,36 @@ def guard_noise(name: str, noise: float) -> float:
 
 class EventsMixin:
     """Event location, mode consistency and fold location of :class:`~ocp_crawl.sim.event.HybridStepper`."""
+
+    def _first_crossing(self, pt: _Point, new: _Point, seg: _Segment, crossed: list[str]):
+        """((t, point), guard) of the first zero in the step [pt, new] of the guards ``crossed``: they are
+        located in the order of their secant estimates, and a guard still positive at the earliest zero found
+        so far is not located (it crosses later; a guard that dips and returns inside the step ends the step
+        in its dip beforehand, see ``_crossings``)."""
+        g0, g1 = self.point_guards(seg.mode, pt), self.point_guards(seg.mode, new)
+
+        def estimate(k: str) -> float:
+            a, b = g0[k], g1[k]
+            return pt.t + (new.t - pt.t) * a / (a - b) if a > 0 > b else pt.t
+
+        best = None
+        for k in sorted(crossed, key=estimate):
+            if best is not None and self.point_guards(seg.mode, best[0][1])[k] > guard_noise(k, self.noise):
+                continue
+            found = (self._locate(pt, new, seg.q, seg.mode, k, start=pt is seg.points[0]), k)
+            if best is None or self._earlier(found, best, crossed):
+                best = found
+        return best
+
+    def _earlier(self, found, best, crossed: list[str]) -> bool:
+        """Whether the located zero ``found`` comes before ``best``; zeros within the location tolerance are
+        simultaneous (e.g. at a kink of a sampled or pulse input, where the slip stops as another friction
+        limit is reached) and then the guard first in ``crossed`` (the guards' table order) comes first."""
+        t_f, t_b = found[0][0], best[0][0]
+        tol = self.opt.event_xtol + 4 * EPS * abs(t_b)
+        if abs(t_f - t_b) <= tol:
+            return crossed.index(found[1]) < crossed.index(best[1])
+        return t_f < t_b
 
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
                 start: bool = False) -> tuple[float, _Point]:
@@ -72,7 +103,8 @@ class EventsMixin:
                     break
             if ta is None:
                 raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
-                               f"guard {name} does not leave zero after the transition into {mode.label}")
+                               f"guard {name} does not leave zero after the transition into {mode.label}"
+                               f"{self.tie_note(p0)}")
         return self._root(point_at, mode, q, name, (ta, ga), (tb, g1))
 
     def _root(self, point_at, mode: Mode, q: np.ndarray, name: str, a: tuple[float, float],

@@ -100,6 +100,9 @@ class _Point:
     (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
 
     __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards", "_xl", "_xdl")
+    left = False
+    """solved with the input's rate just before t (:class:`_LeftPoint`: the end of a step at a kink of the input,
+    see :mod:`ocp_crawl.sim.event_kinks`); else with the rate at t, which at a kink is the one after it"""
 
     def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
                  extra=None, a: list | None = None, xl: list | None = None):
@@ -147,6 +150,13 @@ class _Point:
         if self._xdot is None:
             self._xdot = np.array(self.xdl)
         return self._xdot
+
+
+class _LeftPoint(_Point):
+    """A :class:`_Point` at a kink of the input solved with the input's rate just before it."""
+
+    __slots__ = ()
+    left = True
 
 
 def hermite_point(p0: _Point, p1: _Point, t: float) -> list:

@@ -1,0 +1,151 @@
+"""Piecewise-linear torques in the event-driven stepper: slips that stop or reverse exactly at a kink of the input.
+
+The stepper ends a continuation step at every kink (a knot where tau' jumps) and decides the contact mode
+after it by the rates after it (:mod:`ocp_crawl.sim.event_kinks`).  Independent checks: the switch-exact
+MPCC time-stepping with the kinks on step boundaries, the limit of the same input with its corners rounded
+(a Gaussian of width sigma -> 0, a smooth Fourier series that the stepper follows without any kink
+handling), and the mirror symmetry of an in-phase gait.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from ocp_crawl import (FourierSeries, Harmonic, Model, PeriodicLinear, PeriodicPchip, PeriodicSpline,
+                       ReferenceTorque, Robot, simulate, simulate_torque)
+from ocp_crawl.model.pulse import Pulse
+from ocp_crawl.sim.event_kinks import input_kinks
+from ocp_crawl.sim.timestepping import TimeSteppingOptions
+
+
+def triangle(t, shift: float = 0.0) -> np.ndarray:
+    """Triangle wave in [-1, 1] of period 1: -1 at t = shift, +1 half a cycle later."""
+    u = np.mod(np.asarray(t, float) - shift, 1.0)
+    return np.where(u < 0.5, -1 + 4 * u, 3 - 4 * u)
+
+
+def triangle_gait(n: int, shift2: float, robot: Robot) -> ReferenceTorque:
+    """Both reference angles a triangle wave between 60 and 120 deg, joint 2 shifted by ``shift2`` cycles,
+    linearly interpolated between n equally spaced samples (the turning points are samples)."""
+    tk = np.arange(n) / n
+    v = np.radians(90 + 30 * np.array([triangle(tk), triangle(tk, shift2)]))
+    return ReferenceTorque(PeriodicLinear(tk, v), robot.k)
+
+
+def rounded(torque: ReferenceTorque, sigma: float) -> ReferenceTorque:
+    """The linear interpolant of equally spaced samples convolved with a Gaussian of standard deviation sigma
+    [cycles]: its Fourier series (the hat functions' coefficients sinc^2 times the Gaussian's), cut where the
+    Gaussian factor is below 1e-20."""
+    lin = torque.reference
+    n = lin.t_knots.size
+    h = np.arange(int(math.ceil(1.6 / sigma)) + 1)
+    c = (np.fft.fft(lin.values, axis=1) / n)[:, h % n] * np.sinc(h / n) ** 2 * np.exp(-2 * (math.pi * h * sigma) ** 2)
+    return ReferenceTorque(FourierSeries(c[:, 0].real, 2 * c[:, 1:].real, -2 * c[:, 1:].imag), torque.k)
+
+
+def test_kinks_are_the_knots_where_the_rate_jumps():
+    tk = np.arange(16) / 16
+    harmonic = Harmonic.from_degrees(90, 30, 45)
+    samples = harmonic(tk)
+    assert np.array_equal(input_kinks(PeriodicLinear(tk, samples), tk)[0], tk)
+    for smooth in (PeriodicSpline(tk, samples), PeriodicPchip(tk, samples)):
+        assert input_kinks(smooth, tk)[0].size == 0, type(smooth).__name__
+    collinear = PeriodicLinear([0.0, 0.25, 0.5, 0.75], [[1.0, 2.0, 3.0, 2.0], [0.0, 1.0, 2.0, 2.0]])
+    assert np.array_equal(input_kinks(collinear, collinear.t_knots)[0], [0.0, 0.5, 0.75])  # both straight at 0.25
+    trapezoid = Pulse(1.5, 1.5, 0.5, 0.5, 0.0, 0.1, 0.2)
+    assert np.array_equal(input_kinks(trapezoid, trapezoid.t_knots)[0], trapezoid.t_knots)
+    cosine = Pulse(1.5, 1.5, 0.5, 0.5, 0.0, 0.1, 0.2, ramp="cosine")
+    assert input_kinks(cosine, cosine.t_knots)[0].size == 0
+
+
+@pytest.mark.parametrize("gravity", ["physical", "paper"])
+def test_in_phase_triangle_stops_slipping_at_its_turning_points(gravity):
+    """Equal triangle waves on a symmetric robot: both feet slip together (the tie of the friction limits) until
+    the rate reverses at the turning points t = 0 and 1/2, where the slip stops exactly; the mirror symmetry
+    gives S = 0.  (Before the kinks ended a step, the stop was located a round-off before the kink and the
+    stick-stick mode started there with the old rates: "guard slip_1- does not leave zero".)"""
+    robot = Robot.paper()
+    res = simulate_torque(Model(robot, gravity=gravity), triangle_gait(24, 0.0, robot))
+    assert res.success, res.message
+    stops = [e for e in res.steady_events() if e.kind == "slip_to_stick"]
+    assert sorted({(e.t - res.t0) % 1.0 for e in stops}) == [0.0, 0.5]  # exactly at the kinks
+    assert all(e.mode_before.startswith("slip-slip") and e.mode_after == "stick-stick" for e in stops)
+    assert abs(res.S) <= 1e-12 * robot.L
+
+
+@pytest.fixture(scope="module")
+def graze_case():
+    """Triangles 150 deg apart (joint 2 shifted by -5/12 cycle): the stick-stick state reaches foot 2's friction
+    limit exactly at joint 1's turning point (by the gait's mirror-and-time-reversal symmetry) and leaves it after
+    the kink.  Before: "2 consistent successor modes" (stick-stick and a slip mode 0.4 deg away)."""
+    robot = Robot.paper()
+    model = Model(robot, gravity="physical")
+    torque = triangle_gait(24, -5 / 12, robot)
+    return model, torque, simulate_torque(model, torque)
+
+
+def test_friction_limit_reached_at_a_kink_is_a_graze(graze_case):
+    _, _, res = graze_case
+    assert res.success, res.message
+    graze = [e for e in res.steady_events() if e.kind.startswith("graze_")]
+    assert [(e.t - res.t0, e.mode_after, e.guard_name) for e in graze] == [(0.0, "stick-stick", "slip_2-")]
+    assert abs(graze[0].guard) < 1e-12
+
+
+def test_kinked_gait_agrees_with_switch_exact_time_stepping(graze_case):
+    """MPCC time-stepping with 48 steps: every kink (24 samples) on a step boundary, events split exactly."""
+    model, torque, res = graze_case
+    mpcc = simulate(model, torque, solver="mpcc", options=TimeSteppingOptions(steps=48))
+    assert mpcc.success, mpcc.message
+    assert mpcc.S == pytest.approx(res.S, rel=1e-4)  # (1.1e-6 measured; 2.3e-7 with 192 steps)
+
+
+def test_rounded_corners_converge_to_the_kinked_result(graze_case):
+    """The input with its corners rounded over sigma = 4e-3, 2e-3, 1e-3 cycles (smooth: no kink handling) moves S
+    by O(sigma); the second-order Richardson extrapolation of the three to sigma = 0 is the kinked result."""
+    model, torque, res = graze_case
+    s = {}
+    for sigma in (4e-3, 2e-3, 1e-3):
+        smooth = simulate_torque(model, rounded(torque, sigma))
+        assert smooth.success, smooth.message
+        s[sigma] = smooth.S
+    errors = [abs(s[sigma] - res.S) for sigma in (4e-3, 2e-3, 1e-3)]
+    assert errors[0] > 1e-4 * abs(res.S)  # the rounding matters (7.1e-6 m, 8e-4 relative) ...
+    assert 0.4 < errors[1] / errors[0] < 0.6 and 0.4 < errors[2] / errors[1] < 0.6  # ... to first order in sigma
+    extrapolated = (8 * s[1e-3] - 6 * s[2e-3] + s[4e-3]) / 3  # (errors c1 sigma + c2 sigma^2 cancel)
+    assert extrapolated == pytest.approx(res.S, rel=1e-5)  # (1.8e-6 measured)
+
+
+def test_friction_tie_at_a_kink_fails_with_a_clear_message():
+    """Trapezoid pulses 100 deg apart: the slip of foot 2 reaches a corner where both joints have just come to the
+    same rest level and stay there (tau' = 0 after the kink): a mirror-symmetric state of the symmetric robot, both
+    feet at equal friction limits and nothing moving.  Which foot slips later is not decided by the statics: the
+    run fails, saying so (it is not given a mode)."""
+    robot = Robot.paper()
+    pulse = Pulse(math.radians(90), math.radians(90), math.radians(25), math.radians(25), math.radians(100), 0.12, 0.0)
+    res = simulate_torque(Model(robot, gravity="physical"), ReferenceTorque(pulse, robot.k))
+    assert res.status_name == "no_consistent_mode"
+    assert "the limits tie" in res.message and "physically ambiguous" in res.message
+    t = res.failure_t  # (independent of the stepper: the input there is symmetric and held)
+    assert np.min(np.abs(pulse.t_knots - t % 1.0)) < 1e-12
+    ref, rate = pulse(t), pulse.derivative(t + 1e-6)
+    assert abs(ref[0] - ref[1]) < 1e-12 and np.all(rate == 0.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("gravity", ["physical", "paper"])
+def test_triangle_phase_sweep_is_antisymmetric(gravity):
+    """Equal triangles with joint 2 shifted by j/24 cycle, j = 0..23 (the turning points on samples, so that slips
+    stop at kinks; 8 of these 48 runs failed before): all succeed, and the mirror symmetry of the robot (swapping
+    the joints is the shift -j/24, a time shift apart) reverses the step: S(j) = -S(24 - j), S(0) = S(12) = 0."""
+    robot = Robot.paper()
+    model = Model(robot, gravity=gravity)
+    s = []
+    for j in range(24):
+        res = simulate_torque(model, triangle_gait(24, j / 24, robot))
+        assert res.success, (j, res.message)
+        s.append(res.S)
+    assert abs(s[0]) <= 1e-12 * robot.L and abs(s[12]) <= 1e-12 * robot.L
+    for j in range(1, 12):
+        assert s[j] == pytest.approx(-s[24 - j], rel=1e-9, abs=1e-13 * robot.L), j
+    assert max(np.abs(s)) > 0.01 * robot.L
