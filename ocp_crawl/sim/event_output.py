@@ -371,15 +371,22 @@ class OutputMixin:
                 np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]),
                 np.concatenate([np.full(len(tt), j) for (tt, _), j in zip(pieces, panel)]), positive_panels)
 
-    def _state_at(self, segments, t: float) -> _Point:
+    @staticmethod
+    def _segment_at(segments, t: float):
+        """The last segment whose span holds the phase t (its end within 1e-15: a cycle can end 2e-16 short of
+        its phase)."""
         for seg in reversed(segments):
             if seg.points[0].t <= t <= seg.points[-1].t + 1e-15:
-                for p in seg.points:
-                    if abs(p.t - t) < 1e-15:
-                        return p
-                xs, aux = self._evaluate_many(seg, np.array([t]))
-                return _Point(t, xs[:, 0], aux[:, 0])
+                return seg
         raise ValueError(t)
+
+    def _state_at(self, segments, t: float) -> _Point:
+        seg = self._segment_at(segments, t)
+        for p in seg.points:
+            if abs(p.t - t) < 1e-15:
+                return p
+        xs, aux = self._evaluate_many(seg, np.array([t]))
+        return _Point(t, xs[:, 0], aux[:, 0])
 
     def _build_result(self, run: _Run, status: Status, detail: str, fail_t: float | None, fail_mode: str | None,
                       periodic_at: int | None, te: np.ndarray | None) -> CrawlResult:
@@ -465,9 +472,7 @@ class OutputMixin:
         """S, W+, CoT+ and the energy balance of the steady cycle [t0, t0 + 1] (``first``: see :meth:`_panels`)."""
         model = self.model
         pa, pb = self._state_at(segments, t0), self._state_at(segments, t0 + 1)
-        # (the segments of pa and pb, found as _state_at finds them: a cycle can end 2e-16 short of its phase)
-        sa = [s for s in segments if s.points[0].t <= t0 <= s.points[-1].t + 1e-15][-1]
-        sb = [s for s in segments if s.points[0].t <= t0 + 1 <= s.points[-1].t + 1e-15][-1]
+        sa, sb = self._segment_at(segments, t0), self._segment_at(segments, t0 + 1)
         x1a = sa.foot_positions(pa.aux[AUX["d"]])[0].item()
         x1b = sb.foot_positions(pb.aux[AUX["d"]])[0].item()
         ints = self._cycle_integrals(segments, t0, t0 + 1, positive=True, first=first)
