@@ -14,7 +14,7 @@ SETTINGS = {
     "min_cot": dict(objective="min_cot", speed_min=0.04),
     # one homotopy start (the tight one, which the default two-start solve also ends up using
     # here) keeps this three-scenario solve within the CI budget
-    "robust_speed": dict(objective="robust_speed", sigma0=(1e-6,)),
+    "robust_speed": dict(objective="robust_speed", sigma0=(1e-6,), sigma_min=1e-8),
 }
 
 

@@ -47,19 +47,32 @@ def test_objective_is_time_scale_invariant_at_the_guess(objective):
         assert abs(twice.objective(x3) - once.objective(x1)) > 0.1 * abs(once.objective(x1))
 
 
+def _best_speed(ocp: GaitOCP, starts) -> tuple[float, dict]:
+    """The best mean speed [m/s] of the solves from ``starts`` (signal, period) and its unpacked solution."""
+    best = (-np.inf, None)
+    for signal, period in starts:
+        x, _, failed, _ = ocp.solve(ocp.initial_guess(signal, period))
+        if failed is None and ocp.unpack(x)["scen"][0]["v"] > best[0]:
+            best = (ocp.unpack(x)["scen"][0]["v"], ocp.unpack(x))
+    return best
+
+
 @pytest.mark.slow
-def test_solve_at_2N_from_the_twice_packed_guess_equals_the_solve_at_N():
-    sig = paper_torque()
-    st = OCPSettings(nodes=20, sigma0=(1e-2,))
-    T = st.min_period(30.0, 30.0)
-    once = GaitOCP(PAPER, "physical", st)
-    twice = GaitOCP(PAPER, "physical", OCPSettings(nodes=40, sigma0=(1e-2,)))
-    xa, _, fa, _ = once.solve(once.initial_guess(sig, T))
-    xb, _, fb, _ = twice.solve(twice.initial_guess(packed_twice(sig), 2 * T))
-    assert fa is None and fb is None
-    va, vb = once.unpack(xa)["scen"][0]["v"], twice.unpack(xb)["scen"][0]["v"]
-    assert vb == pytest.approx(va, rel=0.01)
-    assert once.objective(xa) == pytest.approx(twice.objective(xb), rel=0.01)
+def test_the_best_one_stroke_gait_at_N_equals_the_best_two_stroke_gait_at_2N():
+    """Time-scale invariance of the optimum: the best of the solves at N = 20 (from the harmonic gait and from one
+    stroke of the 2N optimum) equals the best at 2N = 40 (from the harmonic gait packed twice and from the N
+    optimum packed twice, period doubled).  Each start alone may end in another local optimum (from the harmonic
+    start 81.7 mm/s at N = 20, 85.5 at 2N), which is why the OCP runs several starts."""
+    sig, T = paper_torque(), OCPSettings().min_period(30.0, 30.0)
+    once = GaitOCP(PAPER, "physical", OCPSettings(nodes=20))
+    twice = GaitOCP(PAPER, "physical", OCPSettings(nodes=40))
+    v1, u1 = _best_speed(once, [(sig, T)])
+    v2, u2 = _best_speed(twice, [(packed_twice(sig), 2 * T),
+                                 (packed_twice(PeriodicLinear(np.arange(20) / 20, u1["tau"])), 2 * u1["T"])])
+    v1, u1 = max((v1, u1), _best_speed(once, [(PeriodicLinear(np.arange(20) / 20, u2["tau"][:, :20]), u2["T"] / 2)]),
+                 key=lambda vu: vu[0])
+    assert v1 == pytest.approx(v2, rel=0.01)
+    assert u2["T"] == pytest.approx(2 * u1["T"], rel=0.02)
 
 
 def fixed_profile_solve(N: int):
@@ -68,7 +81,7 @@ def fixed_profile_solve(N: int):
     event-driven simulation of the same linear-in-phase input (the independent reference)."""
     prob = load_problem(REPO / "problems" / "unequal_friction.toml")
     sig = ReferenceTorque(prob.gait, prob.robot.k)
-    st = OCPSettings(nodes=N, sigma0=(1e-6,))
+    st = OCPSettings(nodes=N, sigma0=(1e-6,), sigma_min=1e-8)
     ocp = GaitOCP(prob.robot, "physical", st)
     x, _, failed, status = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0), switches=False),
                                      fix_profile=True)
@@ -106,7 +119,7 @@ def test_fixed_profile_converges_at_finer_N():
 @pytest.mark.parametrize("objective,extra", [
     ("max_speed", {}),
     pytest.param("min_cot", {"speed_min": 0.03}, marks=pytest.mark.slow),
-    pytest.param("robust_speed", {"sigma0": (1e-6,)}, marks=pytest.mark.slow)])
+    pytest.param("robust_speed", {"sigma0": (1e-6,), "sigma_min": 1e-8}, marks=pytest.mark.slow)])
 def test_each_objective_solves_on_the_paper_robot(objective, extra):
     st = OCPSettings(objective=objective, nodes=24, harmonic_psi=8, **extra)
     res = optimize_gait(PAPER, "physical", st, replay=False)

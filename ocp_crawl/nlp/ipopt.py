@@ -269,6 +269,10 @@ OCP_WARM_IPOPT: dict = {
 }
 
 
+#: nlpsol options that take a derivative function, and the name of that function in a built solver
+DERIVATIVES = {"hess_lag": "nlp_hess_l", "jac_g": "nlp_jac_g", "grad_f": "nlp_grad_f"}
+
+
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
                   verbose: bool = False) -> tuple[cs.Function, cs.Function]:
     """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``).
@@ -281,5 +285,7 @@ def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, 
     ipopt.update(user)
     base = {"print_time": bool(verbose), "calc_lam_p": False, "error_on_fail": False}
     cold = build_ipopt(f"{name}_cold", nlp, dict(base, ipopt=ipopt), owner, user)
-    warm = build_ipopt(f"{name}_warm", nlp, dict(base, ipopt=dict(warm, **ipopt)), owner, user)
+    # the warm solver reuses the cold one's derivative functions (generating them again doubles the build time)
+    shared = {key: cold.get_function(fun) for key, fun in DERIVATIVES.items() if cold.has_function(fun)}
+    warm = build_ipopt(f"{name}_warm", nlp, dict(base, ipopt=dict(warm, **ipopt), **shared), owner, user)
     return cold, warm

@@ -73,12 +73,15 @@ class OCPSettings:
     None (default): from mu_ratio_eps"""
     robust: str = "mean"
     """robust_speed: maximise the 'mean' or the 'worst' direction * S over the scenarios"""
-    sigma0: tuple = (1e-2, 1e-6)
-    """first relaxation parameters of the homotopies run from the harmonic initial guess (the
-    problem is nonconvex and the relaxation path decides the local optimum: a loose start explores,
-    a tight start stays near the guess); the best accepted result is kept"""
-    sigma_min: float = 1e-10
-    sigma_factor: float = 0.1
+    sigma0: tuple = (1e-4,)
+    """first relaxation parameter(s) of the homotopy from the initial guess; with several, a homotopy is run from
+    each (in turn, until one improves on the guess) and the best accepted result is kept.  The relaxation path
+    decides the local optimum: a loose start (1e-2) explores but converges to non-physical points and took half
+    of each solve; 1e-4 stays in the physical region"""
+    sigma_min: float = 1e-6
+    """last relaxation parameter; the polish then solves the NLP with every pair on its identified branch
+    (complementarity exactly 0)"""
+    sigma_factor: float = 0.01
     comp_tol: float = 1e-6
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
     periodic_tol: float = 1e-8

@@ -144,9 +144,9 @@ class Scenario:
         friction-tolerance constraint (:func:`friction_rows`)."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
-        phi0, ft0 = cs.MX.sym(f"phi0_{j}", 2), cs.MX.sym(f"ft0_{j}")
-        theta = cs.MX.sym(f"theta_{j}", N)
-        W = cs.MX.sym(f"w_{j}", NW, 2 * N)
+        phi0, ft0 = nlp.sym(f"phi0_{j}", 2), nlp.sym(f"ft0_{j}")
+        theta = nlp.sym(f"theta_{j}", N)
+        W = nlp.sym(f"w_{j}", NW, 2 * N)
         nlp.var(f"phi0_{j}", phi0, 0.0, math.pi)
         nlp.var(f"ft0_{j}", ft0, -inf, inf)
         nlp.var(f"theta_{j}", theta, 0.0, 1.0)
@@ -171,7 +171,7 @@ class Scenario:
         self.theta, self.W_plus = theta, None
         if with_work:
             # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
-            V = cs.MX.sym(f"v_{j}", 2, 2 * N)
+            V = nlp.sym(f"v_{j}", 2, 2 * N)
             nlp.var(f"v_{j}", cs.vec(V), 0.0, inf)
             tau_mid = 0.5 * (Tsub + cs.horzcat(Tsub[:, -1], Tsub[:, :-1]))
             nlp.con(f"wplus_{j}", cs.vec(V - tau_mid * (PHI[:, 1:] - PHI[:, :-1])), 0.0, inf)
@@ -195,7 +195,7 @@ def _running_sum(nlp, var: str, con: str, terms):
     """Add the running sums c_m = c_m-1 + terms_m (c_-1 = 0) of a (1, n) row of expressions as the variables
     ``var`` (n,), defined by the equality constraints ``con``; returns the total c_n-1 (a scalar expression)."""
     n = terms.numel()
-    c = cs.MX.sym(var, n)
+    c = nlp.sym(var, n)
     nlp.var(var, c, -np.inf, np.inf)
     nlp.con(con, c - cs.vertcat(0.0, c[:-1]) - cs.vec(terms), 0.0, 0.0)
     return c[-1]

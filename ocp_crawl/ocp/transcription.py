@@ -40,6 +40,8 @@ from ocp_crawl.sim.event import simulate_torque
 PERIOD_HAT_BOUNDS = (1e-3, 1e3)
 #: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
 PIN_GRID = 16
+#: how the NLP evaluates the sub-step kernel (see :class:`GaitOCP`)
+KERNELS = ("expanded", "compiled")
 
 
 def fourier_basis(N: int, K: int) -> np.ndarray:
@@ -51,7 +53,9 @@ def fourier_basis(N: int, K: int) -> np.ndarray:
 class Layout:
     """Variables and constraints of an NLP under construction, each block with its named slice."""
 
-    def __init__(self) -> None:
+    def __init__(self, sym=cs.MX.sym) -> None:
+        self.sym = sym
+        """the symbol constructor of the NLP's variables (cs.SX.sym or cs.MX.sym)"""
         self.xs, self.lbx, self.ubx, self.g, self.lbg, self.ubg = [], [], [], [], [], []
         self.slices: dict[str, slice] = {}
 
@@ -75,7 +79,15 @@ class Layout:
 class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
-    def __init__(self, robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None):
+    def __init__(self, robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
+                 kernel: str = "expanded"):
+        """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the whole NLP as one
+        SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than the map of the compiled kernel at N = 100), or
+        "compiled" the compiled step kernel (:func:`~ocp_crawl.nlp.codegen.compiled_kernel`) mapped over the
+        sub-steps in an MX graph (``scripts/bench.py ocp_kernel`` compares the two)."""
+        if kernel not in KERNELS:
+            raise ValueError(f"GaitOCP: kernel must be one of {KERNELS}, got {kernel!r}")
+        self.kernel = kernel
         self.robot = robot
         self.gravity = gravity
         self.settings = settings or OCPSettings()
@@ -97,7 +109,7 @@ class GaitOCP:
         the scaled node torques T (2, N), their periodic differences dT and the scaled period Th."""
         s, N, r = self.settings, self.settings.nodes, self.robot
         ntau = 2 * N if s.parametrization == "free" else 2 * (2 * s.fourier_order + 1)
-        z_tau = cs.MX.sym("tau", ntau)
+        z_tau = nlp.sym("tau", ntau)
         T = self._torque_nodes(z_tau, N)  # (2, N) scaled
         tau_lo, tau_hi = (b / MgL for b in s.torque_bounds(r))
         if s.parametrization == "free":
@@ -105,7 +117,7 @@ class GaitOCP:
         else:
             nlp.var("tau", z_tau, -np.inf, np.inf)
             nlp.con("tau_bounds", cs.vec(T), tau_lo, tau_hi)
-        Th = cs.MX.sym("T_hat")
+        Th = nlp.sym("T_hat")
         nlp.var("T_hat", Th, *PERIOD_HAT_BOUNDS)
         Tref = s.period_ref()
         dT = T - cs.horzcat(T[:, -1], T[:, :-1])  # periodic differences tau_k - tau_{k-1}
@@ -133,7 +145,7 @@ class GaitOCP:
         if s.objective == "robust_speed":
             if s.robust == "mean":
                 return -d * sum(S_list) / (len(S_list) * Th) + reg
-            zeta = cs.MX.sym("zeta")  # the worst scaled speed
+            zeta = nlp.sym("zeta")  # the worst scaled speed
             nlp.var("zeta", zeta, -inf, inf)
             nlp.con("worst", cs.vertcat(*[d * Sj - zeta * Th for Sj in S_list]), 0.0, inf)
             return -zeta + reg
@@ -145,9 +157,10 @@ class GaitOCP:
     def _build(self) -> None:
         s, r = self.settings, self.robot
         MgL = r.M * r.g * r.L
-        nlp = Layout()
+        nlp = Layout(cs.SX.sym if self.kernel == "expanded" else cs.MX.sym)
         T, dT, Th = self._torques(nlp, MgL)
-        step_map = compiled_kernel(step_function()).map(2 * s.nodes)
+        kernel = step_function() if self.kernel == "expanded" else compiled_kernel(step_function())
+        step_map = kernel.map(2 * s.nodes)
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot", s.friction_tol)
                 for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, dT, Th)
@@ -164,7 +177,7 @@ class GaitOCP:
         # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
         # from those of the start: no incentive to leave the physical solution through the relaxation
         theta = cs.vertcat(*[sc.theta for sc in scen])
-        theta_ref = cs.MX.sym("theta_ref", theta.numel())
+        theta_ref = nlp.sym("theta_ref", theta.numel())
         self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G, theta_ref)
         self._sim_solvers = None
         self._fixed: np.ndarray | None = None
