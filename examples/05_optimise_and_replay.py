@@ -1,1 +1,72 @@
-../ocp_crawl/data/examples/05_optimise_and_replay.py
+"""Optimise a gait and replay it.
+
+Solves the periodic-gait optimal control problem (objective ``max_speed``: the largest mean speed
+v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most 180 deg/s)
+on a coarse transcription (40 nodes, one start, so that the example runs in CI time; the README's
+``ocp_max_speed.toml`` uses 100), then replays the optimal torques, linear in phase between the nodes
+as in the transcription, in the event-driven simulator through the plain Python API,
+:func:`ocp_crawl.simulate`, as any other input signal.  The replayed S must match the one
+:func:`~ocp_crawl.ocp.optimize_gait` reports for its own replay (the judge); the figure compares the
+optimal torques and foot motion with the best gait of the whole harmonic family (gamma1, gamma2, A1,
+A2, psi and the period under the same bandwidth).
+
+Run: ``python examples/05_optimise_and_replay.py [OUT_DIR]``; writes ``OUT_DIR/optimise_and_replay.png``.
+"""
+import math
+
+import numpy as np
+from _common import output_dir, save
+from matplotlib.figure import Figure
+
+from ocp_crawl import Model, PeriodicLinear, Robot, simulate
+from ocp_crawl.ocp import OCPSettings, optimize_gait
+
+SETTINGS = OCPSettings(objective="max_speed", nodes=40, harmonic_psi=12, starts=1)
+
+
+def main() -> None:
+    out = output_dir()
+    robot = Robot.paper()
+    opt = optimize_gait(robot, "physical", SETTINGS)
+    print(f"{opt.status.label}: {opt.message}")
+    if not opt.success:
+        raise SystemExit(1)
+    h = opt.harmonic
+    harmonic = simulate(Model(robot), h.torque_signal(robot.k))    # the best harmonic gait, torque drive
+    mine = simulate(Model(robot), PeriodicLinear(opt.phase, opt.tau))   # the optimal torques [N m] as a signal
+    if not (mine.success and math.isclose(mine.S, opt.S_replay[0], rel_tol=1e-9)):
+        raise SystemExit(f"replay through simulate: {mine.status_name}, S = {mine.S} m, optimize_gait's replay "
+                         f"S = {opt.S_replay[0]} m")
+    v_h, v_opt = abs(harmonic.S) / h.T, abs(mine.S) / opt.T_ocp   # mean speeds [m/s]
+    print(f"best harmonic (gamma {h.gamma1_deg:.1f}/{h.gamma2_deg:.1f} deg, A {h.A1_deg:.1f}/{h.A2_deg:.1f} deg, "
+          f"psi {h.psi_deg:.1f} deg, T {h.T:.3f} s): v = {1e3 * v_h:.2f} mm/s")
+    print(f"optimum: v = {1e3 * opt.v_ocp[0]:.2f} mm/s in the OCP, {1e3 * v_opt:.2f} mm/s replayed, T = "
+          f"{opt.T_ocp:.3f} s (gain {100 * opt.gain:+.1f} % over the best harmonic), solved in {opt.solve_time_s:.1f} s")
+
+    fig = Figure(figsize=(10.0, 4.0), layout="constrained")
+    ax_tau, ax_x = fig.subplots(1, 2)
+    tt = np.linspace(0.0, 1.0, 401)
+    tau_opt = PeriodicLinear(opt.phase, opt.tau)(tt)
+    tau_h = h.torque_signal(robot.k)(tt)
+    for i, (color, lw, marker) in enumerate((("C0", 3.5, "s"), ("C3", 1.2, "o"))):  # tau1 wide: tau2 may cover it
+        ax_tau.plot(tt, 1e3 * tau_opt[i], color, lw=lw, alpha=0.8, label=rf"optimal $\tau_{i + 1}$")
+        ax_tau.plot(opt.phase, 1e3 * opt.tau[i], color + marker, ms=3, label=rf"OCP nodes, $\tau_{i + 1}$")
+        ax_tau.plot(tt, 1e3 * tau_h[i], color + "--", lw=1, label=rf"best harmonic $\tau_{i + 1}$")
+    for r, T, style, name in ((mine, opt.T_ocp, "k-", "optimum (replay)"), (harmonic, h.T, "k--", "best harmonic")):
+        phase = np.asarray(r.t) - r.t0
+        ax_x.plot(phase * T, 1e3 * (np.asarray(r.x1) - r.x1[0]), style,
+                  label=f"{name}: S = {1e3 * r.S:.1f} mm in T = {T:.3f} s, v = {1e3 * abs(r.S) / T:.1f} mm/s")
+    ax_tau.set(xlabel="phase t [cycles]", ylabel="joint torque [mN m]", title="(a) torques")
+    ax_x.set(xlabel="time [s] (one cycle each)", ylabel=r"foot 1 position $x_1 - x_1(0)$ [mm]",
+             title="(b) foot 1, event-driven simulator")
+    ax_tau.legend(fontsize="x-small", ncol=2)
+    ax_x.legend(fontsize="small", loc="upper right")
+    for ax in (ax_tau, ax_x):
+        ax.grid(True, lw=0.3)
+    fig.suptitle(f"max_speed optimum ({SETTINGS.nodes} nodes): v = {1e3 * v_opt:.1f} mm/s replayed, "
+                 f"{100 * opt.gain:+.1f} % over the best harmonic gait ({1e3 * v_h:.1f} mm/s)")
+    save(fig, out / "optimise_and_replay.png")
+
+
+if __name__ == "__main__":
+    main()

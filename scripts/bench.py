@@ -5,7 +5,8 @@
     python scripts/bench.py hybrid --old 3a581df --repeat 20
     python scripts/bench.py hybrid_accuracy  # the paper gait against a refined run, both gravities
     python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
-    python scripts/bench.py ocp_kernel --repeat 5  # OCP solves: SX step kernel against the compiled one
+    python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the compiled kernel's map
+    python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the N = 50..400 run
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -178,35 +179,31 @@ def bench_ocp(repeat: int) -> dict:
 KERNEL_PROBLEMS = ("ocp_max_speed", "ocp_min_cot")
 
 
-def _ocp_run(problem, settings, compiled: bool) -> dict:
-    """One ``optimize_gait`` of ``problem`` with the OCP's step kernel compiled or evaluated by CasADi's virtual
-    machine (``OCP_CRAWL_NO_COMPILE`` is read when the kernel is built; the simulator's compiled functions are
-    already loaded): the whole time, IPOPT's time and its function-evaluation time [s], iterations, optimum."""
-    from ocp_crawl.ocp import optimize_gait
+def _ocp_run(problem, settings, harm, kernel: str) -> dict:
+    """Build the OCP with the step kernel ``kernel`` ("expanded": one SX graph; "compiled": the compiled kernel's
+    map in an MX graph) and solve it from the harmonic baseline ``harm``: build and solve time, IPOPT's
+    function-evaluation time [s], iterations, optimum."""
+    from ocp_crawl.ocp.solve import baseline_gait
+    from ocp_crawl.ocp.transcription import GaitOCP
 
-    if compiled:
-        os.environ.pop("OCP_CRAWL_NO_COMPILE", None)
-    else:
-        os.environ["OCP_CRAWL_NO_COMPILE"] = "1"
-    try:
-        t = time.perf_counter()
-        res = optimize_gait(problem.robot, problem.gravity, settings)
-        wall = time.perf_counter() - t
-    finally:
-        os.environ.pop("OCP_CRAWL_NO_COMPILE", None)
-    return {"whole_s": wall, "ipopt_s": sum(h.time for h in res.homotopy),
-            "eval_s": sum(h.eval_time for h in res.homotopy), "iterations": sum(h.iterations for h in res.homotopy),
-            "status": res.status.name, "value_ocp": res.value_ocp}
+    t = time.perf_counter()
+    ocp = GaitOCP(problem.robot, problem.gravity, settings, kernel=kernel)
+    build = time.perf_counter() - t
+    x, hist, failed, _ = ocp.solve(ocp.initial_guess(*baseline_gait(harm, problem.robot)))
+    return {"build_s": build, "ipopt_s": sum(h.time for h in hist), "eval_s": sum(h.eval_time for h in hist),
+            "iterations": sum(h.iterations for h in hist), "status": "ok" if failed is None else failed,
+            "value_ocp": ocp.objective(x) if x is not None else float("nan")}
 
 
 def bench_ocp_kernel(repeat: int) -> dict:
-    """The OCP problem files at their default N: IPOPT's function-evaluation time against IPOPT's whole time and
-    the whole ``optimize_gait`` (baseline, solve, replay) with the step kernel evaluated by CasADi's virtual
-    machine ("sx") and compiled (nlp/codegen.py, "compiled"), alternating in one process, ``min(repeat, 5)``
-    rounds after a warm-up of each: min and median [s], the evaluation share of IPOPT's time, the speed-ups
-    sx/compiled, and whether both found the same optimum (iterations, objective)."""
+    """The OCP problem files at their default N, one start from the harmonic baseline: build time, IPOPT's time
+    and its function-evaluation time with the NLP expanded into one SX graph ("expanded", the default) and with
+    the compiled step kernel mapped in an MX graph (nlp/codegen.py, "compiled"), alternating in one process,
+    ``min(repeat, 5)`` rounds after a warm-up of each: min and median [s], speed-ups compiled/expanded, and
+    whether both found the same optimum (iterations, NLP objective)."""
     from pathlib import Path
 
+    from ocp_crawl.ocp.baseline import best_harmonic
     from ocp_crawl.problem import load_problem, ocp_settings
 
     root = Path(__file__).resolve().parent.parent
@@ -214,25 +211,70 @@ def bench_ocp_kernel(repeat: int) -> dict:
     for name in KERNEL_PROBLEMS:
         problem = load_problem(root / "problems" / f"{name}.toml")
         settings = ocp_settings(problem)
-        runs = {"sx": [], "compiled": []}
+        harm = best_harmonic(problem.robot, problem.gravity, settings)
+        runs = {"expanded": [], "compiled": []}
         for k in range(min(repeat, 5) + 1):
             for mode in runs:
-                run = _ocp_run(problem, settings, mode == "compiled")
+                run = _ocp_run(problem, settings, harm, mode)
                 if k:  # the first round builds and loads (the kernel's library, the simulator's functions)
                     runs[mode].append(run)
         row = {}
         for mode, rs in runs.items():
-            for key in ("whole_s", "ipopt_s", "eval_s"):
+            for key in ("build_s", "ipopt_s", "eval_s"):
                 v = [r[key] for r in rs]
                 row[f"{mode}_{key}"] = {"min": round(min(v), 3), "median": round(statistics.median(v), 3)}
-            row[f"{mode}_eval_share_of_ipopt"] = round(statistics.median([r["eval_s"] / r["ipopt_s"] for r in rs]), 3)
-        for key in ("whole_s", "ipopt_s", "eval_s"):
-            row[f"speedup_{key}_median"] = round(row[f"sx_{key}"]["median"] / row[f"compiled_{key}"]["median"], 2)
-        a, b = runs["sx"][0], runs["compiled"][0]
-        row["iterations_sx_compiled"] = (a["iterations"], b["iterations"])
-        row["status_sx_compiled"] = (a["status"], b["status"])
+        for key in ("build_s", "ipopt_s", "eval_s"):
+            row[f"speedup_{key}_median"] = round(row[f"compiled_{key}"]["median"] / row[f"expanded_{key}"]["median"], 2)
+        a, b = runs["expanded"][0], runs["compiled"][0]
+        row["iterations_expanded_compiled"] = (a["iterations"], b["iterations"])
+        row["status_expanded_compiled"] = (a["status"], b["status"])
         row["value_rel_diff"] = abs(a["value_ocp"] - b["value_ocp"]) / abs(a["value_ocp"])
         out[name] = row
+    out["load_average_end"] = os.getloadavg()
+    return out
+
+
+#: the shipped OCP problem files that ``ocp_files`` solves whole (``ocp-crawl optimize FILE --json``)
+OCP_FILES = ("ocp_max_speed", "ocp_min_cot", "ocp_robust")
+
+
+def _optimize_process(args: list[str]) -> tuple[float, dict]:
+    """Wall time [s] of one whole ``ocp-crawl optimize`` process and its JSON output."""
+    import json
+    import subprocess
+    import sys
+
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "ocp_crawl.cli", "optimize", *args, "--json"],
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    try:
+        return wall, json.loads(proc.stdout)
+    except ValueError:
+        return wall, {"status": f"exit {proc.returncode}: {proc.stderr.strip()[-200:]}"}
+
+
+def bench_ocp_files(repeat: int) -> dict:
+    """Each shipped OCP problem file solved whole at its default N and starts (harmonic baseline, solve, replay;
+    one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status, objective by replay), then
+    the convergence run ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the
+    table).  Targets (issue 13): <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent / "problems"
+    out = {"load_average_start": os.getloadavg()}
+    for name in OCP_FILES:
+        runs = [_optimize_process([str(root / f"{name}.toml")]) for _ in range(min(repeat, 3))]
+        walls = [w for w, _ in runs]
+        data = runs[0][1]
+        out[name] = {"wall_s": {"min": round(min(walls), 2), "median": round(statistics.median(walls), 2)},
+                     "status": data.get("status"), "value_replay": data.get("objective_value_replay"),
+                     "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain")}
+    wall, data = _optimize_process([str(root / "ocp_max_speed.toml"), "--nodes", "50", "100", "200", "400"])
+    rows = data.get("rows", [])
+    out["convergence_max_speed"] = {"wall_s": round(wall, 1), "rows": [
+        {k: r.get(k) for k in ("nodes", "status", "value_ocp", "value_replay", "rel_change", "order", "solve_time_s")}
+        for r in rows]}
     out["load_average_end"] = os.getloadavg()
     return out
 
@@ -293,7 +335,8 @@ def bench_sweep(repeat: int) -> str:
 
 
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
-              "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel}
+              "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
+              "ocp_files": bench_ocp_files}
 
 
 def main(argv=None) -> int:

@@ -28,6 +28,9 @@ from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.status import Status
 
+#: first relaxation parameter of a solve warm-started from the previous N's optimum
+WARM_SIGMA0 = 1e-5
+
 
 def observed_orders(nodes: list[int], values: list[float]) -> list[float]:
     """Observed order of convergence at each N (NaN where undefined; see the module docstring).
@@ -164,7 +167,9 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
 
 def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
-    ocp = GaitOCP(robot, gravity, settings)
+    # the previous optimum is near the new one: a tight relaxation stays with it (a loose one would wander)
+    tight = max(WARM_SIGMA0, settings.sigma_min * 10)
+    ocp = GaitOCP(robot, gravity, replace(settings, sigma0=(min(tight, max(settings.sigma0)),)))
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
