@@ -8,6 +8,7 @@ from ocp_crawl import Robot
 from ocp_crawl import Status
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 
+
 def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
                         OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2))

@@ -28,8 +28,11 @@ from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.status import Status
 
-#: first relaxation parameter of a solve warm-started from the previous N's optimum
-WARM_SIGMA0 = 1e-5
+#: first relaxation parameter of a solve warm-started from the previous N's optimum (the last is a tenth of it)
+WARM_SIGMA0 = 1e-6
+#: IPOPT options of a solve warm-started from the previous N's optimum (the settings' own ipopt options win)
+WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8,
+              "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8}
 
 
 def observed_orders(nodes: list[int], values: list[float]) -> list[float]:
@@ -167,9 +170,11 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
 
 def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
-    # the previous optimum is near the new one: a tight relaxation stays with it (a loose one would wander)
-    tight = max(WARM_SIGMA0, settings.sigma_min * 10)
-    ocp = GaitOCP(robot, gravity, replace(settings, sigma0=(min(tight, max(settings.sigma0)),)))
+    # the previous optimum is near the new one: a tight relaxation and a small, monotone barrier parameter stay
+    # with it (IPOPT's adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
+    near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=min(settings.sigma_min, WARM_SIGMA0 / 10),
+                   ipopt={**WARM_IPOPT, **settings.ipopt})
+    ocp = GaitOCP(robot, gravity, near)
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
