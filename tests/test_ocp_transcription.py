@@ -9,6 +9,7 @@ from ocp_crawl import Robot
 from ocp_crawl.model.inputs import CallableSignal, Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings, optimize_gait
+from ocp_crawl.ocp.substeps import TIE_SLOPE, tie_rows
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.problem import load_problem
 from ocp_crawl.sim.event import simulate_torque
@@ -137,3 +138,19 @@ def test_each_objective_solves_on_the_paper_robot(objective, extra):
         assert res.v_ocp[0] >= st.speed_min * (1 - 1e-6)
     else:
         assert res.value_ocp > res.harmonic.value  # better than the guess it started from
+
+
+def test_a_held_tie_is_excluded_and_a_change_of_the_slipping_foot_is_not():
+    """tie_rows: foot 2 slipping (s2-) while foot 1 sits at its limit on the same side (c1+ = 0) at both ends of the
+    sub-step is excluded (the slip-slip mode in disguise); the same slip starting from a change of the slipping
+    foot (c1+ = 0 at the start only, growing with the slip) passes, whatever the sub-step's length."""
+    W = np.zeros((12, 4))
+    W[8:12] = 0.3  # every margin well inside the friction cone
+    W[7, 2] = 1e-3  # sub-step 2: foot 2 slips in the - direction
+    W[8, 1] = W[8, 2] = 0.0  # foot 1 at its + limit at both ends of sub-step 2
+    assert np.min(tie_rows(W)) < 0 and np.argmin(np.min(tie_rows(W), axis=0)) == 2
+    for length in (1.0, 1e-3):  # margin and slip both proportional to the sub-step's length after a switch
+        W[7, 2], W[8, 2] = 1e-3 * length, 0.05 * 1e-3 * length  # (margin growth 0.05 M g per slip L > TIE_SLOPE)
+        assert np.min(tie_rows(W)) >= 0
+    assert TIE_SLOPE < 0.05
+
