@@ -1,5 +1,6 @@
 """The switch-exact, time-explicit OCP transcription: time-scale invariance, agreement with the event-driven
 simulator on a fixed profile with foot switches, and each objective solved on the paper's robot."""
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -9,9 +10,11 @@ from ocp_crawl import Robot
 from ocp_crawl.model.inputs import CallableSignal, Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings, optimize_gait
+from ocp_crawl.ocp import substeps
 from ocp_crawl.ocp.substeps import TIE_SLOPE, tie_rows
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.problem import load_problem
+from ocp_crawl.problem.run import ocp_settings
 from ocp_crawl.sim.event import simulate_torque
 
 REPO = Path(__file__).resolve().parents[1]
@@ -157,3 +160,22 @@ def test_a_held_tie_is_excluded_and_a_change_of_the_slipping_foot_is_not():
         assert np.min(tie_rows(W)) >= 0
     assert TIE_SLOPE < 0.05
 
+
+
+@pytest.mark.slow
+def test_min_cot_without_the_held_tie_rule_is_not_confirmed_by_the_replay_and_with_it_is(monkeypatch):
+    """problems/ocp_min_cot.toml at N = 50 (one start): without the rule against held ties the optimiser slips one
+    foot at a time in mirror-symmetric postures (the simulator slips both there) and the replay does not confirm
+    the optimum (CoT+ 14.39 against the replay's 14.67, speed_min missed); with it the replay agrees within 0.02 %.
+    Not yet at every N: at N = 30, 60 and 100 the optimum still ends in REPLAY_MISMATCH (0.8 to 3.7 %: near-ties held
+    at a small margin, and the midpoint W+)."""
+    prob = load_problem(REPO / "problems" / "ocp_min_cot.toml")
+    st = dataclasses.replace(ocp_settings(prob), nodes=50, starts=1)
+    monkeypatch.setattr(substeps, "TIE_SLOPE", 0.0)
+    res = optimize_gait(prob.robot, prob.gravity, st)
+    assert res.status.label == "replay_mismatch" and res.value_replay > res.value_ocp * 1.01
+    monkeypatch.undo()
+    res = optimize_gait(prob.robot, prob.gravity, st)
+    assert res.success, res.message
+    assert res.value_replay == pytest.approx(res.value_ocp, rel=1e-3)
+    assert res.value_ocp < res.harmonic.value
