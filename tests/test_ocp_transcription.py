@@ -1,5 +1,6 @@
 """The switch-exact, time-explicit OCP transcription: time-scale invariance, agreement with the event-driven
 simulator on a fixed profile with foot switches, and each objective solved on the paper's robot."""
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -9,8 +10,11 @@ from ocp_crawl import Robot
 from ocp_crawl.model.inputs import CallableSignal, Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings, optimize_gait
+from ocp_crawl.ocp import substeps
+from ocp_crawl.ocp.substeps import TIE_SLOPE, tie_rows
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.problem import load_problem
+from ocp_crawl.problem.run import ocp_settings
 from ocp_crawl.sim.event import simulate_torque
 
 REPO = Path(__file__).resolve().parents[1]
@@ -71,6 +75,9 @@ def test_the_best_one_stroke_gait_at_N_equals_the_best_two_stroke_gait_at_2N():
                                  (packed_twice(PeriodicLinear(np.arange(20) / 20, u1["tau"])), 2 * u1["T"])])
     v1, u1 = max((v1, u1), _best_speed(once, [(PeriodicLinear(np.arange(20) / 20, u2["tau"][:, :20]), u2["T"] / 2)]),
                  key=lambda vu: vu[0])
+    # (and the same once more the other way: the N optimum from one stroke packed twice, as a 2N start)
+    v2, u2 = max((v2, u2), _best_speed(twice, [(packed_twice(PeriodicLinear(np.arange(20) / 20, u1["tau"])),
+                                                2 * u1["T"])]), key=lambda vu: vu[0])
     assert v1 == pytest.approx(v2, rel=0.01)
     assert u2["T"] == pytest.approx(2 * u1["T"], rel=0.02)
 
@@ -137,3 +144,38 @@ def test_each_objective_solves_on_the_paper_robot(objective, extra):
         assert res.v_ocp[0] >= st.speed_min * (1 - 1e-6)
     else:
         assert res.value_ocp > res.harmonic.value  # better than the guess it started from
+
+
+def test_a_held_tie_is_excluded_and_a_change_of_the_slipping_foot_is_not():
+    """tie_rows: foot 2 slipping (s2-) while foot 1 sits at its limit on the same side (c1+ = 0) at both ends of the
+    sub-step is excluded (the slip-slip mode in disguise); the same slip starting from a change of the slipping
+    foot (c1+ = 0 at the start only, growing with the slip) passes, whatever the sub-step's length."""
+    W = np.zeros((12, 4))
+    W[8:12] = 0.3  # every margin well inside the friction cone
+    W[7, 2] = 1e-3  # sub-step 2: foot 2 slips in the - direction
+    W[8, 1] = W[8, 2] = 0.0  # foot 1 at its + limit at both ends of sub-step 2
+    assert np.min(tie_rows(W)) < 0 and np.argmin(np.min(tie_rows(W), axis=0)) == 2
+    for length in (1.0, 1e-3):  # margin and slip both proportional to the sub-step's length after a switch
+        W[7, 2], W[8, 2] = 1e-3 * length, 0.05 * 1e-3 * length  # (margin growth 0.05 M g per slip L > TIE_SLOPE)
+        assert np.min(tie_rows(W)) >= 0
+    assert TIE_SLOPE < 0.05
+
+
+
+@pytest.mark.slow
+def test_min_cot_without_the_held_tie_rule_is_not_confirmed_by_the_replay_and_with_it_is(monkeypatch):
+    """problems/ocp_min_cot.toml at N = 50 (one start): without the rule against held ties the optimiser slips one
+    foot at a time in mirror-symmetric postures (the simulator slips both there) and the replay does not confirm
+    the optimum (CoT+ 14.39 against the replay's 14.67, speed_min missed); with it the replay agrees within 0.02 %.
+    Not yet at every N: at N = 30, 60 and 100 the optimum still ends in REPLAY_MISMATCH (0.8 to 3.7 %: near-ties held
+    at a small margin, and the midpoint W+)."""
+    prob = load_problem(REPO / "problems" / "ocp_min_cot.toml")
+    st = dataclasses.replace(ocp_settings(prob), nodes=50, starts=1)
+    monkeypatch.setattr(substeps, "TIE_SLOPE", 0.0)
+    res = optimize_gait(prob.robot, prob.gravity, st)
+    assert res.status.label == "replay_mismatch" and res.value_replay > res.value_ocp * 1.01
+    monkeypatch.undo()
+    res = optimize_gait(prob.robot, prob.gravity, st)
+    assert res.success, res.message
+    assert res.value_replay == pytest.approx(res.value_ocp, rel=1e-3)
+    assert res.value_ocp < res.harmonic.value

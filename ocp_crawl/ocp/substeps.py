@@ -27,11 +27,22 @@ only remaining step errors are those of slip-to-stick and direction reversal ins
 per event.  Both feet slipping at once (the event-driven simulator's slip-slip mode, possible only when
 mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
 
+No held tie: while one foot slips, the other must not sit at its friction limit on the same side (c2- for
+s1+, c2+ for s1-, c1- for s2+, c1+ for s2-) over the whole sub-step: ``c_j-1 + c_j >= TIE_SLOPE s_j``
+(:func:`tie_rows`; the margin at the sub-step's two ends, linear constraints).  A held tie is the slip-slip
+mode in disguise (the optimiser's slip of one foot in a mirror-symmetric posture, where the simulator slips
+both feet: min_cot's 3.3 % error in S), or a touch of the other foot's limit at a node after a change of the
+slipping foot (robust_speed: two consistent successor modes in the replay).  A real change of the slipping
+foot passes: after it the margin of the foot that stopped grows in proportion to the other's slip (both
+linearly from the switch), so the constraint holds for every sub-step length; it excludes only margins that
+grow by less than TIE_SLOPE M g per slip L.  The cycle-integrated friction tolerance below does not see
+a held tie of small slip.
+
 Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction coefficients known
 only to +-eps/2, so ``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
 (:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's midpoint by the trapezoid rule): the slip-weighted margin rule of the harmonic
 baseline and the replay judge (:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one
-foot slipping (margin 0).
+foot slipping (margin 0) over most of the slip, not over a few sub-steps (which the rule above excludes).
 """
 from __future__ import annotations
 
@@ -160,6 +171,8 @@ class Scenario:
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
+        if TIE_SLOPE > 0:
+            nlp.con(f"tie_{j}", cs.vec(tie_rows(W)), 0.0, inf)
         if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
             nlp.con(f"friction_{j}", total, 0.0, inf)
@@ -176,6 +189,22 @@ class Scenario:
             tau_mid = 0.5 * (Tsub + cs.horzcat(Tsub[:, -1], Tsub[:, :-1]))
             nlp.con(f"wplus_{j}", cs.vec(V - tau_mid * (PHI[:, 1:] - PHI[:, :-1])), 0.0, inf)
             self.W_plus = _running_sum(nlp, f"Wc_{j}", f"W_def_{j}", cs.sum1(V))
+
+
+#: the stuck foot's margin on the slipping foot's side, summed over a slipping sub-step's two ends, is at least this
+#: times the sub-step's slip [M g / L]: no sub-step slips one foot while the other is held at its friction limit
+TIE_SLOPE = 0.01
+#: (slip row, margin row of the other foot on the same side) of :func:`tie_rows`: s1+ with c2-, s1- with c2+,
+#: s2+ with c1-, s2- with c1+
+TIE_PAIRS = ((4, 11), (5, 10), (6, 9), (7, 8))
+
+
+def tie_rows(W):
+    """Rows (4, 2N) that must be >= 0: ``c_j-1 + c_j - TIE_SLOPE s_j`` for each pair of :data:`TIE_PAIRS` (the margin
+    of the stuck foot at both ends of sub-step j, the start being the end of sub-step j-1 cyclically).  ``W``:
+    (NW, 2N) sub-step variables (CasADi or numpy)."""
+    rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE * W[q:q + 1, :] for q, c in TIE_PAIRS]
+    return np.vstack(rows) if isinstance(W, np.ndarray) else cs.vertcat(*rows)
 
 
 def friction_rows(W, eps: float):

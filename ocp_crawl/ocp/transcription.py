@@ -364,10 +364,11 @@ class GaitOCP:
             ubg[self._slices[f"g_cross_{j}"]] = sigma if cross_sigma is None else cross_sigma
         lbx, ubx = self._bounds()
         lbg = self._lbg
-        if self._fixed is not None and "g_friction_0" in self._slices:
-            lbg = lbg.copy()  # a profile given to be simulated need not meet the friction tolerance
-            for j in range(len(self.scen)):
-                lbg[self._slices[f"g_friction_{j}"]] = -np.inf
+        if self._fixed is not None:
+            lbg = lbg.copy()  # a profile given to be simulated need not meet the optimiser's friction tolerance
+            for name in (f"g_{block}_{j}" for block in ("friction", "tie") for j in range(len(self.scen))):
+                if name in self._slices:  # ... nor its rule against held ties
+                    lbg[self._slices[name]] = -np.inf
         data = {"lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
         if self._fixed is not None:
             data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])

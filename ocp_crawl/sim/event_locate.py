@@ -15,6 +15,9 @@ from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, hermite_point,
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
+#: an input whose rate is below this fraction of its largest rate over the cycle holds still (``_input_still``)
+HOLD_RTOL = 1e-6
+
 EPS = float(np.finfo(float).eps)
 #: round-off level of the scaled guards that depend on the angles (and d') only, whatever k/(M g L)
 ANGLE_NOISE = 1e-13
@@ -178,7 +181,19 @@ class EventsMixin:
                     pending.discard(k)
             if not pending:
                 return start
-        return None
+        # guards that stay at zero while the input holds still: a quasistatic (rate-independent) state does not move
+        # while its input does not, so the mode holds at the limit until the hold ends, where the kink of the input
+        # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
+        return start if self._input_still(pt.t) and not self.tie_note(pt) else None
+
+    def _input_still(self, t: float) -> bool:
+        """Whether the input holds still just after phase t [cycles]: its rate below HOLD_RTOL times its largest
+        rate over the cycle (a hold of a piecewise-linear input, to the round-off of its samples)."""
+        if getattr(self, "_rate_scale", None) is None:
+            grid = np.arange(1024) / 1024
+            self._rate_scale = float(np.max(np.abs(np.asarray(self.torque.derivative(grid), float))))
+        rate = np.asarray(self.torque.derivative(t + 1e-9), float)
+        return bool(np.max(np.abs(rate)) <= HOLD_RTOL * self._rate_scale)
 
     def _locate_fold(self, pt: _Point, q: np.ndarray, t_limit: float) -> tuple[float, np.ndarray, float] | None:
         """Newton on the augmented fold system from pt; returns (t_fold, x_fold, sigma_min/sigma_max)."""
