@@ -176,7 +176,7 @@ def bench_ocp(repeat: int) -> dict:
 
 
 #: the problem files of ``ocp_kernel`` (beside this script's package, problems/)
-KERNEL_PROBLEMS = ("ocp_max_speed", "ocp_min_cot")
+KERNEL_PROBLEMS = ("ocp_max_speed",)
 
 
 def _ocp_run(problem, settings, harm, kernel: str) -> dict:

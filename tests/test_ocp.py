@@ -52,7 +52,7 @@ def test_cli_optimize_json_and_outputs(tmp_path, capsys):
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
         assert key in data, key
-    assert data["objective"] == "max_speed" and data["best_harmonic"]["A_deg"] == 30.0
+    assert data["objective"] == "max_speed" and 0 < data["best_harmonic"]["A1_deg"] <= 30.0
     lines = [r for r in (out / "torques.csv").read_text().splitlines() if not r.startswith("#")]
     assert lines[0] == "phase [-],tau1 [N m],tau2 [N m]" and len(lines) == 41
     phase = np.array([float(r.split(",")[0]) for r in lines[1:]])

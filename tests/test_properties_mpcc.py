@@ -253,7 +253,9 @@ def test_mpcc_time_stepping_succeeds_with_the_invariants_or_reports_a_status(cas
             assert "return status" in res.message
         return
     # the samples: the N + 1 step phases and the events located inside steps (switch-exact steps)
-    located = [e for e in res.events if res.t0 < e.t < res.t0 + 1 and e.guard_name != "mode_change_between_steps"]
+    # (an event that falls on a step boundary, e.g. a slip that stops at a turning point t = 1/4, is that boundary)
+    located = [e for e in res.events if res.t0 < e.t < res.t0 + 1 and e.guard_name != "mode_change_between_steps"
+               and abs(e.t * N - round(e.t * N)) > 1e-9]
     assert res.cycles >= 2 and res.t.size == N + 1 + len(located)
     assert math.isfinite(res.S) and math.isfinite(res.W_plus) and res.W_plus >= 0
     assert res.periodicity_residual <= RUN_OPTIONS.periodic_tol

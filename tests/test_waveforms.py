@@ -196,7 +196,8 @@ def test_optimize_torques_replayed_by_simulate(tmp_path, capsys):
     assert np.array_equal(table["phase"], arrays["phase"]) and np.array_equal(table["phase"], np.arange(30) / 30)
     assert np.array_equal(np.array([table["tau1"], table["tau2"]]), arrays["tau"])
     runs = {"toml": ["simulate", str(out / "optimal_gait.toml"), "--json"],
-            "input": ["simulate", str(OCP), "--input", str(out / "torques.csv"), "--json"],
+            "input": ["simulate", str(OCP), "--input", str(out / "torques.csv"), "--set", 'gait.interpolation="linear"',
+                      "--json"],
             "set": ["simulate", str(out / "optimal_gait.toml"), "--set", "gait.file=\"torques.csv\"", "--json"]}
     for name, argv in runs.items():
         assert main(argv) == 0, name

@@ -41,7 +41,7 @@ REPLAY_INTERPOLATION = "linear"
 #: after the transition into stick-stick at phase t = 1.0``) when a contact event coincides with the input's
 #: kink at node 0 on its cycle boundary t = 1, which the phase pin (tau_1 largest at node 0) makes common; the
 #: same profile delayed by half a node replays (a simulator bug, worked around here, not fixed)
-REPLAY_DELAY = 0.5
+REPLAY_DELAY = 0.0
 #: relative tolerance of the envelope and bandwidth checks (the NLP meets its bounds to round-off)
 BOUND_RTOL = 1e-9
 

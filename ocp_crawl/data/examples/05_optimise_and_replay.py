@@ -2,7 +2,7 @@
 
 Solves the periodic-gait optimal control problem (objective ``max_speed``: the largest mean speed
 v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most 180 deg/s)
-on a coarse transcription (24 nodes, one start, so that the example runs in CI time; the README's
+on a coarse transcription (40 nodes, one start, so that the example runs in CI time; the README's
 ``ocp_max_speed.toml`` uses 100), then replays the optimal torques, linear in phase between the nodes
 as in the transcription, in the event-driven simulator through the plain Python API,
 :func:`ocp_crawl.simulate`, as any other input signal.  The replayed S must match the one
@@ -18,10 +18,10 @@ import numpy as np
 from _common import output_dir, save
 from matplotlib.figure import Figure
 
-from ocp_crawl import Harmonic, Model, PeriodicLinear, ReferenceTorque, Robot, simulate
+from ocp_crawl import Model, PeriodicLinear, Robot, simulate
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 
-SETTINGS = OCPSettings(objective="max_speed", nodes=24, harmonic_psi=12, starts=1)
+SETTINGS = OCPSettings(objective="max_speed", nodes=40, harmonic_psi=12, starts=1)
 
 
 def main() -> None:
@@ -60,7 +60,7 @@ def main() -> None:
     ax_x.set(xlabel="time [s] (one cycle each)", ylabel=r"foot 1 position $x_1 - x_1(0)$ [mm]",
              title="(b) foot 1, event-driven simulator")
     ax_tau.legend(fontsize="x-small", ncol=2)
-    ax_x.legend(fontsize="small")
+    ax_x.legend(fontsize="small", loc="upper right")
     for ax in (ax_tau, ax_x):
         ax.grid(True, lw=0.3)
     fig.suptitle(f"max_speed optimum ({SETTINGS.nodes} nodes): v = {1e3 * v_opt:.1f} mm/s replayed, "
