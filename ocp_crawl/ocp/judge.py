@@ -37,11 +37,6 @@ from ocp_crawl.status import Status
 #: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
 #: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
 REPLAY_INTERPOLATION = "linear"
-#: delay of the replay [node intervals]: the event-driven simulator fails (``guard slip_1+ does not leave zero
-#: after the transition into stick-stick at phase t = 1.0``) when a contact event coincides with the input's
-#: kink at node 0 on its cycle boundary t = 1, which the phase pin (tau_1 largest at node 0) makes common; the
-#: same profile delayed by half a node replays (a simulator bug, worked around here, not fixed)
-REPLAY_DELAY = 0.0
 #: relative tolerance of the envelope and bandwidth checks (the NLP meets its bounds to round-off)
 BOUND_RTOL = 1e-9
 
@@ -183,9 +178,9 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     N = tau.shape[1]
     v = Verdict(Status.SUCCESS, "the replay confirms the optimum")
     v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, models[0].robot, tau, T)
-    # the profile delayed by REPLAY_DELAY of a node (the same periodic gait: S, W+ and CoT+ of the steady cycle
-    # do not depend on the phase origin), so that no node's kink falls on the simulator's cycle boundary
-    sig = replay_signal((np.arange(N) + REPLAY_DELAY) / N, tau)
+    # the transcription's own interpolant from phase 0 (the event-driven stepper passes the input's kinks, also
+    # one at the cycle boundary: ocp_crawl/sim/event_kinks.py), as torques.csv replays it
+    sig = replay_signal(np.arange(N) / N, tau)
     v.replay = [simulate_torque(m, sig) for m in models]
     bad = next((r for r in v.replay if not r.success), None)
     if bad is not None:
