@@ -3,7 +3,7 @@
 Solves the periodic-gait optimal control problem (objective ``max_speed``: the largest mean speed
 v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most 180 deg/s)
 on a coarse transcription (40 nodes, one start, so that the example runs in CI time; the README's
-``ocp_max_speed.toml`` uses 100), then replays the optimal torques, linear in phase between the nodes
+``ocp_max_speed.toml`` uses 50), then replays the optimal torques, linear in phase between the nodes
 as in the transcription, in the event-driven simulator through the plain Python API,
 :func:`ocp_crawl.simulate`, as any other input signal.  The replayed S must match the one
 :func:`~ocp_crawl.ocp.optimize_gait` reports for its own replay (the judge); the figure compares the

@@ -55,6 +55,18 @@ def _fake_result(settings, tau, T, value):
                      value_replay=value, rel_diff_replay=1e-3)
 
 
+class _FakeOCP:
+    def __init__(self, robot, gravity, settings):
+        self.settings = settings
+
+
+def _fake_solvers(monkeypatch, fresh, warm) -> None:
+    """Replace the cold solve (optimize_gait), the warm one (solve_from) and the transcription by fakes."""
+    monkeypatch.setattr(convergence, "optimize_gait", fresh)
+    monkeypatch.setattr(convergence, "solve_from", warm)
+    monkeypatch.setattr(convergence, "GaitOCP", _FakeOCP)
+
+
 def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
     """The first N is solved from scratch (optimize_gait), every further N from the previous N's node profile
     (linear in phase: at doubled N the previous nodes exactly, midpoints in between) and period; the rows carry
@@ -79,12 +91,7 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
         seen.append(("warm", N))
         return _fake_result(ocp.settings, profile(t), T + 0.01, value(N))
 
-    class FakeOCP:
-        def __init__(self, robot, gravity, settings):
-            self.settings = settings
-    monkeypatch.setattr(convergence, "optimize_gait", fresh)
-    monkeypatch.setattr(convergence, "solve_from", warm)
-    monkeypatch.setattr(convergence, "GaitOCP", FakeOCP)
+    _fake_solvers(monkeypatch, fresh, warm)
     table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200, 400])
     assert seen == [("fresh", 50), ("warm", 100), ("warm", 200), ("warm", 400)]
     assert table.success and [r.nodes for r in table.rows] == [50, 100, 200, 400]
@@ -94,6 +101,32 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
     data = table.to_dict()
     assert data["unit"] == "m/s" and data["rows"][1]["status"] == "success" and "result" not in data["rows"][1]
     json.dumps(data, allow_nan=False)
+
+
+def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settings(monkeypatch):
+    """When the warm solve (small relaxation, monotone barrier) is not judged a success, the same start is solved
+    once more with the settings of a cold solve; the row carries the retry's result and both messages."""
+    settings = OCPSettings()
+    profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
+    calls = []
+
+    def fresh(robot, gravity, s):
+        return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        calls.append((ocp.settings.sigma0, ocp.settings.ipopt, T))
+        if len(calls) == 1:
+            return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
+                             objective=ocp.settings.objective, settings=ocp.settings)
+        return _fake_result(ocp.settings, profile(np.arange(ocp.settings.nodes) / ocp.settings.nodes), T, 0.051)
+
+    _fake_solvers(monkeypatch, fresh, warm)
+    table = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100])
+    assert calls[0][0] == (convergence.WARM_SIGMA0,) and calls[0][1]["mu_strategy"] == "monotone"
+    assert calls[1][:2] == (settings.sigma0, settings.ipopt) and calls[1][2] == calls[0][2] == 0.7
+    row = table.rows[1]
+    assert row.status == Status.SUCCESS and row.value_replay == 0.051
+    assert "cold solve's settings" in row.message and "restoration failed" in row.message
 
 
 # ------------------------------------------------------------------ the command line

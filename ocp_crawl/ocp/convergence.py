@@ -3,7 +3,9 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.
+exactly; if that solve is not judged a success, the same start once more with the cold solve's relaxation and
+barrier settings), or, while no N has given an optimum whose replay succeeds, again from the baseline and its
+starts.
 Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
@@ -28,8 +30,11 @@ from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.status import Status
 
-#: first relaxation parameter of a solve warm-started from the previous N's optimum (the last is a tenth of it)
-WARM_SIGMA0 = 1e-6
+#: first relaxation parameter of a solve warm-started from the previous N's optimum (then down to the settings'
+#: sigma_min, or a tenth of it if smaller).  1e-4 like a cold solve: with slip onsets and the held-tie rules at a
+#: sub-step's start, the simulated guess at the finer N starts slips inside sub-steps where two events share an
+#: interval, and at sigma 1e-6 IPOPT took > 2000 iterations to repair it (max_speed, N = 100 from N = 50)
+WARM_SIGMA0 = 1e-4
 #: IPOPT options of a solve warm-started from the previous N's optimum (the settings' own ipopt options win)
 WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8,
               "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8}
@@ -170,14 +175,19 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
 
 def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
-    # the previous optimum is near the new one: a tight relaxation and a small, monotone barrier parameter stay
-    # with it (IPOPT's adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
+    # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
+    # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
     near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=min(settings.sigma_min, WARM_SIGMA0 / 10),
                    ipopt={**WARM_IPOPT, **settings.ipopt})
-    ocp = GaitOCP(robot, gravity, near)
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
-    res = solve_from(ocp, models, replay_signal(prev.phase, prev.tau), prev.T_ocp, prev.harmonic)
+    signal = replay_signal(prev.phase, prev.tau)
+    res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
+    if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
+        warm_msg = res.message
+        res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic)
+        res.message += (f" (from the optimum at N = {prev.tau.shape[1]} with the cold solve's settings; the warm "
+                        f"settings gave: {warm_msg})")
     return res
 
 

@@ -10,6 +10,12 @@ k is column 2k-2, b column 2k-1).  Cross conditions (relaxed by the homotopy's s
 complementarity products, each scaled by N so that it is of the size of a product s c):
 
 * no sub-step has both feet slipping: ``N s1_j s2_j <= sigma`` with ``s_i = s_i+ + s_i-``;
+* a foot starts slipping only at a sub-step boundary (slip onsets are switch-exact):
+  ``N sum_q s_q,j c_q,j-1 <= sigma`` over the pairs q (s1+ with c1+, ...): a pair slips in sub-step j only if its
+  margin is zero at the sub-step's start.  Without it a sub-step that sticks, then slips has the right end state
+  (S is a function of the end states) but not the right path: a joint that turns one way while both feet stick and
+  back once a foot slips does positive work that the midpoint rule of W+ nets out (min_cot at N = 100: W+ 0.32 %
+  low, all of it in the one sub-step of an onset; with the rule 3e-7);
 * the slipping foot changes at a sub-step boundary j (cyclically) only at the friction tie:
   ``N s1_j (s2+_j+1 c2+_j + s2-_j+1 c2-_j) <= sigma`` and the same with the feet exchanged: foot 2 starts
   slipping in a direction only where its margin in that direction is already zero at the end of sub-step j.
@@ -22,21 +28,25 @@ complementarity products, each scaled by N so that it is of the size of a produc
   that stands still over a whole interval (allowed by the bandwidth) is not covered: it, too, makes a sub-step
   without slip.
 
-A change of the slipping foot thus falls on a sub-step boundary (the interior point moves to it), so the
-only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
-per event.  Both feet slipping at once (the event-driven simulator's slip-slip mode, possible only when
-mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
+A change of the slipping foot and a slip onset thus fall on sub-step boundaries (the interior point moves to them),
+so the only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
+per event (at slip-to-stick d' falls to zero, so the angle rates do not jump).  Both feet slipping at once (the
+event-driven simulator's slip-slip mode, possible only when mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric
+gaits) is excluded.
 
-No held tie: while one foot slips, the other must not sit at its friction limit on the same side (c2- for
-s1+, c2+ for s1-, c1- for s2+, c1+ for s2-) over the whole sub-step: ``c_j-1 + c_j >= TIE_SLOPE s_j``
-(:func:`tie_rows`; the margin at the sub-step's two ends, linear constraints).  A held tie is the slip-slip
-mode in disguise (the optimiser's slip of one foot in a mirror-symmetric posture, where the simulator slips
-both feet: min_cot's 3.3 % error in S), or a touch of the other foot's limit at a node after a change of the
-slipping foot (robust_speed: two consistent successor modes in the replay).  A real change of the slipping
-foot passes: after it the margin of the foot that stopped grows in proportion to the other's slip (both
-linearly from the switch), so the constraint holds for every sub-step length; it excludes only margins that
-grow by less than TIE_SLOPE M g per slip L.  The cycle-integrated friction tolerance below does not see
-a held tie of small slip.
+No held tie (:func:`tie_rows`, linear constraints): while one foot slips, the other must not sit at its friction
+limit on the same side (c2- for s1+, c2+ for s1-, c1- for s2+, c1+ for s2-), neither over the whole sub-step
+(``c_j-1 + c_j >= TIE_SLOPE s_j``) nor at its end or its start (``c_j >= TIE_END s_j`` unless the other foot takes
+the slip over there, ``c_j-1 >= TIE_END s_j`` unless it hands the slip over there: a change of the slipping foot).  A held tie is the slip-slip mode in disguise: in a mirror-symmetric
+posture under equal torques the two limits are equal all along, the simulator slips both feet (half each, no net
+motion) while a transcription without the rule slipped one foot only, from stick to the tie within one sub-step
+(min_cot at N = 100: a stroke at the top of the envelope that moved the body 0.007 L a cycle, S 3.3 % off), or a
+touch of the other foot's limit at a node after a change of the slipping foot (robust_speed: two consistent
+successor modes in the replay).  A real change of the slipping foot passes: after it the margin of the foot that
+stopped grows in proportion to the other's slip (both linearly from the switch); a slip that stops near the tie
+slips little in its last sub-step.  The rules exclude margins that grow by less than TIE_SLOPE M g per slip L, or
+end below TIE_END M g per slip L (about 0.3 % of the friction limit for a sub-step's slip of 3e-3 L).  The
+cycle-integrated friction tolerance below does not see a held tie of small slip.
 
 Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction coefficients known
 only to +-eps/2, so ``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
@@ -120,7 +130,7 @@ def switch_windows(W, theta):
 
 def cross_products(W, theta, N: int):
     """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions (N,)
-    (CasADi or numpy): both feet slipping per sub-step, then foot 1 -> foot 2 and foot 2 -> foot 1 switches at
+    (CasADi or numpy): both feet slipping per sub-step, foot 1 -> foot 2 and foot 2 -> foot 1 switches at
     boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).  Returns (3, 2N)."""
     s1, s2, before, after = switch_windows(W, theta)
     both = N * s1 * s2
@@ -131,10 +141,22 @@ def cross_products(W, theta, N: int):
     return cs.vertcat(both, to2, to1)
 
 
+def onset_products(W, N: int):
+    """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in sub-step j only if
+    its margin is already zero at the sub-step's start; see the module docstring).  ``W``: (NW, 2N) sub-step
+    variables (CasADi or numpy)."""
+    return N * sum(W[4 + q, :] * _roll(W[8 + q, :], 1) for q in range(NPAIR))
+
+
+def onset_residual(W: np.ndarray) -> float:
+    """Largest violation of the onset condition as a min-residual: min(s_q,j, c_q,j-1) over pairs and sub-steps [-]."""
+    return float(max(np.max(np.abs(np.minimum(W[4 + q, :], _roll(W[8 + q, :], 1)))) for q in range(NPAIR)))
+
+
 def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
     """Largest violation of the cross conditions as a min-residual (like the complementarity residual):
-    min(s1_j, s2_j) and min(slip before boundary j of one foot, slip after it of the other in direction d,
-    that foot's margin c_d at j) (both switch directions, d = +, -) [-]."""
+    min(s1_j, s2_j) and min(slip before boundary j of one foot,
+    slip after it of the other in direction d, that foot's margin c_d at j) (both switch directions, d = +, -) [-]."""
     s1, s2, before, after = switch_windows(W, theta)
     res = [np.minimum(s1, s2)]
     for d in range(2):
@@ -170,9 +192,9 @@ class Scenario:
         nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0)
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
         nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
+        nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0)  # likewise
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
-        if TIE_SLOPE > 0:
-            nlp.con(f"tie_{j}", cs.vec(tie_rows(W)), 0.0, inf)
+        nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf)
         if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
             nlp.con(f"friction_{j}", total, 0.0, inf)
@@ -194,16 +216,28 @@ class Scenario:
 #: the stuck foot's margin on the slipping foot's side, summed over a slipping sub-step's two ends, is at least this
 #: times the sub-step's slip [M g / L]: no sub-step slips one foot while the other is held at its friction limit
 TIE_SLOPE = 0.01
-#: (slip row, margin row of the other foot on the same side) of :func:`tie_rows`: s1+ with c2-, s1- with c2+,
-#: s2+ with c1-, s2- with c1+
-TIE_PAIRS = ((4, 11), (5, 10), (6, 9), (7, 8))
+#: at the end and at the start of a sub-step in which one foot slips, the other foot's margin on the same side (or its
+#: slip on that side just after, resp. just before: a change of the slipping foot) is at least this times the
+#: sub-step's slip [M g / L]
+TIE_END = 0.1
+#: (slip row, margin row of the other foot on the same side, slip row of the other foot into that side) of
+#: :func:`tie_rows`: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2- with c1+ and s1+
+TIE_PAIRS = ((4, 11, 7), (5, 10, 6), (6, 9, 5), (7, 8, 4))
 
 
-def tie_rows(W):
-    """Rows (4, 2N) that must be >= 0: ``c_j-1 + c_j - TIE_SLOPE s_j`` for each pair of :data:`TIE_PAIRS` (the margin
-    of the stuck foot at both ends of sub-step j, the start being the end of sub-step j-1 cyclically).  ``W``:
-    (NW, 2N) sub-step variables (CasADi or numpy)."""
-    rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE * W[q:q + 1, :] for q, c in TIE_PAIRS]
+def tie_rows(W, theta):
+    """Rows (12, 2N) that must be >= 0, for each triple (s, c, s') of :data:`TIE_PAIRS`: ``c_j-1 + c_j - TIE_SLOPE s_j``
+    (the stuck foot's margin at both ends of sub-step j, the start being the end of sub-step j-1 cyclically), then
+    ``c_j + s'_j+1 + w_j+1 s'_j+2 - TIE_END s_j`` (its margin at the end, or its slip on that side just after,
+    through a sub-step of nearly zero length with the weight w of :func:`pass_weights`), then
+    ``c_j-1 + s'_j-1 + w_j-1 s'_j-2 - TIE_END s_j`` (the same at the start: a slip does not start at the tie unless
+    it comes from the other foot).  ``W``: (NW, 2N) sub-step variables, ``theta``: (N,) interior fractions (CasADi
+    or numpy)."""
+    w = pass_weights(theta)
+    rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE * W[q:q + 1, :] for q, c, _ in TIE_PAIRS]
+    for shift in (-1, 1):  # the end of sub-step j (the other foot's slip after it), then its start (before it)
+        rows += [_roll(W[c:c + 1, :], max(shift, 0)) + _roll(W[o:o + 1, :], shift)
+                 + _roll(w, shift) * _roll(W[o:o + 1, :], 2 * shift) - TIE_END * W[q:q + 1, :] for q, c, o in TIE_PAIRS]
     return np.vstack(rows) if isinstance(W, np.ndarray) else cs.vertcat(*rows)
 
 

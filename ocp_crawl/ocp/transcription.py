@@ -6,7 +6,8 @@ Time is explicit.  The period T [s] of the gait is a variable, scaled as ``T_hat
 the torques tau_k; between nodes the torque is linear in phase (the replay's own interpolant).  The
 actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R = max_rate_deg_s), the optional
 smoothness bound ``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k``
-within gamma +- A_max, and the phase pin ``tau_1,k <= tau_1,0``.  Each interval is two switch-exact
+within gamma +- A_max, the phase pin ``tau_1,k <= tau_1,0`` and ``T <= 2 period_ref`` (the resolution of the
+nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact
 sub-steps (:mod:`ocp_crawl.ocp.substeps`); periodicity (angles and tangential force) is a constraint and
 the body displacement over the cycle is S = sum of the slips of foot 1.
 
@@ -31,13 +32,17 @@ from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, positive_work,
-                                    sample_phases, step_function, substep_torques, switch_fractions, switch_windows,
+from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, onset_residual,
+                                    positive_work, sample_phases, step_function, substep_torques, switch_fractions, switch_windows,
                                     THETA_GUESS)
 from ocp_crawl.sim.event import simulate_torque
 
-#: bounds of the scaled period variable T_hat = T / period_ref
-PERIOD_HAT_BOUNDS = (1e-3, 1e3)
+#: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the transcription's resolution:
+#: a node may move a reference angle by up to R T / N, so at T = 2 period_ref = 4 pi A_max / R a cycle holds about
+#: three full strokes of the envelope (down and up at the bandwidth, 4 A_max / R each).  By time-scale invariance it
+#: excludes no gait, only packed copies of one, whose coarse sub-steps the relaxed problem exploited (robust_speed,
+#: N = 50, unbounded: T grew to 4.2 s and the relaxed speed to 1.7 times the true optimum in 6000 iterations)
+PERIOD_HAT_BOUNDS = (1e-3, 2.0)
 #: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
 PIN_GRID = 16
 #: how the NLP evaluates the sub-step kernel (see :class:`GaitOCP`)
@@ -178,7 +183,15 @@ class GaitOCP:
         # from those of the start: no incentive to leave the physical solution through the relaxation
         theta = cs.vertcat(*[sc.theta for sc in scen])
         theta_ref = nlp.sym("theta_ref", theta.numel())
-        self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G, theta_ref)
+        # ... and without the optimiser's own rules (friction tolerance, held ties, slip onsets on sub-step
+        # boundaries): a profile given to be simulated need not meet them (S does not depend on where a slip starts
+        # inside a sub-step; the onset rule is for the optimiser's W+)
+        keep = np.ones(self.ng, bool)
+        for name, sl in self._slices.items():
+            if name.startswith(("g_friction_", "g_tie_", "g_onset_")):
+                keep[sl] = False
+        self._sim_rows = np.flatnonzero(keep)
+        self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G[self._sim_rows.tolist()], theta_ref)
         self._sim_solvers = None
         self._fixed: np.ndarray | None = None
         self._fixed_x = np.zeros(0)
@@ -278,7 +291,8 @@ class GaitOCP:
             ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[2]] * Mg
             x1_sub = np.r_[0.0, np.cumsum(W[4] - W[5])] * r.L
             tau_sub = substep_torques(tau, theta)
-            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W, theta))
+            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W, theta),
+                       onset_residual(W) if self._fixed is None else 0.0)
             modes_sub = modes_of(W)
             S = float(x1_sub[-1])
             out["scen"].append({
@@ -345,7 +359,7 @@ class GaitOCP:
         args = dict(data, x0=start.x)
         if start.warm:
             args.update(lam_x0=start.lam_x, lam_g0=start.lam_g)
-        call = call_ipopt(solver, self.nx, self.ng, **args)
+        call = call_ipopt(solver, self.nx, self.ng if self._fixed is None else self._sim_rows.size, **args)
         scen = self.unpack(call.x)["scen"]
         return Solve.of(call, comp=max(sc["comp"] for sc in scen), S=tuple(sc["S"] for sc in scen))
 
@@ -361,16 +375,12 @@ class GaitOCP:
         ubg = self._ubg.copy()
         for j in range(len(self.scen)):
             ubg[self._slices[f"g_comp_{j}"]] = sigma
-            ubg[self._slices[f"g_cross_{j}"]] = sigma if cross_sigma is None else cross_sigma
+            ubg[self._slices[f"g_cross_{j}"]] = ubg[self._slices[f"g_onset_{j}"]] = \
+                sigma if cross_sigma is None else cross_sigma
         lbx, ubx = self._bounds()
-        lbg = self._lbg
-        if self._fixed is not None:
-            lbg = lbg.copy()  # a profile given to be simulated need not meet the optimiser's friction tolerance
-            for name in (f"g_{block}_{j}" for block in ("friction", "tie") for j in range(len(self.scen))):
-                if name in self._slices:  # ... nor its rule against held ties
-                    lbg[self._slices[name]] = -np.inf
-        data = {"lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
-        if self._fixed is not None:
+        data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
+        if self._fixed is not None:  # the profile-fixed NLP has only the rows _sim_rows
+            data.update(lbg=self._lbg[self._sim_rows], ubg=ubg[self._sim_rows])
             data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
         return data
 
@@ -381,7 +391,8 @@ class GaitOCP:
 
     def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
         """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
-        c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs; where the slipping foot
+        c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs, and likewise each onset pair
+        (s_j = 0 where s_j <= c_j-1, else c_j-1 = 0: the slip starts on the boundary); where the slipping foot
         changes between consecutive sub-steps, the new foot's margin in its slip direction is fixed to 0 at
         the boundary (the tie); the cross products keep the bound sigma_min."""
         N = self.settings.nodes
@@ -394,6 +405,10 @@ class GaitOCP:
             fix = np.zeros((NW, 2 * N), bool)
             fix[4:8] = ~slip
             fix[8:12] = slip
+            if self._fixed is None:  # the onset pairs (s_j, c_j-1), each on its identified branch too
+                onset = W[4:8] > np.roll(W[8:12], 1, axis=1)
+                fix[4:8] |= ~onset
+                fix[8:12] |= np.roll(onset, -1, axis=1)
             ident = np.zeros((NW, 2 * N))
             ident[4:8] = slip
             _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])

@@ -56,6 +56,10 @@ def _title(result: OCPResult) -> str:
         return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
                        else "")
     significance = "" if result.gain_significant else " (not significant)"
+    if len(result.replay) > 1:  # robust_speed: the objective is over the scenarios, the panels show the first
+        head += (f"\n{result.settings.robust} speed over the {len(result.replay)} friction scenarios "
+                 f"{units.speed(result.value_replay, 2)}; panels and the line below: the first, "
+                 f"mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
             f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\ngain over the best harmonic gait "
