@@ -33,8 +33,8 @@ from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, onset_residual,
-                                    positive_work, sample_phases, step_function, substep_torques, switch_fractions, switch_windows,
-                                    THETA_GUESS)
+                                    positive_work, sample_phases, step_function, substep_torques, switch_fractions,
+                                    switch_windows, THETA_GUESS)
 from ocp_crawl.sim.event import simulate_torque
 
 #: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the transcription's resolution:
