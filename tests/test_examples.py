@@ -40,7 +40,8 @@ def test_every_example_is_covered():
 @pytest.mark.parametrize("name", sorted(OUTPUTS))
 def test_example_runs(name, tmp_path):
     out = tmp_path / "out"
-    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join(
+    # the quick budget (examples/_common.py): the full runs (08: about 4 min of CPU) are by hand
+    env = dict(os.environ, MPLBACKEND="Agg", OCP_CRAWL_EXAMPLES_QUICK="1", PYTHONPATH=os.pathsep.join(
         p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p))
     proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(out)], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=TIMEOUT_S)

@@ -277,8 +277,8 @@ def test_cli_simulate_mpcc_solver_failure_exits_1(monkeypatch, capsys):
 
 
 # ---------------------------------------------------------------------------------------- gait OCP
-#: a small OCP (few nodes, four harmonic guesses): each solve well under a second
-SMALL = dict(objective="max_speed", nodes=16, harmonic_psi=4, harmonic_A=1)
+#: a small OCP (few nodes, one start; multi-start: test_multistart): each solve a few seconds
+SMALL = dict(objective="max_speed", nodes=16, harmonic_psi=4, harmonic_A=1, starts=1)
 
 
 def assert_failed_ocp(res, status, ocp_status=Status.SOLVER_FAILURE):

@@ -11,7 +11,8 @@ from ocp_crawl.ocp import OCPSettings, optimize_gait
 
 def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
-                        OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2))
+                        OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2,
+                                    starts=1))
     assert not res.success
     assert res.status == Status.INFEASIBLE, res.message
     assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message

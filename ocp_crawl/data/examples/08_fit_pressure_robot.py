@@ -24,11 +24,12 @@ Same as the command line (step 1):
 
 Run: ``python examples/08_fit_pressure_robot.py [OUT_DIR]``; writes ``OUT_DIR/amplitude/`` and
 ``OUT_DIR/k_and_map/`` (fitted_problem.toml, fit.json, residuals.csv, fit.png each); about 4 min of
-CPU (step 2 on two worker processes).
+CPU (step 2 on two worker processes).  With ``OCP_CRAWL_EXAMPLES_QUICK=1`` (the examples' test) both fits stop
+after a few evaluations: the same outputs, not converged (the report says so).
 """
 from pathlib import Path
 
-from _common import output_dir
+from _common import output_dir, quick
 
 from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
 from ocp_crawl.fit.report import fit_report, write_fit
@@ -41,16 +42,18 @@ DATA = [HERE / "paper_pressure_p0.csv", HERE / "paper_pressure_psi.csv"]
 
 
 def main(out: Path) -> None:
+    nfev_amplitude, nfev_map = (4, 4) if quick() else (30, 150)
     problem = load_problem(PROBLEM)
     data = [read_measurements(p) for p in DATA]
 
     amp = fit_measurements(problem, data, resolve_parameters(problem, ["pressure.amplitude_bar"],
-                                                             bounds=["pressure.amplitude_bar=0.05:1.7"]), max_nfev=30)
+                                                             bounds=["pressure.amplitude_bar=0.05:1.7"]),
+                           max_nfev=nfev_amplitude)
     print("== 1. amplitude A_p of the psi curve's inputs ==\n" + fit_report(amp))
     print("wrote", ", ".join(str(p) for p in write_fit(amp, out / "amplitude")), "\n")
 
     names = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
-    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=150, jobs=2,
+    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=nfev_map, jobs=2,
                             pressure={"amplitude_bar": float(amp.x[0])})
     print("== 2. k and the pressure map ==\n" + fit_report(both))
     print("wrote", ", ".join(str(p) for p in write_fit(both, out / "k_and_map")))

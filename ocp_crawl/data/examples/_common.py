@@ -6,11 +6,22 @@ example writes into a fresh temporary directory and prints its path.  Figures ar
 """
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 from pathlib import Path
 
 from ocp_crawl.viz.gait import save_figure
+
+
+#: set (to anything) by the examples' test (tests/test_examples.py): an example whose full run takes minutes runs the
+#: same steps with a smaller iteration budget, so that the gallery is checked in seconds; unset, they run in full
+QUICK_ENV = "OCP_CRAWL_EXAMPLES_QUICK"
+
+
+def quick() -> bool:
+    """Whether the examples run with the small budget of their test (:data:`QUICK_ENV` set)."""
+    return bool(os.environ.get(QUICK_ENV))
 
 
 def output_dir(argv: list[str] | None = None) -> Path:
