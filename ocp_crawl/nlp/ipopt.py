@@ -9,7 +9,10 @@ use; a user's options (``MPCCOptions.ipopt``, ``OCPSettings.ipopt``) are a dict 
 """
 from __future__ import annotations
 
+import ctypes
+import functools
 import math
+import os
 import re
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -201,15 +204,43 @@ def _casadi_reason(exc: BaseException) -> str:
     return f"{lines[0]} {lines[1]}" if lines[0].endswith(":") and len(lines) > 1 else lines[0]
 
 
+#: the soname of the OpenBLAS that CasADi bundles (Linux wheels), which IPOPT's MUMPS links
+CASADI_OPENBLAS = "libcasadi-tp-openblas.so.0"
+
+
+@functools.cache
+def single_threaded_blas() -> int | None:
+    """Run the OpenBLAS bundled with CasADi (under IPOPT's MUMPS) on one thread, unless ``OPENBLAS_NUM_THREADS``
+    is set; returns the thread count it had (None: not found, or left as the user set it).
+
+    The KKT systems are small (a few thousand rows): a second thread gains nothing on idle cores and spins against
+    other processes on busy ones (measured, the first homotopy stage of max_speed at N = 50, 885 IPOPT iterations:
+    idle, 21.0 s on one thread and 20.5-21.1 s on two; the other core busy, 36 s of which 15 s system time on two
+    threads, 25 s on one).  Called once, after the first solver is built (the library is loaded with IPOPT; found
+    by its soname, i.e. the very instance MUMPS uses); numpy's own BLAS is untouched."""
+    if os.environ.get("OPENBLAS_NUM_THREADS"):
+        return None
+    try:
+        lib = ctypes.CDLL(CASADI_OPENBLAS, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_GLOBAL)
+        before = int(lib.openblas_get_num_threads())
+        lib.openblas_set_num_threads(1)
+    except (OSError, AttributeError):  # another platform's wheel, or CasADi linked another BLAS
+        return None
+    return before
+
+
 def build_ipopt(name: str, nlp: dict, options: dict, owner: str, user_options: dict) -> cs.Function:
-    """The CasADi IPOPT solver of ``nlp`` with ``options`` (the package's only nlpsol call).
+    """The CasADi IPOPT solver of ``nlp`` with ``options`` (the package's only nlpsol call), its BLAS on one
+    thread (:func:`single_threaded_blas`).
 
     IPOPT's rejection of an option (unknown name, wrong type, out of range) becomes one ValueError naming
     ``owner`` and the user's options instead of a CasADi traceback."""
     try:
-        return cs.nlpsol(name, "ipopt", nlp, options)
+        solver = cs.nlpsol(name, "ipopt", nlp, options)
     except RuntimeError as exc:
         raise ValueError(f"{owner} = {user_options!r}: IPOPT rejected the options: {_casadi_reason(exc)}") from None
+    single_threaded_blas()
+    return solver
 
 
 def result_status(outcome: SolverOutcome, usable: bool | None = None) -> Status:
