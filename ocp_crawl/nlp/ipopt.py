@@ -10,7 +10,6 @@ use; a user's options (``MPCCOptions.ipopt``, ``OCPSettings.ipopt``) are a dict 
 from __future__ import annotations
 
 import ctypes
-import functools
 import math
 import os
 import re
@@ -206,26 +205,33 @@ def _casadi_reason(exc: BaseException) -> str:
 
 #: the soname of the OpenBLAS that CasADi bundles (Linux wheels), which IPOPT's MUMPS links
 CASADI_OPENBLAS = "libcasadi-tp-openblas.so.0"
+#: environment variables by which a user sets OpenBLAS's thread count (then :func:`single_threaded_blas` does nothing)
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+_blas_done: list[int] = []
 
 
-@functools.cache
 def single_threaded_blas() -> int | None:
-    """Run the OpenBLAS bundled with CasADi (under IPOPT's MUMPS) on one thread, unless ``OPENBLAS_NUM_THREADS``
-    is set; returns the thread count it had (None: not found, or left as the user set it).
+    """Run the OpenBLAS bundled with CasADi (under IPOPT's MUMPS) on one thread, unless one of
+    :data:`BLAS_THREAD_VARIABLES` is set; returns the thread count it had (None: not loaded, not found on this
+    platform, or left as the user set it).  Never loads a library and never raises.
 
     The KKT systems are small (a few thousand rows): a second thread gains nothing on idle cores and spins against
     other processes on busy ones (measured, the first homotopy stage of max_speed at N = 50, 885 IPOPT iterations:
     idle, 21.0 s on one thread and 20.5-21.1 s on two; the other core busy, 36 s of which 15 s system time on two
-    threads, 25 s on one).  Called once, after the first solver is built (the library is loaded with IPOPT; found
-    by its soname, i.e. the very instance MUMPS uses); numpy's own BLAS is untouched."""
-    if os.environ.get("OPENBLAS_NUM_THREADS"):
+    threads, 25 s on one), and the thread count no longer depends on the machine's cores.  Called after a solver is
+    built (the library is loaded with IPOPT; found by its soname with RTLD_NOLOAD, i.e. the very instance MUMPS
+    uses, without changing its symbol scope); done once per process.  numpy's own BLAS is untouched."""
+    if _blas_done:
+        return _blas_done[0]
+    if any(os.environ.get(v) for v in BLAS_THREAD_VARIABLES) or not hasattr(os, "RTLD_NOLOAD"):
         return None
     try:
-        lib = ctypes.CDLL(CASADI_OPENBLAS, mode=getattr(os, "RTLD_NOLOAD", 0) | ctypes.RTLD_GLOBAL)
+        lib = ctypes.CDLL(CASADI_OPENBLAS, mode=os.RTLD_NOLOAD)
         before = int(lib.openblas_get_num_threads())
         lib.openblas_set_num_threads(1)
-    except (OSError, AttributeError):  # another platform's wheel, or CasADi linked another BLAS
+    except (OSError, AttributeError):  # not loaded (yet), another platform's wheel, or another BLAS
         return None
+    _blas_done.append(before)
     return before
 
 
