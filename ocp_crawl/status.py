@@ -33,6 +33,7 @@ class Status(IntEnum):
     NO_INITIAL_GUESS = 13
     REPLAY_FAILED = 14
     REPLAY_MISMATCH = 18
+    WORSE_THAN_BASELINE = 19
     # sweep rows only: a point whose values break a rule, a point that raised, a point not computed yet
     BAD_INPUT = 20
     ERROR = 21
@@ -86,6 +87,9 @@ STATUS_MESSAGES = {
     Status.REPLAY_MISMATCH: "the event-driven replay of the optimal profile does not confirm the optimiser: it misses "
                             "a constraint (speed requirement, envelope, bandwidth) or disagrees with the OCP's "
                             "objective beyond the tolerance",
+    Status.WORSE_THAN_BASELINE: "the optimiser's profile, confirmed by its replay, is worse than the harmonic baseline "
+                                "it started from (beyond the replay tolerance): a local optimum of the solver's path, "
+                                "not an improvement; the baseline is the better gait",
     Status.BAD_INPUT: "the point's values break a rule of the problem schema",
     Status.ERROR: "an unexpected exception while computing the point (a bug: please report it)",
     Status.MISSING: "the point has not been computed",

@@ -8,6 +8,7 @@ the bandwidth must be flagged.
 """
 import inspect
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -179,7 +180,8 @@ def test_gain_over_the_baseline(objective, value, base, gain):
 def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_is_not():
     """The real path: the transcription with its torques and period fixed to a harmonic gait's (it then only
     simulates the profile, by its own sub-steps) is judged by the event-driven replay: confirmed; the same
-    result with its objective or its period forged beyond the tolerances is not."""
+    result with its objective or its period forged beyond the tolerances is not, nor one worse than a given
+    harmonic baseline beyond replay_tol (WORSE_THAN_BASELINE)."""
     import dataclasses
 
     from ocp_crawl.ocp import solve
@@ -208,3 +210,12 @@ def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_i
     faster = dataclasses.replace(res, T_ocp=0.9 * res.T_ocp)  # the same strokes 10 % faster: beyond the bandwidth
     solve._judge(faster, [MODEL])
     assert faster.status == Status.REPLAY_MISMATCH and "times the bandwidth" in faster.message
+    # a confirmed profile against a harmonic baseline better than it beyond replay_tol is not an optimum; within
+    # the tolerance (either side) it stands
+    value, tol = honest.value_replay, st.replay_tol
+    for excess, status in ((2.0, Status.WORSE_THAN_BASELINE), (0.5, Status.SUCCESS), (-0.5, Status.SUCCESS)):
+        base = value + excess * tol * abs(value)
+        judged = dataclasses.replace(res, harmonic=SimpleNamespace(value=base))
+        solve._judge(judged, [MODEL])
+        assert judged.status == status and judged.success == (status == Status.SUCCESS), judged.message
+        assert judged.gain == pytest.approx((value - base) / abs(base), rel=1e-9)

@@ -48,7 +48,8 @@ class StartRecord:
     @property
     def converged(self) -> bool:
         """The OCP converged from this start and its optimum was replayed (judged or not)."""
-        return math.isfinite(self.value_replay) and self.status in (Status.SUCCESS, Status.REPLAY_MISMATCH)
+        return math.isfinite(self.value_replay) and self.status in (Status.SUCCESS, Status.REPLAY_MISMATCH,
+                                                                     Status.WORSE_THAN_BASELINE)
 
     def to_dict(self) -> dict:
         """JSON-able (the status as its lower-case label)."""
@@ -184,7 +185,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     OCPResult
         The best start by replay among those the judge accepts (else the best replayed, else the first
         start's failure): SUCCESS, INFEASIBLE, SOLVER_FAILURE, NOT_COMPLEMENTARY, NO_INITIAL_GUESS (no
-        harmonic gait simulates), REPLAY_FAILED or REPLAY_MISMATCH; ``starts`` holds every start's outcome.
+        harmonic gait simulates), REPLAY_FAILED, REPLAY_MISMATCH or WORSE_THAN_BASELINE (confirmed by replay but
+        worse than the harmonic baseline it started from); ``starts`` holds every start's outcome.
     """
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
@@ -361,3 +363,16 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
                         f"replay_tol {units.ratio(res.settings.replay_tol)})")
     if res.harmonic is not None:
         res.gain = gain_over(res.settings.objective, res.value_replay, res.harmonic.value)
+        if res.success and res.gain < -res.settings.replay_tol:
+            _worse_than_baseline(res)
+
+
+def _worse_than_baseline(res: OCPResult) -> None:
+    """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same envelope and
+    bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both values."""
+    objective = res.settings.objective
+    res.success = False
+    res.status = Status.WORSE_THAN_BASELINE
+    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay {value_text(objective, res.value_replay)} against "
+                   f"the baseline's {value_text(objective, res.harmonic.value)} (gain {units.ratio(res.gain)}, "
+                   f"replay_tol {units.ratio(res.settings.replay_tol)})")
