@@ -363,7 +363,7 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
                         f"replay_tol {units.ratio(res.settings.replay_tol)})")
     if res.harmonic is not None:
         res.gain = gain_over(res.settings.objective, res.value_replay, res.harmonic.value)
-        if res.success and res.gain < -res.settings.replay_tol:
+        if res.success and res.gain_significant and res.gain < 0:
             _worse_than_baseline(res)
 
 
