@@ -4,6 +4,7 @@ A complementarity problem 0 <= s _|_ c >= 0 is relaxed by a parameter sigma (Sch
 step solver also knows an l1 penalty and Fischer-Burmeister smoothing) and solved by IPOPT along a
 decreasing :func:`schedule` of sigma: the first stage from a guess (the cold solver, or the warm one when
 the guess carries multipliers), each later stage warm-started from the previous stage's primal-dual point.
+Every stage but the last may have its own solvers (a looser tolerance: such a stage only leads to the next).
 A :meth:`Homotopy.polish` then solves the tightened NLP (each pair fixed to its identified branch) from the
 homotopy's point, trying candidate tightenings in turn.  Every IPOPT call is one :class:`Stage` record.
 
@@ -176,12 +177,29 @@ class Homotopy:
     """A relaxation homotopy over one NLP: its cold and warm IPOPT solvers and how to call them.
 
     ``call(solver, start, data)`` makes one IPOPT call (``data``: the stage's ``p`` and bounds) and measures
-    the point; ``records`` collects a :class:`Stage` per call (a caller may share one list across runs)."""
+    the point; ``records`` collects a :class:`Stage` per call (a caller may share one list across runs).
+    ``stage_cold``, ``stage_warm``: the solvers of the stages that only lead to the next one (every stage but
+    the last of a schedule), e.g. with a looser tolerance (:class:`~ocp_crawl.nlp.ipopt.Solvers`); None: the
+    cold and warm ones."""
 
     cold: cs.Function
     warm: cs.Function
     call: Call
     records: list = field(default_factory=list)
+    stage_cold: cs.Function | None = None
+    stage_warm: cs.Function | None = None
+
+    @classmethod
+    def of(cls, solvers, call: Call, records: list | None = None) -> "Homotopy":
+        """The homotopy of a :class:`~ocp_crawl.nlp.ipopt.Solvers` (cold, warm, stage_cold, stage_warm)."""
+        return cls(solvers.cold, solvers.warm, call, [] if records is None else records, solvers.stage_cold,
+                   solvers.stage_warm)
+
+    def _solver(self, warm: bool, last: bool) -> cs.Function:
+        """The solver of a stage: warm-started or cold, the last stage's or an intermediate one's."""
+        if warm:
+            return self.warm if last or self.stage_warm is None else self.stage_warm
+        return self.cold if last or self.stage_cold is None else self.stage_cold
 
     def _stage(self, solver, start: Start, data: dict, sigma: float, kind: str, attempt: int) -> Solve:
         t0 = time.perf_counter()
@@ -198,18 +216,21 @@ class Homotopy:
         """Solve along ``sigmas`` from ``start``: the cold solver first unless ``start`` is warm, then each stage
         warm-started from the previous one.  ``data(sigma)``: parameters and bounds of the stage; ``done(sol)``:
         True ends the homotopy early (e.g. an exact penalty already complementary).  Stops at the first stage
-        the table (or the caller) does not accept."""
+        the table (or the caller) does not accept.  Every stage but the last uses the stage solvers (a looser
+        tolerance), so ``done`` is asked only of the last, and of the stages in a homotopy without stage solvers."""
         sigmas = tuple(sigmas)
-        solver = self.warm if start.warm else self.cold
         run = Run(None, stages=len(sigmas))
+        loose = any(mine is not None and mine is not theirs
+                    for mine, theirs in ((self.stage_cold, self.cold), (self.stage_warm, self.warm)))
         for k, sigma in enumerate(sigmas):
-            sol = self._stage(solver, start, data(sigma), sigma, "homotopy", attempt)
+            last = k == len(sigmas) - 1
+            sol = self._stage(self._solver(start.warm, last), start, data(sigma), sigma, "homotopy", attempt)
             run.stage, run.sigma = k, sigma
             if not sol.accepted:
                 run.failed = sol
                 return run
-            run.last, start, solver = sol, sol.start(), self.warm
-            if done is not None and done(sol):
+            run.last, start = sol, sol.start()
+            if done is not None and (last or not loose) and done(sol):
                 break
         return run
 

@@ -306,23 +306,45 @@ OCP_WARM_IPOPT: dict = {
 }
 
 
+#: IPOPT's own default of ``tol``
+IPOPT_DEFAULT_TOL = 1e-8
+
 #: nlpsol options that take a derivative function, and the name of that function in a built solver
 DERIVATIVES = {"hess_lag": "nlp_hess_l", "jac_g": "nlp_jac_g", "grad_f": "nlp_grad_f"}
 
 
+class Solvers(NamedTuple):
+    """The IPOPT solvers of one NLP (:func:`ipopt_solvers`): cold and warm-started, each also in a loose version for
+    the intermediate stages of a homotopy (the same solver when no stage tolerance was asked for)."""
+
+    cold: cs.Function
+    warm: cs.Function
+    stage_cold: cs.Function
+    """the cold solver with the stage tolerance (the first stage of a homotopy that has later ones)"""
+    stage_warm: cs.Function
+    """the warm solver with the stage tolerance (an intermediate stage)"""
+
+
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
-                  verbose: bool = False) -> tuple[cs.Function, cs.Function]:
+                  verbose: bool = False, stage_tol: float | None = None) -> Solvers:
     """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``).
 
     Options: ``defaults`` (an option set of this module, read when called), quiet unless ``verbose``, then
     the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them.
-    Returns (cold, warm)."""
+    ``stage_tol`` (dimensionless, IPOPT's ``tol``): also build both solvers with this tolerance over every other
+    option, for the stages of a homotopy that are only a path to the next one (None, or not looser than the
+    solvers' own ``tol``: the loose solvers are the tight ones).  All four share one set of derivative functions.
+    Returns :class:`Solvers`."""
     ipopt = dict(defaults)
     ipopt.update({"print_level": 5 if verbose else 0, "sb": "yes"})
     ipopt.update(user)
     base = {"print_time": bool(verbose), "calc_lam_p": False, "error_on_fail": False}
     cold = build_ipopt(f"{name}_cold", nlp, dict(base, ipopt=ipopt), owner, user)
-    # the warm solver reuses the cold one's derivative functions (generating them again doubles the build time)
-    shared = {key: cold.get_function(fun) for key, fun in DERIVATIVES.items() if cold.has_function(fun)}
-    warm = build_ipopt(f"{name}_warm", nlp, dict(base, ipopt=dict(warm, **ipopt), **shared), owner, user)
-    return cold, warm
+    # the other solvers reuse the cold one's derivative functions (generating them again doubles the build time)
+    shared = dict(base, **{key: cold.get_function(fun) for key, fun in DERIVATIVES.items() if cold.has_function(fun)})
+    warm_solver = build_ipopt(f"{name}_warm", nlp, dict(shared, ipopt=dict(warm, **ipopt)), owner, user)
+    if stage_tol is None or not stage_tol > ipopt.get("tol", IPOPT_DEFAULT_TOL):
+        return Solvers(cold, warm_solver, cold, warm_solver)
+    loose = dict(ipopt, tol=float(stage_tol))
+    return Solvers(cold, warm_solver, build_ipopt(f"{name}_stage_cold", nlp, dict(shared, ipopt=loose), owner, user),
+                   build_ipopt(f"{name}_stage_warm", nlp, dict(shared, ipopt=dict(warm, **loose)), owner, user))

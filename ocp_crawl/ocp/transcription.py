@@ -30,7 +30,7 @@ from ocp_crawl.model.step_equations import NW
 from ocp_crawl.nlp import ipopt as nlp_ipopt
 from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
-from ocp_crawl.nlp.ipopt import call_ipopt, ipopt_solvers
+from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, onset_residual,
                                     positive_work, sample_phases, step_function, substep_torques, switch_fractions,
@@ -178,7 +178,7 @@ class GaitOCP:
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
-        self.solver, self.solver_warm = self._solvers("gait_ocp", X, f, G)
+        self.solvers = self._solvers("gait_ocp", X, f, G)
         # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
         # from those of the start: no incentive to leave the physical solution through the relaxation
         theta = cs.vertcat(*[sc.theta for sc in scen])
@@ -196,11 +196,11 @@ class GaitOCP:
         self._fixed: np.ndarray | None = None
         self._fixed_x = np.zeros(0)
 
-    def _solvers(self, name: str, X, f, G, p=None) -> tuple:
+    def _solvers(self, name: str, X, f, G, p=None) -> Solvers:
         s = self.settings
         nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
         return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
-                             s.verbose)
+                             s.verbose, s.stage_tol)
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
@@ -331,7 +331,7 @@ class GaitOCP:
             self._fixed_x = np.asarray(x0, float)
         if fix_profile and self._sim_solvers is None:
             self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
-        hom = Homotopy(*(self._sim_solvers if fix_profile else (self.solver, self.solver_warm)), self._call)
+        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call)
         best = None
         runs = []
         f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess

@@ -195,7 +195,7 @@ class MPCCStep:
         # equations only (no sign bounds): the residual of a point of :meth:`solve_in_mode`
         self._eq_only = cs.Function("mpcc_eq", [w, P], [cs.mmax(cs.fabs(cs.vertcat(g_eq, g_lift)))])
 
-        self._solver_cold, self._solver_warm = ipopt_solvers(
+        self._solver_cold, self._solver_warm, *_ = ipopt_solvers(
             "mpcc_step", {"x": w, "p": P, "f": f, "g": g}, nlp_ipopt.STEP_IPOPT, nlp_ipopt.STEP_WARM_IPOPT,
             opt.ipopt, "MPCCOptions.ipopt", opt.verbose)
         inf = np.inf

@@ -1,0 +1,106 @@
+"""The homotopy's stage solvers: every stage but the last is solved to a looser tolerance (it only leads to
+the next one), the last stage and the polish to the tight one; checked on a relaxed complementarity problem
+with a closed-form solution and on the gait OCP against the same solve without loose stages."""
+import math
+
+import casadi as cs
+import numpy as np
+import pytest
+
+from ocp_crawl import Robot
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.nlp.homotopy import Homotopy, Solve, Start, schedule
+from ocp_crawl.nlp.ipopt import OCP_IPOPT, OCP_WARM_IPOPT, call_ipopt, ipopt_solvers
+from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.ocp.transcription import GaitOCP
+
+#: min (x - 1)^2 + (y - 1/2)^2 subject to x y <= sigma, x, y >= 0: for small sigma the solution is
+#: x = 1 + O(sigma), y = sigma / x (the constraint active), whose KKT system gives x exactly below
+TARGET = (1.0, 0.5)
+
+
+def _relaxed_pair():
+    z = cs.SX.sym("z", 2)
+    return {"x": z, "f": (z[0] - TARGET[0]) ** 2 + (z[1] - TARGET[1]) ** 2, "g": z[0] * z[1]}
+
+
+def _exact(sigma: float) -> tuple[float, float]:
+    """The solution of the relaxed problem: y = sigma / x and stationarity along the curve,
+    (x - 1) - (y - 1/2) sigma / x^2 = 0, solved by Newton's method (independent of IPOPT)."""
+    x = 1.0
+    for _ in range(50):
+        y = sigma / x
+        r = (x - TARGET[0]) - (y - TARGET[1]) * sigma / x**2
+        dr = 1.0 + sigma**2 / x**4 + 2 * (y - TARGET[1]) * sigma / x**3
+        x -= r / dr
+    return x, sigma / x
+
+
+def _homotopy(stage_tol):
+    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {}, "test", stage_tol=stage_tol)
+    used = []
+
+    def call(solver, start: Start, data: dict) -> Solve:
+        used.append(solver.name())
+        args = dict(data, x0=start.x)
+        if start.warm:
+            args.update(lam_x0=start.lam_x, lam_g0=start.lam_g)
+        return Solve.of(call_ipopt(solver, 2, 1, **args), comp=0.0)
+
+    return solvers, Homotopy.of(solvers, call), used
+
+
+def _data(sigma):
+    return {"lbx": [0.0, 0.0], "ubx": [math.inf, math.inf], "lbg": [-math.inf], "ubg": [sigma]}
+
+
+def test_intermediate_stages_use_the_stage_solvers_and_the_last_is_tight():
+    solvers, hom, used = _homotopy(1e-3)
+    sigmas = schedule(1e-1, 0.1, 1e-4)
+    run = hom.relax(sigmas, Start(np.array([0.5, 0.5])), _data)
+    assert run.ok and len(used) == len(sigmas) == 4
+    assert used == ["pair_stage_cold", "pair_stage_warm", "pair_stage_warm", "pair_warm"]
+    # the last stage is solved to the tight tolerance: its point is the closed-form solution at sigma_min
+    assert run.last.x == pytest.approx(_exact(1e-4), abs=1e-9)
+    # a homotopy from a warm start (multipliers given) uses the warm stage solver first
+    _, hom2, used2 = _homotopy(1e-3)
+    hom2.relax(sigmas[2:], run.last.start(), _data)
+    assert used2 == ["pair_stage_warm", "pair_warm"]
+
+
+def test_loose_stage_is_loose():
+    """The stage solver stops earlier than the tight one on the same stage (the test can fail: if the option
+    were not passed, both would run to the same tolerance)."""
+    solvers, hom, _ = _homotopy(1e-2)
+    x0 = np.array([0.9, 0.2])  # on the branch of the solution x near 1
+    loose = call_ipopt(solvers.stage_cold, 2, 1, x0=x0, **_data(1e-3))
+    tight = call_ipopt(solvers.cold, 2, 1, x0=x0, **_data(1e-3))
+    assert loose.usable and tight.usable and loose.iterations < tight.iterations
+    assert tight.x == pytest.approx(_exact(1e-3), abs=1e-9)
+    assert np.max(np.abs(loose.x - _exact(1e-3))) > 1e-9
+
+
+@pytest.mark.parametrize("stage_tol", [None, 1e-12])
+def test_no_stage_tolerance_means_the_same_solvers(stage_tol):
+    """Without a stage tolerance looser than the solvers' own, the stage solvers are the cold and warm ones."""
+    solvers, hom, used = _homotopy(stage_tol)
+    assert solvers.stage_cold is solvers.cold and solvers.stage_warm is solvers.warm
+    hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)
+    assert used == ["pair_cold", "pair_warm", "pair_warm"]
+
+
+def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
+    """max_speed at N = 20: the loose first stage (default stage_tol) reaches the same optimum as the homotopy
+    with every stage solved to 1e-10, and its first stage takes fewer IPOPT iterations."""
+    robot = Robot.paper()
+    sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
+    out = {}
+    for tol in (OCPSettings().stage_tol, 1e-10):
+        st = OCPSettings(objective="max_speed", nodes=20, starts=1, stage_tol=tol)
+        ocp = GaitOCP(robot, "physical", st)
+        x, hist, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        assert failed is None
+        out[tol] = (ocp.unpack(x)["scen"][0]["v"], hist[0].iterations)
+    (v_loose, it_loose), (v_tight, it_tight) = out.values()
+    assert v_loose == pytest.approx(v_tight, rel=1e-6)
+    assert it_loose < it_tight
