@@ -27,6 +27,7 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(mu_ratios=(0.9, -1.0)), "mu_ratios must be positive"),
     (dict(max_accel_deg_s2=-1.0), "max_accel_deg_s2 must be > 0"),
     (dict(max_rate_deg_s=0.0), "max_rate_deg_s must be > 0"),
+    (dict(stage_tol=0.0), "stage_tol must be > 0"),
 ])
 def test_settings_validation(bad, match):
     with pytest.raises((ValueError, TypeError), match=match):
@@ -94,3 +95,25 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     assert code == 1
     assert json.loads(captured.out)["status"] == "infeasible"
     assert "infeasible" in captured.err and "Traceback" not in captured.err
+
+
+def test_figure_of_an_unreplayed_result_says_so():
+    """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a note instead
+    of an empty axes and an empty legend; the other panels keep their legends."""
+    import warnings
+    from dataclasses import replace
+
+    from ocp_crawl.viz.ocp import plot_optimal_gait
+
+    robot = Robot.paper()
+    res = optimize_gait(robot, "physical", OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8,
+                                                       harmonic_A=2))
+    assert res.tau.size and res.replay
+    failed = replace(res, replay=[], status=Status.SOLVER_FAILURE, success=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # matplotlib warns of a legend without artists
+        fig = plot_optimal_gait(failed, robot)
+    ax_d = fig.axes[3]
+    assert ax_d.get_legend() is None and "no replay" in " ".join(t.get_text() for t in ax_d.texts)
+    assert all(ax.get_legend() is not None for ax in fig.axes[:3])
+    assert "solver_failure" in fig.get_suptitle()

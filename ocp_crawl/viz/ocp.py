@@ -87,6 +87,9 @@ def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
         tr = rep.t - rep.t0
         ax.plot(tr, rep.f_t * 1e3, "k", label="$f_t$")
         plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=JOINT_COLORS, scale=1e3)
+    else:  # a failed solve is not replayed: say so instead of an empty panel
+        ax.text(0.5, 0.5, f"no replay: the OCP's result is {result.status.label}", ha="center", va="center",
+                transform=ax.transAxes, fontsize="small")
     _label(ax, "(d) tangential force and friction limits (replay)", "tangential force [mN]")
     if modes:
         patches, names = mode_legend(modes, alpha=MODE_ALPHA)
@@ -106,7 +109,8 @@ def _label(ax, title: str, ylabel: str) -> None:
     ax.set_ylabel(ylabel)
     ax.set_title(title, loc="left", fontsize="medium")
     ax.grid(True, lw=0.3, alpha=0.6)
-    ax.legend(fontsize="small")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="small")
 
 
 def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None) -> None:
