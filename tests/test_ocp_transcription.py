@@ -190,3 +190,23 @@ def test_a_slip_onset_inside_a_sub_step_violates_the_onset_condition():
     W[9, 1] = 0.0  # at the limit already at the end of sub-step 1
     assert onset_residual(W) == 0.0 and np.max(np.abs(onset_products(W, 2))) == 0.0
 
+
+
+def test_polish_candidates_are_distinct():
+    """The polish tries the branches with the ties of the foot switches fixed, then without; the second only when it
+    is another NLP.  With the onset pairs on their branches (the optimiser's NLP) the tie of a foot switch is already
+    fixed (the new foot slips in the next sub-step from a zero margin), so one candidate; the profile-fixed NLP
+    (no onset rule) has two where the slipping foot changes (unequal friction) and one where it does not."""
+    unequal = Robot(M=PAPER.M, L=PAPER.L, beta=PAPER.beta, k=PAPER.k, mu1=0.35, mu2=0.43, g=PAPER.g)
+    expected = {(PAPER, False): 1, (unequal, False): 1, (PAPER, True): 1, (unequal, True): 2}
+    for (robot, fixed), count in expected.items():
+        ocp = GaitOCP(robot, "physical", OCPSettings(objective="max_speed", nodes=20, starts=1))
+        x = ocp.initial_guess(paper_torque(), 1.0)
+        if fixed:
+            ocp._fixed, ocp._fixed_x = np.zeros(ocp.nx, bool), x
+        cands = ocp._polish_candidates(x)
+        assert len(cands) == count, (robot.mu1, fixed)
+        if count == 2:
+            assert not np.array_equal(cands[0]["ubx"], cands[1]["ubx"])
+            # the first fixes more margins to zero (the ties) than the second
+            assert np.sum(cands[0]["ubx"] == 0) > np.sum(cands[1]["ubx"] == 0)

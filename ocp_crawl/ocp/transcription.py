@@ -386,8 +386,10 @@ class GaitOCP:
 
     def _polish_candidates(self, x: np.ndarray) -> list[dict]:
         """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified foot switches
-        fixed, then the pairs' branches alone (the cross products keep the bound sigma_min)."""
-        return [self._polish_data(x), self._polish_data(x, ties=False)]
+        fixed, then the pairs' branches alone (the cross products keep the bound sigma_min); the second only if
+        it differs (no foot switch identified: the same NLP, which would fail the same way)."""
+        first, second = self._polish_data(x), self._polish_data(x, ties=False)
+        return [first] if np.array_equal(first["ubx"], second["ubx"]) else [first, second]
 
     def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
         """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
