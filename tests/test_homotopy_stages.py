@@ -104,3 +104,47 @@ def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
     (v_loose, it_loose), (v_tight, it_tight) = out.values()
     assert v_loose == pytest.approx(v_tight, rel=1e-6)
     assert it_loose < it_tight
+
+
+def test_polish_uses_the_tight_warm_solver():
+    solvers, hom, used = _homotopy(1e-3)
+    run = hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)
+    # the tightened NLP: y on its branch (y = 0), x free
+    pol = hom.polish(run.last, [dict(_data(0.0), ubx=[math.inf, 0.0], x0=np.minimum(run.last.x, [math.inf, 0.0]))],
+                     lambda p: True)
+    assert used[-1] == "pair_warm" and pol is not None
+    assert pol.x == pytest.approx([TARGET[0], 0.0], abs=1e-9)  # the exact solution of the unrelaxed problem
+
+
+@pytest.mark.parametrize("user_tol,loose", [(1e-3, False), (1e-4, False), (1e-6, True)])
+def test_user_tolerance_at_or_above_the_stage_tolerance_means_no_loose_stages(user_tol, loose):
+    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {"tol": user_tol}, "test",
+                            stage_tol=1e-4)
+    assert (solvers.stage_cold is not solvers.cold) == loose
+    assert (solvers.stage_warm is not solvers.warm) == loose
+
+
+class _Fake:
+    """A stand-in solver: the homotopy only hands it to ``call``."""
+
+    def __init__(self, name):
+        self.name = name
+
+
+def _fake_call(used):
+    def call(solver, start, data):
+        used.append(solver.name)
+        return Solve(np.zeros(2), np.zeros(2), np.zeros(1), "Solve_Succeeded", True, 1, comp=0.0)
+    return call
+
+
+@pytest.mark.parametrize("stage_solvers", [False, True])
+def test_done_ends_the_homotopy_only_without_stage_solvers(stage_solvers):
+    """``done`` true after every stage: without stage solvers (the MPCC step) the homotopy ends after its first
+    stage, as before; with them a loose stage never ends it (its point is not an answer)."""
+    used = []
+    extra = (_Fake("stage_cold"), _Fake("stage_warm")) if stage_solvers else (None, None)
+    hom = Homotopy(_Fake("cold"), _Fake("warm"), _fake_call(used), [], *extra)
+    run = hom.relax((1e-2, 1e-3, 1e-4), Start(np.zeros(2)), lambda s: {}, done=lambda sol: True)
+    assert run.ok
+    assert used == (["stage_cold", "stage_warm", "warm"] if stage_solvers else ["cold"])

@@ -191,7 +191,6 @@ def test_a_slip_onset_inside_a_sub_step_violates_the_onset_condition():
     assert onset_residual(W) == 0.0 and np.max(np.abs(onset_products(W, 2))) == 0.0
 
 
-
 def test_polish_candidates_are_distinct():
     """The polish tries the branches with the ties of the foot switches fixed, then without; the second only when it
     is another NLP.  With the onset pairs on their branches (the optimiser's NLP) the tie of a foot switch is already

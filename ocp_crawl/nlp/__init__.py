@@ -10,7 +10,8 @@ _EXPORTS = {
     "Homotopy": "ocp_crawl.nlp.homotopy", "Run": "ocp_crawl.nlp.homotopy", "Solve": "ocp_crawl.nlp.homotopy",
     "Stage": "ocp_crawl.nlp.homotopy", "Start": "ocp_crawl.nlp.homotopy", "schedule": "ocp_crawl.nlp.homotopy",
     "FAILURE_KINDS": "ocp_crawl.nlp.ipopt", "IPOPT_RETURN_STATUS": "ocp_crawl.nlp.ipopt",
-    "IpoptCall": "ocp_crawl.nlp.ipopt", "Solvers": "ocp_crawl.nlp.ipopt", "SolverOutcome": "ocp_crawl.nlp.ipopt", "call_ipopt": "ocp_crawl.nlp.ipopt",
+    "IpoptCall": "ocp_crawl.nlp.ipopt", "Solvers": "ocp_crawl.nlp.ipopt", "SolverOutcome": "ocp_crawl.nlp.ipopt",
+    "call_ipopt": "ocp_crawl.nlp.ipopt",
     "check_ipopt_options": "ocp_crawl.nlp.ipopt", "ipopt_solvers": "ocp_crawl.nlp.ipopt",
     "ipopt_status": "ocp_crawl.nlp.ipopt", "result_status": "ocp_crawl.nlp.ipopt",
 }

@@ -8,7 +8,8 @@ Every stage but the last may have its own solvers (a looser tolerance: such a st
 A :meth:`Homotopy.polish` then solves the tightened NLP (each pair fixed to its identified branch) from the
 homotopy's point, trying candidate tightenings in turn.  Every IPOPT call is one :class:`Stage` record.
 
-The engine knows nothing of the problem: the caller gives the two IPOPT solvers and a function that makes
+The engine knows nothing of the problem: the caller gives the IPOPT solvers (cold and warm, and optionally those
+of the intermediate stages) and a function that makes
 one call, ``call(solver, start, data) -> Solve``, where ``data`` holds the NLP's parameters and bounds of the
 stage (``p``, ``lbx``, ``ubx``, ``lbg``, ``ubg``) and the returned :class:`Solve` carries the point, the
 status table's verdict and the caller's residuals.
@@ -25,7 +26,7 @@ from typing import Callable, Iterable, Iterator
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.nlp.ipopt import IpoptCall, ipopt_status
+from ocp_crawl.nlp.ipopt import IpoptCall, Solvers, ipopt_status
 
 
 #: callbacks told of every IPOPT call of every homotopy (see :func:`observe`)
@@ -190,7 +191,7 @@ class Homotopy:
     stage_warm: cs.Function | None = None
 
     @classmethod
-    def of(cls, solvers, call: Call, records: list | None = None) -> "Homotopy":
+    def of(cls, solvers: Solvers, call: Call, records: list | None = None) -> "Homotopy":
         """The homotopy of a :class:`~ocp_crawl.nlp.ipopt.Solvers` (cold, warm, stage_cold, stage_warm)."""
         return cls(solvers.cold, solvers.warm, call, [] if records is None else records, solvers.stage_cold,
                    solvers.stage_warm)
@@ -217,7 +218,8 @@ class Homotopy:
         warm-started from the previous one.  ``data(sigma)``: parameters and bounds of the stage; ``done(sol)``:
         True ends the homotopy early (e.g. an exact penalty already complementary).  Stops at the first stage
         the table (or the caller) does not accept.  Every stage but the last uses the stage solvers (a looser
-        tolerance), so ``done`` is asked only of the last, and of the stages in a homotopy without stage solvers."""
+        tolerance), whose point must not end the homotopy: with stage solvers ``done`` never ends it early (it is
+        asked only of the last stage); without them it is asked after every stage."""
         sigmas = tuple(sigmas)
         run = Run(None, stages=len(sigmas))
         loose = any(mine is not None and mine is not theirs

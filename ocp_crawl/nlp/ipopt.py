@@ -327,7 +327,7 @@ class Solvers(NamedTuple):
 
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
                   verbose: bool = False, stage_tol: float | None = None) -> Solvers:
-    """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``).
+    """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``), and their loose versions.
 
     Options: ``defaults`` (an option set of this module, read when called), quiet unless ``verbose``, then
     the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them.

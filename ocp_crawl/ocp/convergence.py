@@ -35,8 +35,8 @@ from ocp_crawl.status import Status
 #: sub-step's start, the simulated guess at the finer N starts slips inside sub-steps where two events share an
 #: interval, and at sigma 1e-6 IPOPT took > 2000 iterations to repair it (max_speed, N = 100 from N = 50)
 WARM_SIGMA0 = 1e-4
-#: IPOPT tolerance of the first relaxation stage of a warm-started solve (not the cold solve's looser
-#: ``OCPSettings.stage_tol``): the monotone barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4
+#: IPOPT tolerance of the stages before the last of a warm-started solve (the settings' ``stage_tol`` if tighter; not
+#: the cold solve's looser default): the monotone barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4
 #: stops after a few dozen iterations and leaves the work to the stage at sigma_min, where IPOPT struggles (max_speed,
 #: N = 200 from N = 100: max_iter).  Measured, max_speed N = 50..400, one run each: 1e-4: 442 s; 1e-6: 295 s;
 #: 1e-8: 742 s (a 1832-iteration polish at N = 400); 1e-10: 397 s (N = 200 and 400 within 0.01 % of 1e-6's)
@@ -184,7 +184,7 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
     # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
     near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=min(settings.sigma_min, WARM_SIGMA0 / 10),
-                   stage_tol=WARM_STAGE_TOL, ipopt={**WARM_IPOPT, **settings.ipopt})
+                   stage_tol=min(settings.stage_tol, WARM_STAGE_TOL), ipopt={**WARM_IPOPT, **settings.ipopt})
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)

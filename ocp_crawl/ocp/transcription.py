@@ -387,7 +387,9 @@ class GaitOCP:
     def _polish_candidates(self, x: np.ndarray) -> list[dict]:
         """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified foot switches
         fixed, then the pairs' branches alone (the cross products keep the bound sigma_min); the second only if
-        it differs (no foot switch identified: the same NLP, which would fail the same way)."""
+        it is another NLP (else it would fail the same way).  In the optimiser's NLP the onset pairs on their branches
+        already fix the ties (the new foot slips from a zero margin), so there is usually one; the profile-fixed
+        NLP has no onset rule and two where the slipping foot changes."""
         first, second = self._polish_data(x), self._polish_data(x, ties=False)
         return [first] if np.array_equal(first["ubx"], second["ubx"]) else [first, second]
 

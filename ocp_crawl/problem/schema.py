@@ -280,7 +280,7 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("objective", str, "-", "what to optimise", default=_ocp("objective"),
         choices=("max_speed", "min_cot", "robust_speed")),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
-        rule=within(*NODES_BOUNDS, "the shipped files use 50: 30 to 40 s per start with one friction scenario, "
+        rule=within(*NODES_BOUNDS, "the shipped files use 50: 15 to 25 s per start with one friction scenario, "
                                    "minutes with robust_speed's three; the cost grows at least linearly")),
     Key("direction", int, "-", "sign of S to pursue (-1: towards foot 1, as psi > 0 gaits)", default=_ocp("direction"),
         rule=Rule(lambda v: v in (-1, 1), "-1 or 1")),
