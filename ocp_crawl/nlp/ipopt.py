@@ -293,8 +293,9 @@ OCP_IPOPT: dict = {
     "nlp_scaling_method": "gradient-based",
 }
 
-#: the warm-started OCP stages: a small initial barrier parameter and bound push keep IPOPT from walking
-#: back into the interior (the barrier strategy stays that of :data:`OCP_IPOPT`)
+#: the warm-started OCP stages: a small bound push keeps IPOPT from walking back into the interior (the barrier
+#: strategy stays that of :data:`OCP_IPOPT`, adaptive, which sets mu from the point's complementarity; mu_init acts
+#: only under a monotone strategy, e.g. the convergence run's warm solves)
 OCP_WARM_IPOPT: dict = {
     "warm_start_init_point": "yes",
     "mu_init": 1e-6,
