@@ -197,10 +197,12 @@ class GaitOCP:
         self._fixed_x = np.zeros(0)
 
     def _solvers(self, name: str, X, f, G, p=None) -> Solvers:
+        """The IPOPT solvers of the optimiser's NLP (with loose intermediate stages) or, with the parameters ``p``
+        (the interior points' reference), of the profile-fixed check: a simulation, every stage tight."""
         s = self.settings
         nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
         return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
-                             s.verbose, s.stage_tol)
+                             s.verbose, s.stage_tol if p is None else None)
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
