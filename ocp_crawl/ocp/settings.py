@@ -84,7 +84,8 @@ class OCPSettings:
     sigma_factor: float = 0.01
     stage_tol: float = 1e-4
     """IPOPT tolerance (``tol``) of the homotopy's stages before the last, which only lead to the next one; the
-    last stage and the polish keep OCP_IPOPT's 1e-10 (a ``tol`` in ``ipopt`` at or above stage_tol: no loose stages).
+    last stage and the polish keep OCP_IPOPT's 1e-10 (a ``tol`` in ``ipopt`` at or above stage_tol: no loose stages;
+    the profile-fixed check, ``GaitOCP.solve(fix_profile=True)``, is tight throughout).
     The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit: 1e-4 halves it, with
     the same max_speed optimum at N = 50; min_cot's path changed and one start reached another local optimum (0.5 %
     better)"""
