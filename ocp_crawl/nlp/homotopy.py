@@ -196,11 +196,15 @@ class Homotopy:
         return cls(solvers.cold, solvers.warm, call, [] if records is None else records, solvers.stage_cold,
                    solvers.stage_warm)
 
+    def __post_init__(self) -> None:
+        self.stage_cold = self.cold if self.stage_cold is None else self.stage_cold
+        self.stage_warm = self.warm if self.stage_warm is None else self.stage_warm
+
     def _solver(self, warm: bool, last: bool) -> cs.Function:
         """The solver of a stage: warm-started or cold, the last stage's or an intermediate one's."""
         if warm:
-            return self.warm if last or self.stage_warm is None else self.stage_warm
-        return self.cold if last or self.stage_cold is None else self.stage_cold
+            return self.warm if last else self.stage_warm
+        return self.cold if last else self.stage_cold
 
     def _stage(self, solver, start: Start, data: dict, sigma: float, kind: str, attempt: int) -> Solve:
         t0 = time.perf_counter()
@@ -222,8 +226,7 @@ class Homotopy:
         asked only of the last stage); without them it is asked after every stage."""
         sigmas = tuple(sigmas)
         run = Run(None, stages=len(sigmas))
-        loose = any(mine is not None and mine is not theirs
-                    for mine, theirs in ((self.stage_cold, self.cold), (self.stage_warm, self.warm)))
+        loose = self.stage_cold is not self.cold or self.stage_warm is not self.warm
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             sol = self._stage(self._solver(start.warm, last), start, data(sigma), sigma, "homotopy", attempt)

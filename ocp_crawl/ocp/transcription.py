@@ -178,7 +178,7 @@ class GaitOCP:
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
-        self.solvers = self._solvers("gait_ocp", X, f, G)
+        self.solvers = self._solvers("gait_ocp", X, f, G, stage_tol=s.stage_tol)
         # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
         # from those of the start: no incentive to leave the physical solution through the relaxation
         theta = cs.vertcat(*[sc.theta for sc in scen])
@@ -196,13 +196,13 @@ class GaitOCP:
         self._fixed: np.ndarray | None = None
         self._fixed_x = np.zeros(0)
 
-    def _solvers(self, name: str, X, f, G, p=None) -> Solvers:
-        """The IPOPT solvers of the optimiser's NLP (with loose intermediate stages) or, with the parameters ``p``
-        (the interior points' reference), of the profile-fixed check: a simulation, every stage tight."""
+    def _solvers(self, name: str, X, f, G, p=None, stage_tol: float | None = None) -> Solvers:
+        """The IPOPT solvers of an NLP: the optimiser's with loose intermediate stages (``stage_tol``), the
+        profile-fixed check's (parameters ``p``: the interior points' reference; a simulation) tight throughout."""
         s = self.settings
         nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
         return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
-                             s.verbose, s.stage_tol if p is None else None)
+                             s.verbose, stage_tol)
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
