@@ -58,3 +58,24 @@ def model_of():
         robot = (robot or Robot.paper()).replace(**robot_changes) if robot_changes else (robot or Robot.paper())
         return Model(robot, gravity=gravity)
     return build
+
+
+@pytest.fixture(scope="session")
+def cli_optimize_run(tmp_path_factory):
+    """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30 (a cheap
+    harmonic scan), shared by the tests of its JSON, progress bar and output files: (exit code, stdout, stderr,
+    the --out directory, N)."""
+    import contextlib
+    import io
+    from pathlib import Path
+
+    from ocp_crawl.cli.app import main
+
+    nodes = 30
+    problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
+    out = tmp_path_factory.mktemp("cli_optimize") / "opt"
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set", "ocp.harmonic_psi=8",
+                     "--json", "--out", str(out), "--progress"])
+    return code, stdout.getvalue(), stderr.getvalue(), out, nodes

@@ -226,8 +226,8 @@ def test_every_output_file_is_renamed_into_place(tmp_path):
          "--frames-per-cycle", "4"],
         ["sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:3", "--out", str(out / "sweep"), "--jobs", "1",
          "--no-progress"],
-        ["optimize", str(REPO / "problems" / "ocp_max_speed.toml"), "--set", "ocp.nodes=24",
-         "--set", "ocp.harmonic_psi=8", "--out", str(out / "optimize")],
+        ["optimize", str(REPO / "problems" / "ocp_max_speed.toml"), "--set", "ocp.nodes=8",
+         "--set", "ocp.harmonic_psi=4", "--out", str(out / "optimize")],
     ]
     log = tmp_path / "events.json"
     proc = subprocess.run([sys.executable, "-c", MONITOR, str(tmp_path), json.dumps(commands), str(log)],

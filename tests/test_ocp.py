@@ -34,29 +34,22 @@ def test_settings_validation(bad, match):
         OCPSettings(**bad)
 
 
-def test_cli_optimize_json_and_outputs(tmp_path, capsys):
+def test_cli_optimize_json_and_outputs(cli_optimize_run):
     import json
-    from pathlib import Path
 
-    from ocp_crawl.cli.app import main
-
-    problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
-    out = tmp_path / "opt"
-    code = main(["optimize", str(problem), "--set", "ocp.nodes=40", "--set", "ocp.harmonic_psi=8", "--json",
-                 "--out", str(out), "--progress"])
-    captured = capsys.readouterr()
-    data = json.loads(captured.out)  # the progress bar never mixes into the JSON on stdout
+    code, stdout, stderr, out, nodes = cli_optimize_run
+    data = json.loads(stdout)  # the progress bar never mixes into the JSON on stdout
     assert code == (0 if data["success"] else 1)
     # the bar on stderr counts every IPOPT iteration of the homotopies' calls, over every start
     iterations = sum(start["iterations"] for start in data["starts"])
     assert sum(stage["iterations"] for stage in data["homotopy"]) in [s["iterations"] for s in data["starts"]]
-    assert f"optimize: {iterations} IPOPT it" in captured.err and "polish" in captured.err
+    assert f"optimize: {iterations} IPOPT it" in stderr and "polish" in stderr
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
         assert key in data, key
     assert data["objective"] == "max_speed" and 0 < data["best_harmonic"]["A1_deg"] <= 30.0
     lines = [r for r in (out / "torques.csv").read_text().splitlines() if not r.startswith("#")]
-    assert lines[0] == "phase [-],tau1 [N m],tau2 [N m]" and len(lines) == 41
+    assert lines[0] == "phase [-],tau1 [N m],tau2 [N m]" and len(lines) == nodes + 1
     phase = np.array([float(r.split(",")[0]) for r in lines[1:]])
     assert phase[0] == 0.0 and np.all(np.diff(phase) > 0) and phase[-1] < 1.0
     for name in ("arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"):

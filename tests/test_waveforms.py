@@ -183,17 +183,15 @@ def test_replay_interpolation_is_the_ocp_replays():
     assert INTERPOLANTS[REPLAY_INTERPOLATION][0] is type(replay_signal(t, tau)) is PeriodicLinear
 
 
-def test_optimize_torques_replayed_by_simulate(tmp_path, capsys):
+def test_optimize_torques_replayed_by_simulate(cli_optimize_run, capsys):
     """optimize --out writes torques.csv (full precision) and optimal_gait.toml; simulating either gives the
     optimize replay's S to 1e-9 (also with --input, and with --set from the problem file's directory)."""
-    out = tmp_path / "opt"
-    code = main(["optimize", str(OCP), "--set", "ocp.nodes=30", "--set", "ocp.harmonic_psi=8", "--json",
-                 "--out", str(out)])
-    summary = json.loads(capsys.readouterr().out)
+    code, stdout, _, out, nodes = cli_optimize_run
+    summary = json.loads(stdout)
     assert code == 0 and summary["success"], summary["message"]
     arrays = np.load(out / "arrays.npz")
     table = read_table(out / "torques.csv", {"phase": "dimensionless", "tau1": "torque", "tau2": "torque"})
-    assert np.array_equal(table["phase"], arrays["phase"]) and np.array_equal(table["phase"], np.arange(30) / 30)
+    assert np.array_equal(table["phase"], arrays["phase"]) and np.array_equal(table["phase"], np.arange(nodes) / nodes)
     assert np.array_equal(np.array([table["tau1"], table["tau2"]]), arrays["tau"])
     runs = {"toml": ["simulate", str(out / "optimal_gait.toml"), "--json"],
             "input": ["simulate", str(OCP), "--input", str(out / "torques.csv"), "--set", 'gait.interpolation="linear"',
