@@ -106,6 +106,52 @@ def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
     assert it_loose < it_tight
 
 
+def test_loose_last_stage_then_tighten():
+    """With ``loose_last`` every stage uses the stage solvers, so the last point is only near the solution;
+    ``tighten`` solves that stage again with the tight warm solver, to the closed-form solution."""
+    solvers, hom, used = _homotopy(1e-3)
+    sigmas = schedule(1e-1, 0.1, 1e-3)
+    run = hom.relax(sigmas, Start(np.array([0.5, 0.5])), _data, loose_last=True)
+    assert run.ok and used == ["pair_stage_cold", "pair_stage_warm", "pair_stage_warm"]
+    assert np.max(np.abs(run.last.x - _exact(1e-3))) > 1e-9  # loose: not the solution to the tight tolerance
+    sol = hom.tighten(run.last, sigmas[-1], _data(sigmas[-1]))
+    assert used[-1] == "pair_warm" and hom.records[-1].kind == "homotopy" and hom.records[-1].sigma == sigmas[-1]
+    assert sol.x == pytest.approx(_exact(1e-3), abs=1e-9)
+
+
+def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
+    """max_speed at N = 20: from the optimum's own profile (as the convergence run's warm solves start), the solve
+    with ``loose_last`` returns to the same optimum; and when the polish from the loose last stage fails (here: no
+    candidate offered), that stage is solved again tightly and polished."""
+    from ocp_crawl.ocp.judge import replay_signal
+
+    robot = Robot.paper()
+    sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
+    st = OCPSettings(objective="max_speed", nodes=20, starts=1)
+    ocp = GaitOCP(robot, "physical", st)
+    x, _, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+    assert failed is None
+    best = ocp.unpack(x)
+    near = replay_signal(np.arange(20) / 20, best["tau"])
+    loose = GaitOCP(robot, "physical", OCPSettings(objective="max_speed", nodes=20, starts=1, loose_last=True,
+                                                   stage_tol=st.sigma_min))
+    x, hist, failed, _ = loose.solve(loose.initial_guess(near, best["T"]))
+    kinds = [h.kind for h in hist]
+    assert failed is None and kinds[:3] == ["homotopy", "homotopy", "polish"] and "homotopy" not in kinds[3:]
+    assert hist[-1].accepted
+    # the same local optimum (others differ by percents); 1e-5: the polishes end at IPOPT's acceptable level
+    assert loose.unpack(x)["scen"][0]["v"] == pytest.approx(best["scen"][0]["v"], rel=1e-5)
+    calls = []
+    candidates = GaitOCP._polish_candidates
+    monkeypatch.setattr(GaitOCP, "_polish_candidates",
+                        lambda self, x: [] if not calls.append(1) and len(calls) == 1 else candidates(self, x))
+    x, hist, failed, _ = loose.solve(loose.initial_guess(near, best["T"]))
+    kinds = [h.kind for h in hist]
+    assert failed is None and kinds[:4] == ["homotopy", "homotopy", "homotopy", "polish"]
+    assert hist[2].sigma == st.sigma_min and hist[-1].accepted and "homotopy" not in kinds[4:]
+    assert loose.unpack(x)["scen"][0]["v"] == pytest.approx(best["scen"][0]["v"], rel=1e-5)
+
+
 def test_polish_uses_the_tight_warm_solver():
     solvers, hom, used = _homotopy(1e-3)
     run = hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)

@@ -28,6 +28,8 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(max_accel_deg_s2=-1.0), "max_accel_deg_s2 must be > 0"),
     (dict(max_rate_deg_s=0.0), "max_rate_deg_s must be > 0"),
     (dict(stage_tol=0.0), "stage_tol must be > 0"),
+    (dict(loose_last=True), "loose_last needs stage_tol <= sigma_min"),
+    (dict(loose_last=1), "loose_last must be True or False"),
 ])
 def test_settings_validation(bad, match):
     with pytest.raises((ValueError, TypeError), match=match):

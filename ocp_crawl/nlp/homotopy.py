@@ -216,28 +216,39 @@ class Homotopy:
             callback(self.records[-1])
         return sol
 
+    @property
+    def loose(self) -> bool:
+        """Whether the intermediate stages have their own (looser) solvers."""
+        return self.stage_cold is not self.cold or self.stage_warm is not self.warm
+
     def relax(self, sigmas: Iterable[float], start: Start, data: Callable[[float], dict], attempt: int = 0,
-              done: Callable[[Solve], bool] | None = None) -> Run:
+              done: Callable[[Solve], bool] | None = None, loose_last: bool = False) -> Run:
         """Solve along ``sigmas`` from ``start``: the cold solver first unless ``start`` is warm, then each stage
         warm-started from the previous one.  ``data(sigma)``: parameters and bounds of the stage; ``done(sol)``:
         True ends the homotopy early (e.g. an exact penalty already complementary).  Stops at the first stage
-        the table (or the caller) does not accept.  Every stage but the last uses the stage solvers (a looser
-        tolerance), whose point must not end the homotopy: with stage solvers ``done`` never ends it early (it is
-        asked only of the last stage); without them it is asked after every stage."""
+        the table (or the caller) does not accept.  Every stage but the last (every stage with ``loose_last``)
+        uses the stage solvers (a looser tolerance), whose point must not end the homotopy: with stage solvers
+        ``done`` never ends it early (it is asked only of a tight last stage); without them it is asked after
+        every stage."""
         sigmas = tuple(sigmas)
         run = Run(None, stages=len(sigmas))
-        loose = self.stage_cold is not self.cold or self.stage_warm is not self.warm
+        loose = self.loose
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
-            sol = self._stage(self._solver(start.warm, last), start, data(sigma), sigma, "homotopy", attempt)
+            sol = self._stage(self._solver(start.warm, last and not loose_last), start, data(sigma), sigma,
+                              "homotopy", attempt)
             run.stage, run.sigma = k, sigma
             if not sol.accepted:
                 run.failed = sol
                 return run
             run.last, start = sol, sol.start()
-            if done is not None and (last or not loose) and done(sol):
+            if done is not None and ((last and not loose_last) or not loose) and done(sol):
                 break
         return run
+
+    def tighten(self, sol: Solve, sigma: float, data: dict, attempt: int = 0) -> Solve:
+        """The stage at ``sigma`` solved again with the tight warm solver from ``sol`` (a loose stage's point)."""
+        return self._stage(self.warm, sol.start(), data, sigma, "homotopy", attempt)
 
     def polish(self, sol: Solve, candidates: Iterable[dict], accept: Callable[[Solve], bool],
                attempt: int = 0) -> Solve | None:

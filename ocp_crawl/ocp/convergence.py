@@ -3,9 +3,9 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly; if that solve is not judged a success, the same start once more with the cold solve's relaxation and
-barrier settings), or, while no N has given an optimum whose replay succeeds, again from the baseline and its
-starts.
+exactly; its homotopy stages loose, only the polish tight: :data:`WARM_STAGE_TOL`; if that solve is not judged a
+success, the same start once more with the cold solve's relaxation and barrier settings), or, while no N has given
+an optimum whose replay succeeds, again from the baseline and its starts.
 Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
@@ -35,11 +35,14 @@ from ocp_crawl.status import Status
 #: sub-step's start, the simulated guess at the finer N starts slips inside sub-steps where two events share an
 #: interval, and at sigma 1e-6 IPOPT took > 2000 iterations to repair it (max_speed, N = 100 from N = 50)
 WARM_SIGMA0 = 1e-4
-#: IPOPT tolerance of the stages before the last of a warm-started solve (the settings' ``stage_tol`` if tighter; not
-#: the cold solve's looser default): the monotone barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4
-#: stops after a few dozen iterations and leaves the work to the stage at sigma_min, where IPOPT struggles (max_speed,
-#: N = 200 from N = 100: max_iter).  Measured, max_speed N = 50..400, one run each: 1e-4: 442 s; 1e-6: 295 s;
-#: 1e-8: 742 s (a 1832-iteration polish at N = 400); 1e-10: 397 s (N = 200 and 400 within 0.01 % of 1e-6's)
+#: IPOPT tolerance of every stage of a warm-started solve, the last one included (``loose_last``: only the polish is
+#: tight; the settings' ``stage_tol`` or sigma_min if tighter; not the cold solve's looser default): the monotone
+#: barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4 would stop after a few dozen iterations
+#: and leave the work to the stage at sigma_min, where IPOPT struggles (max_speed, N = 200 from N = 100: max_iter).
+#: Measured, max_speed N = 50..400, one run each, a tight last stage: 1e-4: 442 s; 1e-6: 295 s; 1e-8: 742 s (a
+#: 1832-iteration polish at N = 400); 1e-10: 397 s.  With the last stage at 1e-6 too: 169 s, the same optima to 1e-5
+#: (the tight last stage had taken 300 to 860 iterations, up to 0.2 s each at N = 400).  A further loose stage at
+#: sigma = 1e-8 helped max_speed (139 s) but not min_cot (502 s instead of 218 s: a 1392-iteration polish at N = 400)
 WARM_STAGE_TOL = 1e-6
 #: IPOPT options of a solve warm-started from the previous N's optimum (the settings' own ipopt options win)
 WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8,
@@ -183,8 +186,9 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
     # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
     # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
-    near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=min(settings.sigma_min, WARM_SIGMA0 / 10),
-                   stage_tol=min(settings.stage_tol, WARM_STAGE_TOL), ipopt={**WARM_IPOPT, **settings.ipopt})
+    sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
+    near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True,
+                   stage_tol=min(settings.stage_tol, WARM_STAGE_TOL, sigma_min), ipopt={**WARM_IPOPT, **settings.ipopt})
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)

@@ -89,6 +89,13 @@ class OCPSettings:
     The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit: 1e-4 halves it, with
     the same max_speed optimum at N = 50; min_cot's path changed and one start reached another local optimum (0.5 %
     better)"""
+    loose_last: bool = False
+    """the last homotopy stage at ``stage_tol`` too (which must then be at most sigma_min), so that only the polish
+    is tight; if the polish fails, the last stage is solved again at the tight tolerance and polished once more.
+    For starts already near an optimum (the convergence run's warm solves, :mod:`~ocp_crawl.ocp.convergence`):
+    max_speed N = 50..400 took 169 s instead of 334 s, min_cot 218 s instead of 466 s, with the same optima.  Off
+    by default: from the harmonic baseline (max_speed, N = 20, the last stage to 1e-4) it reached another optimum,
+    2 % slower"""
     comp_tol: float = 1e-6
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
     periodic_tol: float = 1e-8
@@ -129,6 +136,8 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.direction must be -1 or +1, got {self.direction!r}")
         if self.robust not in ("mean", "worst"):
             raise ValueError(f"OCPSettings.robust must be 'mean' or 'worst', got {self.robust!r}")
+        if not isinstance(self.loose_last, bool):
+            raise TypeError(f"OCPSettings.loose_last must be True or False, got {self.loose_last!r}")
 
     def _check_numbers(self) -> None:
         for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
@@ -151,6 +160,10 @@ class OCPSettings:
         self._set("sigma0", tuple(float(v) for v in s0))
         if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
+        if self.loose_last and not self.stage_tol <= self.sigma_min:
+            raise ValueError(f"OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at sigma_min solved "
+                             f"only to stage_tol would stop at once), got stage_tol {self.stage_tol:g}, sigma_min "
+                             f"{self.sigma_min:g}")
         if not self.mu_ratio_eps < 1:
             raise ValueError(f"OCPSettings.mu_ratio_eps must be in [0, 1), got {self.mu_ratio_eps!r}")
         if self.mu_ratios is not None:

@@ -429,9 +429,12 @@ class GaitOCP:
     def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
         raise the complementarity residual; after a failed stage, only if it is within comp_tol):
-        (x or None, failed stage or None, status)."""
+        (x or None, failed stage or None, status).  With ``loose_last`` (and loose stages) the last stage is loose
+        too; if the polish from it fails, that stage is solved again tightly and polished once more."""
         s = self.settings
-        run = hom.relax(schedule(sigma0, s.sigma_factor, s.sigma_min), Start(x0), self._stage_data)
+        sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
+        loose_last = s.loose_last and hom.loose and self._fixed is None
+        run = hom.relax(sigmas, Start(x0), self._stage_data, loose_last=loose_last)
         if not run.ok:
             if run.last is not None:
                 # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
@@ -443,4 +446,9 @@ class GaitOCP:
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
         pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
+        if pol is None and loose_last:
+            tight = hom.tighten(sol, sigmas[-1], self._stage_data(sigmas[-1]))
+            if tight.accepted:
+                sol = tight
+                pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
         return (pol.x, None, pol.status) if pol is not None else (sol.x, None, sol.status)
