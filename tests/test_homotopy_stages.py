@@ -152,6 +152,38 @@ def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
     assert loose.unpack(x)["scen"][0]["v"] == pytest.approx(best["scen"][0]["v"], rel=1e-5)
 
 
+def test_loose_pairs_at_other_tolerances_are_built_once_and_named_validly():
+    """``Solvers.loose(tol)``: a working (cold, warm) pair per tolerance, kept; the tight pair when tol is not looser
+    than the solvers' own; and a homotopy with ``loose_at`` uses the pair of each stage's sigma."""
+    solvers, base, used = _homotopy(1e-3)
+    a, b = solvers.loose(1e-5), solvers.loose(1e-6)
+    assert a is solvers.loose(1e-5) and a != b and solvers.loose(1e-12) == (solvers.cold, solvers.warm)
+    assert solvers.loose(1e-3) == (solvers.stage_cold, solvers.stage_warm)
+    hom = Homotopy.of(solvers, base.call, loose_at=lambda sigma: solvers.loose(sigma / 10))
+    run = hom.relax(schedule(1e-3, 0.1, 1e-5), Start(np.array([0.5, 0.5])), _data)
+    assert run.ok and used == [solvers.loose(1e-4)[0].name(), a[1].name(), "pair_warm"]
+    assert len(set(used)) == 3 and run.last.x == pytest.approx(_exact(1e-5), abs=1e-9)
+
+
+def test_deep_homotopy_ends_complementary_without_a_polish():
+    """max_speed at N = 20 down to sigma = 1e-11 (stages to a tenth of their sigma): the last point is within
+    comp_tol, so no polish runs, and it is the optimum that the default path reaches through its polish."""
+    robot = Robot.paper()
+    sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
+    v = {}
+    for deep in (False, True):
+        extra = dict(sigma0=1e-3, sigma_factor=0.1, sigma_min=1e-11, stage_tol_ratio=0.1) if deep else {}
+        st = OCPSettings(objective="max_speed", nodes=20, starts=1, **extra)
+        ocp = GaitOCP(robot, "physical", st)
+        x, hist, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        assert failed is None and hist[-1].accepted
+        assert (hist[-1].kind == "homotopy") == deep and (hist[-1].sigma == 1e-11) == deep
+        sc = ocp.unpack(x)["scen"][0]
+        assert sc["comp"] <= st.comp_tol
+        v[deep] = sc["v"]
+    assert v[True] == pytest.approx(v[False], rel=1e-5)
+
+
 def test_polish_uses_the_tight_warm_solver():
     solvers, hom, used = _homotopy(1e-3)
     run = hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)

@@ -29,6 +29,8 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(max_rate_deg_s=0.0), "max_rate_deg_s must be > 0"),
     (dict(stage_tol=0.0), "stage_tol must be > 0"),
     (dict(loose_last=True), "loose_last needs stage_tol <= sigma_min"),
+    (dict(stage_tol_ratio=0.0), "stage_tol_ratio must be > 0"),
+    (dict(stage_tol_ratio=2.0), "stage_tol_ratio must be in"),
     (dict(loose_last=1), "loose_last must be True or False"),
 ])
 def test_settings_validation(bad, match):

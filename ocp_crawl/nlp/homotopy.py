@@ -189,22 +189,27 @@ class Homotopy:
     records: list = field(default_factory=list)
     stage_cold: cs.Function | None = None
     stage_warm: cs.Function | None = None
+    loose_at: Callable[[float], tuple[cs.Function, cs.Function]] | None = None
+    """``loose_at(sigma)``: the (cold, warm) solvers of a loose stage at sigma (e.g. a tolerance that scales with
+    sigma); None: ``stage_cold``, ``stage_warm`` at every sigma"""
 
     @classmethod
-    def of(cls, solvers: Solvers, call: Call, records: list | None = None) -> "Homotopy":
+    def of(cls, solvers: Solvers, call: Call, records: list | None = None,
+           loose_at: Callable[[float], tuple[cs.Function, cs.Function]] | None = None) -> "Homotopy":
         """The homotopy of a :class:`~ocp_crawl.nlp.ipopt.Solvers` (cold, warm, stage_cold, stage_warm)."""
         return cls(solvers.cold, solvers.warm, call, [] if records is None else records, solvers.stage_cold,
-                   solvers.stage_warm)
+                   solvers.stage_warm, loose_at)
 
     def __post_init__(self) -> None:
         self.stage_cold = self.cold if self.stage_cold is None else self.stage_cold
         self.stage_warm = self.warm if self.stage_warm is None else self.stage_warm
 
-    def _solver(self, warm: bool, last: bool) -> cs.Function:
-        """The solver of a stage: warm-started or cold, the last stage's or an intermediate one's."""
-        if warm:
-            return self.warm if last else self.stage_warm
-        return self.cold if last else self.stage_cold
+    def _solver(self, warm: bool, last: bool, sigma: float) -> cs.Function:
+        """The solver of a stage at sigma: warm-started or cold, the tight one (``last``) or a loose one."""
+        if last:
+            return self.warm if warm else self.cold
+        cold, warm_solver = (self.stage_cold, self.stage_warm) if self.loose_at is None else self.loose_at(sigma)
+        return warm_solver if warm else cold
 
     def _stage(self, solver, start: Start, data: dict, sigma: float, kind: str, attempt: int) -> Solve:
         t0 = time.perf_counter()
@@ -219,7 +224,7 @@ class Homotopy:
     @property
     def loose(self) -> bool:
         """Whether the intermediate stages have their own (looser) solvers."""
-        return self.stage_cold is not self.cold or self.stage_warm is not self.warm
+        return self.loose_at is not None or self.stage_cold is not self.cold or self.stage_warm is not self.warm
 
     def relax(self, sigmas: Iterable[float], start: Start, data: Callable[[float], dict], attempt: int = 0,
               done: Callable[[Solve], bool] | None = None, loose_last: bool = False) -> Run:
@@ -235,7 +240,7 @@ class Homotopy:
         loose = self.loose
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
-            sol = self._stage(self._solver(start.warm, last and not loose_last), start, data(sigma), sigma,
+            sol = self._stage(self._solver(start.warm, last and not loose_last, sigma), start, data(sigma), sigma,
                               "homotopy", attempt)
             run.stage, run.sigma = k, sigma
             if not sol.accepted:

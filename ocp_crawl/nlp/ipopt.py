@@ -14,7 +14,7 @@ import math
 import os
 import re
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import casadi as cs
 import numpy as np
@@ -324,6 +324,33 @@ class Solvers(NamedTuple):
     """the cold solver with the stage tolerance (the first stage of a homotopy that has later ones)"""
     stage_warm: cs.Function
     """the warm solver with the stage tolerance (an intermediate stage)"""
+    loose: Callable[[float], tuple[cs.Function, cs.Function]] | None = None
+    """``loose(tol)``: the (cold, warm) pair with IPOPT's ``tol`` = tol, built on first use and kept (the tight
+    pair when tol is not looser than theirs)"""
+
+
+class _LoosePairs:
+    """The (cold, warm) solver pairs of one NLP at other tolerances, built on first use, sharing the derivative
+    functions of the first solver."""
+
+    def __init__(self, name: str, nlp: dict, shared: dict, ipopt: dict, warm: dict, owner: str, user: dict,
+                 tight: tuple[cs.Function, cs.Function]):
+        self._args = (name, nlp, shared, ipopt, warm, owner, user)
+        self._pairs: dict[float, tuple[cs.Function, cs.Function]] = {}
+        self._tight = tight
+
+    def __call__(self, tol: float, suffix: str | None = None) -> tuple[cs.Function, cs.Function]:
+        name, nlp, shared, ipopt, warm, owner, user = self._args
+        tol = float(tol)
+        if not tol > ipopt.get("tol", IPOPT_DEFAULT_TOL):
+            return self._tight
+        if tol not in self._pairs:
+            tag = f"_loose{len(self._pairs) + 1}" if suffix is None else suffix  # CasADi names: no "-" or "."
+            loose = dict(ipopt, tol=tol)
+            self._pairs[tol] = (build_ipopt(f"{name}_stage_cold{tag}", nlp, dict(shared, ipopt=loose), owner, user),
+                                build_ipopt(f"{name}_stage_warm{tag}", nlp, dict(shared, ipopt=dict(warm, **loose)),
+                                            owner, user))
+        return self._pairs[tol]
 
 
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
@@ -334,8 +361,8 @@ def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, 
     the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them.
     ``stage_tol`` (dimensionless, IPOPT's ``tol``): also build both solvers with this tolerance over every other
     option, for the stages of a homotopy that are only a path to the next one (None, or not looser than the
-    solvers' own ``tol``: the loose solvers are the tight ones).  All four share one set of derivative functions.
-    Returns :class:`Solvers`."""
+    solvers' own ``tol``: the loose solvers are the tight ones); ``Solvers.loose(tol)`` builds pairs at other
+    tolerances on demand.  All share one set of derivative functions.  Returns :class:`Solvers`."""
     ipopt = dict(defaults)
     ipopt.update({"print_level": 5 if verbose else 0, "sb": "yes"})
     ipopt.update(user)
@@ -344,8 +371,6 @@ def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, 
     # the other solvers reuse the cold one's derivative functions (generating them again doubles the build time)
     shared = dict(base, **{key: cold.get_function(fun) for key, fun in DERIVATIVES.items() if cold.has_function(fun)})
     warm_solver = build_ipopt(f"{name}_warm", nlp, dict(shared, ipopt=dict(warm, **ipopt)), owner, user)
-    if stage_tol is None or not stage_tol > ipopt.get("tol", IPOPT_DEFAULT_TOL):
-        return Solvers(cold, warm_solver, cold, warm_solver)
-    loose = dict(ipopt, tol=float(stage_tol))
-    return Solvers(cold, warm_solver, build_ipopt(f"{name}_stage_cold", nlp, dict(shared, ipopt=loose), owner, user),
-                   build_ipopt(f"{name}_stage_warm", nlp, dict(shared, ipopt=dict(warm, **loose)), owner, user))
+    pairs = _LoosePairs(name, nlp, shared, ipopt, warm, owner, user, (cold, warm_solver))
+    stage = pairs(stage_tol, suffix="") if stage_tol is not None else (cold, warm_solver)
+    return Solvers(cold, warm_solver, *stage, pairs)

@@ -187,8 +187,10 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
     # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
     sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
+    stage_tol = min(settings.stage_tol, WARM_STAGE_TOL)  # loose_last: at most sigma_min, unless it scales with sigma
     near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True,
-                   stage_tol=min(settings.stage_tol, WARM_STAGE_TOL, sigma_min), ipopt={**WARM_IPOPT, **settings.ipopt})
+                   stage_tol=stage_tol if settings.stage_tol_ratio is not None else min(stage_tol, sigma_min),
+                   ipopt={**WARM_IPOPT, **settings.ipopt})
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)

@@ -89,8 +89,14 @@ class OCPSettings:
     The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit: 1e-4 halves it, with
     the same max_speed optimum at N = 50; min_cot's path changed and one start reached another local optimum (0.5 %
     better)"""
+    stage_tol_ratio: float | None = None
+    """a loose stage at sigma is solved to IPOPT ``tol`` = min(stage_tol, stage_tol_ratio * sigma) (a stage's point then
+    stays as close to its relaxed optimum as the relaxation itself; where that is not looser than the tight tolerance,
+    the stage is tight); None (default): stage_tol at every sigma.  robust_speed's file uses 0.1 with sigma from 1e-3
+    down to 1e-11: its first stage at sigma = 1e-4 to tol 1e-4 ended at a poor point and the next stage at max_iter"""
     loose_last: bool = False
-    """the last homotopy stage at ``stage_tol`` too (which must then be at most sigma_min), so that only the polish
+    """the last homotopy stage loose too (at ``stage_tol``, which must then be at most sigma_min, or by
+    ``stage_tol_ratio``), so that only the polish
     is tight; if the polish fails, the last stage is solved again at the tight tolerance and polished once more.
     For starts already near an optimum (the convergence run's warm solves, :mod:`~ocp_crawl.ocp.convergence`):
     max_speed N = 50..400 took 169 s instead of 334 s, min_cot 218 s instead of 466 s, with the same optima.  Off
@@ -160,7 +166,11 @@ class OCPSettings:
         self._set("sigma0", tuple(float(v) for v in s0))
         if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
-        if self.loose_last and not self.stage_tol <= self.sigma_min:
+        if self.stage_tol_ratio is not None:
+            self._set("stage_tol_ratio", real("OCPSettings.stage_tol_ratio", self.stage_tol_ratio, positive=True))
+            if not self.stage_tol_ratio <= 1:
+                raise ValueError(f"OCPSettings.stage_tol_ratio must be in (0, 1], got {self.stage_tol_ratio!r}")
+        if self.loose_last and self.stage_tol_ratio is None and not self.stage_tol <= self.sigma_min:
             raise ValueError(f"OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at sigma_min solved "
                              f"only to stage_tol would stop at once), got stage_tol {self.stage_tol:g}, sigma_min "
                              f"{self.sigma_min:g}")

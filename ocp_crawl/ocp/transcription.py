@@ -333,7 +333,8 @@ class GaitOCP:
             self._fixed_x = np.asarray(x0, float)
         if fix_profile and self._sim_solvers is None:
             self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
-        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call)
+        loose_at = self._loose_at if self.settings.stage_tol_ratio is not None and not fix_profile else None
+        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call, loose_at=loose_at)
         best = None
         runs = []
         f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
@@ -355,6 +356,11 @@ class GaitOCP:
             failed = "; ".join(f"start sigma0 = {sigma0:.0e}: {r[2]} ({r[3]})"
                                for sigma0, r in zip(self.settings.sigma0, runs))
         return x, hom.records, failed, status
+
+    def _loose_at(self, sigma: float) -> tuple:
+        """The (cold, warm) solvers of a loose stage at sigma: tol = min(stage_tol, stage_tol_ratio sigma)."""
+        s = self.settings
+        return self.solvers.loose(min(s.stage_tol, s.stage_tol_ratio * sigma))
 
     def _call(self, solver, start: Start, data: dict) -> Solve:
         """One IPOPT call of the homotopy and the residuals of its point."""
@@ -428,8 +434,8 @@ class GaitOCP:
 
     def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
-        raise the complementarity residual; after a failed stage, only if it is within comp_tol):
-        (x or None, failed stage or None, status).  With ``loose_last`` (and loose stages) the last stage is loose
+        raise the complementarity residual; after a failed stage, only if it is within comp_tol; none when the last
+        stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and loose stages) the last stage is loose
         too; if the polish from it fails, that stage is solved again tightly and polished once more."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
@@ -445,6 +451,8 @@ class GaitOCP:
             x = run.last.x if run.last is not None else None
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
+        if sol.comp <= s.comp_tol:  # already complementary: the polish has nothing to remove
+            return sol.x, None, sol.status
         pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
         if pol is None and loose_last:
             tight = hom.tighten(sol, sigmas[-1], self._stage_data(sigmas[-1]))

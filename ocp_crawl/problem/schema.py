@@ -280,8 +280,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("objective", str, "-", "what to optimise", default=_ocp("objective"),
         choices=("max_speed", "min_cot", "robust_speed")),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
-        rule=within(*NODES_BOUNDS, "the shipped files use 50: 15 to 25 s per start with one friction scenario, "
-                                   "minutes with robust_speed's three; the cost grows at least linearly")),
+        rule=within(*NODES_BOUNDS, "the shipped files use 50: 15 to 30 s per start with one friction scenario, "
+                                   "about 100 s with robust_speed's three; the cost grows at least linearly")),
     Key("direction", int, "-", "sign of S to pursue (-1: towards foot 1, as psi > 0 gaits)", default=_ocp("direction"),
         rule=Rule(lambda v: v in (-1, 1), "-1 or 1")),
     Key("A_max_deg", float, "deg", "half-width of the reference-angle envelope around gait.gamma_deg",
@@ -308,6 +308,14 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
                                                   "and friction scenario; 180 is a 2 deg grid")),
     Key("starts", int, "-", "starts of the OCP (harmonic baseline, perturbed, Fourier-order)", default=_ocp("starts"),
         rule=within(*STARTS_BOUNDS, "each start is a full homotopy of the NLP")),
+    Key("sigma0", float, "-", "homotopy: first relaxation parameter (complementarity products <= sigma)",
+        default=_ocp("sigma0")[0], rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+    Key("sigma_factor", float, "-", "homotopy: ratio of successive relaxation parameters", default=_ocp("sigma_factor"),
+        rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+    Key("sigma_min", float, "-", "homotopy: last relaxation parameter (then the polish, unless already within "
+        "comp_tol)", default=_ocp("sigma_min"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+    Key("stage_tol_ratio", float, "-", f"homotopy: a stage before the last is solved to IPOPT tol = "
+        f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})", rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
     Key("friction_tol", float, "-", "relative tolerance of the friction coefficients: a gait is admissible only "
         "when which foot slips does not depend on them within +-friction_tol/2 (slip-weighted margin)",
         default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
