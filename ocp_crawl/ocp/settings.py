@@ -96,8 +96,8 @@ class OCPSettings:
     down to 1e-11: its first stage at sigma = 1e-4 to tol 1e-4 ended at a poor point and the next stage at max_iter"""
     loose_last: bool = False
     """the last homotopy stage loose too (at ``stage_tol``, which must then be at most sigma_min, or by
-    ``stage_tol_ratio``), so that only the polish
-    is tight; if the polish fails, the last stage is solved again at the tight tolerance and polished once more.
+    ``stage_tol_ratio``), so that only the polish is tight; if the polish fails, the last stage is solved again at
+    the tight tolerance and polished once more.
     For starts already near an optimum (the convergence run's warm solves, :mod:`~ocp_crawl.ocp.convergence`):
     max_speed N = 50..400 took 169 s instead of 334 s, min_cot 218 s instead of 466 s, with the same optima.  Off
     by default: from the harmonic baseline (max_speed, N = 20, the last stage to 1e-4) it reached another optimum,

@@ -435,8 +435,9 @@ class GaitOCP:
     def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
         raise the complementarity residual; after a failed stage, only if it is within comp_tol; none when the last
-        stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and loose stages) the last stage is loose
-        too; if the polish from it fails, that stage is solved again tightly and polished once more."""
+        stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and
+        loose stages) the last stage is loose too; if the polish from it fails, that stage is solved again tightly
+        and polished once more."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
         loose_last = s.loose_last and hom.loose and self._fixed is None
