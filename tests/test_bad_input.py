@@ -294,6 +294,11 @@ ROWS = {
     "optimize: envelope outside (0, 180)": R("optimize", ["{ocp}", "--set", "gait.gamma_deg=150", "--set",
                                                           "ocp.A_max_deg=40"],
                                              ["ocp_max_speed.toml", "A_max_deg = 40", "gamma_deg = 150", "(0, 180)"]),
+    # rules between the homotopy's keys (each alone is valid): exit 2 naming them, not an internal error
+    "optimize: sigma_min above sigma0": R("optimize", ["{ocp}", "--set", "ocp.sigma_min=1e-3"],
+                                          ["ocp_max_speed.toml", "[ocp]", "sigma_min < sigma0"]),
+    "optimize: too many homotopy stages": R("optimize", ["{ocp}", "--set", "ocp.sigma_factor=0.999"],
+                                            ["ocp_max_speed.toml", "[ocp]", "sigma_factor 0.999", "homotopy stages"]),
     # keys of earlier versions: the message names the key, the file and the replacement
     "optimize: removed S_min in a file": R("optimize", ["{file}"], ["x.toml", "[ocp] S_min no longer exists",
                                                                      "speed_min [m/s]", "S_min = 0.04"],

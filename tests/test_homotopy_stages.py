@@ -159,6 +159,8 @@ def test_loose_pairs_at_other_tolerances_are_built_once_and_named_validly():
     a, b = solvers.loose(1e-5), solvers.loose(1e-6)
     assert a is solvers.loose(1e-5) and a != b and solvers.loose(1e-12) == (solvers.cold, solvers.warm)
     assert solvers.loose(1e-3) == (solvers.stage_cold, solvers.stage_warm)
+    # a sigma from repeated products (1e-9 = 1e-3 0.1^6 carries rounding noise): the same pair, or the tight one
+    assert solvers.loose(1e-5 * (1 + 1e-15)) is a and solvers.loose(1e-10 * (1 + 1e-15)) == (solvers.cold, solvers.warm)
     hom = Homotopy.of(solvers, base.call, loose_at=lambda sigma: solvers.loose(sigma / 10))
     run = hom.relax(schedule(1e-3, 0.1, 1e-5), Start(np.array([0.5, 0.5])), _data)
     assert run.ok and used == [solvers.loose(1e-4)[0].name(), a[1].name(), "pair_warm"]

@@ -4,7 +4,8 @@ A complementarity problem 0 <= s _|_ c >= 0 is relaxed by a parameter sigma (Sch
 step solver also knows an l1 penalty and Fischer-Burmeister smoothing) and solved by IPOPT along a
 decreasing :func:`schedule` of sigma: the first stage from a guess (the cold solver, or the warm one when
 the guess carries multipliers), each later stage warm-started from the previous stage's primal-dual point.
-Every stage but the last may have its own solvers (a looser tolerance: such a stage only leads to the next).
+Every stage but the last may have its own solvers (a looser tolerance: such a stage only leads to the next; per
+sigma with ``loose_at``; the last stage too with ``loose_last``, when a polish follows).
 A :meth:`Homotopy.polish` then solves the tightened NLP (each pair fixed to its identified branch) from the
 homotopy's point, trying candidate tightenings in turn.  Every IPOPT call is one :class:`Stage` record.
 
@@ -180,8 +181,8 @@ class Homotopy:
     ``call(solver, start, data)`` makes one IPOPT call (``data``: the stage's ``p`` and bounds) and measures
     the point; ``records`` collects a :class:`Stage` per call (a caller may share one list across runs).
     ``stage_cold``, ``stage_warm``: the solvers of the stages that only lead to the next one (every stage but
-    the last of a schedule), e.g. with a looser tolerance (:class:`~ocp_crawl.nlp.ipopt.Solvers`); None: the
-    cold and warm ones."""
+    the last of a schedule, or every stage with ``relax(loose_last=True)``), e.g. with a looser tolerance
+    (:class:`~ocp_crawl.nlp.ipopt.Solvers`); None: the cold and warm ones; ``loose_at`` chooses them per sigma."""
 
     cold: cs.Function
     warm: cs.Function

@@ -341,8 +341,8 @@ class _LoosePairs:
 
     def __call__(self, tol: float, suffix: str | None = None) -> tuple[cs.Function, cs.Function]:
         name, nlp, shared, ipopt, warm, owner, user = self._args
-        tol = float(tol)
-        if not tol > ipopt.get("tol", IPOPT_DEFAULT_TOL):
+        tol = float(f"{float(tol):.6g}")  # a sigma from repeated products carries rounding noise: one pair per value
+        if not tol > ipopt.get("tol", IPOPT_DEFAULT_TOL) * (1 + 1e-6):
             return self._tight
         if tol not in self._pairs:
             tag = f"_loose{len(self._pairs) + 1}" if suffix is None else suffix  # CasADi names: no "-" or "."

@@ -3,7 +3,8 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly; its homotopy stages loose, only the polish tight: :data:`WARM_STAGE_TOL`; if that solve is not judged a
+exactly; its homotopy stages loose, the last one too, and the polish tight: :data:`WARM_STAGE_TOL` (a file whose
+stage tolerance scales with sigma, ``stage_tol_ratio``, keeps its tight last stages); if that solve is not judged a
 success, the same start once more with the cold solve's relaxation and barrier settings), or, while no N has given
 an optimum whose replay succeeds, again from the baseline and its starts.
 Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
@@ -36,7 +37,8 @@ from ocp_crawl.status import Status
 #: interval, and at sigma 1e-6 IPOPT took > 2000 iterations to repair it (max_speed, N = 100 from N = 50)
 WARM_SIGMA0 = 1e-4
 #: IPOPT tolerance of every stage of a warm-started solve, the last one included (``loose_last``: only the polish is
-#: tight; the settings' ``stage_tol`` or sigma_min if tighter; not the cold solve's looser default): the monotone
+#: tight; the settings' ``stage_tol`` or sigma_min if tighter, unless ``stage_tol_ratio`` scales it with sigma; not
+#: the cold solve's looser default): the monotone
 #: barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4 would stop after a few dozen iterations
 #: and leave the work to the stage at sigma_min, where IPOPT struggles (max_speed, N = 200 from N = 100: max_iter).
 #: Measured, max_speed N = 50..400, one run each, a tight last stage: 1e-4: 442 s; 1e-6: 295 s; 1e-8: 742 s (a

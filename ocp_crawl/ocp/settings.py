@@ -35,6 +35,9 @@ HARMONIC_A_BOUNDS = (1, 20)
 STARTS_BOUNDS = (1, 20)
 
 
+#: most homotopy stages a schedule may have (sigma0 down to sigma_min by sigma_factor): each is an IPOPT solve
+MAX_STAGES = 40
+
 @dataclass(frozen=True)
 class OCPSettings:
     """Settings of the periodic-gait optimal control problem (the ``[ocp]`` keys of a problem file)."""
@@ -80,11 +83,12 @@ class OCPSettings:
     of each solve; 1e-4 stays in the physical region"""
     sigma_min: float = 1e-6
     """last relaxation parameter; the polish then solves the NLP with every pair on its identified branch
-    (complementarity exactly 0)"""
+    (complementarity exactly 0), unless the last stage's point is within comp_tol already (then no polish)"""
     sigma_factor: float = 0.01
     stage_tol: float = 1e-4
     """IPOPT tolerance (``tol``) of the homotopy's stages before the last, which only lead to the next one; the
-    last stage and the polish keep OCP_IPOPT's 1e-10 (a ``tol`` in ``ipopt`` at or above stage_tol: no loose stages;
+    last stage (unless ``loose_last``) and the polish keep OCP_IPOPT's 1e-10 (a ``tol`` in ``ipopt`` at or above
+    stage_tol: no loose stages;
     the profile-fixed check, ``GaitOCP.solve(fix_profile=True)``, is tight throughout).
     The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit: 1e-4 halves it, with
     the same max_speed optimum at N = 50; min_cot's path changed and one start reached another local optimum (0.5 %
@@ -166,6 +170,11 @@ class OCPSettings:
         self._set("sigma0", tuple(float(v) for v in s0))
         if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
+        stages = max(math.ceil(math.log(self.sigma_min / v) / math.log(self.sigma_factor)) + 1 for v in self.sigma0)
+        if stages > MAX_STAGES:
+            raise ValueError(f"OCPSettings: sigma0 {max(self.sigma0):g} to sigma_min {self.sigma_min:g} in steps of "
+                             f"sigma_factor {self.sigma_factor:g} makes {stages} homotopy stages, more than "
+                             f"{MAX_STAGES} (each is an IPOPT solve)")
         if self.stage_tol_ratio is not None:
             self._set("stage_tol_ratio", real("OCPSettings.stage_tol_ratio", self.stage_tol_ratio, positive=True))
             if not self.stage_tol_ratio <= 1:

@@ -440,7 +440,8 @@ class GaitOCP:
         and polished once more."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
-        loose_last = s.loose_last and hom.loose and self._fixed is None
+        # the last stage loose only when its solver is (a tolerance scaling with sigma may give the tight one)
+        loose_last = s.loose_last and self._fixed is None and hom._solver(True, False, sigmas[-1]) is not hom.warm
         run = hom.relax(sigmas, Start(x0), self._stage_data, loose_last=loose_last)
         if not run.ok:
             if run.last is not None:
@@ -452,8 +453,8 @@ class GaitOCP:
             x = run.last.x if run.last is not None else None
             return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
         sol = run.last
-        if sol.comp <= s.comp_tol:  # already complementary: the polish has nothing to remove
-            return sol.x, None, sol.status
+        if sol.comp <= s.comp_tol and not loose_last and self._fixed is None:
+            return sol.x, None, sol.status  # a tight point complementary to comp_tol: the polish is not needed
         pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
         if pol is None and loose_last:
             tight = hom.tighten(sol, sigmas[-1], self._stage_data(sigmas[-1]))

@@ -69,7 +69,8 @@ def centre_deg(problem: Problem) -> float:
 def ocp_settings(problem: Problem) -> OCPSettings:
     """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma.
 
-    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError otherwise.
+    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError otherwise, as
+    for any other rule between keys that OCPSettings checks (e.g. sigma_min < sigma0, at most MAX_STAGES stages).
     """
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:  # a problem built in code: the schema's defaults
@@ -82,7 +83,11 @@ def ocp_settings(problem: Problem) -> OCPSettings:
         raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} with [gait] "
                            f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
                            f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
-    return OCPSettings(**sec, gamma_deg=gamma)
+    try:
+        return OCPSettings(**sec, gamma_deg=gamma)
+    except ValueError as exc:  # a rule between keys (each key alone passed the schema)
+        raise ProblemError(f"{problem.source}: [ocp] {exc}".replace("OCPSettings: ", "").replace("OCPSettings.", "")) \
+            from None
 
 
 #: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as problems/paper_gait.toml.
