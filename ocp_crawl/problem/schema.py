@@ -291,7 +291,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("fourier_order", int, "-", "order of the Fourier series", default=_ocp("fourier_order"),
         rule=within(*FOURIER_ORDER_BOUNDS, "dense coefficient columns slow every IPOPT iteration; for finer "
                     "profiles use the free parametrization")),
-    Key("max_rate_deg_s", float, "deg/s", "actuator bandwidth: largest reference-angle rate |d phi_ref/dt| of each joint",
+    Key("max_rate_deg_s", float, "deg/s", "actuator bandwidth: largest absolute reference-angle rate, "
+        "abs(d phi_ref/dt), of each joint",
         default=_ocp("max_rate_deg_s"), rule=GT0),
     Key("max_accel_deg_s2", float, "deg/s^2", "optional smoothness bound: largest reference-angle acceleration "
         "(absent: no bound)", rule=GT0),
@@ -315,7 +316,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("sigma_min", float, "-", "homotopy: last relaxation parameter (then the polish, unless already within "
         "comp_tol)", default=_ocp("sigma_min"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
     Key("stage_tol_ratio", float, "-", f"homotopy: a stage before the last is solved to IPOPT tol = "
-        f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})", rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
+        f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})",
+        rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
     Key("friction_tol", float, "-", "relative tolerance of the friction coefficients: a gait is admissible only "
         "when which foot slips does not depend on them within +-friction_tol/2 (slip-weighted margin)",
         default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
