@@ -407,3 +407,14 @@ def test_every_robot_key_and_work_key_is_bounded_on_both_sides():
         for name in names:
             rule = SCHEMA[section].key_map[name].rule
             assert rule.text.startswith("in ") and rule.why, (section, name, rule)
+
+
+def test_readme_tables_are_rectangular():
+    """Every markdown table of the README has as many cells in each row as in its header (a '|' inside a cell, e.g.
+    a schema help text with |x|, splits the row)."""
+    from conftest import markdown_table_shapes
+
+    shapes = markdown_table_shapes((REPO / "README.md").read_text(encoding="utf-8"))
+    assert len(shapes) >= 5
+    for header, rows in shapes:
+        assert all(n == header for n in rows), (header, rows)
