@@ -165,6 +165,8 @@ class Run:
     """number of stages of the schedule"""
     sigma: float = math.nan
     """sigma of the failed (or the last) stage"""
+    loose_last: bool = False
+    """the last stage of the schedule was solved by a loose solver (asked for, and one exists at its sigma)"""
 
     @property
     def ok(self) -> bool:
@@ -235,9 +237,11 @@ class Homotopy:
         the table (or the caller) does not accept.  Every stage but the last (every stage with ``loose_last``)
         uses the stage solvers (a looser tolerance), whose point must not end the homotopy: with stage solvers
         ``done`` never ends it early (it is asked only of a tight last stage); without them it is asked after
-        every stage."""
+        every stage.  ``loose_last`` acts only where the last stage's loose solver is not the tight one
+        (``Run.loose_last`` says whether it did)."""
         sigmas = tuple(sigmas)
-        run = Run(None, stages=len(sigmas))
+        loose_last = loose_last and bool(sigmas) and self._solver(True, False, sigmas[-1]) is not self.warm
+        run = Run(None, stages=len(sigmas), loose_last=loose_last)
         loose = self.loose
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1

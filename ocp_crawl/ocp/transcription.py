@@ -333,8 +333,8 @@ class GaitOCP:
             self._fixed_x = np.asarray(x0, float)
         if fix_profile and self._sim_solvers is None:
             self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
-        loose_at = self._loose_at if self.settings.stage_tol_ratio is not None and not fix_profile else None
-        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call, loose_at=loose_at)
+        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call,
+                          loose_at=None if fix_profile else self._loose_at)
         best = None
         runs = []
         f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
@@ -358,9 +358,11 @@ class GaitOCP:
         return x, hom.records, failed, status
 
     def _loose_at(self, sigma: float) -> tuple:
-        """The (cold, warm) solvers of a loose stage at sigma: tol = min(stage_tol, stage_tol_ratio sigma)."""
+        """The (cold, warm) solvers of a loose stage at sigma: tol = stage_tol, or min(stage_tol, stage_tol_ratio
+        sigma) (the tight pair where that is not looser than the tight tolerance)."""
         s = self.settings
-        return self.solvers.loose(min(s.stage_tol, s.stage_tol_ratio * sigma))
+        tol = s.stage_tol if s.stage_tol_ratio is None else min(s.stage_tol, s.stage_tol_ratio * sigma)
+        return self.solvers.loose(tol)
 
     def _call(self, solver, start: Start, data: dict) -> Solve:
         """One IPOPT call of the homotopy and the residuals of its point."""
@@ -440,9 +442,8 @@ class GaitOCP:
         and polished once more."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
-        # the last stage loose only when its solver is (a tolerance scaling with sigma may give the tight one)
-        loose_last = s.loose_last and self._fixed is None and hom._solver(True, False, sigmas[-1]) is not hom.warm
-        run = hom.relax(sigmas, Start(x0), self._stage_data, loose_last=loose_last)
+        run = hom.relax(sigmas, Start(x0), self._stage_data, loose_last=s.loose_last and self._fixed is None)
+        loose_last = run.loose_last
         if not run.ok:
             if run.last is not None:
                 # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
