@@ -13,6 +13,7 @@ import ctypes
 import math
 import os
 import re
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
 
@@ -153,23 +154,82 @@ class IpoptCall:
         return text
 
 
-def call_ipopt(solver: cs.Function, nx: int, ng: int, **args) -> IpoptCall:
-    """Call a CasADi IPOPT ``solver`` and read its outcome through :data:`IPOPT_RETURN_STATUS`.
+def call_ipopt(solver, nx: int, ng: int, **args) -> IpoptCall:
+    """Call a CasADi IPOPT ``solver`` (or a :class:`LazySolver`, built first) and read its outcome through
+    :data:`IPOPT_RETURN_STATUS`.
 
     An exception raised by the call (CasADi evaluation errors, invalid inputs) is caught and reported as
     ``Solver_Exception`` with its first line; the point is then the initial guess ``x0`` (not usable).
     """
+    function = solver.function() if isinstance(solver, LazySolver) else solver  # built outside the solve
     try:
-        sol = solver(**args)
+        with heap_allocations():
+            sol = function(**args)
     except RuntimeError as exc:
         detail = _casadi_reason(exc)
         x0 = np.asarray(args.get("x0", np.full(nx, np.nan)), float).ravel()
         return IpoptCall(ipopt_status("Solver_Exception"), x0, np.zeros(nx), np.zeros(ng), float("nan"), 0, detail)
-    st = solver.stats()
+    st = function.stats()
     return IpoptCall(ipopt_status(st.get("return_status", "Unknown")), np.asarray(sol["x"], float).ravel(),
                      np.asarray(sol["lam_x"], float).ravel(), np.asarray(sol["lam_g"], float).ravel(),
                      float(sol["f"]), int(st.get("iter_count", 0)),
                      eval_time=sum(v for k, v in st.items() if k.startswith("t_wall_nlp_")))
+
+
+#: glibc's mallopt parameters (malloc.h)
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD, _M_MMAP_MAX = -1, -3, -4
+#: free memory at the top of the heap that a solve keeps rather than return to the system [bytes]
+HEAP_KEEP = 1 << 30
+#: glibc's malloc between solves (glibc has no getter, and any mallopt call ends its dynamic thresholds for the
+#: process): mmap for blocks of 32 MiB and more, the heap trimmed above 64 MiB free, the values its dynamic rule
+#: reaches at its largest (mmap threshold at most 32 MiB on 64-bit systems, trim threshold twice it)
+_BETWEEN_SOLVES = {_M_MMAP_MAX: 65536, _M_MMAP_THRESHOLD: 32 << 20, _M_TRIM_THRESHOLD: 64 << 20}
+#: environment variables by which a user tunes glibc's malloc (then :func:`heap_allocations` does nothing)
+MALLOC_VARIABLES = ("MALLOC_MMAP_MAX_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TOP_PAD_")
+_mallopt: list = []
+_heap_depth = [0]
+
+
+def _find_mallopt():
+    """glibc's ``mallopt`` (None on other C libraries, or when the user tunes malloc: :data:`MALLOC_VARIABLES`
+    or ``glibc.malloc.`` tunables in ``GLIBC_TUNABLES``)."""
+    if not _mallopt:
+        fun = None
+        if not any(os.environ.get(v) for v in MALLOC_VARIABLES) and "glibc.malloc." not in os.environ.get(
+                "GLIBC_TUNABLES", ""):
+            try:
+                fun = ctypes.CDLL(None).mallopt
+                fun.argtypes, fun.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+            except (OSError, AttributeError, TypeError):
+                fun = None
+        _mallopt.append(fun)
+    return _mallopt[0]
+
+
+@contextmanager
+def heap_allocations():
+    """During an IPOPT solve, glibc serves large blocks from the heap and keeps freed memory (up to
+    :data:`HEAP_KEEP`); afterwards its malloc works with fixed thresholds (:data:`_BETWEEN_SOLVES`).  Does
+    nothing off glibc or when the user tunes malloc; nested uses act once, at the outermost.
+
+    MUMPS allocates its factorisation workspace (tens of MB for the robust OCP) at every factorisation; glibc
+    serves such blocks by mmap and returns them on free, so every iteration page-faults its workspace afresh.
+    Measured, robust_speed's first homotopy stage at N = 50 (150 IPOPT iterations), three alternating pairs, the
+    other core busy: 9.5 / 10.0 / 10.2 s with heap allocations against 11.9 / 14.6 / 11.8 s (system time 0.2 s
+    against 2.2 to 2.8 s), the same peak memory (285 MB)."""
+    fun = _find_mallopt()
+    outer = fun is not None and not _heap_depth[0]
+    if outer:
+        fun(_M_MMAP_MAX, 0)
+        fun(_M_TRIM_THRESHOLD, HEAP_KEEP)
+    _heap_depth[0] += 1
+    try:
+        yield
+    finally:
+        _heap_depth[0] -= 1
+        if outer:
+            for param, value in _BETWEEN_SOLVES.items():
+                fun(param, value)
 
 
 #: types of IPOPT option values
@@ -314,63 +374,111 @@ IPOPT_DEFAULT_TOL = 1e-8
 DERIVATIVES = {"hess_lag": "nlp_hess_l", "jac_g": "nlp_jac_g", "grad_f": "nlp_grad_f"}
 
 
+class LazySolver:
+    """An IPOPT solver of :func:`ipopt_solvers`, built on its first use: a call, or any attribute of the CasADi
+    function (``stats()``, ``name()``, ...).  Used like the ``cs.Function`` it builds; the same object before and after
+    (solvers are compared by identity).  Not picklable (it holds its builder): results never hold solvers."""
+
+    def __init__(self, build: Callable[[], cs.Function]):
+        self._build = build
+        self._function: cs.Function | None = None
+
+    @property
+    def built(self) -> bool:
+        """Whether the solver has been built."""
+        return self._function is not None
+
+    def function(self) -> cs.Function:
+        """The CasADi solver (built now if not yet)."""
+        if self._function is None:
+            self._function = self._build()
+        return self._function
+
+    def __call__(self, *args, **kwargs):
+        return self.function()(*args, **kwargs)
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.function(), name)
+
+
 class Solvers(NamedTuple):
     """The IPOPT solvers of one NLP (:func:`ipopt_solvers`): cold and warm-started, each also in a loose version for
-    the intermediate stages of a homotopy (the same solver when no stage tolerance was asked for)."""
+    the intermediate stages of a homotopy (the same solver when no stage tolerance was asked for).  Each is a
+    :class:`LazySolver`: built on first use."""
 
-    cold: cs.Function
-    warm: cs.Function
-    stage_cold: cs.Function
+    cold: LazySolver
+    warm: LazySolver
+    stage_cold: LazySolver
     """the cold solver with the stage tolerance (the first stage of a homotopy that has later ones)"""
-    stage_warm: cs.Function
+    stage_warm: LazySolver
     """the warm solver with the stage tolerance (an intermediate stage)"""
-    loose: Callable[[float], tuple[cs.Function, cs.Function]] | None = None
-    """``loose(tol)``: the (cold, warm) pair with IPOPT's ``tol`` = tol, built on first use and kept (the tight
+    loose: Callable[[float], tuple[LazySolver, LazySolver]] | None = None
+    """``loose(tol)``: the (cold, warm) pair with IPOPT's ``tol`` = tol, made on first use and kept (the tight
     pair when tol is not looser than theirs)"""
 
 
-class _LoosePairs:
-    """The (cold, warm) solver pairs of one NLP at other tolerances, built on first use, sharing the derivative
-    functions of the first solver."""
+class _Family:
+    """The solvers of one NLP, built on first use; every solver after the first reuses the first one's derivative
+    functions (generating them again costs as much as the first build: 9 s of the max_speed OCP at N = 400)."""
 
-    def __init__(self, name: str, nlp: dict, shared: dict, ipopt: dict, warm: dict, owner: str, user: dict,
-                 tight: tuple[cs.Function, cs.Function]):
-        self._args = (name, nlp, shared, ipopt, warm, owner, user)
-        self._pairs: dict[float, tuple[cs.Function, cs.Function]] = {}
-        self._tight = tight
+    def __init__(self, name: str, nlp: dict, base: dict, ipopt: dict, warm: dict, owner: str, user: dict):
+        self.name, self.nlp, self.base, self.ipopt, self.warm, self.owner, self.user = (
+            name, nlp, base, ipopt, warm, owner, user)
+        self._source: cs.Function | None = None
+        self._pairs: dict[float, tuple[LazySolver, LazySolver]] = {}
+        self.tight = (self.solver("_cold", ipopt), self.solver("_warm", dict(warm, **ipopt)))
 
-    def __call__(self, tol: float, suffix: str | None = None) -> tuple[cs.Function, cs.Function]:
-        name, nlp, shared, ipopt, warm, owner, user = self._args
+    def solver(self, suffix: str, ipopt: dict) -> LazySolver:
+        """The solver named name + suffix with these IPOPT options, built on first use."""
+        return LazySolver(lambda: self._build(self.name + suffix, ipopt))
+
+    def _build(self, name: str, ipopt: dict) -> cs.Function:
+        src = self._source
+        shared = {} if src is None else {key: src.get_function(fun) for key, fun in DERIVATIVES.items()
+                                         if src.has_function(fun)}
+        solver = build_ipopt(name, self.nlp, dict(self.base, **shared, ipopt=ipopt), self.owner, self.user)
+        if src is None:
+            self._source = solver
+        return solver
+
+    def loose(self, tol: float, suffix: str | None = None) -> tuple[LazySolver, LazySolver]:
+        """The (cold, warm) pair at IPOPT's ``tol`` = tol (the tight pair when tol is not looser than theirs)."""
         tol = float(f"{float(tol):.6g}")  # a sigma from repeated products carries rounding noise: one pair per value
-        if not tol > ipopt.get("tol", IPOPT_DEFAULT_TOL) * (1 + 1e-6):
-            return self._tight
+        if not tol > self.ipopt.get("tol", IPOPT_DEFAULT_TOL) * (1 + 1e-6):
+            return self.tight
         if tol not in self._pairs:
             tag = f"_loose{len(self._pairs) + 1}" if suffix is None else suffix  # CasADi names: no "-" or "."
-            loose = dict(ipopt, tol=tol)
-            self._pairs[tol] = (build_ipopt(f"{name}_stage_cold{tag}", nlp, dict(shared, ipopt=loose), owner, user),
-                                build_ipopt(f"{name}_stage_warm{tag}", nlp, dict(shared, ipopt=dict(warm, **loose)),
-                                            owner, user))
+            loose = dict(self.ipopt, tol=tol)
+            self._pairs[tol] = (self.solver(f"_stage_cold{tag}", loose),
+                                self.solver(f"_stage_warm{tag}", dict(self.warm, **loose)))
         return self._pairs[tol]
+
+
+def _option_check_nlp() -> dict:
+    """The NLP on which :func:`ipopt_solvers` checks the options at once (its real solvers are built on first use)."""
+    x = cs.SX.sym("x")
+    return {"x": x, "f": x**2, "g": x}
 
 
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
                   verbose: bool = False, stage_tol: float | None = None) -> Solvers:
-    """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``), and their loose versions.
+    """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``) and loose versions.
 
     Options: ``defaults`` (an option set of this module, read when called), quiet unless ``verbose``, then
     the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them.
     ``stage_tol`` (dimensionless, IPOPT's ``tol``): also build both solvers with this tolerance over every other
     option, for the stages of a homotopy that are only a path to the next one (None, or not looser than the
     solvers' own ``tol``: the loose solvers are the tight ones); ``Solvers.loose(tol)`` builds pairs at other
-    tolerances on demand.  All share one set of derivative functions.  Returns :class:`Solvers`."""
+    tolerances on demand.  Every solver is built on its first use (:class:`LazySolver`; an NLP solved only warm
+    never builds its cold solvers), the first one with the derivative functions, which the others reuse; the
+    options are checked at once, on a one-variable NLP (ValueError naming ``owner``).  Returns :class:`Solvers`."""
     ipopt = dict(defaults)
     ipopt.update({"print_level": 5 if verbose else 0, "sb": "yes"})
     ipopt.update(user)
     base = {"print_time": bool(verbose), "calc_lam_p": False, "error_on_fail": False}
-    cold = build_ipopt(f"{name}_cold", nlp, dict(base, ipopt=ipopt), owner, user)
-    # the other solvers reuse the cold one's derivative functions (generating them again doubles the build time)
-    shared = dict(base, **{key: cold.get_function(fun) for key, fun in DERIVATIVES.items() if cold.has_function(fun)})
-    warm_solver = build_ipopt(f"{name}_warm", nlp, dict(shared, ipopt=dict(warm, **ipopt)), owner, user)
-    pairs = _LoosePairs(name, nlp, shared, ipopt, warm, owner, user, (cold, warm_solver))
-    stage = pairs(stage_tol, suffix="") if stage_tol is not None else (cold, warm_solver)
-    return Solvers(cold, warm_solver, *stage, pairs)
+    build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=dict(warm, **ipopt)), owner, user)
+    family = _Family(name, nlp, base, ipopt, warm, owner, user)
+    stage = family.loose(stage_tol, suffix="") if stage_tol is not None else family.tight
+    return Solvers(*family.tight, *stage, family.loose)
