@@ -2,6 +2,7 @@
 ``optimize --nodes`` (parsing, bad values, the table's text and JSON)."""
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -129,6 +130,58 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     assert "cold solve's settings" in row.message and "restoration failed" in row.message
 
 
+@pytest.mark.parametrize("own", [dict(stage_tol_ratio=0.1), dict(sigma0=1e-3), dict(sigma_min=1e-8),
+                                 dict(sigma_factor=0.1)])
+def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch, own):
+    """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier, not with the warm
+    schedule tuned on the default path, then retried with its cold settings; the default settings are not 'own'."""
+    settings = OCPSettings(**own)
+    assert convergence.own_homotopy(settings) and not convergence.own_homotopy(OCPSettings())
+    profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
+    calls = []
+
+    def fresh(robot, gravity, s):
+        return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        calls.append(ocp.settings)
+        return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
+                         objective=ocp.settings.objective, settings=ocp.settings)
+
+    _fake_solvers(monkeypatch, fresh, warm)
+    table = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100])
+    cold = replace(settings, nodes=100)
+    assert calls == [replace(cold, ipopt={**convergence.WARM_IPOPT, **settings.ipopt}), cold]
+    assert table.rows[1].status == Status.INFEASIBLE and "settings' own homotopy" in table.rows[1].message
+
+
+@pytest.mark.parametrize("objective, values, flagged", [
+    ("max_speed", {50: 0.05, 100: 0.049, 200: 0.049, 300: 0.045}, [100]),  # 300 is no multiple of 200
+    # 0.16 % worse: within WORSE_TOL plus both rows' OCP-replay differences (1e-3 each in the fakes)
+    ("max_speed", {50: 0.05, 100: 0.04992, 200: 0.0499199}, []),
+    ("min_cot", {50: 14.4, 100: 14.5, 200: 14.3}, [100]),  # CoT+ larger is worse
+])
+def test_a_finer_n_worse_than_the_previous_optimum_says_so(monkeypatch, objective, values, flagged):
+    """The finer N can represent the previous profile when its N is a multiple of the previous one: a replayed
+    optimum worse than the previous beyond WORSE_TOL is another local optimum, and its row's message says so."""
+    profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
+
+    def fresh(robot, gravity, s):
+        return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, values[s.nodes])
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        N = ocp.settings.nodes
+        return _fake_result(ocp.settings, profile(np.arange(N) / N), T, values[N])
+
+    _fake_solvers(monkeypatch, fresh, warm)
+    settings = OCPSettings(objective=objective, **(dict(speed_min=0.04) if objective == "min_cot" else {}))
+    table = converge_in_nodes(Robot.paper(), "physical", settings, sorted(values))
+    assert [r.nodes for r in table.rows if "another local optimum" in r.message] == flagged
+    for r in table.rows:
+        if r.nodes in flagged:
+            assert f"{abs(r.rel_change):.2%} worse than the optimum at N = " in r.message
+
+
 # ------------------------------------------------------------------ the command line
 def run(capsys, *argv):
     from ocp_crawl.cli.app import main
@@ -168,7 +221,7 @@ def _fake_table(settings, nodes):
         res = _fake_result(OCPSettings(nodes=n), np.zeros((2, n)), 0.5236, 0.0452 - 0.3 / n**2)
         rows.append(convergence.ConvergenceRow(n, Status.SUCCESS, "fake", 0.5236, res.value_ocp, res.value_replay,
                                                1e-3, solve_time_s=1.5, result=res))
-    convergence._changes(rows)
+    convergence._changes(rows, settings.objective)
     return convergence.ConvergenceTable(settings.objective, rows)
 
 

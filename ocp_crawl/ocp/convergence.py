@@ -3,10 +3,10 @@
 The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_crawl.ocp.solve.optimize_gait`
 (harmonic baseline and multi-start), every further N warm-started from the previous N's optimum (its node
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
-exactly; its homotopy stages loose, the last one too, and the polish tight: :data:`WARM_STAGE_TOL` (a file whose
-stage tolerance scales with sigma, ``stage_tol_ratio``, keeps its tight last stages); if that solve is not judged a
-success, the same start once more with the cold solve's relaxation and barrier settings), or, while no N has given
-an optimum whose replay succeeds, again from the baseline and its starts.
+exactly; its homotopy stages loose, the last one too, and the polish tight: :data:`WARM_STAGE_TOL`; if that solve
+is not judged a success, the same start once more with the cold solve's relaxation and barrier settings; settings
+with their own homotopy, :func:`own_homotopy`, keep it, with the warm barrier), or, while no N has given an optimum
+whose replay succeeds, again from the baseline and its starts.
 Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
@@ -25,7 +25,7 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
-from ocp_crawl.ocp.judge import replay_signal
+from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.settings import NODES_BOUNDS, OCPSettings
 from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.transcription import GaitOCP
@@ -37,8 +37,7 @@ from ocp_crawl.status import Status
 #: interval, and at sigma 1e-6 IPOPT took > 2000 iterations to repair it (max_speed, N = 100 from N = 50)
 WARM_SIGMA0 = 1e-4
 #: IPOPT tolerance of every stage of a warm-started solve, the last one included (``loose_last``: only the polish is
-#: tight; the settings' ``stage_tol`` or sigma_min if tighter, unless ``stage_tol_ratio`` scales it with sigma; not
-#: the cold solve's looser default): the monotone
+#: tight; the settings' ``stage_tol`` or sigma_min if tighter; not the cold solve's looser default): the monotone
 #: barrier starts at mu = 1e-6, below a loose tolerance, so a stage at 1e-4 would stop after a few dozen iterations
 #: and leave the work to the stage at sigma_min, where IPOPT struggles (max_speed, N = 200 from N = 100: max_iter).
 #: Measured, max_speed N = 50..400, one run each, a tight last stage: 1e-4: 442 s; 1e-6: 295 s; 1e-8: 742 s (a
@@ -49,6 +48,10 @@ WARM_STAGE_TOL = 1e-6
 #: IPOPT options of a solve warm-started from the previous N's optimum (the settings' own ipopt options win)
 WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8,
               "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8}
+#: relative shortfall of a finer N's replayed optimum below the previous N's, beyond both rows' OCP-replay
+#: differences, from which its row says so (the finer N can represent the previous profile when it is a multiple
+#: of the previous N: a worse optimum is then another local optimum, not a discretisation effect)
+WORSE_TOL = 1e-4
 
 
 def observed_orders(nodes: list[int], values: list[float]) -> list[float]:
@@ -180,36 +183,62 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
                                    res.rel_diff_replay, solve_time_s=time.perf_counter() - t0, result=res))
         if log is not None:
             log(f"N = {N}: {res.status.label} ({time.perf_counter() - t0:.1f} s)")
-    _changes(rows)
+    _changes(rows, settings.objective)
     return ConvergenceTable(settings.objective, rows)
 
 
 def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
-    """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before)."""
-    # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
-    # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
-    sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
-    stage_tol = min(settings.stage_tol, WARM_STAGE_TOL)  # loose_last: at most sigma_min, unless it scales with sigma
-    near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True,
-                   stage_tol=stage_tol if settings.stage_tol_ratio is not None else min(stage_tol, sigma_min),
-                   ipopt={**WARM_IPOPT, **settings.ipopt})
+    """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before): the warm
+    schedule, or the settings' own homotopy when they have one (:func:`own_homotopy`), with the warm barrier."""
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
+    n_prev = prev.tau.shape[1]
+    # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
+    # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
+    ipopt = {**WARM_IPOPT, **settings.ipopt}
+    if own_homotopy(settings):
+        near, how = replace(settings, ipopt=ipopt), "with the settings' own homotopy"
+    else:
+        sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
+        near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True, ipopt=ipopt,
+                       stage_tol=min(settings.stage_tol, WARM_STAGE_TOL, sigma_min))  # loose_last: <= sigma_min
+        how = "with the warm schedule"
     res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)
-    res.message += f" (warm start from the optimum at N = {prev.tau.shape[1]})"
+    res.message += f" (warm start from the optimum at N = {n_prev}, {how})"
     if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
         warm_msg = res.message
         res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic)
-        res.message += (f" (from the optimum at N = {prev.tau.shape[1]} with the cold solve's settings; the warm "
+        res.message += (f" (from the optimum at N = {n_prev} with the cold solve's settings; the warm "
                         f"settings gave: {warm_msg})")
     return res
 
 
-def _changes(rows: list[ConvergenceRow]) -> None:
-    """Fill each row's change from the previous N and the observed orders."""
+def own_homotopy(settings: OCPSettings) -> bool:
+    """Whether the settings have their own homotopy (sigma0, sigma_factor, sigma_min or stage_tol_ratio not the
+    defaults, as in ocp_robust.toml): then a warm-started solve keeps it, with the warm barrier (:data:`WARM_SIGMA0`
+    and :data:`WARM_STAGE_TOL` are tuned on the default path).  Measured, robust_speed (both cores busy):
+    N = 100 from its N = 50 optimum: the warm schedule (1e-4 down to 1e-11, loose last stage) took 903 s (stages
+    1e-9 to 1e-11: 4154 IPOPT iterations) to 69.662 mm/s, below N = 50's 69.891; the file's own homotopy with the
+    cold barrier 460 s to 70.639 mm/s.  N = 200 from that optimum: own homotopy, cold barrier: its first stage left
+    the start (objective -0.002 against -0.645), max_iter at sigma = 1e-6, 1809 s; with the warm barrier: success,
+    70.600 mm/s, 863 s."""
+    default = OCPSettings()
+    return any(getattr(settings, key) != getattr(default, key)
+               for key in ("sigma0", "sigma_factor", "sigma_min", "stage_tol_ratio"))
+
+
+def _changes(rows: list[ConvergenceRow], objective: str) -> None:
+    """Fill each row's change from the previous N and the observed orders; a success worse than the previous N's
+    success beyond :data:`WORSE_TOL` plus both OCP-replay differences (its N a multiple of the previous one) says so
+    in its message."""
     for prev, row in zip(rows, rows[1:]):
         row.change = row.value_replay - prev.value_replay
         row.rel_change = row.change / abs(row.value_replay) if row.value_replay else math.nan
+        margin = WORSE_TOL + abs(prev.rel_diff_replay) + abs(row.rel_diff_replay)
+        if (row.nodes % prev.nodes == 0 and Status.SUCCESS == prev.status == row.status
+                and abs(row.rel_change) > margin and is_better(objective, prev.value_replay, row.value_replay)):
+            row.message += (f"; {abs(row.rel_change):.2%} worse than the optimum at N = {prev.nodes}, whose profile "
+                            f"N = {row.nodes} can represent: another local optimum")
     nodes = [r.nodes for r in rows]
     for row, p, q in zip(rows, observed_orders(nodes, [r.value_replay for r in rows]),
                          observed_orders(nodes, [r.value_ocp for r in rows])):
