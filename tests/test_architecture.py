@@ -14,7 +14,7 @@ PKG = Path(__file__).resolve().parent.parent / "ocp_crawl"
 #: floors from the bottom; one floor per subpackage (or floor-0 module)
 FLOORS = ["version", "status", "checks", "io", "model", "nlp", "sim", "ocp", "problem", "viz", "sweep", "fit", "studies", "cli"]
 FLOOR = {name: i for i, name in enumerate(FLOORS)}
-FLOOR["status"] = FLOOR["checks"] = FLOOR["io"] = FLOOR["version"] = 0
+FLOOR["status"] = FLOOR["checks"] = FLOOR["io"] = FLOOR["version"] = FLOOR["workers"] = 0
 TOP = {"__init__", "__main__"}  # the package's front door may import anything
 
 MAX_MODULE_LINES = 500

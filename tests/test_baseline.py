@@ -213,3 +213,41 @@ def test_twice_per_cycle_has_the_same_value(objective):
     v1 = value_from(settings, [r1.S], [r1.CoT_plus], T, enforce_speed_min=True)
     v2 = value_from(settings, [r2.S], [r2.CoT_plus], 2 * T, enforce_speed_min=True)
     assert math.isfinite(v1) and v2 == pytest.approx(v1, rel=1e-9)
+
+
+def test_worker_processes_change_nothing_but_the_time():
+    """The scan and the local searches on two worker processes give the serial search's choice, field by field
+    (the simulations are deterministic), and ``meanwhile`` runs once; a worker pool that breaks falls back to the
+    serial search; jobs < 1 is refused by name."""
+    import ocp_crawl.ocp.baseline as baseline
+    from concurrent.futures.process import BrokenProcessPool
+    from dataclasses import asdict
+
+    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8)
+    called = []
+    runs = [asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=j,
+                                 meanwhile=lambda: called.append(j))) for j in (1, 2)]
+    assert called == [1, 2]  # once each, with and without workers
+    for run in runs:
+        run.pop("time_s")
+    assert runs[1].pop("evaluated") >= runs[0].pop("evaluated")  # parallel searches may both simulate a member
+    assert runs[0] == runs[1] and len(runs[0]["starts"]) == 2
+
+    calls = []
+
+    def broken(robot, gravity, s, jobs):
+        calls.append(jobs)
+        if jobs > 1:
+            raise BrokenProcessPool("a worker died")
+        return real_pool(robot, gravity, s, jobs)
+
+    real_pool, baseline._pool = baseline._pool, broken
+    try:
+        again = asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=2))
+    finally:
+        baseline._pool = real_pool
+    assert calls == [2, 1]
+    again.pop("time_s"), again.pop("evaluated")
+    assert again == runs[0]
+    with pytest.raises(ValueError, match="jobs"):
+        best_harmonic(Robot.paper(), "physical", settings, jobs=0)

@@ -76,7 +76,7 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
     value = lambda n: 0.05 - 0.4 / n**2  # noqa: E731  (second order)
     seen = []
 
-    def fresh(robot, gravity, s):
+    def fresh(robot, gravity, s, jobs=None):
         seen.append(("fresh", s.nodes))
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, value(s.nodes))
 
@@ -111,7 +111,7 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
     calls = []
 
-    def fresh(robot, gravity, s):
+    def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True):
@@ -140,7 +140,7 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
     calls = []
 
-    def fresh(robot, gravity, s):
+    def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True):
@@ -166,7 +166,7 @@ def test_a_finer_n_worse_than_the_previous_optimum_says_so(monkeypatch, objectiv
     optimum worse than the previous beyond WORSE_TOL is another local optimum, and its row's message says so."""
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
 
-    def fresh(robot, gravity, s):
+    def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, values[s.nodes])
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True):
@@ -228,7 +228,7 @@ def _fake_table(settings, nodes):
 def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
     seen = {}
 
-    def fake(robot, gravity, settings, nodes, log=None):
+    def fake(robot, gravity, settings, nodes, log=None, jobs=None):
         seen["nodes"], seen["N0"] = nodes, settings.nodes
         return _fake_table(settings, nodes)
     monkeypatch.setattr(convergence, "converge_in_nodes", fake)
@@ -255,7 +255,7 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
     baseline (optimize_gait), and the first replayed optimum seeds the rest."""
     seen = []
 
-    def fresh(robot, gravity, s):
+    def fresh(robot, gravity, s, jobs=None):
         seen.append(("fresh", s.nodes))
         res = _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
         if s.nodes == 50:

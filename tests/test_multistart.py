@@ -107,6 +107,9 @@ class StandInOCP:
         self.scen = [solve.Model(robot, gravity=gravity)]
         self.kept_run, self.calls = [], 0
 
+    def prepare(self):
+        pass
+
     def initial_guess(self, signal, T):
         n = self.settings.nodes
         return {"tau": np.asarray(signal(np.arange(n) / n)).reshape(2, n), "T": T}
@@ -133,7 +136,7 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     harm_S = simulate(solve.Model(ROBOT, gravity="physical"), signal).S
     harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T,
                            to_dict=lambda: {"value": -harm_S / T})
-    monkeypatch.setattr(solve, "best_harmonic", lambda robot, gravity, settings: harm)
+    monkeypatch.setattr(solve, "best_harmonic", lambda robot, gravity, settings, **kw: harm)
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
     monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start solved overclaims by 20 %
     res = solve.optimize_gait(ROBOT, "physical", st)

@@ -167,6 +167,9 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
+    p.add_argument("--jobs", type=jobs_type, metavar="N",
+                   help="worker processes of the harmonic baseline's search (default: the CPUs available; the "
+                        "result does not depend on it)")
     force_arg(p)
 
 
@@ -260,6 +263,7 @@ def _progress_bar(wanted: bool):
 
     @contextlib.contextmanager
     def shown():
+        tqdm.monitor_interval = 0  # no monitor thread: with one, the baseline's workers could not fork (mp_context)
         with tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True) as bar:
             bar.set_postfix_str("best harmonic gait of the envelope (the initial guess)")
             calls = []
@@ -294,7 +298,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     out = prepare_out(args.out, OCP_FILES, args.force) if args.out is not None else None
     check_start(problem)
     with _progress_bar(args.progress or sys.stderr.isatty()):
-        result = optimize_gait(problem.robot, problem.gravity, settings)
+        result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs)
     data = _optimize_data(result, problem)
     if args.json:
         print(json.dumps(data, allow_nan=False))
@@ -322,7 +326,7 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
     shown = args.progress or sys.stderr.isatty()
     log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None
     with _progress_bar(shown):
-        table = converge_in_nodes(problem.robot, problem.gravity, settings, nodes, log=log)
+        table = converge_in_nodes(problem.robot, problem.gravity, settings, nodes, log=log, jobs=args.jobs)
     finest = table.rows[-1].result
     data = _optimize_data(finest, problem)
     conv = table.to_dict()

@@ -36,7 +36,7 @@ from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem
 from ocp_crawl.status import Status
-from ocp_crawl.sweep.executors import mp_context
+from ocp_crawl.workers import mp_context
 
 #: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from it
 FAILED_RESIDUAL = 1e3

@@ -25,18 +25,24 @@ judges the OCP's replay): on the paper's robot, about 0.007 psi/deg for small ps
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import time
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
+from typing import Callable
 
 import numpy as np
 
+from ocp_crawl.checks import real
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.inputs import FourierSeries, Harmonic, ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp.family import BOX, Evaluation, HarmonicFamily, HarmonicParams
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.sim.result import CrawlResult
+from ocp_crawl.workers import default_jobs, mp_context
 
 #: search ranks (smaller is better) of members that miss speed_min (plus the shortfall) and that fail
 _MISS, _FAIL = 1e6, 1e9
@@ -248,7 +254,8 @@ def _value(settings: OCPSettings, ev: Evaluation) -> float:
 
 
 def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int = 2,
-                  maxfev: int = 200) -> HarmonicChoice | None:
+                  maxfev: int = 200, jobs: int | None = None,
+                  meanwhile: Callable[[], object] | None = None) -> HarmonicChoice | None:
     """The best harmonic gait of the envelope and bandwidth for the objective of ``settings``.
 
     Parameters
@@ -264,6 +271,14 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_start
         Best distinct scan points refined by the local search (>= 0).
     maxfev : int
         Largest number of objective evaluations of each local search.
+    jobs : int, optional
+        Worker processes of the scan and of the local searches (one search per worker); None: the CPUs this
+        process may use (:func:`~ocp_crawl.workers.default_jobs`); 1: all in this process.  The result does not
+        depend on it (every member's simulation is deterministic; only ``evaluated`` may count a member twice
+        that two parallel searches both simulated).
+    meanwhile : callable, optional
+        Called in this process while the workers scan (first, when there are none; again if a broken pool makes the
+        search start over), e.g. to build the OCP's solvers (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.prepare`).
 
     Returns
     -------
@@ -274,10 +289,11 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_start
         when no member simulates successfully.
     """
     t0 = time.perf_counter()
-    fam = HarmonicFamily(robot, gravity, settings)
-    scored = [(search_rank(settings, fam.evaluate(HarmonicParams.from_box(settings, z))), z)
-              for z in scan_points(settings)]
-    starts = [_local(fam, z, maxfev) for _, z in _seeds(scored, local_starts, 6.0 / settings.harmonic_psi)]
+    jobs = default_jobs() if jobs is None else int(real("jobs", jobs, integer=True, low=1))
+    try:
+        fam, starts = _search(robot, gravity, settings, local_starts, maxfev, jobs, meanwhile)
+    except BrokenProcessPool:  # a worker died (killed, out of memory): the same search in this process
+        fam, starts = _search(robot, gravity, settings, local_starts, maxfev, 1, meanwhile)
     rank, best = min(((search_rank(settings, ev), ev) for ev in fam.evaluated()), key=lambda x: x[0],
                      default=(_FAIL, None))
     if rank >= _FAIL:
@@ -285,3 +301,71 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_start
     choice = _choice(settings, best)
     choice.evaluated, choice.starts, choice.time_s = fam.evaluations, starts, time.perf_counter() - t0
     return choice
+
+
+def _search(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int, maxfev: int, jobs: int,
+            meanwhile: Callable[[], object] | None) -> tuple[HarmonicFamily, list[dict]]:
+    """The scan, then the local searches from its best distinct points: the family (every evaluation, in the order
+    of a serial search) and the searches' summaries; on ``jobs`` worker processes when more than one."""
+    fam = HarmonicFamily(robot, gravity, settings)
+    points = scan_points(settings)
+    with _pool(robot, gravity, settings, jobs) as pool:
+        if pool is not None:  # map sends every chunk at once
+            for evs in _then(pool.map(_scan_chunk, [list(c) for c in np.array_split(np.array(points), 4 * jobs)]),
+                             meanwhile):
+                fam.absorb(evs)
+        elif meanwhile is not None:
+            meanwhile()
+        scored = [(search_rank(settings, fam.evaluate(HarmonicParams.from_box(settings, z))), z) for z in points]
+        seeds = [z for _, z in _seeds(scored, local_starts, 6.0 / settings.harmonic_psi)]
+        if pool is None or len(seeds) < 2:
+            return fam, [_local(fam, z, maxfev) for z in seeds]
+        known = fam.evaluated()
+        starts = []
+        for future in [pool.submit(_local_task, z, maxfev, known) for z in seeds]:
+            summary, evs = future.result()
+            fam.absorb(evs)
+            starts.append(summary)
+    return fam, starts
+
+
+def _then(results, meanwhile: Callable[[], object] | None):
+    """``results`` (an iterator of a pool's map) after calling ``meanwhile`` here."""
+    if meanwhile is not None:
+        meanwhile()
+    return results
+
+
+#: the harmonic family of a worker process (set by :func:`_init_worker`)
+_WORKER: dict = {}
+
+
+@contextlib.contextmanager
+def _pool(robot: Robot, gravity: str, settings: OCPSettings, jobs: int):
+    """A pool of ``jobs`` worker processes, each with its harmonic family of the problem (None for one job)."""
+    if jobs < 2:
+        yield None
+        return
+    with ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_init_worker,
+                             initargs=(robot, gravity, settings)) as pool:
+        yield pool
+
+
+def _init_worker(robot: Robot, gravity: str, settings: OCPSettings) -> None:
+    _WORKER["family"] = HarmonicFamily(robot, gravity, settings)
+
+
+def _scan_chunk(points: list) -> list[Evaluation]:
+    """The evaluations of scan points (box coordinates), in a worker."""
+    fam = _WORKER["family"]
+    return [fam.evaluate(HarmonicParams.from_box(fam.settings, z)) for z in points]
+
+
+def _local_task(z0: np.ndarray, maxfev: int, known: list[Evaluation]) -> tuple[dict, list[Evaluation]]:
+    """One local search (:func:`_local`) in a worker whose family knows the scan's evaluations ``known``: its
+    summary and the evaluations it added, in order."""
+    fam = _WORKER["family"]
+    fam.absorb(known)
+    n = len(fam.evaluated())
+    summary = _local(fam, z0, maxfev)
+    return summary, fam.evaluated()[n:]

@@ -149,7 +149,8 @@ def check_nodes(nodes) -> list[int]:
     return out
 
 
-def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, log=None) -> ConvergenceTable:
+def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, log=None,
+                      jobs: int | None = None) -> ConvergenceTable:
     """Solve the OCP at each N of ``nodes``, warm-starting each from the previous optimum, replay each.
 
     Parameters
@@ -164,6 +165,8 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
         Strictly increasing N (each in NODES_BOUNDS), e.g. [50, 100, 200, 400].
     log : callable, optional
         ``log(text)`` after each N (progress).
+    jobs : int, optional
+        Worker processes of the harmonic baseline's search at the first N (None: the CPUs available).
 
     Returns
     -------
@@ -176,7 +179,7 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
     for N in nodes:
         t0 = time.perf_counter()
         s = replace(settings, nodes=N)
-        res = optimize_gait(robot, gravity, s) if warm is None else _warm_solve(robot, gravity, s, warm)
+        res = optimize_gait(robot, gravity, s, jobs=jobs) if warm is None else _warm_solve(robot, gravity, s, warm)
         if math.isfinite(res.value_replay):
             warm = res  # a profile the simulator follows (a failed replay would not start the next N)
         rows.append(ConvergenceRow(N, res.status, res.message, res.T_ocp, res.value_ocp, res.value_replay,

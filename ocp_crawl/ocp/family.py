@@ -130,7 +130,7 @@ class HarmonicFamily:
 
         Returns an :class:`Evaluation`; a member of (almost) zero amplitude or a failed simulation (a
         fold, a lift-off, a non-periodic gait, bad input to the stepper) is an unsuccessful evaluation."""
-        key = tuple(round(v, 12) for v in params.as_dict().values())
+        key = self._key(params)
         if key in self._cache:
             return self._cache[key]
         T = params.period(self.settings)
@@ -142,6 +142,20 @@ class HarmonicFamily:
             out = self._simulate(params, T, nan)
         self._cache[key] = out
         return out
+
+    @staticmethod
+    def _key(params: HarmonicParams) -> tuple:
+        return tuple(round(v, 12) for v in params.as_dict().values())
+
+    def absorb(self, evaluations) -> None:
+        """Add evaluations made elsewhere (by a worker process's family of the same robot, gravity and settings)
+        to the cache, in their order; each one not cached yet counts as a simulated member unless of zero
+        amplitude (as in :meth:`evaluate`)."""
+        for ev in evaluations:
+            key = self._key(ev.params)
+            if key not in self._cache:
+                self._cache[key] = ev
+                self.evaluations += max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG
 
     def _simulate(self, params: HarmonicParams, T: float, nan: tuple) -> Evaluation:
         sims = []

@@ -165,7 +165,7 @@ def baseline_gait(harm: HarmonicChoice, robot: Robot) -> tuple:
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
-                  replay: bool = True) -> OCPResult:
+                  replay: bool = True, jobs: int | None = None) -> OCPResult:
     """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the best.
 
     Parameters
@@ -179,6 +179,9 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     replay : bool
         Judge each optimum by its event-driven replay (default).  False: the OCP's own verdict only, the
         best start by the OCP's value (a solver test; the message says that nothing was replayed).
+    jobs : int, optional
+        Worker processes of the harmonic baseline's search (:func:`~ocp_crawl.ocp.baseline.best_harmonic`; None:
+        the CPUs available).  The result does not depend on it.
 
     Returns
     -------
@@ -190,12 +193,12 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     """
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
-    harm = best_harmonic(robot, gravity, settings)
+    ocp = GaitOCP(robot, gravity, settings)
+    harm = best_harmonic(robot, gravity, settings, jobs=jobs, meanwhile=ocp.prepare)  # the NLP's build overlaps
     if harm is None:
         return OCPResult(success=False, status=Status.NO_INITIAL_GUESS, objective=settings.objective,
                          settings=settings,
                          message="no harmonic gait of the family simulates successfully: no initial guess")
-    ocp = GaitOCP(robot, gravity, settings)
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal, T0 = baseline_gait(harm, robot)
     N = settings.nodes

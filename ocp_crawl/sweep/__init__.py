@@ -10,7 +10,7 @@ _EXPORTS = {
     "SweepSettings": "ocp_crawl.sweep.settings",
     "check_some_point_valid": "ocp_crawl.sweep.grid", "grid_from_specs": "ocp_crawl.sweep.grid",
     "normalize_grid": "ocp_crawl.sweep.grid", "parse_grid": "ocp_crawl.sweep.grid",
-    "default_jobs": "ocp_crawl.sweep.executors",
+    "default_jobs": "ocp_crawl.workers",
     "run_sweep": "ocp_crawl.sweep.run",
 }
 

@@ -1,35 +1,18 @@
 """Executors of a sweep: serial, a process pool, a Dask cluster; each yields (index, row) in completion order.
 
-Also the progress bar (tqdm, on stderr) and the default number of worker processes.
+Also the progress bar (tqdm, on stderr); the pools start as `ocp_crawl.workers.mp_context` says.
 """
 from __future__ import annotations
 
-import multiprocessing
-import os
 import sys
-import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Iterator, Sequence
 
+from ocp_crawl.workers import mp_context
 from ocp_crawl.sweep.point import PointTask, evaluate_point, evaluate_points
 from ocp_crawl.sweep.settings import SweepError, SweepFailed
-
-
-def mp_context():
-    """The multiprocessing context of the package's worker pools (sweeps, fits): fork when safe, else forkserver."""
-    methods = multiprocessing.get_all_start_methods()
-    # fork is the fastest start: workers inherit the imported modules and the loaded compiled
-    # functions (measured ~1 s less per worker than forkserver), but forking a process with other
-    # threads running can deadlock a child on a lock held by one of them
-    if "fork" in methods and threading.active_count() == 1:
-        return multiprocessing.get_context("fork")
-    if "forkserver" in methods:
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["ocp_crawl.problem"])
-        return ctx
-    return multiprocessing.get_context("spawn")
 
 
 def serial_runner(tasks: Sequence[PointTask]) -> Iterator[tuple[int, dict]]:
@@ -151,12 +134,3 @@ def progress_bar(progress: bool, total: int, initial: int):
     from tqdm import tqdm
 
     return tqdm(total=total, initial=initial, desc="sweep", unit="pt", file=sys.stderr, dynamic_ncols=True)
-
-
-def default_jobs() -> int:
-    """Worker processes by default: the CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:
-        return os.cpu_count() or 1
-
