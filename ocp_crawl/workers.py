@@ -1,10 +1,13 @@
 """Worker processes of the package (floor 0: imports nothing of the package): the start method of every process
-pool (sweeps, fits, the harmonic baseline's search) and the default number of workers."""
+pool (sweeps, fits, the harmonic baseline's search), the default number of workers, and :func:`overlap` (a task in a
+forked process while this one does something else)."""
 from __future__ import annotations
 
 import multiprocessing
 import os
+import pickle
 import threading
+from typing import Callable
 
 
 def mp_context():
@@ -28,3 +31,63 @@ def default_jobs() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:
         return os.cpu_count() or 1
+
+
+def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Callable[[], object],
+            forward: Callable[[object], None]) -> tuple[object, object]:
+    """``task(send)`` in a forked process while this one runs ``meanwhile()``; returns (task's result, meanwhile's).
+
+    The task may call ``send(message)`` (picklable) any number of times: each message reaches ``forward(message)``
+    here, in order, after ``meanwhile`` returns.  The task's result must be picklable; an exception it raises is
+    raised here (as itself when it pickles, else as RuntimeError with its text).  Where fork is not safe (threads
+    running, no fork on the platform: :func:`mp_context`), or when the child dies without a result (killed, out of
+    memory), the task runs here, after ``meanwhile``, with ``send = forward``.  For a task whose inputs the child
+    inherits (large or unpicklable objects, e.g. built CasADi solvers) and whose result is small."""
+    ctx = mp_context()
+    if ctx.get_start_method() != "fork":
+        other = meanwhile()
+        return task(forward), other
+    reader, writer = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child, args=(task, writer))
+    child.start()
+    writer.close()  # the child's copy is the only writer left: its exit ends the pipe
+    kind, payload = "died", None
+    try:
+        other = meanwhile()
+        kind, payload = _receive(reader)
+        while kind == "message":
+            forward(payload)
+            kind, payload = _receive(reader)
+    finally:
+        if kind not in ("result", "error"):
+            child.kill()
+        child.join()
+        reader.close()
+    if kind == "result":
+        return payload, other
+    if kind == "error":
+        raise payload
+    return task(forward), other  # the child died without a result: here
+
+
+def _receive(reader) -> tuple[str, object]:
+    """The next (kind, payload) from the child, or ("died", None) when its end of the pipe closed first."""
+    try:
+        return reader.recv()
+    except EOFError:
+        return "died", None
+
+
+def _child(task, writer) -> None:
+    """In the forked process: run the task, sending its messages and then its result or its exception."""
+    try:
+        result = task(lambda message: writer.send(("message", message)))
+        writer.send(("result", result))
+    except BaseException as exc:  # noqa: BLE001 - every failure goes back to the parent
+        try:
+            pickle.dumps(exc)
+        except Exception:  # noqa: BLE001 - an exception that does not pickle: its text
+            exc = RuntimeError(f"{type(exc).__name__}: {exc}")
+        writer.send(("error", exc))
+    finally:
+        writer.close()

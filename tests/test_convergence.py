@@ -2,6 +2,7 @@
 ``optimize --nodes`` (parsing, bad values, the table's text and JSON)."""
 import json
 import math
+import os
 from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -10,6 +11,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
+from ocp_crawl.nlp.homotopy import observe, observers
+from ocp_crawl import workers
 from ocp_crawl.ocp import convergence
 from ocp_crawl.ocp.convergence import check_nodes, converge_in_nodes, observed_orders
 from ocp_crawl.ocp.settings import OCPSettings
@@ -57,15 +60,29 @@ def _fake_result(settings, tau, T, value):
 
 
 class _FakeOCP:
+    prepared = []
+
     def __init__(self, robot, gravity, settings):
         self.settings = settings
 
+    def prepare(self):
+        self.prepared.append((self.settings.nodes, os.getpid()))
 
-def _fake_solvers(monkeypatch, fresh, warm) -> None:
-    """Replace the cold solve (optimize_gait), the warm one (solve_from) and the transcription by fakes."""
+
+def _here(task, meanwhile, forward):
+    """workers.overlap without the fork (the fakes record their calls in this process)."""
+    other = meanwhile()
+    return task(forward), other
+
+
+def _fake_solvers(monkeypatch, fresh, warm, fork=False) -> None:
+    """Replace the cold solve (optimize_gait), the warm one (solve_from) and the transcription by fakes (and, unless
+    ``fork``, run every warm solve in this process)."""
     monkeypatch.setattr(convergence, "optimize_gait", fresh)
     monkeypatch.setattr(convergence, "solve_from", warm)
     monkeypatch.setattr(convergence, "GaitOCP", _FakeOCP)
+    if not fork:
+        monkeypatch.setattr(convergence, "overlap", _here)
 
 
 def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
@@ -273,3 +290,37 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
     assert seen == [("fresh", 50), ("fresh", 100), ("warm", 200)]
     assert not table.success and table.rows[0].status == Status.REPLAY_FAILED
 
+
+
+def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is_built(monkeypatch):
+    """Every warm row but the last solves in a forked process (its records reach this process's observers, in
+    order) while this process builds the next N's transcription, which the next row then uses; the table is the one
+    of the same solves run here."""
+    parent = os.getpid()
+
+    def fresh(robot, gravity, s, jobs=None):
+        return _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+        for callback in observers():
+            callback(("stage", ocp.settings.nodes, os.getpid()))
+        res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05 + 1e-3 * ocp.settings.nodes)
+        res.message = f"pid {os.getpid()}, prepared {isinstance(ocp, _FakeOCP) and bool(ocp.prepared)}"
+        return res
+
+    tables, seen = [], []
+    for fork in (True, False):
+        _FakeOCP.prepared = []
+        _fake_solvers(monkeypatch, fresh, warm, fork=fork)
+        with observe(seen.append):
+            tables.append(converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200, 400]))
+        assert _FakeOCP.prepared == [(200, parent), (400, parent)]  # built here, meanwhile
+    pids = [int(r.message.split()[1].rstrip(",")) for r in tables[0].rows[1:]]
+    if workers.mp_context().get_start_method() == "fork":
+        assert pids[0] != parent and pids[1] != parent and pids[0] != pids[1] and pids[2] == parent
+    else:  # another thread runs in this process (e.g. Dask's, left by an earlier test): every solve here
+        assert pids == [parent] * 3
+    assert [(n, pid) for _, n, pid in seen[:3]] == [(100, pids[0]), (200, pids[1]), (400, parent)]
+    assert [n for _, n, pid in seen[3:]] == [100, 200, 400] and {pid for *_, pid in seen[3:]} == {parent}
+    assert [r.value_replay for r in tables[0].rows] == [r.value_replay for r in tables[1].rows]
+    assert all("prepared True" in r.message for r in tables[0].rows[2:])  # N = 200, 400 on the built ones

@@ -35,14 +35,20 @@ _OBSERVERS: contextvars.ContextVar[tuple] = contextvars.ContextVar("homotopy_obs
 
 
 @contextlib.contextmanager
-def observe(callback: Callable[["Stage"], None]) -> Iterator[None]:
+def observe(callback: Callable[["Stage"], None], alone: bool = False) -> Iterator[None]:
     """Call ``callback(stage)`` with the :class:`Stage` record of every IPOPT call made by a homotopy inside
-    the ``with`` block (for progress displays: ``stage.kind``, ``stage.sigma``, ``stage.iterations``)."""
-    token = _OBSERVERS.set(_OBSERVERS.get() + (callback,))
+    the ``with`` block (for progress displays: ``stage.kind``, ``stage.sigma``, ``stage.iterations``); with
+    ``alone``, only it (not the callbacks of enclosing blocks: a forked process sends its records to the parent's)."""
+    token = _OBSERVERS.set((callback,) if alone else _OBSERVERS.get() + (callback,))
     try:
         yield
     finally:
         _OBSERVERS.reset(token)
+
+
+def observers() -> tuple:
+    """The callbacks that :func:`observe` has registered here (innermost last)."""
+    return _OBSERVERS.get()
 
 
 def schedule(sigma0: float, factor: float, sigma_min: float) -> tuple[float, ...]:

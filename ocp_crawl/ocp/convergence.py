@@ -25,11 +25,13 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.nlp.homotopy import observe, observers
 from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.settings import NODES_BOUNDS, OCPSettings
 from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.status import Status
+from ocp_crawl.workers import overlap
 
 #: first relaxation parameter of a solve warm-started from the previous N's optimum (then down to the settings'
 #: sigma_min, or a tenth of it if smaller).  1e-4 like a cold solve: with slip onsets and the held-tie rules at a
@@ -175,11 +177,14 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
         order, time [s], and the full :class:`~ocp_crawl.ocp.solve.OCPResult`.
     """
     nodes = check_nodes(nodes)
-    rows, warm = [], None
-    for N in nodes:
+    rows, warm, ready = [], None, None
+    for i, N in enumerate(nodes):
         t0 = time.perf_counter()
         s = replace(settings, nodes=N)
-        res = optimize_gait(robot, gravity, s, jobs=jobs) if warm is None else _warm_solve(robot, gravity, s, warm)
+        if warm is None:
+            res, ready = optimize_gait(robot, gravity, s, jobs=jobs), None
+        else:
+            res, ready = _warm_row(robot, gravity, s, warm, ready, nodes[i + 1:])
         if math.isfinite(res.value_replay):
             warm = res  # a profile the simulator follows (a failed replay would not start the next N)
         rows.append(ConvergenceRow(N, res.status, res.message, res.T_ocp, res.value_ocp, res.value_replay,
@@ -190,23 +195,59 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
     return ConvergenceTable(settings.objective, rows)
 
 
-def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult) -> OCPResult:
-    """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before): the warm
-    schedule, or the settings' own homotopy when they have one (:func:`own_homotopy`), with the warm barrier."""
-    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
-    signal = replay_signal(prev.phase, prev.tau)
-    n_prev = prev.tau.shape[1]
+def _warm_row(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult, ready: GaitOCP | None,
+              later: list[int]) -> tuple[OCPResult, GaitOCP | None]:
+    """The warm solve at settings.nodes (on the transcription ``ready`` if it is of this N: built while the previous
+    row solved) and the next N's transcription: when a finer N follows, the solve runs in a forked process while this
+    one builds it (:func:`~ocp_crawl.workers.overlap`; the homotopy's records still reach this process's observers,
+    and the same solve runs here where fork is not safe).  Returns (result, the next N's transcription or None)."""
+    ocp = ready if ready is not None and ready.settings.nodes == settings.nodes else None
+    if not later:
+        return _warm_solve(robot, gravity, settings, prev, ocp), None
+    here = observers()
+
+    def task(send):
+        with observe(send, alone=True):
+            return _warm_solve(robot, gravity, settings, prev, ocp)
+
+    def forward(stage):
+        for callback in here:
+            callback(stage)
+    return overlap(task, lambda: warm_transcription(robot, gravity, replace(settings, nodes=later[0])), forward)
+
+
+def warm_transcription(robot: Robot, gravity: str, settings: OCPSettings) -> GaitOCP:
+    """The transcription of a solve warm-started from the previous N's optimum (:func:`_near`), its first solver
+    built (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.prepare`: at N = 400, about 8 s of derivative generation)."""
+    ocp = GaitOCP(robot, gravity, _near(settings)[0])
+    ocp.prepare()
+    return ocp
+
+
+def _near(settings: OCPSettings) -> tuple[OCPSettings, str]:
+    """The settings of a solve warm-started from the previous N's optimum, and how they were chosen (in words): the
+    warm schedule, or the settings' own homotopy when they have one (:func:`own_homotopy`), with the warm barrier."""
     # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
     # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
     ipopt = {**WARM_IPOPT, **settings.ipopt}
     if own_homotopy(settings):
-        near, how = replace(settings, ipopt=ipopt), "with the settings' own homotopy"
-    else:
-        sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
-        near = replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True, ipopt=ipopt,
-                       stage_tol=min(settings.stage_tol, WARM_STAGE_TOL, sigma_min))  # loose_last: <= sigma_min
-        how = "with the warm schedule"
-    res = solve_from(GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)
+        return replace(settings, ipopt=ipopt), "with the settings' own homotopy"
+    sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
+    return (replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True, ipopt=ipopt,
+                    stage_tol=min(settings.stage_tol, WARM_STAGE_TOL, sigma_min)),  # loose_last: <= sigma_min
+            "with the warm schedule")
+
+
+def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult,
+                ocp: GaitOCP | None = None) -> OCPResult:
+    """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before), with the
+    settings of :func:`_near` (on ``ocp`` when given: their transcription); if that is not a success, the same start
+    with the cold solve's settings."""
+    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
+    signal = replay_signal(prev.phase, prev.tau)
+    n_prev = prev.tau.shape[1]
+    near, how = _near(settings)
+    res = solve_from(ocp or GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {n_prev}, {how})"
     if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
         warm_msg = res.message
