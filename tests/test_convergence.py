@@ -147,10 +147,13 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     assert "cold solve's settings" in row.message and "restoration failed" in row.message
 
 
-@pytest.mark.parametrize("own", [dict(stage_tol_ratio=0.1), dict(sigma0=1e-3), dict(sigma_min=1e-8),
-                                 dict(sigma_factor=0.1)])
-def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch, own):
-    """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier, not with the warm
+@pytest.mark.parametrize("own, sigma0", [(dict(stage_tol_ratio=0.1), 1e-5), (dict(sigma0=1e-3), 1e-5),
+                                         (dict(sigma_min=1e-8), 1e-5), (dict(sigma_factor=0.1), 1e-5),
+                                         (dict(sigma0=(1e-3, 1e-6), sigma_min=1e-11), (1e-5, 1e-6)),
+                                         (dict(sigma0=1e-3, sigma_min=1e-5), 1e-3)])
+def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch, own, sigma0):
+    """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier, from sigma = 1e-5
+    where that is below its first sigma and above its last (the previous optimum is complementary), not with the warm
     schedule tuned on the default path, then retried with its cold settings; the default settings are not 'own'."""
     settings = OCPSettings(**own)
     assert convergence.own_homotopy(settings) and not convergence.own_homotopy(OCPSettings())
@@ -168,7 +171,7 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     _fake_solvers(monkeypatch, fresh, warm)
     table = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100])
     cold = replace(settings, nodes=100)
-    assert calls == [replace(cold, ipopt={**convergence.WARM_IPOPT, **settings.ipopt}), cold]
+    assert calls == [replace(cold, sigma0=sigma0, ipopt={**convergence.WARM_IPOPT, **settings.ipopt}), cold]
     assert table.rows[1].status == Status.INFEASIBLE and "settings' own homotopy" in table.rows[1].message
 
 

@@ -50,6 +50,12 @@ WARM_STAGE_TOL = 1e-6
 #: IPOPT options of a solve warm-started from the previous N's optimum (the settings' own ipopt options win)
 WARM_IPOPT = {"mu_strategy": "monotone", "mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8,
               "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8}
+#: first relaxation parameter of a warm-started solve with the settings' own homotopy (:func:`own_homotopy`; when below
+#: their sigma0 and above their sigma_min): the previous optimum is complementary (robust_speed's to 5e-7), and stages
+#: above it only relax it and let IPOPT wander.  Measured, robust_speed N = 400 from the N = 200 optimum that the
+#: file's own homotopy had reached (70.419 mm/s; the other core busy): from sigma = 1e-3, max_iter at sigma = 1e-6
+#: after 2527 s; from 1e-5, success, 70.256 mm/s in 2420 s
+WARM_OWN_SIGMA0 = 1e-5
 #: relative shortfall of a finer N's replayed optimum below the previous N's, beyond both rows' OCP-replay
 #: differences, from which its row says so (the finer N can represent the previous profile when it is a multiple
 #: of the previous N: a worse optimum is then another local optimum, not a discretisation effect)
@@ -226,11 +232,16 @@ def warm_transcription(robot: Robot, gravity: str, settings: OCPSettings) -> Gai
 
 def _near(settings: OCPSettings) -> tuple[OCPSettings, str]:
     """The settings of a solve warm-started from the previous N's optimum, and how they were chosen (in words): the
-    warm schedule, or the settings' own homotopy when they have one (:func:`own_homotopy`), with the warm barrier."""
+    warm schedule, or the settings' own homotopy when they have one (:func:`own_homotopy`), with the warm barrier, from
+    sigma = :data:`WARM_OWN_SIGMA0` where that is below its sigma0 and above its sigma_min."""
     # the previous optimum is near the new one: a small, monotone barrier parameter stays with it (IPOPT's
     # adaptive barrier raised mu to 1e-2 and threw the iterate away: N = 400 took > 600 iterations)
     ipopt = {**WARM_IPOPT, **settings.ipopt}
     if own_homotopy(settings):
+        if settings.sigma_min < WARM_OWN_SIGMA0:
+            sigma0 = tuple(dict.fromkeys(min(s0, WARM_OWN_SIGMA0) for s0 in settings.sigma0))
+            return (replace(settings, sigma0=sigma0, ipopt=ipopt),
+                    f"with the settings' own homotopy from sigma = {sigma0[0]:.0e}")
         return replace(settings, ipopt=ipopt), "with the settings' own homotopy"
     sigma_min = min(settings.sigma_min, WARM_SIGMA0 / 10)
     return (replace(settings, sigma0=(WARM_SIGMA0,), sigma_min=sigma_min, loose_last=True, ipopt=ipopt,
