@@ -218,6 +218,7 @@ def run(capsys, *argv):
     (["--nodes"], ["--nodes", "expected at least one argument"]),
     (["--nodes", "100", "50"], ["--nodes 100 50 is invalid", "increase strictly"]),
     (["--nodes", "50", "50"], ["--nodes 50 50 is invalid", "increase strictly"]),
+    (["--jobs", "0"], ["--jobs 0 is invalid", "worker processes"]),
 ])
 def test_optimize_bad_nodes_exit_2_with_one_line(capsys, argv, words):
     code, out, err = run(capsys, "optimize", OCP_FILE, *argv)
