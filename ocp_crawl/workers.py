@@ -6,6 +6,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import signal
 import threading
 from typing import Callable
 
@@ -15,7 +16,8 @@ def mp_context():
     methods = multiprocessing.get_all_start_methods()
     # fork is the fastest start: workers inherit the imported modules and the loaded compiled
     # functions (measured ~1 s less per worker than forkserver), but forking a process with other
-    # threads running can deadlock a child on a lock held by one of them
+    # threads running can deadlock a child on a lock held by one of them (this sees Python's threads only; the
+    # bundled OpenBLAS's own threads are shut down by its fork handler)
     if "fork" in methods and threading.active_count() == 1:
         return multiprocessing.get_context("fork")
     if "forkserver" in methods:
@@ -41,22 +43,24 @@ def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Calla
     here, in order, after ``meanwhile`` returns.  The task's result must be picklable; an exception it raises is
     raised here (as itself when it pickles, else as RuntimeError with its text).  Where fork is not safe (threads
     running, no fork on the platform: :func:`mp_context`), or when the child dies without a result (killed, out of
-    memory), the task runs here, after ``meanwhile``, with ``send = forward``.  For a task whose inputs the child
+    memory), the task runs here, after ``meanwhile`` (its messages forwarded from where the child's stopped).  The child
+    is terminated when this process dies (Linux).  For a task whose inputs the child
     inherits (large or unpicklable objects, e.g. built CasADi solvers) and whose result is small."""
     ctx = mp_context()
     if ctx.get_start_method() != "fork":
         other = meanwhile()
         return task(forward), other
     reader, writer = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child, args=(task, writer))
+    child = ctx.Process(target=_child, args=(task, reader, writer, os.getpid()))
     child.start()
     writer.close()  # the child's copy is the only writer left: its exit ends the pipe
-    kind, payload = "died", None
+    kind, payload, forwarded = "died", None, 0
     try:
         other = meanwhile()
         kind, payload = _receive(reader)
         while kind == "message":
             forward(payload)
+            forwarded += 1
             kind, payload = _receive(reader)
     finally:
         if kind not in ("result", "error"):
@@ -67,7 +71,14 @@ def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Calla
         return payload, other
     if kind == "error":
         raise payload
-    return task(forward), other  # the child died without a result: here
+    # the child died without a result: the task here, its messages forwarded from where the child's stopped
+    seen = [0]
+
+    def send(message) -> None:
+        seen[0] += 1
+        if seen[0] > forwarded:
+            forward(message)
+    return task(send), other
 
 
 def _receive(reader) -> tuple[str, object]:
@@ -78,15 +89,34 @@ def _receive(reader) -> tuple[str, object]:
         return "died", None
 
 
-def _child(task, writer) -> None:
+#: Linux's prctl option that signals a process when its parent dies
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with(parent: int) -> None:
+    """Have this (forked) process terminated when ``parent`` dies, on Linux (elsewhere nothing): a child whose parent
+    was killed would otherwise go on solving, or block for ever on a full pipe."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the parent died before the prctl
+        os._exit(1)
+
+
+def _child(task, reader, writer, parent: int) -> None:
     """In the forked process: run the task, sending its messages and then its result or its exception."""
+    reader.close()  # a send to a parent that is gone then fails instead of blocking
+    _die_with(parent)
     try:
         result = task(lambda message: writer.send(("message", message)))
         writer.send(("result", result))
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the parent
         try:
-            pickle.dumps(exc)
-        except Exception:  # noqa: BLE001 - an exception that does not pickle: its text
+            pickle.loads(pickle.dumps(exc))
+        except Exception:  # noqa: BLE001 - an exception that does not survive pickling: its text
             exc = RuntimeError(f"{type(exc).__name__}: {exc}")
         writer.send(("error", exc))
     finally:

@@ -230,7 +230,6 @@ def test_worker_processes_change_nothing_but_the_time():
     assert called == [1, 2]  # once each, with and without workers
     for run in runs:
         run.pop("time_s")
-    assert runs[1].pop("evaluated") >= runs[0].pop("evaluated")  # parallel searches may both simulate a member
     assert runs[0] == runs[1] and len(runs[0]["starts"]) == 2
 
     calls = []
@@ -247,7 +246,7 @@ def test_worker_processes_change_nothing_but_the_time():
     finally:
         baseline._pool = real_pool
     assert calls == [2, 1]
-    again.pop("time_s"), again.pop("evaluated")
+    again.pop("time_s")
     assert again == runs[0]
     with pytest.raises(ValueError, match="jobs"):
         best_harmonic(Robot.paper(), "physical", settings, jobs=0)

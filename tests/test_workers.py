@@ -2,10 +2,14 @@
 import json
 import multiprocessing
 import os
+import signal
 import subprocess
 import sys
 import textwrap
 import threading
+import time
+
+import pytest
 
 from ocp_crawl import workers
 from ocp_crawl.workers import overlap
@@ -52,6 +56,10 @@ def test_an_exception_of_the_task_is_raised_here_and_a_dead_child_leaves_the_tas
             def __reduce__(self):
                 raise TypeError("no pickling")
 
+        class Unbuildable(Exception):  # pickles, but cannot be rebuilt from its args
+            def __init__(self, a, b):
+                super().__init__(f"{a} {b}")
+
         def raising(exc):
             def task(send):
                 raise exc
@@ -63,17 +71,47 @@ def test_an_exception_of_the_task_is_raised_here_and_a_dead_child_leaves_the_tas
         parent, got = os.getpid(), []
 
         def dying(send):
+            send(["first", os.getpid()])
             if os.getpid() != parent:
                 os._exit(3)  # killed, out of memory, ...
-            send("here")
+            send(["second", os.getpid()])
             return "done here"
 
         print(json.dumps({"plain": raising(ValueError("boom")), "odd": raising(Unpicklable("odd")),
+                          "unbuildable": raising(Unbuildable("x", "y")), "parent": parent,
                           "died": overlap(dying, lambda: 7, got.append), "got": got}))
         """)
     assert out["plain"] == ["ValueError", "boom"]
     assert out["odd"] == ["RuntimeError", "Unpicklable: odd"]
-    assert out["died"] == ["done here", 7] and out["got"] == ["here"]
+    assert out["unbuildable"] == ["RuntimeError", "Unbuildable: x y"]
+    # the child's message, then the rest of the task here (its first message not forwarded twice)
+    assert out["died"] == ["done here", 7]
+    assert [m[0] for m in out["got"]] == ["first", "second"] and out["got"][0][1] != out["parent"] == out["got"][1][1]
+
+
+def test_the_child_ends_when_its_parent_is_killed():
+    proc = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
+        import os, sys, time
+        from ocp_crawl.workers import overlap
+
+        def task(send):
+            send(os.getpid())
+            time.sleep(60)
+
+        overlap(task, lambda: None, lambda pid: (print(pid, flush=True), time.sleep(60)))
+        """)], stdout=subprocess.PIPE, text=True)
+    child = int(proc.stdout.readline())
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    for _ in range(100):
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(child, signal.SIGKILL)
+        pytest.fail("the child outlived its killed parent")
 
 
 def test_without_fork_the_task_runs_here_after_meanwhile(monkeypatch):

@@ -263,8 +263,12 @@ def _progress_bar(wanted: bool):
 
     @contextlib.contextmanager
     def shown():
-        tqdm.monitor_interval = 0  # no monitor thread: with one, the baseline's workers could not fork (mp_context)
-        with tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True) as bar:
+        interval, tqdm.monitor_interval = tqdm.monitor_interval, 0  # no monitor thread: the workers fork (mp_context)
+        try:
+            bar = tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True)
+        finally:
+            tqdm.monitor_interval = interval
+        with bar:
             bar.set_postfix_str("best harmonic gait of the envelope (the initial guess)")
             calls = []
 

@@ -274,8 +274,9 @@ def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_start
     jobs : int, optional
         Worker processes of the scan and of the local searches (one search per worker); None: the CPUs this
         process may use (:func:`~ocp_crawl.workers.default_jobs`); 1: all in this process.  The result does not
-        depend on it (every member's simulation is deterministic; only ``evaluated`` may count a member twice
-        that two parallel searches both simulated).
+        depend on it (every member's simulation is deterministic, and ``evaluated`` counts each member once), except
+        the local searches' own ``evaluations``: in parallel, a search does not find the members that another one
+        simulated in its cache.
     meanwhile : callable, optional
         Called in this process while the workers scan (first, when there are none; again if a broken pool makes the
         search start over), e.g. to build the OCP's solvers (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.prepare`).
@@ -346,9 +347,13 @@ def _pool(robot: Robot, gravity: str, settings: OCPSettings, jobs: int):
     if jobs < 2:
         yield None
         return
-    with ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_init_worker,
-                             initargs=(robot, gravity, settings)) as pool:
+    pool = ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_init_worker, initargs=(robot, gravity, settings))
+    try:
         yield pool
+    except BaseException:  # Ctrl-C or an error here: the chunks not started yet are dropped
+        pool.shutdown(cancel_futures=True)
+        raise
+    pool.shutdown()
 
 
 def _init_worker(robot: Robot, gravity: str, settings: OCPSettings) -> None:
