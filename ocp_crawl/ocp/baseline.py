@@ -311,12 +311,12 @@ def _search(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int
     fam = HarmonicFamily(robot, gravity, settings)
     points = scan_points(settings)
     with _pool(robot, gravity, settings, jobs) as pool:
-        if pool is not None:  # map sends every chunk at once
-            for evs in _then(pool.map(_scan_chunk, [list(c) for c in np.array_split(np.array(points), 4 * jobs)]),
-                             meanwhile):
-                fam.absorb(evs)
-        elif meanwhile is not None:
+        chunks = [list(c) for c in np.array_split(np.array(points), 4 * jobs)]
+        scanned = pool.map(_scan_chunk, chunks) if pool is not None else []  # map sends every chunk at once
+        if meanwhile is not None:
             meanwhile()
+        for evs in scanned:
+            fam.absorb(evs)
         scored = [(search_rank(settings, fam.evaluate(HarmonicParams.from_box(settings, z))), z) for z in points]
         seeds = [z for _, z in _seeds(scored, local_starts, 6.0 / settings.harmonic_psi)]
         if pool is None or len(seeds) < 2:
@@ -328,13 +328,6 @@ def _search(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int
             fam.absorb(evs)
             starts.append(summary)
     return fam, starts
-
-
-def _then(results, meanwhile: Callable[[], object] | None):
-    """``results`` (an iterator of a pool's map) after calling ``meanwhile`` here."""
-    if meanwhile is not None:
-        meanwhile()
-    return results
 
 
 #: the harmonic family of a worker process (set by :func:`_init_worker`)
