@@ -95,7 +95,7 @@ class EventsMixin:
             # there): [p0, p1] holds that zero and the crossing, so bracket the crossing between the
             # first sample where the guard is clearly positive and the next one where it is negative
             hh = p1.t - p0.t
-            ta = None
+            ta, below = None, False
             for frac in (1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.05, *np.linspace(0, 1, 10)[1:-1], 1.0):
                 s = p0.t + frac * hh
                 v = g1 if frac == 1.0 else self.point_guards(mode, point_at(s))[name]
@@ -104,6 +104,11 @@ class EventsMixin:
                 elif v < 0 and ta is not None:
                     tb, g1 = s, v
                     break
+                below = below or (ta is None and v < -10 * self.noise)
+            if ta is None and below and not start:
+                # zero at p0 to round-off and negative after it: the guard crosses at p0 (a kink of the input where
+                # its rate turned negative, e.g. the friction limits tie exactly at a sample of a sampled input)
+                return p0.t, p0
             if ta is None:
                 raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
                                f"guard {name} does not leave zero after the transition into {mode.label}"
