@@ -114,3 +114,20 @@ def test_figure_of_an_unreplayed_result_says_so():
     assert ax_d.get_legend() is None and "no replay" in " ".join(t.get_text() for t in ax_d.texts)
     assert all(ax.get_legend() is not None for ax in fig.axes[:3])
     assert any("solver_failure" in t.get_text() for t in fig.texts)  # the title
+
+
+def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
+    """After a loose last stage: the polish failed, then the stage solved again tightly failed too; the kept point is
+    the loose stage's, and the message names both rejected calls (the last of each kind) with IPOPT's words."""
+    from ocp_crawl.nlp.homotopy import Stage
+    from ocp_crawl.ocp.solve import _not_kept
+
+    def stage(kind, accepted, message):
+        return Stage(1e-9, "x", accepted, 10, 1e-9, 0.1, kind=kind, message=message)
+
+    run = [stage("homotopy", True, "ok"), stage("polish", False, "polish A failed"),
+           stage("polish", False, "polish B failed"), stage("homotopy", False, "maximum iterations")]
+    note = _not_kept(run)
+    assert "the last stage solved again tightly not kept: IPOPT maximum iterations" in note
+    assert "polish not kept: IPOPT polish B failed" in note and "polish A" not in note
+    assert _not_kept(run[:1]) == "" and _not_kept([*run, stage("polish", True, "ok")]) == ""

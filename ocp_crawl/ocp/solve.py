@@ -297,15 +297,25 @@ def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) ->
         res.message += "; the last accepted iterate is reported (not an optimum)"
         return False
     if not _check_solution(res, ocp.settings, outcome):
+        res.message += _not_kept(ocp.kept_run)
         return False
     res.success = True
     res.status = Status.SUCCESS
     res.message = (f"optimal {ocp.settings.objective} profile found ({len(res.homotopy)} IPOPT calls, final IPOPT "
-                   f"status {status})")
-    last = ocp.kept_run[-1] if ocp.kept_run else None
-    if last is not None and last.kind == "polish" and not last.accepted:
-        res.message += f"; polish not kept: IPOPT {last.message}"
+                   f"status {status}){_not_kept(ocp.kept_run)}")
     return True
+
+
+def _not_kept(run: list) -> str:
+    """A note on the IPOPT calls after the kept point that IPOPT did not accept, the last of each kind: the polish,
+    and the loose last stage solved again tightly (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve`); '' if none."""
+    last = {}
+    for stage in reversed(run):
+        if stage.accepted:
+            break
+        last.setdefault(stage.kind, stage)
+    what = {"polish": "polish", "homotopy": "the last stage solved again tightly"}
+    return "".join(f"; {what.get(kind, kind)} not kept: IPOPT {stage.message}" for kind, stage in last.items())
 
 
 def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
