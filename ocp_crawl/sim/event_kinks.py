@@ -12,7 +12,9 @@ The stepper therefore treats the input piece by piece:
 * every continuation step ends at the next kink; the point there is solved with the *left* rate (the
   limit of the piece the step is in) and a second time with the *right* rate, which starts the next piece;
 * a guard that is positive from the left and negative from the right is an event exactly at the kink:
-  the state is the one at the kink, and the successor mode is the one consistent with the right rates;
+  the state is the one at the kink, and the successor mode is the one consistent with the right rates; so is a
+  guard that is zero to round-off at the kink (e.g. the friction limits tie exactly at a sample) and negative
+  after it (located by the next step, :meth:`~ocp_crawl.sim.event_locate.EventsMixin._locate`);
 * the curvature tau'' (for the rate of the ``stick`` guard) is differenced inside the point's own piece.
 
 An input without kinks (smooth, or C1 at its knots such as splines and PCHIP) leaves all of this out: the

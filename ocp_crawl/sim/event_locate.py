@@ -72,7 +72,9 @@ class EventsMixin:
     def _locate(self, p0: _Point, p1: _Point, q: np.ndarray, mode: Mode, name: str,
                 start: bool = False) -> tuple[float, _Point]:
         """Phase and solved state where guard ``name`` crosses zero in [p0.t, p1.t] (:meth:`_root`).
-        ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero."""
+        ``start``: p0 starts the mode's segment, where the guard that fired the transition is zero.  A guard at zero
+        to round-off at p0 that is not a segment's start (a kink of the input) and negative after it, without rising
+        first, crosses at p0 itself: the successor is then decided at p0 (:meth:`_successor`)."""
 
         # the ends are known (a re-solve there could differ in the last bits and break the bracket)
         cache: dict[float, _Point] = {p0.t: p0, p1.t: p1}
