@@ -126,7 +126,8 @@ def test_help_and_version(capsys):
 
 
 # ------------------------------------------------------------------------------------------ bad input
-# the table of malformed inputs of every command is tests/test_bad_input.py
+# the table of malformed inputs of every command is tests/test_bad_input.py (its rows in tests/_bad_input_rows.py
+# and tests/_bad_input_data_rows.py)
 
 
 def test_real_subprocess_bad_input_and_json(tmp_path):

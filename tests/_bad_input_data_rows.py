@@ -1,0 +1,120 @@
+"""The rows of the bad-input matrix (tests/test_bad_input.py) for data files and waveforms: fit's measurement files
+and parameters, and the non-harmonic gait waveforms with their sample tables (issue 14)."""
+from _bad_input_rows import PAPER_TEXT, R
+
+# ---- fit: measurement files (the CSV convention) and parameters
+_FIT_HEAD = b"A [deg],S [mm],sigma_S [mm]\n"
+_FIT_ROWS = b"15,-27.7,0.2\n22,-41.1,0.2\n30,-56.0,0.2\n"
+
+
+def _fit(words, *extra, data=_FIT_HEAD + _FIT_ROWS, params=("robot.k",)):
+    argv = ["{paper}", "{tmp}/d.csv", *(a for p in params for a in ("--param", p)), "--out", "{tmp}/out", *extra]
+    return R("fit", argv, words, files={"d.csv": data})
+
+
+DATA_ROWS = {
+    "fit: NaN measurement": _fit(["d.csv:3", "'S [mm]'", "not a finite number"],
+                                 data=_FIT_HEAD + b"15,-27.7,0.2\n22,nan,0.2\n30,-56.0,0.2\n"),
+    "fit: too few points": _fit(["d.csv", "too few points", "2 parameter(s)"], params=("robot.k", "robot.mu"),
+                                data=_FIT_HEAD + b"15,-27.7,0.2\n22,-41.1,0.2\n"),
+    "fit: unknown parameter": _fit(["--param robot.kk", "unknown parameter", "did you mean robot.k?"],
+                                   params=("robot.kk",)),
+    "fit: zero uncertainty": _fit(["d.csv:4", "sigma_S", "must be > 0"],
+                                  data=_FIT_HEAD + b"15,-27.7,0.2\n22,-41.1,0.2\n30,-56.0,0\n"),
+    "fit: negative uncertainty": _fit(["d.csv:2", "sigma_S", "must be > 0"],
+                                      data=_FIT_HEAD + b"15,-27.7,-0.2\n22,-41.1,0.2\n30,-56.0,0.2\n"),
+    "fit: unit mismatch": _fit(["d.csv:1", "'S'", "[deg] is not a length unit"],
+                               data=b"A [deg],S [deg],sigma_S [mm]\n" + _FIT_ROWS),
+    "fit: no uncertainty column": _fit(["d.csv", "missing column 'sigma_S'"], data=b"A [deg],S [mm]\n15,-27.7\n22,-4\n"),
+    "fit: start outside the bounds": _fit(["--param robot.k", "within bounds"], "--bounds", "robot.k=0.2:0.3"),
+    "fit: --max-nfev 0": _fit(["--max-nfev 0", "in [1, 10000]"], "--max-nfev", "0"),
+    "fit: unknown pressure constant": _fit(["--pressure pressure.c1", "unknown pressure constant"], "--pressure",
+                                           "pressure.c1=0.1"),
+}
+DATA_ROWS["fit: earlier results"] = R("fit", ["{paper}", "{tmp}/d.csv", "--param", "robot.k", "--out", "{tmp}/out"],
+                                      ["--out", "would overwrite", "--force"],
+                                      files={"d.csv": _FIT_HEAD + _FIT_ROWS, "out/fit.json": b"{}"})
+
+
+def gait(lines: str) -> str:
+    """The paper problem with its [gait] section's keys replaced by ``lines`` (drive kept)."""
+    start = PAPER_TEXT.index("gamma_deg = 90.0")
+    return PAPER_TEXT[:start] + lines + "\n\n" + PAPER_TEXT[PAPER_TEXT.index("[model]"):]
+
+
+#: a table of torques over one cycle (the optimize convention) and rows to break it with
+CSV_HEAD = "phase [-],tau1 [N m],tau2 [N m]\n"
+CSV_ROWS = "0.0,-0.29,-0.29\n0.25,-0.25,-0.33\n0.5,-0.29,-0.29\n0.75,-0.33,-0.25\n"
+SAMPLES = 'waveform = "samples"\nfile = "work/t.csv"'
+
+
+def csv(text: str) -> dict:
+    return {"t.csv": text.encode()}
+
+
+#: issue 14: non-harmonic waveforms ([gait] waveform) are validated like every other key; files name their line
+DATA_ROWS.update({
+    "simulate: unknown waveform": R("simulate", ["{file}"], ["x.toml", '[gait] waveform = "square"', '"pulse"'],
+                                    text=gait('waveform = "square"')),
+    "simulate: harmonic key with samples": R("simulate", ["{file}"],
+                                             ["x.toml", "[gait] gamma_deg = 90.0", 'waveform = "samples"',
+                                              'key of waveform = "harmonic"'],
+                                             text=gait(SAMPLES + "\ngamma_deg = 90.0"), files=csv(CSV_HEAD + CSV_ROWS)),
+    "simulate: samples file missing": R("simulate", ["{file}"], ["x.toml", "[gait] file", "nope.csv", "No such file"],
+                                        text=gait('waveform = "samples"\nfile = "nope.csv"')),
+    "simulate: --input missing": R("simulate", ["{paper}", "--input", "{tmp}/nope.csv"],
+                                   ["paper_gait.toml", "[gait] file", "nope.csv", "(from --set)", "No such file"]),
+    "simulate: samples not periodic": R("simulate", ["{file}"], ["x.toml", "[gait] file", "t.csv:6", "not periodic"],
+                                        text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS + "1.0,-0.3,-0.29\n")),
+    "simulate: samples NaN": R("simulate", ["{file}"], ["x.toml", "[gait] file", "t.csv:3", "'tau1 [N m]'",
+                                                        "not a finite number"],
+                               text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS.replace("-0.25,", "nan,", 1))),
+    "simulate: samples NaN inline": R("simulate", ["{file}"], ["x.toml", "[gait] tau1 = [0.1, nan", "entry 1 = nan",
+                                                               "finite"],
+                                      text=gait('waveform = "samples"\nphase = [0, 0.5, 0.7]\ntau1 = [0.1, nan, 0.1]\n'
+                                                'tau2 = [0.1, 0.2, 0.1]')),
+    "simulate: samples unknown column": R("simulate", ["{file}"], ["x.toml", "t.csv:1", "unknown column(s) 'tau3'"],
+                                          text=gait(SAMPLES),
+                                          files=csv("phase [-],tau1 [N m],tau3 [N m]\n" + CSV_ROWS)),
+    "simulate: samples one torque column": R("simulate", ["{file}"], ["x.toml", "t.csv", "'tau2 [N m]'", "header has"],
+                                             text=gait(SAMPLES),
+                                             files=csv("phase [-],tau1 [N m]\n0.0,0.1\n0.5,0.2\n0.7,0.1\n")),
+    "simulate: samples wrong unit": R("simulate", ["{file}"], ["x.toml", "t.csv:1", "[deg] is not a torque unit"],
+                                      text=gait(SAMPLES), files=csv(CSV_HEAD.replace("tau1 [N m]", "tau1 [deg]") +
+                                                                    CSV_ROWS)),
+    "simulate: samples unsorted": R("simulate", ["{file}"], ["x.toml", "t.csv:4", "phase 0.2 after 0.25",
+                                                             "sorted and unique"],
+                                    text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS.replace("0.5,", "0.2,", 1))),
+    "simulate: samples repeated phase inline": R("simulate", ["{file}"], ["x.toml", "[gait] phase", "entry 2",
+                                                                          "sorted and unique"],
+                                                 text=gait('waveform = "samples"\nphase = [0, 0.5, 0.5]\n'
+                                                           'tau1 = [0.1, 0.2, 0.1]\ntau2 = [0.1, 0.2, 0.1]')),
+    "simulate: samples angle outside the geometry": R("simulate", ["{file}"],
+                                                      ["x.toml", "t.csv:3", "phi1_ref = 400.0 deg", "(0, 360)"],
+                                                      text=gait(SAMPLES), files=csv(
+                                                          "phase [-],phi1_ref [deg],phi2_ref [deg]\n0,90,90\n"
+                                                          "0.3,400,80\n0.6,90,100\n")),
+    "simulate: samples foot off the ground": R("simulate", ["{file}"], ["x.toml", "[gait]", "foot 1 off the ground"],
+                                               text=gait('waveform = "samples"\nphase = [0, 0.3, 0.6]\n'
+                                                         'phi1_ref_deg = [41.5, 90, 90]\nphi2_ref_deg = [18.5, 90, 90]')),
+    "simulate: samples lengths differ": R("simulate", ["{file}"], ["x.toml", "[gait] tau2", "2 entries where phase has 3"],
+                                          text=gait('waveform = "samples"\nphase = [0, 0.3, 0.6]\n'
+                                                    'tau1 = [0.1, 0.2, 0.1]\ntau2 = [0.1, 0.2]')),
+    "simulate: torque samples, angles drive": R("simulate", ["{file}", "--drive", "angles"],
+                                                ["x.toml", '[gait] drive = "angles"', "torque samples"],
+                                                text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS)),
+    "simulate: pulse edges longer than the cycle": R("simulate", ["{file}"], ["x.toml", "[gait] rise = 0.4",
+                                                                              "hold = 0.3", "<= 1"],
+                                                     text=gait('waveform = "pulse"\ngamma_deg = 90.0\nA_deg = 20.0\n'
+                                                               'psi_deg = 90.0\nrise = 0.4\nhold = 0.3')),
+    "simulate: pulse without rise": R("simulate", ["{file}"], ["x.toml", "[gait] rise is missing",
+                                                               'waveform = "pulse"'],
+                                      text=gait('waveform = "pulse"\ngamma_deg = 90.0\nA_deg = 20.0\n'
+                                                'psi_deg = 90.0\nhold = 0.3')),
+    "simulate: fourier of 101 harmonics": R("simulate", ["{file}"], ["x.toml", "[gait] cos1_deg", "at most 100"],
+                                            text=gait('waveform = "fourier"\ngamma_deg = 90.0\ncos1_deg = [' +
+                                                      ", ".join(["0.1"] * 101) + "]")),
+    "simulate: fourier coefficient a string": R("simulate", ["{file}"], ["x.toml", "[gait] sin2_deg", "entry 0",
+                                                                         "expected a number"],
+                                                text=gait('waveform = "fourier"\ngamma_deg = 90.0\nsin2_deg = ["1"]')),
+})
