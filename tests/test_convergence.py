@@ -155,7 +155,8 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
 def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch, own, sigma0):
     """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier, from sigma = 1e-5
     where that is below its first sigma and above its last (the previous optimum is complementary), not with the warm
-    schedule tuned on the default path, then retried with its cold settings; the default settings are not 'own'."""
+    schedule tuned on the default path, then retried with its cold settings; before the homotopy, the tightened NLP
+    alone on the same transcription; the default settings are not 'own'."""
     settings = OCPSettings(**own)
     assert convergence.own_homotopy(settings) and not convergence.own_homotopy(OCPSettings())
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
@@ -164,16 +165,42 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
-        calls.append(ocp.settings)
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
+        calls.append((ocp.settings, tightened))
         return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
                          objective=ocp.settings.objective, settings=ocp.settings)
 
     _fake_solvers(monkeypatch, fresh, warm)
     table = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100])
     cold = replace(settings, nodes=100)
-    assert calls == [replace(cold, sigma0=sigma0, ipopt={**convergence.WARM_IPOPT, **settings.ipopt}), cold]
-    assert table.rows[1].status == Status.INFEASIBLE and "settings' own homotopy" in table.rows[1].message
+    near = replace(cold, sigma0=sigma0, ipopt={**convergence.WARM_IPOPT, **settings.ipopt})
+    assert calls == [(near, True), (near, False), (cold, False)]
+    message = table.rows[1].message
+    assert table.rows[1].status == Status.INFEASIBLE and "settings' own homotopy" in message
+    assert "the tightened NLP on its branches gave: infeasible" in message
+
+
+@pytest.mark.parametrize("value, kept", [(0.0501, True), (0.04992, True), (0.0498, False), (0.045, False)])
+def test_the_tightened_nlp_is_kept_when_a_success_not_worse_than_the_previous_optimum(monkeypatch, value, kept):
+    """With their own homotopy, the warm solve's first try, the tightened NLP on the previous optimum's branches, is the
+    row when the judge accepts it and it is not worse than the previous N's optimum beyond WORSE_TOL plus both
+    OCP-replay differences (1e-3 each in the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs."""
+    settings = OCPSettings(stage_tol_ratio=0.1)
+    calls = []
+
+    def fresh(robot, gravity, s, jobs=None):
+        return _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
+
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
+        calls.append(tightened)
+        return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, value if tightened else 0.0502)
+
+    _fake_solvers(monkeypatch, fresh, warm)
+    row = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100]).rows[1]
+    assert calls == ([True] if kept else [True, False])
+    assert row.value_replay == (value if kept else 0.0502)
+    assert ("the tightened NLP on its branches)" in row.message) == kept
+    assert ("worse than N = 50" in row.message) == (not kept)
 
 
 @pytest.mark.parametrize("objective, values, flagged", [

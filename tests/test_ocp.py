@@ -1,6 +1,8 @@
 """Periodic-gait optimal control: statuses, settings validation and the command line (each shipped problem file
 solved, judged and converged in N: tests/test_ocp_problems.py)."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -98,7 +100,6 @@ def test_figure_of_an_unreplayed_result_says_so():
     """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a note instead
     of an empty axes and an empty legend; the other panels keep their legends."""
     import warnings
-    from dataclasses import replace
 
     from ocp_crawl.viz.ocp import plot_optimal_gait
 
@@ -131,3 +132,24 @@ def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
     assert "the last stage solved again tightly not kept: IPOPT maximum iterations" in note
     assert "polish not kept: IPOPT polish B failed" in note and "polish A" not in note
     assert _not_kept(run[:1]) == "" and _not_kept([*run, stage("polish", True, "ok")]) == ""
+
+
+def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
+    """solve_from(..., tightened=True): no homotopy, only polish calls (the tightened NLP on the branches of the coarser
+    optimum's simulated guess at twice the nodes), a complementary point that the event-driven replay confirms."""
+    from ocp_crawl.model.statics import Model
+    from ocp_crawl.ocp.judge import replay_signal
+    from ocp_crawl.ocp.solve import solve_from
+    from ocp_crawl.ocp.transcription import GaitOCP
+
+    robot = Robot.paper()
+    settings = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2)
+    coarse = optimize_gait(robot, "physical", settings)
+    assert coarse.success, coarse.message
+    fine = replace(settings, nodes=32)
+    res = solve_from(GaitOCP(robot, "physical", fine), [Model(robot)], replay_signal(coarse.phase, coarse.tau),
+                     coarse.T_ocp, coarse.harmonic, tightened=True)
+    assert res.success, res.message
+    assert res.homotopy and {h.kind for h in res.homotopy} == {"polish"}
+    assert res.complementarity_residual <= fine.comp_tol and res.tau.shape == (2, 32)
+    assert abs(res.value_replay - res.value_ocp) <= fine.replay_tol * abs(res.value_replay)

@@ -5,8 +5,9 @@ The OCP is solved at each N of an increasing list: the first N by :func:`~ocp_cr
 profile, linear in phase, sampled at the new nodes, and its period: for N doubling, the previous profile
 exactly; its homotopy stages loose, the last one too, and the polish tight: :data:`WARM_STAGE_TOL`; if that solve
 is not judged a success, the same start once more with the cold solve's relaxation and barrier settings; settings
-with their own homotopy, :func:`own_homotopy`, keep it, with the warm barrier), or, while no N has given an optimum
-whose replay succeeds, again from the baseline and its starts.
+with their own homotopy, :func:`own_homotopy`, keep it, with the warm barrier, after a first try of the tightened NLP
+alone on the branches of the previous profile's simulated guess, kept when judged a success and not worse than the
+previous optimum), or, while no N has given an optimum whose replay succeeds, again from the baseline and its starts.
 Each optimum is judged by its event-driven replay.  The table gives, per N, the OCP's and the
 replay's objective, the change from the previous N and the observed order
 
@@ -252,20 +253,50 @@ def _near(settings: OCPSettings) -> tuple[OCPSettings, str]:
 def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult,
                 ocp: GaitOCP | None = None) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as before), with the
-    settings of :func:`_near` (on ``ocp`` when given: their transcription); if that is not a success, the same start
-    with the cold solve's settings."""
+    settings of :func:`_near` (on ``ocp`` when given: their transcription); settings with their own homotopy
+    (:func:`own_homotopy`) first solve only the tightened NLP on the branches of the previous profile's simulated guess
+    (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`), kept if the judge accepts it and it is not worse
+    than the previous optimum (:func:`_shortfall`); then the homotopy; if that is not a success, the same start with
+    the cold solve's settings."""
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     n_prev = prev.tau.shape[1]
     near, how = _near(settings)
-    res = solve_from(ocp or GaitOCP(robot, gravity, near), models, signal, prev.T_ocp, prev.harmonic)
-    res.message += f" (warm start from the optimum at N = {n_prev}, {how})"
+    ocp = ocp or GaitOCP(robot, gravity, near)
+    tried = ""
+    if own_homotopy(settings):
+        res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, tightened=True)
+        worse = _shortfall(settings.objective, _numbers(prev), _numbers(res))
+        if res.status == Status.SUCCESS and not worse:
+            res.message += f" (warm start from the optimum at N = {n_prev}: the tightened NLP on its branches)"
+            return res
+        tried = (f"; the tightened NLP on its branches gave: {res.message}"
+                 + (f", {worse:.2%} worse than N = {n_prev}" if worse else ""))
+    res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic)
+    res.message += f" (warm start from the optimum at N = {n_prev}, {how}{tried})"
     if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
         warm_msg = res.message
         res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic)
         res.message += (f" (from the optimum at N = {n_prev} with the cold solve's settings; the warm "
                         f"settings gave: {warm_msg})")
     return res
+
+
+def _numbers(res: OCPResult) -> tuple[int, float, float]:
+    """(N, replayed objective, OCP-replay relative difference) of a result, for :func:`_shortfall`."""
+    return res.settings.nodes, res.value_replay, res.rel_diff_replay
+
+
+def _shortfall(objective: str, prev: tuple, row: tuple) -> float:
+    """How much worse (relative) a replayed optimum is than the previous N's, each given as (N, replayed objective,
+    OCP-replay relative difference): the relative difference when N is a multiple of the previous N (it can represent
+    the previous profile) and the finer one is worse beyond :data:`WORSE_TOL` plus both OCP-replay differences;
+    else 0."""
+    (n0, v0, r0), (n1, v1, r1) = prev, row
+    rel = (v1 - v0) / abs(v1) if v1 else math.nan
+    if n1 % n0 == 0 and abs(rel) > WORSE_TOL + abs(r0) + abs(r1) and is_better(objective, v0, v1):
+        return abs(rel)
+    return 0.0
 
 
 def own_homotopy(settings: OCPSettings) -> bool:
@@ -289,10 +320,10 @@ def _changes(rows: list[ConvergenceRow], objective: str) -> None:
     for prev, row in zip(rows, rows[1:]):
         row.change = row.value_replay - prev.value_replay
         row.rel_change = row.change / abs(row.value_replay) if row.value_replay else math.nan
-        margin = WORSE_TOL + abs(prev.rel_diff_replay) + abs(row.rel_diff_replay)
-        if (row.nodes % prev.nodes == 0 and Status.SUCCESS == prev.status == row.status
-                and abs(row.rel_change) > margin and is_better(objective, prev.value_replay, row.value_replay)):
-            row.message += (f"; {abs(row.rel_change):.2%} worse than the optimum at N = {prev.nodes}, whose profile "
+        worse = _shortfall(objective, (prev.nodes, prev.value_replay, prev.rel_diff_replay),
+                           (row.nodes, row.value_replay, row.rel_diff_replay))
+        if Status.SUCCESS == prev.status == row.status and worse:
+            row.message += (f"; {worse:.2%} worse than the optimum at N = {prev.nodes}, whose profile "
                             f"N = {row.nodes} can represent: another local optimum")
     nodes = [r.nodes for r in rows]
     for row, p, q in zip(rows, observed_orders(nodes, [r.value_replay for r in rows]),

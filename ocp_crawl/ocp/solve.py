@@ -236,7 +236,7 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
 
 
 def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: HarmonicChoice | None = None,
-               replay: bool = True) -> OCPResult:
+               replay: bool = True, tightened: bool = False) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
 
     Parameters
@@ -253,6 +253,9 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Ha
         The harmonic baseline (the gain is measured against its value).
     replay : bool
         Judge the optimum by replay (default).
+    tightened : bool
+        Solve only the tightened NLP on the branches of the start's simulated guess, no homotopy
+        (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`: a coarser N's optimum refined); default False.
 
     Returns
     -------
@@ -268,7 +271,8 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Ha
         res.status = Status.NO_INITIAL_GUESS
         res.message = f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: {bad.message}"
         return res
-    x, hist, failed, status = ocp.solve(ocp.initial_guess(signal, T))
+    x0 = ocp.initial_guess(signal, T)
+    x, hist, failed, status = ocp.solve_tightened(x0) if tightened else ocp.solve(x0)
     res.homotopy = hist
     if not _accept(res, ocp, x, failed, status):
         res.solve_time_s = time.perf_counter() - t_start

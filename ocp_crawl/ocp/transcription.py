@@ -357,6 +357,21 @@ class GaitOCP:
                                for sigma0, r in zip(self.settings.sigma0, runs))
         return x, hom.records, failed, status
 
+    def solve_tightened(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
+        """The tightened NLP alone, no homotopy: each pair fixed to the branch that x0 identifies (x0 complementary,
+        e.g. the simulated guess of a coarser N's optimum, :func:`~ocp_crawl.ocp.convergence.converge_in_nodes`),
+        solved by the tight warm solver from zero multipliers, each polish candidate in turn, kept if IPOPT accepts it
+        and it is complementary to comp_tol.  Returns (x, history, failed, status) as :meth:`solve` does (x None and
+        ``failed`` set when no candidate is kept)."""
+        self._fixed = None
+        hom = Homotopy.of(self.solvers, self._call)
+        start = Solve(x0, np.zeros(self.nx), np.zeros(self.ng), "", True, 0)
+        pol = hom.polish(start, self._polish_candidates(x0), lambda p: p.comp <= self.settings.comp_tol)
+        self.kept_run = hom.records
+        if pol is None:
+            return None, hom.records, "the tightened NLP on the start's branches", hom.records[-1].return_status
+        return pol.x, hom.records, None, pol.status
+
     def prepare(self) -> None:
         """Build the solver of the first homotopy stage now rather than at the first solve (the first build generates
         the derivative functions, which every later solver reuses: about 0.8 s at N = 50, 8 s at N = 400), e.g. while
