@@ -139,9 +139,16 @@ def dissipation_oracle(model: Model, angles, n: int = FINE) -> tuple[float, floa
 
 
 def check_success(model: Model, angles, res) -> None:
-    r = model.robot
-    Mg, L = r.M * r.g, r.L
-    torque_scale = r.MgL + r.k
+    """Every property of a successful prescribed-angle run (each part below), against the model and oracles."""
+    _check_outputs(model, angles, res)
+    _check_contact(model, angles, res)
+    _check_friction(model, angles, res)
+    _check_feet(model, angles, res)
+    _check_energy(model, angles, res)
+
+
+def _check_outputs(model: Model, angles, res) -> None:
+    """Shapes, finite values, output phases and the prescribed angles."""
     n = res.t.size
     # shapes and no NaN anywhere
     assert res.success and res.status == Status.SUCCESS and res.message
@@ -163,6 +170,13 @@ def check_success(model: Model, angles, res) -> None:
         assert np.min(np.abs(res.t - ev.t)) == 0.0
     # the angles are the prescribed ones
     np.testing.assert_allclose(res.phi, angles(res.t), rtol=0, atol=1e-14)
+
+
+def _check_contact(model: Model, angles, res) -> None:
+    """Contact and joint equilibrium at the samples and on a fine grid."""
+    r = model.robot
+    Mg, L = r.M * r.g, r.L
+    torque_scale = r.MgL + r.k
     kin = model.kinematics(res.phi)
     # contact: positive normal forces, joints above the ground, feet apart, at the samples ...
     for name in GUARDS:
@@ -174,9 +188,16 @@ def check_success(model: Model, angles, res) -> None:
     for name in GUARDS:
         assert np.min(fine[name]) > 0, f"{name} reaches {np.min(fine[name]):.3g} although the run succeeded"
     # joint equilibrium with the holding torques, residual relative to the torque scale
-    for j in range(n):
+    for j in range(res.t.size):
         F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
         assert np.max(np.abs(F)) <= 1e-11 * torque_scale, (j, F)
+
+
+def _check_friction(model: Model, angles, res) -> None:
+    """Coulomb's law: the friction limits, the slipping foot, friction opposing the slip."""
+    r = model.robot
+    Mg, L = r.M * r.g, r.L
+    n = res.t.size
     # Coulomb: |f_t| on the friction limit of the slipping foot, which is the smaller limit
     lim1, lim2 = r.mu1 * res.f_n1, r.mu2 * res.f_n2
     # (with both feet slipping, |mu1 f_n1 - mu2 f_n2| <= TIE M g: a tie in the model's definition)
@@ -199,6 +220,13 @@ def check_success(model: Model, angles, res) -> None:
     # stick-stick only where the angles hold still (d' = 0 on a stretch)
     assert np.all(np.abs(ddot[~slip & smooth]) <= 1e-6 * L)
     assert np.all(res.f_t[clear] * ddot[clear] >= 0)
+
+
+def _check_feet(model: Model, angles, res) -> None:
+    """The feet's positions, periodicity and S against an independent integration."""
+    L = model.robot.L
+    n = res.t.size
+    modes = [Mode(int(m)) for m in res.mode]
     # feet: x2 - x1 = d; the sticking foot stays; both feet advance by S over the cycle (periodic)
     np.testing.assert_allclose(res.x2 - res.x1, res.d, rtol=0, atol=1e-12 * L)
     assert res.d[-1] == pytest.approx(res.d[0], abs=1e-12 * L)
@@ -213,6 +241,13 @@ def check_success(model: Model, angles, res) -> None:
     # S against an independent integration of the slipping foot's motion
     S, bound = displacement_oracle(model, angles)
     assert abs(res.S - S) <= bound + 1e-10 * L, (res.S, S, bound)
+
+
+def _check_energy(model: Model, angles, res) -> None:
+    """The energy balance per cycle, W+ and the cost of transport."""
+    r = model.robot
+    Mg, L = r.M * r.g, r.L
+    torque_scale = r.MgL + r.k
     # energy per cycle: W_in = Delta V + dissipation, Delta V = 0 (periodic), W+ >= W_in
     e = res.energy
     scale = max(abs(e["input_work"]), e["dissipation"], e["gross_work"], 1e-12 * r.MgL, 1e-300)
