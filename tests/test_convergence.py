@@ -180,27 +180,38 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     assert "the tightened NLP on its branches gave: infeasible" in message
 
 
-@pytest.mark.parametrize("value, kept", [(0.0501, True), (0.04992, True), (0.0498, False), (0.045, False)])
-def test_the_tightened_nlp_is_kept_when_a_success_not_worse_than_the_previous_optimum(monkeypatch, value, kept):
+@pytest.mark.parametrize("tight, homotopy, calls, row_value", [
+    (0.0501, 0.0502, 1, 0.0501), (0.04992, 0.0502, 1, 0.04992),  # not worse: the row, no homotopy
+    (0.0498, 0.0502, 2, 0.0502), (0.045, 0.0502, 2, 0.0502),  # worse: the homotopy, which does better
+    (0.0498, None, 3, 0.0498), (0.0498, 0.0497, 2, 0.0498),  # worse, but the homotopy fails or does worse still
+])
+def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_the_homotopy(
+        monkeypatch, tight, homotopy, calls, row_value):
     """With their own homotopy, the warm solve's first try, the tightened NLP on the previous optimum's branches, is the
     row when the judge accepts it and it is not worse than the previous N's optimum beyond WORSE_TOL plus both
-    OCP-replay differences (1e-3 each in the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs."""
+    OCP-replay differences (1e-3 each in the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs
+    (then the cold retry if it fails: None), and the worse tightened success stays the row unless the homotopy does
+    better."""
     settings = OCPSettings(stage_tol_ratio=0.1)
-    calls = []
+    seen = []
 
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
-        calls.append(tightened)
-        return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, value if tightened else 0.0502)
+        seen.append(tightened)
+        if tightened or homotopy is not None:
+            return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, tight if tightened else homotopy)
+        return OCPResult(success=False, status=Status.SOLVER_FAILURE, message="IPOPT failed: max_iter",
+                         objective=ocp.settings.objective, settings=ocp.settings)
 
     _fake_solvers(monkeypatch, fresh, warm)
     row = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100]).rows[1]
-    assert calls == ([True] if kept else [True, False])
-    assert row.value_replay == (value if kept else 0.0502)
-    assert ("the tightened NLP on its branches)" in row.message) == kept
-    assert ("worse than N = 50" in row.message) == (not kept)
+    assert seen == [True] + [False] * (calls - 1)
+    assert row.status == Status.SUCCESS and row.value_replay == row_value
+    assert ("the tightened NLP on its branches)" in row.message) == (calls == 1)
+    assert ("worse than N = 50" in row.message) == (calls > 1)
+    assert ("kept: the homotopy then gave" in row.message) == (calls > 1 and row_value == tight)
 
 
 @pytest.mark.parametrize("objective, values, flagged", [

@@ -209,3 +209,35 @@ def test_polish_candidates_are_distinct():
             assert not np.array_equal(cands[0]["ubx"], cands[1]["ubx"])
             # the first fixes more margins to zero (the ties) than the second
             assert np.sum(cands[0]["ubx"] == 0) > np.sum(cands[1]["ubx"] == 0)
+
+
+@pytest.mark.parametrize("outcomes, kept, calls, failed", [
+    ([(True, 0.0), (True, 0.0)], 0, 1, None),  # the first, accepted and complementary: no second call
+    ([(True, 1e-3), (True, 0.0)], 1, 2, None),  # the first accepted but not complementary: the second, complementary
+    ([(True, 1e-3), (False, 0.0)], 0, 2, None),  # none complementary: the first accepted point (the caller rejects it)
+    ([(False, 0.0), (False, 0.0)], None, 2, "(Restoration_Failed, Infeasible_Problem_Detected)"),
+])
+def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure(outcomes, kept, calls, failed):
+    """solve_tightened tries the polish candidates in turn: the first that IPOPT accepts and that is complementary to
+    comp_tol; else the first IPOPT accepted (its residual then fails the caller's check, NOT_COMPLEMENTARY); else no
+    point, and the failure names each candidate's IPOPT status."""
+    from ocp_crawl.nlp.homotopy import Solve
+
+    ocp = GaitOCP(PAPER, "physical", OCPSettings(nodes=8))
+    x0 = ocp.initial_guess(paper_torque(), 0.8)
+    points = [np.full(ocp.nx, float(i)) for i in range(2)]
+    names = iter(["Restoration_Failed", "Infeasible_Problem_Detected"])
+
+    def call(solver, start, data, it=iter(zip(points, outcomes))):
+        x, (ok, comp) = next(it)
+        status = "Solve_Succeeded" if ok else next(names)
+        return Solve(x, np.zeros(ocp.nx), np.zeros(ocp.ng), status, ok, 5, comp=comp)
+
+    ocp._call = call
+    ocp._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0)] * 2
+    x, records, why, status = ocp.solve_tightened(x0)
+    assert [r.kind for r in records] == ["polish"] * calls
+    if kept is None:
+        assert x is None and why.endswith(failed) and status == "Infeasible_Problem_Detected"
+    else:
+        assert why is None and status == "Solve_Succeeded" and np.array_equal(x, points[kept])

@@ -257,21 +257,22 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     (:func:`own_homotopy`) first solve only the tightened NLP on the branches of the previous profile's simulated guess
     (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`), kept if the judge accepts it and it is not worse
     than the previous optimum (:func:`_shortfall`); then the homotopy; if that is not a success, the same start with
-    the cold solve's settings."""
+    the cold solve's settings.  A judged success of the tightened NLP that was worse than the previous optimum is
+    still the row when the homotopy gives no success or a worse one."""
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     n_prev = prev.tau.shape[1]
     near, how = _near(settings)
     ocp = ocp or GaitOCP(robot, gravity, near)
-    tried = ""
+    tight, tried = None, ""
     if own_homotopy(settings):
-        res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, tightened=True)
-        worse = _shortfall(settings.objective, _numbers(prev), _numbers(res))
-        if res.status == Status.SUCCESS and not worse:
-            res.message += f" (warm start from the optimum at N = {n_prev}: the tightened NLP on its branches)"
-            return res
-        tried = (f"; the tightened NLP on its branches gave: {res.message}"
-                 + (f", {worse:.2%} worse than N = {n_prev}" if worse else ""))
+        tight = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, tightened=True)
+        worse = _shortfall(settings.objective, _numbers(prev), _numbers(tight))
+        base, note = tight.message, (f", {worse:.2%} worse than N = {n_prev}" if worse else "")
+        tight.message = f"{base} (warm start from the optimum at N = {n_prev}: the tightened NLP on its branches{note})"
+        if tight.status == Status.SUCCESS and not worse:
+            return tight
+        tried = f"; the tightened NLP on its branches gave: {base}{note}"
     res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic)
     res.message += f" (warm start from the optimum at N = {n_prev}, {how}{tried})"
     if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
@@ -279,6 +280,10 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
         res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic)
         res.message += (f" (from the optimum at N = {n_prev} with the cold solve's settings; the warm "
                         f"settings gave: {warm_msg})")
+    if tight is not None and tight.status == Status.SUCCESS and (
+            res.status != Status.SUCCESS or is_better(settings.objective, tight.value_replay, res.value_replay)):
+        tight.message += f"; kept: the homotopy then gave {res.status.label}: {res.message}"
+        return tight
     return res
 
 

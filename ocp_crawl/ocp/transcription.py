@@ -360,17 +360,25 @@ class GaitOCP:
     def solve_tightened(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """The tightened NLP alone, no homotopy: each pair fixed to the branch that x0 identifies (x0 complementary,
         e.g. the simulated guess of a coarser N's optimum, :func:`~ocp_crawl.ocp.convergence.converge_in_nodes`),
-        solved by the tight warm solver from zero multipliers, each polish candidate in turn, kept if IPOPT accepts it
-        and it is complementary to comp_tol.  Returns (x, history, failed, status) as :meth:`solve` does (x None and
-        ``failed`` set when no candidate is kept)."""
+        solved by the tight warm solver from zero multipliers, each polish candidate in turn until one that IPOPT
+        accepts is complementary to comp_tol.  Returns (x, history, failed, status) as :meth:`solve` does: that
+        candidate's point; else the first point IPOPT accepted (its residual then fails the caller's check); else x
+        None and ``failed`` naming every candidate's IPOPT status."""
         self._fixed = None
         hom = Homotopy.of(self.solvers, self._call)
         start = Solve(x0, np.zeros(self.nx), np.zeros(self.ng), "", True, 0)
-        pol = hom.polish(start, self._polish_candidates(x0), lambda p: p.comp <= self.settings.comp_tol)
+        accepted = []
+        for data in self._polish_candidates(x0):
+            pol = hom.polish(start, [data], lambda p: True)
+            if pol is not None and pol.comp <= self.settings.comp_tol:
+                accepted = [pol]
+                break
+            accepted += [pol] if pol is not None else []
         self.kept_run = hom.records
-        if pol is None:
-            return None, hom.records, "the tightened NLP on the start's branches", hom.records[-1].return_status
-        return pol.x, hom.records, None, pol.status
+        if accepted:
+            return accepted[0].x, hom.records, None, accepted[0].status
+        statuses = ", ".join(r.return_status for r in hom.records)
+        return None, hom.records, f"the tightened NLP on the start's branches ({statuses})", hom.records[-1].return_status
 
     def prepare(self) -> None:
         """Build the solver of the first homotopy stage now rather than at the first solve (the first build generates
