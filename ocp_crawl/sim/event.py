@@ -452,20 +452,17 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
         else the one other consistent mode (the current one for a grazing event), or of several the one that starts
-        from the event's state without a jump (:meth:`_jump`); (mode, its start, event kind)."""
+        from the event's state without a jump (:meth:`_jump`); if that leaves none or several and a kink of the input
+        is inside the trial steps, the one mode consistent up to it (:meth:`_before_kink`); (mode, its start, event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
         trial = self._consistent(target, ev_pt, new_d0)
         if trial is not None:
             return target, trial, event_kind(kind)
-        found = []
-        for m in Mode:
-            if m == target:
-                continue
-            tr = self._consistent(m, ev_pt, new_d0)
-            if tr is not None:
-                found.append((m, tr))
+        found = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]
         if len(found) > 1 and not self._input_jumps(t_ev):  # (e.g. at a kink of the input) a mode that continues
             found = [f for f in found if self._jump(ev_pt, f[1])[0] <= self.opt.jump_tol] or found  # the state wins
+        if len(found) != 1:  # (undecided, with a kink of the input inside the trial steps: the piece before it decides)
+            found = self._before_kink(target, ev_pt, new_d0) or found
         if len(found) != 1:
             raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, mode, f"after event {kind}: {len(found)} consistent "
                            f"successor modes (table successor {target.label} is inconsistent){self.tie_note(ev_pt)}")

@@ -11,10 +11,13 @@ import math
 
 import numpy as np
 
+from ocp_crawl.sim.event_kinks import KINK_GAP
 from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, hermite_point, mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
+#: phase steps [cycles] after an event at which the guards of a successor mode are tested (``_consistent``)
+TRIAL_STEPS = (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4)
 #: an input whose rate is below this fraction of its largest rate over the cycle holds still (``_input_still``)
 HOLD_RTOL = 1e-6
 
@@ -111,6 +114,10 @@ class EventsMixin:
                 # zero at p0 to round-off and negative after it: the guard crosses at p0 (a kink of the input where
                 # its rate turned negative, e.g. the friction limits tie exactly at a sample of a sampled input)
                 return p0.t, p0
+            if ta is None and not below and p1.left and not self.tie_note(p0):
+                # zero to round-off all the way to the kink that ends the step (a mode that holds at its limit up to a
+                # kink, see _before_kink): the event is at the kink, where the rates after it decide (_pass_kink)
+                return p1.t, p1
             if ta is None:
                 raise _Failure(Status.NO_CONSISTENT_MODE, p0.t, mode,
                                f"guard {name} does not leave zero after the transition into {mode.label}"
@@ -157,13 +164,14 @@ class EventsMixin:
                 t = ta + dx
         raise _Failure(Status.NO_CONVERGENCE, t, mode, f"event {name} not located to {self.opt.event_xtol:g}")
 
-    def _consistent(self, mode: Mode, pt: _Point, d0: float) -> _Point | None:
+    def _consistent(self, mode: Mode, pt: _Point, d0: float, kink: float | None = None) -> _Point | None:
         """Return the start point of ``mode`` at pt if the mode is consistent going forward, else None.
 
         Guards that are clearly positive at the event stay positive over a short step.  Guards
         that vanish at the event (the one that fired, seen from the new mode) may grow only
         quadratically (slip -> stick at d' = 0 is tangential), so the trial step is enlarged
-        until their sign is resolved above round-off.
+        until their sign is resolved above round-off.  ``kink``: the next kink of the input, where the trial steps
+        end (solved with the rate before it); guards still at zero there leave the decision to the kink.
         """
         q = mode_q(mode, d0)
         start = self._solve(pt.t, pt.xl, q, step=True)  # (step: with its stability numbers, for the event check)
@@ -176,8 +184,11 @@ class EventsMixin:
         if any(v < -100 * noise[k] for k, v in g0.items()):
             return None
         pending = {k for k, v in g0.items() if v < 100 * noise[k]}
-        for delta in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 1e-4):
-            nxt = self._solve(pt.t + delta, [x + delta * xd for x, xd in zip(start.xl, start.xdl)], q)
+        for delta in TRIAL_STEPS:
+            at_kink = kink is not None and pt.t + delta >= kink - KINK_GAP
+            if at_kink:
+                delta = kink - pt.t
+            nxt = self._solve(pt.t + delta, [x + delta * xd for x, xd in zip(start.xl, start.xdl)], q, left=at_kink)
             if nxt is None:
                 return None
             g = self.point_guards(mode, nxt)
@@ -188,10 +199,32 @@ class EventsMixin:
                     pending.discard(k)
             if not pending:
                 return start
+            if at_kink:  # at zero up to the kink, not at the friction tie (where the mode after it is ambiguous)
+                return None if self.tie_note(pt) else start
         # guards that stay at zero while the input holds still: a quasistatic (rate-independent) state does not move
         # while its input does not, so the mode holds at the limit until the hold ends, where the kink of the input
         # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
         return start if self._input_still(pt.t) and not self.tie_note(pt) else None
+
+    def _before_kink(self, target: Mode, pt: _Point, d0: float) -> list[tuple[Mode, _Point]]:
+        """[(mode, its start)] of the one successor mode consistent on the piece of the input before the next kink,
+        tested up to the kink (``_consistent`` with ``kink``), for an event at pt that the trial steps across the
+        kink leave undecided (no consistent mode, or several): the table's ``target`` if it is consistent there, else
+        the one other mode that is; [] if none or several are, or if no kink is inside the trial steps.
+
+        An event a little before a kink (e.g. a slip that stops 2e-8 cycles before the knot of a sampled input where
+        an optimiser placed it) starts a mode whose guards grow only quadratically (the stick-stick friction guard
+        after a slip stops), still at zero to round-off at the kink; after it the new rates may turn them negative
+        (the slip resumes).  Trial steps across the kink see that and refuse the mode, and the old mode too (it is
+        refused by the rates before the kink): the kink decides, as at a kink that ends a step."""
+        kink = self.next_kink(pt.t)
+        if not kink - pt.t < TRIAL_STEPS[-1]:
+            return []
+        trial = self._consistent(target, pt, d0, kink)
+        if trial is not None:
+            return [(target, trial)]
+        found = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, pt, d0, kink)) is not None]
+        return found if len(found) == 1 else []
 
     def _input_still(self, t: float) -> bool:
         """Whether the input holds still just after phase t [cycles]: its rate below HOLD_RTOL times its largest
