@@ -452,22 +452,21 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
     def _successor(self, mode: Mode, target: Mode, kind: str, ev_pt: _Point, t_ev: float) -> tuple[Mode, _Point, str]:
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
         else the one other consistent mode (the current one for a grazing event), or of several the one that starts
-        from the event's state without a jump (:meth:`_jump`); if that leaves none or several and a kink of the input
-        is inside the trial steps, the one mode consistent up to it (:meth:`_before_kink`); (mode, its start, event kind)."""
+        from the event's state without a jump (:meth:`_jump`); with a kink of the input inside the trial steps, the
+        mode consistent on the piece before it if that one is not or none is (:meth:`_before_kink`); (mode, its start,
+        event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
         trial = self._consistent(target, ev_pt, new_d0)
-        if trial is not None:
-            return target, trial, event_kind(kind)
-        found = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]
+        found = [(target, trial)] if trial is not None else \
+            [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]
         if len(found) > 1 and not self._input_jumps(t_ev):  # (e.g. at a kink of the input) a mode that continues
             found = [f for f in found if self._jump(ev_pt, f[1])[0] <= self.opt.jump_tol] or found  # the state wins
-        if len(found) != 1:  # (undecided, with a kink of the input inside the trial steps: the piece before it decides)
-            found = self._before_kink(target, ev_pt, new_d0) or found
+        found = self._before_kink(target, ev_pt, new_d0, found)
         if len(found) != 1:
             raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, mode, f"after event {kind}: {len(found)} consistent "
                            f"successor modes (table successor {target.label} is inconsistent){self.tie_note(ev_pt)}")
         chosen, trial = found[0]
-        return chosen, trial, f"graze_{event_kind(kind)}" if chosen == mode else event_kind(kind)
+        return chosen, trial, f"graze_{event_kind(kind)}" if chosen == mode != target else event_kind(kind)
 
 
 def simulate_torque(model: Model, torque, options: HybridOptions | None = None, t_eval=None) -> CrawlResult:

@@ -206,25 +206,28 @@ class EventsMixin:
         # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
         return start if self._input_still(pt.t) and not self.tie_note(pt) else None
 
-    def _before_kink(self, target: Mode, pt: _Point, d0: float) -> list[tuple[Mode, _Point]]:
-        """[(mode, its start)] of the one successor mode consistent on the piece of the input before the next kink,
-        tested up to the kink (``_consistent`` with ``kink``), for an event at pt that the trial steps across the
-        kink leave undecided (no consistent mode, or several): the table's ``target`` if it is consistent there, else
-        the one other mode that is; [] if none or several are, or if no kink is inside the trial steps.
+    def _before_kink(self, target: Mode, pt: _Point, d0: float, found: list) -> list[tuple[Mode, _Point]]:
+        """The successors ``found`` [(mode, its start)] of an event at pt by the trial steps of ``_consistent``, checked
+        on the piece of the input before the next kink when that kink is inside the trial steps: unless ``found`` is
+        one mode that is consistent up to the kink too (tested by ``_consistent`` with ``kink``), the one mode that is
+        (the table's ``target`` first); ``found`` itself if there is no such mode, or no kink inside the trial steps.
 
         An event a little before a kink (e.g. a slip that stops 2e-8 cycles before the knot of a sampled input where
-        an optimiser placed it) starts a mode whose guards grow only quadratically (the stick-stick friction guard
+        an optimiser placed it) starts a mode whose guards may grow only quadratically (the stick-stick friction guard
         after a slip stops), still at zero to round-off at the kink; after it the new rates may turn them negative
-        (the slip resumes).  Trial steps across the kink see that and refuse the mode, and the old mode too (it is
-        refused by the rates before the kink): the kink decides, as at a kink that ends a step."""
+        (the slip resumes).  Trial steps across the kink see those rates: they refuse that mode, and may accept one
+        that the rates before the kink refuse (the slip that stops, by the rates after the kink), whose guard is then
+        negative from the event on.  The piece before the kink decides, and the kink what follows (``_pass_kink``)."""
         kink = self.next_kink(pt.t)
         if not kink - pt.t < TRIAL_STEPS[-1]:
-            return []
+            return found
+        if len(found) == 1 and self._consistent(found[0][0], pt, d0, kink) is not None:
+            return found
         trial = self._consistent(target, pt, d0, kink)
         if trial is not None:
             return [(target, trial)]
-        found = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, pt, d0, kink)) is not None]
-        return found if len(found) == 1 else []
+        piece = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, pt, d0, kink)) is not None]
+        return piece if len(piece) == 1 else found
 
     def _input_still(self, t: float) -> bool:
         """Whether the input holds still just after phase t [cycles]: its rate below HOLD_RTOL times its largest
