@@ -164,25 +164,36 @@ class EventsMixin:
                 t = ta + dx
         raise _Failure(Status.NO_CONVERGENCE, t, mode, f"event {name} not located to {self.opt.event_xtol:g}")
 
-    def _consistent(self, mode: Mode, pt: _Point, d0: float, kink: float | None = None) -> _Point | None:
+    def _consistent(self, mode: Mode, pt: _Point, d0: float) -> _Point | None:
         """Return the start point of ``mode`` at pt if the mode is consistent going forward, else None.
 
         Guards that are clearly positive at the event stay positive over a short step.  Guards
         that vanish at the event (the one that fired, seen from the new mode) may grow only
         quadratically (slip -> stick at d' = 0 is tangential), so the trial step is enlarged
-        until their sign is resolved above round-off.  ``kink``: the next kink of the input, where the trial steps
-        end (solved with the rate before it); guards still at zero there leave the decision to the kink.
+        until their sign is resolved above round-off (:meth:`_trial_steps`).
         """
+        start, pending = self._trial_steps(mode, pt, d0)
+        if start is None or not pending:
+            return start
+        # guards that stay at zero while the input holds still: a quasistatic (rate-independent) state does not move
+        # while its input does not, so the mode holds at the limit until the hold ends, where the kink of the input
+        # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
+        return start if self._input_still(pt.t) and not self.tie_note(pt) else None
+
+    def _trial_steps(self, mode: Mode, pt: _Point, d0: float, kink: float | None = None) -> tuple[_Point | None, set]:
+        """(start of ``mode`` at pt, its guards still at zero to round-off after the trial steps TRIAL_STEPS); (None,
+        set()) if a guard is negative at pt or turns negative in the steps.  ``kink``: the next kink of the input, where
+        the steps end (solved there with the rate before it): the guards still at zero there are decided by the kink."""
         q = mode_q(mode, d0)
         start = self._solve(pt.t, pt.xl, q, step=True)  # (step: with its stability numbers, for the event check)
         if start is None:
-            return None
+            return None, set()
         g0 = self.point_guards(mode, start)
         noise = self._noise_table.get(mode)
         if noise is None:  # (the round-off levels of the mode's guards, once per stepper and mode)
             noise = self._noise_table[mode] = {k: guard_noise(k, self.noise) for k in g0}
         if any(v < -100 * noise[k] for k, v in g0.items()):
-            return None
+            return None, set()
         pending = {k for k, v in g0.items() if v < 100 * noise[k]}
         for delta in TRIAL_STEPS:
             at_kink = kink is not None and pt.t + delta >= kink - KINK_GAP
@@ -190,43 +201,43 @@ class EventsMixin:
                 delta = kink - pt.t
             nxt = self._solve(pt.t + delta, [x + delta * xd for x, xd in zip(start.xl, start.xdl)], q, left=at_kink)
             if nxt is None:
-                return None
+                return None, set()
             g = self.point_guards(mode, nxt)
             for k in list(pending):
                 if g[k] < -10 * noise[k]:
-                    return None
+                    return None, set()
                 if g[k] > 10 * noise[k]:
                     pending.discard(k)
-            if not pending:
-                return start
-            if at_kink:  # at zero up to the kink, not at the friction tie (where the mode after it is ambiguous)
-                return None if self.tie_note(pt) else start
-        # guards that stay at zero while the input holds still: a quasistatic (rate-independent) state does not move
-        # while its input does not, so the mode holds at the limit until the hold ends, where the kink of the input
-        # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
-        return start if self._input_still(pt.t) and not self.tie_note(pt) else None
+            if not pending or at_kink:
+                break
+        return start, pending
 
     def _before_kink(self, target: Mode, pt: _Point, d0: float, found: list) -> list[tuple[Mode, _Point]]:
-        """The successors ``found`` [(mode, its start)] of an event at pt by the trial steps of ``_consistent``, checked
-        on the piece of the input before the next kink when that kink is inside the trial steps: unless ``found`` is
-        one mode that is consistent up to the kink too (tested by ``_consistent`` with ``kink``), the one mode that is
-        (the table's ``target`` first); ``found`` itself if there is no such mode, or no kink inside the trial steps.
+        """The successors ``found`` [(mode, its start)] of an event at pt by ``_consistent``, whose trial steps may cross
+        the next kink of the input, checked on the piece before that kink (``_trial_steps`` up to it): ``found`` if it
+        is one mode not refused there, or if no kink is inside the trial steps; else the table's ``target`` if it is
+        not refused there, or the one other mode that is not; else ``found``.  A mode whose guards are still at zero
+        at the kink holds up to it (the kink then decides, ``_pass_kink``), unless the friction limits tie there
+        (``tie_note``: which foot slips after the kink is ambiguous).
 
         An event a little before a kink (e.g. a slip that stops 2e-8 cycles before the knot of a sampled input where
         an optimiser placed it) starts a mode whose guards may grow only quadratically (the stick-stick friction guard
         after a slip stops), still at zero to round-off at the kink; after it the new rates may turn them negative
         (the slip resumes).  Trial steps across the kink see those rates: they refuse that mode, and may accept one
         that the rates before the kink refuse (the slip that stops, by the rates after the kink), whose guard is then
-        negative from the event on.  The piece before the kink decides, and the kink what follows (``_pass_kink``)."""
+        negative from the event on."""
         kink = self.next_kink(pt.t)
         if not kink - pt.t < TRIAL_STEPS[-1]:
             return found
-        if len(found) == 1 and self._consistent(found[0][0], pt, d0, kink) is not None:
+        if len(found) == 1 and self._trial_steps(found[0][0], pt, d0, kink)[0] is not None:
             return found
-        trial = self._consistent(target, pt, d0, kink)
-        if trial is not None:
-            return [(target, trial)]
-        piece = [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, pt, d0, kink)) is not None]
+        piece = []
+        for m in (target, *(m for m in Mode if m != target)):
+            start, pending = self._trial_steps(m, pt, d0, kink)
+            if start is not None and not (pending and self.tie_note(pt)):
+                if m == target:
+                    return [(m, start)]
+                piece.append((m, start))
         return piece if len(piece) == 1 else found
 
     def _input_still(self, t: float) -> bool:
