@@ -206,17 +206,22 @@ def test_slipping_foot_changes_at_a_knot_where_the_limits_tie(hold, switch_at):
         assert abs(near.S - res.S) <= 1e-7 * abs(res.S)  # (8.7e-9 and 2.4e-8 measured without the hold)
 
 
-def test_slip_that_stops_just_before_a_knot_resumes_at_it():
+@pytest.mark.parametrize("shift", [0.0, -5.9916710482000624e-11])
+def test_slip_that_stops_just_before_a_knot_resumes_at_it(shift):
     """The replay of an OCP optimum (tests/data/slip_stops_just_before_a_knot.csv, ocp_robust.toml at mu = 0.3 and
     N = 100, the scenario mu1/mu2 = 0.9) whose switch-exact transcription put the stop of foot 2's slip at the node
     t = 0.51: with the rates of the piece before that knot the slip stops 2.3e-8 cycles before it, the stick-stick
     friction guard of foot 2 then grows only quadratically (at zero to round-off at the knot), and with the rates
     after the knot it falls (the slip resumes, until t = 0.515).  The trial steps of the successor test crossed the
     kink: stick-stick was refused by the rates after it and slip2- by those before it ("0 consistent successor
-    modes").  Now stick-stick holds up to the knot and the slip of foot 2 resumes exactly there.  Independent
-    checks: moving the knot's sample by +-1e-9 N m (the +1e-9 run failed the same way, the -1e-9 one did not) moves
-    S by O(1e-9) only, and the switch-exact MPCC time-stepping (the knots on step boundaries) gives the same S."""
+    modes").  ``shift``: the knot's sample moved by -6e-11 N m (bisected), so that the slip stops 1e-9 cycles
+    before the knot; the trial steps then accepted slip2- (a graze, by the rates after the kink), whose guard is
+    negative up to the kink ("guard stick does not leave zero after the transition into slip2-").  Now stick-stick
+    holds up to the knot and the slip of foot 2 resumes exactly there.  Independent checks: moving the knot's sample
+    by a further +-1e-9 N m (the +1e-9 runs failed the same way, the -1e-9 ones did not) moves S by O(1e-9) only,
+    and the switch-exact MPCC time-stepping (the knots on step boundaries) gives the same S."""
     tau = np.loadtxt(Path(__file__).parent / "data" / "slip_stops_just_before_a_knot.csv", delimiter=",").T
+    tau[:, 51] += shift
     robot = Robot(M=0.052, L=0.12, beta=2.0, k=0.1677, mu1=0.2846049894151541, mu2=0.31622776601683794, g=9.81)
     model = Model(robot, gravity="physical")
     phase = np.arange(100) / 100
@@ -231,7 +236,7 @@ def test_slip_that_stops_just_before_a_knot_resumes_at_it():
         moved[:, 51] += d
         near = simulate_torque(model, PeriodicLinear(phase, moved))
         assert near.success, near.message
-        assert abs(near.S - res.S) <= 1e-7 * abs(res.S)  # (5.0e-9 and 5.0e-9 measured)
+        assert abs(near.S - res.S) <= 1e-7 * abs(res.S)  # (5.0e-9 measured, each)
     mpcc = simulate(model, PeriodicLinear(phase, tau), solver="mpcc", options=TimeSteppingOptions(steps=100))
     assert mpcc.success, mpcc.message
     assert mpcc.S == pytest.approx(res.S, rel=1e-6)  # (1.2e-8 measured; 2.4e-8 with 200 steps)
