@@ -218,8 +218,8 @@ def test_polish_candidates_are_distinct():
     ([(False, 0.0), (False, 0.0)], None, 2, "(Restoration_Failed, Infeasible_Problem_Detected)"),
 ])
 def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure(outcomes, kept, calls, failed):
-    """solve_tightened tries the polish candidates in turn: the first that IPOPT accepts and that is complementary to
-    comp_tol; else the first IPOPT accepted (its residual then fails the caller's check, NOT_COMPLEMENTARY); else no
+    """solve_tightened tries the polish candidates in reverse order (the branches alone first): the first that IPOPT
+    accepts and that is complementary to comp_tol; else the first IPOPT accepted (its residual then fails the caller's check, NOT_COMPLEMENTARY); else no
     point, and the failure names each candidate's IPOPT status."""
     from ocp_crawl.nlp.homotopy import Solve
 
@@ -228,14 +228,18 @@ def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure
     points = [np.full(ocp.nx, float(i)) for i in range(2)]
     names = iter(["Restoration_Failed", "Infeasible_Problem_Detected"])
 
+    order = []
+
     def call(solver, start, data, it=iter(zip(points, outcomes))):
+        order.append(data["tag"])
         x, (ok, comp) = next(it)
         status = "Solve_Succeeded" if ok else next(names)
         return Solve(x, np.zeros(ocp.nx), np.zeros(ocp.ng), status, ok, 5, comp=comp)
 
     ocp._call = call
-    ocp._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0)] * 2
+    ocp._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0, tag=tag) for tag in ("ties", "alone")]
     x, records, why, status = ocp.solve_tightened(x0)
+    assert order == ["alone", "ties"][:calls]  # the branches alone first
     assert [r.kind for r in records] == ["polish"] * calls
     if kept is None:
         assert x is None and why.endswith(failed) and status == "Infeasible_Problem_Detected"
