@@ -369,16 +369,16 @@ class GaitOCP:
         self._fixed = None
         hom = Homotopy.of(self.solvers, self._call)
         start = Solve(x0, np.zeros(self.nx), np.zeros(self.ng), "", True, 0)
-        accepted = []
+        kept = None
         for data in self._polish_candidates(x0)[::-1]:
             pol = hom.polish(start, [data], lambda p: True)
-            if pol is not None and pol.comp <= self.settings.comp_tol:
-                accepted = [pol]
+            if pol is not None and (kept is None or pol.comp <= self.settings.comp_tol):
+                kept = pol  # the first accepted point, unless a later one is complementary
+            if kept is not None and kept.comp <= self.settings.comp_tol:
                 break
-            accepted += [pol] if pol is not None else []
         self.kept_run = hom.records
-        if accepted:
-            return accepted[0].x, hom.records, None, accepted[0].status
+        if kept is not None:
+            return kept.x, hom.records, None, kept.status
         statuses = ", ".join(r.return_status for r in hom.records)
         return None, hom.records, f"the tightened NLP on the start's branches ({statuses})", hom.records[-1].return_status
 
