@@ -47,6 +47,32 @@ def test_solvers_are_built_on_first_use_and_share_the_first_ones_derivatives(mon
     assert solvers.cold.name() == "t_cold" and len(built) == 3
 
 
+@pytest.mark.parametrize("user, warm_strategy", [({}, "monotone"), ({"mu_strategy": "adaptive"}, "adaptive")])
+def test_warm_over_sets_the_warm_solvers_options_under_the_users(monkeypatch, user, warm_strategy):
+    """``warm_over`` (OCPSettings.warm_barrier) overrides the defaults in every warm-started solver, tight and loose,
+    not in the cold ones; the user's options override it."""
+    built = {}
+    real = nlp_ipopt.build_ipopt
+
+    def recording(name, nlp, options, owner, user_options):
+        built[name] = options["ipopt"]
+        return real(name, nlp, options, owner, user_options)
+
+    monkeypatch.setattr(nlp_ipopt, "build_ipopt", recording)
+    solvers = ipopt_solvers("t", _nlp(), OCP_IPOPT, OCP_WARM_IPOPT, user, "owner", stage_tol=1e-4,
+                            warm_over={"mu_strategy": "monotone"})
+    for solver in (*solvers[:4], *solvers.loose(1e-6)):
+        solver.function()
+    assert sorted(built) == ["t_cold", "t_options", "t_stage_cold", "t_stage_cold_loose2", "t_stage_warm",
+                             "t_stage_warm_loose2", "t_warm"]
+    for name, options in built.items():
+        cold = "cold" in name
+        assert options["mu_strategy"] == (OCP_IPOPT["mu_strategy"] if cold else warm_strategy), name
+        assert ("mu_init" in options) == (not cold), name  # the warm start's own options: mu_init 1e-6
+    assert built["t_stage_warm_loose2"]["tol"] == built["t_stage_cold_loose2"]["tol"] == 1e-6
+    assert built["t_warm"]["tol"] == OCP_IPOPT["tol"] and built["t_stage_warm"]["tol"] == 1e-4
+
+
 def test_bad_options_fail_at_once_naming_the_owner(monkeypatch):
     with pytest.raises(ValueError, match="owner = .*IPOPT rejected the options"):
         _solvers(monkeypatch, user={"no_such_option": 1})

@@ -34,6 +34,7 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(stage_tol_ratio=0.0), "stage_tol_ratio must be > 0"),
     (dict(stage_tol_ratio=2.0), "stage_tol_ratio must be in"),
     (dict(loose_last=1), "loose_last must be True or False"),
+    (dict(warm_barrier="probing"), "warm_barrier must be one of"),
 ])
 def test_settings_validation(bad, match):
     with pytest.raises((ValueError, TypeError), match=match):

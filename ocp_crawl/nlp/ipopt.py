@@ -354,8 +354,9 @@ OCP_IPOPT: dict = {
 }
 
 #: the warm-started OCP stages: a small bound push keeps IPOPT from walking back into the interior (the barrier
-#: strategy stays that of :data:`OCP_IPOPT`, adaptive, which sets mu from the point's complementarity; mu_init acts
-#: only under a monotone strategy, e.g. the convergence run's warm solves)
+#: strategy is that of :data:`OCP_IPOPT`, adaptive, which sets mu from the point's complementarity, unless
+#: ``OCPSettings.warm_barrier`` is "monotone"; mu_init acts only under a monotone strategy, that one or the
+#: convergence run's warm solves)
 OCP_WARM_IPOPT: dict = {
     "warm_start_init_point": "yes",
     "mu_init": 1e-6,
@@ -423,12 +424,13 @@ class _Family:
     """The solvers of one NLP, built on first use; every solver after the first reuses the first one's derivative
     functions (generating them again costs as much as the first build: 9 s of the max_speed OCP at N = 400)."""
 
-    def __init__(self, name: str, nlp: dict, base: dict, ipopt: dict, warm: dict, owner: str, user: dict):
-        self.name, self.nlp, self.base, self.ipopt, self.warm, self.owner, self.user = (
-            name, nlp, base, ipopt, warm, owner, user)
+    def __init__(self, name: str, nlp: dict, base: dict, ipopt: tuple[dict, dict], warm: dict, owner: str, user: dict):
+        """``ipopt``: the options of the cold and of the warm solvers; ``warm``: the warm start's own (under them)."""
+        self.name, self.nlp, self.base, self.warm, self.owner, self.user = name, nlp, base, warm, owner, user
+        self.ipopt, self.ipopt_warm = ipopt
         self._source: cs.Function | None = None
         self._pairs: dict[float, tuple[LazySolver, LazySolver]] = {}
-        self.tight = (self.solver("_cold", ipopt), self.solver("_warm", dict(warm, **ipopt)))
+        self.tight = (self.solver("_cold", self.ipopt), self.solver("_warm", dict(warm, **self.ipopt_warm)))
 
     def solver(self, suffix: str, ipopt: dict) -> LazySolver:
         """The solver named name + suffix with these IPOPT options, built on first use."""
@@ -452,7 +454,7 @@ class _Family:
             tag = f"_loose{len(self._pairs) + 1}" if suffix is None else suffix  # CasADi names: no "-" or "."
             loose = dict(self.ipopt, tol=tol)
             self._pairs[tol] = (self.solver(f"_stage_cold{tag}", loose),
-                                self.solver(f"_stage_warm{tag}", dict(self.warm, **loose)))
+                                self.solver(f"_stage_warm{tag}", {**self.warm, **self.ipopt_warm, "tol": tol}))
         return self._pairs[tol]
 
 
@@ -463,22 +465,22 @@ def _option_check_nlp() -> dict:
 
 
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
-                  verbose: bool = False, stage_tol: float | None = None) -> Solvers:
+                  verbose: bool = False, stage_tol: float | None = None, warm_over: dict | None = None) -> Solvers:
     """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``) and loose versions.
 
     Options: ``defaults`` (an option set of this module, read when called), quiet unless ``verbose``, then
-    the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them.
+    the ``user``'s options (named ``owner`` in errors); the warm solver adds ``warm`` under them and ``warm_over``
+    over the defaults (under the user's; e.g. another barrier strategy for the warm-started solves).
     ``stage_tol`` (dimensionless, IPOPT's ``tol``): also build both solvers with this tolerance over every other
     option, for the stages of a homotopy that are only a path to the next one (None, or not looser than the
     solvers' own ``tol``: the loose solvers are the tight ones); ``Solvers.loose(tol)`` builds pairs at other
     tolerances on demand.  Every solver is built on its first use (:class:`LazySolver`; an NLP solved only warm
     never builds its cold solvers), the first one with the derivative functions, which the others reuse; the
     options are checked at once, on a one-variable NLP (ValueError naming ``owner``).  Returns :class:`Solvers`."""
-    ipopt = dict(defaults)
-    ipopt.update({"print_level": 5 if verbose else 0, "sb": "yes"})
-    ipopt.update(user)
+    quiet = {"print_level": 5 if verbose else 0, "sb": "yes"}
+    ipopt, ipopt_warm = {**defaults, **quiet, **user}, {**defaults, **(warm_over or {}), **quiet, **user}
     base = {"print_time": bool(verbose), "calc_lam_p": False, "error_on_fail": False}
-    build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=dict(warm, **ipopt)), owner, user)
-    family = _Family(name, nlp, base, ipopt, warm, owner, user)
+    build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=dict(warm, **ipopt_warm)), owner, user)
+    family = _Family(name, nlp, base, (ipopt, ipopt_warm), warm, owner, user)
     stage = family.loose(stage_tol, suffix="") if stage_tol is not None else family.tight
     return Solvers(*family.tight, *stage, family.loose)

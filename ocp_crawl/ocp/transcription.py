@@ -202,7 +202,7 @@ class GaitOCP:
         s = self.settings
         nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
         return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
-                             s.verbose, stage_tol)
+                             s.verbose, stage_tol, warm_over={"mu_strategy": s.warm_barrier})
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""

@@ -23,7 +23,7 @@ from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.ocp.settings import (FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS, REMOVED_KEYS,
-                                   STARTS_BOUNDS)
+                                   STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
 Drive = Literal["torque", "angles"]
@@ -281,7 +281,7 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
         choices=("max_speed", "min_cot", "robust_speed")),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
         rule=within(*NODES_BOUNDS, "the shipped files use 50: 15 to 30 s per start with one friction scenario, "
-                                   "about 100 s with robust_speed's three; the cost grows at least linearly")),
+                                   "about 70 s with robust_speed's three; the cost grows at least linearly")),
     Key("direction", int, "-", "sign of S to pursue (-1: towards foot 1, as psi > 0 gaits)", default=_ocp("direction"),
         rule=Rule(lambda v: v in (-1, 1), "-1 or 1")),
     Key("A_max_deg", float, "deg", "half-width of the reference-angle envelope around gait.gamma_deg",
@@ -318,6 +318,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("stage_tol_ratio", float, "-", f"homotopy: a stage before the last is solved to IPOPT tol = "
         f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})",
         rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
+    Key("warm_barrier", str, "-", "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
+        "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"), choices=WARM_BARRIERS),
     Key("friction_tol", float, "-", "relative tolerance of the friction coefficients: a gait is admissible only "
         "when which foot slips does not depend on them within +-friction_tol/2 (slip-weighted margin)",
         default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
