@@ -24,7 +24,7 @@ from ocp_crawl.problem import load_problem, ocp_settings
 REPO = Path(__file__).resolve().parents[1]
 FILES = ["ocp_max_speed", "ocp_min_cot", pytest.param("ocp_robust", marks=[
     pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"),
-                       reason="about 100 s at N = 50 (three friction scenarios); by hand, OCP_CRAWL_HEAVY=1")])]
+                       reason="about 70 s at N = 50 (three friction scenarios); by hand, OCP_CRAWL_HEAVY=1")])]
 
 
 def nodes_list() -> list[int]:

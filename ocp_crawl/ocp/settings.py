@@ -113,7 +113,8 @@ class OCPSettings:
     "adaptive" (default, as the first stage) or "monotone" (from mu = 1e-6 at the previous stage's point).
     robust_speed's file uses "monotone": at N = 50 its nine stages took 952 IPOPT iterations instead of 1144 (the
     whole file 69 s instead of 83 s) to the same optimum; on the default path (max_speed, min_cot) it took 2.3x and
-    1.6x the iterations"""
+    1.6x the iterations.  A ``mu_strategy`` in ``ipopt`` overrides it; the convergence run's warm rows use the monotone
+    barrier whatever it is (:data:`~ocp_crawl.ocp.convergence.WARM_IPOPT`)"""
     comp_tol: float = 1e-6
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
     periodic_tol: float = 1e-8
