@@ -148,15 +148,14 @@ class OCPSettings:
         object.__setattr__(self, name, value)
 
     def _check_choices(self) -> None:
-        for name, choices in (("objective", OBJECTIVES), ("parametrization", PARAMETRIZATIONS)):
+        for name, choices in (("objective", OBJECTIVES), ("parametrization", PARAMETRIZATIONS),
+                              ("warm_barrier", WARM_BARRIERS)):
             if getattr(self, name) not in choices:
                 raise ValueError(f"OCPSettings.{name} must be one of {choices}, got {getattr(self, name)!r}")
         if self.direction not in (-1, 1):
             raise ValueError(f"OCPSettings.direction must be -1 or +1, got {self.direction!r}")
         if self.robust not in ("mean", "worst"):
             raise ValueError(f"OCPSettings.robust must be 'mean' or 'worst', got {self.robust!r}")
-        if self.warm_barrier not in WARM_BARRIERS:
-            raise ValueError(f"OCPSettings.warm_barrier must be one of {WARM_BARRIERS}, got {self.warm_barrier!r}")
         if not isinstance(self.loose_last, bool):
             raise TypeError(f"OCPSettings.loose_last must be True or False, got {self.loose_last!r}")
 
