@@ -89,3 +89,15 @@ def test_every_problem_file_the_readme_names_is_shipped():
     named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", readme))
     assert "paper_gait.toml" in named
     assert named <= set(shipped_problems()), named - set(shipped_problems())
+
+
+def test_ci_runs_the_readme_test_command():
+    """CI runs the test command of the README's second line (the one a new machine runs), word for word."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    block = readme.split("```", 2)[1].strip().splitlines()
+    assert len(block) == 2 and block[1].startswith("python3 -m venv"), block
+    readme_command = block[1].split("&&")[-1].strip()
+    ci_lines = [line.strip() for line in (REPO / ".ci" / "run").read_text(encoding="utf-8").splitlines()]
+    test_lines = [line for line in ci_lines if "pytest" in line and not line.startswith("#")]
+    assert readme_command.startswith("python -m pytest")
+    assert test_lines == [readme_command], (test_lines, readme_command)
