@@ -180,18 +180,20 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     assert "the tightened NLP on its branches gave: infeasible" in message
 
 
-@pytest.mark.parametrize("tight, homotopy, calls, row_value", [
-    (0.0501, 0.0502, 1, 0.0501), (0.04992, 0.0502, 1, 0.04992),  # not worse: the row, no homotopy
-    (0.0498, 0.0502, 2, 0.0502), (0.045, 0.0502, 2, 0.0502),  # worse: the homotopy, which does better
-    (0.0498, None, 3, 0.0498), (0.0498, 0.0497, 2, 0.0498),  # worse, but the homotopy fails or does worse still
+@pytest.mark.parametrize("tight, homotopy, cold, calls, row_value", [
+    (0.0501, 0.0502, None, 1, 0.0501), (0.04992, 0.0502, None, 1, 0.04992),  # not worse: the row, no homotopy
+    (0.0498, 0.0502, None, 2, 0.0502), (0.045, 0.0502, None, 2, 0.0502),  # worse: the homotopy, which does better
+    (0.0498, None, None, 3, 0.0498), (0.0498, 0.0497, None, 2, 0.0498),  # worse, but the homotopy fails or does worse
+    # the homotopy fails, its cold retry succeeds: the row if better than the tightened NLP's, else the tightened one
+    (0.0498, None, 0.0502, 3, 0.0502), (0.0498, None, 0.0497, 3, 0.0498),
 ])
 def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_the_homotopy(
-        monkeypatch, tight, homotopy, calls, row_value):
+        monkeypatch, tight, homotopy, cold, calls, row_value):
     """With their own homotopy, the warm solve's first try, the tightened NLP on the previous optimum's branches, is the
     row when the judge accepts it and it is not worse than the previous N's optimum beyond WORSE_TOL plus both
     OCP-replay differences (1e-3 each in the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs
-    (then the cold retry if it fails: None), and the worse tightened success stays the row unless the homotopy does
-    better; the row's result's solve time is that of all the attempts."""
+    (then the cold retry if it fails: None), and the worse tightened success stays the row unless the homotopy (or its
+    cold retry) does better; the row's result's solve time is that of all the attempts."""
     settings = OCPSettings(stage_tol_ratio=0.1)
     seen = []
 
@@ -200,8 +202,9 @@ def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_th
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
         seen.append(tightened)
-        if tightened or homotopy is not None:
-            res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, tight if tightened else homotopy)
+        value = tight if tightened else homotopy if len(seen) == 2 else cold  # the third call: the cold retry
+        if value is not None:
+            res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, value)
         else:
             res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="IPOPT failed: max_iter",
                             objective=ocp.settings.objective, settings=ocp.settings)
@@ -215,6 +218,8 @@ def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_th
     assert ("the tightened NLP on its branches)" in row.message) == (calls == 1)
     assert ("worse than N = 50" in row.message) == (calls > 1)
     assert ("kept: the homotopy then gave" in row.message) == (calls > 1 and row_value == tight)
+    cold_row = row.message.startswith("fake (from the optimum at N = 50 with the cold solve's settings")
+    assert cold_row == (cold is not None and row_value == cold)
     assert row.result.solve_time_s == 2.0 ** calls - 1  # every attempt's time, whichever attempt is the row
 
 
