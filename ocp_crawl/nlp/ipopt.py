@@ -424,13 +424,13 @@ class _Family:
     """The solvers of one NLP, built on first use; every solver after the first reuses the first one's derivative
     functions (generating them again costs as much as the first build: 9 s of the max_speed OCP at N = 400)."""
 
-    def __init__(self, name: str, nlp: dict, base: dict, ipopt: tuple[dict, dict], warm: dict, owner: str, user: dict):
-        """``ipopt``: the options of the cold and of the warm solvers; ``warm``: the warm start's own (under them)."""
-        self.name, self.nlp, self.base, self.warm, self.owner, self.user = name, nlp, base, warm, owner, user
+    def __init__(self, name: str, nlp: dict, base: dict, ipopt: tuple[dict, dict], owner: str, user: dict):
+        """``ipopt``: the whole IPOPT options of the cold and of the warm-started solvers."""
+        self.name, self.nlp, self.base, self.owner, self.user = name, nlp, base, owner, user
         self.ipopt, self.ipopt_warm = ipopt
         self._source: cs.Function | None = None
         self._pairs: dict[float, tuple[LazySolver, LazySolver]] = {}
-        self.tight = (self.solver("_cold", self.ipopt), self.solver("_warm", dict(warm, **self.ipopt_warm)))
+        self.tight = (self.solver("_cold", self.ipopt), self.solver("_warm", self.ipopt_warm))
 
     def solver(self, suffix: str, ipopt: dict) -> LazySolver:
         """The solver named name + suffix with these IPOPT options, built on first use."""
@@ -452,9 +452,8 @@ class _Family:
             return self.tight
         if tol not in self._pairs:
             tag = f"_loose{len(self._pairs) + 1}" if suffix is None else suffix  # CasADi names: no "-" or "."
-            loose = dict(self.ipopt, tol=tol)
-            self._pairs[tol] = (self.solver(f"_stage_cold{tag}", loose),
-                                self.solver(f"_stage_warm{tag}", {**self.warm, **self.ipopt_warm, "tol": tol}))
+            self._pairs[tol] = (self.solver(f"_stage_cold{tag}", dict(self.ipopt, tol=tol)),
+                                self.solver(f"_stage_warm{tag}", dict(self.ipopt_warm, tol=tol)))
         return self._pairs[tol]
 
 
@@ -478,9 +477,9 @@ def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, 
     never builds its cold solvers), the first one with the derivative functions, which the others reuse; the
     options are checked at once, on a one-variable NLP (ValueError naming ``owner``).  Returns :class:`Solvers`."""
     quiet = {"print_level": 5 if verbose else 0, "sb": "yes"}
-    ipopt, ipopt_warm = {**defaults, **quiet, **user}, {**defaults, **(warm_over or {}), **quiet, **user}
+    ipopt, ipopt_warm = {**defaults, **quiet, **user}, {**warm, **defaults, **(warm_over or {}), **quiet, **user}
     base = {"print_time": bool(verbose), "calc_lam_p": False, "error_on_fail": False}
-    build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=dict(warm, **ipopt_warm)), owner, user)
-    family = _Family(name, nlp, base, (ipopt, ipopt_warm), warm, owner, user)
+    build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=ipopt_warm), owner, user)
+    family = _Family(name, nlp, base, (ipopt, ipopt_warm), owner, user)
     stage = family.loose(stage_tol, suffix="") if stage_tol is not None else family.tight
     return Solvers(*family.tight, *stage, family.loose)
