@@ -256,7 +256,8 @@ def _optimize_process(args: list[str]) -> tuple[float, dict]:
 
 def bench_ocp_files(repeat: int) -> dict:
     """Each shipped OCP problem file solved whole at its default N and starts (harmonic baseline, solve, replay;
-    one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status, objective by replay), then
+    one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status, objective by replay, and the
+    first run's IPOPT iterations, seconds and milliseconds per iteration), then
     the convergence run ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the
     table).  Targets (issue 13): <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
     from pathlib import Path
@@ -269,7 +270,8 @@ def bench_ocp_files(repeat: int) -> dict:
         data = runs[0][1]
         out[name] = {"wall_s": {"min": round(min(walls), 2), "median": round(statistics.median(walls), 2)},
                      "status": data.get("status"), "value_replay": data.get("objective_value_replay"),
-                     "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain")}
+                     "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain"),
+                     **_ipopt_split(data.get("homotopy", []))}
     wall, data = _optimize_process([str(root / "ocp_max_speed.toml"), "--nodes", "50", "100", "200", "400"])
     rows = data.get("rows", [])
     out["convergence_max_speed"] = {"wall_s": round(wall, 1), "rows": [
@@ -277,6 +279,15 @@ def bench_ocp_files(repeat: int) -> dict:
         for r in rows]}
     out["load_average_end"] = os.getloadavg()
     return out
+
+
+def _ipopt_split(stages: list) -> dict:
+    """IPOPT's share of a solve (the first run's ``homotopy`` records): iterations, seconds inside IPOPT calls and
+    milliseconds per iteration (the machine's speed on these KKT systems, apart from the iteration count)."""
+    its = sum(int(h.get("iterations", 0)) for h in stages)
+    secs = sum(float(h.get("time", 0.0)) for h in stages)
+    return {"ipopt_iterations": its, "ipopt_s": round(secs, 2),
+            "ms_per_iteration": round(1e3 * secs / its, 1) if its else None}
 
 
 def bench_paper(repeat: int) -> dict:
