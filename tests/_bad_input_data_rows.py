@@ -118,3 +118,39 @@ DATA_ROWS.update({
                                                                          "expected a number"],
                                                 text=gait('waveform = "fourier"\ngamma_deg = 90.0\nsin2_deg = ["1"]')),
 })
+
+
+#: found by fuzzing the command line (session 21): internal errors and a read without end
+DATA_ROWS.update({
+    "simulate: empty inline samples (IndexError)": R("simulate", ["{file}"], ["x.toml", "[gait] phase = []",
+                                                                             "0 sample(s)", "at least 3"],
+                                                     text=gait('waveform = "samples"\nphase = []\ntau1 = []\n'
+                                                               'tau2 = []')),
+    "simulate: NUL in the samples file name (ValueError)": R("simulate", ["{file}"],
+                                                             ["x.toml", "[gait] file", "invalid path"],
+                                                             text=gait('waveform = "samples"\nfile = "a\\u0000b.csv"')),
+    "simulate: --input /dev/zero (read without end)": R("simulate", ["{paper}", "--input", "/dev/zero"],
+                                                        ["/dev/zero", "larger than 16 MiB"]),
+    "simulate: samples cell 1_0 (read as 10)": R("simulate", ["{file}"], ["x.toml", "t.csv:3", "'1_0' is not a number"],
+                                                 text=gait(SAMPLES),
+                                                 files=csv(CSV_HEAD + CSV_ROWS.replace("-0.25,", "1_0,", 1))),
+    "simulate: samples cell in Arabic-Indic digits": R("simulate", ["{file}"], ["x.toml", "t.csv:2", "is not a number"],
+                                                       text=gait(SAMPLES),
+                                                       files=csv(CSV_HEAD + "\u0660,-0.29,-0.29\n" + CSV_ROWS[16:])),
+    "simulate: --input with --set gait.waveform": R("simulate", ["{paper}", "--input", "{tmp}/t.csv", "--set",
+                                                                "gait.waveform=harmonic"],
+                                                    ["--input", "--set gait.waveform=harmonic", "give one"],
+                                                    files=csv(CSV_HEAD + CSV_ROWS)),
+    "simulate: --input with a harmonic key (dropped)": R("simulate", ["{paper}", "--input", "{tmp}/t.csv", "--set",
+                                                                    "gait.psi_deg=10"],
+                                                        ["[gait] psi_deg = 10 (from --set)", 'waveform = "samples"'],
+                                                        files=csv(CSV_HEAD + CSV_ROWS)),
+    "fit: empty measurement file (no example)": _fit(["d.csv", "no header row", "'S [m]'"], data=b""),
+    "fit: operating point out of range (fit failed)": _fit(["d.csv:3", "psi = 900 deg", "gait.psi_deg"],
+                                                           data=b"psi [deg],S [mm],sigma_S [mm]\n0,-20,1\n900,-43,3\n"
+                                                                b"45,-50,1\n"),
+    "fit: a bound outside the valid range": _fit(["--bounds robot.k=-1:1", "low end -1"], "--bounds", "robot.k=-1:1"),
+    "fit: foot off the ground at a row (fit failed)": _fit(["d.csv:3", "gamma = 30 deg", "off the ground"],
+                                                           data=b"gamma [deg],S [mm],sigma_S [mm]\n90,-20,1\n"
+                                                                b"30,-43,3\n100,-50,1\n"),
+})

@@ -231,3 +231,17 @@ def test_the_guard_catches_a_fit(tmp_path, capsys, nothing_computed, monkeypatch
     code = cli.main(["fit", str(PAPER), str(tmp_path / "d.csv"), "--param", "robot.k", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code == 1 and err.startswith("ocp-crawl: internal error: AssertionError: a long computation started"), err
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+@pytest.mark.parametrize("where", ["problem file", "--input"])
+def test_a_named_pipe_without_a_writer_does_not_hang(where, tmp_path, capsys, nothing_computed):
+    """Opening a FIFO for reading waits for a writer: the files are opened without waiting (found by fuzzing: the
+    command hung until killed).  A pipe with no writer reads as empty: bad input naming the file."""
+    fifo = tmp_path / ("p.toml" if where == "problem file" else "p.csv")
+    os.mkfifo(fifo)
+    argv = ["simulate", str(fifo)] if where == "problem file" else ["simulate", str(PAPER), "--input", str(fifo)]
+    with hang_guard(where):
+        code = cli.main(argv)
+    out, err = capsys.readouterr()
+    check_one_line(code, out, err, ["p.toml" if where == "problem file" else "p.csv"])

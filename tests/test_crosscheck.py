@@ -118,3 +118,20 @@ def test_bad_tolerances_raise():
         CrossCheckTolerances(rel_S=0.0)
     with pytest.raises(ValueError, match="event_lag_steps"):
         CrossCheckTolerances(event_lag_steps=(2.0, 1.0))
+
+
+def test_a_failed_crosscheck_says_so_on_stderr(capsys):
+    """Exit 1 with one stderr line naming the failed checks (before, a FAIL left stderr empty); stdout keeps the
+    table.  psi = 0 at N = 20/40: the MPCC's mode sequence differs from the event solver's."""
+    from pathlib import Path
+
+    import ocp_crawl.cli.app as cli
+
+    paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
+    code = cli.main(["crosscheck", str(paper), "--steps", "20", "40", "--set", "gait.psi_deg=0"])
+    out, err = capsys.readouterr()
+    assert code == 1 and "overall: FAIL" in out
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("ocp-crawl: crosscheck FAIL: "), err
+    failed = [line.split("]", 1)[1].split(":")[0].strip() for line in out.splitlines() if "[FAIL]" in line]
+    assert failed and all(name in lines[0] for name in failed), (failed, lines[0])

@@ -74,10 +74,21 @@ def real(option: str, low: float, high: float, what: str = ""):
 
 
 def address(text: str) -> str:
-    """argparse type of --scheduler: a non-empty Dask scheduler address or 'local'."""
+    """argparse type of --scheduler: a non-empty Dask scheduler address of a known scheme, or 'local'."""
+    usage = "a Dask scheduler address (e.g. tcp://host:8786) or 'local'"
     if not text.strip():
-        raise UsageError(f"--scheduler {_shown(text)} is invalid: a Dask scheduler address (e.g. tcp://host:8786) "
-                          "or 'local'")
+        raise UsageError(f"--scheduler {_shown(text)} is invalid: {usage}")
+    if text.strip() == "local":
+        return "local"
+    try:
+        from distributed.comm import parse_address
+        from distributed.comm.registry import get_backend
+    except ImportError:  # the sweep says what to install
+        return text.strip()
+    try:
+        get_backend(parse_address(text.strip())[0])
+    except ValueError as exc:
+        raise UsageError(f"--scheduler {_shown(text)} is invalid: {exc}; {usage}") from None
     return text.strip()
 
 
@@ -87,6 +98,22 @@ steps_type = integer("--steps", STEPS_BOUNDS[0], " (steps per cycle)", high=STEP
 MAX_JOBS = 256
 jobs_type = integer("--jobs", 1, " (worker processes)", high=MAX_JOBS,
                     why="each worker process holds its own compiled functions and solver")
+
+
+def set_keys(overrides: Iterable[str]) -> dict[str, str]:
+    """The keys of ``--set KEY=VALUE`` items, each mapped to its item (to name both sides of a conflict)."""
+    return {item.split("=", 1)[0].strip(): item for item in overrides}
+
+
+def optional_out(args: argparse.Namespace, names: Iterable[str]) -> Path | None:
+    """:func:`prepare_out` of a command whose ``--out`` is optional: None without ``--out`` (nothing is
+    written), where ``--force`` has nothing to overwrite and is refused."""
+    if args.out is None:
+        if args.force:
+            raise BadInput("--force without --out: nothing is written, so nothing would be overwritten; give "
+                           "--out DIR or drop --force")
+        return None
+    return prepare_out(args.out, names, args.force)
 
 
 def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, resume: bool = False,

@@ -65,7 +65,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     params = resolve_parameters(problem, args.params, args.start, args.bounds, args.form)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
-    solve.check_counts(datasets, params, args.form)
+    solve.check_inputs(problem, datasets, params, pressure, args.form)   # before --out is made
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
     result = solve.fit_measurements(problem, datasets, params, pressure=pressure,

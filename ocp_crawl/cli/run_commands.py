@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
-from ocp_crawl.cli.common import finish, force_arg, integer, out_dir, out_file, prepare_out, real, steps_type
+from ocp_crawl.cli.common import (finish, force_arg, integer, optional_out, out_dir, out_file, prepare_out, real,
+                                  set_keys, steps_type)
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
@@ -23,7 +24,8 @@ from ocp_crawl.status import STATUS_MESSAGES, Status
 MAX_STEP_COUNTS = 8
 
 #: units of the summary's numbers, written with every JSON summary
-UNITS = {k: units.UNITS[k] for k in ("S", "W_plus", "W_plus_joint", "CoT_plus", "t", "energy")}
+UNITS = {k: units.UNITS[k] for k in ("S", "W_plus", "W_plus_joint", "CoT_plus", "t", "energy",
+                                         "energy.balance_residual")}
 
 
 def no_start_message(problem: Problem, detail: str) -> str:
@@ -54,14 +56,27 @@ def _simulate(problem: Problem) -> CrawlResult:
 
 
 def shortcuts(args: argparse.Namespace) -> list[str]:
-    """``--set`` overrides of the command followed by those its shortcut options stand for
-    (``--drive``: gait.drive, ``--solver``: simulation.solver, ``--steps``: simulation.steps, ``--input``:
-    gait.waveform = "samples" with gait.file, the file's path made absolute: relative to the current directory)."""
-    keys = (("drive", "gait.drive"), ("solver", "simulation.solver"), ("steps", "simulation.steps"))
-    out = list(args.overrides)
-    if getattr(args, "input", None) is not None:
-        out += ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(args.input))}"]
-    return out + [f"{key}={getattr(args, name)}" for name, key in keys if getattr(args, name, None) is not None]
+    """The overrides that the command's shortcut options stand for (``--drive``: gait.drive, ``--solver``:
+    simulation.solver, ``--steps``: simulation.steps, ``--input``: gait.waveform = "samples" with gait.file, the
+    file's path made absolute: relative to the current directory), followed by its ``--set`` overrides (so that a
+    ``--set`` key of another waveform than ``--input``'s is refused by the schema).  A shortcut and a ``--set`` of
+    the same key are a conflict (BadInput), whatever their values."""
+    given = {name: getattr(args, name, None) for name in ("input", "drive", "solver", "steps")}
+    stands_for = {"input": ("gait.waveform", "gait.file"), "drive": ("gait.drive",),
+                  "solver": ("simulation.solver",), "steps": ("simulation.steps",)}
+    given_set = set_keys(args.overrides)
+    out = []
+    for name, value in given.items():
+        if value is None:
+            continue
+        for key in stands_for[name]:
+            if key in given_set:
+                raise BadInput(f"--{name} {value} and --set {given_set[key]} both set {key}: give one of them")
+        if name == "input":
+            out += ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(value))}"]
+        else:
+            out.append(f"{stands_for[name][0]}={value}")
+    return out + list(args.overrides)
 
 
 def report(result: CrawlResult, problem: Problem) -> dict:
@@ -153,7 +168,10 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
 @register("simulate", "simulate one problem file and report the gait", _simulate_args)
 def cmd_simulate(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, shortcuts(args))
-    out = prepare_out(args.out, RUN_FILES, args.force) if args.out is not None else None
+    if args.steps is not None and problem.solver != "mpcc":
+        raise BadInput(f"--steps {args.steps} is invalid with solver {format_value(problem.solver)}: it sets the "
+                       "steps of --solver mpcc (the event-driven and prescribed-angle solvers place their own)")
+    out = optional_out(args, RUN_FILES)
     check_start(problem)
     result = _simulate(problem)
     data = report(result, problem)
@@ -231,13 +249,16 @@ def _animate_args(p: argparse.ArgumentParser) -> None:
 
 @register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
 def cmd_animate(args: argparse.Namespace) -> int:
-    from ocp_crawl.viz.animate import FRAME_BOUNDS, animate_problem
+    from ocp_crawl.viz.animate import FRAME_BOUNDS, MIN_FPS, animate_problem
 
     for option, value in (("--cycles", args.cycles), ("--frames-per-cycle", args.frames_per_cycle)):
         low, high = FRAME_BOUNDS[option]
         if not low <= value <= high:
             raise BadInput(f"{option} {value} is invalid: must be an integer in [{low}, {high}]: every frame is an "
                            "image held in memory until the GIF is written")
+    if args.fps < MIN_FPS:
+        raise BadInput(f"--fps {args.fps:g} is invalid: must be at least {MIN_FPS:g} (a GIF frame lasts at most "
+                       "655 s)")
     path = Path(args.out)
     if path.suffix.lower() != ".gif" or not path.stem:
         raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
@@ -274,9 +295,10 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     if problem.drive != "torque":
         raise BadInput(f"{problem.source}: crosscheck needs the torque drive, got [gait] drive = "
                        f"{format_value(problem.drive)}")
-    steps = sorted(set(args.steps))
-    if len(steps) < 2:
-        raise BadInput(f"--steps {' '.join(map(str, args.steps))}: give at least two different step counts")
+    steps = list(args.steps)
+    if len(steps) < 2 or any(b <= a for a, b in zip(steps, steps[1:])):
+        raise BadInput(f"--steps {' '.join(map(str, args.steps))} is invalid: give at least two different step counts, "
+                       "increasing strictly (the error is checked to decrease with N)")
     if len(steps) > MAX_STEP_COUNTS:
         raise BadInput(f"--steps {' '.join(map(str, args.steps))}: {len(steps)} step counts, at most "
                        f"{MAX_STEP_COUNTS} (one MPCC run each)")
@@ -286,5 +308,8 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)), allow_nan=False))
     else:
         print(result.table())
-    return EXIT_OK if result.summary()["passed"] else EXIT_FAILURE
+    failed = [name for name, check in result.summary()["checks"].items() if not check["passed"]]
+    if failed:
+        print(f"{PROG}: crosscheck FAIL: {'; '.join(failed)}", file=sys.stderr)
+    return EXIT_FAILURE if failed or not result.passed else EXIT_OK
 

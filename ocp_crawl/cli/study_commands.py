@@ -9,13 +9,13 @@ from dataclasses import replace
 from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
-from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, out_dir,
-                                  prepare_out)
+from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, optional_out,
+                                  out_dir, prepare_out, set_keys)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.settings import NODES_BOUNDS
-from ocp_crawl.problem import load_problem, ocp_settings
+from ocp_crawl.problem import format_value, load_problem, ocp_settings
 from ocp_crawl.problem.overrides import read_toml
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
                              check_some_point_valid, default_jobs, grid_from_specs, run_sweep)
@@ -48,6 +48,11 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, args.overrides)
     grid = grid_from_specs(args.grid)
+    given = set_keys(args.overrides)
+    for key in grid:
+        if key in given:
+            raise BadInput(f"--grid {key}=... and --set {given[key]} both set {key}: the grid gives its values; "
+                           "drop the --set")
     check_some_point_valid(problem, grid)
     check_scheduler(args.scheduler)
     # --resume: run_sweep checks that the directory's settings.json is this sweep's
@@ -291,6 +296,9 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     if "ocp" not in read_toml(args.problem):
         raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
                        "'Problem files', and problems/ocp_max_speed.toml)")
+    if problem.drive != "torque":
+        raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = \"torque\", got "
+                       f"{format_value(problem.drive)}")
     settings = ocp_settings(problem)
     nodes = args.nodes or [settings.nodes]
     if any(b <= a for a, b in zip(nodes, nodes[1:])):
@@ -299,7 +307,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     settings = replace(settings, nodes=nodes[0])
     if len(nodes) > 1:
         return _optimize_nodes(args, problem, settings, nodes)
-    out = prepare_out(args.out, OCP_FILES, args.force) if args.out is not None else None
+    out = optional_out(args, OCP_FILES)
     check_start(problem)
     with _progress_bar(args.progress or sys.stderr.isatty()):
         result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs)
@@ -325,7 +333,7 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
     from ocp_crawl.ocp.convergence import converge_in_nodes
     from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
 
-    out = prepare_out(args.out, (*OCP_FILES, CONVERGENCE_FILE), args.force) if args.out is not None else None
+    out = optional_out(args, (*OCP_FILES, CONVERGENCE_FILE))
     check_start(problem)
     shown = args.progress or sys.stderr.isatty()
     log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None

@@ -26,13 +26,15 @@ kind          columns                             model of a row
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 
-from ocp_crawl.io.tables import Table, TableError, read_table
+from ocp_crawl.io.tables import UNITS, Table, TableError, read_table
+from ocp_crawl.problem.schema import SCHEMA
 
 #: observable column -> its dimension (each file holds exactly one, with ``sigma_<name>``)
 OBSERVABLES = {"S": "length", "S_norm": "dimensionless", "phi": "angle"}
@@ -41,6 +43,11 @@ INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "A_p
           "p": "pressure", "segment": "dimensionless"}
 #: gait columns -> the problem key they set (degrees, as in problem files)
 GAIT_KEYS = {"psi": "gait.psi_deg", "A": "gait.A_deg", "gamma": "gait.gamma_deg"}
+#: every column a measurement file may hold -> dimension
+COLUMNS: Mapping[str, str] = {**OBSERVABLES, **{"sigma_" + k: v for k, v in OBSERVABLES.items()}, **INPUTS}
+#: kind -> operating-point columns whose values must pass the rule of a problem key (the schema's ranges): a gait
+#: row's keys, and a pressure row's phase difference, which has the range of the gait's
+RULE_KEYS = {"gait": GAIT_KEYS, "pressure": {"psi": GAIT_KEYS["psi"]}}
 #: kind -> (observables allowed, inputs required, inputs allowed)
 KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
     "pressure": (("S", "S_norm"), ("p0", "psi"), ("p0", "psi", "A_p")),
@@ -94,6 +101,16 @@ class Measurements:
     def __len__(self) -> int:
         return len(self.table)
 
+    def shown(self, name: str, row: int) -> str:
+        """The value of column ``name`` in row ``row`` as written: a plain number and the file's unit (``"900 deg"``)."""
+        unit = self.table.units[name]
+        value = float(self.table[name][row]) / UNITS[COLUMNS[name]][unit]
+        return f"{value:g}" + ("" if unit in ("-", "1") else f" {unit}")
+
+    def point(self, row: int) -> str:
+        """The operating point of row ``row`` as written (``"psi = 900 deg, p0 = 1.7 bar"``)."""
+        return ", ".join(f"{n} = {self.shown(n, row)}" for n in self.inputs)
+
 
 def _kind(path: str, present: set[str]) -> tuple[str, str]:
     observables = [o for o in OBSERVABLES if o in present]
@@ -111,28 +128,44 @@ def _kind(path: str, present: set[str]) -> tuple[str, str]:
                            f"measurement kind ({valid})")
 
 
+def _check_rules(m: Measurements) -> None:
+    """Every operating-point value of :data:`RULE_KEYS` must pass its problem key's rule (degrees, as the model gets
+    them: :mod:`ocp_crawl.fit.forward`)."""
+    for name, dotted in RULE_KEYS.get(m.kind, {}).items():
+        section, key = dotted.split(".", 1)
+        rule = SCHEMA[section].key_map[key].rule
+        if name not in m.table or rule is None:
+            continue
+        for j, v in enumerate(m.table[name]):
+            if not rule.test(math.degrees(float(v))):
+                how = "it sets" if m.kind == "gait" else "the range of"
+                raise m.table.error(f"{name} = {m.shown(name, j)} is invalid: must be {rule.text} ({how} {dotted}: "
+                                    f"{SCHEMA[section].key_map[key].what})", j)
+
+
 def _check_rows(m: Measurements) -> None:
+    sigma = "sigma_" + m.observable
     for j, s in enumerate(m.sigma):
         if not s > 0:
-            raise m.table.error(f"sigma_{m.observable} = {m.table.columns['sigma_' + m.observable][j]!r}: "
-                                "an uncertainty must be > 0", j)
+            raise m.table.error(f"{sigma} = {m.shown(sigma, j)}: an uncertainty must be > 0", j)
     if m.kind == "bending":
         for j, seg in enumerate(m.table["segment"]):
             if seg not in (1.0, 2.0):
-                raise m.table.error(f"segment = {seg!r}: must be 1 or 2", j)
+                raise m.table.error(f"segment = {m.shown('segment', j)}: must be 1 or 2", j)
     if m.observable == "S_norm":
         ref = m.reference_row
         if not m.y[ref] > 0:
-            raise m.table.error(f"S_norm: the largest value, {m.y[ref]!r}, must be > 0 (it is the normalising "
-                                "row)", ref)
+            raise m.table.error(f"S_norm: the largest value, {m.shown('S_norm', ref)}, must be > 0 (it is the "
+                                "normalising row)", ref)
     if m.kind == "pressure":
         amplitudes = m.table["A_p"] if "A_p" in m.inputs else np.zeros(len(m))
         for j, (p0, amp) in enumerate(zip(m.table["p0"], amplitudes)):
             if p0 < 0:
-                raise m.table.error(f"p0 = {p0:g} Pa: a nominal gauge pressure must be >= 0", j)
+                raise m.table.error(f"p0 = {m.shown('p0', j)}: a nominal gauge pressure must be >= 0", j)
             if not 0 <= amp <= p0:
-                raise m.table.error(f"A_p = {amp:g} Pa: the amplitude must lie in [0, p0] (a gauge pressure "
-                                    "p0 - A_p >= 0)", j)
+                raise m.table.error(f"A_p = {m.shown('A_p', j)} with p0 = {m.shown('p0', j)}: the amplitude must lie "
+                                    "in [0, p0] (a gauge pressure p0 - A_p >= 0)", j)
+    _check_rules(m)
 
 
 def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurements:
@@ -154,10 +187,11 @@ def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurement
     TableError
         One line naming the file and, for a bad row, its line: a missing or unknown column, a unit
         of the wrong dimension, a value that is not a finite number (NaN), an uncertainty <= 0, too
-        few rows.
+        few rows, an operating point outside the range of its problem key (``psi``, ``A``, ``gamma``:
+        ``gait.psi_deg``, ...; a pressure row's ``psi`` has the range of ``gait.psi_deg``), a pressure
+        p0 < 0 or A_p outside [0, p0].
     """
-    columns: Mapping[str, str] = {**OBSERVABLES, **{"sigma_" + k: v for k, v in OBSERVABLES.items()}, **INPUTS}
-    table = read_table(path, {}, columns, min_rows=1)
+    table = read_table(path, {}, COLUMNS, min_rows=1)
     kind, obs = _kind(table.path, set(table.columns))
     if "sigma_" + obs not in table:
         raise TableError(table.path, f"missing column 'sigma_{obs}': every measurement needs its standard "

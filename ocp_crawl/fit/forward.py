@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ocp_crawl.fit.data import GAIT_KEYS, Measurements
+from ocp_crawl.model.inputs import ReferenceTorque
 from ocp_crawl.model.pressure import BendingMap, pressure_torque
 from ocp_crawl.problem import Problem, ProblemError, problem_from_dict, run_problem
 from ocp_crawl.sim import simulate
@@ -22,6 +23,8 @@ from ocp_crawl.status import Status
 
 SUCCESS = Status.SUCCESS.label
 PA_PER_BAR = 1e5
+#: the source of the rows' problems, at the start of their error messages
+SOURCE = "<fit>"
 
 
 @dataclass(frozen=True)
@@ -41,7 +44,7 @@ class RowTask:
 
 @functools.lru_cache(maxsize=8)
 def _base(problem_json: str) -> Problem:
-    return problem_from_dict(json.loads(problem_json), source="<fit>")
+    return problem_from_dict(json.loads(problem_json), source=SOURCE)
 
 
 def _problem(task: RowTask, extra: Mapping[str, float]) -> Problem:
@@ -50,21 +53,29 @@ def _problem(task: RowTask, extra: Mapping[str, float]) -> Problem:
     return base.with_values(values) if values else base
 
 
-def _simulated(task: RowTask) -> tuple[float, str]:
+def _setup(task: RowTask) -> tuple[Problem, ReferenceTorque | None]:
+    """The problem of a gait or pressure row and, for a pressure row, its torque input; ValueError (a ProblemError
+    naming the key) for an operating point or parameter value the model rejects.  Nothing is simulated."""
     inputs = dict(task.inputs)
     if task.kind == "gait":
-        problem = _problem(task, {GAIT_KEYS[n]: math.degrees(v) for n, v in inputs.items()})
+        return _problem(task, {GAIT_KEYS[n]: math.degrees(v) for n, v in inputs.items()}), None
+    problem = _problem(task, {})
+    c = dict(task.pressure)
+    bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
+    amplitude = inputs["A_p"] / PA_PER_BAR if "A_p" in inputs else c.get("amplitude_bar", math.nan)
+    signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
+                             c["phi_rest_deg"], bmap, None if math.isnan(amplitude) else amplitude)
+    return problem, signal
+
+
+def _simulated(task: RowTask) -> tuple[float, str]:
+    try:
+        problem, signal = _setup(task)
+    except ValueError as exc:  # a key the problem rejects, or e.g. an amplitude above the nominal pressure
+        return math.nan, f"{Status.BAD_INPUT.label}: {exc}"
+    if signal is None:
         result = run_problem(problem)
     else:
-        problem = _problem(task, {})
-        c = dict(task.pressure)
-        bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
-        amplitude = inputs["A_p"] / PA_PER_BAR if "A_p" in inputs else c.get("amplitude_bar", math.nan)
-        try:
-            signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
-                                     c["phi_rest_deg"], bmap, None if math.isnan(amplitude) else amplitude)
-        except ValueError as exc:  # e.g. an amplitude above the nominal pressure: a negative gauge pressure
-            return math.nan, f"{Status.BAD_INPUT.label}: {exc}"
         try:
             result = simulate(problem.model, signal, "event", problem.hybrid)
         except ValueError as exc:  # no released equilibrium at t = 0
@@ -72,6 +83,19 @@ def _simulated(task: RowTask) -> tuple[float, str]:
     if not result.success:
         return math.nan, f"{result.status_name}: {result.message}"
     return float(result.S), SUCCESS
+
+
+def row_error(task: RowTask) -> str | None:
+    """Why the model rejects the row before simulating it (the problem's validation of its keys, the pressure
+    waveform's of its pressures), one line without the problem's source; None if it accepts it."""
+    try:
+        if task.kind in ("gait", "pressure"):
+            _setup(task)
+        elif task.kind == "stiffness":
+            _problem(task, {})
+    except ValueError as exc:
+        return " ".join(str(exc).removeprefix(f"{SOURCE}: ").split())
+    return None
 
 
 def _closed_form(task: RowTask) -> float:

@@ -17,11 +17,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
-from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS, BendingMap, form_constants
+from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS, BendingMap, PressureWaveform, form_constants
 from ocp_crawl.problem import Problem, ProblemError
-from ocp_crawl.problem.schema import SCHEMA, suggest
+from ocp_crawl.problem.schema import SCHEMA, Rule, suggest
 
 #: pressure parameters -> unit
 PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg",
@@ -32,6 +32,23 @@ NOT_FITTED = ("model", "simulation", "ocp")
 FIT_SECTIONS = tuple(name for name in SCHEMA if name not in NOT_FITTED)
 #: default bounds: x0 +- this for angles [deg]; x0 / and * this factor for the others
 ANGLE_SPAN_DEG, SCALE_FACTOR = 45.0, 10.0
+#: bisection steps that pull a default bound into the valid range of its parameter
+CLIP_STEPS = 60
+
+
+def _amplitude_ok(v: float) -> bool:
+    """The pressure model's own check of an amplitude (:class:`~ocp_crawl.model.pressure.PressureWaveform`), at the
+    largest nominal pressure it allows (each row's p0 is checked with the rows)."""
+    try:
+        PressureWaveform(max(v, 0.0), 0.0, v)
+    except ValueError:
+        return False
+    return True
+
+
+#: pressure constants whose values the pressure model restricts -> the rule (the others: any finite number)
+PRESSURE_RULES = {"amplitude_bar": Rule(_amplitude_ok, ">= 0", "the amplitude A_p of the paper's form (ref), at most "
+                                                                 "each row's p0")}
 
 
 @dataclass(frozen=True)
@@ -51,8 +68,8 @@ class Parameter:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low <= self.x0 <= self.high
                 and self.low < self.high):
-            raise ValueError(f"Parameter {self.name}: start {self.x0!r} must lie in bounds [{self.low!r}, "
-                             f"{self.high!r}] with low < high, all finite")
+            raise ValueError(f"Parameter {self.name}: start {float(self.x0)!r} must lie in bounds "
+                             f"[{float(self.low)!r}, {float(self.high)!r}] with low < high, all finite")
 
 
 def fittable_names() -> list[str]:
@@ -67,6 +84,53 @@ def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float
     unknown form."""
     return {**{f.name: getattr(BendingMap(), f.name) for f in dataclasses.fields(BendingMap)},
             **form_constants(form, gravity)}
+
+
+def value_rule(name: str) -> tuple[Rule | None, str]:
+    """The rule every value of the parameter ``name`` must pass (None: any finite number) and what it is: the schema's
+    rule of a problem key (the one ``Problem.with_values`` applies), :data:`PRESSURE_RULES` of a pressure constant."""
+    section, key = name.split(".", 1)
+    if section == "pressure":
+        return PRESSURE_RULES.get(key), f"pressure constant, {PRESSURE_UNITS[key]}"
+    k = SCHEMA[section].key_map[key]
+    return k.rule, k.what
+
+
+def check_value(name: str, value: float, what: str) -> None:
+    """ProblemError naming ``what`` (the option and the value given) if ``value`` is outside the valid range of
+    the parameter ``name``."""
+    rule, help_text = value_rule(name)
+    if rule is not None and not rule.test(value):
+        raise ProblemError(f"{what} is invalid: {name} ({help_text}) must be {rule.explained}")
+
+
+def _clip(valid: Callable[[float], bool], end: float, x0: float) -> float:
+    """``end`` if valid, else the valid value nearest it between it and the valid ``x0`` (bisection, then the
+    roundest such value: 0 rather than 1e-17)."""
+    if valid(end):
+        return end
+    bad, good = end, x0
+    for _ in range(CLIP_STEPS):
+        mid = 0.5 * (bad + good)
+        bad, good = (bad, mid) if valid(mid) else (mid, good)
+    for digits in range(16):
+        r = round(good, digits)
+        if min(end, x0) <= r <= max(end, x0) and abs(r - x0) >= abs(good - x0) and valid(r):
+            return r
+    return good
+
+
+def _exclusive(names: Sequence[str]) -> None:
+    """ProblemError for two fitted keys the schema gives as alternatives (``robot.mu`` and ``robot.mu1``/``mu2``)."""
+    for name in names:
+        section, key = name.split(".", 1)
+        if section == "pressure":
+            continue
+        others = SCHEMA[section].key_map[key].exclusive_with
+        clash = [f"{section}.{o}" for o in others if f"{section}.{o}" in names]
+        if clash:
+            raise ProblemError(f"--param {name} and --param {clash[0]}: alternative keys of [{section}] (fit {name}, "
+                               f"or {' and '.join(f'{section}.{o}' for o in others)}), not both")
 
 
 def _current(problem: Problem, name: str, form: str) -> tuple[float | None, str]:
@@ -125,7 +189,8 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     start : sequence of str
         ``NAME=VALUE`` start values replacing the problem's (problem-file units).
     bounds : sequence of str
-        ``NAME=LOW:HIGH`` bounds; default x0 +- 45 deg for angles, [x0/10, 10 x0] for positive numbers.
+        ``NAME=LOW:HIGH`` bounds, both in the parameter's valid range; default x0 +- 45 deg for angles,
+        [x0/10, 10 x0] for positive numbers, each end pulled into the valid range (``gait.A_deg`` = 30: [0, 75]).
     form : str
         The pressure input form whose constants are the default start values of ``pressure.*``
         (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`, default the paper's form (ref)).
@@ -137,8 +202,10 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     Raises
     ------
     ProblemError
-        An unknown or repeated name (with a suggestion), a start or bound that is not a number, a
-        start outside its bounds, an unknown form.
+        An unknown or repeated name (with a suggestion), alternative keys fitted together (``robot.mu`` and
+        ``robot.mu1``), a start or bound that is not a number or outside the valid range of the parameter
+        (the schema's rule of its key, :data:`PRESSURE_RULES`), a start outside its bounds, start values
+        the problem rejects together (``Problem.with_values``), an unknown form.
     """
     if form not in PRESSURE_FORMS:
         raise ProblemError(f"--form {form}: unknown pressure input form; one of {', '.join(PRESSURE_FORMS)}")
@@ -157,7 +224,16 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
             raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add --param {name})")
     if len(set(names)) != len(names):
         raise ProblemError(f"--param: a parameter named twice in {', '.join(names)}")
-    return [_parameter(problem, name, starts, limits, form) for name in names]
+    _exclusive(names)
+    params = [_parameter(problem, name, starts, limits, form) for name in names]
+    keys, _ = split_values(params, [p.x0 for p in params])
+    if keys:
+        try:
+            problem.with_values(keys)
+        except ProblemError as exc:
+            shown = ", ".join(f"{k} = {v:g}" for k, v in keys.items())
+            raise ProblemError(f"--param {', '.join(keys)}: the start values ({shown}) are invalid: {exc}") from None
+    return params
 
 
 def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits: Mapping[str, str],
@@ -168,12 +244,19 @@ def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits:
     if value is None or math.isnan(value):
         raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the "
                            f"{form} form has no such constant); give --start {name}=VALUE")
+    check_value(name, value, f"--start {name}={value:g}" if name in starts else
+                f"--param {name}: the start value {value:g} {unit}")
+    rule, _ = value_rule(name)
     low, high = _default_bounds(float(value), unit)
+    if rule is not None:  # the default bounds end in the valid range (A_deg = 30: [0, 75], not [-15, 75])
+        low, high = _clip(rule.test, low, float(value)), _clip(rule.test, high, float(value))
     if name in limits:
         lo, sep, hi = limits[name].partition(":")
         if not sep:
             raise ProblemError(f"--bounds {name}={limits[name]}: expected LOW:HIGH")
         low, high = _number(lo, f"--bounds {name} low"), _number(hi, f"--bounds {name} high")
+        for end, x in (("low", low), ("high", high)):
+            check_value(name, x, f"--bounds {name}={limits[name]}: the {end} end {x:g}")
     if not low < high or not low <= value <= high:
         raise ProblemError(f"--param {name}: start value {value:g} {unit} must lie within bounds [{low:g}, {high:g}] "
                            "with low < high")
@@ -198,7 +281,8 @@ def at_bound(p: Parameter, x: float, rtol: float = 1e-4) -> bool:
 
 def fixed_pressure(items: Sequence[str]) -> dict[str, float]:
     """``NAME=VALUE`` texts of pressure constants held fixed (``a1``, ..., ``phi_rest_deg``) -> values; ProblemError
-    for an unknown name or a value that is not a number."""
+    for an unknown name, a value that is not a number or is outside the constant's valid range
+    (:data:`PRESSURE_RULES`)."""
     out = {}
     for name, text in _pairs(items, "--pressure").items():
         key = name.removeprefix("pressure.")
@@ -206,4 +290,5 @@ def fixed_pressure(items: Sequence[str]) -> dict[str, float]:
             raise ProblemError(f"--pressure {name}: unknown pressure constant; {suggest(key, list(PRESSURE_UNITS))}"
                                f"one of {', '.join(PRESSURE_UNITS)}")
         out[key] = _number(text, f"--pressure {name}")
+        check_value(f"pressure.{key}", out[key], f"--pressure {name}={text}")
     return out

@@ -30,11 +30,11 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ocp_crawl.fit.data import GAIT_KEYS, Measurements
-from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_tasks
+from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_error, row_tasks
 from ocp_crawl.fit.params import Parameter, pressure_defaults, split_values
 from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
-from ocp_crawl.problem import Problem
+from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.status import Status
 from ocp_crawl.workers import mp_context
 
@@ -225,6 +225,43 @@ def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter], 
                                            f"counted) for {len(params)} parameter(s); at least {len(params) + 1} needed")
 
 
+def check_pressure(params: Sequence[Parameter], pressure: Mapping[str, float]) -> None:
+    """ProblemError for a pressure constant both fitted and held fixed (``--pressure`` and ``--param``)."""
+    for p in params:
+        key = p.name.removeprefix("pressure.")
+        if p.name.startswith("pressure.") and key in pressure:
+            raise ProblemError(f"--pressure {key}={pressure[key]:g} and --param {p.name}: a constant is either fitted "
+                               f"or held fixed, not both (to start the fit there: --start {p.name}="
+                               f"{pressure[key]:g})")
+
+
+def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
+               pressure: Mapping[str, float] | None = None, form: str = DEFAULT_FORM) -> None:
+    """TableError naming the file and row whose operating point the model rejects at the start values: a gait row's
+    keys that ``Problem.with_values`` rejects (a range, a foot off the ground, a key of another waveform), a
+    pressure row whose waveform is invalid (an amplitude above its p0).  Nothing is simulated."""
+    keys, fitted = split_values(params, [p.x0 for p in params])
+    constants = {**pressure_defaults(problem.gravity, form), **(pressure or {}), **fitted}
+    for d in datasets:
+        for j, task in enumerate(row_tasks(problem, d, keys, constants)):
+            why = row_error(task)
+            if why is not None:
+                amp = (f" (amplitude pressure.amplitude_bar = {constants['amplitude_bar']:g} bar)"
+                       if d.kind == "pressure" and "A_p" not in d.inputs
+                       and math.isfinite(constants.get("amplitude_bar", math.nan)) else "")
+                raise d.table.error(f"at the start values the model rejects the operating point {d.point(j)}{amp}: "
+                                    f"{why}", j)
+
+
+def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
+                 pressure: Mapping[str, float] | None = None, form: str = DEFAULT_FORM) -> None:
+    """Every check of a fit's input before any simulation: :func:`check_counts`, :func:`check_pressure`,
+    :func:`check_rows`.  TableError (naming a file and row) or ProblemError (naming an option)."""
+    check_counts(datasets, params, form)
+    check_pressure(params, pressure or {})
+    check_rows(problem, datasets, params, pressure, form)
+
+
 def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: str = "the fitted parameters"
                   ) -> tuple[Status, str]:
     failed = [(f.data.table.line_of(j), f.data.path, s) for f in files for j, s in enumerate(f.statuses)
@@ -282,10 +319,12 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
 
     Raises
     ------
-    TableError
-        Fewer measurements than parameters + 1.
+    TableError, ProblemError
+        Bad input, before any simulation (:func:`check_inputs`): fewer measurements than parameters + 1, a
+        fitted gait key that a file sets, a pressure constant both fitted and fixed, a row the model rejects
+        at the start values (naming the file and row).
     """
-    check_counts(datasets, params, form)
+    check_inputs(problem, datasets, params, pressure, form)
     executor = ProcessPoolExecutor(jobs, mp_context=mp_context()) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)

@@ -11,6 +11,7 @@ still running is never touched.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -146,6 +147,23 @@ def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
         except OSError:
             pass
         raise
+
+
+def read_bounded(path: str | os.PathLike, limit: int) -> bytes:
+    """The bytes of the input file ``path``, at most ``limit + 1`` of them (the caller refuses more).
+
+    An endless file (/dev/zero) stops at the limit, and a named pipe without a writer reads as empty instead
+    of blocking the open.  Every failure is an OSError whose ``strerror`` says why (a path with a NUL
+    character included, which ``open`` reports as a ValueError).
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except ValueError as exc:
+        raise OSError(errno.EINVAL, f"invalid path ({exc})") from None
+    if hasattr(os, "set_blocking"):
+        os.set_blocking(fd, True)
+    with os.fdopen(fd, "rb") as fh:
+        return fh.read(limit + 1)
 
 
 def jsonable(obj: Any) -> Any:

@@ -24,7 +24,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ocp_crawl.io.files import atomic_write
+from ocp_crawl.io.files import atomic_write, read_bounded
 
 #: Accepted units per physical dimension, with their factor to the SI unit (angles to rad).
 UNITS: dict[str, dict[str, float]] = {
@@ -54,7 +54,8 @@ class TableError(ValueError):
 
     def __init__(self, path: str | os.PathLike, message: str, line: int | None = None):
         self.path, self.line, self.reason = str(path), line, message
-        where = f"{self.path}:{line}" if line is not None else self.path
+        shown = self.path if self.path.isprintable() else ascii(self.path)   # a NUL or newline in the name
+        where = f"{shown}:{line}" if line is not None else shown
         super().__init__(f"{where}: {message}")
 
 
@@ -108,9 +109,10 @@ def split_header(cell: str) -> tuple[str, str] | None:
 def _rows(path: Path) -> list[tuple[int, list[str]]]:
     """Non-comment, non-blank CSV rows with their 1-based line numbers."""
     try:
-        if path.stat().st_size > MAX_TABLE_BYTES:
+        raw = read_bounded(path, MAX_TABLE_BYTES)
+        if len(raw) > MAX_TABLE_BYTES:
             raise TableError(path, f"file larger than {MAX_TABLE_BYTES // 2**20} MiB")
-        text = path.read_text(encoding="utf-8-sig")
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise TableError(path, f"not UTF-8 text ({exc.reason})") from None
     except OSError as exc:
@@ -148,11 +150,15 @@ def _factor(path: Path, lineno: int, name: str, unit: str, dimension: str) -> fl
     return units[unit]
 
 
+#: a number cell: ASCII decimal notation (Python's float() also takes "1_0" and non-ASCII digits), or nan/inf to
+#: be named as not finite
+_NUMBER = re.compile(r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
 def _number(path: Path, lineno: int, name: str, unit: str, text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number", lineno) from None
+    if not _NUMBER.fullmatch(text):
+        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number", lineno)
+    value = float(text)
     if not math.isfinite(value):
         raise TableError(path, f"column '{name} [{unit}]': {text} is not a finite number", lineno)
     return value
@@ -190,8 +196,9 @@ def read_table(path: str | os.PathLike, required: Mapping[str, str], optional: M
     known = {**(optional or {}), **required}
     rows = _rows(path)
     if not rows:
-        raise TableError(path, "no header row (expected e.g. " + ", ".join(repr(f"{n} [{SI_UNIT[d]}]") for n, d in
-                                                                          required.items()) + ")")
+        columns = required or known   # a file of optional columns only: name them
+        raise TableError(path, "no header row (expected 'name [unit]' cells, e.g. " + ", ".join(
+            repr(f"{n} [{SI_UNIT[d]}]") for n, d in list(columns.items())[:4]) + ")")
     head_line, head = rows[0]
     names = _header(path, head_line, head)
     present = [n for n, _ in names]

@@ -14,6 +14,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from ocp_crawl.io.files import read_bounded
 from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, removed_key, suggest
 
 _KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
@@ -134,8 +135,7 @@ def read_bytes(path: Path, limit: int = MAX_PROBLEM_BYTES) -> bytes:
     """The bytes of a problem file, at most ``limit`` (a larger file, or an endless one such as /dev/zero, is a
     ProblemError naming the file and the limit)."""
     try:
-        with open(path, "rb") as fh:
-            raw = fh.read(limit + 1)
+        raw = read_bounded(path, limit)
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ProblemError(f"{path}: cannot read the problem file: {reason}") from None

@@ -236,10 +236,11 @@ def _variant(ctx: _Context, section: Section, given: Mapping[str, Any]) -> str |
         key = section.key_map[name]
         if not section.applies(key, variant):
             own = [k.name for k in section.keys if k.variants and section.applies(k, variant)]
+            owned = f"the keys of {selector.name} = {format_value(variant)} are {', '.join(own)}" if own else \
+                f"{selector.name} = {format_value(variant)} has no keys of its own"
             raise ProblemError(f"{ctx.at(section.name, name, value)} is invalid with {selector.name} = "
                                f"{format_value(variant)}: it is a key of {selector.name} = "
-                               f"{' or '.join(format_value(v) for v in key.variants)} ({key.what}); the keys of "
-                               f"{selector.name} = {format_value(variant)} are {', '.join(own) or 'none'}")
+                               f"{' or '.join(format_value(v) for v in key.variants)} ({key.what}); {owned}")
     return variant
 
 

@@ -163,7 +163,7 @@ class Section:
     keys: tuple[Key, ...]
     required: bool = False
     selector: str | None = None
-    """the key whose value selects which of the keys with ``variants`` apply (``[gait] waveform``)"""
+    """the key whose value selects which of the keys with ``variants`` apply (``[gait] waveform``, ``[ocp] objective``)"""
 
     @property
     def key_map(self) -> dict[str, Key]:
@@ -276,7 +276,7 @@ _SIMULATION = Section("simulation", "simulator of the torque drive and its optio
         rule=STEPS),
 ))
 
-_OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys=(
+_OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", selector="objective", keys=(
     Key("objective", str, "-", "what to optimise", default=_ocp("objective"),
         choices=("max_speed", "min_cot", "robust_speed")),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
@@ -299,11 +299,11 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", keys
     Key("regularization", float, "-", "weight of the torque-rate regularisation", default=_ocp("regularization"),
         rule=GE0),
     Key("speed_min", float, "m/s", "min_cot: smallest mean speed direction * S / T", default=_ocp("speed_min"),
-        rule=GE0),
+        rule=GE0, variants=("min_cot",)),
     Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}",
-        default=_ocp("mu_ratio_eps"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+        default=_ocp("mu_ratio_eps"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)"), variants=("robust_speed",)),
     Key("robust", str, "-", "robust_speed: maximise the mean or the worst speed", default=_ocp("robust"),
-        choices=("mean", "worst")),
+        choices=("mean", "worst"), variants=("robust_speed",)),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
         default=_ocp("harmonic_psi"), rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
                                                   "and friction scenario; 180 is a 2 deg grid")),
@@ -341,7 +341,7 @@ SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP)
 SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
 
 
-def _requirement(k: Key) -> str:
+def _requirement(k: Key, selector: str | None) -> str:
     if k.required and k.required_unless:
         req = "required unless " + " and ".join(f"`{u}`" for u in k.required_unless) + " given"
     elif k.required:
@@ -355,7 +355,7 @@ def _requirement(k: Key) -> str:
     if k.exclusive_with:
         req += "; not with " + ", ".join(f"`{e}`" for e in k.exclusive_with)
     if k.variants:
-        req += "; waveform " + ", ".join(f"`{format_value(v)}`" for v in k.variants)
+        req += f"; {selector} " + ", ".join(f"`{format_value(v)}`" for v in k.variants)
     return req
 
 
@@ -366,7 +366,7 @@ def schema_markdown() -> str:
         for k in sec.keys:
             kind = {float: "float", int: "int", str: "string", list: "array"}[k.type]
             valid = k.rule.explained if k.rule is not None and not k.choices and k.type is not list else k.valid_text
-            rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k)} | {valid} | {k.help} |")
+            rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k, sec.selector)} | {valid} | {k.help} |")
     return "\n".join(rows)
 
 

@@ -116,6 +116,10 @@ def _inline(g: Mapping[str, Any], at: At) -> _Samples:
         given = ", ".join(k for k in ("phase", "tau1", "tau2", "phi1_ref_deg", "phi2_ref_deg") if k in g)
         raise ProblemError(f"{at('gait', 'waveform', 'samples')} needs file, or phase with tau1 and tau2 (or "
                            f"phi1_ref_deg and phi2_ref_deg) (given: {given or 'none of them'})")
+    fewest = INTERPOLANTS[g["interpolation"]][1]
+    if len(g["phase"]) < fewest:
+        raise ProblemError(f"{at('gait', 'phase', g['phase'])} is invalid: {len(g['phase'])} sample(s); interpolation "
+                           f"{format_value(g['interpolation'])} needs at least {fewest} in one period")
     for name in pair:
         if len(g[name]) != len(g["phase"]):
             raise ProblemError(f"{at('gait', name, g[name])} is invalid: {len(g[name])} entries where phase has "

@@ -95,6 +95,9 @@ def dask_runner(tasks: Sequence[PointTask], scheduler: str, jobs: int) -> Iterat
                 client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as exc:
             raise SweepFailed(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}") from None
+        except ValueError as exc:  # an address Dask cannot parse (unknown scheme, ...): bad input
+            raise SweepError(f"--scheduler {scheduler!r} is invalid: {exc} (give a Dask scheduler address such as "
+                             "tcp://host:8786, or 'local')") from None
         # one point timed here sizes the chunks (a Dask task costs about a millisecond of overhead)
         first, tasks, seconds = _first_points(tasks)
         yield from first

@@ -50,6 +50,9 @@ def schema_key(name: str, where: str) -> Key:
         hint = f"did you mean {section}.{close[0]}? " if close else ""
         raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid keys: "
                            f"{', '.join(keys)}")
+    if keys[key].type is list:
+        raise ProblemError(f"{where} is invalid: {name} is an array key; an axis varies a number or a string "
+                           "(sweep a key with one value, or one problem file per array)")
     return keys[key]
 
 
@@ -170,7 +173,11 @@ def _range(rhs: str, where: str) -> np.ndarray:
     if num == 1 and start != stop:
         raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
                            f"write a single value instead")
-    return np.linspace(start, stop, num)
+    values = np.linspace(start, stop, num)
+    if not np.all(np.isfinite(values)):
+        raise ProblemError(f"{where} is invalid: STOP - START = {stop!r} - {start!r} overflows a float; "
+                           "give closer ends")
+    return values
 
 
 def parse_grid(spec: str) -> tuple[str, np.ndarray]:

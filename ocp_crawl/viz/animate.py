@@ -185,8 +185,14 @@ def crawl_animation(result: CrawlResult, robot: Robot, cycles: int = 2, frames_p
     return FuncAnimation(scene.fig, scene.update, frames=len(scene), interval=interval_ms, blit=True)
 
 
+#: slowest frame rate of a GIF [1/s]: a frame's delay is a 16-bit count of centiseconds (at most 655.35 s)
+MIN_FPS = 0.01
+
+
 def save_gif(scene: CrawlScene, path: str | os.PathLike, fps: float = 20.0) -> Path:
-    """Write the scene's frames as a looping GIF, atomically."""
+    """Write the scene's frames as a looping GIF, atomically (``fps`` [1/s] at least :data:`MIN_FPS`)."""
+    if not fps >= MIN_FPS:
+        raise ValueError(f"fps = {fps!r}: a GIF needs at least {MIN_FPS} frames per second")
     frames = scene.images()
     duration = int(round(1000.0 / fps))
     return atomic_write(path, lambda fh: frames[0].save(fh, format="GIF", save_all=True, append_images=frames[1:],

@@ -48,7 +48,8 @@ def main() -> None:
         at = best["point"]
         handles += ax.plot(at["gait.gamma_deg"], at["gait.psi_deg"], "k*", ms=12, clip_on=False,
                            label=f"largest |S| = {1e3 * abs(best['S']):.1f} mm/cycle")
-    ax.legend(handles=handles, loc="upper left", fontsize="small")
+    # below the map: inside it the legend would hide cells
+    fig.legend(handles=handles, loc="outside lower center", fontsize="small", ncol=2)
     ax.set(xlabel=r"nominal joint angle $\gamma$ [deg]", ylabel=r"phase difference $\psi$ [deg]")
     title = f"Paper robot, A = 30 deg: S over psi and gamma ({failed.sum()} of {failed.size} points failed)"
     if best is not None:
