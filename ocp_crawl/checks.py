@@ -7,6 +7,7 @@ value always raises the same way: ``TypeError`` for something that is not a real
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -48,3 +49,24 @@ def finite_or_none(x) -> float | None:
     """A float, or None when it is not finite (strict JSON has no NaN or Inf)."""
     x = float(x)
     return x if math.isfinite(x) else None
+
+
+#: a number as a user writes it: ASCII decimal notation, or nan/inf (to be refused as not finite by the caller);
+#: Python's ``float`` and ``int`` also take "1_0" and digits of other scripts, which no file or option means
+_NUMBER_TEXT = re.compile(r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)",
+                          re.ASCII | re.IGNORECASE)
+_INTEGER_TEXT = re.compile(r"[+-]?\d+", re.ASCII)
+
+
+def parse_number(text: str) -> float:
+    """``text`` (stripped) as a float when it is a decimal number in ASCII (or nan/inf); ValueError otherwise."""
+    if not isinstance(text, str) or not _NUMBER_TEXT.fullmatch(text.strip()):
+        raise ValueError(f"not a number: {text!r}")
+    return float(text)
+
+
+def parse_integer(text: str) -> int:
+    """``text`` (stripped) as an int when it is a decimal integer in ASCII; ValueError otherwise."""
+    if not isinstance(text, str) or not _INTEGER_TEXT.fullmatch(text.strip()):
+        raise ValueError(f"not an integer: {text!r}")
+    return int(text)

@@ -123,7 +123,7 @@ DATA_ROWS.update({
 #: found by fuzzing the command line (session 21): internal errors and a read without end
 DATA_ROWS.update({
     "simulate: empty inline samples (IndexError)": R("simulate", ["{file}"], ["x.toml", "[gait] phase = []",
-                                                                             "0 sample(s)", "at least 3"],
+                                                                             "no samples"],
                                                      text=gait('waveform = "samples"\nphase = []\ntau1 = []\n'
                                                                'tau2 = []')),
     "simulate: NUL in the samples file name (ValueError)": R("simulate", ["{file}"],
@@ -141,6 +141,12 @@ DATA_ROWS.update({
                                                                 "gait.waveform=harmonic"],
                                                     ["--input", "--set gait.waveform=harmonic", "give one"],
                                                     files=csv(CSV_HEAD + CSV_ROWS)),
+    "simulate: --input dropped by --set gait.phase": R("simulate", ["{paper}", "--input", "{tmp}/t.csv", "--set",
+                                                                  "gait.phase=[0, 0.3, 0.6]", "--set",
+                                                                  "gait.tau1=[0.1, 0.2, 0.1]", "--set",
+                                                                  "gait.tau2=[0.1, 0.2, 0.1]"],
+                                                       ["--input", "sets gait.file", "--set gait.phase=[0, 0.3, 0.6]",
+                                                        "give one"], files=csv(CSV_HEAD + CSV_ROWS)),
     "simulate: --input with a harmonic key (dropped)": R("simulate", ["{paper}", "--input", "{tmp}/t.csv", "--set",
                                                                     "gait.psi_deg=10"],
                                                         ["[gait] psi_deg = 10 (from --set)", 'waveform = "samples"'],
@@ -153,4 +159,19 @@ DATA_ROWS.update({
     "fit: foot off the ground at a row (fit failed)": _fit(["d.csv:3", "gamma = 30 deg", "off the ground"],
                                                            data=b"gamma [deg],S [mm],sigma_S [mm]\n90,-20,1\n"
                                                                 b"30,-43,3\n100,-50,1\n"),
+})
+
+
+#: found by a second round of fuzzing (session 21)
+DATA_ROWS.update({
+    "simulate: sample phases one ulp apart (ValueError)": R("simulate", ["{file}"],
+                                                           ["t.csv:4", "at least 1e-09 cycles apart"],
+                                                           text=gait(SAMPLES), files=csv(
+                                                               CSV_HEAD + "0,-0.2,-0.26\n0.5,-0.3,-0.2\n"
+                                                               "0.5000000000000001,-0.26,-0.3\n")),
+    "simulate: a subnormal sample phase (ValueError)": R("simulate", ["{file}"], ["[gait] phase", "entry 1",
+                                                                                 "at least 1e-09 cycles apart"],
+                                                        text=gait('waveform = "samples"\nphase = [0, 5e-324, 0.5]\n'
+                                                                  'tau1 = [0.1, 0.2, 0.1]\ntau2 = [0.1, 0.2, 0.1]\n'
+                                                                  'interpolation = "spline"')),
 })

@@ -235,13 +235,40 @@ def test_the_guard_catches_a_fit(tmp_path, capsys, nothing_computed, monkeypatch
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
 @pytest.mark.parametrize("where", ["problem file", "--input"])
-def test_a_named_pipe_without_a_writer_does_not_hang(where, tmp_path, capsys, nothing_computed):
-    """Opening a FIFO for reading waits for a writer: the files are opened without waiting (found by fuzzing: the
-    command hung until killed).  A pipe with no writer reads as empty: bad input naming the file."""
+def test_a_named_pipe_without_a_writer_does_not_hang(where, tmp_path, capsys, nothing_computed, monkeypatch):
+    """Opening a FIFO for reading waits for a writer (found by fuzzing: the command hung until killed).  The files
+    are opened without waiting; a pipe that gets no data within PIPE_WAIT_S is bad input naming the file."""
+    import ocp_crawl.io.files
+
+    monkeypatch.setattr(ocp_crawl.io.files, "PIPE_WAIT_S", 0.2)
     fifo = tmp_path / ("p.toml" if where == "problem file" else "p.csv")
     os.mkfifo(fifo)
     argv = ["simulate", str(fifo)] if where == "problem file" else ["simulate", str(PAPER), "--input", str(fifo)]
     with hang_guard(where):
         code = cli.main(argv)
     out, err = capsys.readouterr()
-    check_one_line(code, out, err, ["p.toml" if where == "problem file" else "p.csv"])
+    check_one_line(code, out, err, [fifo.name, "named pipe", "within 0.2 s", "no writer"])
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_a_named_pipe_whose_writer_comes_late_is_read(tmp_path):
+    """A writer that opens the pipe after the reader (``mkfifo f; later > f``) is waited for, and its data read
+    whole (the first fix read such a pipe as empty and left the writer blocked)."""
+    from ocp_crawl.io.files import read_bounded
+
+    fifo = tmp_path / "late.csv"
+    os.mkfifo(fifo)
+    data = b"phase [-],tau1 [N m],tau2 [N m]\n" * 2000   # more than a pipe's buffer
+
+    def write():
+        import time
+        time.sleep(0.3)
+        with open(fifo, "wb") as fh:
+            fh.write(data)
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    with hang_guard("late writer"):
+        got = read_bounded(fifo, 1 << 20)
+    writer.join(timeout=10)
+    assert got == data and not writer.is_alive()

@@ -132,6 +132,20 @@ def test_a_failed_crosscheck_says_so_on_stderr(capsys):
     out, err = capsys.readouterr()
     assert code == 1 and "overall: FAIL" in out
     lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("ocp-crawl: crosscheck FAIL: "), err
+    assert len(lines) == 1 and lines[0].startswith("ocp-crawl: crosscheck FAIL, checks not passed: "), err
     failed = [line.split("]", 1)[1].split(":")[0].strip() for line in out.splitlines() if "[FAIL]" in line]
     assert failed and all(name in lines[0] for name in failed), (failed, lines[0])
+
+
+def test_crosscheck_reads_the_simulation_section(capsys):
+    """The file's [simulation] options reach both simulators (before, crosscheck ignored them): two cycles and
+    an unreachable periodicity tolerance leave the event solver not periodic, so the cross-check fails."""
+    from pathlib import Path
+
+    import ocp_crawl.cli.app as cli
+
+    paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
+    code = cli.main(["crosscheck", str(paper), "--steps", "16", "32", "--json", "--set", "simulation.max_cycles=2",
+                     "--set", "simulation.periodic_tol=1e-300"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1 and out["event_status"] == "not_periodic", out["event_status"]

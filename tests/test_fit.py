@@ -333,3 +333,52 @@ def test_cli_form_option_chooses_the_default_constants(tmp_path, capsys):
     problem = load_problem(PAPER_GRAVITY)
     assert resolve_parameters(problem, ["pressure.amplitude_bar"])[0].x0 == pytest.approx(0.4)
     assert resolve_parameters(problem, ["pressure.phi_rest_deg"])[0].x0 == pytest.approx(180.0)
+
+
+def _unchecked(tmp_path, phi, sigma, tau):
+    """A stiffness file read without the row checks (as the library may be given one): phi, sigma [rad], tau."""
+    from ocp_crawl.fit.data import Measurements
+    from ocp_crawl.io.tables import Table
+    columns = {"phi": np.array(phi, float), "sigma_phi": np.array(sigma, float), "tau": np.array(tau, float)}
+    table = Table(str(tmp_path / "u.csv"), columns, {"phi": "rad", "sigma_phi": "rad", "tau": "N m"},
+                  np.arange(2, 2 + len(phi)))
+    return Measurements(table, "stiffness", "phi")
+
+
+def test_a_fit_whose_search_did_not_run_is_never_a_success(tmp_path):
+    """Residuals that overflow at the start (phi = 1.7e306 rad): every row is computed, yet the search cannot run;
+    once reported as 'success' with sigma NaN."""
+    problem = load_problem(PAPER)
+    data = _unchecked(tmp_path, [1.7e306, 0.35], [0.0087, 0.0087], [0.03, 0.06])
+    fit = fit_measurements(problem, [data], resolve_parameters(problem, ["robot.k"]))
+    assert not fit.success and fit.status == Status.NO_CONVERGENCE, fit.message
+    assert "u.csv:2" in fit.message and "not finite" in fit.message and "did not run" in fit.message
+    assert math.isnan(fit.chi2) and np.all(np.isnan(fit.sigma))
+
+
+def test_a_search_refused_by_least_squares_is_a_status_not_a_crash(tmp_path):
+    """sigma = 1.7e-302 rad: finite residuals whose Jacobian overflows; scipy raised 'array must not contain infs
+    or NaNs' out of the fit."""
+    problem = load_problem(PAPER)
+    data = _unchecked(tmp_path, [0.1745, 0.349], [0.0087, 1.7e-302], [0.03, 0.06])
+    fit = fit_measurements(problem, [data], resolve_parameters(problem, ["robot.k"]))
+    assert not fit.success and fit.status == Status.NO_CONVERGENCE, fit.message
+    assert "least squares failed" in fit.message and np.all(np.isnan(fit.sigma))
+
+
+def test_a_fit_of_a_parameter_the_data_do_not_depend_on_is_not_a_success(tmp_path, capsys):
+    """Segment-1 bending data fix a1 but say nothing of a2: the Jacobian is zero (rank 0), the search cannot move;
+    once 'success' with sigma inf.  With a1 alongside, rank 1 of 2: a success that lists a2 as unidentifiable."""
+    problem = load_problem(PAPER_GRAVITY)
+    path = write_table(tmp_path / "b.csv", [("p", "bar", [0.5, 1.0, 1.5]), ("segment", "-", [1.0] * 3),
+                                            ("phi", "deg", [6.3, 12.5, 19.0]), ("sigma_phi", "deg", [0.5] * 3)])
+    fit = fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, ["pressure.a2"]))
+    assert fit.rank == 0 and not fit.success and fit.status == Status.NO_CONVERGENCE, fit.message
+    assert "rank 0" in fit.message and "do not depend on any fitted parameter" in fit.message
+    both = fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, ["pressure.a1",
+                                                                                             "pressure.a2"]))
+    assert both.success and both.rank == 1 and math.isinf(both.sigma[1]), both.message
+    code = main(["fit", str(PAPER_GRAVITY), str(path), "--param", "pressure.a2", "--no-figure",
+                 "--out", str(tmp_path / "o")])
+    out, err = capsys.readouterr()
+    assert code == 1 and "fit        no_convergence: not a fit" in out and "rank 0" in err, (out, err)

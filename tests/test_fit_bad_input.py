@@ -182,3 +182,57 @@ def test_an_empty_measurement_file_names_an_example_header(tmp_path, capsys, no_
     empty.write_text("# only a comment\n")
     err = _fit_cli(capsys, tmp_path, PAPER, [empty], "--param", "robot.k")
     assert "e.csv: no header row" in err and "e.g. )" not in err and "e.g. '" in err, err
+
+
+STIFFNESS_ROWS = "phi [deg],sigma_phi [deg],tau [N m]\n{phi},{sigma},0.03\n20,{sigma2},0.06\n"
+
+
+@pytest.mark.parametrize("sigma, sigma2, line", [("0.5", "1e-300", 3), ("1e-11", "0.5", 2)])
+def test_an_uncertainty_too_small_to_weight_is_bad_input(tmp_path, capsys, no_fit, sigma, sigma2, line):
+    """sigma below 1e-12 x max(largest |phi|, 1 rad) = 5.73e-11 deg: the weighted residuals and their Jacobian
+    would overflow (1e-300 deg once crashed the search with 'array must not contain infs or NaNs')."""
+    path = tmp_path / "d.csv"
+    path.write_text(STIFFNESS_ROWS.format(phi=10, sigma=sigma, sigma2=sigma2))
+    err = _fit_cli(capsys, tmp_path, PAPER, [path], "--param", "robot.k")
+    bad = sigma2 if line == 3 else sigma
+    assert f"d.csv:{line}: sigma_phi = {bad} deg is too small" in err and "1e-12 x max(the largest |phi|" in err, err
+    assert "5.73e-11 deg" in err, err
+    with pytest.raises(TableError, match=f"d.csv:{line}: sigma_phi = {bad} deg is too small"):
+        read_measurements(path)
+    path.write_text(STIFFNESS_ROWS.format(phi=10, sigma="1e-10", sigma2="1e-10"))  # above the floor: accepted
+    assert read_measurements(path).sigma.min() > 0
+
+
+def test_the_uncertainty_floor_scales_with_the_data_and_holds_for_zero_data(tmp_path):
+    """Relative to the largest |value| above 1 SI unit (S = 1e7 mm: floor 1e-5 mm); 1e-12 m when all S are 0."""
+    big = tmp_path / "big.csv"
+    big.write_text("A [deg],S [mm],sigma_S [mm]\n15,1e7,1e-4\n22,2e6,1e-6\n30,3e6,1e-4\n")
+    with pytest.raises(TableError, match=r"big.csv:3: sigma_S = 1e-06 mm is too small.* = 1e-05 mm"):
+        read_measurements(big)
+    zero = tmp_path / "zero.csv"
+    zero.write_text("A [deg],S [mm],sigma_S [mm]\n15,0,0.1\n22,0,1e-300\n30,0,0.1\n")
+    with pytest.raises(TableError, match=r"zero.csv:3: sigma_S = 1e-300 mm is too small.* = 1e-09 mm"):
+        read_measurements(zero)
+    for example in (PSI_DATA, PSI_DATA.with_name("paper_pressure_p0.csv")):
+        read_measurements(example)
+
+
+@pytest.mark.parametrize("header, rows, param, message", [
+    ("phi [deg],sigma_phi [deg],tau [N m]", "1e308,0.5,0.03\n20,0.5,0.06", "robot.k",
+     "d.csv:2: phi = 1e+308 deg is out of range; every value of a measurement file must be at most 1e12 rad"),
+    ("p [bar],segment [-],phi [deg],sigma_phi [deg]", "1e308,1,10,1\n1,1,10,1\n1.5,1,12,1", "pressure.a1",
+     "d.csv:2: p is out of range: its value overflows when converted to Pa; every value of a measurement file must "
+     "be at most 1e12 Pa = 1e+07 bar"),
+    ("phi [deg],sigma_phi [deg],tau [N m]", "10,0.5,0.03\n20,0.5,-2e12", "robot.k",
+     "d.csv:3: tau = -2e+12 N m is out of range"),
+])
+def test_a_value_that_overflows_is_bad_input(tmp_path, capsys, no_fit, header, rows, param, message):
+    """phi = 1e308 deg is finite in rad but overflows the residuals; p = 1e308 bar is not finite in Pa: both once
+    gave 'success' with 'the search did not run'."""
+    path = tmp_path / "d.csv"
+    path.write_text(f"{header}\n{rows}\n")
+    problem = PAPER_GRAVITY if param.startswith("pressure") else PAPER
+    err = _fit_cli(capsys, tmp_path, problem, [path], "--param", param)
+    assert message in err, err
+    with pytest.raises(TableError, match=message.split(";")[0].replace("+", r"\+")):
+        read_measurements(path)

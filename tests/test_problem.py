@@ -83,8 +83,10 @@ def test_overrides():
     assert (q.robot.mu1, q.robot.mu2) == (0.5, 0.5)
     q = load_problem(PROBLEMS / "paper_gait.toml", ["robot.mu1=0.3", "robot.mu2=0.4"])
     assert (q.robot.mu1, q.robot.mu2) == (0.3, 0.4)
-    # the last --set of a key wins
-    assert load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=1", "robot.k=2"]).robot.k == 2.0
+    # a key --set twice to different values is a conflict (before, the last one won silently); twice the same is fine
+    with pytest.raises(ProblemError, match=r"robot.k is set twice, to 1 and to 2"):
+        load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=1", "robot.k=2"])
+    assert load_problem(PROBLEMS / "paper_gait.toml", ["robot.k=2", "robot.k=2"]).robot.k == 2.0
 
 
 @pytest.mark.parametrize("text, expected", [
@@ -418,3 +420,23 @@ def test_readme_tables_are_rectangular():
     assert len(shapes) >= 5
     for header, rows in shapes:
         assert all(n == header for n in rows), (header, rows)
+
+
+def test_first_loss_finds_what_later_overrides_undo():
+    """An override undone by a later one is found (the same key to another value, an alternative key, another
+    waveform), and the documented carry-over of one mu to the other foot is not a loss."""
+    from ocp_crawl.problem.overrides import first_loss
+
+    data = {"robot": {"mu": 0.389}, "gait": {"waveform": "harmonic", "psi_deg": 45.0}}
+    assert first_loss(data, [("gait", "psi_deg", 10.0)], [("gait", "psi_deg", 10.0)]) is None
+    assert first_loss(data, [("gait", "psi_deg", 10.0)], [("robot", "k", 1.0), ("gait", "psi_deg", 20.0)]) == \
+        (1, "gait.psi_deg")
+    assert first_loss(data, [("robot", "mu1", 0.3), ("robot", "mu2", 0.4)], [("robot", "mu", 0.2)]) == \
+        (0, "robot.mu1")
+    assert first_loss(data, [("robot", "mu", 0.3)], [("robot", "mu1", 0.2)]) is None   # foot 2 keeps mu
+    assert first_loss(data, [("gait", "waveform", "samples"), ("gait", "file", "t.csv")],
+                      [("gait", "interpolation", "linear")]) is None
+    assert first_loss(data, [("gait", "waveform", "samples"), ("gait", "file", "t.csv")],
+                      [("gait", "phase", [0.0, 0.5])]) == (0, "gait.file")
+    assert first_loss(data, [("gait", "waveform", "samples"), ("gait", "file", "t.csv")],
+                      [("gait", "waveform", "harmonic")]) == (0, "gait.file")

@@ -6,11 +6,17 @@ none of the functions they use).  Every ``FastFunction(...)`` of the package mus
 builder registered with ``compiled_function``, or warm-up would not know it.
 """
 import ast
+import errno
 import json
 import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
+
+import ocp_crawl.sweep.warmup as warmup_module
+from ocp_crawl.model import compiled
 
 ROOT = Path(__file__).resolve().parent.parent
 PKG = ROOT / "ocp_crawl"
@@ -59,6 +65,66 @@ def test_warmup_without_a_compiler_is_a_failure_with_one_line(tmp_path):
     assert out.returncode == 1
     assert out.stderr.count("\n") == 1 and "no working C compiler" in out.stderr
     assert not list(tmp_path.rglob("*.so"))
+
+
+def _bad_caches(tmp_path: Path) -> dict[str, tuple[Path, str]]:
+    """Cache paths that cannot be a cache directory, each with the reason its message must give."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    readonly = tmp_path / "readonly"
+    readonly.mkdir(mode=0o555)
+    return {"regular file": (afile, "not a directory (it is a regular file)"),
+            "device": (Path(os.devnull), "not a directory (it is a character device)"),
+            "under a file": (afile / "sub", f"not a directory ({afile} in its path is a regular file)"),
+            "name too long": (tmp_path / ("a" * 300), "name too long"),
+            "read-only directory": (readonly, "not writable"),
+            "under a read-only directory": (readonly / "sub", "not writable")}
+
+
+def _deny_writes(monkeypatch, created: Path | None) -> None:
+    """What the system says to a user other than root: no access, and no ``created`` directory."""
+    monkeypatch.setattr(os, "access", lambda path, mode: False)
+    mkdir = Path.mkdir
+
+    def denied(self, *args, **kwargs):
+        if self == created:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
+        return mkdir(self, *args, **kwargs)
+    monkeypatch.setattr(Path, "mkdir", denied)
+
+
+@pytest.mark.parametrize("case", ["regular file", "device", "under a file", "name too long", "read-only directory",
+                                  "under a read-only directory"])
+def test_warmup_refuses_a_cache_that_is_not_a_writable_directory(tmp_path, monkeypatch, case):
+    """Checked before anything is built: the message names OCP_CRAWL_CACHE, the path and the real reason (not the
+    "no working C compiler" of a build that failed in the unusable directory)."""
+    cache, reason = _bad_caches(tmp_path)[case]
+    if "read-only" in case and os.access(cache.parent if "under" in case else cache, os.W_OK):
+        _deny_writes(monkeypatch, cache if "under" in case else None)  # root writes anywhere
+    monkeypatch.setenv("OCP_CRAWL_CACHE", str(cache))
+    monkeypatch.delenv("OCP_CRAWL_NO_COMPILE", raising=False)
+    built = []
+    monkeypatch.setattr(warmup_module, "_register_all", lambda: None)
+    monkeypatch.setattr(warmup_module, "BUILDERS", {"x": lambda: built.append(1)})
+    with pytest.raises(getattr(compiled, "CacheError", ())) as info:
+        warmup_module.warmup()
+    message = str(info.value)
+    assert message.startswith(f"OCP_CRAWL_CACHE={cache}: ") and reason in message and "\n" not in message
+    assert not built
+
+
+def test_cli_warmup_with_an_unusable_cache_is_one_line_naming_the_variable(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    out = _cli(["warmup"], tmp_path / "afile")
+    assert out.stderr.count("\n") == 1 and "Traceback" not in out.stderr
+    assert f"OCP_CRAWL_CACHE={tmp_path / 'afile'}: not a directory" in out.stderr
+    assert "C compiler" not in out.stderr and not out.stdout
+
+
+def test_cli_warmup_with_an_unusable_cache_is_bad_input(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    out = _cli(["warmup"], tmp_path / "afile")
+    assert out.returncode == 2 and out.stderr.startswith("ocp-crawl: error: OCP_CRAWL_CACHE="), out.stderr
 
 
 def _decorators(node: ast.FunctionDef) -> set[str]:

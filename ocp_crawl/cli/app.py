@@ -146,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         # not bad input (that is ProblemError or BadInput, raised on purpose): a bug or a failing
         # environment, reported in one line; exit 1 so that a script never mistakes it for bad input
-        if os.environ.get("OCP_CRAWL_TRACEBACK"):
+        if os.environ.get("OCP_CRAWL_TRACEBACK", "").strip().lower() not in ("", "0", "false", "no", "off"):
             raise
         text = " ".join(str(exc).split())
         if isinstance(exc, OSError):

@@ -10,6 +10,7 @@ import tempfile
 from pathlib import Path
 from typing import Iterable
 
+from ocp_crawl.checks import parse_integer, parse_number
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, UsageError
 from ocp_crawl.sim.options import STEPS_BOUNDS
 
@@ -29,7 +30,7 @@ def integer(option: str, low: int, what: str = "", high: int | None = None, why:
 
     def parse(text: str) -> int:
         try:
-            n = int(text)
+            n = parse_integer(text)
         except ValueError:
             n = None
         if n is None or n < low or (high is not None and n > high):
@@ -60,15 +61,16 @@ def out_file(suffix: str):
     return parse
 
 
-def real(option: str, low: float, high: float, what: str = ""):
-    """argparse type of ``option``: a finite number in (low, high]."""
+def real(option: str, low: float, high: float, what: str = "", closed: bool = False):
+    """argparse type of ``option``: a finite number in (low, high], or [low, high] when ``closed``."""
     def parse(text: str) -> float:
         try:
-            x = float(text)
+            x = parse_number(text)
         except ValueError:
             x = math.nan
-        if not (math.isfinite(x) and low < x <= high):
-            raise UsageError(f"{option} {_shown(text)} is invalid: must be a number in ({low:g}, {high:g}]{what}")
+        if not (math.isfinite(x) and (low <= x if closed else low < x) and x <= high):
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be a number in {'[' if closed else '('}"
+                             f"{low:g}, {high:g}]{what}")
         return x
     return parse
 
@@ -98,11 +100,6 @@ steps_type = integer("--steps", STEPS_BOUNDS[0], " (steps per cycle)", high=STEP
 MAX_JOBS = 256
 jobs_type = integer("--jobs", 1, " (worker processes)", high=MAX_JOBS,
                     why="each worker process holds its own compiled functions and solver")
-
-
-def set_keys(overrides: Iterable[str]) -> dict[str, str]:
-    """The keys of ``--set KEY=VALUE`` items, each mapped to its item (to name both sides of a conflict)."""
-    return {item.split("=", 1)[0].strip(): item for item in overrides}
 
 
 def optional_out(args: argparse.Namespace, names: Iterable[str]) -> Path | None:
@@ -145,7 +142,24 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
         raise BadInput(f"{where}: exists and is not a directory") from None
     except OSError as exc:
         raise BadInput(f"{where}: output directory is not writable: {exc.strerror or exc}") from None
+    _check_targets(out, names, label)
     return out
+
+
+def _check_targets(out: Path, names: Iterable[str], label: str) -> None:
+    """BadInput for an output file the directory cannot take: a name longer than the file system allows, or a
+    file name (one with a suffix: results.csv, crawl.gif) that is a directory there."""
+    try:
+        longest = os.pathconf(out, "PC_NAME_MAX")
+    except (AttributeError, OSError, ValueError):
+        longest = 255
+    for name in names:
+        if len(os.fsencode(name)) > longest:
+            raise BadInput(f"{label}: the file name {name[:40]}... is longer than the {longest} bytes a name may "
+                           "have here")
+        if Path(name).suffix and (out / name).is_dir():
+            raise BadInput(f"{label}: {out / name} is a directory, where the command writes a file: remove it or "
+                           "choose another directory")
 
 
 def _exists(path: Path) -> bool:

@@ -11,14 +11,17 @@ import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
 from ocp_crawl.cli.common import (finish, force_arg, integer, optional_out, out_dir, out_file, prepare_out, real,
-                                  set_keys, steps_type)
+                                  steps_type)
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
                                paper_problem, run_problem)
+from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
+from ocp_crawl.problem.problem import solver_options
 from ocp_crawl.problem.waveforms import waveform_text
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.status import STATUS_MESSAGES, Status
+from ocp_crawl.viz import FPS_BOUNDS
 
 #: most step counts of crosscheck (one MPCC run each)
 MAX_STEP_COUNTS = 8
@@ -59,24 +62,26 @@ def shortcuts(args: argparse.Namespace) -> list[str]:
     """The overrides that the command's shortcut options stand for (``--drive``: gait.drive, ``--solver``:
     simulation.solver, ``--steps``: simulation.steps, ``--input``: gait.waveform = "samples" with gait.file, the
     file's path made absolute: relative to the current directory), followed by its ``--set`` overrides (so that a
-    ``--set`` key of another waveform than ``--input``'s is refused by the schema).  A shortcut and a ``--set`` of
-    the same key are a conflict (BadInput), whatever their values."""
-    given = {name: getattr(args, name, None) for name in ("input", "drive", "solver", "steps")}
-    stands_for = {"input": ("gait.waveform", "gait.file"), "drive": ("gait.drive",),
-                  "solver": ("simulation.solver",), "steps": ("simulation.steps",)}
-    given_set = set_keys(args.overrides)
-    out = []
-    for name, value in given.items():
-        if value is None:
-            continue
-        for key in stands_for[name]:
-            if key in given_set:
-                raise BadInput(f"--{name} {value} and --set {given_set[key]} both set {key}: give one of them")
-        if name == "input":
-            out += ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(value))}"]
-        else:
-            out.append(f"{stands_for[name][0]}={value}")
-    return out + list(args.overrides)
+    ``--set`` key of another waveform than ``--input``'s is refused by the schema).  A ``--set`` that changes or
+    drops what a shortcut set (another value of its key, an alternative key such as gait.phase for gait.file,
+    another waveform) is a conflict: BadInput naming both."""
+    options = []   # (the option as given, the overrides it stands for)
+    if getattr(args, "input", None) is not None:
+        options.append((f"--input {args.input}",
+                        ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(args.input))}"]))
+    for name, key in (("drive", "gait.drive"), ("solver", "simulation.solver"), ("steps", "simulation.steps")):
+        if getattr(args, name, None) is not None:
+            options.append((f"--{name} {getattr(args, name)}", [f"{key}={getattr(args, name)}"]))
+    texts = [text for _, items in options for text in items]
+    if texts and args.overrides:
+        source = str(args.problem)
+        loss = first_loss(read_toml(args.problem), [parse_override(t, source) for t in texts],
+                          [parse_override(t, source) for t in args.overrides])
+        if loss is not None:
+            i, key = loss
+            option = next(label for label, items in options if any(t.startswith(key + "=") for t in items))
+            raise BadInput(f"{option} sets {key}, and --set {args.overrides[i]} undoes it: give one of them")
+    return texts + list(args.overrides)
 
 
 def report(result: CrawlResult, problem: Problem) -> dict:
@@ -243,22 +248,20 @@ def _animate_args(p: argparse.ArgumentParser) -> None:
                    help="cycles to show, at most 10 (default: 2)")
     p.add_argument("--frames-per-cycle", type=integer("--frames-per-cycle", 2), default=48, metavar="N",
                    help="frames per cycle, at most 100 (default: 48)")
-    p.add_argument("--fps", type=real("--fps", 0.0, 100.0), default=20.0, help="frames per second (default: 20)")
+    p.add_argument("--fps", type=real("--fps", *FPS_BOUNDS, " (at most 100 s per frame)", closed=True),
+                   default=20.0, help="frames per second (default: 20)")
     force_arg(p, "an existing FILE.gif")
 
 
 @register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
 def cmd_animate(args: argparse.Namespace) -> int:
-    from ocp_crawl.viz.animate import FRAME_BOUNDS, MIN_FPS, animate_problem
+    from ocp_crawl.viz.animate import FRAME_BOUNDS, animate_problem
 
     for option, value in (("--cycles", args.cycles), ("--frames-per-cycle", args.frames_per_cycle)):
         low, high = FRAME_BOUNDS[option]
         if not low <= value <= high:
             raise BadInput(f"{option} {value} is invalid: must be an integer in [{low}, {high}]: every frame is an "
                            "image held in memory until the GIF is written")
-    if args.fps < MIN_FPS:
-        raise BadInput(f"--fps {args.fps:g} is invalid: must be at least {MIN_FPS:g} (a GIF frame lasts at most "
-                       "655 s)")
     path = Path(args.out)
     if path.suffix.lower() != ".gif" or not path.stem:
         raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
@@ -303,13 +306,20 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         raise BadInput(f"--steps {' '.join(map(str, args.steps))}: {len(steps)} step counts, at most "
                        f"{MAX_STEP_COUNTS} (one MPCC run each)")
     check_start(problem)
-    result = crosscheck(problem.model, problem.torque, steps=steps)
+    # the file's [simulation] options (cycles, periodicity, event location) for both simulators; --steps the steps
+    sim = problem.sections.get("simulation", {})
+    result = crosscheck(problem.model, problem.torque, steps=steps, hybrid_options=problem.hybrid,
+                        mpcc_options=solver_options("mpcc", sim))
     if args.json:
         print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)), allow_nan=False))
     else:
         print(result.table())
-    failed = [name for name, check in result.summary()["checks"].items() if not check["passed"]]
+    def shown(x) -> str:
+        return f"{x:.3g}" if isinstance(x, (int, float)) and not isinstance(x, bool) else str(x)
+
+    failed = [f"'{name}' is {shown(c['value'])} (threshold {shown(c['threshold'])})"
+              for name, c in result.summary()["checks"].items() if not c["passed"]]
     if failed:
-        print(f"{PROG}: crosscheck FAIL: {'; '.join(failed)}", file=sys.stderr)
+        print(f"{PROG}: crosscheck FAIL, checks not passed: {'; '.join(failed)}", file=sys.stderr)
     return EXIT_FAILURE if failed or not result.passed else EXIT_OK
 

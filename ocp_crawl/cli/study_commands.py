@@ -10,13 +10,13 @@ from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
 from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, optional_out,
-                                  out_dir, prepare_out, set_keys)
+                                  out_dir, prepare_out)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.settings import NODES_BOUNDS
-from ocp_crawl.problem import format_value, load_problem, ocp_settings
-from ocp_crawl.problem.overrides import read_toml
+from ocp_crawl.problem import SCHEMA, format_value, load_problem, ocp_settings
+from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
                              check_some_point_valid, default_jobs, grid_from_specs, run_sweep)
 
@@ -48,11 +48,8 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
 def cmd_sweep(args: argparse.Namespace) -> int:
     problem = load_problem(args.problem, args.overrides)
     grid = grid_from_specs(args.grid)
-    given = set_keys(args.overrides)
-    for key in grid:
-        if key in given:
-            raise BadInput(f"--grid {key}=... and --set {given[key]} both set {key}: the grid gives its values; "
-                           "drop the --set")
+    _check_grid_keeps_sets(args, grid)
+    _check_axes_matter(problem, grid)
     check_some_point_valid(problem, grid)
     check_scheduler(args.scheduler)
     # --resume: run_sweep checks that the directory's settings.json is this sweep's
@@ -73,15 +70,62 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+#: the [simulation] keys each simulator of the torque drive reads (the angles drive reads none)
+SIMULATION_KEYS_USED = {"event": {"solver", "max_step", "event_xtol", "max_cycles", "periodic_tol"},
+                        "mpcc": {"solver", "steps", "max_cycles", "periodic_tol"}}
+
+
+def _check_axes_matter(problem, grid) -> None:
+    """BadInput for an axis that no point of the sweep reads (its rows would be copies): an [ocp] key (only
+    optimize reads them), a [simulation] key that the points' simulators do not read."""
+    drives = set(grid.get("gait.drive", [problem.drive]))
+    solvers = set(grid.get("simulation.solver", [problem.sections.get("simulation", {}).get("solver", "event")]))
+    used = set().union(*(SIMULATION_KEYS_USED[s] for s in solvers)) if drives != {"angles"} else set()
+    for name in grid:
+        section, key = name.split(".", 1)
+        if section == "ocp":
+            raise BadInput(f"--grid {name}: a sweep simulates gaits, and [ocp] keys matter to optimize only: every "
+                           "row would be the same")
+        if section == "simulation" and key not in used:
+            who = "the angles drive" if not used else f"solver {' and '.join(sorted(solvers))}"
+            raise BadInput(f"--grid {name}: {who} does not read simulation.{key}: every row would be the same")
+
+
+def _check_grid_keeps_sets(args: argparse.Namespace, grid) -> None:
+    """BadInput when a grid value changes or drops a ``--set`` value (the same key, an alternative key such as
+    robot.mu for robot.mu1): the --set would be silently ignored.  Axes of a selector key (gait.waveform,
+    ocp.objective) drop the keys of the other variants by design."""
+    if not args.overrides:
+        return
+    source = str(args.problem)
+    sets = [parse_override(text, source) for text in args.overrides]
+    data = read_toml(args.problem)
+    for name, values in grid.items():
+        section, key = name.split(".", 1)
+        if SCHEMA[section].selector == key:
+            continue
+        for value in dict.fromkeys(v.item() if hasattr(v, "item") else v for v in values):
+            loss = first_loss(data, sets, [(section, key, value)])
+            if loss is not None:
+                given = next(t for t, (sec, k, _) in zip(args.overrides, sets) if f"{sec}.{k}" == loss[1])
+                also = f" (or sweep {loss[1]})" if loss[1] != name else ""
+                raise BadInput(f"--grid {name}={format_value(value)} undoes --set {given}: the grid gives "
+                               f"{name} at every point, so drop the --set{also}")
+
+
 def _warmup_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the list")
 
 
 @register("warmup", "prebuild the compiled-library cache (e.g. before a sweep on a fresh cluster node)", _warmup_args)
 def cmd_warmup(args: argparse.Namespace) -> int:
+    from ocp_crawl.model.compiled import CacheError
     from ocp_crawl.sweep.warmup import warmup
 
-    result = warmup()
+    try:
+        result = warmup()
+    except CacheError as exc:  # OCP_CRAWL_CACHE names no usable directory
+        raise BadInput(str(exc)) from None
     counts = {state: result.count(state) for state in ("built", "cached", "not compiled")}
     if args.json:
         print(json.dumps(jsonable({"cache": str(result.cache), "disabled": result.disabled, **counts,
@@ -292,7 +336,10 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     from ocp_crawl.ocp import optimize_gait
     from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
 
-    problem = load_problem(args.problem, args.overrides)
+    if args.nodes and any(text.split("=", 1)[0].strip() == "ocp.nodes" for text in args.overrides):
+        raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the nodes: give one")
+    # the first N of --nodes is the problem's ocp.nodes (so the reports name the N solved)
+    problem = load_problem(args.problem, [*args.overrides, *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
     if "ocp" not in read_toml(args.problem):
         raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
                        "'Problem files', and problems/ocp_max_speed.toml)")

@@ -20,6 +20,10 @@ kind          columns                             model of a row
               ``segment`` [-] (1 or 2)
 ============  ==================================  ==========================================================
 
+Every value must be finite and at most 1e12 in magnitude once converted to SI (:data:`MAX_SI`); every
+uncertainty at least 1e-12 x max(the largest |value| of the observable column, 1 in SI units)
+(:data:`SIGMA_FLOOR`): smaller ones make the weighted residuals and their Jacobian overflow.
+
 ``S_norm`` is S divided by S at the file's reference row, the row of the largest ``S_norm``
 (normally 1): the model is normalised the same way, by its own S at that row, so that the
 (unknown) scale of the measured S drops out, and with it whatever sets only that scale.
@@ -57,6 +61,14 @@ KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
 }
 #: units in which observables are reported and plotted (name -> (unit, factor from SI))
 DISPLAY = {"S": ("mm", 1e3), "S_norm": ("-", 1.0), "phi": ("deg", 180.0 / np.pi)}
+#: largest magnitude of any value of a measurement file in SI units (m, rad, Pa, N m, -): far beyond any
+#: measurement, small enough that squares, weighted residuals and their Jacobian stay finite
+MAX_SI = 1e12
+#: smallest uncertainty, relative to max(largest |value| of the observable column, 1 SI unit): a smaller sigma
+#: makes the weighted residuals (model - y) / sigma and their Jacobian overflow or drown in round-off
+SIGMA_FLOOR = 1e-12
+#: the SI unit of every column, for messages
+SI_NAMES = {"length": "m", "angle": "rad", "pressure": "Pa", "torque": "N m", "dimensionless": "-"}
 
 
 @dataclass(frozen=True)
@@ -143,11 +155,42 @@ def _check_rules(m: Measurements) -> None:
                                     f"{SCHEMA[section].key_map[key].what})", j)
 
 
-def _check_rows(m: Measurements) -> None:
+def _check_magnitudes(m: Measurements) -> None:
+    """Every value, converted to SI, must be finite and at most :data:`MAX_SI` in magnitude (``1e308 bar`` is
+    not finite in Pa; ``phi = 1e308 deg`` is finite in rad but overflows the residuals)."""
+    for name in m.table.columns:
+        si, unit = SI_NAMES[COLUMNS[name]], m.table.units[name]
+        limit = f"{MAX_SI:g}".replace("e+", "e") + ("" if si == "-" else f" {si}")
+        if unit != si and unit not in ("-", "1"):
+            limit += f" = {MAX_SI / UNITS[COLUMNS[name]][unit]:.3g} {unit}"
+        for j, v in enumerate(m.table[name]):
+            if not abs(v) <= MAX_SI:
+                what = (f"{name} = {m.shown(name, j)} is out of range" if math.isfinite(v)
+                        else f"{name} is out of range: its value overflows when converted to {si}")
+                raise m.table.error(f"{what}; every value of a measurement file must be at most {limit} in "
+                                    "magnitude", j)
+
+
+def _check_sigmas(m: Measurements) -> None:
+    """Every sigma must be > 0 and at least :data:`SIGMA_FLOOR` times max(largest |observable|, 1 SI unit)."""
     sigma = "sigma_" + m.observable
+    floor = SIGMA_FLOOR * max(float(np.max(np.abs(m.y))), 1.0)
     for j, s in enumerate(m.sigma):
         if not s > 0:
             raise m.table.error(f"{sigma} = {m.shown(sigma, j)}: an uncertainty must be > 0", j)
+        if s < floor:
+            unit = m.table.units[sigma]
+            shown = f"{floor / UNITS[COLUMNS[sigma]][unit]:.3g}" + ("" if unit in ("-", "1") else f" {unit}")
+            si = SI_NAMES[COLUMNS[sigma]]
+            raise m.table.error(f"{sigma} = {m.shown(sigma, j)} is too small: an uncertainty must be at least "
+                                f"{SIGMA_FLOOR:g} x max(the largest |{m.observable}| of the file, "
+                                f"{'1' if si == '-' else '1 ' + si}) = {shown}; a smaller one overflows the weighted "
+                                "residuals (model - data) / sigma", j)
+
+
+def _check_rows(m: Measurements) -> None:
+    _check_magnitudes(m)
+    _check_sigmas(m)
     if m.kind == "bending":
         for j, seg in enumerate(m.table["segment"]):
             if seg not in (1.0, 2.0):
@@ -186,7 +229,10 @@ def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurement
     ------
     TableError
         One line naming the file and, for a bad row, its line: a missing or unknown column, a unit
-        of the wrong dimension, a value that is not a finite number (NaN), an uncertainty <= 0, too
+        of the wrong dimension, a value that is not a finite number (NaN), a value whose magnitude in SI
+        units (m, rad, Pa, N m) is above :data:`MAX_SI` = 1e12 or not finite once converted (``1e308 bar``),
+        an uncertainty <= 0 or below :data:`SIGMA_FLOOR` = 1e-12 times max(the largest |value| of the
+        observable column, 1 in SI units: m, rad, -) (a smaller one overflows the weighted residuals), too
         few rows, an operating point outside the range of its problem key (``psi``, ``A``, ``gamma``:
         ``gait.psi_deg``, ...; a pressure row's ``psi`` has the range of ``gait.psi_deg``), a pressure
         p0 < 0 or A_p outside [0, p0].

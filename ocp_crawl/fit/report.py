@@ -1,7 +1,6 @@
 """What a fit reports: the text summary, the JSON record, the fitted problem file and the residual table."""
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -13,6 +12,7 @@ from ocp_crawl.fit.params import at_bound
 from ocp_crawl.fit.solve import FitResult
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import write_table
+from ocp_crawl.problem.overrides import toml_string
 
 #: files written by :func:`write_fit` into its directory
 FIT_FILES = {"problem": "fitted_problem.toml", "json": "fit.json", "residuals": "residuals.csv",
@@ -97,7 +97,7 @@ def _toml_value(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):
-        return json.dumps(v)
+        return toml_string(v)
     return repr(v)
 
 

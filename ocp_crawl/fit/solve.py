@@ -38,6 +38,8 @@ from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.status import Status
 from ocp_crawl.workers import mp_context
 
+#: where the fit starts, in messages
+START = "the start values"
 #: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from it
 FAILED_RESIDUAL = 1e3
 #: singular values below RCOND * the largest are numerically zero (finite differences are good to ~1e-6)
@@ -127,8 +129,10 @@ class _Objective:
         self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
         self.constants = {**pressure_defaults(problem.gravity, form), **pressure}
         self.scale = np.array([abs(p.x0) or 1.0 for p in params])
-        self.failed_evaluations = 0
+        self.failed_evaluations = self.calls = 0
         self.last: tuple[np.ndarray, list] | None = None
+        self.residual = np.empty(0)
+        """the residuals of the last evaluation (failed rows: FAILED_RESIDUAL)"""
 
     def evaluate(self, x: np.ndarray) -> list[tuple[np.ndarray, tuple[str, ...]]]:
         keys, pressure = split_values(self.params, x)
@@ -155,7 +159,13 @@ class _Objective:
         if bad.any():
             self.failed_evaluations += 1
             r[bad] = FAILED_RESIDUAL
+        self.calls += 1
+        self.residual = r
         return r
+
+    def files(self) -> list[FileFit]:
+        """Data and model of every file at the last evaluation."""
+        return [FileFit(d, m, s) for d, (m, s) in zip(self.datasets, self.last[1])]
 
 
 def _n_residuals(datasets: Sequence[Measurements]) -> int:
@@ -264,6 +274,8 @@ def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Seq
 
 def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: str = "the fitted parameters"
                   ) -> tuple[Status, str]:
+    """The first failing row's status; NO_CONVERGENCE for a row whose weighted residual is not finite although its
+    model is (it overflows), or for a search that did not converge; else SUCCESS."""
     failed = [(f.data.table.line_of(j), f.data.path, s) for f in files for j, s in enumerate(f.statuses)
               if s != SUCCESS]
     if failed:
@@ -275,6 +287,13 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: st
             status = Status.ERROR
         return status, (f"{len(failed)} point(s) fail at {where}; the first, {path}:{line}: "
                         f"{' '.join(text.split())}")
+    overflow = [(f, j) for f in files for j in np.flatnonzero(~np.isfinite(f.residuals))]
+    if overflow:
+        f, j = overflow[0]
+        return Status.NO_CONVERGENCE, (
+            f"the weighted residual (model - data) / sigma of {f.data.path}:{f.data.table.line_of(j)} is not finite at "
+            f"{where} (model {f.model[j]:.3g}, data {f.data.y[j]:.3g}, sigma {f.data.sigma[j]:.3g}, SI): it overflows"
+            + ("; the search did not run, no uncertainties" if where == START else ""))
     if ls_status <= 0:
         return Status.NO_CONVERGENCE, f"least squares stopped after {nfev} evaluations without converging"
     return Status.SUCCESS, f"converged after {nfev} evaluations"
@@ -316,6 +335,8 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     FitResult
         Its ``status`` is ``success``, ``no_convergence``, or the status of the first point whose
         simulation fails at the fitted (or, if the start fails, the start) parameters: never raised.
+        ``no_convergence`` also when the search did not run or failed (a weighted residual that overflows),
+        or the weighted Jacobian is not finite or zero (rank 0), or the covariance is NaN: never ``success``.
 
     Raises
     ------
@@ -331,16 +352,23 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         z0 = np.array([p.x0 for p in params]) / obj.scale
         r0 = obj(z0)
         if obj.failed_evaluations:
-            files = [FileFit(d, m, s) for d, (m, s) in zip(datasets, obj.last[1])]
-            status, msg = _final_status(files, 1, 1, "the start values")
-            return _result(obj, z0, None, r0, files, status, msg, 1, absolute_sigma, rcond)
+            status, msg = _final_status(obj.files(), 1, 1, START)
+            return _result(obj, z0, None, r0, obj.files(), status, msg, 1, absolute_sigma, rcond)
         lo = np.array([p.low for p in params]) / obj.scale
         hi = np.array([p.high for p in params]) / obj.scale
-        res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev, method="trf",
-                            x_scale=1.0)
+        try:
+            res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev, method="trf",
+                                x_scale=1.0)
+        except ValueError as exc:  # scipy refuses a Jacobian that is not finite (residuals overflow when differenced)
+            status, msg = _final_status(obj.files(), 1, obj.calls, "the last evaluation")
+            if status == Status.SUCCESS:
+                status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {obj.calls} evaluations: {exc} "
+                                                      "(the weighted residuals overflow); no uncertainties")
+            return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, obj.calls, absolute_sigma,
+                           rcond)
         if obj.last is None or not np.array_equal(obj.last[0], res.x):
             obj(res.x)
-        files = [FileFit(d, m, s) for d, (m, s) in zip(datasets, obj.last[1])]
+        files = obj.files()
         status, msg = _final_status(files, res.status, res.nfev)
         return _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev, absolute_sigma, rcond)
     finally:
@@ -348,18 +376,40 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
             executor.shutdown(cancel_futures=True)
 
 
+def _trusted(status: Status, message: str, jac: np.ndarray | None, cov: np.ndarray, rank: int) -> tuple[Status, str]:
+    """SUCCESS only for a search that ran, with a finite Jacobian, a covariance without NaN and rank >= 1 (a
+    rank-deficient fit keeps its infinite sigmas: the directions are reported); else NO_CONVERGENCE, saying why."""
+    if status != Status.SUCCESS:
+        return status, message
+    if jac is None:
+        why = "the search did not run (no Jacobian)"
+    elif not np.all(np.isfinite(jac)):
+        why = "the weighted Jacobian at the fitted parameters is not finite (the residuals overflow)"
+    elif np.isnan(cov).any():
+        why = "the covariance is not finite (NaN)"
+    elif rank == 0:
+        why = "the weighted Jacobian is zero (rank 0): the data do not depend on any fitted parameter"
+    else:
+        return status, message
+    return Status.NO_CONVERGENCE, f"not a fit ({message}): {why}; nothing is determined, no uncertainties"
+
+
 def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_sigma, rcond) -> FitResult:
     x = z * obj.scale
-    # a failed row's residual is a penalty, not a misfit: no chi-square then
-    chi2 = math.nan if any(s != SUCCESS for f in files for s in f.statuses) else float(np.sum(np.asarray(r) ** 2))
+    # a failed (or overflowing) row's residual is a penalty, not a misfit: no chi-square then
+    failed = any(s != SUCCESS for f in files for s in f.statuses) or not all(np.isfinite(f.residuals).all()
+                                                                            for f in files)
+    with np.errstate(over="ignore"):
+        chi2 = math.nan if failed else float(np.sum(np.asarray(r) ** 2))
     dof = len(r) - len(x)
     scale2 = 1.0 if absolute_sigma or dof <= 0 else chi2 / dof
     names = [p.name for p in obj.params]
-    if jac is None:  # the search did not run: no Jacobian, nothing known about the uncertainties
+    if jac is None or not np.all(np.isfinite(jac)):  # no (usable) Jacobian: nothing known about the uncertainties
         nan = np.full((len(x), len(x)), np.nan)
         cov, corr, s, rank, dirs = nan, nan.copy(), np.empty(0), 0, ()
     else:
         cov, corr, s, rank, dirs = uncertainty(np.asarray(jac), x, names, scale2, rcond)
+    status, message = _trusted(status, message, jac, cov, rank)
     keys, pressure = split_values(obj.params, x)
     fitted = obj.problem.with_values(keys) if keys else obj.problem
     uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)

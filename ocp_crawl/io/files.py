@@ -16,8 +16,10 @@ import hashlib
 import json
 import os
 import re
+import select
 import shutil
 import socket
+import stat
 import tempfile
 from pathlib import Path
 from typing import IO, Any, Callable
@@ -149,20 +151,30 @@ def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
         raise
 
 
+#: how long an input that is a named pipe may stay without data before it is refused [s] (no writer: refused
+#: instead of waiting for ever)
+PIPE_WAIT_S = 10.0
+
+
 def read_bounded(path: str | os.PathLike, limit: int) -> bytes:
     """The bytes of the input file ``path``, at most ``limit + 1`` of them (the caller refuses more).
 
-    An endless file (/dev/zero) stops at the limit, and a named pipe without a writer reads as empty instead
-    of blocking the open.  Every failure is an OSError whose ``strerror`` says why (a path with a NUL
-    character included, which ``open`` reports as a ValueError).
+    An endless file (/dev/zero) stops at the limit.  A named pipe is opened without waiting for a writer and
+    read once data (or the end) arrives, at most :data:`PIPE_WAIT_S` later (then refused: no writer).  Every
+    failure is an OSError whose ``strerror`` says why (a path with a NUL character included, which ``open``
+    reports as a ValueError).
     """
+    nonblocking = getattr(os, "O_NONBLOCK", 0)   # POSIX; Windows has no named pipes in the file system
     try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0) | nonblocking)
     except ValueError as exc:
         raise OSError(errno.EINVAL, f"invalid path ({exc})") from None
-    if hasattr(os, "set_blocking"):
-        os.set_blocking(fd, True)
     with os.fdopen(fd, "rb") as fh:
+        if nonblocking:
+            if stat.S_ISFIFO(os.fstat(fd).st_mode) and not select.select([fd], [], [], PIPE_WAIT_S)[0]:
+                raise OSError(errno.ETIMEDOUT, f"a named pipe with nothing written to it within {PIPE_WAIT_S:g} s "
+                                               "(no writer?)")
+            os.set_blocking(fd, True)   # opened without waiting for a writer; now read as usual
         return fh.read(limit + 1)
 
 

@@ -24,6 +24,7 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from ocp_crawl.checks import parse_number
 from ocp_crawl.io.files import atomic_write, read_bounded
 
 #: Accepted units per physical dimension, with their factor to the SI unit (angles to rad).
@@ -150,15 +151,11 @@ def _factor(path: Path, lineno: int, name: str, unit: str, dimension: str) -> fl
     return units[unit]
 
 
-#: a number cell: ASCII decimal notation (Python's float() also takes "1_0" and non-ASCII digits), or nan/inf to
-#: be named as not finite
-_NUMBER = re.compile(r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)", re.ASCII | re.IGNORECASE)
-
-
 def _number(path: Path, lineno: int, name: str, unit: str, text: str) -> float:
-    if not _NUMBER.fullmatch(text):
-        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number", lineno)
-    value = float(text)
+    try:
+        value = parse_number(text)
+    except ValueError:
+        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number", lineno) from None
     if not math.isfinite(value):
         raise TableError(path, f"column '{name} [{unit}]': {text} is not a finite number", lineno)
     return value

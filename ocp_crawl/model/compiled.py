@@ -10,9 +10,11 @@ preallocated buffers (~3 us per call).  Without a working compiler, or with
 from __future__ import annotations
 
 import ctypes
+import errno
 import hashlib
 import os
 import shutil
+import stat
 import subprocess
 import sys
 import tempfile
@@ -43,12 +45,80 @@ def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "Fa
 CFLAGS = ("-O2", "-fno-math-errno")
 
 
+class CacheError(ValueError):
+    """The compiled-library cache cannot be used (bad input: ``OCP_CRAWL_CACHE`` or ``XDG_CACHE_HOME``).
+
+    The message is one line naming the variable, the path and what is wrong with it.
+    """
+
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))
+
+
 def cache_dir() -> Path:
+    """The compiled-library cache: ``$OCP_CRAWL_CACHE``, else ``$XDG_CACHE_HOME/ocp_crawl`` or
+    ``~/.cache/ocp_crawl`` (not checked: see :func:`usable_cache_dir`)."""
     base = os.environ.get("OCP_CRAWL_CACHE")
     if base:
         return Path(base)
     xdg = os.environ.get("XDG_CACHE_HOME")
     return Path(xdg if xdg else Path.home() / ".cache") / "ocp_crawl"
+
+
+def _cache_name(path: Path) -> str:
+    """The cache directory in messages, with the variable that chose it."""
+    if os.environ.get("OCP_CRAWL_CACHE"):
+        return f"OCP_CRAWL_CACHE={path}"
+    if os.environ.get("XDG_CACHE_HOME"):
+        return f"compiled-library cache {path} (XDG_CACHE_HOME={os.environ['XDG_CACHE_HOME']})"
+    return f"compiled-library cache {path}"
+
+
+def _kind(path: Path) -> str:
+    """What ``path``, which is not a directory, is: "a regular file", "a character device", ..."""
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return "not a directory"
+    kinds = ((stat.S_ISREG, "a regular file"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"))
+    return next((name for test, name in kinds if test(mode)), "not a directory")
+
+
+def _not_usable(exc: OSError, path: Path) -> str:
+    """Why ``path`` cannot be created as a directory, in words."""
+    if isinstance(exc, FileExistsError):
+        return f"not a directory (it is {_kind(path)})"
+    if isinstance(exc, NotADirectoryError):
+        # the first name of the path that exists and is not a directory
+        blocker = next((p for p in reversed(path.parents) if p.exists() and not p.is_dir()), path.parent)
+        return f"not a directory ({blocker} in its path is {_kind(blocker)})"
+    if exc.errno == errno.ENAMETOOLONG:
+        longest, total = max(len(os.fsencode(part)) for part in path.parts), len(os.fsencode(str(path)))
+        return f"name too long ({exc.strerror}; its longest name has {longest} bytes, the path {total})"
+    if isinstance(exc, PermissionError) or exc.errno == errno.EROFS:
+        return f"not writable: cannot create the directory ({exc.strerror})"
+    return f"cannot create the directory: {exc.strerror or exc}"
+
+
+def usable_cache_dir() -> Path:
+    """:func:`cache_dir`, created if absent and checked to be a writable directory.
+
+    Raises
+    ------
+    CacheError : naming the variable that chose the directory, the path and the reason (not a directory,
+        not writable, name too long, ...), before anything is compiled into it.
+    """
+    path = cache_dir()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CacheError(f"{_cache_name(path)}: {_not_usable(exc, path)}; the cache must be a writable "
+                         "directory") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise CacheError(f"{_cache_name(path)}: directory is not writable; the cache must be a writable "
+                         "directory")
+    return path
 
 
 def _compiler() -> str | None:

@@ -6,8 +6,8 @@ Values are validated later, when the problem is built.
 """
 from __future__ import annotations
 
-import json
 import re
+import sys
 import tomllib
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -75,33 +75,75 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], s
                ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
     """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value) triples.
 
-    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``) removes the other, and setting
-    ``gait.waveform`` removes the keys of the other waveforms.  Returns the
-    new data and the set keys.  Values are validated later, when the problem is built.
+    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``, ``file`` and ``phase``) removes the other
+    (and the keys that need it: inline samples with their phases); ``mu1`` or ``mu2`` on a robot given one ``mu``
+    keeps the other foot at mu.  Setting a selector (``gait.waveform``, ``ocp.objective``) removes the keys of
+    ``data`` that belong to other variants than its last value; keys set here stay, for the validation to refuse.
+    An item that undoes an earlier item (the same key to another value, its alternative) is a ProblemError
+    naming both.  Returns the new data and the set keys.  Values are validated later, when the problem is built.
     """
     out = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
-    done: set[tuple[str, str]] = set()
+    done: dict[tuple[str, str], Any] = {}
     for section, name, value in items:
         sec = out.setdefault(section, {})
         if not isinstance(sec, dict):
             raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a section in the file")
+        value = value.item() if isinstance(value, np.generic) else value
+        if (section, name) in done and done[section, name] != value:
+            raise ProblemError(f"{source}: {section}.{name} is set twice, to {format_value(done[section, name])} "
+                               f"and to {format_value(value)}: give it once")
         schema = SCHEMA[section]
-        dropped = [other for other in schema.key_map[name].exclusive_with if sec.pop(other, None) is not None]
-        if name == schema.selector:  # another waveform: the keys of the others go
-            dropped += [k.name for k in schema.keys
-                        if not schema.applies(k, value) and sec.pop(k.name, None) is not None]
-        for key in schema.keys:  # and the keys that only made sense with them (inline samples with their phases)
-            if set(key.requires) & set(dropped):
-                sec.pop(key.name, None)
         if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
             # one foot's friction changed on a robot given one mu: the other foot keeps mu
             sec.setdefault("mu1" if name == "mu2" else "mu2", sec["mu"])
-        for key in SCHEMA[section].keys:
-            if name in key.exclusive_with:
-                sec.pop(key.name, None)
-        sec[name] = value.item() if isinstance(value, np.generic) else value
-        done.add((section, name))
-    return out, done
+            done.pop((section, "mu"), None)   # carried, not lost
+        alternatives = set(schema.key_map[name].exclusive_with) | {k.name for k in schema.keys
+                                                                   if name in k.exclusive_with}
+        _drop(sec, schema, {k for k in alternatives if k in sec}, done, f"{section}.{name} = {format_value(value)}",
+              source)
+        sec[name] = value
+        done[section, name] = value
+    for section in {s for s, n in done if n == SCHEMA[s].selector}:
+        schema, sec = SCHEMA[section], out[section]
+        variant = sec[schema.selector]
+        _drop(sec, schema, {k.name for k in schema.keys if k.name in sec and (section, k.name) not in done
+                            and not schema.applies(k, variant)}, done, "", source)
+    return out, set(done)
+
+
+def _drop(sec: dict, schema, names: set[str], done: Mapping[tuple[str, str], Any], by: str, source: str) -> None:
+    """Remove the keys ``names`` of ``sec`` and those that need one of them (``requires``); a key that an earlier
+    item set is a ProblemError (``by`` undoes it)."""
+    names = names | {k.name for k in schema.keys if k.name in sec and set(k.requires) & names}
+    for name in sorted(names):
+        if (schema.name, name) in done:
+            raise ProblemError(f"{source}: {by} drops {schema.name}.{name} = {format_value(done[schema.name, name])} "
+                               f"given before it (they are alternatives): give one of them")
+        sec.pop(name, None)
+
+
+def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]], then: Sequence[tuple[str, str, Any]]
+               ) -> tuple[int, str] | None:
+    """Which of the values set by ``first`` the later ``then`` overrides silently undo: the index in ``then`` of the
+    first (section, key, value) that changes or removes one (a key set again to another value, an alternative
+    key, another waveform or objective dropping it), with that key as ``"section.key"``; None if none does.
+
+    A removed key whose value moved to a key ``then`` did not set is kept: ``robot.mu`` then ``robot.mu1`` leaves
+    foot 2 at mu (``mu2``), as :func:`set_values` promises.
+    """
+    base, kept = set_values(data, first)
+    current, touched = base, set()
+    for i, item in enumerate(then):
+        current, done = set_values(current, [item])
+        touched |= done
+        for section, name in sorted(kept):
+            was, sec = base[section][name], current.get(section, {})
+            if name in sec and sec[name] == was:
+                continue
+            if name not in sec and any(v == was and (section, n) not in touched for n, v in sec.items()):
+                continue
+            return i, f"{section}.{name}"
+    return None
 
 
 def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str = "<dict>"
@@ -129,6 +171,11 @@ def toml_loads(text: str, where: str) -> dict[str, Any]:
     except RecursionError:
         raise ProblemError(f"{where}: malformed TOML: arrays or tables nested too deeply (problem values are "
                            "numbers and strings)") from None
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError:  # an integer longer than Python's limit of digits (sys.get_int_max_str_digits)
+        raise ProblemError(f"{where}: malformed TOML: an integer of more than {sys.get_int_max_str_digits()} digits "
+                           "(no problem value needs one; write large numbers as floats, e.g. 1e308)") from None
 
 
 def read_bytes(path: Path, limit: int = MAX_PROBLEM_BYTES) -> bytes:
@@ -168,13 +215,19 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise ProblemError(f"{path}: malformed TOML: {msg}{line}") from None
 
 
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: quotes, backslashes and control characters escaped, every other character
+    as it is (JSON's \\ud83d\\ude00 surrogate escapes of characters beyond U+FFFF are not TOML)."""
+    return '"' + re.sub(r'["\\\x00-\x1f\x7f]', lambda m: "\\u%04x" % ord(m.group()), text) + '"'
+
+
 def _toml_value(value: Any) -> str:
     if isinstance(value, np.generic):
         value = value.item()
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):
-        return json.dumps(value)  # a JSON string is a TOML basic string
+        return toml_string(value)
     if isinstance(value, (int, float)):
         return repr(value) if isinstance(value, int) or np.isfinite(value) else ("nan" if np.isnan(value) else
                                                                                  ("inf" if value > 0 else "-inf"))

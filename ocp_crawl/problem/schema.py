@@ -84,6 +84,8 @@ GT0 = Rule(lambda v: v > 0, "> 0")
 GE0 = Rule(lambda v: v >= 0, ">= 0")
 ANGLE = Rule(lambda v: 0 < v < 360, "in (0, 360)")
 PHASE = Rule(lambda v: -360 <= v <= 360, "in [-360, 360]")
+#: a Fourier coefficient of a reference angle [deg]: larger ones cannot keep the angle in (0, 360) deg
+COEFFICIENT = Rule(lambda v: -360 <= v <= 360, "in [-360, 360]", "a reference angle lies in (0, 360) deg")
 
 # ---- bounds of the robot's parameters and of every key that sizes work (README, "Bounds") ----
 #: magnitude bounds of M [kg], L [m], k [N m/rad], g [m/s^2]: products and ratios of four such numbers
@@ -223,13 +225,13 @@ _GAIT = Section("gait", "reference angles (eq. (ref)) or torques over one cycle"
     Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0, variants=_HP),
     Key("A2_deg", float, "deg", "amplitude of joint 2 (overrides A_deg)", rule=GE0, variants=_HP),
     Key("cos1_deg", list, "deg", f"fourier: cosine amplitudes of joint 1 ({_FOURIER_WHY})",
-        default=(), variants=("fourier",)),
+        default=(), rule=COEFFICIENT, variants=("fourier",)),
     Key("sin1_deg", list, "deg", f"fourier: sine amplitudes of joint 1 ({_FOURIER_WHY})", default=(),
-        variants=("fourier",)),
+        rule=COEFFICIENT, variants=("fourier",)),
     Key("cos2_deg", list, "deg", f"fourier: cosine amplitudes of joint 2 ({_FOURIER_WHY})", default=(),
-        variants=("fourier",)),
+        rule=COEFFICIENT, variants=("fourier",)),
     Key("sin2_deg", list, "deg", f"fourier: sine amplitudes of joint 2 ({_FOURIER_WHY})", default=(),
-        variants=("fourier",)),
+        rule=COEFFICIENT, variants=("fourier",)),
     Key("rise", float, "cycles", "pulse: duration of each edge (rise and fall)", required=True,
         rule=Rule(lambda v: 0 < v <= 0.5, "in (0, 0.5]", "an edge takes time; rise -> 0 tends to a square wave"),
         variants=("pulse",)),

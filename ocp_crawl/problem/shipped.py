@@ -92,8 +92,9 @@ def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> lis
     ------
     FileExistsError
         A target exists and ``force`` is false (``filename`` is the first such file).
-    NotADirectoryError, OSError
-        ``directory`` or one of its two folders is not a directory, or cannot be created or written.
+    NotADirectoryError, IsADirectoryError, OSError
+        ``directory`` or one of its two folders is not a directory, a target is a directory, or a folder cannot
+        be created or written.
         The folders are created if needed; no file is written.
     """
     root = Path(directory)
@@ -101,10 +102,11 @@ def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> lis
     for path in (root, *(root / folder for folder in SHIPPED_FOLDERS)):
         if os.path.lexists(path) and not path.is_dir():
             raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(path))
-    if not force:
-        for _, target in plan:
-            if os.path.lexists(target):
-                raise FileExistsError(errno.EEXIST, "exists", str(target))
+    for _, target in plan:
+        if target.is_dir():  # not even --force overwrites a directory with a file
+            raise IsADirectoryError(errno.EISDIR, "is a directory where a shipped file goes", str(target))
+        if not force and os.path.lexists(target):
+            raise FileExistsError(errno.EEXIST, "exists", str(target))
     for folder in SHIPPED_FOLDERS:
         (root / folder).mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=root / folder):  # writable: refused now rather than after the first file

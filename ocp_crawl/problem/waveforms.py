@@ -31,6 +31,9 @@ PHASE_COLUMN = {"phase": "dimensionless"}
 TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
 ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
 #: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17 digits)
+#: smallest distance of two sample phases [cycles] (also across the end of the cycle): closer samples make the
+#: interpolants' slopes overflow or their knots coincide
+MIN_PHASE_GAP = 1e-9
 CLOSING_RTOL = 1e-9
 
 #: ``at(section, key, value)``: the message prefix naming the file, the key and the value
@@ -116,10 +119,9 @@ def _inline(g: Mapping[str, Any], at: At) -> _Samples:
         given = ", ".join(k for k in ("phase", "tau1", "tau2", "phi1_ref_deg", "phi2_ref_deg") if k in g)
         raise ProblemError(f"{at('gait', 'waveform', 'samples')} needs file, or phase with tau1 and tau2 (or "
                            f"phi1_ref_deg and phi2_ref_deg) (given: {given or 'none of them'})")
-    fewest = INTERPOLANTS[g["interpolation"]][1]
-    if len(g["phase"]) < fewest:
-        raise ProblemError(f"{at('gait', 'phase', g['phase'])} is invalid: {len(g['phase'])} sample(s); interpolation "
-                           f"{format_value(g['interpolation'])} needs at least {fewest} in one period")
+    if not g["phase"]:   # the rows are counted per period in _periodic; there is no row to name here
+        raise ProblemError(f"{at('gait', 'phase', g['phase'])} is invalid: no samples (phases of one cycle, with "
+                           f"{pair[0]} and {pair[1]} at them)")
     for name in pair:
         if len(g[name]) != len(g["phase"]):
             raise ProblemError(f"{at('gait', name, g[name])} is invalid: {len(g[name])} entries where phase has "
@@ -140,6 +142,9 @@ def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
         if j and not t[j] > t[j - 1]:
             raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be sorted "
                                "and unique")
+        if j and t[j] - t[j - 1] < MIN_PHASE_GAP and not (t[j] == 1.0 and j == t.size - 1):
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be at "
+                               f"least {MIN_PHASE_GAP:g} cycles apart (the interpolants divide by their differences)")
     if t[-1] == 1.0:
         scale = max(float(np.max(np.abs(v))), np.finfo(float).tiny)
         gap = np.abs(v[:, -1] - v[:, 0])
@@ -150,6 +155,9 @@ def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
                                f"phase 0 (phase {float(t[0])!r}: {first}; phase 1: {last}), or give phases in [0, 1) "
                                "only")
         t, v = t[:-1], v[:, :-1]
+    if t.size and t[0] + 1.0 - t[-1] < MIN_PHASE_GAP:
+        raise ProblemError(f"{s.where(t.size - 1)}: phase {float(t[-1])!r} is less than {MIN_PHASE_GAP:g} cycles "
+                           f"before phase {float(t[0])!r} of the next cycle: phases must be at least that far apart")
     cls, fewest = INTERPOLANTS[interpolation]
     if t.size < fewest:
         raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period; interpolation "

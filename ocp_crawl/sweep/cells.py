@@ -10,6 +10,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ocp_crawl.io.files import jsonable
+from ocp_crawl.status import Status
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 from ocp_crawl.sweep.grid import schema_key
 
@@ -49,13 +50,22 @@ def parse_cell(text: str) -> Any:
     return text
 
 
+def _status(text: str) -> str:
+    """A status cell: the label of a :class:`~ocp_crawl.status.Status` as written (ValueError for any other text)."""
+    if Status.from_label(text).label != text:  # from_label takes any case; the files hold the lower-case label
+        raise ValueError(f"unknown status {text!r}; valid: {', '.join(s.label for s in Status)}")
+    return text
+
+
 def _parser(settings: SweepSettings, column: str):
     if column in settings.keys:
         kind = schema_key(column, column).type
         return kind if kind is not float else float
     if column in ("S", "W_plus", "CoT_plus"):
         return lambda t: math.nan if t == "" else float(t)
-    if column in ("status", "message"):
+    if column == "status":
+        return _status
+    if column == "message":
         return str
     return parse_cell
 

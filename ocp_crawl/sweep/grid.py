@@ -16,6 +16,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
+from ocp_crawl.checks import parse_integer, parse_number
 from ocp_crawl.problem import SCHEMA, Key, Problem, ProblemError
 from ocp_crawl.problem.overrides import toml_loads
 
@@ -101,7 +102,7 @@ def _list_item(text: str, key: Key, where: str) -> Any:
         if key.type is str:
             return text  # bare words for string keys, as --set accepts them
         try:
-            return float(text)  # Python spellings TOML lacks, e.g. "1e3" is TOML but "1." is not
+            return parse_number(text)  # Python spellings TOML lacks, e.g. "1e3" is TOML but "1." is not
         except ValueError:
             raise ProblemError(f"{where} is invalid: {text!r} is not a number") from None
 
@@ -109,7 +110,7 @@ def _list_item(text: str, key: Key, where: str) -> Any:
 def _endpoints(parts: Sequence[str], where: str) -> tuple[float, float]:
     """START and STOP of a range as finite numbers."""
     try:
-        start, stop = float(parts[0]), float(parts[1])
+        start, stop = parse_number(parts[0]), parse_number(parts[1])
     except ValueError:
         raise ProblemError(f"{where} is invalid: START and STOP must be numbers, got {parts[0]!r}, "
                            f"{parts[1]!r}") from None
@@ -122,7 +123,7 @@ def _endpoints(parts: Sequence[str], where: str) -> tuple[float, float]:
 def _count(text: str, where: str) -> int:
     """NUM of a range: an integer in [1, MAX_GRID_POINTS]."""
     try:
-        num = int(text)
+        num = parse_integer(text)
     except ValueError:
         raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {text!r} (for a step "
                            f"write START:STOP:step=STEP)") from None
@@ -138,7 +139,7 @@ def _step_count(start: float, stop: float, text: str, where: str) -> int:
     """The number of values of ``START:STOP:step=STEP``: STEP must be a non-zero number that divides
     STOP - START (to :data:`STEP_RTOL`) and points from START towards STOP."""
     try:
-        step = float(text)
+        step = parse_number(text)
     except ValueError:
         raise ProblemError(f"{where} is invalid: STEP must be a number, got {text!r}") from None
     if not math.isfinite(step) or step == 0:

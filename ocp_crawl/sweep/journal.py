@@ -29,6 +29,17 @@ LOCK_FILE = ".sweep.lock"
 FSYNC_SECONDS = 1.0
 
 
+def _decoded(raw: bytes, path: Path) -> str:
+    """``raw`` (the bytes of ``path``) as UTF-8 text; bytes that are not UTF-8 are a damaged file like a garbage
+    row: SweepError naming the file, the line and the byte."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise SweepError(f"{path}:{line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); the file is damaged: "
+                         "start again with --force") from None
+
+
 class SweepStore:
     """The files of one sweep directory: settings, journal, results; one writer at a time."""
 
@@ -47,7 +58,7 @@ class SweepStore:
     def read_settings(self) -> SweepSettings:
         """The settings.json of the directory; SweepError if absent or malformed."""
         try:
-            data = json.loads(self.settings_path.read_text())
+            data = json.loads(_decoded(self.settings_path.read_bytes(), self.settings_path))
         except FileNotFoundError:
             raise SweepError(f"{self.dir}: no {SETTINGS_FILE}: not a sweep directory") from None
         except (OSError, json.JSONDecodeError) as exc:
@@ -61,7 +72,7 @@ class SweepStore:
         """
         done: dict[int, dict[str, Any]] = {}
         if self.results_path.exists():
-            lines = self.results_path.read_text().splitlines(keepends=True)
+            lines = _decoded(self.results_path.read_bytes(), self.results_path).splitlines(keepends=True)
             if not lines or next(csv.reader(lines[:1])) != list(settings.columns):
                 raise SweepError(f"{self.results_path}: columns differ from {SETTINGS_FILE}; start again with --force")
             rows = parse_rows(lines[1:], settings.columns, settings, str(self.results_path), 2)
@@ -83,7 +94,7 @@ class SweepStore:
             # a run killed in the middle of writing a line: that point was not finished
             with open(self.journal_path, "r+b") as fh:
                 fh.truncate(len(body) + 1 if body else 0)
-        lines = (body + b"\n").decode("utf-8").splitlines(keepends=True) if body else []
+        lines = _decoded(body + b"\n", self.journal_path).splitlines(keepends=True) if body else []
         columns = ("index",) + settings.columns
         if not lines:
             return {}

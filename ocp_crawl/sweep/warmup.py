@@ -18,7 +18,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ocp_crawl.model.compiled import BUILDERS, cache_dir
+from ocp_crawl.model.compiled import BUILDERS, cache_dir, usable_cache_dir
 
 #: subpackages whose modules may define compiled functions (the floors up to sweep, ARCHITECTURE.md)
 PACKAGES = ("ocp_crawl.model", "ocp_crawl.nlp", "ocp_crawl.sim", "ocp_crawl.ocp", "ocp_crawl.problem", "ocp_crawl.sweep")
@@ -78,11 +78,16 @@ def warmup() -> WarmupResult:
     Returns
     -------
     WarmupResult : the cache directory and, per function, its library and whether it was built now.
+
+    Raises
+    ------
+    CacheError : the cache is not a writable directory (checked first; unless OCP_CRAWL_NO_COMPILE is set).
     """
     start = time.perf_counter()
-    _register_all()
-    cache = cache_dir()
     disabled = os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0")
+    # an unusable cache would fail every build, which then looks like a missing compiler: say what is wrong
+    cache = cache_dir() if disabled else usable_cache_dir()
+    _register_all()
     functions = []
     for name in sorted(BUILDERS):
         before = set(cache.glob("*.so")) if cache.is_dir() else set()

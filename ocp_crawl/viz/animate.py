@@ -28,6 +28,7 @@ from ocp_crawl.model.statics import Robot
 from ocp_crawl.viz.gait import robot_points
 from ocp_crawl.problem import Problem, run_problem
 from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.viz import FPS_BOUNDS
 
 #: foot colours: sticking, slipping
 STICK_COLOR = "#1a9850"
@@ -185,14 +186,10 @@ def crawl_animation(result: CrawlResult, robot: Robot, cycles: int = 2, frames_p
     return FuncAnimation(scene.fig, scene.update, frames=len(scene), interval=interval_ms, blit=True)
 
 
-#: slowest frame rate of a GIF [1/s]: a frame's delay is a 16-bit count of centiseconds (at most 655.35 s)
-MIN_FPS = 0.01
-
-
 def save_gif(scene: CrawlScene, path: str | os.PathLike, fps: float = 20.0) -> Path:
-    """Write the scene's frames as a looping GIF, atomically (``fps`` [1/s] at least :data:`MIN_FPS`)."""
-    if not fps >= MIN_FPS:
-        raise ValueError(f"fps = {fps!r}: a GIF needs at least {MIN_FPS} frames per second")
+    """Write the scene's frames as a looping GIF, atomically (``fps`` [1/s] in :data:`~ocp_crawl.viz.FPS_BOUNDS`)."""
+    if not FPS_BOUNDS[0] <= fps <= FPS_BOUNDS[1]:
+        raise ValueError(f"fps = {fps!r}: a GIF takes {FPS_BOUNDS[0]:g} to {FPS_BOUNDS[1]:g} frames per second")
     frames = scene.images()
     duration = int(round(1000.0 / fps))
     return atomic_write(path, lambda fh: frames[0].save(fh, format="GIF", save_all=True, append_images=frames[1:],
