@@ -345,6 +345,7 @@ def _unchecked(tmp_path, phi, sigma, tau):
     return Measurements(table, "stiffness", "phi")
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # in scipy, on purpose
 def test_a_fit_whose_search_did_not_run_is_never_a_success(tmp_path):
     """Residuals that overflow at the start (phi = 1.7e306 rad): every row is computed, yet the search cannot run;
     once reported as 'success' with sigma NaN."""
@@ -356,6 +357,7 @@ def test_a_fit_whose_search_did_not_run_is_never_a_success(tmp_path):
     assert math.isnan(fit.chi2) and np.all(np.isnan(fit.sigma))
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # in scipy, on purpose
 def test_a_search_refused_by_least_squares_is_a_status_not_a_crash(tmp_path):
     """sigma = 1.7e-302 rad: finite residuals whose Jacobian overflows; scipy raised 'array must not contain infs
     or NaNs' out of the fit."""

@@ -61,7 +61,8 @@ class FileFit:
     @property
     def residuals(self) -> np.ndarray:
         """(model - data) / sigma per row (0 at the normalising row)"""
-        return (self.model - self.data.y) / self.data.sigma
+        with np.errstate(over="ignore"):   # an overflowing row is found (not finite) and reported by the caller
+            return (self.model - self.data.y) / self.data.sigma
 
 
 @dataclass(frozen=True)
@@ -151,7 +152,8 @@ class _Objective:
         self.last = (np.array(z, copy=True), per_file)
         r = []
         for d, (model, _) in zip(self.datasets, per_file):
-            res = (model - d.y) / d.sigma
+            with np.errstate(over="ignore"):   # an overflowing residual is replaced below, its row reported
+                res = (model - d.y) / d.sigma
             keep = np.arange(len(d)) != (d.reference_row if d.reference_row is not None else -1)
             r.append(res[keep])
         r = np.concatenate(r)
