@@ -97,3 +97,17 @@ def test_resume_keeps_rows_of_every_known_status(finished, tmp_path, capsys):
     text = (out / RESULTS_FILE).read_text(encoding="utf-8")
     (out / RESULTS_FILE).write_text(text.replace(",success,", ",lift_off,", 1), encoding="utf-8")
     assert SweepResult.read(out).counts() == {"lift_off": 1, "success": 1}
+
+
+def test_a_missing_row_is_computed_on_resume(finished, tmp_path, capsys):
+    """A row with status ``missing`` (a point not computed, as ``SweepResult.read(partial=True)`` shows it) is not a
+    result: ``--resume`` computes the point (before, it was counted as finished and kept as missing)."""
+    out = _copy(finished, tmp_path)
+    text = (out / RESULTS_FILE).read_text()
+    first_success = text.index("success")
+    (out / RESULTS_FILE).write_text(text[:first_success] + "missing" + text[first_success + len("success"):])
+    code = main(["sweep", str(PAPER), "--grid", GRID, "--out", str(out), "--resume", "--no-progress", "--json"])
+    assert code == 0, capsys.readouterr().err
+    rows = SweepResult.read(out).rows
+    assert [r["status"] for r in rows] == [r["status"] for r in SweepResult.read(finished).rows]
+    assert "missing" not in (out / RESULTS_FILE).read_text()

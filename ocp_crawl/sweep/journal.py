@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ocp_crawl.io.files import naming, remove_stale_temps, write_json
+from ocp_crawl.status import Status
 from ocp_crawl.sweep.cells import cell, parse_rows, row_line
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
@@ -81,7 +82,8 @@ class SweepStore:
                                  "start again with --force")
             for i, row in enumerate(rows):
                 self._check_point(settings, i, row, self.results_path)
-                done[i] = row
+                if row["status"] != Status.MISSING.label:   # a point not computed is computed on --resume
+                    done[i] = row
         if self.journal_path.exists():
             for i, row in self._read_journal(settings, repair).items():
                 done.setdefault(i, row)
@@ -106,7 +108,8 @@ class SweepStore:
             if not isinstance(index, int) or not 0 <= index < settings.size:
                 raise SweepError(f"{self.journal_path}:{n}: index {index!r} is not a point of the grid")
             self._check_point(settings, index, row, self.journal_path)
-            done.setdefault(index, row)
+            if row["status"] != Status.MISSING.label:
+                done.setdefault(index, row)
         return done
 
     @staticmethod
