@@ -496,3 +496,15 @@ COMMAND_ROWS.update({
     "sweep: NUM in Arabic-Indic digits": R("sweep", ["{paper}", "--grid", "gait.psi_deg=0:90:\u0663", "--out",
                                                     "{tmp}/s"], ["NUM must be an integer"]),
 })
+
+#: found by the review of the second round (session 21)
+COMMAND_ROWS.update({
+    "sweep: --set gait.waveform with a waveform axis": R("sweep", ["{paper}", "--set", "gait.waveform=fourier",
+                                                                  "--grid", "gait.waveform=harmonic,fourier", "--out",
+                                                                  "{tmp}/s"],
+                                                         ["--set gait.waveform=fourier", "drop the --set"]),
+    "sweep: --set robot.mu1 equal to L, then a mu axis": R("sweep", ["{paper}", "--set", "robot.mu1=0.12", "--set",
+                                                                    "robot.mu2=0.4", "--grid", "robot.mu=0.3,0.4",
+                                                                    "--out", "{tmp}/s"],
+                                                           ["undoes --set robot.mu1=0.12"]),
+})

@@ -272,3 +272,30 @@ def test_a_named_pipe_whose_writer_comes_late_is_read(tmp_path):
         got = read_bounded(fifo, 1 << 20)
     writer.join(timeout=10)
     assert got == data and not writer.is_alive()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+@pytest.mark.parametrize("argv", [["simulate", "{fifo}", "--set", "robot.k=0.2", "--drive", "torque"],
+                                  ["sweep", "{fifo}", "--grid", "gait.psi_deg=30,45", "--set", "robot.k=0.2",
+                                   "--out", "{tmp}/s", "--no-progress"]],
+                         ids=["simulate", "sweep"])
+def test_a_problem_file_on_a_named_pipe_is_read_once(argv, tmp_path, capsys, monkeypatch):
+    """The checks of --set against shortcuts and grids read the file's data already read (a second read of a named
+    pipe would wait for a writer that has gone)."""
+    import ocp_crawl.io.files
+
+    monkeypatch.setattr(ocp_crawl.io.files, "PIPE_WAIT_S", 5.0)
+    fifo = tmp_path / "p.toml"
+    os.mkfifo(fifo)
+
+    def write():
+        with open(fifo, "wb") as fh:
+            fh.write(PAPER.read_bytes())
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    with hang_guard("pipe read once"):
+        code = cli.main([a.replace("{fifo}", str(fifo)).replace("{tmp}", str(tmp_path)) for a in argv])
+    writer.join(timeout=10)
+    err = capsys.readouterr().err
+    assert code == 0, err

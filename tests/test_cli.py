@@ -403,3 +403,16 @@ def test_animation_frames_are_bounded():
                              x2=np.full(n, 0.05), phi=np.full((2, n), 1.5), theta=np.zeros(n), mode=np.zeros(n, int))
     fr = frames_of(failed, 1, 10)
     assert len(fr.t) == 11 and fr.t[0] == 399.0 and fr.t[-1] == 400.0
+
+
+def test_input_path_beyond_the_basic_plane(tmp_path, capsys):
+    """``--input`` with a character beyond U+FFFF in its path (before, the path became JSON's surrogate escapes,
+    which TOML does not read back, and the file was "not found")."""
+    table = tmp_path / "t\U0001F600.csv"
+    table.write_text("phase [-],tau1 [N m],tau2 [N m]\n0.0,-0.29,-0.29\n0.25,-0.25,-0.33\n0.5,-0.29,-0.29\n"
+                     "0.75,-0.33,-0.25\n", encoding="utf-8")
+    paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
+    code = main(["simulate", str(paper), "--input", str(table), "--json"])
+    out, err = capsys.readouterr()
+    assert code in (0, 1) and "No such file" not in err, err
+    assert json.loads(out)["problem"]["gait"]["file"] == str(table)

@@ -439,4 +439,8 @@ def test_first_loss_finds_what_later_overrides_undo():
     assert first_loss(data, [("gait", "waveform", "samples"), ("gait", "file", "t.csv")],
                       [("gait", "phase", [0.0, 0.5])]) == (0, "gait.file")
     assert first_loss(data, [("gait", "waveform", "samples"), ("gait", "file", "t.csv")],
-                      [("gait", "waveform", "harmonic")]) == (0, "gait.file")
+                      [("gait", "waveform", "harmonic")]) == (0, "gait.waveform")
+    # a value that only coincides with another key's (L = 0.12) is not carried: the later mu drops mu1
+    robot = {"robot": {"mu": 0.389, "L": 0.12}}
+    assert first_loss(robot, [("robot", "mu1", 0.12), ("robot", "mu2", 0.4)], [("robot", "mu", 0.3)]) == \
+        (0, "robot.mu1")

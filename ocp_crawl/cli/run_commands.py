@@ -15,8 +15,8 @@ from ocp_crawl.cli.common import (finish, force_arg, integer, optional_out, out_
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
-                               paper_problem, run_problem)
-from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
+                               paper_problem, problem_from_dict, run_problem)
+from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml, toml_string
 from ocp_crawl.problem.problem import solver_options
 from ocp_crawl.problem.waveforms import waveform_text
 from ocp_crawl.sim.result import CrawlResult
@@ -58,24 +58,31 @@ def _simulate(problem: Problem) -> CrawlResult:
     return result
 
 
-def shortcuts(args: argparse.Namespace) -> list[str]:
+def load_with_shortcuts(args: argparse.Namespace) -> Problem:
+    """The command's problem with its shortcut options and ``--set`` overrides (:func:`shortcuts`); the file is
+    read once (it may be a named pipe)."""
+    data = read_toml(args.problem)
+    return problem_from_dict(data, source=str(args.problem), overrides=shortcuts(args, data))
+
+
+def shortcuts(args: argparse.Namespace, data) -> list[str]:
     """The overrides that the command's shortcut options stand for (``--drive``: gait.drive, ``--solver``:
     simulation.solver, ``--steps``: simulation.steps, ``--input``: gait.waveform = "samples" with gait.file, the
     file's path made absolute: relative to the current directory), followed by its ``--set`` overrides (so that a
     ``--set`` key of another waveform than ``--input``'s is refused by the schema).  A ``--set`` that changes or
     drops what a shortcut set (another value of its key, an alternative key such as gait.phase for gait.file,
-    another waveform) is a conflict: BadInput naming both."""
+    another waveform) is a conflict: BadInput naming both.  ``data``: the problem file's sections."""
     options = []   # (the option as given, the overrides it stands for)
     if getattr(args, "input", None) is not None:
         options.append((f"--input {args.input}",
-                        ["gait.waveform=samples", f"gait.file={json.dumps(os.path.abspath(args.input))}"]))
+                        ["gait.waveform=samples", f"gait.file={toml_string(os.path.abspath(args.input))}"]))
     for name, key in (("drive", "gait.drive"), ("solver", "simulation.solver"), ("steps", "simulation.steps")):
         if getattr(args, name, None) is not None:
             options.append((f"--{name} {getattr(args, name)}", [f"{key}={getattr(args, name)}"]))
     texts = [text for _, items in options for text in items]
     if texts and args.overrides:
         source = str(args.problem)
-        loss = first_loss(read_toml(args.problem), [parse_override(t, source) for t in texts],
+        loss = first_loss(data, [parse_override(t, source) for t in texts],
                           [parse_override(t, source) for t in args.overrides])
         if loss is not None:
             i, key = loss
@@ -172,7 +179,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
 
 @register("simulate", "simulate one problem file and report the gait", _simulate_args)
 def cmd_simulate(args: argparse.Namespace) -> int:
-    problem = load_problem(args.problem, shortcuts(args))
+    problem = load_with_shortcuts(args)
     if args.steps is not None and problem.solver != "mpcc":
         raise BadInput(f"--steps {args.steps} is invalid with solver {format_value(problem.solver)}: it sets the "
                        "steps of --solver mpcc (the event-driven and prescribed-angle solvers place their own)")
@@ -265,7 +272,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
     path = Path(args.out)
     if path.suffix.lower() != ".gif" or not path.stem:
         raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
-    problem = load_problem(args.problem, shortcuts(args))
+    problem = load_with_shortcuts(args)
     prepare_out(path.parent, [path.name], args.force, label=f"--out {args.out}")
     check_start(problem)
     result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)

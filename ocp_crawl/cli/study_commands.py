@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import sys
 from dataclasses import replace
@@ -15,8 +16,9 @@ from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.settings import NODES_BOUNDS
-from ocp_crawl.problem import SCHEMA, format_value, load_problem, ocp_settings
+from ocp_crawl.problem import SCHEMA, format_value, ocp_settings, problem_from_dict
 from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
+from ocp_crawl.sim import solver_named
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError, SweepFailed,
                              check_some_point_valid, default_jobs, grid_from_specs, run_sweep)
 
@@ -46,9 +48,10 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
 
 @register("sweep", "map S, W+ and CoT+ over a grid of problem keys (parallel, resumable)", _sweep_args)
 def cmd_sweep(args: argparse.Namespace) -> int:
-    problem = load_problem(args.problem, args.overrides)
+    data = read_toml(args.problem)   # once: the file may be a named pipe
+    problem = problem_from_dict(data, source=str(args.problem), overrides=args.overrides)
     grid = grid_from_specs(args.grid)
-    _check_grid_keeps_sets(args, grid)
+    _check_grid_keeps_sets(args, data, grid)
     _check_axes_matter(problem, grid)
     check_some_point_valid(problem, grid)
     check_scheduler(args.scheduler)
@@ -70,9 +73,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-#: the [simulation] keys each simulator of the torque drive reads (the angles drive reads none)
-SIMULATION_KEYS_USED = {"event": {"solver", "max_step", "event_xtol", "max_cycles", "periodic_tol"},
-                        "mpcc": {"solver", "steps", "max_cycles", "periodic_tol"}}
+def _simulation_keys(solver: str) -> set[str]:
+    """The [simulation] keys the torque solver ``solver`` reads: its options' fields, and ``solver``."""
+    names = {f.name for f in dataclasses.fields(solver_named(solver).options)}
+    return {k.name for k in SCHEMA["simulation"].keys if k.name in names} | {"solver"}
 
 
 def _check_axes_matter(problem, grid) -> None:
@@ -80,7 +84,7 @@ def _check_axes_matter(problem, grid) -> None:
     optimize reads them), a [simulation] key that the points' simulators do not read."""
     drives = set(grid.get("gait.drive", [problem.drive]))
     solvers = set(grid.get("simulation.solver", [problem.sections.get("simulation", {}).get("solver", "event")]))
-    used = set().union(*(SIMULATION_KEYS_USED[s] for s in solvers)) if drives != {"angles"} else set()
+    used = set().union(*(_simulation_keys(s) for s in solvers)) if drives != {"angles"} else set()
     for name in grid:
         section, key = name.split(".", 1)
         if section == "ocp":
@@ -91,18 +95,22 @@ def _check_axes_matter(problem, grid) -> None:
             raise BadInput(f"--grid {name}: {who} does not read simulation.{key}: every row would be the same")
 
 
-def _check_grid_keeps_sets(args: argparse.Namespace, grid) -> None:
+def _check_grid_keeps_sets(args: argparse.Namespace, data, grid) -> None:
     """BadInput when a grid value changes or drops a ``--set`` value (the same key, an alternative key such as
-    robot.mu for robot.mu1): the --set would be silently ignored.  Axes of a selector key (gait.waveform,
-    ocp.objective) drop the keys of the other variants by design."""
+    robot.mu for robot.mu1): the --set would be silently ignored.  An axis of ``gait.waveform`` drops the keys of
+    the other waveforms by design (only a --set of gait.waveform itself is a conflict).  ``data``: the file's
+    sections."""
     if not args.overrides:
         return
     source = str(args.problem)
     sets = [parse_override(text, source) for text in args.overrides]
-    data = read_toml(args.problem)
     for name, values in grid.items():
         section, key = name.split(".", 1)
         if SCHEMA[section].selector == key:
+            given = [text for text, (sec, k, _) in zip(args.overrides, sets) if (sec, k) == (section, key)]
+            if given:
+                raise BadInput(f"--grid {name}=... and --set {given[0]}: the grid gives {name} at every point, so "
+                               "drop the --set")
             continue
         for value in dict.fromkeys(v.item() if hasattr(v, "item") else v for v in values):
             loss = first_loss(data, sets, [(section, key, value)])
@@ -339,10 +347,12 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     if args.nodes and any(text.split("=", 1)[0].strip() == "ocp.nodes" for text in args.overrides):
         raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the nodes: give one")
     # the first N of --nodes is the problem's ocp.nodes (so the reports name the N solved)
-    problem = load_problem(args.problem, [*args.overrides, *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
-    if "ocp" not in read_toml(args.problem):
+    data = read_toml(args.problem)   # once: the file may be a named pipe
+    if "ocp" not in data:
         raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
                        "'Problem files', and problems/ocp_max_speed.toml)")
+    problem = problem_from_dict(data, source=str(args.problem),
+                                overrides=[*args.overrides, *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
     if problem.drive != "torque":
         raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = \"torque\", got "
                        f"{format_value(problem.drive)}")

@@ -127,20 +127,23 @@ def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]], t
     """Which of the values set by ``first`` the later ``then`` overrides silently undo: the index in ``then`` of the
     first (section, key, value) that changes or removes one (a key set again to another value, an alternative
     key, another waveform or objective dropping it), with that key as ``"section.key"``; None if none does.
+    Keys are checked in the order of ``first``.
 
-    A removed key whose value moved to a key ``then`` did not set is kept: ``robot.mu`` then ``robot.mu1`` leaves
-    foot 2 at mu (``mu2``), as :func:`set_values` promises.
+    A removed key whose value the same item carried to a key it added is kept: ``robot.mu`` then ``robot.mu1``
+    leaves foot 2 at mu (``mu2``), as :func:`set_values` promises.
     """
-    base, kept = set_values(data, first)
-    current, touched = base, set()
+    base, _ = set_values(data, first)
+    kept = list(dict.fromkeys((section, name) for section, name, _ in first))
+    current = base
     for i, item in enumerate(then):
-        current, done = set_values(current, [item])
-        touched |= done
-        for section, name in sorted(kept):
+        before = current
+        current, _ = set_values(current, [item])
+        for section, name in kept:
             was, sec = base[section][name], current.get(section, {})
             if name in sec and sec[name] == was:
                 continue
-            if name not in sec and any(v == was and (section, n) not in touched for n, v in sec.items()):
+            added = set(sec) - set(before.get(section, {})) - {item[1]}
+            if name not in sec and any(sec[n] == was for n in added):
                 continue
             return i, f"{section}.{name}"
     return None
