@@ -12,7 +12,7 @@ from ocp_crawl.fit.params import at_bound
 from ocp_crawl.fit.solve import FitResult
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import write_table
-from ocp_crawl.problem.overrides import toml_string
+from ocp_crawl.problem.overrides import toml_text
 
 #: files written by :func:`write_fit` into its directory
 FIT_FILES = {"problem": "fitted_problem.toml", "json": "fit.json", "residuals": "residuals.csv",
@@ -93,31 +93,21 @@ def fit_dict(fit: FitResult) -> dict[str, Any]:
     })
 
 
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return toml_string(v)
-    return repr(v)
-
-
 def problem_toml(fit: FitResult) -> str:
     """The fitted problem as a problem file: the input problem with the fitted keys, the fit in comments.
 
     The pressure constants are not problem-file keys: they are written as comments.
     """
     values = fit.values()
-    head = [f"# Fitted by ocp-crawl fit ({fit.status.label}; chi2/dof {_num(fit.chi2_red)}).",
-            *[f"# {n} = {v:.10g} +- {_num(s)} {p.unit}" for (n, v), s, p in zip(values.items(), fit.sigma,
-                                                                                fit.parameters)]]
+    head = [f"Fitted by ocp-crawl fit ({fit.status.label}; chi2/dof {_num(fit.chi2_red)}).",
+            *[f"{n} = {v:.10g} +- {_num(s)} {p.unit}" for (n, v), s, p in zip(values.items(), fit.sigma,
+                                                                              fit.parameters)]]
     if any(n.startswith("pressure.") for n in values):
-        head.append("# pressure actuator (not a problem-file section): " +
+        head.append("pressure actuator (not a problem-file section): " +
                     ", ".join(f"{k} = {v:.6g}" for k, v in fit.pressure.items()))
-    body = []
-    for section, keys in fit.problem.to_dict().items():
-        body.append(f"\n[{section}]")
-        body += [f"{k} = {_toml_value(v)}" for k, v in keys.items() if v is not None]
-    return "\n".join(head + body) + "\n"
+    sections = {section: {k: v for k, v in keys.items() if v is not None}
+                for section, keys in fit.problem.to_dict().items()}
+    return toml_text(sections, head)
 
 
 def residual_columns(fit: FitResult) -> list[tuple[str, str, list[float]]]:

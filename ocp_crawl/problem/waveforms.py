@@ -31,10 +31,10 @@ PHASE_COLUMN = {"phase": "dimensionless"}
 TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
 ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
 #: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17 digits)
+CLOSING_RTOL = 1e-9
 #: smallest distance of two sample phases [cycles] (also across the end of the cycle): closer samples make the
 #: interpolants' slopes overflow or their knots coincide
 MIN_PHASE_GAP = 1e-9
-CLOSING_RTOL = 1e-9
 
 #: ``at(section, key, value)``: the message prefix naming the file, the key and the value
 At = Callable[[str, str, Any], str]
