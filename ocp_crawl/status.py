@@ -27,6 +27,7 @@ class Status(IntEnum):
     UNSTABLE = 15
     SNAP_THROUGH = 16
     ENERGY_IMBALANCE = 17
+    SET_VALUED = 23
     # the periodic-gait OCP
     INFEASIBLE = 11
     NOT_COMPLEMENTARY = 12
@@ -79,6 +80,8 @@ STATUS_MESSAGES = {
                          "dynamically, which the quasistatic model cannot follow",
     Status.ENERGY_IMBALANCE: "the energy balance of the steady cycle does not close within the tolerance (input work "
                              "against potential change plus friction dissipation)",
+    Status.SET_VALUED: "more than one contact mode continues from a tie of the two feet's friction limits: the "
+                       "quasistatic model leaves the motion undecided (set-valued); mu1 != mu2 breaks the tie",
     Status.INFEASIBLE: "the optimal control problem has no feasible point (locally): the constraints cannot all "
                        "be met",
     Status.NOT_COMPLEMENTARY: "the optimiser converged but the complementarity residual exceeds the tolerance",

@@ -117,22 +117,6 @@ def test_rounded_corners_converge_to_the_kinked_result(graze_case):
     assert extrapolated == pytest.approx(res.S, rel=1e-5)  # (1.8e-6 measured)
 
 
-def test_friction_tie_at_a_kink_fails_with_a_clear_message():
-    """Trapezoid pulses 100 deg apart: the slip of foot 2 reaches a corner where both joints have just come to the
-    same rest level and stay there (tau' = 0 after the kink): a mirror-symmetric state of the symmetric robot, both
-    feet at equal friction limits and nothing moving.  Which foot slips later is not decided by the statics: the
-    run fails, saying so (it is not given a mode)."""
-    robot = Robot.paper()
-    pulse = Pulse(math.radians(90), math.radians(90), math.radians(25), math.radians(25), math.radians(100), 0.12, 0.0)
-    res = simulate_torque(Model(robot, gravity="physical"), ReferenceTorque(pulse, robot.k))
-    assert res.status_name == "no_consistent_mode"
-    assert "the limits tie" in res.message and "physically ambiguous" in res.message
-    t = res.failure_t  # (independent of the stepper: the input there is symmetric and held)
-    assert np.min(np.abs(pulse.t_knots - t % 1.0)) < 1e-12
-    ref, rate = pulse(t), pulse.derivative(t + 1e-6)
-    assert abs(ref[0] - ref[1]) < 1e-12 and np.all(rate == 0.0)
-
-
 @pytest.mark.parametrize("knot", [0, 12])
 def test_a_hold_during_a_slip_changes_nothing(knot):
     """The triangle gait (joint 2 a quarter cycle behind) held still for 0.02 cycles at a knot inside a slip phase of

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot, Status, simulate_torque
-from ocp_crawl.sim.event import HybridStepper, input_step
+from ocp_crawl.sim.event import HybridStepper
+from ocp_crawl.sim.event_kinks import input_step
 from ocp_crawl.sim.event_guards import cubic_min
 
 from conftest import paper_torque

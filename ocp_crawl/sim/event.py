@@ -40,22 +40,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.inputs import CallableSignal, PeriodicSignal, ReferenceTorque, as_signal
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal
 from ocp_crawl.model.stability import fast_step
 from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin
+from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, step_limit
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
-    hermite_point, mode_q, torque_pair
+    hermite_point, mode_change_kind, mode_q, torque_pair
+from ocp_crawl.sim.event_ties import check_shared_slip
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
@@ -85,7 +85,7 @@ class HybridOptions(CycleOptions):
     """events allowed in one cycle before the run ends with status ``too_many_events``"""
     resolve_input: bool = True
     """limit the step to 1/8 of the period of the input's fastest significant harmonic (see
-    :func:`input_step`), so that fast (chattering) inputs are followed and no event pair hides
+    :func:`~ocp_crawl.sim.event_kinks.input_step`), so that fast (chattering) inputs are followed and no event pair hides
     inside a step"""
     trial_step: float = 1e-9
     """phase step used to test the consistency of a mode after a transition"""
@@ -114,36 +114,6 @@ class HybridOptions(CycleOptions):
         self._set("quad_h", real("HybridOptions.quad_h", self.quad_h, low=MAX_STEP_BOUNDS[0], high=MAX_STEP_BOUNDS[1]))
         if not isinstance(self.resolve_input, bool):
             raise ValueError(f"HybridOptions.resolve_input must be True or False, got {self.resolve_input!r}")
-
-
-def input_step(signal, samples: int = 1024, rel: float = 1e-3) -> float:
-    """Largest continuation step [cycles] that resolves a periodic input: 1/(8 f), where f is the
-    highest harmonic whose contribution to the input's rate (amplitude times frequency) is at least
-    ``rel`` times the largest one; 1/8 for a constant input.  Harmonics above samples/2 alias.
-    """
-    t = np.arange(samples) / samples
-    u = np.asarray(signal(t), dtype=float).reshape(-1, samples)
-    rate = np.abs(np.fft.rfft(u, axis=1)).max(axis=0) * np.arange(samples // 2 + 1)
-    if not np.all(np.isfinite(rate)) or rate.max() <= 0:
-        return 0.125
-    return 0.125 / int(np.nonzero(rate >= rel * rate.max())[0].max())
-
-
-@lru_cache(maxsize=256)
-def _cached_input_step(signal: PeriodicSignal) -> float:
-    return input_step(signal)
-
-
-def step_limit(signal: PeriodicSignal) -> float:
-    """:func:`input_step` of ``signal``, remembered for hashable (frozen, value-compared) signals such as
-    :class:`~ocp_crawl.model.inputs.Harmonic` references, so that a sweep or a replay building many steppers
-    of the same input runs the FFT once; a wrapped callable (which may change) is always sampled anew."""
-    if isinstance(signal, CallableSignal):
-        return input_step(signal)
-    try:
-        return _cached_input_step(signal)
-    except TypeError:  # unhashable (array fields)
-        return input_step(signal)
 
 
 class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMixin):
@@ -180,17 +150,20 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         signal = self.torque.reference if isinstance(self.torque, ReferenceTorque) else self.torque
         self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
         self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
+        self._init_holds()  # (where it holds still: crossed in one step, the mode decided at the end)
         if self.opt.resolve_input:
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
     def _solve(self, t: float, x0: np.ndarray | list, q: np.ndarray, step: bool = False,
-               left: bool = False) -> _Point | None:
+               left: bool = False, held: bool = False) -> _Point | None:
         """Newton solve of the mode q at phase t from x0 (an array or a list); None if it does not converge.
         ``step``: a continuation step, solved by :func:`~ocp_crawl.model.stability.fast_step` (the point then
         carries its stability numbers and d'' coefficients).  At a kink of the input the rates are those after
-        it, or before it with ``left`` (:mod:`ocp_crawl.sim.event_kinks`)."""
+        it, or before it with ``left`` (:mod:`ocp_crawl.sim.event_kinks`); ``held``: with the rates of a hold (zero)."""
         tq = self._torque_values(float(t)) if not left else self.kink_values(t, True) or self._torque_values(float(t))
+        if held:
+            tq = tq[:2] + [0.0, 0.0]
         fn, tol = self.step_fn if step else self.newton, self.res_tol
         tail = self._tails.get(id(q))
         if tail is None or tail[0] is not q:  # (q, its inputs q and p as a list, kept in the compiled buffer)
@@ -306,7 +279,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         t_end = float(run.cycle + 1)
         while run.pt.t < t_end - 1e-15:
             pt, seg, h = run.pt, run.seg, run.h
-            t_new = min(pt.t + h, t_end)
+            if self._hold_list and self._cross_hold(run, t_end):
+                continue
+            t_new = min(pt.t + h, t_end, self.next_hold(pt.t))
             if t_end - t_new < 1e-12:
                 t_new = t_end
             at_kink = False
@@ -321,6 +296,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
                 continue
             self.nsteps += 1
             new, crossed, refine = self._crossings(seg, pt, new)
+            crossed = self._not_at_hold(seg, new, crossed)
             if refine and not crossed and hh > 1e-5:
                 run.h = hh / 2
                 continue
@@ -418,6 +394,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         if right is None:
             raise _Failure(Status.NO_CONVERGENCE, pt.t, seg.mode, "mode solve failed at a kink of the input")
         run.pt = right
+        if self.tie_note(right) and self.hold_at(pt.t) is None:  # (at tied limits the rates after it decide)
+            self._apply_decision(run, right, "at a kink of the input where the friction limits tie")
+            return
         g, g_left = self.point_guards(seg.mode, right), self.point_guards(seg.mode, pt)
         jumped = [kind] if kind else [k for k, v in g.items()
                                       if v < -100 * guard_noise(k, self.noise) and g_left[k] >= 0]
@@ -434,7 +413,15 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
             run.events.append(Event(t_ev, event_kind(kind), seg.mode.label, "failure", g_ev, kind))
             raise _Failure(target, t_ev, seg.mode, f"{kind.replace('_', ' ')}")
         chosen, trial, kind_out = self._successor(seg.mode, target, kind, ev_pt, t_ev)
-        run.events.append(Event(t_ev, kind_out, seg.mode.label, chosen.label, g_ev, kind))
+        self._start_mode(run, ev_pt, t_ev, chosen, trial, kind_out, g_ev, kind)
+
+    def _start_mode(self, run: _Run, ev_pt: _Point, t_ev: float, chosen: Mode, trial: _Point, kind_out: str,
+                    g_ev: float, guard: str) -> None:
+        """Record the event ``kind_out`` (located by ``guard``, of value g_ev) at t_ev and start the segment of the
+        successor ``chosen`` from ``trial``, its start at the event's state ev_pt, after the jump and stability
+        checks."""
+        seg = run.seg
+        run.events.append(Event(t_ev, kind_out, seg.mode.label, chosen.label, g_ev, guard))
         self._check_jump(ev_pt, trial, seg.mode, chosen, kind_out)
         # (trial.q: mode_q(chosen, d at the event))
         self._require_stable(trial, chosen, trial.q, f"after the event {kind_out}")
@@ -456,6 +443,12 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         mode consistent on the piece before it if that one is not or none is (:meth:`_before_kink`); (mode, its start,
         event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
+        if self.tie_note(ev_pt) and not self._input_jumps(t_ev):
+            found = self._decide(ev_pt)  # (at a tie of the friction limits: the rule of _decide, not the table)
+            if len(found) == 1:
+                chosen, trial = found[0]
+                kind_out = mode_change_kind(mode, chosen) if chosen != mode else f"graze_{event_kind(kind)}"
+                return chosen, trial, kind_out
         trial = self._consistent(target, ev_pt, new_d0)
         found = [(target, trial)] if trial is not None else \
             [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]
@@ -491,5 +484,8 @@ def simulate_torque(model: Model, torque, options: HybridOptions | None = None, 
     CrawlResult
         Runs cycles from a released start until the gait is periodic: S [m], W+ [J], CoT+ [-], the
         events of the steady cycle, trajectories; a failure (fold, lift-off, not periodic, ...) is a status.
+        A gait in which the feet share a slip at a tie of equal friction limits stands only if the one-sided
+        friction limits agree with it (:mod:`ocp_crawl.sim.event_ties`), else its status is ``set_valued``.
     """
-    return HybridStepper(model, torque, options).run(t_eval=t_eval)
+    res = HybridStepper(model, torque, options).run(t_eval=t_eval)
+    return check_shared_slip(res, model, lambda m: HybridStepper(m, torque, options).run())

@@ -20,23 +20,70 @@ The stepper therefore treats the input piece by piece:
 An input without kinks (smooth, or C1 at its knots such as splines and PCHIP) leaves all of this out: the
 stepper then runs exactly as without this module.
 
+A *hold* of the input is a piece between breakpoints on which both rates are exactly zero (the plateaus of
+pulses and square-like samples).  A quasistatic state does not move while its input does not, whatever its
+mode, so the stepper crosses a hold in one step: every step ends at the next hold's start, the state at the
+start is the state at the end, and no guard is located inside it (each is constant there; a guard at zero
+stays at zero).  At the hold's end the mode that follows is decided by the rates after it
+(:meth:`KinksMixin._leave_hold`): of the modes whose equations hold at the state without a jump, the one whose
+guards all stay positive (those at zero grow) over the trial steps after the hold.  Rate independence
+makes that choice depend on the direction of the input's motion only, so an edge that starts from rest
+(a half-cosine ramp) decides as a straight one does.  This is what decides the friction ties of
+step-like inputs: a symmetric robot under a symmetric hold sits with both feet at their friction limits,
+and the first motion after the hold tells which foot slips, or that both stick.
+
 :class:`KinksMixin` is a part of :class:`~ocp_crawl.sim.event.HybridStepper`; it uses the stepper's
-``torque``, ``torque_at`` and ``breakpoints``.
+``torque``, ``torque_at``, ``breakpoints``, ``opt``, ``_solve``, ``_trial_steps``, ``_jump``, ``point_guards``,
+``tie_note`` and ``_start_mode``.
 """
 from __future__ import annotations
 
 import bisect
 import math
+from functools import lru_cache
 
 import numpy as np
 
-from ocp_crawl.sim.event_state import torque_curvature
+from ocp_crawl.model.inputs import CallableSignal, PeriodicSignal
+from ocp_crawl.model.statics import AUX
+from ocp_crawl.sim.event_state import _Failure, _Point, _Run, mode_change_kind, torque_curvature
+from ocp_crawl.status import Status
 
 #: a knot is a kink when the jump of the slope across it, measured at +-e and +-e/16, does not shrink with e
 #: (a C1 input's difference shrinks like e) and exceeds this fraction of the input's largest rate
 KINK_RTOL = 1e-9
 #: kinks closer than this after a phase [cycles] are not the next step's end (no steps of round-off length)
 KINK_GAP = 1e-12
+
+
+def input_step(signal, samples: int = 1024, rel: float = 1e-3) -> float:
+    """Largest continuation step [cycles] that resolves a periodic input: 1/(8 f), where f is the
+    highest harmonic whose contribution to the input's rate (amplitude times frequency) is at least
+    ``rel`` times the largest one; 1/8 for a constant input.  Harmonics above samples/2 alias.
+    """
+    t = np.arange(samples) / samples
+    u = np.asarray(signal(t), dtype=float).reshape(-1, samples)
+    rate = np.abs(np.fft.rfft(u, axis=1)).max(axis=0) * np.arange(samples // 2 + 1)
+    if not np.all(np.isfinite(rate)) or rate.max() <= 0:
+        return 0.125
+    return 0.125 / int(np.nonzero(rate >= rel * rate.max())[0].max())
+
+
+@lru_cache(maxsize=256)
+def _cached_input_step(signal: PeriodicSignal) -> float:
+    return input_step(signal)
+
+
+def step_limit(signal: PeriodicSignal) -> float:
+    """:func:`input_step` of ``signal``, remembered for hashable (frozen, value-compared) signals such as
+    :class:`~ocp_crawl.model.inputs.Harmonic` references, so that a sweep or a replay building many steppers
+    of the same input runs the FFT once; a wrapped callable (which may change) is always sampled anew."""
+    if isinstance(signal, CallableSignal):
+        return input_step(signal)
+    try:
+        return _cached_input_step(signal)
+    except TypeError:  # unhashable (array fields)
+        return input_step(signal)
 
 
 def one_sided_rates(signal, t: np.ndarray, e: float) -> tuple[np.ndarray, np.ndarray]:
@@ -64,6 +111,41 @@ def input_kinks(signal, breakpoints: np.ndarray) -> tuple[np.ndarray, float]:
     scale = float(np.max(np.abs(np.asarray(signal.derivative(grid), float)))) + np.finfo(float).tiny
     jump, jump16 = np.max(np.abs(hi - lo), axis=0), np.max(np.abs(hi16 - lo16), axis=0)
     return b[(jump16 > 0.5 * jump) & (jump16 > KINK_RTOL * scale)], e
+
+
+def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
+    """The holds of ``signal``: maximal stretches of the pieces between its ``breakpoints`` (phases in [0, 1)) on
+    which both rates are exactly zero (tested at three interior phases of each piece, which is exact for the
+    pieces of piecewise-linear samples, pulses and PCHIP plateaus).
+
+    Returns an array (m, 2) of [start, end) phases [cycles] with start in [0, 1) and start < end < start + 1 (a
+    hold across the period's end ends after 1); m = 0 for an input without holds or one held all the time.
+    """
+    b = np.unique(np.mod(np.asarray(breakpoints, float), 1.0))
+    if b.size == 0:
+        return np.zeros((0, 2))
+    ends = np.append(b[1:], b[0] + 1.0)
+    t = b[:, None] + np.array([0.25, 0.5, 0.75])[None, :] * (ends - b)[:, None]
+    rate = np.asarray(signal.derivative(t.ravel()), float).reshape(2, b.size, 3)
+    held = np.all(rate == 0.0, axis=(0, 2))
+    if held.all() or not held.any():
+        return np.zeros((0, 2))
+    first = int(np.argmin(held))  # a moving piece: the holds are the runs of held pieces after it
+    out, start = [], None
+    for j in range(first + 1, first + 1 + b.size):
+        i = j % b.size
+        lo, hi = b[i] + (j // b.size), ends[i] + (j // b.size)
+        if held[i] and start is None:
+            start = lo
+        if held[i]:
+            end = hi
+        elif start is not None:
+            out.append((start, end))
+            start = None
+    if start is not None:
+        out.append((start, end))
+    holds = np.array(out) - np.floor(np.array(out)[:, :1])
+    return holds[np.argsort(holds[:, 0])]
 
 
 class KinksMixin:
@@ -130,3 +212,77 @@ class KinksMixin:
             elif t - lo < 2 * dt or hi - t < 2 * dt:
                 t = min(max(t, lo + 2 * dt), hi - 2 * dt)
         return torque_curvature(self.torque_at, t, dt)
+
+    def _init_holds(self) -> None:
+        """Find the input's holds (:func:`input_holds`) and keep them as a list of (start, end) per cycle offset."""
+        self.holds = input_holds(self.torque, self.breakpoints)
+        self._hold_list = [tuple(h) for h in self.holds.tolist()]
+
+    def _hold_spans(self, t: float):
+        """The holds' absolute spans (start, end) [cycles] of the cycles around phase t."""
+        c = math.floor(t)
+        return [(a + k, b + k) for k in (c - 1, c, c + 1) for a, b in self._hold_list]
+
+    def next_hold(self, t: float) -> float:
+        """The start of the first hold after phase t [cycles] (later than t + KINK_GAP); inf without holds."""
+        return min((a for a, _ in self._hold_spans(t) if a > t + KINK_GAP), default=math.inf)
+
+    def hold_at(self, t: float) -> tuple[float, float] | None:
+        """The absolute span (start, end) [cycles] of the hold that holds phase t (from its start on, to round-off),
+        or None."""
+        if not self._hold_list:
+            return None
+        return next(((a, b) for a, b in self._hold_spans(t) if a - KINK_GAP <= t < b - KINK_GAP), None)
+
+    def _not_at_hold(self, seg, new: _Point, crossed: list[str]) -> list[str]:
+        """The guards ``crossed`` in a step, less all of them when the step ends at a hold's start with each of them
+        at zero to round-off: a guard that reaches zero as the input comes to rest (the slip of a half-cosine edge
+        stops with its rate) is decided at the hold's end, by the rates after it."""
+        if not crossed or abs(self.next_hold(new.t - 2 * KINK_GAP) - new.t) > KINK_GAP:
+            return crossed
+        g = self.point_guards(seg.mode, new)
+        return crossed if any(g[k] < -100 * self.noise for k in crossed) else []
+
+    def _cross_hold(self, run: _Run, t_end: float) -> bool:
+        """If run.pt is at (or inside) a hold of the input, move it to the hold's end (or to t_end, the end of the
+        cycle, if that comes first) with the state unchanged, and decide there the mode that follows
+        (:meth:`_leave_hold`); returns whether it did."""
+        span = self.hold_at(run.pt.t)
+        if span is None:
+            return False
+        seg, tb = run.seg, min(span[1], t_end)
+        # the hold's ends at rest (zero rates: the dense output interpolates the constant state between them), then
+        # the state at its end with the rates after it
+        ends = [self._solve(t, run.pt.xl, seg.q, step=True, held=True) for t in (run.pt.t, tb)]
+        ends.append(self._solve(tb, run.pt.xl, seg.q, step=True))
+        if any(p is None or self._jump(run.pt, p)[0] > self.opt.jump_tol for p in ends):
+            raise _Failure(Status.NO_CONVERGENCE, tb, seg.mode, "the mode's state changed across a hold of the "
+                           "input (the solve did not return the state it started from)")
+        self.nsteps += 1
+        seg.points.extend(ends)
+        run.pt = end = ends[-1]
+        if tb == span[1]:
+            self._leave_hold(run, end)
+        return True
+
+    def _leave_hold(self, run: _Run, end: _Point) -> None:
+        """At the end of a hold (state ``end``, with the rates after it): keep the current mode if its guards stay
+        positive after the hold (those at zero grow), else :meth:`_apply_decision` of the modes that continue."""
+        start, pending = self._trial_steps(run.seg.mode, end, end.a[AUX["d"]])
+        if start is None or pending:
+            self._apply_decision(run, end, "at the end of a hold of the input")
+
+    def _apply_decision(self, run: _Run, pt: _Point, where: str) -> None:
+        """Continue from pt in the one mode of :meth:`_decide`: the current segment goes on if it is the current
+        mode, else a new segment starts (its event's kind from the two modes).  NO_CONSISTENT_MODE if no mode
+        continues; SET_VALUED if several do (the statics leave the motion undecided: which foot slips, or whether
+        they stick, then depends on what breaks the tie, e.g. mu1 != mu2)."""
+        found, seg = self._decide(pt), run.seg
+        if len(found) != 1:
+            names = ", ".join(m.label for m, _ in found) or "none"
+            status = Status.SET_VALUED if found else Status.NO_CONSISTENT_MODE
+            raise _Failure(status, pt.t, seg.mode, f"{where} the modes that continue from the state are {names}"
+                           f"{self.tie_note(pt)}")
+        chosen, start = found[0]
+        if chosen != seg.mode:
+            self._start_mode(run, pt, pt.t, chosen, start, mode_change_kind(seg.mode, chosen), 0.0, "decided")

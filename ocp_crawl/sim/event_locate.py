@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.event_kinks import KINK_GAP
 from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, hermite_point, mode_q
 from ocp_crawl.sim.result import Mode
@@ -179,6 +180,24 @@ class EventsMixin:
         # while its input does not, so the mode holds at the limit until the hold ends, where the kink of the input
         # decides what follows; not at the friction tie, where the mode after the hold is ambiguous (tie_note)
         return start if self._input_still(pt.t) and not self.tie_note(pt) else None
+
+    def _decide(self, pt: _Point) -> list[tuple[Mode, _Point]]:
+        """The contact modes that continue from the state pt (solved with the input's rate after its phase) without
+        a jump and with all their guards positive over the trial steps (those at zero growing), as (mode, its
+        start): the rule at a tie of the friction limits and at the end of a hold (README, "Friction ties").
+
+        Stick-stick and the one-foot slips are tried first; slip-slip only if none of them continues (at a tie held
+        by a mirror-symmetric motion the one-foot slips keep the tie, so their switch guard stays at zero and they
+        are not taken: the two feet then share the slip, the symmetric solution).  More than one mode found means
+        the statics do not decide the motion (see :meth:`_apply_decision`)."""
+        found: list[tuple[Mode, _Point]] = []
+        for m in Mode:
+            if m.foot == 3 and found:
+                break
+            start, pending = self._trial_steps(m, pt, pt.a[AUX["d"]])
+            if start is not None and not pending and self._jump(pt, start)[0] <= self.opt.jump_tol:
+                found.append((m, start))
+        return found
 
     def _trial_steps(self, mode: Mode, pt: _Point, d0: float, kink: float | None = None) -> tuple[_Point | None, set]:
         """(start of ``mode`` at pt, its guards still at zero to round-off after the trial steps TRIAL_STEPS); (None,
