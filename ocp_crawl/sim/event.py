@@ -279,9 +279,11 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         t_end = float(run.cycle + 1)
         while run.pt.t < t_end - 1e-15:
             pt, seg, h = run.pt, run.seg, run.h
-            if self._hold_list and self._cross_hold(run, t_end):
-                continue
-            t_new = min(pt.t + h, t_end, self.next_hold(pt.t))
+            t_new = min(pt.t + h, t_end)
+            if self._hold_list:  # (a hold is crossed in one step, and a step ends where one starts)
+                if self._cross_hold(run, t_end):
+                    continue
+                t_new = min(t_new, self.next_hold(pt.t))
             if t_end - t_new < 1e-12:
                 t_new = t_end
             at_kink = False
@@ -296,7 +298,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
                 continue
             self.nsteps += 1
             new, crossed, refine = self._crossings(seg, pt, new)
-            crossed = self._not_at_hold(seg, new, crossed)
+            if crossed and self._hold_list:
+                crossed = self._not_at_hold(seg, new, crossed)
             if refine and not crossed and hh > 1e-5:
                 run.h = hh / 2
                 continue
