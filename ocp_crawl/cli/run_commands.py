@@ -291,13 +291,15 @@ def _crosscheck_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (torque drive)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key (repeatable)")
-    p.add_argument("--steps", type=steps_type, nargs="+", default=[50, 100, 200, 400], metavar="N",
-                   help="increasing steps per cycle of the MPCC time-stepping (default 50 100 200 400; at most "
-                        f"{MAX_STEP_COUNTS} counts)")
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the table")
+    p.add_argument("--steps", type=steps_type, nargs="+", default=[50, 100, 200, 400],
+                   metavar="N", help="increasing steps per cycle of the MPCC time-stepping "
+                                     f"(default 50 100 200 400; at most {MAX_STEP_COUNTS} counts)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object on stdout instead of the table")
 
 
-@register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators", _crosscheck_args)
+@register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators",
+          _crosscheck_args)
 def cmd_crosscheck(args: argparse.Namespace) -> int:
     from ocp_crawl.sim.crosscheck import crosscheck
 
@@ -306,27 +308,27 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         raise BadInput(f"{problem.source}: crosscheck needs the torque drive, got [gait] drive = "
                        f"{format_value(problem.drive)}")
     steps = list(args.steps)
+    given = " ".join(map(str, args.steps))
     if len(steps) < 2 or any(b <= a for a, b in zip(steps, steps[1:])):
-        raise BadInput(f"--steps {' '.join(map(str, args.steps))} is invalid: give at least two different step counts, "
+        raise BadInput(f"--steps {given} is invalid: give at least two different step counts, "
                        "increasing strictly (the error is checked to decrease with N)")
     if len(steps) > MAX_STEP_COUNTS:
-        raise BadInput(f"--steps {' '.join(map(str, args.steps))}: {len(steps)} step counts, at most "
+        raise BadInput(f"--steps {given}: {len(steps)} step counts, at most "
                        f"{MAX_STEP_COUNTS} (one MPCC run each)")
     check_start(problem)
-    # the file's [simulation] options (cycles, periodicity, event location) for both simulators; --steps the steps
+    # the file's [simulation] options (cycles, periodicity, event location) for both simulators;
+    # --steps the steps
     sim = problem.sections.get("simulation", {})
     result = crosscheck(problem.model, problem.torque, steps=steps, hybrid_options=problem.hybrid,
                         mpcc_options=solver_options("mpcc", sim))
     if args.json:
-        print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)), allow_nan=False))
+        print(json.dumps(jsonable(dict(result.summary(), problem_file=problem.source)),
+                         allow_nan=False))
     else:
         print(result.table())
-    def shown(x) -> str:
-        return f"{x:.3g}" if isinstance(x, (int, float)) and not isinstance(x, bool) else str(x)
-
-    failed = [f"'{name}' is {shown(c['value'])} (threshold {shown(c['threshold'])})"
-              for name, c in result.summary()["checks"].items() if not c["passed"]]
+    # the criteria decide, each named with its value and bound; the information does not
+    failed = [f"'{name}': {c.text()}" for name, c in result.checks.items() if not c.passed]
     if failed:
-        print(f"{PROG}: crosscheck FAIL, checks not passed: {'; '.join(failed)}", file=sys.stderr)
+        print(f"{PROG}: crosscheck FAIL, criteria not met: {'; '.join(failed)}", file=sys.stderr)
     return EXIT_FAILURE if failed or not result.passed else EXIT_OK
 
