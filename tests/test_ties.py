@@ -178,3 +178,13 @@ def test_step_like_inputs_are_decided(case):
         mpcc = run(ref, robot, solver="mpcc", steps=200)
         if mpcc.success:
             assert agree(res.S, mpcc.S), (res.S, mpcc.S)
+
+
+def test_edges_sharper_than_the_mpcc_steps_name_the_setting():
+    """Pulses with edges of 0.02 cycles (4 steps at N = 200): the event solver follows them (the path does not depend
+    on how fast the edge is), the time-stepping loses the branch at an edge and says which setting resolves it."""
+    ref = pulse(rise=0.02, hold=0.3)
+    assert run(ref).success
+    res = run(ref, solver="mpcc", steps=200)
+    assert res.status == Status.NO_CONVERGENCE
+    assert "raise [simulation] steps (now 200)" in res.message and "input's edges" in res.message

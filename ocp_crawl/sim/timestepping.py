@@ -363,6 +363,15 @@ class TimeStepper:
                 raise _Stop(Status.JOINT_ON_GROUND, "", f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m", t1, mode)
         jump = float(np.max(np.abs(res.phi - state.phi)))
         if jump > self.opt.max_dphi:
+            # an input that itself moves by more than half of max_dphi in the step (a sharp edge of a pulse or a
+            # square wave) says that the step is too coarse, not that the equilibrium branch folds
+            moved = np.asarray(self.torque(t1), float).ravel() - np.asarray(self.torque(t1 - 1.0 / self.steps),
+                                                                             float).ravel()
+            edge = float(np.max(np.abs(moved))) / self.model.robot.k
+            if edge > 0.5 * self.opt.max_dphi:
+                raise _Stop(Status.NO_CONVERGENCE, "", f"{where}: phi jumps by {jump:.3g} rad while the input moves "
+                            f"by {edge:.3g} rad (tau/k) in the step: the step is coarser than the input's edges; "
+                            f"raise [simulation] steps (now {self.steps}) or use the event solver", t1, mode)
             raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)", t1, mode)
         return kin
 
@@ -392,7 +401,8 @@ class TimeStepper:
             self._metrics(res, t, phi, cols)
             res.periodicity_residual = stats["periodicity_deviation"]
             energy_gate(res, self.opt.energy_tol_n2 / N**2, f"TimeSteppingOptions.energy_tol_n2 / N^2 "
-                        f"({self.opt.energy_tol_n2:g}/{N}^2)")
+                        f"({self.opt.energy_tol_n2:g}/{N}^2; the steps may be coarser than the input's edges: "
+                        f"raise [simulation] steps)")
         if te is not None:
             t, phi, cols, mode = _resample(t0 + te, t, phi, cols, mode)
         set_samples(res, t, phi, cols["theta"], cols["d"], cols["x1"], cols["x2"], cols["f_t"], cols["f_n1"],
