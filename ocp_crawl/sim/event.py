@@ -58,10 +58,10 @@ from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, step_limit
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
-    hermite_point, mode_change_kind, mode_q, torque_pair
+    hermite_point, mode_q, torque_pair
 from ocp_crawl.sim.event_ties import check_shared_slip
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
-from ocp_crawl.sim.result import CrawlResult, Event, Mode
+from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 
 _RES, _DET, _D = AUX["res"], AUX["det"], AUX["d"]

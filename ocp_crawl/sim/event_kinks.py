@@ -46,7 +46,8 @@ import numpy as np
 
 from ocp_crawl.model.inputs import CallableSignal, PeriodicSignal
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Failure, _Point, _Run, mode_change_kind, torque_curvature
+from ocp_crawl.sim.event_state import _Failure, _Point, _Run, torque_curvature
+from ocp_crawl.sim.result import mode_change_kind
 from ocp_crawl.status import Status
 
 #: a knot is a kink when the jump of the slope across it, measured at +-e and +-e/16, does not shrink with e

@@ -84,20 +84,6 @@ def event_kind(guard: str) -> str:
     return {"stick": "slip_to_stick", "asymmetry": "slip_slip_end"}.get(guard, guard)
 
 
-def mode_change_kind(before: Mode, after: Mode) -> str:
-    """Public event kind of a change of contact mode from ``before`` to ``after`` (see
-    :class:`~ocp_crawl.sim.result.Event`), for a change decided by the rates rather than by one guard."""
-    if before == Mode.STICK:
-        return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
-    if after == Mode.STICK:
-        return "slip_to_stick"
-    if before.foot == 3:
-        return "slip_slip_end"
-    if after.foot == 3:
-        return "slip_slip_start"
-    return "slip_switch" if after.foot != before.foot else "slip_reversal"
-
-
 def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
     """Mode-parameter vector q = (e_ss, sigma, w, d0) of the compiled mode system (d0: stick distance [m])."""
     if mode == Mode.STICK:

@@ -53,6 +53,20 @@ class Mode(IntEnum):
         return cls.SLIP_BOTH_POS if sigma > 0 else cls.SLIP_BOTH_NEG
 
 
+def mode_change_kind(before: Mode, after: Mode) -> str:
+    """The :class:`Event` kind of a change of contact mode from ``before`` to ``after``, for a change decided
+    by the modes (the MPCC time-stepping's steps, the event-driven stepper's decisions by the rates)."""
+    if before == Mode.STICK:
+        return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
+    if after == Mode.STICK:
+        return "slip_to_stick"
+    if before.foot == 3:
+        return "slip_slip_end"
+    if after.foot == 3:
+        return "slip_slip_start"
+    return "slip_switch" if after.foot != before.foot else "slip_reversal"
+
+
 @dataclass(frozen=True)
 class Event:
     """A located event: phase t (cycles, counted from the start of the run), kind, modes before/after.

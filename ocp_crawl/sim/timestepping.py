@@ -59,7 +59,7 @@ from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
 from ocp_crawl.sim.step_split import locate_event
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
-from ocp_crawl.sim.result import CrawlResult, Event, Mode
+from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 
@@ -94,21 +94,6 @@ class TimeSteppingOptions(CycleOptions):
         if not isinstance(self.switch_exact, bool):
             raise TypeError(f"TimeSteppingOptions.switch_exact must be a bool, got {self.switch_exact!r}")
         self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
-
-
-def event_kind(before: Mode, after: Mode) -> str:
-    """Name of a mode change, in the vocabulary of :class:`~ocp_crawl.sim.result.Event` where it has one."""
-    if before == Mode.STICK:
-        return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
-    if after == Mode.STICK:
-        return "slip_to_stick"
-    if before.foot == 3:
-        return "slip_slip_end"
-    if after.foot == 3:
-        return "slip_slip_start"
-    if after.foot != before.foot:
-        return "slip_switch"
-    return "slip_reversal"
 
 
 #: most events located inside one step (further changes of mode in the step are taken at its end)
@@ -290,7 +275,7 @@ class TimeStepper:
     def _mode_change(run: "_Run", split, te: float) -> None:
         """Record the located event at phase ``te`` and continue in the guard's mode."""
         mode = run.mode
-        run.events.append(Event(te, event_kind(mode, split.mode_after), mode.label, split.mode_after.label,
+        run.events.append(Event(te, mode_change_kind(mode, split.mode_after), mode.label, split.mode_after.label,
                                 split.value, split.guard))
         run.mode, run.det_ref = split.mode_after, None
 
@@ -329,7 +314,7 @@ class TimeStepper:
         det = self._det(res, state, tau)
         if res.mode != mode:
             # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
-            run.events.append(Event(t1, event_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
+            run.events.append(Event(t1, mode_change_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
                                     "mode_change_between_steps"))
             run.det_ref = None
         if run.det_ref is not None and np.sign(det) != run.det_ref:
