@@ -6,7 +6,7 @@ checked against answers that do not use it: the one-sided friction limits mu1 = 
 limits then no longer tie; extrapolated linearly from eps and 2 eps), and the MPCC time-stepping, whose
 complementarity conditions decide each step by themselves.
 
-``OCP_CRAWL_HEAVY=1`` adds the whole pulse grid against the MPCC at N = 400;
+``OCP_CRAWL_HEAVY=1`` adds the whole pulse grid against the MPCC at N = 400 (and two points at N = 200);
 ``OCP_CRAWL_HYPOTHESIS_EXAMPLES=N`` sets the examples of the property (2 by default, derandomised).
 """
 import math
@@ -118,13 +118,33 @@ def test_shared_slip_whose_split_matters_is_set_valued():
         assert min(abs(mpcc.S - up), abs(mpcc.S - down)) <= 1e-4 * abs(mpcc.S)
 
 
-@pytest.mark.parametrize("rise, hold", [(0.35, 0.0)])
+@HEAVY
+@pytest.mark.parametrize("rise, hold", [(0.11, 0.1), (0.35, 0.0)])
 def test_pulse_gait_agrees_with_the_mpcc_time_stepping(rise, hold):
-    """A point of the pulse grid (held ties at the end of each pulse) against the MPCC at N = 200."""
+    """Points of the pulse grid (held ties at the end of each pulse) against the MPCC at N = 200."""
     ref = pulse(rise=rise, hold=hold)
     res, mpcc = run(ref), run(ref, solver="mpcc", steps=200)
     assert res.success and mpcc.success, (res.message, mpcc.message)
     assert agree(res.S, mpcc.S), (res.S, mpcc.S)
+
+
+def test_pulse_grid_succeeds_with_the_event_solver():
+    """A third of the grid of ``ocp-crawl sweep problems/pulse_gait.toml --grid gait.rise=0.02:0.35:12 --grid
+    gait.hold=0,0.1,0.3`` (every third rise; the whole grid with OCP_CRAWL_HEAVY, below) through the sweep library:
+    every point succeeds; pulses that do not overlap (the rests of the joints cover the other's pulse) move the robot
+    back and forth by the same amount, S = 0 (mirror symmetry)."""
+    from pathlib import Path
+
+    from ocp_crawl.problem import load_problem
+    from ocp_crawl.sweep import run_sweep
+    from ocp_crawl.sweep.grid import parse_grid
+
+    problem = load_problem(Path(__file__).resolve().parents[1] / "problems" / "pulse_gait.toml")
+    sweep = run_sweep(problem, dict(parse_grid(g) for g in ("gait.rise=0.02,0.11,0.2,0.29", "gait.hold=0,0.1,0.3")))
+    rows = sweep.rows
+    assert len(rows) == 12 and all(r["status"] == "success" for r in rows), [r["status"] for r in rows]
+    apart = [r for r in rows if r["gait.hold"] == 0.0 and r["gait.rise"] < 0.12]  # 2 rise <= psi/360: no overlap
+    assert apart and all(abs(r["S"]) <= 1e-12 * ROBOT.L for r in apart)
 
 
 @HEAVY
