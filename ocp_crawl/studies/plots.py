@@ -35,11 +35,11 @@ K_STYLES = ("-", "--", ":")
 #: marker of each failure status (others: FALLBACK_MARKER)
 STATUS_MARKERS = {"fold": "X", "lift_off": "^", "joint_on_ground": "v", "no_start": "s", "bad_input": "d", "no_consistent_mode": "D",
                   "feet_crossed": "P", "no_convergence": "*", "not_periodic": "p", "error": "h",
-                  "unstable": "<", "snap_through": ">", "energy_imbalance": "H"}
+                  "unstable": "<", "snap_through": ">", "energy_imbalance": "H", "set_valued": "8"}
 FALLBACK_MARKER = "o"
 #: legend text of statuses whose name alone would mislead
 STATUS_LABELS = {"no_start": "no equilibrium to start from", "unstable": "unstable equilibrium",
-                 "snap_through": "snap-through (state jumps)"}
+                 "snap_through": "snap-through (state jumps)", "set_valued": "set-valued (friction tie)"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
 #: top of the CoT+ axis, as in the paper's Fig. CoT
