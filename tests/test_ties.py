@@ -91,9 +91,24 @@ def test_held_tie_agrees_with_both_one_sided_friction_limits(name, reference):
     assert input_holds(reference, reference.t_knots).size
     res = run(reference)
     assert res.success, res.message
+    assert any(e.guard_name == "decided" for e in res.steady_events())  # (the rule decided a mode change)
     for side in (+1, -1):
         limit = one_sided(reference, side)
         assert abs(limit - res.S) <= 2e-5 * abs(res.S) + 1e-6 * ROBOT.L, (name, side, limit, res.S)
+
+
+def test_flats_equal_to_round_off_are_holds():
+    """The square-like samples with their flat values moved by 1e-13 relative (an optimiser's or a CSV's round-off):
+    the same holds and the same S as the exact flats."""
+    values = np.array([[120, 120, 120, 60, 60, 60, 60, 120], [60, 120, 120, 120, 120, 60, 60, 60]], float)
+    exact = square(values)
+    moved = values.copy()
+    moved[:, 1::2] *= 1 + 1e-13
+    off = square(moved)
+    assert input_holds(off, off.t_knots) == pytest.approx(input_holds(exact, exact.t_knots))
+    a, b = run(exact), run(off)
+    assert a.success and b.success, (a.message, b.message)
+    assert b.S == pytest.approx(a.S, rel=1e-9)
 
 
 def test_shared_slip_whose_split_matters_is_set_valued():

@@ -303,7 +303,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
             self.nsteps += 1
             new, crossed, refine = self._crossings(seg, pt, new)
             if crossed and self._hold_list:
-                crossed = self._not_at_hold(seg, new, crossed)
+                crossed = self._not_at_hold(seg, pt, new, crossed)
             if refine and not crossed and hh > 1e-5:
                 run.h = hh / 2
                 continue
@@ -456,6 +456,9 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
                 chosen, trial = found[0]
                 kind_out = mode_change_kind(mode, chosen) if chosen != mode else f"graze_{event_kind(kind)}"
                 return chosen, trial, kind_out
+            if found:  # (none: the table's tests below, which know holds and kinks inside the trial steps)
+                raise _Failure(Status.SET_VALUED, t_ev, mode, f"after event {kind} the modes that continue from the "
+                               f"state are {', '.join(m.label for m, _ in found)}{self.tie_note(ev_pt)}")
         trial = self._consistent(target, ev_pt, new_d0)
         found = [(target, trial)] if trial is not None else \
             [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]

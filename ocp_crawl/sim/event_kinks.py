@@ -46,7 +46,7 @@ import numpy as np
 
 from ocp_crawl.model.inputs import CallableSignal, PeriodicSignal
 from ocp_crawl.model.statics import AUX
-from ocp_crawl.sim.event_state import _Failure, _Point, _Run, torque_curvature
+from ocp_crawl.sim.event_state import _Failure, _Point, _Run, hermite_point, torque_curvature
 from ocp_crawl.sim.result import mode_change_kind
 from ocp_crawl.status import Status
 
@@ -55,6 +55,8 @@ from ocp_crawl.status import Status
 KINK_RTOL = 1e-9
 #: kinks closer than this after a phase [cycles] are not the next step's end (no steps of round-off length)
 KINK_GAP = 1e-12
+#: a piece of the input is a hold where both rates are below this fraction of the input's largest rate
+HOLD_RTOL = 1e-9
 
 
 def input_step(signal, samples: int = 1024, rel: float = 1e-3) -> float:
@@ -116,8 +118,9 @@ def input_kinks(signal, breakpoints: np.ndarray) -> tuple[np.ndarray, float]:
 
 def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     """The holds of ``signal``: maximal stretches of the pieces between its ``breakpoints`` (phases in [0, 1)) on
-    which both rates are exactly zero (tested at three interior phases of each piece, which is exact for the
-    pieces of piecewise-linear samples, pulses and PCHIP plateaus).
+    which both rates are zero to HOLD_RTOL of the input's largest rate (tested at three interior phases of each
+    piece, which is exact for the pieces of piecewise-linear samples, pulses and PCHIP plateaus; the tolerance
+    takes flats whose samples differ by round-off, as an optimiser's or a CSV's may).
 
     Returns an array (m, 2) of [start, end) phases [cycles] with start in [0, 1) and start < end < start + 1 (a
     hold across the period's end ends after 1); m = 0 for an input without holds or one held all the time.
@@ -128,7 +131,8 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     ends = np.append(b[1:], b[0] + 1.0)
     t = b[:, None] + np.array([0.25, 0.5, 0.75])[None, :] * (ends - b)[:, None]
     rate = np.asarray(signal.derivative(t.ravel()), float).reshape(2, b.size, 3)
-    held = np.all(rate == 0.0, axis=(0, 2))
+    scale = float(np.max(np.abs(np.asarray(signal.derivative(np.linspace(0.0, 1.0, 257)), float))))
+    held = np.all(np.abs(rate) <= HOLD_RTOL * max(scale, float(np.max(np.abs(rate)))), axis=(0, 2))
     if held.all() or not held.any():
         return np.zeros((0, 2))
     first = int(np.argmin(held))  # a moving piece: the holds are the runs of held pieces after it
@@ -235,14 +239,22 @@ class KinksMixin:
             return None
         return next(((a, b) for a, b in self._hold_spans(t) if a - KINK_GAP <= t < b - KINK_GAP), None)
 
-    def _not_at_hold(self, seg, new: _Point, crossed: list[str]) -> list[str]:
-        """The guards ``crossed`` in a step, less all of them when the step ends at a hold's start with each of them
-        at zero to round-off: a guard that reaches zero as the input comes to rest (the slip of a half-cosine edge
-        stops with its rate) is decided at the hold's end, by the rates after it."""
+    def _not_at_hold(self, seg, pt: _Point, new: _Point, crossed: list[str]) -> list[str]:
+        """The guards ``crossed`` in the step [pt, new], less all of them when the step ends at a hold's start with
+        each of them at zero to round-off there and not negative inside the step (solved at a quarter, half and three
+        quarters of it): a guard that reaches zero as the input comes to rest (the slip of a half-cosine edge stops
+        with its rate) is decided at the hold's end, by the rates after it."""
         if not crossed or abs(self.next_hold(new.t - 2 * KINK_GAP) - new.t) > KINK_GAP:
             return crossed
         g = self.point_guards(seg.mode, new)
-        return crossed if any(g[k] < -100 * self.noise for k in crossed) else []
+        if any(g[k] < -100 * self.noise for k in crossed):
+            return crossed
+        for s in (0.25, 0.5, 0.75):
+            t = pt.t + s * (new.t - pt.t)
+            inside = self._solve(t, hermite_point(pt, new, t), seg.q)
+            if inside is None or any(self.point_guards(seg.mode, inside)[k] < -100 * self.noise for k in crossed):
+                return crossed
+        return []
 
     def _cross_hold(self, run: _Run, t_end: float) -> bool:
         """If run.pt is at (or inside) a hold of the input, move it to the hold's end (or to t_end, the end of the
@@ -270,7 +282,7 @@ class KinksMixin:
         """At the end of a hold (state ``end``, with the rates after it): keep the current mode if its guards stay
         positive after the hold (those at zero grow), else :meth:`_apply_decision` of the modes that continue."""
         start, pending = self._trial_steps(run.seg.mode, end, end.a[AUX["d"]])
-        if start is None or pending:
+        if start is None or pending or self.tie_note(end):  # (at a tie every mode is tried: set_valued if several)
             self._apply_decision(run, end, "at the end of a hold of the input")
 
     def _apply_decision(self, run: _Run, pt: _Point, where: str) -> None:

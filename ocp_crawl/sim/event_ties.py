@@ -63,6 +63,12 @@ def check_shared_slip(res: CrawlResult, model: Model, run) -> CrawlResult:
     symmetric = res.S
     res.success, res.status = False, Status.SET_VALUED
     res.S = res.W_plus = res.CoT_plus = math.nan
+    if math.isnan(up) or math.isnan(down):  # (a one-sided run failed: the split could not be checked)
+        res.message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie (the symmetric "
+                       f"split gives S = {symmetric * 1e3:.6g} mm per cycle), and the runs with mu1 and mu2 apart "
+                       f"that would check it did not all succeed (S = {up * 1e3:.6g} mm from above, "
+                       f"{down * 1e3:.6g} mm from below); simulate with mu1 and mu2 apart")
+        return res
     res.message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie, and S = "
                    f"{up * 1e3:.6g} mm per cycle as mu1 -> mu2 from above, {down * 1e3:.6g} mm from below "
                    f"(the symmetric split: {symmetric * 1e3:.6g} mm); set mu1 and mu2 apart to choose one")

@@ -350,9 +350,9 @@ class TimeStepper:
         if jump > self.opt.max_dphi:
             # an input that itself moves by more than half of max_dphi in the step (a sharp edge of a pulse or a
             # square wave) says that the step is too coarse, not that the equilibrium branch folds
-            moved = np.asarray(self.torque(t1), float).ravel() - np.asarray(self.torque(t1 - 1.0 / self.steps),
-                                                                             float).ravel()
-            edge = float(np.max(np.abs(moved))) / self.model.robot.k
+            inside = np.linspace(t1 - 1.0 / self.steps, t1, 9)
+            edge = float(np.max(np.abs(np.asarray(self.torque.derivative(inside), float)))) / self.model.robot.k \
+                / self.steps  # (the largest rate over the step times the step: an edge inside the step counts)
             if edge > 0.5 * self.opt.max_dphi:
                 raise _Stop(Status.NO_CONVERGENCE, "", f"{where}: phi jumps by {jump:.3g} rad while the input moves "
                             f"by {edge:.3g} rad (tau/k) in the step: the step is coarser than the input's edges; "
