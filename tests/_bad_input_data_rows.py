@@ -175,3 +175,27 @@ DATA_ROWS.update({
                                                                   'tau1 = [0.1, 0.2, 0.1]\ntau2 = [0.1, 0.2, 0.1]\n'
                                                                   'interpolation = "spline"')),
 })
+
+
+#: the period of a cycle ([gait] period, a sample file's period column) and the pressure waveform
+_PERIODS = CSV_ROWS.replace("\n", ",2.5\n")
+DATA_ROWS.update({
+    "simulate: a period of 0 s": R("simulate", ["{paper}", "--set", "gait.period=0"],
+                                   ["[gait] period = 0 (from --set)", "> 0", "duration of one cycle"]),
+    "simulate: [gait] period against the file's period column": R(
+        "simulate", ["{file}"], ["x.toml", "[gait] period = 2.0", "gives the period 2.5 s in its period column"],
+        text=gait(SAMPLES + "\nperiod = 2.0"), files=csv(CSV_HEAD.replace("\n", ",period [s]\n") + _PERIODS)),
+    "simulate: a period column of two periods": R(
+        "simulate", ["{file}"], ["t.csv:4", "period 3.0 s differs from 2.5 s"], text=gait(SAMPLES),
+        files=csv(CSV_HEAD.replace("\n", ",period [s]\n") + _PERIODS.replace("0.5,-0.29,-0.29,2.5",
+                                                                             "0.5,-0.29,-0.29,3.0"))),
+    "simulate: pressure waveform without p0_bar": R("simulate", ["{file}"],
+                                                    ["x.toml", "[gait] p0_bar is missing", 'waveform = "pressure"'],
+                                                    text=gait('waveform = "pressure"\npsi_deg = 45.0')),
+    "simulate: pressure amplitude above p0": R("simulate", ["{file}"], ["x.toml", "[gait] p0_bar = 0.3",
+                                                                        "amplitude_bar = 0.4", "at most p0"],
+                                               text=gait('waveform = "pressure"\npsi_deg = 45.0\np0_bar = 0.3')),
+    "fit: --form against the problem's [pressure] form": _fit(["--form paper", '[pressure] form = "raised"',
+                                                               "give one"], "--form", "paper",
+                                                              "--set", "pressure.form=raised"),
+})

@@ -62,6 +62,24 @@ def test_simulate_json(capsys):
     assert data["events"] and all({"t", "kind"} <= set(e) for e in data["events"])
 
 
+def test_simulate_reports_the_speed_of_a_problem_with_a_period(capsys):
+    """[gait] period gives the mean speed |S| / period (text in mm/s, JSON in m/s); without it the speed is "-"
+    and null, and S is the same either way (the quasistatic S per cycle does not depend on time)."""
+    code, out, err = run(capsys, "simulate", PAPER, "--json")
+    plain = json.loads(out)
+    assert code == 0, err
+    assert plain["period"] is None and plain["speed"] is None and plain["units"]["speed"] == "m/s"
+    code, out, err = run(capsys, "simulate", PAPER, "--json", "--set", "gait.period=2.5")
+    timed = json.loads(out)
+    assert code == 0, err
+    assert timed["S"] == plain["S"] and timed["period"] == 2.5 and timed["units"]["period"] == "s"
+    assert timed["speed"] == abs(timed["S"]) / 2.5
+    _, text, _ = run(capsys, "simulate", PAPER, "--set", "gait.period=2.5")
+    assert f"speed      {abs(timed['S']) / 2.5 * 1e3:.3f} mm/s (|S| / period, period 2.5 s)" in text
+    _, text, _ = run(capsys, "simulate", PAPER)
+    assert "speed      - (no [gait] period)" in text
+
+
 def test_simulate_out_writes_the_files(capsys, tmp_path):
     out_dir = tmp_path / "run" / "deep"
     out_dir.mkdir(parents=True)

@@ -18,9 +18,10 @@ from ocp_crawl.cli.app import main
 from ocp_crawl.fit import fit_measurements, read_measurements, resolve_parameters
 from ocp_crawl.fit.params import pressure_defaults
 from ocp_crawl.fit.report import fit_report, write_fit
-from ocp_crawl.io.tables import TableError, write_table
+from ocp_crawl.io.tables import TableError, read_table, write_table
 from ocp_crawl.model.pressure import BendingMap, pressure_torque
 from ocp_crawl.problem import ProblemError, load_problem, run_problem
+from ocp_crawl.problem.overrides import read_toml
 from ocp_crawl.sim import simulate
 from ocp_crawl.status import Status
 
@@ -228,6 +229,65 @@ def test_cli_fit_writes_the_fit_and_refuses_to_overwrite(tmp_path, capsys):
     assert {p.name for p in out.iterdir()} == {"fitted_problem.toml", "fit.json", "residuals.csv", "fit.png"}
     assert main(argv) == 2 and "--force" in capsys.readouterr().err
     assert main(argv + ["--force", "--no-figure"]) == 0
+
+
+def _simulated_S(capsys, problem_file, sets) -> float:
+    """S [m] of ``ocp-crawl simulate problem_file --set ...`` (--json)."""
+    assert main(["simulate", str(problem_file), "--json", *(a for x in sets for a in ("--set", x))]) == 0, sets
+    return json.loads(capsys.readouterr().out)["S"]
+
+
+def _fitted_residuals(capsys, out, data, sets_of_row) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals of residuals.csv in ``out`` and those of simulate runs of its fitted_problem.toml, one per
+    row of the measurements ``data`` (``sets_of_row(j)``: the row's --set texts), normalised as the fit does."""
+    S = np.array([_simulated_S(capsys, out / "fitted_problem.toml", sets_of_row(j)) for j in range(len(data))])
+    model = S / S[data.reference_row] if data.reference_row is not None else S
+    return read_table(out / "residuals.csv", {}, allow_extra=True)["residual"], (model - data.y) / data.sigma
+
+
+def test_fitted_problem_file_keeps_the_input_and_reproduces_the_residuals(tmp_path, capsys):
+    """fitted_problem.toml holds the input file's keys with the fitted value as a key, and no section or key the
+    input did not have (no defaults, no [simulation] or [ocp] added); simulating it at every row's amplitude
+    reproduces the fit's residuals."""
+    problem = load_problem(PAPER)
+    path, _ = _s_vs_amplitude(problem, tmp_path)
+    out = tmp_path / "out"
+    assert main(["fit", str(PAPER), str(path), "--param", "robot.k", "--out", str(out), "--no-figure"]) == 0
+    capsys.readouterr()
+    given, written = read_toml(PAPER), read_toml(out / "fitted_problem.toml")
+    assert {s: set(keys) for s, keys in written.items()} == {s: set(keys) for s, keys in given.items()}
+    k = json.loads((out / "fit.json").read_text())["parameters"][0]["value"]
+    assert written["robot"]["k"] == k != given["robot"]["k"]
+    assert {s: {n: v for n, v in keys.items() if (s, n) != ("robot", "k")} for s, keys in written.items()} == \
+        {s: {n: v for n, v in keys.items() if (s, n) != ("robot", "k")} for s, keys in given.items()}
+    data = read_measurements(path)
+    expected, simulated = _fitted_residuals(capsys, out, data, lambda j: [f"gait.A_deg={float(AMPLITUDES[j])!r}"])
+    assert simulated == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("options, keys", [
+    (["--param", "pressure.amplitude_bar", "--bounds", "pressure.amplitude_bar=0.05:1.7"], ["amplitude_bar"]),
+    (["--form", "raised", "--param", "pressure.a1", "--pressure", "b1=0.13"], ["form", "a1", "b1"])])
+def test_fitted_pressure_constants_are_keys_that_simulate_reproduces(tmp_path, capsys, options, keys):
+    """A fitted pressure constant (the amplitude A_p of the paper's form, a map constant of the raised sine) is a
+    key of [pressure] in fitted_problem.toml, with the form and the constants held fixed that differ from the
+    defaults, and nothing else added: the pressure waveform of that file, at each row's p0 and psi, reproduces the
+    fit's residuals (a few evaluations of the psi curve: the fit need not converge)."""
+    data_file = PRESSURE_DATA[1]
+    out = tmp_path / "out"
+    main(["fit", str(PAPER_GRAVITY), str(data_file), *options, "--max-nfev", "2", "--out", str(out), "--no-figure"])
+    capsys.readouterr()
+    given, written = read_toml(PAPER_GRAVITY), read_toml(out / "fitted_problem.toml")
+    fit = json.loads((out / "fit.json").read_text())
+    assert list(written["pressure"]) == keys and {s: written[s] for s in given} == given
+    name = fit["parameters"][0]["name"]
+    assert written["pressure"][name.split(".")[1]] == fit["parameters"][0]["value"]
+    assert written["pressure"].get("b1", 0.13) == 0.13 and written["pressure"].get("form", "paper") == fit["form"]
+    data = read_measurements(data_file)
+    sets = lambda j: ["gait.waveform=pressure", f"gait.p0_bar={float(data.table['p0'][j]) / 1e5!r}",  # noqa: E731
+                      f"gait.psi_deg={math.degrees(data.table['psi'][j])!r}"]
+    expected, simulated = _fitted_residuals(capsys, out, data, sets)
+    assert simulated == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
 
 @pytest.mark.slow

@@ -56,7 +56,7 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
         assert key in data, key
     assert data["objective"] == "max_speed" and 0 < data["best_harmonic"]["A1_deg"] <= 30.0
     lines = [r for r in (out / "torques.csv").read_text().splitlines() if not r.startswith("#")]
-    assert lines[0] == "phase [-],tau1 [N m],tau2 [N m]" and len(lines) == nodes + 1
+    assert lines[0] == "phase [-],tau1 [N m],tau2 [N m],period [s]" and len(lines) == nodes + 1
     phase = np.array([float(r.split(",")[0]) for r in lines[1:]])
     assert phase[0] == 0.0 and np.all(np.diff(phase) > 0) and phase[-1] < 1.0
     for name in ("arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf"):
@@ -154,3 +154,60 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
     assert res.homotopy and {h.kind for h in res.homotopy} == {"polish"}
     assert res.complementarity_residual <= fine.comp_tol and res.tau.shape == (2, 32)
     assert abs(res.value_replay - res.value_ocp) <= fine.replay_tol * abs(res.value_replay)
+
+
+def test_robust_files_replay_each_friction_scenario(tmp_path, capsys, monkeypatch):
+    """robust_speed's files replay every friction scenario: the writer of optimize --out adds one problem file per
+    scenario, named by its ratio mu1/mu2, and simulating each gives that scenario's replayed S and speed, which
+    summary.json and the text label with the same ratio.  The profile is a triangle wave spanning the envelope at
+    the bandwidth's shortest period (an OCP solve of robust_speed takes minutes), judged by the optimum's replay
+    (judge_replay) and written by the optimum's writers (the figure left out: tests/test_ocp.py draws it)."""
+    import json
+    import math
+    from pathlib import Path
+
+    from ocp_crawl.cli.app import main
+    from ocp_crawl.cli.study_commands import _optimize_data, format_optimize
+    from ocp_crawl.io import units
+    from ocp_crawl.model.statics import Model
+    from ocp_crawl.ocp import OCPResult
+    from ocp_crawl.ocp.judge import judge_replay
+    from ocp_crawl.problem import load_problem, ocp_settings
+    from ocp_crawl.viz import ocp as viz_ocp
+    from ocp_crawl.viz.ocp import scenario_files, write_outputs
+
+    problem = load_problem(Path(__file__).resolve().parents[1] / "problems" / "ocp_robust.toml")
+    settings = ocp_settings(problem)
+    n = 24
+    lo, hi = settings.torque_bounds(problem.robot)
+    tri = lambda i: lo + (hi - lo) * (1 - np.abs(((i % n) - n / 2) / (n / 2)))  # noqa: E731
+    tau = np.vstack([tri(np.arange(n) + n // 2), tri(np.arange(n) + n // 4)])
+    T = 4 * settings.A_max_deg / settings.max_rate_deg_s
+    v = judge_replay([Model(r, gravity=problem.gravity) for r in settings.scenarios(problem.robot)], settings, tau,
+                     T, math.nan)
+    assert len(v.replay) == 3 and all(r.success for r in v.replay)
+    nodes = [np.zeros((2, n + 1))] * 3
+    res = OCPResult(True, Status.SUCCESS, "a triangle wave judged by its replay", "robust_speed", settings,
+                    phase=np.arange(n) / n, tau=tau, T_ocp=T, phi=nodes, x1=[np.zeros(n + 1)] * 3,
+                    f_t=[np.zeros(n + 1)] * 3, modes=[np.zeros(n, int)] * 3, S_ocp=v.S, v_ocp=v.speed,
+                    W_plus_ocp=v.W_plus, CoT_plus_ocp=v.CoT_plus, value_ocp=v.value, replay=v.replay, S_replay=v.S,
+                    v_replay=v.speed, W_plus_replay=v.W_plus, CoT_plus_replay=v.CoT_plus, value_replay=v.value)
+    names = scenario_files(settings)
+    assert names == ["optimal_gait_mu1_mu2_0.9.toml", "optimal_gait_mu1_mu2_1.toml", "optimal_gait_mu1_mu2_1.1.toml"]
+    monkeypatch.setattr(viz_ocp, "plot_optimal_gait", lambda result, robot: None)
+    monkeypatch.setattr(viz_ocp, "save_figure", lambda fig, path: path)
+    write_outputs(res, problem.robot, tmp_path, _optimize_data(res, problem))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    text = format_optimize(summary)
+    assert [s["label"] for s in summary["scenarios"]] == ["0.9", "1", "1.1"]
+    for name, scenario, S in zip(names, summary["scenarios"], v.S):
+        assert scenario["S_replay"] == S and scenario["mu1_mu2"] == float(scenario["label"])
+        assert main(["simulate", str(tmp_path / name), "--json"]) == 0, name
+        data = json.loads(capsys.readouterr().out)
+        robot = data["problem"]["robot"]
+        assert robot["mu1"] / robot["mu2"] == pytest.approx(scenario["mu1_mu2"], rel=1e-12)
+        assert data["S"] == pytest.approx(scenario["S_replay"], rel=1e-9), name
+        assert data["speed"] == pytest.approx(abs(scenario["v_replay"]), rel=1e-9) and data["period"] == T
+        label = f"mu1/mu2 = {scenario['label']}"
+        assert f"{label}: OCP {units.distance(S)}, replay {units.distance(data['S'])}" in text
+        assert f"{label}: OCP {units.speed(scenario['v_ocp'])}, replay {units.speed(data['speed'])}" in text

@@ -190,8 +190,10 @@ def test_optimize_torques_replayed_by_simulate(cli_optimize_run, capsys):
     summary = json.loads(stdout)
     assert code == 0 and summary["success"], summary["message"]
     arrays = np.load(out / "arrays.npz")
-    table = read_table(out / "torques.csv", {"phase": "dimensionless", "tau1": "torque", "tau2": "torque"})
+    table = read_table(out / "torques.csv", {"phase": "dimensionless", "tau1": "torque", "tau2": "torque",
+                                             "period": "time"})
     assert np.array_equal(table["phase"], arrays["phase"]) and np.array_equal(table["phase"], np.arange(nodes) / nodes)
+    assert np.all(table["period"] == summary["T_ocp"])
     assert np.array_equal(np.array([table["tau1"], table["tau2"]]), arrays["tau"])
     runs = {"toml": ["simulate", str(out / "optimal_gait.toml"), "--json"],
             "input": ["simulate", str(OCP), "--input", str(out / "torques.csv"), "--set", 'gait.interpolation="linear"',
@@ -201,6 +203,49 @@ def test_optimize_torques_replayed_by_simulate(cli_optimize_run, capsys):
         assert main(argv) == 0, name
         S = json.loads(capsys.readouterr().out)["S"]
         assert abs(S - summary["S_replay"]) <= 1e-9 * abs(summary["S_replay"]), (name, S, summary["S_replay"])
+
+
+def test_optimal_gait_toml_reports_the_speed_of_optimize(cli_optimize_run, capsys):
+    """The optimum's files keep its period: simulate of optimal_gait.toml (and of the problem with --input
+    torques.csv, whose period column is the period) reports the optimize replay's speed, to 1e-9 in --json and to
+    the printed precision in the text; S alone would not give it (the quasistatic S per cycle has no time)."""
+    from ocp_crawl.cli.study_commands import format_optimize
+
+    code, stdout, _, out, _ = cli_optimize_run
+    summary = json.loads(stdout)
+    assert code == 0 and summary["success"], summary["message"]
+    runs = {"toml": ["simulate", str(out / "optimal_gait.toml")],
+            "input": ["simulate", str(OCP), "--input", str(out / "torques.csv"), "--set",
+                      'gait.interpolation="linear"']}
+    replay_speed = next(line for line in format_optimize(summary).splitlines() if line.startswith("speed"))
+    shown = replay_speed.split("replay ")[1]
+    assert shown.endswith(" mm/s")
+    for name, argv in runs.items():
+        assert main([*argv, "--json"]) == 0, name
+        data = json.loads(capsys.readouterr().out)
+        assert data["period"] == summary["T_ocp"], name
+        assert data["speed"] == pytest.approx(summary["v_replay"], rel=1e-9), name
+        assert main(argv) == 0, name
+        text = capsys.readouterr().out
+        assert f"speed      {shown} (|S| / period, period {summary['T_ocp']:.6g} s)" in text, (name, text)
+
+
+@pytest.mark.parametrize("form, rest, amplitude", [("paper", 180.0, 0.5), ("raised", None, None)])
+def test_pressure_waveform_is_the_pressure_driven_robot(form, rest, amplitude):
+    """[gait] waveform = "pressure" drives the robot of ocp_crawl.model.pressure: its torque is pressure_torque's at
+    p0_bar, psi_deg and the [pressure] constants (absent rest angle: the form's, the fitted one of the gravity
+    convention for the raised sine), and so is its S."""
+    from ocp_crawl.model.pressure import FITTED_REST_DEG, BendingMap, pressure_torque
+    from ocp_crawl.sim import simulate
+
+    sets = ["model.gravity=paper", "gait.waveform=pressure", "gait.p0_bar=1.5", "gait.psi_deg=30", "pressure.a1=0.1",
+            f"pressure.form={form}", *([f"pressure.amplitude_bar={amplitude}"] if amplitude else [])]
+    problem = paper_problem(sets)
+    assert problem.given_dict()["gait"] == {"drive": "torque", "waveform": "pressure", "psi_deg": 30.0, "p0_bar": 1.5}
+    signal = pressure_torque(problem.robot, 1.5, 30.0, rest or FITTED_REST_DEG["paper"], BendingMap(a1=0.1), amplitude)
+    t = np.linspace(0, 1, 101)
+    assert np.array_equal(problem.torque(t), signal(t))
+    assert run_problem(problem).S == simulate(problem.model, signal, "event").S
 
 
 def test_sweeps_of_waveform_problems(tmp_path, monkeypatch, harmonic):

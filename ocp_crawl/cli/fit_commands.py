@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ocp_crawl.cli.app import register
 from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
-from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS
+from ocp_crawl.model.pressure import PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
 
 #: most least-squares evaluations (each runs every measurement's simulation)
@@ -24,17 +24,20 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
                    help="a parameter to fit, named by its problem key (robot.k, robot.mu, robot.mu1, gait.gamma_deg, "
                         "...) or pressure.a1/a2/b1/b2/phi_rest_deg/amplitude_bar (repeatable)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
-                   help="start value of a fitted parameter (default: the problem's value; Table I for pressure.*)")
+                   help="start value of a fitted parameter (default: the problem's value; for pressure.* its "
+                        "[pressure] value, else Table I and the form's)")
     p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOW:HIGH",
                    help="bounds of a fitted parameter (default: start +- 45 deg for angles, [start/10, 10 start] "
                         "otherwise)")
     p.add_argument("--pressure", action="append", default=[], metavar="NAME=VALUE",
                    help="a pressure constant held fixed (a1, a2, b1, b2 [rad/bar^2, rad/bar], phi_rest_deg [deg], "
-                        "amplitude_bar [bar]; default Table I and the constants of --form)")
-    p.add_argument("--form", choices=PRESSURE_FORMS, default=DEFAULT_FORM,
-                   help="pressure input form: 'paper' (default), the paper's form (ref) p0 + A_p sin(2 pi t +- psi/2), "
-                        "p0 the nominal pressure, A_p 0.4 bar, rest angle 180 deg; 'raised', the raised sine from 0 to "
-                        "the peak p0 with the stored fitted rest angle")
+                        "amplitude_bar [bar]; default the problem's [pressure] values, else Table I and the "
+                        "constants of --form)")
+    p.add_argument("--form", choices=PRESSURE_FORMS,
+                   help="pressure input form (default: the problem's [pressure] form, else 'paper'): 'paper', the "
+                        "paper's form (ref) p0 + A_p sin(2 pi t +- psi/2), p0 the nominal pressure, A_p 0.4 bar, rest "
+                        "angle 180 deg; 'raised', the raised sine from 0 to the peak p0 with the stored fitted rest "
+                        "angle")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key of the problem (repeatable)")
     p.add_argument("--relative-sigma", action="store_true",

@@ -27,8 +27,9 @@ from ocp_crawl.viz import FPS_BOUNDS
 MAX_STEP_COUNTS = 8
 
 #: units of the summary's numbers, written with every JSON summary
-UNITS = {k: units.UNITS[k] for k in ("S", "W_plus", "W_plus_joint", "CoT_plus", "t", "energy",
-                                         "energy.balance_residual")}
+UNITS = {**{k: units.UNITS[k] for k in ("S", "W_plus", "W_plus_joint", "CoT_plus", "t", "energy",
+                                            "energy.balance_residual")},
+         "period": units.UNITS["T"], "speed": units.UNITS["v"]}
 
 
 def no_start_message(problem: Problem, detail: str) -> str:
@@ -92,8 +93,11 @@ def shortcuts(args: argparse.Namespace, data) -> list[str]:
 
 
 def report(result: CrawlResult, problem: Problem) -> dict:
-    """The JSON report of a run: the result's summary plus the solver, the problem and the units."""
+    """The JSON report of a run: the result's summary, the period and mean speed |S| / period (None without a
+    period), the solver, the problem and the units."""
     out = result.summary()
+    out["period"] = problem.period
+    out["speed"] = problem.speed(result.S)
     out["solver"] = problem.solver
     out["problem_file"] = problem.source
     out["problem"] = problem.to_dict()
@@ -106,8 +110,16 @@ def _per_cycle(text: str) -> str:
     return text if text == units.MISSING else f"{text} per cycle"
 
 
+def _speed_text(speed: float | None, period: float | None) -> str:
+    """The mean speed with the period it is over, or "-" (no period, or no S)."""
+    if period is None:
+        return f"{units.MISSING} (no [gait] period)"
+    return f"{units.speed(speed)} (|S| / period, period {period:.6g} s)"
+
+
 def format_summary(result: CrawlResult, problem: Problem) -> str:
-    """Readable summary: problem, status, S [mm], W+ [mJ], CoT+, events table, cycles."""
+    """Readable summary: problem, status, S [mm], the mean speed [mm/s] ("-" without a period), W+ [mJ], CoT+,
+    events table, cycles."""
     r = problem.robot
     gait = problem.sections.get("gait", {})
     gait_text = waveform_text(gait)
@@ -122,6 +134,7 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
         f"gait       {gait_text}",
         f"status     {result.status_name} ({result.status}): {result.message}",
         f"S          {_per_cycle(units.distance(result.S))}{direction}",
+        f"speed      {_speed_text(problem.speed(result.S), problem.period)}",
         f"W+         {_per_cycle(units.work(result.W_plus))}",
         f"CoT+       {units.cot(result.CoT_plus)}",
         f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),

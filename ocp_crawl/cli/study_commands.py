@@ -81,14 +81,22 @@ def _simulation_keys(solver: str) -> set[str]:
 
 def _check_axes_matter(problem, grid) -> None:
     """BadInput for an axis that no point of the sweep reads (its rows would be copies): an [ocp] key (only
-    optimize reads them), a [simulation] key that the points' simulators do not read."""
+    optimize reads them), a [simulation] key that the points' simulators do not read, ``gait.period`` (S, W+, CoT+
+    per cycle do not depend on it), a [pressure] key without the pressure waveform."""
     drives = set(grid.get("gait.drive", [problem.drive]))
+    waveforms = set(grid.get("gait.waveform", [problem.sections["gait"]["waveform"]]))
     solvers = set(grid.get("simulation.solver", [problem.sections.get("simulation", {}).get("solver", "event")]))
     used = set().union(*(_simulation_keys(s) for s in solvers)) if drives != {"angles"} else set()
     for name in grid:
         section, key = name.split(".", 1)
         if section == "ocp":
             raise BadInput(f"--grid {name}: a sweep simulates gaits, and [ocp] keys matter to optimize only: every "
+                           "row would be the same")
+        if name == "gait.period":
+            raise BadInput(f"--grid {name}: a sweep reports S, W+ and CoT+ per cycle, which the period does not "
+                           "change: every row would be the same")
+        if section == "pressure" and "pressure" not in waveforms:
+            raise BadInput(f"--grid {name}: only [gait] waveform = \"pressure\" reads the [pressure] section: every "
                            "row would be the same")
         if section == "simulation" and key not in used:
             who = "the angles drive" if not used else f"solver {' and '.join(sorted(solvers))}"
@@ -218,9 +226,9 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                         "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
                         "convergence table (objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate), arrays.npz, "
-                        "summary.json and figures to DIR (with several --nodes: of the finest N, and "
-                        "convergence.json)")
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; robust_speed: "
+                        "also optimal_gait_mu1_mu2_<ratio>.toml per friction scenario), arrays.npz, summary.json "
+                        "and figures to DIR (with several --nodes: of the finest N, and convergence.json)")
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
@@ -230,7 +238,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     force_arg(p)
 
 
-#: the files ocp_output.write_outputs writes
+#: the files ocp_crawl.viz.ocp.write_outputs writes (robust_speed: also one problem file per friction scenario,
+#: ocp_crawl.viz.ocp.scenario_files)
 OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 
@@ -239,6 +248,16 @@ def _each(value, text) -> str:
     if isinstance(value, list):
         return ", ".join(text(v) for v in value) if value else units.MISSING
     return text(value)
+
+
+def _ocp_replay(s: dict, name: str, text) -> str:
+    """The OCP's and the replay's ``name`` (``S``, ``v``, ``W_plus``, ``CoT_plus``): "OCP x, replay y", or per
+    friction scenario of robust_speed, labelled with its ratio: "mu1/mu2 = 0.9: OCP x, replay y; ..."."""
+    ocp, replay = s.get(f"{name}_ocp"), s.get(f"{name}_replay")
+    if not s.get("scenarios"):
+        return f"OCP {_each(ocp, text)}, replay {_each(replay, text)}"
+    return "; ".join(f"mu1/mu2 = {row['label']}: OCP {text(row[f'{name}_ocp'])}, replay {text(row[f'{name}_replay'])}"
+                     for row in s["scenarios"])
 
 
 def _value(objective: str, v, digits: int = 3) -> str:
@@ -272,10 +291,10 @@ def format_optimize(s: dict) -> str:
         f"status      {s['status']}: {s['message']}",
         f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T "
         f"{units.seconds(s.get('T_ocp'))}",
-        f"S           OCP {_each(s['S_ocp'], units.distance)}, replay {_each(s['S_replay'], units.distance)}",
-        f"speed       OCP {_each(s.get('v_ocp'), units.speed)}, replay {_each(s.get('v_replay'), units.speed)}",
-        f"W+          OCP {_each(s['W_plus_ocp'], units.work)}, replay {_each(s['W_plus_replay'], units.work)}",
-        f"CoT+        OCP {_each(s['CoT_plus_ocp'], units.cot)}, replay {_each(s['CoT_plus_replay'], units.cot)}",
+        f"S           {_ocp_replay(s, 'S', units.distance)}",
+        f"speed       {_ocp_replay(s, 'v', units.speed)}",
+        f"W+          {_ocp_replay(s, 'W_plus', units.work)}",
+        f"CoT+        {_ocp_replay(s, 'CoT_plus', units.cot)}",
         f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
         f"harmonic    best of the family: {harmonic}; gain of the optimum (by replay) {_gain(s)}",
@@ -342,7 +361,7 @@ def _progress_bar(wanted: bool):
 @register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
 def cmd_optimize(args: argparse.Namespace) -> int:
     from ocp_crawl.ocp import optimize_gait
-    from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
+    from ocp_crawl.viz.ocp import scenario_files, write_outputs as write_ocp_outputs
 
     if args.nodes and any(text.split("=", 1)[0].strip() == "ocp.nodes" for text in args.overrides):
         raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the nodes: give one")
@@ -364,7 +383,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     settings = replace(settings, nodes=nodes[0])
     if len(nodes) > 1:
         return _optimize_nodes(args, problem, settings, nodes)
-    out = optional_out(args, OCP_FILES)
+    out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
     with _progress_bar(args.progress or sys.stderr.isatty()):
         result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs)
@@ -388,9 +407,9 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
     """``optimize --nodes N1 N2 ...``: the convergence table (and the finest optimum's summary and files)."""
     from ocp_crawl.io.files import write_json
     from ocp_crawl.ocp.convergence import converge_in_nodes
-    from ocp_crawl.viz.ocp import write_outputs as write_ocp_outputs
+    from ocp_crawl.viz.ocp import scenario_files, write_outputs as write_ocp_outputs
 
-    out = optional_out(args, (*OCP_FILES, CONVERGENCE_FILE))
+    out = optional_out(args, (*OCP_FILES, *scenario_files(settings), CONVERGENCE_FILE))
     check_start(problem)
     shown = args.progress or sys.stderr.isatty()
     log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None

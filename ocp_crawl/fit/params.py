@@ -2,11 +2,11 @@
 
 A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.mu``, ``robot.mu1``,
 ``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections, and of any section the
-schema gains that is not a numerics setting), or ``pressure.NAME``
-for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`, which problem files do not
-describe: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar]
-(Table I's map), ``pressure.phi_rest_deg`` [deg] (the rest angle) and ``pressure.amplitude_bar`` [bar]
-(the waveform's amplitude A_p).  Their defaults are those of the input ``form``
+schema gains that is not a numerics setting), or ``pressure.NAME``, a key of the ``[pressure]`` section,
+for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`: ``pressure.a1``, ``pressure.a2``
+[rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar] (Table I's map), ``pressure.phi_rest_deg`` [deg]
+(the rest angle) and ``pressure.amplitude_bar`` [bar] (the waveform's amplitude A_p).  The pressure
+constants are those of the problem's ``[pressure]`` section as given, else those of the input ``form``
 (:func:`ocp_crawl.model.pressure.form_constants`): the default form is the pressure study's, the paper's
 form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0 the nominal (mean) pressure, A_p = 0.4 bar and the flat
 rest shape, 180 deg; ``form="raised"`` is the earlier raised sine from 0 to the peak p0 (no amplitude, NaN)
@@ -75,7 +75,7 @@ class Parameter:
 def fittable_names() -> list[str]:
     """Every name :func:`resolve_parameters` accepts."""
     keys = [f"{s}.{k.name}" for s in FIT_SECTIONS for k in SCHEMA[s].keys if k.type is float]
-    return keys + [f"pressure.{n}" for n in PRESSURE_UNITS]
+    return list(dict.fromkeys(keys + [f"pressure.{n}" for n in PRESSURE_UNITS]))
 
 
 def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float]:
@@ -86,12 +86,35 @@ def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float
             **form_constants(form, gravity)}
 
 
+def pressure_form(problem: Problem, form: str | None = None) -> str:
+    """The pressure input form of a fit: ``form`` (``--form``), else the problem's ``[pressure] form`` as given, else
+    :data:`~ocp_crawl.model.pressure.DEFAULT_FORM`; ProblemError for an unknown form or one that differs from
+    the problem's."""
+    if form is not None and form not in PRESSURE_FORMS:
+        raise ProblemError(f"--form {form}: unknown pressure input form; one of {', '.join(PRESSURE_FORMS)}")
+    given = problem.given_dict().get("pressure", {}).get("form")
+    if form is not None and given is not None and form != given:
+        raise ProblemError(f"--form {form} and {problem.source}: [pressure] form = \"{given}\" differ: give one "
+                           "(the problem file's, or drop the key)")
+    return form or given or DEFAULT_FORM
+
+
+def problem_pressure(problem: Problem, form: str | None = None) -> dict[str, float]:
+    """The pressure constants of ``problem`` (:data:`PRESSURE_UNITS`): those its ``[pressure]`` section gives, the
+    others :func:`pressure_defaults` of its form (:func:`pressure_form`)."""
+    given = problem.given_dict().get("pressure", {})
+    return {**pressure_defaults(problem.gravity, pressure_form(problem, form)),
+            **{k: float(v) for k, v in given.items() if k in PRESSURE_UNITS}}
+
+
 def value_rule(name: str) -> tuple[Rule | None, str]:
     """The rule every value of the parameter ``name`` must pass (None: any finite number) and what it is: the schema's
-    rule of a problem key (the one ``Problem.with_values`` applies), :data:`PRESSURE_RULES` of a pressure constant."""
+    rule of a problem key (the one ``Problem.with_values`` applies); for a pressure constant :data:`PRESSURE_RULES`,
+    else its key's in ``[pressure]``."""
     section, key = name.split(".", 1)
     if section == "pressure":
-        return PRESSURE_RULES.get(key), f"pressure constant, {PRESSURE_UNITS[key]}"
+        rule = PRESSURE_RULES.get(key) or SCHEMA["pressure"].key_map[key].rule
+        return rule, f"pressure constant, {PRESSURE_UNITS[key]}"
     k = SCHEMA[section].key_map[key]
     return k.rule, k.what
 
@@ -133,10 +156,10 @@ def _exclusive(names: Sequence[str]) -> None:
                                f"or {' and '.join(f'{section}.{o}' for o in others)}), not both")
 
 
-def _current(problem: Problem, name: str, form: str) -> tuple[float | None, str]:
+def _current(problem: Problem, name: str, form: str | None) -> tuple[float | None, str]:
     section, key = name.split(".", 1)
     if section == "pressure":
-        return pressure_defaults(problem.gravity, form)[key], PRESSURE_UNITS[key]
+        return problem_pressure(problem, form)[key], PRESSURE_UNITS[key]
     values = problem.sections.get(section, {})
     unit = SCHEMA[section].key_map[key].unit
     value = values.get(key)
@@ -177,13 +200,13 @@ def _number(text: str, what: str) -> float:
 
 
 def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[str] = (),
-                       bounds: Sequence[str] = (), form: str = DEFAULT_FORM) -> list[Parameter]:
+                       bounds: Sequence[str] = (), form: str | None = None) -> list[Parameter]:
     """The parameters to fit, checked: names, start values and bounds.
 
     Parameters
     ----------
     problem : Problem
-        The problem whose values are the start values (pressure constants: :func:`pressure_defaults`).
+        The problem whose values are the start values (pressure constants: :func:`problem_pressure`).
     names : sequence of str
         ``SECTION.KEY`` names (see the module docstring), each once.
     start : sequence of str
@@ -191,9 +214,9 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     bounds : sequence of str
         ``NAME=LOW:HIGH`` bounds, both in the parameter's valid range; default x0 +- 45 deg for angles,
         [x0/10, 10 x0] for positive numbers, each end pulled into the valid range (``gait.A_deg`` = 30: [0, 75]).
-    form : str
+    form : str, optional
         The pressure input form whose constants are the default start values of ``pressure.*``
-        (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`, default the paper's form (ref)).
+        (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`; None: the problem's, :func:`pressure_form`).
 
     Returns
     -------
@@ -207,8 +230,7 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
         (the schema's rule of its key, :data:`PRESSURE_RULES`), a start outside its bounds, start values
         the problem rejects together (``Problem.with_values``), an unknown form.
     """
-    if form not in PRESSURE_FORMS:
-        raise ProblemError(f"--form {form}: unknown pressure input form; one of {', '.join(PRESSURE_FORMS)}")
+    pressure_form(problem, form)
     valid = fittable_names()
     if not names:
         raise ProblemError(f"no parameter to fit: give --param NAME (one of {', '.join(valid)})")
@@ -237,13 +259,13 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
 
 
 def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits: Mapping[str, str],
-               form: str) -> Parameter:
+               form: str | None) -> Parameter:
     value, unit = _current(problem, name, form)
     if name in starts:
         value = starts[name]
     if value is None or math.isnan(value):
         raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the "
-                           f"{form} form has no such constant); give --start {name}=VALUE")
+                           f"{pressure_form(problem, form)} form has no such constant); give --start {name}=VALUE")
     check_value(name, value, f"--start {name}={value:g}" if name in starts else
                 f"--param {name}: the start value {value:g} {unit}")
     rule, _ = value_rule(name)

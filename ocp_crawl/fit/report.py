@@ -3,16 +3,18 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
 from ocp_crawl.fit.data import DISPLAY
-from ocp_crawl.fit.params import at_bound
+from ocp_crawl.fit.params import at_bound, pressure_defaults
 from ocp_crawl.fit.solve import FitResult
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import write_table
+from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.problem.overrides import toml_text
+from ocp_crawl.problem.schema import SCHEMA
 
 #: files written by :func:`write_fit` into its directory
 FIT_FILES = {"problem": "fitted_problem.toml", "json": "fit.json", "residuals": "residuals.csv",
@@ -85,7 +87,7 @@ def fit_dict(fit: FitResult) -> dict[str, Any]:
         "rank": fit.rank, "singular_values": fit.singular_values.tolist(),
         "unidentified": [{"singular_ratio": d.singular_ratio, "relative_sd": d.relative_sd,
                           "components": d.components} for d in fit.unidentified],
-        "pressure": fit.pressure,
+        "pressure": fit.pressure, "form": fit.form,
         "files": [{"path": f.data.path, "kind": f.data.kind, "observable": f.data.observable,
                    "lines": f.data.table.lines.tolist(), "data_si": f.data.y.tolist(), "sigma_si": f.data.sigma.tolist(),
                    "model_si": f.model.tolist(), "residuals": f.residuals.tolist(), "statuses": list(f.statuses)}
@@ -94,20 +96,37 @@ def fit_dict(fit: FitResult) -> dict[str, Any]:
 
 
 def problem_toml(fit: FitResult) -> str:
-    """The fitted problem as a problem file: the input problem with the fitted keys, the fit in comments.
-
-    The pressure constants are not problem-file keys: they are written as comments.
-    """
-    values = fit.values()
+    """The fitted problem as a problem file: the keys the input problem was given (no defaults added), the fitted
+    values as keys (``pressure.*`` in ``[pressure]``, with :func:`pressure_keys`), the uncertainties in comments.
+    Simulating it at a row's operating point gives the model of that row."""
     head = [f"Fitted by ocp-crawl fit ({fit.status.label}; chi2/dof {_num(fit.chi2_red)}).",
-            *[f"{n} = {v:.10g} +- {_num(s)} {p.unit}" for (n, v), s, p in zip(values.items(), fit.sigma,
+            *[f"{n} = {v:.10g} +- {_num(s)} {p.unit}" for (n, v), s, p in zip(fit.values().items(), fit.sigma,
                                                                               fit.parameters)]]
-    if any(n.startswith("pressure.") for n in values):
-        head.append("pressure actuator (not a problem-file section): " +
-                    ", ".join(f"{k} = {v:.6g}" for k, v in fit.pressure.items()))
-    sections = {section: {k: v for k, v in keys.items() if v is not None}
-                for section, keys in fit.problem.to_dict().items()}
+    sections = fit.problem.given_dict()
+    pressure = pressure_keys(fit, sections.get("pressure", {}))
+    if pressure:
+        sections["pressure"] = pressure
     return toml_text(sections, head)
+
+
+def pressure_keys(fit: FitResult, given: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``[pressure]`` section of the fitted problem file: the keys the input gave, the fitted constants, and,
+    when rows used the pressure constants, the form and every constant the fit used that differs from the form's
+    default (``--pressure``, ``--form``), so that the file alone gives the fitted model."""
+    out = dict(given)
+    if fit.pressure:
+        defaults = pressure_defaults(fit.problem.gravity, fit.form)
+        if fit.form != DEFAULT_FORM or "form" in out:
+            out["form"] = fit.form
+        for key, value in fit.pressure.items():
+            if math.isfinite(value) and (key in out or value != defaults[key]):
+                out[key] = float(value)
+    for name, value in fit.values().items():
+        section, key = name.split(".", 1)
+        if section == "pressure":
+            out[key] = value
+    order = [k.name for k in SCHEMA["pressure"].keys]
+    return {k: out[k] for k in sorted(out, key=order.index)}
 
 
 def residual_columns(fit: FitResult) -> list[tuple[str, str, list[float]]]:

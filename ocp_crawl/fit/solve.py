@@ -31,7 +31,7 @@ from scipy.optimize import least_squares
 
 from ocp_crawl.fit.data import GAIT_KEYS, Measurements
 from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_error, row_tasks
-from ocp_crawl.fit.params import Parameter, pressure_defaults, split_values
+from ocp_crawl.fit.params import Parameter, pressure_form, problem_pressure, split_values
 from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem, ProblemError
@@ -105,7 +105,9 @@ class FitResult:
     problem: Problem = field(repr=False)
     """the input problem with the fitted problem keys"""
     pressure: dict[str, float] = field(default_factory=dict)
-    """the pressure constants of the fit (fitted or not)"""
+    """the pressure constants of the fit (fitted or not); empty when no row uses them"""
+    form: str = DEFAULT_FORM
+    """the pressure input form of the fit (:data:`~ocp_crawl.model.pressure.PRESSURE_FORMS`)"""
 
     @property
     def success(self) -> bool:
@@ -128,7 +130,8 @@ class _Objective:
 
     def __init__(self, problem, datasets, params, executor, pressure, form):
         self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
-        self.constants = {**pressure_defaults(problem.gravity, form), **pressure}
+        self.form = pressure_form(problem, form)
+        self.constants = {**problem_pressure(problem, form), **pressure}
         self.scale = np.array([abs(p.x0) or 1.0 for p in params])
         self.failed_evaluations = self.calls = 0
         self.last: tuple[np.ndarray, list] | None = None
@@ -248,12 +251,12 @@ def check_pressure(params: Sequence[Parameter], pressure: Mapping[str, float]) -
 
 
 def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
-               pressure: Mapping[str, float] | None = None, form: str = DEFAULT_FORM) -> None:
+               pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
     """TableError naming the file and row whose operating point the model rejects at the start values: a gait row's
     keys that ``Problem.with_values`` rejects (a range, a foot off the ground, a key of another waveform), a
     pressure row whose waveform is invalid (an amplitude above its p0).  Nothing is simulated."""
     keys, fitted = split_values(params, [p.x0 for p in params])
-    constants = {**pressure_defaults(problem.gravity, form), **(pressure or {}), **fitted}
+    constants = {**problem_pressure(problem, form), **(pressure or {}), **fitted}
     for d in datasets:
         for j, task in enumerate(row_tasks(problem, d, keys, constants)):
             why = row_error(task)
@@ -266,10 +269,10 @@ def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Seque
 
 
 def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
-                 pressure: Mapping[str, float] | None = None, form: str = DEFAULT_FORM) -> None:
+                 pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
     """Every check of a fit's input before any simulation: :func:`check_counts`, :func:`check_pressure`,
     :func:`check_rows`.  TableError (naming a file and row) or ProblemError (naming an option)."""
-    check_counts(datasets, params, form)
+    check_counts(datasets, params, pressure_form(problem, form))
     check_pressure(params, pressure or {})
     check_rows(problem, datasets, params, pressure, form)
 
@@ -303,7 +306,8 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: st
 
 def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter], *,
                      pressure: Mapping[str, float] | None = None, absolute_sigma: bool = True,
-                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND, form: str = DEFAULT_FORM) -> FitResult:
+                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND, form: str | None = None
+                     ) -> FitResult:
     """Fit ``params`` to the measurements by weighted least squares on simulations.
 
     Parameters
@@ -316,8 +320,8 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         What to fit, with start values and bounds (:func:`ocp_crawl.fit.params.resolve_parameters`).
     pressure : mapping of str to float, optional
         Pressure constants held fixed (``a1``, ``a2``, ``b1``, ``b2`` [rad/bar^2, rad/bar], ``phi_rest_deg``
-        [deg], ``amplitude_bar`` [bar]); default Table I and the constants of ``form``
-        (:func:`ocp_crawl.fit.params.pressure_defaults`).
+        [deg], ``amplitude_bar`` [bar]); default the problem's ``[pressure]`` values as given, else Table I and
+        the constants of ``form`` (:func:`ocp_crawl.fit.params.problem_pressure`).
     absolute_sigma : bool
         True: the sigmas are standard uncertainties, covariance (J^T J)^-1; False: relative weights,
         covariance scaled by the reduced chi-square.
@@ -327,10 +331,11 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         Worker processes evaluating the rows (1: this process).
     rcond : float
         Relative singular value below which a direction is unidentifiable.
-    form : str
-        The pressure input form (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`): "paper" (default, as the
-        pressure study), the paper's form (ref) with nominal p0, amplitude 0.4 bar and rest angle 180 deg;
-        "raised", the raised sine from 0 to the peak p0 with the stored fitted rest angle.
+    form : str, optional
+        The pressure input form (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`): "paper" (as the pressure
+        study), the paper's form (ref) with nominal p0, amplitude 0.4 bar and rest angle 180 deg; "raised", the
+        raised sine from 0 to the peak p0 with the stored fitted rest angle; None (default): the problem's
+        ``[pressure] form``, "paper" when it gives none (:func:`ocp_crawl.fit.params.pressure_form`).
 
     Returns
     -------
@@ -417,4 +422,4 @@ def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_s
     uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)
     constants = {**obj.constants, **pressure} if uses else {}
     return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs, tuple(files), chi2, dof,
-                     nfev, status, message, absolute_sigma, fitted, constants)
+                     nfev, status, message, absolute_sigma, fitted, constants, obj.form)

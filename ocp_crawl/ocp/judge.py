@@ -64,6 +64,17 @@ def value_text(objective: str, value: float) -> str:
     return units.cot(value) if objective == "min_cot" else units.speed(value)
 
 
+def ratio_labels(ratios) -> list[str]:
+    """Labels of the friction scenarios mu1/mu2 = ``ratios``: each ratio to the fewest significant digits (from 6)
+    that tell every scenario apart, e.g. ["0.9", "1", "1.1"] (files and text name the scenarios by them)."""
+    ratios = [float(r) for r in ratios]
+    for digits in range(6, 18):
+        labels = [f"{r:.{digits}g}" for r in ratios]
+        if len(set(labels)) == len(set(ratios)):
+            return labels
+    return [repr(r) for r in ratios]
+
+
 def is_better(objective: str, a: float, b: float) -> bool:
     """Whether objective value ``a`` is strictly better than ``b`` (CoT+ smaller, speeds larger); NaN never is."""
     if math.isnan(a):

@@ -21,7 +21,7 @@ from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, value_from
-from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, replay_signal, value_text
+from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, ratio_labels, replay_signal, value_text
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
@@ -155,7 +155,22 @@ class OCPResult:
             "equation_residual": self.equation_residual,
             "failed_stage": self.failed_stage,
             "homotopy": [asdict(h) for h in self.homotopy],
+            "scenarios": self.scenarios(),
         })
+
+    def scenarios(self) -> list[dict] | None:
+        """robust_speed: per friction scenario, in the order of the per-scenario lists, its ratio ``mu1_mu2``, its
+        ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+, CoT+ of the OCP and
+        the replay; None where not computed); None for the other objectives (one scenario, the robot's)."""
+        if self.objective != "robust_speed":
+            return None
+        ratios = self.settings.friction_ratios
+        names = ("S_ocp", "S_replay", "v_ocp", "v_replay", "W_plus_ocp", "W_plus_replay", "CoT_plus_ocp",
+                 "CoT_plus_replay")
+        lists = [getattr(self, name) for name in names]
+        return jsonable([{"mu1_mu2": r, "label": label,
+                          **{n: values[j] if j < len(values) else None for n, values in zip(names, lists)}}
+                         for j, (r, label) in enumerate(zip(ratios, ratio_labels(ratios)))])
 
 
 def baseline_gait(harm: HarmonicChoice, robot: Robot) -> tuple:

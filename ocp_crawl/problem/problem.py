@@ -72,6 +72,9 @@ class Problem:
     input_torque: PeriodicSignal | None = None
     """joint torques [N m] given directly (samples of torques, e.g. an ``optimize`` result); None: the torque
     drive's tau = k (phi_ref - pi) of ``gait``"""
+    given: Mapping[str, Mapping[str, Any]] | None = field(default=None, compare=False, hash=False)
+    """the keys the problem was given (file, ``--set``, ``with_values``), validated, without the defaults of
+    ``sections``; None: every key of ``sections`` (a problem built in code)"""
 
     def __post_init__(self) -> None:
         for name, cls in (("robot", Robot), ("gait", PeriodicSignal)):
@@ -94,6 +97,21 @@ class Problem:
         object.__setattr__(self, "solver", spec.name)
         object.__setattr__(self, "options", spec.options() if self.options is None else self.options)
         object.__setattr__(self, "sections", freeze(self.sections))
+        if self.given is not None:
+            object.__setattr__(self, "given", freeze(self.given))
+
+    @property
+    def period(self) -> float | None:
+        """The duration of one cycle [s] (``[gait] period``, or the period column of a sample file); None when the
+        problem gives none.  The quasistatic S per cycle does not depend on it; the mean speed is S / period."""
+        value = self.sections.get("gait", {}).get("period")
+        return None if value is None else float(value)
+
+    def speed(self, S: float) -> float | None:
+        """The mean speed |S| / period [m/s] of a gait that moves S [m] per cycle (its direction is the sign of S);
+        None without a period or a finite S."""
+        period = self.period
+        return abs(S) / period if period is not None and math.isfinite(S) else None
 
     @property
     def model(self) -> Model:
@@ -128,7 +146,14 @@ class Problem:
             raise TypeError(f"Problem.with_values needs a mapping of SECTION.KEY to values, got {type(values).__name__}")
         items = [(*split_key(k, f"{self.source}: {k}"), v) for k, v in values.items()]
         data, _ = set_values(self.to_dict(), items, self.source)
-        return _validate(data, _Context(self.source))
+        problem = _validate(data, _Context(self.source))
+        given, _ = set_values(self.given_dict(), items, self.source)
+        return dataclasses.replace(problem, given=_given(problem.sections, given))
+
+    def given_dict(self) -> dict:
+        """The keys the problem was given, sections as ``to_dict()`` without the defaults filled in (a problem built
+        in code: ``to_dict()``).  A problem file of these keys is this problem."""
+        return thaw(self.given) if self.given is not None else self.to_dict()
 
     def to_dict(self) -> dict:
         """Plain dict of the problem's sections (JSON- and TOML-friendly; ``problem_from_dict`` accepts it)."""
@@ -368,6 +393,11 @@ def _check_stiffness_ratio(ctx: _Context, robot: Robot, drive: str) -> None:
                         "contact forces; the stiff limit is the prescribed-angle gait: set gait.drive = \"angles\"")
 
 
+def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> dict:
+    """The validated ``values`` of the keys ``data`` gives (sections it gives, keys in the schema's order)."""
+    return {name: {k: v for k, v in values[name].items() if k in data[name]} for name in values if name in data}
+
+
 def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
@@ -375,12 +405,13 @@ def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
     # the schema has checked every value the constructors check, so their errors would be internal bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
     _check_stiffness_ratio(ctx, robot, g["drive"])
-    signals = gait_input(g, robot.k, ctx.at, ctx.base)
+    gravity = values["model"]["gravity"]
+    signals = gait_input(g, robot.k, ctx.at, ctx.base, values["pressure"], gravity)
     values["gait"] = signals.values
     solver = _solver(ctx, g["drive"], sim)
-    problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=values["model"]["gravity"],
+    problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values, source=ctx.source,
-                      input_torque=signals.torque)
+                      input_torque=signals.torque, given=_given(values, data))
     _check_contact(ctx, problem.model, problem.gait, problem.drive, values)
     return problem
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Callable, Literal, Mapping, Sequence
 
+from ocp_crawl.model.pressure import PAPER_FORM_AMPLITUDE_BAR, PRESSURE_FORMS, BendingMap
 from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
@@ -202,7 +203,7 @@ _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, 
 ))
 
 #: the waveforms of ``[gait] waveform``: the reference angles (or torques) over one cycle
-WAVEFORMS = ("harmonic", "fourier", "samples", "pulse")
+WAVEFORMS = ("harmonic", "fourier", "samples", "pulse", "pressure")
 #: interpolations of ``[gait] waveform = "samples"`` (the classes of ocp_crawl.model.inputs)
 INTERPOLATIONS = ("pchip", "linear", "spline")
 _HFP, _HP = ("harmonic", "fourier", "pulse"), ("harmonic", "pulse")
@@ -214,12 +215,19 @@ _GAIT = Section("gait", "reference angles (eq. (ref)) or torques over one cycle"
     Key("drive", str, "-", "actuation: spring torque tau = k (phi_ref - pi), or prescribed angles",
         default=DRIVES[0], choices=DRIVES),
     Key("waveform", str, "-", "shape of the input over one cycle: harmonic (eq. (ref)), Fourier series, samples "
-        "(inline or a CSV file), or pulses of soft actuators", default=WAVEFORMS[0], choices=WAVEFORMS),
+        "(inline or a CSV file), pulses of soft actuators, or the pressures of the [pressure] actuator",
+        default=WAVEFORMS[0], choices=WAVEFORMS),
+    Key("period", float, "s", "duration of one cycle, for the mean speed abs(S) / period (the quasistatic S per "
+        "cycle does not depend on it; absent: no speed)", rule=GT0),
     Key("gamma_deg", float, "deg", "nominal joint angle (Fourier: mean; pulse: centre of the swing)", required=True,
         rule=ANGLE, required_unless=("gamma1_deg", "gamma2_deg"), variants=_HFP),
     Key("A_deg", float, "deg", "amplitude (pulse: half swing)", required=True, rule=GE0,
         required_unless=("A1_deg", "A2_deg"), variants=_HP),
-    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2", required=True, rule=PHASE, variants=_HP),
+    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2", required=True, rule=PHASE,
+        variants=(*_HP, "pressure")),
+    Key("p0_bar", float, "bar", "pressure: nominal pressure p0 of both segments (the [pressure] form \"raised\": "
+        "the peak)", required=True, rule=within(0, 1e3, "a gauge pressure; far beyond any soft actuator"),
+        variants=("pressure",)),
     Key("gamma1_deg", float, "deg", "nominal angle of joint 1 (overrides gamma_deg)", rule=ANGLE, variants=_HFP),
     Key("gamma2_deg", float, "deg", "nominal angle of joint 2 (overrides gamma_deg)", rule=ANGLE, variants=_HFP),
     Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0, variants=_HP),
@@ -255,6 +263,26 @@ _GAIT = Section("gait", "reference angles (eq. (ref)) or torques over one cycle"
         requires=("phase", "tau1")),
     Key("interpolation", str, "-", "samples: periodic interpolation between the samples", default=INTERPOLATIONS[0],
         choices=INTERPOLATIONS, variants=("samples",)),
+))
+
+_PRESSURE_WHY = "Table I's bending map a_i p^2 + b_i p of segment i"
+_PRESSURE = Section("pressure", "the pressure actuator of the soft robot (paper Section III): bending map, rest "
+                    "angle, input form; read by [gait] waveform = \"pressure\" and by ocp-crawl fit",
+                    selector="form", keys=(
+    Key("form", str, "-", "pressure input: the paper's form (ref), p0 + A_p sin(2 pi t +- psi/2), or the raised "
+        "sine from 0 to the peak p0", default=PRESSURE_FORMS[0], choices=PRESSURE_FORMS),
+    Key("a1", float, "rad/bar^2", f"quadratic coefficient of segment 1 ({_PRESSURE_WHY})",
+        default=field_default(BendingMap, "a1")),
+    Key("a2", float, "rad/bar^2", f"quadratic coefficient of segment 2 ({_PRESSURE_WHY})",
+        default=field_default(BendingMap, "a2")),
+    Key("b1", float, "rad/bar", f"linear coefficient of segment 1 ({_PRESSURE_WHY})",
+        default=field_default(BendingMap, "b1")),
+    Key("b2", float, "rad/bar", f"linear coefficient of segment 2 ({_PRESSURE_WHY})",
+        default=field_default(BendingMap, "b2")),
+    Key("phi_rest_deg", float, "deg", "joint angle at zero pressure (absent: the form's, 180 deg for \"paper\", "
+        "the stored fitted rest angle of the gravity convention for \"raised\")", rule=ANGLE),
+    Key("amplitude_bar", float, "bar", "pressure amplitude A_p of the paper's form (at most p0)",
+        default=PAPER_FORM_AMPLITUDE_BAR, rule=GE0, variants=("paper",)),
 ))
 
 _MODEL = Section("model", "model conventions", keys=(
@@ -338,7 +366,7 @@ def removed_key(section: str, name: str) -> str | None:
     return f"[ocp] {name} no longer exists; use {REMOVED_KEYS[name]}"
 
 #: The schema: every section and key of a problem file, in the order they are validated and reported.
-SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP)
+SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP, _PRESSURE)
 
 SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
 

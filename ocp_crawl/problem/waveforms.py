@@ -1,11 +1,13 @@
-"""The input of a problem's ``[gait]`` section: harmonic, Fourier series, samples (inline or a CSV file), pulses.
+"""The input of a problem's ``[gait]`` section: harmonic, Fourier series, samples (inline or a CSV file), pulses,
+pressures of the ``[pressure]`` actuator.
 
 ``[gait] waveform`` selects the keys (schema: ``Key.variants``); :func:`gait_input` turns the validated
 values into the reference angles [rad] and, for torque samples, the joint torques [N m] themselves.
 Sample files follow the package's CSV convention (:mod:`ocp_crawl.io.tables`): a header with the unit
 in every column name, ``phase [-]`` and either ``tau1 [N m]``, ``tau2 [N m]`` or ``phi1_ref [deg]``,
-``phi2_ref [deg]``; an error names the file and the line.  Relative file names are read from the
-directory of the problem file.
+``phi2_ref [deg]``, optionally ``period [s]`` (the same on every row: the ``[gait] period`` of the
+samples, as the ``torques.csv`` of ``optimize --out`` carries it); an error names the file and the line.
+Relative file names are read from the directory of the problem file.
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ import numpy as np
 from ocp_crawl.io.tables import TableError, read_table
 from ocp_crawl.model.inputs import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
                                     PeriodicSpline, TorqueReference)
+from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference, PressureWaveform
 from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.problem.schema import ProblemError, format_value
 
@@ -30,6 +33,8 @@ MAX_HARMONICS = 100
 PHASE_COLUMN = {"phase": "dimensionless"}
 TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
 ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
+#: the optional column of a sample file giving the period of one cycle (the same on every row)
+PERIOD_COLUMN = {"period": "time"}
 #: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17 digits)
 CLOSING_RTOL = 1e-9
 #: smallest distance of two sample phases [cycles] (also across the end of the cycle): closer samples make the
@@ -49,7 +54,8 @@ class GaitInput:
     torque: PeriodicSignal | None
     """joint torques [N m] when the waveform gives them directly; None: tau = k (phi_ref - pi)"""
     values: dict
-    """the section's values as validated (a sample file's name resolved to an absolute path)"""
+    """the section's values as validated (a sample file's name resolved to an absolute path, its period column
+    as ``period``)"""
 
 
 def _joint(g: Mapping[str, Any], name: str) -> tuple[float, float]:
@@ -94,11 +100,12 @@ class _Samples:
     names: tuple[str, str]
 
 
-def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str]:
+def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str, float | None]:
+    """The samples of ``g["file"]``, its resolved path and the period of its ``period [s]`` column (None: none)."""
     path = Path(g["file"]).expanduser()
     path = path if path.is_absolute() else base / path
     try:
-        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS}, min_rows=2)
+        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS, **PERIOD_COLUMN}, min_rows=2)
     except TableError as exc:
         raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {exc}") from None
     pairs = [cols for cols in (TORQUE_COLUMNS, ANGLE_COLUMNS) if any(c in table for c in cols)]
@@ -107,10 +114,34 @@ def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str]
         raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {path}: needs 'phase [-]' and either "
                            f"'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', 'phi2_ref [deg]' (header has {have})")
     cols = list(pairs[0])
-    samples = _Samples(table["phase"], np.array([table[c] for c in cols]), pairs[0] is TORQUE_COLUMNS,
-                       lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}",
+    where = lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}"  # noqa: E731
+    samples = _Samples(table["phase"], np.array([table[c] for c in cols]), pairs[0] is TORQUE_COLUMNS, where,
                        (cols[0], cols[1]))
-    return samples, str(path.resolve())
+    return samples, str(path.resolve()), _file_period(table, where)
+
+
+def _file_period(table, where: Callable[[int], str]) -> float | None:
+    """The period [s] of a sample table's ``period`` column, one positive number on every row; None without it."""
+    if "period" not in table:
+        return None
+    column = table["period"]
+    for j, value in enumerate(column):
+        if not value > 0:
+            raise ProblemError(f"{where(j)}: period {float(value)!r} s must be > 0 (the duration of one cycle)")
+        if value != column[0]:
+            raise ProblemError(f"{where(j)}: period {float(value)!r} s differs from {float(column[0])!r} s on the "
+                               "first row: the column gives the one period of the cycle")
+    return float(column[0])
+
+
+def _period(g: Mapping[str, Any], file_period: float | None, at: At) -> float | None:
+    """The samples' period [s]: ``[gait] period`` and the file's period column agree (to :data:`CLOSING_RTOL`)
+    when both are given; either one alone is the period."""
+    given = g.get("period")
+    if given is not None and file_period is not None and abs(given - file_period) > CLOSING_RTOL * file_period:
+        raise ProblemError(f"{at('gait', 'period', given)} is invalid: the sample file {g['file']} gives the period "
+                           f"{file_period!r} s in its period column: give one period (drop the key or the column)")
+    return given if given is not None else file_period
 
 
 def _inline(g: Mapping[str, Any], at: At) -> _Samples:
@@ -178,7 +209,10 @@ def _check_angles(s: _Samples) -> None:
 def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> GaitInput:
     values = dict(g)
     if "file" in g:
-        samples, values["file"] = _from_file(g, at, base)
+        samples, values["file"], file_period = _from_file(g, at, base)
+        period = _period(g, file_period, at)
+        if period is not None:
+            values["period"] = period
     else:
         samples = _inline(g, at)
     if samples.torque and drive != "torque":
@@ -193,7 +227,24 @@ def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> 
     return GaitInput(signal, None, values)
 
 
-def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path) -> GaitInput:
+def _pressure(g: Mapping[str, Any], pressure: Mapping[str, Any], gravity: str, at: At) -> PressureReference:
+    """The reference angles of the pressure-driven robot: the ``[pressure]`` actuator at ``[gait] p0_bar``,
+    ``psi_deg`` (:func:`ocp_crawl.model.pressure.pressure_torque` with k (phi_ref - pi) the torque)."""
+    paper = pressure["form"] == "paper"
+    rest = pressure.get("phi_rest_deg", FLAT_REST_DEG if paper else FITTED_REST_DEG[gravity])
+    amplitude = pressure["amplitude_bar"] if paper else None   # the raised sine has none: p0 is its peak
+    try:
+        waveform = PressureWaveform(g["p0_bar"], math.radians(g["psi_deg"]), amplitude)
+    except ValueError:
+        raise ProblemError(f"{at('gait', 'p0_bar', g['p0_bar'])} is invalid with [pressure] amplitude_bar = "
+                           f"{format_value(amplitude)}: the amplitude must be at most p0 (the pressure p0 - "
+                           "amplitude must not be negative)") from None
+    bending = BendingMap(*(pressure[name] for name in ("a1", "a2", "b1", "b2")))
+    return PressureReference(waveform, math.radians(rest), bending)
+
+
+def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path, pressure: Mapping[str, Any] | None = None,
+               gravity: str = "physical") -> GaitInput:
     """The signals of the validated ``[gait]`` values ``g`` (schema checked, defaults filled in).
 
     Parameters
@@ -206,6 +257,10 @@ def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path) -> GaitInput:
         ``at(section, key, value)``: the message prefix naming the file, key and value.
     base : Path
         Directory that relative sample-file names are read from (the problem file's).
+    pressure : mapping, optional
+        The validated ``[pressure]`` values (defaults filled in), read by the ``pressure`` waveform.
+    gravity : str
+        The gravity convention (the rest angle of the ``raised`` pressure form depends on it).
 
     Returns
     -------
@@ -224,6 +279,8 @@ def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path) -> GaitInput:
         return GaitInput(_fourier(g, at), None, dict(g))
     if waveform == "pulse":
         return GaitInput(_pulse(g, at), None, dict(g))
+    if waveform == "pressure":
+        return GaitInput(_pressure(g, pressure, gravity, at), None, dict(g))
     (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
     gait = Harmonic.from_degrees(gamma1_deg=g1, gamma2_deg=g2, A1_deg=a1, A2_deg=a2, psi_deg=g["psi_deg"])
     return GaitInput(gait, None, dict(g))
@@ -257,6 +314,8 @@ def waveform_text(g: Mapping[str, Any]) -> str:
         own = f"order {order}"
     elif waveform == "pulse":
         own = f"rise {g['rise']:g}, hold {g['hold']:g} cycles, {g['ramp']} edges"
+    elif waveform == "pressure":
+        own = f"p0 = {g['p0_bar']:g} bar"
     else:
         where = g["file"] if "file" in g else f"{len(g.get('phase', ()))} inline samples"
         own = f"{where}, {g.get('interpolation')} interpolation"
