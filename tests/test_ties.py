@@ -75,6 +75,9 @@ def test_holds_are_the_pieces_where_both_joints_rest():
         np.array([[0.125, 0.25], [0.375, 0.5], [0.625, 0.75], [0.875, 1.0]]))
     wrap = square([[60, 60, 120, 60], [90, 90, 120, 90]], n=4)  # held from 0.75 over the period's end to 0.25
     assert input_holds(wrap, wrap.t_knots) == pytest.approx(np.array([[0.75, 1.25]]))
+    turns = pulse(psi=90, rise=0.25, hold=0.25)  # the joints take turns: both at rest only where edges meet
+    rests = np.array([[t, t] for t in (0.125, 0.375, 0.625, 0.875)])
+    assert input_holds(turns, turns.t_knots) == pytest.approx(rests)
     h = Harmonic.from_degrees(90, 30, 45)
     assert input_holds(h, np.linspace(0, 1, 8, endpoint=False)).shape == (0, 2)
 

@@ -61,7 +61,7 @@ from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, 
     hermite_point, mode_q, torque_pair
 from ocp_crawl.sim.event_ties import check_shared_slip
 from ocp_crawl.sim.options import MAX_EVENTS_BOUNDS, MAX_STEP_BOUNDS, CycleOptions, count
-from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
+from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
 _RES, _DET, _D = AUX["res"], AUX["det"], AUX["d"]
@@ -89,8 +89,8 @@ class HybridOptions(CycleOptions):
     """events allowed in one cycle before the run ends with status ``too_many_events``"""
     resolve_input: bool = True
     """limit the step to 1/8 of the period of the input's fastest significant harmonic (see
-    :func:`~ocp_crawl.sim.event_kinks.input_step`), so that fast (chattering) inputs are followed and no event pair hides
-    inside a step"""
+    :func:`~ocp_crawl.sim.event_kinks.input_step`), so that fast (chattering) inputs are followed and no event
+    pair hides inside a step"""
     trial_step: float = 1e-9
     """phase step used to test the consistency of a mode after a transition"""
     quad_h: float = 1.0 / 32
@@ -450,15 +450,8 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         mode consistent on the piece before it if that one is not or none is (:meth:`_before_kink`); (mode, its start,
         event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
-        if self.tie_note(ev_pt) and not self._input_jumps(t_ev):
-            found = self._decide(ev_pt)  # (at a tie of the friction limits: the rule of _decide, not the table)
-            if len(found) == 1:
-                chosen, trial = found[0]
-                kind_out = mode_change_kind(mode, chosen) if chosen != mode else f"graze_{event_kind(kind)}"
-                return chosen, trial, kind_out
-            if found:  # (none: the table's tests below, which know holds and kinks inside the trial steps)
-                raise _Failure(Status.SET_VALUED, t_ev, mode, f"after event {kind} the modes that continue from the "
-                               f"state are {', '.join(m.label for m, _ in found)}{self.tie_note(ev_pt)}")
+        if self.tie_note(ev_pt) and not self._input_jumps(t_ev) and (tied := self._tie_successor(mode, kind, ev_pt)):
+            return tied
         trial = self._consistent(target, ev_pt, new_d0)
         found = [(target, trial)] if trial is not None else \
             [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]

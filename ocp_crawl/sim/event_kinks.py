@@ -132,9 +132,24 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     t = b[:, None] + np.array([0.25, 0.5, 0.75])[None, :] * (ends - b)[:, None]
     rate = np.asarray(signal.derivative(t.ravel()), float).reshape(2, b.size, 3)
     scale = float(np.max(np.abs(np.asarray(signal.derivative(np.linspace(0.0, 1.0, 257)), float))))
-    held = np.all(np.abs(rate) <= HOLD_RTOL * max(scale, float(np.max(np.abs(rate)))), axis=(0, 2))
-    if held.all() or not held.any():
+    tol = HOLD_RTOL * max(scale, float(np.max(np.abs(rate))))
+    held = np.all(np.abs(rate) <= tol, axis=(0, 2))
+    if held.all():
         return np.zeros((0, 2))
+    # breakpoints where both rates vanish (two half-cosine edges meeting at rest): holds of zero length
+    rest = b[np.all(np.abs(np.asarray(signal.derivative(b), float).reshape(2, -1)) <= tol, axis=0)]
+    out = [(r, r) for r in rest.tolist() if not (held[np.searchsorted(b, r)] or held[np.searchsorted(b, r) - 1])]
+    holds = _runs(b, ends, held) + out
+    if not holds:
+        return np.zeros((0, 2))
+    holds = np.array(holds) - np.floor(np.array(holds)[:, :1])
+    return holds[np.argsort(holds[:, 0])]
+
+
+def _runs(b: np.ndarray, ends: np.ndarray, held: np.ndarray) -> list[tuple[float, float]]:
+    """The maximal runs (start, end) of consecutive held pieces [b_i, ends_i] around the cycle."""
+    if not held.any():
+        return []
     first = int(np.argmin(held))  # a moving piece: the holds are the runs of held pieces after it
     out, start = [], None
     for j in range(first + 1, first + 1 + b.size):
@@ -149,8 +164,7 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
             start = None
     if start is not None:
         out.append((start, end))
-    holds = np.array(out) - np.floor(np.array(out)[:, :1])
-    return holds[np.argsort(holds[:, 0])]
+    return out
 
 
 class KinksMixin:
@@ -222,6 +236,7 @@ class KinksMixin:
         """Find the input's holds (:func:`input_holds`) and keep them as a list of (start, end) per cycle offset."""
         self.holds = input_holds(self.torque, self.breakpoints)
         self._hold_list = [tuple(h) for h in self.holds.tolist()]
+        self._rest_left = None  # (the hold of zero length last left: the stepper is at it, and goes on)
 
     def _hold_spans(self, t: float):
         """The holds' absolute spans (start, end) [cycles] of the cycles around phase t."""
@@ -237,7 +252,8 @@ class KinksMixin:
         or None."""
         if not self._hold_list:
             return None
-        return next(((a, b) for a, b in self._hold_spans(t) if a - KINK_GAP <= t < b - KINK_GAP), None)
+        return next(((a, b) for a, b in self._hold_spans(t) if a - KINK_GAP <= t < b - KINK_GAP or
+                     (a == b and abs(t - a) <= KINK_GAP and a != self._rest_left)), None)
 
     def _not_at_hold(self, seg, pt: _Point, new: _Point, crossed: list[str]) -> list[str]:
         """The guards ``crossed`` in the step [pt, new], less all of them when the step ends at a hold's start with
@@ -265,9 +281,10 @@ class KinksMixin:
             return False
         seg, tb = run.seg, min(span[1], t_end)
         # the hold's ends at rest (zero rates: the dense output interpolates the constant state between them), then
-        # the state at its end with the rates after it
-        ends = [self._solve(t, run.pt.xl, seg.q, step=True, held=True) for t in (run.pt.t, tb)]
+        # the state at its end with the rates after it; a hold of zero length (a rest of the input) is left once
+        ends = [self._solve(t, run.pt.xl, seg.q, step=True, held=True) for t in (run.pt.t, tb) if span[0] < span[1]]
         ends.append(self._solve(tb, run.pt.xl, seg.q, step=True))
+        self._rest_left = span[0] if span[0] == span[1] else self._rest_left
         if any(p is None or self._jump(run.pt, p)[0] > self.opt.jump_tol for p in ends):
             raise _Failure(Status.NO_CONVERGENCE, tb, seg.mode, "the mode's state changed across a hold of the "
                            "input (the solve did not return the state it started from)")

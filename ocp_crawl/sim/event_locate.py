@@ -13,8 +13,8 @@ import numpy as np
 
 from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.event_kinks import KINK_GAP
-from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, hermite_point, mode_q
-from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.event_state import _Failure, _Point, _Segment, event_kind, hermite_point, mode_q
+from ocp_crawl.sim.result import Mode, mode_change_kind
 from ocp_crawl.status import Status
 
 #: phase steps [cycles] after an event at which the guards of a successor mode are tested (``_consistent``)
@@ -198,6 +198,20 @@ class EventsMixin:
             if start is not None and not pending and self._jump(pt, start)[0] <= self.opt.jump_tol:
                 found.append((m, start))
         return found
+
+    def _tie_successor(self, mode: Mode, kind: str, ev_pt: _Point) -> tuple[Mode, _Point, str] | None:
+        """The successor of the event ``kind`` of ``mode`` at ev_pt, where the friction limits tie, by the rule of
+        :meth:`_decide` rather than the transition table: (mode, its start, event kind) if one mode continues, None if
+        none does (the table's tests then apply, which know holds and kinks inside the trial steps); SET_VALUED if
+        several do."""
+        found = self._decide(ev_pt)
+        if len(found) > 1:
+            raise _Failure(Status.SET_VALUED, ev_pt.t, mode, f"after event {kind} the modes that continue from the "
+                           f"state are {', '.join(m.label for m, _ in found)}{self.tie_note(ev_pt)}")
+        if not found:
+            return None
+        chosen, trial = found[0]
+        return chosen, trial, mode_change_kind(mode, chosen) if chosen != mode else f"graze_{event_kind(kind)}"
 
     def _trial_steps(self, mode: Mode, pt: _Point, d0: float, kink: float | None = None) -> tuple[_Point | None, set]:
         """(start of ``mode`` at pt, its guards still at zero to round-off after the trial steps TRIAL_STEPS); (None,

@@ -50,8 +50,9 @@ def one_sided_limits(run, model: Model) -> tuple[float, float]:
 
 
 def check_shared_slip(res: CrawlResult, model: Model, run) -> CrawlResult:
-    """``res`` unchanged unless it shares a slip at an equal-friction tie whose one-sided limits (:func:`one_sided_limits`
-    with ``run``) differ from its S: then the same result with status SET_VALUED and both values."""
+    """``res`` unchanged unless it shares a slip at an equal-friction tie whose one-sided limits
+    (:func:`one_sided_limits` with ``run``) differ from its S: then the same result with status SET_VALUED and both
+    values."""
     robot = model.robot
     if not shares_a_slip(res) or robot.mu1 != robot.mu2:
         return res
