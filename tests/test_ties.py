@@ -222,6 +222,11 @@ def test_step_like_inputs_are_decided(case):
     assert not (res.status == Status.NO_CONSISTENT_MODE and "limits tie" in res.message), res.message
     if res.success:
         mpcc = run(ref, robot, solver="mpcc", steps=MPCC_STEPS)
+        if mpcc.success and not agree(res.S, mpcc.S):
+            # the time-stepping can slip on for a step after a slip that stops at a knot (README, "crosscheck"):
+            # its S then converges to the event solver's with N (checked at 2 N)
+            note(f"N = {MPCC_STEPS}: S = {mpcc.S} against {res.S}")
+            mpcc = run(ref, robot, solver="mpcc", steps=2 * MPCC_STEPS)
         if mpcc.success:
             assert agree(res.S, mpcc.S), (res.S, mpcc.S)
 
