@@ -447,17 +447,20 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         """The mode after the event ``kind`` at ev_pt: the table's successor ``target`` if it is consistent,
         else the one other consistent mode (the current one for a grazing event), or of several the one that starts
         from the event's state without a jump (:meth:`_jump`); with a kink of the input inside the trial steps, the
-        mode consistent on the piece before it if that one is not or none is (:meth:`_before_kink`); (mode, its start,
+        mode consistent on the piece before it if that one is not or none is (:meth:`_before_kink`); where that
+        leaves no mode or several at tied friction limits, the rule of :meth:`_tie_successor`; (mode, its start,
         event kind)."""
         new_d0 = ev_pt.aux[AUX["d"]]
-        if self.tie_note(ev_pt) and not self._input_jumps(t_ev) and (tied := self._tie_successor(mode, kind, ev_pt)):
-            return tied
         trial = self._consistent(target, ev_pt, new_d0)
         found = [(target, trial)] if trial is not None else \
             [(m, tr) for m in Mode if m != target and (tr := self._consistent(m, ev_pt, new_d0)) is not None]
         if len(found) > 1 and not self._input_jumps(t_ev):  # (e.g. at a kink of the input) a mode that continues
             found = [f for f in found if self._jump(ev_pt, f[1])[0] <= self.opt.jump_tol] or found  # the state wins
         found = self._before_kink(target, ev_pt, new_d0, found)
+        if len(found) != 1 and self.tie_note(ev_pt) and not self._input_jumps(t_ev):
+            tied = self._tie_successor(mode, kind, ev_pt)  # (at tied limits: the rule of _decide)
+            if tied:
+                return tied
         if len(found) != 1:
             raise _Failure(Status.NO_CONSISTENT_MODE, t_ev, mode, f"after event {kind}: {len(found)} consistent "
                            f"successor modes (table successor {target.label} is inconsistent){self.tie_note(ev_pt)}")
