@@ -33,7 +33,7 @@ def _median_time(fn, repeat: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
-#: commit whose event-driven stepper ``hybrid`` times against the working tree (issue 12's starting point)
+#: commit whose event-driven stepper ``hybrid`` times against the working tree
 OLD_COMMIT = "3a581df"
 
 
@@ -259,7 +259,7 @@ def bench_ocp_files(repeat: int) -> dict:
     one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status, objective by replay, and the
     first run's IPOPT iterations, seconds and milliseconds per iteration), then
     the convergence run ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the
-    table).  Targets (issue 13): <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
+    table).  Targets: <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent / "problems"

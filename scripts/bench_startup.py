@@ -12,7 +12,7 @@ one run, where the runs are interleaved).  The ``ocp-crawl`` console script adds
 
 The 37-gait sweep (psi 0..180 deg, the paper gait otherwise) is compared with a MuJoCo simulation of
 the same robot with slow actuation: about 24 s of wall time per gait on this machine (T = 12 s,
-dt = 5e-5 s to reach 0.3 % in S; issue 12), i.e. 1/24 gait per second.  Target: 1000 times as many
+dt = 5e-5 s to reach 0.3 % in S), i.e. 1/24 gait per second.  Target: 1000 times as many
 gaits per second, 37 gaits in under 37 * 24 / 1000 = 0.89 s, whole process.
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 PROBLEM = "problems/paper_gait.toml"
 
-#: wall time of one MuJoCo gait of the same robot [s] (issue 12)
+#: wall time of one MuJoCo gait of the same robot [s]
 MUJOCO_SECONDS_PER_GAIT = 24.0
 
 

@@ -1,4 +1,4 @@
-"""Convergence in N of the shipped OCP problems, checked against issue 13's criteria (run by hand; the
+"""Convergence in N of the shipped OCP problems, checked against the README's convergence criteria (run by hand; the
 tables go into notes).
 
     python scripts/convergence.py                                  # the three problems, N = 50 100 200 400
@@ -27,7 +27,7 @@ PROBLEMS = ("ocp_max_speed", "ocp_min_cot", "ocp_robust")
 
 
 def verdicts(table) -> list[tuple[str, bool]]:
-    """Issue 13's criteria on a convergence table: (what, holds)."""
+    """The convergence criteria on a convergence table: (what, holds)."""
     rows = {r.nodes: r for r in table.rows}
     finest = table.rows[-1]
     out = [("the judge accepts every N", table.success)]

@@ -1,5 +1,5 @@
 """The rows of the bad-input matrix (tests/test_bad_input.py) for data files and waveforms: fit's measurement files
-and parameters, and the non-harmonic gait waveforms with their sample tables (issue 14)."""
+and parameters, and the non-harmonic gait waveforms with their sample tables."""
 from _bad_input_rows import PAPER_TEXT, R
 
 # ---- fit: measurement files (the CSV convention) and parameters
@@ -52,7 +52,7 @@ def csv(text: str) -> dict:
     return {"t.csv": text.encode()}
 
 
-#: issue 14: non-harmonic waveforms ([gait] waveform) are validated like every other key; files name their line
+#: non-harmonic waveforms ([gait] waveform) are validated like every other key; files name their line
 DATA_ROWS.update({
     "simulate: unknown waveform": R("simulate", ["{file}"], ["x.toml", '[gait] waveform = "square"', '"pulse"'],
                                     text=gait('waveform = "square"')),
@@ -120,7 +120,7 @@ DATA_ROWS.update({
 })
 
 
-#: found by fuzzing the command line (session 21): internal errors and a read without end
+#: found by fuzzing the command line: internal errors and a read without end
 DATA_ROWS.update({
     "simulate: empty inline samples (IndexError)": R("simulate", ["{file}"], ["x.toml", "[gait] phase = []",
                                                                              "no samples"],
@@ -162,7 +162,7 @@ DATA_ROWS.update({
 })
 
 
-#: found by a second round of fuzzing (session 21)
+#: found by a second round of fuzzing
 DATA_ROWS.update({
     "simulate: sample phases one ulp apart (ValueError)": R("simulate", ["{file}"],
                                                            ["t.csv:4", "at least 1e-09 cycles apart"],

@@ -1,5 +1,5 @@
 """The rows of the bad-input matrix (tests/test_bad_input.py): malformed problem files and arguments of every
-command, and the bounds on work (issue 11); the rows of data files and waveforms are in tests/_bad_input_data_rows.py.
+command, and the bounds on work; the rows of data files and waveforms are in tests/_bad_input_data_rows.py.
 
 :class:`Row` is one case; its placeholders are filled in by ``materialise`` of tests/test_bad_input.py.
 """
@@ -291,7 +291,7 @@ COMMAND_ROWS = {
     "unknown command": R(None, ["crawl"], ["invalid choice: 'crawl'"]),
 }
 
-#: issue 11: every key and option that sizes the work is bounded, and every bad input is one line (the rows that
+#: every key and option that sizes the work is bounded, and every bad input is one line (the rows that
 #: used to hang or end as internal errors are guarded by HANG_GUARD_S)
 COMMAND_ROWS.update({
     # ---- bounds on work
@@ -414,7 +414,7 @@ COMMAND_ROWS.update({
     "init: two directories": R("init", ["{tmp}", "{dir}"], ["unrecognized arguments", "{dir}"]),
 })
 
-#: found by fuzzing the command line (session 21): each was an internal error, a hang or a silent choice
+#: found by fuzzing the command line: each was an internal error, a hang or a silent choice
 COMMAND_ROWS.update({
     "sweep: an array key as an axis (KeyError)": R("sweep", ["{paper}", "--grid", "gait.phase=0,0.5", "--out",
                                                             "{tmp}/s"], ["gait.phase", "array key"]),
@@ -456,7 +456,7 @@ COMMAND_ROWS.update({
                                         ["--steps 40 20", "increasing strictly"]),
 })
 
-#: found by a second round of fuzzing (session 21)
+#: found by a second round of fuzzing
 _BIG_INT = "1" + "0" * 5000
 COMMAND_ROWS.update({
     "simulate: an integer of 5001 digits (ValueError)": R("simulate", ["{paper}", "--set", f"robot.k={_BIG_INT}"],
@@ -502,7 +502,7 @@ COMMAND_ROWS.update({
                                                     "{tmp}/s"], ["NUM must be an integer"]),
 })
 
-#: found by the review of the second round (session 21)
+#: found by the review of the second round
 COMMAND_ROWS.update({
     "sweep: --set gait.waveform with a waveform axis": R("sweep", ["{paper}", "--set", "gait.waveform=fourier",
                                                                   "--grid", "gait.waveform=harmonic,fourier", "--out",

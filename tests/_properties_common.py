@@ -1,5 +1,5 @@
 """Shared by the property-based tests (hypothesis) of the prescribed-angle simulator, the input signals
-and the problem files (issue 6, part 1: tests/test_properties_prescribed.py, test_properties_signals.py and
+and the problem files (tests/test_properties_prescribed.py, test_properties_signals.py and
 test_properties_problem_files.py): the example settings, the strategies more than one of them draws from, and
 the independent checks of a prescribed-angle result.
 

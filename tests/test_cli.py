@@ -365,7 +365,7 @@ def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
     assert code == 0 and "(solver event)" in out
 
 
-# ------------------------------------------------------------------------------------------ issue 11: files, frames
+# ------------------------------------------------------------------------------------------ files, frames
 def test_a_full_disk_names_the_file(capsys, monkeypatch, tmp_path):
     """A real full disk raises OSError(ENOSPC) without a file name (from write or fsync): the one line names the file,
     exit 1 (not bad input), and no temporary file is left."""

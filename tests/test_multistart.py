@@ -27,7 +27,7 @@ N = 40
 
 
 def _value_of_issue13(settings, S, CoT, T):
-    """The objective values of issue 13: a stand-in until the baseline's value_from takes the period T."""
+    """The objective values: a stand-in until the baseline's value_from takes the period T."""
     v = [settings.direction * s / T for s in S]
     return CoT[0] if settings.objective == "min_cot" else v[0]
 

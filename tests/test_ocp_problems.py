@@ -7,7 +7,7 @@ warm-started from the previous one (:func:`~ocp_crawl.ocp.convergence.converge_i
 judged here against numbers computed here: an event-driven replay of the optimal torques (the transcription's own
 interpolant, through the public :func:`ocp_crawl.simulate`, not the judge's code), the envelope and the bandwidth
 from the torques, and the harmonic baseline's value. With 400 among the N: the default N and N = 200 within 1 % of
-N = 400 (issue 13).
+N = 400.
 """
 import math
 import os

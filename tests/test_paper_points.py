@@ -1,4 +1,4 @@
-"""Every published point of the paper's simulated figures (issue 15), at the published abscissae.
+"""Every published point of the paper's simulated figures, at the published abscissae.
 
 CoT+ against the amplitude (Fig. CoT) in the paper's convention within 2 % at every published point;
 where CoT+ is ill-conditioned (more than 5 % change per degree, measured here by a central
@@ -64,7 +64,7 @@ def test_cot_within_2pc_at_every_published_point(i):
     assert not bad, bad
 
 
-@pytest.mark.xfail(strict=True, reason="issue 15: the paper's low-stiffness curve was computed with psi = 42 deg, "
+@pytest.mark.xfail(strict=True, reason="the paper's low-stiffness curve was computed with psi = 42 deg, "
                                        "not the 45 deg of its other curves (test_low_k_curve_is_psi_42); at 45 deg "
                                        "ours is 2..6 % above it at 12 well- or ill-conditioned points, "
                                        "see paper_points.FINDINGS")

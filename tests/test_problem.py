@@ -356,7 +356,7 @@ def test_schema_defaults_are_the_dataclass_defaults():
     assert ocp_settings(Problem(robot=Robot(), gait=paper_problem().gait)) == OCPSettings(gamma_deg=90.0)
 
 
-# ------------------------------------------------------------------------------------------ issue 11: bounds
+# ------------------------------------------------------------------------------------------ bounds
 def test_problem_file_size_is_bounded(tmp_path):
     """A problem file is read up to MAX_PROBLEM_BYTES: one byte more is bad input naming the file and the limit."""
     from ocp_crawl.problem.overrides import MAX_PROBLEM_BYTES
@@ -398,7 +398,7 @@ def test_ocp_settings_sizes_are_bounded(name, low, high):
 
 
 def test_every_robot_key_and_work_key_is_bounded_on_both_sides():
-    """Issue 11: the robot's parameters and every [simulation]/[ocp] key that sizes the work have an upper and a lower
+    """The robot's parameters and every [simulation]/[ocp] key that sizes the work have an upper and a lower
     bound, with a stated reason."""
     from ocp_crawl.problem import SCHEMA
 

@@ -1,4 +1,4 @@
-"""Property-based tests of the event-driven stepper over random physical robots and gaits (issue 6).
+"""Property-based tests of the event-driven stepper over random physical robots and gaits.
 
 Every run either succeeds with all the invariants holding, or returns a documented failure status
 with a message; never a NaN in a successful result, never an exception.

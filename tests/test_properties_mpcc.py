@@ -1,4 +1,4 @@
-"""Property-based tests of the MPCC step and the MPCC time-stepping over random physical robots (issue 6).
+"""Property-based tests of the MPCC step and the MPCC time-stepping over random physical robots.
 
 One MPCC step from a random admissible state (an equilibrium inside the friction cone, possibly on its
 edge) with a random torque increment either succeeds with every invariant holding (equilibrium,

@@ -1,4 +1,4 @@
-"""Property-based tests (hypothesis) of the prescribed-angle simulator (issue 6, part 1), and the
+"""Property-based tests (hypothesis) of the prescribed-angle simulator, and the
 regressions they found.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so

@@ -1,5 +1,5 @@
 """Property-based tests (hypothesis) of the problem files, with strategies driven by the schema: round
-trips, ``--set`` overrides, invalid and missing keys, and runs with prescribed angles (issue 6, part 1).
+trips, ``--set`` overrides, invalid and missing keys, and runs with prescribed angles.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
 that the file runs in well under a minute); a large run::

@@ -1,5 +1,5 @@
 """Property-based tests (hypothesis) of the input signals: periodicity, derivatives, vectorised
-evaluation, the Fourier fit and the rejection of invalid signals (issue 6, part 1).
+evaluation, the Fourier fit and the rejection of invalid signals.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
 that the file runs in well under a minute); a large run::

@@ -28,7 +28,7 @@ MODEL = Model(ROBOT, gravity="physical")
 
 
 def _value_of_issue13(settings, S, CoT, T):
-    """The objective values of issue 13 (speeds direction * S / T [m/s], CoT+ [-]): a stand-in until the
+    """The objective values (speeds direction * S / T [m/s], CoT+ [-]): a stand-in until the
     baseline's value_from takes the period (the fixture below uses it only then)."""
     v = [settings.direction * s / T for s in S]
     if settings.objective == "max_speed":

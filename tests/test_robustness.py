@@ -1,4 +1,4 @@
-"""Numerical robustness of the event-driven stepper (issue 6, part 4): grazing events, events closer
+"""Numerical robustness of the event-driven stepper: grazing events, events closer
 together than the step, many events per cycle (fast chattering inputs), the event cap."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Scale invariance and the stiff limit (issue 11, "Scale invariance").
+"""Scale invariance and the stiff limit.
 
 The quasistatic crawler has one time-free force scale M g and one length scale L: with the body
 ratio beta, the friction coefficients and the nondimensional stiffness k/(M g L) fixed, multiplying

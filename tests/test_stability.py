@@ -1,4 +1,4 @@
-"""Stability of quasistatic equilibria (issue 11), each number checked against something independent:
+"""Stability of quasistatic equilibria, each number checked against something independent:
 the paper gait (stable), the issue's soft-spring counterexample (unstable), a finite-difference second
 derivative of the potential along the constraint curve, the mode Jacobian's determinant, and short
 damped-dynamics runs for the slip criterion."""
@@ -19,7 +19,7 @@ from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
 
-#: issue 11, found 1: a robot whose steady cycle the simulator reports with a jump (snap-through)
+#: counterexample 1: a robot whose steady cycle the simulator reports with a jump (snap-through)
 SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983, "beta": 0.613461927615284,
                           "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
                           "mu2": 0.07199087717290628},
@@ -64,7 +64,7 @@ def test_paper_gait_start_and_steady_cycle_are_stable(gravity):
     assert margins[i] == pytest.approx(stability_margin(m, X[:, i], Q[:, i]), rel=1e-12)
 
 
-# ------------------------------------------------------------------ issue 11, found 2
+# ------------------------------------------------------------------ counterexample 2
 @pytest.mark.parametrize("k, expected", [(0.002, -0.0035), (1e-3, -0.0047)])
 def test_soft_spring_counterexample_is_a_maximum(k, expected):
     """Paper gait with k = 0.002 (1e-3) N m/rad: the simulator used to report success, stuck in stick-stick

@@ -1,6 +1,6 @@
 """Start-up time: heavy libraries are imported where they are used, not by ``import ocp_crawl`` or the CLI.
 
-Every short command and every sweep worker pays the package's import time (issue 12: scipy and
+Every short command and every sweep worker pays the package's import time (scipy and
 matplotlib imported eagerly cost ~0.4 s of a ~0.7 s start-up).  Each check runs in a fresh
 interpreter and reads its ``sys.modules``.
 """

@@ -1,4 +1,4 @@
-"""No silent success (issue 11): a torque-driven run is ``success`` only if every equilibrium it reports is
+"""No silent success: a torque-driven run is ``success`` only if every equilibrium it reports is
 stable, the state is continuous across its events and the energy balance of its steady cycle closes.
 
 Each verdict is checked against something independent of the code that makes it: the stability verdicts
@@ -23,7 +23,7 @@ from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 from ocp_crawl.status import STATUS_MESSAGES, Status
 
-#: issue 11, found 1: reported success with a jump at phase 0.0975 of the steady cycle
+#: counterexample 1: reported success with a jump at phase 0.0975 of the steady cycle
 SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983, "beta": 0.613461927615284,
                           "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
                           "mu2": 0.07199087717290628},
@@ -120,7 +120,7 @@ def test_start_skips_an_unstable_released_equilibrium():
     assert simulate_torque(m, torque).success
 
 
-# ------------------------------------------------------------------ issue 11, found 2: soft springs, heavy robot
+# ------------------------------------------------------------------ counterexample 2: soft springs, heavy robot
 @pytest.mark.parametrize("values", [{"robot.k": 0.002}, {"robot.k": 1e-3}, {"robot.k": 1e-6}, {"robot.M": 1e9}])
 def test_soft_spring_counterexamples_are_no_start_in_both_torque_solvers(values):
     """Gravity dominates the springs: the only released equilibrium is the near-Pi shape, a maximum of the
@@ -132,7 +132,7 @@ def test_soft_spring_counterexamples_are_no_start_in_both_torque_solvers(values)
         assert "unstable equilibrium" in res.message and "reduced stiffness" in res.message, res.message
 
 
-# ------------------------------------------------------------------ issue 11, found 1: snap-through
+# ------------------------------------------------------------------ counterexample 1: snap-through
 def _slip_K_fd(model, phi, tau, sigma, mu, foot, h=1e-6):
     """Finite-difference Jacobian of -F(phi, tau, f_t(phi)) with f_t = sigma mu f_n,foot(phi) [N m/rad]."""
 

@@ -1,4 +1,4 @@
-"""No silent success (issue 11): a ``success`` result satisfies every physical invariant.
+"""No silent success: a ``success`` result satisfies every physical invariant.
 
 Random VALID problems are drawn over the schema's keys (robot, harmonic gait with per-joint values,
 both gravity conventions, torque drive) and built through ``problem_from_dict`` (inputs the schema
@@ -22,7 +22,7 @@ against computations that do not use the stepper:
 
 The first four are hard assertions in :func:`test_success_satisfies_the_static_invariants`.  The last
 three failed for some successes before the stepper checked stability, jumps and the energy balance
-(snap-through and unstable equilibria reported as success, issue 11 "Found" 1 and 2):
+(snap-through and unstable equilibria reported as success):
 :func:`test_success_is_stable_continuous_and_balanced` asserts them, with the issue's two
 counterexamples as explicit examples.
 
@@ -230,7 +230,7 @@ def energy_terms(problem, fine) -> dict:
     potential change is ``Model.potential`` at the cycle's ends.  On a smooth stretch the trapezoid error
     is (h^2/12) of the integral of the integrand's second derivative: with h = 1/4000 and the rates of a
     harmonic gait (a few 2 pi per cycle) it is ~1e-6 of the gross work; ENERGY_TOL = 1e-4 leaves a factor
-    100 for steep stretches, while a snap-through loses a finite fraction (4.4 % in issue 11's example).
+    100 for steep stretches, while a snap-through loses a finite fraction (4.4 % in the example below).
     Round-off: each of the n terms carries ~2 eps |tau| |phi| (the samples' last bits), so the sums are
     exact to ``floor`` = 4 n eps (sum_i max|tau_i| max|phi_i| + max|f_t| max|d|) + 1e-12 M g L, which
     matters for gaits that hardly move (zero amplitude: every term is round-off).
@@ -269,18 +269,18 @@ def energy_violations(problem, res) -> list[str]:
 
 
 def dynamic_violations(problem, res) -> dict[str, list[str]]:
-    """The invariants that need the stepper's new checks (issue 11): stability, continuity, energy."""
+    """The invariants that need the stepper's new checks: stability, continuity, energy."""
     return {"stability": stability_violations(problem, res), "continuity": continuity_violations(problem, res),
             "energy": energy_violations(problem, res)}
 
 
 # ------------------------------------------------------------------------------------- tests
-#: issue 11, Found 1: a snap-through (physical gravity) reported as success with a 4.4 % energy imbalance
+#: counterexample 1: a snap-through (physical gravity) reported as success with a 4.4 % energy imbalance
 SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983, "beta": 0.613461927615284,
                           "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826, "mu2": 0.07199087717290628},
                 "gait": {"drive": "torque", "psi_deg": -274.5634823796951, "gamma_deg": 118.31006032658763,
                          "A_deg": 23.534673118354448}, "model": {"gravity": "physical"}}
-#: issue 11, Found 2: the paper gait with k = 0.002 N m/rad settles on a maximum of the potential
+#: counterexample 2: the paper gait with k = 0.002 N m/rad settles on a maximum of the potential
 UNSTABLE = {"robot": {"M": 0.052, "L": 0.120, "beta": 2.0, "k": 0.002, "mu": 0.389, "g": 9.81},
             "gait": {"drive": "torque", "gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0},
             "model": {"gravity": "physical"}}
@@ -332,13 +332,13 @@ def test_success_is_stable_continuous_and_balanced(data):
 @pytest.mark.parametrize("data, invariant", [(SNAP_THROUGH, "continuity"), (SNAP_THROUGH, "energy"),
                                              (UNSTABLE, "stability")])
 def test_the_checks_see_the_issue_counterexamples(data, invariant):
-    """The invariant checks are not vacuous: each flags its counterexample of issue 11 today, or the run
+    """The invariant checks are not vacuous: each flags its counterexample, or the run
     is no longer a success (after the new statuses) and says so."""
     problem = problem_from_dict(data)
     res = run_problem(problem)
     if res.success:
         assert dynamic_violations(problem, res)[invariant]
-    elif res.status_name == "no_start":  # issue 11: a start that can only settle on an unstable equilibrium
+    elif res.status_name == "no_start":  # a start that can only settle on an unstable equilibrium
         assert "unstable equilibrium" in res.message, res.message
     else:
         assert res.status_name in ("unstable", "snap_through", "energy_imbalance", "fold"), res.message

@@ -103,7 +103,7 @@ def test_grids_of_several_keys():
     assert list(normalize_grid({"robot.k": 0.1})["robot.k"]) == [0.1]
 
 
-# ------------------------------------------------------------------------------------------ issue 11: grid size
+# ------------------------------------------------------------------------------------------ grid size
 def test_grid_size_is_bounded():
     """A grid of MAX_GRID_POINTS points is fine; one more, in one axis or in the product, is bad input naming the
     keys and the limit (checked through the API too, not only on the command line)."""

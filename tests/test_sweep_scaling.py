@@ -1,4 +1,4 @@
-"""What makes a sweep scale (issue 12): compiled functions built once per process, not per point; points
+"""What makes a sweep scale: compiled functions built once per process, not per point; points
 sent to the workers in chunks; the journal fsync'd about once a second, not per row."""
 import os
 from pathlib import Path

@@ -11,7 +11,7 @@ so the torque input is that of eq. (tau) with the reference angle
     phi_ref,i(t) = phi_rest - bending_i(p_i(t)),      tau_i = k (phi_ref,i - pi).
 
 **Earlier assumptions** (``PressureWaveform(amplitude=None)``, ``form="raised"`` of the pressure study and of
-the calibration; the paper's form (ref) below is the default of both, :data:`DEFAULT_FORM`, since issue 15).
+the calibration; the paper's form (ref) below is the default of both, :data:`DEFAULT_FORM`).
 Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we assumed
 
 * a raised sine between zero and the peak pressure p0 (a pressure controller cannot go below
@@ -28,7 +28,7 @@ Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we
   insensitive to it: +-0.01 between 45 and 90 deg), its psi curve is assumed computed at
   p0 = 1.7 bar (the largest experimental pressure) and is normalised by its maximum.
 
-**The paper's form (ref), read literally** (issue 15): "pressure inputs of the form (ref)" with
+**The paper's form (ref), read literally**: "pressure inputs of the form (ref)" with
 "nominal pressure p0", where (ref) is gamma + A sin(w t +- psi/2) and gamma is called the "nominal
 angle": p0 is the mean pressure, p_i = p0 + A_p sin(2 pi t +- psi/2) (``PressureWaveform(amplitude=A_p)``).
 The calibration (supplementary material) measures the edge angle of a clamped segment from the flat

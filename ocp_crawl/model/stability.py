@@ -1,4 +1,4 @@
-"""Stability of the quasistatic equilibria of each contact mode (issue 11).
+"""Stability of the quasistatic equilibria of each contact mode.
 
 An equilibrium of the mode equations ``G(x, tau, q, p) = 0`` of :mod:`ocp_crawl.model.statics`
 is a result only if the robot would stay near it when slightly disturbed.  With the torque held

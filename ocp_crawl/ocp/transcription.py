@@ -362,7 +362,7 @@ class GaitOCP:
         e.g. the simulated guess of a coarser N's optimum, :func:`~ocp_crawl.ocp.convergence.converge_in_nodes`),
         solved by the tight warm solver from zero multipliers, each polish candidate in turn, in reverse order (the
         branches alone first: the guess's foot-switch ties need not sit where the finer N puts them; robust_speed N = 100
-        from N = 50: with the ties fixed, Restoration_Failed after 560 iterations, the branches alone 236 (session 15)
+        from N = 50: with the ties fixed, Restoration_Failed after 560 iterations, the branches alone 236
         to the same optimum), until one that IPOPT accepts is complementary to comp_tol.  Returns (x, history, failed,
         status) as :meth:`solve` does: that candidate's point; else the first point IPOPT accepted (its residual then
         fails the caller's check); else x None and ``failed`` naming every candidate's IPOPT status."""

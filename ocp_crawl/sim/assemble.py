@@ -5,7 +5,7 @@ user asks for, writes the status and its message, stores the sampled arrays and 
 displacement, positive work and energy terms into S, W+, CoT+ and the energy balance, the same
 way for the event-driven stepper, the prescribed angles and the MPCC time-stepping.
 
-It also holds the physical gates of a periodic result of the torque solvers (issue 11): a steady
+It also holds the physical gates of a periodic result of the torque solvers: a steady
 cycle whose energy balance does not close within the solver's tolerance is not a success
 (:func:`energy_gate`), nor one with an unstable equilibrium at a sampled phase (:func:`stability_gate`);
 :func:`demote` turns such a result into the failure.

@@ -1,4 +1,4 @@
-"""Physical checks of the event-driven stepper (issue 11): stability of every equilibrium it follows and
+"""Physical checks of the event-driven stepper: stability of every equilibrium it follows and
 continuity of the state across events.
 
 * **Stability** (:mod:`ocp_crawl.model.stability`): the margin of the current mode's equilibrium must be

@@ -27,7 +27,7 @@ from ocp_crawl.studies.common import COT_K_LABELS, COT_K_RATIOS, PAPER_ROBOT, SU
 from ocp_crawl.studies.pressure import PSI_CURVE_AMPLITUDE_BAR, evaluate_fit
 from ocp_crawl.studies.text import num, table
 
-#: relative tolerance on a published CoT+ value (issue 15)
+#: relative tolerance on a published CoT+ value
 COT_TOL = 0.02
 #: relative change of CoT+ per degree of amplitude above which a point counts as ill-conditioned
 ILL_CONDITIONED_PER_DEG = 0.05
@@ -203,7 +203,7 @@ def paper_points(gravity: str = "paper", psi_amplitude_bar: float | None = None)
 
     Fig. exp twice: with the paper's form (ref) of the pressure input (flat rest, amplitude 0.4 bar on the
     p0 curve, ``psi_amplitude_bar`` [bar] on the psi curve, None: the stored fit), and with the raised
-    sine and the stored fitted rest angle (the assumption before issue 15).  Some tens of seconds.
+    sine and the stored fitted rest angle.  Some tens of seconds.
     """
     cot = cot_curves(gravity)
     # the verdicts are for the paper's convention, in which its figures were computed
@@ -243,9 +243,9 @@ def markdown(points: dict[str, PaperPoints]) -> str:
     return "\n".join(out) + "\n"
 
 
-#: what the published points tell about the paper's inputs (measured for issue 15; paper's convention)
+#: what the published points tell about the paper's inputs (measured at every published point; paper's convention)
 FINDINGS = """
-What the differences are (issue 15, measured at every published point, paper's convention):
+What the differences are (measured at every published point, paper's convention):
 
 - **Realistic stiffness, +0.9 % bias**: the published curve is reproduced with rms 0.09 % (the floor of
   the k = 5 curve, 0.10 %) by k/(M g L) = 2.717 instead of Table I's 0.1677/(0.052 * 9.81 * 0.12) = 2.740:
@@ -275,7 +275,7 @@ What the differences are (issue 15, measured at every published point, paper's c
   A_p = 0.4 bar (the p0 curve starts at 0.4 bar, where p_i reaches 0) reproduces the p0 curve with no
   fitted parameter (RMS 0.024 over 0.4..3 bar, 0.0013 up to 1.7 bar; the physical sign
   does not: 0.05 up to 1.7 bar).  The psi curve's operating point is not stated (at p0 = 1.7 bar the
-  amplitude fitted to it is 0.99 bar).  This input is the pressure study's default since issue 15; the rows
+  amplitude fitted to it is 0.99 bar).  This input is the pressure study's default; the rows
   `_raised` show the earlier assumption (raised sine from 0 to a peak p0, fitted rest angle).  Its RMS <= 0.03 is out of reach of this input family, for a
   measured reason: near psi = 0 the model's S is a friction threshold.  Where the robot is stuck at
   psi = 1 deg (every amplitude up to p0 at p0 = 1.7 bar) the published 0.33 there alone gives RMS >=

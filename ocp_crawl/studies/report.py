@@ -260,7 +260,7 @@ def _pressure_assumptions(p) -> str:
     flat = (f" (raised sine with the flat rest shape on the same grids: RMS error {num(p.flat.rms_p0)} on the p0 "
             f"curve, {num(p.flat.rms_psi)} on the psi curve, {p.flat.failures} failed points)" if p.flat is not None else "")
     if c.amplitude_p0_bar is not None:
-        return ("\n**Input** (issue 15): the paper's \"inputs of the form (ref)\" with \"nominal pressure p0\", read "
+        return ("\n**Input**: the paper's \"inputs of the form (ref)\" with \"nominal pressure p0\", read "
                 f"literally: p_i(t) = p0 + A_p sin(2 pi t +- psi/2); the calibrated bending a_i p^2 + b_i p (Table I, "
                 "measured from the flat clamped beam) lowers the joint's reference angle from the flat shape, "
                 "phi_ref,i = 180 deg - bending_i(p_i), tau_i = k (phi_ref,i - pi). A_p = "
