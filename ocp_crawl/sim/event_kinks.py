@@ -56,7 +56,7 @@ KINK_RTOL = 1e-9
 #: kinks closer than this after a phase [cycles] are not the next step's end (no steps of round-off length)
 KINK_GAP = 1e-12
 #: a piece of the input is a hold where both rates are below this fraction of the input's largest rate
-HOLD_RTOL = 1e-9
+HELD_PIECE_RTOL = 1e-9
 
 
 def input_step(signal, samples: int = 1024, rel: float = 1e-3) -> float:
@@ -118,7 +118,7 @@ def input_kinks(signal, breakpoints: np.ndarray) -> tuple[np.ndarray, float]:
 
 def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     """The holds of ``signal``: maximal stretches of the pieces between its ``breakpoints`` (phases in [0, 1)) on
-    which both rates are zero to HOLD_RTOL of the input's largest rate (tested at three interior phases of each
+    which both rates are zero to HELD_PIECE_RTOL of the input's largest rate (tested at three interior phases of each
     piece, which is exact for the pieces of piecewise-linear samples, pulses and PCHIP plateaus; the tolerance
     takes flats whose samples differ by round-off, as an optimiser's or a CSV's may).
 
@@ -132,7 +132,7 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     t = b[:, None] + np.array([0.25, 0.5, 0.75])[None, :] * (ends - b)[:, None]
     rate = np.asarray(signal.derivative(t.ravel()), float).reshape(2, b.size, 3)
     scale = float(np.max(np.abs(np.asarray(signal.derivative(np.linspace(0.0, 1.0, 257)), float))))
-    tol = HOLD_RTOL * max(scale, float(np.max(np.abs(rate))))
+    tol = HELD_PIECE_RTOL * max(scale, float(np.max(np.abs(rate))))
     held = np.all(np.abs(rate) <= tol, axis=(0, 2))
     if held.all():
         return np.zeros((0, 2))
