@@ -203,7 +203,7 @@ def bench_ocp_kernel(repeat: int) -> dict:
     whether both found the same optimum (iterations, NLP objective)."""
     from pathlib import Path
 
-    from ocp_crawl.ocp.baseline import best_harmonic
+    from ocp_crawl.ocp.search import best_harmonic
     from ocp_crawl.problem import load_problem, ocp_settings
 
     root = Path(__file__).resolve().parent.parent

@@ -14,8 +14,9 @@ import time
 import numpy as np
 
 from ocp_crawl import Robot
-from ocp_crawl.ocp.baseline import best_harmonic, search_rank, value_from
-from ocp_crawl.ocp.family import HarmonicFamily, HarmonicParams
+from ocp_crawl.ocp.baseline import search_rank, value_from
+from ocp_crawl.ocp.search import best_harmonic
+from ocp_crawl.ocp.family import WaveFamily, WaveParams
 from ocp_crawl.ocp.settings import OCPSettings
 
 SHIPPED = {"gamma_deg": 90.0, "A_max_deg": 30.0, "max_rate_deg_s": 180.0, "direction": -1}
@@ -24,10 +25,10 @@ SHIPPED = {"gamma_deg": 90.0, "A_max_deg": 30.0, "max_rate_deg_s": 180.0, "direc
 def old_scan(settings: OCPSettings):
     """The earlier baseline's gaits (gamma fixed, A1 = A2: A_max for speeds, 4 amplitudes for min_cot; 36 psi)
     at the shortest period: the best evaluation and the number of simulations."""
-    fam = HarmonicFamily(Robot.paper(), "physical", settings)
+    fam = WaveFamily(Robot.paper(), "physical", settings)
     amps = np.linspace(settings.A_max_deg / 4, settings.A_max_deg, 4)
     amps = amps if settings.objective == "min_cot" else amps[-1:]
-    evs = [fam.evaluate(HarmonicParams(settings.gamma_deg, settings.gamma_deg, float(A), float(A), float(psi)))
+    evs = [fam.evaluate(WaveParams(settings.gamma_deg, settings.gamma_deg, float(A), float(A), float(psi)))
            for A in amps for psi in np.linspace(-180.0, 180.0, 37)[1:]]
     return min(evs, key=lambda ev: search_rank(settings, ev)), fam.evaluations
 

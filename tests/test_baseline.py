@@ -1,8 +1,8 @@
-"""The harmonic-family baseline (ocp/baseline.py, ocp/family.py) against independent grids of harmonic gaits.
+"""The waveform baselines (ocp/baseline.py, ocp/family.py, ocp/search.py) against independent grids of gaits.
 
 The grids are simulated here directly with the event-driven stepper, and the objectives are written out
-here from ISSUE13's definitions (v = direction * S / T, CoT+ = W+/(M g |S|), T >= 2 pi max(A1, A2) / R),
-not taken from the module under test.  The dense grid (15 gamma x 8 A x 36 psi x 5 periods) is the slow
+here from their definitions (v = direction * S / T, CoT+ = W+/(M g |S|), T >= 2 pi max(A1, A2) / R for a
+sine, 4 max(A1, A2) / R for a triangle wave), not taken from the modules under test.  The dense grid (15 gamma x 8 A x 36 psi x 5 periods) is the slow
 test below; set OCP_CRAWL_BASELINE_GRID="15,8,36" to run it at full size (default: a small grid).
 """
 import json
@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 from ocp_crawl import CallableSignal, Harmonic, Model, ReferenceTorque, Robot
-from ocp_crawl.ocp.baseline import best_harmonic, value_from
-from ocp_crawl.ocp.family import BOX, HarmonicParams
+from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.family import BOX, WaveParams
+from ocp_crawl.ocp.search import best_harmonic
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import result_margins
 from ocp_crawl.sim.event import simulate_torque
@@ -166,12 +167,13 @@ def test_family_box_is_the_envelope():
     rng = np.random.default_rng(0)
     lo, hi = np.array(BOX).T
     for z in rng.uniform(lo, hi, size=(200, 5)):
-        p = HarmonicParams.from_box(settings, z)
+        p = WaveParams.from_box(settings, z)
         assert p.in_envelope(settings, rtol=0.0)
         assert np.allclose(p.to_box(settings), z, atol=1e-12) or p.psi_deg == 180.0
-    edge = HarmonicParams.from_box(settings, (1, -1, 0.2, 0.5, 0.1))
+    edge = WaveParams.from_box(settings, (1, -1, 0.5, -0.6, 0.1))
     assert edge.gamma1_deg + edge.A1_deg == pytest.approx(GAMMA + A_MAX)
     assert edge.gamma2_deg - edge.A2_deg == pytest.approx(GAMMA - A_MAX)
+    assert (edge.A1_deg, edge.A2_deg) == pytest.approx((0.4 * 0.5 * A_MAX, 0.5 * A_MAX))
 
 
 def test_min_cot_unreachable_speed_gives_a_fallback():
@@ -182,18 +184,6 @@ def test_min_cot_unreachable_speed_gives_a_fallback():
     assert choice is not None and not choice.feasible and choice.value == math.inf
     assert 0.04 < choice.v[0] < 1.0
     assert choice.torque_signal(Robot.paper().k)(0.0).shape == (2,)
-
-
-def test_pinned_torque_is_the_gait_shifted_to_the_peak_of_tau1():
-    """pinned_torque(t) = torque_signal(t + peak_phase), and tau_1 is largest at t = 0 (the OCP's phase pin)."""
-    settings = shipped_settings(harmonic_A=1, harmonic_psi=4)
-    choice = best_harmonic(Robot.paper(), "physical", settings, local_starts=0)
-    choice.gamma1_deg, choice.gamma2_deg, choice.A1_deg, choice.A2_deg, choice.psi_deg = 95.0, 88.0, 12.0, 20.0, 70.0
-    k = Robot.paper().k
-    t = np.linspace(0.0, 1.0, 1001)
-    pinned, plain = choice.pinned_torque(k)(t), choice.torque_signal(k)((t + choice.peak_phase) % 1.0)
-    assert np.allclose(pinned, plain, rtol=0, atol=1e-14)
-    assert np.argmax(pinned[0]) in (0, len(t) - 1)
 
 
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
@@ -219,7 +209,7 @@ def test_worker_processes_change_nothing_but_the_time():
     """The scan and the local searches on two worker processes give the serial search's choice, field by field
     (the simulations are deterministic), and ``meanwhile`` runs once; a worker pool that breaks falls back to the
     serial search; jobs < 1 is refused by name."""
-    import ocp_crawl.ocp.baseline as baseline
+    import ocp_crawl.ocp.search as search
     from concurrent.futures.process import BrokenProcessPool
     from dataclasses import asdict
 
@@ -234,17 +224,17 @@ def test_worker_processes_change_nothing_but_the_time():
 
     calls = []
 
-    def broken(robot, gravity, s, jobs):
+    def broken(robot, gravity, s, shapes, jobs):
         calls.append(jobs)
         if jobs > 1:
             raise BrokenProcessPool("a worker died")
-        return real_pool(robot, gravity, s, jobs)
+        return real_pool(robot, gravity, s, shapes, jobs)
 
-    real_pool, baseline._pool = baseline._pool, broken
+    real_pool, search._pool = search._pool, broken
     try:
         again = asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=2))
     finally:
-        baseline._pool = real_pool
+        search._pool = real_pool
     assert calls == [2, 1]
     again.pop("time_s")
     assert again == runs[0]

@@ -12,7 +12,7 @@ from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import judge
 from ocp_crawl.ocp.baseline import value_from
-from ocp_crawl.ocp.family import HarmonicFamily, HarmonicParams
+from ocp_crawl.ocp.family import WaveFamily, WaveParams
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import result_margins, slip_margins
 from ocp_crawl.sim.event import simulate_torque
@@ -67,14 +67,14 @@ def test_margin_is_zero_at_the_tie_and_infinite_without_slip():
 
 def test_near_mirror_symmetric_harmonic_gait_is_rejected_and_psi_45_accepted():
     settings = OCPSettings(friction_tol=0.05)
-    fam = HarmonicFamily(ROBOT, "physical", settings)
-    tie = fam.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 0.01))
-    ok = fam.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 45.0))
+    fam = WaveFamily(ROBOT, "physical", settings)
+    tie = fam.evaluate(WaveParams(90.0, 90.0, 30.0, 30.0, 0.01))
+    ok = fam.evaluate(WaveParams(90.0, 90.0, 30.0, 30.0, 45.0))
     assert not tie.success and "friction_tol" in tie.message and tie.margin[0] < 1e-3
     assert ok.success and ok.margin[0] > 0.05
     # without the tolerance the near-symmetric gait is a member (the faster one)
-    free = HarmonicFamily(ROBOT, "physical", OCPSettings(friction_tol=0.0))
-    assert free.evaluate(HarmonicParams(90.0, 90.0, 30.0, 30.0, 0.01)).success
+    free = WaveFamily(ROBOT, "physical", OCPSettings(friction_tol=0.0))
+    assert free.evaluate(WaveParams(90.0, 90.0, 30.0, 30.0, 0.01)).success
 
 
 @pytest.mark.parametrize("psi, status", [(0.01, Status.REPLAY_MISMATCH), (45.0, Status.SUCCESS)])

@@ -266,11 +266,37 @@ def _value(objective: str, v, digits: int = 3) -> str:
 
 
 def _gain(s: dict) -> str:
-    """The gain by replay over the baseline, and whether it is significant (beyond replay_tol)."""
+    """The gain by replay over the best baseline, and whether it is significant (beyond replay_tol)."""
     if s.get("gain") is None:
         return "-"
     verdict = "significant" if s.get("gain_significant") else "no significant gain"
-    return f"{units.ratio(s['gain'])} ({verdict}: replay_tol {units.ratio(s.get('replay_tol'))})"
+    best = (s.get("best_baseline") or {}).get("shape", "-")
+    return f"{units.ratio(s['gain'])} over the best ({best}) ({verdict}: replay_tol {units.ratio(s.get('replay_tol'))})"
+
+
+def _member(h: dict) -> str:
+    """A waveform family's best member: its angles [deg], a pulse's rise and duty, its period."""
+    deg = lambda key: units.significant(h.get(key))  # noqa: E731
+    pulse = (f", rise {units.significant(h.get('rise'))} cycles, duty {units.significant(h.get('duty'))}"
+             if h.get("shape") == "pulse" else "")
+    return (f"gamma {deg('gamma1_deg')}/{deg('gamma2_deg')} A {deg('A1_deg')}/{deg('A2_deg')} psi "
+            f"{deg('psi_deg')} deg{pulse}, T {units.seconds(h.get('T'))}")
+
+
+def _baseline_lines(s: dict) -> list[str]:
+    """One line per waveform family: its best member's value, the optimum's gain over it, the member."""
+    obj, rows, gains = s["objective"], s.get("baselines") or [], s.get("gains") or {}
+    if not rows:
+        h = s.get("best_harmonic")
+        rows = [dict(h, shape="harmonic")] if h else []
+    out = []
+    for row in rows:
+        if row.get("value") is None and not row.get("feasible"):
+            text = "no member simulates" if "T" not in row else f"none feasible (nearest: {_member(row)})"
+        else:
+            text = f"{_value(obj, row['value'])}, gain {units.ratio(gains.get(row['shape']))}: {_member(row)}"
+        out.append(f"  {row['shape']:<9} {text}")
+    return out
 
 
 def format_optimize(s: dict) -> str:
@@ -278,11 +304,6 @@ def format_optimize(s: dict) -> str:
     mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
     replay)."""
     obj = s["objective"]
-    h = s.get("best_harmonic") or {}
-    deg = lambda key: units.significant(h.get(key))  # noqa: E731
-    harmonic = "-" if not h else (f"gamma = {deg('gamma1_deg')}, {deg('gamma2_deg')} deg, A = {deg('A1_deg')}, "
-                                  f"{deg('A2_deg')} deg, psi = {deg('psi_deg')} deg, T = {units.seconds(h.get('T'))}, "
-                                  f"value {_value(obj, h.get('value'))}")
     starts = s.get("starts") or []
     low, high = s.get("objective_value_replay_min"), s.get("objective_value_replay_max")
     spread = (f"{len(starts)} starts, {s.get('starts_converged')} converged, replayed objective "
@@ -297,7 +318,9 @@ def format_optimize(s: dict) -> str:
         f"CoT+        {_ocp_replay(s, 'CoT_plus', units.cot)}",
         f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
-        f"harmonic    best of the family: {harmonic}; gain of the optimum (by replay) {_gain(s)}",
+        f"baselines   best member of each waveform family at its shortest period; gain of the optimum by replay "
+        f"{_gain(s)}",
+        *_baseline_lines(s),
         f"starts      {spread}",
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",

@@ -55,6 +55,8 @@ class Pulse(PeriodicSignal):
 
     def _unit(self, s):
         """(p, dp/ds) of the unit pulse at phases s (any shape)."""
+        if np.ndim(s) == 0:  # the event stepper's calls: one phase at a time, without numpy's overhead
+            return self._unit_scalar(float(s))
         s = np.mod(s, 1.0)
         r, h = self.rise, self.hold
         up, down = s < r, (s >= r + h) & (s < 2 * r + h)
@@ -63,6 +65,22 @@ class Pulse(PeriodicSignal):
         if self.ramp == "linear":
             return lin, dlin
         return 0.5 * (1.0 - np.cos(math.pi * lin)), 0.5 * math.pi * np.sin(math.pi * lin) * dlin
+
+    def _unit_scalar(self, s: float) -> tuple[float, float]:
+        """:meth:`_unit` at one phase s (the same branches, in floats)."""
+        s %= 1.0
+        r, h = self.rise, self.hold
+        if s < r:
+            lin, dlin = s / r, 1.0 / r
+        elif s < r + h:
+            lin, dlin = 1.0, 0.0
+        elif s < 2 * r + h:
+            lin, dlin = 1.0 - (s - r - h) / r, -1.0 / r
+        else:
+            lin, dlin = 0.0, 0.0
+        if self.ramp == "linear":
+            return lin, dlin
+        return 0.5 * (1.0 - math.cos(math.pi * lin)), 0.5 * math.pi * math.sin(math.pi * lin) * dlin
 
     def _shifts(self, t):
         t = np.asarray(t, dtype=float)

@@ -1,11 +1,13 @@
-"""The periodic-gait optimal control problem: settings, harmonic baseline, transcription, solve and replay."""
+"""The periodic-gait optimal control problem: settings, waveform baselines, transcription, solve and replay."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
 _EXPORTS = {
     "GaitOCP": "ocp_crawl.ocp.transcription",
-    "HarmonicChoice": "ocp_crawl.ocp.baseline", "best_harmonic": "ocp_crawl.ocp.baseline",
+    "WaveChoice": "ocp_crawl.ocp.baseline", "Baselines": "ocp_crawl.ocp.baseline",
     "objective_value": "ocp_crawl.ocp.baseline",
+    "best_harmonic": "ocp_crawl.ocp.search", "best_baselines": "ocp_crawl.ocp.search",
+    "WaveParams": "ocp_crawl.ocp.family", "SHAPES": "ocp_crawl.ocp.family",
     "OBJECTIVES": "ocp_crawl.ocp.settings", "OCPSettings": "ocp_crawl.ocp.settings",
     "OCPResult": "ocp_crawl.ocp.solve", "optimize_gait": "ocp_crawl.ocp.solve",
     "replay_signal": "ocp_crawl.ocp.judge", "judge_replay": "ocp_crawl.ocp.judge",
@@ -14,7 +16,7 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "ConvergenceRow", "GaitOCP", "HarmonicChoice", "OBJECTIVES", "OCPResult", "OCPSettings", "best_harmonic",
-    "converge_in_nodes", "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
+    "Baselines", "ConvergenceRow", "GaitOCP", "OBJECTIVES", "OCPResult", "OCPSettings", "SHAPES",
+    "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes", "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -267,7 +267,8 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
     ocp = ocp or GaitOCP(robot, gravity, near)
     tight, tried, attempts = None, "", []
     if own_homotopy(settings):
-        tight = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, tightened=True)
+        tight = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, tightened=True,
+                           baselines=prev.baselines)
         attempts.append(tight)
         worse = _shortfall(settings.objective, _numbers(prev), _numbers(tight))
         base, note = tight.message, (f", {worse:.2%} worse than N = {n_prev}" if worse else "")
@@ -275,12 +276,13 @@ def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResu
         if tight.status == Status.SUCCESS and not worse:
             return tight
         tried = f"; the tightened NLP on its branches gave: {base}{note}"
-    res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic)
+    res = solve_from(ocp, models, signal, prev.T_ocp, prev.harmonic, baselines=prev.baselines)
     attempts.append(res)
     res.message += f" (warm start from the optimum at N = {n_prev}, {how}{tried})"
     if res.status != Status.SUCCESS:  # the same start with the cold solve's relaxation and barrier
         warm_msg = res.message
-        res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic)
+        res = solve_from(GaitOCP(robot, gravity, settings), models, signal, prev.T_ocp, prev.harmonic,
+                         baselines=prev.baselines)
         attempts.append(res)
         res.message += (f" (from the optimum at N = {n_prev} with the cold solve's settings; the warm "
                         f"settings gave: {warm_msg})")

@@ -1,22 +1,35 @@
-"""The harmonic family of the OCP's envelope and bandwidth: its parameters, gaits and simulations.
+"""The simple waveform families of the OCP's envelope and bandwidth: their parameters, gaits and simulations.
 
-A member is the reference gait phi_ref,i = gamma_i + A_i sin(2 pi t/T +- psi/2) driven as the torque
-tau_i = k (phi_ref,i - pi) (:class:`~ocp_crawl.model.inputs.Harmonic`, :class:`ReferenceTorque`).  It belongs
-to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints stay inside the envelope,
-|gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates 2 pi A_i / T stay within the bandwidth R
-(``max_rate_deg_s``), i.e. T >= ``settings.min_period(A1, A2)`` = 2 pi max(A1, A2) / R.  A member is admissible
-only when which foot slips does not depend on the friction coefficients within +-friction_tol/2 (its
-slip-weighted friction margin, :mod:`ocp_crawl.ocp.slip_margin`, is at least ``settings.friction_tol``): this
-excludes the near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
+A member is the reference gait phi_ref,i = gamma_i + A_i u(t +- s) of one *shape* u (a 1-periodic unit wave
+in [-1, 1]), joint 1 leading joint 2 by the phase psi, driven as the torque tau_i = k (phi_ref,i - pi)
+(:class:`~ocp_crawl.model.inputs.ReferenceTorque`).  The shapes (:data:`SHAPES`):
+
+* ``harmonic``: u = sin(2 pi t) (:class:`~ocp_crawl.model.inputs.Harmonic`), largest slope 2 pi per cycle;
+* ``triangle``: straight ramps up and down, each half a cycle (the reference rate saturated all cycle),
+  largest slope 4 per cycle;
+* ``pulse``: a trapezoid of soft actuators (:class:`~ocp_crawl.model.pulse.Pulse`): edges of ``rise``
+  cycles (in [RISE_MIN, 0.5]), the high level held for ``duty`` of the rest of the cycle, the low level for
+  the remainder; largest slope 2/rise per cycle.  rise = 0.5 is the triangle.
+
+A member belongs to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints stay
+inside the envelope, |gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates stay within the
+bandwidth R (``max_rate_deg_s``): slope * A_i / T <= R, i.e. T >= :meth:`WaveParams.period`.  A member
+is admissible only when which foot slips does not depend on the friction coefficients within
++-friction_tol/2 (its slip-weighted friction margin, :mod:`ocp_crawl.ocp.slip_margin`, is at least
+``settings.friction_tol``): this excludes the near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
 
 Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and CoT+
-of a harmonic gait do not depend on T.  The mean speed direction * S / T is then largest at the smallest
-allowed T, CoT+ is the same at every T, and a speed requirement direction * S / T >= speed_min is easiest
-to meet at the smallest T.  Every objective of the OCP is therefore optimal at T = min_period(A1, A2), and
-the family's search runs over (gamma1, gamma2, A1, A2, psi) only.
+of a member do not depend on T.  The mean speed direction * S / T is then largest at the smallest allowed
+T, CoT+ is the same at every T, and a speed requirement direction * S / T >= speed_min is easiest to meet
+at the smallest T.  Every objective of the OCP is therefore optimal at the shortest period, and a family's
+search runs over its shape parameters only.
 
-The search works in box coordinates z = (w1, w2, u1, u2, p) in [-1, 1] x [-1, 1] x [0, 1] x [0, 1] x [-1, 1]
-that map one to one onto the envelope: A_i = u_i A_max, gamma_i = gamma + w_i (A_max - A_i), psi = 180 p.
+The search works in box coordinates z = (w1, w2, u, q, p[, r, d]) in [-1, 1] x [-1, 1] x [0, 1] x [-1, 1]
+x [-1, 1] (x [0, 1] x [0, 1] for pulses) that map onto the envelope: the larger amplitude is u A_max, the
+other (1 - |q|) u A_max (joint 2's when q > 0, joint 1's when q < 0), gamma_i = gamma + w_i (A_max - A_i),
+psi = 180 p, rise = RISE_MIN + r (0.5 - RISE_MIN), duty = d.  The period depends on u alone, so the
+objective has no kink where the amplitudes cross (with one coordinate per amplitude, the shortest
+period's max(A1, A2) made one, and the local search stalled on it).
 """
 from __future__ import annotations
 
@@ -25,21 +38,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
+from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
 
-#: bounds of the box coordinates z = (w1, w2, u1, u2, p) (see the module docstring)
-BOX = ((-1.0, 1.0), (-1.0, 1.0), (0.0, 1.0), (0.0, 1.0), (-1.0, 1.0))
+#: the waveform families, in the order of reports (the harmonic one is the OCP's first start)
+SHAPES = ("harmonic", "triangle", "pulse")
+#: bounds of the box coordinates z = (w1, w2, u, q, p) shared by every shape (see the module docstring)
+BOX = ((-1.0, 1.0), (-1.0, 1.0), (0.0, 1.0), (-1.0, 1.0), (-1.0, 1.0))
+#: the pulse's two more coordinates (r, d): its rise and duty
+PULSE_BOX = ((0.0, 1.0), (0.0, 1.0))
 #: smallest amplitude max(A1, A2) [deg] of a member (a zero amplitude has no period and no gait)
 A_MIN_DEG = 1e-6
+#: shortest edge of a pulse member [cycles]: steeper edges only lengthen the shortest period (2 A / (rise R))
+RISE_MIN = 0.05
+
+
+def shape_box(shape: str) -> tuple:
+    """The box of the coordinates of a shape's members (:data:`BOX`, and :data:`PULSE_BOX` for pulses)."""
+    if shape not in SHAPES:
+        raise ValueError(f"waveform family must be one of {SHAPES}, got {shape!r}")
+    return BOX + PULSE_BOX if shape == "pulse" else BOX
 
 
 @dataclass(frozen=True)
-class HarmonicParams:
-    """One harmonic gait of the family: angles in degrees (see :class:`~ocp_crawl.model.inputs.Harmonic`)."""
+class WaveParams:
+    """One member of a waveform family: angles in degrees, the shape and, for pulses, rise and duty."""
 
     gamma1_deg: float
     gamma2_deg: float
@@ -47,35 +74,63 @@ class HarmonicParams:
     A2_deg: float
     psi_deg: float
     """phase lead of joint 1 over joint 2 [deg], in (-180, 180]"""
+    shape: str = "harmonic"
+    """one of :data:`SHAPES`"""
+    rise: float = 0.5
+    """duration of each edge [cycles] (triangle: 0.5; pulse: in [RISE_MIN, 0.5]; unused by harmonics)"""
+    duty: float = 0.0
+    """share of the cycle outside the edges (1 - 2 rise) held at the high level (pulse) [-]"""
 
-    def gait(self) -> Harmonic:
-        """The reference angles [rad] of the gait."""
-        return Harmonic.from_degrees(psi_deg=self.psi_deg, gamma1_deg=self.gamma1_deg, gamma2_deg=self.gamma2_deg,
-                                     A1_deg=self.A1_deg, A2_deg=self.A2_deg)
+    def gait(self) -> PeriodicSignal:
+        """The reference angles [rad] of the gait (1-periodic in the phase)."""
+        if self.shape == "harmonic":
+            return Harmonic.from_degrees(psi_deg=self.psi_deg, gamma1_deg=self.gamma1_deg,
+                                         gamma2_deg=self.gamma2_deg, A1_deg=self.A1_deg,
+                                         A2_deg=self.A2_deg)
+        rise = 0.5 if self.shape == "triangle" else self.rise
+        r = [math.radians(v) for v in (self.gamma1_deg, self.gamma2_deg, self.A1_deg, self.A2_deg,
+                                      self.psi_deg)]
+        return Pulse(*r, rise=rise, hold=self.duty * (1.0 - 2.0 * rise) if rise < 0.5 else 0.0)
 
     def torque(self, k: float) -> ReferenceTorque:
-        """The torque input tau = k (phi_ref - pi) [N m] of the gait for the joint stiffness ``k`` [N m/rad]
-        (a 1-periodic signal of the phase; its period in seconds is :meth:`period`)."""
+        """The torque input tau = k (phi_ref - pi) [N m] of the gait for the joint stiffness ``k``
+        [N m/rad] (a 1-periodic signal of the phase; its period in seconds is :meth:`period`)."""
         return ReferenceTorque(self.gait(), k)
 
+    @property
+    def slope(self) -> float:
+        """The unit wave's largest slope |du/dt| [1/cycle]: 2 pi, 4 (triangle) or 2/rise (pulse)."""
+        if self.shape == "harmonic":
+            return 2.0 * math.pi
+        return 4.0 if self.shape == "triangle" else 2.0 / self.rise
+
     def period(self, settings: OCPSettings) -> float:
-        """The gait's period T [s]: the shortest one the bandwidth allows, ``settings.min_period(A1, A2)``."""
-        return settings.min_period(self.A1_deg, self.A2_deg)
+        """The gait's period T [s]: the shortest one the bandwidth allows, slope max(A1, A2) / R
+        (``settings.min_period(A1, A2)`` for a harmonic member)."""
+        return self.slope * max(self.A1_deg, self.A2_deg) / settings.max_rate_deg_s
 
     def in_envelope(self, settings: OCPSettings, rtol: float = 1e-9) -> bool:
-        """True if both joints stay within gamma +- A_max (relative tolerance ``rtol`` of A_max) with A_i >= 0."""
+        """True if both joints stay within gamma +- A_max (relative tolerance ``rtol`` of A_max) with
+        A_i >= 0."""
         tol = rtol * settings.A_max_deg
         return all(a >= 0 and abs(g - settings.gamma_deg) + a <= settings.A_max_deg + tol
                    for g, a in ((self.gamma1_deg, self.A1_deg), (self.gamma2_deg, self.A2_deg)))
 
     @classmethod
-    def from_box(cls, settings: OCPSettings, z) -> "HarmonicParams":
-        """The member at box coordinates ``z`` = (w1, w2, u1, u2, p) (clipped into :data:`BOX`)."""
-        w1, w2, u1, u2, p = (min(max(float(v), lo), hi) for v, (lo, hi) in zip(z, BOX))
+    def from_box(cls, settings: OCPSettings, z, shape: str = "harmonic") -> "WaveParams":
+        """The member of ``shape`` at box coordinates ``z`` (clipped into :func:`shape_box`)."""
+        box = shape_box(shape)
+        c = [min(max(float(v), lo), hi) for v, (lo, hi) in zip(z, box)]
+        w1, w2, u, q, p = c[:5]
         a_max, g = settings.A_max_deg, settings.gamma_deg
-        a1, a2 = u1 * a_max, u2 * a_max
+        a = u * a_max
+        a1, a2 = (a, (1.0 - q) * a) if q >= 0 else ((1.0 + q) * a, a)
         psi = 180.0 * p
-        return cls(g + w1 * (a_max - a1), g + w2 * (a_max - a2), a1, a2, 180.0 if psi == -180.0 else psi)
+        extra = {}
+        if shape == "pulse":
+            extra = {"rise": RISE_MIN + c[5] * (0.5 - RISE_MIN), "duty": c[6]}
+        return cls(g + w1 * (a_max - a1), g + w2 * (a_max - a2), a1, a2,
+                   180.0 if psi == -180.0 else psi, shape, **extra)
 
     def to_box(self, settings: OCPSettings) -> np.ndarray:
         """The box coordinates of this member (inverse of :meth:`from_box`)."""
@@ -83,24 +138,33 @@ class HarmonicParams:
 
         def w(gamma, a):
             return 0.0 if a >= a_max else (gamma - g) / (a_max - a)
-        return np.array([w(self.gamma1_deg, self.A1_deg), w(self.gamma2_deg, self.A2_deg),
-                         self.A1_deg / a_max, self.A2_deg / a_max, self.psi_deg / 180.0])
+        a = max(self.A1_deg, self.A2_deg)
+        q = 0.0 if a == 0 else (1.0 - self.A2_deg / a if self.A1_deg >= self.A2_deg
+                                else self.A1_deg / a - 1.0)
+        z = [w(self.gamma1_deg, self.A1_deg), w(self.gamma2_deg, self.A2_deg), a / a_max, q,
+             self.psi_deg / 180.0]
+        if self.shape == "pulse":
+            z += [(self.rise - RISE_MIN) / (0.5 - RISE_MIN), self.duty]
+        return np.array(z)
 
     def as_dict(self) -> dict:
-        """The five parameters [deg] by name."""
-        return {"gamma1_deg": self.gamma1_deg, "gamma2_deg": self.gamma2_deg, "A1_deg": self.A1_deg,
-                "A2_deg": self.A2_deg, "psi_deg": self.psi_deg}
+        """The parameters by name: angles [deg], the shape, and rise [cycles] and duty [-] of pulses."""
+        out = {"gamma1_deg": self.gamma1_deg, "gamma2_deg": self.gamma2_deg, "A1_deg": self.A1_deg,
+               "A2_deg": self.A2_deg, "psi_deg": self.psi_deg, "shape": self.shape}
+        if self.shape == "pulse":
+            out.update(rise=self.rise, duty=self.duty)
+        return out
 
 
 @dataclass(frozen=True)
 class Evaluation:
     """The simulations of one member (one per friction scenario) at its period T [s].
 
-    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the member is
-    not admissible); ``success`` when every scenario simulated successfully with a slip-weighted friction
-    margin of at least ``friction_tol``; ``message`` the first failure's message."""
+    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the member
+    is not admissible); ``success`` when every scenario simulated successfully with a slip-weighted
+    friction margin of at least ``friction_tol``; ``message`` the first failure's message."""
 
-    params: HarmonicParams
+    params: WaveParams
     T: float
     S: tuple
     W_plus: tuple
@@ -108,24 +172,31 @@ class Evaluation:
     success: bool
     message: str = ""
     margin: tuple = ()
-    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a member below
-    ``settings.friction_tol`` is not admissible (``success`` False)"""
+    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a member
+    below ``settings.friction_tol`` is not admissible (``success`` False)"""
 
 
-class HarmonicFamily:
-    """The harmonic gaits of the envelope and bandwidth of ``settings`` for ``robot`` (SI units) under the
-    gravity convention ``gravity``, simulated with the event-driven stepper in every friction scenario of
-    ``settings.scenarios(robot)``.  Evaluations are cached by parameters; ``evaluations`` counts the
-    simulated members."""
+class WaveFamily:
+    """The members of one shape in the envelope and bandwidth of ``settings`` for ``robot`` (SI units)
+    under the gravity convention ``gravity``, simulated with the event-driven stepper in every friction
+    scenario of ``settings.scenarios(robot)``.  Evaluations are cached by parameters; ``evaluations``
+    counts the simulated members."""
 
-    def __init__(self, robot: Robot, gravity: str, settings: OCPSettings) -> None:
+    def __init__(self, robot: Robot, gravity: str, settings: OCPSettings,
+                 shape: str = "harmonic") -> None:
+        shape_box(shape)
         self.robot = robot
         self.settings = settings
+        self.shape = shape
         self.models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
         self.evaluations = 0
         self._cache: dict[tuple, Evaluation] = {}
 
-    def evaluate(self, params: HarmonicParams) -> Evaluation:
+    def member(self, z) -> WaveParams:
+        """The member of this family's shape at box coordinates ``z``."""
+        return WaveParams.from_box(self.settings, z, self.shape)
+
+    def evaluate(self, params: WaveParams) -> Evaluation:
         """Simulate the member ``params`` in every scenario at its shortest period (cached).
 
         Returns an :class:`Evaluation`; a member of (almost) zero amplitude or a failed simulation (a
@@ -144,27 +215,27 @@ class HarmonicFamily:
         return out
 
     @staticmethod
-    def _key(params: HarmonicParams) -> tuple:
-        return tuple(round(v, 12) for v in params.as_dict().values())
+    def _key(params: WaveParams) -> tuple:
+        return tuple(round(v, 12) if isinstance(v, float) else v for v in params.as_dict().values())
 
     def absorb(self, evaluations) -> None:
-        """Add evaluations made elsewhere (by a worker process's family of the same robot, gravity and settings)
-        to the cache, in their order; each one not cached yet counts as a simulated member unless of zero
-        amplitude (as in :meth:`evaluate`)."""
+        """Add evaluations made elsewhere (by a worker process's family of the same robot, gravity,
+        settings and shape) to the cache, in their order; each one not cached yet counts as a simulated
+        member unless of zero amplitude (as in :meth:`evaluate`)."""
         for ev in evaluations:
             key = self._key(ev.params)
             if key not in self._cache:
                 self._cache[key] = ev
                 self.evaluations += max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG
 
-    def _simulate(self, params: HarmonicParams, T: float, nan: tuple) -> Evaluation:
+    def _simulate(self, params: WaveParams, T: float, nan: tuple) -> Evaluation:
         sims = []
         for m in self.models:
             try:
                 r = simulate_torque(m, params.torque(m.robot.k))
             except (ValueError, IndexError) as exc:
-                # ValueError: the stepper rejects the input; IndexError: a stepper bug on some psi = 180 gaits
-                # (e.g. gamma 91.65/90.44, A 27.93/29.30 deg: its steady-cycle metrics find no segment)
+                # ValueError: the stepper rejects the input; IndexError: its steady-cycle metrics
+                # find no segment on some psi = 180 gaits (e.g. gamma 91.65/90.44, A 27.93/29.30 deg)
                 return Evaluation(params, T, nan, nan, nan, False, f"{type(exc).__name__}: {exc}")
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)
@@ -172,7 +243,7 @@ class HarmonicFamily:
         margins = tuple(result_margins(r, m.robot)[0] for r, m in zip(sims, self.models))
         eps = self.settings.friction_tol
         low = next((x for x in margins if not x >= eps), None)
-        if low is not None:  # not admissible: which foot slips depends on friction known only to +-eps/2
+        if low is not None:  # not admissible: which foot slips depends on friction known to +-eps/2
             return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
         return Evaluation(params, T, tuple(r.S for r in sims), tuple(r.W_plus for r in sims),
                           tuple(r.CoT_plus for r in sims), True, margin=margins)

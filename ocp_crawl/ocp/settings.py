@@ -35,6 +35,11 @@ FOURIER_ORDER_BOUNDS = (1, 25)
 HARMONIC_PSI_BOUNDS = (4, 180)
 HARMONIC_A_BOUNDS = (1, 20)
 STARTS_BOUNDS = (1, 20)
+BASELINE_SAMPLES_BOUNDS = (0, 4096)
+BASELINE_STARTS_BOUNDS = (0, 20)
+BASELINE_EVALUATIONS_BOUNDS = (1, 5000)
+#: the ``baselines`` choices: every waveform family, or one
+BASELINE_CHOICES = ("all", "harmonic", "triangle", "pulse")
 
 
 #: most homotopy stages a schedule may have (sigma0 down to sigma_min by sigma_factor): each is an IPOPT solve
@@ -122,6 +127,17 @@ class OCPSettings:
     """psi values of the coarse harmonic scan that seeds the harmonic-family optimisation, over (-180, 180] deg"""
     harmonic_A: int = 4
     """amplitudes of the coarse harmonic scan, up to A_max"""
+    baseline_samples: int = 64
+    """points of a Sobol sample of each waveform family's whole box in the baselines' scan (the asymmetric
+    members: unequal centres and amplitudes, a pulse's rise and duty), in BASELINE_SAMPLES_BOUNDS; 0: the
+    symmetric scan only (:mod:`~ocp_crawl.ocp.search`)"""
+    baseline_starts: int = 2
+    """local searches of each waveform family, from its best distinct scan points, in BASELINE_STARTS_BOUNDS"""
+    baseline_evaluations: int = 400
+    """most simulated members of each local search of the baselines, in BASELINE_EVALUATIONS_BOUNDS"""
+    baselines: str = "all"
+    """the waveform families an optimum is compared with: "all" (harmonic, triangle, pulse) or one of them
+    (:mod:`~ocp_crawl.ocp.family`); the harmonic family is searched always (it is the OCP's first start)"""
     starts: int = 4
     """starts of the OCP (multi-start): the harmonic baseline first, then perturbed and Fourier-order starts;
     the best replayed optimum is reported with the spread of the others"""
@@ -149,7 +165,7 @@ class OCPSettings:
 
     def _check_choices(self) -> None:
         for name, choices in (("objective", OBJECTIVES), ("parametrization", PARAMETRIZATIONS),
-                              ("warm_barrier", WARM_BARRIERS)):
+                              ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES)):
             if getattr(self, name) not in choices:
                 raise ValueError(f"OCPSettings.{name} must be one of {choices}, got {getattr(self, name)!r}")
         if self.direction not in (-1, 1):
@@ -162,7 +178,10 @@ class OCPSettings:
     def _check_numbers(self) -> None:
         for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
                                   ("harmonic_psi", HARMONIC_PSI_BOUNDS), ("harmonic_A", HARMONIC_A_BOUNDS),
-                                  ("starts", STARTS_BOUNDS)):
+                                  ("starts", STARTS_BOUNDS),
+                                  ("baseline_samples", BASELINE_SAMPLES_BOUNDS),
+                                  ("baseline_starts", BASELINE_STARTS_BOUNDS),
+                                  ("baseline_evaluations", BASELINE_EVALUATIONS_BOUNDS)):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
         for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "stage_tol", "comp_tol",
                      "periodic_tol",
@@ -226,6 +245,13 @@ class OCPSettings:
             return self.mu_ratios
         eps = self.mu_ratio_eps
         return (1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,)
+
+    @property
+    def baseline_shapes(self) -> tuple[str, ...]:
+        """The waveform families searched for baselines: the harmonic one first (the OCP's start), then
+        those of ``baselines``."""
+        rest = BASELINE_CHOICES[2:] if self.baselines == "all" else (self.baselines,)
+        return ("harmonic",) + tuple(s for s in rest if s != "harmonic")
 
     def rate_bound(self, robot: Robot) -> float:
         """Largest torque rate |d tau_i / d t| [N m/s]: k times the reference-angle rate bound."""

@@ -1,12 +1,13 @@
 """Solve the periodic-gait OCP and prove the optimum by replay: :func:`optimize_gait` and :class:`OCPResult`.
 
-The first start is the best harmonic gait of the family (:func:`~ocp_crawl.ocp.baseline.best_harmonic`), then
+The first start is the best harmonic gait of the family (:func:`~ocp_crawl.ocp.search.best_baselines`), then
 a Fourier-order start and perturbed starts (:mod:`~ocp_crawl.ocp.starts`, ``settings.starts`` in all); from each,
 the transcription (:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy, every
 stage read through the IPOPT status table, and the optimum is judged by its event-driven replay
 (:func:`~ocp_crawl.ocp.judge.judge_replay`: the transcription's own linear interpolant, the OCP's period).
 The reported optimum is the best by replay among the starts the judge accepts, with the spread of the others;
-its gain is measured by replay against the harmonic baseline.
+its gain is measured by replay against the best member of each simple waveform family (harmonic, triangle,
+pulse: ``settings.baselines``) and against the best of them.
 """
 from __future__ import annotations
 
@@ -20,8 +21,9 @@ from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
-from ocp_crawl.ocp.baseline import HarmonicChoice, best_harmonic, value_from
+from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
 from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, ratio_labels, replay_signal, value_text
+from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
@@ -93,7 +95,10 @@ class OCPResult:
     """:class:`~ocp_crawl.nlp.homotopy.Stage` records of every IPOPT call (of the reported start)"""
     failed_stage: str | None = None
     solve_time_s: float = float("nan")
-    harmonic: HarmonicChoice | None = None
+    harmonic: WaveChoice | None = None
+    """the best harmonic gait of the family: the first start"""
+    baselines: Baselines | None = None
+    """the best member of each waveform family searched (``settings.baseline_shapes``)"""
     replay: list = field(default_factory=list)
     """per scenario: CrawlResult of the event-driven replay"""
     S_replay: list = field(default_factory=list)
@@ -110,7 +115,9 @@ class OCPResult:
     accel_ratio: float = float("nan")
     """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such bound)"""
     gain: float = float("nan")
-    """relative gain by replay over the harmonic baseline (positive: better)"""
+    """relative gain by replay over the best baseline of every family searched (positive: better)"""
+    gains: dict = field(default_factory=dict)
+    """relative gain by replay over each family's best member, by shape (NaN: none, or infeasible)"""
     starts: list = field(default_factory=list)
     """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
 
@@ -118,6 +125,10 @@ class OCPResult:
     def gain_significant(self) -> bool:
         """Whether the gain exceeds the replay tolerance (|gain| > replay_tol)."""
         return math.isfinite(self.gain) and abs(self.gain) > self.settings.replay_tol
+
+    def _best_baseline(self) -> dict | None:
+        best = self.baselines.best if self.baselines else self.harmonic
+        return {"shape": best.shape, "value": best.value, "feasible": best.feasible} if best else None
 
     @property
     def spread(self) -> tuple[float, float, int]:
@@ -146,7 +157,9 @@ class OCPResult:
             "envelope_excess": self.envelope_excess, "rate_ratio": self.rate_ratio,
             "accel_ratio": self.accel_ratio,
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
-            "gain": self.gain, "gain_significant": self.gain_significant,
+            "baselines": self.baselines.table() if self.baselines else None,
+            "best_baseline": self._best_baseline(),
+            "gain": self.gain, "gain_significant": self.gain_significant, "gains": self.gains,
             "starts": [s.to_dict() for s in self.starts], "starts_converged": converged,
             "objective_value_replay_min": low, "objective_value_replay_max": high,
             "solve_time_s": self.solve_time_s,
@@ -173,7 +186,7 @@ class OCPResult:
                          for j, (r, label) in enumerate(zip(ratios, ratio_labels(ratios)))])
 
 
-def baseline_gait(harm: HarmonicChoice, robot: Robot) -> tuple:
+def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
     """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t [cycles]) and its
     period T [s]."""
     return harm.torque_signal(robot.k), harm.T
@@ -209,7 +222,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
     ocp = GaitOCP(robot, gravity, settings)
-    harm = best_harmonic(robot, gravity, settings, jobs=jobs, meanwhile=ocp.prepare)  # the NLP's build overlaps
+    base = best_baselines(robot, gravity, settings, jobs=jobs, meanwhile=ocp.prepare)  # NLP built meanwhile
+    harm = base.choices["harmonic"]
     if harm is None:
         return OCPResult(success=False, status=Status.NO_INITIAL_GUESS, objective=settings.objective,
                          settings=settings,
@@ -224,7 +238,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
     runs = []
     for guess in guesses:
-        runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay))
+        runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay,
+                               baselines=base))
     res = _pick(runs, settings, replay)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
                               sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
@@ -250,8 +265,9 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
     return runs[0]
 
 
-def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: HarmonicChoice | None = None,
-               replay: bool = True, tightened: bool = False) -> OCPResult:
+def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: WaveChoice | None = None,
+               replay: bool = True, tightened: bool = False,
+               baselines: Baselines | None = None) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
 
     Parameters
@@ -264,13 +280,16 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Ha
         The start's torques ``signal(t)`` [N m] at phases t [cycles] (must simulate successfully).
     T : float
         The start's period [s].
-    harmonic : HarmonicChoice, optional
-        The harmonic baseline (the gain is measured against its value).
+    harmonic : WaveChoice, optional
+        The harmonic baseline (an optimum significantly worse than it, its first start, is not one).
     replay : bool
         Judge the optimum by replay (default).
     tightened : bool
         Solve only the tightened NLP on the branches of the start's simulated guess, no homotopy
         (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`: a coarser N's optimum refined); default False.
+    baselines : Baselines, optional
+        The best member of each waveform family (the gains are measured against them; without them,
+        against ``harmonic``).
 
     Returns
     -------
@@ -280,7 +299,7 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Ha
     settings = ocp.settings
     t_start = time.perf_counter()
     res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
-                    settings=settings, harmonic=harmonic)
+                    settings=settings, harmonic=harmonic, baselines=baselines)
     bad = next((r for r in (simulate_torque(m, signal) for m in models) if not r.success), None)
     if bad is not None:
         res.status = Status.NO_INITIAL_GUESS
@@ -393,18 +412,39 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     else:
         res.message += (f"; confirmed by the event-driven replay (objective within {units.ratio(verdict.rel_diff)}, "
                         f"replay_tol {units.ratio(res.settings.replay_tol)})")
-    if res.harmonic is not None:
-        res.gain = gain_over(res.settings.objective, res.value_replay, res.harmonic.value)
-        if res.success and res.gain_significant and res.gain < 0:
-            _worse_than_baseline(res)
+    _gains(res)
 
 
-def _worse_than_baseline(res: OCPResult) -> None:
+def _gains(res: OCPResult) -> None:
+    """The gains by replay over each family's best member and over the best of them; an optimum
+    significantly worse than the harmonic baseline (its first start) is not one (WORSE_THAN_BASELINE); one
+    worse than another family's best says so in its message (a local optimum: that gait is a start to try)."""
+    objective = res.settings.objective
+    if res.baselines is not None:
+        res.gains = res.baselines.gains(res.value_replay, gain_over)
+        best = res.baselines.best
+    else:
+        best = res.harmonic
+        res.gains = {"harmonic": math.nan if best is None else
+                     gain_over(objective, res.value_replay, best.value)}
+    if best is None:
+        return
+    res.gain = gain_over(objective, res.value_replay, best.value) if best.feasible else math.nan
+    h_gain = res.gains.get("harmonic", math.nan)
+    tol = res.settings.replay_tol
+    if res.success and math.isfinite(h_gain) and h_gain < -tol:
+        _worse_than_baseline(res, h_gain)
+    elif res.success and res.gain < -tol:
+        res.message += (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, gain "
+                        f"{units.ratio(res.gain)}): a local optimum, try that gait as a start")
+
+
+def _worse_than_baseline(res: OCPResult, gain: float) -> None:
     """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same envelope and
     bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both values."""
     objective = res.settings.objective
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
     res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay {value_text(objective, res.value_replay)} against "
-                   f"the baseline's {value_text(objective, res.harmonic.value)} (gain {units.ratio(res.gain)}, "
+                   f"the baseline's {value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
                    f"replay_tol {units.ratio(res.settings.replay_tol)})")

@@ -23,8 +23,9 @@ from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
-from ocp_crawl.ocp.settings import (FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS, REMOVED_KEYS,
-                                   STARTS_BOUNDS, WARM_BARRIERS)
+from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS, BASELINE_SAMPLES_BOUNDS,
+                                   BASELINE_STARTS_BOUNDS, FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS,
+                                   NODES_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
 Drive = Literal["torque", "angles"]
@@ -337,6 +338,17 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
         default=_ocp("harmonic_psi"), rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
                                                   "and friction scenario; 180 is a 2 deg grid")),
+    Key("baselines", str, "-", "waveform families an optimum is compared with (the harmonic one is also its "
+        "first start)", default=_ocp("baselines"), choices=BASELINE_CHOICES),
+    Key("baseline_samples", int, "-", "Sobol points of each family's whole box in the baselines' scan "
+        "(asymmetric members)", default=_ocp("baseline_samples"),
+        rule=within(*BASELINE_SAMPLES_BOUNDS, "one event-driven run per point and friction scenario")),
+    Key("baseline_starts", int, "-", "local searches of each waveform family from its best scan points",
+        default=_ocp("baseline_starts"),
+        rule=within(*BASELINE_STARTS_BOUNDS, "each is up to baseline_evaluations event-driven runs")),
+    Key("baseline_evaluations", int, "-", "most simulated members of each local search of the baselines",
+        default=_ocp("baseline_evaluations"),
+        rule=within(*BASELINE_EVALUATIONS_BOUNDS, "one event-driven run per member and friction scenario")),
     Key("starts", int, "-", "starts of the OCP (harmonic baseline, perturbed, Fourier-order)", default=_ocp("starts"),
         rule=within(*STARTS_BOUNDS, "each start is a full homotopy of the NLP")),
     Key("sigma0", float, "-", "homotopy: first relaxation parameter (complementarity products <= sigma)",

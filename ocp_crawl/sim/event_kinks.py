@@ -89,6 +89,22 @@ def step_limit(signal: PeriodicSignal) -> float:
         return input_step(signal)
 
 
+def linear_pieces(signal, breakpoints: np.ndarray, probes=(0.2, 0.5, 0.8)) -> bool:
+    """Whether ``signal`` is linear on every piece between its ``breakpoints`` (phases in [0, 1)): its rates
+    at interior points of each piece agree to :data:`HELD_PIECE_RTOL` of its largest rate.  Such an input
+    (piecewise-linear samples, trapezoid pulses) has nothing to resolve between its kinks, where steps end
+    anyway: its Fourier content above the first harmonics is that of the kinks, and :func:`input_step`
+    would shorten every step for it (a triangle wave took 2,089 steps per run instead of 200)."""
+    b = np.unique(np.mod(np.asarray(breakpoints, float), 1.0))
+    if b.size == 0:
+        return False
+    ends = np.append(b[1:], b[0] + 1.0)
+    t = (b[:, None] + (ends - b)[:, None] * np.asarray(probes)[None, :]).ravel()
+    d = np.asarray(signal.derivative(t), float).reshape(-1, b.size, len(probes))
+    scale = float(np.max(np.abs(d)))
+    return bool(np.all(np.ptp(d, axis=2) <= HELD_PIECE_RTOL * scale)) if scale > 0 else True
+
+
 def one_sided_rates(signal, t: np.ndarray, e: float) -> tuple[np.ndarray, np.ndarray]:
     """Rates tau'(t - e) and tau'(t + e) (2, n) of ``signal`` at the phases t (n,) [cycles]: the left and right
     rates at knots t when e is inside the pieces next to them (exact for piecewise-linear pieces)."""

@@ -92,7 +92,7 @@ JOINT_COLORS = ("tab:blue", "tab:purple")
 
 
 def _title(result: OCPResult) -> str:
-    """Headline: objective, status, S, W+ and CoT+ of the replay, gain over the best harmonic gait."""
+    """Headline: objective, status, S, W+ and CoT+ of the replay, gains over the waveform families."""
     rep = result.replay[0] if result.replay else None
     head = f"Optimal {result.objective} gait ({result.settings.nodes} nodes): {result.status.label}"
     if rep is None or not rep.success:
@@ -105,8 +105,16 @@ def _title(result: OCPResult) -> str:
                  f"mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
-            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\ngain over the best harmonic gait "
-            f"(by replay) {units.ratio(result.gain)}{significance}")
+            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\n{_gains_text(result)}"
+            f"{significance}")
+
+
+def _gains_text(result: OCPResult) -> str:
+    """The gains by replay over each waveform family's best member, and over the best of them."""
+    parts = ", ".join(f"{shape} {units.ratio(g)}" for shape, g in result.gains.items())
+    best = result.baselines.best if result.baselines else result.harmonic
+    name = best.shape if best is not None else "-"
+    return f"gain by replay over the best {name} gait {units.ratio(result.gain)} (per family: {parts})"
 
 
 def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
@@ -122,7 +130,10 @@ def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
     rep = result.replay[0] if result.replay else None
     h = result.harmonic
     gait = h.gait() if h else None
-    _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None)
+    best = result.baselines.best if result.baselines else None
+    other = best if best is not None and best.shape != "harmonic" else None
+    _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None,
+             other.torque_signal(robot.k) if other else None, other.shape if other else "")
     _angles(axs[0, 1], result, rep, gait)
     modes = _positions(axs[1, 0], result, rep)
     ax = axs[1, 1]
@@ -156,13 +167,17 @@ def _label(ax, title: str, ylabel: str) -> None:
         ax.legend(fontsize="small")
 
 
-def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None) -> None:
+def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None, other=None, name: str = "") -> None:
+    """Panel (a): the optimal node torques, the best harmonic gait's and (``other``) the best gait of
+    the family ``name`` when that is the best baseline (each in its own phase: gaits of one period)."""
     tt = np.linspace(0, 1, 401)
     for i, c in enumerate(JOINT_COLORS):
         ax.plot(np.r_[result.phase, 1.0], np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".",
                 ms=4, label=f"optimal $\\tau_{i + 1}$ (nodes)")
         if harmonic is not None:
             ax.plot(tt, harmonic(tt)[i] * 1e3, color=c, ls="--", lw=1.0, label=f"best harmonic $\\tau_{i + 1}$")
+        if other is not None:
+            ax.plot(tt, other(tt)[i] * 1e3, color=c, ls="-.", lw=1.0, label=f"best {name} $\\tau_{i + 1}$")
     _label(ax, f"(a) joint torques ({result.objective})", "joint torque [mN m]")
 
 
