@@ -6,7 +6,7 @@
 For each gait: its slip-weighted friction margin m at equal feet (:mod:`ocp_crawl.ocp.slip_margin`), its S
 [mm per cycle] at mu1/mu2 = 1, and at 1 - delta, 1 + delta (mu1 = mu sqrt(r), mu2 = mu / sqrt(r): the
 geometric mean fixed) for delta = 0.5 % and friction_tol / 2 = 2.5 %: the largest relative change of S and
-(delta/m)^2 beside it.  The harmonic gaits are gamma 90 deg, A 30 deg, psi as listed, physical gravity.
+(delta/m)^2 beside it, and their ratio.  The harmonic gaits are gamma 90 deg, A 30 deg, psi as listed, physical gravity.
 """
 from __future__ import annotations
 
@@ -42,8 +42,9 @@ def row(name: str, robot: Robot, gravity: str, signal) -> None:
     for d in DELTAS:
         S = [simulate_torque(Model(at_ratio(robot, r), gravity=gravity), signal).S for r in (1 - d, 1 + d)]
         change = max(abs(s - ref.S) for s in S) / abs(ref.S)
+        q = (d / m) ** 2 if m > 0 else math.inf
         cells.append(f"delta {d:.3f}: S {1e3 * S[0]:8.3f} / {1e3 * S[1]:8.3f} mm, change {change:6.1%}, "
-                     f"(delta/m)^2 {(d / m) ** 2 if m > 0 else math.inf:8.3g}")
+                     f"(delta/m)^2 {q:8.3g}, ratio {change / q:5.2f}")
     print("  ".join(cells))
 
 
