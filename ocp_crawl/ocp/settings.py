@@ -137,10 +137,12 @@ class OCPSettings:
     the same rule as a constraint on its sub-steps (:func:`ocp_crawl.ocp.substeps.friction_rows`), the
     judge accepts a replayed margin down to eps - replay_tol (a fraction of the mean friction limit).
     What it guarantees, measured by simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an
-    exact friction tie, an asymmetry delta <= eps/10 costs at most about 2 % of S (about (delta/m)^2),
+    exact friction tie, an asymmetry delta <= eps/10 costs at most about 2 % of S (1.6 (delta/m)^2),
     where a gait at the tie stops at delta = 0.5 %.  It does not hold the speed under +-eps/2 (an optimum
-    on the rule keeps 40 % of its S at mu1/mu2 = 0.975): that is robust_speed's set.  0 admits every gait;
-    in [0, 1)"""
+    on the rule keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its
+    worst case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps
+    its speed under a known friction uncertainty is robust_speed's, robust = "worst".  0 admits every
+    gait; in [0, 1)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False

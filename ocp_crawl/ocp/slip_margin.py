@@ -20,16 +20,19 @@ equal feet ends near the tie (at psi = 45 deg, gamma 90, A 30 deg, physical grav
 margin is 2.5e-4 while m = 0.30).  Both-feet slip (slip-slip modes, only at the tie) has margin 0.
 
 What a margin m guarantees, measured by simulation at mu1/mu2 = 1 +- delta (the geometric mean
-fixed; ``scripts/friction_set.py``, ``tests/test_friction_set.py``): an asymmetry delta takes the
-end of each slip phase, where the limits approach the tie, from the slipping foot; S changes
-continuously, by about (delta/m)^2 of itself (0.7 to 1.6 times that for the harmonic gaits of
-margins 0.014 to 0.30 and the optimum below at delta = 0.5 %, up to 2.4 times at delta = m/2), where
-the tie gait stops.  So ``friction_tol = eps`` guarantees a gait that does not depend on an exact
-tie: an asymmetry delta <= eps/10 costs at most about 2 % of S.  It does not guarantee the speed
-under +-eps/2: the max_speed optimum of the robot M 0.08 kg, L 0.15 m, beta 1.5 (its margin on the
-rule, 0.0497) keeps its direction at mu1/mu2 = 0.975 and 1.025 but only 40 % and 57 % of its S.  A
-gait whose speed holds over a set of friction ratios is asked for by that set: ``robust_speed`` over
-mu1/mu2 in {1 - eps, 1, 1 + eps} (README, "Friction uncertainty").
+fixed; ``scripts/friction_set.py``, ``tests/test_friction_set.py``): an asymmetry delta takes from
+the slipping foot the end of each slip phase where the limits approach the tie; S changes
+continuously, for delta <= m/5 by at most about 1.6 (delta/m)^2 of itself (0.7 to 1.6 times
+(delta/m)^2 on the harmonic gaits of margins 0.035 to 0.30 and the max_speed optimum below, whose
+slip phases end at the tie; 0.01 times on a robust_speed optimum), where the tie gait stops.  So
+``friction_tol = eps`` guarantees a gait that does not depend on an exact tie: an asymmetry delta <=
+eps/10 costs at most about 2 % of S.  It does not guarantee the speed under +-eps/2: the max_speed
+optimum of the robot M 0.08 kg, L 0.15 m, beta 1.5 (its margin on the rule, 0.0497) keeps its
+direction at mu1/mu2 = 0.975 and 1.025 but only 40 % and 57 % of its S.  Nor is it the limit of the
+set {1 - eps, 1, 1 + eps}: robust_speed's worst case over it (eps = 0.05, friction_tol = 0, paper
+robot, N = 50) ends on a margin of 0.103 with S within 0.03 % over the set.  A gait whose speed
+holds over a set of friction ratios is asked for by that set: ``robust_speed`` with ``robust =
+"worst"`` (README, "Friction uncertainty").
 """
 from __future__ import annotations
 
