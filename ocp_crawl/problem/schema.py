@@ -362,8 +362,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
     Key("warm_barrier", str, "-", "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
         "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"), choices=WARM_BARRIERS),
-    Key("friction_tol", float, "-", "relative tolerance of the friction coefficients: a gait is admissible only "
-        "when which foot slips does not depend on them within +-friction_tol/2 (slip-weighted margin)",
+    Key("friction_tol", float, "-", "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
+        "an admissible gait: keeps its slip off the friction tie (README, Friction uncertainty)",
         default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
     Key("replay_tol", float, "-", "relative tolerance of the replay judge (objective, speed requirement)",
         default=_ocp("replay_tol"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),

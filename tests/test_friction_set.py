@@ -1,0 +1,162 @@
+"""Friction uncertainty as a set: what the friction tolerance (ocp.friction_tol) guarantees, checked
+by direct simulation at shifted friction ratios mu1/mu2 = 1 +- delta (mu1 = mu sqrt(r), mu2 = mu /
+sqrt(r), the geometric mean fixed), and the replay judge's comparison of the margin with
+friction_tol.
+
+The margin enters the tests only as the statement's premise; what is checked is the simulated S at
+the shifted friction, and, for the judge, a margin computed independently on a fine output grid (the
+slipping foot read from ``mode``, the rectangle rule)."""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocp_crawl import Robot
+from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.statics import Model
+from ocp_crawl.ocp import judge
+from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.settings import OCPSettings
+from ocp_crawl.ocp.slip_margin import result_margins
+from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
+
+PAPER = Robot.paper()
+#: the robot of tests/data/margin_at_friction_tol.csv (ocp_max_speed.toml with M, L, beta changed)
+GEOMETRY = PAPER.replace(M=0.08, L=0.15, beta=1.5)
+DATA = Path(__file__).parent / "data" / "margin_at_friction_tol.csv"
+
+
+def at_ratio(robot: Robot, ratio: float) -> Model:
+    """The robot with feet mu1/mu2 = ratio at the same geometric mean, physical gravity."""
+    mu = math.sqrt(robot.mu1 * robot.mu2)
+    robot = robot.replace(mu1=mu * math.sqrt(ratio), mu2=mu / math.sqrt(ratio))
+    return Model(robot, gravity="physical")
+
+
+def harmonic(psi_deg: float) -> ReferenceTorque:
+    return ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, psi_deg), PAPER.k)
+
+
+def optimum() -> tuple[PeriodicLinear, np.ndarray, float]:
+    """The stored max_speed optimum on the friction-tolerance row: its replay signal, node torques,
+    period."""
+    tau = np.loadtxt(DATA, delimiter=",").T
+    period = float(DATA.read_text().split("period T = ")[1].split()[0])
+    N = tau.shape[1]
+    return PeriodicLinear(np.arange(N) / N, tau), tau, period
+
+
+def S_at(robot: Robot, signal, ratio: float) -> float:
+    res = simulate_torque(at_ratio(robot, ratio), signal)
+    assert res.success, res.message
+    return res.S
+
+
+def margin_from_modes(res, robot: Robot) -> float:
+    """Independent slip-weighted margin on output samples: the slipping foot after sample k is
+    ``Mode(mode[k]).foot``, its slip |x_k+1 - x_k|, the limits at sample k (rectangle rule)."""
+    l1, l2 = robot.mu1 * res.f_n1, robot.mu2 * res.f_n2
+    num = den = 0.0
+    for k in range(res.t.size - 1):
+        foot = Mode(int(res.mode[k])).foot
+        for i, (x, own, other) in enumerate(((res.x1, l1, l2), (res.x2, l2, l1)), start=1):
+            if foot in (i, 3):
+                slip = abs(x[k + 1] - x[k])
+                num += slip * (other[k] - own[k])
+                den += slip * 0.5 * (own[k] + other[k])
+    return num / den
+
+
+def test_a_gait_at_the_friction_tie_stops_under_half_a_percent_asymmetry():
+    """The mirror-symmetric harmonic gait (psi -> 0) slips at the tie: at equal feet it crawls as
+    fast as any member, at mu1/mu2 = 0.995 or 1.005 it does not move (the foot with the lower limit
+    takes every slip)."""
+    sig = harmonic(0.01)
+    S0 = S_at(PAPER, sig, 1.0)
+    m = result_margins(simulate_torque(at_ratio(PAPER, 1.0), sig), PAPER)[0]
+    assert m < 1e-3  # the premise: at the tie
+    assert abs(S0) > 0.3 * PAPER.L
+    for r in (0.995, 1.005):
+        assert abs(S_at(PAPER, sig, r)) < 1e-3 * abs(S0)
+
+
+@pytest.mark.parametrize("name", ["psi 10", "psi 45", "optimum"])
+def test_a_margin_keeps_the_gait_under_asymmetries_within_it(name):
+    """A gait of margin m >= friction_tol = 0.05: at an asymmetry delta = m/10 S changes by at most
+    2 (delta/m)^2 = 2 % (measured 0.7 to 1.6 times (delta/m)^2: the slip lost is the end of each
+    slip phase, where the limits approach the tie linearly and the slip rate falls linearly); at
+    delta = friction_tol/2 it still moves the same way, but keeps only part of S (the optimum on the
+    rule keeps 40 %: friction_tol is no bound there)."""
+    if name == "optimum":
+        robot, sig = GEOMETRY, optimum()[0]
+    else:
+        robot, sig = PAPER, harmonic(float(name.split()[1]))
+    m = result_margins(simulate_torque(at_ratio(robot, 1.0), sig), robot)[0]
+    assert m >= 0.05 - OCPSettings().replay_tol
+    S0 = S_at(robot, sig, 1.0)
+    for r in (1 - m / 10, 1 + m / 10):
+        assert abs(S_at(robot, sig, r) - S0) <= 2 * 0.1 ** 2 * abs(S0)
+    for r in (1 - 0.025, 1 + 0.025):
+        assert S_at(robot, sig, r) * S0 > 0
+
+
+def test_judge_compares_the_margin_as_a_fraction_of_the_friction_limit():
+    """The optimum whose OCP row holds the margin at 0.05 replays to a margin (independent fine-grid
+    value) below 0.05 by more than replay_tol relative to it, yet within replay_tol of the mean
+    friction limit: the judge accepts it; with friction_tol above that margin by more than
+    replay_tol it rejects it, naming the friction margin."""
+    sig, tau, T = optimum()
+    model = at_ratio(GEOMETRY, 1.0)
+    fine = simulate_torque(model, sig, t_eval=np.linspace(0.0, 1.0, 4001))
+    m_fine = margin_from_modes(fine, model.robot)
+    st = OCPSettings(gamma_deg=90.0, A_max_deg=30.0)
+    tol = st.replay_tol
+    # the premise: a margin that a tolerance relative to it would reject
+    assert st.friction_tol - tol < m_fine < st.friction_tol * (1 - tol)
+    ref = simulate_torque(model, PeriodicLinear(np.arange(tau.shape[1]) / tau.shape[1], tau))
+    claim = value_from(st, [ref.S], [ref.CoT_plus], T)  # an honest claim: only the margin can fail
+    ok = judge.judge_replay([model], st, tau, T, claim)
+    assert ok.status == Status.SUCCESS, ok.message
+    for eps, status in ((m_fine + 0.5 * tol, Status.SUCCESS),
+                        (m_fine + 1.5 * tol, Status.REPLAY_MISMATCH)):
+        st = OCPSettings(gamma_deg=90.0, A_max_deg=30.0, friction_tol=eps)
+        v = judge.judge_replay([model], st, tau, T, claim)
+        assert v.status == status, v.message
+    assert "friction margin" in v.message and "friction_tol" in v.message
+
+
+def test_judge_ignores_the_margin_without_a_friction_tolerance():
+    """friction_tol = 0 admits every gait: the tie gait's replay is confirmed."""
+    N = 100
+    phase = np.arange(N) / N
+    tau = np.asarray(harmonic(0.01)(phase), float).reshape(2, N)
+    st = OCPSettings(friction_tol=0.0)
+    T = 2.0 * st.min_period(30.0, 30.0)
+    model = at_ratio(PAPER, 1.0)
+    ref = simulate_torque(model, PeriodicLinear(phase, tau))
+    v = judge.judge_replay([model], st, tau, T, value_from(st, [ref.S], [ref.CoT_plus], T))
+    assert v.status == Status.SUCCESS, v.message
+    assert v.margin[0] < 1e-3
+
+
+@pytest.mark.slow
+def test_changed_geometry_max_speed_ends_in_success():
+    """ocp_max_speed.toml with M 0.08, L 0.15, beta 1.5 (minutes): success, its replay's margin
+    within replay_tol of friction_tol and its speed at the stored optimum's (the same solve)."""
+    from ocp_crawl.ocp.solve import optimize_gait
+    from ocp_crawl.problem.problem import load_problem
+    from ocp_crawl.problem.run import ocp_settings
+
+    problem = load_problem(Path(__file__).parents[1] / "problems" / "ocp_max_speed.toml")
+    problem = problem.with_values({"robot.M": GEOMETRY.M, "robot.L": GEOMETRY.L,
+                                   "robot.beta": GEOMETRY.beta})
+    st = ocp_settings(problem)
+    res = optimize_gait(problem.robot, problem.model.gravity, st, jobs=1)
+    assert res.status == Status.SUCCESS, res.message
+    m = result_margins(res.replay[0], GEOMETRY)[0]
+    assert st.friction_tol - st.replay_tol <= m
+    sig, _, T = optimum()
+    assert res.v_replay[0] == pytest.approx(-S_at(GEOMETRY, sig, 1.0) / T, rel=1e-3)
