@@ -273,6 +273,27 @@ def _gain(s: dict) -> str:
     return f"{units.ratio(s['gain'])} ({verdict}: replay_tol {units.ratio(s.get('replay_tol'))})"
 
 
+def _pair(value, text) -> str:
+    """A pair of peaks (joints or feet 1, 2), or one pair per friction scenario ("a, b; c, d"); "-" if missing."""
+    if not value:
+        return units.MISSING
+    pairs = value if isinstance(value[0], list) else [value]
+    return "; ".join(", ".join(text(v) for v in pair) for pair in pairs)
+
+
+def _peaks(s: dict) -> str:
+    """The replay's peak actual joint rates [deg/s] and foot sliding speeds [mm/s], the bound max_joint_rate_deg_s
+    if set, and the harmonic baseline's peaks."""
+    deg = lambda v: units.fixed(v, 1)  # noqa: E731
+    mm = lambda v: units.fixed(v, 1, 1e3)  # noqa: E731
+    bound = s.get("max_joint_rate_deg_s")
+    limit = f" (bound {units.significant(bound)})" if bound is not None else ""
+    return (f"joint rate {_pair(s.get('peak_joint_rate_deg_s'), deg)} deg/s{limit}, foot slip speed "
+            f"{_pair(s.get('peak_slip_speed_m_s'), mm)} mm/s; harmonic baseline "
+            f"{_pair(s.get('harmonic_peak_joint_rate_deg_s'), deg)} deg/s, "
+            f"{_pair(s.get('harmonic_peak_slip_speed_m_s'), mm)} mm/s")
+
+
 def format_optimize(s: dict) -> str:
     """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, speeds in
     mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
@@ -298,6 +319,7 @@ def format_optimize(s: dict) -> str:
         f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
         f"harmonic    best of the family: {harmonic}; gain of the optimum (by replay) {_gain(s)}",
+        f"peaks       {_peaks(s)}",
         f"starts      {spread}",
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",
@@ -396,11 +418,17 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     return finish(args, files, result.success, f"optimisation failed: {result.message}")
 
 
+#: the peaks of optimize's JSON summary (their units in their names, and in units.UNITS)
+PEAK_KEYS = ("peak_joint_rate_deg_s", "peak_slip_speed_m_s", "harmonic_peak_joint_rate_deg_s",
+             "harmonic_peak_slip_speed_m_s")
+
+
 def _optimize_data(result, problem) -> dict:
     """The JSON summary of an optimize result, with the problem and the units of its numbers."""
     return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
                          units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
-                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"])))
+                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"],
+                                    **{k: units.UNITS[k] for k in PEAK_KEYS})))
 
 
 def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:

@@ -169,12 +169,13 @@ class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
     def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool,
-                 friction_tol: float = 0.0):
+                 friction_tol: float = 0.0, joint_rate: float | None = None):
         """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross conditions, S
         and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node torques (2, N); ``Th``: the
         scaled period, which divides the relaxed products (a relaxation per unit time: the spurious slip that a
         relaxation sigma allows then cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the
-        friction-tolerance constraint (:func:`friction_rows`)."""
+        friction-tolerance constraint (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
+        (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad])."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
         phi0, ft0 = nlp.sym(f"phi0_{j}", 2), nlp.sym(f"ft0_{j}")
@@ -195,6 +196,8 @@ class Scenario:
         nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0)  # likewise
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
         nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf)
+        if joint_rate is not None:
+            nlp.con(f"joint_rate_{j}", cs.vec(joint_rate_rows(PHI, theta, joint_rate * Th)), 0.0, inf)
         if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
             nlp.con(f"friction_{j}", total, 0.0, inf)
@@ -252,6 +255,25 @@ def friction_rows(W, eps: float):
     e1, e2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
     l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
+
+
+def joint_rate_rows(PHI, theta, step):
+    """Rows (4, 2N) that must be >= 0: the optional bound on the actual joint rates, ``step * l_j -+ dphi_i,j``
+    for both joints i, with dphi_i,j the change of joint angle i over sub-step j and l_j the sub-step's length as a
+    fraction of its interval (theta_k for the first of interval k, 1 - theta_k for the second).  ``step``: the
+    largest change of a joint angle over a whole interval [rad], radians(max_joint_rate_deg_s) T / N (a CasADi
+    expression of the period).  The mean rate over each sub-step is then within the bound; inside a sub-step the
+    rate varies smoothly (one contact mode, the torque linear in time), so the peak rate of the replay exceeds the
+    bound by O(1/N) at most (the judge's tolerance, :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`).  ``PHI``: the
+    angles (2, 2N+1) at node 0 and every sub-step end; ``theta``: (N,) interior fractions (CasADi or numpy)."""
+    if isinstance(PHI, np.ndarray):
+        length = np.column_stack([theta, 1.0 - theta]).ravel()[None, :]
+        dphi = np.diff(PHI, axis=1)
+        return np.vstack([step * length - dphi, step * length + dphi])
+    length = cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1)
+    dphi = PHI[:, 1:] - PHI[:, :-1]
+    bound = cs.repmat(step * length, 2, 1)
+    return cs.vertcat(bound - dphi, bound + dphi)
 
 
 def _running_sum(nlp, var: str, con: str, terms):
