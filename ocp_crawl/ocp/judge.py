@@ -15,8 +15,8 @@ friction scenario and accepts the optimum only when
   slip-weighted friction margin (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol`` within
   ``replay_tol`` (relative: the OCP's constraint holds it at friction_tol to its discretisation error);
 * with the optional ``max_joint_rate_deg_s``: the replay's peak actual joint rate (:mod:`ocp_crawl.ocp.rates`)
-  is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL` (relative: the OCP bounds each sub-step's mean
-  rate, the peak inside a sub-step is O(1/N) above it);
+  is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL` (relative: the OCP bounds the mean rates of the
+  intervals and, 0.5 % looser, of the sub-steps; the peak inside a sub-step is O(1/N) above its mean);
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
 itself, from the torques and the period alone; the OCP's numbers enter only to be compared.

@@ -29,11 +29,10 @@ TINY_PIECE = 1e-9
 #: the fewest pieces per cycle (an input without kinks, e.g. a harmonic gait, is cut into this many)
 MIN_PIECES = 64
 #: relative tolerance of the judge's check of max_joint_rate_deg_s on the replay's peak rate.  The transcription
-#: bounds the mean rate over each sub-step (:func:`~ocp_crawl.ocp.substeps.joint_rate_rows`); inside a sub-step
-#: (one contact mode, the torque linear in time) the rate changes smoothly, by about the sub-step's share of the
-#: cycle times the rate's relative change per cycle, so the peak exceeds the bounded mean by O(1/N).  Measured on
-#: max_speed at the bound 180 deg/s: 0.29 %, 0.33 %, 0.21 % and 0.056 % above it at N = 8, 12, 20 and 30; the
-#: tolerance is three times the largest
+#: bounds the mean rate over each interval, and over each sub-step to SUBSTEP_RATE_SLACK (0.5 %) looser
+#: (:func:`~ocp_crawl.ocp.substeps.joint_rate_rows`); inside a sub-step (one contact mode, the torque linear in
+#: time) the rate changes smoothly, so the peak exceeds the bounded mean by O(1/N) more.  Measured on max_speed
+#: at the bound 180 deg/s: 0.63 % above it at N = 20, 0.57 % at N = 50
 JOINT_RATE_RTOL = 0.01
 
 

@@ -69,7 +69,7 @@ class OCPSettings:
     max_joint_rate_deg_s: float | None = None
     """optional bound on the actual joint rates |d phi_i / d t| [deg/s] of the quasistatic gait (the joint
     angles, not their references: springs, gravity and slips make them faster or slower than the references);
-    None (default): no bound.  The transcription bounds each sub-step's mean rate
+    None (default): no bound.  The transcription bounds each interval's and sub-step's mean rate
     (:func:`~ocp_crawl.ocp.substeps.joint_rate_rows`), the replay judge the replay's peak rate
     (:mod:`ocp_crawl.ocp.rates`)"""
     regularization: float = 1e-5
