@@ -14,7 +14,7 @@ from ocp_crawl.ocp import judge, optimize_gait
 from ocp_crawl.ocp.baseline import value_from
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks, signal_peaks
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.substeps import joint_rate_rows
+from ocp_crawl.ocp.substeps import SUBSTEP_RATE_SLACK, joint_rate_rows
 from ocp_crawl.problem import ProblemError, load_problem
 from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.status import Status
@@ -82,20 +82,24 @@ def test_smooth_input_peaks_and_failures_are_nan():
 
 
 def test_rows_numpy_and_casadi_agree():
-    """The transcription's rows (CasADi) equal their numpy form, and they are >= 0 exactly when every sub-step's
-    mean rate |dphi| / (l T / N) is within the bound."""
+    """The transcription's rows (CasADi) equal their numpy form, and they are >= 0 exactly when every interval's
+    mean rate is within the bound and every sub-step's within it to SUBSTEP_RATE_SLACK."""
     rng = np.random.default_rng(3)
     n = 6
-    phi = rng.uniform(1.0, 2.0, (2, 2 * n + 1))
     theta = rng.uniform(0.1, 0.9, n)
     step = 0.3
-    rows = joint_rate_rows(phi, theta, step)
     P, th = cs.SX.sym("P", 2, 2 * n + 1), cs.SX.sym("th", n)
     f = cs.Function("f", [P, th], [joint_rate_rows(P, th, step)])
-    assert np.allclose(np.asarray(f(phi, theta)), rows, rtol=0, atol=1e-14)
     length = np.column_stack([theta, 1 - theta]).ravel()
-    mean = np.abs(np.diff(phi, axis=1)) / length  # per interval's fraction
-    assert np.array_equal(np.all(rows >= 0, axis=0), np.all(mean <= step, axis=0))
+    for scale in (0.05, 0.3, 1.0):  # all within, some rows beyond, most beyond
+        phi = 1.5 + scale * np.cumsum(rng.uniform(-0.3, 0.3, (2, 2 * n + 1)), axis=1)
+        rows = joint_rate_rows(phi, theta, step)
+        assert rows.shape == (4, 3 * n)
+        assert np.allclose(np.asarray(f(phi, theta)), rows, rtol=0, atol=1e-14)
+        interval = np.abs(phi[:, 2::2] - phi[:, :-2:2])  # node k-1 to node k
+        sub = np.abs(np.diff(phi, axis=1)) / length  # per sub-step, as a rate over a whole interval
+        within = np.all(interval <= step) and np.all(sub <= (1 + SUBSTEP_RATE_SLACK) * step)
+        assert bool(np.all(rows >= 0)) == within
 
 
 def triangle(settings: OCPSettings):
