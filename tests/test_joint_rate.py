@@ -1,5 +1,6 @@
-"""The actual joint rates and foot sliding speeds: their peaks against a finite difference of an independent dense
-sampling, the optional bound max_joint_rate_deg_s in the transcription and in the replay judge, bad input."""
+"""The actual joint rates and foot sliding speeds: their peaks against a finite difference of an
+independent dense sampling, the optional bound max_joint_rate_deg_s in the transcription and in the
+replay judge, bad input."""
 import math
 from dataclasses import replace
 
@@ -22,12 +23,14 @@ from ocp_crawl.status import Status
 ROBOT = Robot.paper()
 MODEL = Model(ROBOT, gravity="physical")
 N = 40
-#: phases of the independent dense sampling (uniform: its differences are mean rates over 1/FINE of a cycle)
+#: phases of the independent dense sampling (uniform: its differences are mean rates over 1/FINE of
+#: a cycle)
 FINE = 4000
 
 
 def fd_peaks(signal, T: float) -> tuple[list, list]:
-    """Peak joint rates [deg/s] and foot speeds [m/s] by finite differences of a uniform dense replay."""
+    """Peak joint rates [deg/s] and foot speeds [m/s] by finite differences of a uniform dense
+    replay."""
     res = simulate_torque(MODEL, signal, t_eval=np.linspace(0.0, 1.0, FINE + 1))
     assert res.success, res.message
     rate = [math.degrees(np.max(np.abs(np.diff(res.phi[i])))) * FINE / T for i in range(2)]
@@ -36,21 +39,24 @@ def fd_peaks(signal, T: float) -> tuple[list, list]:
 
 
 def linear_gait(lag: float = 0.8, amplitude_deg: float = 25.0):
-    """A sine of the reference angles around 90 deg at N nodes, linear in phase between them (kinks at the
-    nodes), joint 2 ``lag`` rad behind."""
+    """A sine of the reference angles around 90 deg at N nodes, linear in phase between them (kinks
+    at the nodes), joint 2 ``lag`` rad behind."""
     phase = np.arange(N) / N
-    ref = np.radians(amplitude_deg) * np.vstack([np.sin(2 * np.pi * phase), np.sin(2 * np.pi * phase - lag)])
+    wave = np.vstack([np.sin(2 * np.pi * phase), np.sin(2 * np.pi * phase - lag)])
+    ref = np.radians(amplitude_deg) * wave
     return PeriodicLinear(phase, ROBOT.k * (ref - np.pi / 2))
 
 
 def agrees(peak: float, fd: float) -> bool:
-    """The piecewise-polynomial peak against the finite difference: the differences are mean rates over
-    1/FINE of a cycle, so they lie below the peak, by at most the rate's change over that length."""
+    """The piecewise-polynomial peak against the finite difference: the differences are mean rates
+    over 1/FINE of a cycle, so they lie below the peak, by at most the rate's change over that
+    length."""
     return fd <= peak * (1 + 1e-7) and fd >= peak * (1 - 2e-3)
 
 
 def test_peaks_against_a_dense_finite_difference():
-    """Kinked input (nodes), slip switches and onsets: every peak agrees with the independent sampling."""
+    """Kinked input (nodes), slip switches and onsets: every peak agrees with the independent
+    sampling."""
     signal, T = linear_gait(), 0.8
     res = simulate_torque(MODEL, signal)
     assert res.success, res.message
@@ -59,22 +65,23 @@ def test_peaks_against_a_dense_finite_difference():
     for i in range(2):
         assert agrees(peaks.joint_rate_deg_s[i], rate[i]), (peaks, rate)
         assert agrees(peaks.slip_speed_m_s[i], speed[i]), (peaks, speed)
-    assert min(peaks.slip_speed_m_s) > 0  # both feet slip in these gaits: the speeds are not the stick's zero
+    assert min(peaks.slip_speed_m_s) > 0  # both feet slip in this gait: not the stick's zero
     # the period converts phase to time: twice the period, half the rates
     slow = replay_peaks(MODEL, signal, 2 * T, res, N)
     assert slow.joint_rate_deg_s == pytest.approx(np.array(peaks.joint_rate_deg_s) / 2, rel=1e-12)
 
 
 def test_smooth_input_peaks_and_failures_are_nan():
-    """A harmonic input (no kinks: the pieces between the events alone) agrees too; a failed replay or a bad
-    period gives NaN, never a number."""
+    """A harmonic input (no kinks: the pieces between the events alone) agrees too; a failed replay
+    or a bad period gives NaN, never a number."""
     from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 
     signal = ReferenceTorque(Harmonic.from_degrees(90.0, 25.0, 40.0), ROBOT.k)
     peaks = signal_peaks(MODEL, signal, 0.6)
     rate, speed = fd_peaks(signal, 0.6)
     for i in range(2):
-        assert agrees(peaks.joint_rate_deg_s[i], rate[i]) and agrees(peaks.slip_speed_m_s[i], speed[i])
+        assert agrees(peaks.joint_rate_deg_s[i], rate[i])
+        assert agrees(peaks.slip_speed_m_s[i], speed[i])
     res = simulate_torque(MODEL, signal)
     assert all(math.isnan(v) for v in replay_peaks(MODEL, signal, 0.0, res).joint_rate_deg_s)
     failed = replace(res, success=False)
@@ -82,8 +89,9 @@ def test_smooth_input_peaks_and_failures_are_nan():
 
 
 def test_rows_numpy_and_casadi_agree():
-    """The transcription's rows (CasADi) equal their numpy form, and they are >= 0 exactly when every interval's
-    mean rate is within the bound and every sub-step's within it to SUBSTEP_RATE_SLACK."""
+    """The transcription's rows (CasADi) equal their numpy form, and they are >= 0 exactly when
+    every interval's mean rate is within the bound and every sub-step's within it to
+    SUBSTEP_RATE_SLACK."""
     rng = np.random.default_rng(3)
     n = 6
     theta = rng.uniform(0.1, 0.9, n)
@@ -103,12 +111,13 @@ def test_rows_numpy_and_casadi_agree():
 
 
 def triangle(settings: OCPSettings):
-    """Triangle waves between the envelope's torque bounds at N nodes, tau2 a quarter cycle behind, at the
-    shortest period of the bandwidth (the gait of tests/test_replay_judge.py)."""
+    """Triangle waves between the envelope's torque bounds at N nodes, tau2 a quarter cycle behind,
+    at the shortest period of the bandwidth (the gait of tests/test_replay_judge.py)."""
     lo, hi = settings.torque_bounds(ROBOT)
     j = np.arange(N)
     tri = lambda i: lo + (hi - lo) * (1 - np.abs(((i % N) - N / 2) / (N / 2)))  # noqa: E731
-    return np.vstack([tri(j + N // 2), tri(j + N // 4)]), 4 * settings.A_max_deg / settings.max_rate_deg_s
+    T = 4 * settings.A_max_deg / settings.max_rate_deg_s
+    return np.vstack([tri(j + N // 2), tri(j + N // 4)]), T
 
 
 @pytest.fixture(scope="module")
@@ -123,8 +132,9 @@ def claim():
 
 @pytest.mark.parametrize("factor,flagged", [(1 / 1.05, True), (1.0, False), (None, False)])
 def test_judge_checks_the_bound_on_the_replayed_peak(claim, factor, flagged):
-    """The judge flags a replay whose peak joint rate (found independently here, by the dense finite difference)
-    exceeds the bound beyond JOINT_RATE_RTOL, and names the bound; at the peak itself it passes."""
+    """The judge flags a replay whose peak joint rate (found independently here, by the dense finite
+    difference) exceeds the bound beyond JOINT_RATE_RTOL, and names the bound; at the peak itself it
+    passes."""
     tau, T, res, rate = claim
     bound = None if factor is None else max(rate) * factor
     st = OCPSettings(direction=int(np.sign(res.S)), max_joint_rate_deg_s=bound)
@@ -144,9 +154,10 @@ BOUND = 180.0
 
 @pytest.fixture(scope="module")
 def bounded():
-    """max_speed at N = 20 with the joint rates bounded by 180 deg/s (unbounded, the optimum's peak is about
-    194 deg/s at this N: ``test_the_bound_costs_speed``)."""
-    settings = OCPSettings(nodes=20, starts=1, harmonic_psi=12, harmonic_A=2, max_joint_rate_deg_s=BOUND)
+    """max_speed at N = 20 with the joint rates bounded by 180 deg/s (unbounded, the optimum's peak
+    is about 194 deg/s at this N: ``test_the_bound_costs_speed``)."""
+    settings = OCPSettings(nodes=20, starts=1, harmonic_psi=12, harmonic_A=2,
+                           max_joint_rate_deg_s=BOUND)
     return optimize_gait(ROBOT, "physical", settings, jobs=1)
 
 
@@ -154,11 +165,12 @@ def test_bound_holds_in_the_replay(bounded):
     res = bounded
     assert res.success, res.message
     N20 = res.settings.nodes
-    # the transcription: each interval's mean rate is a mean of its sub-steps' (each within the bound)
+    # the transcription: each interval's mean rate is a mean of its sub-steps' (each within the
+    # bound)
     node_rate = np.degrees(np.abs(np.diff(res.phi[0], axis=1))) * N20 / res.T_ocp
     assert np.max(node_rate) <= BOUND * (1 + 1e-7)
-    # the replay, sampled independently of the judge: within the tolerance, and the bound is active (the peak
-    # reaches it: without the bound the optimum moves faster)
+    # the replay, sampled independently of the judge: within the tolerance, and the bound is active
+    # (the peak reaches it: without the bound the optimum moves faster)
     rate, speed = fd_peaks(PeriodicLinear(res.phase, res.tau), res.T_ocp)
     assert BOUND * (1 - JOINT_RATE_RTOL) <= max(rate) <= BOUND * (1 + JOINT_RATE_RTOL)
     for i in range(2):
@@ -167,7 +179,8 @@ def test_bound_holds_in_the_replay(bounded):
     summary = res.summary()
     assert summary["max_joint_rate_deg_s"] == BOUND
     assert summary["peak_joint_rate_deg_s"] == pytest.approx(res.peak_joint_rate_deg_s[0], rel=0)
-    assert summary["joint_rate_ratio"] == pytest.approx(max(res.peak_joint_rate_deg_s[0]) / BOUND, rel=1e-12)
+    ratio = max(res.peak_joint_rate_deg_s[0]) / BOUND
+    assert summary["joint_rate_ratio"] == pytest.approx(ratio, rel=1e-12)
     # the harmonic baseline's peaks, by its own replay
     base = res.harmonic.torque_signal(ROBOT.k)
     rate_h, _ = fd_peaks(base, res.harmonic.T)
@@ -177,8 +190,10 @@ def test_bound_holds_in_the_replay(bounded):
 
 @pytest.mark.slow
 def test_the_bound_costs_speed(bounded):
-    """Unbounded, the same problem's optimum moves its joints faster than the bound and is faster."""
-    free = optimize_gait(ROBOT, "physical", replace(bounded.settings, max_joint_rate_deg_s=None), jobs=1)
+    """Unbounded, the same problem's optimum moves its joints faster than the bound and is
+    faster."""
+    settings = replace(bounded.settings, max_joint_rate_deg_s=None)
+    free = optimize_gait(ROBOT, "physical", settings, jobs=1)
     assert free.success, free.message
     assert max(free.peak_joint_rate_deg_s[0]) > BOUND * (1 + JOINT_RATE_RTOL)
     assert free.value_replay > bounded.value_replay

@@ -274,7 +274,8 @@ def _gain(s: dict) -> str:
 
 
 def _pair(value, text) -> str:
-    """A pair of peaks (joints or feet 1, 2), or one pair per friction scenario ("a, b; c, d"); "-" if missing."""
+    """A pair of peaks (joints or feet 1, 2), or one pair per friction scenario ("a, b; c, d"); "-"
+    if missing."""
     if not value:
         return units.MISSING
     pairs = value if isinstance(value[0], list) else [value]
@@ -282,13 +283,14 @@ def _pair(value, text) -> str:
 
 
 def _peaks(s: dict) -> str:
-    """The replay's peak actual joint rates [deg/s] and foot sliding speeds [mm/s], the bound max_joint_rate_deg_s
-    if set, and the harmonic baseline's peaks."""
+    """The replay's peak actual joint rates [deg/s] and foot sliding speeds [mm/s], the bound
+    max_joint_rate_deg_s if set, and the harmonic baseline's peaks."""
     deg = lambda v: units.fixed(v, 1)  # noqa: E731
     mm = lambda v: units.fixed(v, 1, 1e3)  # noqa: E731
     bound = s.get("max_joint_rate_deg_s")
     limit = f" (bound {units.significant(bound)})" if bound is not None else ""
-    return (f"joint rate {_pair(s.get('peak_joint_rate_deg_s'), deg)} deg/s{limit}, foot slip speed "
+    rates = _pair(s.get('peak_joint_rate_deg_s'), deg)
+    return (f"joint rate {rates} deg/s{limit}, foot slip speed "
             f"{_pair(s.get('peak_slip_speed_m_s'), mm)} mm/s; harmonic baseline "
             f"{_pair(s.get('harmonic_peak_joint_rate_deg_s'), deg)} deg/s, "
             f"{_pair(s.get('harmonic_peak_slip_speed_m_s'), mm)} mm/s")
@@ -427,8 +429,8 @@ def _optimize_data(result, problem) -> dict:
     """The JSON summary of an optimize result, with the problem and the units of its numbers."""
     return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
                          units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
-                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"],
-                                    **{k: units.UNITS[k] for k in PEAK_KEYS})))
+                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"],
+                                    v_replay=units.UNITS["v"], **{k: units.UNITS[k] for k in PEAK_KEYS})))
 
 
 def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:

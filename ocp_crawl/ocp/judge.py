@@ -14,9 +14,10 @@ friction scenario and accepts the optimum only when
 * which foot slips does not depend on friction coefficients known only to +-friction_tol/2: the replay's
   slip-weighted friction margin (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol`` within
   ``replay_tol`` (relative: the OCP's constraint holds it at friction_tol to its discretisation error);
-* with the optional ``max_joint_rate_deg_s``: the replay's peak actual joint rate (:mod:`ocp_crawl.ocp.rates`)
-  is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL` (relative: the OCP bounds the mean rates of the
-  intervals and, 0.5 % looser, of the sub-steps; the peak inside a sub-step is O(1/N) above its mean);
+* with the optional ``max_joint_rate_deg_s``: the replay's peak actual joint rate
+  (:mod:`ocp_crawl.ocp.rates`) is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`
+  (relative: the OCP bounds the mean rates of the intervals and, 0.5 % looser, of the sub-steps; the
+  peak inside a sub-step is O(1/N) above its mean);
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
 itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
@@ -158,7 +159,8 @@ class Verdict:
     margin: list = field(default_factory=list)
     """per scenario: the replay's slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`)"""
     peaks: list = field(default_factory=list)
-    """per scenario: the replay's peak joint rates and foot sliding speeds (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
+    """per scenario: the replay's peak joint rates and foot sliding speeds
+    (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
     joint_rate_ratio: float = float("nan")
     """the replay's peak joint rate over max_joint_rate_deg_s (NaN: no such bound)"""
 
@@ -256,8 +258,8 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
 
 
 def _joint_rate_problems(v: Verdict, settings: OCPSettings) -> list[str]:
-    """The replay's peak joint rate above max_joint_rate_deg_s beyond JOINT_RATE_RTOL (sets ``joint_rate_ratio``);
-    [] without the bound."""
+    """The replay's peak joint rate above max_joint_rate_deg_s beyond JOINT_RATE_RTOL (sets
+    ``joint_rate_ratio``); [] without the bound."""
     bound = settings.max_joint_rate_deg_s
     if bound is None:
         return []
@@ -265,5 +267,6 @@ def _joint_rate_problems(v: Verdict, settings: OCPSettings) -> list[str]:
     v.joint_rate_ratio = peak / bound
     if v.joint_rate_ratio <= 1 + JOINT_RATE_RTOL:
         return []
-    return [f"the replayed joint rate reaches {units.significant(peak, 4)} deg/s, above max_joint_rate_deg_s = "
-            f"{units.significant(bound)} deg/s (tolerance {units.ratio(JOINT_RATE_RTOL)})"]
+    return [f"the replayed joint rate reaches {units.significant(peak, 4)} deg/s, above "
+            f"max_joint_rate_deg_s = {units.significant(bound)} deg/s (tolerance "
+            f"{units.ratio(JOINT_RATE_RTOL)})"]

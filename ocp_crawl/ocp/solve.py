@@ -118,7 +118,8 @@ class OCPResult:
     joint_rate_ratio: float = float("nan")
     """the replay's peak joint rate over max_joint_rate_deg_s (<= 1: within; NaN: no such bound)"""
     harmonic_peak_joint_rate_deg_s: list = field(default_factory=list)
-    """per scenario: the harmonic baseline's peak joint rates [deg/s] (its own replay; empty if not measured)"""
+    """per scenario: the harmonic baseline's peak joint rates [deg/s] (its own replay; empty if not
+    measured)"""
     harmonic_peak_slip_speed_m_s: list = field(default_factory=list)
     """per scenario: the harmonic baseline's peak foot sliding speeds [m/s]"""
     gain: float = float("nan")
@@ -159,7 +160,8 @@ class OCPResult:
             "accel_ratio": self.accel_ratio,
             "peak_joint_rate_deg_s": per_scenario(self.peak_joint_rate_deg_s),
             "peak_slip_speed_m_s": per_scenario(self.peak_slip_speed_m_s),
-            "max_joint_rate_deg_s": self.settings.max_joint_rate_deg_s, "joint_rate_ratio": self.joint_rate_ratio,
+            "max_joint_rate_deg_s": self.settings.max_joint_rate_deg_s,
+            "joint_rate_ratio": self.joint_rate_ratio,
             "harmonic_peak_joint_rate_deg_s": per_scenario(self.harmonic_peak_joint_rate_deg_s),
             "harmonic_peak_slip_speed_m_s": per_scenario(self.harmonic_peak_slip_speed_m_s),
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
@@ -421,8 +423,8 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
 
 
 def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:
-    """The harmonic baseline's peak joint rates and foot sliding speeds (its replay in every scenario), unless
-    measured already or there is no baseline."""
+    """The harmonic baseline's peak joint rates and foot sliding speeds (its replay in every
+    scenario), unless measured already or there is no baseline."""
     if res.harmonic is None or res.harmonic_peak_joint_rate_deg_s:
         return
     signal = res.harmonic.torque_signal(models[0].robot.k)
@@ -432,9 +434,9 @@ def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:
 
 
 def _baseline_within(res: OCPResult, models: list[Model]) -> bool:
-    """Whether the harmonic baseline meets the optional max_joint_rate_deg_s (the bandwidth and the envelope it
-    meets by construction); a baseline beyond it is no gait of the problem, so a profile worse than it is no
-    failure (the message says so)."""
+    """Whether the harmonic baseline meets the optional max_joint_rate_deg_s (the bandwidth and the
+    envelope it meets by construction); a baseline beyond it is no gait of the problem, so a profile
+    worse than it is no failure (the message says so)."""
     bound = res.settings.max_joint_rate_deg_s
     if bound is None:
         return True
@@ -442,8 +444,8 @@ def _baseline_within(res: OCPResult, models: list[Model]) -> bool:
     peak = max(max(p) for p in res.harmonic_peak_joint_rate_deg_s)
     if peak <= bound * (1 + JOINT_RATE_RTOL):
         return True
-    res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(res.gain)}), whose joint rate "
-                    f"reaches {units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s")
+    res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(res.gain)}), whose "
+                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s")
     return False
 
 
