@@ -274,6 +274,9 @@ COMMAND_ROWS = {
                                              ["--set", "[ocp] max_rate no longer exists", "max_rate_deg_s [deg/s]"]),
     "optimize: max_rate_deg_s = 0": R("optimize", ["{ocp}", "--set", "ocp.max_rate_deg_s=0"],
                                       ["ocp_max_speed.toml", "[ocp] max_rate_deg_s = 0", "> 0"]),
+    "optimize: max_joint_rate_deg_s = 0": R(
+        "optimize", ["{ocp}", "--set", "ocp.max_joint_rate_deg_s=0"],
+        ["ocp_max_speed.toml", "[ocp] max_joint_rate_deg_s = 0", "> 0"]),
     "optimize: zero direction": R("optimize", ["{ocp}", "--set", "ocp.direction=0"],
                                   ["ocp_max_speed.toml", "[ocp] direction = 0 (from --set)", "-1 or 1"]),
     "optimize: bool for a string": R("optimize", ["{ocp}", "--set", "ocp.objective=robust_speed", "--set", "ocp.robust=true"],

@@ -233,7 +233,7 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
     p.add_argument("--jobs", type=jobs_type, metavar="N",
-                   help="worker processes of the harmonic baseline's search (default: the CPUs available; the "
+                   help="worker processes of the baselines' search (default: the CPUs available; the "
                         "result does not depend on it)")
     force_arg(p)
 
@@ -299,6 +299,29 @@ def _baseline_lines(s: dict) -> list[str]:
     return out
 
 
+def _pair(value, text) -> str:
+    """A pair of peaks (joints or feet 1, 2), or one pair per friction scenario ("a, b; c, d"); "-"
+    if missing."""
+    if not value:
+        return units.MISSING
+    pairs = value if isinstance(value[0], list) else [value]
+    return "; ".join(", ".join(text(v) for v in pair) for pair in pairs)
+
+
+def _peaks(s: dict) -> str:
+    """The replay's peak actual joint rates [deg/s] and foot sliding speeds [mm/s], the bound
+    max_joint_rate_deg_s if set, and the harmonic baseline's peaks."""
+    deg = lambda v: units.fixed(v, 1)  # noqa: E731
+    mm = lambda v: units.fixed(v, 1, 1e3)  # noqa: E731
+    bound = s.get("max_joint_rate_deg_s")
+    limit = f" (bound {units.significant(bound)})" if bound is not None else ""
+    rates = _pair(s.get('peak_joint_rate_deg_s'), deg)
+    return (f"joint rate {rates} deg/s{limit}, foot slip speed "
+            f"{_pair(s.get('peak_slip_speed_m_s'), mm)} mm/s; harmonic baseline "
+            f"{_pair(s.get('harmonic_peak_joint_rate_deg_s'), deg)} deg/s, "
+            f"{_pair(s.get('harmonic_peak_slip_speed_m_s'), mm)} mm/s")
+
+
 def format_optimize(s: dict) -> str:
     """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, speeds in
     mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
@@ -321,6 +344,7 @@ def format_optimize(s: dict) -> str:
         f"baselines   best member of each waveform family at its shortest period; gain of the optimum by replay "
         f"{_gain(s)}",
         *_baseline_lines(s),
+        f"peaks       {_peaks(s)}",
         f"starts      {spread}",
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",
@@ -368,7 +392,7 @@ def _progress_bar(wanted: bool):
         finally:
             tqdm.monitor_interval = interval
         with bar:
-            bar.set_postfix_str("best harmonic gait of the envelope (the initial guess)")
+            bar.set_postfix_str("best gait of each waveform family (the harmonic one: the initial guess)")
             calls = []
 
             def update(stage) -> None:
@@ -419,11 +443,17 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     return finish(args, files, result.success, f"optimisation failed: {result.message}")
 
 
+#: the peaks of optimize's JSON summary (their units in their names, and in units.UNITS)
+PEAK_KEYS = ("peak_joint_rate_deg_s", "peak_slip_speed_m_s", "harmonic_peak_joint_rate_deg_s",
+             "harmonic_peak_slip_speed_m_s")
+
+
 def _optimize_data(result, problem) -> dict:
     """The JSON summary of an optimize result, with the problem and the units of its numbers."""
     return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
                          units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
-                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"], v_replay=units.UNITS["v"])))
+                                    T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"],
+                                    v_replay=units.UNITS["v"], **{k: units.UNITS[k] for k in PEAK_KEYS})))
 
 
 def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:

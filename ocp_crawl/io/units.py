@@ -12,7 +12,9 @@ from typing import Any
 #: SI unit of each number of a summary (JSON output and data frames carry these)
 UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J",
          "energy.balance_residual": "-",
-         "tau": "N m", "solve_time_s": "s", "elapsed_s": "s", "T": "s", "v": "m/s"}
+         "tau": "N m", "solve_time_s": "s", "elapsed_s": "s", "T": "s", "v": "m/s",
+         "peak_joint_rate_deg_s": "deg/s", "peak_slip_speed_m_s": "m/s",
+         "harmonic_peak_joint_rate_deg_s": "deg/s", "harmonic_peak_slip_speed_m_s": "m/s"}
 #: what stands for a number that could not be computed
 MISSING = "-"
 

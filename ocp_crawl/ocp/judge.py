@@ -13,6 +13,10 @@ friction scenario and accepts the optimum only when
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
 * the replay's slip is held clear of the friction tie: its slip-weighted friction margin m
   (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol - replay_tol`` (see below);
+* with the optional ``max_joint_rate_deg_s``: the replay's peak actual joint rate
+  (:mod:`ocp_crawl.ocp.rates`) is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`
+  (relative: the OCP bounds the mean rates of the intervals and, 0.5 % looser, of the sub-steps; the
+  peak inside a sub-step is O(1/N) above its mean);
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
 itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
@@ -42,6 +46,7 @@ from ocp_crawl.io import units
 from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
@@ -166,6 +171,11 @@ class Verdict:
     """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
     margin: list = field(default_factory=list)
     """per scenario: the replay's slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`)"""
+    peaks: list = field(default_factory=list)
+    """per scenario: the replay's peak joint rates and foot sliding speeds
+    (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
+    joint_rate_ratio: float = float("nan")
+    """the replay's peak joint rate over max_joint_rate_deg_s (NaN: no such bound)"""
 
     @property
     def ok(self) -> bool:
@@ -217,6 +227,7 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.speed = [settings.direction * s / T for s in v.S]
     v.value = value_from(settings, v.S, v.CoT_plus, T)
     v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
+    v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
     problems = _problems(v, settings, value_ocp)
     if problems:
         v.status = Status.REPLAY_MISMATCH
@@ -246,6 +257,7 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
     if settings.objective == "min_cot" and settings.speed_min > 0 and not v.speed[0] >= settings.speed_min * (1 - tol):
         out.append(f"the replayed speed {units.speed(v.speed[0])} misses speed_min {units.speed(settings.speed_min)} "
                    f"by more than replay_tol {units.ratio(tol)}")
+    out += _joint_rate_problems(v, settings)
     low = min(v.margin, default=math.inf)
     if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc
         out.append(admissible_text(low, settings.friction_tol)
@@ -257,3 +269,18 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
     if not v.rel_diff <= tol:
         out.append(f"the objective differs by {units.ratio(v.rel_diff)} (replay_tol {units.ratio(tol)})")
     return out
+
+
+def _joint_rate_problems(v: Verdict, settings: OCPSettings) -> list[str]:
+    """The replay's peak joint rate above max_joint_rate_deg_s beyond JOINT_RATE_RTOL (sets
+    ``joint_rate_ratio``); [] without the bound."""
+    bound = settings.max_joint_rate_deg_s
+    if bound is None:
+        return []
+    peak = max((max(p.joint_rate_deg_s) for p in v.peaks), default=math.nan)
+    v.joint_rate_ratio = peak / bound
+    if v.joint_rate_ratio <= 1 + JOINT_RATE_RTOL:
+        return []
+    return [f"the replayed joint rate reaches {units.significant(peak, 4)} deg/s, above "
+            f"max_joint_rate_deg_s = {units.significant(bound)} deg/s (tolerance "
+            f"{units.ratio(JOINT_RATE_RTOL)})"]

@@ -71,6 +71,12 @@ class OCPSettings:
     """optional smoothness bound: the largest reference-angle acceleration |d^2 phi_ref,i / d t^2| [deg/s^2]
     of each actuator; None (default): no bound (the formulation and the switch-exact transcription prevent
     chattering without it)"""
+    max_joint_rate_deg_s: float | None = None
+    """optional bound on the actual joint rates |d phi_i / d t| [deg/s] of the quasistatic gait (the
+    joint angles, not their references: springs, gravity and slips make them faster or slower than
+    the references); None (default): no bound.  The transcription bounds each interval's and
+    sub-step's mean rate (:func:`~ocp_crawl.ocp.substeps.joint_rate_rows`), the replay judge the
+    replay's peak rate (:mod:`ocp_crawl.ocp.rates`)"""
     regularization: float = 1e-5
     """weight of N * sum_k |tau_k - tau_{k-1}|^2/(M g L)^2 in the objective (a tie-breaker where the
     objective is flat, e.g. during stick phases; its share of the objective is reported)"""
@@ -230,9 +236,11 @@ class OCPSettings:
             self._set("mu_ratios", ratios)
 
     def _check_bandwidth(self) -> None:
-        """max_accel_deg_s2: None or a number > 0; replay_tol below 1; friction_tol in [0, 1)."""
-        if self.max_accel_deg_s2 is not None:
-            self._set("max_accel_deg_s2", real("OCPSettings.max_accel_deg_s2", self.max_accel_deg_s2, positive=True))
+        """max_accel_deg_s2, max_joint_rate_deg_s: None or a number > 0; replay_tol below 1;
+        friction_tol in [0, 1)."""
+        for name in ("max_accel_deg_s2", "max_joint_rate_deg_s"):
+            if getattr(self, name) is not None:
+                self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
         self._set("friction_tol", real("OCPSettings.friction_tol", self.friction_tol, nonneg=True))
         if not self.friction_tol < 1:
             raise ValueError(f"OCPSettings.friction_tol must be in [0, 1), got {self.friction_tol!r}")
@@ -269,6 +277,15 @@ class OCPSettings:
     def accel_bound(self, robot: Robot) -> float | None:
         """Largest torque acceleration |d^2 tau_i / d t^2| [N m/s^2], or None (no bound)."""
         return None if self.max_accel_deg_s2 is None else robot.k * math.radians(self.max_accel_deg_s2)
+
+    def joint_rate_step(self) -> float | None:
+        """The joint-rate bound as the transcription uses it: the largest change of a joint angle
+        [rad] over a whole interval at T_hat = 1, radians(max_joint_rate_deg_s) period_ref / N (a
+        sub-step of the fraction l of its interval and the scaled period T_hat moves each joint by
+        at most this times l T_hat); None: no bound."""
+        if self.max_joint_rate_deg_s is None:
+            return None
+        return math.radians(self.max_joint_rate_deg_s) * self.period_ref() / self.nodes
 
     def period_ref(self) -> float:
         """Reference period [s]: the shortest period of the envelope's full harmonic gait (amplitude A_max)

@@ -23,6 +23,7 @@ from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
 from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, ratio_labels, replay_signal, value_text
+from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
@@ -114,6 +115,18 @@ class OCPResult:
     """largest torque rate of the replayed profile over the bandwidth k R (<= 1: within)"""
     accel_ratio: float = float("nan")
     """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such bound)"""
+    peak_joint_rate_deg_s: list = field(default_factory=list)
+    """per scenario: the replay's peak actual joint rates |d phi_i/dt| of joints 1, 2 [deg/s]
+    (:mod:`~ocp_crawl.ocp.rates`)"""
+    peak_slip_speed_m_s: list = field(default_factory=list)
+    """per scenario: the replay's peak sliding speeds |d x_i/dt| of feet 1, 2 [m/s]"""
+    joint_rate_ratio: float = float("nan")
+    """the replay's peak joint rate over max_joint_rate_deg_s (<= 1: within; NaN: no such bound)"""
+    harmonic_peak_joint_rate_deg_s: list = field(default_factory=list)
+    """per scenario: the harmonic baseline's peak joint rates [deg/s] (its own replay; empty if not
+    measured)"""
+    harmonic_peak_slip_speed_m_s: list = field(default_factory=list)
+    """per scenario: the harmonic baseline's peak foot sliding speeds [m/s]"""
     gain: float = float("nan")
     """relative gain by replay over the best baseline of every family searched (positive: better)"""
     gains: dict = field(default_factory=dict)
@@ -156,6 +169,12 @@ class OCPResult:
             "rel_diff_replay": self.rel_diff_replay, "replay_tol": self.settings.replay_tol,
             "envelope_excess": self.envelope_excess, "rate_ratio": self.rate_ratio,
             "accel_ratio": self.accel_ratio,
+            "peak_joint_rate_deg_s": per_scenario(self.peak_joint_rate_deg_s),
+            "peak_slip_speed_m_s": per_scenario(self.peak_slip_speed_m_s),
+            "max_joint_rate_deg_s": self.settings.max_joint_rate_deg_s,
+            "joint_rate_ratio": self.joint_rate_ratio,
+            "harmonic_peak_joint_rate_deg_s": per_scenario(self.harmonic_peak_joint_rate_deg_s),
+            "harmonic_peak_slip_speed_m_s": per_scenario(self.harmonic_peak_slip_speed_m_s),
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
             "baselines": self.baselines.table() if self.baselines else None,
             "best_baseline": self._best_baseline(),
@@ -241,6 +260,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay,
                                baselines=base))
     res = _pick(runs, settings, replay)
+    if replay:
+        harmonic_peaks(res, models)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
                               sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
     low, high, converged = res.spread
@@ -401,7 +422,9 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
     res.replay = verdict.replay
     res.envelope_excess, res.rate_ratio = verdict.envelope_excess, verdict.rate_ratio
-    res.accel_ratio = verdict.accel_ratio
+    res.accel_ratio, res.joint_rate_ratio = verdict.accel_ratio, verdict.joint_rate_ratio
+    res.peak_joint_rate_deg_s = [list(p.joint_rate_deg_s) for p in verdict.peaks]
+    res.peak_slip_speed_m_s = [list(p.slip_speed_m_s) for p in verdict.peaks]
     res.S_replay, res.v_replay = verdict.S, verdict.speed
     res.W_plus_replay, res.CoT_plus_replay = verdict.W_plus, verdict.CoT_plus
     res.value_replay, res.rel_diff_replay = verdict.value, verdict.rel_diff
@@ -412,10 +435,10 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     else:
         res.message += (f"; confirmed by the event-driven replay (objective within {units.ratio(verdict.rel_diff)}, "
                         f"replay_tol {units.ratio(res.settings.replay_tol)})")
-    _gains(res)
+    _gains(res, models)
 
 
-def _gains(res: OCPResult) -> None:
+def _gains(res: OCPResult, models: list[Model]) -> None:
     """The gains by replay over each family's best member and over the best of them; an optimum
     significantly worse than the harmonic baseline (its first start) is not one (WORSE_THAN_BASELINE); one
     worse than another family's best says so in its message (a local optimum: that gait is a start to try)."""
@@ -432,11 +455,39 @@ def _gains(res: OCPResult) -> None:
     res.gain = gain_over(objective, res.value_replay, best.value) if best.feasible else math.nan
     h_gain = res.gains.get("harmonic", math.nan)
     tol = res.settings.replay_tol
-    if res.success and math.isfinite(h_gain) and h_gain < -tol:
+    worse = res.success and math.isfinite(h_gain) and h_gain < -tol
+    if worse and _baseline_within(res, models, h_gain):
         _worse_than_baseline(res, h_gain)
     elif res.success and res.gain < -tol:
         res.message += (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, gain "
                         f"{units.ratio(res.gain)}): a local optimum, try that gait as a start")
+
+
+def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:
+    """The harmonic baseline's peak joint rates and foot sliding speeds (its replay in every
+    scenario), unless measured already or there is no baseline."""
+    if res.harmonic is None or res.harmonic_peak_joint_rate_deg_s:
+        return
+    signal = res.harmonic.torque_signal(models[0].robot.k)
+    peaks = [signal_peaks(m, signal, res.harmonic.T) for m in models]
+    res.harmonic_peak_joint_rate_deg_s = [list(p.joint_rate_deg_s) for p in peaks]
+    res.harmonic_peak_slip_speed_m_s = [list(p.slip_speed_m_s) for p in peaks]
+
+
+def _baseline_within(res: OCPResult, models: list[Model], gain: float) -> bool:
+    """Whether the harmonic baseline meets the optional max_joint_rate_deg_s (the bandwidth and the
+    envelope it meets by construction); a baseline beyond it is no gait of the problem, so a profile
+    worse than it is no failure (the message says so)."""
+    bound = res.settings.max_joint_rate_deg_s
+    if bound is None:
+        return True
+    harmonic_peaks(res, models)
+    peak = max(max(p) for p in res.harmonic_peak_joint_rate_deg_s)
+    if peak <= bound * (1 + JOINT_RATE_RTOL):
+        return True
+    res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(gain)}), whose "
+                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s")
+    return False
 
 
 def _worse_than_baseline(res: OCPResult, gain: float) -> None:

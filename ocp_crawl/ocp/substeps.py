@@ -169,12 +169,14 @@ class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
     def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool,
-                 friction_tol: float = 0.0):
-        """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross conditions, S
-        and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node torques (2, N); ``Th``: the
-        scaled period, which divides the relaxed products (a relaxation per unit time: the spurious slip that a
-        relaxation sigma allows then cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the
-        friction-tolerance constraint (:func:`friction_rows`)."""
+                 friction_tol: float = 0.0, joint_rate: float | None = None):
+        """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross
+        conditions, S and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node
+        torques (2, N); ``Th``: the scaled period, which divides the relaxed products (a relaxation
+        per unit time: the spurious slip that a relaxation sigma allows then cannot buy speed by
+        shrinking the period); ``friction_tol`` > 0 adds the friction-tolerance constraint
+        (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
+        (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad])."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
         phi0, ft0 = nlp.sym(f"phi0_{j}", 2), nlp.sym(f"ft0_{j}")
@@ -195,6 +197,9 @@ class Scenario:
         nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0)  # likewise
         nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
         nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf)
+        if joint_rate is not None:
+            rows = joint_rate_rows(PHI, theta, joint_rate * Th)
+            nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf)
         if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
             nlp.con(f"friction_{j}", total, 0.0, inf)
@@ -252,6 +257,43 @@ def friction_rows(W, eps: float):
     e1, e2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
     l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
+
+
+#: the joint-rate bound on each sub-step's mean rate is this much looser (relative) than on each
+#: interval's (:func:`joint_rate_rows`)
+SUBSTEP_RATE_SLACK = 0.005
+
+
+def joint_rate_rows(PHI, theta, step):
+    """Rows (4, 3N) that must be >= 0: the optional bound on the actual joint rates of both joints,
+    first on each interval, ``step -+ dphi_i,k`` (dphi_i,k the change of joint angle i from node k-1
+    to node k), then on each sub-step, ``(1 + SUBSTEP_RATE_SLACK) step l_j -+ dphi_i,j`` (l_j the
+    sub-step's length as a fraction of its interval: theta_k, then 1 - theta_k).  ``step``: the
+    largest change of a joint angle over an interval [rad], radians(max_joint_rate_deg_s) T / N (a
+    CasADi expression of the period).
+
+    The interval rows bound the mean rate where the rate is smooth (inside an interval without a
+    contact event it changes by O(1/N)).  The sub-step rows bound it on each side of a slip onset or
+    switch (on the interior point), where the rate jumps and an interval's mean would hide a peak
+    (max_speed, N = 20 and 50, interval rows alone: the replay's peak 3 to 4 % above the bound).
+    They are slightly looser so that they do not bind inside smooth intervals: as tight as the
+    interval rows, they drove the free interior points to the nodes (theta about 1e-6: the long
+    sub-step's mean is the interval's, the weakest bound) and the polish found no feasible point
+    (max_speed, N = 50).  The replay's peak is thus within the bound to SUBSTEP_RATE_SLACK plus
+    O(1/N) (the judge's tolerance, :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`).  ``PHI``: the
+    angles (2, 2N+1) at node 0 and every sub-step end; ``theta``: (N,) interior fractions (CasADi or
+    numpy)."""
+    loose = (1 + SUBSTEP_RATE_SLACK) * step
+    if isinstance(PHI, np.ndarray):
+        length = np.column_stack([theta, 1.0 - theta]).ravel()[None, :]
+        dnode, dsub = np.diff(PHI[:, ::2], axis=1), np.diff(PHI, axis=1)
+        return np.hstack([np.vstack([step - dnode, step + dnode]),
+                          np.vstack([loose * length - dsub, loose * length + dsub])])
+    length = cs.repmat(cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1), 2, 1)
+    nodes = PHI[:, ::2]
+    dnode, dsub = nodes[:, 1:] - nodes[:, :-1], PHI[:, 1:] - PHI[:, :-1]
+    return cs.horzcat(cs.vertcat(step - dnode, step + dnode),
+                      cs.vertcat(loose * length - dsub, loose * length + dsub))
 
 
 def _running_sum(nlp, var: str, con: str, terms):

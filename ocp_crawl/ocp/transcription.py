@@ -7,9 +7,10 @@ the torques tau_k; between nodes the torque is linear in phase (the replay's own
 actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R = max_rate_deg_s), the optional
 smoothness bound ``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k``
 within gamma +- A_max, the phase pin ``tau_1,k <= tau_1,0`` and ``T <= 2 period_ref`` (the resolution of the
-nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact
-sub-steps (:mod:`ocp_crawl.ocp.substeps`); periodicity (angles and tangential force) is a constraint and
-the body displacement over the cycle is S = sum of the slips of foot 1.
+nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact sub-steps
+(:mod:`ocp_crawl.ocp.substeps`, with the optional bound max_joint_rate_deg_s on the mean joint rates);
+periodicity (angles and tangential force) is a constraint and the body displacement over the cycle is
+S = sum of the slips of foot 1.
 
 Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
 ``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; robust_speed ``-mean_j v_j`` or ``-min_j v_j`` over the friction
@@ -166,8 +167,8 @@ class GaitOCP:
         T, dT, Th = self._torques(nlp, MgL)
         kernel = step_function() if self.kernel == "expanded" else compiled_kernel(step_function())
         step_map = kernel.map(2 * s.nodes)
-        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot", s.friction_tol)
-                for j, model in enumerate(self.scen)]
+        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot",
+                         s.friction_tol, s.joint_rate_step()) for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, dT, Th)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
         G = cs.vertcat(*nlp.g)
@@ -188,7 +189,7 @@ class GaitOCP:
         # inside a sub-step; the onset rule is for the optimiser's W+)
         keep = np.ones(self.ng, bool)
         for name, sl in self._slices.items():
-            if name.startswith(("g_friction_", "g_tie_", "g_onset_")):
+            if name.startswith(("g_friction_", "g_tie_", "g_onset_", "g_joint_rate_")):
                 keep[sl] = False
         self._sim_rows = np.flatnonzero(keep)
         self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G[self._sim_rows.tolist()], theta_ref)

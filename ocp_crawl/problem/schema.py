@@ -327,6 +327,8 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         default=_ocp("max_rate_deg_s"), rule=GT0),
     Key("max_accel_deg_s2", float, "deg/s^2", "optional smoothness bound: largest reference-angle acceleration "
         "(absent: no bound)", rule=GT0),
+    Key("max_joint_rate_deg_s", float, "deg/s", "optional bound on the actual joint rates "
+        "abs(d phi/dt) of the gait, not only the references' (absent: no bound)", rule=GT0),
     Key("regularization", float, "-", "weight of the torque-rate regularisation", default=_ocp("regularization"),
         rule=GE0),
     Key("speed_min", float, "m/s", "min_cot: smallest mean speed direction * S / T", default=_ocp("speed_min"),
