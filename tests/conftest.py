@@ -77,5 +77,6 @@ def cli_optimize_run(tmp_path_factory):
     stdout, stderr = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
         code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set", "ocp.harmonic_psi=8",
-                     "--json", "--out", str(out), "--progress"])
+                     "--set", "ocp.baseline_samples=8", "--set", "ocp.baseline_starts=1",
+                     "--set", "ocp.baseline_evaluations=40", "--json", "--out", str(out), "--progress"])
     return code, stdout.getvalue(), stderr.getvalue(), out, nodes

@@ -179,7 +179,8 @@ def test_family_box_is_the_envelope():
 def test_min_cot_unreachable_speed_gives_a_fallback():
     """A speed requirement above every harmonic gait's speed: value +inf, not feasible, but a gait (the
     fastest found) is returned as initial guess."""
-    settings = shipped_settings(objective="min_cot", speed_min=1.0, harmonic_A=2, harmonic_psi=8)
+    settings = shipped_settings(objective="min_cot", speed_min=1.0, harmonic_A=2, harmonic_psi=8,
+                                baseline_samples=8)
     choice = best_harmonic(Robot.paper(), "physical", settings, local_starts=1, maxfev=40)
     assert choice is not None and not choice.feasible and choice.value == math.inf
     assert 0.04 < choice.v[0] < 1.0
@@ -213,7 +214,7 @@ def test_worker_processes_change_nothing_but_the_time():
     from concurrent.futures.process import BrokenProcessPool
     from dataclasses import asdict
 
-    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8)
+    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8, baseline_samples=16)
     called = []
     runs = [asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=j,
                                  meanwhile=lambda: called.append(j))) for j in (1, 2)]

@@ -15,7 +15,7 @@ import pytest
 from ocp_crawl import Robot
 from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
 from ocp_crawl.ocp import judge, solve
-from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.baseline import Baselines, value_from
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.sim import simulate
@@ -134,9 +134,10 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     st = OCPSettings(starts=4, nodes=N, direction=-1)
     signal, T = baseline(st)
     harm_S = simulate(solve.Model(ROBOT, gravity="physical"), signal).S
-    harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T,
-                           to_dict=lambda: {"value": -harm_S / T})
-    monkeypatch.setattr(solve, "best_harmonic", lambda robot, gravity, settings, **kw: harm)
+    harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T, shape="harmonic",
+                           feasible=True, to_dict=lambda: {"value": -harm_S / T})
+    monkeypatch.setattr(solve, "best_baselines",
+                        lambda robot, gravity, settings, **kw: Baselines(settings.objective, {"harmonic": harm}))
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
     monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start solved overclaims by 20 %
     res = solve.optimize_gait(ROBOT, "physical", st)

@@ -135,7 +135,8 @@ def test_fixed_profile_converges_at_finer_N():
     pytest.param("min_cot", {"speed_min": 0.03}, marks=pytest.mark.slow),
     pytest.param("robust_speed", {"sigma0": (1e-6,), "sigma_min": 1e-8}, marks=[pytest.mark.slow, HEAVY])])
 def test_each_objective_solves_on_the_paper_robot(objective, extra):
-    st = OCPSettings(objective=objective, nodes=24, harmonic_psi=8, starts=1, **extra)  # multi-start: test_multistart
+    st = OCPSettings(objective=objective, nodes=24, harmonic_psi=8, starts=1, baselines="harmonic",
+                     baseline_samples=8, **extra)  # multi-start: test_multistart
     res = optimize_gait(PAPER, "physical", st, replay=False)
     assert res.success, res.message
     assert res.complementarity_residual <= st.comp_tol and res.equation_residual <= 1e-8

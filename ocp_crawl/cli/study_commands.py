@@ -277,8 +277,10 @@ def _gain(s: dict) -> str:
 def _member(h: dict) -> str:
     """A waveform family's best member: its angles [deg], a pulse's rise and duty, its period."""
     deg = lambda key: units.significant(h.get(key))  # noqa: E731
-    pulse = (f", rise {units.significant(h.get('rise'))} cycles, duty {units.significant(h.get('duty'))}"
-             if h.get("shape") == "pulse" else "")
+    pulse = ""
+    if h.get("shape") == "pulse":  # at rise 0.5 no level is held: a triangle wave, whatever the duty
+        pulse = (", rise 0.5 cycles (a triangle wave)" if h.get("rise", 0.0) >= 0.5 - 1e-12 else
+                 f", rise {units.significant(h.get('rise'))} cycles, duty {units.significant(h.get('duty'))}")
     return (f"gamma {deg('gamma1_deg')}/{deg('gamma2_deg')} A {deg('A1_deg')}/{deg('A2_deg')} psi "
             f"{deg('psi_deg')} deg{pulse}, T {units.seconds(h.get('T'))}")
 

@@ -452,15 +452,14 @@ def _gains(res: OCPResult, models: list[Model]) -> None:
                      gain_over(objective, res.value_replay, best.value)}
     if best is None:
         return
-    res.gain = gain_over(objective, res.value_replay, best.value) if best.feasible else math.nan
-    h_gain = res.gains.get("harmonic", math.nan)
-    tol = res.settings.replay_tol
-    worse = res.success and math.isfinite(h_gain) and h_gain < -tol
-    if worse and _baseline_within(res, models, h_gain):
+    res.gain = gain_over(objective, res.value_replay, best.value)  # NaN for an infeasible one's +inf
+    h_gain, tol = res.gains.get("harmonic", math.nan), res.settings.replay_tol
+    if res.success and h_gain < -tol and _baseline_within(res, models, h_gain):
         _worse_than_baseline(res, h_gain)
-    elif res.success and res.gain < -tol:
+    elif res.success and res.gain < -tol and best is not res.harmonic:
         res.message += (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, gain "
-                        f"{units.ratio(res.gain)}): a local optimum, try that gait as a start")
+                        f"{units.ratio(res.gain)}): the resolution of N = {res.settings.nodes} nodes or a "
+                        f"local optimum")
 
 
 def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:

@@ -105,16 +105,16 @@ def _title(result: OCPResult) -> str:
                  f"mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
-            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\n{_gains_text(result)}"
-            f"{significance}")
+            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\n{_gains_text(result, significance)}")
 
 
-def _gains_text(result: OCPResult) -> str:
-    """The gains by replay over each waveform family's best member, and over the best of them."""
+def _gains_text(result: OCPResult, significance: str) -> str:
+    """The gains by replay over the best of the waveform families' members and, on a second line, over each."""
     parts = ", ".join(f"{shape} {units.ratio(g)}" for shape, g in result.gains.items())
     best = result.baselines.best if result.baselines else result.harmonic
     name = best.shape if best is not None else "-"
-    return f"gain by replay over the best {name} gait {units.ratio(result.gain)} (per family: {parts})"
+    return (f"gain by replay over the best simple gait ({name}) {units.ratio(result.gain)}{significance}\n"
+            f"over each waveform family's best: {parts}")
 
 
 def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
@@ -167,17 +167,27 @@ def _label(ax, title: str, ylabel: str) -> None:
         ax.legend(fontsize="small")
 
 
+def pinned(signal, t: np.ndarray) -> np.ndarray:
+    """``signal`` at the phases ``t`` [cycles] shifted as the OCP pins its profile: phase 0 where the first
+    joint's value is largest (a baseline drawn in the optimum's phase)."""
+    fine = np.arange(4096) / 4096
+    shift = fine[int(np.argmax(np.asarray(signal(fine))[0]))]
+    return np.asarray(signal((t + shift) % 1.0))
+
+
 def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None, other=None, name: str = "") -> None:
     """Panel (a): the optimal node torques, the best harmonic gait's and (``other``) the best gait of
-    the family ``name`` when that is the best baseline (each in its own phase: gaits of one period)."""
+    the family ``name`` when that is the best baseline, both pinned as the optimum (:func:`pinned`)."""
     tt = np.linspace(0, 1, 401)
     for i, c in enumerate(JOINT_COLORS):
         ax.plot(np.r_[result.phase, 1.0], np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".",
                 ms=4, label=f"optimal $\\tau_{i + 1}$ (nodes)")
         if harmonic is not None:
-            ax.plot(tt, harmonic(tt)[i] * 1e3, color=c, ls="--", lw=1.0, label=f"best harmonic $\\tau_{i + 1}$")
+            ax.plot(tt, pinned(harmonic, tt)[i] * 1e3, color=c, ls="--", lw=1.0,
+                    label=f"best harmonic $\\tau_{i + 1}$ (pinned)")
         if other is not None:
-            ax.plot(tt, other(tt)[i] * 1e3, color=c, ls="-.", lw=1.0, label=f"best {name} $\\tau_{i + 1}$")
+            ax.plot(tt, pinned(other, tt)[i] * 1e3, color=c, ls="-.", lw=1.0,
+                    label=f"best {name} $\\tau_{i + 1}$ (pinned)")
     _label(ax, f"(a) joint torques ({result.objective})", "joint torque [mN m]")
 
 
@@ -196,9 +206,9 @@ def _angles(ax, result: OCPResult, rep, gait) -> None:
                 zorder=2, label=f"OCP nodes $\\varphi_{i + 1}$")
     if gait is not None:
         tt = np.linspace(0, 1, 401)
-        ref = np.degrees(gait(tt))
+        ref = np.degrees(pinned(gait, tt))
         for i, c in enumerate(JOINT_COLORS):
-            ax.plot(tt, ref[i], ls=":", color=c, lw=1.0, label=f"harmonic reference $\\varphi_{{{i + 1},\\mathrm{{ref}}}}$")
+            ax.plot(tt, ref[i], ls=":", color=c, lw=1.0, label=f"harmonic reference $\\varphi_{{{i + 1},\\mathrm{{ref}}}}$ (pinned)")
     _label(ax, "(b) joint angles", "joint angle [deg]")
 
 
