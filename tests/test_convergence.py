@@ -98,7 +98,7 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
         seen.append(("fresh", s.nodes))
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, value(s.nodes))
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         N, prev = ocp.settings.nodes, seen[-1][1]
         t = np.arange(N) / N
         got = signal(t)
@@ -132,7 +132,7 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         calls.append((ocp.settings.sigma0, ocp.settings.ipopt, T))
         if len(calls) == 1:
             return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
@@ -165,7 +165,7 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, 0.05)
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False, baselines=None):
         calls.append((ocp.settings, tightened))
         return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
                          objective=ocp.settings.objective, settings=ocp.settings)
@@ -200,7 +200,7 @@ def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_th
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False, baselines=None):
         seen.append(tightened)
         value = tight if tightened else homotopy if len(seen) == 2 else cold  # the third call: the cold retry
         if value is not None:
@@ -237,7 +237,7 @@ def test_a_finer_n_worse_than_the_previous_optimum_says_so(monkeypatch, objectiv
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, profile(np.arange(s.nodes) / s.nodes), 0.7, values[s.nodes])
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         N = ocp.settings.nodes
         return _fake_result(ocp.settings, profile(np.arange(N) / N), T, values[N])
 
@@ -331,7 +331,7 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
             res.status, res.success, res.value_replay = Status.REPLAY_FAILED, False, math.nan
         return res
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         seen.append(("warm", ocp.settings.nodes))
         return _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05)
 
@@ -353,7 +353,7 @@ def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is
     def fresh(robot, gravity, s, jobs=None):
         return _fake_result(s, np.ones((2, s.nodes)), 0.7, 0.05)
 
-    def warm(ocp, models, signal, T, harmonic=None, replay=True):
+    def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         for callback in observers():
             callback(("stage", ocp.settings.nodes, os.getpid()))
         res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05 + 1e-3 * ocp.settings.nodes)

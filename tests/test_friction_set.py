@@ -20,8 +20,8 @@ from ocp_crawl.ocp.baseline import value_from
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import result_margins
 from ocp_crawl.sim.event import simulate_torque
-from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
+from test_slip_margin import margin_from_modes
 
 PAPER = Robot.paper()
 #: the robot of tests/data/margin_at_friction_tol.csv (ocp_max_speed.toml with M, L, beta changed)
@@ -53,21 +53,6 @@ def S_at(robot: Robot, signal, ratio: float) -> float:
     res = simulate_torque(at_ratio(robot, ratio), signal)
     assert res.success, res.message
     return res.S
-
-
-def margin_from_modes(res, robot: Robot) -> float:
-    """Independent slip-weighted margin on output samples: the slipping foot after sample k is
-    ``Mode(mode[k]).foot``, its slip |x_k+1 - x_k|, the limits at sample k (rectangle rule)."""
-    l1, l2 = robot.mu1 * res.f_n1, robot.mu2 * res.f_n2
-    num = den = 0.0
-    for k in range(res.t.size - 1):
-        foot = Mode(int(res.mode[k])).foot
-        for i, (x, own, other) in enumerate(((res.x1, l1, l2), (res.x2, l2, l1)), start=1):
-            if foot in (i, 3):
-                slip = abs(x[k + 1] - x[k])
-                num += slip * (other[k] - own[k])
-                den += slip * 0.5 * (own[k] + other[k])
-    return num / den
 
 
 def test_a_gait_at_the_friction_tie_stops_under_half_a_percent_asymmetry():

@@ -271,7 +271,8 @@ def _gain(s: dict) -> str:
         return "-"
     verdict = "significant" if s.get("gain_significant") else "no significant gain"
     best = (s.get("best_baseline") or {}).get("shape", "-")
-    return f"{units.ratio(s['gain'])} over the best ({best}) ({verdict}: replay_tol {units.ratio(s.get('replay_tol'))})"
+    tol = units.ratio(s.get("replay_tol"))
+    return f"{units.ratio(s['gain'])} over the best ({best}) ({verdict}: replay_tol {tol})"
 
 
 def _member(h: dict) -> str:
@@ -279,8 +280,9 @@ def _member(h: dict) -> str:
     deg = lambda key: units.significant(h.get(key))  # noqa: E731
     pulse = ""
     if h.get("shape") == "pulse":  # at rise 0.5 no level is held: a triangle wave, whatever the duty
+        rise, duty = units.significant(h.get("rise")), units.significant(h.get("duty"))
         pulse = (", rise 0.5 cycles (a triangle wave)" if h.get("rise", 0.0) >= 0.5 - 1e-12 else
-                 f", rise {units.significant(h.get('rise'))} cycles, duty {units.significant(h.get('duty'))}")
+                 f", rise {rise} cycles, duty {duty}")
     return (f"gamma {deg('gamma1_deg')}/{deg('gamma2_deg')} A {deg('A1_deg')}/{deg('A2_deg')} psi "
             f"{deg('psi_deg')} deg{pulse}, T {units.seconds(h.get('T'))}")
 
@@ -294,9 +296,11 @@ def _baseline_lines(s: dict) -> list[str]:
     out = []
     for row in rows:
         if row.get("value") is None and not row.get("feasible"):
-            text = "no member simulates" if "T" not in row else f"none feasible (nearest: {_member(row)})"
+            text = ("no member simulates" if "T" not in row else
+                    f"none feasible (nearest: {_member(row)})")
         else:
-            text = f"{_value(obj, row['value'])}, gain {units.ratio(gains.get(row['shape']))}: {_member(row)}"
+            gain = units.ratio(gains.get(row["shape"]))
+            text = f"{_value(obj, row['value'])}, gain {gain}: {_member(row)}"
         out.append(f"  {row['shape']:<9} {text}")
     return out
 
@@ -343,8 +347,8 @@ def format_optimize(s: dict) -> str:
         f"CoT+        {_ocp_replay(s, 'CoT_plus', units.cot)}",
         f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
-        f"baselines   best member of each waveform family at its shortest period; gain of the optimum by replay "
-        f"{_gain(s)}",
+        f"baselines   best member of each waveform family at its shortest period; gain of the "
+        f"optimum by replay {_gain(s)}",
         *_baseline_lines(s),
         f"peaks       {_peaks(s)}",
         f"starts      {spread}",
@@ -394,7 +398,7 @@ def _progress_bar(wanted: bool):
         finally:
             tqdm.monitor_interval = interval
         with bar:
-            bar.set_postfix_str("best gait of each waveform family (the harmonic one: the initial guess)")
+            bar.set_postfix_str("best gait of each waveform family (the harmonic one: the start)")
             calls = []
 
             def update(stage) -> None:

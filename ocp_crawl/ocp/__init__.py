@@ -1,4 +1,5 @@
-"""The periodic-gait optimal control problem: settings, waveform baselines, transcription, solve and replay."""
+"""The periodic-gait optimal control problem: settings, waveform baselines, transcription, solve and
+replay."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -17,6 +18,7 @@ _EXPORTS = {
 
 __all__ = [
     "Baselines", "ConvergenceRow", "GaitOCP", "OBJECTIVES", "OCPResult", "OCPSettings", "SHAPES",
-    "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes", "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
+    "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes",
+    "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
