@@ -345,9 +345,53 @@ def bench_sweep(repeat: int) -> str:
     return "see above"
 
 
+def bench_baselines(repeat: int) -> dict:
+    """The baselines: (1) a triangle wave's simulation (the paper robot, gamma 87.5, A 27.5, psi 9 deg) with
+    the input's linear pieces taken whole (the default) against the step cap that the input's Fourier content
+    sets otherwise, alternating in one run, ``repeat`` times each: min and median [ms], steps, and S of both;
+    (2) the search of max_speed's baselines (the shipped envelope and bandwidth) with the harmonic family alone
+    and with every family, ``min(repeat, 2)`` times each: min and median [s] and the members simulated."""
+    from ocp_crawl import Model, Robot
+    from ocp_crawl.ocp.family import WaveParams
+    from ocp_crawl.ocp.search import best_baselines
+    from ocp_crawl.ocp.settings import OCPSettings
+    from ocp_crawl.sim.event import HybridOptions, simulate_torque
+    from ocp_crawl.sim.event_kinks import step_limit
+
+    robot = Robot.paper()
+    model, torque = Model(robot), WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle").torque(robot.k)
+    default = HybridOptions()
+    capped = HybridOptions(resolve_input=False, max_step=min(
+        default.max_step, max(step_limit(torque), default.max_step / 64)))
+    out = {"load_average_start": os.getloadavg()}
+    times, results = {"whole_pieces": [], "fourier_cap": []}, {}
+    for _ in range(repeat):
+        for name, opt in (("whole_pieces", default), ("fourier_cap", capped)):
+            t = time.perf_counter()
+            results[name] = simulate_torque(model, torque, opt)
+            times[name].append(time.perf_counter() - t)
+    for name, ts in times.items():
+        out[f"triangle_{name}_ms"] = {"min": round(1e3 * min(ts), 2),
+                                      "median": round(1e3 * statistics.median(ts), 2),
+                                      "samples": len(results[name].t), "S": results[name].S}
+    settings = OCPSettings(gamma_deg=90.0, A_max_deg=30.0, max_rate_deg_s=180.0, direction=-1)
+    for label, shapes in (("harmonic", ("harmonic",)), ("all", None)):
+        walls, base = [], None
+        for _ in range(min(repeat, 2)):
+            t = time.perf_counter()
+            base = best_baselines(robot, "physical", settings, shapes=shapes)
+            walls.append(time.perf_counter() - t)
+        out[f"search_{label}_s"] = {
+            "min": round(min(walls), 2), "median": round(statistics.median(walls), 2),
+            "members": {s: c.evaluated for s, c in base.choices.items()},
+            "value_mm_s": {s: round(1e3 * c.value, 3) for s, c in base.choices.items()}}
+    out["load_average_end"] = os.getloadavg()
+    return out
+
+
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
               "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
-              "ocp_files": bench_ocp_files}
+              "ocp_files": bench_ocp_files, "baselines": bench_baselines}
 
 
 def main(argv=None) -> int:
