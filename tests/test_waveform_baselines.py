@@ -82,6 +82,27 @@ def test_triangle_member_is_the_triangle_wave():
     assert p.period(settings()) == pytest.approx(4 * 27.5 / RATE, rel=1e-15)
 
 
+def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
+    """Triangle and linear pulses are linear between their kinks (cosine pulses and sines are not), and
+    their runs in whole pieces give the S and W+ of the default run, whose steps the input's Fourier
+    content caps."""
+    from ocp_crawl.model.pulse import Pulse
+    from ocp_crawl.ocp.family import WHOLE_PIECES
+    from ocp_crawl.sim.event_kinks import linear_pieces
+
+    robot = Robot.paper()
+    linear = Pulse(1.5, 1.6, 0.4, 0.3, 0.6, 0.2, 0.3)
+    assert linear_pieces(linear, linear.t_knots)
+    assert not linear_pieces(Pulse(1.5, 1.6, 0.4, 0.3, 0.6, 0.2, 0.3, "cosine"), linear.t_knots)
+    assert not linear_pieces(Harmonic.from_degrees(90.0, 30.0, 45.0), np.zeros(0))
+    for p in (WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle"),
+              WaveParams(80.0, 95.0, 10.0, 20.0, 60.0, "pulse", 0.1, 0.3)):
+        whole, capped = (simulate_torque(Model(robot), p.torque(robot.k), opt) for opt in (WHOLE_PIECES, None))
+        assert whole.success and capped.success
+        assert whole.S == pytest.approx(capped.S, rel=1e-12, abs=1e-15)
+        assert whole.W_plus == pytest.approx(capped.W_plus, rel=1e-12)
+
+
 def test_paper_robot_triangle_baseline_beats_an_independent_grid():
     """max_speed on the paper robot: the triangle family's best is at least the best of a grid of triangle
     waves built here, and within 0.1 % of the audit's 86.293 mm/s or above it."""

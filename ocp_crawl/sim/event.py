@@ -54,7 +54,7 @@ from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, s
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, linear_pieces, step_limit
+from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, step_limit
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
@@ -88,8 +88,7 @@ class HybridOptions(CycleOptions):
     max_events_per_cycle: int = 200
     """events allowed in one cycle before the run ends with status ``too_many_events``"""
     resolve_input: bool = True
-    """limit the step to 1/8 of the period of the input's fastest significant harmonic, unless the input is
-    linear between its knots (:func:`~ocp_crawl.sim.event_kinks.linear_pieces`) (see
+    """limit the step to 1/8 of the period of the input's fastest significant harmonic (see
     :func:`~ocp_crawl.sim.event_kinks.input_step`), so that fast (chattering) inputs are followed and no event
     pair hides inside a step"""
     trial_step: float = 1e-9
@@ -156,7 +155,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
         self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
         self._init_holds()  # (where it holds still: crossed in one step, the mode decided at the end)
-        if self.opt.resolve_input and not linear_pieces(self.torque, self.breakpoints):
+        if self.opt.resolve_input:
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations
