@@ -135,8 +135,11 @@ def test_fixed_profile_converges_at_finer_N():
     pytest.param("min_cot", {"speed_min": 0.03}, marks=pytest.mark.slow),
     pytest.param("robust_speed", {"sigma0": (1e-6,), "sigma_min": 1e-8}, marks=[pytest.mark.slow, HEAVY])])
 def test_each_objective_solves_on_the_paper_robot(objective, extra):
+    # the start decides at this coarse N: from the harmonic optimum of the default search (min_cot: CoT+ 16.459)
+    # the polish fails (Error_In_Step_Computation, not_complementary at 14.382), from this search's (16.691)
+    # it solves (14.468); the shipped N = 50 file solves from the default search's (test_ocp_problems.py)
     st = OCPSettings(objective=objective, nodes=24, harmonic_psi=8, starts=1, baselines="harmonic",
-                     baseline_samples=8, **extra)  # multi-start: test_multistart
+                     baseline_samples=8, baseline_evaluations=200, **extra)  # multi-start: test_multistart
     res = optimize_gait(PAPER, "physical", st, replay=False)
     assert res.success, res.message
     assert res.complementarity_residual <= st.comp_tol and res.equation_residual <= 1e-8
