@@ -267,7 +267,7 @@ What the differences are (measured at every published point, paper's convention)
   with 20 or 30 steps per cycle moves CoT+ by -0.3 .. -2.1 % irregularly in A (and k = 5 by up to -1.3 %);
   a fixed-step scheme that detects the contact events one step late (N = 30 .. 120) moves it by 0 .. +3.5
   % at both stiffnesses, the wrong sign (the same scheme without the lag converges to the event solver,
-  within 0.005 % at 2000 steps). Earlier (helper F): the first instead of the steady cycle, the start
+  within 0.005 % at 2000 steps). Also tried, without gain: the first instead of the steady cycle, the start
   phase, the W+ definition and unequal friction. The default stays psi = 45 deg: at it the low-stiffness
   curve is not within 2 % (table above), an input of the paper's.
 - **Pressure robot**: the paper's "nominal pressure p0" of "inputs of the form (ref)" read literally
