@@ -347,12 +347,13 @@ def bench_sweep(repeat: int) -> str:
 
 def bench_baselines(repeat: int) -> dict:
     """The baselines: (1) a triangle wave's simulation (the paper robot, gamma 87.5, A 27.5, psi 9 deg) with
-    the input's linear pieces taken whole (the families' ``WHOLE_PIECES``) against the step cap that the
-    input's Fourier content sets by default, alternating in one run, ``repeat`` times each: min and median [ms], steps, and S of both;
+    the input's linear pieces taken whole (the default for an input linear between its knots) against
+    steps of 1/1024 cycle (the cap its Fourier content would set), alternating in one run, ``repeat``
+    times each: min and median [ms], steps, and S of both;
     (2) the search of max_speed's baselines (the shipped envelope and bandwidth) with the harmonic family alone
     and with every family, ``min(repeat, 2)`` times each: min and median [s] and the members simulated."""
     from ocp_crawl import Model, Robot
-    from ocp_crawl.ocp.family import WHOLE_PIECES, WaveParams
+    from ocp_crawl.ocp.family import WaveParams
     from ocp_crawl.ocp.search import best_baselines
     from ocp_crawl.ocp.settings import OCPSettings
     from ocp_crawl.sim.event import HybridOptions, simulate_torque
@@ -360,9 +361,9 @@ def bench_baselines(repeat: int) -> dict:
     robot = Robot.paper()
     model, torque = Model(robot), WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle").torque(robot.k)
     out = {"load_average_start": os.getloadavg()}
-    times, results = {"whole_pieces": [], "fourier_cap": []}, {}
+    times, results = {"whole_pieces": [], "fine_steps": []}, {}
     for _ in range(repeat):
-        for name, opt in (("whole_pieces", WHOLE_PIECES), ("fourier_cap", HybridOptions())):
+        for name, opt in (("whole_pieces", HybridOptions()), ("fine_steps", HybridOptions(max_step=1 / 1024))):
             t = time.perf_counter()
             results[name] = simulate_torque(model, torque, opt)
             times[name].append(time.perf_counter() - t)

@@ -160,6 +160,24 @@ def test_value_definitions():
     assert value_from(shipped_settings(objective="min_cot"), [0.03], [20.0], T) == math.inf  # wrong way
 
 
+def test_value_over_a_friction_set():
+    """Every objective over a friction set: max_speed's is robust_speed's (mean or worst speed); min_cot's
+    the mean or the largest CoT+, +inf when one scenario misses speed_min or moves the wrong way."""
+    S, cot, T = [-0.03, -0.02, -0.025], [20.0, 30.0, 40.0], 0.5
+    for robust in ("mean", "worst"):
+        own = shipped_settings(objective="max_speed", mu_ratio_eps=0.05, robust=robust)
+        assert own.friction_ratios == (0.95, 1.0, 1.05) and own.friction_set
+        assert value_from(own, S, cot, T) == value_from(
+            shipped_settings(objective="robust_speed", robust=robust), S, cot, T)
+    assert value_from(shipped_settings(objective="min_cot", mu_ratio_eps=0.05), S, cot, T) == 30.0
+    worst = shipped_settings(objective="min_cot", mu_ratio_eps=0.05, robust="worst", speed_min=0.045)
+    assert value_from(worst, S, cot, T) == 40.0
+    assert value_from(worst, S, cot, T, enforce_speed_min=True) == math.inf  # 0.04 m/s in scenario 2
+    assert value_from(worst, [-0.03, 0.001, -0.03], cot, T) == math.inf  # the wrong way in one
+    assert not shipped_settings().friction_set and shipped_settings().friction_ratios == (1.0,)
+    assert shipped_settings(objective="robust_speed").friction_ratios == (0.9, 1.0, 1.1)
+
+
 def test_family_box_is_the_envelope():
     """Every box point maps into the envelope (gamma_i +- A_i within gamma +- A_max), corners reach its
     edges, and to_box inverts from_box."""
@@ -190,7 +208,7 @@ def test_min_cot_unreachable_speed_gives_a_fallback():
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
 def test_twice_per_cycle_has_the_same_value(objective):
     """A harmonic gait run twice per cycle at twice the period: S and W+ double, and value_from is unchanged
-    (v = direction S / T and CoT+ are both invariant), as ISSUE13's formulation requires."""
+    (v = direction S / T and CoT+ are both invariant), as the OCP's free period requires."""
     robot = Robot.paper()
     model = Model(robot, gravity="physical")
     once = ReferenceTorque(Harmonic.from_degrees(psi_deg=30.0, gamma1_deg=100.0, gamma2_deg=96.0, A1_deg=12.0,

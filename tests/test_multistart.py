@@ -5,7 +5,6 @@ The solve itself is replaced by a stand-in (the "optimum" of a start is the star
 other simulator, the MPCC time-stepping) so that these checks of the orchestration run in seconds; the
 transcription's own tests solve the real NLP.
 """
-import inspect
 import math
 from types import SimpleNamespace
 
@@ -14,8 +13,8 @@ import pytest
 
 from ocp_crawl import Robot
 from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
-from ocp_crawl.ocp import judge, solve
-from ocp_crawl.ocp.baseline import Baselines, value_from
+from ocp_crawl.ocp import solve
+from ocp_crawl.ocp.baseline import Baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.sim import simulate
@@ -24,19 +23,6 @@ from ocp_crawl.status import Status
 
 ROBOT = Robot.paper()
 N = 40
-
-
-def _value_of_issue13(settings, S, CoT, T):
-    """The objective values: a stand-in until the baseline's value_from takes the period T."""
-    v = [settings.direction * s / T for s in S]
-    return CoT[0] if settings.objective == "min_cot" else v[0]
-
-
-@pytest.fixture(autouse=True)
-def objective_values(monkeypatch):
-    if "T" not in inspect.signature(value_from).parameters:
-        monkeypatch.setattr(judge, "value_from", _value_of_issue13)
-        monkeypatch.setattr(solve, "value_from", _value_of_issue13)
 
 
 def baseline(settings):

@@ -52,6 +52,36 @@ def test_objective_is_time_scale_invariant_at_the_guess(objective):
         assert abs(twice.objective(x3) - once.objective(x1)) > 0.1 * abs(once.objective(x1))
 
 
+@pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
+def test_objective_over_a_friction_set_at_the_guess(objective):
+    """The NLP objective over a friction set at a harmonic profile: with two copies of the robot's own
+    friction (worst) it equals the one-scenario objective; over mu1/mu2 = {0.9, 1, 1.1} it is the mean
+    or the worst of the scenarios' values, each from an event-driven simulation of the guess's profile
+    (its node torques, linear in phase) in that scenario: speed direction S_j / T, CoT+_j."""
+    sig, T = paper_torque(), OCPSettings().min_period(30.0, 30.0)
+    base = dict(objective=objective, nodes=10, speed_min=0.01, regularization=0.0, friction_tol=0.0)
+    one = GaitOCP(PAPER, "physical", OCPSettings(**base))
+    two = GaitOCP(PAPER, "physical", OCPSettings(**base, mu_ratios=(1.0, 1.0), robust="worst"))
+    assert two.objective(two.initial_guess(sig, T)) == pytest.approx(one.objective(one.initial_guess(sig, T)),
+                                                                      rel=1e-12)
+    for robust in ("mean", "worst"):
+        st = OCPSettings(**base, mu_ratio_eps=0.1, robust=robust)
+        ocp = GaitOCP(PAPER, "physical", st)
+        x = ocp.initial_guess(sig, T)
+        sol = ocp.unpack(x)
+        profile = PeriodicLinear(np.arange(st.nodes) / st.nodes, sol["tau"])
+        values = []
+        for r in st.scenarios(PAPER):
+            res = simulate_torque(Model(r, gravity="physical"), profile)
+            values.append(st.direction * res.S / sol["T"] if objective == "max_speed" else res.CoT_plus)
+        assert np.ptp(values) > 1e-3 * abs(np.mean(values))  # the scenarios differ
+        worst = min(values) if objective == "max_speed" else max(values)
+        want = np.mean(values) if robust == "mean" else worst
+        got = -ocp.objective(x) * PAPER.L / st.period_ref() if objective == "max_speed" else ocp.objective(x)
+        # S is the simulation's; W+ the transcription's midpoint rule on its sub-steps (CoT+ within 1 %)
+        assert got == pytest.approx(want, rel=1e-9 if objective == "max_speed" else 1e-2), robust
+
+
 def _best_speed(ocp: GaitOCP, starts) -> tuple[float, dict]:
     """The best mean speed [m/s] of the solves from ``starts`` (signal, period) and its unpacked solution."""
     best = (-np.inf, None)

@@ -6,7 +6,6 @@ event-driven replay the judge runs).  The judge computes its own numbers from th
 alone, so a claim changed beyond replay_tol, a torque moved out of the envelope or a period shortened beyond
 the bandwidth must be flagged.
 """
-import inspect
 import math
 from types import SimpleNamespace
 
@@ -25,24 +24,6 @@ from ocp_crawl.status import Status
 N = 40
 ROBOT = Robot.paper()
 MODEL = Model(ROBOT, gravity="physical")
-
-
-def _value_of_issue13(settings, S, CoT, T):
-    """The objective values (speeds direction * S / T [m/s], CoT+ [-]): a stand-in until the
-    baseline's value_from takes the period (the fixture below uses it only then)."""
-    v = [settings.direction * s / T for s in S]
-    if settings.objective == "max_speed":
-        return v[0]
-    if settings.objective == "robust_speed":
-        return float(np.mean(v) if settings.robust == "mean" else np.min(v))
-    return CoT[0]
-
-
-@pytest.fixture(autouse=True)
-def objective_values(monkeypatch):
-    if "T" not in inspect.signature(value_from).parameters:
-        monkeypatch.setattr(judge, "value_from", _value_of_issue13)
-    return judge.value_from
 
 
 def triangle(settings):
@@ -68,10 +49,10 @@ def settings_for(res, **kw):
     return OCPSettings(direction=int(np.sign(res.S)), **kw)
 
 
-def test_honest_claim_is_confirmed_with_the_replays_own_numbers(claim, objective_values):
+def test_honest_claim_is_confirmed_with_the_replays_own_numbers(claim):
     tau, T, ts = claim
     st = settings_for(ts)
-    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    value = value_from(st, [ts.S], [ts.CoT_plus], T)
     v = judge.judge_replay([MODEL], st, tau, T, value, [ts.S])
     assert v.status == Status.SUCCESS, v.message
     # the judge's numbers are its own replay's: they agree with the other simulator, not by construction
@@ -83,10 +64,10 @@ def test_honest_claim_is_confirmed_with_the_replays_own_numbers(claim, objective
 
 
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
-def test_claim_changed_beyond_replay_tol_is_a_mismatch(claim, objective, objective_values):
+def test_claim_changed_beyond_replay_tol_is_a_mismatch(claim, objective):
     tau, T, ts = claim
     st = settings_for(ts, objective=objective)
-    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    value = value_from(st, [ts.S], [ts.CoT_plus], T)
     ok = judge.judge_replay([MODEL], st, tau, T, value * (1 + 0.5 * st.replay_tol))
     assert ok.status == Status.SUCCESS, ok.message
     forged = value * (1 + 2 * st.replay_tol)
@@ -99,11 +80,11 @@ def test_claim_changed_beyond_replay_tol_is_a_mismatch(claim, objective, objecti
     assert "leave the envelope" not in v.message and "times the bandwidth" not in v.message
 
 
-def test_torque_outside_the_envelope_is_a_mismatch(claim, objective_values):
+def test_torque_outside_the_envelope_is_a_mismatch(claim):
     tau, T, ts = claim
     st = settings_for(ts)
     T = 1.01 * T  # 1 % slower than the bandwidth allows: only the envelope is at stake
-    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    value = value_from(st, [ts.S], [ts.CoT_plus], T)
     lo, hi = st.torque_bounds(ROBOT)
     bumped = tau.copy()
     bumped[0, 0] = hi + 1e-7 * (hi - lo) / 2  # node 0 is tau1's peak: 1e-7 of the half-width outside
@@ -114,12 +95,12 @@ def test_torque_outside_the_envelope_is_a_mismatch(claim, objective_values):
 
 
 @pytest.mark.parametrize("shrink, flagged", [(1e-7, True), (1e-11, False)])
-def test_period_shorter_than_the_bandwidth_allows_is_a_mismatch(claim, objective_values, shrink, flagged):
+def test_period_shorter_than_the_bandwidth_allows_is_a_mismatch(claim, shrink, flagged):
     """The bandwidth is checked to 1e-9 relative: 1e-7 too fast is flagged, 1e-11 (round-off) is not."""
     tau, T, ts = claim
     st = settings_for(ts)
     Tx = T * (1 - shrink)
-    value = objective_values(st, [ts.S], [ts.CoT_plus], Tx)
+    value = value_from(st, [ts.S], [ts.CoT_plus], Tx)
     v = judge.judge_replay([MODEL], st, tau, Tx, value)
     assert v.rate_ratio == pytest.approx(1 / (1 - shrink), rel=1e-12)
     assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
@@ -127,14 +108,14 @@ def test_period_shorter_than_the_bandwidth_allows_is_a_mismatch(claim, objective
 
 
 @pytest.mark.parametrize("change, flagged", [(-1e-7, True), (1e-7, False)])
-def test_second_difference_beyond_max_accel_is_a_mismatch(claim, objective_values, change, flagged):
+def test_second_difference_beyond_max_accel_is_a_mismatch(claim, change, flagged):
     """With the optional max_accel_deg_s2 = a: the triangle's second difference, 2 |d tau| = 16 k A_max / N at
     its peaks (zero elsewhere), against k a (T/N)^2 at T = 4 A_max / R: met exactly by a* = N R^2 / (2 A_max)."""
     tau, T, ts = claim
     st0 = OCPSettings()
     a_star = N * st0.max_rate_deg_s ** 2 / (2 * st0.A_max_deg)
     st = settings_for(ts, max_accel_deg_s2=a_star * (1 + change))
-    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    value = value_from(st, [ts.S], [ts.CoT_plus], T)
     v = judge.judge_replay([MODEL], st, tau, T, value)
     assert v.accel_ratio == pytest.approx(1 / (1 + change), rel=1e-12)
     assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
@@ -143,17 +124,17 @@ def test_second_difference_beyond_max_accel_is_a_mismatch(claim, objective_value
 
 
 @pytest.mark.parametrize("factor, flagged", [(1 + 2 * 5e-3, True), (1 + 0.5 * 5e-3, False)])
-def test_speed_requirement_missed_by_the_replay_is_a_mismatch(claim, objective_values, factor, flagged):
+def test_speed_requirement_missed_by_the_replay_is_a_mismatch(claim, factor, flagged):
     tau, T, ts = claim
     v_true = abs(ts.S) / T  # the independent simulator's mean speed [m/s]
     st = settings_for(ts, objective="min_cot", speed_min=v_true * factor, replay_tol=5e-3)
-    value = objective_values(st, [ts.S], [ts.CoT_plus], T)
+    value = value_from(st, [ts.S], [ts.CoT_plus], T)
     v = judge.judge_replay([MODEL], st, tau, T, value)
     assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
     assert ("misses speed_min" in v.message) == flagged
 
 
-def test_failed_replay_is_replay_failed(claim, objective_values):
+def test_failed_replay_is_replay_failed(claim):
     """A profile the robot cannot follow (joint 2 driven far outside the envelope, until it reaches the ground)
     is not judged on its numbers: REPLAY_FAILED with the simulator's reason."""
     tau, T, ts = claim
@@ -187,8 +168,6 @@ def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_i
     from ocp_crawl.ocp import solve
     from ocp_crawl.ocp.transcription import GaitOCP
 
-    if "fix_profile" not in inspect.signature(GaitOCP.solve).parameters:
-        pytest.skip("the transcription cannot fix the profile yet")
     st = OCPSettings(nodes=N, starts=1)
     gait = Harmonic.from_degrees(90.0, 30.0, 90.0)  # tau1 peaks at t = 1/8: node N/8 (the phase pin: node 0)
     tt = np.arange(N) / N

@@ -84,10 +84,10 @@ def test_triangle_member_is_the_triangle_wave():
 
 def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
     """Triangle and linear pulses are linear between their kinks (cosine pulses and sines are not), and
-    their runs in whole pieces give the S and W+ of the default run, whose steps the input's Fourier
-    content caps."""
+    their default runs, which take those pieces whole, give the S and W+ of runs in steps of 1/1024
+    cycle (what the input's Fourier content would ask for), in a fifth of the steps or fewer."""
     from ocp_crawl.model.pulse import Pulse
-    from ocp_crawl.ocp.family import WHOLE_PIECES
+    from ocp_crawl.sim.event import HybridOptions
     from ocp_crawl.sim.event_kinks import linear_pieces
 
     robot = Robot.paper()
@@ -97,8 +97,10 @@ def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
     assert not linear_pieces(Harmonic.from_degrees(90.0, 30.0, 45.0), np.zeros(0))
     for p in (WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle"),
               WaveParams(80.0, 95.0, 10.0, 20.0, 60.0, "pulse", 0.1, 0.3)):
-        whole, capped = (simulate_torque(Model(robot), p.torque(robot.k), opt) for opt in (WHOLE_PIECES, None))
+        fine = HybridOptions(max_step=1 / 1024)
+        whole, capped = (simulate_torque(Model(robot), p.torque(robot.k), opt) for opt in (None, fine))
         assert whole.success and capped.success
+        assert 5 * whole.nsteps <= capped.nsteps, (whole.nsteps, capped.nsteps)
         assert whole.S == pytest.approx(capped.S, rel=1e-12, abs=1e-15)
         assert whole.W_plus == pytest.approx(capped.W_plus, rel=1e-12)
 

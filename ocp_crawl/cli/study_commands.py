@@ -226,8 +226,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                         "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
                         "convergence table (objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; robust_speed: "
-                        "also optimal_gait_mu1_mu2_<ratio>.toml per friction scenario), arrays.npz, summary.json "
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; over a friction "
+                        "set: also optimal_gait_mu1_mu2_<ratio>.toml per scenario), arrays.npz, summary.json "
                         "and figures to DIR (with several --nodes: of the finest N, and convergence.json)")
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
@@ -238,7 +238,7 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     force_arg(p)
 
 
-#: the files ocp_crawl.viz.ocp.write_outputs writes (robust_speed: also one problem file per friction scenario,
+#: the files ocp_crawl.viz.ocp.write_outputs writes (over a friction set: also one problem file per scenario,
 #: ocp_crawl.viz.ocp.scenario_files)
 OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
@@ -252,7 +252,7 @@ def _each(value, text) -> str:
 
 def _ocp_replay(s: dict, name: str, text) -> str:
     """The OCP's and the replay's ``name`` (``S``, ``v``, ``W_plus``, ``CoT_plus``): "OCP x, replay y", or per
-    friction scenario of robust_speed, labelled with its ratio: "mu1/mu2 = 0.9: OCP x, replay y; ..."."""
+    friction scenario of a friction set, labelled with its ratio: "mu1/mu2 = 0.9: OCP x, replay y; ..."."""
     ocp, replay = s.get(f"{name}_ocp"), s.get(f"{name}_replay")
     if not s.get("scenarios"):
         return f"OCP {_each(ocp, text)}, replay {_each(replay, text)}"

@@ -4,11 +4,12 @@
 Objective values (one definition, :func:`value_from`, shared by the baselines, the OCP and the replay judge):
 the mean speed of scenario j is v_j = direction * S_j / T [m/s];
 
-* ``max_speed``: v_0 (maximise);
-* ``robust_speed``: the mean or the worst (``settings.robust``) of v_j over ``settings.scenarios(robot)``
-  (maximise; one profile and one period for all scenarios);
-* ``min_cot``: CoT+ = W+/(M g |S|) of the robot (minimise) subject to v_0 >= ``speed_min``; a gait that
-  misses the requirement (or moves the wrong way) has the value +inf.
+* ``max_speed``: v_j (maximise); with a friction set (``settings.friction_set``) the mean or the worst
+  (``settings.robust``) of v_j over ``settings.scenarios(robot)`` (one profile and one period for all);
+* ``robust_speed``: max_speed over a friction set (0.1 unless ``mu_ratio_eps`` says otherwise);
+* ``min_cot``: CoT+ = W+/(M g |S|) (minimise; over a set its mean or its worst, the largest) subject to
+  v_j >= ``speed_min`` in every scenario; a gait that misses the requirement (or moves the wrong way)
+  has the value +inf.
 
 A family's members keep gamma_i +- A_i inside the envelope gamma +- A_max and run at the shortest period
 the bandwidth allows (always the best one: see the family module).  The best member of each family is found
@@ -52,19 +53,19 @@ def speeds(settings: OCPSettings, S, T: float) -> list[float]:
 def value_from(settings: OCPSettings, S, CoT, T: float, enforce_speed_min: bool = False) -> float:
     """Objective value of a gait from its S [m] and CoT+ [-] per scenario and its period T [s].
 
-    max_speed: direction * S_0 / T [m/s]; robust_speed: mean or worst (``settings.robust``) of direction *
-    S_j / T [m/s]; min_cot: CoT+_0, or +inf when the gait moves against ``direction`` (or not at all) or,
-    with ``enforce_speed_min``, when direction * S_0 / T < ``settings.speed_min`` (the baseline's rule; the
-    replay judge reports the CoT+ and checks the speed requirement within its own tolerance).
-    Larger is better for the speeds, smaller for CoT+ (:func:`better`)."""
+    max_speed, robust_speed: the mean or the worst (``settings.robust``) of direction * S_j / T [m/s]
+    (one scenario without a friction set); min_cot: the mean or the worst (largest) CoT+_j, or +inf when
+    the gait moves against ``direction`` (or not at all) in a scenario or, with ``enforce_speed_min``,
+    when direction * S_j / T < ``settings.speed_min`` in one (the baseline's rule; the replay judge
+    reports the CoT+ and checks the speed requirement within its own tolerance).  Larger is better for
+    the speeds, smaller for CoT+ (:func:`better`)."""
     v = speeds(settings, S, T)
-    if settings.objective == "max_speed":
-        return v[0]
-    if settings.objective == "robust_speed":
-        return float(np.mean(v) if settings.robust == "mean" else np.min(v))
-    if not v[0] > 0 or (enforce_speed_min and v[0] < settings.speed_min):
+    mean = settings.robust == "mean"
+    if settings.objective != "min_cot":
+        return float(np.mean(v) if mean else np.min(v))
+    if not min(v) > 0 or (enforce_speed_min and min(v) < settings.speed_min):
         return math.inf
-    return float(CoT[0])
+    return float(np.mean(CoT) if mean else np.max(CoT))
 
 
 def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float,
@@ -97,7 +98,8 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
         return -value
     if math.isfinite(value):
         return value
-    return MISS_RANK + max(settings.speed_min - speeds(settings, ev.S, ev.T)[0], 0.0) + (0.0 if ev.S[0] else 1.0)
+    v = speeds(settings, ev.S, ev.T)
+    return MISS_RANK + max(settings.speed_min - min(v), 0.0) + (0.0 if all(ev.S) else 1.0)
 
 
 def value_of(settings: OCPSettings, ev: Evaluation) -> float:

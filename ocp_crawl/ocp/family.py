@@ -43,8 +43,7 @@ from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
-from ocp_crawl.sim.event import HybridOptions, simulate_torque
-from ocp_crawl.sim.event_kinks import linear_pieces
+from ocp_crawl.sim.event import simulate_torque
 
 #: the waveform families, in the order of reports (the harmonic one is the OCP's first start)
 SHAPES = ("harmonic", "triangle", "pulse")
@@ -56,10 +55,6 @@ PULSE_BOX = ((0.0, 1.0), (0.0, 1.0))
 A_MIN_DEG = 1e-6
 #: shortest edge of a pulse member [cycles]: steeper edges only lengthen the shortest period (2 A / (rise R))
 RISE_MIN = 0.05
-#: the stepper's options for a member linear between its kinks (triangle, trapezoid), where steps end: the
-#: input's Fourier content (a triangle's harmonics fall as 1/n^2) would cap every step for nothing (2,089
-#: steps per run instead of 200, the same S to 4e-15: ``scripts/bench.py baselines``)
-WHOLE_PIECES = HybridOptions(resolve_input=False)
 
 
 def shape_box(shape: str) -> tuple:
@@ -237,10 +232,8 @@ class WaveFamily:
         sims = []
         for m in self.models:
             torque = params.torque(m.robot.k)
-            knots = getattr(torque.reference, "t_knots", ())
-            opt = WHOLE_PIECES if linear_pieces(torque, knots) else None
             try:
-                r = simulate_torque(m, torque, opt)
+                r = simulate_torque(m, torque)
             except (ValueError, IndexError) as exc:
                 # ValueError: the stepper rejects the input; IndexError: its steady-cycle metrics
                 # find no segment on some psi = 180 gaits (e.g. gamma 91.65/90.44, A 27.93/29.30 deg)

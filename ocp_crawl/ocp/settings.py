@@ -82,15 +82,17 @@ class OCPSettings:
     objective is flat, e.g. during stick phases; its share of the objective is reported)"""
     speed_min: float = 0.0
     """min_cot: smallest mean speed direction * S / T [m/s]"""
-    mu_ratio_eps: float = 0.1
-    """robust_speed: friction scenarios mu1/mu2 in {1 - eps, 1, 1 + eps} (just 1 when eps = 0), in [0, 1):
-    the friction uncertainty as a set, each scenario simulated (replayed) as it is"""
+    mu_ratio_eps: float | None = None
+    """every objective: friction scenarios mu1/mu2 in {1 - eps, 1, 1 + eps} (mu1 mu2 fixed), in [0, 1):
+    the friction uncertainty as a set, one profile and one period for all, each scenario simulated
+    (replayed) as it is; None (default): 0.1 for robust_speed, else 0 (the robot's friction only)"""
     mu_ratios: tuple | None = None
-    """robust_speed: the scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r)) given explicitly;
+    """every objective: the scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r)) given explicitly;
     None (default): from mu_ratio_eps"""
     robust: str = "mean"
-    """robust_speed: maximise the 'mean' or the 'worst' direction * S over the scenarios; 'worst' bounds
-    the speed from below at every scenario (the ends of the set and its middle, not between them), 'mean'
+    """with several friction scenarios: optimise the 'mean' or the 'worst' of the objective over them
+    (the speed of max_speed and robust_speed, CoT+ of min_cot, whose speed_min holds in every scenario);
+    'worst' bounds it at every scenario (the ends of the set and its middle, not between them), 'mean'
     only their average (one scenario may be slow where the others are fast)"""
     sigma0: tuple = (1e-4,)
     """first relaxation parameter(s) of the homotopy from the initial guess; with several, a homotopy is run from
@@ -163,7 +165,8 @@ class OCPSettings:
     where a gait at the tie stops at delta = 0.5 %.  It does not hold the speed under +-eps/2 (an optimum
     on the rule keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its
     worst case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps
-    its speed under a known friction uncertainty is robust_speed's, robust = "worst".  0 admits every
+    its speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
+    "worst"; any objective).  0 admits every
     gait; in [0, 1)"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
@@ -202,8 +205,10 @@ class OCPSettings:
                      "periodic_tol",
                      "max_rate_deg_s", "replay_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
-        for name in ("regularization", "speed_min", "mu_ratio_eps"):
+        for name in ("regularization", "speed_min"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), nonneg=True))
+        if self.mu_ratio_eps is not None:
+            self._set("mu_ratio_eps", real("OCPSettings.mu_ratio_eps", self.mu_ratio_eps, nonneg=True))
         if not 0 < self.A_max_deg < 90:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
         if not (0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180):
@@ -227,7 +232,7 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at sigma_min solved "
                              f"only to stage_tol would stop at once), got stage_tol {self.stage_tol:g}, sigma_min "
                              f"{self.sigma_min:g}")
-        if not self.mu_ratio_eps < 1:
+        if not self.ratio_eps < 1:
             raise ValueError(f"OCPSettings.mu_ratio_eps must be in [0, 1), got {self.mu_ratio_eps!r}")
         if self.mu_ratios is not None:
             ratios = tuple(float(r) for r in self.mu_ratios)
@@ -248,20 +253,34 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.replay_tol must be in (0, 1), got {self.replay_tol!r}")
 
     def scenarios(self, robot: Robot) -> list[Robot]:
-        """The robots of the friction scenarios (robust_speed; else just ``robot``)."""
-        if self.objective != "robust_speed":
+        """The robots of the friction scenarios (:attr:`friction_ratios`; just ``robot`` without a set)."""
+        if not self.friction_set:
             return [robot]
         mu = math.sqrt(robot.mu1 * robot.mu2)
         return [robot.replace(mu1=mu * math.sqrt(r), mu2=mu / math.sqrt(r)) for r in self.friction_ratios]
 
     @property
+    def ratio_eps(self) -> float:
+        """The half-width eps of the friction set: mu_ratio_eps, else 0.1 for robust_speed and 0 for the
+        other objectives."""
+        if self.mu_ratio_eps is not None:
+            return self.mu_ratio_eps
+        return 0.1 if self.objective == "robust_speed" else 0.0
+
+    @property
     def friction_ratios(self) -> tuple[float, ...]:
-        """The scenarios mu1/mu2 of robust_speed: mu_ratios, else {1 - eps, 1, 1 + eps} (eps = mu_ratio_eps > 0)
-        or (1,)."""
+        """The scenarios mu1/mu2: mu_ratios, else {1 - eps, 1, 1 + eps} (eps = :attr:`ratio_eps` > 0) or
+        (1,)."""
         if self.mu_ratios is not None:
             return self.mu_ratios
-        eps = self.mu_ratio_eps
+        eps = self.ratio_eps
         return (1 - eps, 1.0, 1 + eps) if eps > 0 else (1.0,)
+
+    @property
+    def friction_set(self) -> bool:
+        """True when the objective is taken over a set of friction scenarios (not only the robot's own
+        friction): explicit ``mu_ratios``, or a set half-width eps > 0."""
+        return self.mu_ratios is not None or self.ratio_eps > 0
 
     @property
     def baseline_shapes(self) -> tuple[str, ...]:

@@ -62,7 +62,7 @@ class StartRecord:
 @dataclass
 class OCPResult:
     """Outcome of :func:`optimize_gait`: the optimal profile, its transcription residuals, the harmonic
-    baseline, the replay that judges it (per scenario lists: one entry unless robust_speed) and the starts."""
+    baseline, the replay that judges it (per scenario lists: one entry without a friction set) and the starts."""
 
     success: bool
     status: Status
@@ -191,10 +191,11 @@ class OCPResult:
         })
 
     def scenarios(self) -> list[dict] | None:
-        """robust_speed: per friction scenario, in the order of the per-scenario lists, its ratio ``mu1_mu2``, its
-        ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+, CoT+ of the OCP and
-        the replay; None where not computed); None for the other objectives (one scenario, the robot's)."""
-        if self.objective != "robust_speed":
+        """Over a friction set: per friction scenario, in the order of the per-scenario lists, its ratio
+        ``mu1_mu2``, its ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+,
+        CoT+ of the OCP and the replay; None where not computed); None without a set (one scenario, the
+        robot's)."""
+        if not self.settings.friction_set:
             return None
         ratios = self.settings.friction_ratios
         names = ("S_ocp", "S_replay", "v_ocp", "v_replay", "W_plus_ocp", "W_plus_replay", "CoT_plus_ocp",

@@ -13,8 +13,9 @@ periodicity (angles and tangential force) is a constraint and the body displacem
 S = sum of the slips of foot 1.
 
 Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
-``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; robust_speed ``-mean_j v_j`` or ``-min_j v_j`` over the friction
-scenarios (one profile and one T).  Each adds ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean
+``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``.  Over a set of friction scenarios (one profile and one T;
+robust_speed is max_speed over a set) ``-mean_j v_j`` or ``-min_j v_j``, ``mean_j CoT+_j`` or ``max_j CoT+_j``
+with ``v_j >= speed_min`` in each.  Each adds ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean
 squared torque rate, a tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without
 an event are otherwise free); both are invariant under repeating the profile k times with T multiplied by k,
 as the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma) is driven to
@@ -146,19 +147,24 @@ class GaitOCP:
         theta = cs.vertcat(*[sc.theta for sc in scen])
         reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
         S_list = [sc.S for sc in scen]
-        if s.objective == "max_speed":
-            return -d * S_list[0] / Th + reg
-        if s.objective == "robust_speed":
-            if s.robust == "mean":
-                return -d * sum(S_list) / (len(S_list) * Th) + reg
-            zeta = nlp.sym("zeta")  # the worst scaled speed
-            nlp.var("zeta", zeta, -inf, inf)
-            nlp.con("worst", cs.vertcat(*[d * Sj - zeta * Th for Sj in S_list]), 0.0, inf)
-            return -zeta + reg
-        v_min = s.speed_min * s.period_ref() / self.robot.L  # scaled speed S_hat / T_hat
-        nlp.con("speed_min", d * S_list[0] - v_min * Th, 0.0, inf)
-        # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
-        return scen[0].W_plus / (d * S_list[0]) + reg
+        if s.objective == "min_cot":
+            v_min = s.speed_min * s.period_ref() / self.robot.L  # scaled speed S_hat / T_hat
+            nlp.con("speed_min", cs.vertcat(*[d * Sj - v_min * Th for Sj in S_list]), 0.0, inf)
+            # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
+            cots = [sc.W_plus / (d * Sj) for sc, Sj in zip(scen, S_list)]
+            if len(cots) == 1 or s.robust == "mean":
+                return sum(cots) / len(cots) + reg
+            zeta = nlp.sym("zeta")  # the worst CoT+: W_hat_j <= zeta S_hat_j
+            nlp.var("zeta", zeta, 0.0, inf)
+            nlp.con("worst", cs.vertcat(*[zeta * d * Sj - sc.W_plus for sc, Sj in zip(scen, S_list)]),
+                    0.0, inf)
+            return zeta + reg
+        if len(S_list) == 1 or s.robust == "mean":
+            return -d * sum(S_list) / (len(S_list) * Th) + reg
+        zeta = nlp.sym("zeta")  # the worst scaled speed
+        nlp.var("zeta", zeta, -inf, inf)
+        nlp.con("worst", cs.vertcat(*[d * Sj - zeta * Th for Sj in S_list]), 0.0, inf)
+        return -zeta + reg
 
     def _build(self) -> None:
         s, r = self.settings, self.robot
@@ -247,7 +253,7 @@ class GaitOCP:
             x[self._slices["tau"]] = coef.T.ravel(order="F")
         x[self._slices["T_hat"]] = period / s.period_ref()
         signal = PeriodicLinear(t_nodes, tau_nodes)
-        speeds = []
+        speeds, cots = [], []
         for j, model in enumerate(self.scen):
             theta = switch_fractions(simulate_torque(model, signal), N) if switches else np.full(N, THETA_GUESS)
             res = simulate_torque(model, signal, t_eval=sample_phases(theta))
@@ -266,8 +272,9 @@ class GaitOCP:
                 V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][0:2]], axis=1), 0.0)
                 x[self._slices[f"v_{j}"]] = V.ravel(order="F")
                 x[self._slices[f"Wc_{j}"]] = np.cumsum(V.sum(axis=0))
-        if "zeta" in self._slices:
-            x[self._slices["zeta"]] = min(speeds)
+                cots.append(V.sum() / max(s.direction * blk["S"], 1e-9))
+        if "zeta" in self._slices:  # the worst scenario's speed, or its CoT+ (min_cot)
+            x[self._slices["zeta"]] = max(cots) if cots else min(speeds)
         return x
 
     # ------------------------------------------------------------------ the solution in physical units

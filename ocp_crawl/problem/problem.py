@@ -313,6 +313,18 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
     return out
 
 
+def _check_friction_set(ctx: _Context, given: Mapping[str, Any]) -> None:
+    """``[ocp] robust = "worst"`` asks for the worst over a friction set: without one (no ``mu_ratio_eps``
+    > 0, no robust_speed) it would be ignored, so it is an error (the mean of one scenario is its value)."""
+    if given.get("robust") != "worst" or given.get("objective") == "robust_speed":
+        return
+    if given.get("mu_ratio_eps", 0) > 0:
+        return
+    raise ProblemError(f"{ctx.at('ocp', 'robust', given['robust'])} needs a friction set: give [ocp] "
+                    f"mu_ratio_eps > 0 (the scenarios mu1/mu2 in {{1 - eps, 1, 1 + eps}}) or "
+                    f'objective = "robust_speed"')
+
+
 def _check_contact(ctx: _Context, model: Model, gait: PeriodicSignal, drive: str, values: Mapping) -> None:
     """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad input."""
     gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
@@ -360,6 +372,7 @@ def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[st
             need = ", ".join(k.name for k in section.keys if k.required)
             raise ctx.error(f"section [{section.name}] is missing (no value given): required, with keys {need}")
         values[section.name] = _check_section(ctx, section, data.get(section.name, {}))
+    _check_friction_set(ctx, data.get("ocp", {}))
     return values
 
 

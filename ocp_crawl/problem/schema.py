@@ -333,10 +333,11 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         rule=GE0),
     Key("speed_min", float, "m/s", "min_cot: smallest mean speed direction * S / T", default=_ocp("speed_min"),
         rule=GE0, variants=("min_cot",)),
-    Key("mu_ratio_eps", float, "-", "robust_speed: scenarios mu1/mu2 in {1 - eps, 1, 1 + eps}",
-        default=_ocp("mu_ratio_eps"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)"), variants=("robust_speed",)),
-    Key("robust", str, "-", "robust_speed: maximise the mean or the worst speed", default=_ocp("robust"),
-        choices=("mean", "worst"), variants=("robust_speed",)),
+    Key("mu_ratio_eps", float, "-", "friction uncertainty as a set: the objective over the scenarios "
+        "mu1/mu2 in {1 - eps, 1, 1 + eps}, each replayed (absent: 0.1 for robust_speed, else 0: the "
+        "robot's friction only)", rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+    Key("robust", str, "-", "over a friction set: optimise the mean or the worst of the objective (speed, "
+        "or CoT+ with speed_min in every scenario)", default=_ocp("robust"), choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
         default=_ocp("harmonic_psi"), rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
                                                   "and friction scenario; 180 is a 2 deg grid")),

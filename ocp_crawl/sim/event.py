@@ -54,7 +54,7 @@ from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, s
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, step_limit
+from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, linear_pieces, step_limit
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
@@ -90,7 +90,8 @@ class HybridOptions(CycleOptions):
     resolve_input: bool = True
     """limit the step to 1/8 of the period of the input's fastest significant harmonic (see
     :func:`~ocp_crawl.sim.event_kinks.input_step`), so that fast (chattering) inputs are followed and no event
-    pair hides inside a step"""
+    pair hides inside a step; not for an input linear between its knots (piecewise-linear samples,
+    trapezoid pulses: :func:`~ocp_crawl.sim.event_kinks.linear_pieces`), whose steps end at every knot"""
     trial_step: float = 1e-9
     """phase step used to test the consistency of a mode after a transition"""
     quad_h: float = 1.0 / 32
@@ -155,7 +156,11 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
         self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
         self._init_holds()  # (where it holds still: crossed in one step, the mode decided at the end)
-        if self.opt.resolve_input:
+        # an input linear between its kinks has nothing to resolve between them (steps end at each kink):
+        # its Fourier content above the first harmonics is that of the kinks (a triangle wave: 205
+        # instead of 2,089 steps, S and W+ the same to 1e-12)
+        linear = self.breakpoints.size > 0 and linear_pieces(self.torque, self.breakpoints)
+        if self.opt.resolve_input and not linear:
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations

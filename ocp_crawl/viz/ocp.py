@@ -16,7 +16,7 @@ from ocp_crawl.io.tables import table_text
 from ocp_crawl.model.inputs import ReferenceTorque
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.ocp import OCPResult, OCPSettings
-from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, ratio_labels
+from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, ratio_labels, value_text
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
@@ -61,10 +61,10 @@ def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
 
 
 def scenario_files(settings: OCPSettings) -> list[str]:
-    """The problem files replaying each friction scenario of robust_speed, named by its ratio mu1/mu2
-    (``optimal_gait_mu1_mu2_0.9.toml``, ...; :func:`~ocp_crawl.ocp.judge.ratio_labels`); [] for the other
-    objectives."""
-    if settings.objective != "robust_speed":
+    """The problem files replaying each friction scenario of a friction set, named by its ratio mu1/mu2
+    (``optimal_gait_mu1_mu2_0.9.toml``, ...; :func:`~ocp_crawl.ocp.judge.ratio_labels`); [] without a
+    set."""
+    if not settings.friction_set:
         return []
     return [f"optimal_gait_mu1_mu2_{label}.toml" for label in ratio_labels(settings.friction_ratios)]
 
@@ -99,9 +99,10 @@ def _title(result: OCPResult) -> str:
         return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
                        else "")
     significance = "" if result.gain_significant else " (not significant)"
-    if len(result.replay) > 1:  # robust_speed: the objective is over the scenarios, the panels show the first
-        head += (f"\n{result.settings.robust} speed over the {len(result.replay)} friction scenarios "
-                 f"{units.speed(result.value_replay, 2)}; panels and the line below: the first, "
+    if len(result.replay) > 1:  # a friction set: the objective is over the scenarios, the panels show the first
+        head += (f"\n{result.settings.robust} {'CoT$^+$' if result.objective == 'min_cot' else 'speed'} over the {len(result.replay)} "
+                 f"friction scenarios {value_text(result.objective, result.value_replay)}; panels and the line "
+                 f"below: the first, "
                  f"mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
@@ -234,7 +235,7 @@ def _write_text(path: Path, text: str) -> Path:
 
 def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, summary: dict) -> list[Path]:
     """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary`` holds the
-    ``problem`` as ``Problem.to_dict()``; robust_speed: also one per friction scenario, :func:`scenario_files`),
+    ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction scenario, :func:`scenario_files`),
     arrays.npz, summary.json and the figure (PNG, PDF) atomically into out_dir; returns the paths written."""
     out = Path(out_dir)
     written = [_write_text(out / "torques.csv", torques_csv(result))]
