@@ -154,6 +154,9 @@ def problem_dicts(draw, ranges=None):
     for section in SECTIONS:
         if section.required or draw(st.booleans()):
             data[section.name] = draw(section_values(section, ranges))
+    ocp = data.get("ocp", {})
+    if ocp.get("robust") == "worst" and not ocp.get("mu_ratio_eps", 0) > 0:  # the worst needs a set
+        ocp["mu_ratio_eps"] = draw(st.sampled_from([0.01, 0.1, 0.5]))
     return data
 
 

@@ -191,10 +191,9 @@ class OCPResult:
         })
 
     def scenarios(self) -> list[dict] | None:
-        """Over a friction set: per friction scenario, in the order of the per-scenario lists, its ratio
-        ``mu1_mu2``, its ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+,
-        CoT+ of the OCP and the replay; None where not computed); None without a set (one scenario, the
-        robot's)."""
+        """Over a friction set: per scenario, in the order of the per-scenario lists, its ratio ``mu1_mu2``,
+        its ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+, CoT+ of the
+        OCP and the replay; None where not computed); None without a set (one scenario, the robot's)."""
         if not self.settings.friction_set:
             return None
         ratios = self.settings.friction_ratios
