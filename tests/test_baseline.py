@@ -130,7 +130,7 @@ def dense_sizes() -> tuple[int, int, int]:
     return n_gamma, n_a, n_psi
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot", "robust_speed"])
 def test_beats_dense_grid(objective):
     """The dense grid (OCP_CRAWL_BASELINE_GRID="15,8,36": 15 gamma x 8 A x 36 psi x 5 periods) by hand;

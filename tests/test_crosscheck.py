@@ -27,9 +27,11 @@ ROUND_OFF = 1e-7
 """relative S error below which the difference is the solvers' tolerance accumulated over the run"""
 
 
-@pytest.fixture(scope="module", params=[("physical", 45.0, None), ("physical", 90.0, None),
-                                        ("paper", 90.0, None), ("physical", 45.0, (0.35, 0.43))],
-                ids=["paper-gait", "psi90", "psi90-paper-gravity", "unequal-friction"])
+@pytest.fixture(scope="module", params=[
+    pytest.param(("physical", 45.0, None), id="paper-gait"),
+    pytest.param(("physical", 90.0, None), id="psi90", marks=pytest.mark.heavy),
+    pytest.param(("paper", 90.0, None), id="psi90-paper-gravity", marks=pytest.mark.heavy),
+    pytest.param(("physical", 45.0, (0.35, 0.43)), id="unequal-friction")])
 def checked(request):
     gravity, psi, mus = request.param
     robot = Robot.paper() if mus is None else Robot.paper(mu1=mus[0], mu2=mus[1])

@@ -89,6 +89,7 @@ def test_no_stage_tolerance_means_the_same_solvers(stage_tol):
     assert used == ["pair_cold", "pair_warm", "pair_warm"]
 
 
+@pytest.mark.heavy
 def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
     """max_speed at N = 20: the loose first stage (default stage_tol) reaches the optimum of the homotopy with
     every stage solved to 1e-10, and its first stage takes fewer IPOPT iterations.  "The optimum" to the

@@ -279,7 +279,7 @@ def test_cli_simulate_mpcc_solver_failure_exits_1(monkeypatch, capsys):
 # ---------------------------------------------------------------------------------------- gait OCP
 #: a small OCP (few nodes, one start; multi-start: test_multistart): each solve a few seconds
 SMALL = dict(objective="max_speed", nodes=16, harmonic_psi=4, harmonic_A=1, starts=1,
-             baseline_samples=8, baseline_starts=1, baseline_evaluations=40)
+             baselines="harmonic", baseline_samples=0, baseline_starts=1, baseline_evaluations=40)
 
 
 def assert_failed_ocp(res, status, ocp_status=Status.SOLVER_FAILURE):

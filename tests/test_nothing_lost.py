@@ -227,7 +227,8 @@ def test_every_output_file_is_renamed_into_place(tmp_path):
         ["sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:3", "--out", str(out / "sweep"), "--jobs", "1",
          "--no-progress"],
         ["optimize", str(REPO / "problems" / "ocp_max_speed.toml"), "--set", "ocp.nodes=8",
-         "--set", "ocp.harmonic_psi=4", "--set", "ocp.baseline_samples=8", "--set", "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--out", str(out / "optimize")],
+         "--set", "ocp.harmonic_psi=4", "--set", "ocp.baselines=harmonic", "--set", "ocp.baseline_samples=0", "--set", "ocp.baseline_starts=1",
+         "--set", "ocp.baseline_evaluations=40", "--out", str(out / "optimize")],
     ]
     log = tmp_path / "events.json"
     proc = subprocess.run([sys.executable, "-c", MONITOR, str(tmp_path), json.dumps(commands), str(log)],

@@ -14,7 +14,8 @@ from ocp_crawl.ocp import OCPSettings, optimize_gait
 def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
                         OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2,
-                                    starts=1, baseline_samples=8, baseline_starts=1, baseline_evaluations=40))
+                                    starts=1, baselines="harmonic", baseline_samples=0, baseline_starts=1,
+                                    baseline_evaluations=40))
     assert not res.success
     assert res.status == Status.INFEASIBLE, res.message
     assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message
@@ -90,7 +91,7 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
 
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_min_cot.toml"
     code = main(["optimize", str(problem), "--set", "ocp.nodes=24", "--set", "ocp.harmonic_psi=8",
-                 "--set", "ocp.speed_min=5.0", "--set", "ocp.baseline_samples=8", "--set",
+                 "--set", "ocp.speed_min=5.0", "--set", "ocp.baseline_samples=0", "--set", "ocp.baselines=harmonic", "--set",
                  "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json"])
     captured = capsys.readouterr()
     assert code == 1
@@ -107,7 +108,8 @@ def test_figure_of_an_unreplayed_result_says_so():
 
     robot = Robot.paper()
     res = optimize_gait(robot, "physical", OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8,
-                                                       harmonic_A=2, baseline_samples=8, baseline_starts=1, baseline_evaluations=40))
+                                                       harmonic_A=2, baselines="harmonic", baseline_samples=0,
+                                                       baseline_starts=1, baseline_evaluations=40))
     assert res.tau.size and res.replay
     failed = replace(res, replay=[], status=Status.SOLVER_FAILURE, success=False)
     with warnings.catch_warnings():
@@ -146,7 +148,7 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
 
     robot = Robot.paper()
     settings = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
-                           baseline_samples=8, baseline_starts=1, baseline_evaluations=40)
+                           baselines="harmonic", baseline_samples=0, baseline_starts=1, baseline_evaluations=40)
     coarse = optimize_gait(robot, "physical", settings)
     assert coarse.success, coarse.message
     fine = replace(settings, nodes=32)

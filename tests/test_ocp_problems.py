@@ -22,9 +22,9 @@ from ocp_crawl.ocp.convergence import converge_in_nodes
 from ocp_crawl.problem import load_problem, ocp_settings
 
 REPO = Path(__file__).resolve().parents[1]
-FILES = ["ocp_max_speed", "ocp_min_cot", pytest.param("ocp_robust", marks=[
-    pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"),
-                       reason="about 70 s at N = 50 (three friction scenarios); by hand, OCP_CRAWL_HEAVY=1")])]
+#: max_speed in the default suite; min_cot (about a minute) and robust_speed (three friction scenarios) by hand
+FILES = ["ocp_max_speed", pytest.param("ocp_min_cot", marks=pytest.mark.heavy),
+         pytest.param("ocp_robust", marks=pytest.mark.heavy)]
 
 
 def nodes_list() -> list[int]:

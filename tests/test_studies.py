@@ -373,7 +373,7 @@ def _complete_figure(path):
     return None
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduced, tmp_path):
     """``reproduce --quick`` killed by SIGKILL during the grids and again (resuming) while drawing the
     figures, then resumed to the end: the same numbers, report, grids and figures as an uninterrupted

@@ -105,6 +105,7 @@ def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
         assert whole.W_plus == pytest.approx(capped.W_plus, rel=1e-12)
 
 
+@pytest.mark.heavy
 def test_paper_robot_triangle_baseline_beats_an_independent_grid():
     """max_speed on the paper robot: the triangle family's best is at least the best of a grid of triangle
     waves built here, and within 0.1 % of the audit's 86.293 mm/s or above it."""
