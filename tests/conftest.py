@@ -76,20 +76,31 @@ def model_of():
 @pytest.fixture(scope="session")
 def cli_optimize_run(tmp_path_factory):
     """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30 (a cheap
-    harmonic scan), shared by the tests of its JSON, progress bar and output files: (exit code, stdout, stderr,
-    the --out directory, N)."""
+    search of every waveform family), shared by the tests of its JSON, progress bar and output files, and
+    by the worker processes of pytest-xdist (the first to take the lock runs it): (exit code, stdout,
+    stderr, the --out directory, N)."""
     import contextlib
+    import fcntl
     import io
+    import json
     from pathlib import Path
 
     from ocp_crawl.cli.app import main
 
     nodes = 30
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
-    out = tmp_path_factory.mktemp("cli_optimize") / "opt"
-    stdout, stderr = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
-        code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set", "ocp.harmonic_psi=8",
-                     "--set", "ocp.baseline_samples=8", "--set", "ocp.baseline_starts=1",
-                     "--set", "ocp.baseline_evaluations=40", "--json", "--out", str(out), "--progress"])
-    return code, stdout.getvalue(), stderr.getvalue(), out, nodes
+    shared = tmp_path_factory.getbasetemp().parent  # the same directory for every xdist worker
+    out, record = shared / "cli_optimize" / "opt", shared / "cli_optimize.json"
+    with open(shared / "cli_optimize.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not record.is_file():
+            out.parent.mkdir(exist_ok=True)
+            stdout, stderr = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+                code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set",
+                             "ocp.harmonic_psi=8", "--set", "ocp.baseline_samples=8", "--set",
+                             "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json",
+                             "--out", str(out), "--progress"])
+            record.write_text(json.dumps([code, stdout.getvalue(), stderr.getvalue()]))
+        code, stdout, stderr = json.loads(record.read_text())
+    return code, stdout, stderr, out, nodes

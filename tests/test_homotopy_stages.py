@@ -170,6 +170,7 @@ def test_loose_pairs_at_other_tolerances_are_built_once_and_named_validly():
     assert len(set(used)) == 3 and run.last.x == pytest.approx(_exact(1e-5), abs=1e-9)
 
 
+@pytest.mark.heavy
 def test_deep_homotopy_ends_complementary_without_a_polish():
     """max_speed at N = 20 down to sigma = 1e-11 (stages to a tenth of their sigma): the last point is within
     comp_tol, so no polish runs, and it is the optimum that the default path reaches through its polish."""

@@ -188,7 +188,7 @@ def test_bound_holds_in_the_replay(bounded):
         assert agrees(res.harmonic_peak_joint_rate_deg_s[0][i], rate_h[i])
 
 
-@pytest.mark.slow
+@pytest.mark.heavy
 def test_the_bound_costs_speed(bounded):
     """Unbounded, the same problem's optimum moves its joints faster than the bound and is
     faster."""

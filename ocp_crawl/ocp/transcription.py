@@ -331,7 +331,7 @@ class GaitOCP:
                     best = (f, x, hom.records[n0:], status)
             if best is not None and best[0] < f0:
                 break  # improved on the initial guess: the next (tighter) start is not needed
-        if not fix_profile and (best is None or best[0] >= f0):
+        if not fix_profile and best is not None and best[0] >= f0:
             best = self._start_branches(x0, best, hom.records)
         self.kept_run = best[2] if best is not None else []
         if best is not None:
@@ -342,15 +342,15 @@ class GaitOCP:
                                for sigma0, r in zip(self.settings.sigma0, runs))
         return x, hom.records, failed, status
 
-    def _start_branches(self, x0: np.ndarray, best: tuple | None, records: list) -> tuple | None:
-        """When no homotopy improved on x0 (e.g. a previous optimum: the relaxation let the point wander to
-        another branch, 0.2 % to 5 % lower at N = 20), the tightened NLP on x0's own branches; the better
-        of the two (objective, x, records, status)."""
+    def _start_branches(self, x0: np.ndarray, best: tuple, records: list) -> tuple:
+        """When the homotopy ended but not better than x0 (e.g. a previous optimum: the relaxation let the
+        point wander to another branch, 0.2 % to 5 % lower at N = 20), the tightened NLP on x0's own
+        branches; the better of the two (objective, x, records, status)."""
         x, hist, failed, status = self.solve_tightened(x0)
         records.extend(hist)
         if failed is None and max(sc["comp"] for sc in self.unpack(x)["scen"]) > self.settings.comp_tol:
             failed = "not complementary"
-        if failed is None and (best is None or self.objective(x) < best[0]):
+        if failed is None and self.objective(x) < best[0]:
             return self.objective(x), x, hist, status
         return best
 
