@@ -226,9 +226,10 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                         "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
                         "convergence table (objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; over a friction "
-                        "set: also optimal_gait_mu1_mu2_<ratio>.toml per scenario), arrays.npz, summary.json "
-                        "and figures to DIR (with several --nodes: of the finest N, and convergence.json)")
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; over "
+                        "a friction set: also optimal_gait_mu1_mu2_<ratio>.toml per scenario), "
+                        "arrays.npz, summary.json and figures to DIR (with several --nodes: of the "
+                        "finest N, and convergence.json)")
     p.add_argument("--progress", action="store_true",
                    help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
                         "not a terminal (it is shown on a terminal anyway)")
@@ -238,8 +239,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     force_arg(p)
 
 
-#: the files ocp_crawl.viz.ocp.write_outputs writes (over a friction set: also one problem file per scenario,
-#: ocp_crawl.viz.ocp.scenario_files)
+#: the files ocp_crawl.viz.ocp.write_outputs writes (over a friction set: also one problem file per
+#: scenario, ocp_crawl.viz.ocp.scenario_files)
 OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
 
 

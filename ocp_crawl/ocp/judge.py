@@ -255,7 +255,8 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
                    f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
                    f"{units.scientific(BOUND_RTOL)})")
     slow = min(v.speed, default=math.inf)
-    if settings.objective == "min_cot" and settings.speed_min > 0 and not slow >= settings.speed_min * (1 - tol):
+    need = settings.speed_min
+    if settings.objective == "min_cot" and need > 0 and not slow >= need * (1 - tol):
         where = "" if len(v.speed) == 1 else " (the slowest scenario)"
         out.append(f"the replayed speed {units.speed(slow)}{where} misses speed_min "
                    f"{units.speed(settings.speed_min)} by more than replay_tol {units.ratio(tol)}")

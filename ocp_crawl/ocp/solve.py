@@ -61,8 +61,8 @@ class StartRecord:
 
 @dataclass
 class OCPResult:
-    """Outcome of :func:`optimize_gait`: the optimal profile, its transcription residuals, the harmonic
-    baseline, the replay that judges it (per scenario lists: one entry without a friction set) and the starts."""
+    """Outcome of :func:`optimize_gait`: the optimal profile, its residuals, the harmonic baseline, the
+    replay that judges it (per scenario lists: one entry without a friction set) and the starts."""
 
     success: bool
     status: Status

@@ -99,11 +99,11 @@ def _title(result: OCPResult) -> str:
         return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
                        else "")
     significance = "" if result.gain_significant else " (not significant)"
-    if len(result.replay) > 1:  # a friction set: the objective is over the scenarios, the panels show the first
-        head += (f"\n{result.settings.robust} {'CoT$^+$' if result.objective == 'min_cot' else 'speed'} over the {len(result.replay)} "
-                 f"friction scenarios {value_text(result.objective, result.value_replay)}; panels and the line "
-                 f"below: the first, "
-                 f"mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
+    if len(result.replay) > 1:  # a friction set: the objective is over the scenarios, the panels: the first
+        what = "CoT$^+$" if result.objective == "min_cot" else "speed"
+        head += (f"\n{result.settings.robust} {what} over the {len(result.replay)} friction scenarios "
+                 f"{value_text(result.objective, result.value_replay)}; panels and the line below: the "
+                 f"first, mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
     return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
             f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
             f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\n{_gains_text(result, significance)}")
@@ -234,9 +234,10 @@ def _write_text(path: Path, text: str) -> Path:
 
 
 def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, summary: dict) -> list[Path]:
-    """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary`` holds the
-    ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction scenario, :func:`scenario_files`),
-    arrays.npz, summary.json and the figure (PNG, PDF) atomically into out_dir; returns the paths written."""
+    """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary`` holds
+    the ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction scenario,
+    :func:`scenario_files`), arrays.npz, summary.json and the figure (PNG, PDF) atomically into out_dir;
+    returns the paths written."""
     out = Path(out_dir)
     written = [_write_text(out / "torques.csv", torques_csv(result))]
     if result.phase.size and "problem" in summary:
