@@ -231,9 +231,8 @@ class WaveFamily:
     def _simulate(self, params: WaveParams, T: float, nan: tuple) -> Evaluation:
         sims = []
         for m in self.models:
-            torque = params.torque(m.robot.k)
             try:
-                r = simulate_torque(m, torque)
+                r = simulate_torque(m, params.torque(m.robot.k))
             except (ValueError, IndexError) as exc:
                 # ValueError: the stepper rejects the input; IndexError: its steady-cycle metrics
                 # find no segment on some psi = 180 gaits (e.g. gamma 91.65/90.44, A 27.93/29.30 deg)

@@ -248,8 +248,8 @@ class GaitOCP:
                 x[self._slices[f"v_{j}"]] = V.ravel(order="F")
                 x[self._slices[f"Wc_{j}"]] = np.cumsum(V.sum(axis=0))
                 cots.append(V.sum() / max(s.direction * blk["S"], 1e-9))
-        if "zeta" in self._slices:  # the worst scenario's speed, or its CoT+ (min_cot)
-            x[self._slices["zeta"]] = max(cots) if cots else min(speeds)
+        if "zeta" in self._slices:  # the worst scenario's CoT+ (min_cot) or speed
+            x[self._slices["zeta"]] = max(cots) if s.objective == "min_cot" else min(speeds)
         return x
 
     # ------------------------------------------------------------------ the solution in physical units
@@ -350,9 +350,8 @@ class GaitOCP:
         records.extend(hist)
         if failed is None and max(sc["comp"] for sc in self.unpack(x)["scen"]) > self.settings.comp_tol:
             failed = "not complementary"
-        if failed is None and self.objective(x) < best[0]:
-            return self.objective(x), x, hist, status
-        return best
+        f = self.objective(x) if failed is None else np.inf
+        return (f, x, hist, status) if f < best[0] else best
 
     def solve_tightened(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """The tightened NLP alone, no homotopy: each pair fixed to the branch that x0 identifies (x0 complementary,

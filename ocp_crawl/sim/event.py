@@ -156,9 +156,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         self.breakpoints = np.sort(np.asarray(getattr(signal, "t_knots", np.zeros(0)), dtype=float) % 1.0)
         self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
         self._init_holds()  # (where it holds still: crossed in one step, the mode decided at the end)
-        # an input linear between its kinks, where steps end, has nothing to resolve between them
-        linear = self.breakpoints.size > 0 and linear_pieces(self.torque, self.breakpoints)
-        if self.opt.resolve_input and not linear:
+        if self.opt.resolve_input and not linear_pieces(self.torque, self.breakpoints):
             self.max_step = min(self.max_step, max(step_limit(self.torque), self.max_step / 64))
 
     # ------------------------------------------------------------------ primitive evaluations

@@ -93,8 +93,8 @@ def linear_pieces(signal, breakpoints: np.ndarray, probes=(0.2, 0.5, 0.8)) -> bo
     """Whether ``signal`` is linear on every piece between its ``breakpoints`` (phases in [0, 1)): its rates
     at interior points of each piece agree to :data:`HELD_PIECE_RTOL` of its largest rate.  Such an input
     (piecewise-linear samples, trapezoid pulses) has nothing to resolve between its kinks, where steps end
-    anyway: its Fourier content above the first harmonics is that of the kinks, so that a run with
-    ``resolve_input`` False follows it as well in fewer steps (the baselines' families do so)."""
+    anyway: its Fourier content above the first harmonics is that of the kinks, and :func:`input_step`
+    would shorten every step for it (a harmonic gait sampled at 50 nodes: 2,102 steps instead of 105)."""
     b = np.unique(np.mod(np.asarray(breakpoints, float), 1.0))
     if b.size == 0:
         return False
