@@ -29,8 +29,13 @@ def real(name: str, value, *, positive: bool = False, nonneg: bool = False, inte
     """
     if not is_real(value):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
-    if not math.isfinite(float(value)):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+    try:
+        finite = math.isfinite(float(value))
+    except OverflowError:  # an integer of hundreds of digits
+        finite = False
+    if not finite:
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        raise ValueError(f"{name} must be finite, got {shown}")
     if integer and int(value) != value:
         raise ValueError(f"{name} must be an integer, got {value!r}")
     v = int(value) if integer else float(value)

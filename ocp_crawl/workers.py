@@ -1,6 +1,10 @@
-"""Worker processes of the package (floor 0: imports nothing of the package): the start method of every process
-pool (sweeps, fits, the harmonic baseline's search), the default number of workers, and :func:`overlap` (a task in a
-forked process while this one does something else)."""
+"""Worker processes of the package (floor 0: imports nothing of the package): the process pool of sweeps,
+reproduce, fits and the baselines' search (:func:`worker_pool`, its start method :func:`mp_context`), the
+default number of workers, and :func:`overlap` (a task in a forked process while this one does something else).
+
+Every worker dies with the process that started it (Linux: a parent-death signal, and elsewhere too a
+watchdog thread that polls the parent): a pool worker of a killed sweep would otherwise live on, blocked
+on its pipe, holding the sweep directory's lock (an inherited ``flock``) and refusing ``--resume``."""
 from __future__ import annotations
 
 import multiprocessing
@@ -8,7 +12,12 @@ import os
 import pickle
 import signal
 import threading
+import time
+from concurrent.futures import ProcessPoolExecutor
 from typing import Callable
+
+#: seconds between two looks of a worker's watchdog at its parent
+WATCH_SECONDS = 0.5
 
 
 def mp_context():
@@ -33,6 +42,28 @@ def default_jobs() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:
         return os.cpu_count() or 1
+
+
+def worker_pool(jobs: int, initializer: Callable | None = None, initargs: tuple = ()) -> ProcessPoolExecutor:
+    """A process pool of ``jobs`` workers (start method :func:`mp_context`) that die with this process.
+
+    ``initializer(*initargs)`` runs in each worker after it is tied to this process's life."""
+    return ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_start_worker,
+                               initargs=(os.getpid(), initializer, initargs))
+
+
+def _start_worker(parent: int, initializer: Callable | None, initargs: tuple) -> None:
+    # a forked worker's parent is this process; a forkserver's or spawn's is the server, which ends
+    # when the package's process does, so the watchdog follows the parent the worker has now
+    _die_with(parent if os.getppid() == parent else os.getppid(), signal.SIGKILL)
+    if initializer is not None:
+        initializer(*initargs)
+
+
+def _watch(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(WATCH_SECONDS)
+    os._exit(1)
 
 
 def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Callable[[], object],
@@ -93,17 +124,23 @@ def _receive(reader) -> tuple[str, object]:
 _PR_SET_PDEATHSIG = 1
 
 
-def _die_with(parent: int) -> None:
-    """Have this (forked) process terminated when ``parent`` dies, on Linux (elsewhere nothing): a child whose parent
-    was killed would otherwise go on solving, or block for ever on a full pipe."""
+def _die_with(parent: int, sig: int = signal.SIGTERM) -> None:
+    """Have this (forked) process end when ``parent`` dies: signal ``sig`` from the kernel on Linux (the
+    pools fork from the thread that submits, the forkserver from its main thread: the signal follows the
+    forking thread), elsewhere a daemon thread that exits the process within :data:`WATCH_SECONDS` of it
+    having another parent (not on Linux: a thread running would keep this process's own pools from
+    forking, :func:`mp_context`).  A child whose parent was killed would otherwise go on solving, or
+    block for ever on a full pipe."""
     try:
         import ctypes
 
-        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+        linux = ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, sig) == 0
     except (OSError, AttributeError):
-        return
+        linux = False
     if os.getppid() != parent:  # the parent died before the prctl
         os._exit(1)
+    if not linux:
+        threading.Thread(target=_watch, args=(parent,), daemon=True, name="parent-watchdog").start()
 
 
 def _child(task, reader, writer, parent: int) -> None:

@@ -1,4 +1,4 @@
-"""Convergence in N of the shipped OCP problems, checked against the README's convergence criteria (run by hand; the
+"""Convergence in N of the shipped OCP problems, checked against the convergence criteria below (run by hand; the
 tables go into notes).
 
     python scripts/convergence.py                                  # the three problems, N = 50 100 200 400

@@ -23,7 +23,7 @@ from ocp_crawl.status import STATUS_MESSAGES
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
 #: expensive properties (one or more simulations per example)
-#: (a small fixed set by default, as the README says, so that CI is deterministic; random with the variable set)
+#: (a small fixed set by default, as docs/benchmarks.md says, so that CI is deterministic; random with the variable set)
 DERANDOMIZE = "OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ
 SIMS = settings(max_examples=EXAMPLES, deadline=None, derandomize=DERANDOMIZE,
                 suppress_health_check=[HealthCheck.too_slow])

@@ -62,6 +62,37 @@ def test_simulate_json(capsys):
     assert data["events"] and all({"t", "kind"} <= set(e) for e in data["events"])
 
 
+def _text_events(text):
+    """(title, [(t, phase, kind)]) of the events table of simulate's text summary."""
+    lines = text.splitlines()
+    i = next(j for j, line in enumerate(lines) if line.startswith("events"))
+    rows = [line.split() for line in lines[i + 2:]]
+    return lines[i], [(float(r[0]), float(r[1]), r[2]) for r in rows]
+
+
+@pytest.mark.parametrize("sets", [[], ["gait.psi_deg=0", "gait.gamma_deg=60"]],
+                         ids=["success", "fold"])
+def test_simulate_json_labels_the_events_the_text_lists(capsys, sets):
+    """The JSON labels every event steady (in the steady cycle the text lists) or not (the transient
+    before it; every event of a failed run), with the phase the text shows; the text's count is the
+    steady ones'."""
+    argv = ["simulate", PAPER, *(a for s in sets for a in ("--set", s))]
+    _, text, _ = run(capsys, *argv)
+    code, out, _ = run(capsys, *argv, "--json")
+    data = json.loads(out)
+    title, rows = _text_events(text)
+    steady = [e for e in data["events"] if e["steady"]]
+    assert all(isinstance(e["steady"], bool) for e in data["events"])
+    if data["success"]:
+        assert title == f"events in the steady cycle: {len(steady)}"
+        assert 0 < len(steady) < len(data["events"])
+        shown = steady
+    else:
+        assert code == 1 and not steady and title == f"events: {len(data['events'])}"
+        shown = data["events"]
+    assert [(round(e["t"], 6), round(e["phase"], 5), e["kind"]) for e in shown] == rows
+
+
 def test_simulate_reports_the_speed_of_a_problem_with_a_period(capsys):
     """[gait] period gives the mean speed |S| / period (text in mm/s, JSON in m/s); without it the speed is "-"
     and null, and S is the same either way (the quasistatic S per cycle does not depend on time)."""

@@ -97,10 +97,16 @@ def test_crosscheck_report(checked):
     table = checked.table()
     assert "overall: PASS" in table and "[FAIL]" not in table
     assert f"{checked.finest.steps:>6d}" in table
-    # every criterion on a line of its own, with its value and its bound
+    # every criterion on a line of its own, with its value and its bound (a count that must be zero
+    # reads "none", sequences that must agree "same": a bound that repeats the value is left out)
     for name, c in s["checks"].items():
         assert set(c) == {"what", "value", "bound", "relation", "passed"}, c
-        assert f"[PASS] {name}: " in table and f" (bound {c['relation']} " in table
+        line = next(x for x in table.splitlines() if x.startswith(f"  [PASS] {name}: "))
+        if (c["relation"], c["bound"]) in (("==", True), ("<=", 0)):
+            assert line.endswith(": none" if c["relation"] == "<=" else ": same")
+            assert "bound" not in line
+        else:
+            assert f" (bound {c['relation']} " in line
 
 
 def test_crosscheck_can_fail():
@@ -257,8 +263,8 @@ def _rows(errors, S=-0.05):
 
 
 def documented_criteria() -> list[str]:
-    """The criteria of the README's crosscheck table (first column, `key`)."""
-    text = (REPO / "README.md").read_text(encoding="utf-8")
+    """The criteria of the crosscheck table in docs/guide/simulators.md (first column, `key`)."""
+    text = (REPO / "docs" / "guide" / "simulators.md").read_text(encoding="utf-8")
     start = text.index("| criterion (`checks` key) |")
     rows = text[start:].splitlines()[2:]
     rows = rows[:next(i for i, line in enumerate(rows) if not line.startswith("|"))]
@@ -266,7 +272,7 @@ def documented_criteria() -> list[str]:
 
 
 def test_only_the_documented_criteria_decide():
-    """The criteria are the README's table, each with its value and bound; the order of S (here
+    """The criteria are the documented table, each with its value and bound; the order of S (here
     0.5: errors halving with each quadrupling of N) and phi (1e-2 rad off) inform, not decide."""
     ev = _result(1.0, S1, [], S=-0.05)
     rows = _rows([4e-6 * (50 / n) ** 0.5 for n in (50, 100, 200, 400)])
@@ -288,6 +294,30 @@ def test_only_the_documented_criteria_decide():
         changed = rows[:-1] + [dataclasses.replace(rows[-1], **change)]
         checks = criteria(ev, changed, CrossCheckTolerances(), L=0.12)[0]
         assert [k for k, c in checks.items() if not c.passed] == [name], change
+
+
+def test_criteria_read_without_bounds_that_say_nothing():
+    """A count that must be zero reads "none" (or the count, "must be none"), sequences that must
+    agree "same" (or "different, must be the same"); no "= 0 (bound <= 0)", "= same (bound ==
+    same)", "-0"."""
+    ev = _result(1.0, S1, [], S=-0.05)
+    rows = _rows([4e-6 * (50 / n) ** 0.5 for n in (50, 100, 200, 400)])
+    checks = criteria(ev, rows, CrossCheckTolerances(), L=0.12)[0]
+    texts = {name: c.text() for name, c in checks.items()}
+    assert texts["runs succeeded"] == ("failed runs of the 5 (event-driven, time-stepping at each "
+                                       "N): none")
+    assert texts["S decreasing"].endswith("not below the previous N's: none")
+    assert texts["mode sequence"] == "mode sequences at N = 400: same"
+    assert texts["event lags"] == ("largest lag of the event-driven mode changes at N = 400 "
+                                   "[steps] = 0 (bound in [-0.001, 0.001])")
+    failed = rows[:-1] + [dataclasses.replace(rows[-1], success=False, modes_match=False)]
+    checks = criteria(ev, failed, CrossCheckTolerances(), L=0.12)[0]
+    assert checks["runs succeeded"].text().endswith(": 1, must be none")
+    assert checks["mode sequence"].text().endswith(": different, must be the same")
+    lag = ("slip_to_stick", SS, 0.5, 0.5, -0.0)
+    lagged = rows[:-1] + [dataclasses.replace(rows[-1], event_lags=(lag,))]
+    checks = criteria(ev, lagged, CrossCheckTolerances(), L=0.12)[0]
+    assert "= 0 (bound in" in checks["event lags"].text()
 
 
 def test_the_max_speed_optimum_passes(cli_optimize_run, capsys):

@@ -1,7 +1,10 @@
-"""The examples gallery: every script in examples/ runs headless in a fresh process and writes its outputs.
+"""The examples gallery: every script in examples/ runs headless and writes its outputs.
 
 A script that is not listed in :data:`OUTPUTS` fails the test (add it with the files it must write), so
-no example goes untested.
+no example goes untested.  The default suite runs the scripts once, in the documentation's build
+(tests/test_docs.py, whose gallery executes them and checks their outputs with
+:func:`check_outputs`); :func:`test_example_runs` runs each in a fresh process, by hand (heavy
+tier).
 """
 import ast
 import os
@@ -21,7 +24,7 @@ OUTPUTS = {
     "04_friction_band.py": ["friction_band.png"],
     "05_optimise_and_replay.py": ["optimise_and_replay.png"],
     "06_custom_waveform.py": ["custom_waveform.png"],
-    "07_study_to_pandas.py": ["study.png", "study.csv"],
+    "07_study_to_pandas.py": ["study.png", "study.csv", "sweep/results.csv"],
     "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
 }
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
@@ -36,7 +39,20 @@ def test_every_example_is_covered():
         assert doc and len(doc.split()) >= 30 and "Run:" in doc, name
 
 
+def check_outputs(name: str, out: Path) -> None:
+    """The example ``name`` wrote every file of :data:`OUTPUTS` into ``out``, PNG files as PNG, and
+    left no temporary file."""
+    for f in OUTPUTS[name]:
+        path = out / f
+        assert path.is_file() and path.stat().st_size > 1000, path
+        if f.endswith(".png"):
+            assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", path
+    leftovers = list(out.rglob("*.tmp"))
+    assert not leftovers, leftovers  # written atomically, nothing left over
+
+
 @pytest.mark.slow
+@pytest.mark.heavy   # the docs build (tests/test_docs.py) runs every example in the default suite
 @pytest.mark.parametrize("name", sorted(OUTPUTS))
 def test_example_runs(name, tmp_path):
     out = tmp_path / "out"
@@ -46,9 +62,4 @@ def test_example_runs(name, tmp_path):
     proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(out)], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=TIMEOUT_S)
     assert proc.returncode == 0, (proc.stdout[-3000:], proc.stderr[-3000:])
-    for f in OUTPUTS[name]:
-        path = out / f
-        assert path.is_file() and path.stat().st_size > 1000, path
-        if f.endswith(".png"):
-            assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert not [p for p in out.iterdir() if p.name.endswith(".tmp")]  # written atomically, nothing left over
+    check_outputs(name, out)

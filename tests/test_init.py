@@ -84,9 +84,11 @@ def test_write_problems_python_api(tmp_path):
 
 
 def test_every_problem_file_the_readme_names_is_shipped():
-    """The README's commands name problems/X; `ocp-crawl init` must write each (a wheel install has no other)."""
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", readme))
+    """The commands of the README and of the docs pages name problems/X; `ocp-crawl init` must write each (a wheel
+    install has no other)."""
+    pages = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), *sorted((REPO / "docs" / "guide").glob("*.md"))]
+    text = "\n".join(page.read_text(encoding="utf-8") for page in pages)
+    named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", text))
     assert "paper_gait.toml" in named
     assert named <= set(shipped_problems()), named - set(shipped_problems())
 

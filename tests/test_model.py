@@ -91,8 +91,9 @@ def test_flat_and_pi_shapes(paper_robot):
 
 
 @pytest.mark.parametrize("field,value,match", [
-    ("M", -1.0, "M must be > 0"), ("L", 0.0, "L must be > 0"), ("k", float("nan"), "k must be finite"),
-    ("beta", -2.0, "beta must be > 0"), ("mu1", -0.1, "mu1 must be >= 0"), ("g", float("inf"), "g must be finite"),
+    ("M", -1.0, "M must be >= 1e-12"), ("L", 0.0, "L must be >= 1e-12"), ("k", float("nan"), "k must be finite"),
+    ("beta", -2.0, "beta must be >= 0.01"), ("mu1", -0.1, "mu1 must be >= 0.0001"),
+    ("g", float("inf"), "g must be finite"),
 ])
 def test_robot_rejects_non_physical_values(field, value, match):
     with pytest.raises(ValueError, match=match):
@@ -118,3 +119,16 @@ def test_check_contact(paper_robot):
         model.check_contact(np.radians([30.0, 50.0]))
     with pytest.raises(ValueError, match="joint 1 at or below the ground"):
         model.check_contact(np.radians([-5.0, 90.0]))
+
+
+@pytest.mark.parametrize("field, value", [("mu1", 0.0), ("mu2", 1e5), ("beta", 1e-9), ("M", 1e300),
+                                          ("L", 0.0), ("k", 10 ** 400), ("g", -9.81)])
+def test_robot_refuses_what_a_problem_file_refuses(field, value, tmp_path):
+    """The API's Robot and the [robot] keys of a file share their bounds: each value is refused by both."""
+    from ocp_crawl.problem import ProblemError, problem_from_dict
+
+    with pytest.raises(ValueError, match=field):
+        Robot(**{field: value})
+    robot = {"M": 0.052, "L": 0.12, "k": 0.1677, "mu1": 0.389, "mu2": 0.389, field: value}
+    with pytest.raises(ProblemError, match=f"\\[robot\\] {field} = "):
+        problem_from_dict({"robot": robot, "gait": {"gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0}})

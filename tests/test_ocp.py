@@ -28,8 +28,15 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(A_max_deg=95), "A_max_deg must be in"),
     (dict(sigma0=(2.0,)), "sigma0 must be"),
     (dict(mu_ratios=(0.9, -1.0)), "mu_ratios must be positive"),
-    (dict(max_accel_deg_s2=-1.0), "max_accel_deg_s2 must be > 0"),
-    (dict(max_rate_deg_s=0.0), "max_rate_deg_s must be > 0"),
+    (dict(max_accel_deg_s2=-1.0), r"max_accel_deg_s2 must be in \[0.01, 1e\+07\]"),
+    (dict(max_rate_deg_s=0.0), r"max_rate_deg_s must be in \[0.01, 10000\] \(below 0.01 deg/s"),
+    (dict(max_rate_deg_s=1e-300), "max_rate_deg_s must be in"),
+    (dict(regularization=1e300), r"regularization must be in \[0, 0.01\] \(a tie-breaker"),
+    (dict(nodes=10 ** 400), "nodes must be finite, got 1000"),
+    (dict(speed_min=np.float32(20.0)), "speed_min must be in"),
+    (dict(replay_tol=0.5), "replay_tol must be in"),
+    (dict(friction_tol=0.9), "friction_tol must be in"),
+    (dict(mu_ratio_eps=0.9), "mu_ratio_eps must be in"),
     (dict(stage_tol=0.0), "stage_tol must be > 0"),
     (dict(loose_last=True), "loose_last needs stage_tol <= sigma_min"),
     (dict(stage_tol_ratio=0.0), "stage_tol_ratio must be > 0"),
@@ -81,6 +88,34 @@ def test_optimize_text_of_a_failed_run_has_no_raw_values():
     text = format_optimize(done)
     assert "S           OCP -79.148 mm, replay -77.887 mm" in text
     assert "+29.9 %" in text and "(relative difference +1.62 %)" in text and "time        4.1 s" in text
+
+
+def test_optimize_text_counts_its_starts_in_words():
+    """One start has no "starts" line (its numbers are the other lines: no "1 starts, 1 converged,
+    replayed objective x to x"); several give their count, the converged ones and the range, one
+    value when they agree; the solve's message says "none converged", not a range of missing
+    values."""
+    from ocp_crawl.cli.study_commands import format_optimize
+    from ocp_crawl.ocp import OCPResult, OCPSettings
+    from ocp_crawl.ocp.judge import spread_text
+    from ocp_crawl.status import Status
+
+    base = OCPResult(success=False, status=Status.REPLAY_FAILED, message="-", objective="max_speed",
+                     settings=OCPSettings()).summary()
+
+    def starts_line(n, converged, low, high):
+        s = dict(base, starts=[{}] * n, starts_converged=converged, objective_value_replay_min=low,
+                 objective_value_replay_max=high)
+        return [line for line in format_optimize(s).splitlines() if line.startswith("starts")]
+
+    assert starts_line(1, 1, 0.0121, 0.0121) == [] and starts_line(0, 0, None, None) == []
+    assert starts_line(4, 3, 0.0121, 0.0129) == [
+        "starts      4 starts, 3 converged, replayed objective 12.100 mm/s to 12.900 mm/s"]
+    assert starts_line(3, 1, 0.0121, 0.0121) == [
+        "starts      3 starts, 1 converged, replayed objective 12.100 mm/s"]
+    assert starts_line(2, 0, None, None) == ["starts      2 starts, none converged"]
+    assert spread_text("max_speed", float("nan"), float("nan"), 0) == "none converged"
+    assert spread_text("min_cot", 20.31, 20.31, 2) == "2 converged, replayed objective 20.3"
 
 
 def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):

@@ -49,7 +49,7 @@ def replayed_value(problem, settings, tau: np.ndarray, T: float) -> tuple[float,
 def test_problem_file_is_solved_confirmed_and_converges(name):
     problem = load_problem(REPO / "problems" / f"{name}.toml")
     settings = ocp_settings(problem)
-    # the file's starts for a convergence run (min_cot: 2, README), one for CI's single N = 50
+    # the file's starts for a convergence run (min_cot: 2, docs/guide/optimal_gaits.md), one for CI's single N = 50
     starts = int(os.environ.get("OCP_CRAWL_OCP_STARTS", settings.starts if len(nodes_list()) > 1 else 1))
     # the harmonic baseline alone (the start and the reference below): every family's baselines have their own
     # tests (test_waveform_baselines.py) and cost three times the search

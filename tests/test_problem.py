@@ -131,8 +131,9 @@ def test_schema_is_one_table_with_units():
             assert key.unit and key.help
     table = schema_markdown()
     assert "`robot.k` | float | N m/rad | required | in [1e-12, 1e12] (so that M g L" in table
-    # the README documents the same table
-    assert table in (REPO / "README.md").read_text(encoding="utf-8")
+    # the documentation shows this table through its generated reference page, and the guide links to it
+    guide = (REPO / "docs" / "guide" / "problem_files.md").read_text(encoding="utf-8")
+    assert "](../reference/problem_files.md)" in guide
 
 
 # ------------------------------------------------------------------------------------------ errors
@@ -256,12 +257,28 @@ def test_run_problem_t_eval():
         run_problem({"robot": {}})
 
 
-def test_readme_status_table_is_current():
+def test_status_guide_links_the_generated_table_and_names_real_statuses():
+    """The status table is generated from STATUS_MESSAGES (docs/reference/statuses.md); the guide links to it, and
+    every status its groups name (in backticks) is a status, in its group's range of codes."""
+    import re
+
     from ocp_crawl.status import STATUS_MESSAGES
 
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    for status, message in STATUS_MESSAGES.items():
-        assert f"| {int(status)} | `{status.name.lower()}` | {message} |" in text
+    text = (REPO / "docs" / "guide" / "statuses.md").read_text(encoding="utf-8")
+    assert "](../reference/statuses.md)" in text
+    codes = {status.name.lower(): int(status) for status in STATUS_MESSAGES}
+    section = text.split("## Statuses", 1)[1].split("\n## ", 1)[0]
+    groups = re.findall(r"^- ([0-9 ,and-]+): (.*?)(?=^- |^\S|\Z)", section, re.M | re.S)
+    assert len(groups) == 4, groups
+    for ranges, words in groups:
+        allowed = set()
+        for part in re.split(r",| and ", ranges):
+            low, _, high = part.strip().partition("-")
+            allowed |= set(range(int(low), int(high or low) + 1))
+        named = re.findall(r"`([a-z_]+)`", words)
+        assert named, ranges
+        for name in named:
+            assert name in codes and codes[name] in allowed, (ranges, name)
 
 
 @pytest.mark.parametrize("gait, A_max", [
@@ -411,15 +428,20 @@ def test_every_robot_key_and_work_key_is_bounded_on_both_sides():
             assert rule.text.startswith("in ") and rule.why, (section, name, rule)
 
 
-def test_readme_tables_are_rectangular():
-    """Every markdown table of the README has as many cells in each row as in its header (a '|' inside a cell, e.g.
-    a schema help text with |x|, splits the row)."""
+def test_readme_and_docs_tables_are_rectangular():
+    """Every markdown table of the README, of the docs pages and of the generated key reference
+    (:func:`schema_markdown`) has as many cells in each row as in its header (a '|' inside a cell, e.g. a schema help
+    text with |x|, splits the row)."""
     from conftest import markdown_table_shapes
 
-    shapes = markdown_table_shapes((REPO / "README.md").read_text(encoding="utf-8"))
-    assert len(shapes) >= 5
-    for header, rows in shapes:
-        assert all(n == header for n in rows), (header, rows)
+    pages = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), *sorted((REPO / "docs" / "guide").glob("*.md"))]
+    texts = {str(page.relative_to(REPO)): page.read_text(encoding="utf-8") for page in pages}
+    texts["schema_markdown()"] = schema_markdown()
+    shapes = {name: markdown_table_shapes(text) for name, text in texts.items()}
+    assert sum(len(s) for s in shapes.values()) >= 5
+    for name, tables in shapes.items():
+        for header, rows in tables:
+            assert all(n == header for n in rows), (name, header, rows)
 
 
 def test_first_loss_finds_what_later_overrides_undo():
@@ -444,3 +466,40 @@ def test_first_loss_finds_what_later_overrides_undo():
     robot = {"robot": {"mu": 0.389, "L": 0.12}}
     assert first_loss(robot, [("robot", "mu1", 0.12), ("robot", "mu2", 0.4)], [("robot", "mu", 0.3)]) == \
         (0, "robot.mu1")
+
+
+def test_problem_files_are_written_by_tomli_w_and_load_back_to_the_same_values():
+    """toml_text (optimal_gait.toml, fitted_problem.toml) is tomli-w's text after the comment lines:
+    numpy arrays and scalars, non-finite floats, strings with quotes, backslashes and control
+    characters and a key that needs quotes load back (tomllib) to the same values; no hand-written
+    serialiser is left."""
+    import inspect
+    import tomli_w
+    from ocp_crawl.problem import overrides
+    from ocp_crawl.problem.overrides import toml_string, toml_text
+
+    name = 'a "b"\\c\t.csv'
+    sections = {"robot": {"k": np.float64(0.1677), "mu": 0.1 + 0.2, "L": 0.12},
+                "gait": {"phase": np.linspace(0.0, 0.75, 4), "tau1": [-0.5, math.inf], "file": name},
+                "simulation": {"max_cycles": np.int64(12), "odd key": float("-inf")}}
+    text = toml_text(sections, comments=["written by a test", "second line"])
+    assert text.startswith("# written by a test\n# second line\n\n")
+    assert text.split("\n\n", 1)[1] == tomli_w.dumps(overrides._plain_value(sections))
+    back = tomllib.loads(text)
+    assert back["robot"] == {"k": 0.1677, "mu": 0.30000000000000004, "L": 0.12}
+    assert back["gait"] == {"phase": [0.0, 0.25, 0.5, 0.75], "tau1": [-0.5, math.inf], "file": name}
+    assert back["simulation"] == {"max_cycles": 12, "odd key": -math.inf}
+    assert tomllib.loads(toml_text({"robot": {"k": 1.0}})) == {"robot": {"k": 1.0}}
+    path = 'x"y\\z\n'
+    assert tomllib.loads("v = " + toml_string(path))["v"] == path
+    assert not hasattr(overrides, "_toml_value")
+    assert "tomli_w" in inspect.getsource(overrides.toml_string)
+
+
+@pytest.mark.parametrize("data, words", [({5: {}}, "a section is named 5 (int)"),
+                                         ({"robot": {5: 1}}, "a key of [robot] is named 5 (int)")])
+def test_a_dict_with_names_that_are_not_strings_is_bad_input(data, words):
+    from ocp_crawl.problem import ProblemError, problem_from_dict
+    with pytest.raises(ProblemError) as info:
+        problem_from_dict(data)
+    assert words in str(info.value)

@@ -4,7 +4,8 @@ with unequal friction at the feet (mu1 != mu2, where the slipping foot can chang
 Whenever both simulators succeed, the relative S error of the time-stepping is at most 1e-4 at N = 200 (the
 bound of ``ocp-crawl crosscheck``), the mode sequences of the steady cycle agree and every event of the
 event-driven stepper falls on a step boundary (lag within 1e-3 steps), except the one thing the time-stepping
-does not resolve (README, "crosscheck"): an excursion into another mode and back inside one step (shorter than
+does not resolve (docs/guide/simulators.md, "Cross-checking the simulators"): an excursion into another mode
+and back inside one step (shorter than
 1/N of a cycle: the step starts and ends in the same mode, so nothing tells it to split).  Such excursions are
 taken out of the event-driven sequence before the comparison, and counted; the S bound holds with them.  The two simulators are independent:
 the time-stepping locates events with its own step NLP (:mod:`ocp_crawl.sim.step_split`).

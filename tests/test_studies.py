@@ -373,11 +373,25 @@ def _complete_figure(path):
     return None
 
 
+def _group_ends(pgid: int, seconds: float) -> bool:
+    """Whether the process group ``pgid`` is empty within ``seconds`` (killed if not)."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.05)
+    os.killpg(pgid, signal.SIGKILL)
+    return False
+
+
 @pytest.mark.heavy
 def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduced, tmp_path):
-    """``reproduce --quick`` killed by SIGKILL during the grids and again (resuming) while drawing the
-    figures, then resumed to the end: the same numbers, report, grids and figures as an uninterrupted
-    run, and no temporary file left behind (a kill while a figure is written leaves its temporary)."""
+    """``reproduce --quick`` killed by SIGKILL during the grids (its main process alone: its workers end
+    within seconds) and again (the whole group, resuming) while drawing the figures, then resumed to the
+    end: the same numbers, report, grids and figures as an uninterrupted run, and no temporary file left
+    behind (a kill while a figure is written leaves its temporary)."""
     rng = random.Random(611)
     out = tmp_path / "repro"
     cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs", "2"]
@@ -394,10 +408,11 @@ def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduc
             while proc.poll() is None and time.monotonic() < deadline and stage not in err.read_text():
                 time.sleep(0.01)
             time.sleep(rng.uniform(0.0, delay))
-        finally:
-            os.killpg(proc.pid, signal.SIGKILL)
+        finally:  # the first kill to the main process alone: its workers must follow it within seconds
+            os.kill(proc.pid, signal.SIGKILL) if i == 0 else os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
         assert proc.returncode == -signal.SIGKILL, f"run {i} ended before it was killed: {err.read_text()}"
+        assert _group_ends(proc.pid, 10.0), f"a worker of run {i} outlived the kill by 10 s"
         assert stage in err.read_text() and "done in" not in err.read_text()
     finished = subprocess.run(cmd + ["--resume", "--no-progress"], capture_output=True, text=True,
                               env=dict(os.environ, MPLBACKEND="Agg"))

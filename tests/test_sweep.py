@@ -69,7 +69,9 @@ def test_sweep_equals_point_by_point_runs(tmp_path):
     assert res.array("gait.gamma_deg")[:, 1].tolist() == [100.0] * 3
     # the file holds the same rows, in grid order, with the documented columns
     table = read_csv(tmp_path / "s" / RESULTS_FILE)
-    assert table[0] == ["gait.psi_deg", "gait.gamma_deg", "S", "W_plus", "CoT_plus", "status", "message"]
+    # every number with its unit, as in the input tables (ocp_crawl.io.tables); text columns bare
+    assert table[0] == ["gait.psi_deg [deg]", "gait.gamma_deg [deg]", "S [m]", "W_plus [J]",
+                        "CoT_plus [-]", "status", "message"]
     assert [(float(r[0]), float(r[1])) for r in table[1:]] == [(p, g) for p in grid["gait.psi_deg"]
                                                               for g in grid["gait.gamma_deg"]]
     assert_same_rows(SweepResult.read(tmp_path / "s").rows, res.rows)
@@ -118,7 +120,7 @@ def test_failures_are_recorded_with_status_and_message(tmp_path):
     assert ok["status"] == "success" and ok["cycles"] >= 2
     assert w[1, 2, 0].sum() == pytest.approx(ok["W_plus"], rel=1e-12)
     table = read_csv(tmp_path / "f" / RESULTS_FILE)
-    assert len(table) == 1 + 12 and table[0][-2:] == ["W_plus_joint", "cycles"]
+    assert len(table) == 1 + 12 and table[0][-2:] == ["W_plus_joint [J]", "cycles [-]"]
     col = table[0].index("status")
     assert [r[col] for r in table[1:]] == list(status.ravel())
     assert_same_rows(SweepResult.read(tmp_path / "f").rows, res.rows)
@@ -161,7 +163,8 @@ def test_existing_output_needs_force_and_resume_checks_settings(tmp_path):
     with pytest.raises(SweepError, match="already holds a sweep .*--resume.*--force"):
         run_sweep(PAPER, grid, out_dir=out)
     assert (out / RESULTS_FILE).read_bytes() == before
-    with pytest.raises(SweepError, match=r"differs .*grid gait.psi_deg: 2 values 30.0..60.0 -> 3 values"):
+    with pytest.raises(SweepError, match=r"differs .*grid gait.psi_deg: 2 values 30\.\.60 -> "
+                                         r"3 values 30\.\.90"):
         run_sweep(PAPER, {"gait.psi_deg": [30.0, 60.0, 90.0]}, out_dir=out, resume=True)
     with pytest.raises(SweepError, match=r"\[robot\] k 0.1677 -> 0.2"):
         run_sweep(load_problem(PAPER, ["robot.k=0.2"]), grid, out_dir=out, resume=True)
@@ -282,11 +285,39 @@ def test_resume_after_a_kill_while_the_journal_header_was_written(tmp_path, monk
         with pytest.raises(KeyboardInterrupt):
             run_sweep(PAPER, grid, out_dir=out, resume=True)
         monkeypatch.undo()
-        assert (out / JOURNAL_FILE).read_text().startswith("index,gait.psi_deg,")
+        assert (out / JOURNAL_FILE).read_text().startswith("index [-],gait.psi_deg [deg],")
         res = run_sweep(PAPER, grid, out_dir=out, resume=True)
         assert res.computed == 2
         assert (out / RESULTS_FILE).read_text() == expected
         assert_same_rows(res.rows, ref.rows)
+
+
+def test_files_without_units_in_the_header_are_read_and_other_units_refused(tmp_path):
+    """results.csv and the journal of an earlier version (bare column names) are read as they
+    are, and a resume writes results.csv with the units; a header whose unit differs is refused
+    naming the column."""
+    out = tmp_path / "s"
+    grid = {"gait.psi_deg": [0.0, 45.0], "model.gravity": ["physical"]}
+    ref = run_sweep(PAPER, grid, out_dir=out, extra_columns=("cycles",))
+    expected = (out / RESULTS_FILE).read_text()
+    assert expected.startswith("gait.psi_deg [deg],model.gravity,S [m],W_plus [J],CoT_plus [-],"
+                               "status,message,cycles [-]\n")
+    lines = expected.splitlines(keepends=True)
+    bare = "gait.psi_deg,model.gravity,S,W_plus,CoT_plus,status,message,cycles\n"
+    (out / RESULTS_FILE).write_text(bare + "".join(lines[1:]))
+    assert_same_rows(SweepResult.read(out).rows, ref.rows)
+    # an earlier version's journal of the first point: resumed, and the file written with the units
+    (out / RESULTS_FILE).unlink()
+    (out / JOURNAL_FILE).write_text("index," + bare + "0," + lines[1])
+    res = run_sweep(PAPER, grid, out_dir=out, resume=True, extra_columns=("cycles",))
+    assert res.computed == 1 and (out / RESULTS_FILE).read_text() == expected
+    (out / RESULTS_FILE).write_text(expected.replace("S [m]", "S [mm]", 1))
+    with pytest.raises(SweepError, match=r"results.csv: columns differ from settings.json "
+                                         r"\(column 3 is 'S \[mm\]', expected 'S \[m\]'\); "
+                                         r"start again with --force"):
+        SweepResult.read(out)
+    with pytest.raises(SweepError, match=r"column 3 is 'S \[mm\]'"):
+        run_sweep(PAPER, grid, out_dir=out, resume=True, extra_columns=("cycles",))
 
 
 # --------------------------------------------------------------------------------------------
@@ -324,6 +355,34 @@ def test_cli_sweep_echoes_the_resolved_values(tmp_path, capsys):
     assert main(["sweep", str(PAPER), "--grid", "gait.psi_deg=0:44:step=2", "--set", "robot.k=0.5", "--jobs", "1",
                  "--out", str(tmp_path / "c")]) == 0
     assert "  gait.psi_deg = 0, 2, 4, 6, ..., 42, 44 (23 values, step 2)" in capsys.readouterr().out.splitlines()
+
+
+def test_cli_sweep_shows_decimal_values_and_counts_in_words(tmp_path, capsys):
+    """Range values are their decimals in the text, the JSON and results.csv (0.1, not
+    0.09999999999999999); one point is "1 point", a lowest-CoT+ line naming the best point again is
+    left out, and a resume that computes nothing says so instead of timing it."""
+    argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=0:0.3:step=0.1", "--jobs", "1",
+            "--no-progress"]
+    assert main(argv + ["--out", str(tmp_path / "a"), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["grid"] == {"gait.psi_deg": [0.0, 0.1, 0.2, 0.3]}
+    assert data["best"]["point"] == {"gait.psi_deg": 0.1}
+    cells = [r[0] for r in read_csv(tmp_path / "a" / RESULTS_FILE)[1:]]
+    assert cells == ["0.0", "0.1", "0.2", "0.3"]
+    assert main(argv + ["--out", str(tmp_path / "b")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "  gait.psi_deg = 0, 0.1, 0.2, 0.3 (4 values, step 0.1)" in lines
+    assert any(line.startswith("best S ") and " at gait.psi_deg = 0.1 (" in line for line in lines)
+    # the best point's CoT+ is the lowest: no second line for it
+    assert not any(line.startswith("lowest CoT+") for line in lines)
+    one = ["sweep", str(PAPER), "--grid", "gait.psi_deg=45", "--jobs", "1",
+           "--out", str(tmp_path / "c")]
+    assert main(one) == 0
+    text = capsys.readouterr().out
+    assert ": 1 point\n" in text and "(1 point computed)" in text and "points" not in text
+    assert main(one + ["--resume"]) == 0
+    text = capsys.readouterr().out
+    assert "time       nothing computed: 1 point from the previous run" in text.splitlines()
 
 
 def test_sweep_over_one_foot_expands_mu(tmp_path, capsys):

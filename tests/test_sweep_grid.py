@@ -121,3 +121,26 @@ def test_grid_size_is_bounded():
         normalize_grid(grid)
     with pytest.raises(ProblemError, match="START and STOP must be finite, got STOP = inf"):
         parse_grid("gait.psi_deg=0:inf:3")
+
+
+@pytest.mark.parametrize("spec, values", [
+    ("robot.mu=0.05:0.5:10", [0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5]),
+    ("gait.psi_deg=0:0.3:4", [0.0, 0.1, 0.2, 0.3]),
+    ("gait.psi_deg=0:0.3:step=0.1", [0.0, 0.1, 0.2, 0.3]),
+    ("gait.psi_deg=-0.3:0:step=0.1", [-0.3, -0.2, -0.1, 0.0]),
+    ("robot.k=0.1:0.2:step=0.05", [0.1, 0.15, 0.2]),
+    ("gait.psi_deg=0:1:4", [0.0, 1 / 3, 2 / 3, 1.0]),
+])
+def test_range_values_are_the_decimals_they_stand_for(spec, values):
+    """A range's values are the floats of their decimals (0.15, not numpy.linspace's
+    0.15000000000000002), shown as such; a value without a short decimal is the nearest float."""
+    from ocp_crawl.sweep.grid import axis_text, value_text
+
+    _, got = parse_grid(spec)
+    assert got.tolist() == values
+    assert all(len(repr(v)) <= 6 or v in (1 / 3, 2 / 3) for v in got.tolist())
+    text = axis_text(got.tolist())
+    assert "0000" not in text and "9999" not in text
+    assert value_text(0.1 + 0.2) == "0.3" and value_text(0.049999999999999996) == "0.05"
+    assert value_text(45.0) == "45" and value_text(3) == "3"
+    assert value_text(0.123456789) == "0.123456789"

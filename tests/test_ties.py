@@ -1,7 +1,8 @@
 """Ties of the two feet's friction limits under step-like inputs (pulses, trapezoids, square-like samples).
 
 A symmetric robot under a symmetric hold of its input sits with both feet at equal friction limits; the
-event-driven stepper decides what follows by the rates after the hold (README, "Friction ties").  The rule is
+event-driven stepper decides what follows by the rates after the hold (docs/guide/simulators.md, "Friction
+ties").  The rule is
 checked against answers that do not use it: the one-sided friction limits mu1 = mu2 (1 +- eps), eps -> 0 (the
 limits then no longer tie; extrapolated linearly from eps and 2 eps), and the MPCC time-stepping, whose
 complementarity conditions decide each step by themselves.
@@ -223,7 +224,8 @@ def test_step_like_inputs_are_decided(case):
     if res.success:
         mpcc = run(ref, robot, solver="mpcc", steps=MPCC_STEPS)
         if mpcc.success and not agree(res.S, mpcc.S):
-            # the time-stepping can slip on for a step after a slip that stops at a knot (README, "crosscheck"):
+            # the time-stepping can slip on for a step after a slip that stops at a knot (docs/guide/simulators.md,
+            # "Cross-checking the simulators", "Measured"):
             # its S then converges to the event solver's with N (checked at 2 N)
             note(f"N = {MPCC_STEPS}: S = {mpcc.S} against {res.S}")
             mpcc = run(ref, robot, solver="mpcc", steps=2 * MPCC_STEPS)

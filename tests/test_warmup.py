@@ -52,6 +52,20 @@ def test_warmup_builds_every_function_once_and_simulations_compile_nothing_more(
     assert set(cache.glob("*.so")) == libraries
 
 
+def test_the_first_run_on_an_empty_cache_says_on_stderr_that_it_compiles(tmp_path):
+    """One line on stderr when the cache does not hold the libraries yet; stdout stays the JSON
+    alone; a run on the filled cache says nothing."""
+    cache = tmp_path / "empty"
+    first = _cli(["simulate", "problems/paper_gait.toml", "--json"], cache)
+    assert first.returncode == 0, first.stderr
+    assert json.loads(first.stdout)["success"] is True
+    assert first.stderr == (f"ocp-crawl: compiling the model's C functions into {cache} (not in "
+                            "the cache yet; once per machine)\n")
+    again = _cli(["simulate", "problems/paper_gait.toml", "--json"], cache)
+    assert again.returncode == 0 and again.stderr == ""
+    assert json.loads(again.stdout) == json.loads(first.stdout)
+
+
 def test_warmup_text_names_the_cache_and_each_function(tmp_path):
     cache = tmp_path / "c"
     out = _cli(["warmup"], cache)

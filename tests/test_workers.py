@@ -138,3 +138,58 @@ def test_fork_is_not_used_while_other_threads_run():
     finally:
         stop.set()
         thread.join()
+
+
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def _rows(journal) -> int:
+    try:
+        return max(journal.read_bytes().count(b"\n") - 1, 0)
+    except FileNotFoundError:
+        return 0
+
+
+@pytest.mark.parametrize("whole_group", [False, True], ids=["main_process_only", "process_group"])
+def test_a_killed_sweep_leaves_no_worker_and_resumes_to_the_same_file(tmp_path, whole_group):
+    """SIGKILL to the sweep's main process alone (a timeout, an out-of-memory kill) or to its whole group,
+    after a few rows: within seconds no process of the run is left (a worker holding the directory's lock
+    would refuse --resume), and --resume ends on the bytes of an uninterrupted run."""
+    from pathlib import Path
+
+    paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
+    grid = ["--grid", "gait.psi_deg=0:180:20", "--grid", "gait.gamma_deg=85:95:2"]
+    base = [sys.executable, "-m", "ocp_crawl", "sweep", str(paper), *grid,
+            "--set", "simulation.max_step=0.002", "--jobs", "2", "--no-progress"]
+    out = tmp_path / "killed"
+    # no pipes: a worker that outlived the kill would hold them open and block the wait here
+    proc = subprocess.Popen(base + ["--out", str(out)], cwd=tmp_path, start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None and _rows(out / "results.partial.csv") < 3:
+        time.sleep(0.005)
+    if whole_group:
+        os.killpg(proc.pid, signal.SIGKILL)
+    else:
+        os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the sweep ended before it could be killed"
+    deadline = time.monotonic() + 10
+    while _group_alive(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    if _group_alive(proc.pid):
+        os.killpg(proc.pid, signal.SIGKILL)
+        pytest.fail("a worker outlived its killed sweep by 10 s")
+    assert not (out / "results.csv").exists()
+    resumed = subprocess.run(base + ["--out", str(out), "--resume"], cwd=tmp_path, capture_output=True,
+                             text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    ref = subprocess.run(base + ["--out", str(tmp_path / "ref")], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300)
+    assert ref.returncode == 0, ref.stderr
+    assert (out / "results.csv").read_bytes() == (tmp_path / "ref" / "results.csv").read_bytes()

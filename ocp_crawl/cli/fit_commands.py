@@ -19,7 +19,7 @@ nfev_type = integer("--max-nfev", 1, " (evaluations of all rows)", high=MAX_NFEV
 def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("problem", metavar="PROBLEM.toml", help="problem file: robot, gait, gravity, solver options")
     p.add_argument("data", metavar="DATA.csv", nargs="+",
-                   help="measurement files (README, 'Calibration'): e.g. 'psi [deg],S [mm],sigma_S [mm]'")
+                   help="measurement files (docs/guide/calibration.md): e.g. 'psi [deg],S [mm],sigma_S [mm]'")
     p.add_argument("--param", dest="params", action="append", default=[], metavar="NAME", required=True,
                    help="a parameter to fit, named by its problem key (robot.k, robot.mu, robot.mu1, gait.gamma_deg, "
                         "...) or pressure.a1/a2/b1/b2/phi_rest_deg/amplitude_bar (repeatable)")
@@ -35,7 +35,7 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
                         "constants of --form)")
     p.add_argument("--form", choices=PRESSURE_FORMS,
                    help="pressure input form (default: the problem's [pressure] form, else 'paper'): 'paper', the "
-                        "paper's form (ref) p0 + A_p sin(2 pi t +- psi/2), p0 the nominal pressure, A_p 0.4 bar, rest "
+                        "paper's form p0 + A_p sin(2 pi t +- psi/2), p0 the nominal pressure, A_p 0.4 bar, rest "
                         "angle 180 deg; 'raised', the raised sine from 0 to the peak p0 with the stored fitted rest "
                         "angle")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",

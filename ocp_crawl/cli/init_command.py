@@ -20,7 +20,7 @@ def _init_args(p: argparse.ArgumentParser) -> None:
     names = ", ".join(shipped_problems())
     p.description = (f"Write the example problem files shipped with the package ({names}) into DIR/problems/ and the "
                      "examples gallery (Python scripts) into DIR/examples/ (default DIR: the current directory, "
-                     "giving ./problems/ and ./examples/), so that the README's commands run as written, e.g. "
+                     "giving ./problems/ and ./examples/), so that the documentation's commands run as written, e.g. "
                      "'ocp-crawl simulate problems/paper_gait.toml'. Existing files are never overwritten without "
                      "--force: the command refuses (exit 2, naming the file) before writing anything. Each file is "
                      "written atomically.")

@@ -169,7 +169,7 @@ def write_outputs(out: Path, result: CrawlResult, problem: Problem, data: dict, 
 # simulate
 # --------------------------------------------------------------------------------------------
 def _simulate_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see docs/guide/problem_files.md)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set robot.k=0.05 or --set gait.drive=angles (repeatable)")
     p.add_argument("--drive", choices=("torque", "angles"), help="shortcut for --set gait.drive=...")
@@ -248,7 +248,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"\nfigures and summaries in {out}/ (<case>_gait.png, <case>_gait.pdf, <case>_summary.json, "
           "<case>_arrays.npz)")
     print("S < 0: the robot moves towards foot 1, the joint that leads in phase. The two gravity signs "
-          "differ by a few percent in S (see README, 'Gravity conventions').")
+          "differ by a few percent in S (see docs/guide/model.md, 'Gravity conventions').")
     for f in failed:
         print(f"{PROG}: simulation failed: {f}", file=sys.stderr)
     return EXIT_FAILURE if failed else EXIT_OK
@@ -258,7 +258,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 # animate
 # --------------------------------------------------------------------------------------------
 def _animate_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see README, 'Problem files')")
+    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file (see docs/guide/problem_files.md)")
     p.add_argument("--out", metavar="FILE.gif", default="crawl.gif", type=out_file(".gif"),
                    help="output GIF (default: ./crawl.gif)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",

@@ -27,7 +27,7 @@ from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_
 # sweep
 # --------------------------------------------------------------------------------------------
 def _sweep_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see README, 'Problem files')")
+    p.add_argument("problem", metavar="PROBLEM.toml", help="base problem file (see docs/guide/problem_files.md)")
     p.add_argument("--grid", action="append", required=True, metavar="KEY=START:STOP:NUM",
                    help="an axis: NUM values from START to STOP inclusive, KEY=START:STOP:step=STEP (START, "
                         "START+STEP, ... up to STOP), or a list KEY=A,B,C (repeatable; the first axis varies "
@@ -217,7 +217,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 # optimize
 # --------------------------------------------------------------------------------------------
 def _optimize_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("problem", metavar="PROBLEM.toml", help="problem file with an [ocp] section (see README)")
+    p.add_argument("problem", metavar="PROBLEM.toml",
+                   help="problem file with an [ocp] section (see docs/guide/optimal_gaits.md)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
@@ -329,15 +330,23 @@ def _peaks(s: dict) -> str:
             f"{_pair(s.get('harmonic_peak_slip_speed_m_s'), mm)} mm/s")
 
 
+def _starts_text(s: dict) -> str | None:
+    """Several starts: "4 starts, 3 converged, replayed objective a to b"; None for one."""
+    starts, converged, obj = s.get("starts") or [], s.get("starts_converged") or 0, s["objective"]
+    if len(starts) < 2:
+        return None
+    low, high = (_value(obj, s.get(f"objective_value_replay_{e}")) for e in ("min", "max"))
+    spread = f"replayed objective {low}" + ("" if low == high else f" to {high}")
+    return f"{len(starts)} starts, " + (f"{converged} converged, {spread}" if converged else
+                                        "none converged")
+
+
 def format_optimize(s: dict) -> str:
     """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, speeds in
     mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
     replay)."""
     obj = s["objective"]
-    starts = s.get("starts") or []
-    low, high = s.get("objective_value_replay_min"), s.get("objective_value_replay_max")
-    spread = (f"{len(starts)} starts, {s.get('starts_converged')} converged, replayed objective "
-              f"{_value(obj, low)} to {_value(obj, high)}" if starts else "-")
+    spread = _starts_text(s)
     lines = [
         f"status      {s['status']}: {s['message']}",
         f"objective   {obj} ({s['nodes']} nodes, {s['parametrization']} torques), period T "
@@ -352,7 +361,7 @@ def format_optimize(s: dict) -> str:
         f"optimum by replay {_gain(s)}",
         *_baseline_lines(s),
         f"peaks       {_peaks(s)}",
-        f"starts      {spread}",
+        *([f"starts      {spread}"] if spread else []),
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",
         f"time        {units.seconds(s['solve_time_s'])}",
@@ -422,8 +431,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     # the first N of --nodes is the problem's ocp.nodes (so the reports name the N solved)
     data = read_toml(args.problem)   # once: the file may be a named pipe
     if "ocp" not in data:
-        raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see README, "
-                       "'Problem files', and problems/ocp_max_speed.toml)")
+        raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see "
+                       "docs/guide/optimal_gaits.md and problems/ocp_max_speed.toml)")
     problem = problem_from_dict(data, source=str(args.problem),
                                 overrides=[*args.overrides, *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
     if problem.drive != "torque":

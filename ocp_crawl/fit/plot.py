@@ -1,6 +1,7 @@
 """The figure of a fit: every measurement file's data with error bars against the fitted model, and the residuals."""
 from __future__ import annotations
 
+import json
 import math
 import os
 from pathlib import Path
@@ -10,6 +11,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ocp_crawl.fit.data import DISPLAY, INPUTS
+from ocp_crawl.fit.forward import RowTask, evaluate_rows, row_tasks
 from ocp_crawl.fit.solve import FitResult
 from ocp_crawl.io.files import atomic_write
 
@@ -19,6 +21,8 @@ INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "
 LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
 #: characters of a 10-point title line per inch of figure width (a little less than fits)
 TITLE_CHARS_PER_INCH = 14
+#: abscissae of the model curve of a segment, besides the data's own (each one simulation)
+CURVE_POINTS = 24
 
 
 def _value(name: str, unit: str, x: float, s: float) -> str:
@@ -64,8 +68,39 @@ def _title(fit: FitResult, width: int) -> str:
     return f"{values}\nchi2/dof = {fit.chi2_red:.3g} ({fit.dof} dof), {rank}{_inputs(fit)}"
 
 
+def model_curve(fit: FitResult, f, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The model of file ``f`` over the rows ``rows`` (one segment, sorted by the abscissa) as a
+    curve (abscissa, model, SI; and True): at the rows and at :data:`CURVE_POINTS` abscissae
+    between their smallest and largest, the other inputs held at the rows' common values
+    (simulated here), normalised as the file (``S_norm``).  Only the rows (and False) when the
+    other inputs vary over them or the model failed at every row."""
+    d = f.data
+    name = d.abscissa
+    x = np.asarray(d.table[name], float)[rows]
+    at_rows = (x, np.asarray(f.model, float)[rows])
+    fixed = {c: np.unique(np.asarray(d.table[c], float)[rows]) for c in d.inputs if c != name}
+    if rows.size < 2 or fit.problem is None or any(v.size != 1 for v in fixed.values()) \
+            or not np.isfinite(at_rows[1]).any():
+        return (*at_rows, False)
+    pj = json.dumps(fit.problem.to_dict(), sort_keys=True)
+    pressure = tuple(sorted(fit.pressure.items()))
+    grid = np.linspace(x.min(), x.max(), CURVE_POINTS)
+    held = tuple((c, float(v[0])) for c, v in fixed.items())
+    tasks = [RowTask(d.kind, pj, (), pressure, ((name, float(g)),) + held) for g in grid]
+    ref = d.reference_row
+    if ref is not None:   # the raw model S of the normalising row
+        tasks.append(row_tasks(fit.problem, d, {}, fit.pressure)[ref])
+    y = np.array([v for v, _ in evaluate_rows(tasks)], dtype=float)
+    if ref is not None:
+        y = y[:-1] / y[-1]
+    xs = np.concatenate([x, grid])
+    order = np.argsort(xs, kind="stable")
+    return xs[order], np.concatenate([at_rows[1], y])[order], True
+
+
 def fit_figure(fit: FitResult) -> Figure:
-    """Data (error bars: one sigma) and model (fitted parameters) per file, residuals in sigmas below."""
+    """Data (error bars: one sigma) and model (fitted parameters; a curve, :func:`model_curve`)
+    per file, residuals in sigmas below."""
     n = len(fit.files)
     fig = Figure(figsize=(5.2 * n, 5.6), constrained_layout=True)
     FigureCanvasAgg(fig)
@@ -86,8 +121,11 @@ def fit_figure(fit: FitResult) -> Figure:
             which = f" (segment {seg:g})" if "segment" in d.inputs else ""
             ax.errorbar(x[segments == seg], d.y[segments == seg] * yf, yerr=d.sigma[segments == seg] * yf, fmt="o",
                         color=("k", "tab:purple")[i % 2], ms=4, capsize=3, label=f"data (+- 1 sigma){which}")
-            ax.plot(x[rows], f.model[rows] * yf, "-s", color=("tab:blue", "tab:orange")[i % 2], ms=4,
-                    label=f"model at the fitted parameters{which}")
+            xs, ys, dense = model_curve(fit, f, rows)
+            at = "" if dense else ", at the rows"   # markers where the model is known only there
+            ax.plot(xs * xf, ys * yf, "-" if dense else "-s", lw=1.6, ms=4, zorder=3,
+                    color=("tab:blue", "tab:orange")[i % 2],
+                    label=f"model at the fitted parameters{at}{which}")
         if (~ok).any():
             ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2, label="simulation failed (data shown)")
         ref = d.reference_row

@@ -22,7 +22,6 @@ shows the trade-offs.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
@@ -36,7 +35,7 @@ from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.status import Status
-from ocp_crawl.workers import mp_context
+from ocp_crawl.workers import worker_pool
 
 #: where the fit starts, in messages
 START = "the start values"
@@ -353,7 +352,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         at the start values (naming the file and row).
     """
     check_inputs(problem, datasets, params, pressure, form)
-    executor = ProcessPoolExecutor(jobs, mp_context=mp_context()) if jobs > 1 else None
+    executor = worker_pool(jobs) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)
         z0 = np.array([p.x0 for p in params]) / obj.scale

@@ -101,3 +101,9 @@ def scientific(x: Any, digits: int = 2) -> str:
     if v is None or math.isnan(v):
         return MISSING
     return format(v, f".{digits - 1}e")
+
+
+def plural(n: int, noun: str, nouns: str | None = None) -> str:
+    """A count with its noun in the right number: ``plural(1, "point")`` -> "1 point",
+    ``plural(3, "point")`` -> "3 points" (``nouns``: the plural when it is not noun + "s")."""
+    return f"{n} {noun if n == 1 else nouns or noun + 's'}"

@@ -44,6 +44,23 @@ def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "Fa
 #: floating-point results (no -ffast-math, no -march that would allow fused multiply-adds)
 CFLAGS = ("-O2", "-fno-math-errno")
 
+#: say on stderr, once per process, when a library is compiled because the cache does not hold it
+#: yet (the first run on a machine pauses for seconds); False: silent (the test suite, whose checks
+#: of stderr must not depend on the state of the cache)
+ANNOUNCE_BUILDS = True
+_announced = False
+
+
+def _announce_build(out_dir: Path) -> None:
+    """One line on stderr (never stdout, which may carry --json output) the first time this process
+    compiles."""
+    global _announced
+    if not ANNOUNCE_BUILDS or _announced:
+        return
+    _announced = True
+    print(f"ocp-crawl: compiling the model's C functions into {out_dir} (not in the cache yet; "
+          "once per machine)", file=sys.stderr, flush=True)
+
 
 class CacheError(ValueError):
     """The compiled-library cache cannot be used (bad input: ``OCP_CRAWL_CACHE`` or ``XDG_CACHE_HOME``).
@@ -173,6 +190,7 @@ def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Functio
     lib = out_dir / f"{fun.name()}_{_key(fun, cc, tag)}.so"
     if lib.exists():
         return lib
+    _announce_build(out_dir)
     src = _generate(companions() if companions is not None else [fun])
     try:
         out_dir.mkdir(parents=True, exist_ok=True)

@@ -24,8 +24,8 @@ from typing import Any, Literal, NamedTuple
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.checks import real
 from ocp_crawl.model.compiled import FastFunction, compiled_function
+from ocp_crawl.model.robot import Robot  # noqa: F401 - the model's robot, imported from here too
 
 GravityConvention = Literal["physical", "paper"]
 GRAVITY_CONVENTIONS = ("physical", "paper")
@@ -56,79 +56,6 @@ def params(p) -> Params:
 #: foot weight (1 = foot 1, 0 = foot 2), stick distance d0 [m]
 Q_NAMES = ("e_ss", "sigma", "w", "d0")
 NQ = len(Q_NAMES)
-
-
-@dataclass(frozen=True)
-class Robot:
-    """Physical parameters of the three-link crawler (SI units), frozen and validated.
-
-    Parameters
-    ----------
-    M : float
-        Total mass [kg] (> 0).
-    L : float
-        Total length [m] (> 0); legs of length l = L / (2 + beta), body beta l.
-    beta : float
-        Body-to-leg length ratio [-] (> 0).
-    k : float
-        Torsion spring stiffness of each joint [N m/rad] (> 0).
-    mu1, mu2 : float
-        Coulomb friction coefficients of foot 1 (left) and foot 2 (right) [-] (>= 0).
-    g : float
-        Gravitational acceleration [m/s^2] (> 0).
-
-    The defaults are the paper's Table I robot (:meth:`paper`).  A non-finite or out-of-range value
-    raises ValueError naming the field; ``robot.replace(k=0.2)`` gives a modified copy.
-    """
-
-    M: float = 0.052
-    """total mass [kg]"""
-    L: float = 0.120
-    """total length [m]"""
-    beta: float = 2.0
-    """body-to-leg length ratio [-]; legs have length l = L/(2+beta)"""
-    k: float = 0.1677
-    """torsion spring stiffness of each joint [N m/rad]"""
-    mu1: float = 0.389
-    """Coulomb friction coefficient at foot 1 (left) [-]"""
-    mu2: float = 0.389
-    """Coulomb friction coefficient at foot 2 (right) [-]"""
-    g: float = 9.81
-    """gravitational acceleration [m/s^2]"""
-
-    def __post_init__(self) -> None:
-        for name in ("M", "L", "beta", "k", "mu1", "mu2", "g"):
-            friction = name in ("mu1", "mu2")
-            object.__setattr__(self, name, real(name, getattr(self, name), positive=not friction, nonneg=friction))
-
-    @classmethod
-    def paper(cls, **overrides: float) -> "Robot":
-        """The robot of the paper's Table I (M = 52 g, L = 120 mm, k = 0.1677 N m/rad, mu = 0.389)."""
-        return cls(**overrides)
-
-    @property
-    def l(self) -> float:
-        """leg length [m]"""
-        return self.L / (2.0 + self.beta)
-
-    @property
-    def m(self) -> float:
-        """leg mass [kg]"""
-        return self.M / (2.0 + self.beta)
-
-    @property
-    def MgL(self) -> float:
-        """gravitational torque scale M g L [N m]"""
-        return self.M * self.g * self.L
-
-    def with_stiffness_ratio(self, ratio: float) -> "Robot":
-        """Copy with k = ratio * M g L."""
-        return self.replace(k=ratio * self.MgL)
-
-    def replace(self, **changes: float) -> "Robot":
-        from dataclasses import replace
-
-        return replace(self, **changes)
 
 
 PAPER_PRESSURE_COEFFS = {"a1": 0.092, "a2": 0.089, "b1": 0.127, "b2": 0.144}
@@ -425,7 +352,7 @@ class Model:
         The physical parameters (default: the paper's Table I robot).
     gravity : {"physical", "paper"}
         Sign of the gravity term: "physical" (virtual work, the default) or "paper" (as printed in
-        the paper; see README, "Gravity conventions").
+        the paper; see docs/guide/model.md, "Gravity conventions").
 
     The model is what every simulator takes: ``simulate(Model(robot), signal, solver)``.
     """

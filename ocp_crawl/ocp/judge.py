@@ -82,6 +82,16 @@ def value_text(objective: str, value: float) -> str:
     return units.cot(value) if objective == "min_cot" else units.speed(value)
 
 
+def spread_text(objective: str, low: float, high: float, converged: int) -> str:
+    """The outcome of several starts: "3 converged, replayed objective from a to b" (one value when
+    a = b), or "none converged"."""
+    if not converged:
+        return "none converged"
+    low_text, high_text = value_text(objective, low), value_text(objective, high)
+    spread = low_text if low_text == high_text else f"from {low_text} to {high_text}"
+    return f"{converged} converged, replayed objective {spread}"
+
+
 def ratio_labels(ratios) -> list[str]:
     """Labels of the friction scenarios mu1/mu2 = ``ratios``: each ratio to the fewest significant digits (from 6)
     that tell every scenario apart, e.g. ["0.9", "1", "1.1"] (files and text name the scenarios by them)."""

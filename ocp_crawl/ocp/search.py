@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import time
-from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable
 
@@ -28,7 +27,7 @@ from ocp_crawl.ocp.baseline import (FAIL_RANK, Baselines, WaveChoice, choice_of,
                                      value_of)
 from ocp_crawl.ocp.family import WaveFamily, shape_box
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.workers import default_jobs, mp_context
+from ocp_crawl.workers import default_jobs, worker_pool
 
 #: Nelder-Mead's stopping tolerances (box coordinates; search ranks, i.e. m/s or CoT+): both must hold
 NM_TOL = {"xatol": 1e-7, "fatol": 1e-12}
@@ -197,8 +196,7 @@ def _pool(robot: Robot, gravity: str, settings: OCPSettings, shapes, jobs: int):
     if jobs < 2:
         yield None
         return
-    pool = ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_init_worker,
-                               initargs=(robot, gravity, settings, shapes))
+    pool = worker_pool(jobs, _init_worker, (robot, gravity, settings, shapes))
     try:
         yield pool
     except BaseException:  # Ctrl-C or an error here: the chunks not started yet are dropped

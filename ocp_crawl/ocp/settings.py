@@ -28,8 +28,8 @@ REMOVED_KEYS = {
                   "boundary",
 }
 
-#: bounds of the settings that size the work (a solve within minutes; see the README's "Bounds"): the nodes
-#: of the transcription, the Fourier order, the psi values and amplitudes of the harmonic scan
+#: bounds of the settings that size the work (a solve within minutes; see docs/guide/problem_files.md,
+#: "Bounds"): the nodes of the transcription, the Fourier order, the psi values and amplitudes of the harmonic scan
 NODES_BOUNDS = (8, 1000)
 FOURIER_ORDER_BOUNDS = (1, 25)
 HARMONIC_PSI_BOUNDS = (4, 180)
@@ -40,6 +40,36 @@ BASELINE_STARTS_BOUNDS = (0, 20)
 BASELINE_EVALUATIONS_BOUNDS = (1, 5000)
 #: the ``baselines`` choices: every waveform family, or one
 BASELINE_CHOICES = ("all", "harmonic", "triangle", "pulse")
+
+
+#: bounds of the numbers that carry a physical meaning, (low, high, why), inclusive: the API and the
+#: problem files refuse the same values with the same reason
+PHYSICAL_BOUNDS = {
+    "max_rate_deg_s": (1e-2, 1e4, "below 0.01 deg/s a cycle of the envelope takes hours; above 1e4 deg/s "
+                       "(cycles of about 10 ms) inertia is not negligible and the quasistatic model fails"),
+    "max_joint_rate_deg_s": (1e-2, 1e4, "the actual joint rate: the bounds of max_rate_deg_s"),
+    "max_accel_deg_s2": (1e-2, 1e7, "the rate bounds reached within 1 ms to 1 s"),
+    "regularization": (0.0, 1e-2, "a tie-breaker between equally good profiles: a larger weight trades the "
+                       "objective for smoothness (bound the profile with max_accel_deg_s2 instead)"),
+    "speed_min": (0.0, 10.0, "10 m/s is far beyond any quasistatic crawler"),
+    "mu_ratio_eps": (0.0, 0.5, "friction ratios beyond 1 +- 0.5 are another robot: give robot.mu1 and "
+                     "robot.mu2"),
+    "friction_tol": (0.0, 0.5, "a fraction of the mean friction limit: above 0.5 almost no gait slips"),
+    "replay_tol": (1e-9, 0.1, "1e-9 is the judge's own bound tolerance; above 0.1 it would accept an "
+                   "optimum a tenth off"),
+}
+
+
+def check_physical(name: str, value, optional: bool = False):
+    """``value`` of the setting ``name`` as a float within :data:`PHYSICAL_BOUNDS` (None passes when
+    ``optional``); ValueError naming the setting, its bounds and their reason."""
+    if value is None and optional:
+        return None
+    low, high, why = PHYSICAL_BOUNDS[name]
+    v = real(f"OCPSettings.{name}", value)
+    if not low <= v <= high:
+        raise ValueError(f"OCPSettings.{name} must be in [{low:g}, {high:g}] ({why}), got {value!r}")
+    return v
 
 
 #: most homotopy stages a schedule may have (sigma0 down to sigma_min by sigma_factor): each is an IPOPT solve
@@ -175,7 +205,6 @@ class OCPSettings:
     def __post_init__(self) -> None:
         self._check_choices()
         self._check_numbers()
-        self._check_bandwidth()
         object.__setattr__(self, "ipopt", check_ipopt_options("OCPSettings.ipopt", self.ipopt))
 
     def _set(self, name: str, value) -> None:
@@ -202,13 +231,11 @@ class OCPSettings:
                                   ("baseline_evaluations", BASELINE_EVALUATIONS_BOUNDS)):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
         for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "stage_tol", "comp_tol",
-                     "periodic_tol",
-                     "max_rate_deg_s", "replay_tol"):
+                     "periodic_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
-        for name in ("regularization", "speed_min"):
-            self._set(name, real(f"OCPSettings.{name}", getattr(self, name), nonneg=True))
-        if self.mu_ratio_eps is not None:
-            self._set("mu_ratio_eps", real("OCPSettings.mu_ratio_eps", self.mu_ratio_eps, nonneg=True))
+        for name in PHYSICAL_BOUNDS:
+            optional = name in ("mu_ratio_eps", "max_accel_deg_s2", "max_joint_rate_deg_s")
+            self._set(name, check_physical(name, getattr(self, name), optional))
         if not 0 < self.A_max_deg < 90:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
         if not (0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180):
@@ -232,25 +259,11 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at sigma_min solved "
                              f"only to stage_tol would stop at once), got stage_tol {self.stage_tol:g}, sigma_min "
                              f"{self.sigma_min:g}")
-        if not self.ratio_eps < 1:
-            raise ValueError(f"OCPSettings.mu_ratio_eps must be in [0, 1), got {self.mu_ratio_eps!r}")
         if self.mu_ratios is not None:
             ratios = tuple(float(r) for r in self.mu_ratios)
             if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
                 raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
             self._set("mu_ratios", ratios)
-
-    def _check_bandwidth(self) -> None:
-        """max_accel_deg_s2, max_joint_rate_deg_s: None or a number > 0; replay_tol below 1;
-        friction_tol in [0, 1)."""
-        for name in ("max_accel_deg_s2", "max_joint_rate_deg_s"):
-            if getattr(self, name) is not None:
-                self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
-        self._set("friction_tol", real("OCPSettings.friction_tol", self.friction_tol, nonneg=True))
-        if not self.friction_tol < 1:
-            raise ValueError(f"OCPSettings.friction_tol must be in [0, 1), got {self.friction_tol!r}")
-        if not self.replay_tol < 1:
-            raise ValueError(f"OCPSettings.replay_tol must be in (0, 1), got {self.replay_tol!r}")
 
     def scenarios(self, robot: Robot) -> list[Robot]:
         """The robots of the friction scenarios (:attr:`friction_ratios`; just ``robot`` without a set)."""

@@ -32,7 +32,7 @@ direction at mu1/mu2 = 0.975 and 1.025 but only 40 % and 57 % of its S.  Nor is 
 set {1 - eps, 1, 1 + eps}: robust_speed's worst case over it (eps = 0.05, friction_tol = 0, paper
 robot, N = 50) ends on a margin of 0.103 with S within 0.03 % over the set.  A gait whose speed
 holds over a set of friction ratios is asked for by that set: ``[ocp] mu_ratio_eps`` with ``robust =
-"worst"``, for any objective (README, "Friction uncertainty").
+"worst"``, for any objective (docs/guide/optimal_gaits.md, "Friction uncertainty").
 """
 from __future__ import annotations
 

@@ -22,7 +22,8 @@ from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
-from ocp_crawl.ocp.judge import gain_over, is_better, judge_replay, ratio_labels, replay_signal, value_text
+from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, ratio_labels, replay_signal,
+                                 spread_text, value_text)
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
@@ -264,10 +265,9 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         harmonic_peaks(res, models)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
                               sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
-    low, high, converged = res.spread
     if len(guesses) > 1:
-        res.message += (f"; best of {len(guesses)} starts ({converged} converged, replayed objective from "
-                        f"{value_text(settings.objective, low)} to {value_text(settings.objective, high)})")
+        spread = spread_text(settings.objective, *res.spread)   # (low, high, converged)
+        res.message += f"; best of {len(guesses)} starts ({spread})"
     res.solve_time_s = time.perf_counter() - t_start
     return res
 

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
+import tomli_w
 
 from ocp_crawl.io.files import read_bounded
 from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, removed_key, suggest
@@ -219,30 +220,26 @@ def read_toml(path: str | Path) -> dict[str, Any]:
 
 
 def toml_string(text: str) -> str:
-    """``text`` as a TOML basic string: quotes, backslashes and control characters escaped, every other character
-    as it is (JSON's \\ud83d\\ude00 surrogate escapes of characters beyond U+FFFF are not TOML)."""
-    return '"' + re.sub(r'["\\\x00-\x1f\x7f]', lambda m: "\\u%04x" % ord(m.group()), text) + '"'
+    """``text`` as a TOML string value (tomli-w's quoting: quotes, backslashes and control
+    characters escaped), e.g. for an override ``gait.file=<path>``."""
+    return tomli_w.dumps({"v": text}).split("=", 1)[1].strip()
 
 
-def _toml_value(value: Any) -> str:
+def _plain_value(value: Any) -> Any:
+    """``value`` with numpy scalars and tuples as the Python types tomli-w writes."""
     if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return toml_string(value)
-    if isinstance(value, (int, float)):
-        return repr(value) if isinstance(value, int) or np.isfinite(value) else ("nan" if np.isnan(value) else
-                                                                                 ("inf" if value > 0 else "-inf"))
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise TypeError(f"no TOML form for {type(value).__name__}")
+        return value.item()
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain_value(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): _plain_value(v) for k, v in value.items()}
+    return value
 
 
 def toml_text(sections: Mapping[str, Mapping[str, Any]], comments: Sequence[str] = ()) -> str:
-    """A problem file's text: ``# comments``, then one ``[section]`` of ``key = value`` lines per entry of
-    ``sections`` (floats with full precision, strings quoted); :func:`read_toml` reads the same values back."""
-    lines = [f"# {c}" for c in comments]
-    for name, values in sections.items():
-        lines += ["", f"[{name}]"] + [f"{key} = {_toml_value(v)}" for key, v in values.items()]
-    return "\n".join(lines).lstrip("\n") + "\n"
+    """A problem file's text: ``# comments``, then the ``[section]`` tables of ``sections`` written
+    by tomli-w (floats with full precision, strings quoted); :func:`read_toml` reads the same values
+    back."""
+    head = "".join(f"# {c}\n" for c in comments)
+    body = tomli_w.dumps(_plain_value(sections))
+    return head + ("\n" if head and body else "") + body

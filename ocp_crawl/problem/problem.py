@@ -242,8 +242,13 @@ def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[int]} ({key.what}), got {toml_type(value)}")
     if key.type is float and not numeric:
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[float]} ({key.what}), got {toml_type(value)}")
-    value = key.type(value)
-    if not math.isfinite(value):
+    try:
+        value = key.type(value)
+        finite = math.isfinite(value)
+    except OverflowError:  # an integer of hundreds of digits
+        bound = f"{key.rule.text}, " if key.rule is not None else ""
+        raise ProblemError(f"{where} is invalid: too large, must be {bound}finite ({key.what})") from None
+    if not finite:
         raise ProblemError(f"{where} is invalid: must be finite ({key.what})")
     if key.rule is not None and not key.rule.test(value):
         why = f": {key.rule.why}" if key.rule.why else ""
@@ -437,7 +442,7 @@ def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides
     data : mapping
         Sections of keys as in a TOML problem file, e.g. ``{"robot": {"M": 0.052, "L": 0.12, "k": 0.1677,
         "mu": 0.389}, "gait": {"gamma_deg": 90, "A_deg": 30, "psi_deg": 45}}``; every key in the unit of the
-        README's key table (kg, m, N m/rad, deg, ...); missing optional keys take their defaults.
+        key reference (kg, m, N m/rad, deg, ...); missing optional keys take their defaults.
     source : str
         Names the origin at the start of every error message (default ``"<dict>"``).
     overrides : sequence of str
@@ -455,6 +460,13 @@ def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides
     """
     if not isinstance(data, Mapping):
         raise ProblemError(f"{source}: a problem must be a table of sections, got {toml_type(data)}")
+    for name, section in data.items():  # a file's names are strings; a dict's may be anything
+        keys = list(section) if isinstance(section, Mapping) else []
+        bad = [k for k in [name, *keys] if not isinstance(k, str)]
+        if bad:
+            where = "a section" if bad[0] is name else f"a key of [{name}]"
+            raise ProblemError(f"{source}: {where} is named {bad[0]!r} ({type(bad[0]).__name__}): "
+                               "section and key names are strings")
     data, overridden = apply_overrides(data, overrides, source)
     return _validate(data, _Context(source, overridden))
 

@@ -1,7 +1,7 @@
 """The schema of problem files: every section and key with its type, unit, default and rule.
 
 One table (:data:`SECTIONS`) lists every section and key; loading, ``--set`` overrides, error
-messages and the README's key table (:func:`schema_markdown`) are all driven by it.  To add a
+messages and the docs' key reference (:func:`schema_markdown`) are all driven by it.  To add a
 section (e.g. ``[sweep]``), append a :class:`Section`; its validated values (defaults filled in)
 appear in ``Problem.sections[name]`` without any other change.
 
@@ -20,12 +20,13 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 from ocp_crawl.model.pressure import PAPER_FORM_AMPLITUDE_BAR, PRESSURE_FORMS, BendingMap
 from ocp_crawl.model.pulse import PULSE_RAMPS
+from ocp_crawl.model.robot import BETA_BOUNDS, MAGNITUDE, MU_BOUNDS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS, BASELINE_SAMPLES_BOUNDS,
                                    BASELINE_STARTS_BOUNDS, FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS,
-                                   NODES_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
+                                   NODES_BOUNDS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 
 Drive = Literal["torque", "angles"]
@@ -57,7 +58,7 @@ def field_default(cls: type, name: str) -> Any:
 @dataclass(frozen=True)
 class Rule:
     """A value constraint: ``test(value)`` must hold; ``text`` says what is valid (e.g. "> 0"); ``why`` gives the
-    reason of a bound (README table and error messages)."""
+    reason of a bound (key reference and error messages)."""
 
     test: Callable[[Any], bool]
     text: str
@@ -71,7 +72,7 @@ class Rule:
 
 def _num(x: float) -> str:
     """A bound as the rule's text writes it: ``1e-12``, ``0.25``, ``500`` (no ``+`` in exponents)."""
-    if isinstance(x, int) or not (abs(x) < 1e-3 or abs(x) >= 1e4):
+    if isinstance(x, int) or x == 0 or not (abs(x) < 1e-3 or abs(x) >= 1e4):
         return format(x, "g")
     mantissa, exponent = f"{x:e}".split("e")
     return f"{mantissa.rstrip('0').rstrip('.')}e{int(exponent)}"
@@ -89,17 +90,11 @@ PHASE = Rule(lambda v: -360 <= v <= 360, "in [-360, 360]")
 #: a Fourier coefficient of a reference angle [deg]: larger ones cannot keep the angle in (0, 360) deg
 COEFFICIENT = Rule(lambda v: -360 <= v <= 360, "in [-360, 360]", "a reference angle lies in (0, 360) deg")
 
-# ---- bounds of the robot's parameters and of every key that sizes work (README, "Bounds") ----
-#: magnitude bounds of M [kg], L [m], k [N m/rad], g [m/s^2]: products and ratios of four such numbers
-#: (M g L, k/(M g L), their squares) stay far inside the floating-point range (1e-308 .. 1e308)
-MAGNITUDE = (1e-12, 1e12)
+# ---- bounds of the robot's parameters and of every key that sizes work (docs/guide/problem_files.md, "Bounds") ----
+#: the robot's bounds (MAGNITUDE, MU_BOUNDS, BETA_BOUNDS) are the model's own, checked by Robot too
 _MAGNITUDE_WHY = "so that M g L, k/(M g L) and their squares stay far inside the floating-point range"
-#: friction coefficients
-MU_BOUNDS = (1e-4, 1e4)
-_MU_WHY = ("a frictionless foot, mu = 0, is outside the quasistatic model (README, Bounds); friction forces below "
-           "1e-4 M g sink into the solvers' force tolerances")
-#: body-to-leg length ratio
-BETA_BOUNDS = (0.01, 100.0)
+_MU_WHY = ("a frictionless foot, mu = 0, is outside the quasistatic model (docs: Problem files, Bounds); "
+           "friction forces below 1e-4 M g sink into the solvers' force tolerances")
 
 MAGNITUDE_RULE = within(*MAGNITUDE, _MAGNITUDE_WHY)
 MU_RULE = within(*MU_BOUNDS, _MU_WHY)
@@ -148,7 +143,7 @@ class Key:
 
     @property
     def valid_text(self) -> str:
-        """What is valid, in words (README table and error messages)."""
+        """What is valid, in words (key reference and error messages)."""
         if self.choices:
             return "one of " + ", ".join(json.dumps(c) for c in self.choices)
         if self.type is list:
@@ -186,6 +181,11 @@ def _hybrid(name: str):
     return field_default(SOLVERS["event"].options, name)
 
 
+def _physical(name: str) -> Rule:
+    """The rule of an [ocp] number with a physical meaning: its bounds and reason in the OCP's settings."""
+    return within(*PHYSICAL_BOUNDS[name])
+
+
 def _ocp(name: str):
     value = field_default(OCPSettings, name)
     return "none" if value is None else value
@@ -211,11 +211,11 @@ _HFP, _HP = ("harmonic", "fourier", "pulse"), ("harmonic", "pulse")
 _FOURIER_WHY = "harmonics n = 1, 2, ... of the reference angle; at most 100"
 _SAMPLES_WHY = "samples over one cycle at the phases of gait.phase"
 
-_GAIT = Section("gait", "reference angles (eq. (ref)) or torques over one cycle", required=True, selector="waveform",
+_GAIT = Section("gait", "reference angles or torques over one cycle", required=True, selector="waveform",
                 keys=(
     Key("drive", str, "-", "actuation: spring torque tau = k (phi_ref - pi), or prescribed angles",
         default=DRIVES[0], choices=DRIVES),
-    Key("waveform", str, "-", "shape of the input over one cycle: harmonic (eq. (ref)), Fourier series, samples "
+    Key("waveform", str, "-", "shape of the input over one cycle: harmonic (the paper's gait), Fourier series, samples "
         "(inline or a CSV file), pulses of soft actuators, or the pressures of the [pressure] actuator",
         default=WAVEFORMS[0], choices=WAVEFORMS),
     Key("period", float, "s", "duration of one cycle, for the mean speed abs(S) / period (the quasistatic S per "
@@ -270,7 +270,7 @@ _PRESSURE_WHY = "Table I's bending map a_i p^2 + b_i p of segment i"
 _PRESSURE = Section("pressure", "the pressure actuator of the soft robot (paper Section III): bending map, rest "
                     "angle, input form; read by [gait] waveform = \"pressure\" and by ocp-crawl fit",
                     selector="form", keys=(
-    Key("form", str, "-", "pressure input: the paper's form (ref), p0 + A_p sin(2 pi t +- psi/2), or the raised "
+    Key("form", str, "-", "pressure input: the paper's form, p0 + A_p sin(2 pi t +- psi/2), or the raised "
         "sine from 0 to the peak p0", default=PRESSURE_FORMS[0], choices=PRESSURE_FORMS),
     Key("a1", float, "rad/bar^2", f"quadratic coefficient of segment 1 ({_PRESSURE_WHY})",
         default=field_default(BendingMap, "a1")),
@@ -324,18 +324,19 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
                     "profiles use the free parametrization")),
     Key("max_rate_deg_s", float, "deg/s", "actuator bandwidth: largest absolute reference-angle rate, "
         "abs(d phi_ref/dt), of each joint",
-        default=_ocp("max_rate_deg_s"), rule=GT0),
+        default=_ocp("max_rate_deg_s"), rule=_physical("max_rate_deg_s")),
     Key("max_accel_deg_s2", float, "deg/s^2", "optional smoothness bound: largest reference-angle acceleration "
-        "(absent: no bound)", rule=GT0),
+        "(absent: no bound)", rule=_physical("max_accel_deg_s2")),
     Key("max_joint_rate_deg_s", float, "deg/s", "optional bound on the actual joint rates "
-        "abs(d phi/dt) of the gait, not only the references' (absent: no bound)", rule=GT0),
+        "abs(d phi/dt) of the gait, not only the references' (absent: no bound)",
+        rule=_physical("max_joint_rate_deg_s")),
     Key("regularization", float, "-", "weight of the torque-rate regularisation", default=_ocp("regularization"),
-        rule=GE0),
+        rule=_physical("regularization")),
     Key("speed_min", float, "m/s", "min_cot: smallest mean speed direction * S / T", default=_ocp("speed_min"),
-        rule=GE0, variants=("min_cot",)),
+        rule=_physical("speed_min"), variants=("min_cot",)),
     Key("mu_ratio_eps", float, "-", "friction uncertainty as a set: the objective over the scenarios "
         "mu1/mu2 in {1 - eps, 1, 1 + eps}, each replayed (absent: 0.1 for robust_speed, else 0: the "
-        "robot's friction only)", rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+        "robot's friction only)", rule=_physical("mu_ratio_eps")),
     Key("robust", str, "-", "over a friction set: optimise the mean or the worst of the objective (speed, "
         "or CoT+ with speed_min in every scenario)", default=_ocp("robust"), choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
@@ -366,10 +367,10 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("warm_barrier", str, "-", "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
         "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"), choices=WARM_BARRIERS),
     Key("friction_tol", float, "-", "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
-        "an admissible gait: keeps its slip off the friction tie (README, Friction uncertainty)",
-        default=_ocp("friction_tol"), rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
+        "an admissible gait: keeps its slip off the friction tie (docs: Optimal gaits, Friction uncertainty)",
+        default=_ocp("friction_tol"), rule=_physical("friction_tol")),
     Key("replay_tol", float, "-", "relative tolerance of the replay judge (objective, speed requirement)",
-        default=_ocp("replay_tol"), rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+        default=_ocp("replay_tol"), rule=_physical("replay_tol")),
 ))
 
 

@@ -2,7 +2,7 @@
 
 The package data folders ``ocp_crawl/data/problems/`` (``paper_gait.toml``, ``ocp_max_speed.toml``,
 ...) and ``ocp_crawl/data/examples/`` (the examples gallery) are the one source of these files.
-:func:`write_problems` copies them into ``DIR/problems/`` and ``DIR/examples/``, so that the README's
+:func:`write_problems` copies them into ``DIR/problems/`` and ``DIR/examples/``, so that the documentation's
 commands (``ocp-crawl simulate problems/paper_gait.toml``, ``python examples/01_simulate_one_gait.py``)
 work from any install; the repository's top-level ``problems/`` and ``examples/`` folders are exactly
 what ``ocp-crawl init`` writes at the repository root (a test checks that they never differ).

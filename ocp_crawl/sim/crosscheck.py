@@ -14,7 +14,7 @@ not have: the time-stepping cannot see one inside a step (the step starts and en
 kink of the input it can show one that the event-driven stepper has not.  Excursions are taken out
 of both sequences before they are compared, and listed; their cost is judged by the S criterion.
 
-PASS/FAIL is decided by :func:`criteria` only (the README's table, each with its value and bound).
+PASS/FAIL is decided by :func:`criteria` only (the table of docs/guide/simulators.md, each with its value and bound).
 The order of S and the largest deviation of phi are information: where S carries an error its
 size is what the S criterion bounds; phi follows the foot positions, whose net change (S) and
 switches (the events) are judged.
@@ -58,7 +58,7 @@ BOUNDARY_TOL = 1e-9
 
 @dataclass(frozen=True)
 class CrossCheckTolerances:
-    """Bounds of the PASS/FAIL criteria (README, "crosscheck")."""
+    """Bounds of the PASS/FAIL criteria (docs/guide/simulators.md, "Cross-checking the simulators")."""
 
     rel_S: float = 1e-4
     """largest relative difference of S at every N >= 200 (at the finest N if all are smaller)"""
@@ -101,6 +101,10 @@ class Criterion:
     passed: bool
 
     def text(self) -> str:
+        if (self.relation, self.bound) in (("==", True), ("<=", 0)):   # "same", "none": no bound
+            must = "the same" if self.relation == "==" else "none"
+            shown = _shown(self.value) if self.relation == "==" else str(self.value or "none")
+            return f"{self.what}: {shown}" + ("" if self.passed else f", must be {must}")
         bound = (f"[{self.bound[0]:g}, {self.bound[1]:g}]" if self.relation == "in"
                  else _shown(self.bound))
         return f"{self.what} = {_shown(self.value)} (bound {self.relation} {bound})"
@@ -115,7 +119,7 @@ class Criterion:
 def _shown(x) -> str:
     if isinstance(x, bool):
         return "same" if x else "different"
-    return f"{x:.3g}" if isinstance(x, float) else str(x)
+    return f"{x + 0.0:.3g}" if isinstance(x, float) else str(x)   # + 0.0: never "-0"
 
 
 def convergence_order(steps, errors) -> float:
@@ -351,7 +355,7 @@ class CrossCheckResult:
                   "  event-driven: " + _sequence_text(self.event_modes),
                   "  time-stepping: " + _sequence_text(fin.modes)]
         for k, m, te, ts, lag in fin.event_lags:
-            step = "unmatched" if ts is None else f"step phase {ts:.5f} (lag {lag:+.2e} steps)"
+            step = "unmatched" if ts is None else f"step phase {ts:.5f} (lag {lag + 0:+.2e} steps)"
             lines.append(f"  {k:<12} -> {m:<12} event phase {te:.5f}  {step}")
         for who, found in (("event-driven", fin.excursions_event),
                            ("time-stepping", fin.excursions_mpcc)):
@@ -403,7 +407,7 @@ def _row_summary(r: CrossCheckRow, ev: CrawlResult) -> dict:
 # ------------------------------------------------------------------------------ the criteria
 def criteria(ev: CrawlResult, rows: list, tol: CrossCheckTolerances,
              L: float) -> tuple[dict, dict, float]:
-    """The PASS/FAIL criteria (name -> :class:`Criterion`, the README's list), the information
+    """The PASS/FAIL criteria (name -> :class:`Criterion`, the documented list), the information
     (name -> (value, note)) and the measured order of S, fitted over the S errors above the
     round-off floor ``rel_S_floor`` max(|S|, L) with the robot's length L [m]."""
     errors = [abs(r.S - ev.S) for r in rows]
@@ -422,7 +426,7 @@ def criteria(ev: CrawlResult, rows: list, tol: CrossCheckTolerances,
     at = f"at N = {fin.steps}"
     checks = {
         "runs succeeded": Criterion(
-            f"failed runs of {1 + len(rows)} (event-driven, time-stepping at each N)",
+            f"failed runs of the {1 + len(rows)} (event-driven, time-stepping at each N)",
             failed, 0, "<=", failed == 0),
         "S": Criterion(f"largest relative S error at N >= {judged[0].steps}", worst, tol.rel_S,
                        "<=", worst <= tol.rel_S),
@@ -437,9 +441,9 @@ def criteria(ev: CrawlResult, rows: list, tol: CrossCheckTolerances,
         checks["CoT+"] = Criterion(f"relative CoT+ error {at}", cot, tol.rel_CoT_plus, "<=",
                                    cot <= tol.rel_CoT_plus)
     n_out = len(fin.excursions_event) + len(fin.excursions_mpcc)
-    checks["mode sequence"] = Criterion(
-        f"mode sequences {at} ({n_out} sub-step excursions taken out)", bool(fin.modes_match),
-        True, "==", bool(fin.modes_match))
+    out = f" ({units.plural(n_out, 'sub-step excursion')} taken out)" if n_out else ""
+    checks["mode sequence"] = Criterion(f"mode sequences {at}{out}", bool(fin.modes_match), True,
+                                        "==", bool(fin.modes_match))
     checks["event lags"] = Criterion(
         f"largest lag of the event-driven mode changes {at} [steps]", worst_lag, (lo, hi), "in",
         lo <= worst_lag <= hi)

@@ -21,7 +21,8 @@ any            det J (sign of the mode's start)              fold (failure statu
 
 Where the input holds still (both rates zero on a piece), the state does not move: the hold is crossed in
 one step and the mode after it decided by the rates after it; so is the mode at a kink or an event where the
-two feet's friction limits tie (README, "Friction ties"; :meth:`~ocp_crawl.sim.event_locate.EventsMixin._decide`).
+two feet's friction limits tie (docs/guide/simulators.md, "Friction ties";
+:meth:`~ocp_crawl.sim.event_locate.EventsMixin._decide`).
 When mu1 f_n1 = mu2 f_n2 identically (mirror-symmetric motion, equal friction), no single-foot slip
 is consistent; the stepper then uses the non-generic slip-slip mode, in which both feet are at
 their friction limits and, the split of d' between the feet being statically indeterminate, each

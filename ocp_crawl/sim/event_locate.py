@@ -184,7 +184,8 @@ class EventsMixin:
     def _decide(self, pt: _Point) -> list[tuple[Mode, _Point]]:
         """The contact modes that continue from the state pt (solved with the input's rate after its phase) without
         a jump and with all their guards positive over the trial steps (those at zero growing), as (mode, its
-        start): the rule at a tie of the friction limits and at the end of a hold (README, "Friction ties").
+        start): the rule at a tie of the friction limits and at the end of a hold (docs/guide/simulators.md,
+        "Friction ties").
 
         Stick-stick and the one-foot slips are tried first; slip-slip only if none of them continues (at a tie held
         by a mirror-symmetric motion the one-foot slips keep the tie, so their switch guard stays at zero and they

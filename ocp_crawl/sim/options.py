@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 from ocp_crawl.checks import real
 
-#: bounds on the options that size a run's work (README, "Bounds"), checked here and read by the problem schema:
+#: bounds on the options that size a run's work (docs/guide/problem_files.md, "Bounds"), checked here and read by
+#: the problem schema:
 #: the event solver's largest step and quadrature panel [cycles] (at most 1e4 per cycle), the cycles a run may
 #: take, and the MPCC's steps per cycle (each an IPOPT solve of about 2 ms)
 MAX_STEP_BOUNDS = (1e-4, 0.25)

@@ -199,6 +199,18 @@ class CrawlResult:
         """Events inside the reported steady cycle."""
         return [e for e in self.events if self.t0 - 1e-12 <= e.t <= self.t0 + 1 + 1e-12]
 
+    def event_dicts(self) -> list[dict]:
+        """Every event as :meth:`Event.to_dict`, labelled as the text summary shows it: ``steady``
+        (True in the reported steady cycle of a successful run, False for the transient before it
+        and for every event of a failed run) and ``phase`` (t - t0 in the steady cycle, else t
+        modulo 1)."""
+        out, ids = [], {id(e) for e in self.steady_events()} if self.success else set()
+        for e in self.events:
+            steady = id(e) in ids
+            phase = e.t - self.t0 if steady else e.t % 1.0
+            out.append(dict(e.to_dict(), steady=steady, phase=float(phase)))
+        return out
+
     def summary(self) -> dict:
         """JSON-friendly summary (no arrays; non-finite numbers are None)."""
         return {
@@ -207,7 +219,7 @@ class CrawlResult:
             "S": finite_or_none(self.S), "W_plus": finite_or_none(self.W_plus),
             "W_plus_joint": [finite_or_none(w) for w in self.W_plus_joint],
             "CoT_plus": finite_or_none(self.CoT_plus), "cycles": int(self.cycles), "t0": float(self.t0),
-            "events": [e.to_dict() for e in self.events],
+            "events": self.event_dicts(),
             "energy": {k: finite_or_none(v) for k, v in self.energy.items()},
             "periodicity_residual": finite_or_none(self.periodicity_residual),
             "nfev": int(self.nfev), "nsteps": int(self.nsteps),

@@ -14,14 +14,15 @@ from matplotlib.colors import BoundaryNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
-from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
+from matplotlib.ticker import MaxNLocator
 
 from ocp_crawl.sim.result import CrawlResult
 from ocp_crawl.studies.common import COT_K_LABELS, MM, SUCCESS
 from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy
 from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap
+from ocp_crawl.studies.marks import (FAIL_COLOR, mark_failures, mark_off_axis, plain_log_ticks,
+                                     stiffness_axis, stiffness_text, successful)
 from ocp_crawl.studies.pressure import PressureStudy
-from ocp_crawl.studies.text import threshold_text
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, robot_points, shade_modes
 
 #: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
@@ -32,16 +33,6 @@ RUN_STYLES = ("-", "--", ":")
 #: colours of the three stiffnesses of the CoT figure (large, realistic, low), as in the paper
 K_COLORS = (BLUE, "black", PURPLE)
 K_STYLES = ("-", "--", ":")
-#: marker of each failure status (others: FALLBACK_MARKER)
-STATUS_MARKERS = {"fold": "X", "lift_off": "^", "joint_on_ground": "v", "no_start": "s", "bad_input": "d", "no_consistent_mode": "D",
-                  "feet_crossed": "P", "no_convergence": "*", "not_periodic": "p", "error": "h",
-                  "unstable": "<", "snap_through": ">", "energy_imbalance": "H", "set_valued": "8"}
-FALLBACK_MARKER = "o"
-#: legend text of statuses whose name alone would mislead
-STATUS_LABELS = {"no_start": "no equilibrium to start from", "unstable": "unstable equilibrium",
-                 "snap_through": "snap-through (state jumps)", "set_valued": "set-valued (friction tie)"}
-#: colour of failure markers on maps
-FAIL_COLOR = "#b2182b"
 #: top of the CoT+ axis, as in the paper's Fig. CoT
 COT_YMAX = 60.0
 
@@ -59,34 +50,14 @@ def _finish(fig: Figure) -> Figure:
     return fig
 
 
-def plain_log_ticks(axis) -> None:
-    """Ticks of a log ``axis`` (``ax.xaxis``/``ax.yaxis``) at 1, 2 and 5 per decade, labelled as plain numbers
-    (0.5, 2, 40) instead of matplotlib's 2x10^0 ... 4x10^1."""
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    axis.set_minor_formatter(NullFormatter())
+def side_legend(ax, handles: list) -> None:
+    """The legend of ``ax`` right of it, off the curves."""
+    ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              borderaxespad=0.0, handlelength=3.0)
 
 
 def _gravity_text(gravity: str) -> str:
     return "paper's printed gravity sign" if gravity == "paper" else "physical gravity sign"
-
-
-def mark_failures(ax, x, y, status, *, color="0.3", size=36, seen: set | None = None) -> list[Line2D]:
-    """Markers at the failed points (x, y) of ``status``; returns legend handles for new statuses."""
-    x, y, status = np.asarray(x, float), np.asarray(y, float), np.asarray(status)
-    handles = []
-    seen = set() if seen is None else seen
-    for name in sorted(set(status.ravel()) - {SUCCESS}):
-        sel = status == name
-        marker = STATUS_MARKERS.get(str(name), FALLBACK_MARKER)
-        ax.scatter(x[sel], y[sel], marker=marker, s=size, facecolor="none" if marker not in "X*" else color,
-                   edgecolor=color, linewidths=1.0, zorder=5, clip_on=False)
-        if name not in seen:
-            seen.add(name)
-            text = STATUS_LABELS.get(str(name), str(name).replace("_", " "))
-            handles.append(Line2D([], [], ls="none", marker=marker, color=color, mfc="none" if marker not in "X*" else color,
-                                  label=f"{text} ({int(sel.sum())})"))
-    return handles
 
 
 def _run_label(name: str, res: CrawlResult) -> str:
@@ -117,10 +88,11 @@ def plot_configuration(gc: GaitComparison, snapshots: int = 5) -> Figure:
     ax_a, ax_b, ax_s = ax[:, 0]
     runs = _comparison_runs(gc)
     fig.suptitle(fr"Configuration over a cycle: $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(gc.gravity)})"
-                 "\n$S$ [mm]: " + ", ".join(
-                     f"{name.replace('torque, ', '').replace(' M g L', '')} "
-                     + (f"{MM * res.S:.1f}" if res.success else res.status_name.replace("_", " "))
-                     for name, res, _ in runs) + r" ($k$ in $M g L$)")
+                 "\n$S$ per cycle ($S$ < 0: towards foot 1):\n" + "; ".join(
+                     f"{name.replace('torque, ', '')}: "
+                     + (f"{MM * res.S:.1f} mm" if res.success
+                        else res.status_name.replace("_", " "))
+                     for name, res, _ in runs))
     handles = []
     for name, res, ls in runs:
         if res.t.size == 0:
@@ -149,7 +121,8 @@ def plot_configuration(gc: GaitComparison, snapshots: int = 5) -> Figure:
     ax_a.set_title("(a) joint angles", loc="left", fontsize="medium")
     ax_b.set_ylabel("contact position [mm]")
     ax_b.set_title("(b) contact positions (from foot 1 at t = 0)", loc="left", fontsize="medium")
-    ax_a.legend(handles=handles, fontsize="small", loc="upper right", ncol=1, framealpha=0.9)
+    # below the panels: inside (a) the legend would hide the curves
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncol=2)
     _snapshots(ax_s, gc.prescribed, gc.robot, snapshots)
     return _finish(fig)
 
@@ -166,8 +139,11 @@ def _snapshots(ax, res: CrawlResult, robot, n: int) -> None:
         i = int(np.argmin(np.abs(t - target)))
         pts = MM * robot_points(robot, res.x1[i] - origin, res.x2[i] - origin, res.phi[0, i], res.theta[i])
         gray = str(0.8 - 0.65 * j / max(n - 1, 1))
-        ax.plot(pts[0], pts[1], "-o", color=gray, lw=1.5, ms=3)
-        ax.annotate(f"{t[i]:.2f}", pts[:, 1] + np.array([0.0, 2.5]), fontsize="x-small", color=gray, ha="center")
+        ax.plot(pts[0], pts[1], "-o", color=gray, lw=1.5, ms=3, label=f"t/T = {t[i]:.2f}")
+    # the phases in a legend beside the axes: as text above the robots they overlap, and leave
+    # the axes at the top
+    ax.legend(title="snapshot at", title_fontsize="x-small", loc="center left",
+              bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)
 
 
 def plot_forces(gc: GaitComparison) -> Figure:
@@ -186,7 +162,7 @@ def plot_forces(gc: GaitComparison) -> Figure:
     for (name, res, robot), a, letter in zip(runs, ax[:, 0], "abcdef"):
         a.set_title(f"({letter}) {_run_label(name, res)}", loc="left", fontsize="medium")
         a.grid(True, lw=0.3, alpha=0.6)
-        a.set_ylabel("force [N]")
+        a.set_ylabel("force [N]\n($f_t$ on foot 1, along +x)")
         if res.t.size == 0:
             continue
         t = _phase(res)
@@ -230,7 +206,7 @@ def plot_parametric(m: PsiGammaMap) -> Figure:
     levels = MaxNLocator(14).tick_values(min(0.0, finite.min()), finite.max()) if finite.size else np.arange(11.0)
     norm = BoundaryNorm(levels, ncolors=256)
     mesh = a.pcolormesh(xe, ye, np.ma.masked_invalid(prog), cmap="viridis", norm=norm, shading="flat")
-    fig.colorbar(mesh, ax=a, label="progress per cycle $-S$ [mm]")
+    fig.colorbar(mesh, ax=a, label="progress per cycle $-S$ [mm] (towards foot 1)")
     handles = []
     failed = m.status != SUCCESS
     if failed.any():
@@ -249,7 +225,7 @@ def plot_parametric(m: PsiGammaMap) -> Figure:
     handles.append(Line2D([], [], ls="none", marker="*", color="orange", mec="k", ms=10,
                           label=rf"largest: {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg"))
     a.set_xlabel(r"phase difference $\psi$ [deg]")
-    a.set_ylabel(r"nominal angle $\gamma$ [deg]")
+    a.set_ylabel(r"nominal joint angle $\gamma$ [deg]")
     n_failed = int(failed.sum())
     fig.suptitle(rf"Progress per cycle over $\psi$ and $\gamma$, $A$ = {m.A_deg:g} deg ({_gravity_text(m.gravity)})"
                  "\n" + rf"largest $-S$ = {MM * -s:.1f} mm at $\psi$ = {p:g}, $\gamma$ = {g:g} deg; "
@@ -309,7 +285,7 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
     """
     overlay = (s.gravity == "paper") if overlay_paper is None else overlay_paper
     comparison = s.paper_comparison() if overlay else None
-    fig, ax = _figure((8.0, 8.0), 2, 1, sharex=True)
+    fig, ax = _figure((11.0, 8.0), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
     least = ", ".join(f"{COT_K_LABELS[i]} k {s.CoT_min[i]:.1f}" + (f" at {s.A_opt[i]:.0f} deg"
                                                                    if np.isfinite(s.A_opt[i]) else " (grid end)")
@@ -317,30 +293,30 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
     fig.suptitle(rf"Amplitude study, $\gamma$ = 90, $\psi$ = 45 deg ({_gravity_text(s.gravity)})"
                  + (f"\nleast CoT$^+$ over $A$: {least}" if least else ""))
     seen: set = set()
-    fails = []
+    fails, fails_c, seen_c = [], [], set()
     for i, k in enumerate(s.k_ratios):
         color, ls = K_COLORS[i % 3], K_STYLES[i % 3]
-        a_s.plot(s.A_deg, -MM * s.S[i], color=color, ls=ls, lw=2, marker=".", label=_k_label(i, k))
-        a_c.plot(s.A_deg, s.CoT_moving[i], color=color, ls=ls, lw=2, marker=".", label=_k_label(i, k))
-        fails += mark_failures(a_s, s.A_deg, np.zeros(len(s.A_deg)), s.status[i], color=color, seen=seen)
+        a_s.plot(s.A_deg, successful(-MM * s.S[i], s.status[i]), color=color, ls=ls, lw=2,
+                 marker=".", label=_k_label(i, k))
+        a_c.plot(s.A_deg, successful(s.CoT_moving[i], s.status[i]), color=color, ls=ls, lw=2,
+                 marker=".", label=_k_label(i, k))
+        zeros = np.zeros(len(s.A_deg))
+        fails += mark_failures(a_s, s.A_deg, zeros, s.status[i], color=color, seen=seen)
+        fails_c += mark_failures(a_c, s.A_deg, zeros, s.status[i], color=color, seen=seen_c)
         if comparison is not None:
             a_c.plot(s.A_deg, comparison["paper"][i], "o", ms=6, mfc="none", mec=color,
                      label=f"paper, {COT_K_LABELS[i]} k")
     a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress against amplitude", loc="left", fontsize="medium")
-    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", loc="upper left")
+    side_legend(a_s, a_s.get_legend_handles_labels()[0] + fails)
     a_c.set_ylabel(r"CoT$^+ = W^+/(M g |S|)$ [-]")
     a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_title("(b) positive cost of transport (Fig. CoT)" + (" with the paper's values (circles)" if comparison
                                                                 is not None else ""), loc="left", fontsize="medium")
     # the paper's axis: CoT+ diverges where the robot barely moves (S -> 0 near the onset of motion)
     a_c.set_ylim(0, COT_YMAX)
-    off = np.isfinite(s.CoT_moving) & (s.CoT_moving > COT_YMAX)
-    for i, j in zip(*np.nonzero(off)):
-        a_c.annotate(f"{s.CoT_moving[i, j]:.0f}", (s.A_deg[j], COT_YMAX), xytext=(0, -12), textcoords="offset points",
-                     ha="center", fontsize="x-small", color=K_COLORS[i % 3], arrowprops={"arrowstyle": "->",
-                                                                                            "color": K_COLORS[i % 3]})
-    a_c.legend(fontsize="small", ncol=2, loc="upper right")
+    mark_off_axis(a_c, s.A_deg, s.CoT_moving, COT_YMAX, K_COLORS)
+    side_legend(a_c, a_c.get_legend_handles_labels()[0] + fails_c)
     for a in (a_s, a_c):
         a.grid(True, lw=0.3, alpha=0.6)
     return _finish(fig)
@@ -351,7 +327,7 @@ def plot_amplitude(s: AmplitudeStudy, overlay_paper: bool | None = None) -> Figu
 # --------------------------------------------------------------------------------------------
 def plot_higher_friction(h: HigherFriction) -> Figure:
     """Supplementary figure: progress against psi for mu = factor x 0.389."""
-    fig, ax = _figure((8.0, 5.0))
+    fig, ax = _figure((10.5, 5.0))
     a = ax[0, 0]
     colors = [BLUE, "tab:orange", "tab:green", "tab:red", "tab:brown", "tab:gray"]
     seen: set = set()
@@ -373,7 +349,7 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
     fig.suptitle(fr"Higher friction, $\gamma$ = 90, $A$ = 30 deg ({_gravity_text(h.gravity)})" "\n"
                  fr"largest $-S$ [mm] per friction factor: {largest or 'none'}")
     a.grid(True, lw=0.3, alpha=0.6)
-    a.legend(handles=a.get_legend_handles_labels()[0] + fails, fontsize="small")
+    side_legend(a, a.get_legend_handles_labels()[0] + fails)
     return _finish(fig)
 
 
@@ -383,12 +359,12 @@ def plot_higher_friction(h: HigherFriction) -> Figure:
 def plot_stiffness(s: StiffnessStudy) -> Figure:
     """Progress and CoT+ against k/(M g L); failed points marked by status, the threshold as a line.  The
     title gives the friction threshold and the largest progress."""
-    fig, ax = _figure((8.0, 7.5), 2, 1, sharex=True)
+    fig, ax = _figure((11.0, 7.5), 2, 1, sharex=True)
     a_s, a_c = ax[:, 0]
     prog = -MM * np.asarray(s.S, float)
     best = f"largest $-S$ = {np.nanmax(prog):.1f} mm" if np.isfinite(prog).any() else "no successful point"
     fig.suptitle(rf"Stiffness, $\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg ({_gravity_text(s.gravity)})" "\n"
-                 f"friction threshold {threshold_text(s.threshold, 3)}; {best}")
+                 f"friction threshold {stiffness_text(s.threshold)}; {best}")
     a_s.semilogx(s.k_ratios, prog, color=BLUE, lw=2, marker=".", label="$-S$")
     fails = mark_failures(a_s, s.k_ratios, np.zeros(len(s.k_ratios)), s.status)
     a_c.loglog(s.k_ratios, np.where(s.stuck, np.nan, s.CoT_plus), color="k", lw=2, marker=".",
@@ -397,34 +373,37 @@ def plot_stiffness(s: StiffnessStudy) -> Figure:
     if np.isfinite(s.threshold):
         for a in (a_s, a_c):
             a.axvline(s.threshold, color="tab:red", ls="--", lw=1.2)
-        lines.append(Line2D([], [], color="tab:red", ls="--", label=f"friction threshold {s.threshold:.3f} M g L"))
+        lines.append(Line2D([], [], color="tab:red", ls="--",
+                            label=f"friction threshold {stiffness_text(s.threshold)}"))
     if np.isfinite(s.onset) and not abs(s.onset - s.threshold) < 1e-3:
         for a in (a_s, a_c):
             a.axvline(s.onset, color="tab:green", ls=":", lw=1.5)
-        lines.append(Line2D([], [], color="tab:green", ls=":", label=f"crawls at every k from {s.onset:.3f} M g L"))
+        lines.append(Line2D([], [], color="tab:green", ls=":",
+                            label=f"crawls at every stiffness from {stiffness_text(s.onset)}"))
     a_s.set_ylabel("progress per cycle $-S$ [mm]")
     a_s.set_title("(a) progress", loc="left", fontsize="medium")
-    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + lines + fails, fontsize="small")
+    side_legend(a_s, a_s.get_legend_handles_labels()[0] + lines + fails)
     a_c.set_ylabel("CoT$^+$ [-]")
     a_c.set_xlabel("stiffness $k/(M g L)$ [-]")
     a_c.set_title("(b) positive cost of transport", loc="left", fontsize="medium")
-    a_c.legend(handles=a_c.get_legend_handles_labels()[0] + lines, fontsize="small")
+    side_legend(a_c, a_c.get_legend_handles_labels()[0] + lines)
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
         plain_log_ticks(a.xaxis)
     plain_log_ticks(a_c.yaxis)
+    stiffness_axis(a_s)
     return _finish(fig)
 
 
 def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeStudy]) -> Figure:
     """The two gravity conventions side by side: progress against k, and CoT+ against A."""
-    fig, ax = _figure((8.0, 8.0), 2, 1)
+    fig, ax = _figure((11.0, 8.0), 2, 1)
     a_s, a_c = ax[:, 0]
-    thresholds = ", ".join(f"{g} {threshold_text(st.threshold, 3)}" for g, st in stiff.items())
+    thresholds = "; ".join(f"{g} {stiffness_text(st.threshold)}" for g, st in stiff.items())
     fig.suptitle("Gravity conventions: paper's printed sign (solid) vs physical sign (dashed)"
                  + (f"\nfriction thresholds: {thresholds}" if thresholds else ""))
     seen: set = set()
-    fails = []
+    fails, fails_c, seen_c, below = [], [], set(), {}
     for gravity, ls, color in (("paper", "-", BLUE), ("physical", "--", "tab:red")):
         if gravity in stiff:
             s = stiff[gravity]
@@ -434,20 +413,24 @@ def plot_conventions(stiff: dict[str, StiffnessStudy], amp: dict[str, AmplitudeS
         if gravity in amp:
             am = amp[gravity]
             for i, k in enumerate(am.k_ratios):
-                a_c.plot(am.A_deg, am.CoT_moving[i], color=K_COLORS[i % 3], ls=ls, lw=1.8,
-                         label=f"{gravity}, {_k_label(i, k)}")
+                c = K_COLORS[i % 3]
+                a_c.plot(am.A_deg, successful(am.CoT_moving[i], am.status[i]), color=c, ls=ls,
+                         lw=1.8, marker=".", label=f"{gravity}, {_k_label(i, k)}")
+                # failures at zero, the physical sign's just below, as in (a)
+                at = np.full(len(am.A_deg), -2.0 if gravity == "physical" else 0.0)
+                fails_c += mark_failures(a_c, am.A_deg, at, am.status[i], color=c, seen=seen_c)
+            mark_off_axis(a_c, am.A_deg, am.CoT_moving, COT_YMAX, K_COLORS, below, f" ({gravity})")
     a_s.set_xlabel("stiffness $k/(M g L)$ [-]")
     a_s.set_ylabel("progress per cycle $-S$ [mm]")
     plain_log_ticks(a_s.xaxis)
     a_s.set_title(r"(a) progress against stiffness ($\gamma$ = 90, $A$ = 30, $\psi$ = 45 deg)", loc="left",
                   fontsize="medium")
-    # above the failure markers, which sit just below zero at low stiffness
-    a_s.legend(handles=a_s.get_legend_handles_labels()[0] + fails, fontsize="small", ncol=2, loc="center right")
+    side_legend(a_s, a_s.get_legend_handles_labels()[0] + fails)
     a_c.set_xlabel("amplitude $A$ [deg]")
     a_c.set_ylabel("CoT$^+$ [-]")
-    a_c.set_ylim(0, COT_YMAX)
+    a_c.set_ylim(-3.5 if fails_c else 0.0, COT_YMAX)
     a_c.set_title(r"(b) CoT$^+$ against amplitude ($\gamma$ = 90, $\psi$ = 45 deg)", loc="left", fontsize="medium")
-    a_c.legend(fontsize="x-small", ncol=2)
+    side_legend(a_c, a_c.get_legend_handles_labels()[0] + fails_c)
     for a in (a_s, a_c):
         a.grid(True, which="both", lw=0.3, alpha=0.6)
     return _finish(fig)

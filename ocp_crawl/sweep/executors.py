@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Iterator, Sequence
 
-from ocp_crawl.workers import mp_context
+from ocp_crawl.workers import mp_context, worker_pool
 from ocp_crawl.sweep.point import PointTask, evaluate_point, evaluate_points
 from ocp_crawl.sweep.settings import SweepError, SweepFailed
 
@@ -61,7 +61,7 @@ def pool_runner(tasks: Sequence[PointTask], jobs: int) -> Iterator[tuple[int, di
         return
     # without a timed point (the workers do not fork from here): a few points per chunk
     size = chunk_size(len(tasks), jobs, seconds) if first else min(4, chunk_size(len(tasks), jobs, 0.0))
-    executor = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx)
+    executor = worker_pool(min(jobs, len(tasks)))
     try:
         # the workers fork at the first submit, before the caller sees a row (and starts a progress thread)
         futures = [executor.submit(evaluate_points, chunk) for chunk in _chunks(tasks, size)]

@@ -12,6 +12,7 @@ import itertools
 import math
 import re
 import tomllib
+from decimal import Decimal, localcontext
 from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
@@ -57,6 +58,18 @@ def schema_key(name: str, where: str) -> Key:
     return keys[key]
 
 
+def _finite(v: int | float) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer of hundreds of digits
+        return False
+
+
+def _short(v) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarray:
     """Values of one axis as a 1-D array of the key's type; wrong types and duplicates raise ProblemError."""
     if len(values) == 0:
@@ -72,8 +85,8 @@ def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarra
         else:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ProblemError(f"{where} is invalid: {name} takes numbers ({key.what}); got {v!r}")
-            if not math.isfinite(v):
-                raise ProblemError(f"{where} is invalid: {name} = {v!r} must be finite")
+            if not _finite(v):
+                raise ProblemError(f"{where} is invalid: {name} = {_short(v)} must be finite")
             if key.type is int:
                 if v != int(v):
                     raise ProblemError(f"{where} is invalid: {name} takes integers ({key.what}); got {v!r}")
@@ -146,13 +159,15 @@ def _step_count(start: float, stop: float, text: str, where: str) -> int:
         raise ProblemError(f"{where} is invalid: STEP must be a finite non-zero number, got {text}")
     span = stop - start
     if span != 0 and (span > 0) != (step > 0):
-        raise ProblemError(f"{where} is invalid: STEP = {text} goes away from STOP; use step={-step:g}")
+        raise ProblemError(f"{where} is invalid: STEP = {text} goes away from STOP; "
+                           f"use step={value_text(-step)}")
     intervals = span / step
     n = round(intervals)
     if abs(intervals - n) > STEP_RTOL * max(1.0, abs(intervals)):
         below = start + math.floor(intervals) * step
-        raise ProblemError(f"{where} is invalid: STEP = {text} does not divide STOP - START = {span:g}; "
-                           f"the last value would be {below:g}, not STOP: change STOP or STEP")
+        raise ProblemError(f"{where} is invalid: STEP = {text} does not divide STOP - START = "
+                           f"{value_text(span)}; the last value would be {value_text(below)}, "
+                           "not STOP: change STOP or STEP")
     if n + 1 > MAX_GRID_POINTS:
         raise ProblemError(f"{where} is invalid: STEP = {text} gives {n + 1} values, more than the {MAX_GRID_POINTS} "
                            "points a sweep may have (about 10 to 20 minutes on 2 cores); take a larger STEP")
@@ -174,11 +189,24 @@ def _range(rhs: str, where: str) -> np.ndarray:
     if num == 1 and start != stop:
         raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
                            f"write a single value instead")
-    values = np.linspace(start, stop, num)
-    if not np.all(np.isfinite(values)):
+    if not math.isfinite(stop - start):
         raise ProblemError(f"{where} is invalid: STOP - START = {stop!r} - {start!r} overflows a float; "
                            "give closer ends")
-    return values
+    return np.array(decimal_linspace(start, stop, num))
+
+
+def decimal_linspace(start: float, stop: float, num: int) -> list[float]:
+    """``numpy.linspace(start, stop, num)`` computed in decimal from the ends as written (their
+    shortest repr), each value then rounded once to a float: every value is the float of the decimal
+    it stands for: ``0:0.3:4`` gives 0.0, 0.1, 0.2, 0.3 (numpy.linspace: 0.09999999999999999,
+    0.19999999999999998)."""
+    if num == 1:
+        return [start]
+    a, b = Decimal(repr(start)), Decimal(repr(stop))
+    with localcontext() as ctx:
+        ctx.prec = 60   # more digits than any two floats' difference needs to be rounded once
+        inner = [float(a + (b - a) * i / (num - 1)) for i in range(1, num - 1)]
+    return [start, *inner, stop]
 
 
 def parse_grid(spec: str) -> tuple[str, np.ndarray]:
@@ -264,19 +292,21 @@ def check_some_point_valid(problem: Problem, grid: Mapping[str, Any]) -> None:
                        f"{', '.join(f'{k} = {len(v)} values' for k, v in grid.items())})")
 
 
-def _value_text(v: Any) -> str:
-    return f"{v:g}" if isinstance(v, float) else str(v)
+def value_text(v: Any) -> str:
+    """A grid value as text: a float as its decimal to 12 significant digits (``0.05``, ``45``,
+    ``1e-06``; never ``0.049999999999999996``), others as they are."""
+    return f"{v:.12g}" if isinstance(v, float) else str(v)
 
 
 def axis_text(values: Sequence[Any]) -> str:
     """The values of one axis as text, e.g. "0, 45, 90, 135, 180 (5 values, step 45)": every value up to
     :data:`ECHO_ALL` of them, else the first four and the last two (and the step of an evenly spaced axis)."""
     vals = list(values)
-    texts = [_value_text(v) for v in vals]
+    texts = [value_text(v) for v in vals]
     text = ", ".join(texts if len(vals) <= ECHO_ALL else texts[:4] + ["..."] + texts[-2:])
     extra = f"{len(vals)} value{'s' if len(vals) != 1 else ''}"
     if len(vals) > 2 and all(isinstance(v, (int, float)) for v in vals):
         steps = np.diff(np.asarray(vals, float))
         if np.allclose(steps, steps[0], rtol=1e-9, atol=0.0):
-            extra += f", step {float(steps[0]):g}"
+            extra += f", step {value_text(float(steps[0]))}"
     return f"{text} ({extra})"

@@ -15,7 +15,7 @@ import json
 import os
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from ocp_crawl.io.files import naming, remove_stale_temps, write_json
 from ocp_crawl.status import Status
@@ -39,6 +39,26 @@ def _decoded(raw: bytes, path: Path) -> str:
         line = raw.count(b"\n", 0, exc.start) + 1
         raise SweepError(f"{path}:{line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); the file is damaged: "
                          "start again with --force") from None
+
+
+#: the first header cell of the journal: the flat index of the row's point
+INDEX_COLUMN = "index [-]"
+
+
+def check_header(path: Path, line: str, expected: Sequence[str], bare: Sequence[str]) -> None:
+    """Every cell of the header ``line`` of ``path`` must be the column with its unit (``expected``)
+    or its bare name (``bare``: a file written before the headers carried units, read the same);
+    SweepError naming the first column that differs otherwise."""
+    cells = next(csv.reader([line]))
+    if len(cells) != len(expected):
+        what = f"{len(cells)} columns, expected {len(expected)}: {', '.join(expected)}"
+    else:
+        wrong = [i for i, c in enumerate(cells) if c not in (expected[i], bare[i])]
+        if not wrong:
+            return
+        what = f"column {wrong[0] + 1} is {cells[wrong[0]]!r}, expected {expected[wrong[0]]!r}"
+    raise SweepError(f"{path}: columns differ from {SETTINGS_FILE} ({what}); "
+                     "start again with --force")
 
 
 class SweepStore:
@@ -74,8 +94,10 @@ class SweepStore:
         done: dict[int, dict[str, Any]] = {}
         if self.results_path.exists():
             lines = _decoded(self.results_path.read_bytes(), self.results_path).splitlines(keepends=True)
-            if not lines or next(csv.reader(lines[:1])) != list(settings.columns):
-                raise SweepError(f"{self.results_path}: columns differ from {SETTINGS_FILE}; start again with --force")
+            if not lines:
+                raise SweepError(f"{self.results_path}: empty file (no header); "
+                                 "start again with --force")
+            check_header(self.results_path, lines[0], settings.header(), settings.columns)
             rows = parse_rows(lines[1:], settings.columns, settings, str(self.results_path), 2)
             if len(rows) != settings.size:
                 raise SweepError(f"{self.results_path}: {len(rows)} rows for {settings.size} points; "
@@ -100,8 +122,7 @@ class SweepStore:
         columns = ("index",) + settings.columns
         if not lines:
             return {}
-        if next(csv.reader(lines[:1])) != list(columns):
-            raise SweepError(f"{self.journal_path}: columns differ from {SETTINGS_FILE}; start again with --force")
+        check_header(self.journal_path, lines[0], (INDEX_COLUMN,) + settings.header(), columns)
         done: dict[int, dict[str, Any]] = {}
         for n, row in enumerate(parse_rows(lines[1:], columns, settings, str(self.journal_path), 2), 2):
             index = row.pop("index")
@@ -169,7 +190,7 @@ class SweepStore:
         fresh = not self.journal_path.exists() or self.journal_path.stat().st_size == 0
         self._journal = open(self.journal_path, "a", encoding="utf-8", newline="")
         if fresh:
-            self._write_line(row_line(("index",) + settings.columns), sync=True)
+            self._write_line(row_line((INDEX_COLUMN,) + settings.header()), sync=True)
         return done
 
     def _write_line(self, line: str, sync: bool = False) -> None:

@@ -11,10 +11,9 @@ import numpy as np
 
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable
-from ocp_crawl.problem import SCHEMA
 from ocp_crawl.status import Status
 from ocp_crawl.sweep.cells import cell, row_line
-from ocp_crawl.sweep.grid import axis_text
+from ocp_crawl.sweep.grid import axis_text, value_text
 from ocp_crawl.sweep.journal import RESULTS_FILE, SweepStore
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
@@ -138,16 +137,10 @@ class SweepResult:
         })
 
     def column_units(self) -> dict[str, str]:
-        """The unit of every numeric column: grid keys from the problem schema, results in SI units
-        (S [m], W_plus [J], CoT_plus [-]); extra columns from :data:`~ocp_crawl.io.units.UNITS` where known."""
-        out = {}
-        for name in self.columns:
-            if name in self.keys:
-                section, key = name.split(".")
-                out[name] = SCHEMA[section].key_map[key].unit
-            elif name in units.UNITS:
-                out[name] = units.UNITS[name]
-        return out
+        """The unit of every numeric column (:meth:`SweepSettings.column_units`), as results.csv's
+        header gives them: grid keys from the problem schema, results in SI units (S [m],
+        W_plus [J], CoT_plus [-])."""
+        return self.settings.column_units()
 
     def to_pandas(self):
         """The rows as a :class:`pandas.DataFrame` in grid order, one column per grid key and result.
@@ -170,9 +163,9 @@ class SweepResult:
     def format_summary(self) -> str:
         """Readable summary (the CLI's output): every axis with its values, counts, best points, timing."""
         def at(p) -> str:
-            return ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}" for k, v in p["point"].items())
+            return ", ".join(f"{k} = {value_text(v)}" for k, v in p["point"].items())
 
-        lines = [f"sweep      {self.settings.source}: {self.settings.size} points"]
+        lines = [f"sweep      {self.settings.source}: {units.plural(self.settings.size, 'point')}"]
         lines += [f"  {k} = {axis_text(v)}" for k, v in self.settings.grid]
         if self.out_dir is not None:
             lines.append(f"results    {Path(self.out_dir) / RESULTS_FILE}")
@@ -183,17 +176,27 @@ class SweepResult:
         else:
             lines.append(f"best S     {units.distance(best['S'])} per cycle at {at(best)} "
                          f"(W+ {units.work(best['W_plus'])}, CoT+ {units.cot(best['CoT_plus'])})")
-        if low is not None:
+        if low is not None and low["point"] != best["point"]:   # else its CoT+ is on the line above
             lines.append(f"lowest CoT+ {units.cot(low['CoT_plus'])} at {at(low)} (S {units.distance(low['S'])})")
         if np.isfinite(self.elapsed):
-            per = f", {units.seconds(self.elapsed / self.computed)} per point" if self.computed else ""
-            resumed = self.settings.size - self.computed
-            lines.append(f"time       {units.seconds(self.elapsed)} ({self.computed} points computed{per}"
-                         + (f"; {resumed} from the previous run" if resumed else "") + ")")
+            lines.append(f"time       {self._time_text()}")
         return "\n".join(lines)
 
+    def _time_text(self) -> str:
+        """This run's time and points, e.g. "4.1 s (1 point computed; 7 from the previous run)"."""
+        resumed = self.settings.size - self.computed
+        if not self.computed:
+            return f"nothing computed: {units.plural(resumed, 'point')} from the previous run"
+        each = units.seconds(self.elapsed / self.computed)
+        per = f", {each} per point" if self.computed > 1 else ""
+        computed = units.plural(self.computed, "point")
+        return (f"{units.seconds(self.elapsed)} ({computed} computed{per}"
+                + (f"; {resumed} from the previous run" if resumed else "") + ")")
+
     def csv_text(self) -> str:
-        return row_line(self.columns) + "".join(row_line([cell(r[c]) for c in self.columns]) for r in self.rows)
+        """The text of results.csv: the header (:meth:`SweepSettings.header`), then the rows."""
+        rows = "".join(row_line([cell(r[c]) for c in self.columns]) for r in self.rows)
+        return row_line(self.settings.header()) + rows
 
     def to_csv(self, path: str | os.PathLike) -> Path:
         """Write the rows in grid order (atomically: temp file + rename)."""

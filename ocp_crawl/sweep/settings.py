@@ -10,13 +10,20 @@ import numpy as np
 
 from ocp_crawl.version import __version__
 from ocp_crawl.io.files import jsonable
+from ocp_crawl.io.units import UNITS, plural
 from ocp_crawl.problem import Problem
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 from ocp_crawl.sim.result import ARRAY_FIELDS, CrawlResult
-from ocp_crawl.sweep.grid import VALUE_DTYPES, normalize_grid, schema_key
+from ocp_crawl.sweep.grid import VALUE_DTYPES, normalize_grid, schema_key, value_text
 
 #: columns of every row after the grid keys
 RESULT_COLUMNS = ("S", "W_plus", "CoT_plus", "status", "message")
+#: SI units of the columns that hold numbers, besides the grid keys (whose units are the schema's);
+#: the others (status, message, flags, names, JSON objects) hold text: their header cells have no
+#: unit
+COLUMN_UNITS = {**{name: UNITS[name] for name in ("S", "W_plus", "CoT_plus", "W_plus_joint")},
+                "cycles": "-", "nfev": "-", "nsteps": "-", "t0": "cycles", "failure_t": "cycles",
+                "periodicity_residual": "rad"}
 #: the ``format`` of settings.json
 FORMAT = "ocp_crawl.sweep/1"
 
@@ -110,8 +117,29 @@ class SweepSettings:
 
     @property
     def columns(self) -> tuple[str, ...]:
-        """Columns of ``results.csv``."""
+        """Columns of ``results.csv`` (names without units; :meth:`header`: the header's cells)."""
         return self.keys + RESULT_COLUMNS + self.extra_columns
+
+    def column_units(self) -> dict[str, str]:
+        """The unit of every numeric column: grid keys from the problem schema, results in SI units
+        (S [m], W_plus [J], CoT_plus [-]), the numeric extra columns from :data:`COLUMN_UNITS`."""
+        out = {}
+        for name in self.columns:
+            if name in self.keys:
+                key = schema_key(name, name)
+                if key.type is not str:
+                    out[name] = key.unit
+            elif name in COLUMN_UNITS:
+                out[name] = COLUMN_UNITS[name]
+        return out
+
+    def header(self) -> tuple[str, ...]:
+        """The header cells of ``results.csv``: ``name [unit]`` for a numeric column, as the
+        package's input tables write them (``gait.psi_deg [deg]``, ``S [m]``, ``CoT_plus [-]``), the
+        bare name for a column of text (``status``, ``message``, a string key such as
+        ``model.gravity``)."""
+        unit = self.column_units()
+        return tuple(f"{c} [{unit[c]}]" if c in unit else c for c in self.columns)
 
     def point(self, index: int) -> dict[str, Any]:
         """Grid values of the point with flat index ``index`` (C order: the last key varies fastest)."""
@@ -138,7 +166,8 @@ class SweepSettings:
         """How ``other`` (e.g. the settings on disk) differs from these, in words ("other -> these");
         empty when the two sweeps compute the same rows."""
         def axis(values) -> str:
-            return f"{len(values)} values {values[0]!r}..{values[-1]!r}"
+            ends = f"{value_text(values[0])}..{value_text(values[-1])}"
+            return f"{plural(len(values), 'value')} {ends}"
 
         out = []
         if self.version != other.version:

@@ -125,8 +125,8 @@ def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) 
 def _gait_title(result: CrawlResult) -> str:
     title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
     if np.isfinite(result.S):
-        title += (f"\nS = {units.distance(result.S, 2)} per cycle, W$^+$ = {units.work(result.W_plus, 1)}, "
-                  f"CoT$^+$ = {units.cot(result.CoT_plus)}")
+        title += (f"\nS = {units.distance(result.S, 2)} per cycle (S < 0: towards foot 1), "
+                  f"W$^+$ = {units.work(result.W_plus, 1)}, CoT$^+$ = {units.cot(result.CoT_plus)}")
     if result.failure_t is not None:
         title += f" at t = {result.failure_t:.4f}"
     return title
@@ -191,7 +191,7 @@ def _draw_angles(ax, result: CrawlResult, phase, reference: PeriodicSignal | Non
         ax.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
     ax.set_ylabel("joint angle [deg]")
     ax.set_title("(a) joint angles", loc="left", fontsize="medium")
-    ax.legend(loc="upper right", fontsize="small", ncol=2)
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small", frameon=False)
 
 
 def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
@@ -199,13 +199,13 @@ def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
     ax.plot(phase, 1e3 * (np.asarray(result.x2, float) - origin), color="C3", label="$x_2$ (foot 2)")
     ax.set_ylabel("contact position [mm]")
     ax.set_title("(b) contact positions", loc="left", fontsize="medium")
-    ax.legend(loc="best", fontsize="small")
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small", frameon=False)
 
 
 def _draw_forces(ax, result: CrawlResult, robot: Robot, phase) -> None:
     ax.plot(phase, np.asarray(result.f_t, float), color="k", label="$f_t$")
     plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2, lw=1.0)
-    ax.set_ylabel("tangential force [N]")
+    ax.set_ylabel("tangential force [N]\n($f_t$ on foot 1, along +x)")
     ax.set_title("(d) tangential force and friction limits", loc="left", fontsize="medium")
 
 

@@ -13,12 +13,13 @@ from matplotlib.figure import Figure
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import table_text
-from ocp_crawl.model.inputs import ReferenceTorque
-from ocp_crawl.model.statics import Robot
+from ocp_crawl.model.inputs import CallableSignal
+from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp import OCPResult, OCPSettings
-from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, ratio_labels, value_text
+from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, ratio_labels
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
+from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
 
 
@@ -89,143 +90,255 @@ def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str,
 
 #: colours of joint/foot 1 and 2
 JOINT_COLORS = ("tab:blue", "tab:purple")
+#: opacity of the contact-mode shading
+MODE_ALPHA = 0.45
+#: the sign of f_t, in the label of every force axis
+FT_SIGN = "on foot 1, along +x"
 
 
-def _title(result: OCPResult) -> str:
-    """Headline: objective, status, S, W+ and CoT+ of the replay, gains over the waveform families."""
-    rep = result.replay[0] if result.replay else None
+def _baseline(result: OCPResult):
+    """The best simple gait: the best member of every waveform family searched (the harmonic
+    without a search), the one the gain is over; None without one."""
+    best = result.baselines.best if result.baselines else None
+    return best if best is not None else result.harmonic
+
+
+def pin_shift(signal) -> float:
+    """The phase [cycles] at which the first joint's value of ``signal`` is largest (where the
+    OCP pins its profile's phase 0)."""
+    fine = np.arange(4096) / 4096
+    return float(fine[int(np.argmax(np.asarray(signal(fine))[0]))])
+
+
+def pinned(signal, t: np.ndarray) -> np.ndarray:
+    """``signal`` at the phases ``t`` [cycles] shifted as the OCP pins its profile: phase 0 where
+    the first joint's value is largest (a baseline drawn in the optimum's phase)."""
+    return np.asarray(signal((np.asarray(t) + pin_shift(signal)) % 1.0))
+
+
+def baseline_replays(result: OCPResult, robot: Robot) -> list:
+    """The event-driven replays of the best simple gait (:func:`_baseline`), its torque pinned as
+    the optimum's (:func:`pinned`), in every friction scenario of the optimum and in its gravity
+    convention: the actual motion to compare the optimum's with; [] without a baseline or without
+    a replay of the optimum."""
+    best = _baseline(result)
+    if best is None or not result.replay:
+        return []
+    torque = best.torque_signal(robot.k)
+    shift = pin_shift(torque)
+    signal = CallableSignal(lambda t: torque((np.asarray(t) + shift) % 1.0),
+                            lambda t: torque.derivative((np.asarray(t) + shift) % 1.0))
+    gravity = result.replay[0].gravity
+    return [simulate_torque(Model(r, gravity), signal) for r in result.settings.scenarios(robot)]
+
+
+#: the label of the time axis in cycles
+PHASE_LABEL = "phase t/T [cycles]"
+
+
+def _clock(result: OCPResult, best) -> tuple[float, float, str]:
+    """The time axis: (seconds per cycle of the optimum, of the best simple gait, axis label); in
+    seconds when the period of the optimum and that of a baseline drawn (the best simple gait, the
+    best harmonic) differ, else in cycles (1, 1)."""
+    T = result.T_ocp
+    periods = [c.T for c in (best, result.harmonic) if c is not None]
+    if math.isfinite(T) and all(math.isfinite(t) for t in periods) \
+            and any(not math.isclose(T, t, rel_tol=1e-6) for t in periods):
+        return T, best.T, "time [s] (one cycle of each gait)"
+    return 1.0, 1.0, PHASE_LABEL
+
+
+def _motion(S: float, T: float, W: float | None = None, cot: float | None = None) -> str:
+    """S per cycle and the mean speed v = S/T, of one sign (S < 0: towards foot 1), and W+ and
+    CoT+ when given."""
+    text = f"S = {units.distance(S, 2)}, v = S/T = {units.speed(S / T if T > 0 else None, 1)}"
+    if W is None:
+        return text
+    return text + f", W$^+$ = {units.work(W, 1)}, CoT$^+$ = {units.cot(cot)}"
+
+
+def _title(result: OCPResult, best) -> str:
+    """Headline: objective, status, periods, S, v, W+ and CoT+ of the replay and of the best
+    simple gait, the gains over the waveform families."""
     head = f"Optimal {result.objective} gait ({result.settings.nodes} nodes): {result.status.label}"
+    rep = result.replay[0] if result.replay else None
     if rep is None or not rep.success:
-        return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)" if result.S_ocp
-                       else "")
+        return head + (f"\nOCP S = {units.distance(result.S_ocp[0], 2)} per cycle (not replayed)"
+                       if result.S_ocp else "")
+    name = f"best {best.shape} gait" if best is not None else ""
+    head += f"; period T = {units.seconds(result.T_ocp)}"
+    head += f" ({name}: {units.seconds(best.T)})" if best is not None else ""
+    sign = "S per cycle, S < 0: towards foot 1"
+    if len(result.replay) > 1:
+        if result.objective == "min_cot":
+            what, value = "CoT$^+$", units.cot(result.value_replay)
+        else:   # the objective's speed, signed as S
+            what = "v = S/T"
+            value = units.speed(result.settings.direction * result.value_replay, 1)
+        head += (f"\n{result.settings.robust} {what} over the {len(result.replay)} friction "
+                 f"scenarios (columns): {value}; {sign}")
+    else:
+        head += f"\nreplay: {_motion(rep.S, result.T_ocp, rep.W_plus, rep.CoT_plus)} ({sign})"
+        if best is not None:
+            head += f"\n{name}: {_motion(best.S[0], best.T, best.W_plus[0], best.CoT_plus[0])}"
     significance = "" if result.gain_significant else " (not significant)"
-    if len(result.replay) > 1:  # a friction set: the objective is over the scenarios, the panels: the first
-        what = "CoT$^+$" if result.objective == "min_cot" else "speed"
-        head += (f"\n{result.settings.robust} {what} over the {len(result.replay)} friction scenarios "
-                 f"{value_text(result.objective, result.value_replay)}; panels and the line below: the "
-                 f"first, mu1/mu2 = {result.settings.friction_ratios[0]:.2f}")
-    return (head + f"\nreplay: S = {units.distance(rep.S, 2)} per cycle, T = {units.seconds(result.T_ocp)}, "
-            f"v = {units.speed(result.v_replay[0] if result.v_replay else None, 1)}, W$^+$ = "
-            f"{units.work(rep.W_plus, 1)}, CoT$^+$ = {units.cot(rep.CoT_plus)}\n{_gains_text(result, significance)}")
+    return head + "\n" + _gains_text(result, significance)
 
 
 def _gains_text(result: OCPResult, significance: str) -> str:
-    """The gains by replay over the best of the waveform families' members and, on a second line, over each."""
+    """The gains by replay over the best of the waveform families' members and over each."""
     parts = ", ".join(f"{shape} {units.ratio(g)}" for shape, g in result.gains.items())
-    best = result.baselines.best if result.baselines else result.harmonic
+    best = _baseline(result)
     name = best.shape if best is not None else "-"
-    return (f"gain by replay over the best simple gait ({name}) {units.ratio(result.gain)}{significance}\n"
-            f"over each waveform family's best: {parts}")
+    return (f"gain by replay over the best simple gait ({name}) {units.ratio(result.gain)}"
+            f"{significance}\nover each waveform family's best: {parts}")
 
 
-def plot_optimal_gait(result: OCPResult, robot: Robot) -> Figure:
-    """Four panels over the cycle: (a) the optimal torques [mN m] against the best harmonic gait's, (b) the
-    joint angles [deg] of the replay with the OCP's nodes and the harmonic reference, (c) the contact
-    positions [mm] over the contact modes of the replay, (d) the tangential force [mN] with the friction
-    limits.  The title gives S, W+ and CoT+ of the event-driven replay and the gain over the best harmonic
-    gait.  Returns the figure (Agg canvas)."""
-    fig = Figure(figsize=(11, 9.5), layout="constrained")
+def _column_title(result: OCPResult, best, j: int, label: str) -> str:
+    """The header of scenario ``j``'s column (mu1/mu2 = ``label``): the optimum's and the
+    baseline's S and v."""
+    rep = result.replay[j]
+    text = f"friction mu1/mu2 = {label}\noptimum: "
+    text += _motion(rep.S, result.T_ocp) if rep.success else rep.status_name
+    if best is not None:
+        text += f"\nbest {best.shape}: {_motion(best.S[j], best.T)}"
+    return text + "\n\n"
+
+
+def plot_optimal_gait(result: OCPResult, robot: Robot, baselines: list | None = None) -> Figure:
+    """Four panels over the cycle, one column per friction scenario: (a) the optimal torques
+    [mN m] against the best simple gaits', (b) the actual joint angles [deg] and (c) contact
+    positions [mm] of the replay and the OCP's nodes against the best simple gait's own replay
+    (``baselines``, one per scenario; default: :func:`baseline_replays`), (d) the tangential force
+    [N] with the friction limits; every panel shaded by the contact modes of the optimum's replay.
+    Time in seconds when the optimum's and the baseline's periods differ, else the phase.  The
+    title gives S, v, W+ and CoT+ of the event-driven replays and the gains.  Returns the figure
+    (Agg canvas)."""
+    best = _baseline(result)
+    runs = baseline_replays(result, robot) if baselines is None else baselines
+    clock = _clock(result, best)
+    n = max(len(result.replay), 1)
+    fig = Figure(figsize=(4.0 + max(6.5, 4.6 * n), 13.5), layout="constrained")
     FigureCanvasAgg(fig)
-    axs = fig.subplots(2, 2)
-    fig.suptitle(_title(result))
-    rep = result.replay[0] if result.replay else None
-    h = result.harmonic
-    gait = h.gait() if h else None
-    best = result.baselines.best if result.baselines else None
-    other = best if best is not None and best.shape != "harmonic" else None
-    _torques(axs[0, 0], result, ReferenceTorque(gait, robot.k) if gait else None,
-             other.torque_signal(robot.k) if other else None, other.shape if other else "")
-    _angles(axs[0, 1], result, rep, gait)
-    modes = _positions(axs[1, 0], result, rep)
-    ax = axs[1, 1]
-    if rep is not None:
-        tr = rep.t - rep.t0
-        ax.plot(tr, rep.f_t * 1e3, "k", label="$f_t$")
-        plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=JOINT_COLORS, scale=1e3)
-    else:  # a failed solve is not replayed: say so instead of an empty panel
-        ax.text(0.5, 0.5, f"no replay: the OCP's result is {result.status.label}", ha="center", va="center",
-                transform=ax.transAxes, fontsize="small")
-    _label(ax, "(d) tangential force and friction limits (replay)", "tangential force [mN]")
+    axs = fig.subplots(4, n, squeeze=False, sharex=True)
+    fig.suptitle(_title(result, best))
+    scenarios = result.settings.scenarios(robot)
+    labels = ratio_labels(result.settings.friction_ratios)
+    name = f"best {best.shape}" if best is not None else ""
+    modes: set[int] = set()
+    for j in range(n):
+        ax = axs[:, j]
+        rep = result.replay[j] if j < len(result.replay) else None
+        base = (runs[j] if j < len(runs) else None, name)
+        if rep is not None:
+            for a in ax:
+                modes |= shade_modes(a, mode_runs((rep.t - rep.t0) * clock[0], rep.mode),
+                                     alpha=MODE_ALPHA)
+        _torques(ax[0], result, robot, best, clock)
+        _angles(ax[1], result, j, rep, base, clock)
+        _positions(ax[2], result, j, rep, base, clock)
+        _forces(ax[3], result, rep, scenarios[min(j, len(scenarios) - 1)], clock)
+        if n > 1 and rep is not None:
+            head = _column_title(result, best, j, labels[j])
+            ax[0].set_title(head + ax[0].get_title(loc="left"), loc="left", fontsize="medium")
+        ax[-1].set_xlabel(clock[2])
+    for a in axs[:, -1]:   # one legend per row, right of the last column: off the curves
+        if a.get_legend_handles_labels()[0]:
+            a.legend(loc="center left", bbox_to_anchor=(1.02, 0.5), fontsize="small")
     if modes:
         patches, names = mode_legend(modes, alpha=MODE_ALPHA)
-        fig.legend(patches, names, loc="outside lower center", ncol=min(len(names), 3), fontsize="small",
-                   title="shading of (c): contact mode of the replay", title_fontsize="small")
+        fig.legend(patches, names, loc="outside lower center", ncol=min(len(names), 3),
+                   fontsize="small", title_fontsize="small",
+                   title="background of every panel: contact mode of the optimum's replay")
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
     return fig
 
 
-#: opacity of the contact-mode shading of panel (c)
-MODE_ALPHA = 0.45
-
-
 def _label(ax, title: str, ylabel: str) -> None:
-    ax.set_xlabel("phase t [cycles]")
     ax.set_ylabel(ylabel)
     ax.set_title(title, loc="left", fontsize="medium")
     ax.grid(True, lw=0.3, alpha=0.6)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize="small")
+    ax.tick_params(labelbottom=True)
 
 
-def pinned(signal, t: np.ndarray) -> np.ndarray:
-    """``signal`` at the phases ``t`` [cycles] shifted as the OCP pins its profile: phase 0 where the first
-    joint's value is largest (a baseline drawn in the optimum's phase)."""
-    fine = np.arange(4096) / 4096
-    shift = fine[int(np.argmax(np.asarray(signal(fine))[0]))]
-    return np.asarray(signal((t + shift) % 1.0))
-
-
-def _torques(ax, result: OCPResult, harmonic: ReferenceTorque | None, other=None, name: str = "") -> None:
-    """Panel (a): the optimal node torques, the best harmonic gait's and (``other``) the best gait of
-    the family ``name`` when that is the best baseline, both pinned as the optimum (:func:`pinned`)."""
+def _torques(ax, result: OCPResult, robot: Robot, best, clock) -> None:
+    """Panel (a): the optimal node torques, the best harmonic gait's and the best simple gait's
+    (when that is of another family), both pinned as the optimum (:func:`pinned`), each over its
+    own period."""
     tt = np.linspace(0, 1, 401)
+    h = result.harmonic
+    others = [(h, "--", "best harmonic")] if h is not None else []
+    if best is not None and best is not h:
+        others.append((best, "-.", f"best {best.shape}"))
+    nodes = np.r_[result.phase, 1.0] * clock[0]
     for i, c in enumerate(JOINT_COLORS):
-        ax.plot(np.r_[result.phase, 1.0], np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".",
-                ms=4, label=f"optimal $\\tau_{i + 1}$ (nodes)")
-        if harmonic is not None:
-            ax.plot(tt, pinned(harmonic, tt)[i] * 1e3, color=c, ls="--", lw=1.0,
-                    label=f"best harmonic $\\tau_{i + 1}$ (pinned)")
-        if other is not None:
-            ax.plot(tt, pinned(other, tt)[i] * 1e3, color=c, ls="-.", lw=1.0,
-                    label=f"best {name} $\\tau_{i + 1}$ (pinned)")
+        ax.plot(nodes, np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".", ms=4,
+                label=f"optimal $\\tau_{i + 1}$ (nodes)")
+        for choice, ls, name in others:   # each over its own period, when in seconds
+            tau = pinned(choice.torque_signal(robot.k), tt)[i] * 1e3
+            period = 1.0 if clock[2] == PHASE_LABEL else choice.T
+            ax.plot(tt * period, tau, color=c, ls=ls, lw=1.0, label=f"{name} $\\tau_{i + 1}$")
     _label(ax, f"(a) joint torques ({result.objective})", "joint torque [mN m]")
 
 
-def _angles(ax, result: OCPResult, rep, gait) -> None:
+def _angles(ax, result: OCPResult, j: int, rep, baseline: tuple, clock) -> None:
+    """Panel (b): the actual joint angles of the optimum (replay and OCP nodes) and of the best
+    simple gait (``baseline``: its own replay and its name)."""
     if rep is not None:
-        tr = rep.t - rep.t0
-        # joint 1 wide and below, joint 2 dashed on top: optimal gaits often move both joints alike
-        ax.plot(tr, np.degrees(rep.phi[0]), color=JOINT_COLORS[0], lw=3.0, alpha=0.8, zorder=3,
+        tr = (rep.t - rep.t0) * clock[0]
+        # joint 1 wide and below, joint 2 thin on top: optimal gaits often move both joints alike
+        ax.plot(tr, np.degrees(rep.phi[0]), color=JOINT_COLORS[0], lw=3.0, alpha=0.6, zorder=3,
                 label="optimal $\\varphi_1$ (replay)")
-        ax.plot(tr, np.degrees(rep.phi[1]), color=JOINT_COLORS[1], lw=1.4, ls="--", zorder=4,
+        ax.plot(tr, np.degrees(rep.phi[1]), color=JOINT_COLORS[1], lw=1.4, zorder=4,
                 label="optimal $\\varphi_2$ (replay)")
-    phi = result.phi[0]
-    nodes = np.arange(phi.shape[1]) / (phi.shape[1] - 1)
-    for i, marker in enumerate(("o", "s")):
-        ax.plot(nodes, np.degrees(phi[i]), ls="none", marker=marker, ms=3.0, mfc="none", mec="0.35", mew=0.6,
-                zorder=2, label=f"OCP nodes $\\varphi_{i + 1}$")
-    if gait is not None:
-        tt = np.linspace(0, 1, 401)
-        ref = np.degrees(pinned(gait, tt))
+    if j < len(result.phi):
+        phi = result.phi[j]
+        nodes = np.arange(phi.shape[1]) / (phi.shape[1] - 1) * clock[0]
+        for i, marker in enumerate(("o", "s")):
+            ax.plot(nodes, np.degrees(phi[i]), ls="none", marker=marker, ms=3.0, mfc="none",
+                    mec="0.35", mew=0.6, zorder=5, label=f"OCP nodes $\\varphi_{i + 1}$")
+    base, name = baseline
+    if base is not None and base.t.size:
+        tb = (base.t - base.t0) * clock[1]
         for i, c in enumerate(JOINT_COLORS):
-            ax.plot(tt, ref[i], ls=":", color=c, lw=1.0, label=f"harmonic reference $\\varphi_{{{i + 1},\\mathrm{{ref}}}}$ (pinned)")
-    _label(ax, "(b) joint angles", "joint angle [deg]")
+            ax.plot(tb, np.degrees(base.phi[i]), color=c, ls="--", lw=1.0, zorder=4,
+                    label=f"{name} $\\varphi_{i + 1}$ (its replay)")
+    _label(ax, "(b) actual joint angles", "joint angle [deg]")
 
 
-def _positions(ax, result: OCPResult, rep) -> set[int]:
-    """Panel (c); returns the contact modes shaded."""
-    drawn: set[int] = set()
+def _positions(ax, result: OCPResult, j: int, rep, baseline: tuple, clock) -> None:
+    """Panel (c): the contact positions of the optimum (replay, OCP nodes) and of the best simple
+    gait (``baseline``), each from its foot 1 at the start of the cycle."""
     if rep is not None:
-        tr = rep.t - rep.t0
-        drawn = shade_modes(ax, mode_runs(tr, rep.mode), alpha=MODE_ALPHA)
-        ax.plot(tr, (rep.x1 - rep.x1[0]) * 1e3, color=JOINT_COLORS[0], label="$x_1$ (replay)")
-        ax.plot(tr, (rep.x2 - rep.x1[0]) * 1e3, color=JOINT_COLORS[1], label="$x_2$ (replay)")
-    x1 = result.x1[0]
-    ax.plot(np.arange(len(x1)) / (len(x1) - 1), (x1 - x1[0]) * 1e3, ls="none", marker="o", ms=3.0, mfc="none",
-            mec="0.35", mew=0.6, label="$x_1$ (OCP nodes)")
-    _label(ax, "(c) contact positions", "contact position [mm]")
-    return drawn
+        tr = (rep.t - rep.t0) * clock[0]
+        for x, c, i in ((rep.x1, JOINT_COLORS[0], 1), (rep.x2, JOINT_COLORS[1], 2)):
+            ax.plot(tr, (x - rep.x1[0]) * 1e3, color=c, label=f"optimal $x_{i}$ (replay)")
+    if j < len(result.x1):
+        x1 = result.x1[j]
+        nodes = np.arange(len(x1)) / (len(x1) - 1) * clock[0]
+        ax.plot(nodes, (x1 - x1[0]) * 1e3, ls="none", marker="o", ms=3.0, mfc="none", mec="0.35",
+                mew=0.6, zorder=5, label="OCP nodes $x_1$")
+    base, name = baseline
+    if base is not None and base.t.size:
+        tb = (base.t - base.t0) * clock[1]
+        for x, c, i in ((base.x1, JOINT_COLORS[0], 1), (base.x2, JOINT_COLORS[1], 2)):
+            ax.plot(tb, (x - base.x1[0]) * 1e3, color=c, ls="--", lw=1.0,
+                    label=f"{name} $x_{i}$ (its replay)")
+    _label(ax, "(c) contact positions (from foot 1 at the start)", "contact position [mm]")
+
+
+def _forces(ax, result: OCPResult, rep, robot: Robot, clock) -> None:
+    """Panel (d): the replay's tangential force [N] and the friction limits of the scenario's
+    ``robot``."""
+    if rep is not None:
+        tr = (rep.t - rep.t0) * clock[0]
+        ax.plot(tr, rep.f_t, "k", label="optimal $f_t$ (replay)")
+        plot_friction_limits(ax, tr, robot, rep.f_n1, rep.f_n2, colors=JOINT_COLORS)
+    else:  # a failed solve is not replayed: say so instead of an empty panel
+        ax.text(0.5, 0.5, f"no replay: the OCP's result is {result.status.label}", ha="center",
+                va="center", transform=ax.transAxes, fontsize="small")
+    _label(ax, "(d) tangential force and friction limits", f"tangential force [N]\n({FT_SIGN})")
 
 
 def _write_text(path: Path, text: str) -> Path:

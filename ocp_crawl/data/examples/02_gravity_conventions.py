@@ -1,7 +1,7 @@
 """The two gravity conventions side by side.
 
 The paper's printed statics carry the gravity term with the opposite sign of the virtual-work
-derivation (see README, "Gravity conventions"). This example runs the paper's gait under both
+derivation (see docs/guide/model.md, "Gravity conventions"). This example runs the paper's gait under both
 conventions (``model.gravity = "physical"`` and ``"paper"``) and plots, over the steady cycle, the
 joint angles phi1, phi2 [deg] and the position of foot 1 [mm], with S of each in the title, so that the
 size of the difference is visible at a glance.

@@ -38,7 +38,7 @@ def main() -> None:
     lead = PSI_DEG / 360.0 / 2.0       # joint 1 leads by psi/2, joint 2 lags by psi/2 (as the harmonic gait)
     samples = np.radians(GAMMA_DEG + A_DEG * np.vstack([trapezoid(t + lead), trapezoid(t - lead)]))   # (2, N) [rad]
     references = {
-        "harmonic (eq. (ref) of the paper)": Harmonic.from_degrees(GAMMA_DEG, A_DEG, PSI_DEG),
+        "harmonic (the paper's gait)": Harmonic.from_degrees(GAMMA_DEG, A_DEG, PSI_DEG),
         "trapezoid (PCHIP)": PeriodicPchip(t, samples),
         "trapezoid, Fourier order 3": FourierSeries.fit(samples, order=3),
     }

@@ -5,13 +5,16 @@ Runs a small sweep of the paper's gait over the amplitude A and the phase differ
 S [m], W_plus [J], CoT_plus [-], status, message) to a :class:`pandas.DataFrame` with
 :meth:`~ocp_crawl.sweep.SweepResult.to_pandas` (units in ``df.attrs["units"]``), where the usual
 tools apply: units converted in columns, the failed points counted by status, the best psi per
-amplitude found with ``groupby``, a pivot table plotted.  Needs pandas (``pip install
-'ocp-crawl[examples]'``).
+amplitude found with ``groupby``, a pivot table plotted.  The sweep's ``results.csv`` carries the
+units in its header (``S [m]``, ``gait.psi_deg [deg]``; text columns bare), as the package's input
+tables do: ``pandas.read_csv`` reads the same rows, and ``study.csv`` is written the same way.
+Needs pandas (``pip install 'ocp-crawl[examples]'``).
 
-Run: ``python examples/07_study_to_pandas.py [OUT_DIR]``; writes ``OUT_DIR/study.csv`` and
-``OUT_DIR/study.png``.
+Run: ``python examples/07_study_to_pandas.py [OUT_DIR]``; writes ``OUT_DIR/sweep/results.csv``,
+``OUT_DIR/study.csv`` and ``OUT_DIR/study.png``.
 """
 import numpy as np
+import pandas as pd
 from _common import output_dir, save
 from matplotlib.figure import Figure
 
@@ -23,12 +26,19 @@ GRID = {"gait.A_deg": [10.0, 20.0, 30.0], "gait.psi_deg": list(np.linspace(0.0, 
 
 def main() -> None:
     out = output_dir()
-    sweep = run_sweep(paper_problem(), GRID, jobs=1)
+    sweep = run_sweep(paper_problem(), GRID, out_dir=out / "sweep", jobs=1, force=True)
     df = sweep.to_pandas()
     assert df.attrs["units"]["S"] == "m" and df.attrs["units"]["W_plus"] == "J"
+    # the file holds the same rows; its header cells are "name [unit]" (e.g. "S [m]") or bare names
+    table = pd.read_csv(out / "sweep" / "results.csv")
+    table = table.rename(columns={cell: cell.split(" [")[0] for cell in table.columns})
+    numbers = ["S", "W_plus", "CoT_plus"]
+    assert table[numbers].equals(df[numbers])
     df["S_mm"] = 1e3 * df["S"]                    # [mm per cycle]
     df["W_plus_mJ"] = 1e3 * df["W_plus"]          # [mJ per cycle]
-    df.to_csv(out / "study.csv", index=False)
+    unit = dict(df.attrs["units"], S_mm="mm", W_plus_mJ="mJ")   # study.csv: the same convention
+    header = [f"{c} [{unit[c]}]" if c in unit else c for c in df.columns]
+    df.to_csv(out / "study.csv", index=False, header=header)
     print(f"wrote {out / 'study.csv'}")
     print(df.groupby("status").size().rename("points").to_string())
     ok = df[df["status"] == "success"]

@@ -14,8 +14,10 @@ from pathlib import Path
 from ocp_crawl.viz.gait import save_figure
 
 
-#: set (to anything) by the examples' test (tests/test_examples.py): an example whose full run takes minutes runs the
-#: same steps with a smaller iteration budget, so that the gallery is checked in seconds; unset, they run in full
+#: set (to anything) by the examples' test (tests/test_examples.py) and the documentation's build
+#: (docs/_ext/ocp_gallery.py, which gives each example its output directory): an example whose
+#: full run takes minutes runs the same steps with a smaller iteration budget, so that the gallery
+#: is checked in seconds; unset, they run in full
 QUICK_ENV = "OCP_CRAWL_EXAMPLES_QUICK"
 
 
