@@ -200,8 +200,9 @@ def test_the_bound_costs_speed(bounded):
 
 
 @pytest.mark.parametrize("value,error,match", [
-    (0.0, ValueError, "OCPSettings.max_joint_rate_deg_s must be > 0"),
-    (-10.0, ValueError, "OCPSettings.max_joint_rate_deg_s must be > 0"),
+    (0.0, ValueError, r"OCPSettings.max_joint_rate_deg_s must be in \[0.01, 10000\]"),
+    (-10.0, ValueError, r"OCPSettings.max_joint_rate_deg_s must be in \[0.01, 10000\]"),
+    (1e5, ValueError, r"OCPSettings.max_joint_rate_deg_s must be in \[0.01, 10000\]"),
     (math.inf, ValueError, "OCPSettings.max_joint_rate_deg_s must be finite"),
     ("fast", TypeError, "OCPSettings.max_joint_rate_deg_s must be a real number"),
 ])
