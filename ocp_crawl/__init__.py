@@ -15,7 +15,7 @@ _EXPORTS = {
     "simulate": "ocp_crawl.sim", "SOLVERS": "ocp_crawl.sim", "HybridOptions": "ocp_crawl.sim",
     "TimeSteppingOptions": "ocp_crawl.sim", "AnglesOptions": "ocp_crawl.sim", "CycleOptions": "ocp_crawl.sim",
     "CrawlResult": "ocp_crawl.sim", "Event": "ocp_crawl.sim", "Mode": "ocp_crawl.sim",
-    "SimulationError": "ocp_crawl.sim",
+    "SimulationError": "ocp_crawl.sim", "MujocoOptions": "ocp_crawl.sim",
     "simulate_torque": "ocp_crawl.sim.event",
     "simulate_angles": "ocp_crawl.sim.angles",
     "simulate_mpcc": "ocp_crawl.sim.timestepping",
@@ -30,5 +30,6 @@ __all__ = [
     "simulate", "SOLVERS", "HybridOptions", "TimeSteppingOptions", "AnglesOptions", "CycleOptions", "CrawlResult",
     "Event", "Mode", "SimulationError", "simulate_torque", "simulate_angles", "simulate_mpcc", "Problem",
     "ProblemError", "load_problem", "paper_problem", "problem_from_dict", "run_problem",
+    "MujocoOptions",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -28,6 +28,7 @@ class Status(IntEnum):
     SNAP_THROUGH = 16
     ENERGY_IMBALANCE = 17
     SET_VALUED = 23
+    COARSE_STEPS = 24
     # the periodic-gait OCP
     INFEASIBLE = 11
     NOT_COMPLEMENTARY = 12
@@ -82,6 +83,9 @@ STATUS_MESSAGES = {
                              "against potential change plus friction dissipation)",
     Status.SET_VALUED: "more than one contact mode continues from a tie of the two feet's friction limits: the "
                        "quasistatic model leaves the motion undecided (set-valued); mu1 != mu2 breaks the tie",
+    Status.COARSE_STEPS: "the time steps are too coarse: the estimate of the discretisation error "
+                         "of S (the steady cycle re-run with halved steps) exceeds its bound; "
+                         "raise [simulation] steps",
     Status.INFEASIBLE: "the optimal control problem has no feasible point (locally): the constraints cannot all "
                        "be met",
     Status.NOT_COMPLEMENTARY: "the optimiser converged but the complementarity residual exceeds the tolerance",

@@ -66,6 +66,11 @@ DATA_ROWS.update({
                                    ["paper_gait.toml", "[gait] file", "nope.csv", "(from --set)", "No such file"]),
     "simulate: samples not periodic": R("simulate", ["{file}"], ["x.toml", "[gait] file", "t.csv:6", "not periodic"],
                                         text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS + "1.0,-0.3,-0.29\n")),
+    "simulate: too many samples": R("simulate", ["{file}"],
+                                    ["x.toml", "[gait] file", "10001 samples in one period, at most 10000"],
+                                    text=gait(SAMPLES),
+                                    files=csv(CSV_HEAD + "".join(f"{j / 10001!r},-0.29,-0.29\n"
+                                                                 for j in range(10001)))),
     "simulate: samples NaN": R("simulate", ["{file}"], ["x.toml", "[gait] file", "t.csv:3", "'tau1 [N m]'",
                                                         "not a finite number"],
                                text=gait(SAMPLES), files=csv(CSV_HEAD + CSV_ROWS.replace("-0.25,", "nan,", 1))),

@@ -26,6 +26,7 @@ OUTPUTS = {
     "06_custom_waveform.py": ["custom_waveform.png"],
     "07_study_to_pandas.py": ["study.png", "study.csv", "sweep/results.csv"],
     "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
+    "09_past_a_fold.py": ["past_a_fold.png"],
 }
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
 TIMEOUT_S = 300

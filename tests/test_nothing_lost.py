@@ -189,9 +189,34 @@ MONITOR = textwrap.dedent("""
 DIRECT_OK = {".sweep.lock", "results.partial.csv"}
 
 
+def _staged(path: str, renamed: dict) -> str | None:
+    """Where ``path`` was before the staging of ``files.write_set`` moved it: the file itself renamed out of
+    a staging directory (``.<DIR>.<pid>-<host>.<random>.tmp``), or a directory above it renamed from one."""
+    src = renamed.get(path)
+    if src is not None and TEMP_RE.match(Path(src).parent.name):
+        return src
+    for d in Path(path).parents:
+        src = renamed.get(str(d))
+        if src is not None and TEMP_RE.match(Path(src).name):
+            return str(Path(src) / Path(path).relative_to(d))
+    return None
+
+
+def _atomic(path: str, renamed: dict, written: set) -> bool:
+    """``path`` renamed into place from a temporary file of its directory (atomic_write), itself or as
+    staged by write_set (all or nothing)."""
+    src = renamed.get(path)
+    m = TEMP_RE.match(Path(src).name) if src else None
+    if m and m["name"] == Path(path).name and Path(src).parent == Path(path).parent and src in written:
+        return True
+    staged = _staged(path, renamed)
+    return staged is not None and staged != path and _atomic(staged, renamed, written)
+
+
 def non_atomic(events, root):
     """Final files under ``root`` that were not renamed into place from a temporary of the same
-    directory, or that were opened for writing directly; and temporary files left behind."""
+    directory (directly, or inside the staging directory of an all-or-nothing set), or that were opened
+    for writing directly; and temporary files left behind."""
     written = {e[1] for e in events if e[0] == "write"}
     renamed = {}
     for e in events:
@@ -199,17 +224,15 @@ def non_atomic(events, root):
             renamed[e[2]] = e[1]
     problems = []
     for f in sorted(p for p in Path(root).rglob("*") if p.is_file()):
-        if f.name.endswith(".tmp"):
+        if f.name.endswith(".tmp") or any(TEMP_RE.match(d.name) for d in f.parents):
             problems.append(f"{f}: temporary file left behind")
         elif f.name in DIRECT_OK:
             continue
         elif str(f) in written:
             problems.append(f"{f}: opened for writing directly")
-        else:
-            src = renamed.get(str(f))
-            m = TEMP_RE.match(Path(src).name) if src else None
-            if not (m and m["name"] == f.name and Path(src).parent == f.parent and src in written):
-                problems.append(f"{f}: not renamed from a temporary file of its directory (source {src})")
+        elif not _atomic(str(f), renamed, written):
+            problems.append(f"{f}: not renamed from a temporary file of its directory "
+                            f"(source {renamed.get(str(f))})")
     # files written directly and deleted again are harmless scratch files; the rest was checked above
     return problems
 

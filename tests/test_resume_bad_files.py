@@ -111,3 +111,23 @@ def test_a_missing_row_is_computed_on_resume(finished, tmp_path, capsys):
     rows = SweepResult.read(out).rows
     assert [r["status"] for r in rows] == [r["status"] for r in SweepResult.read(finished).rows]
     assert "missing" not in (out / RESULTS_FILE).read_text()
+
+
+@pytest.mark.parametrize("journal", [False, True])
+def test_resume_over_a_success_row_without_s_is_bad_input(finished, tmp_path, capsys, journal):
+    """A row with status success and an empty S is a damaged file (a success has a stride), not
+    a result."""
+    out = _copy(finished, tmp_path)
+    name = JOURNAL_FILE if journal else RESULTS_FILE
+    data = _journal_of(out) if journal else (out / name).read_bytes()
+    lines = data.splitlines(keepends=True)
+    header = lines[0].decode().rstrip("\n").split(",")
+    n = next(j for j, line in enumerate(lines) if b",success," in line)
+    cells = lines[n].decode().rstrip("\n").split(",")
+    cells[header.index("S [m]")] = ""
+    lines[n] = (",".join(cells) + "\n").encode()
+    (out / name).write_bytes(b"".join(lines))
+    code, err = _resume(out, capsys)
+    _assert_bad_input(code, err, f"{out / name}:{n + 1}", "success", "empty S")
+    with pytest.raises(SweepError, match="empty S"):
+        SweepResult.read(out, partial=True)

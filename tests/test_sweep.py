@@ -494,3 +494,25 @@ def test_cli_sweep_over_the_solver(tmp_path, capsys):
     settings = json.loads((out / SETTINGS_FILE).read_text())
     assert settings["problem"]["simulation"]["solver"] == "event"
 
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGXFSZ"), reason="file size limits are POSIX")
+def test_an_io_error_of_a_sweep_names_the_file(tmp_path):
+    """A journal the file system refuses (here a file size limit, as a full disk) is named in the
+    one line: the failed flush when the journal is closed is not a second, anonymous error."""
+    import resource
+
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (3072, 3072))
+
+    out = tmp_path / "s"
+    path = os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])
+    env = dict(os.environ, PYTHONPATH=path)
+    env.pop("OCP_CRAWL_TRACEBACK", None)
+    argv = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:40",
+            "--out", str(out), "--no-progress", "--jobs", "1"]
+    proc = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=tmp_path,
+                          preexec_fn=limit, timeout=300)
+    assert proc.returncode == 1
+    assert proc.stderr == f"ocp-crawl: I/O error: {out / JOURNAL_FILE}: File too large\n"

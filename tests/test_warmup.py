@@ -166,3 +166,32 @@ def test_every_fast_function_is_made_by_a_registered_builder():
                     unregistered.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name}")
     assert found >= 5
     assert not unregistered, "FastFunction made outside a @compiled_function builder: " + ", ".join(unregistered)
+
+
+def _gcc_out_of_space(args, **kwargs):
+    return subprocess.CompletedProcess(args, 1, "", "/usr/bin/ld: final link failed: No space "
+                                       "left on device\ncollect2: error: ld returned 1 exit status\n")
+
+
+def _no_space_for_the_directory(*args, **kwargs):
+    raise OSError(errno.ENOSPC, "No space left on device", str(kwargs.get("dir", "?")) + "/.x.tmp")
+
+
+@pytest.mark.parametrize("where", ["compiler", "directory"])
+def test_warmup_on_a_full_disk_says_so_not_no_compiler(where, tmp_path, monkeypatch, capsys):
+    """A cache the disk cannot take (the compiler's output, or the build directory) is a full
+    disk, named by the cache's file, not "no working C compiler"."""
+    from ocp_crawl.cli.app import main
+    cache = tmp_path / "c"
+    monkeypatch.setenv("OCP_CRAWL_CACHE", str(cache))
+    monkeypatch.delenv("OCP_CRAWL_NO_COMPILE", raising=False)
+    if where == "compiler":
+        monkeypatch.setattr(compiled.subprocess, "run", _gcc_out_of_space)
+    else:
+        monkeypatch.setattr(compiled.tempfile, "TemporaryDirectory", _no_space_for_the_directory)
+    assert main(["warmup", "--json"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no working C compiler" not in err, err
+    start = f"ocp-crawl: error: cannot write the compiled-library cache: {cache}/"
+    assert err.startswith(start), err
+    assert ".so: No space left on device" in err

@@ -12,6 +12,7 @@ from typing import Iterable
 
 from ocp_crawl.checks import parse_integer, parse_number
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, UsageError
+from ocp_crawl.io.files import write_set
 from ocp_crawl.sim.options import STEPS_BOUNDS
 
 
@@ -110,11 +111,11 @@ def optional_out(args: argparse.Namespace, names: Iterable[str]) -> Path | None:
             raise BadInput("--force without --out: nothing is written, so nothing would be overwritten; give "
                            "--out DIR or drop --force")
         return None
-    return prepare_out(args.out, names, args.force)
+    return prepare_out(args.out, names, args.force, staged=True)
 
 
 def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, resume: bool = False,
-                kind: str | None = None, label: str | None = None) -> Path:
+                kind: str | None = None, label: str | None = None, staged: bool = False) -> Path:
     """Check and create the output directory of a command, before any computation.
 
     ``names``: the files (or directories) the command writes into ``path``.  If any of them exists,
@@ -122,7 +123,10 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
     command that continues an interrupted run in place: its own code checks what it finds).  A
     directory holding none of these names is fine.  Then the directory is created and checked to be
     writable.  ``kind`` (e.g. "a sweep") says what a resumable directory holds; ``label`` replaces
-    ``--out PATH`` at the start of the messages (e.g. for a file given as --out).
+    ``--out PATH`` at the start of the messages (e.g. for a file given as --out).  ``staged``: the
+    command writes its files with :func:`write_out` (all or nothing), so a directory made here only
+    for the checks is removed again: a run that fails before its files are complete leaves no
+    ``--out`` directory.
     """
     out = Path(path)
     label = label or f"--out {out}"
@@ -134,6 +138,7 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
             raise BadInput(f"{label}: would overwrite earlier results ({shown}){what} pass --force to overwrite "
                            "or choose another directory")
     where = label if label == f"--out {out}" else f"{label}: {out}"
+    made = not _exists(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=out):
@@ -143,7 +148,17 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
     except OSError as exc:
         raise BadInput(f"{where}: output directory is not writable: {exc.strerror or exc}") from None
     _check_targets(out, names, label)
+    if staged and made:
+        out.rmdir()   # write_out makes it, complete, at the end (in a parent shown writable)
     return out
+
+
+def write_out(out: Path, write, force: bool) -> list[Path]:
+    """Write a command's files into ``out`` all or nothing (:func:`ocp_crawl.io.files.write_set`):
+    ``write(directory)`` writes them into a staging directory and returns their paths; returns
+    their final paths.  Without ``force`` a file that appeared in ``out`` since
+    :func:`prepare_out` is not overwritten."""
+    return write_set(out, write, overwrite=force)
 
 
 def _check_targets(out: Path, names: Iterable[str], label: str) -> None:

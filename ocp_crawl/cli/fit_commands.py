@@ -6,7 +6,8 @@ import json
 from pathlib import Path
 
 from ocp_crawl.cli.app import register
-from ocp_crawl.cli.common import finish, force_arg, integer, jobs_type, out_dir, prepare_out
+from ocp_crawl.cli.common import (finish, force_arg, integer, jobs_type, out_dir, prepare_out,
+                                  write_out)
 from ocp_crawl.model.pressure import PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
 
@@ -70,11 +71,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
     datasets = [read_measurements(path) for path in args.data]
     solve.check_inputs(problem, datasets, params, pressure, args.form)   # before --out is made
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
-    out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force)
+    out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force, staged=True)
     result = solve.fit_measurements(problem, datasets, params, pressure=pressure,
                                     absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev, jobs=args.jobs,
                                     form=args.form)
-    files = write_fit(result, out, figure=not args.no_figure)
+    files = write_out(out, lambda d: write_fit(result, d, figure=not args.no_figure), args.force)
     if args.json:
         print(json.dumps(dict(fit_dict(result), written=[str(f) for f in files]), allow_nan=False))
     else:

@@ -11,7 +11,7 @@ import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
 from ocp_crawl.cli.common import (finish, force_arg, integer, optional_out, out_dir, out_file, prepare_out, real,
-                                  steps_type)
+                                  steps_type, write_out)
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
@@ -135,6 +135,13 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
         f"status     {result.status_name} ({result.status}): {result.message}",
         f"S          {_per_cycle(units.distance(result.S))}{direction}",
         f"speed      {_speed_text(problem.speed(result.S), problem.period)}",
+    ]
+    if np.isfinite(result.S_error):
+        ex = result.extra
+        bound = ex.get("S_error_bound", np.nan) * 1e3
+        lines.append(f"S error    {result.S_error * 1e3:.2g} mm (estimate |S_N - S_M|, the steady "
+                     f"cycle re-run with M = {ex.get('steps_check')} steps; bound {bound:.2g} mm)")
+    lines += [
         f"W+         {_per_cycle(units.work(result.W_plus))}",
         f"CoT+       {units.cot(result.CoT_plus)}",
         f"cycles     {result.cycles}" + (f" (steady cycle from t = {result.t0:g})" if result.success else ""),
@@ -179,8 +186,10 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                         "'phi1_ref [deg]', 'phi2_ref [deg]'): shortcut for --set gait.waveform=samples --set "
                         "gait.file=FILE.csv")
     p.add_argument("--solver", choices=TORQUE_SOLVERS,
-                   help="shortcut for --set simulation.solver=...: event (event-driven hybrid solver, the default) "
-                        "or mpcc (MPCC time-stepping, IPOPT); torque drive only")
+                   help="shortcut for --set simulation.solver=...: event (event-driven hybrid "
+                        "solver, the default), mpcc (MPCC time-stepping, IPOPT) or mujoco (dynamic, "
+                        "at simulation.period [s]; needs pip install 'ocp-crawl[dynamic]'); torque "
+                        "drive only")
     p.add_argument("--steps", type=steps_type, metavar="N",
                    help="shortcut for --set simulation.steps=N: steps per cycle of --solver mpcc (default "
                         f"{SCHEMA['simulation'].key_map['steps'].default})")
@@ -204,7 +213,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(data, allow_nan=False))
     else:
         print(format_summary(result, problem))
-    files = write_outputs(out, result, problem, data) if out is not None else []
+    files = [] if out is None else write_out(
+        out, lambda d: write_outputs(d, result, problem, data), args.force)
     return finish(args, files, result.success, f"simulation failed: {result.message}")
 
 
@@ -228,12 +238,12 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
 @register("demo", "run the paper's gait (torque drive, both gravity signs, prescribed angles)", _demo_args)
 def cmd_demo(args: argparse.Namespace) -> int:
     names = [f"{case}_{name}" for case, _, _ in DEMO_CASES for name in RUN_FILES] + ["demo_summary.json"]
-    out = prepare_out(args.out, names, args.force)
+    out = prepare_out(args.out, names, args.force, staged=True)
     print("The paper's gait (Table I robot; gamma = 90 deg, A = 30 deg, psi = 45 deg)\n")
     header = f"{'case':<36} {'status':<10} {'S [mm]':>9} {'W+ [mJ]':>9} {'CoT+':>8} {'events/cycle':>12}"
     print(header)
     print("-" * len(header))
-    reports, failed = {}, []
+    reports, failed, runs = {}, [], []
     for name, text, overrides in DEMO_CASES:
         problem = paper_problem(overrides)
         result = _simulate(problem)
@@ -241,10 +251,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print(f"{text:<36} {result.status_name:<10} {units.fixed(result.S, scale=1e3):>9} "
               f"{units.fixed(result.W_plus, scale=1e3):>9} {units.cot(result.CoT_plus):>8} {n_events:>12}")
         reports[name] = data = report(result, problem)
-        write_outputs(out, result, problem, data, stem=f"{name}_")
+        runs.append((name, result, problem, data))
         if not result.success:
             failed.append(f"{text}: {result.message}")
-    write_json(out / "demo_summary.json", reports)
+
+    def write(directory: Path) -> list[Path]:
+        files = [f for name, *run in runs for f in write_outputs(directory, *run, stem=f"{name}_")]
+        return files + [write_json(directory / "demo_summary.json", reports)]
+    write_out(out, write, args.force)
     print(f"\nfigures and summaries in {out}/ (<case>_gait.png, <case>_gait.pdf, <case>_summary.json, "
           "<case>_arrays.npz)")
     print("S < 0: the robot moves towards foot 1, the joint that leads in phase. The two gravity signs "

@@ -11,10 +11,11 @@ from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
 from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, optional_out,
-                                  out_dir, prepare_out)
+                                  out_dir, prepare_out, write_out)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
+from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.settings import NODES_BOUNDS
 from ocp_crawl.problem import SCHEMA, format_value, ocp_settings, problem_from_dict
 from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
@@ -129,37 +130,6 @@ def _check_grid_keeps_sets(args: argparse.Namespace, data, grid) -> None:
                                f"{name} at every point, so drop the --set{also}")
 
 
-def _warmup_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the list")
-
-
-@register("warmup", "prebuild the compiled-library cache (e.g. before a sweep on a fresh cluster node)", _warmup_args)
-def cmd_warmup(args: argparse.Namespace) -> int:
-    from ocp_crawl.model.compiled import CacheError
-    from ocp_crawl.sweep.warmup import warmup
-
-    try:
-        result = warmup()
-    except CacheError as exc:  # OCP_CRAWL_CACHE names no usable directory
-        raise BadInput(str(exc)) from None
-    counts = {state: result.count(state) for state in ("built", "cached", "not compiled")}
-    if args.json:
-        print(json.dumps(jsonable({"cache": str(result.cache), "disabled": result.disabled, **counts,
-                                   "seconds": round(result.seconds, 3), "functions": [vars(f) for f in result.functions]})))
-    else:
-        print(f"compiled-library cache {result.cache}")
-        for f in result.functions:
-            print(f"  {f.state:<12} {f.function:<28} {f.library.name if f.library else '-'} ({f.seconds:.2f} s)")
-        print(f"{len(result.functions)} compiled functions: {counts['built']} built, {counts['cached']} already "
-              f"cached, {counts['not compiled']} not compiled ({result.seconds:.1f} s)")
-    if result.disabled:
-        print(f"{PROG}: OCP_CRAWL_NO_COMPILE is set: nothing compiled (CasADi evaluates the functions)", file=sys.stderr)
-    elif not result.ok:
-        err("no working C compiler (cc, gcc, clang or $CC): the functions are evaluated by CasADi, which is slower")
-        return EXIT_FAILURE
-    return EXIT_OK
-
-
 # --------------------------------------------------------------------------------------------
 # reproduce
 # --------------------------------------------------------------------------------------------
@@ -223,7 +193,7 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--nodes", nargs="+", metavar="N", type=integer("--nodes", NODES_BOUNDS[0], high=NODES_BOUNDS[1]),
-                   help="numbers of nodes (overrides ocp.nodes); several, strictly increasing (e.g. --nodes 50 100 "
+                   help="numbers of nodes (overrides ocp.nodes); up to 6, strictly increasing (e.g. --nodes 50 100 "
                         "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
                         "convergence table (objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
@@ -240,6 +210,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     force_arg(p)
 
 
+#: most numbers of nodes of one ``optimize --nodes`` (each is a full solve, warm-started)
+MAX_NODE_COUNTS = 6
 #: the files ocp_crawl.viz.ocp.write_outputs writes (over a friction set: also one problem file per
 #: scenario, ocp_crawl.viz.ocp.scenario_files)
 OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
@@ -362,6 +334,7 @@ def format_optimize(s: dict) -> str:
         *_baseline_lines(s),
         f"peaks       {_peaks(s)}",
         *([f"starts      {spread}"] if spread else []),
+        *margin_text(s.get("dynamic_margin")),
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
         f"{units.scientific(s['periodicity_residual'])}",
         f"time        {units.seconds(s['solve_time_s'])}",
@@ -426,6 +399,10 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     from ocp_crawl.ocp import optimize_gait
     from ocp_crawl.viz.ocp import scenario_files, write_outputs as write_ocp_outputs
 
+    if args.nodes and len(args.nodes) > MAX_NODE_COUNTS:
+        raise BadInput(f"--nodes: {len(args.nodes)} numbers of nodes given, at most "
+                       f"{MAX_NODE_COUNTS}: each is a full solve (minutes at N = 400); e.g. "
+                       "--nodes 50 100 200 400")
     if args.nodes and any(text.split("=", 1)[0].strip() == "ocp.nodes" for text in args.overrides):
         raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the nodes: give one")
     # the first N of --nodes is the problem's ocp.nodes (so the reports name the N solved)
@@ -455,7 +432,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         print(json.dumps(data, allow_nan=False))
     else:
         print(format_optimize(data))
-    files = write_ocp_outputs(result, problem.robot, out, data) if out is not None else []
+    files = [] if out is None else write_out(
+        out, lambda d: write_ocp_outputs(result, problem.robot, d, data), args.force)
     return finish(args, files, result.success, f"optimisation failed: {result.message}")
 
 
@@ -491,9 +469,10 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
         print(json.dumps(jsonable(dict(conv, finest=data, problem_file=problem.source)), allow_nan=False))
     else:
         print(format_convergence(conv) + f"\n\nfinest N = {nodes[-1]}:\n" + format_optimize(data))
-    files = write_ocp_outputs(finest, problem.robot, out, data) if out is not None else []
-    if out is not None:
-        files.append(write_json(out / CONVERGENCE_FILE, dict(conv, problem_file=problem.source)))
+    def write(directory: Path) -> list[Path]:
+        return [*write_ocp_outputs(finest, problem.robot, directory, data),
+                write_json(directory / CONVERGENCE_FILE, dict(conv, problem_file=problem.source))]
+    files = [] if out is None else write_out(out, write, args.force)
     bad = [r for r in table.rows if r.status.label != "success"]
     failure = "" if not bad else (f"optimisation not confirmed at N = {', '.join(str(r.nodes) for r in bad)}: "
                                   f"{bad[0].message}")

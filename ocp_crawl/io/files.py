@@ -206,3 +206,81 @@ def write_json(path: str | os.PathLike, data: Any) -> Path:
 
 def write_npz(path: str | os.PathLike, arrays: dict[str, np.ndarray]) -> Path:
     return atomic_write(path, lambda fh: np.savez(fh, **arrays))
+
+
+def write_set(out: str | os.PathLike, write: Callable[[Path], Any], *,
+              overwrite: bool = True) -> list[Path]:
+    """All or nothing: ``write(staging)`` writes a command's files into a staging directory, which
+    then takes the place of ``out``; returns the final paths of what ``write`` returned.
+
+    Without ``out`` (or with ``out`` empty) the staging directory
+    ``.<name>.<pid>-<host>.<random>.tmp`` is made next to ``out`` and renamed to ``out`` at the end
+    (one rename: ``out`` is absent or complete).  Into an ``out`` that holds other files the staging
+    directory is made inside ``out`` and, once every file is complete, its files are renamed into
+    place (renames only: no write can fail any more).  On any error the staging directory is removed
+    and ``out`` keeps its earlier contents; an OSError names the file as it would have been in
+    ``out``.  ``overwrite`` false refuses (FileExistsError) a file that appeared in ``out``
+    meanwhile, before anything is moved.  A killed writer leaves only its staging directory, removed
+    as a stale temporary by the next write of ``out`` (and by :func:`remove_stale_temps`).
+    """
+    out = Path(out)
+    # into an existing directory unless it is empty (a symbolic link to one is kept, not replaced)
+    into = out.is_dir() and (out.is_symlink() or any(True for _ in os.scandir(out)))
+    base = out if into else out.parent
+    base.mkdir(parents=True, exist_ok=True)
+    name = out.resolve().name or "out"   # "." or "/" have no name of their own
+    remove_stale_temps(base, None if into else name)
+    staging = Path(tempfile.mkdtemp(dir=base, prefix=temp_prefix(name), suffix=".tmp"))
+    try:
+        os.chmod(staging, 0o755)   # mkdtemp makes it private; results are readable by others
+        written = write(staging)
+        finals = [out / Path(p).relative_to(staging) for p in written]
+        if not overwrite:
+            _refuse_existing(staging, out)
+        if into:
+            _move_into(staging, out)
+        else:
+            _rename_dir(staging, out)
+    except OSError as exc:
+        _remove(staging)
+        name = exc.filename
+        if name is not None and str(name).startswith(str(staging)):
+            final = str(out) + str(name)[len(str(staging)):]
+            raise OSError(exc.errno, exc.strerror or str(exc), final) from exc
+        raise
+    except BaseException:
+        _remove(staging)
+        raise
+    _remove(staging)
+    _fsync_dir(base)
+    return finals
+
+
+def _refuse_existing(staging: Path, out: Path) -> None:
+    for root, _, files in os.walk(staging):
+        for name in files:
+            target = out / Path(root, name).relative_to(staging)
+            if os.path.lexists(target):
+                raise FileExistsError(errno.EEXIST, "exists", str(target))
+
+
+def _rename_dir(staging: Path, out: Path) -> None:
+    """Rename the staging directory to ``out`` (absent, or an empty directory: replaced)."""
+    try:
+        os.replace(staging, out)
+    except OSError:
+        if not out.is_dir():
+            raise
+        os.rmdir(out)   # empty (checked by the caller); Windows cannot rename over a directory
+        os.replace(staging, out)
+
+
+def _move_into(staging: Path, out: Path) -> None:
+    """Rename the entries of ``staging`` into ``out``: a folder absent there as a whole, the
+    others entry by entry."""
+    for entry in sorted(os.scandir(staging), key=lambda e: e.name):
+        target = out / entry.name
+        if entry.is_dir(follow_symlinks=False) and target.is_dir():
+            _move_into(Path(entry.path), target)
+        else:
+            os.replace(entry.path, target)

@@ -168,6 +168,30 @@ def _key(fun: cs.Function, cc: str, tag: str = "") -> str:
     return hashlib.sha256(fun.serialize().encode() + tag.encode()).hexdigest()[:16]
 
 
+#: why the last build of each function (by name) made no library: ("compiler", text) no working
+#: compiler, ("disk", text) the cache could not be written (a full disk, ...; text names the
+#: file), ("build", text) the compiler failed otherwise.  Read by ocp_crawl.sweep.warmup.warmup.
+BUILD_FAILURES: dict[str, tuple[str, str]] = {}
+
+NO_COMPILER = "no working C compiler (cc, gcc, clang or $CC)"
+#: errors of a cache that cannot take a file: full disk, quota, read-only, failing device, too large
+DISK_ERRORS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EIO, errno.EFBIG)
+
+
+def _failed(name: str, kind: str, text: str) -> None:
+    BUILD_FAILURES[name] = (kind, " ".join(text.split()))
+
+
+def _compiler_failure(proc: subprocess.CompletedProcess, lib: Path) -> tuple[str, str]:
+    """Why the compiler failed: a full disk (or another write error) names the library, else the
+    compiler's last line."""
+    last = (proc.stderr or "").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
+    for code in DISK_ERRORS:
+        if os.strerror(code) in (proc.stderr or ""):
+            return "disk", f"{lib}: {os.strerror(code)} (the compiler could not write it)"
+    return "build", f"the C compiler failed on {lib.name}: {last[0]}"
+
+
 def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Function]] | None = None,
                   tag: str = "") -> Path | None:
     """The shared library of ``fun`` in the cache, compiled from its C source if not there yet.
@@ -185,14 +209,15 @@ def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Functio
     """
     cc = _compiler()
     if cc is None:
+        _failed(fun.name(), "compiler", NO_COMPILER)
         return None
     out_dir = cache_dir()
     lib = out_dir / f"{fun.name()}_{_key(fun, cc, tag)}.so"
     if lib.exists():
         return lib
     _announce_build(out_dir)
-    src = _generate(companions() if companions is not None else [fun])
     try:
+        src = _generate(companions() if companions is not None else [fun])
         out_dir.mkdir(parents=True, exist_ok=True)
         # the source and the library are built in a private directory and the library is renamed into
         # place: a reader (or a concurrent builder) never sees a partial library.  A build killed
@@ -205,10 +230,18 @@ def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Functio
             proc = subprocess.run([cc, *CFLAGS, "-shared", "-fPIC", "-o", str(tmp_lib), str(c_file), "-lm"],
                                   capture_output=True, text=True, timeout=300)
             if proc.returncode != 0:
+                _failed(fun.name(), *_compiler_failure(proc, lib))
                 return None
             os.replace(tmp_lib, lib)
-    except (OSError, subprocess.SubprocessError):
+    except OSError as exc:   # the cache cannot be written (a full disk, ...): name the file
+        where = lib if exc.filename is None or ".tmp" in str(exc.filename) else exc.filename
+        kind = "disk" if exc.errno in DISK_ERRORS else "build"
+        _failed(fun.name(), kind, f"{where}: {exc.strerror or exc}")
         return None
+    except subprocess.SubprocessError as exc:
+        _failed(fun.name(), "build", f"the C compiler failed on {lib.name}: {exc}")
+        return None
+    BUILD_FAILURES.pop(fun.name(), None)
     return lib
 
 

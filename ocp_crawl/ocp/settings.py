@@ -55,6 +55,10 @@ PHYSICAL_BOUNDS = {
     "mu_ratio_eps": (0.0, 0.5, "friction ratios beyond 1 +- 0.5 are another robot: give robot.mu1 and "
                      "robot.mu2"),
     "friction_tol": (0.0, 0.5, "a fraction of the mean friction limit: above 0.5 almost no gait slips"),
+    "dynamic_margin": (1.0, 20.0, "a factor on the shortest period at which MuJoCo's S is "
+                       "within 5 % of the quasistatic S: 1 asks it at the gait's own period; "
+                       "above 20 a 1 s gait is run at 50 ms, fewer than 100 MuJoCo steps per "
+                       "cycle"),
     "replay_tol": (1e-9, 0.1, "1e-9 is the judge's own bound tolerance; above 0.1 it would accept an "
                    "optimum a tenth off"),
 }
@@ -198,6 +202,11 @@ class OCPSettings:
     its speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
     "worst"; any objective).  0 admits every
     gait; in [0, 1)"""
+    dynamic_margin: float | None = None
+    """optional factor c >= 1: the optimum is accepted only when its period T is at least c times
+    the shortest period at which MuJoCo's S of its replay is within 5 % of the quasistatic S (a few
+    MuJoCo runs, :mod:`ocp_crawl.ocp.dynamic_margin`; needs MuJoCo and physical gravity); None
+    (default): not computed, not required"""
     ipopt: dict = field(default_factory=dict)
     """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False
@@ -234,8 +243,15 @@ class OCPSettings:
                      "periodic_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
         for name in PHYSICAL_BOUNDS:
-            optional = name in ("mu_ratio_eps", "max_accel_deg_s2", "max_joint_rate_deg_s")
+            optional = name in ("mu_ratio_eps", "max_accel_deg_s2", "max_joint_rate_deg_s",
+                                "dynamic_margin")
             self._set(name, check_physical(name, getattr(self, name), optional))
+        if self.dynamic_margin is not None:
+            from ocp_crawl.sim.dynamic import INSTALL, mujoco_available
+
+            if not mujoco_available():
+                raise ValueError("OCPSettings.dynamic_margin needs MuJoCo, which is not "
+                                 f"importable: install it with {INSTALL}")
         if not 0 < self.A_max_deg < 90:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
         if not (0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180):

@@ -22,6 +22,7 @@ from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
+from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, ratio_labels, replay_signal,
                                  spread_text, value_text)
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
@@ -134,6 +135,8 @@ class OCPResult:
     """relative gain by replay over each family's best member, by shape (NaN: none, or infeasible)"""
     starts: list = field(default_factory=list)
     """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
+    dynamic_margin: dict | None = None
+    """with ``[ocp] dynamic_margin``: the MuJoCo check (:mod:`ocp_crawl.ocp.dynamic_margin`)"""
 
     @property
     def gain_significant(self) -> bool:
@@ -182,13 +185,11 @@ class OCPResult:
             "gain": self.gain, "gain_significant": self.gain_significant, "gains": self.gains,
             "starts": [s.to_dict() for s in self.starts], "starts_converged": converged,
             "objective_value_replay_min": low, "objective_value_replay_max": high,
-            "solve_time_s": self.solve_time_s,
+            "solve_time_s": self.solve_time_s, "dynamic_margin": self.dynamic_margin,
             "complementarity_residual": self.complementarity_residual,
             "periodicity_residual": self.periodicity_residual,
-            "equation_residual": self.equation_residual,
-            "failed_stage": self.failed_stage,
-            "homotopy": [asdict(h) for h in self.homotopy],
-            "scenarios": self.scenarios(),
+            "equation_residual": self.equation_residual, "failed_stage": self.failed_stage,
+            "homotopy": [asdict(h) for h in self.homotopy], "scenarios": self.scenarios(),
         })
 
     def scenarios(self) -> list[dict] | None:
@@ -256,13 +257,12 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     def follows(tau: np.ndarray) -> bool:
         return all(simulate_torque(m, replay_signal(phase, tau)).success for m in models)
     guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
-    runs = []
-    for guess in guesses:
-        runs.append(solve_from(ocp, models, replay_signal(phase, guess.tau), guess.T, harm, replay,
-                               baselines=base))
+    runs = [solve_from(ocp, models, replay_signal(phase, g.tau), g.T, harm, replay, baselines=base)
+            for g in guesses]
     res = _pick(runs, settings, replay)
     if replay:
         harmonic_peaks(res, models)
+        check_dynamic_margin(res, models)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
                               sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
     if len(guesses) > 1:

@@ -23,7 +23,7 @@ from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, 
 from ocp_crawl.problem.schema import (DRIVES, MAX_ARRAY, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError,
                                       Section, field_default, format_value, removed_key, suggest,
                                       toml_type)
-from ocp_crawl.sim import DEFAULT_SOLVER, solver_named
+from ocp_crawl.sim import DEFAULT_SOLVER, solver_named, unusable
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
 CONTACT_GRID = 721
@@ -381,10 +381,13 @@ def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[st
     return values
 
 
-def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any]) -> str:
-    """The registry name of the problem's solver: ``[simulation] solver`` for the torque drive; the
-    angles drive has its own (naming another torque solver there is bad input)."""
+def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical") -> str:
+    """The registry name of the problem's solver: ``[simulation] solver`` for the torque drive, if it
+    can run (``unusable``); the angles drive has its own (naming another is bad input)."""
     if drive == "torque":
+        why = unusable(sim["solver"], gravity, sim)
+        if why:
+            raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} {why}")
         return sim["solver"]
     default = SCHEMA["simulation"].key_map["solver"].default
     if sim["solver"] != default:
@@ -426,7 +429,7 @@ def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
     gravity = values["model"]["gravity"]
     signals = gait_input(g, robot.k, ctx.at, ctx.base, values["pressure"], gravity)
     values["gait"] = signals.values
-    solver = _solver(ctx, g["drive"], sim)
+    solver = _solver(ctx, g["drive"], sim, gravity)
     problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values, source=ctx.source,
                       input_torque=signals.torque, given=_given(values, data))

@@ -28,6 +28,7 @@ from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUND
                                    BASELINE_STARTS_BOUNDS, FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS,
                                    NODES_BOUNDS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
+from ocp_crawl.sim.dynamic import CONES
 
 Drive = Literal["torque", "angles"]
 DRIVES = ("torque", "angles")
@@ -181,6 +182,10 @@ def _hybrid(name: str):
     return field_default(SOLVERS["event"].options, name)
 
 
+def _mujoco(name: str):
+    return field_default(SOLVERS["mujoco"].options, name)
+
+
 def _physical(name: str) -> Rule:
     """The rule of an [ocp] number with a physical meaning: its bounds and reason in the OCP's settings."""
     return within(*PHYSICAL_BOUNDS[name])
@@ -292,8 +297,9 @@ _MODEL = Section("model", "model conventions", keys=(
 ))
 
 _SIMULATION = Section("simulation", "simulator of the torque drive and its options", keys=(
-    Key("solver", str, "-", "simulator of the torque drive: event-driven, or MPCC time-stepping (the angles "
-        "drive has its own)", default=DEFAULT_SOLVER["torque"], choices=TORQUE_SOLVERS),
+    Key("solver", str, "-", "simulator of the torque drive: event-driven, MPCC time-stepping, or "
+        "dynamic in MuJoCo (the angles drive has its own)", default=DEFAULT_SOLVER["torque"],
+        choices=TORQUE_SOLVERS),
     Key("max_step", float, "cycles", "event solver: largest continuation step", default=_hybrid("max_step"),
         rule=MAX_STEP),
     Key("event_xtol", float, "cycles", "event solver: event location tolerance", default=_hybrid("event_xtol"),
@@ -305,6 +311,20 @@ _SIMULATION = Section("simulation", "simulator of the torque drive and its optio
         default=_hybrid("periodic_tol"), rule=GT0),
     Key("steps", int, "-", "mpcc solver: time steps per cycle", default=field_default(SOLVERS["mpcc"].options, "steps"),
         rule=STEPS),
+    Key("period", float, "s", "mujoco solver: period T of one cycle of the input",
+        default=_mujoco("period"), rule=GT0),
+    Key("timestep", float, "s", "mujoco solver: integration step (contact time constant 5 steps)",
+        default=_mujoco("timestep"),
+        rule=within(1e-6, 1e-2, "the contact time constant is 5 steps: above 1e-2 s the feet sink "
+                    "into the ground")),
+    Key("cone", str, "-", "mujoco solver: friction cone", default=_mujoco("cone"), choices=CONES),
+    Key("s_tol", float, "-", "mujoco solver: periodicity, relative change of S between two cycles",
+        default=_mujoco("s_tol"), rule=GT0),
+    Key("s_error_tol", float, "-", "mpcc solver: bound on the estimated discretisation error of S, "
+        "s_error_tol (abs(S) + 1e-3 L), above which the result is coarse_steps (0: not estimated)",
+        default=field_default(SOLVERS["mpcc"].options, "s_error_tol"),
+        rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)", "the estimate re-runs the steady cycle with "
+                  "2 steps + 1 steps; 0 skips it")),
 ))
 
 _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", selector="objective", keys=(
@@ -369,6 +389,10 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("friction_tol", float, "-", "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
         "an admissible gait: keeps its slip off the friction tie (docs: Optimal gaits, Friction uncertainty)",
         default=_ocp("friction_tol"), rule=_physical("friction_tol")),
+    Key("dynamic_margin", float, "-", "optional: the optimum's period T must be at least this "
+        "factor times the shortest period at which MuJoCo's S is within 5 % of the quasistatic S "
+        "(a few MuJoCo runs; absent: not computed, not required)",
+        rule=_physical("dynamic_margin")),
     Key("replay_tol", float, "-", "relative tolerance of the replay judge (objective, speed requirement)",
         default=_ocp("replay_tol"), rule=_physical("replay_tol")),
 ))

@@ -14,7 +14,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from ocp_crawl.io.files import atomic_write
+from ocp_crawl.io.files import atomic_write, write_set
 
 DATA_DIR = Path(__file__).resolve().parent.parent / "data"
 #: the folders written by ``ocp-crawl init``: name in DIR -> the package data folder it copies
@@ -117,8 +117,9 @@ def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> lis
 def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -> list[Path]:
     """Write the shipped problems and examples into ``directory`` (what ``ocp-crawl init`` does).
 
-    Every check (:func:`init_plan`) comes before the first file is written; each file is written
-    atomically (:func:`~ocp_crawl.io.files.atomic_write`), byte for byte as shipped.
+    Every check (:func:`init_plan`) comes before the first file is written; the files are written
+    all or nothing (:func:`~ocp_crawl.io.files.write_set`: into a staging directory, then renamed
+    into place), byte for byte as shipped.
 
     Parameters
     ----------
@@ -132,8 +133,15 @@ def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -
     list of Path
         The files written: ``directory/problems/...`` then ``directory/examples/...``, each in name order.
     """
-    written = []
-    for src, target in init_plan(directory, force=force):
-        data = src.read_bytes()
-        written.append(atomic_write(target, lambda fh, data=data: fh.write(data)))
-    return written
+    root = Path(directory)
+    plan = init_plan(directory, force=force)
+
+    def write(staging: Path) -> list[Path]:
+        written = []
+        for src, target in plan:
+            data = src.read_bytes()
+            path = staging / target.relative_to(root)
+            path.parent.mkdir(exist_ok=True)
+            written.append(atomic_write(path, lambda fh, data=data: fh.write(data)))
+        return written
+    return write_set(root, write, overwrite=force)

@@ -19,8 +19,8 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ocp_crawl.io.tables import TableError, read_table
-from ocp_crawl.model.inputs import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSignal,
-                                    PeriodicSpline, TorqueReference)
+from ocp_crawl.model.inputs import (MAX_KNOTS, FourierSeries, Harmonic, PeriodicLinear,
+                                    PeriodicPchip, PeriodicSignal, PeriodicSpline, TorqueReference)
 from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference, PressureWaveform
 from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.problem.schema import ProblemError, format_value
@@ -190,6 +190,10 @@ def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
         raise ProblemError(f"{s.where(t.size - 1)}: phase {float(t[-1])!r} is less than {MIN_PHASE_GAP:g} cycles "
                            f"before phase {float(t[0])!r} of the next cycle: phases must be at least that far apart")
     cls, fewest = INTERPOLANTS[interpolation]
+    if t.size > MAX_KNOTS:
+        raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period, at most "
+                           f"{MAX_KNOTS}: each sample is work of the solvers in every cycle (a kink "
+                           "where the event-driven stepper stops, for linear interpolation)")
     if t.size < fewest:
         raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period; interpolation "
                            f"{format_value(interpolation)} needs at least {fewest}")

@@ -216,6 +216,12 @@ class KinksMixin:
                                         [*tau[:, j].tolist(), *right[:, j].tolist()])
             self._kink_list.extend(t.tolist())
         self._kink_upto = max(self._kink_upto, cycle)
+        # the cycles before the last complete one are behind the stepper (and the output's steady
+        # cycle): dropped, so that the table holds at most three cycles of kinks however many run
+        i = bisect.bisect_left(self._kink_list, cycle - 2.0)
+        for tj in self._kink_list[:i]:
+            del self._kink_table[tj]
+        del self._kink_list[:i]
 
     def next_kink(self, t: float) -> float:
         """The first kink after phase t [cycles] (later than t + KINK_GAP); inf for an input without kinks."""

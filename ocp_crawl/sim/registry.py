@@ -9,11 +9,12 @@ whose ``status`` is a :class:`~ocp_crawl.status.Status`.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any, Callable
 
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.angles import simulate_angles
+from ocp_crawl.sim.dynamic import INSTALL, MujocoOptions, mujoco_available, simulate_mujoco
 from ocp_crawl.sim.event import HybridOptions, simulate_torque
 from ocp_crawl.sim.options import count
 from ocp_crawl.sim.result import CrawlResult
@@ -32,6 +33,10 @@ class Solver:
     run: Callable[[Model, Any, Any, Any], CrawlResult]
     """``run(model, signal, options, t_eval) -> CrawlResult`` (``status`` a :class:`~ocp_crawl.status.Status`)"""
     description: str
+    available: Callable[[], bool] = lambda: True
+    """whether its optional dependency can be imported (``install`` says how to get it otherwise)"""
+    install: str = ""
+    """the command that installs its optional dependency ("" for none)"""
 
 
 def _run_event(model, signal, options, t_eval):
@@ -40,6 +45,10 @@ def _run_event(model, signal, options, t_eval):
 
 def _run_mpcc(model, signal, options, t_eval):
     return simulate_mpcc(model, signal, options.steps, options=options, t_eval=t_eval)
+
+
+def _run_mujoco(model, signal, options, t_eval):
+    return simulate_mujoco(model, signal, options, t_eval=t_eval)
 
 
 def _run_angles(model, signal, options, t_eval):
@@ -64,7 +73,35 @@ SOLVERS: dict[str, Solver] = {
                    "MPCC time-stepping: one IPOPT solve of the incremental Coulomb problem per step"),
     "angles": Solver("angles", "angles", AnglesOptions, _run_angles,
                      "prescribed joint angles: kinematic contact modes, events by bracketing and root finding"),
+    "mujoco": Solver("mujoco", "torque", MujocoOptions, _run_mujoco,
+                     "dynamic simulation in MuJoCo: the torques played at a period T [s]",
+                     available=mujoco_available, install=INSTALL),
 }
+
+
+def unusable(name: str, gravity: str, values=None) -> str:
+    """Why the solver ``name`` cannot simulate a model of the ``gravity`` convention with the options
+    ``values`` (a mapping of ``[simulation]`` keys, None: not checked); "" if it can.  Its optional
+    dependency is missing (the message names the install command), the convention is the paper's
+    printed one, which MuJoCo's gravity is not, or the options break a rule between them."""
+    spec = solver_named(name)
+    if not spec.available():
+        return f"needs an optional dependency that is not installed: {spec.install}"
+    if name == "mujoco" and gravity != "physical":
+        return (f"is invalid with [model] gravity = {gravity!r}: MuJoCo simulates physical "
+                "gravity only")
+    try:
+        if values is not None:
+            names = {f.name for f in fields(spec.options)}
+            spec.options(**{k: v for k, v in values.items() if k in names})
+    except ValueError as exc:
+        return f"is invalid with these [simulation] values: {exc}"
+    return ""
+
+
+def unavailable_solvers() -> dict[str, str]:
+    """The solvers whose optional dependency cannot be imported, each with its install command."""
+    return {name: spec.install for name, spec in SOLVERS.items() if not spec.available()}
 
 #: the solver used for each drive when none is named
 DEFAULT_SOLVER = {"torque": "event", "angles": "angles"}

@@ -179,6 +179,9 @@ class CrawlResult:
     energy: dict = field(default_factory=dict)
     """per-cycle energy balance of the steady cycle: input work, potential change, dissipation [J]"""
     periodicity_residual: float = float("nan")
+    S_error: float = float("nan")
+    """estimate of the discretisation error of S [m] (MPCC time-stepping: |S_N - S_2N+1|, see
+    :mod:`ocp_crawl.sim.discretisation`; NaN where not estimated)"""
     nfev: int = 0
     """number of calls of the compiled mode solver"""
     nsteps: int = 0
@@ -222,6 +225,7 @@ class CrawlResult:
             "events": self.event_dicts(),
             "energy": {k: finite_or_none(v) for k, v in self.energy.items()},
             "periodicity_residual": finite_or_none(self.periodicity_residual),
+            "S_error": finite_or_none(self.S_error),
             "nfev": int(self.nfev), "nsteps": int(self.nsteps),
             "failure_t": self.failure_t, "failure_mode": self.failure_mode,
         }

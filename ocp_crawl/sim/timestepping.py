@@ -36,7 +36,9 @@ Jacobian determinant of the active mode's equations within one mode, or a jump o
 ``max_dphi`` in one step, gives ``FOLD`` (the tracked equilibrium branch was lost).  Every solved step's
 equilibrium must be stable in its contact mode (:mod:`ocp_crawl.model.stability`, the criterion of the
 event-driven stepper), else ``UNSTABLE``; the released start must be stable, else ``NO_START``; a steady
-cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is ``ENERGY_IMBALANCE``.
+cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is ``ENERGY_IMBALANCE``.  S's
+discretisation error is estimated by re-running the steady cycle with 2 N + 1 steps
+(:mod:`ocp_crawl.sim.discretisation`); above ``s_error_tol (|S| + 1e-3 L)`` it is ``COARSE_STEPS``.
 """
 from __future__ import annotations
 
@@ -49,6 +51,7 @@ from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
+from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
 from ocp_crawl.sim.assemble import (energy_gate, failure_message, new_result, no_start_result, output_phases,
                                     set_cycle_metrics, set_samples, success_message)
 from ocp_crawl.sim.event import HybridStepper
@@ -84,6 +87,11 @@ class TimeSteppingOptions(CycleOptions):
     (N steps per cycle), else ``energy_imbalance``.  The midpoint work and trapezoid dissipation rules leave
     an O(1/N^2) residual (N^2 |residual| = 0.04 on the paper's gait, <= 10 over the random problems of the
     property test), while a missing term or a snap-through between steps leaves an O(1) one"""
+    s_error_tol: float = 1e-3
+    """bound on the estimate of S's discretisation error, relative: s_error_tol (|S| + 1e-3 L)
+    [-]; the estimate re-runs the steady cycle with 2 N + 1 steps
+    (:mod:`ocp_crawl.sim.discretisation`), above it the result is ``coarse_steps``; 0: no estimate
+    (and no check run)"""
 
     def __post_init__(self) -> None:
         if not isinstance(self.mpcc, MPCCOptions):
@@ -94,6 +102,8 @@ class TimeSteppingOptions(CycleOptions):
         if not isinstance(self.switch_exact, bool):
             raise TypeError(f"TimeSteppingOptions.switch_exact must be a bool, got {self.switch_exact!r}")
         self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
+        self._set("s_error_tol", real("TimeSteppingOptions.s_error_tol", self.s_error_tol,
+                                      nonneg=True))
 
 
 #: most events located inside one step (further changes of mode in the step are taken at its end)
@@ -186,7 +196,13 @@ class TimeStepper:
                  "periodicity_deviation": run.periodic_dev,
                  "split_steps": sum(e.guard_name != "mode_change_between_steps" for e in run.events),
                  "split_ipopt_calls": run.split_calls, "unsplit_mode_changes": run.unsplit}
-        return self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
+        check = None
+        if status == Status.SUCCESS and self.opt.s_error_tol > 0:
+            check = estimate_S_error(self, run, _Stop)
+            stats.update(check)
+        res = self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
+        error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
+        return res
 
     def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
         """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end repeats."""

@@ -27,6 +27,8 @@ _EXPORTS = {
     "pressure_study": "ocp_crawl.studies.pressure", "pressure_curves": "ocp_crawl.studies.pressure",
     "evaluate_fit": "ocp_crawl.studies.pressure", "fit_rest_angle": "ocp_crawl.studies.pressure",
     "simulate_pressure": "ocp_crawl.studies.pressure",
+    "DynamicsScan": "ocp_crawl.studies.dynamics", "dynamics_scan": "ocp_crawl.studies.dynamics",
+    "plot_dynamics": "ocp_crawl.studies.dynamics",
     "GRIDS": "ocp_crawl.studies.suite", "Grids": "ocp_crawl.studies.suite", "StudySet": "ocp_crawl.studies.suite",
     "run_studies": "ocp_crawl.studies.suite",
     "STATEMENTS": "ocp_crawl.studies.statements", "Statement": "ocp_crawl.studies.statements",
@@ -40,6 +42,6 @@ __all__ = [
     "AmplitudeStudy", "amplitude_study", "HigherFriction", "higher_friction", "StiffnessStudy", "stiffness_study",
     "PressureFit", "PressureStudy", "pressure_study", "pressure_curves", "evaluate_fit", "fit_rest_angle",
     "simulate_pressure", "GRIDS", "Grids", "StudySet", "run_studies", "STATEMENTS", "Statement", "check_statements",
-    "FIGURES", "ReproduceResult",
+    "FIGURES", "ReproduceResult", "DynamicsScan", "dynamics_scan", "plot_dynamics",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -54,6 +54,11 @@ class SweepOptions:
     scheduler: str | None = None
     """Dask scheduler address or "local" (None: local worker processes)"""
 
+    def __post_init__(self) -> None:
+        if self.resume and self.out_dir is None:
+            raise ValueError("SweepOptions: resume=True reuses the sweeps journaled in out_dir, "
+                             "and out_dir is None: give out_dir or drop resume")
+
     def run(self, problem: Problem, grid: Mapping[str, Any], name: str) -> SweepResult:
         """Evaluate ``problem`` on ``grid`` ({SECTION.KEY: values}), journaled as ``out_dir/name`` if out_dir is set."""
         out = None if self.out_dir is None else Path(self.out_dir) / name

@@ -50,6 +50,7 @@ def parse_cell(text: str) -> Any:
     return text
 
 
+
 def _status(text: str) -> str:
     """A status cell: the label of a :class:`~ocp_crawl.status.Status` as written (ValueError for any other text)."""
     if Status.from_label(text).label != text:  # from_label takes any case; the files hold the lower-case label
@@ -88,7 +89,11 @@ def parse_rows(lines: Sequence[str], columns: Sequence[str], settings: SweepSett
             raise SweepError(f"{where}:{n}: malformed row ({len(cells)} fields, expected {len(columns)}); "
                              "start the sweep again with --force")
         try:
-            out.append({c: p(t) for c, p, t in zip(columns, parsers, cells)})
+            row = {c: p(t) for c, p, t in zip(columns, parsers, cells)}
+            success = Status.SUCCESS.label
+            if row.get("status") == success and "S" in row and not math.isfinite(row["S"]):
+                raise ValueError(f"status {success!r} with an empty S (every success has a stride)")
+            out.append(row)
         except ValueError as exc:
             raise SweepError(f"{where}:{n}: malformed row: {exc}; start the sweep again with --force") from None
     return out

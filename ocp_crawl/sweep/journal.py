@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any, Sequence
@@ -220,16 +221,21 @@ class SweepStore:
         self._dirty = False
 
     def close(self) -> None:
-        """Close the journal and release the lock."""
+        """Close the journal and release the lock.  An OSError of the closing (the flush of a line
+        a full disk refused) names the journal; after a failure it gives way to the error already
+        on its way."""
         if self._journal is not None:
+            journal, self._journal = self._journal, None
             try:
                 if self._dirty:
-                    self._sync()  # the rows of an interrupted sweep, on disk for its resume
+                    os.fsync(journal.fileno())  # an interrupted sweep's rows, on disk for --resume
             except OSError:
                 pass  # closing after a failure (a full disk, ...): the error is already on its way
-            finally:
-                self._journal.close()
-                self._journal = None
+            try:
+                journal.close()
+            except OSError as exc:
+                if sys.exc_info()[0] is None:
+                    raise naming(exc, self.journal_path) from exc
         if self._lock is not None:
             self._lock.close()  # releases the flock
             self._lock = None

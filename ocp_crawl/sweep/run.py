@@ -51,9 +51,13 @@ from ocp_crawl.sweep.result import SUCCESS, SweepResult
 from ocp_crawl.sweep.settings import SweepSettings
 
 
-def _check_arguments(jobs, resume: bool, force: bool, scheduler) -> None:
+def _check_arguments(jobs, resume: bool, force: bool, scheduler, out_dir) -> None:
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
         raise ValueError(f"jobs = {jobs!r} is invalid: must be an integer >= 1")
+    if out_dir is None and (resume or force):
+        what = "resume=True continues" if resume else "force=True overwrites"
+        raise ValueError(f"{what} the sweep journaled in out_dir, and out_dir is None: give "
+                         f"out_dir or drop {'resume' if resume else 'force'}")
     if resume and force:
         raise ValueError("resume and force are mutually exclusive: resume continues a sweep, force starts it over")
     if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
@@ -111,7 +115,7 @@ def run_sweep(problem: Problem | str | os.PathLike, grid: Mapping[str, Any], *, 
         problem = load_problem(problem)
     if not isinstance(problem, Problem):
         raise TypeError(f"run_sweep needs a Problem or a problem file, got {type(problem).__name__}")
-    _check_arguments(jobs, resume, force, scheduler)
+    _check_arguments(jobs, resume, force, scheduler, out_dir)
     settings = SweepSettings.build(problem, grid, extra_columns)
     store = SweepStore(Path(out_dir)) if out_dir is not None else None
     done = store.open(settings, resume, force) if store is not None else {}

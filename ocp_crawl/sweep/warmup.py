@@ -18,7 +18,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ocp_crawl.model.compiled import BUILDERS, cache_dir, usable_cache_dir
+from ocp_crawl.model.compiled import BUILD_FAILURES, BUILDERS, cache_dir, usable_cache_dir
 
 #: subpackages whose modules may define compiled functions (the floors up to sweep, ARCHITECTURE.md)
 PACKAGES = ("ocp_crawl.model", "ocp_crawl.nlp", "ocp_crawl.sim", "ocp_crawl.ocp", "ocp_crawl.problem", "ocp_crawl.sweep")
@@ -38,6 +38,9 @@ class Built:
     """"built" (compiled now), "cached" (already in the cache) or "not compiled\""""
     seconds: float
     """wall time of the build [s]"""
+    failure: tuple[str, str] | None = None
+    """why it is not compiled: (kind, text), kind "compiler", "disk" or "build"
+    (compiled.BUILD_FAILURES)"""
 
 
 @dataclass(frozen=True)
@@ -53,6 +56,17 @@ class WarmupResult:
     def count(self, state: str) -> int:
         """Number of functions in ``state`` ("built", "cached" or "not compiled")."""
         return sum(f.state == state for f in self.functions)
+
+    @property
+    def failure(self) -> str:
+        """Why functions are not compiled, in one line: a cache that cannot be written (a full
+        disk; naming the file) before a failed compiler, before a missing compiler."""
+        found = {f.failure[0]: f.failure[1] for f in reversed(self.functions) if f.failure}
+        disk = "cannot write the compiled-library cache: "
+        for kind, prefix in (("disk", disk), ("build", ""), ("compiler", "")):
+            if kind in found:
+                return prefix + found[kind]
+        return "" if self.ok else f"{self.count('not compiled')} functions not compiled"
 
     @property
     def ok(self) -> bool:
@@ -97,5 +111,7 @@ def warmup() -> WarmupResult:
         fast = getattr(builder, "__wrapped__", builder)()
         library = fast.library if fast.compiled else None
         state = "not compiled" if library is None else "cached" if library in before else "built"
-        functions.append(Built(name, fast.fun.name(), library, state, time.perf_counter() - t0))
+        failure = BUILD_FAILURES.get(fast.fun.name()) if library is None and not disabled else None
+        functions.append(Built(name, fast.fun.name(), library, state, time.perf_counter() - t0,
+                               failure))
     return WarmupResult(cache, tuple(functions), time.perf_counter() - start, disabled)

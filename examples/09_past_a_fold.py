@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/09_past_a_fold.py
