@@ -417,7 +417,8 @@ def test_a_full_disk_names_the_file(capsys, monkeypatch, tmp_path):
     assert code == 1
     target = out_dir / "arrays.npz"  # the first file written
     assert one_line(err) == f"ocp-crawl: I/O error: {target}: {os.strerror(errno.ENOSPC)}"
-    assert list(out_dir.iterdir()) == []
+    assert not out_dir.exists()  # all or nothing: the staged set is removed with the directory
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_atomic_write_names_its_target(tmp_path):

@@ -106,7 +106,8 @@ class StandInOCP:
 
     def unpack(self, x):
         n = self.settings.nodes
-        res = simulate(self.scen[0], PeriodicLinear(np.arange(n) / n, x["tau"]), "mpcc", TimeSteppingOptions(steps=n))
+        res = simulate(self.scen[0], PeriodicLinear(np.arange(n) / n, x["tau"]), "mpcc",
+                       TimeSteppingOptions(steps=n, s_error_tol=0.0))
         S = res.S * x["claim"]
         sc = {"phi": res.phi, "x1": res.x1, "f_t": res.f_t, "modes": [], "theta": np.full(n, 0.5), "S": S,
               "v": self.settings.direction * S / x["T"], "W_plus": res.W_plus, "comp": 0.0, "periodic": 0.0}

@@ -15,6 +15,7 @@ import json
 import math
 import re
 import tomllib
+from dataclasses import fields
 
 import pytest
 from hypothesis import assume, event, given
@@ -22,6 +23,7 @@ from hypothesis import strategies as st
 
 from ocp_crawl import Robot
 from ocp_crawl.sim.angles import simulate_angles
+from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
 from ocp_crawl.problem.problem import MAX_STIFFNESS_RATIO
@@ -142,8 +144,8 @@ def section_values(draw, section, ranges=None):
                 changed = True
     if section.name == "simulation":
         # the solver choice is covered by tests/test_problem.py; here every problem runs the default
-        # solver of its drive (an MPCC run per example would be slow, and angles + mpcc is bad input)
-        given -= {"solver", "steps"}
+        # solver of its drive, with its own keys (an MPCC or MuJoCo run per example would be slow)
+        given &= {f.name for f in fields(HybridOptions)}
     return {name: draw(valid_values(section.name, keys[name], ranges)) for name in (k.name for k in section.keys)
             if name in given}
 

@@ -225,12 +225,12 @@ class SweepStore:
         a full disk refused) names the journal; after a failure it gives way to the error already
         on its way."""
         if self._journal is not None:
-            journal, self._journal = self._journal, None
             try:
                 if self._dirty:
-                    os.fsync(journal.fileno())  # an interrupted sweep's rows, on disk for --resume
+                    self._sync()  # an interrupted sweep's rows, on disk for --resume
             except OSError:
                 pass  # closing after a failure (a full disk, ...): the error is already on its way
+            journal, self._journal = self._journal, None
             try:
                 journal.close()
             except OSError as exc:
