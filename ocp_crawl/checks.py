@@ -19,6 +19,20 @@ def is_real(value) -> bool:
     return not isinstance(value, (bool, np.bool_)) and isinstance(value, _REAL_TYPES)
 
 
+def is_finite(value) -> bool:
+    """Whether a real number is finite; False for an integer too large for a float (hundreds of digits)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+def short_repr(value, width: int = 40) -> str:
+    """``repr(value)``, cut to ``width`` characters with "..." (a 400-digit integer in a message)."""
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
 def real(name: str, value, *, positive: bool = False, nonneg: bool = False, integer: bool = False,
          low: float | None = None, high: float | None = None) -> float | int:
     """``value`` as a finite float (an int with ``integer``), or an error naming ``name``.
@@ -29,13 +43,8 @@ def real(name: str, value, *, positive: bool = False, nonneg: bool = False, inte
     """
     if not is_real(value):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
-    try:
-        finite = math.isfinite(float(value))
-    except OverflowError:  # an integer of hundreds of digits
-        finite = False
-    if not finite:
-        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
-        raise ValueError(f"{name} must be finite, got {shown}")
+    if not is_finite(value):
+        raise ValueError(f"{name} must be finite, got {short_repr(value)}")
     if integer and int(value) != value:
         raise ValueError(f"{name} must be an integer, got {value!r}")
     v = int(value) if integer else float(value)

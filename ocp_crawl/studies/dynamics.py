@@ -100,8 +100,8 @@ class DynamicsScan:
             f"{self.quasistatic[n] * k:12.4f} {'':8}" for n, _, _, k in QUANTITIES))
         for n, _, _, _ in QUANTITIES:
             f = self.highest_frequency(n)
-            text = "none of the periods" if f is None else f"{f:.3g} Hz (T = {1 / f:.3g} s)"
-            rows.append(f"{n} within {self.tolerance:.0%} of quasistatic up to {text}")
+            text = "at none of the periods" if f is None else f"up to {f:.3g} Hz (T = {1 / f:.3g} s)"
+            rows.append(f"{n} within {self.tolerance:.0%} of quasistatic {text}")
         if self.period is not None:
             rows.append(f"at the gait's own period T = {self.period:.4g} s: " + ", ".join(
                 f"{n} {self.at_period_text(n)}" for n, _, _, _ in QUANTITIES))
@@ -191,10 +191,10 @@ def plot_dynamics(scan: DynamicsScan, path: str | Path) -> Path:
         ax.legend(fontsize=8)
     f_s = scan.highest_frequency("S")
     at = np.argmax(scan.periods)
-    upto = "no frequency" if f_s is None else f"{f_s:.3g} Hz"
+    upto = ("at none of the periods" if f_s is None else f"up to {f_s:.3g} Hz")
     fig.suptitle(f"{Path(scan.source).name}: S = {scan.quasistatic['S'] * 1e3:.2f} mm quasistatic, "
                  f"{scan.values['S'][at] * 1e3:.2f} mm at T = {scan.periods[at]:g} s; S within "
-                 f"{scan.tolerance:.0%} up to {upto}")
+                 f"{scan.tolerance:.0%} {upto}")
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return Path(path)

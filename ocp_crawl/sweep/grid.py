@@ -17,7 +17,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ocp_crawl.checks import parse_integer, parse_number
+from ocp_crawl.checks import is_finite, parse_integer, parse_number, short_repr
 from ocp_crawl.problem import SCHEMA, Key, Problem, ProblemError
 from ocp_crawl.problem.overrides import toml_loads
 
@@ -58,18 +58,6 @@ def schema_key(name: str, where: str) -> Key:
     return keys[key]
 
 
-def _finite(v: int | float) -> bool:
-    try:
-        return math.isfinite(v)
-    except OverflowError:  # an integer of hundreds of digits
-        return False
-
-
-def _short(v) -> str:
-    text = repr(v)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarray:
     """Values of one axis as a 1-D array of the key's type; wrong types and duplicates raise ProblemError."""
     if len(values) == 0:
@@ -85,8 +73,8 @@ def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarra
         else:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ProblemError(f"{where} is invalid: {name} takes numbers ({key.what}); got {v!r}")
-            if not _finite(v):
-                raise ProblemError(f"{where} is invalid: {name} = {_short(v)} must be finite")
+            if not is_finite(v):
+                raise ProblemError(f"{where} is invalid: {name} = {short_repr(v)} must be finite")
             if key.type is int:
                 if v != int(v):
                     raise ProblemError(f"{where} is invalid: {name} takes integers ({key.what}); got {v!r}")
