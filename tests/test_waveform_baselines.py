@@ -85,7 +85,9 @@ def test_triangle_member_is_the_triangle_wave():
 def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
     """Triangle and linear pulses are linear between their kinks (cosine pulses and sines are not), and
     their default runs, which take those pieces whole, give the S and W+ of runs in steps of 1/1024
-    cycle (what the input's Fourier content would ask for), in a fifth of the steps or fewer."""
+    cycle (what the input's Fourier content would ask for), in a fifth of the steps or fewer; so does a
+    triangle wave whose corners at phases 0 and 1, shifted by psi/2 and wrapped, differ by round-off
+    (psi = -140 deg), which must not leave a piece of round-off length."""
     from ocp_crawl.model.pulse import Pulse
     from ocp_crawl.sim.event import HybridOptions
     from ocp_crawl.sim.event_kinks import linear_pieces
@@ -96,6 +98,7 @@ def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
     assert not linear_pieces(Pulse(1.5, 1.6, 0.4, 0.3, 0.6, 0.2, 0.3, "cosine"), linear.t_knots)
     assert not linear_pieces(Harmonic.from_degrees(90.0, 30.0, 45.0), np.zeros(0))
     for p in (WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle"),
+              WaveParams(67.5, 67.5, 7.5, 7.5, -140.0, "triangle"),
               WaveParams(80.0, 95.0, 10.0, 20.0, 60.0, "pulse", 0.1, 0.3)):
         fine = HybridOptions(max_step=1 / 1024)
         whole, capped = (simulate_torque(Model(robot), p.torque(robot.k), opt) for opt in (None, fine))

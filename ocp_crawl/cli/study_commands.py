@@ -5,6 +5,7 @@ import argparse
 import contextlib
 import dataclasses
 import json
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -386,7 +387,7 @@ def _progress_bar(wanted: bool):
 
             def update(stage) -> None:
                 calls.append(stage)
-                sigma = "" if stage.kind == "polish" else f" sigma {units.scientific(stage.sigma)}"
+                sigma = "" if math.isnan(stage.sigma) else f" sigma {units.scientific(stage.sigma)}"
                 bar.set_postfix_str(f"{stage.kind} stage {len(calls)}{sigma}, {stage.return_status}", refresh=False)
                 bar.update(stage.iterations)
             with observe(update):

@@ -267,14 +267,15 @@ class Homotopy:
         return self._stage(self.warm, sol.start(), data, sigma, "homotopy", attempt)
 
     def polish(self, sol: Solve, candidates: Iterable[dict], accept: Callable[[Solve], bool],
-               attempt: int = 0) -> Solve | None:
+               attempt: int = 0, kind: str = "polish") -> Solve | None:
         """Tightened NLPs from the homotopy's solve ``sol``, warm-started with its multipliers, one per
         candidate (``data`` with the starting point ``x0``, e.g. ``sol.x`` on the tightened bounds), in order;
-        the first accepted solve that passes ``accept`` is returned, else None (keep the homotopy's point)."""
+        the first accepted solve that passes ``accept`` is returned, else None (keep the homotopy's point).
+        ``kind``: the records' kind (e.g. "endgame")."""
         for data in candidates:
             data = dict(data)
             start = Start(data.pop("x0"), sol.lam_x, sol.lam_g)
-            pol = self._stage(self.warm, start, data, math.nan, "polish", attempt)
+            pol = self._stage(self.warm, start, data, math.nan, kind, attempt)
             if pol.accepted and accept(pol):
                 return pol
         return None

@@ -418,6 +418,9 @@ class Solvers(NamedTuple):
     loose: Callable[[float], tuple[LazySolver, LazySolver]] | None = None
     """``loose(tol)``: the (cold, warm) pair with IPOPT's ``tol`` = tol, made on first use and kept (the tight
     pair when tol is not looser than theirs)"""
+    capped: Callable[[int], LazySolver] | None = None
+    """``capped(max_iter)``: the tight warm solver with IPOPT's ``max_iter`` = max_iter (a solve that must pay
+    off within a budget, else give way), made on first use and kept"""
 
 
 class _Family:
@@ -430,6 +433,7 @@ class _Family:
         self.ipopt, self.ipopt_warm = ipopt
         self._source: cs.Function | None = None
         self._pairs: dict[float, tuple[LazySolver, LazySolver]] = {}
+        self._capped: dict[int, LazySolver] = {}
         self.tight = (self.solver("_cold", self.ipopt), self.solver("_warm", self.ipopt_warm))
 
     def solver(self, suffix: str, ipopt: dict) -> LazySolver:
@@ -444,6 +448,13 @@ class _Family:
         if src is None:
             self._source = solver
         return solver
+
+    def capped(self, max_iter: int) -> LazySolver:
+        """The tight warm solver with IPOPT's ``max_iter`` = max_iter."""
+        max_iter = min(int(max_iter), int(self.ipopt_warm.get("max_iter", max_iter)))  # a user's is kept
+        if max_iter not in self._capped:
+            self._capped[max_iter] = self.solver(f"_warm_max{max_iter}", dict(self.ipopt_warm, max_iter=max_iter))
+        return self._capped[max_iter]
 
     def loose(self, tol: float, suffix: str | None = None) -> tuple[LazySolver, LazySolver]:
         """The (cold, warm) pair at IPOPT's ``tol`` = tol (the tight pair when tol is not looser than theirs)."""
@@ -482,4 +493,4 @@ def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, 
     build_ipopt(f"{name}_options", _option_check_nlp(), dict(base, ipopt=ipopt_warm), owner, user)
     family = _Family(name, nlp, base, (ipopt, ipopt_warm), owner, user)
     stage = family.loose(stage_tol, suffix="") if stage_tol is not None else family.tight
-    return Solvers(*family.tight, *stage, family.loose)
+    return Solvers(*family.tight, *stage, family.loose, family.capped)

@@ -10,7 +10,7 @@ _EXPORTS = {
     "best_harmonic": "ocp_crawl.ocp.search", "best_baselines": "ocp_crawl.ocp.search",
     "WaveParams": "ocp_crawl.ocp.family", "SHAPES": "ocp_crawl.ocp.family",
     "OBJECTIVES": "ocp_crawl.ocp.settings", "OCPSettings": "ocp_crawl.ocp.settings",
-    "OCPResult": "ocp_crawl.ocp.solve", "optimize_gait": "ocp_crawl.ocp.solve",
+    "OCPResult": "ocp_crawl.ocp.result", "optimize_gait": "ocp_crawl.ocp.solve",
     "replay_signal": "ocp_crawl.ocp.judge", "judge_replay": "ocp_crawl.ocp.judge",
     "ConvergenceRow": "ocp_crawl.ocp.convergence", "converge_in_nodes": "ocp_crawl.ocp.convergence",
     "observed_orders": "ocp_crawl.ocp.convergence",

@@ -37,7 +37,7 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
-from ocp_crawl.ocp.family import Evaluation, WaveParams
+from ocp_crawl.ocp.family import SHAPES, Evaluation, WaveParams
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.sim.result import CrawlResult
 
@@ -191,6 +191,14 @@ class Baselines:
             return None
         sign = 1.0 if self.objective == "min_cot" else -1.0
         return min(found, key=lambda c: (not c.feasible, sign * c.value if c.feasible else 0.0))
+
+    def merged(self, other: "Baselines") -> "Baselines":
+        """These families and ``other``'s (searched apart, e.g. while the OCP solves), in shape order; the
+        time is the sum of both searches' wall times."""
+        choices = {**self.choices, **other.choices}
+        order = {s: i for i, s in enumerate(SHAPES)}
+        return Baselines(self.objective, dict(sorted(choices.items(), key=lambda kv: order[kv[0]])),
+                         self.time_s + other.time_s)
 
     def gains(self, value: float, gain: Callable[[str, float, float], float]) -> dict:
         """The gain of the objective value ``value`` over each family's best, by shape (NaN where it has

@@ -181,7 +181,7 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
     -------
     ConvergenceTable
         One row per N: status, period [s], OCP and replayed objective, change from the previous N, observed
-        order, time [s], and the full :class:`~ocp_crawl.ocp.solve.OCPResult`.
+        order, time [s], and the full :class:`~ocp_crawl.ocp.result.OCPResult`.
     """
     nodes = check_nodes(nodes)
     rows, warm, ready = [], None, None

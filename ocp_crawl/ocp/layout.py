@@ -30,3 +30,9 @@ class Layout:
         self.lbg.append(np.broadcast_to(lb, (expr.numel(),)).astype(float))
         self.ubg.append(np.broadcast_to(ub, (expr.numel(),)).astype(float))
         self.slices["g_" + name] = slice(start, start + expr.numel())
+
+
+def fourier_basis(N: int, K: int) -> np.ndarray:
+    """(2K+1, N) values of 1, cos(2 pi n t), sin(2 pi n t), n = 1..K, at the node phases t = k/N."""
+    t = np.arange(N) / N
+    return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])

@@ -11,6 +11,7 @@ from typing import Literal
 
 from ocp_crawl.checks import is_real, real
 from ocp_crawl.model.statics import Robot
+from ocp_crawl.nlp.homotopy import schedule as sigma_schedule
 from ocp_crawl.nlp.ipopt import check_ipopt_options
 
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
@@ -38,6 +39,7 @@ STARTS_BOUNDS = (1, 20)
 BASELINE_SAMPLES_BOUNDS = (0, 4096)
 BASELINE_STARTS_BOUNDS = (0, 20)
 BASELINE_EVALUATIONS_BOUNDS = (1, 5000)
+ENDGAME_MAX_ITER_BOUNDS = (1, 10000)
 #: the ``baselines`` choices: every waveform family, or one
 BASELINE_CHOICES = ("all", "harmonic", "triangle", "pulse")
 
@@ -158,6 +160,14 @@ class OCPSettings:
     max_speed N = 50..400 took 169 s instead of 334 s, min_cot 218 s instead of 466 s, with the same optima.  Off
     by default: from the harmonic baseline (max_speed, N = 20, the last stage to 1e-4) it reached another optimum,
     2 % slower"""
+    endgame_sigma: float | None = None
+    """the endgame (:mod:`~ocp_crawl.ocp.endgame`): after the homotopy's stage at this sigma (one of the
+    schedule's stages before the last), the tightened NLP on the branches of that stage's simulated profile,
+    kept when the replay judge accepts it and it is at least as good as the stage's profile by replay, else
+    the homotopy goes on; None (default): the whole homotopy"""
+    endgame_max_iter: int = 500
+    """most IPOPT iterations of the endgame's tightened NLP (beyond them the homotopy goes on), in
+    ENDGAME_MAX_ITER_BOUNDS"""
     warm_barrier: str = "adaptive"
     """IPOPT's barrier strategy in the warm-started solves of a homotopy (every stage after the first, the polish):
     "adaptive" (default, as the first stage) or "monotone" (from mu = 1e-6 at the previous stage's point).
@@ -237,7 +247,8 @@ class OCPSettings:
                                   ("starts", STARTS_BOUNDS),
                                   ("baseline_samples", BASELINE_SAMPLES_BOUNDS),
                                   ("baseline_starts", BASELINE_STARTS_BOUNDS),
-                                  ("baseline_evaluations", BASELINE_EVALUATIONS_BOUNDS)):
+                                  ("baseline_evaluations", BASELINE_EVALUATIONS_BOUNDS),
+                                  ("endgame_max_iter", ENDGAME_MAX_ITER_BOUNDS)):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
         for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "stage_tol", "comp_tol",
                      "periodic_tol"):
@@ -267,6 +278,11 @@ class OCPSettings:
             raise ValueError(f"OCPSettings: sigma0 {max(self.sigma0):g} to sigma_min {self.sigma_min:g} in steps of "
                              f"sigma_factor {self.sigma_factor:g} makes {stages} homotopy stages, more than "
                              f"{MAX_STAGES} (each is an IPOPT solve)")
+        if self.endgame_sigma is not None:
+            self._set("endgame_sigma", real("OCPSettings.endgame_sigma", self.endgame_sigma, positive=True))
+            if not any(abs(v - self.endgame_sigma) <= 1e-6 * v for v in self.schedule()[:-1]):
+                raise ValueError(f"OCPSettings.endgame_sigma must be one of the homotopy's stages before the last "
+                                 f"{self.schedule()[:-1]}, got {self.endgame_sigma!r}")
         if self.stage_tol_ratio is not None:
             self._set("stage_tol_ratio", real("OCPSettings.stage_tol_ratio", self.stage_tol_ratio, positive=True))
             if not self.stage_tol_ratio <= 1:
@@ -280,6 +296,11 @@ class OCPSettings:
             if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
                 raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
             self._set("mu_ratios", ratios)
+
+    def schedule(self) -> tuple[float, ...]:
+        """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0 sigma_factor, ...,
+        sigma_min)."""
+        return tuple(float(f"{v:.12g}") for v in sigma_schedule(self.sigma0[0], self.sigma_factor, self.sigma_min))
 
     def scenarios(self, robot: Robot) -> list[Robot]:
         """The robots of the friction scenarios (:attr:`friction_ratios`; just ``robot`` without a set)."""

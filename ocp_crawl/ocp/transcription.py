@@ -26,19 +26,18 @@ from __future__ import annotations
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.model.step_equations import NW
 from ocp_crawl.nlp import ipopt as nlp_ipopt
 from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
-from ocp_crawl.ocp.layout import Layout
+from ocp_crawl.ocp.endgame import Endgame
+from ocp_crawl.ocp.guess import simulated_guess
+from ocp_crawl.ocp.layout import Layout, fourier_basis
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.substeps import (Scenario, cross_residual, friction_rows, guess_block, modes_of, onset_residual,
-                                    positive_work, sample_phases, step_function, substep_torques, switch_fractions,
-                                    switch_windows, THETA_GUESS)
-from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual, positive_work,
+                                    step_function, substep_torques, switch_windows)
 
 #: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the transcription's resolution:
 #: a node may move a reference angle by up to R T / N, so at T = 2 period_ref = 4 pi A_max / R a cycle holds about
@@ -46,16 +45,8 @@ from ocp_crawl.sim.event import simulate_torque
 #: excludes no gait, only packed copies of one, whose coarse sub-steps the relaxed problem exploited (robust_speed,
 #: N = 50, unbounded: T grew to 4.2 s and the relaxed speed to 1.7 times the true optimum in 6000 iterations)
 PERIOD_HAT_BOUNDS = (1e-3, 2.0)
-#: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
-PIN_GRID = 16
 #: how the NLP evaluates the sub-step kernel (see :class:`GaitOCP`)
 KERNELS = ("expanded", "compiled")
-
-
-def fourier_basis(N: int, K: int) -> np.ndarray:
-    """(2K+1, N) values of 1, cos(2 pi n t), sin(2 pi n t), n = 1..K, at the node phases t = k/N."""
-    t = np.arange(N) / N
-    return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
 
 
 class GaitOCP:
@@ -186,71 +177,21 @@ class GaitOCP:
         return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
                              s.verbose, stage_tol, warm_over={"mu_strategy": s.warm_barrier})
 
+    @property
+    def slices(self) -> dict[str, slice]:
+        """Each named block of the NLP's variables and constraints: its slice of x or of g."""
+        return self._slices
+
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
         return float(self._f(x))
 
     # ------------------------------------------------------------------ initial guess from simulations
     def initial_guess(self, torque_signal, period: float, switches: bool = True) -> np.ndarray:
-        """Variables sampled from event-driven simulations (one per scenario) of a torque input.
-
-        Parameters
-        ----------
-        torque_signal : callable
-            ``torque_signal(t)`` [N m] (shape (2, n)) at phases t [cycles], e.g. the best harmonic gait of the
-            baseline; it is sampled at the N nodes, shifted in phase so that node 0 is where tau_1 is largest
-            (the phase pin, on a grid PIN_GRID times finer), and simulated as the transcription sees it, linear in
-            phase between the nodes (its interior points at the simulated foot switches, else mid-interval).
-        period : float
-            The gait's period T [s].
-        switches : bool
-            Place the interior points at the simulated changes of the slipping foot (default); False: every
-            interior point mid-interval (a guess that the solve must correct where a foot switch falls).
-
-        Returns
-        -------
-        np.ndarray
-            The NLP's variable vector (scaled).
-        """
-        s, r = self.settings, self.robot
-        N = s.nodes
-        MgL = r.M * r.g * r.L
-        x = np.zeros(self.nx)
-        t_nodes = np.arange(N) / N
-        fine = np.arange(PIN_GRID * N) / (PIN_GRID * N)
-        shift = fine[np.argmax(np.asarray(torque_signal(fine), float).reshape(2, -1)[0])]  # the phase pin
-        tau_nodes = np.asarray(torque_signal((shift + t_nodes) % 1.0), float).reshape(2, N)
-        if s.parametrization == "free":
-            x[self._slices["tau"]] = (tau_nodes / MgL).ravel(order="F")
-        else:
-            basis = fourier_basis(N, s.fourier_order)
-            coef, *_ = np.linalg.lstsq(basis.T, tau_nodes.T / MgL, rcond=None)
-            x[self._slices["tau"]] = coef.T.ravel(order="F")
-        x[self._slices["T_hat"]] = period / s.period_ref()
-        signal = PeriodicLinear(t_nodes, tau_nodes)
-        speeds, cots = [], []
-        for j, model in enumerate(self.scen):
-            theta = switch_fractions(simulate_torque(model, signal), N) if switches else np.full(N, THETA_GUESS)
-            res = simulate_torque(model, signal, t_eval=sample_phases(theta))
-            blk = guess_block(res, model, N)
-            speeds.append(s.direction * blk["S"] / x[self._slices["T_hat"]][0])
-            for name in ("phi0", "ft0"):
-                x[self._slices[f"{name}_{j}"]] = blk[name]
-            x[self._slices[f"Sc_{j}"]] = np.cumsum(blk["w"][4] - blk["w"][5])
-            x[self._slices[f"w_{j}"]] = blk["w"].ravel(order="F")
-            if f"Fc_{j}" in self._slices:
-                x[self._slices[f"Fc_{j}"]] = np.cumsum(friction_rows(blk["w"], s.friction_tol))
-            x[self._slices[f"theta_{j}"]] = theta
-            if f"v_{j}" in self._slices:
-                tau_sub = substep_torques(tau_nodes, theta) / MgL
-                tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
-                V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][0:2]], axis=1), 0.0)
-                x[self._slices[f"v_{j}"]] = V.ravel(order="F")
-                x[self._slices[f"Wc_{j}"]] = np.cumsum(V.sum(axis=0))
-                cots.append(V.sum() / max(s.direction * blk["S"], 1e-9))
-        if "zeta" in self._slices:  # the worst scenario's CoT+ (min_cot) or speed
-            x[self._slices["zeta"]] = max(cots) if s.objective == "min_cot" else min(speeds)
-        return x
+        """Variables sampled from event-driven simulations (one per scenario) of a torque input
+        ``torque_signal(t)`` [N m] at phases t [cycles] of period ``period`` [s]: see
+        :func:`~ocp_crawl.ocp.guess.simulated_guess`."""
+        return simulated_guess(self, torque_signal, period, switches)
 
     # ------------------------------------------------------------------ the solution in physical units
     def unpack(self, x: np.ndarray) -> dict:
@@ -299,8 +240,12 @@ class GaitOCP:
         return worst
 
     # ------------------------------------------------------------------ solve: the relaxation homotopy
-    def solve(self, x0: np.ndarray, fix_profile: bool = False) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
+    def solve(self, x0: np.ndarray, fix_profile: bool = False,
+              endgame: Endgame | None = None) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
+
+        ``endgame``: after the relaxed stages down to its sigma, its solve from there (kept when it says so:
+        :class:`~ocp_crawl.ocp.endgame.Endgame`), else the rest of the homotopy.
 
         ``fix_profile``: the torques and the period are fixed to those of x0 by their bounds and the objective is
         only the regularisation of the interior points (the transcription then simulates the profile: a check
@@ -323,7 +268,7 @@ class GaitOCP:
         f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
         for sigma0 in self.settings.sigma0:
             n0 = len(hom.records)
-            x, failed, status = self._homotopy(hom, x0, sigma0)
+            x, failed, status = self._homotopy(hom, x0, sigma0, None if fix_profile else endgame)
             runs.append((x, hom.records[n0:], failed, status))
             if x is not None and failed is None:
                 f = self.objective(x)
@@ -353,7 +298,8 @@ class GaitOCP:
         f = self.objective(x) if failed is None else np.inf
         return (f, x, hist, status) if f < best[0] else best
 
-    def solve_tightened(self, x0: np.ndarray) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
+    def solve_tightened(self, x0: np.ndarray, max_iter: int | None = None, kind: str = "polish"
+                        ) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
         """The tightened NLP alone, no homotopy: each pair fixed to the branch that x0 identifies (x0 complementary,
         e.g. the simulated guess of a coarser N's optimum, :func:`~ocp_crawl.ocp.convergence.converge_in_nodes`),
         solved by the tight warm solver from zero multipliers, each polish candidate in turn, in reverse order (the
@@ -361,13 +307,17 @@ class GaitOCP:
         from N = 50: with the ties fixed, Restoration_Failed after 560 iterations, the branches alone 236
         to the same optimum), until one that IPOPT accepts is complementary to comp_tol.  Returns (x, history, failed,
         status) as :meth:`solve` does: that candidate's point; else the first point IPOPT accepted (its residual then
-        fails the caller's check); else x None and ``failed`` naming every candidate's IPOPT status."""
+        fails the caller's check); else x None and ``failed`` naming every candidate's IPOPT status.
+        ``max_iter``: at most this many IPOPT iterations per candidate (None: the solvers' own limit); ``kind``:
+        the records' kind."""
         self._fixed = None
         hom = Homotopy.of(self.solvers, self._call)
+        if max_iter is not None:
+            hom.warm = self.solvers.capped(max_iter)
         start = Solve(x0, np.zeros(self.nx), np.zeros(self.ng), "", True, 0)
         kept = None
         for data in self._polish_candidates(x0)[::-1]:
-            pol = hom.polish(start, [data], lambda p: True)
+            pol = hom.polish(start, [data], lambda p: True, kind=kind)
             if pol is not None and (kept is None or pol.comp <= self.settings.comp_tol):
                 kept = pol  # the first accepted point, unless a later one is complementary
             if kept is not None and kept.comp <= self.settings.comp_tol:
@@ -463,7 +413,8 @@ class GaitOCP:
             ubx[sl] = ub.ravel(order="F")
         return dict(data, ubx=ubx, x0=np.minimum(x, ubx))
 
-    def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float) -> tuple[np.ndarray | None, str | None, str]:
+    def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float,
+                  endgame: Endgame | None = None) -> tuple[np.ndarray | None, str | None, str]:
         """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
         raise the complementarity residual; after a failed stage, only if it is within comp_tol; none when the last
         stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and
@@ -471,7 +422,20 @@ class GaitOCP:
         and polished once more."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
-        run = hom.relax(sigmas, Start(x0), self._stage_data, loose_last=s.loose_last and self._fixed is None)
+        start, head = Start(x0), endgame.head(sigmas) if endgame is not None else ()
+        loose_last = s.loose_last and self._fixed is None
+        if head:
+            run = hom.relax(head, start, self._stage_data, loose_last=True)
+            kept = endgame(run.last.x, hom.records) if run.ok else None
+            if kept is not None:
+                return kept
+            if run.ok:  # the homotopy goes on from the endgame's stage
+                head_run = run
+                run = hom.relax(sigmas[len(head):], run.last.start(), self._stage_data, loose_last=loose_last)
+                run.last = run.last or head_run.last
+                run.stage, run.stages = run.stage + len(head), len(sigmas)
+        else:
+            run = hom.relax(sigmas, start, self._stage_data, loose_last=loose_last)
         loose_last = run.loose_last
         if not run.ok:
             if run.last is not None:

@@ -25,7 +25,8 @@ from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS, BASELINE_SAMPLES_BOUNDS,
-                                   BASELINE_STARTS_BOUNDS, FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS,
+                                   BASELINE_STARTS_BOUNDS, ENDGAME_MAX_ITER_BOUNDS, FOURIER_ORDER_BOUNDS,
+                                   HARMONIC_PSI_BOUNDS,
                                    NODES_BOUNDS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 from ocp_crawl.sim.dynamic import CONES
@@ -384,6 +385,12 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("stage_tol_ratio", float, "-", f"homotopy: a stage before the last is solved to IPOPT tol = "
         f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})",
         rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
+    Key("endgame_sigma", float, "-", "homotopy: after the stage at this sigma (a stage before the last), the "
+        "tightened NLP on the branches of its simulated profile, kept when the judge accepts it and it is at least "
+        "as good by replay (absent: the whole homotopy)", rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+    Key("endgame_max_iter", int, "-", "homotopy: most IPOPT iterations of the endgame's tightened NLP",
+        default=_ocp("endgame_max_iter"), rule=within(*ENDGAME_MAX_ITER_BOUNDS, "each is a factorisation of the KKT "
+        "system")),
     Key("warm_barrier", str, "-", "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
         "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"), choices=WARM_BARRIERS),
     Key("friction_tol", float, "-", "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
