@@ -7,6 +7,7 @@
     python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
     python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the compiled kernel's map
     python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the N = 50..400 run
+    python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path (endgame, ...)
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -281,6 +282,38 @@ def bench_ocp_files(repeat: int) -> dict:
     return out
 
 
+#: the solver paths that ``ocp_paths`` compares on each shipped OCP file (``--set`` overrides)
+OCP_PATHS = {"homotopy": [], "perturbation always": ["ocp.perturbation=always"],
+             "endgame 1e-3": ["ocp.endgame_sigma=1e-3"],
+             "endgame 1e-3, perturbation always": ["ocp.endgame_sigma=1e-3", "ocp.perturbation=always"]}
+
+
+def bench_ocp_paths(repeat: int) -> dict:
+    """robust_speed's and min_cot's files whole (``ocp-crawl optimize FILE --json``) on each path of
+    :data:`OCP_PATHS` where the file's schedule has the stage, alternating in one run, ``min(repeat, 2)``
+    rounds: wall time [s] (min, median), status, replayed objective, IPOPT iterations and seconds, and what
+    the endgame did."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent / "problems"
+    out = {"load_average_start": os.getloadavg()}
+    for name in ("ocp_robust", "ocp_min_cot"):
+        runs: dict = {path: [] for path in OCP_PATHS}
+        for _ in range(min(repeat, 2)):
+            for path, sets in OCP_PATHS.items():
+                if name != "ocp_robust" and "endgame" in path:
+                    continue  # (the default schedule, 1e-4 and 1e-6, has no stage at 1e-3)
+                runs[path].append(_optimize_process([str(root / f"{name}.toml"),
+                                                     *[a for x in sets for a in ("--set", x)]]))
+        out[name] = {path: {"wall_s": {"min": round(min(w for w, _ in r), 1),
+                                       "median": round(statistics.median(w for w, _ in r), 1)},
+                            "status": r[0][1].get("status"), "value_replay": r[0][1].get("objective_value_replay"),
+                            "endgame": r[0][1].get("endgame"), **_ipopt_split(r[0][1].get("homotopy", []))}
+                     for path, r in runs.items() if r}
+    out["load_average_end"] = os.getloadavg()
+    return out
+
+
 def _ipopt_split(stages: list) -> dict:
     """IPOPT's share of a solve (the first run's ``homotopy`` records): iterations, seconds inside IPOPT calls and
     milliseconds per iteration (the machine's speed on these KKT systems, apart from the iteration count)."""
@@ -388,7 +421,7 @@ def bench_baselines(repeat: int) -> dict:
 
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
               "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
-              "ocp_files": bench_ocp_files, "baselines": bench_baselines}
+              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths, "baselines": bench_baselines}
 
 
 def main(argv=None) -> int:

@@ -265,6 +265,11 @@ COMMAND_ROWS = {
     # rules between the homotopy's keys (each alone is valid): exit 2 naming them, not an internal error
     "optimize: sigma_min above sigma0": R("optimize", ["{ocp}", "--set", "ocp.sigma_min=1e-3"],
                                           ["ocp_max_speed.toml", "[ocp]", "sigma_min < sigma0"]),
+    "optimize: endgame after the last stage": R("optimize", ["{ocp}", "--set", "ocp.endgame_sigma=1e-6"],
+                                                ["ocp_max_speed.toml", "[ocp]", "endgame_sigma",
+                                                 "stages before the last"]),
+    "optimize: endgame without iterations": R("optimize", ["{ocp}", "--set", "ocp.endgame_max_iter=0"],
+                                              ["[ocp] endgame_max_iter = 0", "[1, 10000]"]),
     "optimize: too many homotopy stages": R("optimize", ["{ocp}", "--set", "ocp.sigma_factor=0.999"],
                                             ["ocp_max_speed.toml", "[ocp]", "sigma_factor 0.999", "homotopy stages"]),
     # keys of earlier versions: the message names the key, the file and the replacement

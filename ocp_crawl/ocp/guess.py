@@ -1,36 +1,39 @@
 """The initial guess of the periodic-gait OCP from event-driven simulations of a torque input: the
-transcription's variables sampled from one simulation per friction scenario, the interior points at the
-simulated changes of the slipping foot."""
+transcription's variables sampled from one simulation per friction scenario, the interior points at
+the simulated changes of the slipping foot."""
 from __future__ import annotations
 
 import numpy as np
 
 from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.ocp.layout import fourier_basis
-from ocp_crawl.ocp.substeps import (THETA_GUESS, friction_rows, guess_block, sample_phases, substep_torques,
-                                    switch_fractions)
+from ocp_crawl.ocp.substeps import (THETA_GUESS, friction_rows, guess_block, sample_phases,
+                                    substep_torques, switch_fractions)
 from ocp_crawl.sim.event import simulate_torque
 
-#: the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer than the nodes
+#  the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer
+# than the nodes
 PIN_GRID = 16
 
 
 def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) -> np.ndarray:
-    """The variables of the transcription ``ocp`` (a :class:`~ocp_crawl.ocp.transcription.GaitOCP`) sampled
-    from event-driven simulations (one per scenario) of a torque input.
+    """The variables of the transcription ``ocp`` (a :class:`~ocp_crawl.ocp.transcription.GaitOCP`)
+    sampled from event-driven simulations (one per scenario) of a torque input.
 
     Parameters
     ----------
     torque_signal : callable
-        ``torque_signal(t)`` [N m] (shape (2, n)) at phases t [cycles], e.g. the best harmonic gait of the
-        baseline; it is sampled at the N nodes, shifted in phase so that node 0 is where tau_1 is largest
-        (the phase pin, on a grid PIN_GRID times finer), and simulated as the transcription sees it, linear in
-        phase between the nodes (its interior points at the simulated foot switches, else mid-interval).
+        ``torque_signal(t)`` [N m] (shape (2, n)) at phases t [cycles], e.g. the best harmonic gait
+        of the baseline; it is sampled at the N nodes, shifted in phase so that node 0 is where
+        tau_1 is largest (the phase pin, on a grid PIN_GRID times finer), and simulated as the
+        transcription sees it, linear in phase between the nodes (its interior points at the
+        simulated foot switches, else mid-interval).
     period : float
         The gait's period T [s].
     switches : bool
-        Place the interior points at the simulated changes of the slipping foot (default); False: every
-        interior point mid-interval (a guess that the solve must correct where a foot switch falls).
+        Place the interior points at the simulated changes of the slipping foot (default); False:
+        every interior point mid-interval (a guess that the solve must correct where a foot switch
+        falls).
 
     Returns
     -------
@@ -43,7 +46,8 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
     x = np.zeros(ocp.nx)
     t_nodes = np.arange(N) / N
     fine = np.arange(PIN_GRID * N) / (PIN_GRID * N)
-    shift = fine[np.argmax(np.asarray(torque_signal(fine), float).reshape(2, -1)[0])]  # the phase pin
+    # the phase pin
+    shift = fine[np.argmax(np.asarray(torque_signal(fine), float).reshape(2, -1)[0])]
     tau_nodes = np.asarray(torque_signal((shift + t_nodes) % 1.0), float).reshape(2, N)
     if s.parametrization == "free":
         x[ocp.slices["tau"]] = (tau_nodes / MgL).ravel(order="F")
@@ -55,7 +59,8 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
     signal = PeriodicLinear(t_nodes, tau_nodes)
     speeds, cots = [], []
     for j, model in enumerate(ocp.scen):
-        theta = switch_fractions(simulate_torque(model, signal), N) if switches else np.full(N, THETA_GUESS)
+        theta = (switch_fractions(simulate_torque(model, signal), N) if switches
+                 else np.full(N, THETA_GUESS))
         res = simulate_torque(model, signal, t_eval=sample_phases(theta))
         blk = guess_block(res, model, N)
         speeds.append(s.direction * blk["S"] / x[ocp.slices["T_hat"]][0])

@@ -19,6 +19,10 @@ OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
 PARAMETRIZATIONS = ("free", "fourier")
 #: IPOPT barrier strategies of the warm-started homotopy solves (:attr:`OCPSettings.warm_barrier`)
 WARM_BARRIERS = ("adaptive", "monotone")
+#: when IPOPT perturbs the Hessian (:attr:`OCPSettings.perturbation`)
+PERTURBATIONS = ("as_needed", "always")
+#: the paths after the endgame's stage (:attr:`OCPSettings.endgame_paths`)
+ENDGAME_PATHS = ("endgame_first", "both")
 #: keys of earlier versions that no longer exist, and what replaces each (problem files and OCPSettings)
 REMOVED_KEYS = {
     "S_min": "speed_min [m/s], the smallest mean speed direction * S / T (a per-cycle S rewarded packing strokes)",
@@ -165,9 +169,20 @@ class OCPSettings:
     schedule's stages before the last), the tightened NLP on the branches of that stage's simulated profile,
     kept when the replay judge accepts it and it is at least as good as the stage's profile by replay, else
     the homotopy goes on; None (default): the whole homotopy"""
+    endgame_paths: str = "endgame_first"
+    """with ``endgame_sigma``: "endgame_first" (default: the endgame, and the rest of the homotopy only when it
+    is not kept) or "both" (the endgame and the rest of the homotopy, in parallel where a process can be forked,
+    the better by replay kept: never worse than the whole homotopy, as slow as it)"""
     endgame_max_iter: int = 500
     """most IPOPT iterations of the endgame's tightened NLP (beyond them the homotopy goes on), in
     ENDGAME_MAX_ITER_BOUNDS"""
+    perturbation: str = "as_needed"
+    """when IPOPT perturbs the Hessian of its KKT system: "as_needed" (default: IPOPT's own rule, an
+    unperturbed factorisation first at every iteration) or "always" (from the first factorisation: the NLP
+    gets one more variable, in neither the objective nor the constraints, so that IPOPT finds the Hessian
+    structurally degenerate).  Where almost every iteration needs the perturbation (robust_speed: 313 of 319
+    first-stage iterations, two or more factorisations each) "always" saves one per iteration; the path, and
+    so the local optimum, may change (measured per file: docs/benchmarks.md)"""
     warm_barrier: str = "adaptive"
     """IPOPT's barrier strategy in the warm-started solves of a homotopy (every stage after the first, the polish):
     "adaptive" (default, as the first stage) or "monotone" (from mu = 1e-6 at the previous stage's point).
@@ -231,7 +246,8 @@ class OCPSettings:
 
     def _check_choices(self) -> None:
         for name, choices in (("objective", OBJECTIVES), ("parametrization", PARAMETRIZATIONS),
-                              ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES)):
+                              ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES),
+                              ("perturbation", PERTURBATIONS), ("endgame_paths", ENDGAME_PATHS)):
             if getattr(self, name) not in choices:
                 raise ValueError(f"OCPSettings.{name} must be one of {choices}, got {getattr(self, name)!r}")
         if self.direction not in (-1, 1):

@@ -34,7 +34,7 @@ from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
-from ocp_crawl.workers import default_jobs, overlap
+from ocp_crawl.workers import overlap
 from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.sim.result import cost_of_transport
 from ocp_crawl.status import Status
@@ -97,8 +97,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
                                baselines=harmonic)) for g in guesses]
     others = settings.baseline_shapes[1:]
     if others:  # the other families, the gains' comparators only, searched while the OCP solves
-        rest_jobs = max(1, (default_jobs() if jobs is None else jobs) - 1)
-        rest, solved = overlap(lambda send: best_baselines(robot, gravity, settings, others, jobs=rest_jobs),
+        # (on all the workers: the search takes longer than the solve, whose core it then takes over)
+        rest, solved = overlap(lambda send: best_baselines(robot, gravity, settings, others, jobs=jobs),
                                solve_starts, lambda message: None)
         base = harmonic.merged(rest)
     else:
@@ -194,38 +194,39 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Wa
 
 def _endgame(ocp: GaitOCP, models: list[Model]) -> Endgame | None:
     """The settings' endgame (None without ``endgame_sigma``), judged by replay: the endgame's point is kept
-    when the replay judge accepts it and its replayed objective is at least the stage profile's."""
+    when the replay judge accepts it and its replayed objective is at least that of the point it is
+    compared with (the stage's profile, or the homotopy's optimum on both paths)."""
     settings = ocp.settings
     if settings.endgame_sigma is None:
         return None
     phase = np.arange(settings.nodes) / settings.nodes
 
-    def profile(x: np.ndarray) -> tuple:
+    def replays(x: np.ndarray) -> tuple[list, float]:
         u = ocp.unpack(x)
-        return u["tau"], u["T"]
-
-    stage = {}  # the stage profile's replayed objective
+        return [simulate_torque(m, replay_signal(phase, u["tau"])) for m in models], u["T"]
 
     def guess(x_stage: np.ndarray) -> np.ndarray | None:
-        tau, T = profile(x_stage)
-        runs = [simulate_torque(m, replay_signal(phase, tau)) for m in models]
+        runs, T = replays(x_stage)
         if not all(r.success for r in runs):
             return None
-        stage["value"] = value_from(settings, [r.S for r in runs], [r.CoT_plus for r in runs], T)
-        return ocp.initial_guess(replay_signal(phase, tau), T)
+        return ocp.initial_guess(replay_signal(phase, ocp.unpack(x_stage)["tau"]), T)
 
-    def keep(x: np.ndarray, x_stage: np.ndarray) -> tuple[bool, str]:
+    def keep(x: np.ndarray, x_ref: np.ndarray, against: str) -> tuple[bool, str]:
         trial = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
                           settings=settings)
         _fill_solution(trial, ocp, x)
         verdict = judge_replay(models, settings, trial.tau, trial.T_ocp, trial.value_ocp, trial.S_ocp)
         if not verdict.ok:
             return False, f"the replay judge: {verdict.message}"
-        text = (f"replay {value_text(settings.objective, verdict.value)} against the stage profile's "
-                f"{value_text(settings.objective, stage['value'])}")
-        return not is_better(settings.objective, stage["value"], verdict.value), text
+        runs, T = replays(x_ref)
+        ref = (value_from(settings, [r.S for r in runs], [r.CoT_plus for r in runs], T)
+               if all(r.success for r in runs) else math.nan)
+        text = (f"replay {value_text(settings.objective, verdict.value)} against {against}'s "
+                f"{value_text(settings.objective, ref)}")
+        return not is_better(settings.objective, ref, verdict.value), text
     return Endgame(settings.endgame_sigma, settings.endgame_max_iter, guess,
-                   lambda x, max_iter: ocp.solve_tightened(x, max_iter, kind="endgame"), keep)
+                   lambda x, max_iter: ocp.solve_tightened(x, max_iter, kind="endgame"), keep,
+                   both=settings.endgame_paths == "both")
 
 
 def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) -> bool:

@@ -142,6 +142,8 @@ class GaitOCP:
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot",
                          s.friction_tol, s.joint_rate_step()) for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, dT, Th)
+        if s.perturbation == "always":  # in neither f nor g: IPOPT finds the Hessian degenerate
+            nlp.var("free", nlp.sym("free"), -np.inf, np.inf)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
         G = cs.vertcat(*nlp.g)
         self._slices = nlp.slices
@@ -419,23 +421,31 @@ class GaitOCP:
         raise the complementarity residual; after a failed stage, only if it is within comp_tol; none when the last
         stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and
         loose stages) the last stage is loose too; if the polish from it fails, that stage is solved again tightly
-        and polished once more."""
+        and polished once more.  With an ``endgame`` whose sigma is a stage, the stages down to it, then the
+        endgame and (or) the rest of the homotopy as the endgame decides
+        (:meth:`~ocp_crawl.ocp.endgame.Endgame.race`)."""
         s = self.settings
         sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
-        start, head = Start(x0), endgame.head(sigmas) if endgame is not None else ()
+        head = endgame.head(sigmas) if endgame is not None else ()
         loose_last = s.loose_last and self._fixed is None
-        if head:
-            run = hom.relax(head, start, self._stage_data, loose_last=True)
-            kept = endgame(run.last.x, hom.records) if run.ok else None
-            if kept is not None:
-                return kept
-            if run.ok:  # the homotopy goes on from the endgame's stage
-                head_run = run
-                run = hom.relax(sigmas[len(head):], run.last.start(), self._stage_data, loose_last=loose_last)
-                run.last = run.last or head_run.last
-                run.stage, run.stages = run.stage + len(head), len(sigmas)
-        else:
-            run = hom.relax(sigmas, start, self._stage_data, loose_last=loose_last)
+        if not head:
+            return self._finish(hom, hom.relax(sigmas, Start(x0), self._stage_data, loose_last=loose_last),
+                                sigmas)
+        run = hom.relax(head, Start(x0), self._stage_data, loose_last=True)
+        if not run.ok:
+            run.stages = len(sigmas)
+            return self._finish(hom, run, sigmas)
+
+        def rest() -> tuple:  # the homotopy from the endgame's stage on
+            tail = hom.relax(sigmas[len(head):], run.last.start(), self._stage_data, loose_last=loose_last)
+            tail.last = tail.last or run.last
+            tail.stage, tail.stages = tail.stage + len(head), len(sigmas)
+            return self._finish(hom, tail, sigmas)
+        return endgame.race(run.last.x, hom.records, rest)
+
+    def _finish(self, hom: Homotopy, run, sigmas: tuple) -> tuple[np.ndarray | None, str | None, str]:
+        """The end of a homotopy's ``run`` along ``sigmas``: the polish, or the failure (see :meth:`_homotopy`)."""
+        s = self.settings
         loose_last = run.loose_last
         if not run.ok:
             if run.last is not None:
