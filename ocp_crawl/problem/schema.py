@@ -26,10 +26,8 @@ from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS, BASELINE_SAMPLES_BOUNDS,
                                    BASELINE_STARTS_BOUNDS, ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS,
-                                   FOURIER_ORDER_BOUNDS,
-                                   HARMONIC_PSI_BOUNDS,
-                                   NODES_BOUNDS, PERTURBATIONS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS,
-                                   WARM_BARRIERS)
+                                   FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS, PERTURBATIONS,
+                                   PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 from ocp_crawl.sim.dynamic import CONES
 
@@ -387,18 +385,14 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("stage_tol_ratio", float, "-", f"homotopy: a stage before the last is solved to IPOPT tol = "
         f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})",
         rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
-    Key("endgame_sigma", float, "-", "homotopy: after the stage at this sigma (a stage before the last), the "
-        "tightened NLP on the branches of its simulated profile, kept when the judge accepts it and it is at least "
-        "as good by replay (absent: the whole homotopy)", rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
-    Key("endgame_paths", str, "-", "homotopy, with endgame_sigma: endgame_first (the rest of the homotopy only "
-        "when the endgame is not kept) or both (both paths in parallel, the better by replay kept)",
-        default=_ocp("endgame_paths"), choices=ENDGAME_PATHS),
-    Key("endgame_max_iter", int, "-", "homotopy: most IPOPT iterations of the endgame's tightened NLP",
-        default=_ocp("endgame_max_iter"), rule=within(*ENDGAME_MAX_ITER_BOUNDS, "each is a factorisation of the KKT "
-        "system")),
-    Key("perturbation", str, "-", "when IPOPT perturbs the Hessian: as_needed (its own rule) or always (from the "
-        "first factorisation of every iteration; one factorisation fewer where almost all need it, the path may "
-        "change)", default=_ocp("perturbation"), choices=PERTURBATIONS),
+    Key("endgame_sigma", float, "-", "homotopy: after the stage at this sigma, the tightened NLP on its simulated "
+        "profile's branches (absent: the whole homotopy)", rule=Rule(lambda v: 0 < v < 1, "in (0, 1)")),
+    Key("endgame_paths", str, "-", "endgame_first (the homotopy goes on only if the endgame is not kept) or both "
+        "(in parallel, the better by replay)", default=_ocp("endgame_paths"), choices=ENDGAME_PATHS),
+    Key("endgame_max_iter", int, "-", "most IPOPT iterations of the endgame", default=_ocp("endgame_max_iter"),
+        rule=within(*ENDGAME_MAX_ITER_BOUNDS, "each is a factorisation of the KKT system")),
+    Key("perturbation", str, "-", "IPOPT perturbs the Hessian as_needed (its rule) or always (from the first "
+        "factorisation; the path may change)", default=_ocp("perturbation"), choices=PERTURBATIONS),
     Key("warm_barrier", str, "-", "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
         "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"), choices=WARM_BARRIERS),
     Key("friction_tol", float, "-", "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
