@@ -53,14 +53,21 @@ def solve(st: OCPSettings):
                       st.min_period(30.0, 30.0))
 
 
-def test_an_endgame_not_kept_gives_the_whole_homotopy_and_a_kept_one_its_replay():
+@pytest.fixture(scope="module")
+def whole():
+    """The whole homotopy's optimum, the reference of every path."""
+    res = solve(settings())
+    assert res.success, res.message
+    return res
+
+
+def test_an_endgame_not_kept_gives_the_whole_homotopy_and_a_kept_one_its_replay(whole):
     """With one iteration allowed, the endgame's solve fails and the homotopy goes on from the
     endgame's stage: the same optimum as the whole homotopy's, to round-off.  With the default cap,
     the endgame's optimum is kept only as good as its stage's profile by replay, and the replay
     confirms it."""
-    whole = solve(settings())
     capped = solve(settings(endgame_sigma=1e-4, endgame_max_iter=1))
-    assert whole.success and capped.success, (whole.message, capped.message)
+    assert capped.success, capped.message
     assert "not kept" in capped.path
     assert np.allclose(capped.tau, whole.tau, rtol=0, atol=1e-9 * np.abs(whole.tau).max())
     assert capped.value_replay == pytest.approx(whole.value_replay, rel=1e-9)
@@ -87,20 +94,20 @@ def test_endgame_settings_name_the_schedule():
         1e-3, 1e-4, 1e-5, 1e-6)
 
 
-def test_always_perturbed_hessian_solves_the_same_problem():
+def test_always_perturbed_hessian_solves_the_same_problem(whole):
     """perturbation = "always" adds one variable in neither the objective nor the constraints (IPOPT then
     treats the Hessian as degenerate from its first factorisation): the optimum it reaches is a
     complementary point that the replay confirms, within 1 % of the default path's."""
-    default, always = solve(settings()), solve(settings(perturbation="always"))
-    assert default.success and always.success, (default.message, always.message)
+    always = solve(settings(perturbation="always"))
+    assert always.success, always.message
     assert abs(always.value_replay - always.value_ocp) <= 1e-6 * always.value_replay
-    assert always.value_replay == pytest.approx(default.value_replay, rel=1e-2)
+    assert always.value_replay == pytest.approx(whole.value_replay, rel=1e-2)
     with pytest.raises(ValueError, match="perturbation"):
         settings(perturbation="never")
 
 
 @pytest.mark.parametrize("fork", [True, False])
-def test_both_paths_keep_the_better_by_replay(fork, monkeypatch):
+def test_both_paths_keep_the_better_by_replay(fork, monkeypatch, whole):
     """endgame_paths = "both": the endgame and the rest of the homotopy both run (in a forked process, or
     one after the other where none can be forked: the same result), and the better by replay is kept, so
     the optimum is at least the whole homotopy's by replay; both are in the records."""
@@ -108,9 +115,8 @@ def test_both_paths_keep_the_better_by_replay(fork, monkeypatch):
         from ocp_crawl import workers
 
         monkeypatch.setattr(workers, "mp_context", lambda: workers.multiprocessing.get_context("spawn"))
-    whole = solve(settings())
     both = solve(settings(endgame_sigma=1e-4, endgame_paths="both"))
-    assert whole.success and both.success, (whole.message, both.message)
+    assert both.success, both.message
     assert both.value_replay >= whole.value_replay * (1 - 1e-9)
     kinds = [h.kind for h in both.homotopy]
     assert "endgame" in kinds and [k for k in kinds if k != "endgame"] == [h.kind for h in whole.homotopy]

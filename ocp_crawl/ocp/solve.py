@@ -32,7 +32,7 @@ from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.starts import start_guesses
+from ocp_crawl.ocp.starts import StartGuess, start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.workers import overlap
 from ocp_crawl.sim.event import simulate_torque
@@ -62,8 +62,9 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         Judge each optimum by its event-driven replay (default).  False: the OCP's own verdict only, the
         best start by the OCP's value (a solver test; the message says that nothing was replayed).
     jobs : int, optional
-        Worker processes of the harmonic baseline's search (:func:`~ocp_crawl.ocp.baseline.best_harmonic`; None:
-        the CPUs available).  The result does not depend on it.
+        Worker processes of the baselines' search (:func:`~ocp_crawl.ocp.search.best_baselines`; None: the
+        CPUs available): the harmonic family's first, then the other families' while the OCP solves.  The
+        result does not depend on it.
 
     Returns
     -------
@@ -91,7 +92,7 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     def follows(tau: np.ndarray) -> bool:
         return all(simulate_torque(m, replay_signal(phase, tau)).success for m in models)
 
-    def solve_starts() -> list[OCPResult]:
+    def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
         guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
         return [(g, solve_from(ocp, models, replay_signal(phase, g.tau), g.T, harm, replay,
                                baselines=harmonic)) for g in guesses]
