@@ -8,9 +8,10 @@ each sub-step) are those of the real gait
 (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`) is then solved at once, with an
 iteration cap, instead of the remaining stages at ever smaller sigma.  Its point is kept only when
 the caller's judge accepts it (its replay) and it is at least as good as the stage's profile by
-replay; otherwise the homotopy goes on from the stage's point, as without an endgame.  The stage
-decides which local optimum the endgame reaches: the result depends on the path (:class:`Endgame`
-says which was taken).
+replay; otherwise the homotopy goes on from the stage's point, as without an endgame.  Or both
+paths run, the endgame here and the rest of the homotopy in a forked process, and the better by
+replay is kept.  The path decides which local optimum is reached (:class:`Endgame` says which was
+taken, and against what).
 """
 from __future__ import annotations
 
@@ -32,12 +33,12 @@ class Endgame:
 
     ``guess(x_stage)``: the complementary point of the stage's simulated profile, or None when a
     simulation fails; ``solve(x_sim, max_iter)``: the tightened NLP on its branches, (x, records,
-    failed, status) as :meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`; ``keep(x,
-    x_ref)``: whether the endgame's point x is kept over the point x_ref, named ``against`` (the
-    caller's judge: x accepted by replay and at least as good as x_ref's profile by replay), with
-    the comparison in words.  ``both``: the endgame and the rest of the homotopy both run, in
-    parallel where a process can be forked, and the better by replay is kept (False: the endgame
-    first, the rest of the homotopy only when it is not kept)."""
+    failed, status) as :meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`;
+    ``keep(x, x_ref, against)``: whether the endgame's point x is kept over the point x_ref, named
+    ``against`` (the caller's judge: x accepted by replay and at least as good as x_ref's profile by
+    replay), with the comparison in words.  ``both``: the endgame and the rest of the homotopy both
+    run, in parallel where a process can be forked, and the better by replay is kept (False: the
+    endgame first, the rest of the homotopy only when it is not kept)."""
 
     sigma: float
     max_iter: int
