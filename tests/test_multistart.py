@@ -100,7 +100,7 @@ class StandInOCP:
         n = self.settings.nodes
         return {"tau": np.asarray(signal(np.arange(n) / n)).reshape(2, n), "T": T}
 
-    def solve(self, x0):
+    def solve(self, x0, endgame=None):
         self.calls += 1
         return dict(x0, claim=self.claims.get(self.calls, 1.0)), [], None, "Solve_Succeeded"
 
@@ -123,8 +123,9 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     harm_S = simulate(solve.Model(ROBOT, gravity="physical"), signal).S
     harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T, shape="harmonic",
                            feasible=True, to_dict=lambda: {"value": -harm_S / T})
-    monkeypatch.setattr(solve, "best_baselines",
-                        lambda robot, gravity, settings, **kw: Baselines(settings.objective, {"harmonic": harm}))
+    monkeypatch.setattr(solve, "best_baselines",  # (the other families: none simulates)
+                        lambda robot, gravity, settings, shapes, **kw: Baselines(
+                            settings.objective, {s: harm if s == "harmonic" else None for s in shapes}))
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
     monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start solved overclaims by 20 %
     res = solve.optimize_gait(ROBOT, "physical", st)
