@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal
+from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal, merged_knots
 
 
 #: edge shapes of :class:`Pulse`: straight ramps (a trapezoid) or half-cosine ramps (C1 at the corners)
@@ -93,7 +93,7 @@ class Pulse(PeriodicSignal):
         edges; the curvature, cosine edges), so the simulators' quadratures split their panels there."""
         corners = np.array([0.0, self.rise, self.rise + self.hold, 2 * self.rise + self.hold])
         shift = self.psi / (2.0 * TWO_PI)
-        return np.unique(np.mod(np.concatenate([corners - shift, corners + shift]), 1.0))
+        return merged_knots(np.concatenate([corners - shift, corners + shift]))
 
     def __call__(self, t):
         s1, s2 = self._shifts(t)

@@ -49,14 +49,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal, merged_knots
 from ocp_crawl.model.stability import fast_step
 from ocp_crawl.model.statics import AUX, NAUX, Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event_checks import ChecksMixin
 from ocp_crawl.sim.event_guards import GuardsMixin
-from ocp_crawl.sim.event_kinks import (KINK_GAP, KinksMixin, input_breakpoints, linear_pieces,
-                                       step_limit)
+from ocp_crawl.sim.event_kinks import KINK_GAP, KinksMixin, linear_pieces, step_limit
 from ocp_crawl.sim.event_locate import EventsMixin, guard_noise
 from ocp_crawl.sim.event_output import OutputMixin
 from ocp_crawl.sim.event_state import Q_RELEASED, _Failure, _LeftPoint, _Point, _Run, _Segment, event_kind, \
@@ -155,7 +154,7 @@ class HybridStepper(GuardsMixin, EventsMixin, OutputMixin, ChecksMixin, KinksMix
         self.max_step = self.opt.max_step
         # phases where a sampled input's derivative may have a kink (its knots): quadrature panel edges
         signal = self.torque.reference if isinstance(self.torque, ReferenceTorque) else self.torque
-        self.breakpoints = input_breakpoints(getattr(signal, "t_knots", np.zeros(0)))
+        self.breakpoints = merged_knots(getattr(signal, "t_knots", np.zeros(0)))
         self._init_kinks()  # (those where the torque's rate jumps: the continuation stops there)
         self._init_holds()  # (where it holds still: crossed in one step, the mode decided at the end)
         if self.opt.resolve_input and not linear_pieces(self.torque, self.breakpoints):

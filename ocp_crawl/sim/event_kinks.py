@@ -59,22 +59,6 @@ KINK_GAP = 1e-12
 HELD_PIECE_RTOL = 1e-9
 
 
-def input_breakpoints(t_knots) -> np.ndarray:
-    """The phases in [0, 1) of an input's knots ``t_knots`` [cycles], sorted, those within :data:`KINK_GAP` of
-    another (across the wrap too) merged into one: knots that coincide up to round-off (a triangle wave's
-    corners at phases 0 and 1, shifted by psi/2 and wrapped into [0, 1)) would leave a piece of round-off
-    length, on which neither the one-sided rates of a kink nor the test for linear pieces mean anything (the
-    stepper would fall back to steps of 1/1024 cycle on the triangle waves of about half of the phases)."""
-    b = np.sort(np.mod(np.asarray(t_knots, float).ravel(), 1.0))
-    if b.size == 0:
-        return b
-    keep = np.append(True, np.diff(b) > KINK_GAP)
-    b = b[keep]
-    if b.size > 1 and b[0] + 1.0 - b[-1] <= KINK_GAP:
-        b = b[:-1]
-    return b
-
-
 def input_step(signal, samples: int = 1024, rel: float = 1e-3) -> float:
     """Largest continuation step [cycles] that resolves a periodic input: 1/(8 f), where f is the
     highest harmonic whose contribution to the input's rate (amplitude times frequency) is at least
