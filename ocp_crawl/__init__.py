@@ -22,6 +22,9 @@ _EXPORTS = {
     "Problem": "ocp_crawl.problem", "ProblemError": "ocp_crawl.problem", "load_problem": "ocp_crawl.problem",
     "paper_problem": "ocp_crawl.problem", "problem_from_dict": "ocp_crawl.problem",
     "run_problem": "ocp_crawl.problem",
+    **{name: "ocp_crawl.problem.work" for name in (
+        "Work", "WorkLimit", "simulation_work", "optimize_work", "sweep_work", "fit_work", "crosscheck_work",
+        "dynamics_work")},
 }
 
 __all__ = [
@@ -30,6 +33,7 @@ __all__ = [
     "simulate", "SOLVERS", "HybridOptions", "TimeSteppingOptions", "AnglesOptions", "CycleOptions", "CrawlResult",
     "Event", "Mode", "SimulationError", "simulate_torque", "simulate_angles", "simulate_mpcc", "Problem",
     "ProblemError", "load_problem", "paper_problem", "problem_from_dict", "run_problem",
-    "MujocoOptions",
+    "MujocoOptions", "Work", "WorkLimit", "simulation_work", "optimize_work", "sweep_work", "fit_work",
+    "crosscheck_work", "dynamics_work",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

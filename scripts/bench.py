@@ -8,6 +8,7 @@
     python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the compiled kernel's map
     python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the N = 50..400 run
     python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path (endgame, ...)
+    python scripts/bench.py work --repeat 3        # the work estimates against the runs they bound
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -419,9 +420,47 @@ def bench_baselines(repeat: int) -> dict:
     return out
 
 
+#: the requests of ``work``: a shipped file and overrides whose run the estimate must bound
+WORK_CASES = (("paper_gait.toml", []), ("pulse_gait.toml", []),
+              ("paper_gait.toml", ["simulation.max_step=1e-4"]),
+              ("paper_gait.toml", ["simulation.solver=mpcc", "simulation.steps=50"]),
+              ("paper_gait.toml", ["simulation.solver=mpcc", "simulation.steps=400"]),
+              ("pulse_gait.toml", ["simulation.solver=mpcc", "simulation.steps=200"]),
+              ("paper_gait.toml", ["simulation.solver=mujoco", "simulation.period=5"]))
+
+
+def bench_work(repeat: int) -> dict:
+    """The work estimates of ``ocp_crawl.problem.work`` against the runs they bound: for each request of
+    WORK_CASES, the estimate (an upper bound: every cycle up to max_cycles run) and the measured wall
+    time (min and median of ``repeat`` runs after a warm-up) and steps; ratio = estimate / median."""
+    from pathlib import Path
+
+    import ocp_crawl
+    from ocp_crawl.problem.work import simulation_work
+
+    problems = Path(__file__).resolve().parent.parent / "problems"
+    out = {}
+    for name, overrides in WORK_CASES:
+        problem = ocp_crawl.load_problem(problems / name, overrides=overrides)
+        estimate = simulation_work(problem)
+        ocp_crawl.run_problem(problem)
+        times, result = [], None
+        for _ in range(max(1, repeat)):
+            t = time.perf_counter()
+            result = ocp_crawl.run_problem(problem)
+            times.append(time.perf_counter() - t)
+        median = statistics.median(times)
+        out[" ".join([name, *overrides])] = {
+            "estimate_s": round(estimate.seconds, 3), "min_s": round(min(times), 3),
+            "median_s": round(median, 3), "ratio": round(estimate.seconds / median, 1),
+            "cycles": result.cycles, "steps": result.nsteps, "detail": estimate.detail}
+    return out
+
+
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
               "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
-              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths, "baselines": bench_baselines}
+              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths, "baselines": bench_baselines,
+              "work": bench_work}
 
 
 def main(argv=None) -> int:

@@ -28,6 +28,10 @@ DATA_ROWS = {
     "fit: no uncertainty column": _fit(["d.csv", "missing column 'sigma_S'"], data=b"A [deg],S [mm]\n15,-27.7\n22,-4\n"),
     "fit: start outside the bounds": _fit(["--param robot.k", "within bounds"], "--bounds", "robot.k=0.2:0.3"),
     "fit: --max-nfev 0": _fit(["--max-nfev 0", "in [1, 10000]"], "--max-nfev", "0"),
+    "fit: rows x evaluations, hours": _fit(["20000 rows x 10000 evaluations", "DATA.csv rows", "--max-nfev"],
+                                           "--max-nfev", "10000",
+                                           data=_FIT_HEAD + b"".join(b"%.6f,-30.0,0.2\n" % (15 + j * 1e-4)
+                                                                     for j in range(20000))),
     "fit: unknown pressure constant": _fit(["--pressure pressure.c1", "unknown pressure constant"], "--pressure",
                                            "pressure.c1=0.1"),
 }

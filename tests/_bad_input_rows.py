@@ -542,6 +542,41 @@ COMMAND_ROWS.update({
                                                     "{tmp}/s"], ["NUM must be an integer"]),
 })
 
+#: requests whose every count is in range but whose product is hours: refused before they start,
+#: naming the settings that size them and --max-hours (ocp_crawl.problem.work)
+COMMAND_ROWS.update({
+    "simulate: MPCC steps x cycles, hours": R("simulate", ["{paper}", "--solver", "mpcc", "--steps", "10000",
+                                                          "--set", "simulation.max_cycles=500", "--set",
+                                                          "simulation.periodic_tol=1e-300"],
+                                              ["estimated up to", "MPCC 10000 steps x 500 cycles",
+                                               "above the limit of 2 h", "simulation.steps",
+                                               "simulation.max_cycles", "--max-hours"]),
+    "simulate: event solver under a small --max-hours": R("simulate", ["{paper}", "--set",
+                                                                       "simulation.max_step=1e-4", "--max-hours",
+                                                                       "0.001"],
+                                                          ["above the limit of 4 s", "simulation.max_step"]),
+    "simulate: --max-hours 0": R("simulate", ["{paper}", "--max-hours", "0"],
+                                 ["--max-hours 0", "(0, 10000]"]),
+    "crosscheck: steps x cycles, hours": R("crosscheck", ["{paper}", "--steps", "5000", "10000", "--set",
+                                                          "simulation.max_cycles=100"],
+                                           ["estimated up to", "MPCC at steps 5000 10000", "--steps",
+                                            "simulation.max_cycles"]),
+    "sweep: points x MPCC steps, hours": R("sweep", ["{paper}", "--grid", "simulation.solver=event,mpcc",
+                                                     "--grid", "gait.psi_deg=0:180:500", "--grid",
+                                                     "simulation.steps=1000,2000", "--jobs", "2", "--out",
+                                                     "{tmp}/s"],
+                                           ["2000 points / 2 workers", "simulation.steps", "--grid"]),
+    "optimize: nodes x counts over --max-hours": R("optimize", ["{ocp}", "--nodes", "200", "400",
+                                                                "--max-hours", "0.1"],
+                                                   ["N = 200+400", "ocp.nodes", "--nodes",
+                                                    "above the limit of 6 min"]),
+    "dynamics: periods x timestep over --max-hours": R("dynamics", ["{paper}", "--periods", "50", "100",
+                                                                    "--set", "simulation.timestep=1e-4",
+                                                                    "--max-hours", "0.1"],
+                                                       ["MuJoCo at T = 50 + 100 s", "simulation.timestep",
+                                                        "--periods"]),
+})
+
 #: found by the review of the second round
 COMMAND_ROWS.update({
     "sweep: --set gait.waveform with a waveform axis": R("sweep", ["{paper}", "--set", "gait.waveform=fourier",

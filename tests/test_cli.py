@@ -231,7 +231,10 @@ def test_an_internal_error_of_the_optimiser_exits_1(capsys, monkeypatch):
     monkeypatch.setattr(ocp_crawl.ocp, "optimize_gait", broken)
     code, out, err = run(capsys, "optimize", REPO / "problems" / "ocp_max_speed.toml")
     assert code == 1
-    assert one_line(err).startswith("ocp-crawl: internal error: ZeroDivisionError: ")
+    # the run's estimate (above a minute) is announced as it starts, then the error's one line
+    notice, error = err.splitlines()
+    assert notice.startswith("ocp-crawl: estimated about ")
+    assert one_line(error).startswith("ocp-crawl: internal error: ZeroDivisionError: ")
 
 
 def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):

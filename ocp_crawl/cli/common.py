@@ -205,3 +205,35 @@ def force_arg(p: argparse.ArgumentParser, what: str = "the results of an earlier
     p.add_argument("--force", action="store_true",
                    help=f"overwrite {what} (without it the command refuses, before computing anything)")
 
+
+
+def work_arg(p: argparse.ArgumentParser) -> None:
+    """Add ``--max-hours H``, the limit on the command's estimated work
+    (:mod:`ocp_crawl.problem.work`)."""
+    from ocp_crawl.problem.work import DEFAULT_MAX_HOURS
+
+    p.add_argument("--max-hours", type=real("--max-hours", 0.0, 1e4), default=None, metavar="H",
+                   help="refuse the run, before it starts, when its estimated work is above H "
+                        f"hours (default {DEFAULT_MAX_HOURS:g}; the estimate is on stderr above a "
+                        "minute)")
+
+
+def check_work(args: argparse.Namespace, work):
+    """Refuse ``work`` (a :class:`~ocp_crawl.problem.work.Work`) above ``--max-hours`` as bad input
+    naming the settings that size it; ``work`` otherwise (:func:`announce` it when the run starts)."""
+    from ocp_crawl.problem.work import WorkLimit
+
+    try:
+        work.check(args.max_hours)
+    except WorkLimit as exc:
+        raise BadInput(str(exc)) from None
+    return work
+
+
+def announce(work) -> None:
+    """The estimate of ``work`` on stderr when it is above a minute: after every input check (a
+    refusal is one line), as the run starts."""
+    from ocp_crawl.problem.work import ANNOUNCE_SECONDS
+
+    if work.seconds > ANNOUNCE_SECONDS:
+        print(f"{PROG}: estimated {work.text} ({work.detail})", file=sys.stderr, flush=True)

@@ -5,9 +5,11 @@ import argparse
 import json
 
 from ocp_crawl.cli.app import BadInput, register
-from ocp_crawl.cli.common import finish, force_arg, out_dir, prepare_out, real, write_out
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, out_dir, prepare_out, real,
+                                  work_arg, write_out)
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.problem import format_value, load_problem
+from ocp_crawl.problem.work import dynamics_work
 
 #: most periods of one scan (each a MuJoCo run of a few cycles)
 MAX_PERIODS = 12
@@ -29,6 +31,7 @@ def _dynamics_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", type=out_dir,
                    help=f"write {' and '.join(FILES)} (S, W+, CoT+ against frequency) to DIR")
     force_arg(p)
+    work_arg(p)
 
 
 @register("dynamics", "is it still quasistatic? S, W+ and CoT+ against the period, in MuJoCo",
@@ -43,7 +46,9 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     if len(args.periods) > MAX_PERIODS:
         raise BadInput(f"--periods: {len(args.periods)} periods given, at most {MAX_PERIODS} (one "
                        "MuJoCo run each)")
+    work = check_work(args, dynamics_work(problem, sorted(set(args.periods))))
     out = None if args.out is None else prepare_out(args.out, FILES, args.force, staged=True)
+    announce(work)
     try:
         scan = dynamics_scan(problem, sorted(set(args.periods)))
     except ValueError as exc:

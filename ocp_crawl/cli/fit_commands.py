@@ -6,10 +6,11 @@ import json
 from pathlib import Path
 
 from ocp_crawl.cli.app import register
-from ocp_crawl.cli.common import (finish, force_arg, integer, jobs_type, out_dir, prepare_out,
-                                  write_out)
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integer, jobs_type, out_dir,
+                                  prepare_out, work_arg, write_out)
 from ocp_crawl.model.pressure import PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
+from ocp_crawl.problem.work import fit_work
 
 #: most least-squares evaluations (each runs every measurement's simulation)
 MAX_NFEV = 10000
@@ -54,6 +55,7 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-figure", action="store_true", help="do not draw fit.png")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the report")
     force_arg(p)
+    work_arg(p)
 
 
 @register("fit", "calibrate parameters (k, friction, pressure map, ...) to measurements by weighted least squares",
@@ -69,9 +71,13 @@ def cmd_fit(args: argparse.Namespace) -> int:
     params = resolve_parameters(problem, args.params, args.start, args.bounds, args.form)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
+    # the work first: the rows' checks build a problem per row
+    work = check_work(args, fit_work(problem, sum(len(d.y) for d in datasets), args.max_nfev,
+                                     len(params), args.jobs))
     solve.check_inputs(problem, datasets, params, pressure, args.form)   # before --out is made
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force, staged=True)
+    announce(work)
     result = solve.fit_measurements(problem, datasets, params, pressure=pressure,
                                     absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev, jobs=args.jobs,
                                     form=args.form)

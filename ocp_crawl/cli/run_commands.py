@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, register
-from ocp_crawl.cli.common import (finish, force_arg, integer, optional_out, out_dir, out_file, prepare_out, real,
-                                  steps_type, write_out)
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integer, optional_out, out_dir, out_file,
+                                  prepare_out, real, steps_type, work_arg, write_out)
 from ocp_crawl.io import units
+from ocp_crawl.problem.work import crosscheck_work, simulation_work
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem, no_start_reason,
                                paper_problem, problem_from_dict, run_problem)
@@ -197,6 +198,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", metavar="DIR", type=out_dir,
                    help="write arrays.npz, summary.json, gait.png and gait.pdf to DIR")
     force_arg(p)
+    work_arg(p)
 
 
 @register("simulate", "simulate one problem file and report the gait", _simulate_args)
@@ -205,8 +207,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.steps is not None and problem.solver != "mpcc":
         raise BadInput(f"--steps {args.steps} is invalid with solver {format_value(problem.solver)}: it sets the "
                        "steps of --solver mpcc (the event-driven and prescribed-angle solvers place their own)")
+    work = check_work(args, simulation_work(problem))
     out = optional_out(args, RUN_FILES)
     check_start(problem)
+    announce(work)
     result = _simulate(problem)
     data = report(result, problem)
     if args.json:
@@ -323,6 +327,7 @@ def _crosscheck_args(p: argparse.ArgumentParser) -> None:
                                      f"(default 50 100 200 400; at most {MAX_STEP_COUNTS} counts)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object on stdout instead of the table")
+    work_arg(p)
 
 
 @register("crosscheck", "compare the event-driven and the MPCC time-stepping simulators",
@@ -342,7 +347,9 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     if len(steps) > MAX_STEP_COUNTS:
         raise BadInput(f"--steps {given}: {len(steps)} step counts, at most "
                        f"{MAX_STEP_COUNTS} (one MPCC run each)")
+    work = check_work(args, crosscheck_work(problem, steps))
     check_start(problem)
+    announce(work)
     # the file's [simulation] options (cycles, periodicity, event location) for both simulators;
     # --steps the steps
     sim = problem.sections.get("simulation", {})

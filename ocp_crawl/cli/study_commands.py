@@ -11,10 +11,11 @@ from dataclasses import replace
 from pathlib import Path
 
 from ocp_crawl.cli.app import EXIT_FAILURE, EXIT_OK, PROG, BadInput, err, register
-from ocp_crawl.cli.common import (address, check_scheduler, finish, force_arg, integer, jobs_type, optional_out,
-                                  out_dir, prepare_out, write_out)
+from ocp_crawl.cli.common import (address, announce, check_scheduler, check_work, finish, force_arg, integer, jobs_type,
+                                  optional_out, out_dir, prepare_out, work_arg, write_out)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
+from ocp_crawl.problem.work import optimize_work, sweep_work
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.settings import NODES_BOUNDS
@@ -46,6 +47,7 @@ def _sweep_args(p: argparse.ArgumentParser) -> None:
                    help="run on a Dask cluster (e.g. tcp://host:8786, or 'local'); needs the [cluster] extra")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    work_arg(p)
 
 
 @register("sweep", "map S, W+ and CoT+ over a grid of problem keys (parallel, resumable)", _sweep_args)
@@ -57,10 +59,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     _check_axes_matter(problem, grid)
     check_some_point_valid(problem, grid)
     check_scheduler(args.scheduler)
+    work = check_work(args, sweep_work(problem, grid, args.jobs or default_jobs()))
     # --resume: run_sweep checks that the directory's settings.json is this sweep's
     out = prepare_out(args.out or f"sweep_{Path(args.problem).stem}",
                       (SETTINGS_FILE, RESULTS_FILE, JOURNAL_FILE, SUMMARY_FILE), args.force, resume=args.resume,
                       kind="a sweep")
+    announce(work)
     try:
         result = run_sweep(problem, grid, out_dir=out, jobs=args.jobs or default_jobs(), resume=args.resume,
                            force=args.force, progress=not args.no_progress and sys.stderr.isatty(),
@@ -209,6 +213,7 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="worker processes of the baselines' search (default: the CPUs available; the "
                         "result does not depend on it)")
     force_arg(p)
+    work_arg(p)
 
 
 #: most numbers of nodes of one ``optimize --nodes`` (each is a full solve, warm-started)
@@ -422,10 +427,12 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         raise BadInput(f"--nodes {' '.join(str(n) for n in nodes)} is invalid: the numbers of nodes must increase "
                        "strictly (each N is warm-started from the previous one)")
     settings = replace(settings, nodes=nodes[0])
+    work = check_work(args, optimize_work(problem, settings, nodes))
     if len(nodes) > 1:
-        return _optimize_nodes(args, problem, settings, nodes)
+        return _optimize_nodes(args, problem, settings, nodes, work)
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
+    announce(work)
     with _progress_bar(args.progress or sys.stderr.isatty()):
         result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs)
     data = _optimize_data(result, problem)
@@ -451,7 +458,7 @@ def _optimize_data(result, problem) -> dict:
                                     v_replay=units.UNITS["v"], **{k: units.UNITS[k] for k in PEAK_KEYS})))
 
 
-def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int]) -> int:
+def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int], work) -> int:
     """``optimize --nodes N1 N2 ...``: the convergence table (and the finest optimum's summary and files)."""
     from ocp_crawl.io.files import write_json
     from ocp_crawl.ocp.convergence import converge_in_nodes
@@ -459,6 +466,7 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
 
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings), CONVERGENCE_FILE))
     check_start(problem)
+    announce(work)
     shown = args.progress or sys.stderr.isatty()
     log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None
     with _progress_bar(shown):

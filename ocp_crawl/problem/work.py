@@ -1,0 +1,232 @@
+"""The work of a request, estimated before it starts.
+
+Every count that sizes a run is bounded on its own (``simulation.steps``, ``max_cycles``, ``ocp.nodes``,
+the samples of a table, the rows of a fit), but their products are not: MPCC ``steps = 10000`` with
+``max_cycles = 500`` is five million IPOPT solves, hours, though each count is in its range.  So each
+command estimates its work from the counts that size it, times a cost per unit, and
+
+* refuses a request above its limit (``--max-hours``, default :data:`DEFAULT_MAX_HOURS`) before it
+  starts, with one line naming the keys that size it (:class:`WorkLimit`, exit 2 on the command line);
+* announces a request above :data:`ANNOUNCE_SECONDS` on standard error (``estimated up to ...``).
+
+The commands check (``ocp-crawl simulate``, ``crosscheck``, ``sweep``, ``optimize``, ``fit``,
+``dynamics``); the library functions run what they are given, and a program asks first, e.g.
+``simulation_work(problem).check(max_hours=1)``.
+
+The unit costs (:data:`UNIT_COST`) are those measured on the benchmarks page's machine (2 cores,
+``scripts/bench.py work`` prints them against the estimates), a slow one: a faster machine takes less.
+Where the request's own limits bound the count (``max_cycles``, ``max_nfev``) the estimate is an upper
+bound (``up to``); the optimiser's IPOPT iterations are not bounded that way, so its estimate is of a
+typical run (:data:`OCP_ITERATIONS` per start, measured on the shipped files).
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, replace
+
+#: a request estimated above this many hours is refused unless its command's --max-hours allows it
+DEFAULT_MAX_HOURS = 2.0
+#: a request estimated above this [s] is announced on standard error before it starts
+ANNOUNCE_SECONDS = 60.0
+#: the cost of a unit of work [s]: an event-solver step, an MPCC time step (an IPOPT solve), the MPCC's
+#: set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one IPOPT
+#: iteration, a member of a baseline family
+UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco_step": 3e-5,
+             "ocp_node_iteration": 1.5e-3, "family_member": 0.025}
+#: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
+OCP_ITERATIONS = 1000
+#: event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped gaits),
+#: and in a typical cycle
+EVENT_STEPS, EVENT_STEPS_TYPICAL = 1000, 200
+#: cycles of a typical run: the released start's transient, then two equal cycles
+TYPICAL_CYCLES = 3
+#: event-solver steps per input knot (a step ends at each knot; an event costs a few more)
+STEPS_PER_KNOT = 4
+
+
+__all__ = ["Work", "WorkLimit", "simulation_work", "optimize_work", "sweep_work", "fit_work",
+           "crosscheck_work", "dynamics_work", "DEFAULT_MAX_HOURS"]
+
+
+class WorkLimit(ValueError):
+    """A request whose estimated work is above its limit (bad input: exit 2 on the command line)."""
+
+
+@dataclass(frozen=True)
+class Work:
+    """The estimated work of a request.
+
+    Attributes
+    ----------
+    seconds : float
+        The estimate [s] on the benchmarks page's machine.
+    detail : str
+        What it counts, e.g. ``"MPCC 10000 steps x 502 cycles at ~6 ms"``.
+    keys : tuple of str
+        The settings that size it, named in a refusal.
+    bound : bool
+        True when the estimate is an upper bound (the request's own limits bound every count),
+        False for a typical run (the optimiser).
+    """
+
+    seconds: float
+    detail: str
+    keys: tuple[str, ...] = ()
+    bound: bool = True
+
+    def __add__(self, other: Work) -> Work:
+        keys = tuple(dict.fromkeys((*self.keys, *other.keys)))
+        return Work(self.seconds + other.seconds, f"{self.detail}; {other.detail}", keys,
+                    self.bound and other.bound)
+
+    def times(self, factor: float, what: str) -> Work:
+        """This work ``factor`` times (``what``: the count, e.g. ``"24 points"``), shared by no
+        workers: divide by the workers before calling."""
+        return Work(self.seconds * factor, f"{what} x ({self.detail})", self.keys, self.bound)
+
+    @property
+    def text(self) -> str:
+        """``up to 2.8 h`` or ``about 12 min``."""
+        return f"{'up to' if self.bound else 'about'} {duration(self.seconds)}"
+
+    def check(self, max_hours: float | None = None, option: str = "--max-hours") -> None:
+        """Raise :class:`WorkLimit` when the estimate is above ``max_hours`` [h] (None: the default
+        :data:`DEFAULT_MAX_HOURS`; ``math.inf``: no limit); ``option`` is how the caller raises it."""
+        limit = DEFAULT_MAX_HOURS if max_hours is None else max_hours
+        if not self.seconds <= limit * 3600.0:
+            keys = ", ".join(self.keys) or "the request's sizes"
+            need = math.ceil(self.seconds / 3600.0 * 10) / 10
+            raise WorkLimit(f"estimated {self.text} ({self.detail}), above the limit of "
+                            f"{duration(limit * 3600.0)}: lower {keys}, or allow it with "
+                            f"{option} {need:g}")
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as ``42 s``, ``12 min`` or ``2.8 h``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.2g} h"
+
+
+def simulation_work(problem, typical: bool = False) -> Work:
+    """The work of simulating ``problem`` (a :class:`~ocp_crawl.problem.Problem`) with its solver: an
+    upper bound, its ``max_cycles`` cycles run in full; ``typical``: a run periodic after
+    :data:`TYPICAL_CYCLES` cycles (the per-row cost of a fit)."""
+    if problem.drive == "angles":   # closed form at every phase, sized by the samples of its input
+        return Work(0.5, "prescribed angles", ("gait.drive",), bound=not typical)
+    opts, solver = problem.options, problem.solver or "event"
+    cycles = TYPICAL_CYCLES if typical else opts.max_cycles
+    if solver == "mpcc":
+        steps = opts.steps * cycles + (2 * opts.steps + 1) * (opts.s_error_tol > 0)
+        return Work(UNIT_COST["mpcc_setup"] + steps * UNIT_COST["mpcc_step"],
+                    f"MPCC {opts.steps} steps x {cycles} cycles at ~{_ms('mpcc_step')}",
+                    ("simulation.steps", "simulation.max_cycles"), bound=not typical)
+    if solver == "mujoco":
+        return replace(_mujoco(opts.period, opts.timestep, cycles), bound=not typical)
+    knots = max(len(getattr(signal, "t_knots", ())) for signal in (problem.torque, problem.gait))
+    floor = EVENT_STEPS_TYPICAL if typical else EVENT_STEPS
+    per_cycle = max(1.0 / opts.max_step, floor) + STEPS_PER_KNOT * knots
+    keys = ("simulation.max_step", "simulation.max_cycles") + (("gait.phase",) if knots else ())
+    return Work(per_cycle * cycles * UNIT_COST["event_step"],
+                f"event solver {per_cycle:.3g} steps x {cycles} cycles at ~{_ms('event_step')}", keys,
+                bound=not typical)
+
+
+def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
+    """The work of ``optimize`` on ``problem`` with :class:`~ocp_crawl.ocp.OCPSettings` ``settings``
+    at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS` IPOPT
+    iterations per start, plus the harmonic baseline's search (the OCP's start; the other families
+    are searched in another process while the OCP solves)."""
+    nodes = list(nodes or [settings.nodes])
+    scen = len(settings.scenarios(problem.robot))
+    per_it = sum(nodes) * scen * UNIT_COST["ocp_node_iteration"]
+    solve = Work(per_it * OCP_ITERATIONS * settings.starts,
+                 f"{settings.starts} starts x {OCP_ITERATIONS} iterations x N = "
+                 f"{'+'.join(map(str, nodes))} x {scen} scenarios at ~{_ms('ocp_node_iteration')}",
+                 ("ocp.nodes", "ocp.starts", "--nodes"), bound=False)
+    from ocp_crawl.ocp.search import scan_points
+
+    members = len(scan_points(settings)) + settings.baseline_starts * settings.baseline_evaluations
+    search = Work(members * scen * UNIT_COST["family_member"],
+                  f"{members} harmonic members x {scen} scenarios at ~{_ms('family_member')}",
+                  ("ocp.harmonic_psi", "ocp.baseline_samples", "ocp.baseline_evaluations"))
+    return solve + search
+
+
+def fit_work(problem, rows: int, max_nfev: int, n_params: int, jobs: int = 1) -> Work:
+    """The work of fitting ``n_params`` parameters of ``problem`` to ``rows`` measured rows in at most
+    ``max_nfev`` evaluations (each simulates every row, a Jacobian ``n_params`` times more) on
+    ``jobs`` workers, each row a typical run (:func:`simulation_work`)."""
+    row = simulation_work(problem, typical=True)
+    sims = rows * max_nfev * (1 + n_params) / max(jobs, 1)
+    return Work(sims * row.seconds,
+                f"{rows} rows x {max_nfev} evaluations x {1 + n_params} (Jacobian) / {jobs} workers "
+                f"x ({row.detail})", ("DATA.csv rows", "--max-nfev", *row.keys))
+
+
+def _ms(unit: str) -> str:
+    value = UNIT_COST[unit]
+    return f"{value:g} s" if value >= 1 else f"{value * 1e3:.2g} ms"
+
+
+def sweep_work(problem, grid, jobs: int = 1) -> Work:
+    """The work of a sweep of ``problem`` over ``grid`` (axis name -> values) on ``jobs`` workers:
+    the points times the costliest point's :func:`simulation_work` over the axes that size a
+    simulation ([simulation] keys, the drive, the waveform; the others at their first value)."""
+    from ocp_crawl.problem.schema import ProblemError
+
+    sizing = [k for k in grid if k.startswith("simulation.") or k in ("gait.drive", "gait.waveform")]
+    first = {k: v[0] for k, v in grid.items() if k not in sizing}
+    worst = None
+    for values in itertools.product(*(list(grid[k]) for k in sizing)):
+        try:
+            w = simulation_work(problem.with_values(dict(first, **dict(zip(sizing, values)))))
+        except ProblemError:   # an invalid point is a row of status bad_input: no work
+            continue
+        worst = w if worst is None or w.seconds > worst.seconds else worst
+    worst = worst or simulation_work(problem)
+    points = math.prod(len(v) for v in grid.values())
+    keys = tuple(dict.fromkeys((*worst.keys, "--grid")))
+    return Work(worst.seconds * points / max(jobs, 1),
+                f"{points} points / {jobs} workers x ({worst.detail})", keys)
+
+
+def crosscheck_work(problem, steps: list[int]) -> Work:
+    """The work of ``crosscheck``: the event solver, and the MPCC at each of ``steps`` (without
+    its own error estimate: the event solver checks every step count)."""
+    total = simulation_work(replace(problem, solver="event", options=problem.hybrid))
+    for n in steps:
+        mpcc = _mpcc_options(problem, n)
+        total = total + simulation_work(replace(problem, solver="mpcc", options=mpcc))
+    return Work(total.seconds, f"event solver and MPCC at steps {' '.join(map(str, steps))}",
+                ("--steps", "simulation.max_cycles"))
+
+
+def dynamics_work(problem, periods: list[float]) -> Work:
+    """The work of ``dynamics``: a MuJoCo run of ``problem`` at each period [s] of ``periods``."""
+    opts = problem.options
+    seconds = sum(_mujoco(t, opts.timestep, opts.max_cycles).seconds for t in periods)
+    return Work(seconds, f"MuJoCo at T = {' + '.join(f'{t:g}' for t in periods)} s x "
+                f"{problem.options.max_cycles} cycles, step {problem.options.timestep:g} s "
+                f"at ~{_ms('mujoco_step')}",
+                ("--periods", "simulation.timestep", "simulation.max_cycles"))
+
+
+def _mujoco(period: float, timestep: float, cycles: int) -> Work:
+    """A MuJoCo run of ``cycles`` cycles of ``period`` [s] at ``timestep`` [s], after its settling."""
+    from ocp_crawl.sim.dynamic import SETTLE_TIME
+
+    per_cycle = period / timestep
+    return Work((per_cycle * cycles + SETTLE_TIME / timestep) * UNIT_COST["mujoco_step"],
+                f"MuJoCo {per_cycle:.3g} steps x {cycles} cycles at ~{_ms('mujoco_step')}",
+                ("simulation.period", "simulation.timestep", "simulation.max_cycles"))
+
+
+def _mpcc_options(problem, steps: int):
+    from ocp_crawl.problem.problem import solver_options
+
+    opts = solver_options("mpcc", problem.sections.get("simulation", {}))
+    return replace(opts, steps=steps, s_error_tol=0.0)

@@ -1,0 +1,97 @@
+"""The work estimates of ocp_crawl.problem.work: bounds of the runs they size, refusals, notices.
+
+The estimates are counts (steps, cycles, points, rows) times a cost per unit; the unit costs are
+machine-dependent and live in scripts/bench.py ``work``, so these tests check the counts: an upper
+bound of the steps the solver reports it took, the sizing axis a sweep is charged for, the scaling
+with each count, and what the commands do with an estimate (refuse above --max-hours, announce
+above a minute).  The refusals of each command are rows of the bad-input matrix.
+"""
+import math
+from pathlib import Path
+
+import pytest
+
+from ocp_crawl import load_problem, run_problem
+from ocp_crawl.cli import main
+from ocp_crawl.problem.run import ocp_settings
+from ocp_crawl.problem.work import (DEFAULT_MAX_HOURS, UNIT_COST, Work, WorkLimit, fit_work,
+                                    optimize_work, simulation_work, sweep_work)
+
+PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
+
+
+def problem(name: str, *overrides: str):
+    return load_problem(PROBLEMS / name, overrides=list(overrides))
+
+
+@pytest.mark.parametrize("name, overrides, unit", [
+    ("paper_gait.toml", (), "event_step"),
+    ("pulse_gait.toml", (), "event_step"),
+    ("paper_gait.toml", ("simulation.max_step=1e-3",), "event_step"),
+    ("paper_gait.toml", ("simulation.solver=mpcc", "simulation.steps=50"), "mpcc_step"),
+    ("paper_gait.toml", ("simulation.solver=mujoco", "simulation.period=1"), "mujoco_step"),
+])
+def test_the_estimate_bounds_the_steps_the_solver_takes(name, overrides, unit):
+    p = problem(name, *overrides)
+    work = simulation_work(p)
+    result = run_problem(p)
+    assert result.success, result.message
+    setup = UNIT_COST["mpcc_setup"] if unit == "mpcc_step" else 0.0
+    steps = (work.seconds - setup) / UNIT_COST[unit]
+    assert work.bound and steps >= result.nsteps
+    # with every cycle run the bound is reached, so it is not loose by more than the cycles it allows
+    assert steps <= p.options.max_cycles * max(result.nsteps / result.cycles, 1000) * 10
+
+
+def test_mpcc_work_grows_with_steps_times_cycles():
+    base = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=100"))
+    more = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=100",
+                                   "simulation.max_cycles=24"))
+    finer = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=200"))
+    setup = UNIT_COST["mpcc_setup"]
+    assert more.seconds - setup > 1.8 * (base.seconds - setup)
+    assert finer.seconds - setup == pytest.approx(2 * (base.seconds - setup), rel=0.01)
+
+
+def test_check_refuses_above_the_limit_and_names_what_sizes_the_work():
+    work = Work(3 * 3600.0, "MPCC 10000 steps x 500 cycles", ("simulation.steps", "simulation.max_cycles"))
+    with pytest.raises(WorkLimit, match=r"up to 3 h .*simulation\.steps, simulation\.max_cycles.*"
+                                        r"--max-hours 3"):
+        work.check()
+    assert DEFAULT_MAX_HOURS < 3
+    work.check(3.0)
+    work.check(math.inf)
+    with pytest.raises(WorkLimit, match="limit of 36 s"):
+        Work(60.0, "x").check(0.01)
+
+
+def test_a_sweep_is_charged_for_its_costliest_sizing_axis():
+    p = problem("paper_gait.toml")
+    grid = {"simulation.solver": ["event", "mpcc"], "gait.psi_deg": [10.0, 20.0, 30.0]}
+    mpcc = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc"))
+    for jobs in (1, 2):
+        assert sweep_work(p, grid, jobs).seconds == pytest.approx(6 * mpcc.seconds / jobs)
+    event_only = sweep_work(p, {"gait.psi_deg": [10.0, 20.0, 30.0]})
+    assert event_only.seconds == pytest.approx(3 * simulation_work(p).seconds)
+
+
+def test_fit_and_optimize_work_scale_with_their_counts():
+    p = problem("paper_gait.toml")
+    assert fit_work(p, 20, 100, 1).seconds == pytest.approx(2 * fit_work(p, 10, 100, 1).seconds)
+    assert fit_work(p, 20, 100, 2).seconds == pytest.approx(1.5 * fit_work(p, 20, 100, 1).seconds)
+    ocp = problem("ocp_max_speed.toml")
+    settings = ocp_settings(ocp)
+    one, two = optimize_work(ocp, settings, [50]), optimize_work(ocp, settings, [50, 100])
+    assert not one.bound and "N = 50+100" in two.detail
+    # the solves' work is linear in the nodes summed over the counts (one baseline search)
+    hundred = optimize_work(ocp, settings, [100])
+    assert two.seconds - one.seconds == pytest.approx(2 * (hundred.seconds - one.seconds))
+
+
+def test_a_long_run_is_announced_before_it_starts(capsys):
+    # 500 cycles of 10^4 steps allowed, about 2 run: the estimate (an upper bound) is minutes
+    code = main(["simulate", str(PROBLEMS / "paper_gait.toml"), "--set", "simulation.max_step=1e-4",
+                 "--set", "simulation.max_cycles=500", "--json"])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert "estimated up to" in err and "1e+04 steps x 500 cycles" in err
