@@ -38,24 +38,27 @@ def test_the_estimate_bounds_the_steps_the_solver_takes(name, overrides, unit):
     assert result.success, result.message
     setup = UNIT_COST["mpcc_setup"] if unit == "mpcc_step" else 0.0
     steps = (work.seconds - setup) / UNIT_COST[unit]
-    assert work.bound and steps >= result.nsteps
-    # with every cycle run the bound is reached, so it is not loose by more than the cycles it allows
+    assert steps >= result.nsteps and work.typical < work.seconds
+    # with every cycle run the bound is reached, so it is not loose by more than the cycles it
+    # allows
     assert steps <= p.options.max_cycles * max(result.nsteps / result.cycles, 1000) * 10
 
 
 def test_mpcc_work_grows_with_steps_times_cycles():
-    base = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=100"))
-    more = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=100",
-                                   "simulation.max_cycles=24"))
-    finer = simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", "simulation.steps=200"))
+    def mpcc(*overrides):
+        return simulation_work(problem("paper_gait.toml", "simulation.solver=mpcc", *overrides))
+
+    base, finer = mpcc("simulation.steps=100"), mpcc("simulation.steps=200")
+    more = mpcc("simulation.steps=100", "simulation.max_cycles=24")
     setup = UNIT_COST["mpcc_setup"]
     assert more.seconds - setup > 1.8 * (base.seconds - setup)
     assert finer.seconds - setup == pytest.approx(2 * (base.seconds - setup), rel=0.01)
 
 
 def test_check_refuses_above_the_limit_and_names_what_sizes_the_work():
-    work = Work(3 * 3600.0, "MPCC 10000 steps x 500 cycles", ("simulation.steps", "simulation.max_cycles"))
-    with pytest.raises(WorkLimit, match=r"up to 3 h .*simulation\.steps, simulation\.max_cycles.*"
+    work = Work(3 * 3600.0, "MPCC 10000 steps x 500 cycles",
+                ("simulation.steps", "simulation.max_cycles"))
+    with pytest.raises(WorkLimit, match=r"about 3 h .*simulation\.steps, simulation\.max_cycles.*"
                                         r"--max-hours 3"):
         work.check()
     assert DEFAULT_MAX_HOURS < 3
@@ -82,16 +85,21 @@ def test_fit_and_optimize_work_scale_with_their_counts():
     ocp = problem("ocp_max_speed.toml")
     settings = ocp_settings(ocp)
     one, two = optimize_work(ocp, settings, [50]), optimize_work(ocp, settings, [50, 100])
-    assert not one.bound and "N = 50+100" in two.detail
+    assert one.typical == one.seconds and one.text.startswith("about ")
+    assert "N = 50+100" in two.detail
     # the solves' work is linear in the nodes summed over the counts (one baseline search)
     hundred = optimize_work(ocp, settings, [100])
     assert two.seconds - one.seconds == pytest.approx(2 * (hundred.seconds - one.seconds))
 
 
-def test_a_long_run_is_announced_before_it_starts(capsys):
-    # 500 cycles of 10^4 steps allowed, about 2 run: the estimate (an upper bound) is minutes
+def test_a_long_run_is_announced_before_it_starts(capsys, monkeypatch):
+    import ocp_crawl.problem.work as work
+
+    # a typical run of 3 cycles of 10^4 steps, above a threshold of 1 s (a minute by default)
+    monkeypatch.setattr(work, "ANNOUNCE_SECONDS", 1.0)
     code = main(["simulate", str(PROBLEMS / "paper_gait.toml"), "--set", "simulation.max_step=1e-4",
                  "--set", "simulation.max_cycles=500", "--json"])
     err = capsys.readouterr().err
     assert code == 0
-    assert "estimated up to" in err and "1e+04 steps x 500 cycles" in err
+    assert err.startswith("ocp-crawl: estimated about ") and ", up to " in err
+    assert "1e+04 steps x 500 cycles" in err and len(err.splitlines()) == 1

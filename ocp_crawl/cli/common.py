@@ -231,9 +231,9 @@ def check_work(args: argparse.Namespace, work):
 
 
 def announce(work) -> None:
-    """The estimate of ``work`` on stderr when it is above a minute: after every input check (a
-    refusal is one line), as the run starts."""
+    """The estimate of ``work`` on stderr when its typical run is above a minute: after every input
+    check (a refusal is one line), as the run starts."""
     from ocp_crawl.problem.work import ANNOUNCE_SECONDS
 
-    if work.seconds > ANNOUNCE_SECONDS:
+    if work.typical > ANNOUNCE_SECONDS:
         print(f"{PROG}: estimated {work.text} ({work.detail})", file=sys.stderr, flush=True)

@@ -8,7 +8,7 @@ from ocp_crawl.cli.app import BadInput, register
 from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, out_dir, prepare_out, real,
                                   work_arg, write_out)
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.problem import format_value, load_problem
+from ocp_crawl.problem import load_problem
 from ocp_crawl.problem.work import dynamics_work
 
 #: most periods of one scan (each a MuJoCo run of a few cycles)
@@ -40,9 +40,6 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     from ocp_crawl.studies.dynamics import dynamics_scan, plot_dynamics
 
     problem = load_problem(args.problem, ["simulation.solver=mujoco", *args.overrides])
-    if problem.drive != "torque":
-        raise BadInput(f"{problem.source}: dynamics needs the torque drive, got [gait] drive = "
-                       f"{format_value(problem.drive)}")
     if len(args.periods) > MAX_PERIODS:
         raise BadInput(f"--periods: {len(args.periods)} periods given, at most {MAX_PERIODS} (one "
                        "MuJoCo run each)")

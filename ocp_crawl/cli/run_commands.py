@@ -189,8 +189,8 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--solver", choices=TORQUE_SOLVERS,
                    help="shortcut for --set simulation.solver=...: event (event-driven hybrid "
                         "solver, the default), mpcc (MPCC time-stepping, IPOPT) or mujoco (dynamic, "
-                        "at simulation.period [s]; needs pip install 'ocp-crawl[dynamic]'); torque "
-                        "drive only")
+                        "at simulation.period [s]; needs pip install 'ocp-crawl[dynamic]'); the "
+                        "angles drive has its own solver, or mujoco (servos hold the angles)")
     p.add_argument("--steps", type=steps_type, metavar="N",
                    help="shortcut for --set simulation.steps=N: steps per cycle of --solver mpcc (default "
                         f"{SCHEMA['simulation'].key_map['steps'].default})")

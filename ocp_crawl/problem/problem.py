@@ -23,7 +23,7 @@ from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, 
 from ocp_crawl.problem.schema import (DRIVES, MAX_ARRAY, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError,
                                       Section, field_default, format_value, removed_key, suggest,
                                       toml_type)
-from ocp_crawl.sim import DEFAULT_SOLVER, solver_named, unusable
+from ocp_crawl.sim import DEFAULT_SOLVER, MUJOCO_SOLVERS, solver_named, unusable
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
 CONTACT_GRID = 721
@@ -175,13 +175,11 @@ class Problem:
 
     def _simulation_values(self) -> dict[str, Any]:
         """``[simulation]`` of a problem built in code: its solver's options, the others' defaults."""
-        out = {}
-        for key in SCHEMA["simulation"].keys:
-            if key.name == "solver":
-                out["solver"] = self.solver if self.drive == "torque" else key.default
-            else:
-                out[key.name] = getattr(self.options, key.name, getattr(self.hybrid, key.name, key.default))
-        return out
+        out = {key.name: getattr(self.options, key.name, getattr(self.hybrid, key.name, key.default))
+               for key in SCHEMA["simulation"].keys if key.name != "solver"}
+        named = "mujoco" if "mujoco" in self.solver else self.solver   # (MuJoCo: a row per drive)
+        return {"solver": named if self.drive == "torque" or named == "mujoco" else DEFAULT_SOLVER["torque"],
+                **out}
 
 
 # --------------------------------------------------------------------------------------------
@@ -382,18 +380,20 @@ def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[st
 
 
 def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical") -> str:
-    """The registry name of the problem's solver: ``[simulation] solver`` for the torque drive, if it
-    can run (``unusable``); the angles drive has its own (naming another is bad input)."""
-    if drive == "torque":
-        why = unusable(sim["solver"], gravity, sim)
+    """The registry name of the problem's solver, if it can run (``unusable``): ``[simulation]
+    solver`` for the torque drive; the angles drive has its own, or ``mujoco`` (servos hold the
+    angles); naming another is bad input."""
+    name = MUJOCO_SOLVERS[drive] if sim["solver"] == "mujoco" else sim["solver"]
+    if drive == "torque" or name != sim["solver"]:
+        why = unusable(name, gravity, sim)
         if why:
             raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} {why}")
-        return sim["solver"]
+        return name
     default = SCHEMA["simulation"].key_map["solver"].default
     if sim["solver"] != default:
         raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} is invalid with [gait] drive = "
                            f"{format_value(drive)}: the {drive} drive has its own solver ({DEFAULT_SOLVER[drive]}); "
-                           f"[simulation] solver chooses the simulator of the torque drive")
+                           "[simulation] solver chooses the simulator of the torque drive (or \"mujoco\")")
     return DEFAULT_SOLVER[drive]
 
 

@@ -1,23 +1,27 @@
 """The work of a request, estimated before it starts.
 
-Every count that sizes a run is bounded on its own (``simulation.steps``, ``max_cycles``, ``ocp.nodes``,
-the samples of a table, the rows of a fit), but their products are not: MPCC ``steps = 10000`` with
-``max_cycles = 500`` is five million IPOPT solves, hours, though each count is in its range.  So each
-command estimates its work from the counts that size it, times a cost per unit, and
+Every count that sizes a run is bounded on its own (``simulation.steps``, ``max_cycles``,
+``ocp.nodes``, the samples of a table, the rows of a fit), but their products are not: MPCC
+``steps = 10000`` with ``max_cycles = 500`` is five million IPOPT solves, hours, though each count
+is in its range.  So each command estimates its work from the counts that size it, times a cost per unit, and
 
 * refuses a request above its limit (``--max-hours``, default :data:`DEFAULT_MAX_HOURS`) before it
-  starts, with one line naming the keys that size it (:class:`WorkLimit`, exit 2 on the command line);
-* announces a request above :data:`ANNOUNCE_SECONDS` on standard error (``estimated up to ...``).
+  starts, with one line naming the keys that size it (:class:`WorkLimit`, exit 2 on the command
+  line);
+* announces a request whose typical run is above :data:`ANNOUNCE_SECONDS` on standard error
+  (``estimated about ..., up to ...``).
 
 The commands check (``ocp-crawl simulate``, ``crosscheck``, ``sweep``, ``optimize``, ``fit``,
 ``dynamics``); the library functions run what they are given, and a program asks first, e.g.
 ``simulation_work(problem).check(max_hours=1)``.
 
 The unit costs (:data:`UNIT_COST`) are those measured on the benchmarks page's machine (2 cores,
-``scripts/bench.py work`` prints them against the estimates), a slow one: a faster machine takes less.
-Where the request's own limits bound the count (``max_cycles``, ``max_nfev``) the estimate is an upper
-bound (``up to``); the optimiser's IPOPT iterations are not bounded that way, so its estimate is of a
-typical run (:data:`OCP_ITERATIONS` per start, measured on the shipped files).
+``scripts/bench.py work`` prints them against the estimates), a slow one: a faster machine takes
+less. Where the request's own limits bound the count (``max_cycles``, ``max_nfev``) the estimate
+checked is an upper bound (``up to``), and a typical run (a gait periodic after
+:data:`TYPICAL_CYCLES` cycles) is announced beside it; the optimiser's IPOPT iterations are not
+bounded that way, so its estimate is of a typical run (:data:`OCP_ITERATIONS` per start, measured on
+the shipped files).
 """
 from __future__ import annotations
 
@@ -29,15 +33,15 @@ from dataclasses import dataclass, replace
 DEFAULT_MAX_HOURS = 2.0
 #: a request estimated above this [s] is announced on standard error before it starts
 ANNOUNCE_SECONDS = 60.0
-#: the cost of a unit of work [s]: an event-solver step, an MPCC time step (an IPOPT solve), the MPCC's
-#: set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one IPOPT
-#: iteration, a member of a baseline family
+#  the cost of a unit of work [s]: an event-solver step, an MPCC time step (an IPOPT solve), the
+# MPCC's  set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one
+# IPOPT  iteration, a member of a baseline family
 UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco_step": 3e-5,
              "ocp_node_iteration": 1.5e-3, "family_member": 0.025}
 #: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
 OCP_ITERATIONS = 1000
-#: event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped gaits),
-#: and in a typical cycle
+#  event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped
+# gaits),  and in a typical cycle
 EVENT_STEPS, EVENT_STEPS_TYPICAL = 1000, 200
 #: cycles of a typical run: the released start's transient, then two equal cycles
 TYPICAL_CYCLES = 3
@@ -60,39 +64,43 @@ class Work:
     Attributes
     ----------
     seconds : float
-        The estimate [s] on the benchmarks page's machine.
+        The estimate [s] on the benchmarks page's machine that the limit is checked against: an
+        upper bound where the request's own limits bound every count (``max_cycles``, ``max_nfev``),
+        else a typical run (the optimiser's iterations).
     detail : str
-        What it counts, e.g. ``"MPCC 10000 steps x 502 cycles at ~6 ms"``.
+        What it counts, e.g. ``"MPCC 10000 steps x 500 cycles at ~10 ms"``.
     keys : tuple of str
         The settings that size it, named in a refusal.
-    bound : bool
-        True when the estimate is an upper bound (the request's own limits bound every count),
-        False for a typical run (the optimiser).
+    typical : float, optional
+        A typical run [s] (a periodic gait ends after :data:`TYPICAL_CYCLES` cycles); None: equal
+        to ``seconds``.  A run is announced by it.
     """
 
     seconds: float
     detail: str
     keys: tuple[str, ...] = ()
-    bound: bool = True
+    typical: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.typical is None:
+            object.__setattr__(self, "typical", self.seconds)
 
     def __add__(self, other: Work) -> Work:
         keys = tuple(dict.fromkeys((*self.keys, *other.keys)))
         return Work(self.seconds + other.seconds, f"{self.detail}; {other.detail}", keys,
-                    self.bound and other.bound)
-
-    def times(self, factor: float, what: str) -> Work:
-        """This work ``factor`` times (``what``: the count, e.g. ``"24 points"``), shared by no
-        workers: divide by the workers before calling."""
-        return Work(self.seconds * factor, f"{what} x ({self.detail})", self.keys, self.bound)
+                    self.typical + other.typical)
 
     @property
     def text(self) -> str:
-        """``up to 2.8 h`` or ``about 12 min``."""
-        return f"{'up to' if self.bound else 'about'} {duration(self.seconds)}"
+        """``about 3 s, up to 2.8 h`` (an upper bound above a typical run) or ``about 12 min``."""
+        if self.typical < self.seconds:
+            return f"about {duration(self.typical)}, up to {duration(self.seconds)}"
+        return f"about {duration(self.seconds)}"
 
     def check(self, max_hours: float | None = None, option: str = "--max-hours") -> None:
         """Raise :class:`WorkLimit` when the estimate is above ``max_hours`` [h] (None: the default
-        :data:`DEFAULT_MAX_HOURS`; ``math.inf``: no limit); ``option`` is how the caller raises it."""
+        :data:`DEFAULT_MAX_HOURS`; ``math.inf``: no limit); ``option`` is how the caller raises
+        it."""
         limit = DEFAULT_MAX_HOURS if max_hours is None else max_hours
         if not self.seconds <= limit * 3600.0:
             keys = ", ".join(self.keys) or "the request's sizes"
@@ -111,42 +119,44 @@ def duration(seconds: float) -> str:
     return f"{seconds / 3600:.2g} h"
 
 
-def simulation_work(problem, typical: bool = False) -> Work:
-    """The work of simulating ``problem`` (a :class:`~ocp_crawl.problem.Problem`) with its solver: an
-    upper bound, its ``max_cycles`` cycles run in full; ``typical``: a run periodic after
-    :data:`TYPICAL_CYCLES` cycles (the per-row cost of a fit)."""
-    if problem.drive == "angles":   # closed form at every phase, sized by the samples of its input
-        return Work(0.5, "prescribed angles", ("gait.drive",), bound=not typical)
+def simulation_work(problem) -> Work:
+    """The work of simulating ``problem`` (a :class:`~ocp_crawl.problem.Problem`) with its solver:
+    ``seconds`` an upper bound (its ``max_cycles`` cycles run in full), ``typical`` a gait periodic
+    after :data:`TYPICAL_CYCLES` cycles."""
     opts, solver = problem.options, problem.solver or "event"
-    cycles = TYPICAL_CYCLES if typical else opts.max_cycles
+    if solver == "angles":   # closed form at every phase, sized by the samples of its input
+        return Work(0.5, "prescribed angles", ("gait.drive",))
+    cycles = opts.max_cycles
     if solver == "mpcc":
-        steps = opts.steps * cycles + (2 * opts.steps + 1) * (opts.s_error_tol > 0)
-        return Work(UNIT_COST["mpcc_setup"] + steps * UNIT_COST["mpcc_step"],
-                    f"MPCC {opts.steps} steps x {cycles} cycles at ~{_ms('mpcc_step')}",
-                    ("simulation.steps", "simulation.max_cycles"), bound=not typical)
-    if solver == "mujoco":
-        return replace(_mujoco(opts.period, opts.timestep, cycles), bound=not typical)
+        check = (2 * opts.steps + 1) * (opts.s_error_tol > 0)   # the error estimate's run
+        seconds = [UNIT_COST["mpcc_setup"] + (opts.steps * n + check) * UNIT_COST["mpcc_step"]
+                   for n in (cycles, TYPICAL_CYCLES)]
+        return Work(seconds[0], f"MPCC {opts.steps} steps x {cycles} cycles at ~{_ms('mpcc_step')}",
+                    ("simulation.steps", "simulation.max_cycles"), seconds[1])
+    if solver in ("mujoco", "mujoco_angles"):
+        work = _mujoco(opts.period, opts.timestep, cycles)
+        return replace(work, typical=_mujoco(opts.period, opts.timestep, TYPICAL_CYCLES).seconds)
     knots = max(len(getattr(signal, "t_knots", ())) for signal in (problem.torque, problem.gait))
-    floor = EVENT_STEPS_TYPICAL if typical else EVENT_STEPS
-    per_cycle = max(1.0 / opts.max_step, floor) + STEPS_PER_KNOT * knots
+    per_cycle = [max(1.0 / opts.max_step, floor) + STEPS_PER_KNOT * knots
+                 for floor in (EVENT_STEPS, EVENT_STEPS_TYPICAL)]
     keys = ("simulation.max_step", "simulation.max_cycles") + (("gait.phase",) if knots else ())
-    return Work(per_cycle * cycles * UNIT_COST["event_step"],
-                f"event solver {per_cycle:.3g} steps x {cycles} cycles at ~{_ms('event_step')}", keys,
-                bound=not typical)
+    return Work(per_cycle[0] * cycles * UNIT_COST["event_step"],
+                f"event solver {per_cycle[0]:.3g} steps x {cycles} cycles at ~{_ms('event_step')}",
+                keys, per_cycle[1] * TYPICAL_CYCLES * UNIT_COST["event_step"])
 
 
 def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     """The work of ``optimize`` on ``problem`` with :class:`~ocp_crawl.ocp.OCPSettings` ``settings``
-    at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS` IPOPT
-    iterations per start, plus the harmonic baseline's search (the OCP's start; the other families
-    are searched in another process while the OCP solves)."""
+    at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS`
+    IPOPT iterations per start, plus the harmonic baseline's search (the OCP's start; the other
+    families are searched in another process while the OCP solves)."""
     nodes = list(nodes or [settings.nodes])
     scen = len(settings.scenarios(problem.robot))
     per_it = sum(nodes) * scen * UNIT_COST["ocp_node_iteration"]
     solve = Work(per_it * OCP_ITERATIONS * settings.starts,
                  f"{settings.starts} starts x {OCP_ITERATIONS} iterations x N = "
                  f"{'+'.join(map(str, nodes))} x {scen} scenarios at ~{_ms('ocp_node_iteration')}",
-                 ("ocp.nodes", "ocp.starts", "--nodes"), bound=False)
+                 ("ocp.nodes", "ocp.starts", "--nodes"))
     from ocp_crawl.ocp.search import scan_points
 
     members = len(scan_points(settings)) + settings.baseline_starts * settings.baseline_evaluations
@@ -157,14 +167,15 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
 
 
 def fit_work(problem, rows: int, max_nfev: int, n_params: int, jobs: int = 1) -> Work:
-    """The work of fitting ``n_params`` parameters of ``problem`` to ``rows`` measured rows in at most
-    ``max_nfev`` evaluations (each simulates every row, a Jacobian ``n_params`` times more) on
+    """The work of fitting ``n_params`` parameters of ``problem`` to ``rows`` measured rows in at
+    most ``max_nfev`` evaluations (each simulates every row, a Jacobian ``n_params`` times more) on
     ``jobs`` workers, each row a typical run (:func:`simulation_work`)."""
-    row = simulation_work(problem, typical=True)
+    row = simulation_work(problem)
     sims = rows * max_nfev * (1 + n_params) / max(jobs, 1)
-    return Work(sims * row.seconds,
-                f"{rows} rows x {max_nfev} evaluations x {1 + n_params} (Jacobian) / {jobs} workers "
-                f"x ({row.detail})", ("DATA.csv rows", "--max-nfev", *row.keys))
+    return Work(sims * row.typical,
+                f"{rows} rows x {max_nfev} evaluations x {1 + n_params} (Jacobian) / {jobs} "
+                "workers "
+                f"x a typical ({row.detail})", ("DATA.csv rows", "--max-nfev", *row.keys))
 
 
 def _ms(unit: str) -> str:
@@ -178,7 +189,8 @@ def sweep_work(problem, grid, jobs: int = 1) -> Work:
     simulation ([simulation] keys, the drive, the waveform; the others at their first value)."""
     from ocp_crawl.problem.schema import ProblemError
 
-    sizing = [k for k in grid if k.startswith("simulation.") or k in ("gait.drive", "gait.waveform")]
+    sizing = [k for k in grid
+              if k.startswith("simulation.") or k in ("gait.drive", "gait.waveform")]
     first = {k: v[0] for k, v in grid.items() if k not in sizing}
     worst = None
     for values in itertools.product(*(list(grid[k]) for k in sizing)):
@@ -190,8 +202,9 @@ def sweep_work(problem, grid, jobs: int = 1) -> Work:
     worst = worst or simulation_work(problem)
     points = math.prod(len(v) for v in grid.values())
     keys = tuple(dict.fromkeys((*worst.keys, "--grid")))
-    return Work(worst.seconds * points / max(jobs, 1),
-                f"{points} points / {jobs} workers x ({worst.detail})", keys)
+    share = points / max(jobs, 1)
+    return Work(worst.seconds * share, f"{points} points / {jobs} workers x ({worst.detail})", keys,
+                worst.typical * share)
 
 
 def crosscheck_work(problem, steps: list[int]) -> Work:
@@ -202,21 +215,22 @@ def crosscheck_work(problem, steps: list[int]) -> Work:
         mpcc = _mpcc_options(problem, n)
         total = total + simulation_work(replace(problem, solver="mpcc", options=mpcc))
     return Work(total.seconds, f"event solver and MPCC at steps {' '.join(map(str, steps))}",
-                ("--steps", "simulation.max_cycles"))
+                ("--steps", "simulation.max_cycles"), total.typical)
 
 
 def dynamics_work(problem, periods: list[float]) -> Work:
     """The work of ``dynamics``: a MuJoCo run of ``problem`` at each period [s] of ``periods``."""
     opts = problem.options
-    seconds = sum(_mujoco(t, opts.timestep, opts.max_cycles).seconds for t in periods)
+    seconds, typical = (sum(_mujoco(t, opts.timestep, n).seconds for t in periods)
+                        for n in (opts.max_cycles, TYPICAL_CYCLES))
     return Work(seconds, f"MuJoCo at T = {' + '.join(f'{t:g}' for t in periods)} s x "
                 f"{problem.options.max_cycles} cycles, step {problem.options.timestep:g} s "
                 f"at ~{_ms('mujoco_step')}",
-                ("--periods", "simulation.timestep", "simulation.max_cycles"))
+                ("--periods", "simulation.timestep", "simulation.max_cycles"), typical)
 
 
 def _mujoco(period: float, timestep: float, cycles: int) -> Work:
-    """A MuJoCo run of ``cycles`` cycles of ``period`` [s] at ``timestep`` [s], after its settling."""
+    """A MuJoCo run of ``cycles`` cycles of ``period`` [s] at ``timestep`` [s], after settling."""
     from ocp_crawl.sim.dynamic import SETTLE_TIME
 
     per_cycle = period / timestep

@@ -10,14 +10,14 @@ _EXPORTS = {
     "HybridOptions": "ocp_crawl.sim.event",
     "TimeSteppingOptions": "ocp_crawl.sim.timestepping",
     "MujocoOptions": "ocp_crawl.sim.dynamic", "unavailable_solvers": "ocp_crawl.sim.registry",
-    "unusable": "ocp_crawl.sim.registry",
+    "unusable": "ocp_crawl.sim.registry", "MUJOCO_SOLVERS": "ocp_crawl.sim.registry",
     "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result", "Mode": "ocp_crawl.sim.result",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }
 
 __all__ = [
     "DEFAULT_SOLVER", "SOLVERS", "AnglesOptions", "CycleOptions", "HybridOptions", "Solver", "TimeSteppingOptions",
-    "MujocoOptions", "unavailable_solvers", "unusable", "simulate", "solver_named", "CrawlResult",
+    "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate", "solver_named", "CrawlResult",
     "Event", "Mode", "SimulationError", "Status",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,12 +1,15 @@
 """Dynamic simulation of the crawler in MuJoCo: the quasistatic gait played at a period T [s].
 
-The robot of :mod:`ocp_crawl.sim.mujoco_model` is driven by the joint torques tau(t / T) [N m] of
-the input signal (phase t / T in cycles), after a settling time :data:`SETTLE_TIME` [s] at the
-torque of phase 0, cycle after cycle until the displacement per cycle S converges (relative
-change between two successive cycles at most ``MujocoOptions.s_tol``).  The result is a
+The robot of :mod:`ocp_crawl.sim.mujoco_model` is driven by the input signal at the phase t / T
+(in cycles): the joint torques tau(t / T) [N m] of the torque drive, or the joint angles
+phi(t / T) [rad] of the angles drive, which position servos make the hinges follow (see
+:func:`drive_controls`).  After a settling time :data:`SETTLE_TIME` [s] at the input of phase 0
+it runs cycle after cycle until the displacement per cycle S converges (relative change between
+two successive cycles at most ``MujocoOptions.s_tol``).  The result is a
 :class:`CrawlResult` as the quasistatic solvers give: S [m] (foot 1's displacement over the
-steady cycle), W+ [J] (per actuator, the integral of max(tau_i phi_i', 0) over the cycle, as the
-event solver defines it; see :data:`W_PLUS_WINDOW`), CoT+, samples, and the contact modes and
+steady cycle), W+ [J] (per actuator, the integral of max(tau_i phi_i', 0) over the cycle, tau_i
+the actuator's torque as MuJoCo's sensor reads it, as the event and angles solvers define it; see
+:data:`W_PLUS_WINDOW`), CoT+, samples, and the contact modes and
 events from the feet's sliding (see :func:`sample_cycle`).  The energy balance is not closed
 (``energy`` holds the input and gross work only): friction, contact and joint damping are not
 separated.
@@ -33,12 +36,14 @@ from ocp_crawl.sim.assemble import (
     success_message,
 )
 from ocp_crawl.sim.mujoco_model import (
+    DRIVES,
     FOOT_RADIUS,
     crawler_mjcf,
     foot_forces,
     foot_positions,
     joint_heights,
     place_on_ground,
+    servo_controls,
 )
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
@@ -124,9 +129,22 @@ class MujocoOptions:
 
 
 @lru_cache(maxsize=8)
-def _compiled(robot, timestep: float, cone: str):
+def _compiled(robot, timestep: float, cone: str, drive: str):
     mujoco = require_mujoco()
-    return mujoco.MjModel.from_xml_string(crawler_mjcf(robot, timestep, cone))
+    return mujoco.MjModel.from_xml_string(crawler_mjcf(robot, timestep, cone, drive))
+
+
+def drive_controls(robot, signal, drive: str, period: float, timestep: float, phases) -> np.ndarray:
+    """The actuator controls at ``phases`` [cycles], shape (len(phases), 2): the torques
+    tau [N m] of the torque drive; for the angles drive the set points [rad] of the position
+    servos that hold the hinge angles phi - pi of the signal moving at phi' / T
+    (:func:`~ocp_crawl.sim.mujoco_model.servo_controls`)."""
+    phases = np.atleast_1d(np.asarray(phases, float))
+    values = np.asarray(signal(phases), float).reshape(2, -1)
+    if drive == "torque":
+        return np.ascontiguousarray(values.T)
+    rate = np.asarray(signal.derivative(phases), float).reshape(2, -1) / period
+    return np.ascontiguousarray(servo_controls(robot, timestep, values - math.pi, rate).T)
 
 
 @dataclass
@@ -135,6 +153,8 @@ class _Cycle:
 
     qpos: np.ndarray
     qvel: np.ndarray
+    tau: np.ndarray
+    """the actuators' torques [N m] in each step, (n, 2)"""
     S: float
     w_plus: np.ndarray
     w_plus_steps: np.ndarray
@@ -153,39 +173,41 @@ def windowed_positive_work(controls: np.ndarray, dphi: np.ndarray, window: int) 
 
 
 def _run_cycle(mujoco, mjm, data, controls: np.ndarray, robot) -> _Cycle:
-    """Step ``data`` through one cycle of ``controls`` (n, 2) [N m], one per step (MuJoCo's
-    rollout)."""
+    """Step ``data`` through one cycle of ``controls`` (n, 2), one per step (MuJoCo's rollout);
+    the torques are the actuators' as their sensors read them at the start of each step."""
     from mujoco import rollout
 
     nq, nv = mjm.nq, mjm.nv
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state0 = np.empty(mujoco.mj_stateSize(mjm, spec))
     mujoco.mj_getState(mjm, data, state0, spec)
-    states, _ = rollout.rollout(mjm, data, state0[None], controls[None])
+    states, sensors = rollout.rollout(mjm, data, state0[None], controls[None])
+    tau = np.ascontiguousarray(sensors[0][:, :2])
     states = np.vstack([state0[None], states[0]])
     qpos, qvel = states[:, 1 : 1 + nq], states[:, 1 + nq : 1 + nq + nv]
     mujoco.mj_setState(mjm, data, states[-1], spec)
     mujoco.mj_forward(mjm, data)
     dphi = np.diff(qpos[:, 3:5], axis=0)  # (the joint angle increments of the steps [rad])
-    power = controls * dphi  # [J] per step
+    power = tau * dphi  # [J] per step
     x1 = foot_positions(robot, qpos[[0, -1]])[0][:, 0]
     n, step = len(controls), mjm.opt.timestep
     window = int(min(max(1.0, round(W_PLUS_WINDOW / step)), max(1, n // 200)))
     return _Cycle(
         qpos,
         qvel,
+        tau,
         float(x1[1] - x1[0]),
-        windowed_positive_work(controls, dphi, window),
+        windowed_positive_work(tau, dphi, window),
         np.maximum(power, 0.0).sum(axis=0),
         float(power.sum()),
         float(np.abs(power).sum()),
     )
 
 
-def _failure(model, status, detail, cycle, **fields) -> CrawlResult:
+def _failure(model, status, detail, cycle, drive="torque", **fields) -> CrawlResult:
     return new_result(
         model,
-        "torque",
+        drive,
         status,
         failure_message(status, detail),
         failure_t=float(cycle),
@@ -194,7 +216,7 @@ def _failure(model, status, detail, cycle, **fields) -> CrawlResult:
     )
 
 
-def _geometry_failure(model, cyc: _Cycle, cycle: int) -> CrawlResult | None:
+def _geometry_failure(model, cyc: _Cycle, cycle: int, drive: str) -> CrawlResult | None:
     """LIFT_OFF, JOINT_ON_GROUND or FEET_CROSSED if a step of ``cyc`` shows it, else None."""
     r = model.robot
     (f1, f2), joints = foot_positions(r, cyc.qpos), joint_heights(r, cyc.qpos)
@@ -212,23 +234,23 @@ def _geometry_failure(model, cyc: _Cycle, cycle: int) -> CrawlResult | None:
     for status, bad, text in checks:
         if np.any(bad):
             t = cycle + int(np.argmax(bad)) / n
-            return _failure(model, status, f"{text} at t = {t:.4f} cycles", t)
+            return _failure(model, status, f"{text} at t = {t:.4f} cycles", t, drive)
     return None
 
 
-def _cycles(model: Model, signal, options: MujocoOptions):
+def _cycles(model: Model, signal, options: MujocoOptions, drive: str):
     """Run cycles until S converges; returns (the steady cycle, cycles run, the S of each cycle,
     the MuJoCo objects at the start of the steady cycle, controls) or a failure result."""
     mujoco = require_mujoco()
-    r = model.robot
-    mjm = _compiled(r, options.timestep, options.cone)
+    r, step = model.robot, options.timestep
+    mjm = _compiled(r, step, options.cone, drive)
     data = mujoco.MjData(mjm)
-    tau0 = np.asarray(signal(0.0), float)
-    place_on_ground(mujoco, mjm, data, math.pi + tau0 / r.k)
-    data.ctrl[:] = tau0
-    mujoco.mj_step(mjm, data, nstep=max(1, int(round(SETTLE_TIME / options.timestep))))
-    n = max(4, int(round(options.period / options.timestep)))
-    controls = np.ascontiguousarray(np.asarray(signal((np.arange(n) + 0.5) / n), float).T)
+    start = np.asarray(signal(0.0), float).ravel()
+    place_on_ground(mujoco, mjm, data, math.pi + start / r.k if drive == "torque" else start)
+    data.ctrl[:] = drive_controls(r, signal, drive, options.period, step, [0.0])[0]
+    mujoco.mj_step(mjm, data, nstep=max(1, int(round(SETTLE_TIME / step))))
+    n = max(4, int(round(options.period / step)))
+    controls = drive_controls(r, signal, drive, options.period, step, (np.arange(n) + 0.5) / n)
     history: list[float] = []
     for cycle in range(options.max_cycles):
         cyc = _run_cycle(mujoco, mjm, data, controls, r)
@@ -238,8 +260,9 @@ def _cycles(model: Model, signal, options: MujocoOptions):
                 Status.SOLVER_FAILURE,
                 f"the MuJoCo state is not finite in cycle {cycle + 1}",
                 cycle,
+                drive,
             )
-        fail = _geometry_failure(model, cyc, cycle)
+        fail = _geometry_failure(model, cyc, cycle, drive)
         if fail is not None:
             return fail
         history.append(cyc.S)
@@ -251,25 +274,29 @@ def _cycles(model: Model, signal, options: MujocoOptions):
         f"S of the last cycles {history[-3:]} [m] changes by more than "
         f"s_tol = {options.s_tol:g} after {options.max_cycles} cycles",
         options.max_cycles,
+        drive,
         extra={"S_cycles": history},
     )
 
 
 def simulate_mujoco(
-    model: Model, signal, options: MujocoOptions | None = None, t_eval=None
+    model: Model, signal, options: MujocoOptions | None = None, t_eval=None, drive: str = "torque"
 ) -> CrawlResult:
-    """Simulate the torque-driven crawler dynamically in MuJoCo, the input played at a period T [s].
+    """Simulate the crawler dynamically in MuJoCo, the input played at a period T [s].
 
     Parameters
     ----------
     model : Model
         robot; its gravity convention must be ``"physical"`` (MuJoCo has no other).
     signal : PeriodicSignal
-        joint torques tau(phase) [N m], phase in cycles.
+        joint torques tau(phase) [N m] (torque drive) or joint angles phi(phase) [rad] with their
+        derivative (angles drive), phase in cycles.
     options : MujocoOptions, optional
         period [s], time step [s], friction cone, cycles and periodicity tolerance.
     t_eval : array_like, optional
         output phases [cycles] in [0, 1] of the steady cycle; None: :data:`SAMPLES` + 1 equal steps.
+    drive : str
+        ``"torque"`` (torque motors) or ``"angles"`` (the angles prescribed by position servos).
 
     Returns
     -------
@@ -279,11 +306,13 @@ def simulate_mujoco(
         ``not_periodic``,         ``solver_failure``) with its message otherwise.
     """
     options = MujocoOptions() if options is None else options
+    if drive not in DRIVES:
+        raise ValueError(f"drive must be one of {', '.join(DRIVES)}, got {drive!r}")
     if model.gravity != "physical":
         raise ValueError(
             f"the mujoco solver simulates physical gravity only, got gravity = {model.gravity!r}"
         )
-    out = _cycles(model, signal, options)
+    out = _cycles(model, signal, options, drive)
     if isinstance(out, CrawlResult):
         return out
     cyc, cycles, history, engine, controls = out
@@ -291,7 +320,7 @@ def simulate_mujoco(
     phases = np.linspace(0.0, 1.0, SAMPLES + 1) if t_eval is None else np.asarray(t_eval, float)
     res = new_result(
         model,
-        "torque",
+        drive,
         Status.SUCCESS,
         success_message(
             cycles, t0, f" of {len(controls)} MuJoCo steps at T = {options.period:g} s"
@@ -341,7 +370,7 @@ def sample_cycle(res: CrawlResult, model: Model, engine, cyc: _Cycle, controls, 
         mujoco.mj_forward(mjm, data)
         forces[j] = foot_forces(mujoco, mjm, data, feet)
     modes = _modes(f1[:, 0], f2[:, 0], phases, r.L * SLIP_SPEED)
-    tau = controls[np.minimum(idx, n - 1)].T
+    tau = cyc.tau[np.minimum(idx, n - 1)].T
     phi = qpos[:, 3:5].T + math.pi
     set_samples(
         res,

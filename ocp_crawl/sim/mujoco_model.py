@@ -12,8 +12,9 @@ The model (the conventions of :mod:`ocp_crawl.model.statics`):
   the body of length beta l; the inertia about the y axis through the link's centre is
   mass length^2/12 [kg m^2] (about the rod's own axis 1e-3 of that, never excited in the plane);
 * each hinge carries a torsion spring of stiffness k [N m/rad] with rest angle q = 0 (phi = pi),
-  a light viscous damping (:data:`DAMPING_RATIO`) and a torque motor of gear 1 (tau [N m] acts
-  on phi);
+  a light viscous damping (:data:`DAMPING_RATIO`) and an actuator whose torque tau [N m] acts on
+  phi: a torque motor of gear 1 (torque drive) or a position servo (angles drive, see
+  :func:`servo_gains`); a sensor per hinge reads the actuator's torque;
 * the feet are spheres of radius :data:`FOOT_RADIUS` l centred at the leg ends; only they touch
   the ground, a plane, through explicit contact pairs of friction mu1 and mu2 (condim 3); the
   capsules that draw the links collide with nothing.
@@ -34,16 +35,34 @@ FOOT_RADIUS = 1e-3
 #: takes out the spring-mass ringing (about 30 Hz for the paper robot) within a few periods of it;
 #: its torque b phi' is below 1e-3 k A at periods above a few seconds
 DAMPING_RATIO = 0.2
-#: contact softness: solref = (time constant SOLREF_STEPS x timestep [s], damping ratio 1) and
-#: solimp = (0.99, 0.999, width 1e-3 l): a contact stiff enough that the feet sink about 4 um, soft
-#: enough for the time step (2 steps, the least MuJoCo advises, let the feet chatter more and
-#: moved S of the paper gait by -5 % at T = 5 s; 5 to 8 steps: within 0.1 %)
+#: contact softness: solref = (time constant SOLREF_STEPS x timestep [s], damping ratio
+#: SOLREF_DAMPING) and solimp = (0.99, 0.999, width 1e-3 l): a contact stiff enough that the feet
+#: sink about 4 um, soft enough for the time step (2 steps, the least MuJoCo advises, let the feet
+#: chatter more and moved S of the paper gait by -5 % at T = 5 s; 5 to 8 steps: within 0.1 %)
 SOLREF_STEPS = 5.0
+#: damping ratio of the contact: a sliding foot hops on the soft contact (a few um, every few ms),
+#: and each hop unloads the other foot for a moment; a sticking foot that uses nearly all its
+#: friction (96 % in the median of the slips of the max_speed optimum) then slips a little at each
+#: hop.  Ratio 1: that optimum's S -16 % at T = 5 s, -21 % at 20 s, growing with T; 4 to 30: -8 %
+#: and -4.4 % (-4.8 % at 40 s), the paper and pulse gaits unchanged within 0.1 %; the angles drive
+#: (stiff joints) at T = 20 s: -6.6 % at ratio 1, -0.55 % at 4 and 10
+SOLREF_DAMPING = 10.0
 SOLIMP = (0.99, 0.999, 1e-3)
 #: iterations of MuJoCo's no-slip solver, which removes the creep of a soft friction contact under
 #: a steady tangential load (without it S of the paper gait at T = 20 s is off by -1.1 %, with it
 #: by -0.2 %)
 NOSLIP_ITERATIONS = 20
+#: position servo of the angles drive: natural frequency of a leg on the servo's stiffness
+#: SERVO_OMEGA_STEP / timestep [rad/s], critically damped.  A stiff joint passes the hops of a
+#: sliding foot (see SOLREF_DAMPING) on to the other foot, which then slips too: paper gait at
+#: T = 20 s, S -23.6 % at 1.0 (-30.5 % with joint equality constraints instead of servos),
+#: -1.6 % at 0.3, -0.75 % at 0.2 (alternating between two S 0.15 % apart at T = 10 s), -0.55 %
+#: at 0.15, -0.42 % at 0.1.  A soft servo follows the angles less closely: with the spring and
+#: velocity feed-forward of :func:`servo_controls` the load deflects it by up to 4e-3 rad at 0.3,
+#: 1.2e-2 rad at 0.15, 1.9e-2 rad at 0.1
+SERVO_OMEGA_STEP = 0.15
+#: the drives and their actuators
+DRIVES = ("torque", "angles")
 
 
 def _inertial(mass: float, length: float, centre_x: float) -> str:
@@ -56,7 +75,38 @@ def _inertial(mass: float, length: float, centre_x: float) -> str:
     )
 
 
-def crawler_mjcf(robot, timestep: float, cone: str = "elliptic") -> str:
+def servo_gains(robot, timestep: float) -> tuple[float, float]:
+    """Stiffness kp [N m/rad] and damping kv [N m s/rad] of the angles drive's position servo: the
+    stiffest the explicit step integrates stably (:data:`SERVO_OMEGA_STEP`), critically damped
+    for a leg about its hinge (inertia m l^2/3)."""
+    i_leg = robot.m * robot.l**2 / 3.0
+    kp = i_leg * (SERVO_OMEGA_STEP / timestep) ** 2
+    return kp, 2.0 * math.sqrt(kp * i_leg)
+
+
+def servo_controls(robot, timestep: float, q_ref, dq_ref) -> np.ndarray:
+    """Set points [rad] of the position servos that hold the hinge angles q_ref [rad] moving at
+    dq_ref [rad/s]: the servo's torque kp (u - q) - kv q' is then the spring's k q plus
+    kv (q_ref' - q') plus kp (q_ref - q), so the angles do not lag the reference and the servo
+    deflects only under the load of gravity and friction."""
+    kp, kv = servo_gains(robot, timestep)
+    return np.asarray(q_ref, float) * (1.0 + robot.k / kp) + (kv / kp) * np.asarray(dq_ref, float)
+
+
+def _actuators(robot, timestep: float, drive: str) -> str:
+    """The ``<actuator>`` and ``<sensor>`` elements of ``drive``: one actuator per hinge and a
+    sensor of its torque [N m]."""
+    if drive == "torque":
+        kind = ('motor', 'gear="1"')
+    else:
+        kp, kv = servo_gains(robot, timestep)
+        kind = ('position', f'kp="{kp!r}" kv="{kv!r}"')
+    acts = "".join(f'<{kind[0]} name="act{i}" joint="joint{i}" {kind[1]}/>' for i in (1, 2))
+    sensors = "".join(f'<actuatorfrc actuator="act{i}"/>' for i in (1, 2))
+    return f"<actuator>{acts}</actuator><sensor>{sensors}</sensor>"
+
+
+def crawler_mjcf(robot, timestep: float, cone: str = "elliptic", drive: str = "torque") -> str:
     """The MJCF text of the crawler ``robot`` (a :class:`~ocp_crawl.model.robot.Robot`).
 
     Parameters
@@ -67,6 +117,9 @@ def crawler_mjcf(robot, timestep: float, cone: str = "elliptic") -> str:
         Integration step [s]; the contact time constant is :data:`SOLREF_STEPS` times it.
     cone : str
         Friction cone, ``"elliptic"`` or ``"pyramidal"``.
+    drive : str
+        ``"torque"``: torque motors (the control is tau [N m]); ``"angles"``: position servos
+        (the control is the set point of :func:`servo_controls` [rad]).
 
     Returns
     -------
@@ -78,7 +131,7 @@ def crawler_mjcf(robot, timestep: float, cone: str = "elliptic") -> str:
     i_leg = m * l**2 / 3.0  # a leg about its hinge [kg m^2]
     damping = DAMPING_RATIO * 2.0 * math.sqrt(robot.k * i_leg)
     r_foot, r_draw = FOOT_RADIUS * l, 0.02 * l
-    solref = f'{SOLREF_STEPS * timestep!r} 1'
+    solref = f'{SOLREF_STEPS * timestep!r} {SOLREF_DAMPING!r}'
     solimp = f'{SOLIMP[0]!r} {SOLIMP[1]!r} {SOLIMP[2] * l!r}'
     joint = f'type="hinge" stiffness="{robot.k!r}" springref="0" damping="{damping!r}"'
     legs = []
@@ -107,8 +160,7 @@ def crawler_mjcf(robot, timestep: float, cone: str = "elliptic") -> str:
         f'{_inertial(body_m, bl, 0.0)}'
         f'<geom type="capsule" fromto="{-bl / 2!r} 0 0 {bl / 2!r} 0 0" size="{r_draw!r}"/>'
         f'{"".join(legs)}</body></worldbody><contact>{pairs}</contact>'
-        '<actuator><motor joint="joint1" gear="1"/><motor joint="joint2" gear="1"/></actuator>'
-        '</mujoco>'
+        f'{_actuators(robot, timestep, drive)}</mujoco>'
     )
 
 

@@ -51,6 +51,10 @@ def _run_mujoco(model, signal, options, t_eval):
     return simulate_mujoco(model, signal, options, t_eval=t_eval)
 
 
+def _run_mujoco_angles(model, signal, options, t_eval):
+    return simulate_mujoco(model, signal, options, t_eval=t_eval, drive="angles")
+
+
 def _run_angles(model, signal, options, t_eval):
     return simulate_angles(model, signal, t_eval=t_eval, n_scan=options.n_scan)
 
@@ -76,7 +80,13 @@ SOLVERS: dict[str, Solver] = {
     "mujoco": Solver("mujoco", "torque", MujocoOptions, _run_mujoco,
                      "dynamic simulation in MuJoCo: the torques played at a period T [s]",
                      available=mujoco_available, install=INSTALL),
+    "mujoco_angles": Solver("mujoco_angles", "angles", MujocoOptions, _run_mujoco_angles,
+                            "dynamic simulation in MuJoCo: the angles held by position "
+                            "servos, played at a period T [s]",
+                            available=mujoco_available, install=INSTALL),
 }
+#: the MuJoCo solver of each drive (``[simulation] solver = "mujoco"`` names both)
+MUJOCO_SOLVERS = {"torque": "mujoco", "angles": "mujoco_angles"}
 
 
 def unusable(name: str, gravity: str, values=None) -> str:
@@ -87,7 +97,7 @@ def unusable(name: str, gravity: str, values=None) -> str:
     spec = solver_named(name)
     if not spec.available():
         return f"needs an optional dependency that is not installed: {spec.install}"
-    if name == "mujoco" and gravity != "physical":
+    if name in MUJOCO_SOLVERS.values() and gravity != "physical":
         return (f"is invalid with [model] gravity = {gravity!r}: MuJoCo simulates physical "
                 "gravity only")
     try:

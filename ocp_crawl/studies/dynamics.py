@@ -1,8 +1,10 @@
 """Is it still quasistatic? S, W+ and CoT+ of a gait against its period T, in MuJoCo.
 
-:func:`dynamics_scan` runs the dynamic solver (``"mujoco"``) at each period and the event solver
-once (the quasistatic limit); :class:`DynamicsScan` holds both, the relative deviations, the
-highest frequency at which each quantity stays within a tolerance of the quasistatic value, a
+:func:`dynamics_scan` runs the dynamic solver at each period (``"mujoco"``, or
+``"mujoco_angles"`` for a problem of the angles drive) and the quasistatic solver of the drive
+once (``"event"`` or ``"angles"``: the limit T -> infinity); :class:`DynamicsScan` holds both,
+the relative deviations, the highest frequency at which each quantity stays within a tolerance
+of the quasistatic value, a
 CSV table and a figure (:func:`plot_dynamics`).
 """
 from __future__ import annotations
@@ -25,6 +27,8 @@ QUANTITIES = (("S", "S", "mm", 1e3), ("W+", "W_plus", "mJ", 1e3), ("CoT+", "CoT_
 DEFAULT_PERIODS = (1.0, 2.0, 5.0, 10.0, 20.0)
 #: default tolerance of "still quasistatic" [-]
 TOLERANCE = 0.05
+#: the quasistatic and the dynamic solver of each drive
+DRIVE_SOLVERS = {"torque": ("event", "mujoco"), "angles": ("angles", "mujoco_angles")}
 
 
 @dataclass
@@ -120,13 +124,13 @@ class DynamicsScan:
 
 def dynamics_scan(problem: Problem, periods=DEFAULT_PERIODS, options: MujocoOptions | None = None,
                   tolerance: float = TOLERANCE) -> DynamicsScan:
-    """Simulate the torque-driven ``problem`` in MuJoCo at each period [s], and with the event
-    solver.
+    """Simulate ``problem`` in MuJoCo at each period [s], and with the quasistatic solver of its
+    drive (the event solver for the torque drive, the angles solver for prescribed angles).
 
     Parameters
     ----------
     problem : Problem
-        A torque-drive problem with physical gravity.
+        A problem of either drive with physical gravity.
     periods : sequence of float
         Periods T [s] of one cycle; the problem's ``[gait] period`` (the gait's own, e.g. in the
         ``optimal_gait.toml`` of ``optimize --out``) is added when it gives one.
@@ -144,14 +148,16 @@ def dynamics_scan(problem: Problem, periods=DEFAULT_PERIODS, options: MujocoOpti
         options = solver_options("mujoco", problem.sections.get("simulation", {}))
     own = problem.sections.get("gait", {}).get("period")
     periods = sorted({float(t) for t in periods} | ({float(own)} if own else set()))
-    event = simulate(problem.model, problem.torque, "event")
+    signal = problem.torque if problem.drive == "torque" else problem.gait
+    quasi_solver, dynamic = DRIVE_SOLVERS[problem.drive]
+    event = simulate(problem.model, signal, quasi_solver)
     if not event.success:
         raise ValueError(f"{problem.source}: the quasistatic gait failed: {event.message}")
     quasi = {name: float(getattr(event, attr)) for name, attr, _, _ in QUANTITIES}
     values = {name: np.full(len(periods), np.nan) for name, _, _, _ in QUANTITIES}
     statuses, messages = [], []
     for i, period in enumerate(periods):
-        res = simulate(problem.model, problem.torque, "mujoco",
+        res = simulate(problem.model, signal, dynamic,
                        dataclasses.replace(options, period=float(period)))
         statuses.append(res.status_name)
         messages.append(res.message)
@@ -175,7 +181,7 @@ def plot_dynamics(scan: DynamicsScan, path: str | Path) -> Path:
     for ax, (name, _, unit, k) in zip(axes, QUANTITIES):
         q = scan.quasistatic[name] * k
         ax.plot(freq, scan.values[name] * k, "o-", label="MuJoCo (dynamic)")
-        ax.axhline(q, color="k", ls="--", label="quasistatic (event solver)")
+        ax.axhline(q, color="k", ls="--", label="quasistatic (event or angles solver)")
         ax.axhspan(q * (1 - scan.tolerance), q * (1 + scan.tolerance), color="0.85",
                    label=f"quasistatic ± {scan.tolerance:.0%}")
         f = scan.highest_frequency(name)
