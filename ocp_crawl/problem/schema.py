@@ -299,7 +299,8 @@ _MODEL = Section("model", "model conventions", keys=(
 
 _SIMULATION = Section("simulation", "simulator of the torque drive and its options", keys=(
     Key("solver", str, "-", "simulator of the torque drive: event-driven, MPCC time-stepping, or "
-        "dynamic in MuJoCo (the angles drive has its own)", default=DEFAULT_SOLVER["torque"],
+        "dynamic in MuJoCo (the angles drive has its own, or mujoco: servos hold the angles)",
+        default=DEFAULT_SOLVER["torque"],
         choices=TORQUE_SOLVERS),
     Key("max_step", float, "cycles", "event solver: largest continuation step", default=_hybrid("max_step"),
         rule=MAX_STEP),
