@@ -386,6 +386,32 @@ def _group_ends(pgid: int, seconds: float) -> bool:
     return False
 
 
+def test_a_killed_reproduce_leaves_no_worker_and_its_resume_starts(tmp_path):
+    """``reproduce --quick`` killed by SIGKILL in its grids, its main process alone: the workers end
+    within seconds, and ``--resume`` is not refused (a lingering worker would hold the directory's
+    lock) but runs on, past the stage it was killed in (the heavy test below resumes to the end)."""
+    out = tmp_path / "repro"
+    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs", "2"]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    for i, (wait_for, kill) in enumerate([("paper convention: band ...", os.kill),
+                                          ("paper convention: friction ...", os.killpg)]):
+        err = tmp_path / f"stderr{i}.txt"
+        with open(err, "wb") as fh:
+            proc = subprocess.Popen(cmd + (["--resume"] if i else []), stdout=subprocess.DEVNULL,
+                                    stderr=fh, start_new_session=True, env=env)
+        try:
+            deadline = time.monotonic() + 120
+            while proc.poll() is None and time.monotonic() < deadline \
+                    and wait_for not in err.read_text():
+                time.sleep(0.01)
+        finally:
+            kill(proc.pid, signal.SIGKILL)
+            proc.wait()
+        assert proc.returncode == -signal.SIGKILL, f"run {i} ended before the kill: {err.read_text()}"
+        assert wait_for in err.read_text(), err.read_text()
+        assert _group_ends(proc.pid, 10.0), f"a worker of run {i} outlived the kill by 10 s"
+
+
 @pytest.mark.heavy
 def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduced, tmp_path):
     """``reproduce --quick`` killed by SIGKILL during the grids (its main process alone: its workers end
