@@ -96,6 +96,19 @@ def test_problem_files_reach_the_angles_drive_in_mujoco(capsys):
     assert out["S"] == pytest.approx(quasi.S, rel=0.1)   # (T = 2 s: -6.8 % measured)
 
 
+def test_a_sweep_of_the_angles_drive_in_mujoco_reads_the_period(tmp_path, capsys):
+    import json
+
+    code = main(["sweep", PAPER, "--set", "gait.drive=angles", "--set", "simulation.solver=mujoco",
+                 "--grid", "simulation.period=1,2", "--jobs", "1", "--out", str(tmp_path / "s"),
+                 "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["counts"] == {"success": 2}
+    rows = (tmp_path / "s" / "results.csv").read_text().splitlines()[1:]
+    s1, s2 = (float(r.split(",")[1]) for r in rows)
+    assert abs(s2) > abs(s1)   # (closer to the quasistatic S at the longer period)
+
+
 def test_the_robot_stands_on_both_feet():
     mujoco = pytest.importorskip("mujoco")
     problem = load_problem(PAPER)

@@ -92,7 +92,9 @@ def _check_axes_matter(problem, grid) -> None:
     drives = set(grid.get("gait.drive", [problem.drive]))
     waveforms = set(grid.get("gait.waveform", [problem.sections["gait"]["waveform"]]))
     solvers = set(grid.get("simulation.solver", [problem.sections.get("simulation", {}).get("solver", "event")]))
-    used = set().union(*(_simulation_keys(s) for s in solvers)) if drives != {"angles"} else set()
+    # the angles drive reads [simulation] only for MuJoCo (its servos), the torque drive for every solver
+    read = solvers if "torque" in drives else solvers & {"mujoco"}
+    used = set().union(*(_simulation_keys(s) for s in read))
     for name in grid:
         section, key = name.split(".", 1)
         if section == "ocp":
