@@ -177,5 +177,8 @@ def test_every_family_is_searched_and_the_best_is_their_best():
         ev = fam.evaluate(c.params)
         assert ev.success and DIRECTION * ev.S[0] / ev.T == pytest.approx(c.value, rel=1e-12)
     assert base.best.value == max(c.value for c in base.choices.values())
+    # a triangle is a pulse (rise 0.5): the pulse search goes on from the triangle's best
+    assert base.choices["pulse"].value >= base.choices["triangle"].value
+    assert len(base.choices["pulse"].starts) == len(base.choices["triangle"].starts) + 1
     table = base.table()
     assert [row["shape"] for row in table] == list(SHAPES)
