@@ -45,7 +45,8 @@ def _cli(*args: str) -> str:
 def _problem(rng: random.Random) -> dict:
     """A random valid-looking problem: paper-like robot, any gravity, one of three waveforms."""
     robot = {"M": rng.uniform(0.02, 0.2), "L": rng.uniform(0.05, 0.2),
-             "beta": rng.uniform(0.6, 1.6), "mu1": rng.uniform(0.2, 0.6), "mu2": rng.uniform(0.2, 0.6)}
+             "beta": rng.uniform(0.6, 1.6), "mu1": rng.uniform(0.2, 0.6),
+             "mu2": rng.uniform(0.2, 0.6)}
     robot["k"] = rng.uniform(0.5, 20.0) * robot["M"] * 9.81 * robot["L"]
     kind = rng.choice(["harmonic", "pulse", "samples"])
     gait = {"gamma_deg": rng.uniform(70, 110), "psi_deg": rng.uniform(-180, 180)}
