@@ -58,9 +58,10 @@ CONES = ("elliptic", "pyramidal")
 #: output samples per cycle when no phases are asked for
 SAMPLES = 200
 #: W+ is summed over windows of W_PLUS_WINDOW [s] (at most 1/200 of the period): the joint angle
-#: increment of a window times the mean torque in it, clipped at zero.  A sliding foot chatters
-#: (hops of a few um, every few ms), which the quasistatic motion, smooth on a window, does not;
-#: ``extra["W_plus_steps"]`` is the sum over single steps, chatter included
+#: increment of a window times the mean torque in it, clipped at zero: the quasistatic motion is
+#: smooth on a window, and a contact that lets a sliding foot chatter (hops of a few um every few
+#: ms: a contact hard up to the surface) would add work on single steps;
+#: ``extra["W_plus_steps"]`` is the sum over single steps (on the paper gait within 2e-4 of it)
 W_PLUS_WINDOW = 0.02
 #: a foot slides when it moves faster than SLIP_SPEED L / T (averaged between output samples) and
 #: faster than SLIP_SHARE times the other foot (the sticking foot of a slip creeps at about 1 % of

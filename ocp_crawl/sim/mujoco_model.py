@@ -28,38 +28,48 @@ import numpy as np
 
 #: foot sphere radius [fraction of the leg length l]: the contact point rolls by r per radian of
 #: the leg while the foot sticks, which the model's point feet do not (measured at T = 20 s on the
-#: paper gait: r = 0.01 l moves S by +0.9 %, r = 0.001 l by +0.1 %); the soft contact's
-#: penetration (about 4 um) stays well inside it
+#: paper gait: r = 0.01 l moves S by +1.0 %, r = 0.001 l by +0.1 %); the soft contact's
+#: penetration (2 to 6 um, 0.1 to 0.2 r for the paper robot) stays well inside it
 FOOT_RADIUS = 1e-3
 #: joint damping [fraction of the critical damping 2 sqrt(k I_leg) of a leg on its spring]: it
 #: takes out the spring-mass ringing (about 30 Hz for the paper robot) within a few periods of it;
 #: its torque b phi' is below 1e-3 k A at periods above a few seconds
 DAMPING_RATIO = 0.2
 #: contact softness: solref = (time constant SOLREF_STEPS x timestep [s], damping ratio
-#: SOLREF_DAMPING) and solimp = (0.99, 0.999, width 1e-3 l): a contact stiff enough that the feet
-#: sink about 4 um, soft enough for the time step (2 steps, the least MuJoCo advises, let the feet
-#: chatter more and moved S of the paper gait by -5 % at T = 5 s; 5 to 8 steps: within 0.1 %)
+#: SOLREF_DAMPING) and solimp = SOLIMP: a contact stiff enough that the feet sink 2 to 6 um, soft
+#: enough for the time step.  With SOLIMP, 2 to 20 steps give the same S within 0.05 % (paper gait,
+#: T = 5 s) and 0.2 % (max_speed optimum, T = 20 s)
 SOLREF_STEPS = 5.0
-#: damping ratio of the contact: a sliding foot hops on the soft contact (a few um, every few ms),
-#: and each hop unloads the other foot for a moment; a sticking foot that uses nearly all its
-#: friction (96 % in the median of the slips of the max_speed optimum) then slips a little at each
-#: hop.  Ratio 1: that optimum's S -16 % at T = 5 s, -21 % at 20 s, growing with T; 4 to 30: -8 %
-#: and -4.4 % (-4.8 % at 40 s), the paper and pulse gaits unchanged within 0.1 %; the angles drive
-#: (stiff joints) at T = 20 s: -6.6 % at ratio 1, -0.55 % at 4 and 10
+#: damping ratio of the contact: with SOLIMP, ratio 1 and 10 give the same S within 0.01 % (paper
+#: gait, both drives, T = 5 and 20 s; max_speed optimum at 5, 20 and 40 s); with solimp
+#: (0.99, 0.999, 1e-3 l) the ratio decides (optimum at T = 20 s: -21 % at 1, -4.4 % at 4 to 30)
 SOLREF_DAMPING = 10.0
-SOLIMP = (0.99, 0.999, 1e-3)
+#: solimp = (dmin, dmax, width [fraction of l]), MuJoCo's midpoint 0.5 and power 2: the impedance
+#: rises from dmin at first touch to dmax at a penetration of width (3 um for the paper robot),
+#: so a foot resting 2 to 6 um deep has a hard contact and a foot that rises towards the surface a
+#: soft one.  A stiff contact all the way up, (0.99, 0.999, 1e-3 l), lets a sliding foot hop (a
+#: few um, every few ms; its normal force is zero in 3 % of the samples at T = 20 s); each hop
+#: unloads the other foot, and a sticking foot at nearly all its friction (96 % in the median of
+#: the slips of the max_speed optimum) slips a little at each hop: that optimum's S -8.4 % at
+#: T = 5 s, -4.4 % at 20 s, -4.8 % at 40 s.  With SOLIMP the feet stay at least 1.2 um deep
+#: (T = 5 and 20 s) and that S is -2.5 %, -0.06 %, +0.07 %; dmin 0.1 to 0.7 and width 3e-5 to
+#: 3e-4 l all give -0.06 to -0.08 % at 20 s, dmin 0.9 gives -3.9 %.  The paper and pulse gaits
+#: move by less than 0.3 % (-0.46 %, +0.07 % and -0.50 %, +0.09 % at 5 and 20 s), the angles drive
+#: from -1.57 % to -0.22 % at 5 s.  The time step changes little: -0.50 %, -0.06 %, -0.11 % at
+#: 1e-4, 2.5e-4 and 1e-3 s (optimum, 20 s)
+SOLIMP = (0.1, 0.999, 1e-4)
 #: iterations of MuJoCo's no-slip solver, which removes the creep of a soft friction contact under
-#: a steady tangential load (without it S of the paper gait at T = 20 s is off by -1.1 %, with it
-#: by -0.2 %)
+#: a steady tangential load (at T = 20 s, S of the max_speed optimum -0.18 % without it, -0.06 %
+#: with it; of the paper gait -0.02 % and +0.07 %)
 NOSLIP_ITERATIONS = 20
 #: position servo of the angles drive: natural frequency of a leg on the servo's stiffness
-#: SERVO_OMEGA_STEP / timestep [rad/s], critically damped.  A stiff joint passes the hops of a
-#: sliding foot (see SOLREF_DAMPING) on to the other foot, which then slips too: paper gait at
-#: T = 20 s, S -23.6 % at 1.0 (-30.5 % with joint equality constraints instead of servos),
-#: -1.6 % at 0.3, -0.75 % at 0.2 (alternating between two S 0.15 % apart at T = 10 s), -0.55 %
-#: at 0.15, -0.42 % at 0.1.  A soft servo follows the angles less closely: with the spring and
-#: velocity feed-forward of :func:`servo_controls` the load deflects it by up to 4e-3 rad at 0.3,
-#: 1.2e-2 rad at 0.15, 1.9e-2 rad at 0.1
+#: SERVO_OMEGA_STEP / timestep [rad/s], critically damped.  A stiff joint passes any hop of a
+#: sliding foot (see SOLIMP) on to the other foot, which then slips too: paper gait at T = 20 s,
+#: S -18.3 % at 1.0, -3.3 % at 0.7, +0.09 % at 0.5 to 0.2, +0.10 % at 0.15, +0.11 % at 0.1 (with
+#: solimp (0.99, 0.999, 1e-3 l): -23.6 % at 1.0, -1.6 % at 0.3, -0.55 % at 0.15).  A soft servo
+#: follows the angles less closely: with the spring and velocity feed-forward of
+#: :func:`servo_controls` the load deflects it by up to 4e-3 rad at 0.3, 1.2e-2 rad at 0.15,
+#: 1.9e-2 rad at 0.1, and W+ is off by +0.43 % at 0.3, +1.29 % at 0.15, +2.1 % at 0.1 (T = 20 s)
 SERVO_OMEGA_STEP = 0.15
 #: the drives and their actuators
 DRIVES = ("torque", "angles")

@@ -7,7 +7,7 @@ real robot has no nearby equilibrium and must move dynamically.  The same torque
 in MuJoCo (period T = 5 s) run through the fold: joint 1 collapses (to about 15 deg) within a few
 hundredths of a cycle, foot 2 hops about 33 mm off the ground (the dynamic solver itself reports
 ``lift_off``, as its two-contact checks demand), lands, and the robot settles on another periodic
-gait that never reaches the fold: S = -28.0 mm in the first cycle, then +28.3 mm per cycle (the
+gait that never reaches the fold: S = -29.3 mm in the first cycle, then +29.9 mm per cycle (the
 other way).  The example steps MuJoCo directly (the robot of :mod:`ocp_crawl.sim.mujoco_model`)
 to follow it past the hop, prints S of each cycle and the largest foot height, and plots the
 joint angles against phase for both solvers with the fold marked.  Needs MuJoCo (``pip install
