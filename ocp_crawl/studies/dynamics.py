@@ -47,6 +47,8 @@ class DynamicsScan:
     period: float | None = None
     """the gait's own period [s] (``[gait] period``, e.g. an optimum's), one of ``periods``; None
     if the problem gives none"""
+    quasistatic_solver: str = "event"
+    """the solver of the quasistatic values (``"event"``; ``"angles"`` for the angles drive)"""
 
     def at_period(self, name: str) -> float | None:
         """Relative deviation of ``name`` at the gait's own period [-]; None without one."""
@@ -164,7 +166,7 @@ def dynamics_scan(problem: Problem, periods=DEFAULT_PERIODS, options: MujocoOpti
         for name, attr, _, _ in QUANTITIES:
             values[name][i] = getattr(res, attr)
     return DynamicsScan(problem.source, np.asarray(periods, float), values, quasi, statuses,
-                        tolerance, messages, float(own) if own else None)
+                        tolerance, messages, float(own) if own else None, quasi_solver)
 
 
 def plot_dynamics(scan: DynamicsScan, path: str | Path) -> Path:
@@ -175,13 +177,14 @@ def plot_dynamics(scan: DynamicsScan, path: str | Path) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     freq = 1.0 / scan.periods
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), constrained_layout=True)
     for ax, (name, _, unit, k) in zip(axes, QUANTITIES):
         q = scan.quasistatic[name] * k
         ax.plot(freq, scan.values[name] * k, "o-", label="MuJoCo (dynamic)")
-        ax.axhline(q, color="k", ls="--", label="quasistatic (event or angles solver)")
+        ax.axhline(q, color="k", ls="--", label=f"quasistatic ({scan.quasistatic_solver} solver)")
         ax.axhspan(q * (1 - scan.tolerance), q * (1 + scan.tolerance), color="0.85",
                    label=f"quasistatic ± {scan.tolerance:.0%}")
         f = scan.highest_frequency(name)
@@ -192,13 +195,17 @@ def plot_dynamics(scan: DynamicsScan, path: str | Path) -> Path:
             ax.axvline(1.0 / scan.period, color="tab:green", ls="-.", label=f"the gait's period "
                        f"T = {scan.period:.3g} s ({scan.at_period_text(name, '+.1%')})")
         ax.set_xscale("log")
+        ax.set_xticks(freq, [f"{v:.3g}" for v in freq])   # the scanned frequencies, not decades
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         ax.set_xlabel("frequency 1/T [Hz]")
         ax.set_ylabel(f"{name} [{unit}]")
         ax.legend(fontsize=8)
     f_s = scan.highest_frequency("S")
     at = np.argmax(scan.periods)
     upto = ("at none of the periods" if f_s is None else f"up to {f_s:.3g} Hz")
-    fig.suptitle(f"{Path(scan.source).name}: S = {scan.quasistatic['S'] * 1e3:.2f} mm quasistatic, "
+    drive = " (angles drive)" if scan.quasistatic_solver == "angles" else ""
+    fig.suptitle(f"{Path(scan.source).name}{drive}: S = {scan.quasistatic['S'] * 1e3:.2f} mm "
+                 "quasistatic, "
                  f"{scan.values['S'][at] * 1e3:.2f} mm at T = {scan.periods[at]:g} s; S within "
                  f"{scan.tolerance:.0%} {upto}")
     fig.savefig(path, dpi=120)
