@@ -106,7 +106,8 @@ class DynamicsScan:
             f"{self.quasistatic[n] * k:12.4f} {'':8}" for n, _, _, k in QUANTITIES))
         for n, _, _, _ in QUANTITIES:
             f = self.highest_frequency(n)
-            text = "at none of the periods" if f is None else f"up to {f:.3g} Hz (T = {1 / f:.3g} s)"
+            text = ("at none of the periods" if f is None
+                    else f"up to {f:.3g} Hz (T = {1 / f:.3g} s)")
             rows.append(f"{n} within {self.tolerance:.0%} of quasistatic {text}")
         if self.period is not None:
             rows.append(f"at the gait's own period T = {self.period:.4g} s: " + ", ".join(
