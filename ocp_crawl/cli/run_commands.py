@@ -289,6 +289,7 @@ def _animate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fps", type=real("--fps", *FPS_BOUNDS, " (at most 100 s per frame)", closed=True),
                    default=20.0, help="frames per second (default: 20)")
     force_arg(p, "an existing FILE.gif")
+    work_arg(p)
 
 
 @register("animate", "animate the robot crawling (GIF; feet coloured by contact state)", _animate_args)
@@ -304,8 +305,11 @@ def cmd_animate(args: argparse.Namespace) -> int:
     if path.suffix.lower() != ".gif" or not path.stem:
         raise BadInput(f"--out {args.out}: the animation is a GIF; give a file name ending in .gif")
     problem = load_with_shortcuts(args)
+    twice = simulation_work(problem).times(2, "a run for the cycle, one for the frames")
+    work = check_work(args, twice)
     prepare_out(path.parent, [path.name], args.force, label=f"--out {args.out}")
     check_start(problem)
+    announce(work)
     result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)
     print(f"wrote {written}: {result.status_name}, "
           + (f"S = {units.distance(result.S, 2)} per cycle" if result.success else result.message))

@@ -3,7 +3,8 @@
 Every count that sizes a run is bounded on its own (``simulation.steps``, ``max_cycles``,
 ``ocp.nodes``, the samples of a table, the rows of a fit), but their products are not: MPCC
 ``steps = 10000`` with ``max_cycles = 500`` is five million IPOPT solves, hours, though each count
-is in its range.  So each command estimates its work from the counts that size it, times a cost per unit, and
+is in its range.  So each command estimates its work from the counts that size it, times a cost
+per unit, and
 
 * refuses a request above its limit (``--max-hours``, default :data:`DEFAULT_MAX_HOURS`) before it
   starts, with one line naming the keys that size it (:class:`WorkLimit`, exit 2 on the command
@@ -11,9 +12,9 @@ is in its range.  So each command estimates its work from the counts that size i
 * announces a request whose typical run is above :data:`ANNOUNCE_SECONDS` on standard error
   (``estimated about ..., up to ...``).
 
-The commands check (``ocp-crawl simulate``, ``crosscheck``, ``sweep``, ``optimize``, ``fit``,
-``dynamics``); the library functions run what they are given, and a program asks first, e.g.
-``simulation_work(problem).check(max_hours=1)``.
+The commands check (``ocp-crawl simulate``, ``animate``, ``crosscheck``, ``sweep``, ``optimize``,
+``fit``, ``dynamics``); the library functions run what they are given, and a program asks first,
+e.g. ``simulation_work(problem).check(max_hours=1)``.
 
 The unit costs (:data:`UNIT_COST`) are those measured on the benchmarks page's machine (2 cores,
 ``scripts/bench.py work`` prints them against the estimates), a slow one: a faster machine takes
@@ -89,6 +90,11 @@ class Work:
         keys = tuple(dict.fromkeys((*self.keys, *other.keys)))
         return Work(self.seconds + other.seconds, f"{self.detail}; {other.detail}", keys,
                     self.typical + other.typical)
+
+    def times(self, factor: float, why: str) -> Work:
+        """This work ``factor`` times (``why``: what the factor counts)."""
+        return Work(self.seconds * factor, f"{why}: {factor:g} x ({self.detail})", self.keys,
+                    self.typical * factor)
 
     @property
     def text(self) -> str:
