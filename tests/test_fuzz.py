@@ -59,8 +59,9 @@ from ocp_crawl import Mode, ProblemError, Status, problem_from_dict, run_problem
 from ocp_crawl.status import STATUS_MESSAGES
 
 import _properties_common as C
-from test_success_properties import (DEFECT_FRACTION, ENERGY_TOL, energy_terms, friction_violations,
-                                     stability_violations, state_rates, static_violations)
+from test_success_properties import (ENERGY_TOL, energy_terms, friction_violations,
+                                     interval_defects, stability_violations, state_rates,
+                                     static_violations)
 
 COUNT = int(os.environ.get("OCP_CRAWL_FUZZ", "100"))
 #: only these problem indices (comma-separated), e.g. to re-check the problems of a log
@@ -265,12 +266,10 @@ def continuity_violations(problem, res) -> tuple[list[str], np.ndarray]:
     j = np.arange(n - 1)
     h = np.diff(res.t)
     modes = res.mode[1:]
-    a = one_sided_rates(problem, res, modes, j, 1e-3 * h)
-    b = one_sided_rates(problem, res, modes, j + 1, -1e-3 * h)
+    defect, bound = interval_defects(problem, res,
+                                     one_sided_rates(problem, res, modes, j, 1e-3 * h),
+                                     one_sided_rates(problem, res, modes, j + 1, -1e-3 * h))
     X = np.vstack([res.phi, res.f_t / (problem.robot.M * problem.robot.g)])
-    defect = np.abs(np.diff(X, axis=1) - 0.5 * h * (a + b))
-    floor = np.array([1e-9, 1e-9, 1e-9 * (1 + problem.robot.k / problem.robot.MgL)])[:, None]
-    bound = DEFECT_FRACTION * h * np.maximum(np.abs(a), np.abs(b)) + floor
     bad = np.nonzero(np.any(defect > bound, axis=0))[0]
     if not bad.size:
         return [], bad

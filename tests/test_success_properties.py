@@ -187,6 +187,17 @@ def state_rates(problem, res, modes: np.ndarray, cols: np.ndarray) -> np.ndarray
     return np.vstack([aux[AUX["dphi1"]], aux[AUX["dphi2"]], aux[AUX["dft"]] / Mg])
 
 
+def interval_defects(problem, res, a, b):
+    """The trapezoid defects |x_j+1 - x_j - h (a + b)/2| of x = (phi1, phi2, f_t/(M g)) on each
+    interval between samples, rates ``a``, ``b`` at its ends, and their bounds (see
+    :func:`continuity_violations`); both (3, n - 1)."""
+    h = np.diff(res.t)
+    X = np.vstack([res.phi, res.f_t / (problem.robot.M * problem.robot.g)])
+    defect = np.abs(np.diff(X, axis=1) - 0.5 * h * (a + b))
+    floor = np.array([1e-9, 1e-9, 1e-9 * (1 + problem.robot.k / problem.robot.MgL)])[:, None]
+    return defect, DEFECT_FRACTION * h * np.maximum(np.abs(a), np.abs(b)) + floor
+
+
 def continuity_violations(problem, res) -> list[str]:
     """Jumps of x = (phi1, phi2, f_t/(M g)) between consecutive samples t_j < t_j+1 (h = t_j+1 - t_j).
 
@@ -203,17 +214,13 @@ def continuity_violations(problem, res) -> list[str]:
         return []
     j = np.arange(n - 1)
     modes = res.mode[1:]
-    a = state_rates(problem, res, modes, j)
-    b = state_rates(problem, res, modes, j + 1)
-    h = np.diff(res.t)
-    X = np.vstack([res.phi, res.f_t / (problem.robot.M * problem.robot.g)])
-    defect = np.abs(np.diff(X, axis=1) - 0.5 * h * (a + b))
-    floor = np.array([1e-9, 1e-9, 1e-9 * (1 + problem.robot.k / problem.robot.MgL)])[:, None]
-    bound = DEFECT_FRACTION * h * np.maximum(np.abs(a), np.abs(b)) + floor
+    defect, bound = interval_defects(problem, res, state_rates(problem, res, modes, j),
+                                     state_rates(problem, res, modes, j + 1))
     bad = np.nonzero(np.any(defect > bound, axis=0))[0]
     if not bad.size:
         return []
     i = int(bad[np.argmax(np.max(defect[:, bad] - bound[:, bad], axis=0))])
+    X = np.vstack([res.phi, res.f_t / (problem.robot.M * problem.robot.g)])
     jump = np.diff(X, axis=1)[:, i]
     return [f"continuity: {bad.size} intervals jump, worst at phase {res.t[i] - res.t0:.5f}-{res.t[i + 1] - res.t0:.5f} "
             f"({Mode(int(res.mode[i])).label} -> {Mode(int(res.mode[i + 1])).label}): dphi = "
