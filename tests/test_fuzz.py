@@ -59,7 +59,7 @@ from ocp_crawl import Mode, ProblemError, Status, problem_from_dict, run_problem
 from ocp_crawl.status import STATUS_MESSAGES
 
 import _properties_common as C
-from test_success_properties import (ENERGY_TOL, energy_terms, friction_violations,
+from test_success_properties import (energy_violations_on, friction_violations,
                                      interval_defects, stability_violations, state_rates,
                                      static_violations)
 
@@ -302,18 +302,7 @@ def refined_continuity(problem, res, fine) -> list[str]:
 
 def energy_violations(problem, res, fine) -> list[str]:
     """The cycle's energy balance by quadrature on the fine cycle, and the result's own terms."""
-    e = energy_terms(problem, fine)
-    tol = ENERGY_TOL * max(e["gross_work"], abs(e["dissipation"])) + e["floor"]
-    out = []
-    residual = e["input_work"] - e["potential_change"] - e["dissipation"]
-    if not abs(residual) <= tol:
-        out.append(f"energy: balance residual {residual:.3g} J > {tol:.3g} J (input "
-                   f"{e['input_work']:.4g} J, dissipation {e['dissipation']:.4g} J)")
-    for name in ("input_work", "dissipation", "potential_change"):
-        if not abs(e[name] - res.energy[name]) <= tol:
-            out.append(f"energy: {name} {res.energy[name]:.6g} J of the result, "
-                       f"{e[name]:.6g} J by quadrature")
-    return out
+    return energy_violations_on(problem, res, fine)
 
 
 def event_violations(problem, res) -> list[str]:

@@ -261,6 +261,11 @@ def energy_violations(problem, res) -> list[str]:
     fine = run_problem(problem, t_eval=te)
     if not fine.success:
         return [f"energy: the rerun on the fine grid ends with {fine.status_name}"]
+    return energy_violations_on(problem, res, fine)
+
+
+def energy_violations_on(problem, res, fine) -> list[str]:
+    """:func:`energy_violations` with the fine grid's result ``fine`` given."""
     e = energy_terms(problem, fine)
     tol = ENERGY_TOL * max(e["gross_work"], abs(e["dissipation"])) + e["floor"]
     out = []
