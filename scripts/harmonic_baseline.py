@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ocp_crawl import Robot
-from ocp_crawl.ocp.baseline import search_rank, value_from
+from ocp_crawl.ocp.baseline import required_value, search_rank
 from ocp_crawl.ocp.search import best_harmonic
 from ocp_crawl.ocp.family import WaveFamily, WaveParams
 from ocp_crawl.ocp.settings import OCPSettings
@@ -39,7 +39,7 @@ def report(name: str, settings: OCPSettings):
     c = best_harmonic(Robot.paper(), "physical", settings)
     dt = time.perf_counter() - t
     old, n_old = old_scan(settings)
-    v_old = value_from(settings, old.S, old.CoT_plus, old.T, enforce_speed_min=True)
+    v_old = required_value(settings, old.S, old.CoT_plus, old.T)
     print(f"{name}: gamma {c.gamma1_deg:.4f}/{c.gamma2_deg:.4f} A {c.A1_deg:.4f}/{c.A2_deg:.4f} psi {c.psi_deg:.3g} "
           f"deg, T {c.T:.4f} s, S {np.round(np.array(c.S) * 1e3, 4)} mm, "
           f"W+ {np.round(np.array(c.W_plus) * 1e3, 3)} mJ, "

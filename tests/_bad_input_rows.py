@@ -491,6 +491,27 @@ COMMAND_ROWS.update({
                                                    ["x.toml", '[ocp] robust = "worst"', "mu_ratio_eps > 0",
                                                     'objective = "robust_speed"'],
                                                    text=ocp_edit("nodes = 50", 'nodes = 50\nrobust = "worst"')),
+    "optimize: a constraint on an unknown quantity": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] constraint", "unknown quantity 'torque'", "peak_torque"],
+        text=OCP_TEXT + '\n[[ocp.constraint]]\nquantity = "torque"\nmax = 0.3\n'),
+    "optimize: a lower bound on the peak torque": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] constraint", "min bound is not available", "upper"],
+        text=OCP_TEXT + '\n[[ocp.constraint]]\nquantity = "peak_torque"\nmin = 0.3\n'),
+    "optimize: a constraint with min above max": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] constraint", "min 0.05 > max 0.04"],
+        text=OCP_TEXT + '\n[[ocp.constraint]]\nquantity = "speed"\nmin = 0.05\nmax = 0.04\n'),
+    "optimize: a constraint without a bound": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] constraint", "neither min nor max"],
+        text=OCP_TEXT + '\n[[ocp.constraint]]\nquantity = "speed"\n'),
+    "optimize: a constraint with an unknown key": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] constraint", "keys quantity (required), min, max, over"],
+        text=OCP_TEXT + '\n[[ocp.constraint]]\nquantity = "speed"\nmaximum = 0.1\n'),
+    "optimize: a constraint that is not a table": R(
+        "optimize", ["{ocp}", "--set", "ocp.constraint=0.3"],
+        ["[ocp] constraint = 0.3 (from --set)", "an array of tables"]),
+    "optimize: a friction level of zero": R(
+        "optimize", ["{ocp}", "--set", "ocp.mu_levels=[1.0, 0.0]"],
+        ["[ocp] mu_levels", "entry 1 = 0.0", "in [0.001, 10]"]),
     "optimize: the angles drive (torques optimised anyway)": R("optimize", ["{ocp}", "--set", "gait.drive=angles"],
                                                                ["ocp_max_speed.toml", "needs [gait] drive", '"angles"']),
     "crosscheck: decreasing --steps": R("crosscheck", ["{paper}", "--steps", "40", "20"],

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import CallableSignal, Harmonic, Model, ReferenceTorque, Robot
-from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.baseline import required_value, value_from
 from ocp_crawl.ocp.family import BOX, WaveParams
 from ocp_crawl.ocp.search import best_harmonic
 from ocp_crawl.ocp.settings import OCPSettings
@@ -156,7 +156,7 @@ def test_value_definitions():
     assert value_from(shipped_settings(objective="robust_speed", robust="worst"), S, cot, T) == pytest.approx(-0.02)
     need = shipped_settings(objective="min_cot", speed_min=0.07)
     assert value_from(need, S[:1], cot[:1], T) == 20.0
-    assert value_from(need, S[:1], cot[:1], T, enforce_speed_min=True) == math.inf
+    assert required_value(need, S[:1], cot[:1], T) == math.inf
     assert value_from(shipped_settings(objective="min_cot"), [0.03], [20.0], T) == math.inf  # wrong way
 
 
@@ -172,7 +172,7 @@ def test_value_over_a_friction_set():
     assert value_from(shipped_settings(objective="min_cot", mu_ratio_eps=0.05), S, cot, T) == 30.0
     worst = shipped_settings(objective="min_cot", mu_ratio_eps=0.05, robust="worst", speed_min=0.045)
     assert value_from(worst, S, cot, T) == 40.0
-    assert value_from(worst, S, cot, T, enforce_speed_min=True) == math.inf  # 0.04 m/s in scenario 2
+    assert required_value(worst, S, cot, T) == math.inf  # 0.04 m/s in scenario 2
     assert value_from(worst, [-0.03, 0.001, -0.03], cot, T) == math.inf  # the wrong way in one
     assert not shipped_settings().friction_set and shipped_settings().friction_ratios == (1.0,)
     assert shipped_settings(objective="robust_speed").friction_ratios == (0.9, 1.0, 1.1)
@@ -219,8 +219,8 @@ def test_twice_per_cycle_has_the_same_value(objective):
     assert r2.S == pytest.approx(2 * r1.S, rel=1e-9) and r2.W_plus == pytest.approx(2 * r1.W_plus, rel=1e-9)
     settings = shipped_settings(objective=objective, speed_min=0.01)
     T = 2 * math.pi * 15.0 / RATE
-    v1 = value_from(settings, [r1.S], [r1.CoT_plus], T, enforce_speed_min=True)
-    v2 = value_from(settings, [r2.S], [r2.CoT_plus], 2 * T, enforce_speed_min=True)
+    v1 = required_value(settings, [r1.S], [r1.CoT_plus], T)
+    v2 = required_value(settings, [r2.S], [r2.CoT_plus], 2 * T)
     assert math.isfinite(v1) and v2 == pytest.approx(v1, rel=1e-9)
 
 

@@ -131,7 +131,19 @@ def test_speed_requirement_missed_by_the_replay_is_a_mismatch(claim, factor, fla
     value = value_from(st, [ts.S], [ts.CoT_plus], T)
     v = judge.judge_replay([MODEL], st, tau, T, value)
     assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
-    assert ("misses speed_min" in v.message) == flagged
+    assert ("misses speed >=" in v.message) == flagged
+
+
+@pytest.mark.parametrize("factor, flagged", [(1 - 2 * 5e-3, True), (1 - 0.5 * 5e-3, False)])
+def test_a_bound_on_a_cycle_quantity_missed_by_the_replay_is_a_mismatch(claim, factor, flagged):
+    """peak |tau| <= b: the triangle's peak is its envelope's edge, |lo|; a bound below it by more than
+    replay_tol is flagged, within it is not."""
+    tau, T, ts = claim
+    peak = float(np.max(np.abs(tau)))
+    st = settings_for(ts, constraints=({"quantity": "peak_torque", "max": peak * factor},))
+    v = judge.judge_replay([MODEL], st, tau, T, value_from(st, [ts.S], [ts.CoT_plus], T))
+    assert (v.status == Status.REPLAY_MISMATCH) == flagged, v.message
+    assert ("misses peak_torque <=" in v.message) == flagged
 
 
 def test_failed_replay_is_replay_failed(claim):

@@ -238,8 +238,14 @@ def _ocp_replay(s: dict, name: str, text) -> str:
     ocp, replay = s.get(f"{name}_ocp"), s.get(f"{name}_replay")
     if not s.get("scenarios"):
         return f"OCP {_each(ocp, text)}, replay {_each(replay, text)}"
-    return "; ".join(f"mu1/mu2 = {row['label']}: OCP {text(row[f'{name}_ocp'])}, replay {text(row[f'{name}_replay'])}"
+    return "; ".join(f"{_scenario(row)}: OCP {text(row[f'{name}_ocp'])}, replay {text(row[f'{name}_replay'])}"
                      for row in s["scenarios"])
+
+
+def _scenario(row: dict) -> str:
+    """A friction scenario in text: "mu1/mu2 = 0.9", with a level other than the robot's ", level 0.5"."""
+    ratio, _, level = row["label"].partition("_level_")
+    return f"mu1/mu2 = {ratio}" + (f", level {level}" if level else "")
 
 
 def _value(objective: str, v, digits: int = 3) -> str:
@@ -341,6 +347,8 @@ def format_optimize(s: dict) -> str:
         f"optimum by replay {_gain(s)}",
         *_baseline_lines(s),
         f"peaks       {_peaks(s)}",
+        *[f"requirement {r['text']}: replay {', '.join(units.significant(v, 6) for v in r['replay'])}"
+          for r in s.get("requirements") or []],
         *([f"starts      {spread}"] if spread else []),
         *margin_text(s.get("dynamic_margin")),
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "

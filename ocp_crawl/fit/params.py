@@ -21,7 +21,8 @@ from typing import Callable, Mapping, Sequence
 
 from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS, BendingMap, PressureWaveform, form_constants
 from ocp_crawl.problem import Problem, ProblemError
-from ocp_crawl.problem.schema import SCHEMA, Rule, suggest
+from ocp_crawl.problem.messages import suggest
+from ocp_crawl.problem.schema import SCHEMA, Rule
 
 #: pressure parameters -> unit
 PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg",

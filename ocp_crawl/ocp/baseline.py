@@ -9,7 +9,9 @@ the mean speed of scenario j is v_j = direction * S_j / T [m/s];
 * ``robust_speed``: max_speed over a friction set (0.1 unless ``mu_ratio_eps`` says otherwise);
 * ``min_cot``: CoT+ = W+/(M g |S|) (minimise; over a set its mean or its worst, the largest) subject to
   v_j >= ``speed_min`` in every scenario; a gait that misses the requirement (or moves the wrong way)
-  has the value +inf.
+  has the value +inf;
+* every objective: a gait that misses a bound of ``settings.constraints``
+  (:mod:`ocp_crawl.ocp.quantities`) is infeasible (+inf for CoT+, -inf for the speeds).
 
 A family's members keep gamma_i +- A_i inside the envelope gamma +- A_max and run at the shortest period
 the bandwidth allows (always the best one: see the family module).  The best member of each family is found
@@ -38,6 +40,7 @@ import numpy as np
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
 from ocp_crawl.ocp.family import SHAPES, Evaluation, WaveParams
+from ocp_crawl.ocp.quantities import Cycle, shortfall
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.sim.result import CrawlResult
 
@@ -50,31 +53,57 @@ def speeds(settings: OCPSettings, S, T: float) -> list[float]:
     return [settings.direction * s / T for s in S]
 
 
-def value_from(settings: OCPSettings, S, CoT, T: float, enforce_speed_min: bool = False) -> float:
+def value_from(settings: OCPSettings, S, CoT, T: float, feasible: bool = True) -> float:
     """Objective value of a gait from its S [m] and CoT+ [-] per scenario and its period T [s].
 
     max_speed, robust_speed: the mean or the worst (``settings.robust``) of direction * S_j / T [m/s]
-    (one scenario without a friction set); min_cot: the mean or the worst (largest) CoT+_j, or +inf when
-    the gait moves against ``direction`` (or not at all) in a scenario or, with ``enforce_speed_min``,
-    when direction * S_j / T < ``settings.speed_min`` in one (the baseline's rule; the replay judge
-    reports the CoT+ and checks the speed requirement within its own tolerance).  Larger is better for
-    the speeds, smaller for CoT+ (:func:`better`)."""
+    (one scenario without a friction set), -inf when not ``feasible``; min_cot: the mean or the worst
+    (largest) CoT+_j, or +inf when the gait moves against ``direction`` (or not at all) in a scenario or
+    is not ``feasible``.  ``feasible``: whether the gait meets the requirements (:func:`meets`; the
+    baselines' rule: the replay judge reports the value and checks the requirements within its own
+    tolerance).  Larger is better for the speeds, smaller for CoT+ (:func:`better`)."""
     v = speeds(settings, S, T)
     mean = settings.robust == "mean"
     if settings.objective != "min_cot":
-        return float(np.mean(v) if mean else np.min(v))
-    if not min(v) > 0 or (enforce_speed_min and min(v) < settings.speed_min):
+        return float(np.mean(v) if mean else np.min(v)) if feasible else -math.inf
+    if not min(v) > 0 or not feasible:
         return math.inf
     return float(np.mean(CoT) if mean else np.max(CoT))
 
 
+def cycle_of(settings: OCPSettings, S, W_plus, CoT, T: float,
+             profile: tuple = (math.nan, math.nan)) -> Cycle:
+    """The :class:`~ocp_crawl.ocp.quantities.Cycle` of a simulated gait (``profile``: its peak |tau| [N m]
+    and mean squared torque [N^2 m^2], needed by profile constraints only)."""
+    return Cycle(tuple(S), tuple(W_plus), tuple(CoT), T, settings.direction, *profile)
+
+
+def shortfalls(settings: OCPSettings, cycle: Cycle) -> float:
+    """The sum over ``settings.requirements`` of how far the gait misses each, relative to its bound (0:
+    every requirement met; :func:`~ocp_crawl.ocp.quantities.shortfall`)."""
+    return float(sum(shortfall(c, cycle) for c in settings.requirements))
+
+
 def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float,
-                    enforce_speed_min: bool = True) -> float:
-    """Objective of a set of simulations (one per scenario) of a gait of period T [s] (:func:`value_from`);
-    NaN when a simulation failed."""
+                    profile: tuple = (math.nan, math.nan), enforce: bool = True) -> float:
+    """Objective of a set of simulations (one per scenario) of a gait of period T [s] (:func:`value_from`),
+    with ``enforce`` an infeasible value where it misses a requirement (``profile``: the torque profile's
+    peak |tau| [N m] and mean squared torque [N^2 m^2], for profile constraints); NaN when a simulation
+    failed."""
     if any(not r.success for r in results):
         return math.nan
-    return value_from(settings, [r.S for r in results], [r.CoT_plus for r in results], T, enforce_speed_min)
+    S, W, CoT = ([getattr(r, k) for r in results] for k in ("S", "W_plus", "CoT_plus"))
+    ok = not enforce or shortfalls(settings, cycle_of(settings, S, W, CoT, T, profile)) <= 0
+    return value_from(settings, S, CoT, T, ok)
+
+
+def required_value(settings: OCPSettings, S, CoT, T: float, W_plus=None,
+                   profile: tuple = (math.nan, math.nan)) -> float:
+    """:func:`value_from` with the requirements enforced (the baselines' rule), from S [m], CoT+ [-] and
+    (for W+ bounds) W+ [J] per scenario, the period T [s] and the torque ``profile`` (for profile bounds)."""
+    W = [math.nan] * len(S) if W_plus is None else W_plus
+    ok = shortfalls(settings, cycle_of(settings, S, W, CoT, T, profile)) <= 0
+    return value_from(settings, S, CoT, T, ok)
 
 
 def better(settings: OCPSettings, a: float, b: float) -> bool:
@@ -87,26 +116,34 @@ def better(settings: OCPSettings, a: float, b: float) -> bool:
     return a < b if settings.objective == "min_cot" else a > b
 
 
+def _cycle(settings: OCPSettings, ev: Evaluation) -> Cycle:
+    return cycle_of(settings, ev.S, ev.W_plus, ev.CoT_plus, ev.T, ev.profile)
+
+
 def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
     """Rank of an evaluation for the search, smaller is better: the negated speed objective, CoT+ of a gait
-    that meets speed_min, else 1e6 plus its speed shortfall [m/s] (so the search, and the fallback, reach
-    for the requirement), 1e9 for a failed simulation."""
+    that meets the requirements, else 1e6 plus how far it misses them (min_cot: the speed shortfall [m/s]
+    below speed_min; the relative shortfalls of the constraints), so that the search, and the fallback,
+    reach for the requirements; 1e9 for a failed simulation."""
     if not ev.success:
         return FAIL_RANK
-    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, enforce_speed_min=True)
-    if settings.objective != "min_cot":
-        return -value
+    miss = shortfalls(settings, _cycle(settings, ev))
+    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, miss <= 0)
     if math.isfinite(value):
-        return value
+        return value if settings.objective == "min_cot" else -value
+    if settings.objective != "min_cot":
+        return MISS_RANK + miss
     v = speeds(settings, ev.S, ev.T)
-    return MISS_RANK + max(settings.speed_min - min(v), 0.0) + (0.0 if all(ev.S) else 1.0)
+    rest = sum(shortfall(c, _cycle(settings, ev)) for c in settings.constraints)
+    return MISS_RANK + max(settings.speed_min - min(v), 0.0) + (0.0 if all(ev.S) else 1.0) + rest
 
 
 def value_of(settings: OCPSettings, ev: Evaluation) -> float:
-    """The objective value of an evaluation (speed requirement enforced), NaN for a failed simulation."""
+    """The objective value of an evaluation (requirements enforced), NaN for a failed simulation."""
     if not ev.success:
         return math.nan
-    return value_from(settings, ev.S, ev.CoT_plus, ev.T, enforce_speed_min=True)
+    ok = shortfalls(settings, _cycle(settings, ev)) <= 0
+    return value_from(settings, ev.S, ev.CoT_plus, ev.T, ok)
 
 
 @dataclass

@@ -162,10 +162,11 @@ def margin_text(d: dict | None) -> list[str]:
 
 
 def _nominal(settings) -> int:
-    """Index of the friction scenario nearest mu1/mu2 = 1 (0 without a friction set)."""
+    """Index of the friction scenario nearest mu1/mu2 = 1 at the robot's level (0 without a friction
+    set)."""
     if not settings.friction_set:
         return 0
-    return int(np.argmin([abs(math.log(r)) for r in settings.friction_ratios]))
+    return int(np.argmin([abs(math.log(r)) + abs(math.log(lv)) for lv, r in settings.scenario_pairs()]))
 
 
 def check_dynamic_margin(res, models: list[Model]) -> None:

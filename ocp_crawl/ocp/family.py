@@ -41,6 +41,7 @@ import numpy as np
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
 from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.ocp.quantities import PROFILE_QUANTITIES, profile_of_signal
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
@@ -174,6 +175,9 @@ class Evaluation:
     margin: tuple = ()
     """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a member
     below ``settings.friction_tol`` is not admissible (``success`` False)"""
+    profile: tuple = (math.nan, math.nan)
+    """the torque profile's peak |tau| [N m] and mean squared torque [N^2 m^2]
+    (:func:`~ocp_crawl.ocp.quantities.profile_of_signal`), computed only where a constraint bounds them"""
 
 
 class WaveFamily:
@@ -245,8 +249,11 @@ class WaveFamily:
         low = next((x for x in margins if not x >= eps), None)
         if low is not None:  # not admissible: which foot slips depends on friction known to +-eps/2
             return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
+        profile = (math.nan, math.nan)
+        if any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements):
+            profile = profile_of_signal(params.torque(self.robot.k))
         return Evaluation(params, T, tuple(r.S for r in sims), tuple(r.W_plus for r in sims),
-                          tuple(r.CoT_plus for r in sims), True, margin=margins)
+                          tuple(r.CoT_plus for r in sims), True, margin=margins, profile=profile)
 
     def evaluated(self) -> list[Evaluation]:
         """Every evaluation so far (successful or not), in the order of their first request."""

@@ -9,7 +9,8 @@ friction scenario and accepts the optimum only when
 * the profile stays in the envelope gamma +- A_max and within the bandwidth |d tau_i/dt| <= k R, both to
   :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its nodes), and, with
   the optional ``max_accel_deg_s2`` = a, its second differences within k a (T/N)^2;
-* min_cot: the replayed mean speed direction * S / T meets ``speed_min`` within ``replay_tol`` (relative);
+* every requirement (min_cot's ``speed_min``, the bounds of ``constraints`` on cycle quantities:
+  :mod:`ocp_crawl.ocp.quantities`) holds on the replay within ``replay_tol`` (relative to the bound);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
 * the replay's slip is held clear of the friction tie: its slip-weighted friction margin m
   (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol - replay_tol`` (see below);
@@ -45,7 +46,8 @@ import numpy as np
 from ocp_crawl.io import units
 from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
-from ocp_crawl.ocp.baseline import value_from
+from ocp_crawl.ocp.baseline import cycle_of, value_from
+from ocp_crawl.ocp.quantities import Cycle, missed, profile_of_nodes
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
@@ -101,6 +103,16 @@ def ratio_labels(ratios) -> list[str]:
         if len(set(labels)) == len(set(ratios)):
             return labels
     return [repr(r) for r in ratios]
+
+
+def scenario_labels(settings: OCPSettings) -> list[str]:
+    """Labels of the friction scenarios of ``settings``, in their order: the ratio's
+    (:func:`ratio_labels`), and with friction levels (``mu_levels``) "<ratio>_level_<level>"."""
+    ratios = ratio_labels(settings.friction_ratios)
+    if settings.mu_levels is None:
+        return ratios
+    levels = ratio_labels(settings.levels)
+    return [f"{r}_level_{lv}" for lv in levels for r in ratios]
 
 
 def is_better(objective: str, a: float, b: float) -> bool:
@@ -186,6 +198,9 @@ class Verdict:
     (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
     joint_rate_ratio: float = float("nan")
     """the replay's peak joint rate over max_joint_rate_deg_s (NaN: no such bound)"""
+    cycle: Cycle | None = None
+    """the replayed cycle quantities the requirements are checked on
+    (:class:`~ocp_crawl.ocp.quantities.Cycle`)"""
 
     @property
     def ok(self) -> bool:
@@ -236,6 +251,7 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.CoT_plus = [r.CoT_plus for r in v.replay]
     v.speed = [settings.direction * s / T for s in v.S]
     v.value = value_from(settings, v.S, v.CoT_plus, T)
+    v.cycle = cycle_of(settings, v.S, v.W_plus, v.CoT_plus, T, profile_of_nodes(tau))
     v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
     v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
     problems = _problems(v, settings, value_ocp)
@@ -250,8 +266,8 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
 
 
 def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
-    """What the replay misses: the envelope, the bandwidth, speed_min, the friction tolerance, the agreement with
-    the OCP."""
+    """What the replay misses: the envelope, the bandwidth, the requirements, the friction tolerance, the
+    agreement with the OCP."""
     tol = settings.replay_tol
     out = []
     if not v.envelope_excess <= BOUND_RTOL:
@@ -264,12 +280,8 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
         out.append(f"the torque's second difference reaches {units.significant(v.accel_ratio, 10)} times the bound "
                    f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
                    f"{units.scientific(BOUND_RTOL)})")
-    slow = min(v.speed, default=math.inf)
-    need = settings.speed_min
-    if settings.objective == "min_cot" and need > 0 and not slow >= need * (1 - tol):
-        where = "" if len(v.speed) == 1 else " (the slowest scenario)"
-        out.append(f"the replayed speed {units.speed(slow)}{where} misses speed_min "
-                   f"{units.speed(settings.speed_min)} by more than replay_tol {units.ratio(tol)}")
+    out += [f"the replay misses {text} by more than replay_tol {units.ratio(tol)}"
+            for text in missed(settings.requirements, v.cycle, tol)]
     out += _joint_rate_problems(v, settings)
     low = min(v.margin, default=math.inf)
     if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc

@@ -9,7 +9,7 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice
-from ocp_crawl.ocp.judge import ratio_labels
+from ocp_crawl.ocp.judge import scenario_labels
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.status import Status
 
@@ -105,6 +105,9 @@ class OCPResult:
     """per scenario: the replay's peak sliding speeds |d x_i/dt| of feet 1, 2 [m/s]"""
     joint_rate_ratio: float = float("nan")
     """the replay's peak joint rate over max_joint_rate_deg_s (<= 1: within; NaN: no such bound)"""
+    requirements: list = field(default_factory=list)
+    """per requirement (min_cot's speed, each ``constraints`` bound): its ``text`` and table
+    (``constraint``) and the ``replay``'s values (one per scenario, or one)"""
     harmonic_peak_joint_rate_deg_s: list = field(default_factory=list)
     """per scenario: the harmonic baseline's peak joint rates [deg/s] (its own replay; empty if not
     measured)"""
@@ -157,7 +160,7 @@ class OCPResult:
             "peak_joint_rate_deg_s": per_scenario(self.peak_joint_rate_deg_s),
             "peak_slip_speed_m_s": per_scenario(self.peak_slip_speed_m_s),
             "max_joint_rate_deg_s": self.settings.max_joint_rate_deg_s,
-            "joint_rate_ratio": self.joint_rate_ratio,
+            "joint_rate_ratio": self.joint_rate_ratio, "requirements": self.requirements,
             "harmonic_peak_joint_rate_deg_s": per_scenario(self.harmonic_peak_joint_rate_deg_s),
             "harmonic_peak_slip_speed_m_s": per_scenario(self.harmonic_peak_slip_speed_m_s),
             "best_harmonic": self.harmonic.to_dict() if self.harmonic else None,
@@ -176,14 +179,14 @@ class OCPResult:
 
     def scenarios(self) -> list[dict] | None:
         """Over a friction set: per scenario, in the order of the per-scenario lists, its ratio ``mu1_mu2``,
-        its ``label`` (:func:`~ocp_crawl.ocp.judge.ratio_labels`) and its values (S, speed, W+, CoT+ of the
+        its friction ``level``, its ``label`` (:func:`~ocp_crawl.ocp.judge.scenario_labels`) and its values (S, speed, W+, CoT+ of the
         OCP and the replay; None where not computed); None without a set (one scenario, the robot's)."""
         if not self.settings.friction_set:
             return None
-        ratios = self.settings.friction_ratios
+        pairs = self.settings.scenario_pairs()
         names = ("S_ocp", "S_replay", "v_ocp", "v_replay", "W_plus_ocp", "W_plus_replay", "CoT_plus_ocp",
                  "CoT_plus_replay")
         lists = [getattr(self, name) for name in names]
-        return jsonable([{"mu1_mu2": r, "label": label,
+        return jsonable([{"mu1_mu2": r, "level": level, "label": label,
                           **{n: values[j] if j < len(values) else None for n, values in zip(names, lists)}}
-                         for j, (r, label) in enumerate(zip(ratios, ratio_labels(ratios)))])
+                         for j, ((level, r), label) in enumerate(zip(pairs, scenario_labels(self.settings)))])

@@ -13,6 +13,7 @@ from ocp_crawl.checks import is_real, real
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.nlp.homotopy import schedule as sigma_schedule
 from ocp_crawl.nlp.ipopt import check_ipopt_options
+from ocp_crawl.ocp.quantities import Constraint
 
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
 OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
@@ -129,6 +130,14 @@ class OCPSettings:
     mu_ratios: tuple | None = None
     """every objective: the scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r)) given explicitly;
     None (default): from mu_ratio_eps"""
+    mu_levels: tuple | None = None
+    """every objective: friction levels, each a factor on both feet's coefficients (mu1 and mu2 times it),
+    e.g. (1.0, 0.5) for a gait that must also move on a surface of half the friction; with a ratio set
+    (mu_ratio_eps, mu_ratios) every ratio at every level.  None (default): the robot's level only"""
+    constraints: tuple = ()
+    """bounds on cycle quantities (:class:`~ocp_crawl.ocp.quantities.Constraint`, or mappings of its
+    fields: a problem file's ``[[ocp.constraint]]`` tables), stated in the NLP, met by every baseline and
+    checked on the replay within replay_tol: e.g. ``{"quantity": "peak_torque", "max": 0.3}``"""
     robust: str = "mean"
     """with several friction scenarios: optimise the 'mean' or the 'worst' of the objective over them
     (the speed of max_speed and robust_speed, CoT+ of min_cot, whose speed_min holds in every scenario);
@@ -312,6 +321,14 @@ class OCPSettings:
             if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
                 raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
             self._set("mu_ratios", ratios)
+        if self.mu_levels is not None:
+            levels = tuple(float(r) for r in self.mu_levels)
+            if not levels or any(not (math.isfinite(r) and 0 < r <= 10) for r in levels):
+                raise ValueError(f"OCPSettings.mu_levels must be numbers in (0, 10], got {self.mu_levels!r}")
+            self._set("mu_levels", levels)
+        if isinstance(self.constraints, (dict, Constraint)):
+            raise ValueError("OCPSettings.constraints must be a sequence of constraints, got one")
+        self._set("constraints", tuple(Constraint.of(c) for c in self.constraints))
 
     def schedule(self) -> tuple[float, ...]:
         """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0 sigma_factor, ...,
@@ -319,11 +336,33 @@ class OCPSettings:
         return tuple(float(f"{v:.12g}") for v in sigma_schedule(self.sigma0[0], self.sigma_factor, self.sigma_min))
 
     def scenarios(self, robot: Robot) -> list[Robot]:
-        """The robots of the friction scenarios (:attr:`friction_ratios`; just ``robot`` without a set)."""
+        """The robots of the friction scenarios: each level of :attr:`levels`, at it each ratio of
+        :attr:`friction_ratios` (just ``robot`` without a set)."""
         if not self.friction_set:
             return [robot]
         mu = math.sqrt(robot.mu1 * robot.mu2)
-        return [robot.replace(mu1=mu * math.sqrt(r), mu2=mu / math.sqrt(r)) for r in self.friction_ratios]
+        return [robot.replace(mu1=level * mu * math.sqrt(r), mu2=level * mu / math.sqrt(r))
+                for level in self.levels for r in self.friction_ratios]
+
+    @property
+    def levels(self) -> tuple[float, ...]:
+        """The friction levels (factors on both coefficients): mu_levels, else (1,)."""
+        return self.mu_levels if self.mu_levels is not None else (1.0,)
+
+    def scenario_pairs(self) -> list[tuple[float, float]]:
+        """(level, ratio) of each scenario, in the order of :meth:`scenarios`."""
+        return [(level, r) for level in self.levels for r in self.friction_ratios]
+
+    @property
+    def requirements(self) -> tuple[Constraint, ...]:
+        """Every bound on a cycle quantity: min_cot's speed requirement (a speed at least speed_min in
+        every scenario; unless a constraint bounds the speed from below in every scenario itself), then
+        :attr:`constraints`."""
+        own = any(c.quantity == "speed" and c.min is not None and c.over == "every"
+                  for c in self.constraints)
+        if self.objective != "min_cot" or own:
+            return self.constraints
+        return (Constraint("speed", min=self.speed_min),) + self.constraints
 
     @property
     def ratio_eps(self) -> float:
@@ -345,8 +384,8 @@ class OCPSettings:
     @property
     def friction_set(self) -> bool:
         """True when the objective is taken over a set of friction scenarios (not only the robot's own
-        friction): explicit ``mu_ratios``, or a set half-width eps > 0."""
-        return self.mu_ratios is not None or self.ratio_eps > 0
+        friction): explicit ``mu_ratios`` or ``mu_levels``, or a set half-width eps > 0."""
+        return self.mu_ratios is not None or self.mu_levels is not None or self.ratio_eps > 0
 
     @property
     def baseline_shapes(self) -> tuple[str, ...]:

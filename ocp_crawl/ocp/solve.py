@@ -24,6 +24,7 @@ from ocp_crawl.io import units
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
+from ocp_crawl.ocp.quantities import cycle_values
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, replay_signal, spread_text,
@@ -318,6 +319,9 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     res.S_replay, res.v_replay = verdict.S, verdict.speed
     res.W_plus_replay, res.CoT_plus_replay = verdict.W_plus, verdict.CoT_plus
     res.value_replay, res.rel_diff_replay = verdict.value, verdict.rel_diff
+    if verdict.cycle is not None:
+        res.requirements = [{"text": c.text(), "constraint": c.to_dict(),
+                             "replay": cycle_values(c, verdict.cycle)} for c in res.settings.requirements]
     if not verdict.ok:
         res.success = False
         res.status = verdict.status

@@ -13,7 +13,8 @@ periodicity (angles and tangential force) is a constraint and the body displacem
 S = sum of the slips of foot 1.
 
 Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
-``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``.  Over a set of friction scenarios (one profile and one T;
+``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; every objective with the bounds of ``constraints`` on cycle
+quantities (:mod:`ocp_crawl.ocp.quantities`).  Over a set of friction scenarios (one profile and one T;
 robust_speed is max_speed over a set) ``-mean_j v_j`` or ``-min_j v_j``, ``mean_j CoT+_j`` or ``max_j CoT+_j``
 with ``v_j >= speed_min`` in each.  Each adds ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean
 squared torque rate, a tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without
@@ -35,6 +36,7 @@ from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.guess import simulated_guess
 from ocp_crawl.ocp.layout import Layout, fourier_basis
+from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual, positive_work,
                                     step_function, substep_torques, switch_windows)
@@ -106,16 +108,27 @@ class GaitOCP:
         nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)  # node 0 is where tau_1 is largest
         return T, dT, Th
 
-    def _objective(self, nlp: Layout, scen: list[Scenario], dT, Th):
-        """The objective (to minimise) with the regularisation, and its extra constraints."""
+    def _requirements(self, nlp: Layout, scen: list[Scenario], T, Th) -> None:
+        """The rows of every bound on a cycle quantity (:attr:`OCPSettings.requirements`: min_cot's
+        speed requirement, the ``constraints``), as :func:`~ocp_crawl.ocp.quantities.constraint_rows`
+        states them."""
+        s, r = self.settings, self.robot
+        sym = Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L, r.L,
+                      s.period_ref(), s.direction)
+        for i, c in enumerate(s.requirements):
+            for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
+                nlp.con(f"require_{i}_{k}", expr, lb, ub)
+
+    def _objective(self, nlp: Layout, scen: list[Scenario], T, dT, Th):
+        """The objective (to minimise) with the regularisation, and its extra constraints (the
+        requirements first)."""
         s, inf, N = self.settings, np.inf, self.settings.nodes
         d = s.direction
         theta = cs.vertcat(*[sc.theta for sc in scen])
         reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
         S_list = [sc.S for sc in scen]
+        self._requirements(nlp, scen, T, Th)
         if s.objective == "min_cot":
-            v_min = s.speed_min * s.period_ref() / self.robot.L  # scaled speed S_hat / T_hat
-            nlp.con("speed_min", cs.vertcat(*[d * Sj - v_min * Th for Sj in S_list]), 0.0, inf)
             # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
             cots = [sc.W_plus / (d * Sj) for sc, Sj in zip(scen, S_list)]
             if len(cots) == 1 or s.robust == "mean":
@@ -139,9 +152,10 @@ class GaitOCP:
         T, dT, Th = self._torques(nlp, MgL)
         kernel = step_function() if self.kernel == "expanded" else compiled_kernel(step_function())
         step_map = kernel.map(2 * s.nodes)
-        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, s.objective == "min_cot",
+        work = s.objective == "min_cot" or needs_work(s.requirements)
+        scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, work,
                          s.friction_tol, s.joint_rate_step()) for j, model in enumerate(self.scen)]
-        f = self._objective(nlp, scen, dT, Th)
+        f = self._objective(nlp, scen, T, dT, Th)
         if s.perturbation == "always":  # in neither f nor g: IPOPT finds the Hessian degenerate
             nlp.var("free", nlp.sym("free"), -np.inf, np.inf)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])

@@ -8,7 +8,7 @@ _EXPORTS = {
     "run_problem": "ocp_crawl.problem.run",
     "SCHEMA": "ocp_crawl.problem.schema", "SECTIONS": "ocp_crawl.problem.schema",
     "TORQUE_SOLVERS": "ocp_crawl.problem.schema", "Key": "ocp_crawl.problem.schema",
-    "ProblemError": "ocp_crawl.problem.schema", "format_value": "ocp_crawl.problem.schema",
+    "ProblemError": "ocp_crawl.problem.schema", "format_value": "ocp_crawl.problem.messages",
     "schema_markdown": "ocp_crawl.problem.schema",
     "Problem": "ocp_crawl.problem.problem", "load_problem": "ocp_crawl.problem.problem",
     "problem_from_dict": "ocp_crawl.problem.problem",

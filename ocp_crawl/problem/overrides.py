@@ -16,7 +16,8 @@ import numpy as np
 import tomli_w
 
 from ocp_crawl.io.files import read_bounded
-from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, format_value, removed_key, suggest
+from ocp_crawl.problem.messages import format_value, suggest
+from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, removed_key
 
 _KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
 

@@ -20,9 +20,10 @@ from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
 from ocp_crawl.problem.waveforms import gait_input
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
 from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
-from ocp_crawl.problem.schema import (DRIVES, MAX_ARRAY, SCHEMA, SECTIONS, TYPE_WORDS, Drive, Key, ProblemError,
-                                      Section, field_default, format_value, removed_key, suggest,
-                                      toml_type)
+from ocp_crawl.problem.messages import format_value, suggest, toml_type
+from ocp_crawl.problem.schema import (DRIVES, SCHEMA, SECTIONS, Drive, ProblemError, Section, field_default,
+                                      removed_key)
+from ocp_crawl.problem.values import Context, check_value
 from ocp_crawl.sim import DEFAULT_SOLVER, MUJOCO_SOLVERS, solver_named, unusable
 
 #: phases at which a prescribed-angle gait is checked for contact validity before simulating
@@ -146,7 +147,7 @@ class Problem:
             raise TypeError(f"Problem.with_values needs a mapping of SECTION.KEY to values, got {type(values).__name__}")
         items = [(*split_key(k, f"{self.source}: {k}"), v) for k, v in values.items()]
         data, _ = set_values(self.to_dict(), items, self.source)
-        problem = _validate(data, _Context(self.source))
+        problem = _validate(data, Context(self.source))
         given, _ = set_values(self.given_dict(), items, self.source)
         return dataclasses.replace(problem, given=_given(problem.sections, given))
 
@@ -182,84 +183,12 @@ class Problem:
                 **out}
 
 
-# --------------------------------------------------------------------------------------------
-# validation
-# --------------------------------------------------------------------------------------------
-class _Context:
-    """Where values came from, for messages: the file, and which keys were set on the command line."""
-
-    def __init__(self, source: str, overridden: set[tuple[str, str]] | None = None):
-        self.source = source
-        self.overridden = overridden or set()
-
-    @property
-    def base(self) -> Path:
-        """The directory relative file names in the problem are read from: the problem file's (else the current)."""
-        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
-
-    def at(self, section: str, key: str, value: Any) -> str:
-        origin = " (from --set)" if (section, key) in self.overridden else ""
-        return f"{self.source}: [{section}] {key} = {format_value(value)}{origin}"
-
-    def error(self, msg: str) -> ProblemError:
-        return ProblemError(f"{self.source}: {msg}")
-
-
-def _check_array(ctx: _Context, section: str, key: Key, value: Any) -> list[float]:
-    """An array key's value as a list of floats (JSON's and TOML's arrays), each finite and passing the key's rule."""
-    where = ctx.at(section, key.name, value)
-    if not isinstance(value, (list, tuple)):
-        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[list]} ({key.what}), got {toml_type(value)}")
-    if len(value) > MAX_ARRAY:
-        raise ProblemError(f"{where} is invalid: {len(value)} entries, at most {MAX_ARRAY} ({key.what})")
-    for j, v in enumerate(value):
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise ProblemError(f"{where} is invalid: entry {j} is {toml_type(v)}, expected a number ({key.what})")
-        if not math.isfinite(v):
-            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be finite ({key.what})")
-        if key.rule is not None and not key.rule.test(v):
-            raise ProblemError(f"{where} is invalid: entry {j} = {format_value(v)} must be {key.rule.text} "
-                               f"({key.what})")
-    return [float(v) for v in value]
-
-
-def _check_value(ctx: _Context, section: str, key: Key, value: Any) -> Any:
-    where = ctx.at(section, key.name, value)
-    if key.type is list:
-        return _check_array(ctx, section, key, value)
-    if key.type is str:
-        if not isinstance(value, str):
-            raise ProblemError(f"{where} is invalid: expected a string, {key.valid_text} ({key.what}), "
-                               f"got {toml_type(value)}")
-        if key.choices and value not in key.choices:
-            hint = suggest(value, key.choices)
-            raise ProblemError(f"{where} is invalid: {hint}must be {key.valid_text} ({key.what})")
-        return value
-    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
-    if key.type is int and not (numeric and isinstance(value, int)):
-        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[int]} ({key.what}), got {toml_type(value)}")
-    if key.type is float and not numeric:
-        raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[float]} ({key.what}), got {toml_type(value)}")
-    try:
-        value = key.type(value)
-        finite = math.isfinite(value)
-    except OverflowError:  # an integer of hundreds of digits
-        bound = f"{key.rule.text}, " if key.rule is not None else ""
-        raise ProblemError(f"{where} is invalid: too large, must be {bound}finite ({key.what})") from None
-    if not finite:
-        raise ProblemError(f"{where} is invalid: must be finite ({key.what})")
-    if key.rule is not None and not key.rule.test(value):
-        why = f": {key.rule.why}" if key.rule.why else ""
-        raise ProblemError(f"{where} is invalid: must be {key.rule.text} ({key.what}){why}")
-    return value
-
-
-def _variant(ctx: _Context, section: Section, given: Mapping[str, Any]) -> str | None:
+def _variant(ctx: Context, section: Section, given: Mapping[str, Any]) -> str | None:
     """The value of the section's selector key (``[gait] waveform``); keys of other variants are errors."""
     if section.selector is None:
         return None
     selector = section.key_map[section.selector]
-    variant = _check_value(ctx, section.name, selector, given.get(selector.name, selector.default))
+    variant = check_value(ctx, section.name, selector, given.get(selector.name, selector.default))
     for name, value in given.items():
         key = section.key_map[name]
         if not section.applies(key, variant):
@@ -272,7 +201,7 @@ def _variant(ctx: _Context, section: Section, given: Mapping[str, Any]) -> str |
     return variant
 
 
-def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) -> dict[str, Any]:
+def _check_section(ctx: Context, section: Section, given: Mapping[str, Any]) -> dict[str, Any]:
     keys = section.key_map
     for name, value in given.items():
         if name not in keys:
@@ -286,7 +215,7 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
     out: dict[str, Any] = {}
     for key in section.keys:
         if key.name in given:
-            out[key.name] = _check_value(ctx, section.name, key, given[key.name])
+            out[key.name] = check_value(ctx, section.name, key, given[key.name])
     # pairing rules before missing keys: "mu1 without mu2" says more than "mu is missing"
     for key in section.keys:
         name = key.name
@@ -316,19 +245,19 @@ def _check_section(ctx: _Context, section: Section, given: Mapping[str, Any]) ->
     return out
 
 
-def _check_friction_set(ctx: _Context, given: Mapping[str, Any]) -> None:
+def _check_friction_set(ctx: Context, given: Mapping[str, Any]) -> None:
     """``[ocp] robust = "worst"`` asks for the worst over a friction set: without one (no ``mu_ratio_eps``
-    > 0, no robust_speed) it would be ignored, so it is an error (the mean of one scenario is its value)."""
+    > 0, no ``mu_levels``, no robust_speed) it would be ignored, so it is an error (the mean of one scenario is its value)."""
     if given.get("robust") != "worst" or given.get("objective") == "robust_speed":
         return
-    if given.get("mu_ratio_eps", 0) > 0:
+    if given.get("mu_ratio_eps", 0) > 0 or "mu_levels" in given:
         return
     raise ProblemError(f"{ctx.at('ocp', 'robust', given['robust'])} needs a friction set: give [ocp] "
-                    f"mu_ratio_eps > 0 (the scenarios mu1/mu2 in {{1 - eps, 1, 1 + eps}}) or "
+                    f"mu_ratio_eps > 0 (the scenarios mu1/mu2 in {{1 - eps, 1, 1 + eps}}), mu_levels or "
                     f'objective = "robust_speed"')
 
 
-def _check_contact(ctx: _Context, model: Model, gait: PeriodicSignal, drive: str, values: Mapping) -> None:
+def _check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str, values: Mapping) -> None:
     """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad input."""
     gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
     blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
@@ -354,7 +283,7 @@ def _check_contact(ctx: _Context, model: Model, gait: PeriodicSignal, drive: str
 
 
 
-def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[str, Any]]:
+def _check_sections(data: Mapping[str, Any], ctx: Context) -> dict[str, dict[str, Any]]:
     """Every section's values checked, defaults filled in; unknown and misplaced sections rejected."""
     if not isinstance(data, Mapping):
         raise ctx.error(f"a problem must be a table of sections, got {toml_type(data)}")
@@ -379,7 +308,7 @@ def _check_sections(data: Mapping[str, Any], ctx: _Context) -> dict[str, dict[st
     return values
 
 
-def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical") -> str:
+def _solver(ctx: Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical") -> str:
     """The registry name of the problem's solver, if it can run (``unusable``): ``[simulation]
     solver`` for the torque drive; the angles drive has its own, or ``mujoco`` (servos hold the
     angles); naming another is bad input."""
@@ -404,7 +333,7 @@ def _solver(ctx: _Context, drive: str, sim: Mapping[str, Any], gravity: str = "p
 MAX_STIFFNESS_RATIO = 1e10
 
 
-def _check_stiffness_ratio(ctx: _Context, robot: Robot, drive: str) -> None:
+def _check_stiffness_ratio(ctx: Context, robot: Robot, drive: str) -> None:
     """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the keys."""
     ratio = robot.k / robot.MgL
     if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
@@ -419,7 +348,7 @@ def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> 
     return {name: {k: v for k, v in values[name].items() if k in data[name]} for name in values if name in data}
 
 
-def _validate(data: Mapping[str, Any], ctx: _Context) -> Problem:
+def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
@@ -471,7 +400,7 @@ def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides
             raise ProblemError(f"{source}: {where} is named {bad[0]!r} ({type(bad[0]).__name__}): "
                                "section and key names are strings")
     data, overridden = apply_overrides(data, overrides, source)
-    return _validate(data, _Context(source, overridden))
+    return _validate(data, Context(source, overridden))
 
 
 def load_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:

@@ -10,7 +10,8 @@ from ocp_crawl.model.inputs import Harmonic
 from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
-from ocp_crawl.problem.schema import SCHEMA, ProblemError, format_value
+from ocp_crawl.problem.messages import format_value
+from ocp_crawl.problem.schema import SCHEMA, ProblemError
 from ocp_crawl.sim import simulate
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.result import CrawlResult
@@ -83,6 +84,8 @@ def ocp_settings(problem: Problem) -> OCPSettings:
         raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} with [gait] "
                            f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
                            f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
+    if "constraint" in sec:  # one [[ocp.constraint]] table per bound
+        sec["constraints"] = tuple(sec.pop("constraint"))
     try:
         return OCPSettings(**sec, gamma_deg=gamma)
     except ValueError as exc:  # a rule between keys (each key alone passed the schema)

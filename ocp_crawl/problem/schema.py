@@ -11,24 +11,24 @@ the registry's solvers, ``OCPSettings``); the schema reads them from there with 
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import json
-import math
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, Callable, Literal, Mapping, Sequence
+from typing import Any, Callable, Literal, Mapping
 
 from ocp_crawl.model.pressure import PAPER_FORM_AMPLITUDE_BAR, PRESSURE_FORMS, BendingMap
 from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.robot import BETA_BOUNDS, MAGNITUDE, MU_BOUNDS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
-from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
+from ocp_crawl.problem.messages import format_value
+from ocp_crawl.ocp.quantities import QUANTITIES, Constraint
 from ocp_crawl.ocp.settings import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS, BASELINE_SAMPLES_BOUNDS,
                                    BASELINE_STARTS_BOUNDS, ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS,
                                    FOURIER_ORDER_BOUNDS, HARMONIC_PSI_BOUNDS, NODES_BOUNDS, PERTURBATIONS,
                                    PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
+from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.sim.dynamic import CONES
 
 Drive = Literal["torque", "angles"]
@@ -107,7 +107,12 @@ CYCLES = within(*MAX_CYCLES_BOUNDS, "periodic gaits settle in a few cycles; 500 
                 "a few minutes")
 STEPS = within(*STEPS_BOUNDS, "each step is an IPOPT solve of about 2 ms: 1e4 steps take about 20 s per cycle")
 
-TYPE_WORDS = {float: "a number", int: "an integer", str: "a string", list: "an array of numbers"}
+class Tables:
+    """The type of a key whose value is an array of tables (``[[ocp.constraint]]``)."""
+
+
+TYPE_WORDS = {float: "a number", int: "an integer", str: "a string", list: "an array of numbers",
+              Tables: "an array of tables"}
 #: most entries of an array key (inline samples, Fourier coefficients)
 MAX_ARRAY = 100_000
 
@@ -136,7 +141,8 @@ class Key:
 
     def __post_init__(self) -> None:
         if self.type not in TYPE_WORDS:
-            raise TypeError(f"Key {self.name}: type must be one of float, int, str, list, got {self.type!r}")
+            raise TypeError(f"Key {self.name}: type must be one of float, int, str, list, Tables, got "
+                            f"{self.type!r}")
 
     @property
     def what(self) -> str:
@@ -150,6 +156,8 @@ class Key:
             return "one of " + ", ".join(json.dumps(c) for c in self.choices)
         if self.type is list:
             return "an array of numbers, each " + (self.rule.text if self.rule is not None else "finite")
+        if self.type is Tables:
+            return "an array of tables, each " + (self.rule.text if self.rule is not None else "a table")
         if self.rule is not None:
             return self.rule.text
         return "any finite number" if self.type in (float, int) else "any string"
@@ -329,6 +337,20 @@ _SIMULATION = Section("simulation", "simulator of the torque drive and its optio
                   "2 steps + 1 steps; 0 skips it")),
 ))
 
+def _constraint_ok(value) -> bool:
+    """Whether ``value`` is a valid ``[[ocp.constraint]]`` table (its message: :func:`constraint_error`)."""
+    return constraint_error(value) is None
+
+
+def constraint_error(value) -> str | None:
+    """What is wrong with an ``[[ocp.constraint]]`` table, or None."""
+    try:
+        Constraint.of(value)
+    except (TypeError, ValueError) as exc:
+        return str(exc).replace("OCPSettings.constraints: ", "")
+    return None
+
+
 _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", selector="objective", keys=(
     Key("objective", str, "-", "what to optimise", default=_ocp("objective"),
         choices=("max_speed", "min_cot", "robust_speed")),
@@ -359,6 +381,15 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("mu_ratio_eps", float, "-", "friction uncertainty as a set: the objective over the scenarios "
         "mu1/mu2 in {1 - eps, 1, 1 + eps}, each replayed (absent: 0.1 for robust_speed, else 0: the "
         "robot's friction only)", rule=_physical("mu_ratio_eps")),
+    Key("mu_levels", list, "-", "friction levels: the objective and the constraints also at these "
+        "factors on both feet's coefficients, e.g. [1.0, 0.5] (with mu_ratio_eps: every ratio at every "
+        "level; absent: the robot's level only)", rule=within(1e-3, 10.0, "a factor on mu; mu itself "
+                                                              "stays within its bounds")),
+    Key("constraint", Tables, "-", "bounds on cycle quantities, one [[ocp.constraint]] table each: "
+        "quantity (" + ", ".join(f"{q.name} [{q.unit}]" for q in QUANTITIES.values()) + "), min and/or "
+        "max in its unit, over = \"every\" scenario (default) or their \"mean\"",
+        rule=Rule(_constraint_ok, "a table of quantity, min, max, over (docs: Optimal gaits, "
+                  "Constraints)")),
     Key("robust", str, "-", "over a friction set: optimise the mean or the worst of the objective (speed, "
         "or CoT+ with speed_min in every scenario)", default=_ocp("robust"), choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
@@ -444,56 +475,8 @@ def schema_markdown() -> str:
     rows = ["| key | type | unit | required / default | valid | meaning |", "|---|---|---|---|---|---|"]
     for sec in SECTIONS:
         for k in sec.keys:
-            kind = {float: "float", int: "int", str: "string", list: "array"}[k.type]
-            valid = k.rule.explained if k.rule is not None and not k.choices and k.type is not list else k.valid_text
+            kind = {float: "float", int: "int", str: "string", list: "array", Tables: "array of tables"}[k.type]
+            valid = (k.rule.explained if k.rule is not None and not k.choices and k.type not in (list, Tables)
+                     else k.valid_text)
             rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k, sec.selector)} | {valid} | {k.help} |")
     return "\n".join(rows)
-
-
-# --------------------------------------------------------------------------------------------
-# values in messages
-# --------------------------------------------------------------------------------------------
-def format_value(value: Any, _depth: int = 0) -> str:
-    """A value as it would be written in TOML (strings quoted), shortened to keep messages on one line
-    (arrays and tables nested more than 3 deep shown as ``...``)."""
-    if _depth > 3 and isinstance(value, (Mapping, list, tuple)):
-        s = "..."
-    elif isinstance(value, bool):
-        s = "true" if value else "false"
-    elif isinstance(value, str):
-        s = json.dumps(value)
-    elif isinstance(value, float):
-        s = "nan" if math.isnan(value) else ("inf" if value == math.inf else "-inf" if value == -math.inf else repr(value))
-    elif isinstance(value, Mapping):
-        s = "{" + ", ".join(f"{k} = {format_value(v, _depth + 1)}" for k, v in list(value.items())[:20]) + "}"
-    elif isinstance(value, (list, tuple)):
-        s = "[" + ", ".join(format_value(v, _depth + 1) for v in value[:20]) + "]"
-    else:
-        s = str(value)
-    return s if len(s) <= 60 else s[:57] + "..."
-
-
-def toml_type(value: Any) -> str:
-    """What a value is, in TOML's words ("a boolean", "a table", ...), for messages."""
-    if isinstance(value, bool):
-        return "a boolean"
-    if isinstance(value, str):
-        return "a string"
-    if isinstance(value, int):
-        return "an integer"
-    if isinstance(value, float):
-        return "a number"
-    if isinstance(value, Mapping):
-        return "a table"
-    if isinstance(value, (list, tuple)):
-        return "an array"
-    return f"a {type(value).__name__}"
-
-
-def suggest(name: str, valid: Sequence[str]) -> str:
-    """"did you mean X? " for the valid name closest to ``name``, or ""."""
-    # case slips (Mu for mu) score lower with difflib than a shorter name (M), so they come first
-    close = [v for v in valid if v.lower() == name.lower()] or \
-        difflib.get_close_matches(name, list(valid), n=1, cutoff=0.6) or \
-        sorted((v for v in valid if name.lower().startswith(v.lower())), key=len, reverse=True)
-    return f"did you mean {close[0]}? " if close else ""

@@ -23,7 +23,8 @@ from ocp_crawl.model.inputs import (MAX_KNOTS, FourierSeries, Harmonic, Periodic
                                     PeriodicPchip, PeriodicSignal, PeriodicSpline, TorqueReference)
 from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference, PressureWaveform
 from ocp_crawl.model.pulse import Pulse
-from ocp_crawl.problem.schema import ProblemError, format_value
+from ocp_crawl.problem.messages import format_value
+from ocp_crawl.problem.schema import ProblemError
 
 #: the interpolations of sampled waveforms and the fewest samples each needs over one period
 INTERPOLANTS = {"pchip": (PeriodicPchip, 3), "linear": (PeriodicLinear, 2), "spline": (PeriodicSpline, 3)}

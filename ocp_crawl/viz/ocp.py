@@ -16,7 +16,7 @@ from ocp_crawl.io.tables import table_text
 from ocp_crawl.model.inputs import CallableSignal
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp import OCPResult, OCPSettings
-from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, ratio_labels
+from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, scenario_labels
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.sim.event import simulate_torque
@@ -63,15 +63,16 @@ def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
 
 def scenario_files(settings: OCPSettings) -> list[str]:
     """The problem files replaying each friction scenario of a friction set, named by its ratio mu1/mu2
-    (``optimal_gait_mu1_mu2_0.9.toml``, ...; :func:`~ocp_crawl.ocp.judge.ratio_labels`); [] without a
-    set."""
+    (``optimal_gait_mu1_mu2_0.9.toml``, ...; with friction levels ``..._0.9_level_0.5.toml``:
+    :func:`~ocp_crawl.ocp.judge.scenario_labels`); [] without a set."""
     if not settings.friction_set:
         return []
-    return [f"optimal_gait_mu1_mu2_{label}.toml" for label in ratio_labels(settings.friction_ratios)]
+    return [f"optimal_gait_mu1_mu2_{label}.toml" for label in scenario_labels(settings)]
 
 
 def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str, name: str) -> str:
-    """The problem file ``name`` replaying the optimum in one friction scenario, mu1/mu2 = ``label``: as
+    """The problem file ``name`` replaying the optimum in one friction scenario ``label``
+    (:func:`~ocp_crawl.ocp.judge.scenario_labels`): as
     :func:`optimal_gait_toml`, the robot's friction coefficients those of ``scenario`` (mu1, mu2, full precision)."""
     sections = _gait_sections(result, problem)
     robot = {}
@@ -82,8 +83,8 @@ def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str,
             robot[key] = value
     sections["robot"] = robot
     return toml_text(sections, comments=[
-        f"The optimal {result.objective} torque profile ({result.status.label}) in the friction scenario mu1/mu2 = "
-        f"{label}, written by ocp-crawl optimize.",
+        f"The optimal {result.objective} torque profile ({result.status.label}) in the friction scenario "
+        f"mu1 = {scenario.mu1:.6g}, mu2 = {scenario.mu2:.6g} ({label}), written by ocp-crawl optimize.",
         f"Run:  ocp-crawl simulate {name}  (S and the speed reproduce the optimize replay's in this scenario).",
         "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full precision."])
 
@@ -223,7 +224,7 @@ def plot_optimal_gait(result: OCPResult, robot: Robot, baselines: list | None = 
     axs = fig.subplots(4, n, squeeze=False, sharex=True)
     fig.suptitle(_title(result, best))
     scenarios = result.settings.scenarios(robot)
-    labels = ratio_labels(result.settings.friction_ratios)
+    labels = scenario_labels(result.settings)
     name = f"best {best.shape}" if best is not None else ""
     modes: set[int] = set()
     for j in range(n):
@@ -356,7 +357,7 @@ def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, s
     if result.phase.size and "problem" in summary:
         problem = summary["problem"]
         written.append(_write_text(out / OPTIMAL_GAIT_TOML, optimal_gait_toml(result, problem)))
-        labels = ratio_labels(result.settings.friction_ratios)
+        labels = scenario_labels(result.settings)
         for name, label, scenario in zip(scenario_files(result.settings), labels,
                                          result.settings.scenarios(robot)):
             written.append(_write_text(out / name, scenario_toml(result, problem, scenario, label, name)))

@@ -1,0 +1,282 @@
+"""The cycle quantities an OCP can bound: the vocabulary of ``[[ocp.constraint]]``.
+
+A :class:`Constraint` bounds one quantity of the gait's cycle (:data:`QUANTITIES`) from below, above or
+both; a quantity of the friction scenarios (speed, distance, W+, CoT+) is bounded in every scenario or
+as the mean over them (``over``).  The same constraint has three readings, one per layer, from one
+definition here:
+
+* in the NLP (:func:`constraint_rows`): rows in the transcription's scaled variables;
+* on a simulated gait (:func:`cycle_values`, :func:`shortfall`): the values computed from the event-driven
+  simulations and the torque signal alone (the baselines' members, the replay judge);
+* in text (:meth:`Constraint.text`): reports and messages.
+
+Which bounds a quantity admits is set by what the transcription can state exactly (:attr:`Quantity.bounds`):
+W+ is a sum of slack variables v >= tau dphi, v >= 0, exact only where something presses it down (an
+upper bound, or min_cot's objective), and the peak torque is a maximum over nodes, exact as an upper
+bound on every node.  A lower bound on either would be met by inflating the slacks or by one node: it
+is refused.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import casadi as cs
+import numpy as np
+
+#: how a scenario quantity's bound applies over the friction scenarios: in every one, or to their mean
+OVERS = ("every", "mean")
+#: phases at which a torque signal is sampled for its profile quantities (a family member's; the replay's
+#: linear interpolant is evaluated on its nodes exactly)
+PROFILE_SAMPLES = 4096
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One quantity of a gait's cycle: its unit, whether it is per friction scenario, its meaning and the
+    bounds the transcription states exactly (``"min"``, ``"max"``)."""
+
+    name: str
+    unit: str
+    per_scenario: bool
+    meaning: str
+    bounds: tuple = ("min", "max")
+
+
+QUANTITIES = {q.name: q for q in (
+    Quantity("speed", "m/s", True, "mean speed direction * S / T"),
+    Quantity("distance", "m", True, "distance per cycle direction * S"),
+    Quantity("W_plus", "J", True, "positive actuator work per cycle", ("max",)),
+    Quantity("CoT_plus", "-", True, "cost of transport W+ / (M g |S|)", ("max",)),
+    Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",)),
+    Quantity("mean_torque_sq", "N^2 m^2", False,
+             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, up to a factor)"),
+    Quantity("period", "s", False, "period T of the gait"),
+)}
+
+
+#: the quantities of the torque profile alone (the same in every scenario)
+PROFILE_QUANTITIES = tuple(q.name for q in QUANTITIES.values() if not q.per_scenario and q.name != "period")
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A bound ``min <= quantity <= max`` (either may be None) on a cycle quantity of :data:`QUANTITIES`
+    (SI units, as listed there), in ``over`` = "every" friction scenario or on their "mean"."""
+
+    quantity: str
+    min: float | None = None
+    max: float | None = None
+    over: str = "every"
+
+    def __post_init__(self) -> None:
+        where = f"constraint on {self.quantity!r}"
+        if self.quantity not in QUANTITIES:
+            raise ValueError(f"OCPSettings.constraints: unknown quantity {self.quantity!r}; one of "
+                             f"{', '.join(QUANTITIES)}")
+        q = QUANTITIES[self.quantity]
+        for side in ("min", "max"):
+            value = getattr(self, side)
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be a finite number, "
+                                 f"got {value!r}")
+            if side not in q.bounds:
+                raise ValueError(f"OCPSettings.constraints: {where}: a {side} bound is not available "
+                                 f"({q.name} admits only {' and '.join(q.bounds)}: {_WHY_ONE_SIDED})")
+            object.__setattr__(self, side, float(value))
+        if self.min is None and self.max is None:
+            raise ValueError(f"OCPSettings.constraints: {where} has neither min nor max")
+        if self.min is not None and self.max is not None and not self.min <= self.max:
+            raise ValueError(f"OCPSettings.constraints: {where}: min {self.min:g} > max {self.max:g}")
+        if self.over not in OVERS:
+            raise ValueError(f"OCPSettings.constraints: {where}: over must be one of {OVERS}, got "
+                             f"{self.over!r}")
+
+    @classmethod
+    def of(cls, value) -> "Constraint":
+        """A Constraint from itself or a mapping of its fields (a problem file's table)."""
+        if isinstance(value, Constraint):
+            return value
+        if not isinstance(value, Mapping):
+            raise ValueError(f"OCPSettings.constraints: each must be a table of quantity, min, max, over; "
+                             f"got {value!r}")
+        unknown = sorted(set(value) - {"quantity", "min", "max", "over"})
+        if unknown or "quantity" not in value:
+            raise ValueError(f"OCPSettings.constraints: a constraint has the keys quantity (required), min, "
+                             f"max, over; got {', '.join(map(str, value))}")
+        return cls(**value)
+
+    @property
+    def unit(self) -> str:
+        return QUANTITIES[self.quantity].unit
+
+    def text(self) -> str:
+        """E.g. "speed >= 0.04 m/s in every scenario", "peak_torque <= 0.3 N m"."""
+        unit = "" if self.unit == "-" else f" {self.unit}"
+        sides = [f">= {self.min:g}{unit}" if self.min is not None else "",
+                 f"<= {self.max:g}{unit}" if self.max is not None else ""]
+        scope = ""
+        if QUANTITIES[self.quantity].per_scenario:
+            scope = " in every scenario" if self.over == "every" else " on the mean of the scenarios"
+        return f"{self.quantity} {' and '.join(s for s in sides if s)}{scope}"
+
+    def to_dict(self) -> dict:
+        """The problem file's table (absent bounds left out)."""
+        out = {"quantity": self.quantity}
+        out.update({k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None})
+        if QUANTITIES[self.quantity].per_scenario:
+            out["over"] = self.over
+        return out
+
+
+_WHY_ONE_SIDED = ("W+ and CoT+ are sums of slacks v >= tau dphi, v >= 0 and the peak torque a maximum "
+                  "over nodes: exact under an upper bound only")
+
+
+@dataclass(frozen=True)
+class Symbols:
+    """The transcription's expressions a constraint is stated in, scaled as the NLP is: node torques
+    ``T`` (2, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L (``S``)
+    and W+ over M g L (``W``, None where not built), and the scales."""
+
+    T: object
+    Th: object
+    S: list
+    W: list
+    MgL: float
+    L: float
+    period_ref: float
+    direction: int
+
+
+def _over(c: Constraint, rows: list):
+    """The rows of a scenario quantity: one per scenario, or their mean."""
+    if c.over == "mean":
+        return sum(rows) / len(rows)
+    return cs.vertcat(*rows)
+
+
+def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
+    """The NLP rows ``(expr, lb, ub)`` of constraint ``c``, each of order one in the scaled variables.
+
+    speed v = d S_hat L / (T_hat period_ref): ``d S_hat - (v* period_ref / L) T_hat`` against 0 (the form of
+    min_cot's speed requirement); distance ``d S_hat - s*/L``; W+ ``W_hat - W*/(M g L) <= 0``; CoT+
+    ``W_hat - c* d S_hat <= 0`` (CoT+ = W_hat / (d S_hat)); the peak torque ``-b <= T_hat <= b`` at every
+    node (the linear interpolant's extremes are its nodes'); the mean squared torque ``sum over intervals
+    and joints of (a^2 + a b + b^2) / 3 / N`` (exact for the linear interpolant); the period ``T_hat``."""
+    q, d, out = c.quantity, sym.direction, []
+    if q in ("speed", "distance"):
+        for side, bound, lb, ub in (("min", c.min, 0.0, np.inf), ("max", c.max, -np.inf, 0.0)):
+            if bound is None:
+                continue
+            if q == "speed":
+                rows = [d * S - bound * sym.period_ref / sym.L * sym.Th for S in sym.S]
+            else:
+                rows = [d * S - bound / sym.L for S in sym.S]
+            out.append((_over(c, rows), lb, ub))
+        return out
+    if q == "W_plus":
+        return [(_over(c, [W - c.max / sym.MgL for W in sym.W]), -np.inf, 0.0)]
+    if q == "CoT_plus":
+        if c.over == "mean":
+            rows = [W / (d * S) for W, S in zip(sym.W, sym.S)]
+            return [(sum(rows) / len(rows) - c.max, -np.inf, 0.0)]
+        return [(cs.vertcat(*[W - c.max * d * S for W, S in zip(sym.W, sym.S)]), -np.inf, 0.0)]
+    if q == "peak_torque":
+        b = c.max / sym.MgL
+        return [(cs.vec(sym.T), -b, b)]
+    if q == "mean_torque_sq":
+        value = mean_square_nodes(sym.T)
+        scale = sym.MgL**2
+        return [(value, -np.inf if c.min is None else c.min / scale,
+                 np.inf if c.max is None else c.max / scale)]
+    # period
+    return [(sym.Th, -np.inf if c.min is None else c.min / sym.period_ref,
+             np.inf if c.max is None else c.max / sym.period_ref)]
+
+
+def mean_square_nodes(T):
+    """Mean over the cycle of the sum over joints of the squared linear interpolant of node values ``T``
+    (2, N) (periodic): per interval (a^2 + a b + b^2) / 3; a CasADi expression or a float."""
+    if isinstance(T, np.ndarray):
+        nxt = np.roll(T, -1, axis=1)
+        return float(np.sum(T**2 + T * nxt + nxt**2) / (3 * T.shape[1]))
+    nxt = cs.horzcat(T[:, 1:], T[:, 0])
+    return cs.sum2(cs.sum1(T**2 + T * nxt + nxt**2)) / (3 * T.shape[1])
+
+
+def needs_work(constraints) -> bool:
+    """Whether a constraint needs W+ in the NLP (W_plus, CoT_plus)."""
+    return any(c.quantity in ("W_plus", "CoT_plus") for c in constraints)
+
+
+@dataclass(frozen=True)
+class Cycle:
+    """A simulated gait's numbers that constraints are checked on: per scenario S [m], W+ [J], CoT+ [-],
+    the period T [s], ``direction``, and the torque profile's peak |tau| [N m] and mean squared torque
+    [N^2 m^2] (:func:`profile_of_nodes`, :func:`profile_of_signal`)."""
+
+    S: tuple
+    W_plus: tuple
+    CoT_plus: tuple
+    T: float
+    direction: int
+    peak_torque: float
+    mean_torque_sq: float
+
+
+def profile_of_nodes(tau: np.ndarray) -> tuple[float, float]:
+    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of the linear interpolant of node torques ``tau``
+    (2, N), exactly."""
+    tau = np.asarray(tau, float)
+    return float(np.max(np.abs(tau))), mean_square_nodes(tau)
+
+
+def profile_of_signal(signal) -> tuple[float, float]:
+    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of a torque signal tau(t) [N m] of the phase t
+    [cycles], from :data:`PROFILE_SAMPLES` phases and its kinks (its linear interpolant there: relative error
+    O(1e-7) on the paper's waveforms)."""
+    t = np.arange(PROFILE_SAMPLES) / PROFILE_SAMPLES
+    tau = np.asarray(signal(t), float).reshape(2, -1)
+    return profile_of_nodes(tau)
+
+
+def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
+    """The values of the constrained quantity on a simulated gait: one per scenario ("every") or one."""
+    d, T = cycle.direction, cycle.T
+    per = {"speed": [d * s / T for s in cycle.S], "distance": [d * s for s in cycle.S],
+           "W_plus": list(cycle.W_plus), "CoT_plus": list(cycle.CoT_plus)}
+    if c.quantity in per:
+        values = per[c.quantity]
+        return [float(np.mean(values))] if c.over == "mean" else values
+    return [float({"peak_torque": cycle.peak_torque, "mean_torque_sq": cycle.mean_torque_sq,
+                   "period": T}[c.quantity])]
+
+
+def shortfall(c: Constraint, cycle: Cycle) -> float:
+    """How far the gait misses the constraint, relative to its bound's size (0 when met; NaN values miss
+    by infinity): max over the values of (min - value) / |min| and (value - max) / |max| (a zero bound:
+    absolute)."""
+    worst = 0.0
+    for value in cycle_values(c, cycle):
+        if not math.isfinite(value):
+            return math.inf
+        for bound, miss in ((c.min, None if c.min is None else c.min - value),
+                            (c.max, None if c.max is None else value - c.max)):
+            if bound is not None:
+                worst = max(worst, miss / (abs(bound) or 1.0))
+    return worst
+
+
+def missed(constraints, cycle: Cycle, tol: float = 0.0) -> list[str]:
+    """The constraints the gait misses by more than ``tol`` (relative to the bound), each as a text with the
+    gait's values."""
+    out = []
+    for c in constraints:
+        if shortfall(c, cycle) > tol:
+            values = ", ".join(f"{v:.6g}" for v in cycle_values(c, cycle))
+            out.append(f"{c.text()} (here {values})")
+    return out
