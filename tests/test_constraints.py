@@ -14,7 +14,7 @@ from scipy.integrate import quad
 
 from ocp_crawl import Robot
 from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
-from ocp_crawl.ocp import optimize_gait
+from ocp_crawl.ocp import UserObjective, optimize_gait
 from ocp_crawl.ocp.judge import scenario_labels
 from ocp_crawl.ocp.quantities import (QUANTITIES, Constraint, Cycle, mean_square_nodes,
                                       profile_of_signal, shortfall)
@@ -114,3 +114,29 @@ def test_the_optimum_under_a_peak_torque_bound_meets_it_and_beats_its_baseline()
     (req,) = res.requirements
     assert req["replay"] == [pytest.approx(PEAK, rel=1e-6)] and req["constraint"]["max"] == PEAK
     assert res.value_replay > res.harmonic.value and res.harmonic.feasible
+
+
+def _speed_nlp(q):
+    return q.direction * q.S[0] / q.T
+
+
+def _speed_value(cycle):
+    return cycle.direction * cycle.S[0] / cycle.T
+
+
+@pytest.mark.slow
+def test_a_user_objective_that_restates_max_speed_finds_its_optimum():
+    """The hook with the mean speed direction S / T, scaled as the named objective scales it (L over
+    the reference period), is the max_speed NLP: the same replayed optimum (N = 16), reported under the
+    user's label and compared with the same baseline."""
+    base = dict(nodes=16, starts=1, direction=-1, baselines="harmonic", baseline_samples=0,
+                harmonic_A=2, harmonic_psi=8)
+    named = optimize_gait(ROBOT, "physical", OCPSettings(**base), jobs=1)
+    scale = ROBOT.L / OCPSettings(**base).period_ref()
+    user = UserObjective("speed", _speed_nlp, _speed_value, sense="max", unit="m/s", scale=scale)
+    mine = optimize_gait(ROBOT, "physical", OCPSettings(**base, user_objective=user), jobs=1)
+    assert named.success and mine.success, (named.message, mine.message)
+    assert mine.objective == "max:speed" and mine.settings.minimises is False
+    assert mine.value_replay == pytest.approx(named.value_replay, rel=1e-7)
+    assert mine.harmonic.value == pytest.approx(named.harmonic.value, rel=1e-12)
+    assert mine.gains["harmonic"] == pytest.approx(named.gains["harmonic"], rel=1e-6)

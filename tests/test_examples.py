@@ -27,6 +27,7 @@ OUTPUTS = {
     "07_study_to_pandas.py": ["study.png", "study.csv", "sweep/results.csv"],
     "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
     "09_past_a_fold.py": ["past_a_fold.png"],
+    "10_user_objective.py": ["user_objective.png"],
 }
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
 TIMEOUT_S = 300

@@ -1,6 +1,7 @@
 """The shipped OCP problem files solved and judged, with convergence in N.
 
-Each file (``problems/ocp_*.toml``: max_speed, min_cot, robust_speed on the paper's robot) is solved at each N of
+Each file (``problems/ocp_*.toml``: max_speed, min_cot, robust_speed on the paper's robot; max_speed under a
+peak-torque bound; min_cot at two friction levels) is solved at each N of
 ``OCP_CRAWL_OCP_NODES`` (default "50"; ``OCP_CRAWL_OCP_NODES="50 100 200 400"`` for the convergence table, ``-s``
 prints it; heavy: by hand with OCP_CRAWL_HEAVY=1) with ``OCP_CRAWL_OCP_STARTS`` starts (default: one for a single N, else the file's), each N
 warm-started from the previous one (:func:`~ocp_crawl.ocp.convergence.converge_in_nodes`), and every optimum is
@@ -24,7 +25,8 @@ from ocp_crawl.problem import load_problem, ocp_settings
 REPO = Path(__file__).resolve().parents[1]
 #: the shipped files at N = 50 (a minute or more each) by hand; the default suite solves max_speed's at
 #: N = 30 (the shared run of conftest.py)
-FILES = ["ocp_max_speed", "ocp_min_cot", "ocp_robust"]
+FILES = ["ocp_max_speed", "ocp_min_cot", "ocp_robust", "ocp_max_speed_peak_torque",
+         "ocp_min_cot_two_levels"]
 
 
 def nodes_list() -> list[int]:
@@ -39,9 +41,11 @@ def replayed_value(problem, settings, tau: np.ndarray, T: float) -> tuple[float,
     runs = [simulate(Model(r, gravity=problem.gravity), signal) for r in settings.scenarios(problem.robot)]
     if not all(r.success for r in runs):
         return math.nan, runs
+    pick = np.mean if settings.robust == "mean" else (max if settings.objective == "min_cot" else min)
     if settings.objective == "min_cot":
-        return runs[0].W_plus / (problem.robot.M * problem.robot.g * abs(runs[0].S)), runs
-    return float(np.mean([settings.direction * r.S / T for r in runs])), runs
+        Mg = problem.robot.M * problem.robot.g
+        return float(pick([r.W_plus / (Mg * abs(r.S)) for r in runs])), runs
+    return float(pick([settings.direction * r.S / T for r in runs])), runs
 
 
 @pytest.mark.heavy
@@ -74,7 +78,14 @@ def test_problem_file_is_solved_confirmed_and_converges(name):
         dtau = np.abs(np.diff(np.c_[res.tau, res.tau[:, :1]], axis=1)) * row.nodes / res.T_ocp
         assert np.max(dtau) <= st.rate_bound(robot) * (1 + 1e-9)
         if st.objective == "min_cot":
-            assert st.direction * runs[0].S / res.T_ocp >= st.speed_min * (1 - st.replay_tol)
+            assert all(st.direction * r.S / res.T_ocp >= st.speed_min * (1 - st.replay_tol) for r in runs)
+        for c in st.constraints:  # the shipped files' bounds, each by its own definition
+            if c.quantity == "peak_torque":
+                assert np.max(np.abs(res.tau)) <= c.max * (1 + 1e-9)
+            elif c.quantity == "speed":
+                assert all(st.direction * r.S / res.T_ocp >= c.min * (1 - st.replay_tol) for r in runs)
+            else:
+                raise AssertionError(f"no independent check of {c.quantity}")
         # at least as good as the harmonic baseline (the start), within the replay tolerance
         base = res.harmonic.value
         slack = st.replay_tol * abs(base)

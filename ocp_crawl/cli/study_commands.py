@@ -250,7 +250,9 @@ def _scenario(row: dict) -> str:
 
 def _value(objective: str, v, digits: int = 3) -> str:
     """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] to ``digits + 1`` significant digits."""
-    return units.significant(v, digits + 1) if objective == "min_cot" else units.speed(v, digits)
+    if objective in ("max_speed", "robust_speed"):
+        return units.speed(v, digits)
+    return units.significant(v, digits + 1)
 
 
 def _gain(s: dict) -> str:

@@ -14,10 +14,13 @@ _EXPORTS = {
     "replay_signal": "ocp_crawl.ocp.judge", "judge_replay": "ocp_crawl.ocp.judge",
     "ConvergenceRow": "ocp_crawl.ocp.convergence", "converge_in_nodes": "ocp_crawl.ocp.convergence",
     "observed_orders": "ocp_crawl.ocp.convergence",
+    "Constraint": "ocp_crawl.ocp.quantities", "UserObjective": "ocp_crawl.ocp.quantities",
+    "QUANTITIES": "ocp_crawl.ocp.quantities",
 }
 
 __all__ = [
-    "Baselines", "ConvergenceRow", "GaitOCP", "OBJECTIVES", "OCPResult", "OCPSettings", "SHAPES",
+    "Baselines", "Constraint", "ConvergenceRow", "GaitOCP", "OBJECTIVES", "OCPResult", "OCPSettings",
+    "QUANTITIES", "SHAPES", "UserObjective",
     "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes",
     "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]

@@ -40,7 +40,7 @@ import numpy as np
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
 from ocp_crawl.ocp.family import SHAPES, Evaluation, WaveParams
-from ocp_crawl.ocp.quantities import Cycle, shortfall
+from ocp_crawl.ocp.quantities import Cycle, minimises, shortfall
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.sim.result import CrawlResult
 
@@ -53,7 +53,8 @@ def speeds(settings: OCPSettings, S, T: float) -> list[float]:
     return [settings.direction * s / T for s in S]
 
 
-def value_from(settings: OCPSettings, S, CoT, T: float, feasible: bool = True) -> float:
+def value_from(settings: OCPSettings, S, CoT, T: float, feasible: bool = True,
+               cycle: Cycle | None = None) -> float:
     """Objective value of a gait from its S [m] and CoT+ [-] per scenario and its period T [s].
 
     max_speed, robust_speed: the mean or the worst (``settings.robust``) of direction * S_j / T [m/s]
@@ -61,7 +62,15 @@ def value_from(settings: OCPSettings, S, CoT, T: float, feasible: bool = True) -
     (largest) CoT+_j, or +inf when the gait moves against ``direction`` (or not at all) in a scenario or
     is not ``feasible``.  ``feasible``: whether the gait meets the requirements (:func:`meets`; the
     baselines' rule: the replay judge reports the value and checks the requirements within its own
-    tolerance).  Larger is better for the speeds, smaller for CoT+ (:func:`better`)."""
+    tolerance).  Larger is better for the speeds, smaller for CoT+ (:func:`better`).  A user objective
+    (``settings.user_objective``) is its ``value`` of the gait's ``cycle`` (required then)."""
+    user = settings.user_objective
+    if user is not None:
+        if cycle is None:
+            raise ValueError(f"value_from: the user objective {user.label} needs the gait's cycle")
+        if not feasible:
+            return math.inf if user.sense == "min" else -math.inf
+        return float(user.value(cycle))
     v = speeds(settings, S, T)
     mean = settings.robust == "mean"
     if settings.objective != "min_cot":
@@ -93,8 +102,9 @@ def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float,
     if any(not r.success for r in results):
         return math.nan
     S, W, CoT = ([getattr(r, k) for r in results] for k in ("S", "W_plus", "CoT_plus"))
-    ok = not enforce or shortfalls(settings, cycle_of(settings, S, W, CoT, T, profile)) <= 0
-    return value_from(settings, S, CoT, T, ok)
+    cycle = cycle_of(settings, S, W, CoT, T, profile)
+    ok = not enforce or shortfalls(settings, cycle) <= 0
+    return value_from(settings, S, CoT, T, ok, cycle)
 
 
 def required_value(settings: OCPSettings, S, CoT, T: float, W_plus=None,
@@ -102,8 +112,8 @@ def required_value(settings: OCPSettings, S, CoT, T: float, W_plus=None,
     """:func:`value_from` with the requirements enforced (the baselines' rule), from S [m], CoT+ [-] and
     (for W+ bounds) W+ [J] per scenario, the period T [s] and the torque ``profile`` (for profile bounds)."""
     W = [math.nan] * len(S) if W_plus is None else W_plus
-    ok = shortfalls(settings, cycle_of(settings, S, W, CoT, T, profile)) <= 0
-    return value_from(settings, S, CoT, T, ok)
+    cycle = cycle_of(settings, S, W, CoT, T, profile)
+    return value_from(settings, S, CoT, T, shortfalls(settings, cycle) <= 0, cycle)
 
 
 def better(settings: OCPSettings, a: float, b: float) -> bool:
@@ -113,7 +123,7 @@ def better(settings: OCPSettings, a: float, b: float) -> bool:
         return False
     if math.isnan(b):
         return True
-    return a < b if settings.objective == "min_cot" else a > b
+    return a < b if settings.minimises else a > b
 
 
 def _cycle(settings: OCPSettings, ev: Evaluation) -> Cycle:
@@ -127,10 +137,11 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
     reach for the requirements; 1e9 for a failed simulation."""
     if not ev.success:
         return FAIL_RANK
-    miss = shortfalls(settings, _cycle(settings, ev))
-    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, miss <= 0)
+    cycle = _cycle(settings, ev)
+    miss = shortfalls(settings, cycle)
+    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, miss <= 0, cycle)
     if math.isfinite(value):
-        return value if settings.objective == "min_cot" else -value
+        return value if settings.minimises else -value
     if settings.objective != "min_cot":
         return MISS_RANK + miss
     v = speeds(settings, ev.S, ev.T)
@@ -142,8 +153,8 @@ def value_of(settings: OCPSettings, ev: Evaluation) -> float:
     """The objective value of an evaluation (requirements enforced), NaN for a failed simulation."""
     if not ev.success:
         return math.nan
-    ok = shortfalls(settings, _cycle(settings, ev)) <= 0
-    return value_from(settings, ev.S, ev.CoT_plus, ev.T, ok)
+    cycle = _cycle(settings, ev)
+    return value_from(settings, ev.S, ev.CoT_plus, ev.T, shortfalls(settings, cycle) <= 0, cycle)
 
 
 @dataclass
@@ -226,7 +237,7 @@ class Baselines:
         found = [c for c in self.choices.values() if c is not None]
         if not found:
             return None
-        sign = 1.0 if self.objective == "min_cot" else -1.0
+        sign = 1.0 if minimises(self.objective) else -1.0
         return min(found, key=lambda c: (not c.feasible, sign * c.value if c.feasible else 0.0))
 
     def merged(self, other: "Baselines") -> "Baselines":

@@ -136,7 +136,7 @@ class ConvergenceTable:
 
     def to_dict(self) -> dict:
         """JSON-able: the objective, its unit, the units of the rows' numbers and the rows."""
-        unit = "-" if self.objective == "min_cot" else "m/s"
+        unit = "m/s" if self.objective in ("max_speed", "robust_speed") else "-"
         units = {"T": "s", "value_ocp": unit, "value_replay": unit, "change": unit, "rel_diff_replay": "-",
                  "rel_change": "-", "order": "-", "order_ocp": "-", "solve_time_s": "s"}
         return jsonable({"objective": self.objective, "unit": unit, "units": units, "success": self.success,

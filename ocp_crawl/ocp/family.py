@@ -250,7 +250,8 @@ class WaveFamily:
         if low is not None:  # not admissible: which foot slips depends on friction known to +-eps/2
             return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
         profile = (math.nan, math.nan)
-        if any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements):
+        if (self.settings.user_objective is not None
+                or any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements)):
             profile = profile_of_signal(params.torque(self.robot.k))
         return Evaluation(params, T, tuple(r.S for r in sims), tuple(r.W_plus for r in sims),
                           tuple(r.CoT_plus for r in sims), True, margin=margins, profile=profile)

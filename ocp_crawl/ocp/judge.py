@@ -47,7 +47,7 @@ from ocp_crawl.io import units
 from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.baseline import cycle_of, value_from
-from ocp_crawl.ocp.quantities import Cycle, missed, profile_of_nodes
+from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
@@ -81,6 +81,8 @@ def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
 
 def value_text(objective: str, value: float) -> str:
     """An objective value with its unit: a speed [m/s] in mm/s (max_speed, robust_speed), else CoT+ [-]."""
+    if objective.startswith(("min:", "max:")):
+        return units.significant(value, 6)
     return units.cot(value) if objective == "min_cot" else units.speed(value)
 
 
@@ -121,7 +123,7 @@ def is_better(objective: str, a: float, b: float) -> bool:
         return False
     if math.isnan(b):
         return True
-    return a < b if objective == "min_cot" else a > b
+    return a < b if minimises(objective) else a > b
 
 
 def gain_over(objective: str, value: float, baseline: float) -> float:
@@ -130,7 +132,9 @@ def gain_over(objective: str, value: float, baseline: float) -> float:
     min_cot: (CoT_baseline - CoT) / CoT_baseline; speeds: (v - v_baseline) / |v_baseline|."""
     if not (math.isfinite(value) and math.isfinite(baseline)) or baseline == 0:
         return float("nan")
-    return (baseline - value) / baseline if objective == "min_cot" else (value - baseline) / abs(baseline)
+    if minimises(objective):
+        return (baseline - value) / abs(baseline)
+    return (value - baseline) / abs(baseline)
 
 
 def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> tuple[float, float, float]:
@@ -250,8 +254,8 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.W_plus = [r.W_plus for r in v.replay]
     v.CoT_plus = [r.CoT_plus for r in v.replay]
     v.speed = [settings.direction * s / T for s in v.S]
-    v.value = value_from(settings, v.S, v.CoT_plus, T)
     v.cycle = cycle_of(settings, v.S, v.W_plus, v.CoT_plus, T, profile_of_nodes(tau))
+    v.value = value_from(settings, v.S, v.CoT_plus, T, cycle=v.cycle)
     v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
     v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
     problems = _problems(v, settings, value_ocp)

@@ -280,3 +280,70 @@ def missed(constraints, cycle: Cycle, tol: float = 0.0) -> list[str]:
             values = ", ".join(f"{v:.6g}" for v in cycle_values(c, cycle))
             out.append(f"{c.text()} (here {values})")
     return out
+
+
+#: the sign of a user objective's value: minimised or maximised
+SENSES = ("min", "max")
+
+
+@dataclass(frozen=True)
+class UserObjective:
+    """An objective of the user's, for what the named objectives do not say (the Python hook).
+
+    ``nlp(q)`` returns the objective as a CasADi expression of the transcription's symbols in physical
+    units, ``q`` a :class:`Physical`; ``value(cycle)`` the same number on a simulated gait, from a
+    :class:`Cycle` (the baselines' members, the replay: the judge compares the two within replay_tol).
+    ``sense`` "min" or "max"; ``scale`` its typical size in its ``unit`` (the NLP minimises value /
+    scale: an objective of order one converges to IPOPT's tolerances as the named ones do); ``work``:
+    whether ``nlp`` uses W+ (the NLP then builds it).  The settings name the objective "min:<name>" or
+    "max:<name>"."""
+
+    name: str
+    nlp: object
+    value: object
+    sense: str = "min"
+    unit: str = "-"
+    scale: float = 1.0
+    work: bool = False
+
+    def __post_init__(self) -> None:
+        if self.sense not in SENSES:
+            raise ValueError(f"UserObjective.sense must be one of {SENSES}, got {self.sense!r}")
+        if not (callable(self.nlp) and callable(self.value)):
+            raise ValueError("UserObjective: nlp and value must be callables (of the symbols, of a Cycle)")
+        if not (isinstance(self.scale, (int, float)) and math.isfinite(self.scale) and self.scale > 0):
+            raise ValueError(f"UserObjective.scale must be a positive number, got {self.scale!r}")
+        if not (isinstance(self.name, str) and self.name.isidentifier()):
+            raise ValueError(f"UserObjective.name must be an identifier, got {self.name!r}")
+
+    @property
+    def label(self) -> str:
+        """The objective's name in settings and reports: "min:<name>" or "max:<name>"."""
+        return f"{self.sense}:{self.name}"
+
+
+@dataclass(frozen=True)
+class Physical:
+    """The transcription's symbols in physical units, for a :class:`UserObjective`: node torques ``tau``
+    (2, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S`` [m] and
+    ``W_plus`` [J] (None unless the objective says ``work``), the mean squared torque ``mean_torque_sq``
+    [N^2 m^2] and ``direction`` (the sign of S pursued)."""
+
+    tau: object
+    T: object
+    S: list
+    W_plus: list
+    mean_torque_sq: object
+    direction: int
+
+
+def physical(sym: Symbols) -> Physical:
+    """The symbols of ``sym`` (scaled) in physical units."""
+    W = [None if w is None else w * sym.MgL for w in sym.W]
+    return Physical(sym.T * sym.MgL, sym.Th * sym.period_ref, [s * sym.L for s in sym.S], W,
+                    mean_square_nodes(sym.T) * sym.MgL**2, sym.direction)
+
+
+def minimises(objective: str) -> bool:
+    """Whether the objective named ``objective`` is minimised: min_cot and "min:<name>" user objectives."""
+    return objective == "min_cot" or objective.startswith("min:")

@@ -13,7 +13,7 @@ from ocp_crawl.checks import is_real, real
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.nlp.homotopy import schedule as sigma_schedule
 from ocp_crawl.nlp.ipopt import check_ipopt_options
-from ocp_crawl.ocp.quantities import Constraint
+from ocp_crawl.ocp.quantities import Constraint, UserObjective, minimises
 
 Objective = Literal["max_speed", "min_cot", "robust_speed"]
 OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
@@ -138,6 +138,10 @@ class OCPSettings:
     """bounds on cycle quantities (:class:`~ocp_crawl.ocp.quantities.Constraint`, or mappings of its
     fields: a problem file's ``[[ocp.constraint]]`` tables), stated in the NLP, met by every baseline and
     checked on the replay within replay_tol: e.g. ``{"quantity": "peak_torque", "max": 0.3}``"""
+    user_objective: UserObjective | None = None
+    """an objective of the user's (:class:`~ocp_crawl.ocp.quantities.UserObjective`: its expression in
+    the transcription's symbols and its value on a simulated gait), Python only; ``objective`` then
+    becomes its label, "min:<name>" or "max:<name>"; None (default): ``objective`` names it"""
     robust: str = "mean"
     """with several friction scenarios: optimise the 'mean' or the 'worst' of the objective over them
     (the speed of max_speed and robust_speed, CoT+ of min_cot, whose speed_min holds in every scenario);
@@ -253,8 +257,27 @@ class OCPSettings:
     def _set(self, name: str, value) -> None:
         object.__setattr__(self, name, value)
 
+    @property
+    def minimises(self) -> bool:
+        """Whether the objective is minimised (min_cot, a "min:" user objective) rather than maximised."""
+        return minimises(self.objective)
+
+    def _check_objective(self) -> None:
+        user = self.user_objective
+        if user is None:
+            if self.objective not in OBJECTIVES:
+                raise ValueError(f"OCPSettings.objective must be one of {OBJECTIVES}, got {self.objective!r}")
+            return
+        if not isinstance(user, UserObjective):
+            raise ValueError(f"OCPSettings.user_objective must be a UserObjective, got {user!r}")
+        if self.objective not in (user.label, "max_speed"):  # the default, or its own label
+            raise ValueError(f"OCPSettings: objective {self.objective!r} and user_objective {user.label!r}: "
+                             "give one")
+        self._set("objective", user.label)
+
     def _check_choices(self) -> None:
-        for name, choices in (("objective", OBJECTIVES), ("parametrization", PARAMETRIZATIONS),
+        self._check_objective()
+        for name, choices in (("parametrization", PARAMETRIZATIONS),
                               ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES),
                               ("perturbation", PERTURBATIONS), ("endgame_paths", ENDGAME_PATHS)):
             if getattr(self, name) not in choices:

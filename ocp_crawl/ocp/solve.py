@@ -23,8 +23,8 @@ import numpy as np
 from ocp_crawl.io import units
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
-from ocp_crawl.ocp.baseline import Baselines, WaveChoice, value_from
-from ocp_crawl.ocp.quantities import cycle_values
+from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_value, value_from
+from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, replay_signal, spread_text,
@@ -221,8 +221,7 @@ def _endgame(ocp: GaitOCP, models: list[Model]) -> Endgame | None:
         if not verdict.ok:
             return False, f"the replay judge: {verdict.message}"
         runs, T = replays(x_ref)
-        ref = (value_from(settings, [r.S for r in runs], [r.CoT_plus for r in runs], T)
-               if all(r.success for r in runs) else math.nan)
+        ref = objective_value(settings, runs, T, profile_of_nodes(ocp.unpack(x_ref)["tau"]), enforce=False)
         text = (f"replay {value_text(settings.objective, verdict.value)} against {against}'s "
                 f"{value_text(settings.objective, ref)}")
         return not is_better(settings.objective, ref, verdict.value), text
@@ -288,7 +287,9 @@ def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
     res.complementarity_residual = max(sc["comp"] for sc in un["scen"])
     res.periodicity_residual = max(sc["periodic"] for sc in un["scen"])
     res.equation_residual = ocp.equation_residual(x)
-    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, res.T_ocp)
+    cycle = cycle_of(ocp.settings, res.S_ocp, res.W_plus_ocp, res.CoT_plus_ocp, res.T_ocp,
+                     profile_of_nodes(res.tau))
+    res.value_ocp = value_from(ocp.settings, res.S_ocp, res.CoT_plus_ocp, res.T_ocp, cycle=cycle)
 
 
 def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:

@@ -36,7 +36,7 @@ from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.guess import simulated_guess
 from ocp_crawl.ocp.layout import Layout, fourier_basis
-from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work
+from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work, physical
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual, positive_work,
                                     step_function, substep_torques, switch_windows)
@@ -108,13 +108,17 @@ class GaitOCP:
         nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)  # node 0 is where tau_1 is largest
         return T, dT, Th
 
+    def _symbols(self, scen: list[Scenario], T, Th) -> Symbols:
+        s, r = self.settings, self.robot
+        return Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L, r.L,
+                       s.period_ref(), s.direction)
+
     def _requirements(self, nlp: Layout, scen: list[Scenario], T, Th) -> None:
         """The rows of every bound on a cycle quantity (:attr:`OCPSettings.requirements`: min_cot's
         speed requirement, the ``constraints``), as :func:`~ocp_crawl.ocp.quantities.constraint_rows`
         states them."""
-        s, r = self.settings, self.robot
-        sym = Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L, r.L,
-                      s.period_ref(), s.direction)
+        s = self.settings
+        sym = self._symbols(scen, T, Th)
         for i, c in enumerate(s.requirements):
             for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
                 nlp.con(f"require_{i}_{k}", expr, lb, ub)
@@ -128,6 +132,10 @@ class GaitOCP:
         reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
         S_list = [sc.S for sc in scen]
         self._requirements(nlp, scen, T, Th)
+        user = s.user_objective
+        if user is not None:  # the user's expression in physical units, over its typical size
+            f = user.nlp(physical(self._symbols(scen, T, Th))) / user.scale
+            return (f if user.sense == "min" else -f) + reg
         if s.objective == "min_cot":
             # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
             cots = [sc.W_plus / (d * Sj) for sc, Sj in zip(scen, S_list)]
@@ -152,7 +160,8 @@ class GaitOCP:
         T, dT, Th = self._torques(nlp, MgL)
         kernel = step_function() if self.kernel == "expanded" else compiled_kernel(step_function())
         step_map = kernel.map(2 * s.nodes)
-        work = s.objective == "min_cot" or needs_work(s.requirements)
+        work = (s.objective == "min_cot" or needs_work(s.requirements)
+                or (s.user_objective is not None and s.user_objective.work))
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, work,
                          s.friction_tol, s.joint_rate_step()) for j, model in enumerate(self.scen)]
         f = self._objective(nlp, scen, T, dT, Th)

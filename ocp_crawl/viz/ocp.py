@@ -173,6 +173,8 @@ def _title(result: OCPResult, best) -> str:
     if len(result.replay) > 1:
         if result.objective == "min_cot":
             what, value = "CoT$^+$", units.cot(result.value_replay)
+        elif result.objective not in ("max_speed", "robust_speed"):  # a user objective
+            what, value = result.objective, units.significant(result.value_replay, 6)
         else:   # the objective's speed, signed as S
             what = "v = S/T"
             value = units.speed(result.settings.direction * result.value_replay, 1)

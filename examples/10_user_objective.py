@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/10_user_objective.py
