@@ -512,6 +512,13 @@ COMMAND_ROWS.update({
     "optimize: a friction level of zero": R(
         "optimize", ["{ocp}", "--set", "ocp.mu_levels=[1.0, 0.0]"],
         ["[ocp] mu_levels", "entry 1 = 0.0", "in [0.001, 10]"]),
+    "optimize: an unknown IPOPT option in [ocp.ipopt]": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp.ipopt]", "No such IPOPT option: max_itr"],
+        text=OCP_TEXT + '\n[ocp.ipopt]\nmax_itr = 3\n'),
+    "optimize: [ocp.ipopt] not a table": R(
+        "optimize", ["{ocp}", "--set", "ocp.ipopt=3"], ["[ocp] ipopt = 3 (from --set)", "a table"]),
+    "optimize: --verbose with --json": R("optimize", ["{ocp}", "--verbose", "--json"],
+                                         ["--verbose with --json", "output_file"]),
     "optimize: the angles drive (torques optimised anyway)": R("optimize", ["{ocp}", "--set", "gait.drive=angles"],
                                                                ["ocp_max_speed.toml", "needs [gait] drive", '"angles"']),
     "crosscheck: decreasing --steps": R("crosscheck", ["{paper}", "--steps", "40", "20"],

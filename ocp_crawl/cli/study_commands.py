@@ -214,6 +214,9 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=jobs_type, metavar="N",
                    help="worker processes of the baselines' search (default: the CPUs available; the "
                         "result does not depend on it)")
+    p.add_argument("--verbose", action="store_true",
+                   help="IPOPT's log of every solve on stdout (not with --json; a log file instead: "
+                        "[ocp.ipopt] output_file, file_print_level)")
     force_arg(p)
     work_arg(p)
 
@@ -434,6 +437,10 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = \"torque\", got "
                        f"{format_value(problem.drive)}")
     settings = ocp_settings(problem)
+    if args.verbose and args.json:
+        raise BadInput("--verbose with --json: IPOPT's log would mix into the JSON on stdout; give one, or "
+                       "write the log to a file with [ocp.ipopt] output_file and file_print_level")
+    settings = replace(settings, verbose=bool(args.verbose))
     nodes = args.nodes or [settings.nodes]
     if any(b <= a for a, b in zip(nodes, nodes[1:])):
         raise BadInput(f"--nodes {' '.join(str(n) for n in nodes)} is invalid: the numbers of nodes must increase "

@@ -474,6 +474,13 @@ def _option_check_nlp() -> dict:
     return {"x": x, "f": x**2, "g": x}
 
 
+def check_ipopt_names(owner: str, options: dict) -> None:
+    """IPOPT's own check of ``options`` (names, types, ranges) on a one-variable NLP, at once: ValueError
+    naming ``owner`` when it rejects one."""
+    build_ipopt("options_check", _option_check_nlp(),
+                {"error_on_fail": False, "ipopt": {"print_level": 0, "sb": "yes", **options}}, owner, options)
+
+
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,
                   verbose: bool = False, stage_tol: float | None = None, warm_over: dict | None = None) -> Solvers:
     """The cold and the warm-started IPOPT solver of ``nlp`` (CasADi's ``{"x", "p", "f", "g"}``) and loose versions.

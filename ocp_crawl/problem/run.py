@@ -85,7 +85,9 @@ def ocp_settings(problem: Problem) -> OCPSettings:
                            f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
                            f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
     if "constraint" in sec:  # one [[ocp.constraint]] table per bound
-        sec["constraints"] = tuple(sec.pop("constraint"))
+        sec["constraints"] = tuple(dict(c) for c in sec.pop("constraint"))
+    if "ipopt" in sec:
+        sec["ipopt"] = dict(sec["ipopt"])
     try:
         return OCPSettings(**sec, gamma_deg=gamma)
     except ValueError as exc:  # a rule between keys (each key alone passed the schema)

@@ -112,7 +112,7 @@ class Tables:
 
 
 TYPE_WORDS = {float: "a number", int: "an integer", str: "a string", list: "an array of numbers",
-              Tables: "an array of tables"}
+              Tables: "an array of tables", dict: "a table"}
 #: most entries of an array key (inline samples, Fourier coefficients)
 MAX_ARRAY = 100_000
 
@@ -141,7 +141,7 @@ class Key:
 
     def __post_init__(self) -> None:
         if self.type not in TYPE_WORDS:
-            raise TypeError(f"Key {self.name}: type must be one of float, int, str, list, Tables, got "
+            raise TypeError(f"Key {self.name}: type must be one of float, int, str, list, Tables, dict, got "
                             f"{self.type!r}")
 
     @property
@@ -158,6 +158,8 @@ class Key:
             return "an array of numbers, each " + (self.rule.text if self.rule is not None else "finite")
         if self.type is Tables:
             return "an array of tables, each " + (self.rule.text if self.rule is not None else "a table")
+        if self.type is dict:
+            return "a table of names and numbers or strings"
         if self.rule is not None:
             return self.rule.text
         return "any finite number" if self.type in (float, int) else "any string"
@@ -390,6 +392,9 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         "max in its unit, over = \"every\" scenario (default) or their \"mean\"",
         rule=Rule(_constraint_ok, "a table of quantity, min, max, over (docs: Optimal gaits, "
                   "Constraints)")),
+    Key("ipopt", dict, "-", "IPOPT options of every solve of the OCP, one [ocp.ipopt] table (e.g. max_iter = "
+        "500, output_file = \"ipopt.log\", file_print_level = 5), over the package's own; names and ranges "
+        "checked by IPOPT when the file is read"),
     Key("robust", str, "-", "over a friction set: optimise the mean or the worst of the objective (speed, "
         "or CoT+ with speed_min in every scenario)", default=_ocp("robust"), choices=("mean", "worst")),
     Key("harmonic_psi", int, "-", "psi values of the harmonic sweep (initial guess, comparison)",
@@ -475,8 +480,9 @@ def schema_markdown() -> str:
     rows = ["| key | type | unit | required / default | valid | meaning |", "|---|---|---|---|---|---|"]
     for sec in SECTIONS:
         for k in sec.keys:
-            kind = {float: "float", int: "int", str: "string", list: "array", Tables: "array of tables"}[k.type]
-            valid = (k.rule.explained if k.rule is not None and not k.choices and k.type not in (list, Tables)
+            kind = {float: "float", int: "int", str: "string", list: "array", Tables: "array of tables",
+                    dict: "table"}[k.type]
+            valid = (k.rule.explained if k.rule is not None and not k.choices and k.type not in (list, Tables, dict)
                      else k.valid_text)
             rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | {_requirement(k, sec.selector)} | {valid} | {k.help} |")
     return "\n".join(rows)

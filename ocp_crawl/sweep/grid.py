@@ -52,9 +52,9 @@ def schema_key(name: str, where: str) -> Key:
         hint = f"did you mean {section}.{close[0]}? " if close else ""
         raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid keys: "
                            f"{', '.join(keys)}")
-    if keys[key].type is list:
-        raise ProblemError(f"{where} is invalid: {name} is an array key; an axis varies a number or a string "
-                           "(sweep a key with one value, or one problem file per array)")
+    if keys[key].type not in (float, int, str):
+        raise ProblemError(f"{where} is invalid: {name} is an array or table key; an axis varies a number or a "
+                           "string (sweep a key with one value, or one problem file per array)")
     return keys[key]
 
 
