@@ -517,6 +517,8 @@ COMMAND_ROWS.update({
         text=OCP_TEXT + '\n[ocp.ipopt]\nmax_itr = 3\n'),
     "optimize: [ocp.ipopt] not a table": R(
         "optimize", ["{ocp}", "--set", "ocp.ipopt=3"], ["[ocp] ipopt = 3 (from --set)", "a table"]),
+    "optimize: --start without a period": R("optimize", ["{ocp}", "--start", "{paper}"],
+                                            ["--start", "paper_gait.toml", "[gait] period", "optimal_gait.toml"]),
     "optimize: --verbose with --json": R("optimize", ["{ocp}", "--verbose", "--json"],
                                          ["--verbose with --json", "output_file"]),
     "optimize: the angles drive (torques optimised anyway)": R("optimize", ["{ocp}", "--set", "gait.drive=angles"],

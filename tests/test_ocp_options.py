@@ -33,3 +33,43 @@ def test_verbose_prints_ipopts_log(tmp_path, capfd):
     assert code == 0, out[-2000:]
     assert "This is Ipopt version" in out and "iter    objective" in out
     assert "status      success" in out
+
+
+def test_a_previous_optimum_as_the_start(tmp_path, capsys):
+    """--start DIR/optimal_gait.toml (a previous run's replay file): the first start is that gait, labelled
+    so, and the optimum reached from it is at least as good by replay as the one it started from."""
+    ocp = str(_file(tmp_path, ""))
+    assert main(["optimize", ocp, "--json", "--out", str(tmp_path / "first"), *CHEAP]) == 0
+    first = json.loads(capsys.readouterr().out)
+    code = main(["optimize", ocp, "--json", "--start", str(tmp_path / "first" / "optimal_gait.toml"), *CHEAP])
+    again = json.loads(capsys.readouterr().out)
+    assert code == 0 and again["starts"][0]["label"] == "given start"
+    assert again["starts"][0]["T_start"] == first["T_ocp"]
+    value, before = again["objective_value_replay"], first["objective_value_replay"]
+    assert value >= before * (1 - first["replay_tol"])
+
+
+def test_the_nlp_exported_to_a_solver_of_ones_own():
+    """GaitOCP.export: CasADi's nlpsol input and the relaxation's bounds; IPOPT called directly on it from
+    the simulated guess of the harmonic baseline's family member reaches a point whose objective and
+    constraints the transcription's own functions confirm."""
+    import casadi as cs
+    import numpy as np
+
+    from ocp_crawl import Robot
+    from ocp_crawl.ocp import GaitOCP, OCPSettings
+    from ocp_crawl.ocp.family import WaveParams
+
+    s = OCPSettings(nodes=12, direction=-1)
+    ocp = GaitOCP(Robot.paper(), "physical", s)
+    member = WaveParams(90.0, 90.0, 25.0, 25.0, 30.0)
+    x0 = ocp.initial_guess(member.torque(Robot.paper().k), member.period(s))
+    out = ocp.export(sigma=1e-4)
+    solver = cs.nlpsol("mine", "ipopt", out["nlp"], {"ipopt.print_level": 0, "print_time": False})
+    sol = solver(x0=x0, lbx=out["lbx"], ubx=out["ubx"], lbg=out["lbg"], ubg=out["ubg"])
+    assert solver.stats()["success"]
+    x = np.asarray(sol["x"]).ravel()
+    g = np.asarray(cs.Function("g", [out["nlp"]["x"]], [out["nlp"]["g"]])(x)).ravel()
+    assert np.all(g >= out["lbg"] - 1e-6) and np.all(g <= out["ubg"] + 1e-6)
+    assert float(sol["f"]) == ocp.objective(x) < ocp.objective(x0)
+    assert ocp.unpack(x)["scen"][0]["v"] > 0

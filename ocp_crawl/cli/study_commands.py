@@ -214,6 +214,9 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=jobs_type, metavar="N",
                    help="worker processes of the baselines' search (default: the CPUs available; the "
                         "result does not depend on it)")
+    p.add_argument("--start", metavar="GAIT.toml",
+                   help="start the OCP from this gait instead of the harmonic baseline: a problem file of a "
+                        "torque-drive gait with [gait] period, e.g. a previous run's optimal_gait.toml")
     p.add_argument("--verbose", action="store_true",
                    help="IPOPT's log of every solve on stdout (not with --json; a log file instead: "
                         "[ocp.ipopt] output_file, file_print_level)")
@@ -451,9 +454,10 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         return _optimize_nodes(args, problem, settings, nodes, work)
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
+    start = _start(args.start)
     announce(work)
     with _progress_bar(args.progress or sys.stderr.isatty()):
-        result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs)
+        result = optimize_gait(problem.robot, problem.gravity, settings, jobs=args.jobs, start=start)
     data = _optimize_data(result, problem)
     if args.json:
         print(json.dumps(data, allow_nan=False))
@@ -462,6 +466,20 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     files = [] if out is None else write_out(
         out, lambda d: write_ocp_outputs(result, problem.robot, d, data), args.force)
     return finish(args, files, result.success, f"optimisation failed: {result.message}")
+
+
+def _start(path) -> tuple | None:
+    """``--start GAIT.toml``: the torque signal of the phase and the period of a problem file's gait."""
+    if path is None:
+        return None
+    from ocp_crawl.problem import load_problem
+
+    gait = load_problem(path)
+    if gait.drive != "torque" or gait.period is None:
+        raise BadInput(f"--start {path}: needs a torque-drive gait with a [gait] period [s] (as the "
+                       f"optimal_gait.toml that optimize --out writes); got drive {format_value(gait.drive)}, "
+                       f"period {format_value(gait.period)}")
+    return gait.torque, gait.period
 
 
 #: the peaks of optimize's JSON summary (their units in their names, and in units.UNITS)

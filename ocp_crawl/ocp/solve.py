@@ -33,7 +33,7 @@ from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.starts import StartGuess, start_guesses
+from ocp_crawl.ocp.starts import StartGuess, given_start, start_guesses
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.workers import overlap
 from ocp_crawl.sim.event import simulate_torque
@@ -48,7 +48,7 @@ def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
-                  replay: bool = True, jobs: int | None = None) -> OCPResult:
+                  replay: bool = True, jobs: int | None = None, start: tuple | None = None) -> OCPResult:
     """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the best.
 
     Parameters
@@ -66,6 +66,11 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         Worker processes of the baselines' search (:func:`~ocp_crawl.ocp.search.best_baselines`; None: the
         CPUs available): the harmonic family's first, then the other families' while the OCP solves.  The
         result does not depend on it.
+    start : (callable, float), optional
+        A first start of the user's in place of the harmonic baseline: a torque signal tau(t) [N m] of the
+        phase t [cycles] (sampled at the node phases; e.g. a previous optimum's
+        :func:`~ocp_crawl.ocp.judge.replay_signal`) and its period [s], clipped to the envelope and slowed
+        to the bandwidth if needed.  The baselines are searched and reported as without it.
 
     Returns
     -------
@@ -95,6 +100,8 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
 
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
         guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
+        if start is not None:
+            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(2, N), start[1])
         return [(g, solve_from(ocp, models, replay_signal(phase, g.tau), g.T, harm, replay,
                                baselines=harmonic)) for g in guesses]
     others = settings.baseline_shapes[1:]

@@ -61,6 +61,12 @@ def _profile(settings: OCPSettings, robot: Robot, label: str, tau: np.ndarray, T
     return StartGuess(label, tau, feasible_period(settings, robot, tau, T))
 
 
+def given_start(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> StartGuess:
+    """A start of the user's: node torques ``tau`` (2, N) [N m] and a period ``T`` [s] (e.g. a previous
+    optimum), clipped to the envelope, pinned, the period lengthened if the bandwidth requires."""
+    return _profile(settings, robot, "given start", np.asarray(tau, float), T)
+
+
 def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
                           attempt: int = 0) -> StartGuess:
     """The baseline plus a second harmonic: each joint's profile plus SECOND_HARMONIC / 2^attempt times its

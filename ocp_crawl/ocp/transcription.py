@@ -173,6 +173,7 @@ class GaitOCP:
         self.nx, self.ng = X.numel(), G.numel()
         self._lbx, self._ubx = np.concatenate(nlp.lbx), np.concatenate(nlp.ubx)
         self._lbg, self._ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
+        self._nlp = {"x": X, "f": f, "g": G}
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
@@ -206,6 +207,15 @@ class GaitOCP:
     def slices(self) -> dict[str, slice]:
         """Each named block of the NLP's variables and constraints: its slice of x or of g."""
         return self._slices
+
+    def export(self, sigma: float | None = None) -> dict:
+        """The NLP for a solver of one's own: ``nlp`` (CasADi's ``{"x", "f", "g"}``, the input of
+        ``casadi.nlpsol``) and the bounds ``lbx``, ``ubx``, ``lbg``, ``ubg`` of the relaxation at ``sigma``
+        (None: ``settings.sigma_min``; complementarity products and cross conditions <= sigma).  The
+        variables' blocks are :attr:`slices`; :meth:`initial_guess` gives a start, :meth:`unpack` reads a
+        solution in physical units."""
+        data = self._stage_data(self.settings.sigma_min if sigma is None else sigma)
+        return {"nlp": dict(self._nlp), **{k: data[k].copy() for k in ("lbx", "ubx", "lbg", "ubg")}}
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
