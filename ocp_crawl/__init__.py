@@ -21,7 +21,7 @@ _EXPORTS = {
     "simulate_mpcc": "ocp_crawl.sim.timestepping",
     "Problem": "ocp_crawl.problem", "ProblemError": "ocp_crawl.problem", "load_problem": "ocp_crawl.problem",
     "paper_problem": "ocp_crawl.problem", "problem_from_dict": "ocp_crawl.problem",
-    "run_problem": "ocp_crawl.problem",
+    "run_problem": "ocp_crawl.problem", "optimize_problem": "ocp_crawl.problem",
     **{name: "ocp_crawl.problem.work" for name in (
         "Work", "WorkLimit", "simulation_work", "optimize_work", "sweep_work", "fit_work", "crosscheck_work",
         "dynamics_work")},
@@ -32,7 +32,7 @@ __all__ = [
     "PeriodicLinear", "PeriodicPchip", "CallableSignal", "PeriodicSignal", "ReferenceTorque", "as_signal",
     "simulate", "SOLVERS", "HybridOptions", "TimeSteppingOptions", "AnglesOptions", "CycleOptions", "CrawlResult",
     "Event", "Mode", "SimulationError", "simulate_torque", "simulate_angles", "simulate_mpcc", "Problem",
-    "ProblemError", "load_problem", "paper_problem", "problem_from_dict", "run_problem",
+    "ProblemError", "load_problem", "paper_problem", "problem_from_dict", "run_problem", "optimize_problem",
     "MujocoOptions", "Work", "WorkLimit", "simulation_work", "optimize_work", "sweep_work", "fit_work",
     "crosscheck_work", "dynamics_work",
 ]

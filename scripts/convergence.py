@@ -18,7 +18,7 @@ import sys
 import time
 from pathlib import Path
 
-from ocp_crawl.cli.study_commands import format_convergence
+from ocp_crawl.cli.optimize_command import format_convergence
 from ocp_crawl.ocp.convergence import converge_in_nodes
 from ocp_crawl.problem import load_problem, ocp_settings
 

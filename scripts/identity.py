@@ -115,13 +115,22 @@ def leaves(x, path=""):
         yield path, x
 
 
+#: leaves that are wall-clock times, not numbers of the code (left out of the comparison)
+TIMINGS = ("elapsed_s", "time_s")
+
+
+def _timing(path: str) -> bool:
+    return any(part.endswith(TIMINGS) for part in path.split("/"))
+
+
 def compare(a: dict, b: dict) -> bool:
     ok = True
     for cat in CATEGORIES:
         if cat not in a or cat not in b:
             print(f"{cat:10s} not in both records")
             continue
-        la, lb = dict(leaves(a[cat])), dict(leaves(b[cat]))
+        la = {p: v for p, v in leaves(a[cat]) if not _timing(p)}
+        lb = {p: v for p, v in leaves(b[cat]) if not _timing(p)}
         worst, where, texts = 0.0, "", [p for p in la.keys() ^ lb.keys()]
         for p in la.keys() & lb.keys():
             x, y = la[p], lb[p]

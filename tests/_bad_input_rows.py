@@ -519,6 +519,8 @@ COMMAND_ROWS.update({
         "optimize", ["{ocp}", "--set", "ocp.ipopt=3"], ["[ocp] ipopt = 3 (from --set)", "a table"]),
     "optimize: --start without a period": R("optimize", ["{ocp}", "--start", "{paper}"],
                                             ["--start", "paper_gait.toml", "[gait] period", "optimal_gait.toml"]),
+    "optimize: --start with several --nodes": R("optimize", ["{ocp}", "--start", "{ocp}", "--nodes", "20", "40"],
+                                                ["--start with --nodes 20 40", "one N"]),
     "optimize: --verbose with --json": R("optimize", ["{ocp}", "--verbose", "--json"],
                                          ["--verbose with --json", "output_file"]),
     "optimize: the angles drive (torques optimised anyway)": R("optimize", ["{ocp}", "--set", "gait.drive=angles"],

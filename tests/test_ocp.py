@@ -74,7 +74,7 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
 def test_optimize_text_of_a_failed_run_has_no_raw_values():
     """A run that found nothing (no replay, no harmonic gait) reads "-" where a number is missing, never
     None or nan; numbers carry their units."""
-    from ocp_crawl.cli.study_commands import format_optimize
+    from ocp_crawl.cli.optimize_command import format_optimize
     from ocp_crawl.ocp import OCPResult, OCPSettings
     from ocp_crawl.status import Status
 
@@ -95,7 +95,7 @@ def test_optimize_text_counts_its_starts_in_words():
     replayed objective x to x"); several give their count, the converged ones and the range, one
     value when they agree; the solve's message says "none converged", not a range of missing
     values."""
-    from ocp_crawl.cli.study_commands import format_optimize
+    from ocp_crawl.cli.optimize_command import format_optimize
     from ocp_crawl.ocp import OCPResult, OCPSettings
     from ocp_crawl.ocp.judge import spread_text
     from ocp_crawl.status import Status
@@ -206,7 +206,7 @@ def test_robust_files_replay_each_friction_scenario(tmp_path, capsys, monkeypatc
     from pathlib import Path
 
     from ocp_crawl.cli.app import main
-    from ocp_crawl.cli.study_commands import _optimize_data, format_optimize
+    from ocp_crawl.cli.optimize_command import _optimize_data, format_optimize
     from ocp_crawl.io import units
     from ocp_crawl.model.statics import Model
     from ocp_crawl.ocp import OCPResult

@@ -209,7 +209,7 @@ def test_optimal_gait_toml_reports_the_speed_of_optimize(cli_optimize_run, capsy
     """The optimum's files keep its period: simulate of optimal_gait.toml (and of the problem with --input
     torques.csv, whose period column is the period) reports the optimize replay's speed, to 1e-9 in --json and to
     the printed precision in the text; S alone would not give it (the quasistatic S per cycle has no time)."""
-    from ocp_crawl.cli.study_commands import format_optimize
+    from ocp_crawl.cli.optimize_command import format_optimize
 
     code, stdout, _, out, _ = cli_optimize_run
     summary = json.loads(stdout)

@@ -2,7 +2,8 @@
 
 Commands live in one registry (:data:`COMMANDS`), filled with :func:`register` by the command
 modules (:mod:`~ocp_crawl.cli.run_commands`: simulate, demo, animate, crosscheck;
-:mod:`~ocp_crawl.cli.study_commands`: sweep, reproduce, optimize), which the package imports.
+:mod:`~ocp_crawl.cli.study_commands`: sweep, reproduce; :mod:`~ocp_crawl.cli.optimize_command`:
+optimize), which the package imports.
 Commands parse arguments, call a library function and print; solvers are chosen by the problem's
 ``[simulation] solver`` through the registry :data:`ocp_crawl.sim.SOLVERS`.
 

@@ -95,6 +95,48 @@ def ocp_settings(problem: Problem) -> OCPSettings:
             from None
 
 
+def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Problem | None = None,
+                     verbose: bool = False):
+    """Solve the OCP of a problem's ``[ocp]`` section (:func:`~ocp_crawl.ocp.optimize_gait`).
+
+    Parameters
+    ----------
+    problem : Problem
+        A validated problem of the torque drive (robot, gravity convention, gait centre, ``[ocp]``).
+    jobs : int, optional
+        Worker processes of the baselines' search (None: the CPUs available).
+    start : Problem, optional
+        A gait to start from instead of the harmonic baseline: its torque input and ``[gait] period``
+        (e.g. a previous optimum's ``optimal_gait.toml``).
+    verbose : bool
+        IPOPT's log on stdout.
+
+    Returns
+    -------
+    OCPResult
+        The optimum and its verdict; ``result.scenarios()`` names each friction scenario's numbers.
+
+    Raises
+    ------
+    ProblemError
+        For a problem of the angles drive, a start without a period, or ``[ocp]`` values that break a rule
+        between keys.
+    """
+    from dataclasses import replace
+
+    from ocp_crawl.ocp import optimize_gait
+
+    if problem.drive != "torque":
+        raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = "
+                           f"\"torque\", got {format_value(problem.drive)}")
+    if start is not None and (start.drive != "torque" or start.period is None):
+        raise ProblemError(f"{start.source}: a start needs a torque-drive gait with a [gait] period [s] (as "
+                           "the optimal_gait.toml that optimize --out writes)")
+    settings = replace(ocp_settings(problem), verbose=verbose)
+    given = None if start is None else (start.torque, start.period)
+    return optimize_gait(problem.robot, problem.gravity, settings, jobs=jobs, start=given)
+
+
 #: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as problems/paper_gait.toml.
 PAPER_GAIT: Mapping[str, Mapping[str, Any]] = freeze({
     "robot": {"M": 0.052, "L": 0.120, "beta": 2.0, "k": 0.1677, "mu": 0.389, "g": 9.81},
