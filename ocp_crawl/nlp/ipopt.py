@@ -236,9 +236,10 @@ def heap_allocations():
 _IPOPT_VALUE_TYPES = (str, int, float, np.integer, np.floating)
 
 
-def check_ipopt_options(owner: str, options) -> dict:
+def check_ipopt_options(owner: str, options, by_ipopt: bool = False) -> dict:
     """A copy of a dict of IPOPT options with string keys and finite number or string values (ValueError/TypeError
-    naming ``owner`` and the key otherwise); IPOPT itself checks names and ranges when the solver is built."""
+    naming ``owner`` and the key otherwise); IPOPT itself checks names and ranges when the solver is built, or
+    at once with ``by_ipopt`` (on a one-variable NLP)."""
     if not isinstance(options, dict):
         raise TypeError(f"{owner} must be a dict of IPOPT options, got {type(options).__name__}")
     out = {}
@@ -250,6 +251,9 @@ def check_ipopt_options(owner: str, options) -> dict:
         if isinstance(value, (float, np.floating)) and not math.isfinite(value):
             raise ValueError(f"{owner}[{key!r}] must be finite, got {value!r}")
         out[key] = value.item() if isinstance(value, (np.integer, np.floating)) else value
+    if by_ipopt:
+        build_ipopt("options_check", _option_check_nlp(),
+                    {"error_on_fail": False, "ipopt": {"print_level": 0, "sb": "yes", **out}}, owner, out)
     return out
 
 
@@ -472,13 +476,6 @@ def _option_check_nlp() -> dict:
     """The NLP on which :func:`ipopt_solvers` checks the options at once (its real solvers are built on first use)."""
     x = cs.SX.sym("x")
     return {"x": x, "f": x**2, "g": x}
-
-
-def check_ipopt_names(owner: str, options: dict) -> None:
-    """IPOPT's own check of ``options`` (names, types, ranges) on a one-variable NLP, at once: ValueError
-    naming ``owner`` when it rejects one."""
-    build_ipopt("options_check", _option_check_nlp(),
-                {"error_on_fail": False, "ipopt": {"print_level": 0, "sb": "yes", **options}}, owner, options)
 
 
 def ipopt_solvers(name: str, nlp: dict, defaults: dict, warm: dict, user: dict, owner: str,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.step_equations import PHI_ROWS, S1M, S1P
 from ocp_crawl.ocp.layout import fourier_basis
 from ocp_crawl.ocp.substeps import (THETA_GUESS, friction_rows, guess_block, sample_phases,
                                     substep_torques, switch_fractions)
@@ -66,7 +67,7 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
         speeds.append(s.direction * blk["S"] / x[ocp.slices["T_hat"]][0])
         for name in ("phi0", "ft0"):
             x[ocp.slices[f"{name}_{j}"]] = blk[name]
-        x[ocp.slices[f"Sc_{j}"]] = np.cumsum(blk["w"][4] - blk["w"][5])
+        x[ocp.slices[f"Sc_{j}"]] = np.cumsum(blk["w"][S1P] - blk["w"][S1M])
         x[ocp.slices[f"w_{j}"]] = blk["w"].ravel(order="F")
         if f"Fc_{j}" in ocp.slices:
             x[ocp.slices[f"Fc_{j}"]] = np.cumsum(friction_rows(blk["w"], s.friction_tol))
@@ -74,7 +75,7 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
         if f"v_{j}" in ocp.slices:
             tau_sub = substep_torques(tau_nodes, theta) / MgL
             tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
-            V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][0:2]], axis=1), 0.0)
+            V = np.maximum(tau_mid * np.diff(np.c_[blk["phi0"], blk["w"][PHI_ROWS]], axis=1), 0.0)
             x[ocp.slices[f"v_{j}"]] = V.ravel(order="F")
             x[ocp.slices[f"Wc_{j}"]] = np.cumsum(V.sum(axis=0))
             cots.append(V.sum() / max(s.direction * blk["S"], 1e-9))

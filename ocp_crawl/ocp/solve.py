@@ -67,10 +67,9 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         CPUs available): the harmonic family's first, then the other families' while the OCP solves.  The
         result does not depend on it.
     start : (callable, float), optional
-        A first start of the user's in place of the harmonic baseline: a torque signal tau(t) [N m] of the
-        phase t [cycles] (sampled at the node phases; e.g. a previous optimum's
-        :func:`~ocp_crawl.ocp.judge.replay_signal`) and its period [s], clipped to the envelope and slowed
-        to the bandwidth if needed.  The baselines are searched and reported as without it.
+        A first start in place of the harmonic baseline: a torque signal tau(t) [N m] of the phase t
+        [cycles] (e.g. a previous optimum's :func:`~ocp_crawl.ocp.judge.replay_signal`) and its period
+        [s] (:func:`~ocp_crawl.ocp.starts.given_start`); the baselines are searched as without it.
 
     Returns
     -------

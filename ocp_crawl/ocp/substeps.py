@@ -62,7 +62,8 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.statics import NP, Model
-from ocp_crawl.model.step_equations import NPAIR, NW, friction_margins, step_equations
+from ocp_crawl.model.step_equations import (C1M, C1P, C2M, C2P, FT1, FT2, MARGIN_ROWS, NPAIR, NW, PHI_ROWS,
+                                            S1M, S1P, S2M, S2P, SLIP_ROWS, friction_margins, step_equations)
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import SLIP_PAIR_MODES
 
@@ -121,10 +122,10 @@ def switch_windows(W, theta):
     """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j plus its
     predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j (s_j-1 + w_j-1 s_j-2)),
     and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+, s2-).  Returns (s1, s2, before, after)."""
-    s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
+    s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
     w = pass_weights(theta)
     before = [s + w * (_roll(s, 1) + _roll(w, 1) * _roll(s, 2)) for s in (s1, s2)]
-    after = [_roll(W[4 + q, :], -1) for q in range(NPAIR)]
+    after = [_roll(W[S1P + q, :], -1) for q in range(NPAIR)]
     return s1, s2, before, after
 
 
@@ -134,8 +135,8 @@ def cross_products(W, theta, N: int):
     boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).  Returns (3, 2N)."""
     s1, s2, before, after = switch_windows(W, theta)
     both = N * s1 * s2
-    to2 = N * before[0] * (after[2] * W[10, :] + after[3] * W[11, :])
-    to1 = N * before[1] * (after[0] * W[8, :] + after[1] * W[9, :])
+    to2 = N * before[0] * (after[2] * W[C2P, :] + after[3] * W[C2M, :])
+    to1 = N * before[1] * (after[0] * W[C1P, :] + after[1] * W[C1M, :])
     if isinstance(W, np.ndarray):
         return np.vstack((both, to2, to1))
     return cs.vertcat(both, to2, to1)
@@ -145,12 +146,12 @@ def onset_products(W, N: int):
     """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in sub-step j only if
     its margin is already zero at the sub-step's start; see the module docstring).  ``W``: (NW, 2N) sub-step
     variables (CasADi or numpy)."""
-    return N * sum(W[4 + q, :] * _roll(W[8 + q, :], 1) for q in range(NPAIR))
+    return N * sum(W[S1P + q, :] * _roll(W[C1P + q, :], 1) for q in range(NPAIR))
 
 
 def onset_residual(W: np.ndarray) -> float:
     """Largest violation of the onset condition as a min-residual: min(s_q,j, c_q,j-1) over pairs and sub-steps [-]."""
-    return float(max(np.max(np.abs(np.minimum(W[4 + q, :], _roll(W[8 + q, :], 1)))) for q in range(NPAIR)))
+    return float(max(np.max(np.abs(np.minimum(W[S1P + q, :], _roll(W[C1P + q, :], 1)))) for q in range(NPAIR)))
 
 
 def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
@@ -160,8 +161,8 @@ def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
     s1, s2, before, after = switch_windows(W, theta)
     res = [np.minimum(s1, s2)]
     for d in range(2):
-        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[10 + d]))
-        res.append(np.minimum(np.minimum(before[1], after[d]), W[8 + d]))
+        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[C2P + d]))
+        res.append(np.minimum(np.minimum(before[1], after[d]), W[C1P + d]))
     return float(np.max(np.abs(np.vstack(res))))
 
 
@@ -188,26 +189,28 @@ class Scenario:
         lbw = np.r_[0.0, 0.0, -inf, -inf, np.zeros(2 * NPAIR)]
         ubw = np.r_[math.pi, math.pi, inf, inf, np.full(2 * NPAIR, inf)]
         nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, 2 * N), np.tile(ubw, 2 * N))
-        PHI = cs.horzcat(phi0, W[0:2, :])  # (2, 2N+1)
+        PHI = cs.horzcat(phi0, W[PHI_ROWS, :])  # (2, 2N+1)
         Tsub = substep_torques(T, theta)
         eqs, comp = step_map(PHI[:, :-1], W, Tsub, cs.repmat(cs.DM(model.p), 1, 2 * N))
-        nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0)
-        nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0)  # upper bound sigma, set per stage
-        nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0)  # upper bound sigma, set per stage
-        nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0)  # likewise
-        nlp.con(f"periodic_{j}", cs.vertcat(W[0:2, -1] - phi0, W[2, -1] - ft0), 0.0, 0.0)
-        nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf)
+        nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0, ("equation",))
+        # the relaxed products' upper bound is sigma, set per homotopy stage
+        nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0, ("complementarity",))
+        nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0, ("cross",))
+        nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0, ("cross", "rule"))
+        nlp.con(f"periodic_{j}", cs.vertcat(W[PHI_ROWS, -1] - phi0, W[FT1, -1] - ft0), 0.0, 0.0,
+                ("equation",))
+        nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf, ("rule",))
         if joint_rate is not None:
             rows = joint_rate_rows(PHI, theta, joint_rate * Th)
-            nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf)
+            nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf, ("rule",))
         if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
-            nlp.con(f"friction_{j}", total, 0.0, inf)
+            nlp.con(f"friction_{j}", total, 0.0, inf, ("rule",))
         # S and W+ are lifted into running sums over the sub-steps (variables Sc_j, Wc_j, each defined by a
         # two-term recurrence): neither the nonlinear objective in them (W+/S, S/T) nor their definitions make a
         # dense row (a dense row costs one Jacobian direction per variable it touches: 2.4x the evaluation
         # time per IPOPT iteration at N = 100)
-        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[4, :] - W[5, :])  # foot-1 displacement / L
+        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[S1P, :] - W[S1M, :])  # foot-1 displacement / L
         self.theta, self.W_plus = theta, None
         if with_work:
             # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
@@ -227,7 +230,7 @@ TIE_SLOPE = 0.01
 TIE_END = 0.1
 #: (slip row, margin row of the other foot on the same side, slip row of the other foot into that side) of
 #: :func:`tie_rows`: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2- with c1+ and s1+
-TIE_PAIRS = ((4, 11, 7), (5, 10, 6), (6, 9, 5), (7, 8, 4))
+TIE_PAIRS = ((S1P, C2M, S2M), (S1M, C2P, S2P), (S2P, C1M, S1M), (S2M, C1P, S1P))
 
 
 def tie_rows(W, theta):
@@ -253,8 +256,8 @@ def friction_rows(W, eps: float):
     sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled by M g) at its two ends (the trapezoid
     rule of the simulation's margin; the start of sub-step 0 is the end of the last one, periodicity).  ``W``:
     (NW, 2N) sub-step variables (CasADi or numpy)."""
-    s1, s2 = W[4, :] + W[5, :], W[6, :] + W[7, :]
-    e1, e2 = 0.5 * (W[8, :] + W[9, :]), 0.5 * (W[10, :] + W[11, :])
+    s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
+    e1, e2 = 0.5 * (W[C1P, :] + W[C1M, :]), 0.5 * (W[C2P, :] + W[C2M, :])
     l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
 
@@ -302,7 +305,7 @@ def _running_sum(nlp, var: str, con: str, terms):
     n = terms.numel()
     c = nlp.sym(var, n)
     nlp.var(var, c, -np.inf, np.inf)
-    nlp.con(con, c - cs.vertcat(0.0, c[:-1]) - cs.vec(terms), 0.0, 0.0)
+    nlp.con(con, c - cs.vertcat(0.0, c[:-1]) - cs.vec(terms), 0.0, 0.0, ("equation",))
     return c[-1]
 
 
@@ -338,15 +341,15 @@ def guess_block(res, model: Model, N: int) -> dict:
     Mg, L = r.M * r.g, r.L
     phi, ft = res.phi, res.f_t / Mg
     W = np.zeros((NW, 2 * N))
-    W[0:2] = phi[:, 1:]
-    W[2], W[3] = ft[1:], -ft[1:]
+    W[PHI_ROWS] = phi[:, 1:]
+    W[FT1], W[FT2] = ft[1:], -ft[1:]
     dx1, dx2 = np.diff(res.x1) / L, np.diff(res.x2) / L
-    W[4], W[5] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
-    W[6], W[7] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
+    W[S1P], W[S1M] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
+    W[S2P], W[S2M] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
     fn1, fn2 = res.f_n1[1:] / Mg, res.f_n2[1:] / Mg
     # lifted margins at the simulated points (f_t2 = -f_t on foot 2), clipped to >= 0
-    W[8:12] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2, -ft[1:])), 0.0)
-    return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[4] - W[5]))}
+    W[MARGIN_ROWS] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2, -ft[1:])), 0.0)
+    return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[S1P] - W[S1M]))}
 
 
 def sample_phases(theta: np.ndarray) -> np.ndarray:
@@ -358,7 +361,7 @@ def sample_phases(theta: np.ndarray) -> np.ndarray:
 
 def modes_of(W: np.ndarray) -> list[int]:
     """Contact mode of each sub-step (the pair that slips most, stick when none slips beyond its margin)."""
-    sv, cv = W[4:8], W[8:12]
+    sv, cv = W[SLIP_ROWS], W[MARGIN_ROWS]
     modes = []
     for k in range(W.shape[1]):
         sl = [i for i in range(NPAIR) if sv[i, k] > cv[i, k]]

@@ -28,14 +28,14 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.statics import Model, Robot
-from ocp_crawl.model.step_equations import NW
+from ocp_crawl.model.step_equations import C1P, C2P, FT1, MARGIN_ROWS, NW, PHI_ROWS, S1M, S1P, SLIP_ROWS
 from ocp_crawl.nlp import ipopt as nlp_ipopt
 from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
 from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.guess import simulated_guess
-from ocp_crawl.ocp.layout import Layout, fourier_basis
+from ocp_crawl.ocp.layout import KINDS, Layout, fourier_basis, rows_of
 from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work, physical
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual, positive_work,
@@ -170,6 +170,7 @@ class GaitOCP:
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
         G = cs.vertcat(*nlp.g)
         self._slices = nlp.slices
+        self._rows = {kind: rows_of(nlp.slices, nlp.kinds, kind) for kind in KINDS}
         self.nx, self.ng = X.numel(), G.numel()
         self._lbx, self._ubx = np.concatenate(nlp.lbx), np.concatenate(nlp.ubx)
         self._lbg, self._ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
@@ -186,9 +187,8 @@ class GaitOCP:
         # boundaries): a profile given to be simulated need not meet them (S does not depend on where a slip starts
         # inside a sub-step; the onset rule is for the optimiser's W+)
         keep = np.ones(self.ng, bool)
-        for name, sl in self._slices.items():
-            if name.startswith(("g_friction_", "g_tie_", "g_onset_", "g_joint_rate_")):
-                keep[sl] = False
+        for sl in self._rows["rule"]:
+            keep[sl] = False
         self._sim_rows = np.flatnonzero(keep)
         self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G[self._sim_rows.tolist()], theta_ref)
         self._sim_solvers = None
@@ -248,11 +248,11 @@ class GaitOCP:
         for j in range(len(self.scen)):
             W = x[self._slices[f"w_{j}"]].reshape(NW, 2 * N, order="F")
             theta = x[self._slices[f"theta_{j}"]].copy()
-            phi_sub = np.c_[x[self._slices[f"phi0_{j}"]], W[0:2]]
-            ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[2]] * Mg
-            x1_sub = np.r_[0.0, np.cumsum(W[4] - W[5])] * r.L
+            phi_sub = np.c_[x[self._slices[f"phi0_{j}"]], W[PHI_ROWS]]
+            ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[FT1]] * Mg
+            x1_sub = np.r_[0.0, np.cumsum(W[S1P] - W[S1M])] * r.L
             tau_sub = substep_torques(tau, theta)
-            comp = max(float(np.max(np.abs(np.minimum(W[4:8], W[8:12])))), cross_residual(W, theta),
+            comp = max(float(np.max(np.abs(np.minimum(W[SLIP_ROWS], W[MARGIN_ROWS])))), cross_residual(W, theta),
                        onset_residual(W) if self._fixed is None else 0.0)
             modes_sub = modes_of(W)
             S = float(x1_sub[-1])
@@ -268,11 +268,8 @@ class GaitOCP:
         """Largest violation of the equality constraints (equilibrium, balance, closure, lifting,
         periodicity, definitions of S and W+) at x, in the scaled units of the NLP."""
         g = np.asarray(self._g(x)).ravel()
-        worst = 0.0
-        for name, sl in self._slices.items():
-            if name.startswith(("g_eq_", "g_periodic_", "g_S_def_", "g_W_def_", "g_F_def_")):
-                worst = max(worst, float(np.max(np.abs(g[sl] - self._lbg[sl]))))
-        return worst
+        return max((float(np.max(np.abs(g[sl] - self._lbg[sl]))) for sl in self._rows["equation"]),
+                   default=0.0)
 
     # ------------------------------------------------------------------ solve: the relaxation homotopy
     def solve(self, x0: np.ndarray, fix_profile: bool = False,
@@ -397,10 +394,10 @@ class GaitOCP:
     def _stage_data(self, sigma: float, cross_sigma: float | None = None) -> dict:
         """Bounds of a relaxation stage: s_j c_j <= sigma, cross products <= sigma (``cross_sigma`` if given)."""
         ubg = self._ubg.copy()
-        for j in range(len(self.scen)):
-            ubg[self._slices[f"g_comp_{j}"]] = sigma
-            ubg[self._slices[f"g_cross_{j}"]] = ubg[self._slices[f"g_onset_{j}"]] = \
-                sigma if cross_sigma is None else cross_sigma
+        for sl in self._rows["complementarity"]:
+            ubg[sl] = sigma
+        for sl in self._rows["cross"]:
+            ubg[sl] = sigma if cross_sigma is None else cross_sigma
         lbx, ubx = self._bounds()
         data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
         if self._fixed is not None:  # the profile-fixed NLP has only the rows _sim_rows
@@ -429,20 +426,20 @@ class GaitOCP:
         for j in range(len(self.scen)):
             sl = self._slices[f"w_{j}"]
             W = x[sl].reshape(NW, 2 * N, order="F")
-            slip = W[4:8] > W[8:12]
+            slip = W[SLIP_ROWS] > W[MARGIN_ROWS]
             fix = np.zeros((NW, 2 * N), bool)
-            fix[4:8] = ~slip
-            fix[8:12] = slip
+            fix[SLIP_ROWS] = ~slip
+            fix[MARGIN_ROWS] = slip
             if self._fixed is None:  # the onset pairs (s_j, c_j-1), each on its identified branch too
-                onset = W[4:8] > np.roll(W[8:12], 1, axis=1)
-                fix[4:8] |= ~onset
-                fix[8:12] |= np.roll(onset, -1, axis=1)
+                onset = W[SLIP_ROWS] > np.roll(W[MARGIN_ROWS], 1, axis=1)
+                fix[SLIP_ROWS] |= ~onset
+                fix[MARGIN_ROWS] |= np.roll(onset, -1, axis=1)
             ident = np.zeros((NW, 2 * N))
-            ident[4:8] = slip
+            ident[SLIP_ROWS] = slip
             _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
             for d in range(2 if ties else 0):
-                fix[10 + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
-                fix[8 + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
+                fix[C2P + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
+                fix[C1P + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
             ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
             ub[fix] = 0.0
             ubx[sl] = ub.ravel(order="F")

@@ -64,15 +64,14 @@ def _check_tables(ctx: Context, section: str, key: Key, value: Any) -> list[dict
 def _check_table(ctx: Context, section: str, key: Key, value: Any) -> dict:
     """A table key's value (``[ocp.ipopt]``): names and finite numbers or strings, then the names and
     ranges as IPOPT checks them."""
-    from ocp_crawl.nlp.ipopt import check_ipopt_names, check_ipopt_options
+    from ocp_crawl.nlp.ipopt import check_ipopt_options
 
     where = ctx.at(section, key.name, value)
     if not isinstance(value, Mapping):
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[dict]}, a [{section}.{key.name}] table "
                            f"({key.what})")
     try:
-        options = check_ipopt_options(f"[{section}.{key.name}]", dict(value))
-        check_ipopt_names(f"[{section}.{key.name}]", options)
+        options = check_ipopt_options(f"[{section}.{key.name}]", dict(value), by_ipopt=True)
     except (TypeError, ValueError) as exc:
         raise ProblemError(f"{ctx.source}: {exc}") from None
     return options
