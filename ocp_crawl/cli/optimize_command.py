@@ -10,14 +10,15 @@ from dataclasses import replace
 from pathlib import Path
 
 from ocp_crawl.cli.app import PROG, BadInput, register
-from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integer, jobs_type, optional_out,
-                                  out_dir, work_arg, write_out)
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integer, jobs_type,
+                                  optional_out, out_dir, work_arg, write_out)
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.settings import NODES_BOUNDS
-from ocp_crawl.problem import format_value, load_problem, ocp_settings, optimize_problem, problem_from_dict
+from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
+                               problem_from_dict)
 from ocp_crawl.problem.overrides import read_toml
 from ocp_crawl.problem.work import optimize_work
 
@@ -27,28 +28,32 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
                    help="problem file with an [ocp] section (see docs/guide/optimal_gaits.md)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a key, e.g. --set ocp.nodes=200 (repeatable)")
-    p.add_argument("--json", action="store_true", help="print one JSON object on stdout instead of the summary")
-    p.add_argument("--nodes", nargs="+", metavar="N", type=integer("--nodes", NODES_BOUNDS[0], high=NODES_BOUNDS[1]),
-                   help="numbers of nodes (overrides ocp.nodes); up to 6, strictly increasing (e.g. --nodes 50 100 "
-                        "200 400): solve at each, warm-started from the previous optimum, replay each and print the "
-                        "convergence table (objective, change, observed order)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object on stdout instead of the summary")
+    p.add_argument("--nodes", nargs="+", metavar="N",
+                   type=integer("--nodes", NODES_BOUNDS[0], high=NODES_BOUNDS[1]),
+                   help="numbers of nodes (overrides ocp.nodes); up to 6, strictly increasing "
+                        "(e.g. --nodes 50 100 200 400): solve at each, warm-started from the "
+                        "previous optimum, replay each and print the convergence table "
+                        "(objective, change, observed order)")
     p.add_argument("--out", metavar="DIR", type=out_dir,
-                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; over "
-                        "a friction set: also optimal_gait_mu1_mu2_<ratio>.toml per scenario), "
-                        "arrays.npz, summary.json and figures to DIR (with several --nodes: of the "
-                        "finest N, and convergence.json)")
+                   help="write torques.csv, optimal_gait.toml (replays the optimum with simulate; "
+                        "over a friction set: also optimal_gait_mu1_mu2_<ratio>.toml per "
+                        "scenario), arrays.npz, summary.json and figures to DIR (with several "
+                        "--nodes: of the finest N, and convergence.json)")
     p.add_argument("--progress", action="store_true",
-                   help="show the homotopy's progress (stage, IPOPT iterations) on stderr even when stderr is "
-                        "not a terminal (it is shown on a terminal anyway)")
+                   help="show the homotopy's progress (stage, IPOPT iterations) on stderr even "
+                        "when stderr is not a terminal (it is shown on a terminal anyway)")
     p.add_argument("--jobs", type=jobs_type, metavar="N",
-                   help="worker processes of the baselines' search (default: the CPUs available; the "
-                        "result does not depend on it)")
+                   help="worker processes of the baselines' search (default: the CPUs available; "
+                        "the result does not depend on it)")
     p.add_argument("--start", metavar="GAIT.toml",
-                   help="start the OCP from this gait instead of the harmonic baseline: a problem file of a "
-                        "torque-drive gait with [gait] period, e.g. a previous run's optimal_gait.toml")
+                   help="start the OCP from this gait instead of the harmonic baseline: a problem "
+                        "file of a torque-drive gait with [gait] period, e.g. a previous run's "
+                        "optimal_gait.toml")
     p.add_argument("--verbose", action="store_true",
-                   help="IPOPT's log of every solve on stdout (not with --json; a log file instead: "
-                        "[ocp.ipopt] output_file, file_print_level)")
+                   help="IPOPT's log of every solve on stdout (not with --json; a log file "
+                        "instead: [ocp.ipopt] output_file, file_print_level)")
     force_arg(p)
     work_arg(p)
 
@@ -57,7 +62,8 @@ def _optimize_args(p: argparse.ArgumentParser) -> None:
 MAX_NODE_COUNTS = 6
 #: the files ocp_crawl.viz.ocp.write_outputs writes (over a friction set: also one problem file per
 #: scenario, ocp_crawl.viz.ocp.scenario_files)
-OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png", "optimal_gait.pdf")
+OCP_FILES = ("torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png",
+             "optimal_gait.pdf")
 
 
 def _each(value, text) -> str:
@@ -68,30 +74,35 @@ def _each(value, text) -> str:
 
 
 def _ocp_replay(s: dict, name: str, text) -> str:
-    """The OCP's and the replay's ``name`` (``S``, ``v``, ``W_plus``, ``CoT_plus``): "OCP x, replay y", or per
-    friction scenario of a friction set, labelled with its ratio: "mu1/mu2 = 0.9: OCP x, replay y; ..."."""
+    """The OCP's and the replay's ``name`` (``S``, ``v``, ``W_plus``, ``CoT_plus``): "OCP x, replay
+    y", or per friction scenario of a friction set, labelled with its ratio: "mu1/mu2 = 0.9: OCP x,
+    replay y; ..."."""
     ocp, replay = s.get(f"{name}_ocp"), s.get(f"{name}_replay")
     if not s.get("scenarios"):
         return f"OCP {_each(ocp, text)}, replay {_each(replay, text)}"
-    return "; ".join(f"{_scenario(row)}: OCP {text(row[f'{name}_ocp'])}, replay {text(row[f'{name}_replay'])}"
+    return "; ".join(f"{_scenario(row)}: OCP {text(row[f'{name}_ocp'])}, "
+                     f"replay {text(row[f'{name}_replay'])}"
                      for row in s["scenarios"])
 
 
 def _scenario(row: dict) -> str:
-    """A friction scenario in text: "mu1/mu2 = 0.9", with a level other than the robot's ", level 0.5"."""
+    """A friction scenario in text: "mu1/mu2 = 0.9", with a level other than the robot's ", level
+    0.5"."""
     ratio, _, level = row["label"].partition("_level_")
     return f"mu1/mu2 = {ratio}" + (f", level {level}" if level else "")
 
 
 def _value(objective: str, v, digits: int = 3) -> str:
-    """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] to ``digits + 1`` significant digits."""
+    """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] to ``digits + 1``
+    significant digits."""
     if objective in ("max_speed", "robust_speed"):
         return units.speed(v, digits)
     return units.significant(v, digits + 1)
 
 
 def _gain(s: dict) -> str:
-    """The gain by replay over the best baseline, and whether it is significant (beyond replay_tol)."""
+    """The gain by replay over the best baseline, and whether it is significant (beyond
+    replay_tol)."""
     if s.get("gain") is None:
         return "-"
     verdict = "significant" if s.get("gain_significant") else "no significant gain"
@@ -104,7 +115,8 @@ def _member(h: dict) -> str:
     """A waveform family's best member: its angles [deg], a pulse's rise and duty, its period."""
     deg = lambda key: units.significant(h.get(key))  # noqa: E731
     pulse = ""
-    if h.get("shape") == "pulse":  # at rise 0.5 no level is held: a triangle wave, whatever the duty
+    # at rise 0.5 no level is held: a triangle wave, whatever the duty
+    if h.get("shape") == "pulse":
         rise, duty = units.significant(h.get("rise")), units.significant(h.get("duty"))
         pulse = (", rise 0.5 cycles (a triangle wave)" if h.get("rise", 0.0) >= 0.5 - 1e-12 else
                  f", rise {rise} cycles, duty {duty}")
@@ -113,7 +125,8 @@ def _member(h: dict) -> str:
 
 
 def _baseline_lines(s: dict) -> list[str]:
-    """One line per waveform family: its best member's value, the optimum's gain over it, the member."""
+    """One line per waveform family: its best member's value, the optimum's gain over it, the
+    member."""
     obj, rows, gains = s["objective"], s.get("baselines") or [], s.get("gains") or {}
     if not rows:
         h = s.get("best_harmonic")
@@ -165,9 +178,9 @@ def _starts_text(s: dict) -> str | None:
 
 
 def format_optimize(s: dict) -> str:
-    """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in mm, speeds in
-    mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not computed (e.g. a failed
-    replay)."""
+    """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in
+    mm, speeds in mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not
+    computed (e.g. a failed replay)."""
     obj = s["objective"]
     spread = _starts_text(s)
     lines = [
@@ -178,48 +191,54 @@ def format_optimize(s: dict) -> str:
         f"speed       {_ocp_replay(s, 'v', units.speed)}",
         f"W+          {_ocp_replay(s, 'W_plus', units.work)}",
         f"CoT+        {_ocp_replay(s, 'CoT_plus', units.cot)}",
-        f"value       OCP {_value(obj, s['objective_value_ocp'])}, replay {_value(obj, s['objective_value_replay'])} "
+        f"value       OCP {_value(obj, s['objective_value_ocp'])}, "
+        f"replay {_value(obj, s['objective_value_replay'])} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
         f"baselines   best member of each waveform family at its shortest period; gain of the "
         f"optimum by replay {_gain(s)}",
         *_baseline_lines(s),
         f"peaks       {_peaks(s)}",
-        *[f"requirement {r['text']}: replay {', '.join(units.significant(v, 6) for v in r['replay'])}"
+        *[f"requirement {r['text']}: "
+          f"replay {', '.join(units.significant(v, 6) for v in r['replay'])}"
           for r in s.get("requirements") or []],
         *([f"starts      {spread}"] if spread else []),
         *margin_text(s.get("dynamic_margin")),
-        f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, periodicity "
-        f"{units.scientific(s['periodicity_residual'])}",
+        f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, "
+        f"periodicity {units.scientific(s['periodicity_residual'])}",
         f"time        {units.seconds(s['solve_time_s'])}",
     ]
     return "\n".join(lines)
 
 
-#: the convergence table ``optimize --nodes N1 N2 ... --out DIR`` writes next to the finest optimum's files
+#: the convergence table ``optimize --nodes N1 N2 ... --out DIR`` writes next to the finest
+#: optimum's files
 CONVERGENCE_FILE = "convergence.json"
 
 
 def format_convergence(table: dict) -> str:
-    """The convergence table (``ConvergenceTable.to_dict()``, SI units) as text: per N the status, the period,
-    the OCP's and the replay's objective (speeds in mm/s, CoT+ to 6 significant digits), their relative
-    difference, the change of the replayed objective from the previous N and the observed order p."""
+    """The convergence table (``ConvergenceTable.to_dict()``, SI units) as text: per N the status,
+    the period, the OCP's and the replay's objective (speeds in mm/s, CoT+ to 6 significant digits),
+    their relative difference, the change of the replayed objective from the previous N and the
+    observed order p."""
     obj = table["objective"]
-    head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  {'change':>14}  "
-            f"{'change':>10}  {'p':>6}  {'time':>7}")
-    lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: |OCP - replay| / |replay|; "
-             f"change: replay minus the previous N's, absolute and relative; p: observed order)", head]
+    head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  "
+            f"{'change':>14}  {'change':>10}  {'p':>6}  {'time':>7}")
+    lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: "
+             f"|OCP - replay| / |replay|; change: replay minus the previous N's, absolute and "
+             f"relative; p: observed order)", head]
     for r in table["rows"]:
         lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  "
                      f"{_value(obj, r['value_ocp'], 5):>14}  "
-                     f"{_value(obj, r['value_replay'], 5):>14}  {units.ratio(r['rel_diff_replay']):>11}  "
+                     f"{_value(obj, r['value_replay'], 5):>14}  "
+                     f"{units.ratio(r['rel_diff_replay']):>11}  "
                      f"{_value(obj, r['change'], 5):>14}  {units.ratio(r['rel_change']):>10}  "
                      f"{units.fixed(r['order'], 2):>6}  {units.seconds(r['solve_time_s']):>7}")
     return "\n".join(lines)
 
 
 def _progress_bar(wanted: bool):
-    """A context manager showing the homotopy's IPOPT calls on stderr (tqdm: stage, sigma, IPOPT iterations),
-    or doing nothing unless ``wanted``."""
+    """A context manager showing the homotopy's IPOPT calls on stderr (tqdm: stage, sigma, IPOPT
+    iterations), or doing nothing unless ``wanted``."""
     if not wanted:
         return contextlib.nullcontext()
     from tqdm import tqdm
@@ -228,7 +247,8 @@ def _progress_bar(wanted: bool):
 
     @contextlib.contextmanager
     def shown():
-        interval, tqdm.monitor_interval = tqdm.monitor_interval, 0  # no monitor thread: the workers fork (mp_context)
+        # no monitor thread: the workers fork (mp_context)
+        interval, tqdm.monitor_interval = tqdm.monitor_interval, 0
         try:
             bar = tqdm(desc="optimize", unit=" IPOPT it", file=sys.stderr, dynamic_ncols=True)
         finally:
@@ -240,14 +260,16 @@ def _progress_bar(wanted: bool):
             def update(stage) -> None:
                 calls.append(stage)
                 sigma = "" if math.isnan(stage.sigma) else f" sigma {units.scientific(stage.sigma)}"
-                bar.set_postfix_str(f"{stage.kind} stage {len(calls)}{sigma}, {stage.return_status}", refresh=False)
+                bar.set_postfix_str(f"{stage.kind} stage {len(calls)}{sigma}, "
+                                    f"{stage.return_status}", refresh=False)
                 bar.update(stage.iterations)
             with observe(update):
                 yield
     return shown()
 
 
-@register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay", _optimize_args)
+@register("optimize", "design an optimal periodic torque profile (OCP) and prove it by replay",
+          _optimize_args)
 def cmd_optimize(args: argparse.Namespace) -> int:
     from ocp_crawl.viz.ocp import scenario_files, write_outputs as write_ocp_outputs
 
@@ -256,29 +278,33 @@ def cmd_optimize(args: argparse.Namespace) -> int:
                        f"{MAX_NODE_COUNTS}: each is a full solve (minutes at N = 400); e.g. "
                        "--nodes 50 100 200 400")
     if args.nodes and any(text.split("=", 1)[0].strip() == "ocp.nodes" for text in args.overrides):
-        raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the nodes: give one")
+        raise BadInput(f"--nodes {' '.join(map(str, args.nodes))} and --set ocp.nodes both set the "
+                       f"nodes: give one")
     # the first N of --nodes is the problem's ocp.nodes (so the reports name the N solved)
     data = read_toml(args.problem)   # once: the file may be a named pipe
     if "ocp" not in data:
-        raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, ...; see "
-                       "docs/guide/optimal_gaits.md and problems/ocp_max_speed.toml)")
+        raise BadInput(f"{args.problem}: no [ocp] section: optimize needs one (objective, nodes, "
+                       "...; see docs/guide/optimal_gaits.md and problems/ocp_max_speed.toml)")
     problem = problem_from_dict(data, source=str(args.problem),
-                                overrides=[*args.overrides, *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
+                                overrides=[*args.overrides,
+                                           *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
     if problem.drive != "torque":
-        raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = \"torque\", got "
-                       f"{format_value(problem.drive)}")
+        raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = "
+                       f"\"torque\", got {format_value(problem.drive)}")
     settings = ocp_settings(problem)
     if args.verbose and args.json:
-        raise BadInput("--verbose with --json: IPOPT's log would mix into the JSON on stdout; give one, or "
-                       "write the log to a file with [ocp.ipopt] output_file and file_print_level")
+        raise BadInput("--verbose with --json: IPOPT's log would mix into the JSON on stdout; give "
+                       "one, or write the log to a file with [ocp.ipopt] output_file and "
+                       "file_print_level")
     settings = replace(settings, verbose=bool(args.verbose))
     if args.start and args.nodes and len(args.nodes) > 1:
-        raise BadInput(f"--start with --nodes {' '.join(map(str, args.nodes))}: the convergence run starts "
-                       "each N from the previous optimum; give --start with one N")
+        raise BadInput(f"--start with --nodes {' '.join(map(str, args.nodes))}: the convergence "
+                       "run starts each N from the previous optimum; give --start with one N")
     nodes = args.nodes or [settings.nodes]
     if any(b <= a for a, b in zip(nodes, nodes[1:])):
-        raise BadInput(f"--nodes {' '.join(str(n) for n in nodes)} is invalid: the numbers of nodes must increase "
-                       "strictly (each N is warm-started from the previous one)")
+        raise BadInput(f"--nodes {' '.join(str(n) for n in nodes)} is invalid: the numbers of "
+                       "nodes must increase strictly (each N is warm-started from the "
+                       "previous one)")
     settings = replace(settings, nodes=nodes[0])
     work = check_work(args, optimize_work(problem, settings, nodes))
     if len(nodes) > 1:
@@ -287,9 +313,9 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     check_start(problem)
     start = None if args.start is None else load_problem(args.start)
     if start is not None and (start.drive != "torque" or start.period is None):
-        raise BadInput(f"--start {args.start}: needs a torque-drive gait with a [gait] period [s] (as the "
-                       f"optimal_gait.toml that optimize --out writes); got drive {format_value(start.drive)}, "
-                       f"period {format_value(start.period)}")
+        raise BadInput(f"--start {args.start}: needs a torque-drive gait with a [gait] period [s] "
+                       f"(as the optimal_gait.toml that optimize --out writes); got drive "
+                       f"{format_value(start.drive)}, period {format_value(start.period)}")
     announce(work)
     with _progress_bar(args.progress or sys.stderr.isatty()):
         result = optimize_problem(problem, jobs=args.jobs, start=start, verbose=bool(args.verbose))
@@ -311,13 +337,16 @@ PEAK_KEYS = ("peak_joint_rate_deg_s", "peak_slip_speed_m_s", "harmonic_peak_join
 def _optimize_data(result, problem) -> dict:
     """The JSON summary of an optimize result, with the problem and the units of its numbers."""
     return jsonable(dict(result.summary(), problem_file=problem.source, problem=problem.to_dict(),
-                         units=dict({k: units.UNITS[k] for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
+                         units=dict({k: units.UNITS[k]
+                                     for k in ("S", "W_plus", "CoT_plus", "tau", "solve_time_s")},
                                     T_ocp=units.UNITS["T"], v_ocp=units.UNITS["v"],
-                                    v_replay=units.UNITS["v"], **{k: units.UNITS[k] for k in PEAK_KEYS})))
+                                    v_replay=units.UNITS["v"],
+                                    **{k: units.UNITS[k] for k in PEAK_KEYS})))
 
 
 def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int], work) -> int:
-    """``optimize --nodes N1 N2 ...``: the convergence table (and the finest optimum's summary and files)."""
+    """``optimize --nodes N1 N2 ...``: the convergence table (and the finest optimum's summary and
+    files)."""
     from ocp_crawl.io.files import write_json
     from ocp_crawl.ocp.convergence import converge_in_nodes
     from ocp_crawl.viz.ocp import scenario_files, write_outputs as write_ocp_outputs
@@ -328,12 +357,14 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
     shown = args.progress or sys.stderr.isatty()
     log = (lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True)) if shown else None
     with _progress_bar(shown):
-        table = converge_in_nodes(problem.robot, problem.gravity, settings, nodes, log=log, jobs=args.jobs)
+        table = converge_in_nodes(problem.robot, problem.gravity, settings, nodes, log=log,
+                                  jobs=args.jobs)
     finest = table.rows[-1].result
     data = _optimize_data(finest, problem)
     conv = table.to_dict()
     if args.json:
-        print(json.dumps(jsonable(dict(conv, finest=data, problem_file=problem.source)), allow_nan=False))
+        print(json.dumps(jsonable(dict(conv, finest=data, problem_file=problem.source)),
+                         allow_nan=False))
     else:
         print(format_convergence(conv) + f"\n\nfinest N = {nodes[-1]}:\n" + format_optimize(data))
     def write(directory: Path) -> list[Path]:
@@ -341,6 +372,7 @@ def _optimize_nodes(args: argparse.Namespace, problem, settings, nodes: list[int
                 write_json(directory / CONVERGENCE_FILE, dict(conv, problem_file=problem.source))]
     files = [] if out is None else write_out(out, write, args.force)
     bad = [r for r in table.rows if r.status.label != "success"]
-    failure = "" if not bad else (f"optimisation not confirmed at N = {', '.join(str(r.nodes) for r in bad)}: "
+    failure = "" if not bad else (f"optimisation not confirmed at N = "
+                                  f"{', '.join(str(r.nodes) for r in bad)}: "
                                   f"{bad[0].message}")
     return finish(args, files, table.success, failure)
