@@ -106,3 +106,17 @@ def test_module_and_function_size(path):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
             n = node.end_lineno - node.lineno + 1
             assert n <= MAX_FUNCTION_LINES, f"{path}:{node.lineno} {node.name} has {n} lines"
+
+
+def test_ruff_finds_nothing():
+    """ruff with the project's configuration (pyproject.toml: pyflakes' errors, syntax errors) on the
+    package, the tests, the scripts and the docs' extensions."""
+    import shutil
+    import subprocess
+
+    ruff = shutil.which("ruff")
+    if ruff is None:
+        pytest.skip("ruff is not installed (pip install -e .[test])")
+    proc = subprocess.run([ruff, "check", "ocp_crawl", "tests", "scripts", "docs/_ext"], cwd=PKG.parent,
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
