@@ -523,6 +523,9 @@ COMMAND_ROWS.update({
                                                 ["--start with --nodes 20 40", "one N"]),
     "optimize: --verbose with --json": R("optimize", ["{ocp}", "--verbose", "--json"],
                                          ["--verbose with --json", "output_file"]),
+    "optimize: a friction level below mu's bound": R(
+        "optimize", ["{ocp}", "--set", "robot.mu=0.05", "--set", "ocp.mu_levels=[1.0, 0.001]"],
+        ["ocp_max_speed.toml", "friction scenario", "mu1 must be >= 0.0001"]),
     "optimize: the angles drive (torques optimised anyway)": R("optimize", ["{ocp}", "--set", "gait.drive=angles"],
                                                                ["ocp_max_speed.toml", "needs [gait] drive", '"angles"']),
     "crosscheck: decreasing --steps": R("crosscheck", ["{paper}", "--steps", "40", "20"],

@@ -89,10 +89,16 @@ def ocp_settings(problem: Problem) -> OCPSettings:
     if "ipopt" in sec:
         sec["ipopt"] = dict(sec["ipopt"])
     try:
-        return OCPSettings(**sec, gamma_deg=gamma)
+        settings = OCPSettings(**sec, gamma_deg=gamma)
     except ValueError as exc:  # a rule between keys (each key alone passed the schema)
         raise ProblemError(f"{problem.source}: [ocp] {exc}".replace("OCPSettings: ", "").replace("OCPSettings.", "")) \
             from None
+    try:  # every friction scenario a valid robot (a level or ratio may take mu out of its bounds)
+        settings.scenarios(problem.robot)
+    except ValueError as exc:
+        raise ProblemError(f"{problem.source}: [ocp] a friction scenario (mu_levels, mu_ratio_eps) makes an "
+                           f"invalid robot: {exc}") from None
+    return settings
 
 
 def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Problem | None = None,
