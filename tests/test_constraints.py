@@ -82,6 +82,46 @@ def test_friction_levels_scale_both_feet_and_name_their_scenarios():
     assert scenario_labels(OCPSettings(mu_ratio_eps=0.1)) == ["0.9", "1", "1.1"]
 
 
+def test_levels_keep_an_unequal_robots_own_coefficients():
+    """Without a ratio set, a level scales the robot's own mu1 and mu2 (not their geometric mean)."""
+    s = OCPSettings(mu_levels=(1.0, 0.5))
+    robots = s.scenarios(ROBOT.replace(mu1=0.35, mu2=0.43))
+    assert [(r.mu1, r.mu2) for r in robots] == [(0.35, 0.43), (0.175, 0.215)]
+    assert scenario_labels(s) == ["own_level_1", "own_level_0.5"]
+
+
+def test_a_gait_moving_backwards_misses_zero_bounds_and_cot_bounds():
+    """speed >= 0 is missed by a backward gait relative to the quantity's size (not in m/s), and CoT+
+    of a backward scenario is +inf for a CoT+ bound."""
+    from ocp_crawl.ocp.quantities import missed, reference_sizes
+
+    s = OCPSettings()
+    cycle = Cycle((0.004,), (0.1,), (10.0,), 1.0, -1, math.nan, math.nan)   # 4 mm/s the wrong way
+    sizes = reference_sizes(ROBOT.M, ROBOT.g, ROBOT.L, s.period_ref())
+    assert missed([Constraint("speed", min=0.0)], cycle, 5e-3, sizes)
+    assert not missed([Constraint("speed", min=0.0)], cycle, 5e-3)   # in m/s: 4e-3 < 5e-3
+    assert shortfall(Constraint("CoT_plus", max=50.0), cycle) == math.inf
+
+
+def test_bounds_a_quantity_cannot_meet_are_refused():
+    """A positive quantity's bound must be > 0; speed_min and a speed constraint both: give one."""
+    for q in ("peak_torque", "W_plus", "CoT_plus", "period"):
+        with pytest.raises(ValueError, match="must be > 0"):
+            Constraint(q, max=-0.1)
+    with pytest.raises(ValueError, match="give one"):
+        OCPSettings(objective="min_cot", speed_min=0.04, constraints=({"quantity": "speed", "min": 0.05},))
+
+
+def test_a_period_bound_slows_the_baselines_members():
+    """period >= 1.5 s: a member is evaluated at 1.5 s (S does not depend on T), not at its shortest."""
+    from ocp_crawl.ocp.family import WaveFamily, WaveParams
+
+    s = OCPSettings(direction=-1, constraints=({"quantity": "period", "min": 1.5},))
+    member = WaveParams(90.0, 90.0, 25.0, 25.0, 30.0)
+    ev = WaveFamily(ROBOT, "physical", s).evaluate(member)
+    assert member.period(s) < 1.0 and ev.T == 1.5 and ev.success
+
+
 def _search(settings):
     return best_harmonic(ROBOT, "physical", settings, local_starts=1, maxfev=60)
 

@@ -89,6 +89,8 @@ def _scenario(row: dict) -> str:
     """A friction scenario in text: "mu1/mu2 = 0.9", with a level other than the robot's ", level
     0.5"."""
     ratio, _, level = row["label"].partition("_level_")
+    if ratio == "own":
+        return f"friction level {level}"
     return f"mu1/mu2 = {ratio}" + (f", level {level}" if level else "")
 
 

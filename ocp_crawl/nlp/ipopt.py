@@ -251,9 +251,9 @@ def check_ipopt_options(owner: str, options, by_ipopt: bool = False) -> dict:
         if isinstance(value, (float, np.floating)) and not math.isfinite(value):
             raise ValueError(f"{owner}[{key!r}] must be finite, got {value!r}")
         out[key] = value.item() if isinstance(value, (np.integer, np.floating)) else value
-    if by_ipopt:
-        build_ipopt("options_check", _option_check_nlp(),
-                    {"error_on_fail": False, "ipopt": {"print_level": 0, "sb": "yes", **out}}, owner, out)
+    if by_ipopt:  # without output_file: building a solver opens (truncates) it
+        ipopt = {"print_level": 0, "sb": "yes", **{k: v for k, v in out.items() if k != "output_file"}}
+        build_ipopt("options_check", _option_check_nlp(), {"error_on_fail": False, "ipopt": ipopt}, owner, out)
     return out
 
 

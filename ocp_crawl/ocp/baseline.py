@@ -53,7 +53,7 @@ def speeds(settings: OCPSettings, S, T: float) -> list[float]:
     return [settings.direction * s / T for s in S]
 
 
-def value_from(settings: OCPSettings, S, CoT, T: float, feasible: bool = True,
+def value_from(settings: OCPSettings, S, CoT, T: float, *, feasible: bool = True,
                cycle: Cycle | None = None) -> float:
     """Objective value of a gait from its S [m] and CoT+ [-] per scenario and its period T [s].
 
@@ -93,8 +93,8 @@ def shortfalls(settings: OCPSettings, cycle: Cycle) -> float:
     return float(sum(shortfall(c, cycle) for c in settings.requirements))
 
 
-def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float,
-                    profile: tuple = (math.nan, math.nan), enforce: bool = True) -> float:
+def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float, enforce: bool = True, *,
+                    profile: tuple = (math.nan, math.nan)) -> float:
     """Objective of a set of simulations (one per scenario) of a gait of period T [s] (:func:`value_from`),
     with ``enforce`` an infeasible value where it misses a requirement (``profile``: the torque profile's
     peak |tau| [N m] and mean squared torque [N^2 m^2], for profile constraints); NaN when a simulation
@@ -104,7 +104,7 @@ def objective_value(settings: OCPSettings, results: list[CrawlResult], T: float,
     S, W, CoT = ([getattr(r, k) for r in results] for k in ("S", "W_plus", "CoT_plus"))
     cycle = cycle_of(settings, S, W, CoT, T, profile)
     ok = not enforce or shortfalls(settings, cycle) <= 0
-    return value_from(settings, S, CoT, T, ok, cycle)
+    return value_from(settings, S, CoT, T, feasible=ok, cycle=cycle)
 
 
 def required_value(settings: OCPSettings, S, CoT, T: float, W_plus=None,
@@ -113,7 +113,7 @@ def required_value(settings: OCPSettings, S, CoT, T: float, W_plus=None,
     (for W+ bounds) W+ [J] per scenario, the period T [s] and the torque ``profile`` (for profile bounds)."""
     W = [math.nan] * len(S) if W_plus is None else W_plus
     cycle = cycle_of(settings, S, W, CoT, T, profile)
-    return value_from(settings, S, CoT, T, shortfalls(settings, cycle) <= 0, cycle)
+    return value_from(settings, S, CoT, T, feasible=shortfalls(settings, cycle) <= 0, cycle=cycle)
 
 
 def better(settings: OCPSettings, a: float, b: float) -> bool:
@@ -139,9 +139,11 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
         return FAIL_RANK
     cycle = _cycle(settings, ev)
     miss = shortfalls(settings, cycle)
-    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, miss <= 0, cycle)
+    value = value_from(settings, ev.S, ev.CoT_plus, ev.T, feasible=miss <= 0, cycle=cycle)
     if math.isfinite(value):
-        return value if settings.minimises else -value
+        # a user objective in its own unit, over its typical size: below MISS_RANK whatever its unit
+        size = 1.0 if settings.user_objective is None else settings.user_objective.scale
+        return (value if settings.minimises else -value) / size
     if settings.objective != "min_cot":
         return MISS_RANK + miss
     v = speeds(settings, ev.S, ev.T)
@@ -154,7 +156,8 @@ def value_of(settings: OCPSettings, ev: Evaluation) -> float:
     if not ev.success:
         return math.nan
     cycle = _cycle(settings, ev)
-    return value_from(settings, ev.S, ev.CoT_plus, ev.T, shortfalls(settings, cycle) <= 0, cycle)
+    return value_from(settings, ev.S, ev.CoT_plus, ev.T, feasible=shortfalls(settings, cycle) <= 0,
+                      cycle=cycle)
 
 
 @dataclass

@@ -21,8 +21,10 @@ is admissible only when which foot slips does not depend on the friction coeffic
 Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and CoT+
 of a member do not depend on T.  The mean speed direction * S / T is then largest at the smallest allowed
 T, CoT+ is the same at every T, and a speed requirement direction * S / T >= speed_min is easiest to meet
-at the smallest T.  Every objective of the OCP is therefore optimal at the shortest period, and a family's
-search runs over its shape parameters only.
+at the smallest T.  Every named objective of the OCP is therefore optimal at the shortest period, and a
+family's search runs over its shape parameters only.  Bounds on the period or an upper bound on the speed
+(``[[ocp.constraint]]``) slow a member down to the shortest period they allow
+(:func:`allowed_period`); a user objective is evaluated at that period too.
 
 The search works in box coordinates z = (w1, w2, u, q, p[, r, d]) in [-1, 1] x [-1, 1] x [0, 1] x [-1, 1]
 x [-1, 1] (x [0, 1] x [0, 1] for pulses) that map onto the envelope: the larger amplitude is u A_max, the
@@ -180,6 +182,20 @@ class Evaluation:
     (:func:`~ocp_crawl.ocp.quantities.profile_of_signal`), computed only where a constraint bounds them"""
 
 
+def allowed_period(settings: OCPSettings, T: float, S) -> float:
+    """The shortest period [s], at least ``T`` (the bandwidth's), that the constraints allow a member of
+    displacements ``S`` [m] per scenario: at least a ``period`` constraint's min and slow enough for a
+    ``speed`` constraint's max (direction S_j / T <= v_max in every scenario, or on their mean)."""
+    d = settings.direction
+    for c in settings.requirements:
+        if c.quantity == "period" and c.min is not None:
+            T = max(T, c.min)
+        elif c.quantity == "speed" and c.max is not None and c.max > 0:
+            reach = [d * s for s in S] if c.over == "every" else [d * sum(S) / len(S)]
+            T = max(T, max(reach) / c.max)
+    return T
+
+
 class WaveFamily:
     """The members of one shape in the envelope and bandwidth of ``settings`` for ``robot`` (SI units)
     under the gravity convention ``gravity``, simulated with the event-driven stepper in every friction
@@ -249,11 +265,13 @@ class WaveFamily:
         low = next((x for x in margins if not x >= eps), None)
         if low is not None:  # not admissible: which foot slips depends on friction known to +-eps/2
             return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
+        S = tuple(r.S for r in sims)
+        T = allowed_period(self.settings, T, S)
         profile = (math.nan, math.nan)
         if (self.settings.user_objective is not None
                 or any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements)):
             profile = profile_of_signal(params.torque(self.robot.k))
-        return Evaluation(params, T, tuple(r.S for r in sims), tuple(r.W_plus for r in sims),
+        return Evaluation(params, T, S, tuple(r.W_plus for r in sims),
                           tuple(r.CoT_plus for r in sims), True, margin=margins, profile=profile)
 
     def evaluated(self) -> list[Evaluation]:

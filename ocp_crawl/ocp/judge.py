@@ -47,7 +47,7 @@ from ocp_crawl.io import units
 from ocp_crawl.model.inputs import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.baseline import cycle_of, value_from
-from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes
+from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes, reference_sizes
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
@@ -109,8 +109,9 @@ def ratio_labels(ratios) -> list[str]:
 
 def scenario_labels(settings: OCPSettings) -> list[str]:
     """Labels of the friction scenarios of ``settings``, in their order: the ratio's
-    (:func:`ratio_labels`), and with friction levels (``mu_levels``) "<ratio>_level_<level>"."""
-    ratios = ratio_labels(settings.friction_ratios)
+    (:func:`ratio_labels`), and with friction levels (``mu_levels``) "<ratio>_level_<level>" ("own" for
+    the robot's own ratio, without a ratio set)."""
+    ratios = ratio_labels(settings.friction_ratios) if settings.ratio_set else ["own"]
     if settings.mu_levels is None:
         return ratios
     levels = ratio_labels(settings.levels)
@@ -258,7 +259,8 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.value = value_from(settings, v.S, v.CoT_plus, T, cycle=v.cycle)
     v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
     v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
-    problems = _problems(v, settings, value_ocp)
+    r = models[0].robot
+    problems = _problems(v, settings, value_ocp, reference_sizes(r.M, r.g, r.L, settings.period_ref()))
     if problems:
         v.status = Status.REPLAY_MISMATCH
         S_text = ", ".join(units.distance(s) for s in (S_ocp or []))
@@ -269,7 +271,7 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     return v
 
 
-def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
+def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) -> list[str]:
     """What the replay misses: the envelope, the bandwidth, the requirements, the friction tolerance, the
     agreement with the OCP."""
     tol = settings.replay_tol
@@ -285,7 +287,7 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float) -> list[str]:
                    f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
                    f"{units.scientific(BOUND_RTOL)})")
     out += [f"the replay misses {text} by more than replay_tol {units.ratio(tol)}"
-            for text in missed(settings.requirements, v.cycle, tol)]
+            for text in missed(settings.requirements, v.cycle, tol, sizes)]
     out += _joint_rate_problems(v, settings)
     low = min(v.margin, default=math.inf)
     if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc

@@ -10,8 +10,9 @@ import numpy as np
 #: the kinds of constraint blocks: the model's equations (equilibrium, closure, periodicity, the running
 #: sums' definitions: residual reports); the complementarity products and the cross conditions, relaxed
 #: to sigma per homotopy stage; the optimiser's own rules (friction tolerance, held ties, slip onsets on
-#: sub-step boundaries, joint rates), which a profile given to be simulated need not meet
-KINDS = ("equation", "complementarity", "cross", "rule")
+#: sub-step boundaries, joint rates) and the requirements on cycle quantities, which a profile given to
+#: be simulated need not meet
+KINDS = ("equation", "complementarity", "cross", "rule", "requirement")
 
 
 class Layout:

@@ -34,25 +34,29 @@ PROFILE_SAMPLES = 4096
 
 @dataclass(frozen=True)
 class Quantity:
-    """One quantity of a gait's cycle: its unit, whether it is per friction scenario, its meaning and the
-    bounds the transcription states exactly (``"min"``, ``"max"``)."""
+    """One quantity of a gait's cycle: its unit, whether it is per friction scenario, its meaning, the
+    bounds the transcription states exactly (``"min"``, ``"max"``), whether it is positive by nature
+    (its bounds must then be > 0) and its reference size (:func:`reference_sizes`)."""
 
     name: str
     unit: str
     per_scenario: bool
     meaning: str
     bounds: tuple = ("min", "max")
+    positive: bool = False
 
 
 QUANTITIES = {q.name: q for q in (
     Quantity("speed", "m/s", True, "mean speed direction * S / T"),
     Quantity("distance", "m", True, "distance per cycle direction * S"),
-    Quantity("W_plus", "J", True, "positive actuator work per cycle", ("max",)),
-    Quantity("CoT_plus", "-", True, "cost of transport W+ / (M g |S|)", ("max",)),
-    Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",)),
+    Quantity("W_plus", "J", True, "positive actuator work per cycle", ("max",), True),
+    Quantity("CoT_plus", "-", True, "cost of transport W+ / (M g direction S) (+inf moving backwards)",
+             ("max",), True),
+    Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",), True),
     Quantity("mean_torque_sq", "N^2 m^2", False,
-             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, up to a factor)"),
-    Quantity("period", "s", False, "period T of the gait"),
+             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, up to a factor)",
+             positive=True),
+    Quantity("period", "s", False, "period T of the gait", positive=True),
 )}
 
 
@@ -83,6 +87,9 @@ class Constraint:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError(f"OCPSettings.constraints: {where}: {side} must be a finite number, "
                                  f"got {value!r}")
+            if q.positive and not value > 0:
+                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be > 0 ({q.name} is "
+                                 f"positive), got {value!r}")
             if side not in q.bounds:
                 raise ValueError(f"OCPSettings.constraints: {where}: a {side} bound is not available "
                                  f"({q.name} admits only {' and '.join(q.bounds)}: {_WHY_ONE_SIDED})")
@@ -181,9 +188,10 @@ def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
     if q == "W_plus":
         return [(_over(c, [W - c.max / sym.MgL for W in sym.W]), -np.inf, 0.0)]
     if q == "CoT_plus":
-        if c.over == "mean":
+        if c.over == "mean":  # each scenario forwards (a backwards one would lower the mean)
             rows = [W / (d * S) for W, S in zip(sym.W, sym.S)]
-            return [(sum(rows) / len(rows) - c.max, -np.inf, 0.0)]
+            return [(cs.vertcat(*[d * S for S in sym.S]), 0.0, np.inf),
+                    (sum(rows) / len(rows) - c.max, -np.inf, 0.0)]
         return [(cs.vertcat(*[W - c.max * d * S for W, S in zip(sym.W, sym.S)]), -np.inf, 0.0)]
     if q == "peak_torque":
         b = c.max / sym.MgL
@@ -237,18 +245,24 @@ def profile_of_nodes(tau: np.ndarray) -> tuple[float, float]:
 
 def profile_of_signal(signal) -> tuple[float, float]:
     """(peak |tau| [N m], mean squared torque [N^2 m^2]) of a torque signal tau(t) [N m] of the phase t
-    [cycles], from :data:`PROFILE_SAMPLES` phases and its kinks (its linear interpolant there: relative error
-    O(1e-7) on the paper's waveforms)."""
+    [cycles]: the peak over :data:`PROFILE_SAMPLES` phases and the signal's knots (``t_knots``: the
+    corners of triangle and pulse waves, where their peaks lie), the mean square by the trapezoid rule on
+    the uniform phases (relative error O(1e-7) on the paper's waveforms)."""
     t = np.arange(PROFILE_SAMPLES) / PROFILE_SAMPLES
     tau = np.asarray(signal(t), float).reshape(2, -1)
-    return profile_of_nodes(tau)
+    knots = np.mod(np.asarray(getattr(signal, "t_knots", ()), float).ravel(), 1.0)
+    peak = float(np.max(np.abs(tau)))
+    if knots.size:
+        peak = max(peak, float(np.max(np.abs(np.asarray(signal(knots), float)))))
+    return peak, mean_square_nodes(tau)
 
 
 def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
     """The values of the constrained quantity on a simulated gait: one per scenario ("every") or one."""
     d, T = cycle.direction, cycle.T
     per = {"speed": [d * s / T for s in cycle.S], "distance": [d * s for s in cycle.S],
-           "W_plus": list(cycle.W_plus), "CoT_plus": list(cycle.CoT_plus)}
+           "W_plus": list(cycle.W_plus),
+           "CoT_plus": [c if d * s > 0 else math.inf for c, s in zip(cycle.CoT_plus, cycle.S)]}
     if c.quantity in per:
         values = per[c.quantity]
         return [float(np.mean(values))] if c.over == "mean" else values
@@ -256,27 +270,38 @@ def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
                    "period": T}[c.quantity])]
 
 
-def shortfall(c: Constraint, cycle: Cycle) -> float:
+def reference_sizes(M: float, g: float, L: float, period_ref: float) -> dict[str, float]:
+    """The size of each quantity on a robot of mass M [kg] and length L [m] under gravity g [m/s^2] with
+    the reference period ``period_ref`` [s] (the NLP's scales): a zero bound's miss is measured against
+    it (speed L / period_ref, distance L, W+ M g L, CoT+ 1, peak torque M g L, mean squared torque
+    (M g L)^2, period period_ref)."""
+    MgL = M * g * L
+    return {"speed": L / period_ref, "distance": L, "W_plus": MgL, "CoT_plus": 1.0, "peak_torque": MgL,
+            "mean_torque_sq": MgL**2, "period": period_ref}
+
+
+def shortfall(c: Constraint, cycle: Cycle, sizes: dict | None = None) -> float:
     """How far the gait misses the constraint, relative to its bound's size (0 when met; NaN values miss
-    by infinity): max over the values of (min - value) / |min| and (value - max) / |max| (a zero bound:
-    absolute)."""
+    by infinity): max over the values of (min - value) / |min| and (value - max) / |max|; a zero bound's
+    miss relative to the quantity's size in ``sizes`` (:func:`reference_sizes`; None: in its unit)."""
     worst = 0.0
+    size = 1.0 if sizes is None else sizes[c.quantity]
     for value in cycle_values(c, cycle):
         if not math.isfinite(value):
             return math.inf
         for bound, miss in ((c.min, None if c.min is None else c.min - value),
                             (c.max, None if c.max is None else value - c.max)):
             if bound is not None:
-                worst = max(worst, miss / (abs(bound) or 1.0))
+                worst = max(worst, miss / (abs(bound) or size))
     return worst
 
 
-def missed(constraints, cycle: Cycle, tol: float = 0.0) -> list[str]:
-    """The constraints the gait misses by more than ``tol`` (relative to the bound), each as a text with the
-    gait's values."""
+def missed(constraints, cycle: Cycle, tol: float = 0.0, sizes: dict | None = None) -> list[str]:
+    """The constraints the gait misses by more than ``tol`` (relative to the bound, or for a zero bound
+    to the quantity's size in ``sizes``), each as a text with the gait's values."""
     out = []
     for c in constraints:
-        if shortfall(c, cycle) > tol:
+        if shortfall(c, cycle, sizes) > tol:
             values = ", ".join(f"{v:.6g}" for v in cycle_values(c, cycle))
             out.append(f"{c.text()} (here {values})")
     return out
@@ -295,8 +320,10 @@ class UserObjective:
     :class:`Cycle` (the baselines' members, the replay: the judge compares the two within replay_tol).
     ``sense`` "min" or "max"; ``scale`` its typical size in its ``unit`` (the NLP minimises value /
     scale: an objective of order one converges to IPOPT's tolerances as the named ones do); ``work``:
-    whether ``nlp`` uses W+ (the NLP then builds it).  The settings name the objective "min:<name>" or
-    "max:<name>"."""
+    whether ``nlp`` uses W+ (the NLP then builds it: a sum of slacks v >= tau dphi, v >= 0, exact only
+    where the objective presses it down).  The settings name the objective "min:<name>" or "max:<name>".
+    ``nlp`` and ``value`` should be module-level functions: the baselines' search sends the settings to
+    worker processes, which a lambda does not reach under the forkserver and spawn start methods."""
 
     name: str
     nlp: object

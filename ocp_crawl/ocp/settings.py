@@ -273,6 +273,9 @@ class OCPSettings:
         if self.objective not in (user.label, "max_speed"):  # the default, or its own label
             raise ValueError(f"OCPSettings: objective {self.objective!r} and user_objective {user.label!r}: "
                              "give one")
+        if self.robust != "mean":
+            raise ValueError("OCPSettings.robust: a user objective takes the scenarios' numbers itself "
+                             "(Physical.S, Cycle.S are per scenario); robust must stay 'mean'")
         self._set("objective", user.label)
 
     def _check_choices(self) -> None:
@@ -352,6 +355,9 @@ class OCPSettings:
         if isinstance(self.constraints, (dict, Constraint)):
             raise ValueError("OCPSettings.constraints must be a sequence of constraints, got one")
         self._set("constraints", tuple(Constraint.of(c) for c in self.constraints))
+        if self.objective == "min_cot" and self.speed_min > 0 and self._own_speed_min():
+            raise ValueError("OCPSettings: speed_min and a speed constraint with min in every scenario both "
+                             "give min_cot's speed requirement: give one")
 
     def schedule(self) -> tuple[float, ...]:
         """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0 sigma_factor, ...,
@@ -363,29 +369,41 @@ class OCPSettings:
         :attr:`friction_ratios` (just ``robot`` without a set)."""
         if not self.friction_set:
             return [robot]
+        if not self.ratio_set:  # levels of the robot's own coefficients
+            return [robot.replace(mu1=level * robot.mu1, mu2=level * robot.mu2) for level in self.levels]
         mu = math.sqrt(robot.mu1 * robot.mu2)
         return [robot.replace(mu1=level * mu * math.sqrt(r), mu2=level * mu / math.sqrt(r))
                 for level in self.levels for r in self.friction_ratios]
+
+    @property
+    def ratio_set(self) -> bool:
+        """True when the scenarios set the ratio mu1/mu2 (``mu_ratios``, or eps > 0) rather than keep the
+        robot's own."""
+        return self.mu_ratios is not None or self.ratio_eps > 0
 
     @property
     def levels(self) -> tuple[float, ...]:
         """The friction levels (factors on both coefficients): mu_levels, else (1,)."""
         return self.mu_levels if self.mu_levels is not None else (1.0,)
 
-    def scenario_pairs(self) -> list[tuple[float, float]]:
-        """(level, ratio) of each scenario, in the order of :meth:`scenarios`."""
-        return [(level, r) for level in self.levels for r in self.friction_ratios]
+    def scenario_pairs(self) -> list[tuple[float, float | None]]:
+        """(level, ratio) of each scenario, in the order of :meth:`scenarios` (ratio None: the robot's
+        own)."""
+        ratios = self.friction_ratios if self.ratio_set else (None,)
+        return [(level, r) for level in self.levels for r in ratios]
 
     @property
     def requirements(self) -> tuple[Constraint, ...]:
         """Every bound on a cycle quantity: min_cot's speed requirement (a speed at least speed_min in
         every scenario; unless a constraint bounds the speed from below in every scenario itself), then
         :attr:`constraints`."""
-        own = any(c.quantity == "speed" and c.min is not None and c.over == "every"
-                  for c in self.constraints)
-        if self.objective != "min_cot" or own:
+        if self.objective != "min_cot" or self._own_speed_min():
             return self.constraints
         return (Constraint("speed", min=self.speed_min),) + self.constraints
+
+    def _own_speed_min(self) -> bool:
+        return any(c.quantity == "speed" and c.min is not None and c.over == "every"
+                   for c in self.constraints)
 
     @property
     def ratio_eps(self) -> float:

@@ -227,7 +227,7 @@ def _endgame(ocp: GaitOCP, models: list[Model]) -> Endgame | None:
         if not verdict.ok:
             return False, f"the replay judge: {verdict.message}"
         runs, T = replays(x_ref)
-        ref = objective_value(settings, runs, T, profile_of_nodes(ocp.unpack(x_ref)["tau"]), enforce=False)
+        ref = objective_value(settings, runs, T, enforce=False, profile=profile_of_nodes(ocp.unpack(x_ref)["tau"]))
         text = (f"replay {value_text(settings.objective, verdict.value)} against {against}'s "
                 f"{value_text(settings.objective, ref)}")
         return not is_better(settings.objective, ref, verdict.value), text

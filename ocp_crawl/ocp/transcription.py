@@ -121,7 +121,7 @@ class GaitOCP:
         sym = self._symbols(scen, T, Th)
         for i, c in enumerate(s.requirements):
             for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
-                nlp.con(f"require_{i}_{k}", expr, lb, ub)
+                nlp.con(f"require_{i}_{k}", expr, lb, ub, ("requirement",))
 
     def _objective(self, nlp: Layout, scen: list[Scenario], T, dT, Th):
         """The objective (to minimise) with the regularisation, and its extra constraints (the
@@ -184,10 +184,10 @@ class GaitOCP:
         theta = cs.vertcat(*[sc.theta for sc in scen])
         theta_ref = nlp.sym("theta_ref", theta.numel())
         # ... and without the optimiser's own rules (friction tolerance, held ties, slip onsets on sub-step
-        # boundaries): a profile given to be simulated need not meet them (S does not depend on where a slip starts
-        # inside a sub-step; the onset rule is for the optimiser's W+)
+        # boundaries) and the requirements: a profile given to be simulated need not meet them (S does not
+        # depend on where a slip starts inside a sub-step; the onset rule is for the optimiser's W+)
         keep = np.ones(self.ng, bool)
-        for sl in self._rows["rule"]:
+        for sl in self._rows["rule"] + self._rows["requirement"]:
             keep[sl] = False
         self._sim_rows = np.flatnonzero(keep)
         self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G[self._sim_rows.tolist()], theta_ref)
@@ -209,12 +209,12 @@ class GaitOCP:
         return self._slices
 
     def export(self, sigma: float | None = None) -> dict:
-        """The NLP for a solver of one's own: ``nlp`` (CasADi's ``{"x", "f", "g"}``, the input of
-        ``casadi.nlpsol``) and the bounds ``lbx``, ``ubx``, ``lbg``, ``ubg`` of the relaxation at ``sigma``
-        (None: ``settings.sigma_min``; complementarity products and cross conditions <= sigma).  The
-        variables' blocks are :attr:`slices`; :meth:`initial_guess` gives a start, :meth:`unpack` reads a
-        solution in physical units."""
+        """The NLP for a solver of one's own: ``nlp`` (``casadi.nlpsol``'s ``{"x", "f", "g"}``) and the bounds
+        ``lbx``, ``ubx``, ``lbg``, ``ubg`` of the relaxation at ``sigma`` (None: ``settings.sigma_min``); the
+        blocks are :attr:`slices`, :meth:`initial_guess` gives a start, :meth:`unpack` reads a solution."""
+        fixed, self._fixed = self._fixed, None  # the optimiser's NLP, whatever the last solve was
         data = self._stage_data(self.settings.sigma_min if sigma is None else sigma)
+        self._fixed = fixed
         return {"nlp": dict(self._nlp), **{k: data[k].copy() for k in ("lbx", "ubx", "lbg", "ubg")}}
 
     def objective(self, x: np.ndarray) -> float:

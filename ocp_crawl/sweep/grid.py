@@ -53,8 +53,9 @@ def schema_key(name: str, where: str) -> Key:
         raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid keys: "
                            f"{', '.join(keys)}")
     if keys[key].type not in (float, int, str):
-        raise ProblemError(f"{where} is invalid: {name} is an array or table key; an axis varies a number or a "
-                           "string (sweep a key with one value, or one problem file per array)")
+        what = "an array key" if keys[key].type is list else "a table key"
+        raise ProblemError(f"{where} is invalid: {name} is {what}; an axis varies a number or a string "
+                           "(sweep a key with one value, or one problem file per array)")
     return keys[key]
 
 

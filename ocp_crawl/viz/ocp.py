@@ -63,11 +63,13 @@ def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
 
 def scenario_files(settings: OCPSettings) -> list[str]:
     """The problem files replaying each friction scenario of a friction set, named by its ratio mu1/mu2
-    (``optimal_gait_mu1_mu2_0.9.toml``, ...; with friction levels ``..._0.9_level_0.5.toml``:
-    :func:`~ocp_crawl.ocp.judge.scenario_labels`); [] without a set."""
+    (``optimal_gait_mu1_mu2_0.9.toml``, ...; with friction levels ``..._0.9_level_0.5.toml``, or
+    ``optimal_gait_level_0.5.toml`` at the robot's own ratio: :func:`~ocp_crawl.ocp.judge.scenario_labels`);
+    [] without a set."""
     if not settings.friction_set:
         return []
-    return [f"optimal_gait_mu1_mu2_{label}.toml" for label in scenario_labels(settings)]
+    return [f"optimal_gait_level_{label.removeprefix('own_level_')}.toml" if label.startswith("own_")
+            else f"optimal_gait_mu1_mu2_{label}.toml" for label in scenario_labels(settings)]
 
 
 def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str, name: str) -> str:
