@@ -189,6 +189,7 @@ SUBPROCESS_ROWS = ("sweep: NUM < 1", "optimize: unknown [ocp] key", "simulate: c
                    "simulate: TOML nested 5000 deep (RecursionError)")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", SUBPROCESS_ROWS)
 def test_bad_input_in_a_real_process(case, tmp_path):
     argv, words = materialise(ROWS[case], tmp_path)

@@ -116,10 +116,12 @@ def coarse_rows():
     return grid(5, (5.0, 17.0, 29.0), np.linspace(-165.0, 165.0, 12), [Robot.paper()])
 
 
+@pytest.mark.slow
 def test_max_speed_beats_coarse_grid(coarse_rows):
     assert_beats_speed(coarse_rows, "max_speed")
 
 
+@pytest.mark.slow
 def test_min_cot_beats_coarse_grid(coarse_rows):
     assert_beats_cot(coarse_rows)
 
@@ -224,6 +226,7 @@ def test_twice_per_cycle_has_the_same_value(objective):
     assert math.isfinite(v1) and v2 == pytest.approx(v1, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_worker_processes_change_nothing_but_the_time():
     """The scan and the local searches on two worker processes give the serial search's choice, field by field
     (the simulations are deterministic), and ``meanwhile`` runs once; a worker pool that breaks falls back to the

@@ -111,6 +111,7 @@ def test_simulate_reports_the_speed_of_a_problem_with_a_period(capsys):
     assert "speed      - (no [gait] period)" in text
 
 
+@pytest.mark.slow
 def test_simulate_out_writes_the_files(capsys, tmp_path):
     out_dir = tmp_path / "run" / "deep"
     out_dir.mkdir(parents=True)
@@ -131,6 +132,7 @@ def test_simulate_out_writes_the_files(capsys, tmp_path):
     refuse_then_force(capsys, argv, out_dir, names, 0)
 
 
+@pytest.mark.slow
 def test_numerical_failure_exits_1_and_still_prints_json(capsys, tmp_path):
     # a stiff robot with a large amplitude: foot 2 lifts off during the first cycle
     code, out, err = run(capsys, "simulate", PAPER, "--set", "robot.k=0.612", "--set", "gait.A_deg=60", "--json",
@@ -143,6 +145,7 @@ def test_numerical_failure_exits_1_and_still_prints_json(capsys, tmp_path):
     assert (tmp_path / "gait.png").exists()
 
 
+@pytest.mark.slow
 def test_demo(capsys, tmp_path, monkeypatch):
     argv = ["demo", "--out", tmp_path / "demo"]
     code, out, err = run(capsys, *argv)
@@ -179,6 +182,7 @@ def test_help_and_version(capsys):
 # and tests/_bad_input_data_rows.py)
 
 
+@pytest.mark.slow
 def test_real_subprocess_bad_input_and_json(tmp_path):
     env = dict(os.environ, MPLBACKEND="Agg")
     bad = write(tmp_path, edit("k = 0.1677", "k = -1.0"))
@@ -319,6 +323,7 @@ def refuse_then_force(capsys, argv, out_dir, files, first_code):
         assert after[name][2] != before[name][2] or after[name][1] != before[name][1], name
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", list(FORCE_CASES))
 def test_out_is_never_overwritten_without_force(command, capsys, tmp_path):
     args, files = FORCE_CASES[command]
@@ -374,6 +379,7 @@ def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, 
 
 
 # ------------------------------------------------------------------------------------------ solvers
+@pytest.mark.slow
 def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
     """``--set simulation.solver=mpcc`` runs the MPCC time-stepping; ``--solver``/``--steps`` are shortcuts.
 

@@ -58,6 +58,7 @@ def _random_point(rng, model):
     return x, np.tile(model.p, N)
 
 
+@pytest.mark.slow
 @needs_cc
 def test_compiled_kernel_values_jacobian_and_hessian_equal_the_sx_kernel(kernel, built):
     assert built.compiled and built.function.class_name() == "External"

@@ -29,6 +29,7 @@ def run(env_extra):
     return json.loads(out.stdout)
 
 
+@pytest.mark.slow
 def test_fallback_without_compiler_gives_identical_results():
     fast = run({})
     slow = run({"OCP_CRAWL_NO_COMPILE": "1"})

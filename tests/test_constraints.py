@@ -126,6 +126,7 @@ def _search(settings):
     return best_harmonic(ROBOT, "physical", settings, local_starts=1, maxfev=60)
 
 
+@pytest.mark.slow
 def test_the_baseline_meets_a_peak_torque_bound_that_binds():
     """The best harmonic member under peak |tau| <= 0.3 N m meets it by its closed-form peak, and the
     unconstrained search's best breaks it (so the bound decides the baseline)."""

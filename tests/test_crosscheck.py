@@ -38,6 +38,7 @@ def checked(request):
     return crosscheck(Model(robot, gravity=gravity), paper_torque(robot, psi=psi), steps=STEPS)
 
 
+@pytest.mark.slow
 def test_s_converges_to_the_event_driven_value(checked):
     rows = checked.rows
     assert checked.event.success, checked.event.message
@@ -58,6 +59,7 @@ def test_s_converges_to_the_event_driven_value(checked):
         assert np.isnan(checked.order)
 
 
+@pytest.mark.slow
 def test_unequal_friction_has_foot_switches_that_plain_steps_get_wrong():
     """The unequal-friction gait (problems/unequal_friction.toml) switches the slipping foot during
     slip twice per cycle: the plain incremental step (no event location) gives the whole slip of the
@@ -146,6 +148,7 @@ def test_bad_tolerances_raise():
         CrossCheckTolerances(event_lag_steps=(2.0, 1.0))
 
 
+@pytest.mark.slow
 def test_a_failed_crosscheck_says_so_on_stderr(capsys):
     """Exit 1 with one stderr line naming the criteria not met; stdout keeps the table.  psi = 0 at
     N = 20/40: the MPCC's mode sequence differs from the event solver's."""
@@ -163,6 +166,7 @@ def test_a_failed_crosscheck_says_so_on_stderr(capsys):
     assert failed and all(f"'{name}': " in lines[0] for name in failed), (failed, lines[0])
 
 
+@pytest.mark.slow
 def test_crosscheck_reads_the_simulation_section(capsys):
     """The file's [simulation] options reach both simulators: two cycles and an unreachable
     periodicity tolerance leave the event solver not periodic, so the cross-check fails."""
@@ -321,6 +325,7 @@ def test_criteria_read_without_bounds_that_say_nothing():
     assert "= 0 (bound in" in checks["event lags"].text()
 
 
+@pytest.mark.slow
 def test_the_max_speed_optimum_passes(cli_optimize_run, capsys):
     """The optimum of problems/ocp_max_speed.toml (the shared optimize run) through the command:
     PASS, every documented criterion printed with its value and bound, and S converging."""

@@ -61,6 +61,7 @@ def whole():
     return res
 
 
+@pytest.mark.slow
 def test_an_endgame_not_kept_gives_the_whole_homotopy_and_a_kept_one_its_replay(whole):
     """With one iteration allowed, the endgame's solve fails and the homotopy goes on from the
     endgame's stage: the same optimum as the whole homotopy's, to round-off.  With the default cap,
@@ -94,6 +95,7 @@ def test_endgame_settings_name_the_schedule():
         1e-3, 1e-4, 1e-5, 1e-6)
 
 
+@pytest.mark.slow
 def test_always_perturbed_hessian_solves_the_same_problem(whole):
     """perturbation = "always" adds one variable in neither the objective nor the constraints (IPOPT then
     treats the Hessian as degenerate from its first factorisation): the optimum it reaches is a
@@ -106,6 +108,7 @@ def test_always_perturbed_hessian_solves_the_same_problem(whole):
         settings(perturbation="never")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fork", [True, False])
 def test_both_paths_keep_the_better_by_replay(fork, monkeypatch, whole):
     """endgame_paths = "both": the endgame and the rest of the homotopy both run (in a forked process, or

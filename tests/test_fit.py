@@ -80,6 +80,7 @@ def test_sigma_of_k_matches_the_curvature_of_chi2(tmp_path):
     assert sk == pytest.approx(sigma_scan, rel=0.1)
 
 
+@pytest.mark.slow
 def test_closed_form_sigma_and_coverage(tmp_path):
     """Stiffness data phi = tau / k: the reported sigma equals the weighted linear regression's, and over
     many noisy repetitions about 68 % of the fits lie within one reported sigma of the truth."""
@@ -171,6 +172,7 @@ def _moved(problem, log_step, form, directory):
     return _s_norm_pressure(problem, 0.1677 * factors["robot.k"], bmap, form, directory)[0]
 
 
+@pytest.mark.slow
 def test_normalised_data_cannot_fix_k_and_the_pressure_map_together_raised_sine(tmp_path):
     """The earlier raised sine (peak p0, stored rest angle): k down with the whole map up is not determined."""
     problem = load_problem(PAPER_GRAVITY)
@@ -188,6 +190,7 @@ def test_normalised_data_cannot_fix_k_and_the_pressure_map_together_raised_sine(
     assert np.sum(((traded - base) / sig) ** 2) < 0.1 * np.sum(((k_only - base) / sig) ** 2)
 
 
+@pytest.mark.slow
 def test_normalised_data_cannot_fix_the_scale_of_the_pressure_map(tmp_path):
     """The paper's form (ref), the default (nominal p0, A_p = 0.4 bar, flat rest): the angles follow the map and k
     only sets the sag under gravity, so k is determined (to better than 100 %) but the overall scale of the map,
@@ -218,6 +221,7 @@ def test_a_failing_start_is_a_status_not_a_crash(tmp_path):
     assert np.all(np.isnan(fit.sigma)) and "search did not run" in fit_report(fit)
 
 
+@pytest.mark.slow
 def test_cli_fit_writes_the_fit_and_refuses_to_overwrite(tmp_path, capsys):
     problem = load_problem(PAPER)
     path, _ = _s_vs_amplitude(problem, tmp_path)
@@ -265,6 +269,7 @@ def test_fitted_problem_file_keeps_the_input_and_reproduces_the_residuals(tmp_pa
     assert simulated == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options, keys", [
     (["--param", "pressure.amplitude_bar", "--bounds", "pressure.amplitude_bar=0.05:1.7"], ["amplitude_bar"]),
     (["--form", "raised", "--param", "pressure.a1", "--pressure", "b1=0.13"], ["form", "a1", "b1"])])
@@ -359,6 +364,7 @@ def test_bending_map_matches_weighted_linear_least_squares(tmp_path):
     assert pooled.x == pytest.approx(fit.x, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_recovers_the_waveform_amplitude_of_the_paper_form(tmp_path):
     """Pressure rows with the paper's form (ref) (nominal p0, amplitude A_p, flat rest): A_p recovered within
     3 sigma from S simulated at A_p = 0.4 bar with known noise."""

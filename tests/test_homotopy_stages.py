@@ -122,6 +122,7 @@ def test_loose_last_stage_then_tighten():
     assert sol.x == pytest.approx(_exact(1e-3), abs=1e-9)
 
 
+@pytest.mark.slow
 def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
     """max_speed at N = 20: from the optimum's own profile (as the convergence run's warm solves start), the solve
     with ``loose_last`` returns to the same optimum; and when the polish from the loose last stage fails (here: no

@@ -210,6 +210,7 @@ def test_bad_ipopt_options_are_one_line_errors(paper_robot, ipopt, exc, match):
 
 
 # ---------------------------------------------------------------------------------------- MPCC time-stepping
+@pytest.mark.slow
 def test_time_stepping_failure_keeps_the_steps_done_so_far(paper_robot):
     """A step IPOPT cannot solve in mid-cycle (a torque jump to 1000 N m at phase 0.5): SOLVER_FAILURE
     naming the step, its phase and the IPOPT status; the steps before it are those of an undisturbed run."""
@@ -304,6 +305,7 @@ def test_ocp_resource_limits_are_solver_failures(ipopt, status):
     assert len(res.homotopy) == len(res.settings.sigma0)  # each homotopy start failed at its first stage
 
 
+@pytest.mark.slow
 def test_ocp_infeasible_speed_requirement_is_infeasible():
     res = optimize_gait(Robot.paper(), "physical", OCPSettings(**dict(SMALL, objective="min_cot", speed_min=5.0)))
     assert_failed_ocp(res, "Infeasible_Problem_Detected", Status.INFEASIBLE)
@@ -324,6 +326,7 @@ def test_ocp_nan_in_the_initial_guess_is_invalid_number(monkeypatch):
     assert_failed_ocp(res, "Invalid_Number_Detected")
 
 
+@pytest.mark.slow
 def test_ocp_success_names_its_final_status():
     res = optimize_gait(Robot.paper(), "physical", OCPSettings(**SMALL), replay=False)
     assert res.status == Status.SUCCESS and res.success, res.message

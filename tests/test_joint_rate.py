@@ -161,6 +161,7 @@ def bounded():
     return optimize_gait(ROBOT, "physical", settings, jobs=1)
 
 
+@pytest.mark.slow
 def test_bound_holds_in_the_replay(bounded):
     res = bounded
     assert res.success, res.message

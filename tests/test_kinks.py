@@ -96,6 +96,7 @@ def test_friction_limit_reached_at_a_kink_is_a_graze(graze_case):
     assert abs(graze[0].guard) < 1e-12
 
 
+@pytest.mark.slow
 def test_kinked_gait_agrees_with_switch_exact_time_stepping(graze_case):
     """MPCC time-stepping with 48 steps: every kink (24 samples) on a step boundary, events split exactly."""
     model, torque, res = graze_case
@@ -104,6 +105,7 @@ def test_kinked_gait_agrees_with_switch_exact_time_stepping(graze_case):
     assert mpcc.S == pytest.approx(res.S, rel=1e-4)  # (1.1e-6 measured; 2.3e-7 with 192 steps)
 
 
+@pytest.mark.slow
 def test_rounded_corners_converge_to_the_kinked_result(graze_case):
     """The input with its corners rounded over sigma = 4e-3, 2e-3, 1e-3 cycles (smooth: no kink handling) moves S
     by O(sigma); the second-order Richardson extrapolation of the three to sigma = 0 is the kinked result."""
@@ -193,6 +195,7 @@ def test_slipping_foot_changes_at_a_knot_where_the_limits_tie(hold, switch_at):
         assert abs(near.S - res.S) <= 1e-7 * abs(res.S)  # (8.7e-9 and 2.4e-8 measured without the hold)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shift", [0.0, -5.9916710482000624e-11])
 def test_slip_that_stops_just_before_a_knot_resumes_at_it(shift):
     """The replay of an OCP optimum (tests/data/slip_stops_just_before_a_knot.csv, ocp_robust.toml at mu = 0.3 and

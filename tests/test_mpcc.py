@@ -220,6 +220,7 @@ def test_mode_from_pairs():
 
 
 # ---------------------------------------------------------------------------------------- step vs oracle
+@pytest.mark.slow
 def test_mpcc_step_agrees_with_mode_enumeration(samples, steppers):
     assert len(samples) >= 300
     compared_modes = 0
@@ -275,6 +276,7 @@ def test_step_at_equal_limits_and_turning_point(ipopt):
         state, prev = res.next_state(), res
 
 
+@pytest.mark.slow
 def test_incremental_step_is_exact_within_a_mode(gravity):
     """Between two step phases without an event, the step solution is the event-driven solution."""
     robot = Robot.paper(mu1=0.33, mu2=0.42)
@@ -314,6 +316,7 @@ def paper_run():
     return model, torque, simulate_mpcc(model, torque, steps=100)
 
 
+@pytest.mark.slow
 def test_time_stepping_result(paper_run):
     model, torque, res = paper_run
     r = model.robot
@@ -368,6 +371,7 @@ def test_events_are_located_on_step_boundaries(paper_run):
                                sorted(t - res.t0 for t in steady), rtol=0, atol=1e-8)
 
 
+@pytest.mark.slow
 def test_t_eval_and_fixed_cycles(paper_run):
     model, torque, res = paper_run
     part = simulate_mpcc(model, torque, steps=100, t_eval=[0.0, 0.25, 0.5, 1.0])
@@ -450,6 +454,7 @@ def test_ipopt_failure_ends_the_run_with_solver_failure(paper_robot):
     assert part.status == Status.SOLVER_FAILURE and list(part.t) == [0.0]
 
 
+@pytest.mark.slow
 def test_switch_exact_event_points_satisfy_their_event_condition():
     """Unequal friction (problems/unequal_friction.toml): at each located event the sample satisfies the event's
     condition recomputed from the model's kinematics: at a change of the slipping foot both feet are on their

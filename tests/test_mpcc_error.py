@@ -39,6 +39,7 @@ PULSE = Pulse(gamma1=1.5761910957427558, gamma2=1.5371503517637386, A1=0.1457934
 S_EVENT_SOFT = 0.009843120573007735
 
 
+@pytest.mark.slow
 def test_coarse_steps_on_a_soft_robot_with_linear_pulses():
     """N = 50 misses a slip-to-stick after the end of a hold (S 2.4 % off the event-driven S): the
     estimate sees it, and the message names the estimate and a steps value."""
@@ -55,6 +56,7 @@ def test_coarse_steps_on_a_soft_robot_with_linear_pulses():
     assert res.extra["steps_check"] == 101 and res.summary()["S_error"] == res.S_error
 
 
+@pytest.mark.slow
 def test_paper_gait_at_50_steps_is_a_success_with_a_small_estimate():
     problem = load_problem(REPO / "problems" / "paper_gait.toml").with_values(
         {"simulation.solver": "mpcc", "simulation.steps": 50})
@@ -124,6 +126,7 @@ QUICK = settings(max_examples=EXAMPLES, deadline=None, database=None,
 HEAVY = settings(QUICK, max_examples=max(10 * EXAMPLES, 100))
 
 
+@pytest.mark.slow
 @QUICK
 @given(cases())
 def test_mpcc_successes_are_within_their_error_bound(case):

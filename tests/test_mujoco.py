@@ -49,6 +49,7 @@ def _errors(path, periods):
     return out
 
 
+@pytest.mark.slow
 def test_the_slow_limit_is_the_quasistatic_gait():
     """Paper gait at T = 5 s and 20 s: S and W+ approach the event solver's, the error shrinking
     with T (measured: S -0.46 % and +0.07 %, W+ +0.43 % and +0.18 %)."""
@@ -97,6 +98,7 @@ def test_convergence_in_the_period(path):
     assert max(w[1:]) < 1.5e-2 and max(w[2:]) < 1e-2
 
 
+@pytest.mark.slow
 def test_the_angles_drive_tends_to_the_prescribed_angle_gait():
     """Paper gait with prescribed angles (position servos) at T = 5 s and 20 s against the angles
     solver: the S error shrinks with T, within 1 % at 20 s (measured -0.22 % and +0.10 %; W+

@@ -117,6 +117,7 @@ class StandInOCP:
         return 0.0
 
 
+@pytest.mark.slow
 def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     st = OCPSettings(starts=4, nodes=N, direction=-1)
     signal, T = baseline(st)

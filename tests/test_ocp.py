@@ -11,6 +11,7 @@ from ocp_crawl import Status
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 
 
+@pytest.mark.slow
 def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
                         OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2,
@@ -118,6 +119,7 @@ def test_optimize_text_counts_its_starts_in_words():
     assert spread_text("min_cot", 20.31, 20.31, 2) == "2 converged, replayed objective 20.3"
 
 
+@pytest.mark.slow
 def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     import json
     from pathlib import Path
@@ -134,6 +136,7 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     assert "infeasible" in captured.err and "Traceback" not in captured.err
 
 
+@pytest.mark.slow
 def test_figure_of_an_unreplayed_result_says_so():
     """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a note instead
     of an empty axes and an empty legend; the other panels keep their legends."""
@@ -173,6 +176,7 @@ def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
     assert _not_kept(run[:1]) == "" and _not_kept([*run, stage("polish", True, "ok")]) == ""
 
 
+@pytest.mark.slow
 def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
     """solve_from(..., tightened=True): no homotopy, only polish calls (the tightened NLP on the branches of the coarser
     optimum's simulated guess at twice the nodes), a complementary point that the event-driven replay confirms."""

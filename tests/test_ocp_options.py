@@ -2,6 +2,8 @@
 ``--verbose`` shows IPOPT's own iteration log."""
 import json
 
+import pytest
+
 from ocp_crawl.cli import main
 
 #: a cheap problem: 12 nodes, the harmonic family's coarse scan only
@@ -17,6 +19,7 @@ def _file(tmp_path, extra: str):
     return path
 
 
+@pytest.mark.slow
 def test_ipopt_options_of_the_file_reach_the_solver(tmp_path, capsys):
     """max_iter = 5 in [ocp.ipopt]: the first stage stops at IPOPT's iteration limit, and says so."""
     code = main(["optimize", str(_file(tmp_path, "\n[ocp.ipopt]\nmax_iter = 5\n")), "--json", *CHEAP])
@@ -26,6 +29,7 @@ def test_ipopt_options_of_the_file_reach_the_solver(tmp_path, capsys):
     assert out["homotopy"][0]["iterations"] == 5
 
 
+@pytest.mark.slow
 def test_verbose_prints_ipopts_log(tmp_path, capfd):
     """--verbose: IPOPT's banner and iteration table on stdout, then the summary."""
     code = main(["optimize", str(_file(tmp_path, "")), "--verbose", *CHEAP])
@@ -35,6 +39,7 @@ def test_verbose_prints_ipopts_log(tmp_path, capfd):
     assert "status      success" in out
 
 
+@pytest.mark.slow
 def test_a_previous_optimum_as_the_start(tmp_path, capsys):
     """--start DIR/optimal_gait.toml (a previous run's replay file): the first start is that gait, labelled
     so, and the optimum reached from it is at least as good by replay as the one it started from."""
@@ -49,6 +54,7 @@ def test_a_previous_optimum_as_the_start(tmp_path, capsys):
     assert value >= before * (1 - first["replay_tol"])
 
 
+@pytest.mark.slow
 def test_the_nlp_exported_to_a_solver_of_ones_own():
     """GaitOCP.export: CasADi's nlpsol input and the relaxation's bounds; IPOPT called directly on it from
     the simulated guess of the harmonic baseline's family member reaches a point whose objective and

@@ -138,6 +138,7 @@ def fixed_profile_solve(N: int):
     return sc, ref, switches
 
 
+@pytest.mark.slow
 def test_fixed_profile_places_the_foot_switches_and_matches_the_event_driven_S():
     """The solve moves the interior points from mid-interval to the simulated changes of the slipping foot and
     then reproduces the event-driven S (the slip-to-stick events of this gait fall on nodes: no O(h^2) error)."""

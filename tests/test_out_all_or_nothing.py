@@ -49,6 +49,7 @@ def test_simulate_new_out_is_absent_after_an_io_error(capsys, monkeypatch, tmp_p
     no_staging_left(tmp_path)
 
 
+@pytest.mark.slow
 def test_simulate_force_keeps_the_earlier_run_after_an_io_error(capsys, monkeypatch, tmp_path):
     import ocp_crawl.cli.run_commands as cli
     out = tmp_path / "run"

@@ -81,6 +81,7 @@ def test_low_k_first_point_ill_conditioned_and_matched():
     assert _point_ok(COT_K_RATIOS[2], A[0], paper[0]) is None
 
 
+@pytest.mark.slow
 def test_low_k_curve_is_psi_42():
     """The paper's low-stiffness curve is the gait with phase difference 42 deg (not stated in the paper; its other
     two curves are at 45 deg): every published point within 2 % or, the first (ill-conditioned), matched within
@@ -124,6 +125,7 @@ def test_paper_form_p0_curve():
     assert physical.rms_p0 > 0.03
 
 
+@pytest.mark.slow
 def test_stored_psi_amplitude_is_the_fit():
     """The stored amplitude of the psi curve is the minimum of its RMS error on the paper's 49 points (paper's
     convention), which the 1 deg point bounds below by 0.334/7."""

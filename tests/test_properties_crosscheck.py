@@ -90,6 +90,7 @@ def cases(draw):
           ReferenceTorque(Harmonic(gamma1=1.4311699866353502, gamma2=1.4660765716752369, A1=0.17453292519943295,
                                    A2=0.17453292519943295, psi=0.0), k=26.666344737183238)))
 # found by a large run: a slip1+ excursion of 3.4e-4 cycle from stick-stick and back, inside one step at N = 200
+@pytest.mark.slow
 @example((Model(Robot(M=1.0, L=math.exp(-1.0), beta=math.exp(0.390625), k=56.45265225161622, mu1=math.exp(-1.0),
                       mu2=0.44029404111717807, g=9.81)),
           ReferenceTorque(Harmonic(gamma1=1.5009831567151235, gamma2=1.5664330036649108, A1=0.3665191429188092,

@@ -174,6 +174,7 @@ def _case(k, mu2, L, x2, f_t, tau):
 # cases found by large runs (shrunk): near a fold, a large step where the MPCC finds no solution although the
 # oracle finds one 0.6 rad away; a large step where the MPCC's valid solution is 1.2 rad from the oracle's; a
 # slip mode with a slip of 2e-10 L on the friction limit; an exact slip of 9e-9 L (below comp_tol)
+@pytest.mark.slow
 @example(_case(0.48841114068874536, math.exp(-1), math.exp(-1), 0.16533696542425982, 2.1266352114877525,
                [-0.4183002747842387, -0.5052319298181006]))
 @example(_case(1.3276391285511706, math.exp(-1), 1.0, 0.4494324686853269, 2.1266352114877525,
@@ -231,6 +232,7 @@ def runs(draw):
     return model, ReferenceTorque(gait, model.robot.k), draw(st.sampled_from([40, 50]))
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(runs())
 def test_mpcc_time_stepping_succeeds_with_the_invariants_or_reports_a_status(case):

@@ -85,6 +85,7 @@ angle_signals = st.one_of(harmonic_gaits(), fourier_gaits(), sampled_gaits())
 # ============================================================================================
 # 1. prescribed angles
 # ============================================================================================
+@pytest.mark.slow
 @SIMS
 @given(model=models, angles=angle_signals)
 def test_prescribed_random_robots_and_gaits(model, angles):
@@ -115,6 +116,7 @@ def shifted(angles: FourierSeries, s: float) -> FourierSeries:
     return FourierSeries(angles.a0, angles.a * c + angles.b * sn, angles.b * c - angles.a * sn)
 
 
+@pytest.mark.slow
 @SIMS
 @given(model=models, angles=st.one_of(harmonic_gaits(), fourier_gaits()))
 def test_prescribed_mirror_and_time_reversal(model, angles):
@@ -151,6 +153,7 @@ def test_prescribed_mirror_and_time_reversal(model, angles):
         assert not (res or rev).success
 
 
+@pytest.mark.slow
 @SIMS
 @given(model=models, angles=fourier_gaits(), s=st.floats(0.0, 1.0))
 def test_prescribed_phase_shift_and_harmonic_equivalence(model, angles, s):

@@ -48,7 +48,7 @@ _NUM = r"(-?[0-9.]+(?:e-?[0-9]+)?)"
 
 def rule_bounds(key):
     """(low, high, low open, high open, listed values) from the rule's text, e.g. "> 0", "in (0, 0.25]", "-1 or 1"."""
-    text = key.valid_text
+    text = key.valid_text.removeprefix("an array of numbers, each ")
     if m := re.fullmatch(rf"(>=|>) {_NUM}", text):
         return float(m[2]), None, m[1] == ">", False, None
     if m := re.fullmatch(rf"in ([\[(]){_NUM}, {_NUM}([\])])", text):
@@ -60,11 +60,26 @@ def rule_bounds(key):
     raise AssertionError(f"the property tests do not know the rule {text!r} of key {key.name}: extend rule_bounds")
 
 
+#: values of the table keys: [[ocp.constraint]] tables (bounds no gait of the runs can miss) and IPOPT
+#: options
+TABLE_VALUES = {
+    ("ocp", "constraint"): [[], [{"quantity": "peak_torque", "max": 10.0}],
+                            [{"quantity": "period", "min": 1e-3, "max": 100.0}]],
+    ("ocp", "ipopt"): [{}, {"max_iter": 3000}, {"tol": 1e-9, "mu_strategy": "adaptive"}],
+}
+
+
 def valid_values(section: str, key, ranges=None):
     """Values the schema accepts for a key (the key's own rule filters them)."""
     ranges = PLAUSIBLE if ranges is None else ranges
     if key.choices:
         return st.sampled_from(key.choices)
+    if (section, key.name) in TABLE_VALUES:
+        return st.sampled_from(TABLE_VALUES[(section, key.name)])
+    if key.type is list:  # an array of numbers, each within the rule
+        lo, hi, lo_open, hi_open, _ = rule_bounds(key)
+        entry = st.floats(lo, hi, exclude_min=lo_open, exclude_max=hi_open).filter(key.rule.test)
+        return st.lists(entry, min_size=1, max_size=3)
     lo, hi, lo_open, hi_open, listed = rule_bounds(key)
     if listed is not None:
         base = st.sampled_from(listed)
@@ -225,6 +240,7 @@ def schema_keys(numeric_only=False):
     return [(s.name, k) for s in SECTIONS for k in default_variant_keys(s) if not numeric_only or k.type in (int, float)]
 
 
+@pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts())
 def test_problem_round_trip(data):
@@ -249,6 +265,7 @@ def test_problem_round_trip(data):
             assert p.sections[section][name] == value
 
 
+@pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from(schema_keys()), st_data=st.data())
 def test_set_override_equals_dict_edit(data, st_key, st_data):
@@ -280,6 +297,7 @@ def test_set_override_equals_dict_edit(data, st_key, st_data):
         assert str(bare) == str(via_set) if isinstance(bare, ProblemError) else bare == via_set
 
 
+@pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from(schema_keys(numeric_only=True)), st_data=st.data())
 def test_invalid_numeric_values_name_the_key_and_value(data, st_key, st_data):
@@ -301,6 +319,7 @@ def test_invalid_numeric_values_name_the_key_and_value(data, st_key, st_data):
     assert isinstance(info.value, ValueError)
 
 
+@pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from([(s.name, k) for s in SECTIONS if s.required
                                                      for k in default_variant_keys(s) if k.required]))
@@ -320,6 +339,7 @@ def test_missing_required_key_is_named(data, st_key):
     assert f"[{section}] {key.name} is missing" in msg, msg
 
 
+@pytest.mark.slow
 @SIMS
 @given(data=problem_dicts(PHYSICAL), model_gravity=st.sampled_from(["physical", "paper"]))
 def test_run_problem_with_prescribed_angles(data, model_gravity):

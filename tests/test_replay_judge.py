@@ -49,6 +49,7 @@ def settings_for(res, **kw):
     return OCPSettings(direction=int(np.sign(res.S)), **kw)
 
 
+@pytest.mark.slow
 def test_honest_claim_is_confirmed_with_the_replays_own_numbers(claim):
     tau, T, ts = claim
     st = settings_for(ts)

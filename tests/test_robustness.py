@@ -33,6 +33,7 @@ def check_coulomb(res, robot, tol=1e-9):
     assert np.max(np.abs(res.f_t) - lim) <= tol * Mg
 
 
+@pytest.mark.slow
 def test_chattering_input_loses_no_event():
     """A ripple of 40 periods per cycle makes tens of events per cycle, some pairs closer together
     than the step: the default run finds the same events as a much finer one."""

@@ -91,6 +91,7 @@ def test_rescaling_covers_success_and_failure():
     assert "success" in statuses and len(statuses) >= 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("gravity", ["physical", "paper"])
 def test_rescaled_robot_mpcc(gravity):
     """The MPCC time-stepping (40 steps per cycle) is scale invariant too, to its solver tolerance."""

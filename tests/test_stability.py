@@ -227,6 +227,7 @@ def _slip_sample(problem, mode, phase=None):
     return res.phi[:, i]
 
 
+@pytest.mark.slow
 def test_slip_stable_on_the_paper_gait_perturbation_decays():
     pr = paper_problem()
     m = pr.model

@@ -386,6 +386,7 @@ def _group_ends(pgid: int, seconds: float) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_a_killed_reproduce_leaves_no_worker_and_its_resume_starts(tmp_path):
     """``reproduce --quick`` killed by SIGKILL in its grids, its main process alone: the workers end
     within seconds, and ``--resume`` is not refused (a lingering worker would hold the directory's

@@ -233,6 +233,7 @@ def test_energy_gate_of_the_event_solver_fires_at_its_tolerance():
     assert simulate_torque(pr.model, pr.torque, HybridOptions(energy_tol=2 * r)).success
 
 
+@pytest.mark.slow
 def test_energy_gate_of_the_mpcc_solver_scales_with_the_steps():
     """N = 16: residual O(1/N^2) (0.04/N^2 on the paper gait) passes the default 10/N^2, fails a tight 0.01/N^2."""
     pr = paper_problem()

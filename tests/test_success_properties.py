@@ -305,6 +305,7 @@ NAN_ITERATE = {"robot": {"M": 1.0, "L": 1.0, "beta": 1.0, "k": 9.81, "g": 9.81, 
                "model": {"gravity": "paper"}}
 
 
+@pytest.mark.slow
 @SETTINGS
 @example(data=NAN_ITERATE)
 @example(data={**NAN_ITERATE, "gait": {**NAN_ITERATE["gait"], "A_deg": 21.0}})
@@ -327,6 +328,7 @@ def test_success_satisfies_the_static_invariants(data):
             f.write(json.dumps({"data": data, "S": res.S, "violations": found}) + "\n")
 
 
+@pytest.mark.slow
 @SETTINGS
 @example(data=SNAP_THROUGH)
 @example(data=UNSTABLE)

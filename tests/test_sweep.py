@@ -50,6 +50,7 @@ def read_csv(path):
 # --------------------------------------------------------------------------------------------
 # rows
 # --------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_sweep_equals_point_by_point_runs(tmp_path):
     problem = load_problem(PAPER)
     grid = {"gait.psi_deg": [0.0, 45.0, 135.0], "gait.gamma_deg": [80.0, 100.0]}
@@ -206,6 +207,7 @@ def _journal_rows(journal: Path) -> int:
         return 0
 
 
+@pytest.mark.slow
 def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
     """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last, then
     --resume to the end: the same file as an uninterrupted run, and nothing left behind."""
@@ -463,6 +465,7 @@ def test_cli_refuses_existing_output(tmp_path, capsys):
 # --------------------------------------------------------------------------------------------
 # Dask
 # --------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     distributed = pytest.importorskip("distributed", reason="the [cluster] extra (dask.distributed) is not installed")
     grid = {"gait.psi_deg": [0.0, 45.0, 90.0], "gait.A_deg": [30.0, 60.0]}
@@ -475,6 +478,7 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     assert (tmp_path / "dask" / RESULTS_FILE).read_text() == (tmp_path / "pool" / RESULTS_FILE).read_text()
 
 
+@pytest.mark.slow
 def test_cli_sweep_over_the_solver(tmp_path, capsys):
     """``--grid simulation.solver=event,mpcc``: both simulators in one sweep, S agreeing to n_events (2 h)^2
     relative (h = 1/steps: each stick-slip transition is taken up to two MPCC steps late, the slip over
@@ -496,6 +500,7 @@ def test_cli_sweep_over_the_solver(tmp_path, capsys):
 
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(signal, "SIGXFSZ"), reason="file size limits are POSIX")
 def test_an_io_error_of_a_sweep_names_the_file(tmp_path):
     """A journal the file system refuses (here a file size limit, as a full disk) is named in the

@@ -209,6 +209,7 @@ def step_like(draw):
     return ref, ROBOT.replace(mu1=ROBOT.mu2 * ratio)
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, database=None,
           derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
           suppress_health_check=[HealthCheck.too_slow])

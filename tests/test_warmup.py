@@ -30,6 +30,7 @@ def _cli(args, cache: Path, **env_extra) -> subprocess.CompletedProcess:
                           cwd=ROOT, timeout=300)
 
 
+@pytest.mark.slow
 def test_warmup_builds_every_function_once_and_simulations_compile_nothing_more(tmp_path):
     cache = tmp_path / "cache"
     first = _cli(["warmup", "--json"], cache)
@@ -52,6 +53,7 @@ def test_warmup_builds_every_function_once_and_simulations_compile_nothing_more(
     assert set(cache.glob("*.so")) == libraries
 
 
+@pytest.mark.slow
 def test_the_first_run_on_an_empty_cache_says_on_stderr_that_it_compiles(tmp_path):
     """One line on stderr when the cache does not hold the libraries yet; stdout stays the JSON
     alone; a run on the filled cache says nothing."""
@@ -66,6 +68,7 @@ def test_the_first_run_on_an_empty_cache_says_on_stderr_that_it_compiles(tmp_pat
     assert json.loads(again.stdout) == json.loads(first.stdout)
 
 
+@pytest.mark.slow
 def test_warmup_text_names_the_cache_and_each_function(tmp_path):
     cache = tmp_path / "c"
     out = _cli(["warmup"], cache)
@@ -149,6 +152,7 @@ def _decorators(node: ast.FunctionDef) -> set[str]:
     return names
 
 
+@pytest.mark.slow
 def test_every_fast_function_is_made_by_a_registered_builder():
     """A FastFunction made outside a ``@compiled_function`` builder would be compiled on first use only."""
     unregistered, found = [], 0

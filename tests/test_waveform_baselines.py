@@ -131,6 +131,7 @@ def asym_grid_sizes() -> tuple[int, int, int, int]:
     return tuple(int(v) for v in text.split(","))
 
 
+@pytest.mark.slow
 def test_asymmetric_robot_sine_baseline_beats_an_independent_grid():
     """mu1 = 0.30, mu2 = 0.45, max_speed: the harmonic family's best reaches 45.9 mm/s (a sine of the family
     reaches 45.98) and beats a grid of sines with unequal centres simulated here (gamma1, gamma2, A, psi;
@@ -164,6 +165,7 @@ def test_asymmetric_robot_min_cot_finds_a_feasible_sine():
     assert r.W_plus / (ASYM.M * ASYM.g * abs(r.S)) == pytest.approx(choice.value, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_every_family_is_searched_and_the_best_is_their_best():
     """best_baselines with every family (small search): a choice per family, each confirmed by a fresh
     simulation of its member, and ``best`` the fastest of them."""

@@ -75,6 +75,7 @@ def _sample_table(path: Path, problem, n: int, torque: bool) -> Path:
     return write_table(path, [("phase", "-", t), ("phi1_ref", "deg", phi[0]), ("phi2_ref", "deg", phi[1])])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("torque, interpolation", [(False, "spline"), (True, "pchip")])
 def test_samples_file_converges_to_the_harmonic_gait(tmp_path, harmonic, torque, interpolation):
     """A file of samples of the harmonic gait gives its S to interpolation accuracy, shrinking with more samples
@@ -248,6 +249,7 @@ def test_pressure_waveform_is_the_pressure_driven_robot(form, rest, amplitude):
     assert run_problem(problem).S == simulate(problem.model, signal, "event").S
 
 
+@pytest.mark.slow
 def test_sweeps_of_waveform_problems(tmp_path, monkeypatch, harmonic):
     """robot.k of a samples problem (file relative to the problem file, run from elsewhere) and psi of a pulse."""
     from ocp_crawl.sweep import run_sweep

@@ -82,6 +82,7 @@ def _bin(venv: Path, name: str) -> Path:
     return venv / ("Scripts" if os.name == "nt" else "bin") / name
 
 
+@pytest.mark.slow
 def test_wheel_holds_the_data_files(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     shipped = {f"ocp_crawl/data/{folder}/{n}" for folder in SHIPPED_FOLDERS for n in shipped_files(folder)}

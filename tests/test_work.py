@@ -24,6 +24,7 @@ def problem(name: str, *overrides: str):
     return load_problem(PROBLEMS / name, overrides=list(overrides))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, overrides, unit", [
     ("paper_gait.toml", (), "event_step"),
     ("pulse_gait.toml", (), "event_step"),

@@ -155,6 +155,7 @@ def _rows(journal) -> int:
         return 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("whole_group", [False, True], ids=["main_process_only", "process_group"])
 def test_a_killed_sweep_leaves_no_worker_and_resumes_to_the_same_file(tmp_path, whole_group):
     """SIGKILL to the sweep's main process alone (a timeout, an out-of-memory kill) or to its whole group,
