@@ -1,9 +1,9 @@
-"""Bounds on cycle quantities (``[[ocp.constraint]]``): one definition read three ways, in the NLP, on
-simulated gaits and in text.
+"""Bounds on cycle quantities (``[[ocp.constraint]]``): one definition read three ways, in the NLP,
+on simulated gaits and in text.
 
 The profile quantities are checked against closed forms and adaptive quadrature (not the code's own
-formula), the baseline against the bound it must meet, and the optimum's torques against the bound by
-their own maximum.
+formula), the baseline against the bound it must meet, and the optimum's torques against the bound
+by their own maximum.
 """
 import math
 
@@ -50,12 +50,14 @@ def test_profile_of_a_harmonic_member_is_its_closed_form():
                                                 A2_deg=25.0), ROBOT.k)
     peak, mean_sq = profile_of_signal(sig)
     assert peak == pytest.approx(ROBOT.k * float(np.max(np.pi - g + A)), rel=1e-6)
-    assert mean_sq == pytest.approx(ROBOT.k**2 * float(np.sum((g - np.pi) ** 2 + A**2 / 2)), rel=1e-6)
+    assert mean_sq == pytest.approx(ROBOT.k**2 * float(np.sum((g - np.pi) ** 2 + A**2 / 2)),
+                                    rel=1e-6)
 
 
 def test_constraint_text_table_and_shortfall():
-    """A constraint reads back from its table, says what it bounds in words and units, and its shortfall
-    is the relative miss of the worst value (0 when met, a mean over scenarios when asked)."""
+    """A constraint reads back from its table, says what it bounds in words and units, and its
+    shortfall is the relative miss of the worst value (0 when met, a mean over scenarios when
+    asked)."""
     c = Constraint.of({"quantity": "speed", "min": 0.04, "over": "mean"})
     assert Constraint.of(c.to_dict()) == c
     assert c.text() == "speed >= 0.04 m/s on the mean of the scenarios"
@@ -72,7 +74,8 @@ def test_constraint_text_table_and_shortfall():
 
 
 def test_friction_levels_scale_both_feet_and_name_their_scenarios():
-    """mu_levels: every ratio at every level, both coefficients times the level; labels tell them apart."""
+    """mu_levels: every ratio at every level, both coefficients times the level; labels tell them
+    apart."""
     s = OCPSettings(mu_levels=(1.0, 0.5), mu_ratio_eps=0.1)
     robots = s.scenarios(ROBOT.replace(mu1=0.4, mu2=0.4))
     assert len(robots) == 6 and s.friction_set
@@ -83,7 +86,8 @@ def test_friction_levels_scale_both_feet_and_name_their_scenarios():
 
 
 def test_levels_keep_an_unequal_robots_own_coefficients():
-    """Without a ratio set, a level scales the robot's own mu1 and mu2 (not their geometric mean)."""
+    """Without a ratio set, a level scales the robot's own mu1 and mu2 (not their geometric
+    mean)."""
     s = OCPSettings(mu_levels=(1.0, 0.5))
     robots = s.scenarios(ROBOT.replace(mu1=0.35, mu2=0.43))
     assert [(r.mu1, r.mu2) for r in robots] == [(0.35, 0.43), (0.175, 0.215)]
@@ -91,8 +95,8 @@ def test_levels_keep_an_unequal_robots_own_coefficients():
 
 
 def test_a_gait_moving_backwards_misses_zero_bounds_and_cot_bounds():
-    """speed >= 0 is missed by a backward gait relative to the quantity's size (not in m/s), and CoT+
-    of a backward scenario is +inf for a CoT+ bound."""
+    """speed >= 0 is missed by a backward gait relative to the quantity's size (not in m/s), and
+    CoT+ of a backward scenario is +inf for a CoT+ bound."""
     from ocp_crawl.ocp.quantities import missed, reference_sizes
 
     s = OCPSettings()
@@ -109,11 +113,13 @@ def test_bounds_a_quantity_cannot_meet_are_refused():
         with pytest.raises(ValueError, match="must be > 0"):
             Constraint(q, max=-0.1)
     with pytest.raises(ValueError, match="give one"):
-        OCPSettings(objective="min_cot", speed_min=0.04, constraints=({"quantity": "speed", "min": 0.05},))
+        OCPSettings(objective="min_cot", speed_min=0.04,
+                    constraints=({"quantity": "speed", "min": 0.05},))
 
 
 def test_a_period_bound_slows_the_baselines_members():
-    """period >= 1.5 s: a member is evaluated at 1.5 s (S does not depend on T), not at its shortest."""
+    """period >= 1.5 s: a member is evaluated at 1.5 s (S does not depend on T), not at its
+    shortest."""
     from ocp_crawl.ocp.family import WaveFamily, WaveParams
 
     s = OCPSettings(direction=-1, constraints=({"quantity": "period", "min": 1.5},))
@@ -128,8 +134,8 @@ def _search(settings):
 
 @pytest.mark.slow
 def test_the_baseline_meets_a_peak_torque_bound_that_binds():
-    """The best harmonic member under peak |tau| <= 0.3 N m meets it by its closed-form peak, and the
-    unconstrained search's best breaks it (so the bound decides the baseline)."""
+    """The best harmonic member under peak |tau| <= 0.3 N m meets it by its closed-form peak, and
+    the unconstrained search's best breaks it (so the bound decides the baseline)."""
     base = dict(direction=-1, harmonic_A=2, harmonic_psi=8, baseline_samples=0)
     free = _search(OCPSettings(**base))
     held = _search(OCPSettings(**base, constraints=({"quantity": "peak_torque", "max": PEAK},)))
@@ -143,11 +149,12 @@ def test_the_baseline_meets_a_peak_torque_bound_that_binds():
 
 @pytest.mark.slow
 def test_the_optimum_under_a_peak_torque_bound_meets_it_and_beats_its_baseline():
-    """max_speed with peak |tau| <= 0.3 N m (N = 16): success, the optimum's largest node torque is the
-    bound (active), the replay's requirement value is it, and the optimum beats the constrained
+    """max_speed with peak |tau| <= 0.3 N m (N = 16): success, the optimum's largest node torque is
+    the bound (active), the replay's requirement value is it, and the optimum beats the constrained
     harmonic baseline."""
     s = OCPSettings(nodes=16, starts=1, direction=-1, baselines="harmonic", baseline_samples=0,
-                    harmonic_A=2, harmonic_psi=8, constraints=({"quantity": "peak_torque", "max": PEAK},))
+                    harmonic_A=2, harmonic_psi=8,
+                    constraints=({"quantity": "peak_torque", "max": PEAK},))
     res = optimize_gait(ROBOT, "physical", s, jobs=1)
     assert res.status == Status.SUCCESS, res.message
     assert float(np.max(np.abs(res.tau))) == pytest.approx(PEAK, rel=1e-6)
@@ -168,8 +175,8 @@ def _speed_value(cycle):
 @pytest.mark.slow
 def test_a_user_objective_that_restates_max_speed_finds_its_optimum():
     """The hook with the mean speed direction S / T, scaled as the named objective scales it (L over
-    the reference period), is the max_speed NLP: the same replayed optimum (N = 16), reported under the
-    user's label and compared with the same baseline."""
+    the reference period), is the max_speed NLP: the same replayed optimum (N = 16), reported under
+    the user's label and compared with the same baseline."""
     base = dict(nodes=16, starts=1, direction=-1, baselines="harmonic", baseline_samples=0,
                 harmonic_A=2, harmonic_psi=8)
     named = optimize_gait(ROBOT, "physical", OCPSettings(**base), jobs=1)

@@ -1,5 +1,5 @@
-"""IPOPT's options and log from a problem file and the command line: ``[ocp.ipopt]`` reaches every solve,
-``--verbose`` shows IPOPT's own iteration log."""
+"""IPOPT's options and log from a problem file and the command line: ``[ocp.ipopt]`` reaches every
+solve, ``--verbose`` shows IPOPT's own iteration log."""
 import json
 
 import pytest
@@ -7,8 +7,8 @@ import pytest
 from ocp_crawl.cli import main
 
 #: a cheap problem: 12 nodes, the harmonic family's coarse scan only
-CHEAP = ["--set", "ocp.nodes=12", "--set", "ocp.baselines=harmonic", "--set", "ocp.baseline_samples=0",
-         "--set", "ocp.harmonic_psi=8"]
+CHEAP = ["--set", "ocp.nodes=12", "--set", "ocp.baselines=harmonic",
+         "--set", "ocp.baseline_samples=0", "--set", "ocp.harmonic_psi=8"]
 
 
 def _file(tmp_path, extra: str):
@@ -21,8 +21,10 @@ def _file(tmp_path, extra: str):
 
 @pytest.mark.slow
 def test_ipopt_options_of_the_file_reach_the_solver(tmp_path, capsys):
-    """max_iter = 5 in [ocp.ipopt]: the first stage stops at IPOPT's iteration limit, and says so."""
-    code = main(["optimize", str(_file(tmp_path, "\n[ocp.ipopt]\nmax_iter = 5\n")), "--json", *CHEAP])
+    """max_iter = 5 in [ocp.ipopt]: the first stage stops at IPOPT's iteration limit, and says
+    so."""
+    code = main(["optimize", str(_file(tmp_path, "\n[ocp.ipopt]\nmax_iter = 5\n")), "--json",
+                 *CHEAP])
     out = json.loads(capsys.readouterr().out)
     assert code == 1 and out["status"] == "solver_failure"
     assert "Maximum_Iterations_Exceeded" in out["message"]
@@ -41,12 +43,14 @@ def test_verbose_prints_ipopts_log(tmp_path, capfd):
 
 @pytest.mark.slow
 def test_a_previous_optimum_as_the_start(tmp_path, capsys):
-    """--start DIR/optimal_gait.toml (a previous run's replay file): the first start is that gait, labelled
-    so, and the optimum reached from it is at least as good by replay as the one it started from."""
+    """--start DIR/optimal_gait.toml (a previous run's replay file): the first start is that gait,
+    labelled so, and the optimum reached from it is at least as good by replay as the one it started
+    from."""
     ocp = str(_file(tmp_path, ""))
     assert main(["optimize", ocp, "--json", "--out", str(tmp_path / "first"), *CHEAP]) == 0
     first = json.loads(capsys.readouterr().out)
-    code = main(["optimize", ocp, "--json", "--start", str(tmp_path / "first" / "optimal_gait.toml"), *CHEAP])
+    code = main(["optimize", ocp, "--json", "--start",
+                 str(tmp_path / "first" / "optimal_gait.toml"), *CHEAP])
     again = json.loads(capsys.readouterr().out)
     assert code == 0 and again["starts"][0]["label"] == "given start"
     assert again["starts"][0]["T_start"] == first["T_ocp"]
@@ -56,9 +60,9 @@ def test_a_previous_optimum_as_the_start(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_the_nlp_exported_to_a_solver_of_ones_own():
-    """GaitOCP.export: CasADi's nlpsol input and the relaxation's bounds; IPOPT called directly on it from
-    the simulated guess of the harmonic baseline's family member reaches a point whose objective and
-    constraints the transcription's own functions confirm."""
+    """GaitOCP.export: CasADi's nlpsol input and the relaxation's bounds; IPOPT called directly on
+    it from the simulated guess of the harmonic baseline's family member reaches a point whose
+    objective and constraints the transcription's own functions confirm."""
     import casadi as cs
     import numpy as np
 

@@ -1,20 +1,20 @@
 """The cycle quantities an OCP can bound: the vocabulary of ``[[ocp.constraint]]``.
 
-A :class:`Constraint` bounds one quantity of the gait's cycle (:data:`QUANTITIES`) from below, above or
-both; a quantity of the friction scenarios (speed, distance, W+, CoT+) is bounded in every scenario or
-as the mean over them (``over``).  The same constraint has three readings, one per layer, from one
-definition here:
+A :class:`Constraint` bounds one quantity of the gait's cycle (:data:`QUANTITIES`) from below, above
+or both; a quantity of the friction scenarios (speed, distance, W+, CoT+) is bounded in every
+scenario or as the mean over them (``over``).  The same constraint has three readings, one per
+layer, from one definition here:
 
 * in the NLP (:func:`constraint_rows`): rows in the transcription's scaled variables;
-* on a simulated gait (:func:`cycle_values`, :func:`shortfall`): the values computed from the event-driven
-  simulations and the torque signal alone (the baselines' members, the replay judge);
+* on a simulated gait (:func:`cycle_values`, :func:`shortfall`): the values computed from the
+  event-driven simulations and the torque signal alone (the baselines' members, the replay judge);
 * in text (:meth:`Constraint.text`): reports and messages.
 
-Which bounds a quantity admits is set by what the transcription can state exactly (:attr:`Quantity.bounds`):
-W+ is a sum of slack variables v >= tau dphi, v >= 0, exact only where something presses it down (an
-upper bound, or min_cot's objective), and the peak torque is a maximum over nodes, exact as an upper
-bound on every node.  A lower bound on either would be met by inflating the slacks or by one node: it
-is refused.
+Which bounds a quantity admits is set by what the transcription can state exactly
+(:attr:`Quantity.bounds`): W+ is a sum of slack variables v >= tau dphi, v >= 0, exact only where
+something presses it down (an upper bound, or min_cot's objective), and the peak torque is a maximum
+over nodes, exact as an upper bound on every node.  A lower bound on either would be met by
+inflating the slacks or by one node: it is refused.
 """
 from __future__ import annotations
 
@@ -25,18 +25,19 @@ from typing import Mapping
 import casadi as cs
 import numpy as np
 
-#: how a scenario quantity's bound applies over the friction scenarios: in every one, or to their mean
+#: how a scenario quantity's bound applies over the friction scenarios: in every one, or to their
+#: mean
 OVERS = ("every", "mean")
-#: phases at which a torque signal is sampled for its profile quantities (a family member's; the replay's
-#: linear interpolant is evaluated on its nodes exactly)
+#: phases at which a torque signal is sampled for its profile quantities (a family member's; the
+#: replay's linear interpolant is evaluated on its nodes exactly)
 PROFILE_SAMPLES = 4096
 
 
 @dataclass(frozen=True)
 class Quantity:
-    """One quantity of a gait's cycle: its unit, whether it is per friction scenario, its meaning, the
-    bounds the transcription states exactly (``"min"``, ``"max"``), whether it is positive by nature
-    (its bounds must then be > 0) and its reference size (:func:`reference_sizes`)."""
+    """One quantity of a gait's cycle: its unit, whether it is per friction scenario, its meaning,
+    the bounds the transcription states exactly (``"min"``, ``"max"``), whether it is positive by
+    nature (its bounds must then be > 0) and its reference size (:func:`reference_sizes`)."""
 
     name: str
     unit: str
@@ -50,24 +51,28 @@ QUANTITIES = {q.name: q for q in (
     Quantity("speed", "m/s", True, "mean speed direction * S / T"),
     Quantity("distance", "m", True, "distance per cycle direction * S"),
     Quantity("W_plus", "J", True, "positive actuator work per cycle", ("max",), True),
-    Quantity("CoT_plus", "-", True, "cost of transport W+ / (M g direction S) (+inf moving backwards)",
-             ("max",), True),
-    Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",), True),
+    Quantity("CoT_plus", "-", True,
+             "cost of transport W+ / (M g direction S) (+inf moving backwards)", ("max",), True),
+    Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",),
+             True),
     Quantity("mean_torque_sq", "N^2 m^2", False,
-             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, up to a factor)",
+             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, "
+             "up to a factor)",
              positive=True),
     Quantity("period", "s", False, "period T of the gait", positive=True),
 )}
 
 
 #: the quantities of the torque profile alone (the same in every scenario)
-PROFILE_QUANTITIES = tuple(q.name for q in QUANTITIES.values() if not q.per_scenario and q.name != "period")
+PROFILE_QUANTITIES = tuple(q.name for q in QUANTITIES.values()
+                           if not q.per_scenario and q.name != "period")
 
 
 @dataclass(frozen=True)
 class Constraint:
-    """A bound ``min <= quantity <= max`` (either may be None) on a cycle quantity of :data:`QUANTITIES`
-    (SI units, as listed there), in ``over`` = "every" friction scenario or on their "mean"."""
+    """A bound ``min <= quantity <= max`` (either may be None) on a cycle quantity of
+    :data:`QUANTITIES` (SI units, as listed there), in ``over`` = "every" friction scenario or on
+    their "mean"."""
 
     quantity: str
     min: float | None = None
@@ -84,20 +89,23 @@ class Constraint:
             value = getattr(self, side)
             if value is None:
                 continue
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be a finite number, "
-                                 f"got {value!r}")
+            if (isinstance(value, bool) or not isinstance(value, (int, float))
+                    or not math.isfinite(value)):
+                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be a finite "
+                                 f"number, got {value!r}")
             if q.positive and not value > 0:
-                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be > 0 ({q.name} is "
-                                 f"positive), got {value!r}")
+                raise ValueError(f"OCPSettings.constraints: {where}: {side} must be > 0 "
+                                 f"({q.name} is positive), got {value!r}")
             if side not in q.bounds:
-                raise ValueError(f"OCPSettings.constraints: {where}: a {side} bound is not available "
-                                 f"({q.name} admits only {' and '.join(q.bounds)}: {_WHY_ONE_SIDED})")
+                raise ValueError(f"OCPSettings.constraints: {where}: a {side} bound is not "
+                                 f"available ({q.name} admits only {' and '.join(q.bounds)}: "
+                                 f"{_WHY_ONE_SIDED})")
             object.__setattr__(self, side, float(value))
         if self.min is None and self.max is None:
             raise ValueError(f"OCPSettings.constraints: {where} has neither min nor max")
         if self.min is not None and self.max is not None and not self.min <= self.max:
-            raise ValueError(f"OCPSettings.constraints: {where}: min {self.min:g} > max {self.max:g}")
+            raise ValueError(f"OCPSettings.constraints: {where}: min {self.min:g} > max "
+                             f"{self.max:g}")
         if self.over not in OVERS:
             raise ValueError(f"OCPSettings.constraints: {where}: over must be one of {OVERS}, got "
                              f"{self.over!r}")
@@ -108,12 +116,12 @@ class Constraint:
         if isinstance(value, Constraint):
             return value
         if not isinstance(value, Mapping):
-            raise ValueError(f"OCPSettings.constraints: each must be a table of quantity, min, max, over; "
-                             f"got {value!r}")
+            raise ValueError("OCPSettings.constraints: each must be a table of quantity, min, max, "
+                             f"over; got {value!r}")
         unknown = sorted(set(value) - {"quantity", "min", "max", "over"})
         if unknown or "quantity" not in value:
-            raise ValueError(f"OCPSettings.constraints: a constraint has the keys quantity (required), min, "
-                             f"max, over; got {', '.join(map(str, value))}")
+            raise ValueError("OCPSettings.constraints: a constraint has the keys quantity "
+                             f"(required), min, max, over; got {', '.join(map(str, value))}")
         return cls(**value)
 
     @property
@@ -127,7 +135,8 @@ class Constraint:
                  f"<= {self.max:g}{unit}" if self.max is not None else ""]
         scope = ""
         if QUANTITIES[self.quantity].per_scenario:
-            scope = " in every scenario" if self.over == "every" else " on the mean of the scenarios"
+            scope = (" in every scenario" if self.over == "every"
+                     else " on the mean of the scenarios")
         return f"{self.quantity} {' and '.join(s for s in sides if s)}{scope}"
 
     def to_dict(self) -> dict:
@@ -139,15 +148,15 @@ class Constraint:
         return out
 
 
-_WHY_ONE_SIDED = ("W+ and CoT+ are sums of slacks v >= tau dphi, v >= 0 and the peak torque a maximum "
-                  "over nodes: exact under an upper bound only")
+_WHY_ONE_SIDED = ("W+ and CoT+ are sums of slacks v >= tau dphi, v >= 0 and the peak torque a "
+                  "maximum over nodes: exact under an upper bound only")
 
 
 @dataclass(frozen=True)
 class Symbols:
     """The transcription's expressions a constraint is stated in, scaled as the NLP is: node torques
-    ``T`` (2, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L (``S``)
-    and W+ over M g L (``W``, None where not built), and the scales."""
+    ``T`` (2, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L
+    (``S``) and W+ over M g L (``W``, None where not built), and the scales."""
 
     T: object
     Th: object
@@ -167,13 +176,15 @@ def _over(c: Constraint, rows: list):
 
 
 def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
-    """The NLP rows ``(expr, lb, ub)`` of constraint ``c``, each of order one in the scaled variables.
+    """The NLP rows ``(expr, lb, ub)`` of constraint ``c``, each of order one in the scaled
+    variables.
 
-    speed v = d S_hat L / (T_hat period_ref): ``d S_hat - (v* period_ref / L) T_hat`` against 0 (the form of
-    min_cot's speed requirement); distance ``d S_hat - s*/L``; W+ ``W_hat - W*/(M g L) <= 0``; CoT+
-    ``W_hat - c* d S_hat <= 0`` (CoT+ = W_hat / (d S_hat)); the peak torque ``-b <= T_hat <= b`` at every
-    node (the linear interpolant's extremes are its nodes'); the mean squared torque ``sum over intervals
-    and joints of (a^2 + a b + b^2) / 3 / N`` (exact for the linear interpolant); the period ``T_hat``."""
+    speed v = d S_hat L / (T_hat period_ref): ``d S_hat - (v* period_ref / L) T_hat`` against 0 (the
+    form of min_cot's speed requirement); distance ``d S_hat - s*/L``; W+
+    ``W_hat - W*/(M g L) <= 0``; CoT+ ``W_hat - c* d S_hat <= 0`` (CoT+ = W_hat / (d S_hat)); the
+    peak torque ``-b <= T_hat <= b`` at every node (the linear interpolant's extremes are its
+    nodes'); the mean squared torque ``sum over intervals and joints of (a^2 + a b + b^2) / 3 / N``
+    (exact for the linear interpolant); the period ``T_hat``."""
     q, d, out = c.quantity, sym.direction, []
     if q in ("speed", "distance"):
         for side, bound, lb, ub in (("min", c.min, 0.0, np.inf), ("max", c.max, -np.inf, 0.0)):
@@ -207,8 +218,8 @@ def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
 
 
 def mean_square_nodes(T):
-    """Mean over the cycle of the sum over joints of the squared linear interpolant of node values ``T``
-    (2, N) (periodic): per interval (a^2 + a b + b^2) / 3; a CasADi expression or a float."""
+    """Mean over the cycle of the sum over joints of the squared linear interpolant of node values
+    ``T`` (2, N) (periodic): per interval (a^2 + a b + b^2) / 3; a CasADi expression or a float."""
     if isinstance(T, np.ndarray):
         nxt = np.roll(T, -1, axis=1)
         return float(np.sum(T**2 + T * nxt + nxt**2) / (3 * T.shape[1]))
@@ -223,9 +234,9 @@ def needs_work(constraints) -> bool:
 
 @dataclass(frozen=True)
 class Cycle:
-    """A simulated gait's numbers that constraints are checked on: per scenario S [m], W+ [J], CoT+ [-],
-    the period T [s], ``direction``, and the torque profile's peak |tau| [N m] and mean squared torque
-    [N^2 m^2] (:func:`profile_of_nodes`, :func:`profile_of_signal`)."""
+    """A simulated gait's numbers that constraints are checked on: per scenario S [m], W+ [J], CoT+
+    [-], the period T [s], ``direction``, and the torque profile's peak |tau| [N m] and mean squared
+    torque [N^2 m^2] (:func:`profile_of_nodes`, :func:`profile_of_signal`)."""
 
     S: tuple
     W_plus: tuple
@@ -237,17 +248,18 @@ class Cycle:
 
 
 def profile_of_nodes(tau: np.ndarray) -> tuple[float, float]:
-    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of the linear interpolant of node torques ``tau``
-    (2, N), exactly."""
+    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of the linear interpolant of node torques
+    ``tau`` (2, N), exactly."""
     tau = np.asarray(tau, float)
     return float(np.max(np.abs(tau))), mean_square_nodes(tau)
 
 
 def profile_of_signal(signal) -> tuple[float, float]:
-    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of a torque signal tau(t) [N m] of the phase t
-    [cycles]: the peak over :data:`PROFILE_SAMPLES` phases and the signal's knots (``t_knots``: the
-    corners of triangle and pulse waves, where their peaks lie), the mean square by the trapezoid rule on
-    the uniform phases (relative error O(1e-7) on the paper's waveforms)."""
+    """(peak |tau| [N m], mean squared torque [N^2 m^2]) of a torque signal tau(t) [N m] of the
+    phase t [cycles]: the peak over :data:`PROFILE_SAMPLES` phases and the signal's knots
+    (``t_knots``: the corners of triangle and pulse waves, where their peaks lie), the mean square
+    by the trapezoid rule on the uniform phases (relative error O(1e-7) on the paper's
+    waveforms)."""
     t = np.arange(PROFILE_SAMPLES) / PROFILE_SAMPLES
     tau = np.asarray(signal(t), float).reshape(2, -1)
     knots = np.mod(np.asarray(getattr(signal, "t_knots", ()), float).ravel(), 1.0)
@@ -258,7 +270,8 @@ def profile_of_signal(signal) -> tuple[float, float]:
 
 
 def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
-    """The values of the constrained quantity on a simulated gait: one per scenario ("every") or one."""
+    """The values of the constrained quantity on a simulated gait: one per scenario ("every") or
+    one."""
     d, T = cycle.direction, cycle.T
     per = {"speed": [d * s / T for s in cycle.S], "distance": [d * s for s in cycle.S],
            "W_plus": list(cycle.W_plus),
@@ -271,19 +284,20 @@ def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
 
 
 def reference_sizes(M: float, g: float, L: float, period_ref: float) -> dict[str, float]:
-    """The size of each quantity on a robot of mass M [kg] and length L [m] under gravity g [m/s^2] with
-    the reference period ``period_ref`` [s] (the NLP's scales): a zero bound's miss is measured against
-    it (speed L / period_ref, distance L, W+ M g L, CoT+ 1, peak torque M g L, mean squared torque
-    (M g L)^2, period period_ref)."""
+    """The size of each quantity on a robot of mass M [kg] and length L [m] under gravity g [m/s^2]
+    with the reference period ``period_ref`` [s] (the NLP's scales): a zero bound's miss is measured
+    against it (speed L / period_ref, distance L, W+ M g L, CoT+ 1, peak torque M g L, mean squared
+    torque (M g L)^2, period period_ref)."""
     MgL = M * g * L
-    return {"speed": L / period_ref, "distance": L, "W_plus": MgL, "CoT_plus": 1.0, "peak_torque": MgL,
-            "mean_torque_sq": MgL**2, "period": period_ref}
+    return {"speed": L / period_ref, "distance": L, "W_plus": MgL, "CoT_plus": 1.0,
+            "peak_torque": MgL, "mean_torque_sq": MgL**2, "period": period_ref}
 
 
 def shortfall(c: Constraint, cycle: Cycle, sizes: dict | None = None) -> float:
-    """How far the gait misses the constraint, relative to its bound's size (0 when met; NaN values miss
-    by infinity): max over the values of (min - value) / |min| and (value - max) / |max|; a zero bound's
-    miss relative to the quantity's size in ``sizes`` (:func:`reference_sizes`; None: in its unit)."""
+    """How far the gait misses the constraint, relative to its bound's size (0 when met; NaN values
+    miss by infinity): max over the values of (min - value) / |min| and (value - max) / |max|; a
+    zero bound's miss relative to the quantity's size in ``sizes`` (:func:`reference_sizes`; None:
+    in its unit)."""
     worst = 0.0
     size = 1.0 if sizes is None else sizes[c.quantity]
     for value in cycle_values(c, cycle):
@@ -297,8 +311,8 @@ def shortfall(c: Constraint, cycle: Cycle, sizes: dict | None = None) -> float:
 
 
 def missed(constraints, cycle: Cycle, tol: float = 0.0, sizes: dict | None = None) -> list[str]:
-    """The constraints the gait misses by more than ``tol`` (relative to the bound, or for a zero bound
-    to the quantity's size in ``sizes``), each as a text with the gait's values."""
+    """The constraints the gait misses by more than ``tol`` (relative to the bound, or for a zero
+    bound to the quantity's size in ``sizes``), each as a text with the gait's values."""
     out = []
     for c in constraints:
         if shortfall(c, cycle, sizes) > tol:
@@ -315,15 +329,16 @@ SENSES = ("min", "max")
 class UserObjective:
     """An objective of the user's, for what the named objectives do not say (the Python hook).
 
-    ``nlp(q)`` returns the objective as a CasADi expression of the transcription's symbols in physical
-    units, ``q`` a :class:`Physical`; ``value(cycle)`` the same number on a simulated gait, from a
-    :class:`Cycle` (the baselines' members, the replay: the judge compares the two within replay_tol).
-    ``sense`` "min" or "max"; ``scale`` its typical size in its ``unit`` (the NLP minimises value /
-    scale: an objective of order one converges to IPOPT's tolerances as the named ones do); ``work``:
-    whether ``nlp`` uses W+ (the NLP then builds it: a sum of slacks v >= tau dphi, v >= 0, exact only
-    where the objective presses it down).  The settings name the objective "min:<name>" or "max:<name>".
-    ``nlp`` and ``value`` should be module-level functions: the baselines' search sends the settings to
-    worker processes, which a lambda does not reach under the forkserver and spawn start methods."""
+    ``nlp(q)`` returns the objective as a CasADi expression of the transcription's symbols in
+    physical units, ``q`` a :class:`Physical`; ``value(cycle)`` the same number on a simulated gait,
+    from a :class:`Cycle` (the baselines' members, the replay: the judge compares the two within
+    replay_tol).  ``sense`` "min" or "max"; ``scale`` its typical size in its ``unit`` (the NLP
+    minimises value / scale: an objective of order one converges to IPOPT's tolerances as the named
+    ones do); ``work``: whether ``nlp`` uses W+ (the NLP then builds it: a sum of slacks v >= tau
+    dphi, v >= 0, exact only where the objective presses it down).  The settings name the objective
+    "min:<name>" or "max:<name>".  ``nlp`` and ``value`` should be module-level functions: the
+    baselines' search sends the settings to worker processes, which a lambda does not reach under
+    the forkserver and spawn start methods."""
 
     name: str
     nlp: object
@@ -337,8 +352,10 @@ class UserObjective:
         if self.sense not in SENSES:
             raise ValueError(f"UserObjective.sense must be one of {SENSES}, got {self.sense!r}")
         if not (callable(self.nlp) and callable(self.value)):
-            raise ValueError("UserObjective: nlp and value must be callables (of the symbols, of a Cycle)")
-        if not (isinstance(self.scale, (int, float)) and math.isfinite(self.scale) and self.scale > 0):
+            raise ValueError("UserObjective: nlp and value must be callables (of the symbols, "
+                             "of a Cycle)")
+        if not (isinstance(self.scale, (int, float)) and math.isfinite(self.scale)
+                and self.scale > 0):
             raise ValueError(f"UserObjective.scale must be a positive number, got {self.scale!r}")
         if not (isinstance(self.name, str) and self.name.isidentifier()):
             raise ValueError(f"UserObjective.name must be an identifier, got {self.name!r}")
@@ -351,10 +368,10 @@ class UserObjective:
 
 @dataclass(frozen=True)
 class Physical:
-    """The transcription's symbols in physical units, for a :class:`UserObjective`: node torques ``tau``
-    (2, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S`` [m] and
-    ``W_plus`` [J] (None unless the objective says ``work``), the mean squared torque ``mean_torque_sq``
-    [N^2 m^2] and ``direction`` (the sign of S pursued)."""
+    """The transcription's symbols in physical units, for a :class:`UserObjective`: node torques
+    ``tau`` (2, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S``
+    [m] and ``W_plus`` [J] (None unless the objective says ``work``), the mean squared torque
+    ``mean_torque_sq`` [N^2 m^2] and ``direction`` (the sign of S pursued)."""
 
     tau: object
     T: object
@@ -372,5 +389,6 @@ def physical(sym: Symbols) -> Physical:
 
 
 def minimises(objective: str) -> bool:
-    """Whether the objective named ``objective`` is minimised: min_cot and "min:<name>" user objectives."""
+    """Whether the objective named ``objective`` is minimised: min_cot and "min:<name>" user
+    objectives."""
     return objective == "min_cot" or objective.startswith("min:")

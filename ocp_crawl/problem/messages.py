@@ -1,5 +1,5 @@
-"""Values in messages: a value as TOML writes it, what type it is in TOML's words, and the valid name
-closest to a misspelt one (every one-line message of bad input uses them)."""
+"""Values in messages: a value as TOML writes it, what type it is in TOML's words, and the valid
+name closest to a misspelt one (every one-line message of bad input uses them)."""
 from __future__ import annotations
 
 import difflib
@@ -9,8 +9,8 @@ from typing import Any, Mapping, Sequence
 
 
 def format_value(value: Any, _depth: int = 0) -> str:
-    """A value as it would be written in TOML (strings quoted), shortened to keep messages on one line
-    (arrays and tables nested more than 3 deep shown as ``...``)."""
+    """A value as it would be written in TOML (strings quoted), shortened to keep messages on one
+    line (arrays and tables nested more than 3 deep shown as ``...``)."""
     if _depth > 3 and isinstance(value, (Mapping, list, tuple)):
         s = "..."
     elif isinstance(value, bool):
@@ -18,9 +18,11 @@ def format_value(value: Any, _depth: int = 0) -> str:
     elif isinstance(value, str):
         s = json.dumps(value)
     elif isinstance(value, float):
-        s = "nan" if math.isnan(value) else ("inf" if value == math.inf else "-inf" if value == -math.inf else repr(value))
+        s = "nan" if math.isnan(value) else ("inf" if value == math.inf
+                                             else "-inf" if value == -math.inf else repr(value))
     elif isinstance(value, Mapping):
-        s = "{" + ", ".join(f"{k} = {format_value(v, _depth + 1)}" for k, v in list(value.items())[:20]) + "}"
+        s = "{" + ", ".join(f"{k} = {format_value(v, _depth + 1)}"
+                            for k, v in list(value.items())[:20]) + "}"
     elif isinstance(value, (list, tuple)):
         s = "[" + ", ".join(format_value(v, _depth + 1) for v in value[:20]) + "]"
     else:

@@ -8,8 +8,8 @@ twice: as a CasADi expression of the transcription's symbols (``nlp``: node torq
 scenario, in physical units) and as the same number on a simulated gait (``value``: a
 :class:`~ocp_crawl.ocp.quantities.Cycle`), so that the baselines and the replay judge measure it the
 way the optimiser does.  A speed of at least 40 mm/s is required (a constraint of the vocabulary, as
-``[[ocp.constraint]]`` in a file).  The optimum is compared with the best harmonic gait that meets the
-same requirement; the figure shows both torque profiles.
+``[[ocp.constraint]]`` in a file).  The optimum is compared with the best harmonic gait that meets
+the same requirement; the figure shows both torque profiles.
 
 Run: ``python examples/10_user_objective.py [OUT_DIR]``; writes ``OUT_DIR/user_objective.png``.
 """
@@ -41,7 +41,8 @@ def main() -> None:
     out = output_dir()
     robot = Robot.paper()
     settings = OCPSettings(user_objective=HEAT, nodes=20 if quick() else 40, starts=1,
-                           baselines="harmonic", harmonic_psi=12, baseline_samples=0 if quick() else 16,
+                           baselines="harmonic", harmonic_psi=12,
+                           baseline_samples=0 if quick() else 16,
                            baseline_starts=1, baseline_evaluations=60 if quick() else 200,
                            constraints=({"quantity": "speed", "min": SPEED_MIN},))
     opt = optimize_gait(robot, "physical", settings)
@@ -51,8 +52,9 @@ def main() -> None:
     h = opt.harmonic
     gain = opt.gains["harmonic"]
     print(f"heat per metre: optimum {opt.value_replay:.4g} N^2 m s (replayed; speed "
-          f"{1e3 * opt.v_replay[0]:.1f} mm/s, T {opt.T_ocp:.3f} s), best harmonic gait at >= 40 mm/s "
-          f"{h.value:.4g} N^2 m s ({1e3 * h.v[0]:.1f} mm/s, T {h.T:.3f} s): {100 * gain:+.1f} %")
+          f"{1e3 * opt.v_replay[0]:.1f} mm/s, T {opt.T_ocp:.3f} s), best harmonic gait at "
+          f">= 40 mm/s {h.value:.4g} N^2 m s ({1e3 * h.v[0]:.1f} mm/s, T {h.T:.3f} s): "
+          f"{100 * gain:+.1f} %")
 
     fig = Figure(figsize=(9.0, 5.0), layout="constrained")
     ax = fig.subplots()
@@ -61,13 +63,14 @@ def main() -> None:
     tau_h = pinned(h.torque_signal(robot.k), tt)
     for i, color in enumerate(("C0", "C3")):
         ax.plot(tt * opt.T_ocp, 1e3 * tau_opt[i], color, lw=2, label=rf"optimum, $\tau_{i + 1}$")
-        ax.plot(tt * h.T, 1e3 * tau_h[i], color + "--", lw=1, label=rf"best harmonic, $\tau_{i + 1}$")
+        ax.plot(tt * h.T, 1e3 * tau_h[i], color + "--", lw=1,
+                label=rf"best harmonic, $\tau_{i + 1}$")
     ax.set(xlabel="time [s] (one cycle each)", ylabel="joint torque [mN m]")
     ax.grid(True, lw=0.3)
     ax.legend(fontsize="small", ncol=2)
     fig.suptitle(f"least heat per metre H = mean(tau^2) T/|S| at v >= {1e3 * SPEED_MIN:.0f} mm/s "
-                 f"({settings.nodes} nodes):\noptimum {opt.value_replay:.3g} N^2 m s, best harmonic "
-                 f"{h.value:.3g} N^2 m s ({100 * gain:+.1f} %)")
+                 f"({settings.nodes} nodes):\noptimum {opt.value_replay:.3g} N^2 m s, best "
+                 f"harmonic {h.value:.3g} N^2 m s ({100 * gain:+.1f} %)")
     save(fig, out / "user_objective.png")
 
 
