@@ -27,6 +27,7 @@ from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
 from ocp_crawl.problem.problem import MAX_STIFFNESS_RATIO
+from ocp_crawl.problem.schema import Tables
 
 from _properties_common import (BAD_NUMBERS, CHEAP, SIMS, amplitudes, check_outcome, gammas,
                                 run_prescribed)
@@ -97,10 +98,18 @@ def valid_values(section: str, key, ranges=None):
     return base.filter(lambda v: key.rule is None or key.rule.test(v))
 
 
+#: tables the schema must reject for [[ocp.constraint]]: an unknown quantity, no bound, a key of another name
+BAD_TABLES = [[{"quantity": "torque", "max": 1.0}], [{"quantity": "speed"}], [{"quantity": "speed", "maximum": 1.0}],
+              [{"quantity": "peak_torque", "min": 0.1}]]
+
+
 def invalid_values(key):
-    """Values the schema must reject for a numeric key: non-finite, outside the rule, wrong type."""
+    """Values the schema must reject for a key: non-finite, outside the rule, wrong type (for an array of
+    tables: tables its rule rejects)."""
     wrong_type = st.sampled_from(["1.0", True, False, [1.0], {"x": 1.0}])
     out = [BAD_NUMBERS, wrong_type]
+    if key.type is Tables:
+        return st.one_of(out + [st.sampled_from(BAD_TABLES)])
     if key.type is int:
         out.append(st.floats(-50.5, 50.5).filter(lambda v: v != int(v)))
     if key.rule is not None:

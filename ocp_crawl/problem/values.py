@@ -82,7 +82,7 @@ def _check_table(ctx: Context, section: str, key: Key, value: Any) -> dict:
     try:
         options = check_ipopt_options(f"[{section}.{key.name}]", dict(value), by_ipopt=True)
     except (TypeError, ValueError) as exc:
-        raise ProblemError(f"{ctx.source}: {exc}") from None
+        raise ProblemError(f"{where} is invalid: {exc}") from None
     return options
 
 
