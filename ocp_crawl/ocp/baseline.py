@@ -147,7 +147,7 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
     if settings.objective != "min_cot":
         return MISS_RANK + miss
     v = speeds(settings, ev.S, ev.T)
-    rest = sum(shortfall(c, _cycle(settings, ev)) for c in settings.constraints)
+    rest = sum(shortfall(c, cycle) for c in settings.constraints)
     return MISS_RANK + max(settings.speed_min - min(v), 0.0) + (0.0 if all(ev.S) else 1.0) + rest
 
 

@@ -113,13 +113,11 @@ class GaitOCP:
         return Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L, r.L,
                        s.period_ref(), s.direction)
 
-    def _requirements(self, nlp: Layout, scen: list[Scenario], T, Th) -> None:
+    def _requirements(self, nlp: Layout, sym: Symbols) -> None:
         """The rows of every bound on a cycle quantity (:attr:`OCPSettings.requirements`: min_cot's
         speed requirement, the ``constraints``), as :func:`~ocp_crawl.ocp.quantities.constraint_rows`
         states them."""
-        s = self.settings
-        sym = self._symbols(scen, T, Th)
-        for i, c in enumerate(s.requirements):
+        for i, c in enumerate(self.settings.requirements):
             for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
                 nlp.con(f"require_{i}_{k}", expr, lb, ub, ("requirement",))
 
@@ -131,10 +129,11 @@ class GaitOCP:
         theta = cs.vertcat(*[sc.theta for sc in scen])
         reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
         S_list = [sc.S for sc in scen]
-        self._requirements(nlp, scen, T, Th)
+        sym = self._symbols(scen, T, Th)
+        self._requirements(nlp, sym)
         user = s.user_objective
         if user is not None:  # the user's expression in physical units, over its typical size
-            f = user.nlp(physical(self._symbols(scen, T, Th))) / user.scale
+            f = user.nlp(physical(sym)) / user.scale
             return (f if user.sense == "min" else -f) + reg
         if s.objective == "min_cot":
             # CoT+ = W+ / (M g |S|) = (W_hat M g L) / (M g S_hat L) = W_hat / S_hat
