@@ -23,14 +23,14 @@ def test_event_phases_match_an_independent_brent_root(gravity, gamma, amp, psi, 
     worst = 0.0
     for ev in res.events:
         before = labels[ev.mode_before]
-        seg = [s for s in stepper._segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
+        seg = [s for s in stepper.segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
         assert seg, ev
         seg = seg[-1]
         p = min(seg.points, key=lambda pt: abs(pt.t - ev.t))
 
         def guard(t):
-            pt = stepper._solve(t, p.x, seg.q)
-            return stepper.guards(before, pt.aux)[ev.guard_name]
+            pt = stepper.solver.solve(t, p.x, seg.q)
+            return stepper.guards.values(before, pt.aux)[ev.guard_name]
 
         lo, hi = ev.t - 1e-9, ev.t + 1e-9
         assert guard(lo) > 0 > guard(hi), ev

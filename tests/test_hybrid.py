@@ -70,16 +70,16 @@ def test_events_are_located_on_their_guards(gravity):
         assert abs(ev.guard) < 1e-9, ev
         before = {m.label: m for m in Mode}[ev.mode_before]
         # the guard of the mode before the event changes sign across it (bracket of 2e-10 in phase)
-        seg = [s for s in stepper._segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
+        seg = [s for s in stepper.segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
         assert seg, ev
         p = min(seg[-1].points, key=lambda pt: abs(pt.t - ev.t))
         vals = []
         for dt in (-1e-10, 1e-10):
-            pt = stepper._solve(ev.t + dt, p.x, seg[-1].q)
-            vals.append(stepper.guards(before, pt.aux)[ev.guard_name])
+            pt = stepper.solver.solve(ev.t + dt, p.x, seg[-1].q)
+            vals.append(stepper.guards.values(before, pt.aux)[ev.guard_name])
         assert vals[0] > 0 > vals[1] or (abs(vals[0]) < 1e-9 and abs(vals[1]) < 1e-9), (ev, vals)
         # independent check of the physical guard at the event state
-        pt = stepper._solve(ev.t, p.x, seg[-1].q)
+        pt = stepper.solver.solve(ev.t, p.x, seg[-1].q)
         ft, fn1, fn2 = pt.aux[AUX["ft"]], pt.aux[AUX["fn1"]], pt.aux[AUX["fn2"]]
         if ev.kind.startswith("slip_onset_"):
             i = int(ev.kind[-1])
@@ -87,7 +87,7 @@ def test_events_are_located_on_their_guards(gravity):
         elif ev.kind == "slip_to_stick":
             # d has a stationary point: central difference of d along the slip branch
             h = 1e-5
-            d = [stepper._solve(ev.t + s * h, p.x, seg[-1].q).aux[AUX["d"]] for s in (-1, 1)]
+            d = [stepper.solver.solve(ev.t + s * h, p.x, seg[-1].q).aux[AUX["d"]] for s in (-1, 1)]
             assert abs((d[1] - d[0]) / (2 * h)) < 1e-7 * L
         elif ev.kind == "slip_switch":
             assert abs(robot.mu1 * fn1 - robot.mu2 * fn2) < 1e-9 * Mg
@@ -133,16 +133,16 @@ def test_fold_is_reported_with_phase_mode_and_singular_jacobian():
     assert res.failure_t is not None and 0 < res.failure_t
     x = np.array(res.extra["fold_x"])
     mode = {m.label: m for m in Mode}[res.failure_mode]
-    seg = stepper._segments[-1]
+    seg = stepper.segments[-1]
     assert seg.mode == mode
-    G, J = model.sym.system(x, stepper.torque(res.failure_t), seg.q, model.p)
+    G, J = model.sym.system(x, stepper.ctx.torque(res.failure_t), seg.q, model.p)
     assert np.max(np.abs(np.asarray(G))) < 1e-10  # the fold point is an equilibrium ...
     s = np.linalg.svd(np.asarray(J), compute_uv=False)
     assert s[-1] / s[0] < 1e-8  # ... with a singular Jacobian
     # just before the fold the branch exists and its Jacobian is regular
     last = seg.points[-1]
     assert last.t < res.failure_t
-    _, J0 = model.sym.system(last.x, stepper.torque(last.t), seg.q, model.p)
+    _, J0 = model.sym.system(last.x, stepper.ctx.torque(last.t), seg.q, model.p)
     s0 = np.linalg.svd(np.asarray(J0), compute_uv=False)
     assert s0[-1] / s0[0] > s[-1] / s[0]
 

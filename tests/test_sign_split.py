@@ -1,9 +1,9 @@
-"""The batched roots of the W+ sign split (ocp_crawl.sim.event_output.legendre_roots) against numpy's legroots,
+"""The batched roots of the W+ sign split (ocp_crawl.sim.quadrature.legendre_roots) against numpy's legroots,
 row by row, including rows whose leading coefficients vanish (lower degree)."""
 import numpy as np
 from numpy.polynomial import legendre
 
-from ocp_crawl.sim.event_output import legendre_roots
+from ocp_crawl.sim.quadrature import legendre_roots
 
 
 def test_legendre_roots_are_numpys_legroots_row_by_row():

@@ -242,7 +242,7 @@ def test_slip_saddle_on_the_snap_through_robot_perturbation_grows():
     # the run now ends as snap_through before its slip2+ stretch: solve the slip2+ equilibrium at phase
     # 0.09 from a guess near the one the simulator used to report there
     st = HybridStepper(pr.model, pr.torque)
-    pt = st._solve(1.09, np.array([1.0457, 2.7819, 0.0216]), mode_q(Mode.SLIP2_POS))
+    pt = st.solver.solve(1.09, np.array([1.0457, 2.7819, 0.0216]), mode_q(Mode.SLIP2_POS))
     phi = pt.x[:2]
     s = _check_against_dynamics(pr.model, phi, mode_q(Mode.SLIP2_POS), stable=False)
     assert s["detK"] < 0

@@ -174,9 +174,9 @@ def test_jump_guard_exempts_an_input_discontinuity():
     pr = paper_problem()
     square = CallableSignal(lambda t: np.array([0.01, 0.0]) * (1.0 if (t % 1.0) < 0.5 else -1.0))
     st = HybridStepper(pr.model, square)
-    assert st._input_jumps(0.5) and not st._input_jumps(0.25)
+    assert st.checks.input_jumps(0.5) and not st.checks.input_jumps(0.25)
     smooth = HybridStepper(pr.model, pr.torque)
-    assert not any(smooth._input_jumps(t) for t in np.linspace(0, 1, 17))
+    assert not any(smooth.checks.input_jumps(t) for t in np.linspace(0, 1, 17))
 
 
 # ------------------------------------------------------------------ success means stable samples

@@ -7,8 +7,13 @@ way for the event-driven stepper, the prescribed angles and the MPCC time-steppi
 
 It also holds the physical gates of a periodic result of the torque solvers: a steady
 cycle whose energy balance does not close within the solver's tolerance is not a success
-(:func:`energy_gate`), nor one with an unstable equilibrium at a sampled phase (:func:`stability_gate`);
-:func:`demote` turns such a result into the failure.
+(:func:`imbalance`), nor one with an unstable equilibrium at a sampled phase
+(:func:`unstable_sample`);
+:func:`failed_metrics` are the fields of such a failure.  A solver that builds its result in one
+call (the event-driven stepper) takes the fields of :func:`cycle_metrics` and
+:func:`failed_metrics`; the others store them on a result they have made (:func:`set_cycle_metrics`,
+:func:`energy_gate`,
+:func:`stability_gate`, :func:`demote`).
 """
 from __future__ import annotations
 
@@ -37,7 +42,8 @@ MAX_OUTPUT_PHASES = 100_001
 
 
 def output_phases(t_eval) -> np.ndarray | None:
-    """The output phases ``t_eval`` [cycles, in [0, 1] of the reported cycle] as a float array; None stays None.
+    """The output phases ``t_eval`` [cycles, in [0, 1] of the reported cycle] as a float array; None
+    stays None.
 
     Raises ValueError for something that is not a non-empty array of finite phases in [0, 1]
     (1e-12 of round-off allowed at the ends), sorted (non-decreasing: an unsorted array is refused,
@@ -48,10 +54,12 @@ def output_phases(t_eval) -> np.ndarray | None:
     try:
         te = np.asarray(t_eval, dtype=float).ravel()
     except (TypeError, ValueError):
-        raise ValueError(f"t_eval must be an array of phases in [0, 1], got {t_eval!r:.60}") from None
+        raise ValueError(f"t_eval must be an array of phases in [0, 1], got {t_eval!r:.60}") \
+            from None
     if te.size == 0 or not np.all(np.isfinite(te)) or np.any(te < -1e-12) or np.any(te > 1 + 1e-12):
-        raise ValueError("t_eval must be a non-empty array of finite phases in [0, 1] (phase within the "
-                         f"reported cycle), got {np.array2string(te, threshold=6)}")
+        raise ValueError("t_eval must be a non-empty array of finite phases in [0, 1] (phase "
+                         "within the reported cycle), got "
+                         f"{np.array2string(te, threshold=6)}")
     if te.size > MAX_OUTPUT_PHASES:
         raise ValueError(f"t_eval has {te.size} phases, at most {MAX_OUTPUT_PHASES}: each is a "
                          "sampled state and stability check of the result (1e-5 cycles apart "
@@ -66,7 +74,8 @@ def output_phases(t_eval) -> np.ndarray | None:
 
 
 def default_phases(event_phases) -> np.ndarray:
-    """The default output phases [cycles]: DEFAULT_OUTPUT_POINTS equally spaced in [0, 1] and the event phases."""
+    """The default output phases [cycles]: DEFAULT_OUTPUT_POINTS equally spaced in [0, 1] and the
+    event phases."""
     return np.unique(np.concatenate([_DEFAULT_GRID, event_phases]))
 
 
@@ -76,81 +85,124 @@ def failure_message(status: Status, detail: str) -> str:
 
 
 def success_message(cycles: int, t0: float, how: str = "") -> str:
-    """The message of a periodic gait found after ``cycles`` cycles (``how``: e.g. " of 200 MPCC steps")."""
-    return f"{STATUS_MESSAGES[Status.SUCCESS]} after {cycles} cycles{how}; steady cycle t in [{t0:g}, {t0 + 1:g}]"
+    """The message of a periodic gait found after ``cycles`` cycles (``how``: e.g. " of 200 MPCC
+    steps")."""
+    return (f"{STATUS_MESSAGES[Status.SUCCESS]} after {cycles} cycles{how}; steady cycle t in "
+            f"[{t0:g}, {t0 + 1:g}]")
 
 
-def new_result(model: Model, drive: str, status: Status, message: str = "", **fields) -> CrawlResult:
-    """A result with its status (a :class:`~ocp_crawl.status.Status`) and message; ``fields``: any other
-    :class:`CrawlResult` field."""
-    return CrawlResult(success=status == Status.SUCCESS, status=Status(status), message=message, drive=drive,
-                       gravity=model.gravity, **fields)
+def new_result(model: Model, drive: str, status: Status, message: str = "",
+               **fields) -> CrawlResult:
+    """A result with its status (a :class:`~ocp_crawl.status.Status`) and message; ``fields``: any
+    other :class:`CrawlResult` field."""
+    return CrawlResult(success=status == Status.SUCCESS, status=Status(status), message=message,
+                       drive=drive, gravity=model.gravity, **fields)
 
 
 def no_start_result(model: Model, detail: str, **fields) -> CrawlResult:
     """The result of a run without a released equilibrium at t = 0 (status NO_START, no samples)."""
-    return new_result(model, "torque", Status.NO_START, failure_message(Status.NO_START, detail), failure_t=0.0,
-                      failure_mode="released start", **fields)
+    return new_result(model, "torque", Status.NO_START, failure_message(Status.NO_START, detail),
+                      failure_t=0.0, failure_mode="released start", **fields)
 
 
 def set_samples(res: CrawlResult, t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, tau, mode) -> None:
-    """Store the output arrays on the phases ``t`` [cycles]: angles phi [rad] (2, N), body angle theta [rad],
-    foot distance d and foot positions x1, x2 [m], tangential and normal forces [N], torques tau [N m]
-    (2, N) and the contact mode codes."""
+    """Store the output arrays on the phases ``t`` [cycles]: angles phi [rad] (2, N), body angle
+    theta [rad], foot distance d and foot positions x1, x2 [m], tangential and normal forces [N],
+    torques tau [N m] (2, N) and the contact mode codes."""
     res.t, res.phi, res.theta, res.d = t, phi, theta, d
     res.x1, res.x2, res.f_t, res.f_n1, res.f_n2 = x1, x2, f_t, f_n1, f_n2
     res.tau, res.mode = tau, mode
 
 
-def set_cycle_metrics(res: CrawlResult, robot, S: float, w_plus_joint, input_work: float, potential_change: float,
-                      dissipation: float, gross_work: float) -> None:
-    """Store the metrics of the reported cycle: S [m], W+ per actuator and summed [J], CoT+ [-] and the
-    energy balance of input work, potential change, friction dissipation and gross work [J]."""
-    res.S = S
-    res.W_plus_joint = w_plus_joint
-    res.W_plus = float(np.sum(w_plus_joint))
-    res.CoT_plus = cost_of_transport(res.W_plus, robot, S)
-    res.energy = energy_balance(input_work, potential_change, dissipation, gross_work, robot)
+def cycle_metrics(robot, S: float, w_plus_joint, energy: dict) -> dict:
+    """The metric fields of a :class:`CrawlResult` of the reported cycle: S [m], W+ per actuator and
+    summed [J], CoT+ [-] and the energy balance ``energy``
+    (:func:`~ocp_crawl.sim.result.energy_balance`)."""
+    w_plus = float(np.sum(w_plus_joint))
+    return {"S": S, "W_plus_joint": w_plus_joint, "W_plus": w_plus,
+            "CoT_plus": cost_of_transport(w_plus, robot, S), "energy": energy}
 
 
-def demote(res: CrawlResult, status: Status, detail: str, t: float | None, mode: str | None) -> None:
-    """Turn a result that its solver found periodic into the failure ``status`` (a physical check failed):
-    the message says ``detail``, ``failure_t`` [cycles] and ``failure_mode`` say where; S, W+ and CoT+
-    become NaN (they would describe a motion the robot cannot make); samples and energy stay, to diagnose."""
+def set_cycle_metrics(res: CrawlResult, robot, S: float, w_plus_joint, input_work: float,
+                      potential_change: float, dissipation: float, gross_work: float) -> None:
+    """Store the metrics of the reported cycle: S [m], W+ per actuator and summed [J], CoT+ [-] and
+    the energy balance of input work, potential change, friction dissipation and gross work [J]."""
+    energy = energy_balance(input_work, potential_change, dissipation, gross_work, robot)
+    for name, value in cycle_metrics(robot, S, w_plus_joint, energy).items():
+        setattr(res, name, value)
+
+
+def failed_metrics(t: float | None, mode: str | None) -> dict:
+    """The fields of a result that its solver found periodic and a physical check turned into a
+    failure at phase ``t`` [cycles] in ``mode``: S, W+ and CoT+ become NaN (they would describe a
+    motion the robot cannot make); samples and energy stay, to diagnose."""
+    nan = float("nan")
+    return {"failure_t": t, "failure_mode": mode, "S": nan, "W_plus": nan, "CoT_plus": nan,
+            "W_plus_joint": np.full(2, np.nan)}
+
+
+def demote(res: CrawlResult, status: Status, detail: str, t: float | None,
+           mode: str | None) -> None:
+    """Turn a result that its solver found periodic into the failure ``status`` (a physical check
+    failed): the message says ``detail``, ``failure_t`` [cycles] and ``failure_mode`` say where
+    (:func:`failed_metrics`)."""
     res.success = False
     res.status = Status(status)
     res.message = failure_message(status, detail)
-    res.failure_t, res.failure_mode = t, mode
-    res.S = res.W_plus = res.CoT_plus = float("nan")
-    res.W_plus_joint = np.full(2, np.nan)
+    for name, value in failed_metrics(t, mode).items():
+        setattr(res, name, value)
+
+
+def imbalance(energy: dict, tol: float, why: str, t0: float) -> str | None:
+    """Why the energy balance ``energy`` of the steady cycle [t0, t0 + 1] does not close: its
+    |residual| (relative to the gross work) exceeds ``tol`` (``why`` names the option and the reason
+    for its value); None when it closes."""
+    r = energy.get("balance_residual", float("nan")) if energy else float("nan")
+    if abs(r) <= tol:
+        return None
+    return (f"residual {r:.4g} of the gross work over the steady cycle t in [{t0:g}, {t0 + 1:g}] "
+            f"exceeds {why} = {tol:.3g}")
 
 
 def energy_gate(res: CrawlResult, tol: float, why: str) -> None:
-    """Demote a successful result to ENERGY_IMBALANCE when |balance residual| (relative to the gross work)
-    exceeds ``tol``; ``why`` names the option and the reason for its value (for the message)."""
-    r = res.energy.get("balance_residual", float("nan")) if res.energy else float("nan")
-    if res.success and not abs(r) <= tol:
-        demote(res, Status.ENERGY_IMBALANCE, f"residual {r:.4g} of the gross work over the steady cycle t in "
-               f"[{res.t0:g}, {res.t0 + 1:g}] exceeds {why} = {tol:.3g}", res.t0, "steady cycle")
+    """Demote a successful result to ENERGY_IMBALANCE when |balance residual| (relative to the gross
+    work) exceeds ``tol`` (:func:`imbalance`); ``why`` names the option and the reason for its value
+    (for the message)."""
+    detail = imbalance(res.energy, tol, why, res.t0) if res.success else None
+    if detail is not None:
+        demote(res, Status.ENERGY_IMBALANCE, detail, res.t0, "steady cycle")
+
+
+def unstable_sample(model: Model, t: np.ndarray, phi: np.ndarray, f_t: np.ndarray,
+                    mode: np.ndarray) -> tuple[str, float, str] | None:
+    """The first sampled phase (of the phases ``t`` with angles phi (2, N) [rad], tangential forces
+    f_t [N] and mode codes) whose equilibrium has a stability margin <= 0 in its sample's contact
+    mode (:func:`ocp_crawl.model.stability.stability_margins`): (detail naming its mode and margin,
+    phase, mode); None if every one is stable."""
+    r = model.robot
+    X = np.vstack([phi, f_t / (r.M * r.g)])
+    modes = np.asarray(mode, dtype=int)
+    # (ValueError for a code that is not a mode: they are 0, 1, ...)
+    Mode(int(modes.min())), Mode(int(modes.max()))
+    margin = sample_margins(model, X, _MODE_Q.take(modes.ravel(), axis=1))
+    bad = np.nonzero(~(margin > 0))[0]
+    if not bad.size:
+        return None
+    j = bad[0]
+    tj, label = float(t[j]), Mode(int(modes[j])).label
+    return (f"stability margin {margin[j]:.4g} <= 0 at the sampled phase t = {tj:.10f} "
+            f"(cycle {int(np.floor(tj)) + 1}, phase {tj % 1:.10f}) in mode {label}", tj, label)
 
 
 def stability_gate(res: CrawlResult, model: Model) -> None:
-    """Demote a successful result to UNSTABLE when the equilibrium at one of its sampled phases has a
-    stability margin <= 0 in its sample's contact mode (:func:`ocp_crawl.model.stability.stability_margins`);
-    the message names the first such phase, its mode and margin."""
+    """Demote a successful result to UNSTABLE when the equilibrium at one of its sampled phases has
+    a stability margin <= 0 in its sample's contact mode (:func:`unstable_sample`); the message
+    names the first such phase, its mode and margin."""
     if not res.success or res.t.size == 0:
         return
-    r = model.robot
-    X = np.vstack([res.phi, res.f_t / (r.M * r.g)])
-    modes = np.asarray(res.mode, dtype=int)
-    Mode(int(modes.min())), Mode(int(modes.max()))  # (ValueError for a code that is not a mode: they are 0, 1, ...)
-    margin = sample_margins(model, X, _MODE_Q.take(modes.ravel(), axis=1))
-    bad = np.nonzero(~(margin > 0))[0]
-    if bad.size:
-        j = bad[0]
-        t, mode = float(res.t[j]), Mode(int(modes[j])).label
-        demote(res, Status.UNSTABLE, f"stability margin {margin[j]:.4g} <= 0 at the sampled phase t = {t:.10f} "
-               f"(cycle {int(np.floor(t)) + 1}, phase {t % 1:.10f}) in mode {mode}", t, mode)
+    found = unstable_sample(model, res.t, res.phi, res.f_t, res.mode)
+    if found is not None:
+        demote(res, Status.UNSTABLE, *found)
 
 
 #: mode_q of each mode (4, number of modes), by mode code
@@ -164,10 +216,11 @@ def _mapped_stability() -> FastFunction:
 
 
 def sample_margins(model: Model, X: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Stability margins (nondimensional, > 0 <=> stable) of the equilibria ``X`` (3, n) = (phi1, phi2 [rad],
-    f_t/(M g)) in the modes ``Q`` (4, n) = (e_ss, sigma, w, d0): the values of
-    :func:`ocp_crawl.model.stability.stability_margins`, by a compiled function mapped over MARGIN_BATCH columns
-    (about 0.05 ms per batch instead of 0.7 ms for 200 points), the last batch padded with its last column."""
+    """Stability margins (nondimensional, > 0 <=> stable) of the equilibria ``X`` (3, n) = (phi1,
+    phi2 [rad], f_t/(M g)) in the modes ``Q`` (4, n) = (e_ss, sigma, w, d0): the values of
+    :func:`ocp_crawl.model.stability.stability_margins`, by a compiled function mapped over
+    MARGIN_BATCH columns (about 0.05 ms per batch instead of 0.7 ms for 200 points), the last batch
+    padded with its last column."""
     n = X.shape[1]
     out = np.empty(n)
     f = _mapped_stability()
@@ -175,7 +228,8 @@ def sample_margins(model: Model, X: np.ndarray, Q: np.ndarray) -> np.ndarray:
     XT, QT = X.T, Q.T  # (the columns as rows: a selection of rows, raveled, is column-major)
     for a in range(0, n, MARGIN_BATCH):
         b = min(n, a + MARGIN_BATCH)
-        cols = np.minimum(np.arange(a, a + MARGIN_BATCH), b - 1)  # (the last column repeated as padding)
+        # (the last column repeated as padding)
+        cols = np.minimum(np.arange(a, a + MARGIN_BATCH), b - 1)
         s = f(XT.take(cols, axis=0).ravel(), QT.take(cols, axis=0).ravel(), P)[0]
         out[a:b] = s[:4 * (b - a):4]  # (the margins: the first of the 4 numbers of each column)
     return out

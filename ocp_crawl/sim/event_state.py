@@ -1,7 +1,7 @@
-"""State of the event-driven stepper: solved points, constant-mode segments, mode parameters, failures.
+"""State of the event-driven stepper: solved points, constant-mode segments, mode parameters, the
+run so far, its outcome and failures.
 
-Shared by the modules of the event-driven stepper (:mod:`ocp_crawl.sim.event` and its guards,
-event location and output modules).
+Shared by the modules of the event-driven stepper (:mod:`ocp_crawl.sim.event` and its parts).
 """
 from __future__ import annotations
 
@@ -19,7 +19,8 @@ _DPHI1, _DPHI2, _DFT = AUX["dphi1"], AUX["dphi2"], AUX["dft"]
 
 
 def hermite(t0, x0, xd0, t1, x1, xd1, t):
-    """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of phases."""
+    """Cubic Hermite interpolation between (t0, x0, x0') and (t1, x1, x1'); scalars or arrays of
+    phases."""
     h = np.asarray(t1 - t0, float)
     s = np.where(h > 0, (np.asarray(t, float) - t0) / np.where(h > 0, h, 1.0), 0.0)
     s2 = s * s
@@ -30,19 +31,22 @@ def hermite(t0, x0, xd0, t1, x1, xd1, t):
 
 
 def torque_pair(signal):
-    """A function t -> (tau(t), tau'(t)) [N m, N m/cycle] at one phase t [cycles] of the input ``signal``.
+    """A function t -> (tau(t), tau'(t)) [N m, N m/cycle] at one phase t [cycles] of the input
+    ``signal``.
 
-    For the common torque input k (phi_ref(t) - pi) of a :class:`~ocp_crawl.model.inputs.Harmonic` reference
-    both come from one scalar evaluation in the same arithmetic as the signal's own methods (the stepper
-    calls this before every solve); any other signal is called as it is.  The function has the attribute
-    ``values``: t -> [tau1, tau2, tau1', tau2'] as a list of floats (the same numbers).
+    For the common torque input k (phi_ref(t) - pi) of a :class:`~ocp_crawl.model.inputs.Harmonic`
+    reference both come from one scalar evaluation in the same arithmetic as the signal's own
+    methods (the stepper calls this before every solve); any other signal is called as it is.  The
+    function has the attribute ``values``: t -> [tau1, tau2, tau1', tau2'] as a list of floats (the
+    same numbers).
     """
     ref = getattr(signal, "reference", None)
     if not (isinstance(signal, ReferenceTorque) and type(ref) is Harmonic):
         def generic(t: float):
             return signal(t), signal.derivative(t)
 
-        generic.values = lambda t: [*np.ravel(signal(t)).tolist(), *np.ravel(signal.derivative(t)).tolist()]
+        generic.values = lambda t: [*np.ravel(signal(t)).tolist(),
+                                    *np.ravel(signal.derivative(t)).tolist()]
         return generic
     k, g1, g2, a1, a2, half = signal.k, ref.gamma1, ref.gamma2, ref.A1, ref.A2, ref.psi / 2
     pi, two_pi, sin, cos = math.pi, TWO_PI, math.sin, math.cos
@@ -50,8 +54,8 @@ def torque_pair(signal):
     def values(t: float) -> list:
         w = two_pi * t
         w1, w2 = w + half, w - half
-        return [k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi), k * (two_pi * a1 * cos(w1)),
-                k * (two_pi * a2 * cos(w2))]
+        return [k * ((g1 + a1 * sin(w1)) - pi), k * ((g2 + a2 * sin(w2)) - pi),
+                k * (two_pi * a1 * cos(w1)), k * (two_pi * a2 * cos(w2))]
 
     def pair(t: float):
         v = values(t)
@@ -66,7 +70,8 @@ def torque_pair(signal):
 
 
 def torque_curvature(torque_at, t: float, dt: float = 1e-5) -> list:
-    """tau''(t) [N m/cycle^2] by central differences of tau' over +-dt [cycles], with ``torque_at`` from
+    """tau''(t) [N m/cycle^2] by central differences of tau' over +-dt [cycles], with ``torque_at``
+    from
     :func:`torque_pair` (floats; the same arithmetic as on arrays)."""
     rate = getattr(torque_at, "rate", None)
     if rate is None:
@@ -85,7 +90,8 @@ def event_kind(guard: str) -> str:
 
 
 def mode_q(mode: Mode, d0: float = 0.0) -> np.ndarray:
-    """Mode-parameter vector q = (e_ss, sigma, w, d0) of the compiled mode system (d0: stick distance [m])."""
+    """Mode-parameter vector q = (e_ss, sigma, w, d0) of the compiled mode system (d0: stick
+    distance [m])."""
     if mode == Mode.STICK:
         return np.array([1.0, 0.0, 0.0, d0])
     return np.array([0.0, float(mode.sigma), {1: 1.0, 2: 0.0, 3: 0.5}[mode.foot], 0.0])
@@ -96,32 +102,38 @@ Q_RELEASED = np.array([0.0, 0.0, 1.0, 0.0])
 
 
 class _Point:
-    """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled outputs aux
-    (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once (kept on the point)."""
+    """A solved equilibrium: phase t [cycles], x = (phi1, phi2 [rad], f_t/(M g)), the compiled
+    outputs aux (:data:`~ocp_crawl.model.statics.AUX`), and what the stepper derives from them once
+    (kept on the point)."""
 
-    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards", "_xl", "_xdl")
+    __slots__ = ("t", "x", "aux", "rates", "tau", "dtau", "_xdot", "_a", "q", "extra", "guards",
+                 "_xl", "_xdl")
     left = False
-    """solved with the input's rate just before t (:class:`_LeftPoint`: the end of a step at a kink of the input,
-    see :mod:`ocp_crawl.sim.event_kinks`); else with the rate at t, which at a kink is the one after it"""
+    """solved with the input's rate just before t (:class:`_LeftPoint`: the end of a step at a kink
+    of the input, see :mod:`ocp_crawl.sim.event_kinks`); else with the rate at t, which at a kink is
+    the one after it"""
 
-    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None, q=None,
-                 extra=None, a: list | None = None, xl: list | None = None):
+    def __init__(self, t: float, x: np.ndarray, aux: np.ndarray, rates=None, tau=None, dtau=None,
+                 q=None, extra=None, a: list | None = None, xl: list | None = None):
         self.t, self.x, self.aux = t, x, aux
         self._xl = xl
         self._xdl = None
         """x as a list (None until asked for; see :attr:`xl`)"""
         self.q, self.extra = q, extra
-        """mode parameters of the solve, and the stability numbers and d'' coefficients computed with it
-        (:func:`~ocp_crawl.model.stability.fast_step`; None when the solve did not compute them)"""
+        """mode parameters of the solve, and the stability numbers and d'' coefficients computed
+        with it (:func:`~ocp_crawl.model.stability.fast_step`; None when the solve did not compute
+        them)"""
         self.rates = rates
-        """guard rates of the point's mode (cached by ``HybridStepper._dips``)"""
+        """guard rates of the point's mode (kept by
+        :meth:`~ocp_crawl.sim.event_guards.Guards.dips`)"""
         self.tau, self.dtau = tau, dtau
         """torque and its derivative at t (kept from the solve)"""
         self._xdot = None
         self._a = a
         """aux as a list (None until asked for; see :attr:`a`)"""
         self.guards = None
-        """(mode, guard values of that mode) once computed (``HybridStepper.point_guards``)"""
+        """(mode, guard values of that mode) once computed
+        (:meth:`~ocp_crawl.sim.event_guards.Guards.at`)"""
 
     @property
     def a(self) -> list:
@@ -160,7 +172,8 @@ class _LeftPoint(_Point):
 
 
 def hermite_point(p0: _Point, p1: _Point, t: float) -> list:
-    """:func:`hermite` between two points at one phase t in scalar arithmetic (the same formula): a list of 3 floats."""
+    """:func:`hermite` between two points at one phase t in scalar arithmetic (the same formula): a
+    list of 3 floats."""
     h = p1.t - p0.t
     s = (t - p0.t) / h if h > 0 else 0.0
     s2 = s * s
@@ -182,16 +195,19 @@ class _Segment:
     points: list = field(default_factory=list)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Phases (n,), states (3, n) and their rates (3, n) of the stored points (kept until a point is added)."""
+        """Phases (n,), states (3, n) and their rates (3, n) of the stored points (kept until a
+        point is added)."""
         cache = getattr(self, "_arrays", None)
         if cache is None or cache[0].size != len(self.points):
             pts = self.points
-            cache = (np.array([p.t for p in pts]), np.array([p.xl for p in pts]).T, np.array([p.xdl for p in pts]).T)
+            cache = (np.array([p.t for p in pts]), np.array([p.xl for p in pts]).T,
+                     np.array([p.xdl for p in pts]).T)
             self._arrays = cache
         return cache
 
     def feet(self, d):
-        """Foot positions (x1, x2) [m] at the foot distance d [m] (a float or an array; a fixed foot is its float)."""
+        """Foot positions (x1, x2) [m] at the foot distance d [m] (a float or an array; a fixed foot
+        is its float)."""
         if self.mode == Mode.STICK:
             return self.x1_fixed, self.x2_fixed
         if self.mode.foot == 1:  # foot 2 sticks
@@ -209,7 +225,8 @@ class _Segment:
 
 @dataclass(slots=True)
 class _Run:
-    """What a run has built so far: the segments, the events, the current segment, point and step."""
+    """What a run has built so far: the segments, the events, the current segment, point and
+    step."""
 
     seg: _Segment
     pt: _Point
@@ -221,20 +238,38 @@ class _Run:
     events: list[Event] = field(default_factory=list)
     cycle: int = 0
     events_in_cycle: int = 0
+    nsteps: int = 0
+    """accepted continuation steps (a hold of the input crossed counts as one)"""
     extra: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class _Outcome:
+    """How a run ended: its status, and for a failure the reason, the phase [cycles] and the mode's
+    label; for a periodic run the number of cycles run when the state repeated."""
+
+    status: Status
+    detail: str = ""
+    t: float | None = None
+    mode: str | None = None
+    periodic_at: int | None = None
+
+
 class _Failure(Exception):
-    def __init__(self, status: Status, t: float, mode: Mode, detail: str, extra: dict | None = None):
+    def __init__(self, status: Status, t: float, mode: Mode, detail: str,
+                 extra: dict | None = None):
         super().__init__(detail)
-        self.status, self.t, self.mode, self.detail, self.extra = status, t, mode, detail, extra or {}
+        self.status, self.t, self.mode, self.detail = status, t, mode, detail
+        self.extra = extra or {}
 
 
 def phase_owners(segments, te: np.ndarray) -> list:
-    """The phases ``te`` on each segment: a phase on a boundary goes to the earlier segment, a phase on none to none.
+    """The phases ``te`` on each segment: a phase on a boundary goes to the earlier segment, a phase
+    on none to none.
 
-    Sorted phases on consecutive segments (the default output) are assigned by one search for all segments (the
-    phases of segment k are those in its span after the ones of the segments before); others one segment at a time.
+    Sorted phases on consecutive segments (the default output) are assigned by one search for all
+    segments (the phases of segment k are those in its span after the ones of the segments before);
+    others one segment at a time.
 
     Parameters
     ----------

@@ -1,18 +1,21 @@
-"""Slips the two feet share at a tie of their friction limits: the symmetric split against the one-sided limits.
+"""Slips the two feet share at a tie of their friction limits: the symmetric split against the
+one-sided limits.
 
-Where a mirror-symmetric state moves mirror-symmetrically (equal friction, equal joint motion), the friction limits
-of the two feet stay tied: the one-foot slips keep the tie and the event-driven stepper lets both feet slip, half of
-d' each (``slip-slip``, the symmetric solution).  How the slip is split is not decided by the statics: any split
-is an equilibrium.  The answer is physical only if it does not depend on how the tie is broken, so a run that shares
-a slip is repeated with mu1 = mu2 (1 + eps) and mu1 = mu2 (1 - eps) and each extrapolated to eps -> 0 (linearly,
-from eps and 2 eps).  Both one-sided limits equal to the run's S (a gait whose shared slips cancel over the cycle,
-e.g. identical joint motions): the run stands.  Otherwise the problem is set-valued: the run ends with status
-``set_valued`` (S, W+ and CoT+ NaN, as for any failure) and both values in its message and in
+Where a mirror-symmetric state moves mirror-symmetrically (equal friction, equal joint motion), the
+friction limits of the two feet stay tied: the one-foot slips keep the tie and the event-driven
+stepper lets both feet slip, half of d' each (``slip-slip``, the symmetric solution).  How the slip
+is split is not decided by the statics: any split is an equilibrium.  The answer is physical only if
+it does not depend on how the tie is broken, so a run that shares a slip is repeated with mu1 = mu2
+(1 + eps) and mu1 = mu2 (1 - eps) and each extrapolated to eps -> 0 (linearly, from eps and 2 eps).
+Both one-sided limits equal to the run's S (a gait whose shared slips cancel over the cycle, e.g.
+identical joint motions): the run stands.  Otherwise the problem is set-valued: the run ends with
+status ``set_valued`` (S, W+ and CoT+ NaN, as for any failure) and both values in its message and in
 ``extra["one_sided_S"]``.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.result import CrawlResult, Mode
@@ -35,9 +38,9 @@ def shares_a_slip(res: CrawlResult) -> bool:
 
 
 def one_sided_limits(run, model: Model) -> tuple[float, float]:
-    """S [m] in the limits mu1 -> mu2 from above and from below: ``run(model)`` -> CrawlResult is called with
-    mu1 = mu2 (1 +- eps) for eps = TIE_EPS and 2 TIE_EPS, and each side extrapolated linearly to eps = 0 (NaN for
-    a side whose runs fail)."""
+    """S [m] in the limits mu1 -> mu2 from above and from below: ``run(model)`` -> CrawlResult is
+    called with mu1 = mu2 (1 +- eps) for eps = TIE_EPS and 2 TIE_EPS, and each side extrapolated
+    linearly to eps = 0 (NaN for a side whose runs fail)."""
     robot = model.robot
     out = []
     for side in (1.0, -1.0):
@@ -50,27 +53,28 @@ def one_sided_limits(run, model: Model) -> tuple[float, float]:
 
 
 def check_shared_slip(res: CrawlResult, model: Model, run) -> CrawlResult:
-    """``res`` unchanged unless it shares a slip at an equal-friction tie whose one-sided limits
-    (:func:`one_sided_limits` with ``run``) differ from its S: then the same result with status SET_VALUED and both
-    values."""
+    """``res`` unchanged unless it shares a slip at an equal-friction tie: then a copy with both
+    one-sided limits (:func:`one_sided_limits` with ``run``) in ``extra["one_sided_S"]``, and status
+    SET_VALUED if they differ from its S."""
     robot = model.robot
     if not shares_a_slip(res) or robot.mu1 != robot.mu2:
         return res
     up, down = one_sided_limits(run, model)
     tol = TIE_RTOL * abs(res.S) + TIE_ATOL_L * robot.L
-    res.extra["one_sided_S"] = [up, down]
+    extra = {**res.extra, "one_sided_S": [up, down]}
     if abs(up - res.S) <= tol and abs(down - res.S) <= tol:
-        return res
+        return replace(res, extra=extra)
     symmetric = res.S
-    res.success, res.status = False, Status.SET_VALUED
-    res.S = res.W_plus = res.CoT_plus = math.nan
-    if math.isnan(up) or math.isnan(down):  # (a one-sided run failed: the split could not be checked)
-        res.message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie (the symmetric "
-                       f"split gives S = {symmetric * 1e3:.6g} mm per cycle), and the runs with mu1 and mu2 apart "
-                       f"that would check it did not all succeed (S = {up * 1e3:.6g} mm from above, "
-                       f"{down * 1e3:.6g} mm from below); simulate with mu1 and mu2 apart")
-        return res
-    res.message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie, and S = "
-                   f"{up * 1e3:.6g} mm per cycle as mu1 -> mu2 from above, {down * 1e3:.6g} mm from below "
-                   f"(the symmetric split: {symmetric * 1e3:.6g} mm); set mu1 and mu2 apart to choose one")
-    return res
+    if math.isnan(up) or math.isnan(down):  # (a one-sided run failed: the split is not checked)
+        message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie "
+                   f"(the symmetric split gives S = {symmetric * 1e3:.6g} mm per cycle), and the "
+                   "runs with mu1 and mu2 apart that would check it did not all succeed "
+                   f"(S = {up * 1e3:.6g} mm from above, {down * 1e3:.6g} mm from below); simulate "
+                   "with mu1 and mu2 apart")
+    else:
+        message = (f"{STATUS_MESSAGES[Status.SET_VALUED]}: the feet share a slip at a held tie, "
+                   f"and S = {up * 1e3:.6g} mm per cycle as mu1 -> mu2 from above, "
+                   f"{down * 1e3:.6g} mm from below (the symmetric split: "
+                   f"{symmetric * 1e3:.6g} mm); set mu1 and mu2 apart to choose one")
+    return replace(res, success=False, status=Status.SET_VALUED, message=message, S=math.nan,
+                   W_plus=math.nan, CoT_plus=math.nan, extra=extra)
