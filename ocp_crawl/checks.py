@@ -20,7 +20,8 @@ def is_real(value) -> bool:
 
 
 def is_finite(value) -> bool:
-    """Whether a real number is finite; False for an integer too large for a float (hundreds of digits)."""
+    """Whether a real number is finite; False for an integer too large for a float (hundreds of
+    digits)."""
     try:
         return math.isfinite(value)
     except OverflowError:
@@ -28,7 +29,8 @@ def is_finite(value) -> bool:
 
 
 def short_repr(value, width: int = 40) -> str:
-    """``repr(value)``, cut to ``width`` characters with "..." (a 400-digit integer in a message)."""
+    """``repr(value)``, cut to ``width`` characters with "..." (a 400-digit integer in a
+    message)."""
     text = repr(value)
     return text if len(text) <= width else text[:width - 3] + "..."
 
@@ -65,15 +67,17 @@ def finite_or_none(x) -> float | None:
     return x if math.isfinite(x) else None
 
 
-#: a number as a user writes it: ASCII decimal notation, or nan/inf (to be refused as not finite by the caller);
-#: Python's ``float`` and ``int`` also take "1_0" and digits of other scripts, which no file or option means
+#: a number as a user writes it: ASCII decimal notation, or nan/inf (to be refused as not finite by
+#: the caller); Python's ``float`` and ``int`` also take "1_0" and digits of other scripts, which no
+#: file or option means
 _NUMBER_TEXT = re.compile(r"[+-]?(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)",
                           re.ASCII | re.IGNORECASE)
 _INTEGER_TEXT = re.compile(r"[+-]?\d+", re.ASCII)
 
 
 def parse_number(text: str) -> float:
-    """``text`` (stripped) as a float when it is a decimal number in ASCII (or nan/inf); ValueError otherwise."""
+    """``text`` (stripped) as a float when it is a decimal number in ASCII (or nan/inf); ValueError
+    otherwise."""
     if not isinstance(text, str) or not _NUMBER_TEXT.fullmatch(text.strip()):
         raise ValueError(f"not a number: {text!r}")
     return float(text)

@@ -1,10 +1,12 @@
-"""Worker processes of the package (floor 0: imports nothing of the package): the process pool of sweeps,
-reproduce, fits and the baselines' search (:func:`worker_pool`, its start method :func:`mp_context`), the
-default number of workers, and :func:`overlap` (a task in a forked process while this one does something else).
+"""Worker processes of the package (floor 0: imports nothing of the package): the process pool of
+sweeps, reproduce, fits and the baselines' search (:func:`worker_pool`, its start method
+:func:`mp_context`), the default number of workers, and :func:`overlap` (a task in a forked process
+while this one does something else).
 
-Every worker dies with the process that started it (Linux: a parent-death signal, and elsewhere too a
-watchdog thread that polls the parent): a pool worker of a killed sweep would otherwise live on, blocked
-on its pipe, holding the sweep directory's lock (an inherited ``flock``) and refusing ``--resume``."""
+Every worker dies with the process that started it (Linux: a parent-death signal, and elsewhere too
+a watchdog thread that polls the parent): a pool worker of a killed sweep would otherwise live on,
+blocked on its pipe, holding the sweep directory's lock (an inherited ``flock``) and refusing
+``--resume``."""
 from __future__ import annotations
 
 import multiprocessing
@@ -14,19 +16,20 @@ import signal
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
-from typing import Callable
+from typing import Callable, TypeVar, cast
 
 #: seconds between two looks of a worker's watchdog at its parent
 WATCH_SECONDS = 0.5
 
 
 def mp_context():
-    """The multiprocessing context of the package's worker pools: fork when safe, else forkserver (else spawn)."""
+    """The multiprocessing context of the package's worker pools: fork when safe, else forkserver
+    (else spawn)."""
     methods = multiprocessing.get_all_start_methods()
     # fork is the fastest start: workers inherit the imported modules and the loaded compiled
     # functions (measured ~1 s less per worker than forkserver), but forking a process with other
-    # threads running can deadlock a child on a lock held by one of them (this sees Python's threads only; the
-    # bundled OpenBLAS's own threads are shut down by its fork handler)
+    # threads running can deadlock a child on a lock held by one of them (this sees Python's threads
+    # only; the bundled OpenBLAS's own threads are shut down by its fork handler)
     if "fork" in methods and threading.active_count() == 1:
         return multiprocessing.get_context("fork")
     if "forkserver" in methods:
@@ -44,8 +47,10 @@ def default_jobs() -> int:
         return os.cpu_count() or 1
 
 
-def worker_pool(jobs: int, initializer: Callable | None = None, initargs: tuple = ()) -> ProcessPoolExecutor:
-    """A process pool of ``jobs`` workers (start method :func:`mp_context`) that die with this process.
+def worker_pool(jobs: int, initializer: Callable | None = None,
+                initargs: tuple = ()) -> ProcessPoolExecutor:
+    """A process pool of ``jobs`` workers (start method :func:`mp_context`) that die with this
+    process.
 
     ``initializer(*initargs)`` runs in each worker after it is tied to this process's life."""
     return ProcessPoolExecutor(jobs, mp_context=mp_context(), initializer=_start_worker,
@@ -66,17 +71,24 @@ def _watch(parent: int) -> None:
     os._exit(1)
 
 
-def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Callable[[], object],
-            forward: Callable[[object], None]) -> tuple[object, object]:
-    """``task(send)`` in a forked process while this one runs ``meanwhile()``; returns (task's result, meanwhile's).
+_Task = TypeVar("_Task")
+_Meanwhile = TypeVar("_Meanwhile")
 
-    The task may call ``send(message)`` (picklable) any number of times: each message reaches ``forward(message)``
-    here, in order, after ``meanwhile`` returns.  The task's result must be picklable; an exception it raises is
-    raised here (as itself when it pickles, else as RuntimeError with its text).  Where fork is not safe (threads
-    running, no fork on the platform: :func:`mp_context`), or when the child dies without a result (killed, out of
-    memory), the task runs here, after ``meanwhile`` (its messages forwarded from where the child's stopped).  The child
-    is terminated when this process dies (Linux).  For a task whose inputs the child
-    inherits (large or unpicklable objects, e.g. built CasADi solvers) and whose result is small."""
+
+def overlap(task: Callable[[Callable[[object], None]], _Task],
+            meanwhile: Callable[[], _Meanwhile],
+            forward: Callable[[object], None]) -> tuple[_Task, _Meanwhile]:
+    """``task(send)`` in a forked process while this one runs ``meanwhile()``; returns (task's
+    result, meanwhile's).
+
+    The task may call ``send(message)`` (picklable) any number of times: each message reaches
+    ``forward(message)`` here, in order, after ``meanwhile`` returns.  The task's result must be
+    picklable; an exception it raises is raised here (as itself when it pickles, else as
+    RuntimeError with its text).  Where fork is not safe (threads running, no fork on the platform:
+    :func:`mp_context`), or when the child dies without a result (killed, out of memory), the task
+    runs here, after ``meanwhile`` (its messages forwarded from where the child's stopped).  The
+    child is terminated when this process dies (Linux).  For a task whose inputs the child inherits
+    (large or unpicklable objects, e.g. built CasADi solvers) and whose result is small."""
     ctx = mp_context()
     if ctx.get_start_method() != "fork":
         other = meanwhile()
@@ -99,10 +111,11 @@ def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Calla
         child.join()
         reader.close()
     if kind == "result":
-        return payload, other
+        return cast(_Task, payload), other  # the task's result, from the child
     if kind == "error":
-        raise payload
-    # the child died without a result: the task here, its messages forwarded from where the child's stopped
+        raise cast(BaseException, payload)  # _child sends ("error", exc)
+    # the child died without a result: the task here, its messages forwarded from where the child's
+    # stopped
     seen = [0]
 
     def send(message) -> None:
@@ -113,7 +126,8 @@ def overlap(task: Callable[[Callable[[object], None]], object], meanwhile: Calla
 
 
 def _receive(reader) -> tuple[str, object]:
-    """The next (kind, payload) from the child, or ("died", None) when its end of the pipe closed first."""
+    """The next (kind, payload) from the child, or ("died", None) when its end of the pipe closed
+    first."""
     try:
         return reader.recv()
     except EOFError:
@@ -125,12 +139,12 @@ _PR_SET_PDEATHSIG = 1
 
 
 def _die_with(parent: int, sig: int = signal.SIGTERM) -> None:
-    """Have this (forked) process end when ``parent`` dies: signal ``sig`` from the kernel on Linux (the
-    pools fork from the thread that submits, the forkserver from its main thread: the signal follows the
-    forking thread), elsewhere a daemon thread that exits the process within :data:`WATCH_SECONDS` of it
-    having another parent (not on Linux: a thread running would keep this process's own pools from
-    forking, :func:`mp_context`).  A child whose parent was killed would otherwise go on solving, or
-    block for ever on a full pipe."""
+    """Have this (forked) process end when ``parent`` dies: signal ``sig`` from the kernel on Linux
+    (the pools fork from the thread that submits, the forkserver from its main thread: the signal
+    follows the forking thread), elsewhere a daemon thread that exits the process within
+    :data:`WATCH_SECONDS` of it having another parent (not on Linux: a thread running would keep
+    this process's own pools from forking, :func:`mp_context`).  A child whose parent was killed
+    would otherwise go on solving, or block for ever on a full pipe."""
     try:
         import ctypes
 
@@ -144,7 +158,8 @@ def _die_with(parent: int, sig: int = signal.SIGTERM) -> None:
 
 
 def _child(task, reader, writer, parent: int) -> None:
-    """In the forked process: run the task, sending its messages and then its result or its exception."""
+    """In the forked process: run the task, sending its messages and then its result or its
+    exception."""
     reader.close()  # a send to a parent that is gone then fails instead of blocking
     _die_with(parent)
     try:

@@ -1,20 +1,24 @@
 """Benchmarks (run by hand; figures go into the closing notes, never into timed tests).
 
     python scripts/bench.py                # all benchmarks (several minutes)
-    python scripts/bench.py hybrid         # paper gait and one steady cycle, CPU, against an old commit
+    python scripts/bench.py hybrid         # paper gait and one steady cycle, CPU, against an old
+                                             commit
     python scripts/bench.py hybrid --old 3a581df --repeat 20
     python scripts/bench.py hybrid_accuracy  # the paper gait against a refined run, both gravities
     python scripts/bench.py mpcc sweep ocp # MPCC step/cycle, the 37 x 31 map, the OCP solves
-    python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the compiled kernel's map
-    python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the N = 50..400 run
-    python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path (endgame, ...)
+    python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the
+                                                     compiled kernel's map
+    python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the
+                                                     N = 50..400 run
+    python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path
+                                                     (endgame, ...)
     python scripts/bench.py work --repeat 3        # the work estimates against the runs they bound
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
 warm-up builds or loads the compiled functions, which happens once per process); ``hybrid`` reports
-CPU time (min and median) of this tree and of an older commit (``--old``, exported with ``git archive``)
-measured in alternating subprocesses of the same run, and their ratio.
+CPU time (min and median) of this tree and of an older commit (``--old``, exported with
+``git archive``) measured in alternating subprocesses of the same run, and their ratio.
 """
 from __future__ import annotations
 
@@ -40,10 +44,11 @@ OLD_COMMIT = "3a581df"
 
 
 def hybrid_cpu(repeat: int) -> dict:
-    """CPU times [ms] (time.process_time) of the warm paper gait (released start + confirming cycle, output,
-    checks: one ``simulate_torque``) and of one steady cycle (one more cycle of the stepper, events and checks,
-    from the periodic state), after a warm-up run; lists of ``repeat`` samples each.  Uses only names that the
-    old code has too (it runs in a subprocess on an exported old tree, see :func:`bench_hybrid`)."""
+    """CPU times [ms] (time.process_time) of the warm paper gait (released start + confirming cycle,
+    output, checks: one ``simulate_torque``) and of one steady cycle (one more cycle of the stepper,
+    events and checks, from the periodic state), after a warm-up run; lists of ``repeat`` samples
+    each.  Uses only names that the old code has too (it runs in a subprocess on an exported old
+    tree, see :func:`bench_hybrid`)."""
     from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot, simulate_torque
     from ocp_crawl.sim.event import HybridStepper
 
@@ -69,15 +74,16 @@ def hybrid_cpu(repeat: int) -> dict:
 
 
 def _old_tree(commit: str) -> str:
-    """The package ``ocp_crawl`` of ``commit`` exported (git archive) into a temporary directory; its path."""
+    """The package ``ocp_crawl`` of ``commit`` exported (git archive) into a temporary directory;
+    its path."""
     import subprocess
     import tempfile
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent
     tmp = tempfile.mkdtemp(prefix="ocp_crawl_old_")
-    archive = subprocess.run(["git", "-C", str(root), "archive", commit, "ocp_crawl"], capture_output=True,
-                             check=True).stdout
+    archive = subprocess.run(["git", "-C", str(root), "archive", commit, "ocp_crawl"],
+                             capture_output=True, check=True).stdout
     subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
     return tmp
 
@@ -89,16 +95,17 @@ def _worker(tree: str, repeat: int) -> dict:
     import subprocess
 
     env = dict(os.environ, PYTHONPATH=tree)
-    out = subprocess.run([sys.executable, __file__, "--hybrid-worker", str(repeat)], env=env, capture_output=True,
-                         text=True, check=True).stdout
+    out = subprocess.run([sys.executable, __file__, "--hybrid-worker", str(repeat)], env=env,
+                         capture_output=True, text=True, check=True).stdout
     return json.loads(out.splitlines()[-1])
 
 
 def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
-    """Warm paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive, paper gravity) and one steady
-    cycle, CPU time, for the working tree and for commit ``old`` in the same run: ``rounds`` alternating pairs
-    of subprocesses of ``repeat`` timed runs each; min and median [ms] over all samples, their ratios, and the
-    largest differences of S, W+ and the event phases between the two codes."""
+    """Warm paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive, paper gravity) and
+    one steady cycle, CPU time, for the working tree and for commit ``old`` in the same run:
+    ``rounds`` alternating pairs of subprocesses of ``repeat`` timed runs each; min and median [ms]
+    over all samples, their ratios, and the largest differences of S, W+ and the event phases
+    between the two codes."""
     import shutil
     from pathlib import Path
 
@@ -115,7 +122,8 @@ def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
     for which in ("gait_ms", "cycle_ms"):
         for code in ("new", "old"):
             v = [x for s in samples[code] for x in s[which]]
-            out[f"{which[:-3]}_{code}_ms"] = {"min": round(min(v), 3), "median": round(statistics.median(v), 3)}
+            out[f"{which[:-3]}_{code}_ms"] = {"min": round(min(v), 3),
+                                              "median": round(statistics.median(v), 3)}
         for stat in ("min", "median"):
             out[f"{which[:-3]}_ratio_old_over_new_{stat}"] = round(
                 out[f"{which[:-3]}_old_ms"][stat] / out[f"{which[:-3]}_new_ms"][stat], 2)
@@ -131,8 +139,9 @@ def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
 
 
 def bench_hybrid_accuracy(repeat: int) -> dict:
-    """The paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive): median wall time and S, W+ against
-    a refined run (max_step 1/512, event_xtol 1e-15, quad_h 1/256), both gravity conventions."""
+    """The paper gait (Table I robot, gamma 90, A 30, psi 45 deg, torque drive): median wall time
+    and S, W+ against a refined run (max_step 1/512, event_xtol 1e-15, quad_h 1/256), both gravity
+    conventions."""
     from ocp_crawl import Harmonic, HybridOptions, Model, ReferenceTorque, Robot, simulate_torque
     from ocp_crawl.model.statics import fast_newton
 
@@ -141,10 +150,12 @@ def bench_hybrid_accuracy(repeat: int) -> dict:
         model = Model(Robot.paper(), gravity=gravity)
         torque = ReferenceTorque(Harmonic.from_degrees(90, 30, 45), model.robot.k)
         med, res = _median_time(lambda: simulate_torque(model, torque), repeat)
-        ref = simulate_torque(model, torque, HybridOptions(max_step=1 / 512, event_xtol=1e-15, quad_h=1 / 256))
+        ref = simulate_torque(model, torque,
+                              HybridOptions(max_step=1 / 512, event_xtol=1e-15, quad_h=1 / 256))
         out[gravity] = {
             "median_ms": 1e3 * med, "S_m": res.S, "S_rel_diff_vs_refined": abs(res.S / ref.S - 1),
-            "W_plus_rel_diff_vs_refined": abs(res.W_plus / ref.W_plus - 1), "cycles_run": res.cycles,
+            "W_plus_rel_diff_vs_refined": abs(res.W_plus / ref.W_plus - 1),
+            "cycles_run": res.cycles,
             "nfev": res.nfev, "events": len(res.events), "compiled": fast_newton().compiled,
         }
     return out
@@ -155,12 +166,14 @@ def bench_prescribed(repeat: int) -> dict:
     from ocp_crawl.sim.angles import simulate_angles
 
     model = Model(Robot.paper())
-    med, res = _median_time(lambda: simulate_angles(model, Harmonic.from_degrees(90, 30, 45)), repeat)
+    med, res = _median_time(lambda: simulate_angles(model, Harmonic.from_degrees(90, 30, 45)),
+                            repeat)
     return {"median_ms": 1e3 * med, "S_m": res.S}
 
 
 def bench_ocp(repeat: int) -> dict:
-    """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve each)."""
+    """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve
+    each)."""
     from ocp_crawl import Robot
     from ocp_crawl.ocp import OCPSettings, optimize_gait
 
@@ -168,10 +181,13 @@ def bench_ocp(repeat: int) -> dict:
     for name, kw in (("max_speed", {}), ("min_cot", {"speed_min": 0.04}), ("robust_speed", {})):
         for nodes in (100,):
             t = time.perf_counter()
-            res = optimize_gait(Robot.paper(), "physical", OCPSettings(objective=name, nodes=nodes, **kw))
+            res = optimize_gait(Robot.paper(), "physical",
+                                OCPSettings(objective=name, nodes=nodes, **kw))
             out[f"{name}_N{nodes}"] = {
-                "wall_s": time.perf_counter() - t, "solve_time_s": res.solve_time_s, "status": res.status,
-                "value_ocp": res.value_ocp, "value_replay": res.value_replay, "rel_diff_replay": res.rel_diff_replay,
+                "wall_s": time.perf_counter() - t, "solve_time_s": res.solve_time_s,
+                "status": res.status,
+                "value_ocp": res.value_ocp, "value_replay": res.value_replay,
+                "rel_diff_replay": res.rel_diff_replay,
                 "gain_vs_best_harmonic": res.gain, "stages": len(res.homotopy),
             }
     return out
@@ -182,27 +198,31 @@ KERNEL_PROBLEMS = ("ocp_max_speed",)
 
 
 def _ocp_run(problem, settings, harm, kernel: str) -> dict:
-    """Build the OCP with the step kernel ``kernel`` ("expanded": one SX graph; "compiled": the compiled kernel's
-    map in an MX graph) and solve it from the harmonic baseline ``harm``: build and solve time, IPOPT's
-    function-evaluation time [s], iterations, optimum."""
+    """Build the OCP with the step kernel ``kernel`` ("expanded": one SX graph; "compiled": the
+    compiled kernel's map in an MX graph) and solve it from the harmonic baseline ``harm``: build
+    and solve time, IPOPT's function-evaluation time [s], iterations, optimum."""
     from ocp_crawl.ocp.solve import baseline_gait
+    from ocp_crawl.ocp.solver import GaitSolver
     from ocp_crawl.ocp.transcription import GaitOCP
 
     t = time.perf_counter()
     ocp = GaitOCP(problem.robot, problem.gravity, settings, kernel=kernel)
     build = time.perf_counter() - t
-    x, hist, failed, _ = ocp.solve(ocp.initial_guess(*baseline_gait(harm, problem.robot)))
-    return {"build_s": build, "ipopt_s": sum(h.time for h in hist), "eval_s": sum(h.eval_time for h in hist),
-            "iterations": sum(h.iterations for h in hist), "status": "ok" if failed is None else failed,
+    x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(*baseline_gait(harm, problem.robot)))
+    return {"build_s": build, "ipopt_s": sum(h.time for h in hist),
+            "eval_s": sum(h.eval_time for h in hist),
+            "iterations": sum(h.iterations for h in hist),
+            "status": "ok" if failed is None else failed,
             "value_ocp": ocp.objective(x) if x is not None else float("nan")}
 
 
 def bench_ocp_kernel(repeat: int) -> dict:
-    """The OCP problem files at their default N, one start from the harmonic baseline: build time, IPOPT's time
-    and its function-evaluation time with the NLP expanded into one SX graph ("expanded", the default) and with
-    the compiled step kernel mapped in an MX graph (nlp/codegen.py, "compiled"), alternating in one process,
-    ``min(repeat, 5)`` rounds after a warm-up of each: min and median [s], speed-ups compiled/expanded, and
-    whether both found the same optimum (iterations, NLP objective)."""
+    """The OCP problem files at their default N, one start from the harmonic baseline: build time,
+    IPOPT's time and its function-evaluation time with the NLP expanded into one SX graph
+    ("expanded", the default) and with the compiled step kernel mapped in an MX graph
+    (nlp/codegen.py, "compiled"), alternating in one process, ``min(repeat, 5)`` rounds after a
+    warm-up of each: min and median [s], speed-ups compiled/expanded, and whether both found the
+    same optimum (iterations, NLP objective)."""
     from pathlib import Path
 
     from ocp_crawl.ocp.search import best_harmonic
@@ -218,15 +238,18 @@ def bench_ocp_kernel(repeat: int) -> dict:
         for k in range(min(repeat, 5) + 1):
             for mode in runs:
                 run = _ocp_run(problem, settings, harm, mode)
-                if k:  # the first round builds and loads (the kernel's library, the simulator's functions)
+                # the first round builds and loads (the kernel's library, the simulator's functions)
+                if k:
                     runs[mode].append(run)
         row = {}
         for mode, rs in runs.items():
             for key in ("build_s", "ipopt_s", "eval_s"):
                 v = [r[key] for r in rs]
-                row[f"{mode}_{key}"] = {"min": round(min(v), 3), "median": round(statistics.median(v), 3)}
+                row[f"{mode}_{key}"] = {"min": round(min(v), 3),
+                                        "median": round(statistics.median(v), 3)}
         for key in ("build_s", "ipopt_s", "eval_s"):
-            row[f"speedup_{key}_median"] = round(row[f"compiled_{key}"]["median"] / row[f"expanded_{key}"]["median"], 2)
+            row[f"speedup_{key}_median"] = round(row[f"compiled_{key}"]["median"]
+                                                 / row[f"expanded_{key}"]["median"], 2)
         a, b = runs["expanded"][0], runs["compiled"][0]
         row["iterations_expanded_compiled"] = (a["iterations"], b["iterations"])
         row["status_expanded_compiled"] = (a["status"], b["status"])
@@ -236,7 +259,8 @@ def bench_ocp_kernel(repeat: int) -> dict:
     return out
 
 
-#: the shipped OCP problem files that ``ocp_files`` solves whole (``ocp-crawl optimize FILE --json``)
+#: the shipped OCP problem files that ``ocp_files`` solves whole (``ocp-crawl optimize FILE
+#: --json``)
 OCP_FILES = ("ocp_max_speed", "ocp_min_cot", "ocp_robust")
 
 
@@ -257,11 +281,12 @@ def _optimize_process(args: list[str]) -> tuple[float, dict]:
 
 
 def bench_ocp_files(repeat: int) -> dict:
-    """Each shipped OCP problem file solved whole at its default N and starts (harmonic baseline, solve, replay;
-    one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status, objective by replay, and the
-    first run's IPOPT iterations, seconds and milliseconds per iteration), then
-    the convergence run ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the
-    table).  Targets: <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
+    """Each shipped OCP problem file solved whole at its default N and starts (harmonic baseline,
+    solve, replay; one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status,
+    objective by replay, and the first run's IPOPT iterations, seconds and milliseconds per
+    iteration), then the convergence run
+    ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the table).
+    Targets: <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent / "problems"
@@ -270,14 +295,18 @@ def bench_ocp_files(repeat: int) -> dict:
         runs = [_optimize_process([str(root / f"{name}.toml")]) for _ in range(min(repeat, 3))]
         walls = [w for w, _ in runs]
         data = runs[0][1]
-        out[name] = {"wall_s": {"min": round(min(walls), 2), "median": round(statistics.median(walls), 2)},
-                     "status": data.get("status"), "value_replay": data.get("objective_value_replay"),
+        out[name] = {"wall_s": {"min": round(min(walls), 2),
+                                "median": round(statistics.median(walls), 2)},
+                     "status": data.get("status"),
+                     "value_replay": data.get("objective_value_replay"),
                      "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain"),
                      **_ipopt_split(data.get("homotopy", []))}
-    wall, data = _optimize_process([str(root / "ocp_max_speed.toml"), "--nodes", "50", "100", "200", "400"])
+    wall, data = _optimize_process([str(root / "ocp_max_speed.toml"), "--nodes", "50", "100", "200",
+                                    "400"])
     rows = data.get("rows", [])
     out["convergence_max_speed"] = {"wall_s": round(wall, 1), "rows": [
-        {k: r.get(k) for k in ("nodes", "status", "value_ocp", "value_replay", "rel_change", "order", "solve_time_s")}
+        {k: r.get(k) for k in ("nodes", "status", "value_ocp", "value_replay", "rel_change",
+                               "order", "solve_time_s")}
         for r in rows]}
     out["load_average_end"] = os.getloadavg()
     return out
@@ -286,14 +315,15 @@ def bench_ocp_files(repeat: int) -> dict:
 #: the solver paths that ``ocp_paths`` compares on each shipped OCP file (``--set`` overrides)
 OCP_PATHS = {"homotopy": [], "perturbation always": ["ocp.perturbation=always"],
              "endgame 1e-3": ["ocp.endgame_sigma=1e-3"],
-             "endgame 1e-3, perturbation always": ["ocp.endgame_sigma=1e-3", "ocp.perturbation=always"]}
+             "endgame 1e-3, perturbation "
+             "always": ["ocp.endgame_sigma=1e-3", "ocp.perturbation=always"]}
 
 
 def bench_ocp_paths(repeat: int) -> dict:
     """robust_speed's and min_cot's files whole (``ocp-crawl optimize FILE --json``) on each path of
-    :data:`OCP_PATHS` where the file's schedule has the stage, alternating in one run, ``min(repeat, 2)``
-    rounds: wall time [s] (min, median), status, replayed objective, IPOPT iterations and seconds, and what
-    the endgame did."""
+    :data:`OCP_PATHS` where the file's schedule has the stage, alternating in one run,
+    ``min(repeat, 2)`` rounds: wall time [s] (min, median), status, replayed objective, IPOPT
+    iterations and seconds, and what the endgame did."""
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent / "problems"
@@ -308,16 +338,19 @@ def bench_ocp_paths(repeat: int) -> dict:
                                                      *[a for x in sets for a in ("--set", x)]]))
         out[name] = {path: {"wall_s": {"min": round(min(w for w, _ in r), 1),
                                        "median": round(statistics.median(w for w, _ in r), 1)},
-                            "status": r[0][1].get("status"), "value_replay": r[0][1].get("objective_value_replay"),
-                            "endgame": r[0][1].get("endgame"), **_ipopt_split(r[0][1].get("homotopy", []))}
+                            "status": r[0][1].get("status"),
+                            "value_replay": r[0][1].get("objective_value_replay"),
+                            "endgame": r[0][1].get("endgame"),
+                            **_ipopt_split(r[0][1].get("homotopy", []))}
                      for path, r in runs.items() if r}
     out["load_average_end"] = os.getloadavg()
     return out
 
 
 def _ipopt_split(stages: list) -> dict:
-    """IPOPT's share of a solve (the first run's ``homotopy`` records): iterations, seconds inside IPOPT calls and
-    milliseconds per iteration (the machine's speed on these KKT systems, apart from the iteration count)."""
+    """IPOPT's share of a solve (the first run's ``homotopy`` records): iterations, seconds inside
+    IPOPT calls and milliseconds per iteration (the machine's speed on these KKT systems, apart from
+    the iteration count)."""
     its = sum(int(h.get("iterations", 0)) for h in stages)
     secs = sum(float(h.get("time", 0.0)) for h in stages)
     return {"ipopt_iterations": its, "ipopt_s": round(secs, 2),
@@ -325,7 +358,8 @@ def _ipopt_split(stages: list) -> dict:
 
 
 def bench_paper(repeat: int) -> dict:
-    """Accuracy checks behind the notes: stiff limit vs prescribed angles, CoT+ vs the published curve."""
+    """Accuracy checks behind the notes: stiff limit vs prescribed angles, CoT+ vs the published
+    curve."""
     import csv
 
     import numpy as np
@@ -345,7 +379,8 @@ def bench_paper(repeat: int) -> dict:
     with open(paper_data_dir() / "fig_cot_vs_amplitude.csv") as fh:
         rows = list(csv.DictReader(fh))
     amps = np.array([float(r["A_deg"]) for r in rows])
-    for col, ratio in (("CoT_plus_large_k", 5.0), ("CoT_plus_realistic_k", 2.74), ("CoT_plus_low_k", 0.3)):
+    for col, ratio in (("CoT_plus_large_k", 5.0), ("CoT_plus_realistic_k", 2.74),
+                       ("CoT_plus_low_k", 0.3)):
         for target in (20.0, 50.0):
             j = int(np.argmin(np.abs(amps - target)))
             robot = Robot.paper().with_stiffness_ratio(ratio)
@@ -380,12 +415,13 @@ def bench_sweep(repeat: int) -> str:
 
 
 def bench_baselines(repeat: int) -> dict:
-    """The baselines: (1) a triangle wave's simulation (the paper robot, gamma 87.5, A 27.5, psi 9 deg) with
-    the input's linear pieces taken whole (the default for an input linear between its knots) against
-    steps of 1/1024 cycle (the cap its Fourier content would set), alternating in one run, ``repeat``
-    times each: min and median [ms], steps, and S of both;
-    (2) the search of max_speed's baselines (the shipped envelope and bandwidth) with the harmonic family alone
-    and with every family, ``min(repeat, 2)`` times each: min and median [s] and the members simulated."""
+    """The baselines: (1) a triangle wave's simulation (the paper robot, gamma 87.5, A 27.5, psi 9
+    deg) with the input's linear pieces taken whole (the default for an input linear between its
+    knots) against steps of 1/1024 cycle (the cap its Fourier content would set), alternating in one
+    run, ``repeat`` times each: min and median [ms], steps, and S of both;
+    (2) the search of max_speed's baselines (the shipped envelope and bandwidth) with the harmonic
+    family alone and with every family, ``min(repeat, 2)`` times each: min and median [s] and the
+    members simulated."""
     from ocp_crawl import Model, Robot
     from ocp_crawl.ocp.family import WaveParams
     from ocp_crawl.ocp.search import best_baselines
@@ -393,11 +429,13 @@ def bench_baselines(repeat: int) -> dict:
     from ocp_crawl.sim.event import HybridOptions, simulate_torque
 
     robot = Robot.paper()
-    model, torque = Model(robot), WaveParams(87.5, 87.5, 27.5, 27.5, 9.0, "triangle").torque(robot.k)
+    model, torque = Model(robot), WaveParams(87.5, 87.5, 27.5, 27.5, 9.0,
+                                             "triangle").torque(robot.k)
     out = {"load_average_start": os.getloadavg()}
     times, results = {"whole_pieces": [], "fine_steps": []}, {}
     for _ in range(repeat):
-        for name, opt in (("whole_pieces", HybridOptions()), ("fine_steps", HybridOptions(max_step=1 / 1024))):
+        for name, opt in (("whole_pieces", HybridOptions()),
+                          ("fine_steps", HybridOptions(max_step=1 / 1024))):
             t = time.perf_counter()
             results[name] = simulate_torque(model, torque, opt)
             times[name].append(time.perf_counter() - t)
@@ -430,10 +468,10 @@ WORK_CASES = (("paper_gait.toml", []), ("pulse_gait.toml", []),
 
 
 def bench_work(repeat: int) -> dict:
-    """The work estimates of ``ocp_crawl.problem.work`` against the runs they bound: for each request of
-    WORK_CASES, the estimate (an upper bound: every cycle up to max_cycles run), the typical one (three
-    cycles) and the measured wall time (min and median of ``repeat`` runs after a warm-up) and steps;
-    ratio = estimate / median."""
+    """The work estimates of ``ocp_crawl.problem.work`` against the runs they bound: for each
+    request of WORK_CASES, the estimate (an upper bound: every cycle up to max_cycles run), the
+    typical one (three cycles) and the measured wall time (min and median of ``repeat`` runs after a
+    warm-up) and steps; ratio = estimate / median."""
     from pathlib import Path
 
     import ocp_crawl
@@ -459,10 +497,11 @@ def bench_work(repeat: int) -> dict:
     return out
 
 
-BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy, "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
+BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy,
+              "prescribed": bench_prescribed, "paper": bench_paper, "mpcc": bench_mpcc,
               "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
-              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths, "baselines": bench_baselines,
-              "work": bench_work}
+              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths,
+              "baselines": bench_baselines, "work": bench_work}
 
 
 def main(argv=None) -> int:
@@ -470,7 +509,8 @@ def main(argv=None) -> int:
     ap.add_argument("which", nargs="*", metavar="NAME", default=[],
                     help=f"benchmarks to run: {', '.join(BENCHMARKS)} (default: all)")
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
-    ap.add_argument("--old", default=OLD_COMMIT, help="commit that `hybrid` compares against (default: %(default)s)")
+    ap.add_argument("--old", default=OLD_COMMIT,
+                    help="commit that `hybrid` compares against (default: %(default)s)")
     ap.add_argument("--hybrid-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.hybrid_worker:
@@ -483,7 +523,8 @@ def main(argv=None) -> int:
         ap.error(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}")
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
-        result = bench_hybrid(args.repeat, args.old) if name == "hybrid" else BENCHMARKS[name](args.repeat)
+        result = bench_hybrid(args.repeat,
+                              args.old) if name == "hybrid" else BENCHMARKS[name](args.repeat)
         print(f"{name}: {result}")
     return 0
 

@@ -87,8 +87,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=200, help="steps per cycle N")
     ap.add_argument("--gravity", choices=("physical", "paper"), default="physical")
-    ap.add_argument("--psi", type=float, default=45.0, help="phase difference [deg] of the harmonic gait")
-    ap.add_argument("--formulation", choices=("scholtes", "l1_penalty", "fischer_burmeister"), default="scholtes")
+    ap.add_argument("--psi", type=float, default=45.0,
+                    help="phase difference [deg] of the harmonic gait")
+    ap.add_argument("--formulation", choices=("scholtes", "l1_penalty", "fischer_burmeister"),
+                    default="scholtes")
     ap.add_argument("--repeat", type=int, default=5, help="timed full-cycle runs")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args(argv)

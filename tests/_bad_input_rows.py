@@ -254,7 +254,7 @@ COMMAND_ROWS = {
     "optimize: float for int nodes": R("optimize", ["{file}"], ["x.toml", "[ocp] nodes = 10.5", "integer"],
                                        text=ocp_edit("nodes = 50", "nodes = 10.5")),
     "optimize: unknown objective": R("optimize", ["{file}"], ["x.toml", '[ocp] objective = "fastest"', '"min_cot"'],
-                                     text=ocp_edit('objective = "max_speed"', 'objective = "fastest"')),
+                                     text=ocp_edit('objective = "max:speed"', 'objective = "fastest"')),
     "optimize: unknown [ocp] key": R("optimize", ["{file}"], ["x.toml", "[ocp] unknown key node = 100"],
                                      text=ocp_edit("nodes = 50", "node = 100")),
     "optimize: A_max_deg too large": R("optimize", ["{file}"], ["x.toml", "[ocp] A_max_deg = 95.0", "(0, 90)"],
@@ -485,7 +485,7 @@ COMMAND_ROWS.update({
     "simulate: --force without --out": R("simulate", ["{paper}", "--force"], ["--force without --out"]),
     "optimize: --force without --out": R("optimize", ["{ocp}", "--force"], ["--force without --out"]),
     "optimize: speed_min with max_speed (ignored)": R("optimize", ["{ocp}", "--set", "ocp.speed_min=0.1"],
-                                                      ["[ocp] speed_min = 0.1 (from --set)", 'objective = "max_speed"',
+                                                      ["[ocp] speed_min = 0.1 (from --set)", 'objective = "max:speed"',
                                                        'objective = "min_cot"']),
     "optimize: robust without a friction set": R("optimize", ["{file}"],
                                                    ["x.toml", '[ocp] robust = "worst"', "mu_ratio_eps > 0",
@@ -515,6 +515,28 @@ COMMAND_ROWS.update({
     "optimize: an unknown IPOPT option in [ocp.ipopt]": R(
         "optimize", ["{file}"], ["x.toml", "[ocp.ipopt]", "No such IPOPT option: max_itr"],
         text=OCP_TEXT + '\n[ocp.ipopt]\nmax_itr = 3\n'),
+    "optimize: an objective not in the vocabulary": R(
+        "optimize", ["{ocp}", "--set", 'ocp.objective="min:peak_torque"'],
+        ["[ocp] objective = \"min:peak_torque\" (from --set)", '"min:W_plus"', '"min:sum"']),
+    "optimize: [ocp.terms] with another objective": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] terms", 'objective = "max:speed"'],
+        text=OCP_TEXT + '\n[ocp.terms]\nW_plus = 1.0\n'),
+    "optimize: min:sum without [ocp.terms]": R(
+        "optimize", ["{ocp}", "--set", 'ocp.objective="min:sum"'],
+        ["[ocp]", "min:sum", "needs terms"]),
+    "optimize: the peak torque as a term": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] terms", "'peak_torque' cannot be a term",
+                                 "[[ocp.constraint]]"],
+        text=ocp_edit('objective = "max:speed"', 'objective = "min:sum"')
+        + '\n[ocp.terms]\npeak_torque = 1.0\n'),
+    "optimize: a negative weight of W+": R(
+        "optimize", ["{file}"], ["x.toml", "[ocp] terms", "weight of W_plus must be positive"],
+        text=ocp_edit('objective = "max:speed"', 'objective = "min:sum"')
+        + '\n[ocp.terms]\nW_plus = -1.0\n'),
+    "optimize: the worst of a vocabulary objective": R(
+        "optimize", ["{ocp}", "--set", 'ocp.objective="min:W_plus"', "--set", "ocp.mu_ratio_eps=0.05",
+                     "--set", 'ocp.robust="worst"'],
+        ["[ocp] robust", "min:W_plus", "max:speed and min:CoT_plus"]),
     "optimize: [ocp.ipopt] not a table": R(
         "optimize", ["{ocp}", "--set", "ocp.ipopt=3"], ["[ocp] ipopt = 3 (from --set)", "a table"]),
     "optimize: --start without a period": R("optimize", ["{ocp}", "--start", "{paper}"],

@@ -77,11 +77,12 @@ def _here(task, meanwhile, forward):
 
 
 def _fake_solvers(monkeypatch, fresh, warm, fork=False) -> None:
-    """Replace the cold solve (optimize_gait), the warm one (solve_from) and the transcription by fakes (and, unless
-    ``fork``, run every warm solve in this process)."""
+    """Replace the cold solve (optimize_gait), the warm one (solve_from), the transcription and its solver by fakes
+    (and, unless ``fork``, run every warm solve in this process)."""
     monkeypatch.setattr(convergence, "optimize_gait", fresh)
     monkeypatch.setattr(convergence, "solve_from", warm)
     monkeypatch.setattr(convergence, "GaitOCP", _FakeOCP)
+    monkeypatch.setattr(convergence, "GaitSolver", lambda ocp: ocp)  # the fake transcription solves itself
     if not fork:
         monkeypatch.setattr(convergence, "overlap", _here)
 
@@ -291,7 +292,7 @@ def _fake_table(settings, nodes):
         rows.append(convergence.ConvergenceRow(n, Status.SUCCESS, "fake", 0.5236, res.value_ocp, res.value_replay,
                                                1e-3, solve_time_s=1.5, result=res))
     convergence._changes(rows, settings.objective)
-    return convergence.ConvergenceTable(settings.objective, rows)
+    return convergence.ConvergenceTable(settings.objective, rows, settings.objective_unit)
 
 
 def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
@@ -338,6 +339,7 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
     monkeypatch.setattr(convergence, "optimize_gait", fresh)
     monkeypatch.setattr(convergence, "solve_from", warm)
     monkeypatch.setattr(convergence, "GaitOCP", lambda robot, gravity, settings: SimpleNamespace(settings=settings))
+    monkeypatch.setattr(convergence, "GaitSolver", lambda ocp: ocp)
     table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200])
     assert seen == [("fresh", 50), ("fresh", 100), ("warm", 200)]
     assert not table.success and table.rows[0].status == Status.REPLAY_FAILED

@@ -12,6 +12,7 @@ from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.solve import solve_from
+from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 
 
@@ -49,7 +50,7 @@ def settings(**changes) -> OCPSettings:
 def solve(st: OCPSettings):
     robot = Robot.paper()
     signal = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 30.0), robot.k)
-    return solve_from(GaitOCP(robot, "physical", st), [Model(robot)], signal,
+    return solve_from(GaitSolver(GaitOCP(robot, "physical", st)), [Model(robot)], signal,
                       st.min_period(30.0, 30.0))
 
 

@@ -12,6 +12,7 @@ from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.nlp.homotopy import Homotopy, Solve, Start, schedule
 from ocp_crawl.nlp.ipopt import OCP_IPOPT, OCP_WARM_IPOPT, call_ipopt, ipopt_solvers
 from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 
 #: min (x - 1)^2 + (y - 1/2)^2 subject to x y <= sigma, x, y >= 0: for small sigma the solution is
@@ -101,7 +102,7 @@ def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
     for tol in (OCPSettings().stage_tol, 1e-10):
         st = OCPSettings(objective="max_speed", nodes=20, starts=1, stage_tol=tol)
         ocp = GaitOCP(robot, "physical", st)
-        x, hist, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
         assert failed is None
         out[tol] = (ocp.unpack(x)["scen"][0]["v"], hist[0].iterations)
     (v_loose, it_loose), (v_tight, it_tight) = out.values()
@@ -133,23 +134,23 @@ def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
     sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
     st = OCPSettings(objective="max_speed", nodes=20, starts=1)
     ocp = GaitOCP(robot, "physical", st)
-    x, _, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+    x, _, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
     assert failed is None
     best = ocp.unpack(x)
     near = replay_signal(np.arange(20) / 20, best["tau"])
     loose = GaitOCP(robot, "physical", OCPSettings(objective="max_speed", nodes=20, starts=1, loose_last=True,
                                                    stage_tol=st.sigma_min))
-    x, hist, failed, _ = loose.solve(loose.initial_guess(near, best["T"]))
+    x, hist, failed, _ = GaitSolver(loose).solve(loose.initial_guess(near, best["T"]))
     kinds = [h.kind for h in hist]
     assert failed is None and kinds[:3] == ["homotopy", "homotopy", "polish"] and "homotopy" not in kinds[3:]
     assert hist[-1].accepted
     # the same local optimum (others differ by percents); 1e-5: the polishes end at IPOPT's acceptable level
     assert loose.unpack(x)["scen"][0]["v"] == pytest.approx(best["scen"][0]["v"], rel=1e-5)
     calls = []
-    candidates = GaitOCP._polish_candidates
-    monkeypatch.setattr(GaitOCP, "_polish_candidates",
+    candidates = GaitSolver._polish_candidates
+    monkeypatch.setattr(GaitSolver, "_polish_candidates",
                         lambda self, x: [] if not calls.append(1) and len(calls) == 1 else candidates(self, x))
-    x, hist, failed, _ = loose.solve(loose.initial_guess(near, best["T"]))
+    x, hist, failed, _ = GaitSolver(loose).solve(loose.initial_guess(near, best["T"]))
     kinds = [h.kind for h in hist]
     assert failed is None and kinds[:4] == ["homotopy", "homotopy", "homotopy", "polish"]
     assert hist[2].sigma == st.sigma_min and hist[-1].accepted and "homotopy" not in kinds[4:]
@@ -182,7 +183,7 @@ def test_deep_homotopy_ends_complementary_without_a_polish():
         extra = dict(sigma0=1e-3, sigma_factor=0.1, sigma_min=1e-11, stage_tol_ratio=0.1) if deep else {}
         st = OCPSettings(objective="max_speed", nodes=20, starts=1, **extra)
         ocp = GaitOCP(robot, "physical", st)
-        x, hist, failed, _ = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
         assert failed is None and hist[-1].accepted
         assert (hist[-1].kind == "homotopy") == deep and (hist[-1].sigma == 1e-11) == deep
         sc = ocp.unpack(x)["scen"][0]

@@ -11,7 +11,7 @@ import pytest
 from ocp_crawl import CallableSignal, Model, Robot, Status
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.nlp.ipopt import FAILURE_KINDS, IPOPT_RETURN_STATUS, SolverOutcome, call_ipopt, ipopt_status
-from ocp_crawl.ocp import GaitOCP, OCPSettings, optimize_gait
+from ocp_crawl.ocp import GaitOCP, GaitSolver, OCPSettings, optimize_gait
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import RESULT_FIELDS, StepState
 from ocp_crawl.sim.oracle import solve_step_enumerate
@@ -203,9 +203,9 @@ def test_bad_ipopt_options_are_one_line_errors(paper_robot, ipopt, exc, match):
     with pytest.raises(exc, match=match) as info:
         MPCCStep(Model(paper_robot), MPCCOptions(ipopt=ipopt))
     assert "\n" not in str(info.value)
-    # the OCP's options: the same checks (in OCPSettings, or when the NLP is built)
+    # the OCP's options: the same checks (in OCPSettings, or when its solver is built)
     with pytest.raises(exc, match=match.replace("MPCCOptions", "OCPSettings")) as info:
-        GaitOCP(Robot.paper(), "physical", OCPSettings(nodes=8, ipopt=ipopt))
+        GaitSolver(GaitOCP(Robot.paper(), "physical", OCPSettings(nodes=8, ipopt=ipopt)))
     assert "\n" not in str(info.value)
 
 

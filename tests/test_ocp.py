@@ -183,6 +183,7 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
     from ocp_crawl.model.statics import Model
     from ocp_crawl.ocp.judge import replay_signal
     from ocp_crawl.ocp.solve import solve_from
+    from ocp_crawl.ocp.solver import GaitSolver
     from ocp_crawl.ocp.transcription import GaitOCP
 
     robot = Robot.paper()
@@ -191,7 +192,7 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
     coarse = optimize_gait(robot, "physical", settings)
     assert coarse.success, coarse.message
     fine = replace(settings, nodes=32)
-    res = solve_from(GaitOCP(robot, "physical", fine), [Model(robot)], replay_signal(coarse.phase, coarse.tau),
+    res = solve_from(GaitSolver(GaitOCP(robot, "physical", fine)), [Model(robot)], replay_signal(coarse.phase, coarse.tau),
                      coarse.T_ocp, coarse.harmonic, tightened=True)
     assert res.success, res.message
     assert res.homotopy and {h.kind for h in res.homotopy} == {"polish"}

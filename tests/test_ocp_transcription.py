@@ -11,6 +11,7 @@ from ocp_crawl.model.inputs import CallableSignal, Harmonic, PeriodicLinear, Ref
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 from ocp_crawl.ocp.substeps import TIE_END, TIE_SLOPE, onset_products, onset_residual, tie_rows
+from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.problem import load_problem
 from ocp_crawl.sim.event import simulate_torque
@@ -86,7 +87,7 @@ def _best_speed(ocp: GaitOCP, starts) -> tuple[float, dict]:
     """The best mean speed [m/s] of the solves from ``starts`` (signal, period) and its unpacked solution."""
     best = (-np.inf, None)
     for signal, period in starts:
-        x, _, failed, _ = ocp.solve(ocp.initial_guess(signal, period))
+        x, _, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(signal, period))
         if failed is None and ocp.unpack(x)["scen"][0]["v"] > best[0]:
             best = (ocp.unpack(x)["scen"][0]["v"], ocp.unpack(x))
     return best
@@ -127,10 +128,11 @@ def fixed_profile_solve(N: int):
     sig = ReferenceTorque(prob.gait, prob.robot.k)
     st = OCPSettings(nodes=N, sigma0=(1e-6,), sigma_min=1e-8)
     ocp = GaitOCP(prob.robot, "physical", st)
-    x, _, failed, status = ocp.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0), switches=False),
-                                     fix_profile=True)
+    solver = GaitSolver(ocp)
+    x, _, failed, status = solver.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0), switches=False),
+                                        fix_profile=True)
     assert failed is None, status
-    sc = ocp.unpack(x)["scen"][0]
+    sc = solver.unpack(x)["scen"][0]
     assert sc["comp"] <= st.comp_tol
     ref = simulate_torque(Model(prob.robot), PeriodicLinear(np.arange(N) / N, ocp.unpack(x)["tau"]))
     switches = [(e.t - ref.t0) * N for e in ref.steady_events() if e.kind == "slip_switch"]
@@ -236,9 +238,10 @@ def test_polish_candidates_are_distinct():
     for (robot, fixed), count in expected.items():
         ocp = GaitOCP(robot, "physical", OCPSettings(objective="max_speed", nodes=20, starts=1))
         x = ocp.initial_guess(paper_torque(), 1.0)
+        solver = GaitSolver(ocp)
         if fixed:
-            ocp._fixed, ocp._fixed_x = np.zeros(ocp.nx, bool), x
-        cands = ocp._polish_candidates(x)
+            solver._fixed, solver._fixed_x = np.zeros(ocp.nx, bool), x
+        cands = solver._polish_candidates(x)
         assert len(cands) == count, (robot.mu1, fixed)
         if count == 2:
             assert not np.array_equal(cands[0]["ubx"], cands[1]["ubx"])
@@ -271,9 +274,10 @@ def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure
         status = "Solve_Succeeded" if ok else next(names)
         return Solve(x, np.zeros(ocp.nx), np.zeros(ocp.ng), status, ok, 5, comp=comp)
 
-    ocp._call = call
-    ocp._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0, tag=tag) for tag in ("ties", "alone")]
-    x, records, why, status = ocp.solve_tightened(x0)
+    solver = GaitSolver(ocp)
+    solver._call = call
+    solver._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0, tag=tag) for tag in ("ties", "alone")]
+    x, records, why, status = solver.solve_tightened(x0)
     assert order == ["alone", "ties"][:calls]  # the branches alone first
     assert [r.kind for r in records] == ["polish"] * calls
     if kept is None:

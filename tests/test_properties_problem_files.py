@@ -27,7 +27,7 @@ from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
 from ocp_crawl.problem.problem import MAX_STIFFNESS_RATIO
-from ocp_crawl.problem.schema import Tables
+from ocp_crawl.problem.keys import Tables
 
 from _properties_common import (BAD_NUMBERS, CHEAP, SIMS, amplitudes, check_outcome, gammas,
                                 run_prescribed)

@@ -179,6 +179,7 @@ def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_i
     import dataclasses
 
     from ocp_crawl.ocp import solve
+    from ocp_crawl.ocp.solver import GaitSolver
     from ocp_crawl.ocp.transcription import GaitOCP
 
     st = OCPSettings(nodes=N, starts=1)
@@ -187,10 +188,11 @@ def test_the_transcription_on_a_fixed_profile_is_confirmed_and_a_forged_result_i
     start = PeriodicLinear(tt, ReferenceTorque(gait, ROBOT.k)(tt + 0.125))
     T = st.min_period(30.0, 30.0)
     ocp = GaitOCP(ROBOT, "physical", st)
-    x, hist, failed, status = ocp.solve(ocp.initial_guess(start, T), fix_profile=True)
+    solver = GaitSolver(ocp)
+    x, hist, failed, status = solver.solve(ocp.initial_guess(start, T), fix_profile=True)
     res = solve.OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=st.objective,
                           settings=st)
-    assert solve._accept(res, ocp, x, failed, status), res.message
+    assert solve._accept(res, solver, x, failed, status), res.message
     assert res.T_ocp == pytest.approx(T, rel=1e-12)
     honest = dataclasses.replace(res)
     solve._judge(honest, [MODEL])

@@ -1,6 +1,8 @@
-"""Command line ``ocp-crawl``: argument parsing and printing only; every command calls a library function.
+"""Command line ``ocp-crawl``: argument parsing and printing only; every command calls a library
+function.
 
-The command modules register their commands in :data:`~ocp_crawl.cli.app.COMMANDS` when imported here.
+The command modules register their commands in :data:`~ocp_crawl.cli.app.COMMANDS` when imported
+here.
 """
 # the command modules register their commands when imported
 from ocp_crawl.cli import (fit_commands, init_command, optimize_command, run_commands,  # noqa: F401

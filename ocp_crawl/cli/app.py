@@ -41,7 +41,8 @@ EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
 
 class BadInput(Exception):
-    """Bad input that is not a ProblemError: arguments, output directories, a robot that cannot stand.
+    """Bad input that is not a ProblemError: arguments, output directories, a robot that cannot
+    stand.
 
     The message is one line naming the option or file, and the value given.  Only ProblemError and
     BadInput give exit code 2; every other exception escaping a command is an internal error.
@@ -94,8 +95,11 @@ def err(message: str) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog=PROG, description="Hybrid-quasistatic simulation of a soft three-link inchworm crawler.",
-                     epilog="exit codes: 0 success, 1 numerical failure (or an internal error), 2 bad input")
+    parser = _Parser(prog=PROG,
+                     description="Hybrid-quasistatic simulation of a soft three-link inchworm "
+                                 "crawler.",
+                     epilog="exit codes: 0 success, 1 numerical failure (or an internal error), 2 "
+                            "bad input")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for cmd in COMMANDS.values():
@@ -105,15 +109,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _run(args: argparse.Namespace) -> int:
-    """Run the parsed command with numpy's floating-point warnings silenced: a result carries its status, and
-    stderr holds one line at most (an overflow warning before an error message would break that)."""
+    """Run the parsed command with numpy's floating-point warnings silenced: a result carries its
+    status, and stderr holds one line at most (an overflow warning before an error message would
+    break that)."""
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return COMMANDS[args.command].run(args)
 
 
 def io_message(exc: OSError) -> str:
-    """An I/O failure in one line naming the file: ``PATH: reason`` (``cannot write PATH: No space left on device``)."""
+    """An I/O failure in one line naming the file: ``PATH: reason``
+    (``cannot write PATH: No space left on device``)."""
     reason = exc.strerror or " ".join(str(exc).split()) or type(exc).__name__
     if exc.filename is None:
         return reason
@@ -147,14 +153,15 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         # not bad input (that is ProblemError or BadInput, raised on purpose): a bug or a failing
         # environment, reported in one line; exit 1 so that a script never mistakes it for bad input
-        if os.environ.get("OCP_CRAWL_TRACEBACK", "").strip().lower() not in ("", "0", "false", "no", "off"):
+        if os.environ.get("OCP_CRAWL_TRACEBACK", "").strip().lower() not in ("", "0", "false", "no",
+                                                                             "off"):
             raise
         text = " ".join(str(exc).split())
         if isinstance(exc, OSError):
             print(f"{PROG}: I/O error: {io_message(exc)}", file=sys.stderr)
         else:
-            print(f"{PROG}: internal error: {type(exc).__name__}: {text} (set OCP_CRAWL_TRACEBACK=1 for the "
-                  "traceback)", file=sys.stderr)
+            print(f"{PROG}: internal error: {type(exc).__name__}: {text} (set "
+                  "OCP_CRAWL_TRACEBACK=1 for the traceback)", file=sys.stderr)
         return EXIT_FAILURE
 
 

@@ -22,7 +22,8 @@ def _shown(text: str) -> str:
 
 
 def integer(option: str, low: int, what: str = "", high: int | None = None, why: str = ""):
-    """argparse type of ``option``: an integer >= low (and <= high, ``why`` giving the reason of the bound).
+    """argparse type of ``option``: an integer >= low (and <= high, ``why`` giving the reason of the
+    bound).
 
     A bad value ends parsing with a one-line usage error naming the option and the value as written
     (raised directly: argparse would reword an ArgumentTypeError as "argument OPTION: ...").
@@ -36,48 +37,52 @@ def integer(option: str, low: int, what: str = "", high: int | None = None, why:
             n = None
         if n is None or n < low or (high is not None and n > high):
             reason = f": {why}" if why and n is not None and high is not None and n > high else ""
-            raise UsageError(f"{option} {_shown(text)} is invalid: must be an integer {valid}{what}{reason}")
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be an integer "
+                             f"{valid}{what}{reason}")
         return n
     return parse
 
 
 def out_dir(text: str) -> str:
-    """argparse type of ``--out DIR``: a non-empty path (an empty one would write nothing, or into the current
-    directory, silently)."""
+    """argparse type of ``--out DIR``: a non-empty path (an empty one would write nothing, or into
+    the current directory, silently)."""
     if not text.strip():
         raise UsageError(f"--out {_shown(text)} is invalid: an empty path; give a directory")
     return text
 
 
 def out_file(suffix: str):
-    """argparse type of ``--out FILE``: a non-empty path to a file, not ending in a path separator (``x.gif/`` names
-    a directory, which the command would otherwise silently drop)."""
+    """argparse type of ``--out FILE``: a non-empty path to a file, not ending in a path separator
+    (``x.gif/`` names a directory, which the command would otherwise silently drop)."""
     def parse(text: str) -> str:
         if not text.strip():
-            raise UsageError(f"--out {_shown(text)} is invalid: an empty path; give a file name ending in {suffix}")
+            raise UsageError(f"--out {_shown(text)} is invalid: an empty path; give a file name "
+                             f"ending in {suffix}")
         if text.endswith(("/", os.sep)) or (os.altsep and text.endswith(os.altsep)):
-            raise UsageError(f"--out {text} is invalid: it ends with {text[-1]!r}, which names a directory; give a "
-                             f"file name ending in {suffix}")
+            raise UsageError(f"--out {text} is invalid: it ends with {text[-1]!r}, which names a "
+                             f"directory; give a file name ending in {suffix}")
         return text
     return parse
 
 
 def real(option: str, low: float, high: float, what: str = "", closed: bool = False):
-    """argparse type of ``option``: a finite number in (low, high], or [low, high] when ``closed``."""
+    """argparse type of ``option``: a finite number in (low, high], or [low, high] when
+    ``closed``."""
     def parse(text: str) -> float:
         try:
             x = parse_number(text)
         except ValueError:
             x = math.nan
         if not (math.isfinite(x) and (low <= x if closed else low < x) and x <= high):
-            raise UsageError(f"{option} {_shown(text)} is invalid: must be a number in {'[' if closed else '('}"
-                             f"{low:g}, {high:g}]{what}")
+            raise UsageError(f"{option} {_shown(text)} is invalid: must be a number in "
+                             f"{'[' if closed else '('}{low:g}, {high:g}]{what}")
         return x
     return parse
 
 
 def address(text: str) -> str:
-    """argparse type of --scheduler: a non-empty Dask scheduler address of a known scheme, or 'local'."""
+    """argparse type of --scheduler: a non-empty Dask scheduler address of a known scheme, or
+    'local'."""
     usage = "a Dask scheduler address (e.g. tcp://host:8786) or 'local'"
     if not text.strip():
         raise UsageError(f"--scheduler {_shown(text)} is invalid: {usage}")
@@ -104,12 +109,12 @@ jobs_type = integer("--jobs", 1, " (worker processes)", high=MAX_JOBS,
 
 
 def optional_out(args: argparse.Namespace, names: Iterable[str]) -> Path | None:
-    """:func:`prepare_out` of a command whose ``--out`` is optional: None without ``--out`` (nothing is
-    written), where ``--force`` has nothing to overwrite and is refused."""
+    """:func:`prepare_out` of a command whose ``--out`` is optional: None without ``--out`` (nothing
+    is written), where ``--force`` has nothing to overwrite and is refused."""
     if args.out is None:
         if args.force:
-            raise BadInput("--force without --out: nothing is written, so nothing would be overwritten; give "
-                           "--out DIR or drop --force")
+            raise BadInput("--force without --out: nothing is written, so nothing would be "
+                           "overwritten; give --out DIR or drop --force")
         return None
     return prepare_out(args.out, names, args.force, staged=True)
 
@@ -135,8 +140,8 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
         if existing:
             shown = ", ".join(existing[:3]) + (", ..." if len(existing) > 3 else "")
             what = f"; it already holds {kind}: continue it with --resume," if kind else ";"
-            raise BadInput(f"{label}: would overwrite earlier results ({shown}){what} pass --force to overwrite "
-                           "or choose another directory")
+            raise BadInput(f"{label}: would overwrite earlier results ({shown}){what} pass --force "
+                           "to overwrite or choose another directory")
     where = label if label == f"--out {out}" else f"{label}: {out}"
     made = not _exists(out)
     try:
@@ -146,7 +151,8 @@ def prepare_out(path: str | os.PathLike, names: Iterable[str], force: bool, *, r
     except FileExistsError:
         raise BadInput(f"{where}: exists and is not a directory") from None
     except OSError as exc:
-        raise BadInput(f"{where}: output directory is not writable: {exc.strerror or exc}") from None
+        raise BadInput(f"{where}: output directory is not writable: "
+                       f"{exc.strerror or exc}") from None
     _check_targets(out, names, label)
     if staged and made:
         out.rmdir()   # write_out makes it, complete, at the end (in a parent shown writable)
@@ -162,19 +168,19 @@ def write_out(out: Path, write, force: bool) -> list[Path]:
 
 
 def _check_targets(out: Path, names: Iterable[str], label: str) -> None:
-    """BadInput for an output file the directory cannot take: a name longer than the file system allows, or a
-    file name (one with a suffix: results.csv, crawl.gif) that is a directory there."""
+    """BadInput for an output file the directory cannot take: a name longer than the file system
+    allows, or a file name (one with a suffix: results.csv, crawl.gif) that is a directory there."""
     try:
         longest = os.pathconf(out, "PC_NAME_MAX")
     except (AttributeError, OSError, ValueError):
         longest = 255
     for name in names:
         if len(os.fsencode(name)) > longest:
-            raise BadInput(f"{label}: the file name {name[:40]}... is longer than the {longest} bytes a name may "
-                           "have here")
+            raise BadInput(f"{label}: the file name {name[:40]}... is longer than the {longest} "
+                           "bytes a name may have here")
         if Path(name).suffix and (out / name).is_dir():
-            raise BadInput(f"{label}: {out / name} is a directory, where the command writes a file: remove it or "
-                           "choose another directory")
+            raise BadInput(f"{label}: {out / name} is a directory, where the command writes a "
+                           "file: remove it or choose another directory")
 
 
 def _exists(path: Path) -> bool:
@@ -187,11 +193,13 @@ def _exists(path: Path) -> bool:
 def check_scheduler(address: str | None) -> None:
     """``--scheduler ADDRESS`` needs dask.distributed installed: BadInput otherwise."""
     if address is not None and importlib.util.find_spec("distributed") is None:
-        raise BadInput(f"--scheduler {address}: needs dask.distributed: pip install 'ocp-crawl[cluster]'")
+        raise BadInput(f"--scheduler {address}: needs dask.distributed: pip install "
+                       "'ocp-crawl[cluster]'")
 
 
 def finish(args: argparse.Namespace, files, success: bool, failure: str) -> int:
-    """List the written files (unless --json) and turn success into the exit code, with the failure on stderr."""
+    """List the written files (unless --json) and turn success into the exit code, with the failure
+    on stderr."""
     if files and not args.json:
         print("wrote      " + ", ".join(str(f) for f in files))
     if not success:
@@ -200,10 +208,12 @@ def finish(args: argparse.Namespace, files, success: bool, failure: str) -> int:
     return EXIT_OK
 
 
-def force_arg(p: argparse.ArgumentParser, what: str = "the results of an earlier run in DIR") -> None:
+def force_arg(p: argparse.ArgumentParser,
+              what: str = "the results of an earlier run in DIR") -> None:
     """Add ``--force`` (overwrite ``what``) to the parser ``p``."""
     p.add_argument("--force", action="store_true",
-                   help=f"overwrite {what} (without it the command refuses, before computing anything)")
+                   help=f"overwrite {what} (without it the command refuses, before computing "
+                        "anything)")
 
 
 
@@ -220,7 +230,8 @@ def work_arg(p: argparse.ArgumentParser) -> None:
 
 def check_work(args: argparse.Namespace, work):
     """Refuse ``work`` (a :class:`~ocp_crawl.problem.work.Work`) above ``--max-hours`` as bad input
-    naming the settings that size it; ``work`` otherwise (:func:`announce` it when the run starts)."""
+    naming the settings that size it; ``work`` otherwise (:func:`announce` it when the run
+    starts)."""
     from ocp_crawl.problem.work import WorkLimit
 
     try:

@@ -5,8 +5,8 @@ import argparse
 import json
 
 from ocp_crawl.cli.app import BadInput, register
-from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, out_dir, prepare_out, real,
-                                  work_arg, write_out)
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, out_dir, prepare_out,
+                                  real, work_arg, write_out)
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.problem import load_problem
 from ocp_crawl.problem.work import dynamics_work

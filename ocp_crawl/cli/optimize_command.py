@@ -16,7 +16,7 @@ from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.dynamic_margin import margin_text
-from ocp_crawl.ocp.settings import NODES_BOUNDS
+from ocp_crawl.ocp.limits import NODES_BOUNDS
 from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
                                problem_from_dict)
 from ocp_crawl.problem.overrides import read_toml
@@ -94,12 +94,13 @@ def _scenario(row: dict) -> str:
     return f"mu1/mu2 = {ratio}" + (f", level {level}" if level else "")
 
 
-def _value(objective: str, v, digits: int = 3) -> str:
-    """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] to ``digits + 1``
-    significant digits."""
+def _value(objective: str, v, digits: int = 3, unit: str = "-") -> str:
+    """An objective value with its unit: a speed [m/s] in mm/s, or CoT+ [-] (or another
+    objective in its ``unit``) to ``digits + 1`` significant digits."""
     if objective in ("max_speed", "robust_speed"):
         return units.speed(v, digits)
-    return units.significant(v, digits + 1)
+    text = units.significant(v, digits + 1)
+    return text if unit == "-" or text == units.MISSING else f"{text} {unit}"
 
 
 def _gain(s: dict) -> str:
@@ -140,7 +141,8 @@ def _baseline_lines(s: dict) -> list[str]:
                     f"none feasible (nearest: {_member(row)})")
         else:
             gain = units.ratio(gains.get(row["shape"]))
-            text = f"{_value(obj, row['value'])}, gain {gain}: {_member(row)}"
+            value = _value(obj, row['value'], unit=s.get("objective_unit", "-"))
+            text = f"{value}, gain {gain}: {_member(row)}"
         out.append(f"  {row['shape']:<9} {text}")
     return out
 
@@ -173,7 +175,9 @@ def _starts_text(s: dict) -> str | None:
     starts, converged, obj = s.get("starts") or [], s.get("starts_converged") or 0, s["objective"]
     if len(starts) < 2:
         return None
-    low, high = (_value(obj, s.get(f"objective_value_replay_{e}")) for e in ("min", "max"))
+    unit = s.get("objective_unit", "-")
+    low, high = (_value(obj, s.get(f"objective_value_replay_{e}"), unit=unit)
+                 for e in ("min", "max"))
     spread = f"replayed objective {low}" + ("" if low == high else f" to {high}")
     return f"{len(starts)} starts, " + (f"{converged} converged, {spread}" if converged else
                                         "none converged")
@@ -183,7 +187,7 @@ def format_optimize(s: dict) -> str:
     """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in
     mm, speeds in mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not
     computed (e.g. a failed replay)."""
-    obj = s["objective"]
+    obj, unit = s["objective"], s.get("objective_unit", "-")
     spread = _starts_text(s)
     lines = [
         f"status      {s['status']}: {s['message']}",
@@ -193,8 +197,8 @@ def format_optimize(s: dict) -> str:
         f"speed       {_ocp_replay(s, 'v', units.speed)}",
         f"W+          {_ocp_replay(s, 'W_plus', units.work)}",
         f"CoT+        {_ocp_replay(s, 'CoT_plus', units.cot)}",
-        f"value       OCP {_value(obj, s['objective_value_ocp'])}, "
-        f"replay {_value(obj, s['objective_value_replay'])} "
+        f"value       OCP {_value(obj, s['objective_value_ocp'], unit=unit)}, "
+        f"replay {_value(obj, s['objective_value_replay'], unit=unit)} "
         f"(relative difference {units.ratio(s['rel_diff_replay'])})",
         f"baselines   best member of each waveform family at its shortest period; gain of the "
         f"optimum by replay {_gain(s)}",
@@ -222,7 +226,7 @@ def format_convergence(table: dict) -> str:
     the period, the OCP's and the replay's objective (speeds in mm/s, CoT+ to 6 significant digits),
     their relative difference, the change of the replayed objective from the previous N and the
     observed order p."""
-    obj = table["objective"]
+    obj, unit = table["objective"], table.get("unit", "-")
     head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  "
             f"{'change':>14}  {'change':>10}  {'p':>6}  {'time':>7}")
     lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: "
@@ -230,11 +234,12 @@ def format_convergence(table: dict) -> str:
              f"relative; p: observed order)", head]
     for r in table["rows"]:
         lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  "
-                     f"{_value(obj, r['value_ocp'], 5):>14}  "
-                     f"{_value(obj, r['value_replay'], 5):>14}  "
+                     f"{_value(obj, r['value_ocp'], 5, unit):>14}  "
+                     f"{_value(obj, r['value_replay'], 5, unit):>14}  "
                      f"{units.ratio(r['rel_diff_replay']):>11}  "
-                     f"{_value(obj, r['change'], 5):>14}  {units.ratio(r['rel_change']):>10}  "
-                     f"{units.fixed(r['order'], 2):>6}  {units.seconds(r['solve_time_s']):>7}")
+                     f"{_value(obj, r['change'], 5, unit):>14}  "
+                     f"{units.ratio(r['rel_change']):>10}  {units.fixed(r['order'], 2):>6}  "
+                     f"{units.seconds(r['solve_time_s']):>7}")
     return "\n".join(lines)
 
 

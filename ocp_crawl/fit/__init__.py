@@ -1,4 +1,5 @@
-"""Calibration from measurements: fit problem keys and the pressure actuator's constants to measured data.
+"""Calibration from measurements: fit problem keys and the pressure actuator's constants to measured
+data.
 
 ``read_measurements`` (files of the CSV convention), ``resolve_parameters`` (what to fit, bounds),
 ``fit_measurements`` (weighted least squares on simulations, uncertainties, identifiability),
@@ -11,11 +12,13 @@ _EXPORTS = {
     "Measurements": "ocp_crawl.fit.data", "read_measurements": "ocp_crawl.fit.data",
     "Parameter": "ocp_crawl.fit.params", "fittable_names": "ocp_crawl.fit.params",
     "resolve_parameters": "ocp_crawl.fit.params",
-    "Direction": "ocp_crawl.fit.solve", "FileFit": "ocp_crawl.fit.solve", "FitResult": "ocp_crawl.fit.solve",
+    "Direction": "ocp_crawl.fit.solve", "FileFit": "ocp_crawl.fit.solve",
+    "FitResult": "ocp_crawl.fit.solve",
     "fit_measurements": "ocp_crawl.fit.solve", "uncertainty": "ocp_crawl.fit.solve",
     "fit_report": "ocp_crawl.fit.report", "write_fit": "ocp_crawl.fit.report",
 }
 
-__all__ = ["Direction", "FileFit", "FitResult", "Measurements", "Parameter", "fit_measurements", "fit_report",
+__all__ = ["Direction", "FileFit", "FitResult", "Measurements", "Parameter", "fit_measurements",
+           "fit_report",
            "fittable_names", "read_measurements", "resolve_parameters", "uncertainty", "write_fit"]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -20,8 +20,8 @@ kind          columns                             model of a row
               ``segment`` [-] (1 or 2)
 ============  ==================================  ==========================================================
 
-Every value must be finite and at most 1e12 in magnitude once converted to SI (:data:`MAX_SI`); every
-uncertainty at least 1e-12 x max(the largest |value| of the observable column, 1 in SI units)
+Every value must be finite and at most 1e12 in magnitude once converted to SI (:data:`MAX_SI`);
+every uncertainty at least 1e-12 x max(the largest |value| of the observable column, 1 in SI units)
 (:data:`SIGMA_FLOOR`): smaller ones make the weighted residuals and their Jacobian overflow.
 
 ``S_norm`` is S divided by S at the file's reference row, the row of the largest ``S_norm``
@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Mapping, cast
 
 import numpy as np
 
@@ -43,14 +43,16 @@ from ocp_crawl.problem.schema import SCHEMA
 #: observable column -> its dimension (each file holds exactly one, with ``sigma_<name>``)
 OBSERVABLES = {"S": "length", "S_norm": "dimensionless", "phi": "angle"}
 #: operating-point columns -> dimension
-INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "A_p": "pressure", "tau": "torque",
-          "p": "pressure", "segment": "dimensionless"}
+INPUTS = {"psi": "angle", "A": "angle", "gamma": "angle", "p0": "pressure", "A_p": "pressure",
+          "tau": "torque", "p": "pressure", "segment": "dimensionless"}
 #: gait columns -> the problem key they set (degrees, as in problem files)
 GAIT_KEYS = {"psi": "gait.psi_deg", "A": "gait.A_deg", "gamma": "gait.gamma_deg"}
 #: every column a measurement file may hold -> dimension
-COLUMNS: Mapping[str, str] = {**OBSERVABLES, **{"sigma_" + k: v for k, v in OBSERVABLES.items()}, **INPUTS}
-#: kind -> operating-point columns whose values must pass the rule of a problem key (the schema's ranges): a gait
-#: row's keys, and a pressure row's phase difference, which has the range of the gait's
+COLUMNS: Mapping[str, str] = {**OBSERVABLES, **{"sigma_" + k: v for k, v in OBSERVABLES.items()},
+                              **INPUTS}
+#: kind -> operating-point columns whose values must pass the rule of a problem key (the schema's
+#: ranges): a gait row's keys, and a pressure row's phase difference, which has the range of the
+#: gait's
 RULE_KEYS = {"gait": GAIT_KEYS, "pressure": {"psi": GAIT_KEYS["psi"]}}
 #: kind -> (observables allowed, inputs required, inputs allowed)
 KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
@@ -61,11 +63,12 @@ KINDS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = {
 }
 #: units in which observables are reported and plotted (name -> (unit, factor from SI))
 DISPLAY = {"S": ("mm", 1e3), "S_norm": ("-", 1.0), "phi": ("deg", 180.0 / np.pi)}
-#: largest magnitude of any value of a measurement file in SI units (m, rad, Pa, N m, -): far beyond any
-#: measurement, small enough that squares, weighted residuals and their Jacobian stay finite
+#: largest magnitude of any value of a measurement file in SI units (m, rad, Pa, N m, -): far beyond
+#: any measurement, small enough that squares, weighted residuals and their Jacobian stay finite
 MAX_SI = 1e12
-#: smallest uncertainty, relative to max(largest |value| of the observable column, 1 SI unit): a smaller sigma
-#: makes the weighted residuals (model - y) / sigma and their Jacobian overflow or drown in round-off
+#: smallest uncertainty, relative to max(largest |value| of the observable column, 1 SI unit): a
+#: smaller sigma makes the weighted residuals (model - y) / sigma and their Jacobian overflow or
+#: drown in round-off
 SIGMA_FLOOR = 1e-12
 #: the SI unit of every column, for messages
 SI_NAMES = {"length": "m", "angle": "rad", "pressure": "Pa", "torque": "N m", "dimensionless": "-"}
@@ -73,7 +76,8 @@ SI_NAMES = {"length": "m", "angle": "rad", "pressure": "Pa", "torque": "N m", "d
 
 @dataclass(frozen=True)
 class Measurements:
-    """One measurement file, checked: the observable, its sigma and the operating point of every row (SI)."""
+    """One measurement file, checked: the observable, its sigma and the operating point of every row
+    (SI)."""
 
     table: Table = field(repr=False)
     kind: str
@@ -108,13 +112,14 @@ class Measurements:
     def abscissa(self) -> str:
         """The input varying most across the rows (the x axis of the figure)."""
         spans = {n: float(np.ptp(self.table[n])) for n in self.inputs if n != "segment"}
-        return max(spans, key=spans.get) if spans else self.inputs[0]
+        return max(spans, key=spans.__getitem__) if spans else self.inputs[0]
 
     def __len__(self) -> int:
         return len(self.table)
 
     def shown(self, name: str, row: int) -> str:
-        """The value of column ``name`` in row ``row`` as written: a plain number and the file's unit (``"900 deg"``)."""
+        """The value of column ``name`` in row ``row`` as written: a plain number and the file's
+        unit (``"900 deg"``)."""
         unit = self.table.units[name]
         value = float(self.table[name][row]) / UNITS[COLUMNS[name]][unit]
         return f"{value:g}" + ("" if unit in ("-", "1") else f" {unit}")
@@ -127,8 +132,9 @@ class Measurements:
 def _kind(path: str, present: set[str]) -> tuple[str, str]:
     observables = [o for o in OBSERVABLES if o in present]
     if len(observables) != 1:
-        raise TableError(path, f"a measurement file holds exactly one observable column of {', '.join(OBSERVABLES)} "
-                               f"(found {', '.join(observables) or 'none'})")
+        raise TableError(path,
+                         "a measurement file holds exactly one observable column of "
+                         f"{', '.join(OBSERVABLES)} (found {', '.join(observables) or 'none'})")
     obs = observables[0]
     inputs = present & set(INPUTS)
     for kind, (allowed_obs, required, allowed) in KINDS.items():
@@ -136,13 +142,14 @@ def _kind(path: str, present: set[str]) -> tuple[str, str]:
             return kind, obs
     valid = "; ".join(f"{k}: {'/'.join(o)} with {', '.join(r) or 'any of ' + ', '.join(a)}"
                       for k, (o, r, a) in KINDS.items())
-    raise TableError(path, f"columns {', '.join(sorted(inputs)) or '(no operating point)'} with {obs} match no "
-                           f"measurement kind ({valid})")
+    raise TableError(path,
+                     f"columns {', '.join(sorted(inputs)) or '(no operating point)'} with {obs} "
+                     f"match no measurement kind ({valid})")
 
 
 def _check_rules(m: Measurements) -> None:
-    """Every operating-point value of :data:`RULE_KEYS` must pass its problem key's rule (degrees, as the model gets
-    them: :mod:`ocp_crawl.fit.forward`)."""
+    """Every operating-point value of :data:`RULE_KEYS` must pass its problem key's rule (degrees,
+    as the model gets them: :mod:`ocp_crawl.fit.forward`)."""
     for name, dotted in RULE_KEYS.get(m.kind, {}).items():
         section, key = dotted.split(".", 1)
         rule = SCHEMA[section].key_map[key].rule
@@ -151,13 +158,14 @@ def _check_rules(m: Measurements) -> None:
         for j, v in enumerate(m.table[name]):
             if not rule.test(math.degrees(float(v))):
                 how = "it sets" if m.kind == "gait" else "the range of"
-                raise m.table.error(f"{name} = {m.shown(name, j)} is invalid: must be {rule.text} ({how} {dotted}: "
-                                    f"{SCHEMA[section].key_map[key].what})", j)
+                raise m.table.error(f"{name} = {m.shown(name, j)} is invalid: must be {rule.text} "
+                                    f"({how} {dotted}: {SCHEMA[section].key_map[key].what})", j)
 
 
 def _check_magnitudes(m: Measurements) -> None:
-    """Every value, converted to SI, must be finite and at most :data:`MAX_SI` in magnitude (``1e308 bar`` is
-    not finite in Pa; ``phi = 1e308 deg`` is finite in rad but overflows the residuals)."""
+    """Every value, converted to SI, must be finite and at most :data:`MAX_SI` in magnitude
+    (``1e308 bar`` is not finite in Pa; ``phi = 1e308 deg`` is finite in rad but overflows the
+    residuals)."""
     for name in m.table.columns:
         si, unit = SI_NAMES[COLUMNS[name]], m.table.units[name]
         limit = f"{MAX_SI:g}".replace("e+", "e") + ("" if si == "-" else f" {si}")
@@ -167,12 +175,13 @@ def _check_magnitudes(m: Measurements) -> None:
             if not abs(v) <= MAX_SI:
                 what = (f"{name} = {m.shown(name, j)} is out of range" if math.isfinite(v)
                         else f"{name} is out of range: its value overflows when converted to {si}")
-                raise m.table.error(f"{what}; every value of a measurement file must be at most {limit} in "
-                                    "magnitude", j)
+                raise m.table.error(f"{what}; every value of a measurement file must be at most "
+                                    f"{limit} in magnitude", j)
 
 
 def _check_sigmas(m: Measurements) -> None:
-    """Every sigma must be > 0 and at least :data:`SIGMA_FLOOR` times max(largest |observable|, 1 SI unit)."""
+    """Every sigma must be > 0 and at least :data:`SIGMA_FLOOR` times max(largest |observable|, 1 SI
+    unit)."""
     sigma = "sigma_" + m.observable
     floor = SIGMA_FLOOR * max(float(np.max(np.abs(m.y))), 1.0)
     for j, s in enumerate(m.sigma):
@@ -180,12 +189,14 @@ def _check_sigmas(m: Measurements) -> None:
             raise m.table.error(f"{sigma} = {m.shown(sigma, j)}: an uncertainty must be > 0", j)
         if s < floor:
             unit = m.table.units[sigma]
-            shown = f"{floor / UNITS[COLUMNS[sigma]][unit]:.3g}" + ("" if unit in ("-", "1") else f" {unit}")
+            shown = f"{floor / UNITS[COLUMNS[sigma]][unit]:.3g}" + ("" if unit in ("-", "1")
+                                                                    else f" {unit}")
             si = SI_NAMES[COLUMNS[sigma]]
-            raise m.table.error(f"{sigma} = {m.shown(sigma, j)} is too small: an uncertainty must be at least "
-                                f"{SIGMA_FLOOR:g} x max(the largest |{m.observable}| of the file, "
-                                f"{'1' if si == '-' else '1 ' + si}) = {shown}; a smaller one overflows the weighted "
-                                "residuals (model - data) / sigma", j)
+            raise m.table.error(f"{sigma} = {m.shown(sigma, j)} is too small: an uncertainty must "
+                                f"be at least {SIGMA_FLOOR:g} x max(the largest |{m.observable}| "
+                                f"of the file, {'1' if si == '-' else '1 ' + si}) = {shown}; a "
+                                "smaller one overflows the weighted residuals (model - data) / "
+                                "sigma", j)
 
 
 def _check_rows(m: Measurements) -> None:
@@ -196,18 +207,20 @@ def _check_rows(m: Measurements) -> None:
             if seg not in (1.0, 2.0):
                 raise m.table.error(f"segment = {m.shown('segment', j)}: must be 1 or 2", j)
     if m.observable == "S_norm":
-        ref = m.reference_row
+        ref = cast(int, m.reference_row)  # a row when the observable is S_norm
         if not m.y[ref] > 0:
-            raise m.table.error(f"S_norm: the largest value, {m.shown('S_norm', ref)}, must be > 0 (it is the "
-                                "normalising row)", ref)
+            raise m.table.error(f"S_norm: the largest value, {m.shown('S_norm', ref)}, must be > 0 "
+                                "(it is the normalising row)", ref)
     if m.kind == "pressure":
         amplitudes = m.table["A_p"] if "A_p" in m.inputs else np.zeros(len(m))
         for j, (p0, amp) in enumerate(zip(m.table["p0"], amplitudes)):
             if p0 < 0:
-                raise m.table.error(f"p0 = {m.shown('p0', j)}: a nominal gauge pressure must be >= 0", j)
+                raise m.table.error(f"p0 = {m.shown('p0', j)}: a nominal gauge pressure must be >= "
+                                    "0", j)
             if not 0 <= amp <= p0:
-                raise m.table.error(f"A_p = {m.shown('A_p', j)} with p0 = {m.shown('p0', j)}: the amplitude must lie "
-                                    "in [0, p0] (a gauge pressure p0 - A_p >= 0)", j)
+                raise m.table.error(f"A_p = {m.shown('A_p', j)} with p0 = {m.shown('p0', j)}: the "
+                                    "amplitude must lie in [0, p0] (a gauge pressure p0 - A_p >= "
+                                    "0)", j)
     _check_rules(m)
 
 
@@ -229,25 +242,28 @@ def read_measurements(path: str | os.PathLike, min_rows: int = 2) -> Measurement
     ------
     TableError
         One line naming the file and, for a bad row, its line: a missing or unknown column, a unit
-        of the wrong dimension, a value that is not a finite number (NaN), a value whose magnitude in SI
-        units (m, rad, Pa, N m) is above :data:`MAX_SI` = 1e12 or not finite once converted (``1e308 bar``),
-        an uncertainty <= 0 or below :data:`SIGMA_FLOOR` = 1e-12 times max(the largest |value| of the
-        observable column, 1 in SI units: m, rad, -) (a smaller one overflows the weighted residuals), too
-        few rows, an operating point outside the range of its problem key (``psi``, ``A``, ``gamma``:
-        ``gait.psi_deg``, ...; a pressure row's ``psi`` has the range of ``gait.psi_deg``), a pressure
-        p0 < 0 or A_p outside [0, p0].
+        of the wrong dimension, a value that is not a finite number (NaN), a value whose magnitude
+        in SI units (m, rad, Pa, N m) is above :data:`MAX_SI` = 1e12 or not finite once converted
+        (``1e308 bar``), an uncertainty <= 0 or below :data:`SIGMA_FLOOR` = 1e-12 times max(the
+        largest |value| of the observable column, 1 in SI units: m, rad, -) (a smaller one overflows
+        the weighted residuals), too few rows, an operating point outside the range of its problem
+        key (``psi``, ``A``, ``gamma``: ``gait.psi_deg``, ...; a pressure row's ``psi`` has the
+        range of ``gait.psi_deg``), a pressure p0 < 0 or A_p outside [0, p0].
     """
     table = read_table(path, {}, COLUMNS, min_rows=1)
     kind, obs = _kind(table.path, set(table.columns))
     if "sigma_" + obs not in table:
-        raise TableError(table.path, f"missing column 'sigma_{obs}': every measurement needs its standard "
-                                     f"uncertainty (same unit as {obs})")
+        raise TableError(table.path,
+                         f"missing column 'sigma_{obs}': every measurement needs its standard "
+                         f"uncertainty (same unit as {obs})")
     extra = [c for c in table.columns if c.startswith("sigma_") and c != "sigma_" + obs]
     if extra:
-        raise TableError(table.path, f"column {extra[0]!r} has no observable {extra[0][6:]!r} in this file")
+        raise TableError(table.path,
+                         f"column {extra[0]!r} has no observable {extra[0][6:]!r} in this file")
     need = min_rows + (obs == "S_norm")
     if len(table) < need:
-        raise TableError(table.path, f"{len(table)} data row(s); a {kind} fit of {obs} needs at least {need}")
+        raise TableError(table.path,
+                         f"{len(table)} data row(s); a {kind} fit of {obs} needs at least {need}")
     m = Measurements(table, kind, obs)
     _check_rows(m)
     return m

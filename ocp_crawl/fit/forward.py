@@ -1,4 +1,5 @@
-"""The model of every measurement row at a parameter vector: simulations (or closed forms), failures as statuses.
+"""The model of every measurement row at a parameter vector: simulations (or closed forms), failures
+as statuses.
 
 Rows are independent, so they are evaluated as picklable tasks (:class:`RowTask`), one after the
 other in this process or in worker processes (:func:`evaluate_rows`).
@@ -54,8 +55,9 @@ def _problem(task: RowTask, extra: Mapping[str, float]) -> Problem:
 
 
 def _setup(task: RowTask) -> tuple[Problem, ReferenceTorque | None]:
-    """The problem of a gait or pressure row and, for a pressure row, its torque input; ValueError (a ProblemError
-    naming the key) for an operating point or parameter value the model rejects.  Nothing is simulated."""
+    """The problem of a gait or pressure row and, for a pressure row, its torque input; ValueError
+    (a ProblemError naming the key) for an operating point or parameter value the model rejects.
+    Nothing is simulated."""
     inputs = dict(task.inputs)
     if task.kind == "gait":
         return _problem(task, {GAIT_KEYS[n]: math.degrees(v) for n, v in inputs.items()}), None
@@ -71,7 +73,8 @@ def _setup(task: RowTask) -> tuple[Problem, ReferenceTorque | None]:
 def _simulated(task: RowTask) -> tuple[float, str]:
     try:
         problem, signal = _setup(task)
-    except ValueError as exc:  # a key the problem rejects, or e.g. an amplitude above the nominal pressure
+    # a key the problem rejects, or e.g. an amplitude above the nominal pressure
+    except ValueError as exc:
         return math.nan, f"{Status.BAD_INPUT.label}: {exc}"
     if signal is None:
         result = run_problem(problem)
@@ -86,8 +89,9 @@ def _simulated(task: RowTask) -> tuple[float, str]:
 
 
 def row_error(task: RowTask) -> str | None:
-    """Why the model rejects the row before simulating it (the problem's validation of its keys, the pressure
-    waveform's of its pressures), one line without the problem's source; None if it accepts it."""
+    """Why the model rejects the row before simulating it (the problem's validation of its keys, the
+    pressure waveform's of its pressures), one line without the problem's source; None if it accepts
+    it."""
     try:
         if task.kind in ("gait", "pressure"):
             _setup(task)
@@ -109,9 +113,11 @@ def _closed_form(task: RowTask) -> float:
 
 
 def evaluate_row(task: RowTask) -> tuple[float, str]:
-    """The model's value of one row (SI: S [m] or phi [rad]) and ``"success"``, or (NaN, ``"status: message"``).
+    """The model's value of one row (SI: S [m] or phi [rad]) and ``"success"``, or (NaN,
+    ``"status: message"``).
 
-    A failure of the simulation, a parameter value the problem rejects, or any error is a status, never raised.
+    A failure of the simulation, a parameter value the problem rejects, or any error is a status,
+    never raised.
     """
     try:
         with np.errstate(all="ignore"):
@@ -134,15 +140,18 @@ def row_tasks(problem: Problem, data: Measurements, values: Mapping[str, float],
             for j in range(len(data))]
 
 
-def evaluate_rows(tasks: Sequence[RowTask], executor: Executor | None = None) -> list[tuple[float, str]]:
-    """:func:`evaluate_row` of every task, in this process (``executor`` None) or by ``executor.map``."""
+def evaluate_rows(tasks: Sequence[RowTask],
+                  executor: Executor | None = None) -> list[tuple[float, str]]:
+    """:func:`evaluate_row` of every task, in this process (``executor`` None) or by
+    ``executor.map``."""
     if executor is None:
         return [evaluate_row(t) for t in tasks]
     return list(executor.map(evaluate_row, tasks, chunksize=max(1, len(tasks) // 8)))
 
 
 def model_values(data: Measurements, results: Sequence[tuple[float, str]]) -> np.ndarray:
-    """The model's values in the file's observable: S [m], phi [rad], or S normalised at the reference row."""
+    """The model's values in the file's observable: S [m], phi [rad], or S normalised at the
+    reference row."""
     y = np.array([r[0] for r in results], dtype=float)
     ref = data.reference_row
     return y / y[ref] if ref is not None else y

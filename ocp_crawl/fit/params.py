@@ -1,35 +1,39 @@
 """The parameters a calibration can fit: problem-file keys and the pressure actuator's constants.
 
 A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.mu``, ``robot.mu1``,
-``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections, and of any section the
-schema gains that is not a numerics setting), or ``pressure.NAME``, a key of the ``[pressure]`` section,
-for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`: ``pressure.a1``, ``pressure.a2``
-[rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar] (Table I's map), ``pressure.phi_rest_deg`` [deg]
-(the rest angle) and ``pressure.amplitude_bar`` [bar] (the waveform's amplitude A_p).  The pressure
-constants are those of the problem's ``[pressure]`` section as given, else those of the input ``form``
-(:func:`ocp_crawl.model.pressure.form_constants`): the default form is the pressure study's, the paper's
-form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0 the nominal (mean) pressure, A_p = 0.4 bar and the flat
-rest shape, 180 deg; ``form="raised"`` is the earlier raised sine from 0 to the peak p0 (no amplitude, NaN)
-with the stored fitted rest angle.  Values are in the units of the problem files (degrees for angles).
+``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections, and of any section
+the schema gains that is not a numerics setting), or ``pressure.NAME``, a key of the ``[pressure]``
+section, for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`: ``pressure.a1``,
+``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar] (Table I's map),
+``pressure.phi_rest_deg`` [deg] (the rest angle) and ``pressure.amplitude_bar`` [bar] (the
+waveform's amplitude A_p).  The pressure constants are those of the problem's ``[pressure]`` section
+as given, else those of the input ``form`` (:func:`ocp_crawl.model.pressure.form_constants`): the
+default form is the pressure study's, the paper's form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0
+the nominal (mean) pressure, A_p = 0.4 bar and the flat rest shape, 180 deg; ``form="raised"`` is
+the earlier raised sine from 0 to the peak p0 (no amplitude, NaN) with the stored fitted rest angle.
+Values are in the units of the problem files (degrees for angles).
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Iterable, Mapping, Sequence
 
-from ocp_crawl.model.pressure import DEFAULT_FORM, PRESSURE_FORMS, BendingMap, PressureWaveform, form_constants
+from ocp_crawl.model.pressure import (DEFAULT_FORM, PRESSURE_FORMS, BendingMap, PressureWaveform,
+                                      form_constants)
 from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.problem.messages import suggest
-from ocp_crawl.problem.schema import SCHEMA, Rule
+from ocp_crawl.problem.keys import Rule
+from ocp_crawl.problem.schema import SCHEMA
 
 #: pressure parameters -> unit
-PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar", "phi_rest_deg": "deg",
-                  "amplitude_bar": "bar"}
+PRESSURE_UNITS = {"a1": "rad/bar^2", "a2": "rad/bar^2", "b1": "rad/bar", "b2": "rad/bar",
+                  "phi_rest_deg": "deg", "amplitude_bar": "bar"}
 #: sections whose numbers are settings of the numerics, not properties of the robot or its input
 NOT_FITTED = ("model", "simulation", "ocp")
-#: sections whose numbers can be fitted (every other section of the schema, e.g. ones added for new inputs)
+#: sections whose numbers can be fitted (every other section of the schema, e.g. ones added for new
+#: inputs)
 FIT_SECTIONS = tuple(name for name in SCHEMA if name not in NOT_FITTED)
 #: default bounds: x0 +- this for angles [deg]; x0 / and * this factor for the others
 ANGLE_SPAN_DEG, SCALE_FACTOR = 45.0, 10.0
@@ -38,8 +42,9 @@ CLIP_STEPS = 60
 
 
 def _amplitude_ok(v: float) -> bool:
-    """The pressure model's own check of an amplitude (:class:`~ocp_crawl.model.pressure.PressureWaveform`), at the
-    largest nominal pressure it allows (each row's p0 is checked with the rows)."""
+    """The pressure model's own check of an amplitude
+    (:class:`~ocp_crawl.model.pressure.PressureWaveform`), at the largest nominal pressure it allows
+    (each row's p0 is checked with the rows)."""
     try:
         PressureWaveform(max(v, 0.0), 0.0, v)
     except ValueError:
@@ -47,8 +52,10 @@ def _amplitude_ok(v: float) -> bool:
     return True
 
 
-#: pressure constants whose values the pressure model restricts -> the rule (the others: any finite number)
-PRESSURE_RULES = {"amplitude_bar": Rule(_amplitude_ok, ">= 0", "the amplitude A_p of the paper's form (ref), at most "
+#: pressure constants whose values the pressure model restricts -> the rule (the others: any finite
+#: number)
+PRESSURE_RULES = {"amplitude_bar": Rule(_amplitude_ok, ">= 0",
+                                        "the amplitude A_p of the paper's form (ref), at most "
                                                                  "each row's p0")}
 
 
@@ -67,10 +74,11 @@ class Parameter:
     """upper bound"""
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low <= self.x0 <= self.high
-                and self.low < self.high):
+        if not (math.isfinite(self.low) and math.isfinite(self.high)
+                and self.low <= self.x0 <= self.high and self.low < self.high):
             raise ValueError(f"Parameter {self.name}: start {float(self.x0)!r} must lie in bounds "
-                             f"[{float(self.low)!r}, {float(self.high)!r}] with low < high, all finite")
+                             f"[{float(self.low)!r}, {float(self.high)!r}] with low < high, all "
+                             "finite")
 
 
 def fittable_names() -> list[str]:
@@ -80,38 +88,39 @@ def fittable_names() -> list[str]:
 
 
 def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float]:
-    """The pressure constants used when not fitted: Table I's map and the waveform constants of ``form``
-    (:func:`ocp_crawl.model.pressure.form_constants`: rest angle [deg], amplitude [bar] or NaN); ValueError for an
-    unknown form."""
+    """The pressure constants used when not fitted: Table I's map and the waveform constants of
+    ``form`` (:func:`ocp_crawl.model.pressure.form_constants`: rest angle [deg], amplitude [bar] or
+    NaN); ValueError for an unknown form."""
     return {**{f.name: getattr(BendingMap(), f.name) for f in dataclasses.fields(BendingMap)},
             **form_constants(form, gravity)}
 
 
 def pressure_form(problem: Problem, form: str | None = None) -> str:
-    """The pressure input form of a fit: ``form`` (``--form``), else the problem's ``[pressure] form`` as given, else
-    :data:`~ocp_crawl.model.pressure.DEFAULT_FORM`; ProblemError for an unknown form or one that differs from
-    the problem's."""
+    """The pressure input form of a fit: ``form`` (``--form``), else the problem's
+    ``[pressure] form`` as given, else :data:`~ocp_crawl.model.pressure.DEFAULT_FORM`; ProblemError
+    for an unknown form or one that differs from the problem's."""
     if form is not None and form not in PRESSURE_FORMS:
-        raise ProblemError(f"--form {form}: unknown pressure input form; one of {', '.join(PRESSURE_FORMS)}")
+        raise ProblemError(f"--form {form}: unknown pressure input form; one of "
+                           f"{', '.join(PRESSURE_FORMS)}")
     given = problem.given_dict().get("pressure", {}).get("form")
     if form is not None and given is not None and form != given:
-        raise ProblemError(f"--form {form} and {problem.source}: [pressure] form = \"{given}\" differ: give one "
-                           "(the problem file's, or drop the key)")
+        raise ProblemError(f"--form {form} and {problem.source}: [pressure] form = \"{given}\" "
+                           "differ: give one (the problem file's, or drop the key)")
     return form or given or DEFAULT_FORM
 
 
 def problem_pressure(problem: Problem, form: str | None = None) -> dict[str, float]:
-    """The pressure constants of ``problem`` (:data:`PRESSURE_UNITS`): those its ``[pressure]`` section gives, the
-    others :func:`pressure_defaults` of its form (:func:`pressure_form`)."""
+    """The pressure constants of ``problem`` (:data:`PRESSURE_UNITS`): those its ``[pressure]``
+    section gives, the others :func:`pressure_defaults` of its form (:func:`pressure_form`)."""
     given = problem.given_dict().get("pressure", {})
     return {**pressure_defaults(problem.gravity, pressure_form(problem, form)),
             **{k: float(v) for k, v in given.items() if k in PRESSURE_UNITS}}
 
 
 def value_rule(name: str) -> tuple[Rule | None, str]:
-    """The rule every value of the parameter ``name`` must pass (None: any finite number) and what it is: the schema's
-    rule of a problem key (the one ``Problem.with_values`` applies); for a pressure constant :data:`PRESSURE_RULES`,
-    else its key's in ``[pressure]``."""
+    """The rule every value of the parameter ``name`` must pass (None: any finite number) and what
+    it is: the schema's rule of a problem key (the one ``Problem.with_values`` applies); for a
+    pressure constant :data:`PRESSURE_RULES`, else its key's in ``[pressure]``."""
     section, key = name.split(".", 1)
     if section == "pressure":
         rule = PRESSURE_RULES.get(key) or SCHEMA["pressure"].key_map[key].rule
@@ -121,16 +130,16 @@ def value_rule(name: str) -> tuple[Rule | None, str]:
 
 
 def check_value(name: str, value: float, what: str) -> None:
-    """ProblemError naming ``what`` (the option and the value given) if ``value`` is outside the valid range of
-    the parameter ``name``."""
+    """ProblemError naming ``what`` (the option and the value given) if ``value`` is outside the
+    valid range of the parameter ``name``."""
     rule, help_text = value_rule(name)
     if rule is not None and not rule.test(value):
         raise ProblemError(f"{what} is invalid: {name} ({help_text}) must be {rule.explained}")
 
 
 def _clip(valid: Callable[[float], bool], end: float, x0: float) -> float:
-    """``end`` if valid, else the valid value nearest it between it and the valid ``x0`` (bisection, then the
-    roundest such value: 0 rather than 1e-17)."""
+    """``end`` if valid, else the valid value nearest it between it and the valid ``x0`` (bisection,
+    then the roundest such value: 0 rather than 1e-17)."""
     if valid(end):
         return end
     bad, good = end, x0
@@ -145,7 +154,8 @@ def _clip(valid: Callable[[float], bool], end: float, x0: float) -> float:
 
 
 def _exclusive(names: Sequence[str]) -> None:
-    """ProblemError for two fitted keys the schema gives as alternatives (``robot.mu`` and ``robot.mu1``/``mu2``)."""
+    """ProblemError for two fitted keys the schema gives as alternatives (``robot.mu`` and
+    ``robot.mu1``/``mu2``)."""
     for name in names:
         section, key = name.split(".", 1)
         if section == "pressure":
@@ -153,8 +163,9 @@ def _exclusive(names: Sequence[str]) -> None:
         others = SCHEMA[section].key_map[key].exclusive_with
         clash = [f"{section}.{o}" for o in others if f"{section}.{o}" in names]
         if clash:
-            raise ProblemError(f"--param {name} and --param {clash[0]}: alternative keys of [{section}] (fit {name}, "
-                               f"or {' and '.join(f'{section}.{o}' for o in others)}), not both")
+            raise ProblemError(f"--param {name} and --param {clash[0]}: alternative keys of "
+                               f"[{section}] (fit {name}, or "
+                               f"{' and '.join(f'{section}.{o}' for o in others)}), not both")
 
 
 def _current(problem: Problem, name: str, form: str | None) -> tuple[float | None, str]:
@@ -207,17 +218,20 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     Parameters
     ----------
     problem : Problem
-        The problem whose values are the start values (pressure constants: :func:`problem_pressure`).
+        The problem whose values are the start values (pressure constants:
+        :func:`problem_pressure`).
     names : sequence of str
         ``SECTION.KEY`` names (see the module docstring), each once.
     start : sequence of str
         ``NAME=VALUE`` start values replacing the problem's (problem-file units).
     bounds : sequence of str
-        ``NAME=LOW:HIGH`` bounds, both in the parameter's valid range; default x0 +- 45 deg for angles,
-        [x0/10, 10 x0] for positive numbers, each end pulled into the valid range (``gait.A_deg`` = 30: [0, 75]).
+        ``NAME=LOW:HIGH`` bounds, both in the parameter's valid range; default x0 +- 45 deg for
+        angles, [x0/10, 10 x0] for positive numbers, each end pulled into the valid range
+        (``gait.A_deg`` = 30: [0, 75]).
     form : str, optional
         The pressure input form whose constants are the default start values of ``pressure.*``
-        (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`; None: the problem's, :func:`pressure_form`).
+        (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`; None: the problem's,
+        :func:`pressure_form`).
 
     Returns
     -------
@@ -226,10 +240,11 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     Raises
     ------
     ProblemError
-        An unknown or repeated name (with a suggestion), alternative keys fitted together (``robot.mu`` and
-        ``robot.mu1``), a start or bound that is not a number or outside the valid range of the parameter
-        (the schema's rule of its key, :data:`PRESSURE_RULES`), a start outside its bounds, start values
-        the problem rejects together (``Problem.with_values``), an unknown form.
+        An unknown or repeated name (with a suggestion), alternative keys fitted together
+        (``robot.mu`` and ``robot.mu1``), a start or bound that is not a number or outside the valid
+        range of the parameter (the schema's rule of its key, :data:`PRESSURE_RULES`), a start
+        outside its bounds, start values the problem rejects together (``Problem.with_values``), an
+        unknown form.
     """
     pressure_form(problem, form)
     valid = fittable_names()
@@ -240,11 +255,12 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
     for option, given in (("--param", names), ("--start", starts), ("--bounds", limits)):
         for name in given:
             if name not in valid:
-                raise ProblemError(f"{option} {name}: unknown parameter; {suggest(name, valid)}fittable: "
-                                   f"{', '.join(valid)}")
+                raise ProblemError(f"{option} {name}: unknown parameter; "
+                                   f"{suggest(name, valid)}fittable: {', '.join(valid)}")
     for name in [*starts, *limits]:
         if name not in names:
-            raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add --param {name})")
+            raise ProblemError(f"{name}: a start value or bounds for a parameter not fitted (add "
+                               f"--param {name})")
     if len(set(names)) != len(names):
         raise ProblemError(f"--param: a parameter named twice in {', '.join(names)}")
     _exclusive(names)
@@ -255,7 +271,8 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
             problem.with_values(keys)
         except ProblemError as exc:
             shown = ", ".join(f"{k} = {v:g}" for k, v in keys.items())
-            raise ProblemError(f"--param {', '.join(keys)}: the start values ({shown}) are invalid: {exc}") from None
+            raise ProblemError(f"--param {', '.join(keys)}: the start values ({shown}) are "
+                               f"invalid: {exc}") from None
     return params
 
 
@@ -265,13 +282,15 @@ def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits:
     if name in starts:
         value = starts[name]
     if value is None or math.isnan(value):
-        raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, or the "
-                           f"{pressure_form(problem, form)} form has no such constant); give --start {name}=VALUE")
+        raise ProblemError(f"--param {name}: no value to start from (the problem file gives none, "
+                           f"or the {pressure_form(problem, form)} form has no such constant); "
+                           f"give --start {name}=VALUE")
     check_value(name, value, f"--start {name}={value:g}" if name in starts else
                 f"--param {name}: the start value {value:g} {unit}")
     rule, _ = value_rule(name)
     low, high = _default_bounds(float(value), unit)
-    if rule is not None:  # the default bounds end in the valid range (A_deg = 30: [0, 75], not [-15, 75])
+    # the default bounds end in the valid range (A_deg = 30: [0, 75], not [-15, 75])
+    if rule is not None:
         low, high = _clip(rule.test, low, float(value)), _clip(rule.test, high, float(value))
     if name in limits:
         lo, sep, hi = limits[name].partition(":")
@@ -281,37 +300,41 @@ def _parameter(problem: Problem, name: str, starts: Mapping[str, float], limits:
         for end, x in (("low", low), ("high", high)):
             check_value(name, x, f"--bounds {name}={limits[name]}: the {end} end {x:g}")
     if not low < high or not low <= value <= high:
-        raise ProblemError(f"--param {name}: start value {value:g} {unit} must lie within bounds [{low:g}, {high:g}] "
-                           "with low < high")
+        raise ProblemError(f"--param {name}: start value {value:g} {unit} must lie within bounds "
+                           f"[{low:g}, {high:g}] with low < high")
     return Parameter(name, unit, float(value), float(low), float(high))
 
 
-def split_values(params: Sequence[Parameter], x: Sequence[float]) -> tuple[dict[str, float], dict[str, float]]:
+def split_values(params: Sequence[Parameter], x: Iterable[float]) -> tuple[dict[str, float],
+                                                                           dict[str, float]]:
     """(problem key -> value, pressure constant -> value) of the parameter vector ``x``."""
-    keys, pressure = {}, {}
+    keys: dict[str, float] = {}
+    pressure: dict[str, float] = {}
     for p, v in zip(params, x):
         section, key = p.name.split(".", 1)
-        (pressure if section == "pressure" else keys)[key if section == "pressure" else p.name] = float(v)
+        (pressure if section == "pressure" else keys)[key if section == "pressure"
+                                                      else p.name] = float(v)
     return keys, pressure
 
 
 def at_bound(p: Parameter, x: float, rtol: float = 1e-4) -> bool:
-    """True if ``x`` lies within ``rtol`` of the bound interval's width from a bound of ``p`` (the fit was stopped
-    there: its uncertainty is not a confidence interval)."""
+    """True if ``x`` lies within ``rtol`` of the bound interval's width from a bound of ``p`` (the
+    fit was stopped there: its uncertainty is not a confidence interval)."""
     tol = rtol * (p.high - p.low)
     return x <= p.low + tol or x >= p.high - tol
 
 
 def fixed_pressure(items: Sequence[str]) -> dict[str, float]:
-    """``NAME=VALUE`` texts of pressure constants held fixed (``a1``, ..., ``phi_rest_deg``) -> values; ProblemError
-    for an unknown name, a value that is not a number or is outside the constant's valid range
-    (:data:`PRESSURE_RULES`)."""
+    """``NAME=VALUE`` texts of pressure constants held fixed (``a1``, ..., ``phi_rest_deg``) ->
+    values; ProblemError for an unknown name, a value that is not a number or is outside the
+    constant's valid range (:data:`PRESSURE_RULES`)."""
     out = {}
     for name, text in _pairs(items, "--pressure").items():
         key = name.removeprefix("pressure.")
         if key not in PRESSURE_UNITS:
-            raise ProblemError(f"--pressure {name}: unknown pressure constant; {suggest(key, list(PRESSURE_UNITS))}"
-                               f"one of {', '.join(PRESSURE_UNITS)}")
+            raise ProblemError(f"--pressure {name}: unknown pressure constant; "
+                               f"{suggest(key, list(PRESSURE_UNITS))}one of "
+                               f"{', '.join(PRESSURE_UNITS)}")
         out[key] = _number(text, f"--pressure {name}")
         check_value(f"pressure.{key}", out[key], f"--pressure {name}={text}")
     return out

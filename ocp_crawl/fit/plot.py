@@ -1,4 +1,5 @@
-"""The figure of a fit: every measurement file's data with error bars against the fitted model, and the residuals."""
+"""The figure of a fit: every measurement file's data with error bars against the fitted model, and
+the residuals."""
 from __future__ import annotations
 
 import json
@@ -16,8 +17,8 @@ from ocp_crawl.fit.solve import FitResult
 from ocp_crawl.io.files import atomic_write
 
 #: display unit and factor from SI of the operating-point columns
-INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5), "torque": ("N m", 1.0),
-                 "dimensionless": ("-", 1.0)}
+INPUT_DISPLAY = {"angle": ("deg", 180.0 / math.pi), "pressure": ("bar", 1e-5),
+                 "torque": ("N m", 1.0), "dimensionless": ("-", 1.0)}
 LABELS = {"S": "S per cycle", "S_norm": "S / S_ref", "phi": "edge angle phi"}
 #: characters of a 10-point title line per inch of figure width (a little less than fits)
 TITLE_CHARS_PER_INCH = 14
@@ -35,19 +36,21 @@ def _value(name: str, unit: str, x: float, s: float) -> str:
 
 
 def _inputs(fit: FitResult) -> str:
-    """The pressure input form of a fit with pressure rows (amplitude and rest angle), else empty."""
+    """The pressure input form of a fit with pressure rows (amplitude and rest angle), else
+    empty."""
     c = fit.pressure
     if not any(f.data.kind == "pressure" for f in fit.files) or "amplitude_bar" not in c:
         return ""
     rest = f"rest angle {c['phi_rest_deg']:.4g} deg"
     if math.isnan(c["amplitude_bar"]):
         return f"\ninputs: raised sine from 0 to the peak p0, {rest}"
-    return (f"\ninputs: paper's form p0 + A_p sin(2 pi t +- psi/2), A_p = {c['amplitude_bar']:.4g} bar "
-            f"(unless a file gives A_p), {rest}")
+    return (f"\ninputs: paper's form p0 + A_p sin(2 pi t +- psi/2), A_p = {c['amplitude_bar']:.4g} "
+            f"bar (unless a file gives A_p), {rest}")
 
 
 def _packed(head: str, items: list[str], width: int) -> str:
-    """``head`` and ``items`` joined by "; ", a new line before an item that would pass ``width`` characters."""
+    """``head`` and ``items`` joined by "; ", a new line before an item that would pass ``width``
+    characters."""
     lines = [head]
     for item in items:
         if len(lines[-1]) + 2 + len(item) > width:
@@ -60,7 +63,8 @@ def _packed(head: str, items: list[str], width: int) -> str:
 
 def _title(fit: FitResult, width: int) -> str:
     values = _packed(f"fit ({fit.status.label}):", [_value(p.name, p.unit, x, s)
-                                                    for p, x, s in zip(fit.parameters, fit.x, fit.sigma)], width)
+                                                    for p, x, s in zip(fit.parameters, fit.x,
+                                                                       fit.sigma)], width)
     n = len(fit.unidentified)
     said = f"; {n} direction(s) not determined by the data (see the report)" if n else ""
     rank = (f"rank {fit.rank} of {len(fit.parameters)}{said}" if fit.singular_values.size
@@ -119,24 +123,27 @@ def fit_figure(fit: FitResult) -> Figure:
             rows = order[segments[order] == seg]
             rows = rows[ok[rows]]
             which = f" (segment {seg:g})" if "segment" in d.inputs else ""
-            ax.errorbar(x[segments == seg], d.y[segments == seg] * yf, yerr=d.sigma[segments == seg] * yf, fmt="o",
-                        color=("k", "tab:purple")[i % 2], ms=4, capsize=3, label=f"data (+- 1 sigma){which}")
+            ax.errorbar(x[segments == seg], d.y[segments == seg] * yf,
+                        yerr=d.sigma[segments == seg] * yf, fmt="o",
+                        color=("k", "tab:purple")[i % 2], ms=4, capsize=3,
+                        label=f"data (+- 1 sigma){which}")
             xs, ys, dense = model_curve(fit, f, rows)
             at = "" if dense else ", at the rows"   # markers where the model is known only there
             ax.plot(xs * xf, ys * yf, "-" if dense else "-s", lw=1.6, ms=4, zorder=3,
                     color=("tab:blue", "tab:orange")[i % 2],
                     label=f"model at the fitted parameters{at}{which}")
         if (~ok).any():
-            ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2, label="simulation failed (data shown)")
+            ax.plot(x[~ok], d.y[~ok] * yf, "x", color="tab:red", ms=9, mew=2,
+                    label="simulation failed (data shown)")
         ref = d.reference_row
         if ref is not None:
             ax.plot(x[ref], d.y[ref] * yf, "o", mfc="none", mec="tab:red", ms=11, mew=1.5,
                     label="normalising row")
         others = [f"{c} = {v:g} {INPUT_DISPLAY[INPUTS[c]][0]}" for c in d.inputs if c != name
-                  for v in [np.unique(np.round(d.table[c] * INPUT_DISPLAY[INPUTS[c]][1], 6))] if v.size == 1
-                  for v in [v[0]]]
-        ax.set_title(f"{Path(d.path).name} ({d.kind}" + (", " + ", ".join(others) if others else "") + ")",
-                     fontsize=9)
+                  for v in [np.unique(np.round(d.table[c] * INPUT_DISPLAY[INPUTS[c]][1], 6))]
+                  if v.size == 1 for v in [v[0]]]
+        ax.set_title(f"{Path(d.path).name} ({d.kind}" + (", " + ", ".join(others) if others else "")
+                     + ")", fontsize=9)
         ax.set_ylabel(f"{LABELS[d.observable]} [{yunit}]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)

@@ -1,4 +1,5 @@
-"""What a fit reports: the text summary, the JSON record, the fitted problem file and the residual table."""
+"""What a fit reports: the text summary, the JSON record, the fitted problem file and the residual
+table."""
 from __future__ import annotations
 
 import math
@@ -26,14 +27,17 @@ def _num(v: float) -> str:
 
 
 def identifiability_text(fit: FitResult) -> list[str]:
-    """Lines saying the rank and every direction the data do not fix (empty list never: rank is always said)."""
+    """Lines saying the rank and every direction the data do not fix (empty list never: rank is
+    always said)."""
     p = len(fit.parameters)
     if fit.singular_values.size == 0:
         return ["weighted Jacobian: none (the search did not run; no uncertainties)"]
     sv = ", ".join(f"{s:.3g}" for s in fit.singular_values)
-    lines = [f"weighted Jacobian (relative parameters): rank {fit.rank} of {p}; singular values {sv}"]
+    lines = [f"weighted Jacobian (relative parameters): rank {fit.rank} of {p}; singular values "
+             f"{sv}"]
     for d in fit.unidentified:
-        word = "unidentifiable (rank-deficient)" if math.isinf(d.relative_sd) else "not determined (sd > 100 %)"
+        word = ("unidentifiable (rank-deficient)" if math.isinf(d.relative_sd)
+                else "not determined (sd > 100 %)")
         lines.append(f"  {word}: {d.text()}")
     if not fit.unidentified:
         lines.append("  every parameter combination is determined by the data")
@@ -52,15 +56,17 @@ def correlation_text(fit: FitResult) -> list[str]:
 
 
 def fit_report(fit: FitResult) -> str:
-    """The fit as text: status, parameters with uncertainties, chi-square, identifiability, correlations, files."""
-    how = "absolute sigmas: (J^T J)^-1" if fit.absolute_sigma else "sigmas as weights: s^2 (J^T J)^-1"
+    """The fit as text: status, parameters with uncertainties, chi-square, identifiability,
+    correlations, files."""
+    how = ("absolute sigmas: (J^T J)^-1" if fit.absolute_sigma
+           else "sigmas as weights: s^2 (J^T J)^-1")
     lines = [f"fit        {fit.status.label}: {fit.message}",
-             f"chi2       {fit.chi2:.4g} for {fit.dof} degrees of freedom (chi2/dof {_num(fit.chi2_red)}); "
-             f"covariance from {how}"]
+             f"chi2       {fit.chi2:.4g} for {fit.dof} degrees of freedom (chi2/dof "
+             f"{_num(fit.chi2_red)}); covariance from {how}"]
     for p, x, s in zip(fit.parameters, fit.x, fit.sigma):
         bound = "  AT A BOUND" if at_bound(p, x) else ""
-        lines.append(f"  {p.name:<22} {x:12.6g} +- {_num(s):<10} {p.unit:<10} (start {p.x0:g}, bounds "
-                     f"[{p.low:g}, {p.high:g}]){bound}")
+        lines.append(f"  {p.name:<22} {x:12.6g} +- {_num(s):<10} {p.unit:<10} (start {p.x0:g}, "
+                     f"bounds [{p.low:g}, {p.high:g}]){bound}")
     lines += identifiability_text(fit)
     if len(fit.parameters) > 1:
         lines += ["correlations"] + ["  " + r for r in correlation_text(fit)]
@@ -69,18 +75,21 @@ def fit_report(fit: FitResult) -> str:
         finite = f.residuals[np.isfinite(f.residuals)]
         rms = float(np.sqrt(np.mean(finite ** 2))) if finite.size else math.nan
         failed = sum(s != "success" for s in f.statuses)
-        lines.append(f"data       {f.data.path}: {len(f.data)} {f.data.kind} rows of {f.data.observable} [{unit}], "
-                     f"RMS residual {rms:.3g} sigma" + (f", {failed} failed" if failed else ""))
+        lines.append(f"data       {f.data.path}: {len(f.data)} {f.data.kind} rows of "
+                     f"{f.data.observable} [{unit}], RMS residual {rms:.3g} sigma"
+                     + (f", {failed} failed" if failed else ""))
     return "\n".join(lines)
 
 
 def fit_dict(fit: FitResult) -> dict[str, Any]:
-    """The fit as a JSON-ready dict (values in problem-file units; SI in the per-row model values)."""
+    """The fit as a JSON-ready dict (values in problem-file units; SI in the per-row model
+    values)."""
     return jsonable({
         "status": fit.status.label, "message": fit.message, "success": fit.success,
-        "parameters": [{"name": p.name, "unit": p.unit, "value": float(x), "sigma": float(s), "start": p.x0,
-                        "bounds": [p.low, p.high],
-                        "at_bound": at_bound(p, x)} for p, x, s in zip(fit.parameters, fit.x, fit.sigma)],
+        "parameters": [{"name": p.name, "unit": p.unit, "value": float(x), "sigma": float(s),
+                        "start": p.x0, "bounds": [p.low, p.high],
+                        "at_bound": at_bound(p, x)} for p, x, s in zip(fit.parameters, fit.x,
+                                                                       fit.sigma)],
         "covariance": fit.covariance.tolist(), "correlation": fit.correlation.tolist(),
         "covariance_from": "absolute_sigma" if fit.absolute_sigma else "scaled_by_chi2_red",
         "chi2": fit.chi2, "dof": fit.dof, "chi2_red": fit.chi2_red, "nfev": fit.nfev,
@@ -89,19 +98,23 @@ def fit_dict(fit: FitResult) -> dict[str, Any]:
                           "components": d.components} for d in fit.unidentified],
         "pressure": fit.pressure, "form": fit.form,
         "files": [{"path": f.data.path, "kind": f.data.kind, "observable": f.data.observable,
-                   "lines": f.data.table.lines.tolist(), "data_si": f.data.y.tolist(), "sigma_si": f.data.sigma.tolist(),
-                   "model_si": f.model.tolist(), "residuals": f.residuals.tolist(), "statuses": list(f.statuses)}
+                   "lines": f.data.table.lines.tolist(), "data_si": f.data.y.tolist(),
+                   "sigma_si": f.data.sigma.tolist(),
+                   "model_si": f.model.tolist(), "residuals": f.residuals.tolist(),
+                   "statuses": list(f.statuses)}
                   for f in fit.files],
     })
 
 
 def problem_toml(fit: FitResult) -> str:
-    """The fitted problem as a problem file: the keys the input problem was given (no defaults added), the fitted
-    values as keys (``pressure.*`` in ``[pressure]``, with :func:`pressure_keys`), the uncertainties in comments.
-    Simulating it at a row's operating point gives the model of that row."""
+    """The fitted problem as a problem file: the keys the input problem was given (no defaults
+    added), the fitted values as keys (``pressure.*`` in ``[pressure]``, with
+    :func:`pressure_keys`), the uncertainties in comments.  Simulating it at a row's operating point
+    gives the model of that row."""
     head = [f"Fitted by ocp-crawl fit ({fit.status.label}; chi2/dof {_num(fit.chi2_red)}).",
-            *[f"{n} = {v:.10g} +- {_num(s)} {p.unit}" for (n, v), s, p in zip(fit.values().items(), fit.sigma,
-                                                                              fit.parameters)]]
+            *[f"{n} = {v:.10g} +- {_num(s)} "
+              f"{p.unit}" for (n, v), s, p in zip(fit.values().items(), fit.sigma,
+                                                  fit.parameters)]]
     sections = fit.problem.given_dict()
     pressure = pressure_keys(fit, sections.get("pressure", {}))
     if pressure:
@@ -110,9 +123,10 @@ def problem_toml(fit: FitResult) -> str:
 
 
 def pressure_keys(fit: FitResult, given: Mapping[str, Any]) -> dict[str, Any]:
-    """The ``[pressure]`` section of the fitted problem file: the keys the input gave, the fitted constants, and,
-    when rows used the pressure constants, the form and every constant the fit used that differs from the form's
-    default (``--pressure``, ``--form``), so that the file alone gives the fitted model."""
+    """The ``[pressure]`` section of the fitted problem file: the keys the input gave, the fitted
+    constants, and, when rows used the pressure constants, the form and every constant the fit used
+    that differs from the form's default (``--pressure``, ``--form``), so that the file alone gives
+    the fitted model."""
     out = dict(given)
     if fit.pressure:
         defaults = pressure_defaults(fit.problem.gravity, fit.form)
@@ -130,8 +144,10 @@ def pressure_keys(fit: FitResult, given: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def residual_columns(fit: FitResult) -> list[tuple[str, str, list[float]]]:
-    """Columns of the residual table: file index, file line, data, sigma, model (display units), residual."""
-    cols: dict[str, list[float]] = {"file": [], "line": [], "data": [], "sigma": [], "model": [], "residual": []}
+    """Columns of the residual table: file index, file line, data, sigma, model (display units),
+    residual."""
+    cols: dict[str, list[float]] = {"file": [], "line": [], "data": [], "sigma": [], "model": [],
+                                    "residual": []}
     for i, f in enumerate(fit.files):
         _, factor = DISPLAY[f.data.observable]
         cols["file"] += [i + 1] * len(f.data)
@@ -147,7 +163,8 @@ def residual_columns(fit: FitResult) -> list[tuple[str, str, list[float]]]:
 
 
 def write_fit(fit: FitResult, out_dir: str | Path, figure: bool = True) -> list[Path]:
-    """Write the fitted problem file, fit.json, residuals.csv and (``figure``) fit.png into ``out_dir``, atomically.
+    """Write the fitted problem file, fit.json, residuals.csv and (``figure``) fit.png into
+    ``out_dir``, atomically.
 
     Returns the paths written.
     """
@@ -157,7 +174,8 @@ def write_fit(fit: FitResult, out_dir: str | Path, figure: bool = True) -> list[
     paths = [atomic_write(out / FIT_FILES["problem"], lambda f: f.write(text)),
              write_json(out / FIT_FILES["json"], fit_dict(fit))]
     only = {DISPLAY[f.data.observable][0] for f in fit.files}
-    comments = [f"residual = (model - data) / sigma; file = index in: {', '.join(f.data.path for f in fit.files)}"]
+    comments = ["residual = (model - data) / sigma; file = index in: "
+                f"{', '.join(f.data.path for f in fit.files)}"]
     if len(only) > 1:
         comments.append("data, sigma, model in mm (S), deg (phi) or - (S_norm) per file")
     paths.append(write_table(out / FIT_FILES["residuals"], residual_columns(fit), comments))

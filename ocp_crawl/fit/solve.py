@@ -1,10 +1,11 @@
 """Weighted least squares of chosen parameters on simulated measurements: :func:`fit_measurements`.
 
 The residual of row j of a file is r_j = (model_j - y_j) / sigma_j (the normalising row of an
-``S_norm`` file is left out: it is 1 - 1 = 0 whatever the parameters).  ``scipy.optimize.least_squares``
-(trust-region reflective, bounds) minimises sum r_j^2 over the parameters, scaled by their start
-values so that every variable is of order 1 (its finite-difference Jacobian then steps every
-parameter by about 1e-4 of its size, far above the simulations' round-off).
+``S_norm`` file is left out: it is 1 - 1 = 0 whatever the parameters).
+``scipy.optimize.least_squares`` (trust-region reflective, bounds) minimises sum r_j^2 over the
+parameters, scaled by their start values so that every variable is of order 1 (its finite-difference
+Jacobian then steps every parameter by about 1e-4 of its size, far above the simulations'
+round-off).
 
 Uncertainties.  J is the Jacobian of r at the solution (per unit of each parameter).  With
 ``absolute_sigma`` (default) the sigmas are taken as the data's standard uncertainties and the
@@ -39,9 +40,11 @@ from ocp_crawl.workers import worker_pool
 
 #: where the fit starts, in messages
 START = "the start values"
-#: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from it
+#: residual (in sigmas) given to a row whose simulation failed during the search, to steer away from
+#: it
 FAILED_RESIDUAL = 1e3
-#: singular values below RCOND * the largest are numerically zero (finite differences are good to ~1e-6)
+#: singular values below RCOND * the largest are numerically zero (finite differences are good to
+#: ~1e-6)
 RCOND = 1e-4
 #: a direction fixed to worse than this relative standard deviation is reported as not determined
 POOR = 1.0
@@ -60,7 +63,8 @@ class FileFit:
     @property
     def residuals(self) -> np.ndarray:
         """(model - data) / sigma per row (0 at the normalising row)"""
-        with np.errstate(over="ignore"):   # an overflowing row is found (not finite) and reported by the caller
+        # an overflowing row is found (not finite) and reported by the caller
+        with np.errstate(over="ignore"):
             return (self.model - self.data.y) / self.data.sigma
 
 
@@ -76,7 +80,8 @@ class Direction:
     """parameter -> component of the unit vector (in relative changes d x / x)"""
 
     def text(self) -> str:
-        terms = " ".join(f"{c:+.2f} dlog({n})" for n, c in self.components.items() if abs(c) >= 0.05)
+        terms = " ".join(f"{c:+.2f} dlog({n})" for n, c in self.components.items()
+                         if abs(c) >= 0.05)
         return f"{terms} (s/s_max = {self.singular_ratio:.1e}, relative sd {self.relative_sd:.2g})"
 
 
@@ -125,10 +130,12 @@ class FitResult:
 
 
 class _Objective:
-    """r(z) of the scaled parameters z = x / scale, with the last evaluation kept (statuses, failures)."""
+    """r(z) of the scaled parameters z = x / scale, with the last evaluation kept (statuses,
+    failures)."""
 
     def __init__(self, problem, datasets, params, executor, pressure, form):
-        self.problem, self.datasets, self.params, self.executor = problem, datasets, params, executor
+        self.problem, self.datasets, self.params, self.executor = (problem, datasets, params,
+                                                                   executor)
         self.form = pressure_form(problem, form)
         self.constants = {**problem_pressure(problem, form), **pressure}
         self.scale = np.array([abs(p.x0) or 1.0 for p in params])
@@ -152,13 +159,14 @@ class _Objective:
     def __call__(self, z: np.ndarray) -> np.ndarray:
         per_file = self.evaluate(z * self.scale)
         self.last = (np.array(z, copy=True), per_file)
-        r = []
+        parts = []
         for d, (model, _) in zip(self.datasets, per_file):
-            with np.errstate(over="ignore"):   # an overflowing residual is replaced below, its row reported
+            # an overflowing residual is replaced below, its row reported
+            with np.errstate(over="ignore"):
                 res = (model - d.y) / d.sigma
             keep = np.arange(len(d)) != (d.reference_row if d.reference_row is not None else -1)
-            r.append(res[keep])
-        r = np.concatenate(r)
+            parts.append(res[keep])
+        r = np.concatenate(parts)
         bad = ~np.isfinite(r)
         if bad.any():
             self.failed_evaluations += 1
@@ -169,6 +177,7 @@ class _Objective:
 
     def files(self) -> list[FileFit]:
         """Data and model of every file at the last evaluation."""
+        assert self.last is not None  # called after an evaluation
         return [FileFit(d, m, s) for d, (m, s) in zip(self.datasets, self.last[1])]
 
 
@@ -177,8 +186,10 @@ def _n_residuals(datasets: Sequence[Measurements]) -> int:
 
 
 def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: float = 1.0,
-                rcond: float = RCOND) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, tuple[Direction, ...]]:
-    """Covariance, correlation, singular values, rank and undetermined directions of a weighted Jacobian.
+                rcond: float = RCOND) -> tuple[np.ndarray, np.ndarray, np.ndarray, int,
+                                               tuple[Direction, ...]]:
+    """Covariance, correlation, singular values, rank and undetermined directions of a weighted
+    Jacobian.
 
     Parameters
     ----------
@@ -215,45 +226,53 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
     np.fill_diagonal(corr, 1.0)
     cov[lost, :] = cov[:, lost] = np.inf
     dirs = tuple(Direction(float(si / smax), math.inf if z else float(math.sqrt(scale2) / si),
-                           {n: float(c) for n, c in zip(names, v * np.sign(v[np.argmax(np.abs(v))]))})
+                           {n: float(c)
+                            for n, c in zip(names, v * np.sign(v[np.argmax(np.abs(v))]))})
                  for si, v, z in zip(s, vt, zero) if z or math.sqrt(scale2) / si > POOR)
     return cov, corr, s, rank, dirs
 
 
-def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter], form: str = DEFAULT_FORM) -> None:
-    """TableError naming a file: fewer measurements than parameters + 1, a fitted gait key that a file's column sets,
-    or an amplitude column ``A_p`` (the paper's form) with ``form`` "raised"."""
+def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter],
+                 form: str = DEFAULT_FORM) -> None:
+    """TableError naming a file: fewer measurements than parameters + 1, a fitted gait key that a
+    file's column sets, or an amplitude column ``A_p`` (the paper's form) with ``form`` "raised"."""
     for d in datasets:
         if form == "raised" and "A_p" in d.inputs:
-            raise TableError(d.path, "column 'A_p' is an amplitude of the paper's form (ref): it cannot be used with "
-                                     "the raised sine (--form raised)")
+            raise TableError(d.path,
+                             "column 'A_p' is an amplitude of the paper's form (ref): it cannot be "
+                             "used with the raised sine (--form raised)")
         for name in d.inputs:
             key = GAIT_KEYS.get(name)
             if d.kind == "gait" and key in {p.name for p in params}:
-                raise TableError(d.path, f"column {name!r} sets {key} in every row: it cannot also be fitted "
-                                         f"(--param {key})")
+                raise TableError(d.path,
+                                 f"column {name!r} sets {key} in every row: it cannot also be "
+                                 f"fitted (--param {key})")
     n = _n_residuals(datasets)
     if n < len(params) + 1:
         names = ", ".join(d.path for d in datasets)
-        raise TableError(datasets[0].path, f"too few points: {n} measurement(s) in {names} (normalising rows not "
-                                           f"counted) for {len(params)} parameter(s); at least {len(params) + 1} needed")
+        raise TableError(datasets[0].path,
+                         f"too few points: {n} measurement(s) in {names} (normalising rows not "
+                         f"counted) for {len(params)} parameter(s); at least {len(params) + 1} "
+                         "needed")
 
 
 def check_pressure(params: Sequence[Parameter], pressure: Mapping[str, float]) -> None:
-    """ProblemError for a pressure constant both fitted and held fixed (``--pressure`` and ``--param``)."""
+    """ProblemError for a pressure constant both fitted and held fixed (``--pressure`` and
+    ``--param``)."""
     for p in params:
         key = p.name.removeprefix("pressure.")
         if p.name.startswith("pressure.") and key in pressure:
-            raise ProblemError(f"--pressure {key}={pressure[key]:g} and --param {p.name}: a constant is either fitted "
-                               f"or held fixed, not both (to start the fit there: --start {p.name}="
-                               f"{pressure[key]:g})")
+            raise ProblemError(f"--pressure {key}={pressure[key]:g} and --param {p.name}: a "
+                               "constant is either fitted or held fixed, not both (to start the "
+                               f"fit there: --start {p.name}={pressure[key]:g})")
 
 
 def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
                pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
-    """TableError naming the file and row whose operating point the model rejects at the start values: a gait row's
-    keys that ``Problem.with_values`` rejects (a range, a foot off the ground, a key of another waveform), a
-    pressure row whose waveform is invalid (an amplitude above its p0).  Nothing is simulated."""
+    """TableError naming the file and row whose operating point the model rejects at the start
+    values: a gait row's keys that ``Problem.with_values`` rejects (a range, a foot off the ground,
+    a key of another waveform), a pressure row whose waveform is invalid (an amplitude above its
+    p0).  Nothing is simulated."""
     keys, fitted = split_values(params, [p.x0 for p in params])
     constants = {**problem_pressure(problem, form), **(pressure or {}), **fitted}
     for d in datasets:
@@ -263,24 +282,27 @@ def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Seque
                 amp = (f" (amplitude pressure.amplitude_bar = {constants['amplitude_bar']:g} bar)"
                        if d.kind == "pressure" and "A_p" not in d.inputs
                        and math.isfinite(constants.get("amplitude_bar", math.nan)) else "")
-                raise d.table.error(f"at the start values the model rejects the operating point {d.point(j)}{amp}: "
-                                    f"{why}", j)
+                raise d.table.error("at the start values the model rejects the operating point "
+                                    f"{d.point(j)}{amp}: {why}", j)
 
 
 def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
                  pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
-    """Every check of a fit's input before any simulation: :func:`check_counts`, :func:`check_pressure`,
-    :func:`check_rows`.  TableError (naming a file and row) or ProblemError (naming an option)."""
+    """Every check of a fit's input before any simulation: :func:`check_counts`,
+    :func:`check_pressure`, :func:`check_rows`.  TableError (naming a file and row) or ProblemError
+    (naming an option)."""
     check_counts(datasets, params, pressure_form(problem, form))
     check_pressure(params, pressure or {})
     check_rows(problem, datasets, params, pressure, form)
 
 
-def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: str = "the fitted parameters"
-                  ) -> tuple[Status, str]:
-    """The first failing row's status; NO_CONVERGENCE for a row whose weighted residual is not finite although its
-    model is (it overflows), or for a search that did not converge; else SUCCESS."""
-    failed = [(f.data.table.line_of(j), f.data.path, s) for f in files for j, s in enumerate(f.statuses)
+def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int,
+                  where: str = "the fitted parameters" ) -> tuple[Status, str]:
+    """The first failing row's status; NO_CONVERGENCE for a row whose weighted residual is not
+    finite although its model is (it overflows), or for a search that did not converge; else
+    SUCCESS."""
+    failed = [(f.data.table.line_of(j), f.data.path,
+               s) for f in files for j, s in enumerate(f.statuses)
               if s != SUCCESS]
     if failed:
         line, path, text = failed[0]
@@ -295,11 +317,14 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int, where: st
     if overflow:
         f, j = overflow[0]
         return Status.NO_CONVERGENCE, (
-            f"the weighted residual (model - data) / sigma of {f.data.path}:{f.data.table.line_of(j)} is not finite at "
-            f"{where} (model {f.model[j]:.3g}, data {f.data.y[j]:.3g}, sigma {f.data.sigma[j]:.3g}, SI): it overflows"
+            "the weighted residual (model - data) / sigma of "
+            f"{f.data.path}:{f.data.table.line_of(int(j))} is not finite at {where} (model "
+            f"{f.model[j]:.3g}, data {f.data.y[j]:.3g}, sigma {f.data.sigma[j]:.3g}, SI): it "
+            "overflows"
             + ("; the search did not run, no uncertainties" if where == START else ""))
     if ls_status <= 0:
-        return Status.NO_CONVERGENCE, f"least squares stopped after {nfev} evaluations without converging"
+        return (Status.NO_CONVERGENCE,
+                f"least squares stopped after {nfev} evaluations without converging")
     return Status.SUCCESS, f"converged after {nfev} evaluations"
 
 
@@ -370,6 +395,7 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
             if status == Status.SUCCESS:
                 status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {obj.calls} evaluations: {exc} "
                                                       "(the weighted residuals overflow); no uncertainties")
+            assert obj.last is not None  # obj.files() above needs an evaluation
             return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, obj.calls, absolute_sigma,
                            rcond)
         if obj.last is None or not np.array_equal(obj.last[0], res.x):
@@ -382,35 +408,43 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
             executor.shutdown(cancel_futures=True)
 
 
-def _trusted(status: Status, message: str, jac: np.ndarray | None, cov: np.ndarray, rank: int) -> tuple[Status, str]:
-    """SUCCESS only for a search that ran, with a finite Jacobian, a covariance without NaN and rank >= 1 (a
-    rank-deficient fit keeps its infinite sigmas: the directions are reported); else NO_CONVERGENCE, saying why."""
+def _trusted(status: Status, message: str, jac: np.ndarray | None, cov: np.ndarray,
+             rank: int) -> tuple[Status, str]:
+    """SUCCESS only for a search that ran, with a finite Jacobian, a covariance without NaN and rank
+    >= 1 (a rank-deficient fit keeps its infinite sigmas: the directions are reported); else
+    NO_CONVERGENCE, saying why."""
     if status != Status.SUCCESS:
         return status, message
     if jac is None:
         why = "the search did not run (no Jacobian)"
     elif not np.all(np.isfinite(jac)):
-        why = "the weighted Jacobian at the fitted parameters is not finite (the residuals overflow)"
+        why = ("the weighted Jacobian at the fitted parameters is not finite (the residuals "
+               "overflow)")
     elif np.isnan(cov).any():
         why = "the covariance is not finite (NaN)"
     elif rank == 0:
-        why = "the weighted Jacobian is zero (rank 0): the data do not depend on any fitted parameter"
+        why = ("the weighted Jacobian is zero (rank 0): the data do not depend on any fitted "
+               "parameter")
     else:
         return status, message
-    return Status.NO_CONVERGENCE, f"not a fit ({message}): {why}; nothing is determined, no uncertainties"
+    return (Status.NO_CONVERGENCE,
+            f"not a fit ({message}): {why}; nothing is determined, no uncertainties")
 
 
-def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_sigma, rcond) -> FitResult:
+def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_sigma,
+            rcond) -> FitResult:
     x = z * obj.scale
     # a failed (or overflowing) row's residual is a penalty, not a misfit: no chi-square then
-    failed = any(s != SUCCESS for f in files for s in f.statuses) or not all(np.isfinite(f.residuals).all()
-                                                                            for f in files)
+    failed = (any(s != SUCCESS for f in files for s in f.statuses)
+              or not all(np.isfinite(f.residuals).all() for f in files))
     with np.errstate(over="ignore"):
         chi2 = math.nan if failed else float(np.sum(np.asarray(r) ** 2))
     dof = len(r) - len(x)
     scale2 = 1.0 if absolute_sigma or dof <= 0 else chi2 / dof
     names = [p.name for p in obj.params]
-    if jac is None or not np.all(np.isfinite(jac)):  # no (usable) Jacobian: nothing known about the uncertainties
+    # no (usable) Jacobian: nothing known about the uncertainties
+    dirs: tuple[Direction, ...]
+    if jac is None or not np.all(np.isfinite(jac)):
         nan = np.full((len(x), len(x)), np.nan)
         cov, corr, s, rank, dirs = nan, nan.copy(), np.empty(0), 0, ()
     else:
@@ -420,5 +454,6 @@ def _result(obj: _Objective, z, jac, r, files, status, message, nfev, absolute_s
     fitted = obj.problem.with_values(keys) if keys else obj.problem
     uses = any(d.kind in ("pressure", "bending") for d in obj.datasets)
     constants = {**obj.constants, **pressure} if uses else {}
-    return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs, tuple(files), chi2, dof,
+    return FitResult(tuple(obj.params), x, np.sqrt(np.diag(cov)), cov, corr, s, rank, dirs,
+                     tuple(files), chi2, dof,
                      nfev, status, message, absolute_sigma, fitted, constants, obj.form)

@@ -28,21 +28,25 @@ import numpy as np
 
 from ocp_crawl.checks import finite_or_none
 
-#: tag of this host in temporary names: a leftover is only judged by its writer's pid on the same host
+#: tag of this host in temporary names: a leftover is only judged by its writer's pid on the same
+#: host
 HOST_TAG = hashlib.sha1(socket.gethostname().encode("utf-8", "replace")).hexdigest()[:8]
-#: ``.<name>.<pid>-<host>.<random>.tmp``: the temporary files of :func:`atomic_write` (and of temp_prefix)
+#: ``.<name>.<pid>-<host>.<random>.tmp``: the temporary files of :func:`atomic_write` (and of
+#: temp_prefix)
 TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)-(?P<host>[0-9a-f]{8})\.[^./]+\.tmp$")
 
 
 def temp_prefix(name: str) -> str:
-    """Prefix of a temporary file or directory (the caller adds a random part and ``.tmp``) for ``name``."""
+    """Prefix of a temporary file or directory (the caller adds a random part and ``.tmp``) for
+    ``name``."""
     return f".{name}.{os.getpid()}-{HOST_TAG}."
 
 
 def _alive(pid: int) -> bool:
     if pid == os.getpid():
         return True
-    if os.name == "nt":  # os.kill(pid, 0) would terminate the process on Windows: assume it is alive
+    # os.kill(pid, 0) would terminate the process on Windows: assume it is alive
+    if os.name == "nt":
         return True
     try:
         os.kill(pid, 0)
@@ -54,8 +58,8 @@ def _alive(pid: int) -> bool:
 
 
 def is_stale_temp(name: str, target: str | None = None) -> bool:
-    """True if ``name`` is a temporary file (or directory) of a writer on this host that no longer runs;
-    with ``target``, only the temporary files of that target name."""
+    """True if ``name`` is a temporary file (or directory) of a writer on this host that no longer
+    runs; with ``target``, only the temporary files of that target name."""
     m = TEMP_RE.match(name)
     if m is None or m["host"] != HOST_TAG or (target is not None and m["name"] != target):
         return False
@@ -76,10 +80,11 @@ def _remove(path: Path) -> bool:
 
 
 def remove_stale_temps(directory: str | os.PathLike, target: str | None = None) -> list[Path]:
-    """Remove the temporary files left in ``directory`` by killed writers (see the module docstring).
+    """Remove the temporary files left in ``directory`` by killed writers (see the module
+    docstring).
 
-    Only names of the form ``.<name>.<pid>-<host>.<random>.tmp`` whose process is gone on this host are
-    removed; returns them.  A missing or unreadable directory removes nothing.
+    Only names of the form ``.<name>.<pid>-<host>.<random>.tmp`` whose process is gone on this host
+    are removed; returns them.  A missing or unreadable directory removes nothing.
     """
     directory = Path(directory)
     try:
@@ -94,7 +99,8 @@ def remove_stale_temps(directory: str | os.PathLike, target: str | None = None) 
 
 
 def _fsync_dir(directory: Path) -> None:
-    """Make a rename in ``directory`` durable (POSIX); a no-op where directories cannot be opened."""
+    """Make a rename in ``directory`` durable (POSIX); a no-op where directories cannot be
+    opened."""
     try:
         fd = os.open(directory, os.O_RDONLY)
     except OSError:
@@ -108,31 +114,35 @@ def _fsync_dir(directory: Path) -> None:
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[IO[bytes]], Any]) -> Path:
-    """Call ``write(fh)`` on a temporary file in the target's directory, then rename it over ``path``.
+    """Call ``write(fh)`` on a temporary file in the target's directory, then rename it over
+    ``path``.
 
     The temporary file lives in the same directory so that ``os.replace`` is a rename on one file
     system (atomic on POSIX and Windows); on any error it is removed and the target is untouched.
-    Leftovers of earlier writers of ``path`` that were killed are removed first.  An OSError (a full disk, ...)
-    is raised again with ``path`` as its file name, so that the message names the file.
+    Leftovers of earlier writers of ``path`` that were killed are removed first.  An OSError (a full
+    disk, ...) is raised again with ``path`` as its file name, so that the message names the file.
     """
     path = Path(path)
     try:
         _write_replace(path, write)
     except OSError as exc:
-        # name the target (a full disk says only "No space left on device"; mkstemp names its temporary file)
+        # name the target (a full disk says only "No space left on device"; mkstemp names its
+        # temporary file)
         raise naming(exc, path) from exc
     _fsync_dir(path.parent)
     return path
 
 
 def naming(exc: OSError, path: str | os.PathLike) -> OSError:
-    """A copy of ``exc`` with ``path`` as its file name (the same errno, hence the same OSError subclass, and reason),
-    so that its message names the file written."""
-    return OSError(exc.errno, exc.strerror or " ".join(str(exc).split()) or type(exc).__name__, str(path))
+    """A copy of ``exc`` with ``path`` as its file name (the same errno, hence the same OSError
+    subclass, and reason), so that its message names the file written."""
+    return OSError(exc.errno, exc.strerror or " ".join(str(exc).split()) or type(exc).__name__,
+                   str(path))
 
 
 def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
-    """The temporary file of :func:`atomic_write`, written and renamed over ``path`` (removed on any error)."""
+    """The temporary file of :func:`atomic_write`, written and renamed over ``path`` (removed on any
+    error)."""
     remove_stale_temps(path.parent, path.name)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=temp_prefix(path.name), suffix=".tmp")
     try:
@@ -151,35 +161,40 @@ def _write_replace(path: Path, write: Callable[[IO[bytes]], Any]) -> None:
         raise
 
 
-#: how long an input that is a named pipe may stay without data before it is refused [s] (no writer: refused
-#: instead of waiting for ever)
+#: how long an input that is a named pipe may stay without data before it is refused [s] (no writer:
+#: refused instead of waiting for ever)
 PIPE_WAIT_S = 10.0
 
 
 def read_bounded(path: str | os.PathLike, limit: int) -> bytes:
-    """The bytes of the input file ``path``, at most ``limit + 1`` of them (the caller refuses more).
+    """The bytes of the input file ``path``, at most ``limit + 1`` of them (the caller refuses
+    more).
 
-    An endless file (/dev/zero) stops at the limit.  A named pipe is opened without waiting for a writer and
-    read once data (or the end) arrives, at most :data:`PIPE_WAIT_S` later (then refused: no writer).  Every
-    failure is an OSError whose ``strerror`` says why (a path with a NUL character included, which ``open``
-    reports as a ValueError).
+    An endless file (/dev/zero) stops at the limit.  A named pipe is opened without waiting for a
+    writer and read once data (or the end) arrives, at most :data:`PIPE_WAIT_S` later (then refused:
+    no writer).  Every failure is an OSError whose ``strerror`` says why (a path with a NUL
+    character included, which ``open`` reports as a ValueError).
     """
-    nonblocking = getattr(os, "O_NONBLOCK", 0)   # POSIX; Windows has no named pipes in the file system
+    # POSIX; Windows has no named pipes in the file system
+    nonblocking = getattr(os, "O_NONBLOCK", 0)
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0) | nonblocking)
     except ValueError as exc:
         raise OSError(errno.EINVAL, f"invalid path ({exc})") from None
     with os.fdopen(fd, "rb") as fh:
         if nonblocking:
-            if stat.S_ISFIFO(os.fstat(fd).st_mode) and not select.select([fd], [], [], PIPE_WAIT_S)[0]:
-                raise OSError(errno.ETIMEDOUT, f"a named pipe with nothing written to it within {PIPE_WAIT_S:g} s "
-                                               "(no writer?)")
+            if (stat.S_ISFIFO(os.fstat(fd).st_mode)
+                    and not select.select([fd], [], [], PIPE_WAIT_S)[0]):
+                raise OSError(errno.ETIMEDOUT,
+                              f"a named pipe with nothing written to it within {PIPE_WAIT_S:g} s "
+                              "(no writer?)")
             os.set_blocking(fd, True)   # opened without waiting for a writer; now read as usual
         return fh.read(limit + 1)
 
 
 def jsonable(obj: Any) -> Any:
-    """Plain JSON types: numpy scalars and arrays converted, non-finite floats as null (strict JSON)."""
+    """Plain JSON types: numpy scalars and arrays converted, non-finite floats as null (strict
+    JSON)."""
     if isinstance(obj, dict):
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):

@@ -1,9 +1,9 @@
 """Lazy re-exports (PEP 562): a package's public names are imported from their modules on first use.
 
 The package ``__init__`` files re-export their folder's public names this way, so that
-``import ocp_crawl`` (or ``ocp_crawl.sweep``, ...) costs nothing until a name is used: numpy, CasADi,
-scipy and matplotlib are imported by the modules that need them, when one of their names is first
-asked for.  Start-up time matters for short commands and for every worker process of a sweep.
+``import ocp_crawl`` (or ``ocp_crawl.sweep``, ...) costs nothing until a name is used: numpy,
+CasADi, scipy and matplotlib are imported by the modules that need them, when one of their names is
+first asked for.  Start-up time matters for short commands and for every worker process of a sweep.
 """
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import sys
 from typing import Any, Callable, Mapping
 
 
-def lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+def lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[str], Any],
+                                                                    Callable[[], list[str]]]:
     """The module-level ``__getattr__`` and ``__dir__`` of a package with lazy public names.
 
     Parameters

@@ -1,4 +1,5 @@
-"""The numbers behind the paper's published curves, shipped with the package (``ocp_crawl/data/paper``)."""
+"""The numbers behind the paper's published curves, shipped with the package
+(``ocp_crawl/data/paper``)."""
 from __future__ import annotations
 
 import csv
@@ -12,7 +13,8 @@ PAPER_DATA_ENV = "OCP_CRAWL_PAPER_DATA"
 
 
 def paper_data_dir() -> Path:
-    """Directory of the paper's data files: ``$OCP_CRAWL_PAPER_DATA``, else the copy shipped in the package."""
+    """Directory of the paper's data files: ``$OCP_CRAWL_PAPER_DATA``, else the copy shipped in the
+    package."""
     env = os.environ.get(PAPER_DATA_ENV)
     return Path(env) if env else Path(__file__).resolve().parent.parent / "data" / "paper"
 

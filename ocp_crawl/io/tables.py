@@ -43,7 +43,8 @@ UNITS: dict[str, dict[str, float]] = {
 }
 
 #: The unit every column is converted to, per dimension.
-SI_UNIT = {"dimensionless": "-", "angle": "rad", "torque": "N m", "length": "m", "pressure": "Pa", "time": "s",
+SI_UNIT = {"dimensionless": "-", "angle": "rad", "torque": "N m", "length": "m", "pressure": "Pa",
+           "time": "s",
            "frequency": "Hz", "energy": "J", "force": "N", "mass": "kg", "stiffness": "N m/rad"}
 
 _HEADER = re.compile(r"^\s*([^\[\]]*?)\s*\[\s*([^\[\]]*?)\s*\]\s*$")
@@ -51,11 +52,13 @@ MAX_TABLE_BYTES = 16 * 2**20
 
 
 class TableError(ValueError):
-    """A table file breaks the convention; ``str(exc)`` is one line ``FILE[:LINE]: what is wrong``."""
+    """A table file breaks the convention; ``str(exc)`` is one line
+    ``FILE[:LINE]: what is wrong``."""
 
     def __init__(self, path: str | os.PathLike, message: str, line: int | None = None):
         self.path, self.line, self.reason = str(path), line, message
-        shown = self.path if self.path.isprintable() else ascii(self.path)   # a NUL or newline in the name
+        # a NUL or newline in the name
+        shown = self.path if self.path.isprintable() else ascii(self.path)
         where = f"{shown}:{line}" if line is not None else shown
         super().__init__(f"{where}: {message}")
 
@@ -155,13 +158,15 @@ def _number(path: Path, lineno: int, name: str, unit: str, text: str) -> float:
     try:
         value = parse_number(text)
     except ValueError:
-        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number", lineno) from None
+        raise TableError(path, f"column '{name} [{unit}]': {text!r} is not a number",
+                         lineno) from None
     if not math.isfinite(value):
         raise TableError(path, f"column '{name} [{unit}]': {text} is not a finite number", lineno)
     return value
 
 
-def read_table(path: str | os.PathLike, required: Mapping[str, str], optional: Mapping[str, str] | None = None,
+def read_table(path: str | os.PathLike, required: Mapping[str, str],
+               optional: Mapping[str, str] | None = None,
                *, min_rows: int = 1, allow_extra: bool = False) -> Table:
     """Read a CSV table of the package's convention, checked and converted to SI units.
 
@@ -201,8 +206,9 @@ def read_table(path: str | os.PathLike, required: Mapping[str, str], optional: M
     present = [n for n, _ in names]
     missing = [n for n in required if n not in present]
     if missing:
-        raise TableError(path, f"missing column(s) {', '.join(repr(m) for m in missing)} (header has "
-                               f"{', '.join(repr(c) for c in head)})", head_line)
+        raise TableError(path,
+                         f"missing column(s) {', '.join(repr(m) for m in missing)} (header has "
+                         f"{', '.join(repr(c) for c in head)})", head_line)
     extra = [n for n in present if n not in known]
     if extra and not allow_extra:
         raise TableError(path, f"unknown column(s) {', '.join(repr(e) for e in extra)} (expected "
@@ -211,8 +217,10 @@ def read_table(path: str | os.PathLike, required: Mapping[str, str], optional: M
     data, lines = [], []
     for lineno, cells in rows[1:]:
         if len(cells) != len(names):
-            raise TableError(path, f"{len(cells)} cells where the header has {len(names)} columns", lineno)
-        data.append([_number(path, lineno, n, u, c) * f for (n, u), c, f in zip(names, cells, factors)])
+            raise TableError(path, f"{len(cells)} cells where the header has {len(names)} columns",
+                             lineno)
+        data.append([_number(path, lineno, n, u, c) * f
+                     for (n, u), c, f in zip(names, cells, factors)])
         lines.append(lineno)
     if len(data) < min_rows:
         raise TableError(path, f"{len(data)} data row(s); at least {min_rows} needed")
@@ -221,8 +229,10 @@ def read_table(path: str | os.PathLike, required: Mapping[str, str], optional: M
                  {n: u for n, u in names}, np.array(lines, dtype=int))
 
 
-def table_text(columns: Sequence[tuple[str, str, Iterable[float]]], comments: Sequence[str] = ()) -> str:
-    """The CSV text of ``columns`` = [(name, unit, values), ...] with full precision (``repr`` floats)."""
+def table_text(columns: Sequence[tuple[str, str, Iterable[float]]],
+               comments: Sequence[str] = ()) -> str:
+    """The CSV text of ``columns`` = [(name, unit, values), ...] with full precision (``repr``
+    floats)."""
     cols = [(n, u, [float(v) for v in vals]) for n, u, vals in columns]
     lengths = {len(v) for _, _, v in cols}
     if len(lengths) > 1:

@@ -10,8 +10,8 @@ import math
 from typing import Any
 
 #: SI unit of each number of a summary (JSON output and data frames carry these)
-UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles", "energy": "J",
-         "energy.balance_residual": "-",
+UNITS = {"S": "m", "W_plus": "J", "W_plus_joint": "J", "CoT_plus": "-", "t": "cycles",
+         "energy": "J", "energy.balance_residual": "-",
          "tau": "N m", "solve_time_s": "s", "elapsed_s": "s", "T": "s", "v": "m/s",
          "peak_joint_rate_deg_s": "deg/s", "peak_slip_speed_m_s": "m/s",
          "harmonic_peak_joint_rate_deg_s": "deg/s", "harmonic_peak_slip_speed_m_s": "m/s"}
@@ -46,7 +46,8 @@ def fixed(x: Any, decimals: int = 3, scale: float = 1.0, sign: bool = False) -> 
 
 
 def significant(x: Any, digits: int = 3) -> str:
-    """x to ``digits`` significant digits, trailing zeros kept (20.3, 0.500, 1.23e+04); "-" if missing."""
+    """x to ``digits`` significant digits, trailing zeros kept (20.3, 0.500, 1.23e+04); "-" if
+    missing."""
     v = _value(x)
     if v is None or math.isnan(v):
         return MISSING
@@ -80,7 +81,8 @@ def cot(x: Any, digits: int = 3) -> str:
 
 
 def seconds(t: Any) -> str:
-    """A duration [s]: one decimal from 1 s on, 3 significant digits below, e.g. "4.1 s", "0.0415 s"."""
+    """A duration [s]: one decimal from 1 s on, 3 significant digits below, e.g. "4.1 s", "0.0415
+    s"."""
     v = _value(t)
     if v is None or not math.isfinite(v):
         return MISSING

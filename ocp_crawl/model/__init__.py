@@ -1,4 +1,5 @@
-"""The robot: named parameters, kinematics and statics, contact modes, step equations, input signals."""
+"""The robot: named parameters, kinematics and statics, contact modes, step equations, input
+signals."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -13,7 +14,8 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear", "PeriodicPchip",
+    "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear",
+    "PeriodicPchip",
     "PeriodicSignal", "PeriodicSpline", "Pulse", "ReferenceTorque", "TorqueReference", "as_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -27,21 +27,24 @@ import numpy as np
 from ocp_crawl.io.files import remove_stale_temps, temp_prefix
 
 
-#: zero-argument builders of the package's compiled functions ("module.qualname" -> builder returning a
-#: FastFunction), registered by :func:`compiled_function`; ``ocp-crawl warmup`` builds them all, and
-#: tests/test_warmup.py checks that every FastFunction of the package is made by a registered builder
+#: zero-argument builders of the package's compiled functions ("module.qualname" -> builder
+#: returning a FastFunction), registered by :func:`compiled_function`; ``ocp-crawl warmup`` builds
+#: them all, and tests/test_warmup.py checks that every FastFunction of the package is made by a
+#: registered builder
 BUILDERS: dict[str, Callable[[], "FastFunction"]] = {}
 
 
 def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "FastFunction"]:
-    """Decorator: register ``builder`` (no arguments, returns a :class:`FastFunction`) in :data:`BUILDERS`."""
+    """Decorator: register ``builder`` (no arguments, returns a :class:`FastFunction`) in
+    :data:`BUILDERS`."""
     BUILDERS[f"{builder.__module__}.{builder.__qualname__}"] = builder
     return builder
 
 
-#: C compiler flags of the libraries.  -fno-math-errno lets the compiler use the square-root instruction instead of
-#: a libm call that sets errno (the same correctly rounded value; 20-25 % faster solves); no flag that changes
-#: floating-point results (no -ffast-math, no -march that would allow fused multiply-adds)
+#: C compiler flags of the libraries.  -fno-math-errno lets the compiler use the square-root
+#: instruction instead of a libm call that sets errno (the same correctly rounded value; 20-25 %
+#: faster solves); no flag that changes floating-point results (no -ffast-math, no -march that would
+#: allow fused multiply-adds)
 CFLAGS = ("-O2", "-fno-math-errno")
 
 #: say on stderr, once per process, when a library is compiled because the cache does not hold it
@@ -63,7 +66,8 @@ def _announce_build(out_dir: Path) -> None:
 
 
 class CacheError(ValueError):
-    """The compiled-library cache cannot be used (bad input: ``OCP_CRAWL_CACHE`` or ``XDG_CACHE_HOME``).
+    """The compiled-library cache cannot be used (bad input: ``OCP_CRAWL_CACHE`` or
+    ``XDG_CACHE_HOME``).
 
     The message is one line naming the variable, the path and what is wrong with it.
     """
@@ -97,7 +101,8 @@ def _kind(path: Path) -> str:
         mode = path.stat().st_mode
     except OSError:
         return "not a directory"
-    kinds = ((stat.S_ISREG, "a regular file"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+    kinds = ((stat.S_ISREG, "a regular file"), (stat.S_ISCHR, "a character device"),
+             (stat.S_ISBLK, "a block device"),
              (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"))
     return next((name for test, name in kinds if test(mode)), "not a directory")
 
@@ -108,11 +113,14 @@ def _not_usable(exc: OSError, path: Path) -> str:
         return f"not a directory (it is {_kind(path)})"
     if isinstance(exc, NotADirectoryError):
         # the first name of the path that exists and is not a directory
-        blocker = next((p for p in reversed(path.parents) if p.exists() and not p.is_dir()), path.parent)
+        blocker = next((p for p in reversed(path.parents) if p.exists() and not p.is_dir()),
+                       path.parent)
         return f"not a directory ({blocker} in its path is {_kind(blocker)})"
     if exc.errno == errno.ENAMETOOLONG:
-        longest, total = max(len(os.fsencode(part)) for part in path.parts), len(os.fsencode(str(path)))
-        return f"name too long ({exc.strerror}; its longest name has {longest} bytes, the path {total})"
+        longest, total = (max(len(os.fsencode(part)) for part in path.parts),
+                          len(os.fsencode(str(path))))
+        return (f"name too long ({exc.strerror}; its longest name has {longest} bytes, the path "
+                f"{total})")
     if isinstance(exc, PermissionError) or exc.errno == errno.EROFS:
         return f"not writable: cannot create the directory ({exc.strerror})"
     return f"cannot create the directory: {exc.strerror or exc}"
@@ -123,18 +131,18 @@ def usable_cache_dir() -> Path:
 
     Raises
     ------
-    CacheError : naming the variable that chose the directory, the path and the reason (not a directory,
-        not writable, name too long, ...), before anything is compiled into it.
+    CacheError : naming the variable that chose the directory, the path and the reason (not a
+        directory, not writable, name too long, ...), before anything is compiled into it.
     """
     path = cache_dir()
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise CacheError(f"{_cache_name(path)}: {_not_usable(exc, path)}; the cache must be a writable "
-                         "directory") from None
+        raise CacheError(f"{_cache_name(path)}: {_not_usable(exc, path)}; the cache must be a "
+                         "writable directory") from None
     if not os.access(path, os.W_OK | os.X_OK):
-        raise CacheError(f"{_cache_name(path)}: directory is not writable; the cache must be a writable "
-                         "directory")
+        raise CacheError(f"{_cache_name(path)}: directory is not writable; the cache must be a "
+                         "writable directory")
     return path
 
 
@@ -161,10 +169,12 @@ def _generate(funs: Sequence[cs.Function]) -> str:
 
 
 def _key(fun: cs.Function, cc: str, tag: str = "") -> str:
-    """Cache key of ``fun``'s library: a hash of its serialised expression graph (a few ms, against 10-20 ms
-    for generating the C source, which a warm run thus never does), the CasADi version, platform, compiler and
-    flags, and ``tag`` (what else the library holds, see :func:`build_library`)."""
-    tag = "|".join(("codegen-v2", " ".join(CFLAGS), cs.__version__, sys.platform, cc)) + (f"|{tag}" if tag else "")
+    """Cache key of ``fun``'s library: a hash of its serialised expression graph (a few ms, against
+    10-20 ms for generating the C source, which a warm run thus never does), the CasADi version,
+    platform, compiler and flags, and ``tag`` (what else the library holds, see
+    :func:`build_library`)."""
+    tag = "|".join(("codegen-v2", " ".join(CFLAGS), cs.__version__, sys.platform,
+                    cc)) + (f"|{tag}" if tag else "")
     return hashlib.sha256(fun.serialize().encode() + tag.encode()).hexdigest()[:16]
 
 
@@ -199,8 +209,8 @@ def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Functio
     Parameters
     ----------
     fun : the function; the library is named after it and keyed by its expression graph.
-    companions : called only when the library is built: the functions it holds (``fun`` first; default
-        ``[fun]``), e.g. ``fun`` and its derivatives, which are functions of ``fun`` alone.
+    companions : called only when the library is built: the functions it holds (``fun`` first;
+        default ``[fun]``), e.g. ``fun`` and its derivatives, which are functions of ``fun`` alone.
     tag : names what ``companions`` adds (part of the cache key; empty for ``fun`` alone).
 
     Returns
@@ -219,15 +229,17 @@ def build_library(fun: cs.Function, companions: Callable[[], Sequence[cs.Functio
     try:
         src = _generate(companions() if companions is not None else [fun])
         out_dir.mkdir(parents=True, exist_ok=True)
-        # the source and the library are built in a private directory and the library is renamed into
-        # place: a reader (or a concurrent builder) never sees a partial library.  A build killed
-        # half-way leaves its directory; the next build removes it (files.remove_stale_temps)
+        # the source and the library are built in a private directory and the library is renamed
+        # into place: a reader (or a concurrent builder) never sees a partial library.  A build
+        # killed half-way leaves its directory; the next build removes it (files.remove_stale_temps)
         remove_stale_temps(out_dir, lib.name)
-        with tempfile.TemporaryDirectory(dir=out_dir, prefix=temp_prefix(lib.name), suffix=".tmp") as tmp:
+        with tempfile.TemporaryDirectory(dir=out_dir, prefix=temp_prefix(lib.name),
+                                         suffix=".tmp") as tmp:
             c_file = Path(tmp, "f.c")
             c_file.write_text(src)
             tmp_lib = Path(tmp, "f.so")
-            proc = subprocess.run([cc, *CFLAGS, "-shared", "-fPIC", "-o", str(tmp_lib), str(c_file), "-lm"],
+            proc = subprocess.run([cc, *CFLAGS, "-shared", "-fPIC", "-o", str(tmp_lib), str(c_file),
+                                   "-lm"],
                                   capture_output=True, text=True, timeout=300)
             if proc.returncode != 0:
                 _failed(fun.name(), *_compiler_failure(proc, lib))
@@ -278,11 +290,13 @@ class FastFunction:
         if work(*[ctypes.byref(s) for s in sz]) != 0:
             raise OSError("work query failed")
         sz_arg, sz_res, sz_iw, sz_w = (s.value for s in sz)
-        # one contiguous buffer for all inputs and one for all outputs (the arguments are views into them): a
-        # call fills the inputs with one assignment (:meth:`flat`) and copies the outputs once
+        # one contiguous buffer for all inputs and one for all outputs (the arguments are views into
+        # them): a call fills the inputs with one assignment (:meth:`flat`) and copies the outputs
+        # once
         self._inbuf, self._in = _stacked(self.n_in)
         self._outbuf, self._out = _stacked(self.n_out)
-        self._cin = (ctypes.c_double * max(self._inbuf.size, 1)).from_buffer(self._inbuf) if self._inbuf.size else None
+        self._cin = ((ctypes.c_double * max(self._inbuf.size, 1)).from_buffer(self._inbuf)
+                     if self._inbuf.size else None)
         dp = ctypes.POINTER(ctypes.c_double)
         self._arg = (dp * max(sz_arg, len(self._in)))(*[a.ctypes.data_as(dp) for a in self._in])
         self._res = (dp * max(sz_res, len(self._out)))(*[a.ctypes.data_as(dp) for a in self._out])
@@ -293,11 +307,13 @@ class FastFunction:
         self._call_args = (self._arg, self._res, self._iw, self._w, 0)
         self._lib = lib
         self._kept: tuple | None = None
-        """(list, position) of the inputs that :meth:`flat` keeps in the input buffer, None if none"""
+        """(list, position) of the inputs that :meth:`flat` keeps in the input buffer, None if
+        none"""
 
     def __call__(self, *inputs) -> list[np.ndarray]:
         if not self.compiled:
-            out = self.fun(*[np.reshape(x, self.fun.size_in(i), order="F") for i, x in enumerate(inputs)])
+            out = self.fun(*[np.reshape(x, self.fun.size_in(i),
+                                        order="F") for i, x in enumerate(inputs)])
             if not isinstance(out, (list, tuple)):
                 out = [out]
             return [np.asarray(o, float).ravel(order="F") for o in out]
@@ -309,17 +325,19 @@ class FastFunction:
         return [o.copy() for o in self._out]
 
     def flat(self, values: list, kept: list | None = None) -> np.ndarray:
-        """The function at flat inputs: the same numbers as ``__call__``, with the least Python work per call (one
-        assignment of the inputs, one copy of the outputs; for the stepper's hot loop).
+        """The function at flat inputs: the same numbers as ``__call__``, with the least Python work
+        per call (one assignment of the inputs, one copy of the outputs; for the stepper's hot
+        loop).
 
         Parameters
         ----------
         values : list of float
-            All inputs one after the other (``sum(n_in)`` values, each input in column-major order), or the first
-            ones if ``kept`` is given.
+            All inputs one after the other (``sum(n_in)`` values, each input in column-major order),
+            or the first ones if ``kept`` is given.
         kept : list of float, optional
-            The last inputs, as a list that the caller never changes: while the same list (the same object) comes
-            again after the same number of ``values``, it is still in the input buffer and not written anew.
+            The last inputs, as a list that the caller never changes: while the same list (the same
+            object) comes again after the same number of ``values``, it is still in the input buffer
+            and not written anew.
 
         Returns
         -------

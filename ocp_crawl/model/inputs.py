@@ -263,6 +263,7 @@ class _Sampled(PeriodicSignal):
     """Base of the signals interpolating samples at knots ``t_knots`` in [0, 1)."""
 
     t_knots: np.ndarray
+    values: np.ndarray
 
     def __repr__(self) -> str:
         with np.printoptions(precision=17, threshold=10_000):

@@ -10,9 +10,10 @@ so the torque input is that of eq. (tau) with the reference angle
 
     phi_ref,i(t) = phi_rest - bending_i(p_i(t)),      tau_i = k (phi_ref,i - pi).
 
-**Earlier assumptions** (``PressureWaveform(amplitude=None)``, ``form="raised"`` of the pressure study and of
-the calibration; the paper's form (ref) below is the default of both, :data:`DEFAULT_FORM`).
-Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we assumed
+**Earlier assumptions** (``PressureWaveform(amplitude=None)``, ``form="raised"`` of the pressure
+study and of the calibration; the paper's form (ref) below is the default of both,
+:data:`DEFAULT_FORM`).  Reading "periodic inputs of the form (ref)" with nominal pressure p0
+loosely, we assumed
 
 * a raised sine between zero and the peak pressure p0 (a pressure controller cannot go below
   atmospheric, and the largest experimental p0 = 1.7 bar gives a plausible 28 deg of bending):
@@ -30,13 +31,14 @@ Reading "periodic inputs of the form (ref)" with nominal pressure p0 loosely, we
 
 **The paper's form (ref), read literally**: "pressure inputs of the form (ref)" with
 "nominal pressure p0", where (ref) is gamma + A sin(w t +- psi/2) and gamma is called the "nominal
-angle": p0 is the mean pressure, p_i = p0 + A_p sin(2 pi t +- psi/2) (``PressureWaveform(amplitude=A_p)``).
-The calibration (supplementary material) measures the edge angle of a clamped segment from the flat
-beam (phi = asin(z/w), torque = k phi), i.e. the bending from flat: the rest angle is 180 deg, not a
-fitted one.  With A_p = :data:`PAPER_FORM_AMPLITUDE_BAR` = 0.4 bar (the paper's p0 curve starts at
-exactly 0.4 bar, the smallest nominal pressure that keeps p_i >= 0) the paper's simulated p0 curve
-is reproduced with RMS 0.0013 in S/S(1.7 bar) up to 1.7 bar and 0.024 over 0.4..3 bar (paper's
-gravity sign; the physical sign: 0.05 up to 1.7 bar), with no fitted parameter.
+angle": p0 is the mean pressure, p_i = p0 + A_p sin(2 pi t +- psi/2)
+(``PressureWaveform(amplitude=A_p)``).  The calibration (supplementary material) measures the edge
+angle of a clamped segment from the flat beam (phi = asin(z/w), torque = k phi), i.e. the bending
+from flat: the rest angle is 180 deg, not a fitted one.  With A_p =
+:data:`PAPER_FORM_AMPLITUDE_BAR` = 0.4 bar (the paper's p0 curve starts at exactly 0.4 bar, the
+smallest nominal pressure that keeps p_i >= 0) the paper's simulated p0 curve is reproduced with RMS
+0.0013 in S/S(1.7 bar) up to 1.7 bar and 0.024 over 0.4..3 bar (paper's gravity sign; the physical
+sign: 0.05 up to 1.7 bar), with no fitted parameter.
 
 The published psi curve has two features this family does not reproduce (they dominate the fit
 error, see :class:`PressureFit`): S/S_max = 0.34 already at psi = 1 deg, and 0.08 at psi = 180 deg.
@@ -53,16 +55,17 @@ import numpy as np
 from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal, ReferenceTorque
 from ocp_crawl.model.statics import PAPER_PRESSURE_COEFFS, Robot
 
-#: pressure amplitude A_p [bar] of the paper's form (ref) read from its p0 curve (see the module docstring)
+#: pressure amplitude A_p [bar] of the paper's form (ref) read from its p0 curve (see the module
+#: docstring)
 PAPER_FORM_AMPLITUDE_BAR = 0.4
 #: rest angle [deg] of the calibrated bending map: the flat beam
 FLAT_REST_DEG = 180.0
-#: rest angle [deg] fitted by :func:`ocp_crawl.studies.pressure.fit_rest_angle` on the paper's full curves,
-#: per gravity convention (used when a run does not fit again, e.g. ``reproduce --quick``)
+#: rest angle [deg] fitted by :func:`ocp_crawl.studies.pressure.fit_rest_angle` on the paper's full
+#: curves, per gravity convention (used when a run does not fit again, e.g. ``reproduce --quick``)
 FITTED_REST_DEG = {"paper": 131.3, "physical": 128.9}
-#: the waveforms of the pressure inputs: "paper", the paper's form (ref) with nominal (mean) p0, flat rest shape
-#: and amplitude :data:`PAPER_FORM_AMPLITUDE_BAR`; "raised", the earlier raised sine from 0 to the peak p0 with
-#: the fitted rest angle :data:`FITTED_REST_DEG`
+#: the waveforms of the pressure inputs: "paper", the paper's form (ref) with nominal (mean) p0,
+#: flat rest shape and amplitude :data:`PAPER_FORM_AMPLITUDE_BAR`; "raised", the earlier raised sine
+#: from 0 to the peak p0 with the fitted rest angle :data:`FITTED_REST_DEG`
 PRESSURE_FORMS = ("paper", "raised")
 #: the default waveform of the pressure study and of the calibration (``ocp_crawl.fit``)
 DEFAULT_FORM = "paper"
@@ -76,13 +79,14 @@ def form_constants(form: str = DEFAULT_FORM, gravity: str = "paper") -> dict[str
     form : str
         One of :data:`PRESSURE_FORMS`.
     gravity : str
-        Gravity convention ("paper" or "physical"): the stored rest angle of the raised sine depends on it.
+        Gravity convention ("paper" or "physical"): the stored rest angle of the raised sine depends
+        on it.
 
     Returns
     -------
     dict
-        ``phi_rest_deg`` [deg], the rest angle, and ``amplitude_bar`` [bar], the pressure amplitude A_p of
-        the paper's form (NaN for the raised sine, whose p0 is the peak pressure).
+        ``phi_rest_deg`` [deg], the rest angle, and ``amplitude_bar`` [bar], the pressure amplitude
+        A_p of the paper's form (NaN for the raised sine, whose p0 is the peak pressure).
 
     Raises
     ------
@@ -111,7 +115,8 @@ class BendingMap:
 
     def _ab(self, ndim: int) -> tuple[np.ndarray, np.ndarray]:
         shape = (2,) + (1,) * ndim
-        return np.array([self.a1, self.a2]).reshape(shape), np.array([self.b1, self.b2]).reshape(shape)
+        return np.array([self.a1,
+                         self.a2]).reshape(shape), np.array([self.b1, self.b2]).reshape(shape)
 
     def bending(self, p) -> np.ndarray:
         """Bending angles [rad] for pressures p [bar] of shape (2, ...)."""
@@ -130,8 +135,8 @@ class BendingMap:
 class PressureWaveform:
     """Pressure inputs [bar] of segment 1 (leading for psi > 0) and segment 2.
 
-    ``amplitude`` None: the raised sine from 0 to the peak p0, p_i = p0 (1 + sin(2 pi t +- psi/2)) / 2.
-    ``amplitude`` a number A_p: the paper's form (ref) with p0 the nominal (mean) pressure,
+    ``amplitude`` None: the raised sine from 0 to the peak p0, p_i = p0 (1 + sin(2 pi t +- psi/2)) /
+    2.  ``amplitude`` a number A_p: the paper's form (ref) with p0 the nominal (mean) pressure,
     p_i = p0 + A_p sin(2 pi t +- psi/2) (0 <= A_p <= p0: a gauge pressure is not negative).
     """
 
@@ -145,13 +150,15 @@ class PressureWaveform:
     def __post_init__(self) -> None:
         for name in ("p0", "psi") + (("amplitude",) if self.amplitude is not None else ()):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+            if (isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating))
+                    or not math.isfinite(v)):
                 raise ValueError(f"PressureWaveform.{name} must be a finite number, got {v!r}")
         if self.p0 < 0:
             raise ValueError(f"PressureWaveform.p0 must be >= 0 bar, got {self.p0!r}")
         if self.amplitude is not None and not 0 <= self.amplitude <= self.p0:
-            raise ValueError(f"PressureWaveform.amplitude must be in [0, p0 = {self.p0!r}] bar (the pressure "
-                             f"p0 - amplitude must not be negative), got {self.amplitude!r}")
+            raise ValueError(f"PressureWaveform.amplitude must be in [0, p0 = {self.p0!r}] bar "
+                             "(the pressure p0 - amplitude must not be negative), got "
+                             f"{self.amplitude!r}")
 
     def _phases(self, t) -> np.ndarray:
         w = TWO_PI * np.asarray(t, float)
@@ -176,7 +183,8 @@ class PressureWaveform:
 
 @dataclass(frozen=True)
 class PressureReference(PeriodicSignal):
-    """Reference joint angles of the pressure-driven robot, phi_ref,i = phi_rest - bending_i(p_i(t)) [rad]."""
+    """Reference joint angles of the pressure-driven robot, phi_ref,i = phi_rest - bending_i(p_i(t))
+    [rad]."""
 
     waveform: PressureWaveform
     phi_rest: float = math.radians(FITTED_REST_DEG["paper"])
@@ -191,19 +199,22 @@ class PressureReference(PeriodicSignal):
 
     def describe(self) -> dict:
         m = self.bending_map
-        return {"type": "PressureReference", "p0_bar": self.waveform.p0, "psi_deg": math.degrees(self.waveform.psi),
+        return {"type": "PressureReference", "p0_bar": self.waveform.p0,
+                "psi_deg": math.degrees(self.waveform.psi),
                 "phi_rest_deg": math.degrees(self.phi_rest), "a": [m.a1, m.a2], "b": [m.b1, m.b2],
                 "waveform": self.waveform.describe()}
 
 
 def pressure_torque(robot: Robot, p0_bar: float, psi_deg: float, phi_rest_deg: float,
-                    bending_map: BendingMap | None = None, amplitude_bar: float | None = None) -> ReferenceTorque:
+                    bending_map: BendingMap | None = None,
+                    amplitude_bar: float | None = None) -> ReferenceTorque:
     """Torque input tau = k (phi_ref - pi) of the pressure-driven robot [N m].
 
     ``p0_bar``: peak (raised sine) or nominal pressure [bar]; ``psi_deg``: phase lead [deg];
-    ``phi_rest_deg``: joint angle at zero pressure [deg]; ``amplitude_bar``: None for the raised sine,
-    else the pressure amplitude of the paper's form (ref) [bar] (see :class:`PressureWaveform`).
+    ``phi_rest_deg``: joint angle at zero pressure [deg]; ``amplitude_bar``: None for the raised
+    sine, else the pressure amplitude of the paper's form (ref) [bar] (see
+    :class:`PressureWaveform`).
     """
-    ref = PressureReference(PressureWaveform(p0_bar, math.radians(psi_deg), amplitude_bar), math.radians(phi_rest_deg),
-                            bending_map or BendingMap())
+    ref = PressureReference(PressureWaveform(p0_bar, math.radians(psi_deg), amplitude_bar),
+                            math.radians(phi_rest_deg), bending_map or BendingMap())
     return ReferenceTorque(ref, robot.k)

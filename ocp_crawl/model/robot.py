@@ -9,11 +9,12 @@ from dataclasses import dataclass
 
 from ocp_crawl.checks import real
 
-#: magnitude bounds of M [kg], L [m], k [N m/rad], g [m/s^2]: products and ratios of four such numbers
-#: (M g L, k/(M g L), their squares) stay far inside the floating-point range (1e-308 .. 1e308)
+#: magnitude bounds of M [kg], L [m], k [N m/rad], g [m/s^2]: products and ratios of four such
+#: numbers (M g L, k/(M g L), their squares) stay far inside the floating-point range (1e-308 ..
+#: 1e308)
 MAGNITUDE = (1e-12, 1e12)
-#: friction coefficients: mu = 0 is outside the quasistatic model, friction forces below 1e-4 M g sink
-#: into the solvers' force tolerances
+#: friction coefficients: mu = 0 is outside the quasistatic model, friction forces below 1e-4 M g
+#: sink into the solvers' force tolerances
 MU_BOUNDS = (1e-4, 1e4)
 #: body-to-leg length ratio: a link shorter than 1 % of another makes the geometry degenerate
 BETA_BOUNDS = (0.01, 100.0)
@@ -60,12 +61,14 @@ class Robot:
 
     def __post_init__(self) -> None:
         for name in ("M", "L", "beta", "k", "mu1", "mu2", "g"):
-            low, high = MU_BOUNDS if name in ("mu1", "mu2") else BETA_BOUNDS if name == "beta" else MAGNITUDE
+            low, high = (MU_BOUNDS if name in ("mu1", "mu2") else BETA_BOUNDS if name == "beta"
+                         else MAGNITUDE)
             object.__setattr__(self, name, real(name, getattr(self, name), low=low, high=high))
 
     @classmethod
     def paper(cls, **overrides: float) -> "Robot":
-        """The robot of the paper's Table I (M = 52 g, L = 120 mm, k = 0.1677 N m/rad, mu = 0.389)."""
+        """The robot of the paper's Table I (M = 52 g, L = 120 mm, k = 0.1677 N m/rad, mu =
+        0.389)."""
         return cls(**overrides)
 
     @property

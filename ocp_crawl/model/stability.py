@@ -13,14 +13,15 @@ Stick-stick (``e_ss = 1``; both feet fixed, ``d(phi) = d0``, ``f_t`` the Lagrang
 
         kappa = v^T (hess Pi + f_t hess d) v        [N m / rad^2, written N m/rad]
 
-    is positive, with ``v = (-d_phi2, d_phi1)/|grad d|`` the unit tangent of ``d = const``.  kappa is
-    the second derivative of ``Pi_tau`` along the curve ``d = d0`` parametrised by arc length in
+    is positive, with ``v = (-d_phi2, d_phi1)/|grad d|`` the unit tangent of ``d = const``.  kappa
+    is the second derivative of ``Pi_tau`` along the curve ``d = d0`` parametrised by arc length in
     ``phi`` (the multiplier term accounts for the curvature of the constraint).
 
-Slip (``e_ss = 0``; one foot at its friction limit, ``f_t(phi) = sigma (w mu1 fn1 + (1-w) mu2 fn2)``)
-    Friction is not conservative and ``f_t`` depends on ``phi`` through the normal forces, so
-    there is no potential to minimise.  The criterion used is the linear stability of the
-    overdamped (gradient-like) dynamics of the mode with the torque held fixed,
+Slip (``e_ss = 0``; one foot at its friction limit,
+    ``f_t(phi) = sigma (w mu1 fn1 + (1-w) mu2 fn2)``) Friction is not conservative and ``f_t``
+    depends on ``phi`` through the normal forces, so there is no potential to minimise.  The
+    criterion used is the linear stability of the overdamped (gradient-like) dynamics of the mode
+    with the torque held fixed,
 
         phi' = -(grad Pi_tau + f_t(phi) grad d),   linearised:  dphi' = -K dphi,
         K = d/dphi [grad Pi + f_t(phi) grad d]     (2x2, not symmetric)  [N m/rad],
@@ -44,9 +45,9 @@ already computed along every branch as ``aux["det"]``):
   ``det J`` vanishing: a sign change of ``det J`` alone does not detect it.
 
 Units of :func:`stability_margin` (nondimensional, scaled by ``M g L``):
-``kappa/(M g L)`` in stick-stick; ``min(tr K, det K/|tr K|)/(M g L)`` in slip modes (``det K/|tr K|``
-is a stiffness: for real positive eigenvalues it lies between half the smaller one and the smaller
-one).  Margin > 0 <=> stable.
+``kappa/(M g L)`` in stick-stick; ``min(tr K, det K/|tr K|)/(M g L)`` in slip modes
+(``det K/|tr K|`` is a stiffness: for real positive eigenvalues it lies between half the smaller one
+and the smaller one).  Margin > 0 <=> stable.
 """
 from __future__ import annotations
 
@@ -66,12 +67,12 @@ STABILITY_NAMES = ("margin", "kappa", "trK", "detK")
 def stability_function() -> cs.Function:
     """CasADi function ``(x[3], q[4], p[NP]) -> s[4]`` (built once per process).
 
-    ``x = (phi1, phi2, f_t/(M g))`` [rad, rad, -], ``q = (e_ss, sigma, w, d0)`` the mode parameters of
-    :mod:`ocp_crawl.model.statics` (``d0`` is not used), ``p`` the model's parameter vector.
-    ``s = (margin, kappa/(M g L), tr K/(M g L), det K/(M g L)^2)``, all nondimensional; ``margin`` is the
-    stick-stick value ``kappa/(M g L)`` when ``e_ss > 0.5``, else the slip value
-    ``min(tr K, det K/|tr K|)/(M g L)``.  kappa uses ``f_t = x[2] M g``; K uses the mode's friction law
-    ``f_t(phi)`` (equal to ``x[2] M g`` at a solution of the slip mode).
+    ``x = (phi1, phi2, f_t/(M g))`` [rad, rad, -], ``q = (e_ss, sigma, w, d0)`` the mode parameters
+    of :mod:`ocp_crawl.model.statics` (``d0`` is not used), ``p`` the model's parameter vector.
+    ``s = (margin, kappa/(M g L), tr K/(M g L), det K/(M g L)^2)``, all nondimensional; ``margin``
+    is the stick-stick value ``kappa/(M g L)`` when ``e_ss > 0.5``, else the slip value
+    ``min(tr K, det K/|tr K|)/(M g L)``.  kappa uses ``f_t = x[2] M g``; K uses the mode's friction
+    law ``f_t(phi)`` (equal to ``x[2] M g`` at a solution of the slip mode).
     """
     x = cs.SX.sym("x", 3)
     q = cs.SX.sym("q", NQ)
@@ -101,8 +102,9 @@ def stability_function() -> cs.Function:
 @compiled_function
 @lru_cache(maxsize=1)
 def fast_stability():
-    """:func:`stability_function` as a low-overhead callable for hot loops (compiled C when a compiler is
-    available, see :mod:`ocp_crawl.model.compiled`): ``fast_stability()(x, q, p)[0]`` is ``s[4]``."""
+    """:func:`stability_function` as a low-overhead callable for hot loops (compiled C when a
+    compiler is available, see :mod:`ocp_crawl.model.compiled`): ``fast_stability()(x, q, p)[0]`` is
+    ``s[4]``."""
     from ocp_crawl.model.compiled import FastFunction
 
     return FastFunction(stability_function())
@@ -113,10 +115,11 @@ def fast_stability():
 def fast_step():
     """One call per continuation step of the event-driven stepper (compiled C when available):
     ``fast_step()(x0, tau, dtau, q, p) -> (x, aux, extra)`` with ``(x, aux)`` those of
-    :attr:`~ocp_crawl.model.statics._Symbolic.newton` and ``extra[7] = (s[4], a, b[2])``: the stability numbers
-    of :func:`stability_function` and the coefficients of :attr:`~ocp_crawl.model.statics._Symbolic.ddot2`
-    (d'' = a + b . tau''), both at the returned x.  The same expressions as the separate functions, in one
-    generated C function (one ctypes call instead of three)."""
+    :attr:`~ocp_crawl.model.statics._Symbolic.newton` and ``extra[7] = (s[4], a, b[2])``: the
+    stability numbers of :func:`stability_function` and the coefficients of
+    :attr:`~ocp_crawl.model.statics._Symbolic.ddot2` (d'' = a + b . tau''), both at the returned x.
+    The same expressions as the separate functions, in one generated C function (one ctypes call
+    instead of three)."""
     from ocp_crawl.model.compiled import FastFunction
 
     sym = symbolic()
@@ -130,7 +133,8 @@ def fast_step():
 
 @lru_cache(maxsize=1)
 def slip_stiffness_function() -> cs.Function:
-    """CasADi function ``(phi[2], q[4], p) -> K[2x2]`` [N m/rad]: the slip-mode stiffness (see module doc)."""
+    """CasADi function ``(phi[2], q[4], p) -> K[2x2]`` [N m/rad]: the slip-mode stiffness (see
+    module doc)."""
     phi = cs.SX.sym("phi", 2)
     q = cs.SX.sym("q", NQ)
     p = cs.SX.sym("p", NP)
@@ -139,7 +143,8 @@ def slip_stiffness_function() -> cs.Function:
 
 
 def _slip_stiffness(phi, q, p, geo):
-    """Symbolic K = d/dphi [grad Pi + f_t(phi) grad d] [N m/rad], f_t(phi) = sigma (w mu1 fn1 + (1-w) mu2 fn2)."""
+    """Symbolic K = d/dphi [grad Pi + f_t(phi) grad d] [N m/rad], f_t(phi) = sigma (w mu1 fn1 +
+    (1-w) mu2 fn2)."""
     pr = params(p)
     ft_slip = q[1] * (q[2] * pr.mu1 * geo["fn1"] + (1 - q[2]) * pr.mu2 * geo["fn2"])
     F = cs.gradient(geo["U_el"] + pr.sgrav * geo["U_g"], phi) + ft_slip * cs.gradient(geo["d"], phi)
@@ -166,8 +171,9 @@ def _state_vector(x) -> np.ndarray:
 def stability(model, x, q) -> dict[str, float]:
     """All stability numbers of one equilibrium (nondimensional, see :func:`stability_function`).
 
-    ``model``: a :class:`~ocp_crawl.model.statics.Model`; ``x = (phi1 [rad], phi2 [rad], f_t/(M g))``;
-    ``q = (e_ss, sigma, w[, d0])``.  Returns ``{"margin", "kappa", "trK", "detK"}``.
+    ``model``: a :class:`~ocp_crawl.model.statics.Model`;
+    ``x = (phi1 [rad], phi2 [rad], f_t/(M g))``; ``q = (e_ss, sigma, w[, d0])``.  Returns
+    ``{"margin", "kappa", "trK", "detK"}``.
     """
     s = np.asarray(stability_function()(_state_vector(x), _mode_vector(q), model.p)).ravel()
     return dict(zip(STABILITY_NAMES, (float(v) for v in s)))
@@ -176,25 +182,28 @@ def stability(model, x, q) -> dict[str, float]:
 def stability_margin(model, x, q) -> float:
     """Nondimensional stability margin of the equilibrium ``x`` of mode ``q``; > 0 <=> stable.
 
-    ``model``: a Model; ``x = (phi1 [rad], phi2 [rad], f_t/(M g))``; ``q = (e_ss, sigma, w[, d0])`` as in
-    :mod:`ocp_crawl.model.statics` (stick-stick ``(1, 0, 0)``; foot 1 slipping with sign(d') = sigma:
-    ``(0, sigma, 1)``; foot 2: ``(0, sigma, 0)``).  Returns ``kappa/(M g L)`` in stick-stick and
-    ``min(tr K, det K/|tr K|)/(M g L)`` in slip modes (module docstring).
+    ``model``: a Model; ``x = (phi1 [rad], phi2 [rad], f_t/(M g))``; ``q = (e_ss, sigma, w[, d0])``
+    as in :mod:`ocp_crawl.model.statics` (stick-stick ``(1, 0, 0)``; foot 1 slipping with sign(d') =
+    sigma: ``(0, sigma, 1)``; foot 2: ``(0, sigma, 0)``).  Returns ``kappa/(M g L)`` in stick-stick
+    and ``min(tr K, det K/|tr K|)/(M g L)`` in slip modes (module docstring).
     """
     return stability(model, x, q)["margin"]
 
 
 def stability_margins(model, x: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """:func:`stability_margin` at n points in one call: ``x`` (3, n), ``q`` (4, n) or one (4,) vector."""
+    """:func:`stability_margin` at n points in one call: ``x`` (3, n), ``q`` (4, n) or one (4,)
+    vector."""
     x = np.asarray(x, dtype=float)
     q = np.asarray(q, dtype=float)
     if x.ndim != 2 or x.shape[0] != 3 or q.shape[0] != NQ or q.ndim > 2:
-        raise ValueError(f"x must have shape (3, n) and q (4,) or (4, n); got {x.shape} and {q.shape}")
+        raise ValueError(f"x must have shape (3, n) and q (4,) or (4, n); got {x.shape} and "
+                         f"{q.shape}")
     return call_mapped(stability_function(), x, q, model.p)[0]
 
 
 def reduced_stiffness(model, phi, f_t: float) -> float:
-    """Stick-stick reduced stiffness kappa = v^T (hess Pi + f_t hess d) v [N m/rad] at ``phi`` [rad], ``f_t`` [N]."""
+    """Stick-stick reduced stiffness kappa = v^T (hess Pi + f_t hess d) v [N m/rad] at ``phi``
+    [rad], ``f_t`` [N]."""
     r = model.robot
     x = np.array([*np.asarray(phi, float), float(f_t) / (r.M * r.g)])
     return stability(model, x, (1.0, 0.0, 0.0))["kappa"] * r.MgL

@@ -36,7 +36,8 @@ NP = len(P_NAMES)
 
 
 class Params(NamedTuple):
-    """The parameter vector ``p`` by name (CasADi symbols or floats): read ``params(p).mu1``, never ``p[4]``."""
+    """The parameter vector ``p`` by name (CasADi symbols or floats): read ``params(p).mu1``, never
+    ``p[4]``."""
 
     M: Any
     L: Any
@@ -78,19 +79,22 @@ class _Symbolic:
     system: cs.Function
     """(x[3], tau[2], q[4], p) -> (G[3], J[3x3]) scaled mode equations and Jacobian"""
     fold: cs.Function
-    """(z[7], v0[3], tau0[2], dtau[2], q, p) -> (H[7], dH[7x7]): fold system, see the hybrid module"""
+    """(z[7], v0[3], tau0[2], dtau[2], q, p) -> (H[7], dH[7x7]): fold system, see the hybrid
+    module"""
     newton: cs.Function
-    """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): NEWTON_ITERS unrolled Newton steps + outputs;
-    pure SX, so it can be compiled to C (see :mod:`ocp_crawl.model.compiled`)"""
+    """(x0[3], tau[2], dtau[2], q[4], p) -> (x[3], aux[NAUX]): NEWTON_ITERS unrolled Newton steps +
+    outputs; pure SX, so it can be compiled to C (see :mod:`ocp_crawl.model.compiled`)"""
     ddot2: cs.Function
-    """(x[3], tau[2], dtau[2], q[4], p) -> (a, b[2]): d'' = a + b . tau'' along the mode's solution"""
+    """(x[3], tau[2], dtau[2], q[4], p) -> (a, b[2]): d'' = a + b . tau'' along the mode's
+    solution"""
 
 
 #: names of the auxiliary outputs returned with every mode solve
 AUX_NAMES = (
     "theta", "d", "xc", "Delta", "fn1", "fn2", "ft", "ddot",
     "dphi1", "dphi2", "dft", "det", "res", "lim1", "lim2", "zj1", "zj2",
-    # time derivatives along the mode's solution (d/dt = grad . x'), for event detection inside a step
+    # time derivatives along the mode's solution (d/dt = grad . x'), for event detection inside a
+    # step
     "dfn1", "dfn2", "dzj1", "dzj2",
 )
 AUX = {n: i for i, n in enumerate(AUX_NAMES)}
@@ -127,7 +131,8 @@ def _geometry(phi, p):
 @lru_cache(maxsize=1)
 def symbolic() -> _Symbolic:
     """Build (once) and return the compiled CasADi functions of the model."""
-    phi, tau, dtau, ft = cs.SX.sym("phi", 2), cs.SX.sym("tau", 2), cs.SX.sym("dtau", 2), cs.SX.sym("ft")
+    phi, tau, dtau, ft = cs.SX.sym("phi",
+                                   2), cs.SX.sym("tau", 2), cs.SX.sym("dtau", 2), cs.SX.sym("ft")
     p, q = cs.SX.sym("p", NP), cs.SX.sym("q", NQ)
     kin, residual, hold, F, grad_d = _statics(phi, tau, ft, p)
     x = cs.SX.sym("x", 3)
@@ -138,14 +143,16 @@ def symbolic() -> _Symbolic:
     for _ in range(NEWTON_ITERS):
         Gk, Jk = system(xk, tau, q, p)
         xk = xk - cs.solve(Jk, Gk)
-    newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p], [xk, evaluate(xk, tau, dtau, q, p)],
+    newton = cs.Function("ocp_crawl_newton", [xn, tau, dtau, q, p],
+                         [xk, evaluate(xk, tau, dtau, q, p)],
                          ["x0", "tau", "dtau", "q", "p"], ["x", "aux"])
     return _Symbolic(kin=kin, residual=residual, hold_torque=hold, evaluate=evaluate, system=system,
                      fold=_fold_system(x, tau, dtau, p, q, G, J), newton=newton, ddot2=ddot2)
 
 
 def _statics(phi, tau, ft, p):
-    """The kinematics, the joint residual F and the holding torque as functions; F and grad d as expressions.
+    """The kinematics, the joint residual F and the holding torque as functions; F and grad d as
+    expressions.
 
     Virtual work: Pi(phi; tau) = U_el + sgrav U_g - tau.phi; friction does virtual work
     f_t dx1 - f_t (dx1 + grad d . dphi) = -f_t grad d . dphi, so F = -dPi/dphi - f_t grad d.
@@ -172,7 +179,8 @@ def _statics(phi, tau, ft, p):
 
 
 def _mode_system(x, phi, tau, dtau, ft, p, q, F, grad_d):
-    """The unified mode system in x = (phi1, phi2, f_t/(M g)): (G, J) as expressions, ``evaluate`` and ``ddot2``.
+    """The unified mode system in x = (phi1, phi2, f_t/(M g)): (G, J) as expressions, ``evaluate``
+    and ``ddot2``.
 
     q selects the mode: stick-stick (e_ss = 1): d(phi) = d0; slip (e_ss = 0):
     f_t = sigma (w mu1 fn1 + (1-w) mu2 fn2), sigma = sign(d').
@@ -185,7 +193,8 @@ def _mode_system(x, phi, tau, dtau, ft, p, q, F, grad_d):
     F_x = cs.substitute(F, cs.vertcat(phi, ft), cs.vertcat(x[0:2], x[2] * Mg))
     lim1 = mu1 * geo_x["fn1"]
     lim2 = mu2 * geo_x["fn2"]
-    c_mode = e_ss * (geo_x["d"] - d0) / L + (1 - e_ss) * (x[2] - sigma * (w * lim1 + (1 - w) * lim2) / Mg)
+    c_mode = e_ss * (geo_x["d"] - d0) / L + (1 - e_ss) * (x[2] - sigma
+                                                          * (w * lim1 + (1 - w) * lim2) / Mg)
     G = cs.vertcat(F_x / (Mg * L), c_mode)
     J = cs.jacobian(G, x)
     G_tau = cs.jacobian(G, tau)
@@ -196,15 +205,17 @@ def _mode_system(x, phi, tau, dtau, ft, p, q, F, grad_d):
     rates = [cs.dot(cs.gradient(geo_x[n], x[0:2]), xdot[0:2]) for n in ("fn1", "fn2", "zj1", "zj2")]
     aux = cs.vertcat(
         geo_x["theta"], geo_x["d"], geo_x["xc"], Delta_x, geo_x["fn1"], geo_x["fn2"], x[2] * Mg,
-        ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2, geo_x["zj1"], geo_x["zj2"],
-        *rates,
+        ddot, xdot[0], xdot[1], xdot[2] * Mg, detJ, cs.norm_inf(G), lim1, lim2, geo_x["zj1"],
+        geo_x["zj2"], *rates,
     )
     assert aux.shape[0] == NAUX
-    evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"], ["aux"])
+    evaluate = cs.Function("evaluate", [x, tau, dtau, q, p], [aux], ["x", "tau", "dtau", "q", "p"],
+                           ["aux"])
     # d'' along the mode's solution, d'' = a + b . tau'' (the caller supplies the torque's second
     # derivative); separate from ``evaluate`` because only event detection in slip modes needs it
     ddot2 = cs.Function("ocp_crawl_ddot2", [x, tau, dtau, q, p],
-                        [cs.vertcat(cs.dot(cs.gradient(ddot, x), xdot) + cs.dot(cs.gradient(ddot, tau), dtau),
+                        [cs.vertcat(cs.dot(cs.gradient(ddot, x), xdot)
+                                    + cs.dot(cs.gradient(ddot, tau), dtau),
                                     cs.gradient(ddot, dtau))],
                         ["x", "tau", "dtau", "q", "p"], ["ab"])
     return G, J, evaluate, ddot2
@@ -231,7 +242,8 @@ NEWTON_ITERS = 4
 @compiled_function
 @lru_cache(maxsize=1)
 def fast_newton():
-    """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is available)."""
+    """The unrolled Newton solve as a low-overhead callable (compiled C when a compiler is
+    available)."""
     return FastFunction(symbolic().newton)
 
 
@@ -250,8 +262,8 @@ def fast_kin():
     return FastFunction(symbolic().kin)
 
 
-#: width of the compiled vectorised Newton solve, and of a narrow one for the last few columns (a call costs
-#: about 1 us per column, padding included)
+#: width of the compiled vectorised Newton solve, and of a narrow one for the last few columns (a
+#: call costs about 1 us per column, padding included)
 BATCH = 64
 SMALL_BATCH = 16
 
@@ -259,7 +271,8 @@ SMALL_BATCH = 16
 @compiled_function
 @lru_cache(maxsize=2)
 def fast_newton_batch(width: int = BATCH):
-    """``newton`` mapped over ``width`` columns, compiled like :func:`fast_newton` (inputs flattened column-major)."""
+    """``newton`` mapped over ``width`` columns, compiled like :func:`fast_newton` (inputs flattened
+    column-major)."""
     # MX symbols keep the map as a loop over one copy of the SX kernel in the generated C
     # (SX symbols would inline BATCH copies: a large library that takes long to compile)
     f = symbolic().newton.map(width)
@@ -276,24 +289,28 @@ def fast_newton_batch(width: int = BATCH):
 @compiled_function
 @lru_cache(maxsize=1)
 def fast_newton_batch_small():
-    """The narrow (:data:`SMALL_BATCH` columns) :func:`fast_newton_batch`, registered so that warm-up builds it."""
+    """The narrow (:data:`SMALL_BATCH` columns) :func:`fast_newton_batch`, registered so that
+    warm-up builds it."""
     return fast_newton_batch(SMALL_BATCH)
 
 
 def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray, p: np.ndarray):
-    """Mode solves at n points (columns; q may be one vector for all): returns x (3, n) and aux (NAUX, n).
+    """Mode solves at n points (columns; q may be one vector for all): returns x (3, n) and aux
+    (NAUX, n).
 
-    Each column is the same compiled Newton kernel as :func:`fast_newton` (results independent of the batching);
-    chunks of BATCH columns, the last ones in chunks of SMALL_BATCH (less padding)."""
+    Each column is the same compiled Newton kernel as :func:`fast_newton` (results independent of
+    the batching); chunks of BATCH columns, the last ones in chunks of SMALL_BATCH (less
+    padding)."""
     n = x0.shape[1]
-    widths = []
+    widths: list[int] = []
     while sum(widths) < n:
         widths.append(BATCH if n - sum(widths) > 3 * SMALL_BATCH else SMALL_BATCH)
     total = sum(widths)
     # the inputs padded with copies of the last column, column-major
     last = np.full(total - n, n - 1, dtype=int)
     q = np.asarray(q, float)
-    Q = np.repeat(q[:, None], total, axis=1) if q.ndim == 1 else np.concatenate([q, q[:, last]], axis=1)
+    Q = np.repeat(q[:, None], total, axis=1) if q.ndim == 1 else np.concatenate([q, q[:, last]],
+                                                                                axis=1)
     cols = [np.concatenate([np.asarray(a, float), np.asarray(a, float)[:, last]], axis=1).ravel("F")
             for a in (x0, tau, dtau)]
     cols.append(Q.ravel("F"))
@@ -302,7 +319,8 @@ def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray,
     s = 0
     wide, narrow = fast_newton_batch(), fast_newton_batch_small()  # one cache key each (built once)
     for width in widths:
-        xi, ai = (wide if width == BATCH else narrow)(*(c[r * s:r * (s + width)] for c, r in zip(cols, (3, 2, 2, NQ))), p)
+        xi, ai = (wide if width == BATCH else narrow)(*(c[r * s:r * (s + width)]
+                                                        for c, r in zip(cols, (3, 2, 2, NQ))), p)
         xs[3 * s:3 * (s + width)] = xi
         aux[NAUX * s:NAUX * (s + width)] = ai
         s += width
@@ -312,8 +330,9 @@ def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray,
 _MAPS: dict[tuple[str, int], cs.Function] = {}
 
 
-def call_mapped(fun: cs.Function, *args) -> np.ndarray:
-    """Evaluate ``fun`` column-wise over n columns in one call.
+def call_mapped(fun: cs.Function, *args) -> Any:
+    """Evaluate ``fun`` column-wise over n columns in one call: an array (rows, n), or a list of
+    them when ``fun`` has several outputs (hence ``Any``: the caller knows which).
 
     Matrix arguments are (rows, n); 1-D arguments (e.g. the parameter vector) are broadcast.
     Sizes are padded to powers of two so that only a few mapped functions are ever compiled.
@@ -330,15 +349,16 @@ def call_mapped(fun: cs.Function, *args) -> np.ndarray:
         if a.ndim == 1:
             cols.append(np.tile(a[:, None], (1, size)))
         else:
-            cols.append(np.concatenate([a, np.repeat(a[:, -1:], size - n, axis=1)], axis=1) if size > n else a)
+            cols.append(np.concatenate([a, np.repeat(a[:, -1:], size - n, axis=1)], axis=1)
+                        if size > n else a)
     out = f(*cols)
     if isinstance(out, (list, tuple)):
         return [np.asarray(o)[:, :n] for o in out]
     return np.asarray(out)[:, :n]
 
 
-KIN_NAMES = ("theta", "d", "xc", "Delta", "fn1", "fn2", "grad_d1", "grad_d2", "grad_Ug1", "grad_Ug2",
-             "U_el", "U_g", "zj1", "zj2")
+KIN_NAMES = ("theta", "d", "xc", "Delta", "fn1", "fn2", "grad_d1", "grad_d2", "grad_Ug1",
+             "grad_Ug2", "U_el", "U_g", "zj1", "zj2")
 KIN = {n: i for i, n in enumerate(KIN_NAMES)}
 
 
@@ -382,7 +402,8 @@ class Model:
 
     # ---------------------------------------------------------------- kinematics and statics
     def kinematics(self, phi) -> dict[str, np.ndarray]:
-        """theta, d, x_c, Delta, normal forces, grad d, grad U_g, U_el, U_g at phi (shape (2,) or (2, N))."""
+        """theta, d, x_c, Delta, normal forces, grad d, grad U_g, U_el, U_g at phi (shape (2,) or
+        (2, N))."""
         phi = np.asarray(phi, dtype=float)
         if phi.ndim == 1:
             out = fast_kin()(phi, self.p)[0]
@@ -395,11 +416,14 @@ class Model:
         return kin["fn1"], kin["fn2"]
 
     def equilibrium_residual(self, phi, tau, f_t) -> np.ndarray:
-        """Joint balance residual F(phi, tau, f_t) [N m] (eq. intEq with this model's gravity sign)."""
-        return np.asarray(self.sym.residual(np.asarray(phi, float), np.asarray(tau, float), float(f_t), self.p)).ravel()
+        """Joint balance residual F(phi, tau, f_t) [N m] (eq. intEq with this model's gravity
+        sign)."""
+        return np.asarray(self.sym.residual(np.asarray(phi, float), np.asarray(tau, float),
+                                            float(f_t), self.p)).ravel()
 
     def hold_torque(self, phi, f_t) -> np.ndarray:
-        """Joint torques that hold the configuration phi in equilibrium with tangential force f_t [N m]."""
+        """Joint torques that hold the configuration phi in equilibrium with tangential force f_t [N
+        m]."""
         phi = np.asarray(phi, float)
         if phi.ndim == 1:
             return np.asarray(self.sym.hold_torque(phi, float(f_t), self.p)).ravel()
@@ -411,16 +435,19 @@ class Model:
         return kin["U_el"] + self.sgrav * kin["U_g"]
 
     def check_contact(self, phi, *, where: str = "configuration") -> None:
-        """Raise ValueError if phi has a foot off the ground (f_n <= 0) or the feet crossed (d <= 0)."""
+        """Raise ValueError if phi has a foot off the ground (f_n <= 0) or the feet crossed (d <=
+        0)."""
         kin = self.kinematics(np.asarray(phi, float))
         if not kin["d"] > 0:
-            raise ValueError(f"{where}: feet crossed or coincident (d = {kin['d']:.4g} m <= 0) at phi = "
-                             f"{np.degrees(phi).round(3).tolist()} deg")
+            raise ValueError(f"{where}: feet crossed or coincident (d = {kin['d']:.4g} m <= 0) at "
+                             f"phi = {np.degrees(phi).round(3).tolist()} deg")
         for i in (1, 2):
             if not kin[f"zj{i}"] > 0:
-                raise ValueError(f"{where}: joint {i} at or below the ground (height {kin[f'zj{i}'] * 1e3:.4g} mm) at "
-                                 f"phi = {np.degrees(phi).round(3).tolist()} deg; the legs must stand above the ground")
+                raise ValueError(f"{where}: joint {i} at or below the ground (height "
+                                 f"{kin[f'zj{i}'] * 1e3:.4g} mm) at phi = "
+                                 f"{np.degrees(phi).round(3).tolist()} deg; the legs must stand "
+                                 "above the ground")
             if not kin[f"fn{i}"] > 0:
-                raise ValueError(f"{where}: foot {i} off the ground (f_n{i} = {kin[f'fn{i}']:.4g} N <= 0) at "
-                                 f"phi = {np.degrees(phi).round(3).tolist()} deg; valid configurations keep "
-                                 "the centre of mass between the feet")
+                raise ValueError(f"{where}: foot {i} off the ground (f_n{i} = {kin[f'fn{i}']:.4g} "
+                                 f"N <= 0) at phi = {np.degrees(phi).round(3).tolist()} deg; valid "
+                                 "configurations keep the centre of mass between the feet")

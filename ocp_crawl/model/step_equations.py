@@ -1,8 +1,8 @@
 """The incremental (time-stepping) equations of one quasistatic step, as CasADi expressions.
 
 Shared by the MPCC step solver (:mod:`ocp_crawl.sim.mpcc`) and the periodic-gait optimal control
-problem (:mod:`ocp_crawl.ocp.transcription`), so both use the same compiled model functions and the same
-complementarity formulation.
+problem (:mod:`ocp_crawl.ocp.transcription`), so both use the same compiled model functions and the
+same complementarity formulation.
 
 Scaled step variables (forces by M g, lengths by L, torques by M g L):
 
@@ -24,7 +24,8 @@ NEQ = 4
 """equations: joint balance (2), horizontal balance, kinematic closure"""
 NPAIR = 4
 PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
-#: the rows of w by name: the joint angles, the tangential forces, the slips and the friction margins
+#: the rows of w by name: the joint angles, the tangential forces, the slips and the friction
+#: margins
 PHI_ROWS, FT1, FT2 = slice(0, 2), 2, 3
 SLIP_ROWS, MARGIN_ROWS = slice(4, 8), slice(8, 12)
 S1P, S1M, S2P, S2M = 4, 5, 6, 7

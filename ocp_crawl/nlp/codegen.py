@@ -1,23 +1,24 @@
 """Compiled evaluation of an NLP's per-step kernel, with the derivatives IPOPT needs.
 
-A transcribed OCP applies one small function (the step equations of one interval: the *kernel*) at every
-node, ``kernel.map(N)``.  IPOPT with exact Hessians then evaluates, every iteration, the kernel, its
-Jacobian (CasADi: reverse or forward directional derivatives of the map, several directions at once) and
-the Hessian of the Lagrangian (forward derivatives of the kernel's adjoint).  CasADi's virtual machine
-spends most of an OCP solve there.  :func:`compiled_kernel` generates C code for the kernel and for those
-derivatives, compiles it once into the package's compiled-library cache
-(:func:`ocp_crawl.model.compiled.build_library`: keyed by the kernel's expression graph, the CasADi version
-and the compiler; built in a private directory and renamed into place) and returns a CasADi ``external``
-of it.  The external finds its derivatives in the library by CasADi's naming convention
-(``fwd<n>_f``, ``adj<n>_f``, ``fwd<n>_adj1_f``, ``jac_f``, ``jac_adj1_f``): a map of it, and every
-derivative CasADi takes of the map, runs compiled code.  The Jacobians in the library give CasADi the
-exact sparsity of the kernel's first and second derivatives (an external without them is taken as dense,
-which would make the Hessian's colouring and the KKT system denser).  CasADi asks for ``n`` directions at a
-time; ``n`` not in :data:`DIRECTIONS` is evaluated as ``n`` compiled one-direction calls.
+A transcribed OCP applies one small function (the step equations of one interval: the *kernel*) at
+every node, ``kernel.map(N)``.  IPOPT with exact Hessians then evaluates, every iteration, the
+kernel, its Jacobian (CasADi: reverse or forward directional derivatives of the map, several
+directions at once) and the Hessian of the Lagrangian (forward derivatives of the kernel's adjoint).
+CasADi's virtual machine spends most of an OCP solve there.  :func:`compiled_kernel` generates C
+code for the kernel and for those derivatives, compiles it once into the package's compiled-library
+cache (:func:`ocp_crawl.model.compiled.build_library`: keyed by the kernel's expression graph, the
+CasADi version and the compiler; built in a private directory and renamed into place) and returns a
+CasADi ``external`` of it.  The external finds its derivatives in the library by CasADi's naming
+convention (``fwd<n>_f``, ``adj<n>_f``, ``fwd<n>_adj1_f``, ``jac_f``, ``jac_adj1_f``): a map of it,
+and every derivative CasADi takes of the map, runs compiled code.  The Jacobians in the library give
+CasADi the exact sparsity of the kernel's first and second derivatives (an external without them is
+taken as dense, which would make the Hessian's colouring and the KKT system denser).  CasADi asks
+for ``n`` directions at a time; ``n`` not in :data:`DIRECTIONS` is evaluated as ``n`` compiled
+one-direction calls.
 
-The kernel must not depend on N (it is compiled once for every N).  Without a working C compiler (or a
-failed build) the kernel itself is returned with a warning: same numbers, CasADi's virtual machine;
-``OCP_CRAWL_NO_COMPILE=1`` does the same on purpose, silently.
+The kernel must not depend on N (it is compiled once for every N).  Without a working C compiler (or
+a failed build) the kernel itself is returned with a warning: same numbers, CasADi's virtual
+machine; ``OCP_CRAWL_NO_COMPILE=1`` does the same on purpose, silently.
 """
 from __future__ import annotations
 
@@ -30,8 +31,8 @@ import casadi as cs
 
 from ocp_crawl.model.compiled import build_library
 
-#: numbers of directions of the derivatives in a kernel's library (CasADi uses an external's ``fwd<n>``
-#: or ``adj<n>`` only for a power of two n, and ``n`` one-direction calls otherwise)
+#: numbers of directions of the derivatives in a kernel's library (CasADi uses an external's
+#: ``fwd<n>`` or ``adj<n>`` only for a power of two n, and ``n`` one-direction calls otherwise)
 DIRECTIONS = (1, 2, 4, 8)
 
 #: what a kernel's library holds besides the kernel (part of its cache key)
@@ -42,9 +43,10 @@ _LOADED: dict[str, cs.Function] = {}
 
 
 def kernel_functions(fun: cs.Function) -> list[cs.Function]:
-    """``fun`` and the derivatives that go into its library, named by CasADi's convention: its Jacobian and the
-    Jacobian of its adjoint (for their sparsity), forward and reverse derivatives in :data:`DIRECTIONS`
-    directions (Jacobians), and forward derivatives of its one-direction adjoint (Hessians)."""
+    """``fun`` and the derivatives that go into its library, named by CasADi's convention: its
+    Jacobian and the Jacobian of its adjoint (for their sparsity), forward and reverse derivatives
+    in :data:`DIRECTIONS` directions (Jacobians), and forward derivatives of its one-direction
+    adjoint (Hessians)."""
     adj = fun.reverse(1)
     return [fun, fun.jacobian(), adj.jacobian(), *(fun.forward(n) for n in DIRECTIONS),
             *(fun.reverse(n) for n in DIRECTIONS), *(adj.forward(n) for n in DIRECTIONS)]
@@ -71,13 +73,14 @@ def kernel_library(fun: cs.Function) -> KernelBuild:
 
     Parameters
     ----------
-    fun : a CasADi function independent of the number of nodes (typically SX, dense inputs and outputs).
+    fun : a CasADi function independent of the number of nodes (typically SX, dense inputs and
+    outputs).
 
     Returns
     -------
-    KernelBuild : ``function`` evaluates like ``fun`` (same inputs, outputs, sparsity and derivatives) from
-    compiled code; it is ``fun`` itself, with a RuntimeWarning, when no C compiler works, and silently when
-    ``OCP_CRAWL_NO_COMPILE`` is set.
+    KernelBuild : ``function`` evaluates like ``fun`` (same inputs, outputs, sparsity and
+    derivatives) from compiled code; it is ``fun`` itself, with a RuntimeWarning, when no C compiler
+    works, and silently when ``OCP_CRAWL_NO_COMPILE`` is set.
     """
     if not isinstance(fun, cs.Function):
         raise TypeError(f"compiled_kernel: fun must be a casadi.Function, got {type(fun).__name__}")
@@ -90,8 +93,9 @@ def kernel_library(fun: cs.Function) -> KernelBuild:
     else:
         reason = "no working C compiler, or its build failed"
     if lib is None:
-        warnings.warn(f"compiled_kernel: {fun.name()} is not compiled ({reason}); it is evaluated by CasADi's "
-                      "virtual machine: same results, slower", RuntimeWarning, stacklevel=3)
+        warnings.warn(f"compiled_kernel: {fun.name()} is not compiled ({reason}); it is evaluated "
+                      "by CasADi's virtual machine: same results, slower", RuntimeWarning,
+                      stacklevel=3)
         return KernelBuild(fun, fun, None)
     ext = _LOADED.get(str(lib))
     if ext is None:
@@ -101,5 +105,6 @@ def kernel_library(fun: cs.Function) -> KernelBuild:
 
 def compiled_kernel(fun: cs.Function) -> cs.Function:
     """``fun`` evaluated by compiled C code, derivatives included: use it in place of ``fun``, e.g.
-    ``compiled_kernel(step).map(N)``.  See :func:`kernel_library` (the fall-back without a compiler)."""
+    ``compiled_kernel(step).map(N)``.  See :func:`kernel_library` (the fall-back without a
+    compiler)."""
     return kernel_library(fun).function

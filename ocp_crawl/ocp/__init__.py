@@ -4,12 +4,13 @@ from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
 _EXPORTS = {
-    "GaitOCP": "ocp_crawl.ocp.transcription",
+    "GaitOCP": "ocp_crawl.ocp.transcription", "GaitSolver": "ocp_crawl.ocp.solver",
+    "VOCABULARY": "ocp_crawl.ocp.objectives",
     "WaveChoice": "ocp_crawl.ocp.baseline", "Baselines": "ocp_crawl.ocp.baseline",
     "objective_value": "ocp_crawl.ocp.baseline",
     "best_harmonic": "ocp_crawl.ocp.search", "best_baselines": "ocp_crawl.ocp.search",
     "WaveParams": "ocp_crawl.ocp.family", "SHAPES": "ocp_crawl.ocp.family",
-    "OBJECTIVES": "ocp_crawl.ocp.settings", "OCPSettings": "ocp_crawl.ocp.settings",
+    "OBJECTIVES": "ocp_crawl.ocp.objectives", "OCPSettings": "ocp_crawl.ocp.settings",
     "OCPResult": "ocp_crawl.ocp.result", "optimize_gait": "ocp_crawl.ocp.solve",
     "replay_signal": "ocp_crawl.ocp.judge", "judge_replay": "ocp_crawl.ocp.judge",
     "ConvergenceRow": "ocp_crawl.ocp.convergence", "converge_in_nodes": "ocp_crawl.ocp.convergence",
@@ -19,8 +20,8 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "Baselines", "Constraint", "ConvergenceRow", "GaitOCP", "OBJECTIVES", "OCPResult", "OCPSettings",
-    "QUANTITIES", "SHAPES", "UserObjective",
+    "Baselines", "Constraint", "ConvergenceRow", "GaitOCP", "GaitSolver", "OBJECTIVES", "OCPResult",
+    "OCPSettings", "QUANTITIES", "SHAPES", "UserObjective", "VOCABULARY",
     "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes",
     "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]

@@ -166,7 +166,8 @@ def _nominal(settings) -> int:
     set)."""
     if not settings.friction_set:
         return 0
-    return int(np.argmin([abs(math.log(r or 1.0)) + abs(math.log(lv)) for lv, r in settings.scenario_pairs()]))
+    return int(np.argmin([abs(math.log(r or 1.0))
+                          + abs(math.log(lv)) for lv, r in settings.scenario_pairs()]))
 
 
 def check_dynamic_margin(res, models: list[Model]) -> None:

@@ -5,7 +5,7 @@ A relaxed stage's profile (torques and period) is already a gait: simulated in e
 scenario it gives a complementary point of the transcription whose branches (which foot slips in
 each sub-step) are those of the real gait
 (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.initial_guess`).  The tightened NLP on those branches
-(:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`) is then solved at once, with an
+(:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve_tightened`) is then solved at once, with an
 iteration cap, instead of the remaining stages at ever smaller sigma.  Its point is kept only when
 the caller's judge accepts it (its replay) and it is at least as good as the stage's profile by
 replay; otherwise the homotopy goes on from the stage's point, as without an endgame.  Or both
@@ -33,7 +33,7 @@ class Endgame:
 
     ``guess(x_stage)``: the complementary point of the stage's simulated profile, or None when a
     simulation fails; ``solve(x_sim, max_iter)``: the tightened NLP on its branches, (x, records,
-    failed, status) as :meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`;
+    failed, status) as :meth:`~ocp_crawl.ocp.solver.GaitSolver.solve_tightened`;
     ``keep(x, x_ref, against)``: whether the endgame's point x is kept over the point x_ref, named
     ``against`` (the caller's judge: x accepted by replay and at least as good as x_ref's profile by
     replay), with the comparison in words.  ``both``: the endgame and the rest of the homotopy both

@@ -1,37 +1,41 @@
-"""The simple waveform families of the OCP's envelope and bandwidth: their parameters, gaits and simulations.
+"""The simple waveform families of the OCP's envelope and bandwidth: their parameters, gaits and
+simulations.
 
-A member is the reference gait phi_ref,i = gamma_i + A_i u(t +- s) of one *shape* u (a 1-periodic unit wave
-in [-1, 1]), joint 1 leading joint 2 by the phase psi, driven as the torque tau_i = k (phi_ref,i - pi)
-(:class:`~ocp_crawl.model.inputs.ReferenceTorque`).  The shapes (:data:`SHAPES`):
+A member is the reference gait phi_ref,i = gamma_i + A_i u(t +- s) of one *shape* u (a 1-periodic
+unit wave in [-1, 1]), joint 1 leading joint 2 by the phase psi, driven as the torque tau_i = k
+(phi_ref,i - pi) (:class:`~ocp_crawl.model.inputs.ReferenceTorque`).  The shapes (:data:`SHAPES`):
 
-* ``harmonic``: u = sin(2 pi t) (:class:`~ocp_crawl.model.inputs.Harmonic`), largest slope 2 pi per cycle;
-* ``triangle``: straight ramps up and down, each half a cycle (the reference rate saturated all cycle),
-  largest slope 4 per cycle;
-* ``pulse``: a trapezoid of soft actuators (:class:`~ocp_crawl.model.pulse.Pulse`): edges of ``rise``
-  cycles (in [RISE_MIN, 0.5]), the high level held for ``duty`` of the rest of the cycle, the low level for
-  the remainder; largest slope 2/rise per cycle.  rise = 0.5 is the triangle.
+* ``harmonic``: u = sin(2 pi t) (:class:`~ocp_crawl.model.inputs.Harmonic`), largest slope 2 pi per
+  cycle;
+* ``triangle``: straight ramps up and down, each half a cycle (the reference rate saturated all
+  cycle), largest slope 4 per cycle;
+* ``pulse``: a trapezoid of soft actuators (:class:`~ocp_crawl.model.pulse.Pulse`): edges of
+  ``rise`` cycles (in [RISE_MIN, 0.5]), the high level held for ``duty`` of the rest of the cycle,
+  the low level for the remainder; largest slope 2/rise per cycle.  rise = 0.5 is the triangle.
 
-A member belongs to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints stay
-inside the envelope, |gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates stay within the
-bandwidth R (``max_rate_deg_s``): slope * A_i / T <= R, i.e. T >= :meth:`WaveParams.period`.  A member
-is admissible only when which foot slips does not depend on the friction coefficients within
-+-friction_tol/2 (its slip-weighted friction margin, :mod:`ocp_crawl.ocp.slip_margin`, is at least
-``settings.friction_tol``): this excludes the near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
+A member belongs to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints
+stay inside the envelope, |gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates stay
+within the bandwidth R (``max_rate_deg_s``): slope * A_i / T <= R, i.e. T >=
+:meth:`WaveParams.period`.  A member is admissible only when which foot slips does not depend on the
+friction coefficients within +-friction_tol/2 (its slip-weighted friction margin,
+:mod:`ocp_crawl.ocp.slip_margin`, is at least ``settings.friction_tol``): this excludes the
+near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
 
-Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and CoT+
-of a member do not depend on T.  The mean speed direction * S / T is then largest at the smallest allowed
-T, CoT+ is the same at every T, and a speed requirement direction * S / T >= speed_min is easiest to meet
-at the smallest T.  Every named objective of the OCP is therefore optimal at the shortest period, and a
-family's search runs over its shape parameters only.  Bounds on the period or an upper bound on the speed
-(``[[ocp.constraint]]``) slow a member down to the shortest period they allow
-(:func:`allowed_period`); a user objective is evaluated at that period too.
+Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and
+CoT+ of a member do not depend on T.  The mean speed direction * S / T is then largest at the
+smallest allowed T, CoT+ is the same at every T, and a speed requirement direction * S / T >=
+speed_min is easiest to meet at the smallest T.  Every named objective of the OCP is therefore
+optimal at the shortest period, and a family's search runs over its shape parameters only.  Bounds
+on the period or an upper bound on the speed (``[[ocp.constraint]]``) slow a member down to the
+shortest period they allow (:func:`allowed_period`); a user objective is evaluated at that period
+too.
 
-The search works in box coordinates z = (w1, w2, u, q, p[, r, d]) in [-1, 1] x [-1, 1] x [0, 1] x [-1, 1]
-x [-1, 1] (x [0, 1] x [0, 1] for pulses) that map onto the envelope: the larger amplitude is u A_max, the
-other (1 - |q|) u A_max (joint 2's when q > 0, joint 1's when q < 0), gamma_i = gamma + w_i (A_max - A_i),
-psi = 180 p, rise = RISE_MIN + r (0.5 - RISE_MIN), duty = d.  The period depends on u alone, so the
-objective has no kink where the amplitudes cross (with one coordinate per amplitude, the shortest
-period's max(A1, A2) made one, and the local search stalled on it).
+The search works in box coordinates z = (w1, w2, u, q, p[, r, d]) in [-1, 1] x [-1, 1] x [0, 1] x
+[-1, 1] x [-1, 1] (x [0, 1] x [0, 1] for pulses) that map onto the envelope: the larger amplitude is
+u A_max, the other (1 - |q|) u A_max (joint 2's when q > 0, joint 1's when q < 0), gamma_i = gamma +
+w_i (A_max - A_i), psi = 180 p, rise = RISE_MIN + r (0.5 - RISE_MIN), duty = d.  The period depends
+on u alone, so the objective has no kink where the amplitudes cross (with one coordinate per
+amplitude, the shortest period's max(A1, A2) made one, and the local search stalled on it).
 """
 from __future__ import annotations
 
@@ -50,18 +54,21 @@ from ocp_crawl.sim.event import simulate_torque
 
 #: the waveform families, in the order of reports (the harmonic one is the OCP's first start)
 SHAPES = ("harmonic", "triangle", "pulse")
-#: bounds of the box coordinates z = (w1, w2, u, q, p) shared by every shape (see the module docstring)
+#: bounds of the box coordinates z = (w1, w2, u, q, p) shared by every shape (see the module
+#: docstring)
 BOX = ((-1.0, 1.0), (-1.0, 1.0), (0.0, 1.0), (-1.0, 1.0), (-1.0, 1.0))
 #: the pulse's two more coordinates (r, d): its rise and duty
 PULSE_BOX = ((0.0, 1.0), (0.0, 1.0))
 #: smallest amplitude max(A1, A2) [deg] of a member (a zero amplitude has no period and no gait)
 A_MIN_DEG = 1e-6
-#: shortest edge of a pulse member [cycles]: steeper edges only lengthen the shortest period (2 A / (rise R))
+#: shortest edge of a pulse member [cycles]: steeper edges only lengthen the shortest period (2 A /
+#: (rise R))
 RISE_MIN = 0.05
 
 
 def shape_box(shape: str) -> tuple:
-    """The box of the coordinates of a shape's members (:data:`BOX`, and :data:`PULSE_BOX` for pulses)."""
+    """The box of the coordinates of a shape's members (:data:`BOX`, and :data:`PULSE_BOX` for
+    pulses)."""
     if shape not in SHAPES:
         raise ValueError(f"waveform family must be one of {SHAPES}, got {shape!r}")
     return BOX + PULSE_BOX if shape == "pulse" else BOX
@@ -69,7 +76,8 @@ def shape_box(shape: str) -> tuple:
 
 @dataclass(frozen=True)
 class WaveParams:
-    """One member of a waveform family: angles in degrees, the shape and, for pulses, rise and duty."""
+    """One member of a waveform family: angles in degrees, the shape and, for pulses, rise and
+    duty."""
 
     gamma1_deg: float
     gamma2_deg: float
@@ -80,7 +88,8 @@ class WaveParams:
     shape: str = "harmonic"
     """one of :data:`SHAPES`"""
     rise: float = 0.5
-    """duration of each edge [cycles] (triangle: 0.5; pulse: in [RISE_MIN, 0.5]; unused by harmonics)"""
+    """duration of each edge [cycles] (triangle: 0.5; pulse: in [RISE_MIN, 0.5]; unused by
+    harmonics)"""
     duty: float = 0.0
     """share of the cycle outside the edges (1 - 2 rise) held at the high level (pulse) [-]"""
 
@@ -113,8 +122,8 @@ class WaveParams:
         return self.slope * max(self.A1_deg, self.A2_deg) / settings.max_rate_deg_s
 
     def in_envelope(self, settings: OCPSettings, rtol: float = 1e-9) -> bool:
-        """True if both joints stay within gamma +- A_max (relative tolerance ``rtol`` of A_max) with
-        A_i >= 0."""
+        """True if both joints stay within gamma +- A_max (relative tolerance ``rtol`` of A_max)
+        with A_i >= 0."""
         tol = rtol * settings.A_max_deg
         return all(a >= 0 and abs(g - settings.gamma_deg) + a <= settings.A_max_deg + tol
                    for g, a in ((self.gamma1_deg, self.A1_deg), (self.gamma2_deg, self.A2_deg)))
@@ -151,7 +160,8 @@ class WaveParams:
         return np.array(z)
 
     def as_dict(self) -> dict:
-        """The parameters by name: angles [deg], the shape, and rise [cycles] and duty [-] of pulses."""
+        """The parameters by name: angles [deg], the shape, and rise [cycles] and duty [-] of
+        pulses."""
         out = {"gamma1_deg": self.gamma1_deg, "gamma2_deg": self.gamma2_deg, "A1_deg": self.A1_deg,
                "A2_deg": self.A2_deg, "psi_deg": self.psi_deg, "shape": self.shape}
         if self.shape == "pulse":
@@ -163,9 +173,10 @@ class WaveParams:
 class Evaluation:
     """The simulations of one member (one per friction scenario) at its period T [s].
 
-    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the member
-    is not admissible); ``success`` when every scenario simulated successfully with a slip-weighted
-    friction margin of at least ``friction_tol``; ``message`` the first failure's message."""
+    ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the
+    member is not admissible); ``success`` when every scenario simulated successfully with a
+    slip-weighted friction margin of at least ``friction_tol``; ``message`` the first failure's
+    message."""
 
     params: WaveParams
     T: float
@@ -175,17 +186,19 @@ class Evaluation:
     success: bool
     message: str = ""
     margin: tuple = ()
-    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a member
-    below ``settings.friction_tol`` is not admissible (``success`` False)"""
+    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a
+    member below ``settings.friction_tol`` is not admissible (``success`` False)"""
     profile: tuple = (math.nan, math.nan)
     """the torque profile's peak |tau| [N m] and mean squared torque [N^2 m^2]
-    (:func:`~ocp_crawl.ocp.quantities.profile_of_signal`), computed only where a constraint bounds them"""
+    (:func:`~ocp_crawl.ocp.quantities.profile_of_signal`), computed only where a constraint bounds
+    them"""
 
 
 def allowed_period(settings: OCPSettings, T: float, S) -> float:
-    """The shortest period [s], at least ``T`` (the bandwidth's), that the constraints allow a member of
-    displacements ``S`` [m] per scenario: at least a ``period`` constraint's min and slow enough for a
-    ``speed`` constraint's max (direction S_j / T <= v_max in every scenario, or on their mean)."""
+    """The shortest period [s], at least ``T`` (the bandwidth's), that the constraints allow a
+    member of displacements ``S`` [m] per scenario: at least a ``period`` constraint's min and slow
+    enough for a ``speed`` constraint's max (direction S_j / T <= v_max in every scenario, or on
+    their mean)."""
     d = settings.direction
     for c in settings.requirements:
         if c.quantity == "period" and c.min is not None:
@@ -197,10 +210,10 @@ def allowed_period(settings: OCPSettings, T: float, S) -> float:
 
 
 class WaveFamily:
-    """The members of one shape in the envelope and bandwidth of ``settings`` for ``robot`` (SI units)
-    under the gravity convention ``gravity``, simulated with the event-driven stepper in every friction
-    scenario of ``settings.scenarios(robot)``.  Evaluations are cached by parameters; ``evaluations``
-    counts the simulated members."""
+    """The members of one shape in the envelope and bandwidth of ``settings`` for ``robot`` (SI
+    units) under the gravity convention ``gravity``, simulated with the event-driven stepper in
+    every friction scenario of ``settings.scenarios(robot)``.  Evaluations are cached by parameters;
+    ``evaluations`` counts the simulated members."""
 
     def __init__(self, robot: Robot, gravity: str, settings: OCPSettings,
                  shape: str = "harmonic") -> None:
@@ -219,8 +232,9 @@ class WaveFamily:
     def evaluate(self, params: WaveParams) -> Evaluation:
         """Simulate the member ``params`` in every scenario at its shortest period (cached).
 
-        Returns an :class:`Evaluation`; a member of (almost) zero amplitude or a failed simulation (a
-        fold, a lift-off, a non-periodic gait, bad input to the stepper) is an unsuccessful evaluation."""
+        Returns an :class:`Evaluation`; a member of (almost) zero amplitude or a failed simulation
+        (a fold, a lift-off, a non-periodic gait, bad input to the stepper) is an unsuccessful
+        evaluation."""
         key = self._key(params)
         if key in self._cache:
             return self._cache[key]
@@ -240,8 +254,8 @@ class WaveFamily:
 
     def absorb(self, evaluations) -> None:
         """Add evaluations made elsewhere (by a worker process's family of the same robot, gravity,
-        settings and shape) to the cache, in their order; each one not cached yet counts as a simulated
-        member unless of zero amplitude (as in :meth:`evaluate`)."""
+        settings and shape) to the cache, in their order; each one not cached yet counts as a
+        simulated member unless of zero amplitude (as in :meth:`evaluate`)."""
         for ev in evaluations:
             key = self._key(ev.params)
             if key not in self._cache:
@@ -255,7 +269,8 @@ class WaveFamily:
                 r = simulate_torque(m, params.torque(m.robot.k))
             except (ValueError, IndexError) as exc:
                 # ValueError: the stepper rejects the input; IndexError: its steady-cycle metrics
-                # find no segment on some psi = 180 gaits (e.g. gamma 91.65/90.44, A 27.93/29.30 deg)
+                # find no segment on some psi = 180 gaits (e.g. gamma 91.65/90.44, A 27.93/29.30
+                # deg)
                 return Evaluation(params, T, nan, nan, nan, False, f"{type(exc).__name__}: {exc}")
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)

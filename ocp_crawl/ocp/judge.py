@@ -1,16 +1,18 @@
 """Replay is the judge: the OCP's optimum counts only when the event-driven simulator confirms it.
 
-The replay signal is the transcription's own interpolant: the node torques tau_k at phases k/N, linear in
-phase between nodes (:class:`~ocp_crawl.model.inputs.PeriodicLinear`, the ``[gait] waveform = "samples"``
-with ``interpolation = "linear"``), run with the OCP's period T.  :func:`judge_replay` replays it in every
-friction scenario and accepts the optimum only when
+The replay signal is the transcription's own interpolant: the node torques tau_k at phases k/N,
+linear in phase between nodes (:class:`~ocp_crawl.model.inputs.PeriodicLinear`, the
+``[gait] waveform = "samples"`` with ``interpolation = "linear"``), run with the OCP's period T.
+:func:`judge_replay` replays it in every friction scenario and accepts the optimum only when
 
 * every replay succeeds (else ``REPLAY_FAILED``);
-* the profile stays in the envelope gamma +- A_max and within the bandwidth |d tau_i/dt| <= k R, both to
-  :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its nodes), and, with
-  the optional ``max_accel_deg_s2`` = a, its second differences within k a (T/N)^2;
+* the profile stays in the envelope gamma +- A_max and within the bandwidth |d tau_i/dt| <= k R,
+  both to :data:`BOUND_RTOL` relative (the linear interpolant's extremes and slopes are those of its
+  nodes), and, with the optional ``max_accel_deg_s2`` = a, its second differences within k a
+  (T/N)^2;
 * every requirement (min_cot's ``speed_min``, the bounds of ``constraints`` on cycle quantities:
-  :mod:`ocp_crawl.ocp.quantities`) holds on the replay within ``replay_tol`` (relative to the bound);
+  :mod:`ocp_crawl.ocp.quantities`) holds on the replay within ``replay_tol`` (relative to the
+  bound);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
 * the replay's slip is held clear of the friction tie: its slip-weighted friction margin m
   (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol - replay_tol`` (see below);
@@ -19,8 +21,8 @@ friction scenario and accepts the optimum only when
   (relative: the OCP bounds the mean rates of the intervals and, 0.5 % looser, of the sub-steps; the
   peak inside a sub-step is O(1/N) above its mean);
 
-otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its numbers
-itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
+otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its
+numbers itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
 
 Why the margin's tolerance is absolute.  m is a fraction of the mean friction limit: the
 slip-weighted mean of (lim_anchor - lim_slip) / mean(lim).  The OCP holds it with the trapezoid rule
@@ -54,15 +56,16 @@ from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.status import Status
 
-#: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal` (the
-#: ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
+#: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal`
+#: (the ``optimal_gait.toml`` that ``optimize --out`` writes replays the optimum with it)
 REPLAY_INTERPOLATION = "linear"
 #: relative tolerance of the envelope and bandwidth checks (the NLP meets its bounds to round-off)
 BOUND_RTOL = 1e-9
 
 
 def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
-    """Torque input of the event-driven replay: the transcription's own interpolant, linear in phase.
+    """Torque input of the event-driven replay: the transcription's own interpolant, linear in
+    phase.
 
     Parameters
     ----------
@@ -80,7 +83,8 @@ def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
 
 
 def value_text(objective: str, value: float) -> str:
-    """An objective value with its unit: a speed [m/s] in mm/s (max_speed, robust_speed), else CoT+ [-]."""
+    """An objective value with its unit: a speed [m/s] in mm/s (max_speed, robust_speed), else CoT+
+    [-]."""
     if objective.startswith(("min:", "max:")):
         return units.significant(value, 6)
     return units.cot(value) if objective == "min_cot" else units.speed(value)
@@ -97,8 +101,9 @@ def spread_text(objective: str, low: float, high: float, converged: int) -> str:
 
 
 def ratio_labels(ratios) -> list[str]:
-    """Labels of the friction scenarios mu1/mu2 = ``ratios``: each ratio to the fewest significant digits (from 6)
-    that tell every scenario apart, e.g. ["0.9", "1", "1.1"] (files and text name the scenarios by them)."""
+    """Labels of the friction scenarios mu1/mu2 = ``ratios``: each ratio to the fewest significant
+    digits (from 6) that tell every scenario apart, e.g. ["0.9", "1", "1.1"] (files and text name
+    the scenarios by them)."""
     ratios = [float(r) for r in ratios]
     for digits in range(6, 18):
         labels = [f"{r:.{digits}g}" for r in ratios]
@@ -109,8 +114,8 @@ def ratio_labels(ratios) -> list[str]:
 
 def scenario_labels(settings: OCPSettings) -> list[str]:
     """Labels of the friction scenarios of ``settings``, in their order: the ratio's
-    (:func:`ratio_labels`), and with friction levels (``mu_levels``) "<ratio>_level_<level>" ("own" for
-    the robot's own ratio, without a ratio set)."""
+    (:func:`ratio_labels`), and with friction levels (``mu_levels``) "<ratio>_level_<level>" ("own"
+    for the robot's own ratio, without a ratio set)."""
     ratios = ratio_labels(settings.friction_ratios) if settings.ratio_set else ["own"]
     if settings.mu_levels is None:
         return ratios
@@ -119,7 +124,8 @@ def scenario_labels(settings: OCPSettings) -> list[str]:
 
 
 def is_better(objective: str, a: float, b: float) -> bool:
-    """Whether objective value ``a`` is strictly better than ``b`` (CoT+ smaller, speeds larger); NaN never is."""
+    """Whether objective value ``a`` is strictly better than ``b`` (CoT+ smaller, speeds larger);
+    NaN never is."""
     if math.isnan(a):
         return False
     if math.isnan(b):
@@ -128,7 +134,8 @@ def is_better(objective: str, a: float, b: float) -> bool:
 
 
 def gain_over(objective: str, value: float, baseline: float) -> float:
-    """Relative gain [-] of ``value`` over the ``baseline`` value (positive: better), NaN if undefined.
+    """Relative gain [-] of ``value`` over the ``baseline`` value (positive: better), NaN if
+    undefined.
 
     min_cot: (CoT_baseline - CoT) / CoT_baseline; speeds: (v - v_baseline) / |v_baseline|."""
     if not (math.isfinite(value) and math.isfinite(baseline)) or baseline == 0:
@@ -138,13 +145,15 @@ def gain_over(objective: str, value: float, baseline: float) -> float:
     return (value - baseline) / abs(baseline)
 
 
-def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> tuple[float, float, float]:
+def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray,
+                 T: float) -> tuple[float, float, float]:
     """How far a node profile goes to its limits.
 
     Parameters
     ----------
     settings : OCPSettings
-        The envelope (gamma, A_max), the bandwidth (max_rate_deg_s) and the optional max_accel_deg_s2.
+        The envelope (gamma, A_max), the bandwidth (max_rate_deg_s) and the optional
+        max_accel_deg_s2.
     robot : Robot
         The robot (its stiffness k [N m/rad] turns angles into torques).
     tau : array_like, shape (2, N)
@@ -155,9 +164,10 @@ def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float)
     Returns
     -------
     (float, float, float)
-        The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside); the
-        largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the bandwidth);
-        the largest second difference over its bound k a (T/N)^2 (<= 1 within it; NaN without max_accel_deg_s2).
+        The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside);
+        the largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the
+        bandwidth); the largest second difference over its bound k a (T/N)^2 (<= 1 within it; NaN
+        without max_accel_deg_s2).
     """
     tau = np.asarray(tau, float)
     N = tau.shape[1]
@@ -169,7 +179,8 @@ def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float)
     if accel is None:
         return excess, rate, math.nan
     second = np.diff(np.c_[steps[:, -1:], steps], axis=1)  # tau_k+1 - 2 tau_k + tau_k-1
-    return excess, rate, float(np.max(np.abs(second))) / (accel * (T / N) ** 2) if T > 0 else math.inf
+    return (excess, rate,
+            float(np.max(np.abs(second))) / (accel * (T / N) ** 2) if T > 0 else math.inf)
 
 
 @dataclass
@@ -197,7 +208,8 @@ class Verdict:
     accel_ratio: float = float("nan")
     """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
     margin: list = field(default_factory=list)
-    """per scenario: the replay's slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`)"""
+    """per scenario: the replay's slip-weighted friction margin [-]
+    (:mod:`ocp_crawl.ocp.slip_margin`)"""
     peaks: list = field(default_factory=list)
     """per scenario: the replay's peak joint rates and foot sliding speeds
     (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
@@ -213,9 +225,10 @@ class Verdict:
         return self.status == Status.SUCCESS
 
 
-def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T: float, value_ocp: float,
-                 S_ocp: list | None = None) -> Verdict:
-    """Replay node torques in the event-driven simulator and judge the OCP's claim (see the module docstring).
+def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T: float,
+                 value_ocp: float, S_ocp: list | None = None) -> Verdict:
+    """Replay node torques in the event-driven simulator and judge the OCP's claim (see the module
+    docstring).
 
     Parameters
     ----------
@@ -235,15 +248,16 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     Returns
     -------
     Verdict
-        ``SUCCESS``, ``REPLAY_FAILED`` or ``REPLAY_MISMATCH`` (the message gives the OCP's and the replay's
-        numbers), with the replayed numbers and the envelope and bandwidth margins.
+        ``SUCCESS``, ``REPLAY_FAILED`` or ``REPLAY_MISMATCH`` (the message gives the OCP's and the
+        replay's numbers), with the replayed numbers and the envelope and bandwidth margins.
     """
     tau = np.asarray(tau, float)
     N = tau.shape[1]
     v = Verdict(Status.SUCCESS, "the replay confirms the optimum")
     v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, models[0].robot, tau, T)
-    # the transcription's own interpolant from phase 0 (the event-driven stepper passes the input's kinks, also
-    # one at the cycle boundary: ocp_crawl/sim/event_kinks.py), as torques.csv replays it
+    # the transcription's own interpolant from phase 0 (the event-driven stepper passes the input's
+    # kinks, also one at the cycle boundary: ocp_crawl/sim/event_kinks.py), as torques.csv replays
+    # it
     sig = replay_signal(np.arange(N) / N, tau)
     v.replay = [simulate_torque(m, sig) for m in models]
     bad = next((r for r in v.replay if not r.success), None)
@@ -260,31 +274,35 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
     v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
     r = models[0].robot
-    problems = _problems(v, settings, value_ocp, reference_sizes(r.M, r.g, r.L, settings.period_ref()))
+    problems = _problems(v, settings, value_ocp,
+                         reference_sizes(r.M, r.g, r.L, settings.period_ref()))
     if problems:
         v.status = Status.REPLAY_MISMATCH
         S_text = ", ".join(units.distance(s) for s in (S_ocp or []))
         v.message = (f"{Status.REPLAY_MISMATCH.text}: {'; '.join(problems)} (OCP: value "
                      f"{value_text(settings.objective, value_ocp)}{', S ' + S_text if S_text else ''}; replay: value "
-                     f"{value_text(settings.objective, v.value)}, S {', '.join(units.distance(s) for s in v.S)}, "
-                     f"speed {', '.join(units.speed(s) for s in v.speed)}; T = {units.seconds(T)})")
+                     f"{value_text(settings.objective, v.value)}, S "
+                     f"{', '.join(units.distance(s) for s in v.S)}, speed "
+                     f"{', '.join(units.speed(s) for s in v.speed)}; T = {units.seconds(T)})")
     return v
 
 
 def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) -> list[str]:
-    """What the replay misses: the envelope, the bandwidth, the requirements, the friction tolerance, the
-    agreement with the OCP."""
+    """What the replay misses: the envelope, the bandwidth, the requirements, the friction
+    tolerance, the agreement with the OCP."""
     tol = settings.replay_tol
     out = []
     if not v.envelope_excess <= BOUND_RTOL:
-        out.append(f"the torques leave the envelope by {units.scientific(v.envelope_excess)} of its half-width "
-                   f"(tolerance {units.scientific(BOUND_RTOL)})")
+        out.append(f"the torques leave the envelope by {units.scientific(v.envelope_excess)} of "
+                   f"its half-width (tolerance {units.scientific(BOUND_RTOL)})")
     if not v.rate_ratio <= 1 + BOUND_RTOL:
-        out.append(f"the torque rate reaches {units.significant(v.rate_ratio, 10)} times the bandwidth "
-                   f"{units.significant(settings.max_rate_deg_s)} deg/s (tolerance {units.scientific(BOUND_RTOL)})")
+        out.append(f"the torque rate reaches {units.significant(v.rate_ratio, 10)} times the "
+                   f"bandwidth {units.significant(settings.max_rate_deg_s)} deg/s (tolerance "
+                   f"{units.scientific(BOUND_RTOL)})")
     if not (math.isnan(v.accel_ratio) or v.accel_ratio <= 1 + BOUND_RTOL):
-        out.append(f"the torque's second difference reaches {units.significant(v.accel_ratio, 10)} times the bound "
-                   f"of max_accel_deg_s2 = {units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
+        out.append(f"the torque's second difference reaches {units.significant(v.accel_ratio, 10)} "
+                   "times the bound of max_accel_deg_s2 = "
+                   f"{units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
                    f"{units.scientific(BOUND_RTOL)})")
     out += [f"the replay misses {text} by more than replay_tol {units.ratio(tol)}"
             for text in missed(settings.requirements, v.cycle, tol, sizes)]
@@ -292,13 +310,15 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) 
     low = min(v.margin, default=math.inf)
     if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc
         out.append(admissible_text(low, settings.friction_tol)
-                   + f" by more than replay_tol {units.significant(tol)} (of the mean friction limit)")
+                   + f" by more than replay_tol {units.significant(tol)} (of the mean friction "
+                     "limit)")
     if v.value != 0:
         v.rel_diff = abs(v.value - value_ocp) / abs(v.value)
     else:
         v.rel_diff = 0.0 if value_ocp == 0 else math.inf
     if not v.rel_diff <= tol:
-        out.append(f"the objective differs by {units.ratio(v.rel_diff)} (replay_tol {units.ratio(tol)})")
+        out.append(f"the objective differs by {units.ratio(v.rel_diff)} (replay_tol "
+                   f"{units.ratio(tol)})")
     return out
 
 

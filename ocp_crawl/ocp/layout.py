@@ -7,11 +7,11 @@ import casadi as cs
 import numpy as np
 
 
-#: the kinds of constraint blocks: the model's equations (equilibrium, closure, periodicity, the running
-#: sums' definitions: residual reports); the complementarity products and the cross conditions, relaxed
-#: to sigma per homotopy stage; the optimiser's own rules (friction tolerance, held ties, slip onsets on
-#: sub-step boundaries, joint rates) and the requirements on cycle quantities, which a profile given to
-#: be simulated need not meet
+#: the kinds of constraint blocks: the model's equations (equilibrium, closure, periodicity, the
+#: running sums' definitions: residual reports); the complementarity products and the cross
+#: conditions, relaxed to sigma per homotopy stage; the optimiser's own rules (friction tolerance,
+#: held ties, slip onsets on sub-step boundaries, joint rates) and the requirements on cycle
+#: quantities, which a profile given to be simulated need not meet
 KINDS = ("equation", "complementarity", "cross", "rule", "requirement")
 
 
@@ -34,8 +34,8 @@ class Layout:
         self.slices[name] = slice(start, start + sym.numel())
 
     def con(self, name: str, expr, lb, ub, kinds: tuple[str, ...] = ()) -> None:
-        """Add the constraints lb <= ``expr`` <= ub as the block ``"g_" + name`` of the ``kinds`` (of
-        :data:`KINDS`)."""
+        """Add the constraints lb <= ``expr`` <= ub as the block ``"g_" + name`` of the ``kinds``
+        (of :data:`KINDS`)."""
         if not set(kinds) <= set(KINDS):
             raise ValueError(f"Layout.con: kinds must be of {KINDS}, got {kinds!r}")
         self.kinds["g_" + name] = tuple(kinds)
@@ -54,4 +54,5 @@ def rows_of(layout_slices: dict[str, slice], kinds: dict[str, tuple], kind: str)
 def fourier_basis(N: int, K: int) -> np.ndarray:
     """(2K+1, N) values of 1, cos(2 pi n t), sin(2 pi n t), n = 1..K, at the node phases t = k/N."""
     t = np.arange(N) / N
-    return np.vstack([np.ones(N)] + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])
+    return np.vstack([np.ones(N)]
+                     + [f(2 * np.pi * n * t) for n in range(1, K + 1) for f in (np.cos, np.sin)])

@@ -269,18 +269,30 @@ def profile_of_signal(signal) -> tuple[float, float]:
     return peak, mean_square_nodes(tau)
 
 
+def quantity_values(name: str, cycle: Cycle) -> list[float]:
+    """The values of the quantity ``name`` on a simulated gait: one per scenario (speed, distance,
+    W+, CoT+; CoT+ +inf where the gait moves backwards or not at all) or one (the profile's
+    quantities, the period)."""
+    d, T = cycle.direction, cycle.T
+    if name == "speed":
+        return [d * s / T for s in cycle.S]
+    if name == "distance":
+        return [d * s for s in cycle.S]
+    if name == "W_plus":
+        return list(cycle.W_plus)
+    if name == "CoT_plus":
+        return [c if d * s > 0 else math.inf for c, s in zip(cycle.CoT_plus, cycle.S)]
+    return [float({"peak_torque": cycle.peak_torque, "mean_torque_sq": cycle.mean_torque_sq,
+                   "period": T}[name])]
+
+
 def cycle_values(c: Constraint, cycle: Cycle) -> list[float]:
     """The values of the constrained quantity on a simulated gait: one per scenario ("every") or
     one."""
-    d, T = cycle.direction, cycle.T
-    per = {"speed": [d * s / T for s in cycle.S], "distance": [d * s for s in cycle.S],
-           "W_plus": list(cycle.W_plus),
-           "CoT_plus": [c if d * s > 0 else math.inf for c, s in zip(cycle.CoT_plus, cycle.S)]}
-    if c.quantity in per:
-        values = per[c.quantity]
-        return [float(np.mean(values))] if c.over == "mean" else values
-    return [float({"peak_torque": cycle.peak_torque, "mean_torque_sq": cycle.mean_torque_sq,
-                   "period": T}[c.quantity])]
+    values = quantity_values(c.quantity, cycle)
+    if QUANTITIES[c.quantity].per_scenario and c.over == "mean":
+        return [float(np.mean(values))]
+    return values
 
 
 def reference_sizes(M: float, g: float, L: float, period_ref: float) -> dict[str, float]:
@@ -371,7 +383,9 @@ class Physical:
     """The transcription's symbols in physical units, for a :class:`UserObjective`: node torques
     ``tau`` (2, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S``
     [m] and ``W_plus`` [J] (None unless the objective says ``work``), the mean squared torque
-    ``mean_torque_sq`` [N^2 m^2] and ``direction`` (the sign of S pursued)."""
+    ``mean_torque_sq`` [N^2 m^2], ``direction`` (the sign of S pursued) and ``sizes``, the
+    reference size of each quantity on the robot (:func:`reference_sizes`: e.g. to make an
+    expression of order one)."""
 
     tau: object
     T: object
@@ -379,13 +393,15 @@ class Physical:
     W_plus: list
     mean_torque_sq: object
     direction: int
+    sizes: dict
 
 
 def physical(sym: Symbols) -> Physical:
     """The symbols of ``sym`` (scaled) in physical units."""
     W = [None if w is None else w * sym.MgL for w in sym.W]
+    sizes = reference_sizes(sym.MgL / sym.L, 1.0, sym.L, sym.period_ref)
     return Physical(sym.T * sym.MgL, sym.Th * sym.period_ref, [s * sym.L for s in sym.S], W,
-                    mean_square_nodes(sym.T) * sym.MgL**2, sym.direction)
+                    mean_square_nodes(sym.T) * sym.MgL**2, sym.direction, sizes)
 
 
 def minimises(objective: str) -> bool:

@@ -1,5 +1,6 @@
-"""The outcome of the periodic-gait OCP: :class:`OCPResult` (the optimal profile, its residuals, its replay,
-its baselines and gains, every start) and :class:`StartRecord` (one start of the multi-start)."""
+"""The outcome of the periodic-gait OCP: :class:`OCPResult` (the optimal profile, its residuals, its
+replay, its baselines and gains, every start) and :class:`StartRecord` (one start of the
+multi-start)."""
 from __future__ import annotations
 
 import math
@@ -32,7 +33,8 @@ class StartRecord:
     @property
     def converged(self) -> bool:
         """The OCP converged from this start and its optimum was replayed (judged or not)."""
-        return math.isfinite(self.value_replay) and self.status in (Status.SUCCESS, Status.REPLAY_MISMATCH,
+        return math.isfinite(self.value_replay) and self.status in (Status.SUCCESS,
+                                                                    Status.REPLAY_MISMATCH,
                                                                      Status.WORSE_THAN_BASELINE)
 
     def to_dict(self) -> dict:
@@ -42,8 +44,9 @@ class StartRecord:
 
 @dataclass
 class OCPResult:
-    """Outcome of :func:`optimize_gait`: the optimal profile, its residuals, the harmonic baseline, the
-    replay that judges it (per scenario lists: one entry without a friction set) and the starts."""
+    """Outcome of :func:`optimize_gait`: the optimal profile, its residuals, the harmonic baseline,
+    the replay that judges it (per scenario lists: one entry without a friction set) and the
+    starts."""
 
     success: bool
     status: Status
@@ -93,11 +96,13 @@ class OCPResult:
     value_replay: float = float("nan")
     rel_diff_replay: float = float("nan")
     envelope_excess: float = float("nan")
-    """largest excursion of the torques beyond the envelope, relative to its half-width (<= 0: inside)"""
+    """largest excursion of the torques beyond the envelope, relative to its half-width (<= 0:
+    inside)"""
     rate_ratio: float = float("nan")
     """largest torque rate of the replayed profile over the bandwidth k R (<= 1: within)"""
     accel_ratio: float = float("nan")
-    """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such bound)"""
+    """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such
+    bound)"""
     peak_joint_rate_deg_s: list = field(default_factory=list)
     """per scenario: the replay's peak actual joint rates |d phi_i/dt| of joints 1, 2 [deg/s]
     (:mod:`~ocp_crawl.ocp.rates`)"""
@@ -116,7 +121,8 @@ class OCPResult:
     gain: float = float("nan")
     """relative gain by replay over the best baseline of every family searched (positive: better)"""
     gains: dict = field(default_factory=dict)
-    """relative gain by replay over each family's best member, by shape (NaN: none, or infeasible)"""
+    """relative gain by replay over each family's best member, by shape (NaN: none, or
+    infeasible)"""
     starts: list = field(default_factory=list)
     """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
     dynamic_margin: dict | None = None
@@ -129,16 +135,20 @@ class OCPResult:
 
     def _best_baseline(self) -> dict | None:
         best = self.baselines.best if self.baselines else self.harmonic
-        return {"shape": best.shape, "value": best.value, "feasible": best.feasible} if best else None
+        return {"shape": best.shape, "value": best.value,
+                "feasible": best.feasible} if best else None
 
     @property
     def spread(self) -> tuple[float, float, int]:
-        """(min, max) of the replayed objective over the converged starts and how many converged (NaNs if none)."""
+        """(min, max) of the replayed objective over the converged starts and how many converged
+        (NaNs if none)."""
         values = [s.value_replay for s in self.starts if s.converged]
-        return (min(values), max(values), len(values)) if values else (float("nan"), float("nan"), 0)
+        return (min(values), max(values), len(values)) if values else (float("nan"), float("nan"),
+                                                                       0)
 
     def summary(self) -> dict:
-        """The result as strict JSON types (non-finite numbers None; the status as its lower-case label)."""
+        """The result as strict JSON types (non-finite numbers None; the status as its lower-case
+        label)."""
         one = len(self.S_ocp) == 1
 
         def per_scenario(values):
@@ -147,12 +157,15 @@ class OCPResult:
         low, high, converged = self.spread
         return jsonable({
             "status": self.status.label, "success": bool(self.success), "message": self.message,
-            "objective": self.objective, "nodes": self.settings.nodes,
+            "objective": self.objective, "objective_unit": self.settings.objective_unit,
+            "nodes": self.settings.nodes,
             "parametrization": self.settings.parametrization,
             "S_ocp": per_scenario(self.S_ocp), "S_replay": per_scenario(self.S_replay),
-            "T_ocp": self.T_ocp, "v_ocp": per_scenario(self.v_ocp), "v_replay": per_scenario(self.v_replay),
+            "T_ocp": self.T_ocp, "v_ocp": per_scenario(self.v_ocp),
+            "v_replay": per_scenario(self.v_replay),
             "W_plus_ocp": self.W_plus_ocp, "W_plus_replay": self.W_plus_replay,
-            "CoT_plus_ocp": self.CoT_plus_ocp, "CoT_plus_replay": per_scenario(self.CoT_plus_replay),
+            "CoT_plus_ocp": self.CoT_plus_ocp,
+            "CoT_plus_replay": per_scenario(self.CoT_plus_replay),
             "objective_value_ocp": self.value_ocp, "objective_value_replay": self.value_replay,
             "rel_diff_replay": self.rel_diff_replay, "replay_tol": self.settings.replay_tol,
             "envelope_excess": self.envelope_excess, "rate_ratio": self.rate_ratio,
@@ -178,15 +191,18 @@ class OCPResult:
         })
 
     def scenarios(self) -> list[dict] | None:
-        """Over a friction set: per scenario, in the order of the per-scenario lists, its ratio ``mu1_mu2``,
-        its friction ``level``, its ``label`` (:func:`~ocp_crawl.ocp.judge.scenario_labels`) and its values (S, speed, W+, CoT+ of the
-        OCP and the replay; None where not computed); None without a set (one scenario, the robot's)."""
+        """Over a friction set: per scenario, in the order of the per-scenario lists, its ratio
+        ``mu1_mu2``, its friction ``level``, its ``label``
+        (:func:`~ocp_crawl.ocp.judge.scenario_labels`) and its values (S, speed, W+, CoT+ of the OCP
+        and the replay; None where not computed); None without a set (one scenario, the robot's)."""
         if not self.settings.friction_set:
             return None
         pairs = self.settings.scenario_pairs()
-        names = ("S_ocp", "S_replay", "v_ocp", "v_replay", "W_plus_ocp", "W_plus_replay", "CoT_plus_ocp",
-                 "CoT_plus_replay")
+        names = ("S_ocp", "S_replay", "v_ocp", "v_replay", "W_plus_ocp", "W_plus_replay",
+                 "CoT_plus_ocp", "CoT_plus_replay")
         lists = [getattr(self, name) for name in names]
         return jsonable([{"mu1_mu2": r, "level": level, "label": label,
-                          **{n: values[j] if j < len(values) else None for n, values in zip(names, lists)}}
-                         for j, ((level, r), label) in enumerate(zip(pairs, scenario_labels(self.settings)))])
+                          **{n: values[j] if j < len(values)
+                             else None for n, values in zip(names, lists)}}
+                         for j, ((level, r),
+                                 label) in enumerate(zip(pairs, scenario_labels(self.settings)))])

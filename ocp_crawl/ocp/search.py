@@ -1,16 +1,16 @@
-"""The search of the waveform families for their best members: a scan of each family's whole box, then local
-refinement from its best distinct points, on worker processes.
+"""The search of the waveform families for their best members: a scan of each family's whole box,
+then local refinement from its best distinct points, on worker processes.
 
-The scan (:func:`scan_points`) has two parts: the symmetric members (gamma1 = gamma2, A1 = A2) on a grid of
-``harmonic_A`` amplitudes, centres at both edges and the middle of what the envelope leaves, and
-``harmonic_psi`` phases; and ``baseline_samples`` points of a scrambled Sobol sequence over the whole box
-(every coordinate free: unequal centres, amplitudes, and for pulses rise and duty), which finds the
-asymmetric members that robots with unequal feet prefer.  The ``local_starts`` best scan points at least
-6/harmonic_psi apart start bounded Nelder-Mead searches (:func:`local_search`): a symmetric point first in
-the symmetric sub-family, then every point in rounds over every coordinate.
+The scan (:func:`scan_points`) has two parts: the symmetric members (gamma1 = gamma2, A1 = A2) on a
+grid of ``harmonic_A`` amplitudes, centres at both edges and the middle of what the envelope leaves,
+and ``harmonic_psi`` phases; and ``baseline_samples`` points of a scrambled Sobol sequence over the
+whole box (every coordinate free: unequal centres, amplitudes, and for pulses rise and duty), which
+finds the asymmetric members that robots with unequal feet prefer.  The ``local_starts`` best scan
+points at least 6/harmonic_psi apart start bounded Nelder-Mead searches (:func:`local_search`): a
+symmetric point first in the symmetric sub-family, then every point in rounds over every coordinate.
 
-Every member's simulation is deterministic and the Sobol sequence has a fixed seed, so the result does not
-depend on the number of worker processes.
+Every member's simulation is deterministic and the Sobol sequence has a fixed seed, so the result
+does not depend on the number of worker processes.
 """
 from __future__ import annotations
 
@@ -29,12 +29,14 @@ from ocp_crawl.ocp.family import WaveFamily, shape_box
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.workers import default_jobs, worker_pool
 
-#: Nelder-Mead's stopping tolerances (box coordinates; search ranks, i.e. m/s or CoT+): both must hold.
-#: The searches end by their evaluation budgets.  A tolerance of 5e-6 relative saved a quarter of the
-#: harmonic family's evaluations but moved its best member by 7e-6, which put robust_speed's homotopy
-#: on another path: 2,588 IPOPT iterations instead of 1,181, 69.813 mm/s instead of 69.891
+#: Nelder-Mead's stopping tolerances (box coordinates; search ranks, i.e. m/s or CoT+): both must
+#: hold.  The searches end by their evaluation budgets.  A tolerance of 5e-6 relative saved a
+#: quarter of the harmonic family's evaluations but moved its best member by 7e-6, which put
+#: robust_speed's homotopy on another path: 2,588 IPOPT iterations instead of 1,181, 69.813 mm/s
+#: instead of 69.891
 NM_TOL = {"xatol": 1e-7, "fatol": 1e-12}
-#: centre offsets w of the symmetric scan (gamma_i = gamma + w (A_max - A_i)): both edges and the middle
+#: centre offsets w of the symmetric scan (gamma_i = gamma + w (A_max - A_i)): both edges and the
+#: middle
 SCAN_W = (-1.0, 0.0, 1.0)
 #: the pulse's (r, d) coordinates on the symmetric scan: rise 0.25 cycles, equal high and low levels
 PULSE_SCAN = (0.2 / 0.45, 0.5)
@@ -57,8 +59,8 @@ def _full(y) -> np.ndarray:
 
 
 def scan_points(settings: OCPSettings, shape: str = "harmonic") -> list[np.ndarray]:
-    """Box coordinates of the scan of a shape's family (see the module docstring): the symmetric grid, then
-    the Sobol sample of the whole box."""
+    """Box coordinates of the scan of a shape's family (see the module docstring): the symmetric
+    grid, then the Sobol sample of the whole box."""
     n_a = settings.harmonic_A
     extra = list(PULSE_SCAN) if shape == "pulse" else []
     out = []
@@ -77,7 +79,8 @@ def scan_points(settings: OCPSettings, shape: str = "harmonic") -> list[np.ndarr
 
 
 def seeds(scored: list[tuple[float, np.ndarray]], count: int, min_dist: float) -> list[np.ndarray]:
-    """The ``count`` best scan points of (rank, z) at least ``min_dist`` apart in box coordinates."""
+    """The ``count`` best scan points of (rank, z) at least ``min_dist`` apart in box
+    coordinates."""
     chosen: list = []
     for rank, z in sorted(scored, key=lambda x: x[0]):
         if len(chosen) >= count:
@@ -88,7 +91,8 @@ def seeds(scored: list[tuple[float, np.ndarray]], count: int, min_dist: float) -
 
 
 def _simplex(z: np.ndarray, steps, box) -> np.ndarray:
-    """Nelder-Mead's first simplex: z and one point per coordinate, ``steps`` away inside ``box``."""
+    """Nelder-Mead's first simplex: z and one point per coordinate, ``steps`` away inside
+    ``box``."""
     pts = [z]
     for i, h in enumerate(steps):
         y = z.copy()
@@ -105,13 +109,14 @@ def _symmetric(z: np.ndarray) -> bool:
 def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
     """Local search from the box point ``z0`` on :func:`~ocp_crawl.ocp.baseline.search_rank`.
 
-    From a symmetric point: bounded Nelder-Mead in the symmetric sub-family first (at most a third of
-    ``maxfev`` evaluations).  Then rounds of bounded Nelder-Mead in every coordinate, each from a fresh
-    small simplex at the previous round's end point (:data:`ROUND_FEV` evaluations each), until a round
-    improves the rank by less than :data:`ROUND_RTOL` or ``maxfev`` is spent: a simplex in five or
-    seven coordinates degenerates on the objective's ridges long before it converges, and a fresh one
-    goes on (on an asymmetric robot one search of 600 evaluations gained 2.6 % over one of 200).
-    Returns the start's summary (seed and end point, their objective values, evaluations)."""
+    From a symmetric point: bounded Nelder-Mead in the symmetric sub-family first (at most a third
+    of ``maxfev`` evaluations).  Then rounds of bounded Nelder-Mead in every coordinate, each from a
+    fresh small simplex at the previous round's end point (:data:`ROUND_FEV` evaluations each),
+    until a round improves the rank by less than :data:`ROUND_RTOL` or ``maxfev`` is spent: a
+    simplex in five or seven coordinates degenerates on the objective's ridges long before it
+    converges, and a fresh one goes on (on an asymmetric robot one search of 600 evaluations gained
+    2.6 % over one of 200).  Returns the start's summary (seed and end point, their objective
+    values, evaluations)."""
     from scipy.optimize import minimize
 
     settings, box = fam.settings, shape_box(fam.shape)
@@ -148,12 +153,14 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
 def search_families(robot: Robot, gravity: str, settings: OCPSettings, shapes, local_starts: int,
                     maxfev: int, jobs: int, meanwhile: Callable[[], object] | None = None
                     ) -> dict[str, tuple[WaveFamily, list[dict]]]:
-    """Scan and local searches of every shape's family: per shape, the family (every evaluation, in the
-    order of a serial search) and the local searches' summaries.  On ``jobs`` worker processes when more
-    than one (all shapes' scans, then all their local searches, share the pool); ``meanwhile`` runs in
-    this process while the workers scan.  A broken pool (a worker killed) starts the search over here."""
+    """Scan and local searches of every shape's family: per shape, the family (every evaluation, in
+    the order of a serial search) and the local searches' summaries.  On ``jobs`` worker processes
+    when more than one (all shapes' scans, then all their local searches, share the pool);
+    ``meanwhile`` runs in this process while the workers scan.  A broken pool (a worker killed)
+    starts the search over here."""
     try:
-        return _search(robot, gravity, settings, tuple(shapes), local_starts, maxfev, jobs, meanwhile)
+        return _search(robot, gravity, settings, tuple(shapes), local_starts, maxfev, jobs,
+                       meanwhile)
     except BrokenProcessPool:
         return _search(robot, gravity, settings, tuple(shapes), local_starts, maxfev, 1, meanwhile)
 
@@ -164,7 +171,8 @@ def _search(robot, gravity, settings, shapes, local_starts, maxfev, jobs, meanwh
     with _pool(robot, gravity, settings, shapes, jobs) as pool:
         chunks = [(s, list(c)) for s in shapes
                   for c in np.array_split(np.array(points[s]), 4 * jobs) if len(c)]
-        scanned = pool.map(_scan_chunk, chunks) if pool is not None else []  # every chunk sent at once
+        # every chunk sent at once
+        scanned = pool.map(_scan_chunk, chunks) if pool is not None else []
         if meanwhile is not None:
             meanwhile()
         for (s, _), evs in zip(chunks, scanned):
@@ -207,7 +215,8 @@ _WORKER: dict = {}
 
 @contextlib.contextmanager
 def _pool(robot: Robot, gravity: str, settings: OCPSettings, shapes, jobs: int):
-    """A pool of ``jobs`` worker processes, each with the families of the problem (None for one job)."""
+    """A pool of ``jobs`` worker processes, each with the families of the problem (None for one
+    job)."""
     if jobs < 2:
         yield None
         return
@@ -242,7 +251,8 @@ def _local_task(shape: str, z0: np.ndarray, maxfev: int, known: list) -> tuple[d
 
 
 def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=None,
-                   local_starts: int | None = None, maxfev: int | None = None, jobs: int | None = None,
+                   local_starts: int | None = None, maxfev: int | None = None,
+                   jobs: int | None = None,
                    meanwhile: Callable[[], object] | None = None) -> Baselines:
     """The best member of each waveform family of the envelope and bandwidth for the objective.
 
@@ -254,8 +264,8 @@ def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=Non
         Its gravity convention ("physical" or "paper").
     settings : OCPSettings
         The envelope (gamma_deg, A_max_deg), the bandwidth (max_rate_deg_s), the objective (and
-        speed_min, robust, direction), the scan sizes (harmonic_A, harmonic_psi, baseline_samples), the
-        local searches (baseline_starts) and the families (``baseline_shapes``).
+        speed_min, robust, direction), the scan sizes (harmonic_A, harmonic_psi, baseline_samples),
+        the local searches (baseline_starts) and the families (``baseline_shapes``).
     shapes : sequence of str, optional
         The families to search (None: ``settings.baseline_shapes``).
     local_starts : int, optional
@@ -263,20 +273,20 @@ def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=Non
     maxfev : int, optional
         Largest number of simulated members of each local search (None: ``baseline_evaluations``).
     jobs : int, optional
-        Worker processes (None: the CPUs this process may use; 1: all in this process).  The result does
-        not depend on it, except the local searches' own ``evaluations``: in parallel, a search does not
-        find in its cache the members that another one simulated.
+        Worker processes (None: the CPUs this process may use; 1: all in this process).  The result
+        does not depend on it, except the local searches' own ``evaluations``: in parallel, a search
+        does not find in its cache the members that another one simulated.
     meanwhile : callable, optional
-        Called in this process while the workers scan (first, when there are none), e.g. to build the
-        OCP's solvers (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.prepare`).
+        Called in this process while the workers scan (first, when there are none), e.g. to build
+        the OCP's solvers (:meth:`~ocp_crawl.ocp.solver.GaitSolver.prepare`).
 
     Returns
     -------
     Baselines
-        Per family the best member found over the scan and the local searches (every member simulated
-        with the event-driven stepper in every scenario at its shortest period); for min_cot, when no
-        member meets speed_min, the one nearest to it (value +inf, ``feasible`` False) as an initial
-        guess only; None when no member simulates successfully.
+        Per family the best member found over the scan and the local searches (every member
+        simulated with the event-driven stepper in every scenario at its shortest period); for
+        min_cot, when no member meets speed_min, the one nearest to it (value +inf, ``feasible``
+        False) as an initial guess only; None when no member simulates successfully.
     """
     t0 = time.perf_counter()
     shapes = tuple(settings.baseline_shapes if shapes is None else shapes)
@@ -298,7 +308,8 @@ def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=Non
     return Baselines(settings.objective, choices, dt)
 
 
-def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings, local_starts: int | None = None,
+def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings,
+                  local_starts: int | None = None,
                   maxfev: int | None = None, jobs: int | None = None,
                   meanwhile: Callable[[], object] | None = None) -> WaveChoice | None:
     """The best member of the harmonic family alone (:func:`best_baselines` with ``shapes`` =

@@ -1,102 +1,54 @@
 """Settings of the periodic-gait optimal control problem: the objectives and their options.
 
 Every OCP default is defined here once, as an :class:`OCPSettings` field; the problem schema
-(``[ocp]`` section of a problem file) reads its defaults from these fields, key by key of the same name.
+(``[ocp]`` section of a problem file) reads its defaults from these fields, key by key of the same
+name.  The choices and bounds each field is checked against are in :mod:`ocp_crawl.ocp.limits`.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 from ocp_crawl.checks import is_real, real
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.nlp.homotopy import schedule as sigma_schedule
 from ocp_crawl.nlp.ipopt import check_ipopt_options
+from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
+                                  BASELINE_SAMPLES_BOUNDS, BASELINE_STARTS_BOUNDS,
+                                  ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
+                                  HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, MAX_STAGES, NODES_BOUNDS,
+                                  PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS, STARTS_BOUNDS,
+                                  WARM_BARRIERS, check_physical)
+from ocp_crawl.ocp.objectives import resolve_objective
 from ocp_crawl.ocp.quantities import Constraint, UserObjective, minimises
 
-Objective = Literal["max_speed", "min_cot", "robust_speed"]
-OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
-PARAMETRIZATIONS = ("free", "fourier")
-#: IPOPT barrier strategies of the warm-started homotopy solves (:attr:`OCPSettings.warm_barrier`)
-WARM_BARRIERS = ("adaptive", "monotone")
-#: when IPOPT perturbs the Hessian (:attr:`OCPSettings.perturbation`)
-PERTURBATIONS = ("as_needed", "always")
-#: the paths after the endgame's stage (:attr:`OCPSettings.endgame_paths`)
-ENDGAME_PATHS = ("endgame_first", "both")
-#: keys of earlier versions that no longer exist, and what replaces each (problem files and OCPSettings)
-REMOVED_KEYS = {
-    "S_min": "speed_min [m/s], the smallest mean speed direction * S / T (a per-cycle S rewarded packing strokes)",
-    "rate_limit": "max_rate_deg_s [deg/s], the actuators' largest reference-angle rate (a physical bandwidth)",
-    "max_rate": "max_rate_deg_s [deg/s], the actuators' largest reference-angle rate (a physical bandwidth)",
-    "curvature_limit": "max_accel_deg_s2 [deg/s^2], an optional physical smoothness bound, off by default",
-    "tie_margin": "nothing: the switch-exact transcription places every change of the slipping foot on a sub-step "
-                  "boundary",
-}
 
-#: bounds of the settings that size the work (a solve within minutes; see docs/guide/problem_files.md,
-#: "Bounds"): the nodes of the transcription, the Fourier order, the psi values and amplitudes of the harmonic scan
-NODES_BOUNDS = (8, 1000)
-FOURIER_ORDER_BOUNDS = (1, 25)
-HARMONIC_PSI_BOUNDS = (4, 180)
-HARMONIC_A_BOUNDS = (1, 20)
-STARTS_BOUNDS = (1, 20)
-BASELINE_SAMPLES_BOUNDS = (0, 4096)
-BASELINE_STARTS_BOUNDS = (0, 20)
-BASELINE_EVALUATIONS_BOUNDS = (1, 5000)
-ENDGAME_MAX_ITER_BOUNDS = (1, 10000)
-#: the ``baselines`` choices: every waveform family, or one
-BASELINE_CHOICES = ("all", "harmonic", "triangle", "pulse")
+def _bounds_speed_below(c: Constraint) -> bool:
+    """Whether ``c`` bounds the speed from below in every scenario (min_cot's speed requirement)."""
+    return c.quantity == "speed" and c.min is not None and c.over == "every"
 
-
-#: bounds of the numbers that carry a physical meaning, (low, high, why), inclusive: the API and the
-#: problem files refuse the same values with the same reason
-PHYSICAL_BOUNDS = {
-    "max_rate_deg_s": (1e-2, 1e4, "below 0.01 deg/s a cycle of the envelope takes hours; above 1e4 deg/s "
-                       "(cycles of about 10 ms) inertia is not negligible and the quasistatic model fails"),
-    "max_joint_rate_deg_s": (1e-2, 1e4, "the actual joint rate: the bounds of max_rate_deg_s"),
-    "max_accel_deg_s2": (1e-2, 1e7, "the rate bounds reached within 1 ms to 1 s"),
-    "regularization": (0.0, 1e-2, "a tie-breaker between equally good profiles: a larger weight trades the "
-                       "objective for smoothness (bound the profile with max_accel_deg_s2 instead)"),
-    "speed_min": (0.0, 10.0, "10 m/s is far beyond any quasistatic crawler"),
-    "mu_ratio_eps": (0.0, 0.5, "friction ratios beyond 1 +- 0.5 are another robot: give robot.mu1 and "
-                     "robot.mu2"),
-    "friction_tol": (0.0, 0.5, "a fraction of the mean friction limit: above 0.5 almost no gait slips"),
-    "dynamic_margin": (1.0, 20.0, "a factor on the shortest period at which MuJoCo's S is "
-                       "within 5 % of the quasistatic S: 1 asks it at the gait's own period; "
-                       "above 20 a 1 s gait is run at 50 ms, fewer than 100 MuJoCo steps per "
-                       "cycle"),
-    "replay_tol": (1e-9, 0.1, "1e-9 is the judge's own bound tolerance; above 0.1 it would accept an "
-                   "optimum a tenth off"),
-}
-
-
-def check_physical(name: str, value, optional: bool = False):
-    """``value`` of the setting ``name`` as a float within :data:`PHYSICAL_BOUNDS` (None passes when
-    ``optional``); ValueError naming the setting, its bounds and their reason."""
-    if value is None and optional:
-        return None
-    low, high, why = PHYSICAL_BOUNDS[name]
-    v = real(f"OCPSettings.{name}", value)
-    if not low <= v <= high:
-        raise ValueError(f"OCPSettings.{name} must be in [{low:g}, {high:g}] ({why}), got {value!r}")
-    return v
-
-
-#: most homotopy stages a schedule may have (sigma0 down to sigma_min by sigma_factor): each is an IPOPT solve
-MAX_STAGES = 40
 
 @dataclass(frozen=True)
 class OCPSettings:
-    """Settings of the periodic-gait optimal control problem (the ``[ocp]`` keys of a problem file)."""
+    """Settings of the periodic-gait optimal control problem (the ``[ocp]`` keys of a problem
+    file)."""
 
-    objective: Objective = "max_speed"
+    objective: str = "max_speed"
+    """what to optimise: a named objective (max_speed, min_cot, robust_speed) or one of the
+    vocabulary of cycle quantities (:data:`~ocp_crawl.ocp.objectives.VOCABULARY`: "max:speed" is
+    max_speed, "min:CoT_plus" min_cot, kept under those names; "min:W_plus", "max:distance",
+    "min:mean_torque_sq", ..., and "min:sum" of ``terms``)"""
+    terms: dict | None = None
+    """objective "min:sum": the weighted sum's terms, quantity -> weight (weight times the quantity,
+    in its SI unit; a quantity of the friction scenarios as its mean over them; a negative weight
+    maximises it), e.g. ``{"W_plus": 1.0, "mean_torque_sq": 10.0}``"""
     nodes: int = 100
     """steps per cycle N, in NODES_BOUNDS"""
     direction: int = -1
     """sign of S to pursue: -1 towards foot 1 (the direction of psi > 0 gaits), +1 towards foot 2"""
     gamma_deg: float = 90.0
-    """centre of the reference-angle envelope [deg] (a problem file gives it as ``[gait] gamma_deg``)"""
+    """centre of the reference-angle envelope [deg] (a problem file gives it as
+    ``[gait] gamma_deg``)"""
     A_max_deg: float = 30.0
     """half-width of the reference-angle envelope [deg]"""
     parametrization: str = "free"
@@ -104,14 +56,14 @@ class OCPSettings:
     (band-limited, but its dense coefficient columns make IPOPT iterations much slower)"""
     fourier_order: int = 4
     max_rate_deg_s: float = 180.0
-    """bandwidth of each joint's actuator: the largest reference-angle rate |d phi_ref,i / d t| [deg/s]
-    (a torque rate k times it).  Time is explicit: a gait of period T [s] (a variable of the OCP) moves its
-    reference at most this fast, so the mean speed S/T is what max_speed maximises and a profile repeated
-    twice per cycle (period doubled) is neither better nor worse than once"""
+    """bandwidth of each joint's actuator: the largest reference-angle rate |d phi_ref,i / d t|
+    [deg/s] (a torque rate k times it).  Time is explicit: a gait of period T [s] (a variable of the
+    OCP) moves its reference at most this fast, so the mean speed S/T is what max_speed maximises
+    and a profile repeated twice per cycle (period doubled) is neither better nor worse than once"""
     max_accel_deg_s2: float | None = None
-    """optional smoothness bound: the largest reference-angle acceleration |d^2 phi_ref,i / d t^2| [deg/s^2]
-    of each actuator; None (default): no bound (the formulation and the switch-exact transcription prevent
-    chattering without it)"""
+    """optional smoothness bound: the largest reference-angle acceleration |d^2 phi_ref,i / d t^2|
+    [deg/s^2] of each actuator; None (default): no bound (the formulation and the switch-exact
+    transcription prevent chattering without it)"""
     max_joint_rate_deg_s: float | None = None
     """optional bound on the actual joint rates |d phi_i / d t| [deg/s] of the quasistatic gait (the
     joint angles, not their references: springs, gravity and slips make them faster or slower than
@@ -124,129 +76,144 @@ class OCPSettings:
     speed_min: float = 0.0
     """min_cot: smallest mean speed direction * S / T [m/s]"""
     mu_ratio_eps: float | None = None
-    """every objective: friction scenarios mu1/mu2 in {1 - eps, 1, 1 + eps} (mu1 mu2 fixed), in [0, 1):
-    the friction uncertainty as a set, one profile and one period for all, each scenario simulated
-    (replayed) as it is; None (default): 0.1 for robust_speed, else 0 (the robot's friction only)"""
+    """every objective: friction scenarios mu1/mu2 in {1 - eps, 1, 1 + eps} (mu1 mu2 fixed), in [0,
+    1): the friction uncertainty as a set, one profile and one period for all, each scenario
+    simulated (replayed) as it is; None (default): 0.1 for robust_speed, else 0 (the robot's
+    friction only)"""
     mu_ratios: tuple | None = None
-    """every objective: the scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r)) given explicitly;
-    None (default): from mu_ratio_eps"""
+    """every objective: the scenarios mu1/mu2 (mu1 = mu sqrt(r), mu2 = mu / sqrt(r)) given
+    explicitly; None (default): from mu_ratio_eps"""
     mu_levels: tuple | None = None
-    """every objective: friction levels, each a factor on both feet's coefficients (mu1 and mu2 times it),
-    e.g. (1.0, 0.5) for a gait that must also move on a surface of half the friction; with a ratio set
-    (mu_ratio_eps, mu_ratios) every ratio at every level.  None (default): the robot's level only"""
+    """every objective: friction levels, each a factor on both feet's coefficients (mu1 and mu2
+    times it), e.g. (1.0, 0.5) for a gait that must also move on a surface of half the friction;
+    with a ratio set (mu_ratio_eps, mu_ratios) every ratio at every level.  None (default): the
+    robot's level only"""
     constraints: tuple = ()
     """bounds on cycle quantities (:class:`~ocp_crawl.ocp.quantities.Constraint`, or mappings of its
-    fields: a problem file's ``[[ocp.constraint]]`` tables), stated in the NLP, met by every baseline and
-    checked on the replay within replay_tol: e.g. ``{"quantity": "peak_torque", "max": 0.3}``"""
+    fields: a problem file's ``[[ocp.constraint]]`` tables), stated in the NLP, met by every
+    baseline and checked on the replay within replay_tol: e.g.
+    ``{"quantity": "peak_torque", "max": 0.3}``"""
     user_objective: UserObjective | None = None
-    """an objective of the user's (:class:`~ocp_crawl.ocp.quantities.UserObjective`: its expression in
-    the transcription's symbols and its value on a simulated gait), Python only; ``objective`` then
-    becomes its label, "min:<name>" or "max:<name>"; None (default): ``objective`` names it"""
+    """an objective of the user's (:class:`~ocp_crawl.ocp.quantities.UserObjective`: its expression
+    in the transcription's symbols and its value on a simulated gait), Python only; ``objective``
+    then becomes its label, "min:<name>" or "max:<name>"; None (default): ``objective`` names it"""
     robust: str = "mean"
-    """with several friction scenarios: optimise the 'mean' or the 'worst' of the objective over them
-    (the speed of max_speed and robust_speed, CoT+ of min_cot, whose speed_min holds in every scenario);
-    'worst' bounds it at every scenario (the ends of the set and its middle, not between them), 'mean'
-    only their average (one scenario may be slow where the others are fast)"""
+    """with several friction scenarios: optimise the 'mean' or the 'worst' of the objective over
+    them (the speed of max_speed and robust_speed, CoT+ of min_cot, whose speed_min holds in every
+    scenario); 'worst' bounds it at every scenario (the ends of the set and its middle, not between
+    them), 'mean' only their average (one scenario may be slow where the others are fast)"""
     sigma0: tuple = (1e-4,)
-    """first relaxation parameter(s) of the homotopy from the initial guess; with several, a homotopy is run from
-    each (in turn, until one improves on the guess) and the best accepted result is kept.  The relaxation path
-    decides the local optimum: a loose start (1e-2) explores but converges to non-physical points and took half
-    of each solve; 1e-4 stays in the physical region"""
+    """first relaxation parameter(s) of the homotopy from the initial guess; with several, a
+    homotopy is run from each (in turn, until one improves on the guess) and the best accepted
+    result is kept.  The relaxation path decides the local optimum: a loose start (1e-2) explores
+    but converges to non-physical points and took half of each solve; 1e-4 stays in the physical
+    region"""
     sigma_min: float = 1e-6
-    """last relaxation parameter; the polish then solves the NLP with every pair on its identified branch
-    (complementarity exactly 0), unless the last stage's point is within comp_tol already (then no polish)"""
+    """last relaxation parameter; the polish then solves the NLP with every pair on its identified
+    branch (complementarity exactly 0), unless the last stage's point is within comp_tol already
+    (then no polish)"""
     sigma_factor: float = 0.01
     stage_tol: float = 1e-4
-    """IPOPT tolerance (``tol``) of the homotopy's stages before the last, which only lead to the next one; the
-    last stage (unless ``loose_last``) and the polish keep OCP_IPOPT's 1e-10 (a ``tol`` in ``ipopt`` at or above
-    stage_tol: no loose stages;
-    the profile-fixed check, ``GaitOCP.solve(fix_profile=True)``, is tight throughout).
-    The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit: 1e-4 halves it, with
-    the same max_speed optimum at N = 50; min_cot's path changed and one start reached another local optimum (0.5 %
-    better)"""
+    """IPOPT tolerance (``tol``) of the homotopy's stages before the last, which only lead to the
+    next one; the last stage (unless ``loose_last``) and the polish keep OCP_IPOPT's 1e-10 (a
+    ``tol`` in ``ipopt`` at or above stage_tol: no loose stages;
+    the profile-fixed check, ``GaitSolver.solve(fix_profile=True)``, is tight throughout).
+    The first stage at sigma = 1e-4 spent 40 % of its IPOPT iterations refining its sixth digit:
+    1e-4 halves it, with the same max_speed optimum at N = 50; min_cot's path changed and one start
+    reached another local optimum (0.5 % better)"""
     stage_tol_ratio: float | None = None
-    """a loose stage at sigma is solved to IPOPT ``tol`` = min(stage_tol, stage_tol_ratio * sigma) (a stage's point then
-    stays as close to its relaxed optimum as the relaxation itself; where that is not looser than the tight tolerance,
-    the stage is tight); None (default): stage_tol at every sigma.  robust_speed's file uses 0.1 with sigma from 1e-3
-    down to 1e-11: its first stage at sigma = 1e-4 to tol 1e-4 ended at a poor point and the next stage at max_iter"""
+    """a loose stage at sigma is solved to IPOPT ``tol`` = min(stage_tol, stage_tol_ratio * sigma)
+    (a stage's point then stays as close to its relaxed optimum as the relaxation itself; where that
+    is not looser than the tight tolerance, the stage is tight); None (default): stage_tol at every
+    sigma.  robust_speed's file uses 0.1 with sigma from 1e-3 down to 1e-11: its first stage at
+    sigma = 1e-4 to tol 1e-4 ended at a poor point and the next stage at max_iter"""
     loose_last: bool = False
-    """the last homotopy stage loose too (at ``stage_tol``, which must then be at most sigma_min, or by
-    ``stage_tol_ratio``), so that only the polish is tight; if the polish fails, the last stage is solved again at
-    the tight tolerance and polished once more.
-    For starts already near an optimum (the convergence run's warm solves, :mod:`~ocp_crawl.ocp.convergence`):
-    max_speed N = 50..400 took 169 s instead of 334 s, min_cot 218 s instead of 466 s, with the same optima.  Off
-    by default: from the harmonic baseline (max_speed, N = 20, the last stage to 1e-4) it reached another optimum,
-    2 % slower"""
+    """the last homotopy stage loose too (at ``stage_tol``, which must then be at most sigma_min, or
+    by ``stage_tol_ratio``), so that only the polish is tight; if the polish fails, the last stage
+    is solved again at the tight tolerance and polished once more.
+    For starts already near an optimum (the convergence run's warm solves,
+    :mod:`~ocp_crawl.ocp.convergence`): max_speed N = 50..400 took 169 s instead of 334 s, min_cot
+    218 s instead of 466 s, with the same optima.  Off by default: from the harmonic baseline
+    (max_speed, N = 20, the last stage to 1e-4) it reached another optimum, 2 % slower"""
     endgame_sigma: float | None = None
-    """the endgame (:mod:`~ocp_crawl.ocp.endgame`): after the homotopy's stage at this sigma (one of the
-    schedule's stages before the last), the tightened NLP on the branches of that stage's simulated profile,
-    kept when the replay judge accepts it and it is at least as good as the stage's profile by replay, else
-    the homotopy goes on; None (default): the whole homotopy"""
+    """the endgame (:mod:`~ocp_crawl.ocp.endgame`): after the homotopy's stage at this sigma (one of
+    the schedule's stages before the last), the tightened NLP on the branches of that stage's
+    simulated profile, kept when the replay judge accepts it and it is at least as good as the
+    stage's profile by replay, else the homotopy goes on; None (default): the whole homotopy"""
     endgame_paths: str = "endgame_first"
-    """with ``endgame_sigma``: "endgame_first" (default: the endgame, and the rest of the homotopy only when it
-    is not kept) or "both" (the endgame and the rest of the homotopy, in parallel where a process can be forked,
-    the better by replay kept: never worse than the whole homotopy, as slow as it)"""
+    """with ``endgame_sigma``: "endgame_first" (default: the endgame, and the rest of the homotopy
+    only when it is not kept) or "both" (the endgame and the rest of the homotopy, in parallel where
+    a process can be forked, the better by replay kept: never worse than the whole homotopy, as slow
+    as it)"""
     endgame_max_iter: int = 500
     """most IPOPT iterations of the endgame's tightened NLP (beyond them the homotopy goes on), in
     ENDGAME_MAX_ITER_BOUNDS"""
     perturbation: str = "as_needed"
     """when IPOPT perturbs the Hessian of its KKT system: "as_needed" (default: IPOPT's own rule, an
-    unperturbed factorisation first at every iteration) or "always" (from the first factorisation: the NLP
-    gets one more variable, in neither the objective nor the constraints, so that IPOPT finds the Hessian
-    structurally degenerate).  Where almost every iteration needs the perturbation (robust_speed: 313 of 319
-    first-stage iterations, two or more factorisations each) "always" saves one per iteration; the path, and
-    so the local optimum, may change (measured per file: docs/benchmarks.md)"""
+    unperturbed factorisation first at every iteration) or "always" (from the first factorisation:
+    the NLP gets one more variable, in neither the objective nor the constraints, so that IPOPT
+    finds the Hessian structurally degenerate).  Where almost every iteration needs the perturbation
+    (robust_speed: 313 of 319 first-stage iterations, two or more factorisations each) "always"
+    saves one per iteration; the path, and so the local optimum, may change (measured per file:
+    docs/benchmarks.md)"""
     warm_barrier: str = "adaptive"
-    """IPOPT's barrier strategy in the warm-started solves of a homotopy (every stage after the first, the polish):
-    "adaptive" (default, as the first stage) or "monotone" (from mu = 1e-6 at the previous stage's point).
-    robust_speed's file uses "monotone": at N = 50 its nine stages took 952 IPOPT iterations instead of 1144 (the
-    whole file 69 s instead of 83 s) to the same optimum; on the default path (max_speed, min_cot) it took 2.3x and
-    1.6x the iterations.  A ``mu_strategy`` in ``ipopt`` overrides it; the convergence run's warm rows use the monotone
+    """IPOPT's barrier strategy in the warm-started solves of a homotopy (every stage after the
+    first, the polish): "adaptive" (default, as the first stage) or "monotone" (from mu = 1e-6 at
+    the previous stage's point).  robust_speed's file uses "monotone": at N = 50 its nine stages
+    took 952 IPOPT iterations instead of 1144 (the whole file 69 s instead of 83 s) to the same
+    optimum; on the default path (max_speed, min_cot) it took 2.3x and 1.6x the iterations.  A
+    ``mu_strategy`` in ``ipopt`` overrides it; the convergence run's warm rows use the monotone
     barrier whatever it is (:data:`~ocp_crawl.ocp.convergence.WARM_IPOPT`)"""
     comp_tol: float = 1e-6
     """largest accepted complementarity residual max_j |min(s_j/L, c_j/(M g))|"""
     periodic_tol: float = 1e-8
     harmonic_psi: int = 36
-    """psi values of the coarse harmonic scan that seeds the harmonic-family optimisation, over (-180, 180] deg"""
+    """psi values of the coarse harmonic scan that seeds the harmonic-family optimisation, over
+    (-180, 180] deg"""
     harmonic_A: int = 4
     """amplitudes of the coarse harmonic scan, up to A_max"""
     baseline_samples: int = 64
-    """points of a Sobol sample of each waveform family's whole box in the baselines' scan (the asymmetric
-    members: unequal centres and amplitudes, a pulse's rise and duty), in BASELINE_SAMPLES_BOUNDS; 0: the
-    symmetric scan only (:mod:`~ocp_crawl.ocp.search`)"""
+    """points of a Sobol sample of each waveform family's whole box in the baselines' scan (the
+    asymmetric members: unequal centres and amplitudes, a pulse's rise and duty), in
+    BASELINE_SAMPLES_BOUNDS; 0: the symmetric scan only (:mod:`~ocp_crawl.ocp.search`)"""
     baseline_starts: int = 2
-    """local searches of each waveform family, from its best distinct scan points, in BASELINE_STARTS_BOUNDS"""
+    """local searches of each waveform family, from its best distinct scan points, in
+    BASELINE_STARTS_BOUNDS"""
     baseline_evaluations: int = 400
-    """most simulated members of each local search of the baselines, in BASELINE_EVALUATIONS_BOUNDS"""
+    """most simulated members of each local search of the baselines, in
+    BASELINE_EVALUATIONS_BOUNDS"""
     baselines: str = "all"
-    """the waveform families an optimum is compared with: "all" (harmonic, triangle, pulse) or one of them
-    (:mod:`~ocp_crawl.ocp.family`); the harmonic family is searched always (it is the OCP's first start)"""
+    """the waveform families an optimum is compared with: "all" (harmonic, triangle, pulse) or one
+    of them (:mod:`~ocp_crawl.ocp.family`); the harmonic family is searched always (it is the OCP's
+    first start)"""
     starts: int = 4
-    """starts of the OCP (multi-start): the harmonic baseline first, then perturbed and Fourier-order starts;
-    the best replayed optimum is reported with the spread of the others"""
+    """starts of the OCP (multi-start): the harmonic baseline first, then perturbed and
+    Fourier-order starts; the best replayed optimum is reported with the spread of the others"""
     replay_tol: float = 5e-3
-    """relative tolerance of the replay judge: the event-driven replay must agree with the OCP's objective
-    and meet speed_min within this fraction (envelope and bandwidth within 1e-9 relative)"""
+    """relative tolerance of the replay judge: the event-driven replay must agree with the OCP's
+    objective and meet speed_min within this fraction (envelope and bandwidth within 1e-9
+    relative)"""
     friction_tol: float = 0.05
-    """eps: a gait is admissible (baseline, replay judge) only when its slip-weighted friction margin
-    (lim_anchor - lim_slip) / mean(lim) is at least eps (:mod:`ocp_crawl.ocp.slip_margin`); the OCP has
-    the same rule as a constraint on its sub-steps (:func:`ocp_crawl.ocp.substeps.friction_rows`), the
-    judge accepts a replayed margin down to eps - replay_tol (a fraction of the mean friction limit).
-    What it guarantees, measured by simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an
-    exact friction tie, an asymmetry delta <= eps/10 costs at most about 2 % of S (1.6 (delta/m)^2),
-    where a gait at the tie stops at delta = 0.5 %.  It does not hold the speed under +-eps/2 (an optimum
-    on the rule keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its
-    worst case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps
-    its speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
-    "worst"; any objective).  0 admits every
-    gait; in [0, 1)"""
+    """eps: a gait is admissible (baseline, replay judge) only when its slip-weighted friction
+    margin (lim_anchor - lim_slip) / mean(lim) is at least eps (:mod:`ocp_crawl.ocp.slip_margin`);
+    the OCP has the same rule as a constraint on its sub-steps
+    (:func:`ocp_crawl.ocp.substeps.friction_rows`), the judge accepts a replayed margin down to
+    eps - replay_tol (a fraction of the mean friction limit).  What it guarantees, measured by
+    simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an exact friction tie, an
+    asymmetry delta <= eps/10 costs at most about 2 % of S (1.6 (delta/m)^2), where a gait at the
+    tie stops at delta = 0.5 %.  It does not hold the speed under +-eps/2 (an optimum on the rule
+    keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its worst
+    case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps its
+    speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
+    "worst"; any objective).  0 admits every gait; in [0, 1)"""
     dynamic_margin: float | None = None
     """optional factor c >= 1: the optimum is accepted only when its period T is at least c times
     the shortest period at which MuJoCo's S of its replay is within 5 % of the quasistatic S (a few
     MuJoCo runs, :mod:`ocp_crawl.ocp.dynamic_margin`; needs MuJoCo and physical gravity); None
     (default): not computed, not required"""
     ipopt: dict = field(default_factory=dict)
-    """IPOPT options passed through (copied per instance); override :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
+    """IPOPT options passed through (copied per instance); override
+    :data:`~ocp_crawl.nlp.ipopt.OCP_IPOPT`"""
     verbose: bool = False
 
     def __post_init__(self) -> None:
@@ -259,24 +226,23 @@ class OCPSettings:
 
     @property
     def minimises(self) -> bool:
-        """Whether the objective is minimised (min_cot, a "min:" user objective) rather than maximised."""
+        """Whether the objective is minimised (min_cot, a "min:" user objective) rather than
+        maximised."""
         return minimises(self.objective)
 
+    @property
+    def objective_unit(self) -> str:
+        """The objective value's unit: m/s (the speeds), - (CoT+), a user objective's own."""
+        if self.user_objective is not None:
+            return self.user_objective.unit
+        return "-" if self.objective == "min_cot" else "m/s"
+
     def _check_objective(self) -> None:
-        user = self.user_objective
-        if user is None:
-            if self.objective not in OBJECTIVES:
-                raise ValueError(f"OCPSettings.objective must be one of {OBJECTIVES}, got {self.objective!r}")
-            return
-        if not isinstance(user, UserObjective):
-            raise ValueError(f"OCPSettings.user_objective must be a UserObjective, got {user!r}")
-        if self.objective not in (user.label, "max_speed"):  # the default, or its own label
-            raise ValueError(f"OCPSettings: objective {self.objective!r} and user_objective {user.label!r}: "
-                             "give one")
-        if self.robust != "mean":
-            raise ValueError("OCPSettings.robust: a user objective takes the scenarios' numbers itself "
-                             "(Physical.S, Cycle.S are per scenario); robust must stay 'mean'")
-        self._set("objective", user.label)
+        objective, user, terms = resolve_objective(self.objective, self.user_objective, self.terms,
+                                                   self.robust)
+        self._set("objective", objective)
+        self._set("user_objective", user)
+        self._set("terms", terms)
 
     def _check_choices(self) -> None:
         self._check_objective()
@@ -284,23 +250,27 @@ class OCPSettings:
                               ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES),
                               ("perturbation", PERTURBATIONS), ("endgame_paths", ENDGAME_PATHS)):
             if getattr(self, name) not in choices:
-                raise ValueError(f"OCPSettings.{name} must be one of {choices}, got {getattr(self, name)!r}")
+                raise ValueError(f"OCPSettings.{name} must be one of {choices}, got "
+                                 f"{getattr(self, name)!r}")
         if self.direction not in (-1, 1):
             raise ValueError(f"OCPSettings.direction must be -1 or +1, got {self.direction!r}")
         if self.robust not in ("mean", "worst"):
             raise ValueError(f"OCPSettings.robust must be 'mean' or 'worst', got {self.robust!r}")
         if not isinstance(self.loose_last, bool):
-            raise TypeError(f"OCPSettings.loose_last must be True or False, got {self.loose_last!r}")
+            raise TypeError("OCPSettings.loose_last must be True or False, got "
+                            f"{self.loose_last!r}")
 
     def _check_numbers(self) -> None:
         for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
-                                  ("harmonic_psi", HARMONIC_PSI_BOUNDS), ("harmonic_A", HARMONIC_A_BOUNDS),
-                                  ("starts", STARTS_BOUNDS),
+                                  ("harmonic_psi", HARMONIC_PSI_BOUNDS),
+                                  ("harmonic_A", HARMONIC_A_BOUNDS), ("starts", STARTS_BOUNDS),
                                   ("baseline_samples", BASELINE_SAMPLES_BOUNDS),
                                   ("baseline_starts", BASELINE_STARTS_BOUNDS),
                                   ("baseline_evaluations", BASELINE_EVALUATIONS_BOUNDS),
                                   ("endgame_max_iter", ENDGAME_MAX_ITER_BOUNDS)):
-            self._set(name, real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low, high=high))
+            self._set(name,
+                      real(f"OCPSettings.{name}", getattr(self, name), integer=True, low=low,
+                           high=high))
         for name in ("gamma_deg", "A_max_deg", "sigma_min", "sigma_factor", "stage_tol", "comp_tol",
                      "periodic_tol"):
             self._set(name, real(f"OCPSettings.{name}", getattr(self, name), positive=True))
@@ -324,45 +294,55 @@ class OCPSettings:
         self._set("sigma0", tuple(float(v) for v in s0))
         if not self.sigma_factor < 1 or not all(self.sigma_min < v for v in self.sigma0):
             raise ValueError("OCPSettings: need sigma_factor < 1 and sigma_min < sigma0")
-        stages = max(math.ceil(math.log(self.sigma_min / v) / math.log(self.sigma_factor)) + 1 for v in self.sigma0)
+        stages = max(math.ceil(math.log(self.sigma_min / v) / math.log(self.sigma_factor))
+                     + 1 for v in self.sigma0)
         if stages > MAX_STAGES:
-            raise ValueError(f"OCPSettings: sigma0 {max(self.sigma0):g} to sigma_min {self.sigma_min:g} in steps of "
-                             f"sigma_factor {self.sigma_factor:g} makes {stages} homotopy stages, more than "
-                             f"{MAX_STAGES} (each is an IPOPT solve)")
+            raise ValueError(f"OCPSettings: sigma0 {max(self.sigma0):g} to sigma_min "
+                             f"{self.sigma_min:g} in steps of sigma_factor {self.sigma_factor:g} "
+                             f"makes {stages} homotopy stages, more than {MAX_STAGES} (each is an "
+                             "IPOPT solve)")
         if self.endgame_sigma is not None:
-            self._set("endgame_sigma", real("OCPSettings.endgame_sigma", self.endgame_sigma, positive=True))
+            self._set("endgame_sigma",
+                      real("OCPSettings.endgame_sigma", self.endgame_sigma, positive=True))
             if not any(abs(v - self.endgame_sigma) <= 1e-6 * v for v in self.schedule()[:-1]):
-                raise ValueError(f"OCPSettings.endgame_sigma must be one of the homotopy's stages before the last "
-                                 f"{self.schedule()[:-1]}, got {self.endgame_sigma!r}")
+                raise ValueError("OCPSettings.endgame_sigma must be one of the homotopy's stages "
+                                 f"before the last {self.schedule()[:-1]}, got "
+                                 f"{self.endgame_sigma!r}")
         if self.stage_tol_ratio is not None:
-            self._set("stage_tol_ratio", real("OCPSettings.stage_tol_ratio", self.stage_tol_ratio, positive=True))
+            self._set("stage_tol_ratio",
+                      real("OCPSettings.stage_tol_ratio", self.stage_tol_ratio, positive=True))
             if not self.stage_tol_ratio <= 1:
-                raise ValueError(f"OCPSettings.stage_tol_ratio must be in (0, 1], got {self.stage_tol_ratio!r}")
-        if self.loose_last and self.stage_tol_ratio is None and not self.stage_tol <= self.sigma_min:
-            raise ValueError(f"OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at sigma_min solved "
-                             f"only to stage_tol would stop at once), got stage_tol {self.stage_tol:g}, sigma_min "
-                             f"{self.sigma_min:g}")
+                raise ValueError("OCPSettings.stage_tol_ratio must be in (0, 1], got "
+                                 f"{self.stage_tol_ratio!r}")
+        if (self.loose_last and self.stage_tol_ratio is None and not self.stage_tol
+            <= self.sigma_min):
+            raise ValueError("OCPSettings.loose_last needs stage_tol <= sigma_min (a last stage at "
+                             "sigma_min solved only to stage_tol would stop at once), got "
+                             f"stage_tol {self.stage_tol:g}, sigma_min {self.sigma_min:g}")
         if self.mu_ratios is not None:
             ratios = tuple(float(r) for r in self.mu_ratios)
             if not ratios or any(not (math.isfinite(r) and r > 0) for r in ratios):
-                raise ValueError(f"OCPSettings.mu_ratios must be positive numbers, got {self.mu_ratios!r}")
+                raise ValueError("OCPSettings.mu_ratios must be positive numbers, got "
+                                 f"{self.mu_ratios!r}")
             self._set("mu_ratios", ratios)
         if self.mu_levels is not None:
             levels = tuple(float(r) for r in self.mu_levels)
             if not levels or any(not (math.isfinite(r) and 0 < r <= 10) for r in levels):
-                raise ValueError(f"OCPSettings.mu_levels must be numbers in (0, 10], got {self.mu_levels!r}")
+                raise ValueError("OCPSettings.mu_levels must be numbers in (0, 10], got "
+                                 f"{self.mu_levels!r}")
             self._set("mu_levels", levels)
         if isinstance(self.constraints, (dict, Constraint)):
             raise ValueError("OCPSettings.constraints must be a sequence of constraints, got one")
         self._set("constraints", tuple(Constraint.of(c) for c in self.constraints))
         if self.objective == "min_cot" and self.speed_min > 0 and self._own_speed_min():
-            raise ValueError("OCPSettings: speed_min and a speed constraint with min in every scenario both "
-                             "give min_cot's speed requirement: give one")
+            raise ValueError("OCPSettings: speed_min and a speed constraint with min in every "
+                             "scenario both give min_cot's speed requirement: give one")
 
     def schedule(self) -> tuple[float, ...]:
-        """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0 sigma_factor, ...,
-        sigma_min)."""
-        return tuple(float(f"{v:.12g}") for v in sigma_schedule(self.sigma0[0], self.sigma_factor, self.sigma_min))
+        """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0
+        sigma_factor, ..., sigma_min)."""
+        return tuple(float(f"{v:.12g}") for v in sigma_schedule(self.sigma0[0], self.sigma_factor,
+                                                                self.sigma_min))
 
     def scenarios(self, robot: Robot) -> list[Robot]:
         """The robots of the friction scenarios: each level of :attr:`levels`, at it each ratio of
@@ -370,15 +350,16 @@ class OCPSettings:
         if not self.friction_set:
             return [robot]
         if not self.ratio_set:  # levels of the robot's own coefficients
-            return [robot.replace(mu1=level * robot.mu1, mu2=level * robot.mu2) for level in self.levels]
+            return [robot.replace(mu1=level * robot.mu1,
+                                  mu2=level * robot.mu2) for level in self.levels]
         mu = math.sqrt(robot.mu1 * robot.mu2)
         return [robot.replace(mu1=level * mu * math.sqrt(r), mu2=level * mu / math.sqrt(r))
                 for level in self.levels for r in self.friction_ratios]
 
     @property
     def ratio_set(self) -> bool:
-        """True when the scenarios set the ratio mu1/mu2 (``mu_ratios``, or eps > 0) rather than keep the
-        robot's own."""
+        """True when the scenarios set the ratio mu1/mu2 (``mu_ratios``, or eps > 0) rather than
+        keep the robot's own."""
         return self.mu_ratios is not None or self.ratio_eps > 0
 
     @property
@@ -387,36 +368,43 @@ class OCPSettings:
         return self.mu_levels if self.mu_levels is not None else (1.0,)
 
     def scenario_pairs(self) -> list[tuple[float, float | None]]:
-        """(level, ratio) of each scenario, in the order of :meth:`scenarios` (ratio None: the robot's
-        own)."""
+        """(level, ratio) of each scenario, in the order of :meth:`scenarios` (ratio None: the
+        robot's own)."""
         ratios = self.friction_ratios if self.ratio_set else (None,)
         return [(level, r) for level in self.levels for r in ratios]
 
     @property
     def requirements(self) -> tuple[Constraint, ...]:
-        """Every bound on a cycle quantity: min_cot's speed requirement (a speed at least speed_min in
-        every scenario; unless a constraint bounds the speed from below in every scenario itself), then
-        :attr:`constraints`."""
+        """Every bound on a cycle quantity: min_cot's speed requirement (a speed at least speed_min
+        in every scenario; unless a constraint bounds the speed from below in every scenario
+        itself), then :attr:`constraints`."""
         if self.objective != "min_cot" or self._own_speed_min():
             return self.constraints
         return (Constraint("speed", min=self.speed_min),) + self.constraints
 
+    @property
+    def speed_requirement(self) -> Constraint | None:
+        """min_cot's speed requirement (speed >= speed_min in every scenario, or the constraint of
+        ``constraints`` that says so, the first); None for the other objectives."""
+        if self.objective != "min_cot":
+            return None
+        return next((c for c in self.requirements if _bounds_speed_below(c)), None)
+
     def _own_speed_min(self) -> bool:
-        return any(c.quantity == "speed" and c.min is not None and c.over == "every"
-                   for c in self.constraints)
+        return any(_bounds_speed_below(c) for c in self.constraints)
 
     @property
     def ratio_eps(self) -> float:
-        """The half-width eps of the friction set: mu_ratio_eps, else 0.1 for robust_speed and 0 for the
-        other objectives."""
+        """The half-width eps of the friction set: mu_ratio_eps, else 0.1 for robust_speed and 0 for
+        the other objectives."""
         if self.mu_ratio_eps is not None:
             return self.mu_ratio_eps
         return 0.1 if self.objective == "robust_speed" else 0.0
 
     @property
     def friction_ratios(self) -> tuple[float, ...]:
-        """The scenarios mu1/mu2: mu_ratios, else {1 - eps, 1, 1 + eps} (eps = :attr:`ratio_eps` > 0) or
-        (1,)."""
+        """The scenarios mu1/mu2: mu_ratios, else {1 - eps, 1, 1 + eps} (eps = :attr:`ratio_eps`
+        > 0) or (1,)."""
         if self.mu_ratios is not None:
             return self.mu_ratios
         eps = self.ratio_eps
@@ -424,14 +412,14 @@ class OCPSettings:
 
     @property
     def friction_set(self) -> bool:
-        """True when the objective is taken over a set of friction scenarios (not only the robot's own
-        friction): explicit ``mu_ratios`` or ``mu_levels``, or a set half-width eps > 0."""
+        """True when the objective is taken over a set of friction scenarios (not only the robot's
+        own friction): explicit ``mu_ratios`` or ``mu_levels``, or a set half-width eps > 0."""
         return self.mu_ratios is not None or self.mu_levels is not None or self.ratio_eps > 0
 
     @property
     def baseline_shapes(self) -> tuple[str, ...]:
-        """The waveform families searched for baselines: the harmonic one first (the OCP's start), then
-        those of ``baselines``."""
+        """The waveform families searched for baselines: the harmonic one first (the OCP's start),
+        then those of ``baselines``."""
         rest = BASELINE_CHOICES[2:] if self.baselines == "all" else (self.baselines,)
         return ("harmonic",) + tuple(s for s in rest if s != "harmonic")
 
@@ -441,7 +429,8 @@ class OCPSettings:
 
     def accel_bound(self, robot: Robot) -> float | None:
         """Largest torque acceleration |d^2 tau_i / d t^2| [N m/s^2], or None (no bound)."""
-        return None if self.max_accel_deg_s2 is None else robot.k * math.radians(self.max_accel_deg_s2)
+        return (None if self.max_accel_deg_s2 is None else robot.k
+                * math.radians(self.max_accel_deg_s2))
 
     def joint_rate_step(self) -> float | None:
         """The joint-rate bound as the transcription uses it: the largest change of a joint angle
@@ -453,8 +442,9 @@ class OCPSettings:
         return math.radians(self.max_joint_rate_deg_s) * self.period_ref() / self.nodes
 
     def period_ref(self) -> float:
-        """Reference period [s]: the shortest period of the envelope's full harmonic gait (amplitude A_max)
-        under the bandwidth, 2 pi A_max / max_rate (the OCP scales its period variable by it)."""
+        """Reference period [s]: the shortest period of the envelope's full harmonic gait (amplitude
+        A_max) under the bandwidth, 2 pi A_max / max_rate (the OCP scales its period variable by
+        it)."""
         return 2 * math.pi * self.A_max_deg / self.max_rate_deg_s
 
     def min_period(self, A1_deg: float, A2_deg: float) -> float:

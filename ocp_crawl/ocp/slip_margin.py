@@ -67,8 +67,8 @@ def slip_margins(robot: Robot, f_n1, f_n2, x1, x2) -> tuple[float, float]:
     Returns
     -------
     (float, float)
-        m [-] (see the module docstring; +inf when no foot slips) and the smallest (lim_anchor - lim_slip) /
-        mean(lim) [-] at the ends of the steps in which a foot slips (+inf when none).
+        m [-] (see the module docstring; +inf when no foot slips) and the smallest (lim_anchor -
+        lim_slip) / mean(lim) [-] at the ends of the steps in which a foot slips (+inf when none).
     """
     l1, l2 = robot.mu1 * np.asarray(f_n1, float), robot.mu2 * np.asarray(f_n2, float)
     d1, d2 = np.abs(np.diff(np.asarray(x1, float))), np.abs(np.diff(np.asarray(x2, float)))
@@ -85,12 +85,15 @@ def slip_margins(robot: Robot, f_n1, f_n2, x1, x2) -> tuple[float, float]:
 
 
 def result_margins(res, robot: Robot) -> tuple[float, float]:
-    """:func:`slip_margins` of an event-driven CrawlResult over its steady cycle (its steps and events)."""
+    """:func:`slip_margins` of an event-driven CrawlResult over its steady cycle (its steps and
+    events)."""
     sel = steady_slice(res)
     return slip_margins(robot, res.f_n1[sel], res.f_n2[sel], res.x1[sel], res.x2[sel])
 
 
 def admissible_text(m: float, eps: float) -> str:
-    """Why a gait of slip-weighted margin m [-] is not admissible under the friction tolerance eps [-]."""
+    """Why a gait of slip-weighted margin m [-] is not admissible under the friction tolerance eps
+    [-]."""
     return (f"the slip runs too close to the friction tie (which foot slips depends on the feet's "
-            f"friction coefficients): slip-weighted friction margin {m:.3g} < friction_tol {eps:.3g}")
+            f"friction coefficients): slip-weighted friction margin {m:.3g} < friction_tol "
+            f"{eps:.3g}")

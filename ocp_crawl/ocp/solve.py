@@ -1,17 +1,18 @@
 """Solve the periodic-gait OCP and prove the optimum by replay: :func:`optimize_gait` (its result:
 :class:`~ocp_crawl.ocp.result.OCPResult`).
 
-The first start is the best harmonic gait of the family (:func:`~ocp_crawl.ocp.search.best_baselines`), then
-a Fourier-order start and perturbed starts (:mod:`~ocp_crawl.ocp.starts`, ``settings.starts`` in all); from each,
-the transcription (:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy, every
-stage read through the IPOPT status table, and the optimum is judged by its event-driven replay
-(:func:`~ocp_crawl.ocp.judge.judge_replay`: the transcription's own linear interpolant, the OCP's period).
-The reported optimum is the best by replay among the starts the judge accepts, with the spread of the others;
-its gain is measured by replay against the best member of each simple waveform family (harmonic, triangle,
-pulse: ``settings.baselines``) and against the best of them.  The harmonic family is searched first (the start);
-the others, comparators only, are searched in a forked process while this one solves the OCP
-(:func:`~ocp_crawl.workers.overlap`).  With ``endgame_sigma`` the homotopy may end early
-(:mod:`~ocp_crawl.ocp.endgame`), judged by replay here.
+The first start is the best harmonic gait of the family
+(:func:`~ocp_crawl.ocp.search.best_baselines`), then a Fourier-order start and perturbed starts
+(:mod:`~ocp_crawl.ocp.starts`, ``settings.starts`` in all); from each, the transcription
+(:class:`~ocp_crawl.ocp.transcription.GaitOCP`) is solved by the relaxation homotopy, every stage
+read through the IPOPT status table, and the optimum is judged by its event-driven replay
+(:func:`~ocp_crawl.ocp.judge.judge_replay`: the transcription's own linear interpolant, the OCP's
+period).  The reported optimum is the best by replay among the starts the judge accepts, with the
+spread of the others; its gain is measured by replay against the best member of each simple waveform
+family (harmonic, triangle, pulse: ``settings.baselines``) and against the best of them.  The
+harmonic family is searched first (the start); the others, comparators only, are searched in a
+forked process while this one solves the OCP (:func:`~ocp_crawl.workers.overlap`).  With
+``endgame_sigma`` the homotopy may end early (:mod:`~ocp_crawl.ocp.endgame`), judged by replay here.
 """
 from __future__ import annotations
 
@@ -34,6 +35,7 @@ from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import StartGuess, given_start, start_guesses
+from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.workers import overlap
 from ocp_crawl.sim.event import simulate_torque
@@ -42,14 +44,16 @@ from ocp_crawl.status import Status
 
 
 def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
-    """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t [cycles]) and its
-    period T [s]."""
+    """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t
+    [cycles]) and its period T [s]."""
     return harm.torque_signal(robot.k), harm.T
 
 
 def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
-                  replay: bool = True, jobs: int | None = None, start: tuple | None = None) -> OCPResult:
-    """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the best.
+                  replay: bool = True, jobs: int | None = None,
+                  start: tuple | None = None) -> OCPResult:
+    """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the
+    best.
 
     Parameters
     ----------
@@ -60,35 +64,39 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     settings : OCPSettings, optional
         The OCP's settings (None: the defaults), ``settings.starts`` starts.
     replay : bool
-        Judge each optimum by its event-driven replay (default).  False: the OCP's own verdict only, the
-        best start by the OCP's value (a solver test; the message says that nothing was replayed).
+        Judge each optimum by its event-driven replay (default).  False: the OCP's own verdict only,
+        the best start by the OCP's value (a solver test; the message says that nothing was
+        replayed).
     jobs : int, optional
-        Worker processes of the baselines' search (:func:`~ocp_crawl.ocp.search.best_baselines`; None: the
-        CPUs available): the harmonic family's first, then the other families' while the OCP solves.  The
-        result does not depend on it.
+        Worker processes of the baselines' search (:func:`~ocp_crawl.ocp.search.best_baselines`;
+        None: the CPUs available): the harmonic family's first, then the other families' while the
+        OCP solves.  The result does not depend on it.
     start : (callable, float), optional
         A first start in place of the harmonic baseline: a torque signal tau(t) [N m] of the phase t
-        [cycles] (e.g. a previous optimum's :func:`~ocp_crawl.ocp.judge.replay_signal`) and its period
-        [s] (:func:`~ocp_crawl.ocp.starts.given_start`); the baselines are searched as without it.
+        [cycles] (e.g. a previous optimum's :func:`~ocp_crawl.ocp.judge.replay_signal`) and its
+        period [s] (:func:`~ocp_crawl.ocp.starts.given_start`); the baselines are searched as
+        without it.
 
     Returns
     -------
     OCPResult
-        The best start by replay among those the judge accepts (else the best replayed, else the first
-        start's failure): SUCCESS, INFEASIBLE, SOLVER_FAILURE, NOT_COMPLEMENTARY, NO_INITIAL_GUESS (no
-        harmonic gait simulates), REPLAY_FAILED, REPLAY_MISMATCH or WORSE_THAN_BASELINE (confirmed by replay but
-        worse than the harmonic baseline it started from); ``starts`` holds every start's outcome.
+        The best start by replay among those the judge accepts (else the best replayed, else the
+        first start's failure): SUCCESS, INFEASIBLE, SOLVER_FAILURE, NOT_COMPLEMENTARY,
+        NO_INITIAL_GUESS (no harmonic gait simulates), REPLAY_FAILED, REPLAY_MISMATCH or
+        WORSE_THAN_BASELINE (confirmed by replay but worse than the harmonic baseline it started
+        from); ``starts`` holds every start's outcome.
     """
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
-    ocp = GaitOCP(robot, gravity, settings)
+    solver = GaitSolver(GaitOCP(robot, gravity, settings))
     harmonic = best_baselines(robot, gravity, settings, ("harmonic",), jobs=jobs,
-                              meanwhile=ocp.prepare)  # the NLP built meanwhile
+                              meanwhile=solver.prepare)  # the NLP built meanwhile
     harm = harmonic.choices["harmonic"]
     if harm is None:
-        return OCPResult(success=False, status=Status.NO_INITIAL_GUESS, objective=settings.objective,
-                         settings=settings,
-                         message="no harmonic gait of the family simulates successfully: no initial guess")
+        return OCPResult(success=False, status=Status.NO_INITIAL_GUESS,
+                         objective=settings.objective, settings=settings,
+                         message="no harmonic gait of the family simulates successfully: no "
+                                 "initial guess")
     models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
     signal, T0 = baseline_gait(harm, robot)
     N = settings.nodes
@@ -100,17 +108,29 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
         guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
         if start is not None:
-            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(2, N), start[1])
-        return [(g, solve_from(ocp, models, replay_signal(phase, g.tau), g.T, harm, replay,
+            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(2, N),
+                                     start[1])
+        return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T, harm, replay,
                                baselines=harmonic)) for g in guesses]
     others = settings.baseline_shapes[1:]
     if others:  # the other families, the gains' comparators only, searched while the OCP solves
-        # (on all the workers: the search takes longer than the solve, whose core it then takes over)
-        rest, solved = overlap(lambda send: best_baselines(robot, gravity, settings, others, jobs=jobs),
+        # (on all the workers: the search takes longer than the solve, whose core it then takes
+        # over)
+        rest, solved = overlap(lambda send: best_baselines(robot, gravity, settings, others,
+                                                           jobs=jobs),
                                solve_starts, lambda message: None)
         base = harmonic.merged(rest)
     else:
         solved, base = solve_starts(), harmonic
+    res = _best_start(solved, base, models, settings, replay)
+    res.solve_time_s = time.perf_counter() - t_start
+    return res
+
+
+def _best_start(solved: list, base: Baselines, models: list[Model], settings: OCPSettings,
+                replay: bool) -> OCPResult:
+    """The best of the starts' outcomes (``solved``: (guess, result) pairs), each measured against
+    the baselines ``base``, with the record of every start and their spread."""
     guesses, runs = [g for g, _ in solved], [r for _, r in solved]
     for r in runs:
         r.baselines = base
@@ -121,11 +141,11 @@ def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings
         harmonic_peaks(res, models)
         check_dynamic_margin(res, models)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
-                              sum(stage.iterations for stage in r.homotopy)) for g, r in zip(guesses, runs)]
+                              sum(stage.iterations for stage in r.homotopy))
+                  for g, r in zip(guesses, runs)]
     if len(guesses) > 1:
         spread = spread_text(settings.objective, *res.spread)   # (low, high, converged)
         res.message += f"; best of {len(guesses)} starts ({spread})"
-    res.solve_time_s = time.perf_counter() - t_start
     return res
 
 
@@ -133,7 +153,8 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
     """The reported start: the best by replay among the judged successes (by the OCP's value without
     replay), else the best replayed one, else the first start."""
     key = "value_replay" if replay else "value_ocp"
-    for pool in ([r for r in runs if r.success], [r for r in runs if math.isfinite(r.value_replay)]):
+    for pool in ([r for r in runs if r.success],
+                 [r for r in runs if math.isfinite(r.value_replay)]):
         best = None
         for r in pool:
             if best is None or is_better(settings.objective, getattr(r, key), getattr(best, key)):
@@ -143,17 +164,20 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
     return runs[0]
 
 
-def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: WaveChoice | None = None,
-               replay: bool = True, tightened: bool = False,
+def solve_from(solver: GaitSolver, models: list[Model], signal, T: float,
+               harmonic: WaveChoice | None = None, replay: bool = True, tightened: bool = False,
                baselines: Baselines | None = None) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
 
     Parameters
     ----------
-    ocp : GaitOCP
-        The transcription (built once for its settings).
+    solver : GaitSolver
+        The solver of the transcription (both built once for its settings:
+        :class:`~ocp_crawl.ocp.solver.GaitSolver` of a
+        :class:`~ocp_crawl.ocp.transcription.GaitOCP`).
     models : list of Model
-        The friction scenarios' models (the judge's replays), in the order of ``ocp.settings.scenarios``.
+        The friction scenarios' models (the judge's replays), in the order of
+        ``solver.settings.scenarios``.
     signal : callable
         The start's torques ``signal(t)`` [N m] at phases t [cycles] (must simulate successfully).
     T : float
@@ -164,7 +188,8 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Wa
         Judge the optimum by replay (default).
     tightened : bool
         Solve only the tightened NLP on the branches of the start's simulated guess, no homotopy
-        (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve_tightened`: a coarser N's optimum refined); default False.
+        (:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve_tightened`: a coarser N's optimum refined);
+        default False.
     baselines : Baselines, optional
         The best member of each waveform family (the gains are measured against them; without them,
         against ``harmonic``).
@@ -174,21 +199,24 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Wa
     OCPResult
         The start's outcome (``starts`` empty; ``solve_time_s`` of this start).
     """
-    settings = ocp.settings
+    settings, ocp = solver.settings, solver.ocp
     t_start = time.perf_counter()
-    res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
+    res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
+                    objective=settings.objective,
                     settings=settings, harmonic=harmonic, baselines=baselines)
     bad = next((r for r in (simulate_torque(m, signal) for m in models) if not r.success), None)
     if bad is not None:
         res.status = Status.NO_INITIAL_GUESS
-        res.message = f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: {bad.message}"
+        res.message = (f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: "
+                       f"{bad.message}")
         return res
     x0 = ocp.initial_guess(signal, T)
-    endgame = None if tightened or not replay else _endgame(ocp, models)
-    x, hist, failed, status = ocp.solve_tightened(x0) if tightened else ocp.solve(x0, endgame=endgame)
+    endgame = None if tightened or not replay else _endgame(solver, models)
+    x, hist, failed, status = (solver.solve_tightened(x0) if tightened
+                               else solver.solve(x0, endgame=endgame))
     res.homotopy = hist
     res.path = "; ".join(endgame.outcome) if endgame is not None else ""
-    if not _accept(res, ocp, x, failed, status):
+    if not _accept(res, solver, x, failed, status):
         res.message += f"; {res.path}" if res.path else ""
         res.solve_time_s = time.perf_counter() - t_start
         return res
@@ -200,11 +228,11 @@ def solve_from(ocp: GaitOCP, models: list[Model], signal, T: float, harmonic: Wa
     return res
 
 
-def _endgame(ocp: GaitOCP, models: list[Model]) -> Endgame | None:
-    """The settings' endgame (None without ``endgame_sigma``), judged by replay: the endgame's point is kept
-    when the replay judge accepts it and its replayed objective is at least that of the point it is
-    compared with (the stage's profile, or the homotopy's optimum on both paths)."""
-    settings = ocp.settings
+def _endgame(solver: GaitSolver, models: list[Model]) -> Endgame | None:
+    """The settings' endgame (None without ``endgame_sigma``), judged by replay: the endgame's point
+    is kept when the replay judge accepts it and its replayed objective is at least that of the
+    point it is compared with (the stage's profile, or the homotopy's optimum on both paths)."""
+    settings, ocp = solver.settings, solver.ocp
     if settings.endgame_sigma is None:
         return None
     phase = np.arange(settings.nodes) / settings.nodes
@@ -220,24 +248,27 @@ def _endgame(ocp: GaitOCP, models: list[Model]) -> Endgame | None:
         return ocp.initial_guess(replay_signal(phase, ocp.unpack(x_stage)["tau"]), T)
 
     def keep(x: np.ndarray, x_ref: np.ndarray, against: str) -> tuple[bool, str]:
-        trial = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="", objective=settings.objective,
-                          settings=settings)
-        _fill_solution(trial, ocp, x)
-        verdict = judge_replay(models, settings, trial.tau, trial.T_ocp, trial.value_ocp, trial.S_ocp)
+        trial = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
+                          objective=settings.objective, settings=settings)
+        _fill_solution(trial, solver, x)
+        verdict = judge_replay(models, settings, trial.tau, trial.T_ocp, trial.value_ocp,
+                               trial.S_ocp)
         if not verdict.ok:
             return False, f"the replay judge: {verdict.message}"
         runs, T = replays(x_ref)
-        ref = objective_value(settings, runs, T, enforce=False, profile=profile_of_nodes(ocp.unpack(x_ref)["tau"]))
+        ref = objective_value(settings, runs, T, enforce=False,
+                              profile=profile_of_nodes(ocp.unpack(x_ref)["tau"]))
         text = (f"replay {value_text(settings.objective, verdict.value)} against {against}'s "
                 f"{value_text(settings.objective, ref)}")
         return not is_better(settings.objective, ref, verdict.value), text
     return Endgame(settings.endgame_sigma, settings.endgame_max_iter, guess,
-                   lambda x, max_iter: ocp.solve_tightened(x, max_iter, kind="endgame"), keep,
+                   lambda x, max_iter: solver.solve_tightened(x, max_iter, kind="endgame"), keep,
                    both=settings.endgame_paths == "both")
 
 
-def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) -> bool:
-    """Fill res from the solve's outcome; True if the OCP converged to a usable, complementary point."""
+def _accept(res: OCPResult, solver: GaitSolver, x, failed: str | None, status: str) -> bool:
+    """Fill res from the solve's outcome; True if the OCP converged to a usable, complementary
+    point."""
     outcome = ipopt_status(status)
     if failed is not None:
         # every homotopy failed: the status table decides infeasible vs solver failure
@@ -247,35 +278,39 @@ def _accept(res: OCPResult, ocp: GaitOCP, x, failed: str | None, status: str) ->
                        f"IPOPT {outcome.describe()} at {failed}")
     if x is None:
         return False
-    _fill_solution(res, ocp, x)
+    _fill_solution(res, solver, x)
     if failed is not None:
         res.message += "; the last accepted iterate is reported (not an optimum)"
         return False
-    if not _check_solution(res, ocp.settings, outcome):
-        res.message += _not_kept(ocp.kept_run)
+    if not _check_solution(res, solver.settings, outcome):
+        res.message += _not_kept(solver.kept_run)
         return False
     res.success = True
     res.status = Status.SUCCESS
-    res.message = (f"optimal {ocp.settings.objective} profile found ({len(res.homotopy)} IPOPT calls, final IPOPT "
-                   f"status {status}){_not_kept(ocp.kept_run)}{'; ' + res.path if res.path else ''}")
+    res.message = (f"optimal {solver.settings.objective} profile found ({len(res.homotopy)} IPOPT "
+                   "calls, final IPOPT status "
+                   f"{status}){_not_kept(solver.kept_run)}{'; ' + res.path if res.path else ''}")
     return True
 
 
 def _not_kept(run: list) -> str:
-    """A note on the IPOPT calls after the kept point that IPOPT did not accept, the last of each kind: the polish,
-    and the loose last stage solved again tightly (:meth:`~ocp_crawl.ocp.transcription.GaitOCP.solve`); '' if none."""
+    """A note on the IPOPT calls after the kept point that IPOPT did not accept, the last of each
+    kind: the polish, and the loose last stage solved again tightly
+    (:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve`); '' if none."""
     last = {}
     for stage in reversed(run):
         if stage.accepted:
             break
         last.setdefault(stage.kind, stage)
     what = {"polish": "polish", "homotopy": "the last stage solved again tightly"}
-    return "".join(f"; {what.get(kind, kind)} not kept: IPOPT {stage.message}" for kind, stage in last.items())
+    return "".join(f"; {what.get(kind, kind)} not kept: IPOPT "
+                   f"{stage.message}" for kind, stage in last.items())
 
 
-def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
+def _fill_solution(res: OCPResult, solver: GaitSolver, x: np.ndarray) -> None:
     """The profile, period, trajectories, S, v, W+, CoT+ and residuals of the NLP point x."""
-    un = ocp.unpack(x)
+    ocp = solver.ocp
+    un = solver.unpack(x)
     res.phase = np.arange(ocp.settings.nodes) / ocp.settings.nodes
     res.tau = un["tau"]
     res.T_ocp = un["T"]
@@ -301,22 +336,23 @@ def _fill_solution(res: OCPResult, ocp: GaitOCP, x: np.ndarray) -> None:
 def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     """False (with the status and message set) if the accepted point has non-finite values or is not
     complementary."""
-    numbers = [*res.S_ocp, res.T_ocp, *res.W_plus_ocp, res.complementarity_residual, res.periodicity_residual,
-               res.equation_residual, *np.ravel(res.tau)]
+    numbers = [*res.S_ocp, res.T_ocp, *res.W_plus_ocp, res.complementarity_residual,
+               res.periodicity_residual, res.equation_residual, *np.ravel(res.tau)]
     if not all(math.isfinite(v) for v in numbers):
         res.status = Status.SOLVER_FAILURE
         res.message = f"IPOPT returned {outcome.describe()} but the solution has NaN or Inf values"
         return False
     if not res.complementarity_residual <= settings.comp_tol:
         res.status = Status.NOT_COMPLEMENTARY
-        res.message = (f"complementarity residual {res.complementarity_residual:.2e} above {settings.comp_tol:.1e} "
-                       "after the homotopy")
+        res.message = (f"complementarity residual {res.complementarity_residual:.2e} above "
+                       f"{settings.comp_tol:.1e} after the homotopy")
         return False
     return True
 
 
 def _judge(res: OCPResult, models: list[Model]) -> None:
-    """Replay the optimal profile (every scenario) and let the judge decide; the gain over the baseline."""
+    """Replay the optimal profile (every scenario) and let the judge decide; the gain over the
+    baseline."""
     verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
     res.replay = verdict.replay
     res.envelope_excess, res.rate_ratio = verdict.envelope_excess, verdict.rate_ratio
@@ -334,15 +370,17 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
         res.status = verdict.status
         res.message = verdict.message
     else:
-        res.message += (f"; confirmed by the event-driven replay (objective within {units.ratio(verdict.rel_diff)}, "
-                        f"replay_tol {units.ratio(res.settings.replay_tol)})")
+        res.message += ("; confirmed by the event-driven replay (objective within "
+                        f"{units.ratio(verdict.rel_diff)}, replay_tol "
+                        f"{units.ratio(res.settings.replay_tol)})")
     _gains(res, models)
 
 
 def _gains(res: OCPResult, models: list[Model]) -> None:
     """The gains by replay over each family's best member and over the best of them; an optimum
-    significantly worse than the harmonic baseline (its first start) is not one (WORSE_THAN_BASELINE); one
-    worse than another family's best says so in its message (a local optimum: that gait is a start to try)."""
+    significantly worse than the harmonic baseline (its first start) is not one
+    (WORSE_THAN_BASELINE); one worse than another family's best says so in its message (a local
+    optimum: that gait is a start to try)."""
     objective = res.settings.objective
     if res.baselines is not None:
         res.gains = res.baselines.gains(res.value_replay, gain_over)
@@ -353,14 +391,15 @@ def _gains(res: OCPResult, models: list[Model]) -> None:
                      gain_over(objective, res.value_replay, best.value)}
     if best is None:
         return
-    res.gain = gain_over(objective, res.value_replay, best.value)  # NaN for an infeasible one's +inf
+    # NaN for an infeasible one's +inf
+    res.gain = gain_over(objective, res.value_replay, best.value)
     h_gain, tol = res.gains.get("harmonic", math.nan), res.settings.replay_tol
     if res.success and h_gain < -tol and _baseline_within(res, models, h_gain):
         _worse_than_baseline(res, h_gain)
     elif res.success and res.gain < -tol and best is not res.harmonic:
-        res.message += (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, gain "
-                        f"{units.ratio(res.gain)}): the resolution of N = {res.settings.nodes} nodes or a "
-                        f"local optimum")
+        res.message += (f"; the best {best.shape} gait is better "
+                        f"({value_text(objective, best.value)}, gain {units.ratio(res.gain)}): the "
+                        f"resolution of N = {res.settings.nodes} nodes or a local optimum")
 
 
 def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:
@@ -386,16 +425,19 @@ def _baseline_within(res: OCPResult, models: list[Model], gain: float) -> bool:
     if peak <= bound * (1 + JOINT_RATE_RTOL):
         return True
     res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(gain)}), whose "
-                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s")
+                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond "
+                    "max_joint_rate_deg_s")
     return False
 
 
 def _worse_than_baseline(res: OCPResult, gain: float) -> None:
-    """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same envelope and
-    bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both values."""
+    """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same
+    envelope and bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both
+    values."""
     objective = res.settings.objective
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
-    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay {value_text(objective, res.value_replay)} against "
-                   f"the baseline's {value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
+    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
+                   f"{value_text(objective, res.value_replay)} against the baseline's "
+                   f"{value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
                    f"replay_tol {units.ratio(res.settings.replay_tol)})")

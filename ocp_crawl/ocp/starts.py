@@ -1,11 +1,13 @@
-"""The starts of the multi-start OCP: the harmonic baseline, a Fourier-order start and perturbed starts.
+"""The starts of the multi-start OCP: the harmonic baseline, a Fourier-order start and perturbed
+starts.
 
-Every start is a node profile (torques at phases k/N, shifted by whole nodes so that node 0 is where tau_1
-is largest: the OCP's phase pin) with a period chosen so that it lies inside the envelope and within the
-bandwidth: the perturbed profiles are clipped to the envelope (clipping never
-steepens a profile) and their period is the baseline's or, if the perturbation steepened the profile, the
-shortest one that keeps |d tau_i/dt| <= k R for the linear interpolant.  The perturbations are drawn from a
-seeded generator (:data:`START_SEED`): the same settings give the same starts.
+Every start is a node profile (torques at phases k/N, shifted by whole nodes so that node 0 is where
+tau_1 is largest: the OCP's phase pin) with a period chosen so that it lies inside the envelope and
+within the bandwidth: the perturbed profiles are clipped to the envelope (clipping never
+steepens a profile) and their period is the baseline's or, if the perturbation steepened the
+profile, the shortest one that keeps |d tau_i/dt| <= k R for the linear interpolant.  The
+perturbations are drawn from a seeded generator (:data:`START_SEED`): the same settings give the
+same starts.
 """
 from __future__ import annotations
 
@@ -42,35 +44,40 @@ class StartGuess:
 
 
 def feasible_period(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> float:
-    """The period [s] of the node profile ``tau`` (2, N) [N m]: ``T`` [s], or longer when the profile's linear
-    interpolant would exceed the bandwidth k R at ``T`` (max |tau_k - tau_k-1| N / T <= k R)."""
+    """The period [s] of the node profile ``tau`` (2, N) [N m]: ``T`` [s], or longer when the
+    profile's linear interpolant would exceed the bandwidth k R at ``T`` (max |tau_k - tau_k-1| N /
+    T <= k R)."""
     steps = np.abs(np.diff(np.c_[tau, tau[:, :1]], axis=1))
     return max(T, float(np.max(steps)) * tau.shape[1] / settings.rate_bound(robot))
 
 
 def pinned(tau: np.ndarray) -> np.ndarray:
-    """The node profile (2, N) shifted by whole nodes so that node 0 is where tau_1 is largest (the OCP's phase
-    pin, tau_1,k <= tau_1,0): the same periodic gait, started at another phase."""
+    """The node profile (2, N) shifted by whole nodes so that node 0 is where tau_1 is largest (the
+    OCP's phase pin, tau_1,k <= tau_1,0): the same periodic gait, started at another phase."""
     return np.roll(tau, -int(np.argmax(tau[0])), axis=1)
 
 
-def _profile(settings: OCPSettings, robot: Robot, label: str, tau: np.ndarray, T: float) -> StartGuess:
-    """The profile clipped to the envelope and pinned, with the period that keeps it within the bandwidth."""
+def _profile(settings: OCPSettings, robot: Robot, label: str, tau: np.ndarray,
+             T: float) -> StartGuess:
+    """The profile clipped to the envelope and pinned, with the period that keeps it within the
+    bandwidth."""
     lo, hi = settings.torque_bounds(robot)
     tau = pinned(np.clip(tau, lo, hi))
     return StartGuess(label, tau, feasible_period(settings, robot, tau, T))
 
 
 def given_start(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> StartGuess:
-    """A start of the user's: node torques ``tau`` (2, N) [N m] and a period ``T`` [s] (e.g. a previous
-    optimum), clipped to the envelope, pinned, the period lengthened if the bandwidth requires."""
+    """A start of the user's: node torques ``tau`` (2, N) [N m] and a period ``T`` [s] (e.g. a
+    previous optimum), clipped to the envelope, pinned, the period lengthened if the bandwidth
+    requires."""
     return _profile(settings, robot, "given start", np.asarray(tau, float), T)
 
 
 def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
                           attempt: int = 0) -> StartGuess:
-    """The baseline plus a second harmonic: each joint's profile plus SECOND_HARMONIC / 2^attempt times its
-    half-range times sin(4 pi t) (clipped to the envelope, the period lengthened if the bandwidth requires)."""
+    """The baseline plus a second harmonic: each joint's profile plus SECOND_HARMONIC / 2^attempt
+    times its half-range times sin(4 pi t) (clipped to the envelope, the period lengthened if the
+    bandwidth requires)."""
     N = base.shape[1]
     half = 0.5 * (base.max(axis=1) - base.min(axis=1)) * SECOND_HARMONIC / 2**attempt
     wave = np.sin(4 * math.pi * np.arange(N) / N)
@@ -80,14 +87,15 @@ def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray,
 def perturbed_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float, i: int,
                     attempt: int = 0) -> StartGuess:
     """The baseline plus a smooth random perturbation (Fourier orders 1..PERTURBATION_ORDERS, random
-    coefficients of the generator seeded with (START_SEED, i, attempt)), scaled to at most PERTURBATION /
-    2^attempt times the envelope's half-width k A_max, clipped to the envelope, the period lengthened if the
-    bandwidth requires."""
+    coefficients of the generator seeded with (START_SEED, i, attempt)), scaled to at most
+    PERTURBATION / 2^attempt times the envelope's half-width k A_max, clipped to the envelope, the
+    period lengthened if the bandwidth requires."""
     N = base.shape[1]
     rng = np.random.default_rng((START_SEED, i, attempt))
     t = np.arange(N) / N
     n = np.arange(1, PERTURBATION_ORDERS + 1)[:, None]
-    coef = rng.normal(size=(2, 2, PERTURBATION_ORDERS)) / n.T  # (joint, cos/sin, order), decaying with order
+    # (joint, cos/sin, order), decaying with order
+    coef = rng.normal(size=(2, 2, PERTURBATION_ORDERS)) / n.T
     delta = coef[:, 0] @ np.cos(2 * math.pi * n * t) + coef[:, 1] @ np.sin(2 * math.pi * n * t)
     half_width = robot.k * math.radians(settings.A_max_deg)
     delta *= PERTURBATION / 2**attempt * half_width / np.max(np.abs(delta))
@@ -109,20 +117,23 @@ def start_guesses(settings: OCPSettings, robot: Robot, base: np.ndarray, T: floa
     T : float
         The baseline's period [s].
     follows : callable, optional
-        ``follows(tau)``: whether the simulator follows the node profile tau (2, N) [N m] (the OCP's initial
-        guess simulates its start).  A start it does not follow is drawn again, up to ATTEMPTS times, each
-        with half the amplitude (perturbed starts: a new draw of their generator); the last is kept if none
-        is followed.  None: the first draw.
+        ``follows(tau)``: whether the simulator follows the node profile tau (2, N) [N m] (the OCP's
+        initial guess simulates its start).  A start it does not follow is drawn again, up to
+        ATTEMPTS times, each with half the amplitude (perturbed starts: a new draw of their
+        generator); the last is kept if none is followed.  None: the first draw.
 
     Returns
     -------
     list of StartGuess
-        The baseline first, then (if starts >= 2) the Fourier-order start (second harmonic), then perturbed
-        starts 1, 2, ... up to ``settings.starts`` in all; each pinned (node 0 where tau_1 is largest).
+        The baseline first, then (if starts >= 2) the Fourier-order start (second harmonic), then
+        perturbed starts 1, 2, ... up to ``settings.starts`` in all; each pinned (node 0 where tau_1
+        is largest).
     """
     base = pinned(np.asarray(base, float))
-    makers = [lambda a: second_harmonic_start(settings, robot, base, T, a)] if settings.starts >= 2 else []
-    makers += [lambda a, i=i: perturbed_start(settings, robot, base, T, i, a) for i in range(1, settings.starts - 1)]
+    makers = [lambda a: second_harmonic_start(settings, robot, base, T,
+                                              a)] if settings.starts >= 2 else []
+    makers += [lambda a, i=i: perturbed_start(settings, robot, base, T, i,
+                                              a) for i in range(1, settings.starts - 1)]
     out = [StartGuess("harmonic baseline", base, T)]
     for make in makers:
         for attempt in range(ATTEMPTS if follows is not None else 1):

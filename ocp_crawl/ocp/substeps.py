@@ -1,58 +1,66 @@
-"""Switch-exact sub-steps of the gait OCP: one friction scenario's variables and constraints, its initial
-guess from an event-driven simulation and its solution in physical units.
+"""Switch-exact sub-steps of the gait OCP: one friction scenario's variables and constraints, its
+initial guess from an event-driven simulation and its solution in physical units.
 
-Interval k (k = 1..N, from node k-1 at phase (k-1)/N to node k at phase k/N, node N = node 0) is split into
-two sub-steps, ``a`` from node k-1 to an interior point at the torque ``tau_k-1 + theta_k (tau_k - tau_k-1)``
-(``theta_k`` in [0, 1] a variable, the phase (k-1+theta_k)/N on the linear-in-phase interpolant) and ``b``
-from there to node k.  Each sub-step carries the full incremental step equations and complementarity of
-:mod:`ocp_crawl.model.step_equations`.  Sub-step j is column j of the (NW, 2N) step variables (a of interval
-k is column 2k-2, b column 2k-1).  Cross conditions (relaxed by the homotopy's sigma like the
-complementarity products, each scaled by N so that it is of the size of a product s c):
+Interval k (k = 1..N, from node k-1 at phase (k-1)/N to node k at phase k/N, node N = node 0) is
+split into two sub-steps, ``a`` from node k-1 to an interior point at the torque
+``tau_k-1 + theta_k (tau_k - tau_k-1)`` (``theta_k`` in [0, 1] a variable, the phase (k-1+theta_k)/N
+on the linear-in-phase interpolant) and ``b`` from there to node k.  Each sub-step carries the full
+incremental step equations and complementarity of :mod:`ocp_crawl.model.step_equations`.  Sub-step j
+is column j of the (NW, 2N) step variables (a of interval k is column 2k-2, b column 2k-1).  Cross
+conditions (relaxed by the homotopy's sigma like the complementarity products, each scaled by N so
+that it is of the size of a product s c):
 
 * no sub-step has both feet slipping: ``N s1_j s2_j <= sigma`` with ``s_i = s_i+ + s_i-``;
 * a foot starts slipping only at a sub-step boundary (slip onsets are switch-exact):
-  ``N sum_q s_q,j c_q,j-1 <= sigma`` over the pairs q (s1+ with c1+, ...): a pair slips in sub-step j only if its
-  margin is zero at the sub-step's start.  Without it a sub-step that sticks, then slips has the right end state
-  (S is a function of the end states) but not the right path: a joint that turns one way while both feet stick and
-  back once a foot slips does positive work that the midpoint rule of W+ nets out (min_cot at N = 100: W+ 0.32 %
-  low, all of it in the one sub-step of an onset; with the rule 3e-7);
+  ``N sum_q s_q,j c_q,j-1 <= sigma`` over the pairs q (s1+ with c1+, ...): a pair slips in sub-step
+  j only if its margin is zero at the sub-step's start.  Without it a sub-step that sticks, then
+  slips has the right end state (S is a function of the end states) but not the right path: a joint
+  that turns one way while both feet stick and back once a foot slips does positive work that the
+  midpoint rule of W+ nets out (min_cot at N = 100: W+ 0.32 % low, all of it in the one sub-step of
+  an onset; with the rule 3e-7);
 * the slipping foot changes at a sub-step boundary j (cyclically) only at the friction tie:
-  ``N s1_j (s2+_j+1 c2+_j + s2-_j+1 c2-_j) <= sigma`` and the same with the feet exchanged: foot 2 starts
-  slipping in a direction only where its margin in that direction is already zero at the end of sub-step j.
-  A sub-step of zero length (theta = 0 or 1) has no slip of its own: sitting between two slips it would let
-  the slipping foot change inside the next sub-step, away from the tie (an O(h) error per switch, which the
-  optimiser exploits).  So the slip before boundary j is s_j plus the slips of its predecessors passed through
-  short sub-steps with the weight max(0, 1 - l/SHORT)^2 (l the sub-step's length as a fraction of its interval,
-  SHORT = 0.1): s_j + w_j (s_j-1 + w_j-1 s_j-2) (three sub-steps always span a whole interval).  The price: a
-  slip of one foot, a stick shorter than SHORT h and a slip of the other without a tie is excluded.  A torque
-  that stands still over a whole interval (allowed by the bandwidth) is not covered: it, too, makes a sub-step
+  ``N s1_j (s2+_j+1 c2+_j + s2-_j+1 c2-_j) <= sigma`` and the same with the feet exchanged: foot 2
+  starts slipping in a direction only where its margin in that direction is already zero at the end
+  of sub-step j.  A sub-step of zero length (theta = 0 or 1) has no slip of its own: sitting between
+  two slips it would let the slipping foot change inside the next sub-step, away from the tie (an
+  O(h) error per switch, which the optimiser exploits).  So the slip before boundary j is s_j plus
+  the slips of its predecessors passed through short sub-steps with the weight max(0, 1 - l/SHORT)^2
+  (l the sub-step's length as a fraction of its interval, SHORT = 0.1): s_j + w_j (s_j-1 + w_j-1
+  s_j-2) (three sub-steps always span a whole interval).  The price: a slip of one foot, a stick
+  shorter than SHORT h and a slip of the other without a tie is excluded.  A torque that stands
+  still over a whole interval (allowed by the bandwidth) is not covered: it, too, makes a sub-step
   without slip.
 
-A change of the slipping foot and a slip onset thus fall on sub-step boundaries (the interior point moves to them),
-so the only remaining step errors are those of slip-to-stick and direction reversal inside a sub-step, O(h^2)
-per event (at slip-to-stick d' falls to zero, so the angle rates do not jump).  Both feet slipping at once (the
-event-driven simulator's slip-slip mode, possible only when mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric
-gaits) is excluded.
+A change of the slipping foot and a slip onset thus fall on sub-step boundaries (the interior point
+moves to them), so the only remaining step errors are those of slip-to-stick and direction reversal
+inside a sub-step, O(h^2) per event (at slip-to-stick d' falls to zero, so the angle rates do not
+jump).  Both feet slipping at once (the event-driven simulator's slip-slip mode, possible only when
+mu1 f_n1 = mu2 f_n2 identically, i.e. mirror-symmetric gaits) is excluded.
 
-No held tie (:func:`tie_rows`, linear constraints): while one foot slips, the other must not sit at its friction
-limit on the same side (c2- for s1+, c2+ for s1-, c1- for s2+, c1+ for s2-), neither over the whole sub-step
-(``c_j-1 + c_j >= TIE_SLOPE s_j``) nor at its end or its start (``c_j >= TIE_END s_j`` unless the other foot takes
-the slip over there, ``c_j-1 >= TIE_END s_j`` unless it hands the slip over there: a change of the slipping foot).  A held tie is the slip-slip mode in disguise: in a mirror-symmetric
-posture under equal torques the two limits are equal all along, the simulator slips both feet (half each, no net
-motion) while a transcription without the rule slipped one foot only, from stick to the tie within one sub-step
-(min_cot at N = 100: a stroke at the top of the envelope that moved the body 0.007 L a cycle, S 3.3 % off), or a
-touch of the other foot's limit at a node after a change of the slipping foot (robust_speed: two consistent
-successor modes in the replay).  A real change of the slipping foot passes: after it the margin of the foot that
-stopped grows in proportion to the other's slip (both linearly from the switch); a slip that stops near the tie
-slips little in its last sub-step.  The rules exclude margins that grow by less than TIE_SLOPE M g per slip L, or
-end below TIE_END M g per slip L (about 0.3 % of the friction limit for a sub-step's slip of 3e-3 L).  The
-cycle-integrated friction tolerance below does not see a held tie of small slip.
+No held tie (:func:`tie_rows`, linear constraints): while one foot slips, the other must not sit at
+its friction limit on the same side (c2- for s1+, c2+ for s1-, c1- for s2+, c1+ for s2-), neither
+over the whole sub-step (``c_j-1 + c_j >= TIE_SLOPE s_j``) nor at its end or its start
+(``c_j >= TIE_END s_j`` unless the other foot takes the slip over there, ``c_j-1 >= TIE_END s_j``
+unless it hands the slip over there: a change of the slipping foot).  A held tie is the slip-slip
+mode in disguise: in a mirror-symmetric posture under equal torques the two limits are equal all
+along, the simulator slips both feet (half each, no net motion) while a transcription without the
+rule slipped one foot only, from stick to the tie within one sub-step (min_cot at N = 100: a stroke
+at the top of the envelope that moved the body 0.007 L a cycle, S 3.3 % off), or a touch of the
+other foot's limit at a node after a change of the slipping foot (robust_speed: two consistent
+successor modes in the replay).  A real change of the slipping foot passes: after it the margin of
+the foot that stopped grows in proportion to the other's slip (both linearly from the switch); a
+slip that stops near the tie slips little in its last sub-step.  The rules exclude margins that grow
+by less than TIE_SLOPE M g per slip L, or end below TIE_END M g per slip L (about 0.3 % of the
+friction limit for a sub-step's slip of 3e-3 L).  The cycle-integrated friction tolerance below does
+not see a held tie of small slip.
 
-Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction coefficients known
-only to +-eps/2, so ``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
-(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's midpoint by the trapezoid rule): the slip-weighted margin rule of the harmonic
-baseline and the replay judge (:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one
-foot slipping (margin 0) over most of the slip, not over a few sub-steps (which the rule above excludes).
+Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction
+coefficients known only to +-eps/2, so
+``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
+(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's midpoint by the trapezoid rule): the
+slip-weighted margin rule of the harmonic baseline and the replay judge
+(:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one foot slipping
+(margin 0) over most of the slip, not over a few sub-steps (which the rule above excludes).
 """
 from __future__ import annotations
 
@@ -62,17 +70,21 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.statics import NP, Model
-from ocp_crawl.model.step_equations import (C1M, C1P, C2M, C2P, FT1, FT2, MARGIN_ROWS, NPAIR, NW, PHI_ROWS,
-                                            S1M, S1P, S2M, S2P, SLIP_ROWS, friction_margins, step_equations)
+from ocp_crawl.model.step_equations import (C1M, C1P, C2M, C2P, FT1, FT2, MARGIN_ROWS, NPAIR, NW,
+                                            PHI_ROWS,
+                                            S1M, S1P, S2M, S2P, SLIP_ROWS, friction_margins,
+                                            step_equations)
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import SLIP_PAIR_MODES
 
 #: the guess's interior points: fraction of the interval when no foot switch is simulated inside it
 THETA_GUESS = 0.5
-#: a sub-step shorter than this fraction of its interval passes its predecessor's slip on to the switch condition
-#: (a sub-step of zero length, theta = 0 or 1, has no slip of its own and would hide a change of the slipping foot)
+#: a sub-step shorter than this fraction of its interval passes its predecessor's slip on to the
+#: switch condition (a sub-step of zero length, theta = 0 or 1, has no slip of its own and would
+#: hide a change of the slipping foot)
 SHORT = 0.1
-#: a simulated switch closer than this to a node [interval fraction] keeps the interior point off the node
+#: a simulated switch closer than this to a node [interval fraction] keeps the interior point off
+#: the node
 THETA_EDGE = 1e-6
 
 
@@ -100,7 +112,8 @@ def substep_torques(T, theta):
 
 
 def _roll(x, n: int):
-    """Cyclic shift along the sub-steps: element j of the result is element j - n of ``x`` (numpy or CasADi)."""
+    """Cyclic shift along the sub-steps: element j of the result is element j - n of ``x`` (numpy or
+    CasADi)."""
     if isinstance(x, np.ndarray):
         return np.roll(x, n, axis=-1)
     n %= x.shape[1]
@@ -108,9 +121,9 @@ def _roll(x, n: int):
 
 
 def pass_weights(theta):
-    """Weight (2N,) of each sub-step's predecessor in the switch condition: 1 for a sub-step of zero length,
-    falling as max(0, 1 - l/SHORT)^2 to 0 at the length l = SHORT (fraction of the interval); ``theta`` (N,)
-    (numpy or CasADi column)."""
+    """Weight (2N,) of each sub-step's predecessor in the switch condition: 1 for a sub-step of zero
+    length, falling as max(0, 1 - l/SHORT)^2 to 0 at the length l = SHORT (fraction of the
+    interval); ``theta`` (N,) (numpy or CasADi column)."""
     if isinstance(theta, np.ndarray):
         length = np.column_stack([theta, 1.0 - theta]).ravel()
         return np.maximum(0.0, 1.0 - length / SHORT) ** 2
@@ -119,9 +132,10 @@ def pass_weights(theta):
 
 
 def switch_windows(W, theta):
-    """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j plus its
-    predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j (s_j-1 + w_j-1 s_j-2)),
-    and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+, s2-).  Returns (s1, s2, before, after)."""
+    """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j
+    plus its predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j
+    (s_j-1 + w_j-1 s_j-2)), and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+,
+    s2-).  Returns (s1, s2, before, after)."""
     s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
     w = pass_weights(theta)
     before = [s + w * (_roll(s, 1) + _roll(w, 1) * _roll(s, 2)) for s in (s1, s2)]
@@ -130,9 +144,10 @@ def switch_windows(W, theta):
 
 
 def cross_products(W, theta, N: int):
-    """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions (N,)
-    (CasADi or numpy): both feet slipping per sub-step, foot 1 -> foot 2 and foot 2 -> foot 1 switches at
-    boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).  Returns (3, 2N)."""
+    """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions
+    (N,) (CasADi or numpy): both feet slipping per sub-step, foot 1 -> foot 2 and foot 2 -> foot 1
+    switches at boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).
+    Returns (3, 2N)."""
     s1, s2, before, after = switch_windows(W, theta)
     both = N * s1 * s2
     to2 = N * before[0] * (after[2] * W[C2P, :] + after[3] * W[C2M, :])
@@ -143,21 +158,24 @@ def cross_products(W, theta, N: int):
 
 
 def onset_products(W, N: int):
-    """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in sub-step j only if
-    its margin is already zero at the sub-step's start; see the module docstring).  ``W``: (NW, 2N) sub-step
-    variables (CasADi or numpy)."""
+    """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in
+    sub-step j only if its margin is already zero at the sub-step's start; see the module
+    docstring).  ``W``: (NW, 2N) sub-step variables (CasADi or numpy)."""
     return N * sum(W[S1P + q, :] * _roll(W[C1P + q, :], 1) for q in range(NPAIR))
 
 
 def onset_residual(W: np.ndarray) -> float:
-    """Largest violation of the onset condition as a min-residual: min(s_q,j, c_q,j-1) over pairs and sub-steps [-]."""
-    return float(max(np.max(np.abs(np.minimum(W[S1P + q, :], _roll(W[C1P + q, :], 1)))) for q in range(NPAIR)))
+    """Largest violation of the onset condition as a min-residual: min(s_q,j, c_q,j-1) over pairs
+    and sub-steps [-]."""
+    return float(max(np.max(np.abs(np.minimum(W[S1P + q, :],
+                                              _roll(W[C1P + q, :], 1)))) for q in range(NPAIR)))
 
 
 def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
-    """Largest violation of the cross conditions as a min-residual (like the complementarity residual):
-    min(s1_j, s2_j) and min(slip before boundary j of one foot,
-    slip after it of the other in direction d, that foot's margin c_d at j) (both switch directions, d = +, -) [-]."""
+    """Largest violation of the cross conditions as a min-residual (like the complementarity
+    residual): min(s1_j, s2_j) and min(slip before boundary j of one foot,
+    slip after it of the other in direction d, that foot's margin c_d at j) (both switch directions,
+    d = +, -) [-]."""
     s1, s2, before, after = switch_windows(W, theta)
     res = [np.minimum(s1, s2)]
     for d in range(2):
@@ -203,17 +221,20 @@ class Scenario:
         if joint_rate is not None:
             rows = joint_rate_rows(PHI, theta, joint_rate * Th)
             nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf, ("rule",))
-        if friction_tol > 0:  # the sum as running sums (a dense row would cost a Jacobian direction per column)
+        # the sum as running sums (a dense row would cost a Jacobian direction per column)
+        if friction_tol > 0:
             total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
             nlp.con(f"friction_{j}", total, 0.0, inf, ("rule",))
-        # S and W+ are lifted into running sums over the sub-steps (variables Sc_j, Wc_j, each defined by a
-        # two-term recurrence): neither the nonlinear objective in them (W+/S, S/T) nor their definitions make a
-        # dense row (a dense row costs one Jacobian direction per variable it touches: 2.4x the evaluation
-        # time per IPOPT iteration at N = 100)
-        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[S1P, :] - W[S1M, :])  # foot-1 displacement / L
+        # S and W+ are lifted into running sums over the sub-steps (variables Sc_j, Wc_j, each
+        # defined by a two-term recurrence): neither the nonlinear objective in them (W+/S, S/T) nor
+        # their definitions make a dense row (a dense row costs one Jacobian direction per variable
+        # it touches: 2.4x the evaluation time per IPOPT iteration at N = 100)
+        # foot-1 displacement / L
+        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[S1P, :] - W[S1M, :])
         self.theta, self.W_plus = theta, None
         if with_work:
-            # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled by M g L)
+            # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled
+            # by M g L)
             V = nlp.sym(f"v_{j}", 2, 2 * N)
             nlp.var(f"v_{j}", cs.vec(V), 0.0, inf)
             tau_mid = 0.5 * (Tsub + cs.horzcat(Tsub[:, -1], Tsub[:, :-1]))
@@ -221,41 +242,48 @@ class Scenario:
             self.W_plus = _running_sum(nlp, f"Wc_{j}", f"W_def_{j}", cs.sum1(V))
 
 
-#: the stuck foot's margin on the slipping foot's side, summed over a slipping sub-step's two ends, is at least this
-#: times the sub-step's slip [M g / L]: no sub-step slips one foot while the other is held at its friction limit
+#: the stuck foot's margin on the slipping foot's side, summed over a slipping sub-step's two ends,
+#: is at least this times the sub-step's slip [M g / L]: no sub-step slips one foot while the other
+#: is held at its friction limit
 TIE_SLOPE = 0.01
-#: at the end and at the start of a sub-step in which one foot slips, the other foot's margin on the same side (or its
-#: slip on that side just after, resp. just before: a change of the slipping foot) is at least this times the
-#: sub-step's slip [M g / L]
+#: at the end and at the start of a sub-step in which one foot slips, the other foot's margin on the
+#: same side (or its slip on that side just after, resp. just before: a change of the slipping foot)
+#: is at least this times the sub-step's slip [M g / L]
 TIE_END = 0.1
-#: (slip row, margin row of the other foot on the same side, slip row of the other foot into that side) of
-#: :func:`tie_rows`: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2- with c1+ and s1+
+#: (slip row, margin row of the other foot on the same side, slip row of the other foot into that
+#: side) of :func:`tie_rows`: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2-
+#: with c1+ and s1+
 TIE_PAIRS = ((S1P, C2M, S2M), (S1M, C2P, S2P), (S2P, C1M, S1M), (S2M, C1P, S1P))
 
 
 def tie_rows(W, theta):
-    """Rows (12, 2N) that must be >= 0, for each triple (s, c, s') of :data:`TIE_PAIRS`: ``c_j-1 + c_j - TIE_SLOPE s_j``
-    (the stuck foot's margin at both ends of sub-step j, the start being the end of sub-step j-1 cyclically), then
-    ``c_j + s'_j+1 + w_j+1 s'_j+2 - TIE_END s_j`` (its margin at the end, or its slip on that side just after,
-    through a sub-step of nearly zero length with the weight w of :func:`pass_weights`), then
-    ``c_j-1 + s'_j-1 + w_j-1 s'_j-2 - TIE_END s_j`` (the same at the start: a slip does not start at the tie unless
-    it comes from the other foot).  ``W``: (NW, 2N) sub-step variables, ``theta``: (N,) interior fractions (CasADi
-    or numpy)."""
+    """Rows (12, 2N) that must be >= 0, for each triple (s, c, s') of :data:`TIE_PAIRS`:
+    ``c_j-1 + c_j - TIE_SLOPE s_j`` (the stuck foot's margin at both ends of sub-step j, the start
+    being the end of sub-step j-1 cyclically), then ``c_j + s'_j+1 + w_j+1 s'_j+2 - TIE_END s_j``
+    (its margin at the end, or its slip on that side just after, through a sub-step of nearly zero
+    length with the weight w of :func:`pass_weights`), then
+    ``c_j-1 + s'_j-1 + w_j-1 s'_j-2 - TIE_END s_j`` (the same at the start: a slip does not start at
+    the tie unless it comes from the other foot).  ``W``: (NW, 2N) sub-step variables, ``theta``:
+    (N,) interior fractions (CasADi or numpy)."""
     w = pass_weights(theta)
-    rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE * W[q:q + 1, :] for q, c, _ in TIE_PAIRS]
-    for shift in (-1, 1):  # the end of sub-step j (the other foot's slip after it), then its start (before it)
+    rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE
+            * W[q:q + 1, :] for q, c, _ in TIE_PAIRS]
+    # the end of sub-step j (the other foot's slip after it), then its start (before it)
+    for shift in (-1, 1):
         rows += [_roll(W[c:c + 1, :], max(shift, 0)) + _roll(W[o:o + 1, :], shift)
-                 + _roll(w, shift) * _roll(W[o:o + 1, :], 2 * shift) - TIE_END * W[q:q + 1, :] for q, c, o in TIE_PAIRS]
+                 + _roll(w, shift) * _roll(W[o:o + 1, :], 2 * shift) - TIE_END
+                 * W[q:q + 1, :] for q, c, o in TIE_PAIRS]
     return np.vstack(rows) if isinstance(W, np.ndarray) else cs.vertcat(*rows)
 
 
 def friction_rows(W, eps: float):
-    """Terms (1, 2N) of the friction-tolerance constraint sum_j terms_j >= 0, the transcription's form of the
-    slip-weighted margin rule of :mod:`ocp_crawl.ocp.slip_margin` (the same rule as the replay judge's):
-    ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with s_i the slip of foot i in
-    sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled by M g) at its two ends (the trapezoid
-    rule of the simulation's margin; the start of sub-step 0 is the end of the last one, periodicity).  ``W``:
-    (NW, 2N) sub-step variables (CasADi or numpy)."""
+    """Terms (1, 2N) of the friction-tolerance constraint sum_j terms_j >= 0, the transcription's
+    form of the slip-weighted margin rule of :mod:`ocp_crawl.ocp.slip_margin` (the same rule as the
+    replay judge's): ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with
+    s_i the slip of foot i in sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled
+    by M g) at its two ends (the trapezoid rule of the simulation's margin; the start of sub-step 0
+    is the end of the last one, periodicity).  ``W``: (NW, 2N) sub-step variables (CasADi or
+    numpy)."""
     s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
     e1, e2 = 0.5 * (W[C1P, :] + W[C1M, :]), 0.5 * (W[C2P, :] + W[C2M, :])
     l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
@@ -300,8 +328,9 @@ def joint_rate_rows(PHI, theta, step):
 
 
 def _running_sum(nlp, var: str, con: str, terms):
-    """Add the running sums c_m = c_m-1 + terms_m (c_-1 = 0) of a (1, n) row of expressions as the variables
-    ``var`` (n,), defined by the equality constraints ``con``; returns the total c_n-1 (a scalar expression)."""
+    """Add the running sums c_m = c_m-1 + terms_m (c_-1 = 0) of a (1, n) row of expressions as the
+    variables ``var`` (n,), defined by the equality constraints ``con``; returns the total c_n-1 (a
+    scalar expression)."""
     n = terms.numel()
     c = nlp.sym(var, n)
     nlp.var(var, c, -np.inf, np.inf)
@@ -310,17 +339,19 @@ def _running_sum(nlp, var: str, con: str, terms):
 
 
 def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:
-    """Discrete W+ of the transcription (the units of the inputs: [J] from [N m] and [rad]): the midpoint
-    rule per sub-step, sum over actuators and sub-steps of max(0, tau_mid dphi).  ``tau_sub``: torques at
-    the sub-step ends (2, 2N) (the last one is node 0's); ``phi_sub``: angles (2, 2N+1) from node 0."""
+    """Discrete W+ of the transcription (the units of the inputs: [J] from [N m] and [rad]): the
+    midpoint rule per sub-step, sum over actuators and sub-steps of max(0, tau_mid dphi).
+    ``tau_sub``: torques at the sub-step ends (2, 2N) (the last one is node 0's); ``phi_sub``:
+    angles (2, 2N+1) from node 0."""
     tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
     return float(np.sum(np.maximum(tau_mid * np.diff(phi_sub, axis=1), 0.0)))
 
 
 def switch_fractions(res, N: int) -> np.ndarray:
-    """Interior fractions of the guess: theta_k at the simulated change of the slipping foot inside interval
-    k, else at another contact event there (slip onset, slip-to-stick: the sub-step boundary then makes it exact
-    too), else THETA_GUESS.  ``res``: an event-driven CrawlResult; returns (N,)."""
+    """Interior fractions of the guess: theta_k at the simulated change of the slipping foot inside
+    interval k, else at another contact event there (slip onset, slip-to-stick: the sub-step
+    boundary then makes it exact too), else THETA_GUESS.  ``res``: an event-driven CrawlResult;
+    returns (N,)."""
     theta = np.full(N, THETA_GUESS)
     rank = np.full(N, 3)  # 0: a foot switch placed, 1: another event placed
     for ev in res.steady_events():
@@ -335,8 +366,9 @@ def switch_fractions(res, N: int) -> np.ndarray:
 
 
 def guess_block(res, model: Model, N: int) -> dict:
-    """Scaled variables of one scenario sampled from an event-driven simulation ``res`` whose output phases
-    are node 0 and the 2N sub-step ends: the state of node 0, the (NW, 2N) sub-step variables and S."""
+    """Scaled variables of one scenario sampled from an event-driven simulation ``res`` whose output
+    phases are node 0 and the 2N sub-step ends: the state of node 0, the (NW, 2N) sub-step variables
+    and S."""
     r = model.robot
     Mg, L = r.M * r.g, r.L
     phi, ft = res.phi, res.f_t / Mg
@@ -348,22 +380,26 @@ def guess_block(res, model: Model, N: int) -> dict:
     W[S2P], W[S2M] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
     fn1, fn2 = res.f_n1[1:] / Mg, res.f_n2[1:] / Mg
     # lifted margins at the simulated points (f_t2 = -f_t on foot 2), clipped to >= 0
-    W[MARGIN_ROWS] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2, -ft[1:])), 0.0)
+    W[MARGIN_ROWS] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2,
+                                                           -ft[1:])), 0.0)
     return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[S1P] - W[S1M]))}
 
 
 def sample_phases(theta: np.ndarray) -> np.ndarray:
-    """Phases [cycles] of node 0 and the 2N sub-step ends for the interior fractions ``theta`` (N,)."""
+    """Phases [cycles] of node 0 and the 2N sub-step ends for the interior fractions ``theta``
+    (N,)."""
     N = theta.size
     k = np.arange(N)
     return np.r_[0.0, np.column_stack([(k + theta) / N, (k + 1) / N]).ravel()]
 
 
 def modes_of(W: np.ndarray) -> list[int]:
-    """Contact mode of each sub-step (the pair that slips most, stick when none slips beyond its margin)."""
+    """Contact mode of each sub-step (the pair that slips most, stick when none slips beyond its
+    margin)."""
     sv, cv = W[SLIP_ROWS], W[MARGIN_ROWS]
     modes = []
     for k in range(W.shape[1]):
         sl = [i for i in range(NPAIR) if sv[i, k] > cv[i, k]]
-        modes.append(int(Mode.STICK) if not sl else int(SLIP_PAIR_MODES[max(sl, key=lambda q: sv[q, k])]))
+        modes.append(int(Mode.STICK) if not sl
+                     else int(SLIP_PAIR_MODES[max(sl, key=lambda q: sv[q, k])]))
     return modes

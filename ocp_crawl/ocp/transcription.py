@@ -1,26 +1,30 @@
-"""Direct transcription of the periodic-gait OCP: the NLP's variables, constraints and objective, its
-initial guess from simulations, the residuals of a solution, and its solve by the relaxation homotopy.
+"""Direct transcription of the periodic-gait OCP: the NLP's variables, constraints and objective,
+its initial guess from simulations, the residuals of a solution, and its solve by the relaxation
+homotopy.
 
 Time is explicit.  The period T [s] of the gait is a variable, scaled as ``T_hat = T / period_ref``
-(:meth:`~ocp_crawl.ocp.settings.OCPSettings.period_ref`).  Node k sits at phase k/N (k = 0..N-1) and carries
-the torques tau_k; between nodes the torque is linear in phase (the replay's own interpolant).  The
-actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R = max_rate_deg_s), the optional
-smoothness bound ``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k``
-within gamma +- A_max, the phase pin ``tau_1,k <= tau_1,0`` and ``T <= 2 period_ref`` (the resolution of the
-nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact sub-steps
-(:mod:`ocp_crawl.ocp.substeps`, with the optional bound max_joint_rate_deg_s on the mean joint rates);
-periodicity (angles and tangential force) is a constraint and the body displacement over the cycle is
-S = sum of the slips of foot 1.
+(:meth:`~ocp_crawl.ocp.settings.OCPSettings.period_ref`).  Node k sits at phase k/N (k = 0..N-1) and
+carries the torques tau_k; between nodes the torque is linear in phase (the replay's own
+interpolant).  The actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R =
+max_rate_deg_s), the optional smoothness bound
+``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k`` within
+gamma +- A_max, the phase pin ``tau_1,k <= tau_1,0`` and ``T <= 2 period_ref`` (the resolution of
+the nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact sub-steps
+(:mod:`ocp_crawl.ocp.substeps`, with the optional bound max_joint_rate_deg_s on the mean joint
+rates); periodicity (angles and tangential force) is a constraint and the body displacement over the
+cycle is S = sum of the slips of foot 1.
 
 Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
-``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; every objective with the bounds of ``constraints`` on cycle
-quantities (:mod:`ocp_crawl.ocp.quantities`).  Over a set of friction scenarios (one profile and one T;
-robust_speed is max_speed over a set) ``-mean_j v_j`` or ``-min_j v_j``, ``mean_j CoT+_j`` or ``max_j CoT+_j``
-with ``v_j >= speed_min`` in each.  Each adds ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean
-squared torque rate, a tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without
-an event are otherwise free); both are invariant under repeating the profile k times with T multiplied by k,
-as the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma) is driven to
-sigma_min by the homotopy engine of :mod:`ocp_crawl.nlp.homotopy`, then polished on the identified branches.
+``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; every objective with the bounds of ``constraints``
+on cycle quantities (:mod:`ocp_crawl.ocp.quantities`).  Over a set of friction scenarios (one
+profile and one T; robust_speed is max_speed over a set) ``-mean_j v_j`` or ``-min_j v_j``,
+``mean_j CoT+_j`` or ``max_j CoT+_j`` with ``v_j >= speed_min`` in each.  Each adds
+``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean squared torque rate, a
+tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without an event are
+otherwise free); both are invariant under repeating the profile k times with T multiplied by k, as
+the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma) is driven
+to sigma_min by the homotopy engine of :mod:`ocp_crawl.nlp.homotopy`, then polished on the
+identified branches.
 """
 from __future__ import annotations
 
@@ -28,24 +32,23 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.statics import Model, Robot
-from ocp_crawl.model.step_equations import C1P, C2P, FT1, MARGIN_ROWS, NW, PHI_ROWS, S1M, S1P, SLIP_ROWS
-from ocp_crawl.nlp import ipopt as nlp_ipopt
+from ocp_crawl.model.step_equations import (C1P, C2P, FT1, MARGIN_ROWS, NW, PHI_ROWS, S1M, S1P,
+                                            SLIP_ROWS)
 from ocp_crawl.nlp.codegen import compiled_kernel
-from ocp_crawl.nlp.homotopy import Homotopy, Solve, Stage, Start, schedule
-from ocp_crawl.nlp.ipopt import Solvers, call_ipopt, ipopt_solvers
-from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.guess import simulated_guess
 from ocp_crawl.ocp.layout import KINDS, Layout, fourier_basis, rows_of
 from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work, physical
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual, positive_work,
-                                    step_function, substep_torques, switch_windows)
+from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual,
+                                    positive_work, step_function, substep_torques, switch_windows)
 
-#: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the transcription's resolution:
-#: a node may move a reference angle by up to R T / N, so at T = 2 period_ref = 4 pi A_max / R a cycle holds about
-#: three full strokes of the envelope (down and up at the bandwidth, 4 A_max / R each).  By time-scale invariance it
-#: excludes no gait, only packed copies of one, whose coarse sub-steps the relaxed problem exploited (robust_speed,
-#: N = 50, unbounded: T grew to 4.2 s and the relaxed speed to 1.7 times the true optimum in 6000 iterations)
+#: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the
+#: transcription's resolution: a node may move a reference angle by up to R T / N, so at T = 2
+#: period_ref = 4 pi A_max / R a cycle holds about three full strokes of the envelope (down and up
+#: at the bandwidth, 4 A_max / R each).  By time-scale invariance it excludes no gait, only packed
+#: copies of one, whose coarse sub-steps the relaxed problem exploited (robust_speed, N = 50,
+#: unbounded: T grew to 4.2 s and the relaxed speed to 1.7 times the true optimum in 6000
+#: iterations)
 PERIOD_HAT_BOUNDS = (1e-3, 2.0)
 #: how the NLP evaluates the sub-step kernel (see :class:`GaitOCP`)
 KERNELS = ("expanded", "compiled")
@@ -56,10 +59,11 @@ class GaitOCP:
 
     def __init__(self, robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
                  kernel: str = "expanded"):
-        """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the whole NLP as one
-        SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than the map of the compiled kernel at N = 100), or
-        "compiled" the compiled step kernel (:func:`~ocp_crawl.nlp.codegen.compiled_kernel`) mapped over the
-        sub-steps in an MX graph (``scripts/bench.py ocp_kernel`` compares the two)."""
+        """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the
+        whole NLP as one SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than
+        the map of the compiled kernel at N = 100), or "compiled" the compiled step kernel
+        (:func:`~ocp_crawl.nlp.codegen.compiled_kernel`) mapped over the sub-steps in an MX graph
+        (``scripts/bench.py ocp_kernel`` compares the two)."""
         if kernel not in KERNELS:
             raise ValueError(f"GaitOCP: kernel must be one of {KERNELS}, got {kernel!r}")
         self.kernel = kernel
@@ -67,8 +71,6 @@ class GaitOCP:
         self.gravity = gravity
         self.settings = settings or OCPSettings()
         self.scen = [Model(r, gravity=gravity) for r in self.settings.scenarios(robot)]
-        self.kept_run: list[Stage] = []
-        """records of the homotopy whose result :meth:`solve` returned (empty if none succeeded)"""
         self._build()
 
     # ------------------------------------------------------------------ the NLP (built once)
@@ -77,11 +79,13 @@ class GaitOCP:
         s = self.settings
         if s.parametrization == "free":
             return cs.reshape(z_tau, 2, N)
-        return cs.reshape(z_tau, 2, 2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
+        return cs.reshape(z_tau, 2,
+                          2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
 
     def _torques(self, nlp: Layout, MgL: float):
-        """Torque and period variables, envelope, bandwidth, optional smoothness bound and phase pin; returns
-        the scaled node torques T (2, N), their periodic differences dT and the scaled period Th."""
+        """Torque and period variables, envelope, bandwidth, optional smoothness bound and phase
+        pin; returns the scaled node torques T (2, N), their periodic differences dT and the scaled
+        period Th."""
         s, N, r = self.settings, self.settings.nodes, self.robot
         ntau = 2 * N if s.parametrization == "free" else 2 * (2 * s.fourier_order + 1)
         z_tau = nlp.sym("tau", ntau)
@@ -105,18 +109,19 @@ class GaitOCP:
             d2T = cs.vec(cs.horzcat(dT[:, 1:], dT[:, 0]) - dT)  # periodic second differences
             nlp.con("accel_up", d2T - c_acc * Th**2, -np.inf, 0.0)
             nlp.con("accel_down", d2T + c_acc * Th**2, 0.0, np.inf)
-        nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)  # node 0 is where tau_1 is largest
+        # node 0 is where tau_1 is largest
+        nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)
         return T, dT, Th
 
     def _symbols(self, scen: list[Scenario], T, Th) -> Symbols:
         s, r = self.settings, self.robot
-        return Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L, r.L,
-                       s.period_ref(), s.direction)
+        return Symbols(T, Th, [sc.S for sc in scen], [sc.W_plus for sc in scen], r.M * r.g * r.L,
+                       r.L, s.period_ref(), s.direction)
 
     def _requirements(self, nlp: Layout, sym: Symbols) -> None:
         """The rows of every bound on a cycle quantity (:attr:`OCPSettings.requirements`: min_cot's
-        speed requirement, the ``constraints``), as :func:`~ocp_crawl.ocp.quantities.constraint_rows`
-        states them."""
+        speed requirement, the ``constraints``), as
+        :func:`~ocp_crawl.ocp.quantities.constraint_rows` states them."""
         for i, c in enumerate(self.settings.requirements):
             for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
                 nlp.con(f"require_{i}_{k}", expr, lb, ub, ("requirement",))
@@ -127,7 +132,8 @@ class GaitOCP:
         s, inf, N = self.settings, np.inf, self.settings.nodes
         d = s.direction
         theta = cs.vertcat(*[sc.theta for sc in scen])
-        reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5) / (N * len(scen)))
+        reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5)
+                                  / (N * len(scen)))
         S_list = [sc.S for sc in scen]
         sym = self._symbols(scen, T, Th)
         self._requirements(nlp, sym)
@@ -142,7 +148,8 @@ class GaitOCP:
                 return sum(cots) / len(cots) + reg
             zeta = nlp.sym("zeta")  # the worst CoT+: W_hat_j <= zeta S_hat_j
             nlp.var("zeta", zeta, 0.0, inf)
-            nlp.con("worst", cs.vertcat(*[zeta * d * Sj - sc.W_plus for sc, Sj in zip(scen, S_list)]),
+            nlp.con("worst",
+                    cs.vertcat(*[zeta * d * Sj - sc.W_plus for sc, Sj in zip(scen, S_list)]),
                     0.0, inf)
             return zeta + reg
         if len(S_list) == 1 or s.robust == "mean":
@@ -169,38 +176,35 @@ class GaitOCP:
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
         G = cs.vertcat(*nlp.g)
         self._slices = nlp.slices
-        self._rows = {kind: rows_of(nlp.slices, nlp.kinds, kind) for kind in KINDS}
+        self.rows = {kind: rows_of(nlp.slices, nlp.kinds, kind) for kind in KINDS}
+        """each kind of constraint (:data:`~ocp_crawl.ocp.layout.KINDS`): its slices of g"""
         self.nx, self.ng = X.numel(), G.numel()
-        self._lbx, self._ubx = np.concatenate(nlp.lbx), np.concatenate(nlp.ubx)
-        self._lbg, self._ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
-        self._nlp = {"x": X, "f": f, "g": G}
+        self.lbx, self.ubx = np.concatenate(nlp.lbx), np.concatenate(nlp.ubx)
+        self.lbg, self.ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
+        """the bounds of the variables and of the constraints, as built (relaxation:
+        :meth:`relaxed_ubg`)"""
+        self.nlp = {"x": X, "f": f, "g": G}
+        """the optimiser's NLP (``casadi.nlpsol``'s input)"""
         self._T = cs.Function("T", [X], [T * MgL])
         self._g = cs.Function("g", [X], [G])
         self._f = cs.Function("f", [X], [f])
-        self.solvers = self._solvers("gait_ocp", X, f, G, stage_tol=s.stage_tol)
-        # the profile-fixed check (solve(fix_profile=True)) minimises only the distance of the interior points
-        # from those of the start: no incentive to leave the physical solution through the relaxation
+        # the profile-fixed check (GaitSolver.solve(fix_profile=True)) minimises only the distance
+        # of the interior points from those of the start: no incentive to leave the physical
+        # solution through the relaxation
         theta = cs.vertcat(*[sc.theta for sc in scen])
         theta_ref = nlp.sym("theta_ref", theta.numel())
-        # ... and without the optimiser's own rules (friction tolerance, held ties, slip onsets on sub-step
-        # boundaries) and the requirements: a profile given to be simulated need not meet them (S does not
-        # depend on where a slip starts inside a sub-step; the onset rule is for the optimiser's W+)
+        # ... and without the optimiser's own rules (friction tolerance, held ties, slip onsets on
+        # sub-step boundaries) and the requirements: a profile given to be simulated need not meet
+        # them (S does not depend on where a slip starts inside a sub-step; the onset rule is for
+        # the optimiser's W+)
         keep = np.ones(self.ng, bool)
-        for sl in self._rows["rule"] + self._rows["requirement"]:
+        for sl in self.rows["rule"] + self.rows["requirement"]:
             keep[sl] = False
-        self._sim_rows = np.flatnonzero(keep)
-        self._sim_nlp = (X, cs.sumsqr(theta - theta_ref) / theta.numel(), G[self._sim_rows.tolist()], theta_ref)
-        self._sim_solvers = None
-        self._fixed: np.ndarray | None = None
-        self._fixed_x = np.zeros(0)
-
-    def _solvers(self, name: str, X, f, G, p=None, stage_tol: float | None = None) -> Solvers:
-        """The IPOPT solvers of an NLP: the optimiser's with loose intermediate stages (``stage_tol``), the
-        profile-fixed check's (parameters ``p``: the interior points' reference; a simulation) tight throughout."""
-        s = self.settings
-        nlp = {"x": X, "f": f, "g": G} if p is None else {"x": X, "p": p, "f": f, "g": G}
-        return ipopt_solvers(name, nlp, nlp_ipopt.OCP_IPOPT, nlp_ipopt.OCP_WARM_IPOPT, s.ipopt, "OCPSettings.ipopt",
-                             s.verbose, stage_tol, warm_over={"mu_strategy": s.warm_barrier})
+        self.fixed_rows = np.flatnonzero(keep)
+        """the constraints of the profile-fixed NLP: every row but the rules and the requirements"""
+        self.fixed_nlp = {"x": X, "p": theta_ref, "f": cs.sumsqr(theta - theta_ref) / theta.numel(),
+                          "g": G[self.fixed_rows.tolist()]}
+        """the profile-fixed NLP (parameters: the interior points' reference)"""
 
     @property
     def slices(self) -> dict[str, slice]:
@@ -208,35 +212,84 @@ class GaitOCP:
         return self._slices
 
     def export(self, sigma: float | None = None) -> dict:
-        """The NLP for a solver of one's own: ``nlp`` (``casadi.nlpsol``'s ``{"x", "f", "g"}``) and the bounds
-        ``lbx``, ``ubx``, ``lbg``, ``ubg`` of the relaxation at ``sigma`` (None: ``settings.sigma_min``); the
-        blocks are :attr:`slices`, :meth:`initial_guess` gives a start, :meth:`unpack` reads a solution."""
-        fixed, self._fixed = self._fixed, None  # the optimiser's NLP, whatever the last solve was
-        data = self._stage_data(self.settings.sigma_min if sigma is None else sigma)
-        self._fixed = fixed
-        return {"nlp": dict(self._nlp), **{k: data[k].copy() for k in ("lbx", "ubx", "lbg", "ubg")}}
+        """The NLP for a solver of one's own: ``nlp`` (``casadi.nlpsol``'s ``{"x", "f", "g"}``) and
+        the bounds ``lbx``, ``ubx``, ``lbg``, ``ubg`` of the relaxation at ``sigma`` (None:
+        ``settings.sigma_min``); the blocks are :attr:`slices`, :meth:`initial_guess` gives a start,
+        :meth:`unpack` reads a solution."""
+        ubg = self.relaxed_ubg(self.settings.sigma_min if sigma is None else sigma)
+        return {"nlp": dict(self.nlp), "lbx": self.lbx.copy(), "ubx": self.ubx.copy(),
+                "lbg": self.lbg.copy(), "ubg": ubg}
+
+    def relaxed_ubg(self, sigma: float, cross_sigma: float | None = None) -> np.ndarray:
+        """The constraints' upper bounds of the relaxation at sigma: s_j c_j <= sigma, the cross
+        products <= sigma (``cross_sigma`` if given)."""
+        ubg = self.ubg.copy()
+        for sl in self.rows["complementarity"]:
+            ubg[sl] = sigma
+        for sl in self.rows["cross"]:
+            ubg[sl] = sigma if cross_sigma is None else cross_sigma
+        return ubg
+
+    def branch_ubx(self, x: np.ndarray, ubx: np.ndarray, ties: bool = True, onset: bool = True
+                   ) -> np.ndarray:
+        """The variables' upper bounds ``ubx`` with each pair on the branch x identifies (s_j = 0
+        where s_j <= c_j, else c_j = 0), which removes the O(sqrt(sigma)) residual of biactive
+        pairs; with ``onset`` likewise each onset pair (s_j = 0 where s_j <= c_j-1, else c_j-1 = 0:
+        the slip starts on the boundary; the optimiser's NLP, not the profile-fixed one); with
+        ``ties``, where the slipping foot changes between consecutive sub-steps, the new foot's
+        margin in its slip direction fixed to 0 at the boundary (the tie)."""
+        N = self.settings.nodes
+        ubx = ubx.copy()
+        for j in range(len(self.scen)):
+            sl = self._slices[f"w_{j}"]
+            W = x[sl].reshape(NW, 2 * N, order="F")
+            slip = W[SLIP_ROWS] > W[MARGIN_ROWS]
+            fix = np.zeros((NW, 2 * N), bool)
+            fix[SLIP_ROWS] = ~slip
+            fix[MARGIN_ROWS] = slip
+            if onset:  # the onset pairs (s_j, c_j-1), each on its identified branch too
+                early = W[SLIP_ROWS] > np.roll(W[MARGIN_ROWS], 1, axis=1)
+                fix[SLIP_ROWS] |= ~early
+                fix[MARGIN_ROWS] |= np.roll(early, -1, axis=1)
+            ident = np.zeros((NW, 2 * N))
+            ident[SLIP_ROWS] = slip
+            _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
+            for d in range(2 if ties else 0):
+                # foot 1 -> foot 2: c2d = 0 at the boundary
+                fix[C2P + d] |= (before[0] > 0) & (after[2 + d] > 0)
+                # foot 2 -> foot 1: c1d = 0 at the boundary
+                fix[C1P + d] |= (before[1] > 0) & (after[d] > 0)
+            ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
+            ub[fix] = 0.0
+            ubx[sl] = ub.ravel(order="F")
+        return ubx
 
     def objective(self, x: np.ndarray) -> float:
         """The NLP's objective (scaled, to minimise, with the regularisation) at the variables x."""
         return float(self._f(x))
 
-    # ------------------------------------------------------------------ initial guess from simulations
+    # ------------------------------------------------------------------ initial guess from
+    # simulations
     def initial_guess(self, torque_signal, period: float, switches: bool = True) -> np.ndarray:
         """Variables sampled from event-driven simulations (one per scenario) of a torque input
         ``torque_signal(t)`` [N m] at phases t [cycles] of period ``period`` [s]: see
         :func:`~ocp_crawl.ocp.guess.simulated_guess`."""
         return simulated_guess(self, torque_signal, period, switches)
 
-    # ------------------------------------------------------------------ the solution in physical units
-    def unpack(self, x: np.ndarray) -> dict:
-        """The solution x in physical units.
+    # ------------------------------------------------------------------ the solution in physical
+    # units
+    def unpack(self, x: np.ndarray, onset: bool = True) -> dict:
+        """The solution x in physical units (``onset``: the onset pairs' residual in ``comp``, as
+        the optimiser's NLP states them; False for a profile-fixed solution, whose NLP has no onset
+        rule).
 
-        Returns a dict: ``tau`` (2, N) node torques [N m], ``T`` period [s], and per scenario (``scen``): ``theta``
-        (N,) interior fractions [-], ``phi`` (2, N+1) node angles [rad] (node N = node 0 after one cycle),
-        ``phi_sub`` (2, 2N+1) the angles at node 0 and every sub-step end, ``tau_sub`` (2, 2N) [N m] the torques
-        at the sub-step ends, ``f_t`` (N+1,) [N], ``x1`` (N+1,) and ``x1_sub`` (2N+1,) foot-1 positions [m],
-        ``S`` [m], ``v = direction S / T`` [m/s], ``W_plus`` [J] (midpoint rule per sub-step), the contact ``modes``
-        per interval and ``modes_sub`` per sub-step, and the complementarity (``comp``, including the cross
+        Returns a dict: ``tau`` (2, N) node torques [N m], ``T`` period [s], and per scenario
+        (``scen``): ``theta`` (N,) interior fractions [-], ``phi`` (2, N+1) node angles [rad] (node
+        N = node 0 after one cycle), ``phi_sub`` (2, 2N+1) the angles at node 0 and every sub-step
+        end, ``tau_sub`` (2, 2N) [N m] the torques at the sub-step ends, ``f_t`` (N+1,) [N], ``x1``
+        (N+1,) and ``x1_sub`` (2N+1,) foot-1 positions [m], ``S`` [m], ``v = direction S / T``
+        [m/s], ``W_plus`` [J] (midpoint rule per sub-step), the contact ``modes`` per interval and
+        ``modes_sub`` per sub-step, and the complementarity (``comp``, including the cross
         conditions) and periodicity (``periodic``) residuals [-].
         """
         s, r = self.settings, self.robot
@@ -251,247 +304,23 @@ class GaitOCP:
             ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[FT1]] * Mg
             x1_sub = np.r_[0.0, np.cumsum(W[S1P] - W[S1M])] * r.L
             tau_sub = substep_torques(tau, theta)
-            comp = max(float(np.max(np.abs(np.minimum(W[SLIP_ROWS], W[MARGIN_ROWS])))), cross_residual(W, theta),
-                       onset_residual(W) if self._fixed is None else 0.0)
+            comp = max(float(np.max(np.abs(np.minimum(W[SLIP_ROWS], W[MARGIN_ROWS])))),
+                       cross_residual(W, theta), onset_residual(W) if onset else 0.0)
             modes_sub = modes_of(W)
             S = float(x1_sub[-1])
             out["scen"].append({
-                "theta": theta, "phi": phi_sub[:, ::2], "phi_sub": phi_sub, "tau_sub": tau_sub, "f_t": ft_sub[::2],
+                "theta": theta, "phi": phi_sub[:, ::2], "phi_sub": phi_sub, "tau_sub": tau_sub,
+                "f_t": ft_sub[::2],
                 "x1": x1_sub[::2], "x1_sub": x1_sub, "S": S, "v": s.direction * S / period,
                 "W_plus": positive_work(tau_sub, phi_sub), "comp": comp, "modes_sub": modes_sub,
                 "modes": [a if a != 0 else b for a, b in zip(modes_sub[::2], modes_sub[1::2])],
-                "periodic": float(max(np.max(np.abs(phi_sub[:, -1] - phi_sub[:, 0])), abs(ft_sub[-1] - ft_sub[0]) / Mg))})
+                "periodic": float(max(np.max(np.abs(phi_sub[:, -1] - phi_sub[:, 0])),
+                                      abs(ft_sub[-1] - ft_sub[0]) / Mg))})
         return out
 
     def equation_residual(self, x: np.ndarray) -> float:
         """Largest violation of the equality constraints (equilibrium, balance, closure, lifting,
         periodicity, definitions of S and W+) at x, in the scaled units of the NLP."""
         g = np.asarray(self._g(x)).ravel()
-        return max((float(np.max(np.abs(g[sl] - self._lbg[sl]))) for sl in self._rows["equation"]),
+        return max((float(np.max(np.abs(g[sl] - self.lbg[sl]))) for sl in self.rows["equation"]),
                    default=0.0)
-
-    # ------------------------------------------------------------------ solve: the relaxation homotopy
-    def solve(self, x0: np.ndarray, fix_profile: bool = False,
-              endgame: Endgame | None = None) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
-        """Homotopies from x0, one per sigma0; returns the best accepted (x, history, failed stage, status).
-
-        ``endgame``: after the relaxed stages down to its sigma, its solve from there (kept when it says so:
-        :class:`~ocp_crawl.ocp.endgame.Endgame`), else the rest of the homotopy.
-
-        ``fix_profile``: the torques and the period are fixed to those of x0 by their bounds and the objective is
-        only the regularisation of the interior points (the transcription then simulates the profile: a check
-        against the event-driven simulator).
-        ``status`` is the return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`) of the solve that
-        decided: the last accepted stage or polish of the kept homotopy, else the failed stage of the last
-        homotopy, whose ``failed`` then names the stage (``x`` is that homotopy's last accepted iterate or None).
-        """
-        self._fixed = None
-        if fix_profile:
-            self._fixed = np.zeros(self.nx, bool)
-            self._fixed[self._slices["tau"]] = self._fixed[self._slices["T_hat"]] = True
-            self._fixed_x = np.asarray(x0, float)
-        if fix_profile and self._sim_solvers is None:
-            self._sim_solvers = self._solvers("gait_ocp_fixed", *self._sim_nlp)
-        hom = Homotopy.of(self._sim_solvers if fix_profile else self.solvers, self._call,
-                          loose_at=None if fix_profile else self._loose_at)
-        best = None
-        runs = []
-        f0 = self.objective(x0)  # objective of the (nearly feasible) initial guess
-        for sigma0 in self.settings.sigma0:
-            n0 = len(hom.records)
-            x, failed, status = self._homotopy(hom, x0, sigma0, None if fix_profile else endgame)
-            runs.append((x, hom.records[n0:], failed, status))
-            if x is not None and failed is None:
-                f = self.objective(x)
-                if best is None or f < best[0]:
-                    best = (f, x, hom.records[n0:], status)
-            if best is not None and best[0] < f0:
-                break  # improved on the initial guess: the next (tighter) start is not needed
-        if not fix_profile and best is not None and best[0] >= f0:
-            best = self._start_branches(x0, best, hom.records)
-        self.kept_run = best[2] if best is not None else []
-        if best is not None:
-            return best[1], hom.records, None, best[3]
-        x, _, failed, status = runs[-1]
-        if len(runs) > 1:
-            failed = "; ".join(f"start sigma0 = {sigma0:.0e}: {r[2]} ({r[3]})"
-                               for sigma0, r in zip(self.settings.sigma0, runs))
-        return x, hom.records, failed, status
-
-    def _start_branches(self, x0: np.ndarray, best: tuple, records: list) -> tuple:
-        """When the homotopy ended but not better than x0 (e.g. a previous optimum: the relaxation let the
-        point wander to another branch, 0.2 % to 5 % lower at N = 20), the tightened NLP on x0's own
-        branches; the better of the two (objective, x, records, status)."""
-        x, hist, failed, status = self.solve_tightened(x0)
-        records.extend(hist)
-        if failed is None and max(sc["comp"] for sc in self.unpack(x)["scen"]) > self.settings.comp_tol:
-            failed = "not complementary"
-        f = self.objective(x) if failed is None else np.inf
-        return (f, x, hist, status) if f < best[0] else best
-
-    def solve_tightened(self, x0: np.ndarray, max_iter: int | None = None, kind: str = "polish"
-                        ) -> tuple[np.ndarray | None, list[Stage], str | None, str]:
-        """The tightened NLP alone, no homotopy: each pair fixed to the branch that x0 identifies (x0 complementary,
-        e.g. the simulated guess of a coarser N's optimum, :func:`~ocp_crawl.ocp.convergence.converge_in_nodes`),
-        solved by the tight warm solver from zero multipliers, each polish candidate in turn, in reverse order (the
-        branches alone first: the guess's foot-switch ties need not sit where the finer N puts them; robust_speed N = 100
-        from N = 50: with the ties fixed, Restoration_Failed after 560 iterations, the branches alone 236
-        to the same optimum), until one that IPOPT accepts is complementary to comp_tol.  Returns (x, history, failed,
-        status) as :meth:`solve` does: that candidate's point; else the first point IPOPT accepted (its residual then
-        fails the caller's check); else x None and ``failed`` naming every candidate's IPOPT status.
-        ``max_iter``: at most this many IPOPT iterations per candidate (None: the solvers' own limit); ``kind``:
-        the records' kind."""
-        self._fixed = None
-        hom = Homotopy.of(self.solvers, self._call)
-        if max_iter is not None:
-            hom.warm = self.solvers.capped(max_iter)
-        start = Solve(x0, np.zeros(self.nx), np.zeros(self.ng), "", True, 0)
-        kept = None
-        for data in self._polish_candidates(x0)[::-1]:
-            pol = hom.polish(start, [data], lambda p: True, kind=kind)
-            if pol is not None and (kept is None or pol.comp <= self.settings.comp_tol):
-                kept = pol  # the first accepted point, unless a later one is complementary
-            if kept is not None and kept.comp <= self.settings.comp_tol:
-                break
-        self.kept_run = hom.records
-        if kept is not None:
-            return kept.x, hom.records, None, kept.status
-        statuses = ", ".join(r.return_status for r in hom.records)
-        return None, hom.records, f"the tightened NLP on the start's branches ({statuses})", hom.records[-1].return_status
-
-    def prepare(self) -> None:
-        """Build the solver of the first homotopy stage now rather than at the first solve (the first build generates
-        the derivative functions, which every later solver reuses: about 0.8 s at N = 50, 8 s at N = 400), e.g. while
-        the harmonic baseline's worker processes search.  The same solvers, the same results."""
-        s = self.settings
-        sigmas = schedule(s.sigma0[0], s.sigma_factor, s.sigma_min)
-        (self.solvers.cold if len(sigmas) == 1 else self._loose_at(sigmas[0])[0]).function()
-
-    def _loose_at(self, sigma: float) -> tuple:
-        """The (cold, warm) solvers of a loose stage at sigma: tol = stage_tol, or min(stage_tol, stage_tol_ratio
-        sigma) (the tight pair where that is not looser than the tight tolerance)."""
-        s = self.settings
-        tol = s.stage_tol if s.stage_tol_ratio is None else min(s.stage_tol, s.stage_tol_ratio * sigma)
-        return self.solvers.loose(tol)
-
-    def _call(self, solver, start: Start, data: dict) -> Solve:
-        """One IPOPT call of the homotopy and the residuals of its point."""
-        args = dict(data, x0=start.x)
-        if start.warm:
-            args.update(lam_x0=start.lam_x, lam_g0=start.lam_g)
-        call = call_ipopt(solver, self.nx, self.ng if self._fixed is None else self._sim_rows.size, **args)
-        scen = self.unpack(call.x)["scen"]
-        return Solve.of(call, comp=max(sc["comp"] for sc in scen), S=tuple(sc["S"] for sc in scen))
-
-    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Variable bounds, with the profile fixed when :meth:`solve` was asked to."""
-        lbx, ubx = self._lbx.copy(), self._ubx.copy()
-        if self._fixed is not None:
-            lbx[self._fixed] = ubx[self._fixed] = self._fixed_x[self._fixed]
-        return lbx, ubx
-
-    def _stage_data(self, sigma: float, cross_sigma: float | None = None) -> dict:
-        """Bounds of a relaxation stage: s_j c_j <= sigma, cross products <= sigma (``cross_sigma`` if given)."""
-        ubg = self._ubg.copy()
-        for sl in self._rows["complementarity"]:
-            ubg[sl] = sigma
-        for sl in self._rows["cross"]:
-            ubg[sl] = sigma if cross_sigma is None else cross_sigma
-        lbx, ubx = self._bounds()
-        data = {"lbx": lbx, "ubx": ubx, "lbg": self._lbg, "ubg": ubg}
-        if self._fixed is not None:  # the profile-fixed NLP has only the rows _sim_rows
-            data.update(lbg=self._lbg[self._sim_rows], ubg=ubg[self._sim_rows])
-            data["p"] = np.concatenate([self._fixed_x[self._slices[f"theta_{j}"]] for j in range(len(self.scen))])
-        return data
-
-    def _polish_candidates(self, x: np.ndarray) -> list[dict]:
-        """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified foot switches
-        fixed, then the pairs' branches alone (the cross products keep the bound sigma_min); the second only if
-        it is another NLP (else it would fail the same way).  In the optimiser's NLP the onset pairs on their branches
-        already fix the ties (the new foot slips from a zero margin), so there is usually one; the profile-fixed
-        NLP has no onset rule and two where the slipping foot changes."""
-        first, second = self._polish_data(x), self._polish_data(x, ties=False)
-        return [first] if np.array_equal(first["ubx"], second["ubx"]) else [first, second]
-
-    def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
-        """The tightened NLP from x: each pair on its identified branch (s_j = 0 where s_j <= c_j, else
-        c_j = 0, as bounds), which removes the O(sqrt(sigma)) residual of biactive pairs, and likewise each onset pair
-        (s_j = 0 where s_j <= c_j-1, else c_j-1 = 0: the slip starts on the boundary); where the slipping foot
-        changes between consecutive sub-steps, the new foot's margin in its slip direction is fixed to 0 at
-        the boundary (the tie); the cross products keep the bound sigma_min."""
-        N = self.settings.nodes
-        data = self._stage_data(0.0, cross_sigma=self.settings.sigma_min)
-        ubx = data["ubx"].copy()
-        for j in range(len(self.scen)):
-            sl = self._slices[f"w_{j}"]
-            W = x[sl].reshape(NW, 2 * N, order="F")
-            slip = W[SLIP_ROWS] > W[MARGIN_ROWS]
-            fix = np.zeros((NW, 2 * N), bool)
-            fix[SLIP_ROWS] = ~slip
-            fix[MARGIN_ROWS] = slip
-            if self._fixed is None:  # the onset pairs (s_j, c_j-1), each on its identified branch too
-                onset = W[SLIP_ROWS] > np.roll(W[MARGIN_ROWS], 1, axis=1)
-                fix[SLIP_ROWS] |= ~onset
-                fix[MARGIN_ROWS] |= np.roll(onset, -1, axis=1)
-            ident = np.zeros((NW, 2 * N))
-            ident[SLIP_ROWS] = slip
-            _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
-            for d in range(2 if ties else 0):
-                fix[C2P + d] |= (before[0] > 0) & (after[2 + d] > 0)  # foot 1 -> foot 2: c2d = 0 at the boundary
-                fix[C1P + d] |= (before[1] > 0) & (after[d] > 0)  # foot 2 -> foot 1: c1d = 0 at the boundary
-            ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
-            ub[fix] = 0.0
-            ubx[sl] = ub.ravel(order="F")
-        return dict(data, ubx=ubx, x0=np.minimum(x, ubx))
-
-    def _homotopy(self, hom: Homotopy, x0: np.ndarray, sigma0: float,
-                  endgame: Endgame | None = None) -> tuple[np.ndarray | None, str | None, str]:
-        """One relaxation homotopy from x0, then the polish (kept only if IPOPT accepts it and it does not
-        raise the complementarity residual; after a failed stage, only if it is within comp_tol; none when the last
-        stage is within comp_tol already): (x or None, failed stage or None, status).  With ``loose_last`` (and
-        loose stages) the last stage is loose too; if the polish from it fails, that stage is solved again tightly
-        and polished once more.  With an ``endgame`` whose sigma is a stage, the stages down to it, then the
-        endgame and (or) the rest of the homotopy as the endgame decides
-        (:meth:`~ocp_crawl.ocp.endgame.Endgame.race`)."""
-        s = self.settings
-        sigmas = schedule(sigma0, s.sigma_factor, s.sigma_min)
-        head = endgame.head(sigmas) if endgame is not None else ()
-        loose_last = s.loose_last and self._fixed is None
-        if not head:
-            return self._finish(hom, hom.relax(sigmas, Start(x0), self._stage_data, loose_last=loose_last),
-                                sigmas)
-        run = hom.relax(head, Start(x0), self._stage_data, loose_last=True)
-        if not run.ok:
-            run.stages = len(sigmas)
-            return self._finish(hom, run, sigmas)
-
-        def rest() -> tuple:  # the homotopy from the endgame's stage on
-            tail = hom.relax(sigmas[len(head):], run.last.start(), self._stage_data, loose_last=loose_last)
-            tail.last = tail.last or run.last
-            tail.stage, tail.stages = tail.stage + len(head), len(sigmas)
-            return self._finish(hom, tail, sigmas)
-        return endgame.race(run.last.x, hom.records, rest)
-
-    def _finish(self, hom: Homotopy, run, sigmas: tuple) -> tuple[np.ndarray | None, str | None, str]:
-        """The end of a homotopy's ``run`` along ``sigmas``: the polish, or the failure (see :meth:`_homotopy`)."""
-        s = self.settings
-        loose_last = run.loose_last
-        if not run.ok:
-            if run.last is not None:
-                # a later stage failed (degenerate pairs, e.g. a foot resting at its friction limit without slipping):
-                # the polish from the last accepted stage, kept only if it is complementary
-                pol = hom.polish(run.last, self._polish_candidates(run.last.x), lambda p: p.comp <= s.comp_tol)
-                if pol is not None:
-                    return pol.x, None, pol.status
-            x = run.last.x if run.last is not None else None
-            return x, f"homotopy stage {run.stage + 1}/{run.stages} (sigma = {run.sigma:.1e})", run.failed.status
-        sol = run.last
-        if sol.comp <= s.comp_tol and not loose_last and self._fixed is None:
-            return sol.x, None, sol.status  # a tight point complementary to comp_tol: the polish is not needed
-        pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
-        if pol is None and loose_last:
-            tight = hom.tighten(sol, sigmas[-1], self._stage_data(sigmas[-1]))
-            if tight.accepted:
-                sol = tight
-                pol = hom.polish(sol, self._polish_candidates(sol.x), lambda p: p.comp <= sol.comp)
-        return (pol.x, None, pol.status) if pol is not None else (sol.x, None, sol.status)

@@ -1,4 +1,5 @@
-"""Setting keys of a problem: ``SECTION.KEY`` names, ``--set`` text, typed values, and reading TOML files.
+"""Setting keys of a problem: ``SECTION.KEY`` names, ``--set`` text, typed values, and reading TOML
+files.
 
 Values set in code (:func:`set_values`, ``Problem.with_values``) are typed: no text round trip.
 Only the command line's ``--set SECTION.KEY=VALUE`` is text, parsed here as one TOML value.
@@ -17,7 +18,8 @@ import tomli_w
 
 from ocp_crawl.io.files import read_bounded
 from ocp_crawl.problem.messages import format_value, suggest
-from ocp_crawl.problem.schema import SCHEMA, TYPE_WORDS, ProblemError, removed_key
+from ocp_crawl.problem.keys import TYPE_WORDS, ProblemError
+from ocp_crawl.problem.schema import SCHEMA, removed_key
 
 _KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
 
@@ -27,18 +29,21 @@ def split_key(dotted: str, where: str) -> tuple[str, str]:
     m = _KEY_RE.match(dotted) if isinstance(dotted, str) else None
     if not m:
         shown = format_value(dotted.strip()) if isinstance(dotted, str) else repr(dotted)
-        raise ProblemError(f"{where} is invalid: the key {shown} must be SECTION.KEY, e.g. robot.k=0.05")
+        raise ProblemError(f"{where} is invalid: the key {shown} must be SECTION.KEY, e.g. "
+                           "robot.k=0.05")
     section, name = m.groups()
     if section not in SCHEMA:
         hint = suggest(section, list(SCHEMA))
-        raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid sections: {', '.join(SCHEMA)}")
+        raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid "
+                           f"sections: {', '.join(SCHEMA)}")
     keys = SCHEMA[section].key_map
     if name not in keys:
         removed = removed_key(section, name)
         if removed is not None:
             raise ProblemError(f"{where} is invalid: {removed}")
         hint = suggest(name, list(keys))
-        raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid keys: {', '.join(keys)}")
+        raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid "
+                           f"keys: {', '.join(keys)}")
     return section, name
 
 
@@ -48,7 +53,8 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
     Returns (section, key, value); bad text raises ProblemError naming ``source`` and the text.
     """
     if not isinstance(text, str):
-        raise ProblemError(f"{source}: --set {text!r} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
+        raise ProblemError(f"{source}: --set {text!r} is invalid: expected SECTION.KEY=VALUE, e.g. "
+                           "robot.k=0.05")
     where = f"{source}: --set {format_value(text)}"
     if "=" not in text:
         raise ProblemError(f"{where} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
@@ -58,8 +64,8 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
     rhs = rhs.strip()
     if not rhs or "\n" in rhs or "\r" in rhs:
         example = key.default if key.default is not None else (key.choices or (1.0,))[0]
-        raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. {section}.{name}="
-                           f"{format_value(example)}")
+        raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. "
+                           f"{section}.{name}={format_value(example)}")
     try:
         parsed = toml_loads(f"v = {rhs}", f"{where} is invalid")
         if set(parsed) != {"v"}:
@@ -67,33 +73,37 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
         value = parsed["v"]
     except tomllib.TOMLDecodeError:
         if key.type is not str:
-            raise ProblemError(f"{where} is invalid: {format_value(rhs)} is not a TOML value; expected "
-                               f"{TYPE_WORDS[key.type]} ({key.what})") from None
+            raise ProblemError(f"{where} is invalid: {format_value(rhs)} is not a TOML value; "
+                               f"expected {TYPE_WORDS[key.type]} ({key.what})") from None
         value = rhs
     return section, name, value
 
 
-def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], source: str = "<dict>"
-               ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
-    """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value) triples.
+def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]],
+               source: str = "<dict>" ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
+    """Copy of ``data`` with typed values set, in order: ``items`` are (section, key, value)
+    triples.
 
-    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``, ``file`` and ``phase``) removes the other
-    (and the keys that need it: inline samples with their phases); ``mu1`` or ``mu2`` on a robot given one ``mu``
-    keeps the other foot at mu.  Setting a selector (``gait.waveform``, ``ocp.objective``) removes the keys of
-    ``data`` that belong to other variants than its last value; keys set here stay, for the validation to refuse.
-    An item that undoes an earlier item (the same key to another value, its alternative) is a ProblemError
-    naming both.  Returns the new data and the set keys.  Values are validated later, when the problem is built.
+    Setting one of two alternative keys (``mu`` and ``mu1``/``mu2``, ``file`` and ``phase``) removes
+    the other (and the keys that need it: inline samples with their phases); ``mu1`` or ``mu2`` on a
+    robot given one ``mu`` keeps the other foot at mu.  Setting a selector (``gait.waveform``,
+    ``ocp.objective``) removes the keys of ``data`` that belong to other variants than its last
+    value; keys set here stay, for the validation to refuse.  An item that undoes an earlier item
+    (the same key to another value, its alternative) is a ProblemError naming both.  Returns the new
+    data and the set keys.  Values are validated later, when the problem is built.
     """
     out = {k: dict(v) if isinstance(v, Mapping) else v for k, v in data.items()}
     done: dict[tuple[str, str], Any] = {}
     for section, name, value in items:
         sec = out.setdefault(section, {})
         if not isinstance(sec, dict):
-            raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a section in the file")
+            raise ProblemError(f"{source}: {section}.{name} cannot be set: {section} is not a "
+                               "section in the file")
         value = value.item() if isinstance(value, np.generic) else value
         if (section, name) in done and done[section, name] != value:
-            raise ProblemError(f"{source}: {section}.{name} is set twice, to {format_value(done[section, name])} "
-                               f"and to {format_value(value)}: give it once")
+            raise ProblemError(f"{source}: {section}.{name} is set twice, to "
+                               f"{format_value(done[section, name])} and to {format_value(value)}: "
+                               "give it once")
         schema = SCHEMA[section]
         if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
             # one foot's friction changed on a robot given one mu: the other foot keeps mu
@@ -101,38 +111,41 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]], s
             done.pop((section, "mu"), None)   # carried, not lost
         alternatives = set(schema.key_map[name].exclusive_with) | {k.name for k in schema.keys
                                                                    if name in k.exclusive_with}
-        _drop(sec, schema, {k for k in alternatives if k in sec}, done, f"{section}.{name} = {format_value(value)}",
-              source)
+        _drop(sec, schema, {k for k in alternatives if k in sec}, done,
+              f"{section}.{name} = {format_value(value)}", source)
         sec[name] = value
         done[section, name] = value
     for section in {s for s, n in done if n == SCHEMA[s].selector}:
         schema, sec = SCHEMA[section], out[section]
         variant = sec[schema.selector]
-        _drop(sec, schema, {k.name for k in schema.keys if k.name in sec and (section, k.name) not in done
-                            and not schema.applies(k, variant)}, done, "", source)
+        _drop(sec, schema,
+              {k.name for k in schema.keys if k.name in sec and (section, k.name) not in done
+               and not schema.applies(k, variant)}, done, "", source)
     return out, set(done)
 
 
-def _drop(sec: dict, schema, names: set[str], done: Mapping[tuple[str, str], Any], by: str, source: str) -> None:
-    """Remove the keys ``names`` of ``sec`` and those that need one of them (``requires``); a key that an earlier
-    item set is a ProblemError (``by`` undoes it)."""
+def _drop(sec: dict, schema, names: set[str], done: Mapping[tuple[str, str], Any], by: str,
+          source: str) -> None:
+    """Remove the keys ``names`` of ``sec`` and those that need one of them (``requires``); a key
+    that an earlier item set is a ProblemError (``by`` undoes it)."""
     names = names | {k.name for k in schema.keys if k.name in sec and set(k.requires) & names}
     for name in sorted(names):
         if (schema.name, name) in done:
-            raise ProblemError(f"{source}: {by} drops {schema.name}.{name} = {format_value(done[schema.name, name])} "
-                               f"given before it (they are alternatives): give one of them")
+            raise ProblemError(f"{source}: {by} drops {schema.name}.{name} = "
+                               f"{format_value(done[schema.name, name])} given before it (they are "
+                               "alternatives): give one of them")
         sec.pop(name, None)
 
 
-def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]], then: Sequence[tuple[str, str, Any]]
-               ) -> tuple[int, str] | None:
-    """Which of the values set by ``first`` the later ``then`` overrides silently undo: the index in ``then`` of the
-    first (section, key, value) that changes or removes one (a key set again to another value, an alternative
-    key, another waveform or objective dropping it), with that key as ``"section.key"``; None if none does.
-    Keys are checked in the order of ``first``.
+def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]],
+               then: Sequence[tuple[str, str, Any]] ) -> tuple[int, str] | None:
+    """Which of the values set by ``first`` the later ``then`` overrides silently undo: the index in
+    ``then`` of the first (section, key, value) that changes or removes one (a key set again to
+    another value, an alternative key, another waveform or objective dropping it), with that key as
+    ``"section.key"``; None if none does.  Keys are checked in the order of ``first``.
 
-    A removed key whose value the same item carried to a key it added is kept: ``robot.mu`` then ``robot.mu1``
-    leaves foot 2 at mu (``mu2``), as :func:`set_values` promises.
+    A removed key whose value the same item carried to a key it added is kept: ``robot.mu`` then
+    ``robot.mu1`` leaves foot 2 at mu (``mu2``), as :func:`set_values` promises.
     """
     base, _ = set_values(data, first)
     kept = list(dict.fromkeys((section, name) for section, name, _ in first))
@@ -153,59 +166,65 @@ def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]], t
 
 def apply_overrides(data: Mapping[str, Any], overrides: Sequence[str], source: str = "<dict>"
                     ) -> tuple[dict[str, Any], set[tuple[str, str]]]:
-    """Copy of ``data`` with ``SECTION.KEY=VALUE`` overrides (text, as ``--set``) applied; also returns the
-    overridden keys."""
+    """Copy of ``data`` with ``SECTION.KEY=VALUE`` overrides (text, as ``--set``) applied; also
+    returns the overridden keys."""
     if isinstance(overrides, str):
         overrides = [overrides]
     items = [parse_override(text, source) for text in overrides]
     for (section, _, _), text in zip(items, overrides):
         if not isinstance(data.get(section, {}), Mapping):
-            raise ProblemError(f"{source}: --set {format_value(text)} is invalid: {section} is not a section in the file")
+            raise ProblemError(f"{source}: --set {format_value(text)} is invalid: {section} is not "
+                               "a section in the file")
     return set_values(data, items, source)
 
 
-#: largest problem file read [bytes]: problem files are a few hundred bytes; a path such as /dev/zero must not hang
+#: largest problem file read [bytes]: problem files are a few hundred bytes; a path such as
+#: /dev/zero must not hang
 MAX_PROBLEM_BYTES = 1 << 20
 
 
 def toml_loads(text: str, where: str) -> dict[str, Any]:
-    """``tomllib.loads``, nesting deeper than Python's recursion limit (arrays of arrays ...) a ProblemError
-    naming ``where`` instead of a RecursionError."""
+    """``tomllib.loads``, nesting deeper than Python's recursion limit (arrays of arrays ...) a
+    ProblemError naming ``where`` instead of a RecursionError."""
     try:
         return tomllib.loads(text)
     except RecursionError:
-        raise ProblemError(f"{where}: malformed TOML: arrays or tables nested too deeply (problem values are "
-                           "numbers and strings)") from None
+        raise ProblemError(f"{where}: malformed TOML: arrays or tables nested too deeply (problem "
+                           "values are numbers and strings)") from None
     except tomllib.TOMLDecodeError:
         raise
-    except ValueError:  # an integer longer than Python's limit of digits (sys.get_int_max_str_digits)
-        raise ProblemError(f"{where}: malformed TOML: an integer of more than {sys.get_int_max_str_digits()} digits "
-                           "(no problem value needs one; write large numbers as floats, e.g. 1e308)") from None
+    # an integer longer than Python's limit of digits (sys.get_int_max_str_digits)
+    except ValueError:
+        raise ProblemError(f"{where}: malformed TOML: an integer of more than "
+                           f"{sys.get_int_max_str_digits()} digits (no problem value needs one; "
+                           "write large numbers as floats, e.g. 1e308)") from None
 
 
 def read_bytes(path: Path, limit: int = MAX_PROBLEM_BYTES) -> bytes:
-    """The bytes of a problem file, at most ``limit`` (a larger file, or an endless one such as /dev/zero, is a
-    ProblemError naming the file and the limit)."""
+    """The bytes of a problem file, at most ``limit`` (a larger file, or an endless one such as
+    /dev/zero, is a ProblemError naming the file and the limit)."""
     try:
         raw = read_bounded(path, limit)
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ProblemError(f"{path}: cannot read the problem file: {reason}") from None
     if len(raw) > limit:
-        raise ProblemError(f"{path}: cannot read the problem file: larger than {limit} bytes ({limit / 2**20:g} MiB), "
-                           "the limit of a problem file (problem files are a few hundred bytes)")
+        raise ProblemError(f"{path}: cannot read the problem file: larger than {limit} bytes "
+                           f"({limit / 2**20:g} MiB), the limit of a problem file (problem files "
+                           "are a few hundred bytes)")
     return raw
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file (at most :data:`MAX_PROBLEM_BYTES`); unreadable or oversized files and malformed TOML raise
-    ProblemError (with the offending line)."""
+    """Read a TOML file (at most :data:`MAX_PROBLEM_BYTES`); unreadable or oversized files and
+    malformed TOML raise ProblemError (with the offending line)."""
     path = Path(path)
     raw = read_bytes(path)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ProblemError(f"{path}: cannot read the problem file: not UTF-8 text (byte {exc.start})") from None
+        raise ProblemError(f"{path}: cannot read the problem file: not UTF-8 text (byte "
+                           f"{exc.start})") from None
     try:
         return toml_loads(text, str(path))
     except tomllib.TOMLDecodeError as exc:

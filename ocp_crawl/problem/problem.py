@@ -1,6 +1,6 @@
 """The validated :class:`Problem`: robot, gait, drive, gravity convention, solver and its options.
 
-Every bad input raises :class:`~ocp_crawl.problem.schema.ProblemError` with a one-line message that
+Every bad input raises :class:`~ocp_crawl.problem.keys.ProblemError` with a one-line message that
 names the file, the ``[section] key``, the value given and what is valid, for example::
 
     problems/x.toml: [robot] k = -1.0 is invalid: must be > 0 (torsion stiffness, N m/rad)
@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, Sequence, cast
 
 import numpy as np
 
@@ -21,8 +21,8 @@ from ocp_crawl.problem.waveforms import gait_input
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
 from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
 from ocp_crawl.problem.messages import format_value, suggest, toml_type
-from ocp_crawl.problem.schema import (DRIVES, SCHEMA, SECTIONS, Drive, ProblemError, Section, field_default,
-                                      removed_key)
+from ocp_crawl.problem.keys import ProblemError, Section, field_default
+from ocp_crawl.problem.schema import DRIVES, SCHEMA, SECTIONS, Drive, removed_key
 from ocp_crawl.problem.values import Context, check_value
 from ocp_crawl.sim import DEFAULT_SOLVER, MUJOCO_SOLVERS, solver_named, unusable
 
@@ -41,8 +41,8 @@ def thaw(d: Mapping) -> dict:
 
 
 def solver_options(solver: str, values: Mapping[str, Any]):
-    """The options dataclass of the registry's ``solver`` from ``[simulation]`` values (its fields only;
-    the others keep their defaults)."""
+    """The options dataclass of the registry's ``solver`` from ``[simulation]`` values (its fields
+    only; the others keep their defaults)."""
     cls = solver_named(solver).options
     names = {f.name for f in dataclasses.fields(cls)}
     return cls(**{k: v for k, v in values.items() if k in names})
@@ -50,20 +50,21 @@ def solver_options(solver: str, values: Mapping[str, Any]):
 
 @dataclass(frozen=True)
 class Problem:
-    """A validated simulation problem: robot, gait, drive, gravity convention, solver and its options."""
+    """A validated simulation problem: robot, gait, drive, gravity convention, solver and its
+    options."""
 
     robot: Robot
     """physical parameters (SI units)"""
     gait: PeriodicSignal
-    """reference angles [rad] (a :class:`Harmonic` for the default waveform); the values as given are in
-    ``sections["gait"]``"""
+    """reference angles [rad] (a :class:`Harmonic` for the default waveform); the values as given
+    are in ``sections["gait"]``"""
     drive: Drive = SCHEMA["gait"].key_map["drive"].default
     """actuation: "torque" (tau = k (phi_ref - pi)) or "angles" (phi = phi_ref prescribed)"""
     gravity: GravityConvention = field_default(Model, "gravity")
     """sign convention of the gravity term (see MODEL_NOTES erratum)"""
     solver: str | None = None
-    """name in the registry :data:`ocp_crawl.sim.SOLVERS`; None: the drive's default ("event" for the
-    torque drive, "angles" for the angles drive)"""
+    """name in the registry :data:`ocp_crawl.sim.SOLVERS`; None: the drive's default ("event" for
+    the torque drive, "angles" for the angles drive)"""
     options: Any = None
     """the solver's options dataclass (``SOLVERS[solver].options``); None: its defaults"""
     sections: Mapping[str, Mapping[str, Any]] = field(default_factory=dict, hash=False)
@@ -71,46 +72,52 @@ class Problem:
     source: str = field(default="<dict>", compare=False)
     """where the problem came from (file name or "<dict>")"""
     input_torque: PeriodicSignal | None = None
-    """joint torques [N m] given directly (samples of torques, e.g. an ``optimize`` result); None: the torque
-    drive's tau = k (phi_ref - pi) of ``gait``"""
+    """joint torques [N m] given directly (samples of torques, e.g. an ``optimize`` result); None:
+    the torque drive's tau = k (phi_ref - pi) of ``gait``"""
     given: Mapping[str, Mapping[str, Any]] | None = field(default=None, compare=False, hash=False)
-    """the keys the problem was given (file, ``--set``, ``with_values``), validated, without the defaults of
-    ``sections``; None: every key of ``sections`` (a problem built in code)"""
+    """the keys the problem was given (file, ``--set``, ``with_values``), validated, without the
+    defaults of ``sections``; None: every key of ``sections`` (a problem built in code)"""
 
     def __post_init__(self) -> None:
         for name, cls in (("robot", Robot), ("gait", PeriodicSignal)):
             if not isinstance(getattr(self, name), cls):
-                raise TypeError(f"Problem.{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
+                raise TypeError(f"Problem.{name} must be a {cls.__name__}, got "
+                                f"{type(getattr(self, name)).__name__}")
         if self.drive not in DRIVES:
             raise ValueError(f"Problem.drive must be one of {DRIVES}, got {self.drive!r}")
-        if self.input_torque is not None and (self.drive != "torque" or not isinstance(self.input_torque,
-                                                                                       PeriodicSignal)):
-            raise ValueError("Problem.input_torque must be a PeriodicSignal of the torque drive, got "
-                             f"{type(self.input_torque).__name__} with drive {self.drive!r}")
+        if self.input_torque is not None and (self.drive != "torque"
+                                              or not isinstance(self.input_torque,
+                                                                PeriodicSignal)):
+            raise ValueError("Problem.input_torque must be a PeriodicSignal of the torque drive, "
+                             f"got {type(self.input_torque).__name__} with drive {self.drive!r}")
         if self.gravity not in GRAVITY_CONVENTIONS:
-            raise ValueError(f"Problem.gravity must be one of {GRAVITY_CONVENTIONS}, got {self.gravity!r}")
+            raise ValueError(f"Problem.gravity must be one of {GRAVITY_CONVENTIONS}, got "
+                             f"{self.gravity!r}")
         spec = solver_named(DEFAULT_SOLVER[self.drive] if self.solver is None else self.solver)
         if spec.drive != self.drive:
-            raise ValueError(f"Problem.solver = {spec.name!r} simulates the {spec.drive} drive, not {self.drive!r}")
+            raise ValueError(f"Problem.solver = {spec.name!r} simulates the {spec.drive} drive, "
+                             f"not {self.drive!r}")
         if self.options is not None and not isinstance(self.options, spec.options):
-            raise TypeError(f"Problem.options of solver {spec.name!r} must be {spec.options.__name__}, "
-                            f"got {type(self.options).__name__}")
+            raise TypeError(f"Problem.options of solver {spec.name!r} must be "
+                            f"{spec.options.__name__}, got {type(self.options).__name__}")
         object.__setattr__(self, "solver", spec.name)
-        object.__setattr__(self, "options", spec.options() if self.options is None else self.options)
+        object.__setattr__(self, "options",
+                           spec.options() if self.options is None else self.options)
         object.__setattr__(self, "sections", freeze(self.sections))
         if self.given is not None:
             object.__setattr__(self, "given", freeze(self.given))
 
     @property
     def period(self) -> float | None:
-        """The duration of one cycle [s] (``[gait] period``, or the period column of a sample file); None when the
-        problem gives none.  The quasistatic S per cycle does not depend on it; the mean speed is S / period."""
+        """The duration of one cycle [s] (``[gait] period``, or the period column of a sample file);
+        None when the problem gives none.  The quasistatic S per cycle does not depend on it; the
+        mean speed is S / period."""
         value = self.sections.get("gait", {}).get("period")
         return None if value is None else float(value)
 
     def speed(self, S: float) -> float | None:
-        """The mean speed |S| / period [m/s] of a gait that moves S [m] per cycle (its direction is the sign of S);
-        None without a period or a finite S."""
+        """The mean speed |S| / period [m/s] of a gait that moves S [m] per cycle (its direction is
+        the sign of S); None without a period or a finite S."""
         period = self.period
         return abs(S) / period if period is not None and math.isfinite(S) else None
 
@@ -121,30 +128,37 @@ class Problem:
 
     @property
     def torque(self) -> PeriodicSignal:
-        """The torque input [N m]: ``input_torque`` if given, else tau = k (phi_ref - pi) of eq. (tau)."""
-        return self.input_torque if self.input_torque is not None else ReferenceTorque(self.gait, self.robot.k)
+        """The torque input [N m]: ``input_torque`` if given, else tau = k (phi_ref - pi) of eq.
+        (tau)."""
+        return (self.input_torque if self.input_torque is not None
+                else ReferenceTorque(self.gait, self.robot.k))
 
     @property
     def signal(self) -> PeriodicSignal:
-        """The input of the drive: joint torques [N m] (torque drive) or joint angles [rad] (angles drive)."""
+        """The input of the drive: joint torques [N m] (torque drive) or joint angles [rad] (angles
+        drive)."""
         return self.torque if self.drive == "torque" else self.gait
 
     @property
     def hybrid(self):
-        """Options of the event-driven stepper (HybridOptions): the solver's own for solver "event"; else those in
-        ``[simulation]`` (the stepper also finds the released start of every torque solver)."""
+        """Options of the event-driven stepper (HybridOptions): the solver's own for solver "event";
+        else those in ``[simulation]`` (the stepper also finds the released start of every torque
+        solver)."""
         if self.solver == "event":
             return self.options
         return solver_options("event", self.sections.get("simulation", {}))
 
     def with_values(self, values: Mapping[str, Any]) -> "Problem":
-        """A new problem with typed values set: ``problem.with_values({"robot.mu1": 0.35, "gait.psi_deg": 30.0})``.
+        """A new problem with typed values set:
+        ``problem.with_values({"robot.mu1": 0.35, "gait.psi_deg": 30.0})``.
 
         Keys are ``SECTION.KEY`` of the schema (units as in the problem files); the new problem is
-        validated as a whole, so a bad value raises ProblemError naming the key.  No text round trip.
+        validated as a whole, so a bad value raises ProblemError naming the key.  No text round
+        trip.
         """
         if not isinstance(values, Mapping):
-            raise TypeError(f"Problem.with_values needs a mapping of SECTION.KEY to values, got {type(values).__name__}")
+            raise TypeError("Problem.with_values needs a mapping of SECTION.KEY to values, got "
+                            f"{type(values).__name__}")
         items = [(*split_key(k, f"{self.source}: {k}"), v) for k, v in values.items()]
         data, _ = set_values(self.to_dict(), items, self.source)
         problem = _validate(data, Context(self.source))
@@ -152,39 +166,48 @@ class Problem:
         return dataclasses.replace(problem, given=_given(problem.sections, given))
 
     def given_dict(self) -> dict:
-        """The keys the problem was given, sections as ``to_dict()`` without the defaults filled in (a problem built
-        in code: ``to_dict()``).  A problem file of these keys is this problem."""
+        """The keys the problem was given, sections as ``to_dict()`` without the defaults filled in
+        (a problem built in code: ``to_dict()``).  A problem file of these keys is this problem."""
         return thaw(self.given) if self.given is not None else self.to_dict()
 
     def to_dict(self) -> dict:
-        """Plain dict of the problem's sections (JSON- and TOML-friendly; ``problem_from_dict`` accepts it)."""
+        """Plain dict of the problem's sections (JSON- and TOML-friendly; ``problem_from_dict``
+        accepts it)."""
         out = thaw(self.sections)
         # problems built in code without sections: report the objects themselves
         if "robot" not in out:
             r = self.robot
-            out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1, "mu2": r.mu2, "g": r.g}
+            out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1,
+                            "mu2": r.mu2, "g": r.g}
         if "gait" not in out:
             g = self.gait
             if not isinstance(g, Harmonic):
-                raise TypeError(f"a problem built in code with a {type(g).__name__} gait has no problem-file form; "
-                                "build it from a problem file or dict (gait.waveform)")
-            out["gait"] = {"drive": self.drive, "gamma1_deg": math.degrees(g.gamma1), "gamma2_deg": math.degrees(g.gamma2),
-                           "A1_deg": math.degrees(g.A1), "A2_deg": math.degrees(g.A2), "psi_deg": math.degrees(g.psi)}
+                raise TypeError(f"a problem built in code with a {type(g).__name__} gait has no "
+                                "problem-file form; build it from a problem file or dict "
+                                "(gait.waveform)")
+            out["gait"] = {"drive": self.drive, "gamma1_deg": math.degrees(g.gamma1),
+                           "gamma2_deg": math.degrees(g.gamma2),
+                           "A1_deg": math.degrees(g.A1), "A2_deg": math.degrees(g.A2),
+                           "psi_deg": math.degrees(g.psi)}
         out.setdefault("model", {"gravity": self.gravity})
         out.setdefault("simulation", self._simulation_values())
         return out
 
     def _simulation_values(self) -> dict[str, Any]:
-        """``[simulation]`` of a problem built in code: its solver's options, the others' defaults."""
-        out = {key.name: getattr(self.options, key.name, getattr(self.hybrid, key.name, key.default))
+        """``[simulation]`` of a problem built in code: its solver's options, the others'
+        defaults."""
+        out = {key.name: getattr(self.options, key.name,
+                                 getattr(self.hybrid, key.name, key.default))
                for key in SCHEMA["simulation"].keys if key.name != "solver"}
-        named = "mujoco" if "mujoco" in self.solver else self.solver   # (MuJoCo: a row per drive)
-        return {"solver": named if self.drive == "torque" or named == "mujoco" else DEFAULT_SOLVER["torque"],
-                **out}
+        solver = cast(str, self.solver)  # __post_init__ replaced None by the default solver
+        named = "mujoco" if "mujoco" in solver else solver   # (MuJoCo: a row per drive)
+        return {"solver": named if self.drive == "torque" or named == "mujoco"
+                else DEFAULT_SOLVER["torque"], **out}
 
 
 def _variant(ctx: Context, section: Section, given: Mapping[str, Any]) -> str | None:
-    """The value of the section's selector key (``[gait] waveform``); keys of other variants are errors."""
+    """The value of the section's selector key (``[gait] waveform``); keys of other variants are
+    errors."""
     if section.selector is None:
         return None
     selector = section.key_map[section.selector]
@@ -195,9 +218,11 @@ def _variant(ctx: Context, section: Section, given: Mapping[str, Any]) -> str | 
             own = [k.name for k in section.keys if k.variants and section.applies(k, variant)]
             owned = f"the keys of {selector.name} = {format_value(variant)} are {', '.join(own)}" if own else \
                 f"{selector.name} = {format_value(variant)} has no keys of its own"
-            raise ProblemError(f"{ctx.at(section.name, name, value)} is invalid with {selector.name} = "
-                               f"{format_value(variant)}: it is a key of {selector.name} = "
-                               f"{' or '.join(format_value(v) for v in key.variants)} ({key.what}); {owned}")
+            raise ProblemError(f"{ctx.at(section.name, name, value)} is invalid with "
+                               f"{selector.name} = {format_value(variant)}: it is a key of "
+                               f"{selector.name} = "
+                               f"{' or '.join(format_value(v) for v in key.variants)} "
+                               f"({key.what}); {owned}")
     return variant
 
 
@@ -224,17 +249,18 @@ def _check_section(ctx: Context, section: Section, given: Mapping[str, Any]) -> 
         for other in key.exclusive_with:
             if other in given:
                 raise ProblemError(f"{ctx.at(section.name, name, given[name])} and {other} = "
-                                   f"{format_value(given[other])} are mutually exclusive: give {name}, or "
-                                   f"{' and '.join(key.exclusive_with)}")
+                                   f"{format_value(given[other])} are mutually exclusive: give "
+                                   f"{name}, or {' and '.join(key.exclusive_with)}")
         for other in key.requires:
             if other not in given:
-                raise ProblemError(f"{ctx.at(section.name, name, given[name])} is given without {other}: "
-                                   f"give both {name} and {other} ({key.what})")
+                raise ProblemError(f"{ctx.at(section.name, name, given[name])} is given without "
+                                   f"{other}: give both {name} and {other} ({key.what})")
     for key in section.keys:
         name = key.name
         if name in given or not section.applies(key, variant):
             continue
-        if key.required and not (key.required_unless and all(u in given for u in key.required_unless)):
+        if key.required and not (key.required_unless
+                                 and all(u in given for u in key.required_unless)):
             alt = f" (or {' and '.join(key.required_unless)})" if key.required_unless else ""
             if key.variants and section.selector is not None:
                 alt += f" with {section.selector} = {format_value(variant)}"
@@ -246,19 +272,24 @@ def _check_section(ctx: Context, section: Section, given: Mapping[str, Any]) -> 
 
 
 def _check_friction_set(ctx: Context, given: Mapping[str, Any]) -> None:
-    """``[ocp] robust = "worst"`` asks for the worst over a friction set: without one (no ``mu_ratio_eps``
-    > 0, no ``mu_levels``, no robust_speed) it would be ignored, so it is an error (the mean of one scenario is its value)."""
+    """``[ocp] robust = "worst"`` asks for the worst over a friction set: without one (no
+    ``mu_ratio_eps`` > 0, no ``mu_levels``, no robust_speed) it would be ignored, so it is an error
+    (the mean of one scenario is its value)."""
     if given.get("robust") != "worst" or given.get("objective") == "robust_speed":
         return
     if given.get("mu_ratio_eps", 0) > 0 or "mu_levels" in given:
         return
-    raise ProblemError(f"{ctx.at('ocp', 'robust', given['robust'])} needs a friction set: give [ocp] "
-                    f"mu_ratio_eps > 0 (the scenarios mu1/mu2 in {{1 - eps, 1, 1 + eps}}), mu_levels or "
+    raise ProblemError(f"{ctx.at('ocp', 'robust', given['robust'])} needs a friction set: give "
+                       "[ocp] "
+                    f"mu_ratio_eps > 0 (the scenarios mu1/mu2 in {{1 - eps, 1, 1 + eps}}), "
+                    "mu_levels or "
                     f'objective = "robust_speed"')
 
 
-def _check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str, values: Mapping) -> None:
-    """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad input."""
+def _check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str,
+                   values: Mapping) -> None:
+    """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad
+    input."""
     gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
     blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
     blame = f"[gait] {blame} (with [robot] beta = {format_value(values['robot']['beta'])})"
@@ -278,31 +309,34 @@ def _check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str,
             detail = f"prescribed angles at phase {t[j]:.4f}: contact lost"
         except ValueError as exc:
             detail = str(exc)
-        raise ctx.error(f"{blame} are invalid for the angles drive: {detail} (both feet must stay on the "
-                        "ground over the whole cycle)")
+        raise ctx.error(f"{blame} are invalid for the angles drive: {detail} (both feet must stay "
+                        "on the ground over the whole cycle)")
 
 
 
 def _check_sections(data: Mapping[str, Any], ctx: Context) -> dict[str, dict[str, Any]]:
-    """Every section's values checked, defaults filled in; unknown and misplaced sections rejected."""
+    """Every section's values checked, defaults filled in; unknown and misplaced sections
+    rejected."""
     if not isinstance(data, Mapping):
         raise ctx.error(f"a problem must be a table of sections, got {toml_type(data)}")
     for name, value in data.items():
         if name not in SCHEMA and not isinstance(value, Mapping):
-            raise ctx.error(f"top-level key {name} = {format_value(value)} is not in a section: keys belong in a "
-                            f"section, one of {', '.join(f'[{s}]' for s in SCHEMA)}")
+            raise ctx.error(f"top-level key {name} = {format_value(value)} is not in a section: "
+                            "keys belong in a section, one of "
+                            f"{', '.join(f'[{s}]' for s in SCHEMA)}")
         if name not in SCHEMA:
             hint = suggest(name, list(SCHEMA))
-            raise ctx.error(f"unknown section [{name}] = {format_value(value)}; {hint}valid sections: "
-                            f"{', '.join(SCHEMA)}")
+            raise ctx.error(f"unknown section [{name}] = {format_value(value)}; {hint}valid "
+                            f"sections: {', '.join(SCHEMA)}")
         if not isinstance(value, Mapping):
-            raise ctx.error(f"{name} = {format_value(value)} is not a section: keys belong in a table [{name}] "
-                            f"(got {toml_type(value)})")
+            raise ctx.error(f"{name} = {format_value(value)} is not a section: keys belong in a "
+                            f"table [{name}] (got {toml_type(value)})")
     values: dict[str, dict[str, Any]] = {}
     for section in SECTIONS:
         if section.name not in data and section.required:
             need = ", ".join(k.name for k in section.keys if k.required)
-            raise ctx.error(f"section [{section.name}] is missing (no value given): required, with keys {need}")
+            raise ctx.error(f"section [{section.name}] is missing (no value given): required, with "
+                            f"keys {need}")
         values[section.name] = _check_section(ctx, section, data.get(section.name, {}))
     _check_friction_set(ctx, data.get("ocp", {}))
     return values
@@ -320,39 +354,46 @@ def _solver(ctx: Context, drive: str, sim: Mapping[str, Any], gravity: str = "ph
         return name
     default = SCHEMA["simulation"].key_map["solver"].default
     if sim["solver"] != default:
-        raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} is invalid with [gait] drive = "
-                           f"{format_value(drive)}: the {drive} drive has its own solver ({DEFAULT_SOLVER[drive]}); "
-                           "[simulation] solver chooses the simulator of the torque drive (or \"mujoco\")")
+        raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} is invalid with "
+                           f"[gait] drive = {format_value(drive)}: the {drive} drive has its own "
+                           f"solver ({DEFAULT_SOLVER[drive]}); [simulation] solver chooses the "
+                           "simulator of the torque drive (or \"mujoco\")")
     return DEFAULT_SOLVER[drive]
 
 
-#: largest nondimensional stiffness k/(M g L) of the torque drive: the joint balance subtracts spring torques of
-#: order k from inputs of order k, so round-off in the contact forces grows like 1e-16 k/(M g L) (M g); at 1e10
-#: that is 1e-6 M g, the solvers' force tolerance.  The stiff limit is the prescribed-angle gait (gait.drive =
-#: "angles"), which S approaches as M g L/k (tests/test_scaling.py measures the first order up to 1e8).
+#: largest nondimensional stiffness k/(M g L) of the torque drive: the joint balance subtracts
+#: spring torques of order k from inputs of order k, so round-off in the contact forces grows like
+#: 1e-16 k/(M g L) (M g); at 1e10 that is 1e-6 M g, the solvers' force tolerance.  The stiff limit
+#: is the prescribed-angle gait (gait.drive = "angles"), which S approaches as M g L/k
+#: (tests/test_scaling.py measures the first order up to 1e8).
 MAX_STIFFNESS_RATIO = 1e10
 
 
 def _check_stiffness_ratio(ctx: Context, robot: Robot, drive: str) -> None:
-    """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the keys."""
+    """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the
+    keys."""
     ratio = robot.k / robot.MgL
     if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
-        raise ctx.error(f"[robot] k = {format_value(robot.k)} with M = {format_value(robot.M)}, L = "
-                        f"{format_value(robot.L)}, g = {format_value(robot.g)} is invalid: k/(M g L) = {ratio:.3g} "
-                        f"exceeds {MAX_STIFFNESS_RATIO:g}, beyond which round-off in double precision swamps the "
-                        "contact forces; the stiff limit is the prescribed-angle gait: set gait.drive = \"angles\"")
+        raise ctx.error(f"[robot] k = {format_value(robot.k)} with M = {format_value(robot.M)}, L "
+                        f"= {format_value(robot.L)}, g = {format_value(robot.g)} is invalid: k/(M "
+                        f"g L) = {ratio:.3g} exceeds {MAX_STIFFNESS_RATIO:g}, beyond which "
+                        "round-off in double precision swamps the contact forces; the stiff limit "
+                        "is the prescribed-angle gait: set gait.drive = \"angles\"")
 
 
 def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> dict:
-    """The validated ``values`` of the keys ``data`` gives (sections it gives, keys in the schema's order)."""
-    return {name: {k: v for k, v in values[name].items() if k in data[name]} for name in values if name in data}
+    """The validated ``values`` of the keys ``data`` gives (sections it gives, keys in the schema's
+    order)."""
+    return {name: {k: v for k, v in values[name].items() if k in data[name]} for name in values
+            if name in data}
 
 
 def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
-    # the schema has checked every value the constructors check, so their errors would be internal bugs
+    # the schema has checked every value the constructors check, so their errors would be internal
+    # bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
     _check_stiffness_ratio(ctx, robot, g["drive"])
     gravity = values["model"]["gravity"]
@@ -360,25 +401,29 @@ def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     values["gait"] = signals.values
     solver = _solver(ctx, g["drive"], sim, gravity)
     problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=gravity,
-                      solver=solver, options=solver_options(solver, sim), sections=values, source=ctx.source,
-                      input_torque=signals.torque, given=_given(values, data))
+                      solver=solver, options=solver_options(solver, sim), sections=values,
+                      source=ctx.source, input_torque=signals.torque, given=_given(values, data))
     _check_contact(ctx, problem.model, problem.gait, problem.drive, values)
     return problem
 
 
-def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides: Sequence[str] = ()) -> Problem:
+def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>",
+                      overrides: Sequence[str] = ()) -> Problem:
     """Validate a dict shaped like a problem file (sections of keys) and build the :class:`Problem`.
 
     Parameters
     ----------
     data : mapping
-        Sections of keys as in a TOML problem file, e.g. ``{"robot": {"M": 0.052, "L": 0.12, "k": 0.1677,
-        "mu": 0.389}, "gait": {"gamma_deg": 90, "A_deg": 30, "psi_deg": 45}}``; every key in the unit of the
-        key reference (kg, m, N m/rad, deg, ...); missing optional keys take their defaults.
+        Sections of keys as in a TOML problem file, e.g.
+        ``{"robot": {"M": 0.052, "L": 0.12, "k": 0.1677, "mu": 0.389}, "gait": {"gamma_deg": 90,
+        "A_deg": 30, "psi_deg":
+        45}}``; every key in the unit of the key reference (kg, m, N m/rad, deg, ...); missing
+        optional keys take their defaults.
     source : str
         Names the origin at the start of every error message (default ``"<dict>"``).
     overrides : sequence of str
-        ``SECTION.KEY=VALUE`` texts applied on top of ``data``, as ``--set`` (the value parsed as TOML).
+        ``SECTION.KEY=VALUE`` texts applied on top of ``data``, as ``--set`` (the value parsed as
+        TOML).
 
     Returns
     -------
@@ -388,10 +433,12 @@ def problem_from_dict(data: Mapping[str, Any], source: str = "<dict>", overrides
     Raises
     ------
     ProblemError
-        Bad input (a ValueError), with a one-line message naming the source, key, value and what is valid.
+        Bad input (a ValueError), with a one-line message naming the source, key, value and what is
+        valid.
     """
     if not isinstance(data, Mapping):
-        raise ProblemError(f"{source}: a problem must be a table of sections, got {toml_type(data)}")
+        raise ProblemError(f"{source}: a problem must be a table of sections, got "
+                           f"{toml_type(data)}")
     for name, section in data.items():  # a file's names are strings; a dict's may be anything
         keys = list(section) if isinstance(section, Mapping) else []
         bad = [k for k in [name, *keys] if not isinstance(k, str)]
@@ -412,8 +459,8 @@ def load_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
         The problem file (TOML, at most 1 MiB); the shipped examples are written out by
         ``ocp-crawl init`` or found with :func:`ocp_crawl.problem.shipped.shipped_problem`.
     overrides : sequence of str
-        ``SECTION.KEY=VALUE`` texts, e.g. ``["robot.k=0.2", "gait.drive=angles"]`` (values parsed as TOML,
-        in the units of the file's keys).
+        ``SECTION.KEY=VALUE`` texts, e.g. ``["robot.k=0.2", "gait.drive=angles"]`` (values parsed as
+        TOML, in the units of the file's keys).
 
     Returns
     -------
@@ -423,6 +470,7 @@ def load_problem(path: str | Path, overrides: Sequence[str] = ()) -> Problem:
     Raises
     ------
     ProblemError
-        An unreadable or malformed file, or an invalid key or value (one line naming the file and key).
+        An unreadable or malformed file, or an invalid key or value (one line naming the file and
+        key).
     """
     return problem_from_dict(read_toml(path), source=str(path), overrides=overrides)

@@ -1,4 +1,5 @@
-"""Running a problem: the simulation through the solver registry, the OCP settings, the paper's problem."""
+"""Running a problem: the simulation through the solver registry, the OCP settings, the paper's
+problem."""
 from __future__ import annotations
 
 import math
@@ -11,28 +12,32 @@ from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.messages import format_value
-from ocp_crawl.problem.schema import SCHEMA, ProblemError
+from ocp_crawl.problem.keys import ProblemError
+from ocp_crawl.problem.schema import SCHEMA
 from ocp_crawl.sim import simulate
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.result import CrawlResult
 
 
 def run_problem(problem: Problem, t_eval=None) -> CrawlResult:
-    """Simulate the problem with its solver (``problem.solver`` of the registry, ``problem.options``).
+    """Simulate the problem with its solver (``problem.solver`` of the registry,
+    ``problem.options``).
 
     Parameters
     ----------
     problem : Problem
-        A validated problem (:func:`load_problem`, :func:`problem_from_dict`, :func:`paper_problem`).
+        A validated problem (:func:`load_problem`, :func:`problem_from_dict`,
+        :func:`paper_problem`).
     t_eval : array_like of float, optional
         Output phases [cycles] in the steady cycle (in [0, 1]); None for the solver's own sampling.
 
     Returns
     -------
     CrawlResult
-        ``status``/``success``/``message``, the displacement per cycle ``S`` [m] (< 0: towards foot 1),
-        the positive work ``W_plus`` [J], the cost of transport ``CoT_plus`` [-], the events and the sampled
-        trajectories.  A numerical failure (fold, lift-off, ...) is a status, not an exception.
+        ``status``/``success``/``message``, the displacement per cycle ``S`` [m] (< 0: towards foot
+        1), the positive work ``W_plus`` [J], the cost of transport ``CoT_plus`` [-], the events and
+        the sampled trajectories.  A numerical failure (fold, lift-off, ...) is a status, not an
+        exception.
     """
     if not isinstance(problem, Problem):
         raise TypeError(f"run_problem needs a Problem, got {type(problem).__name__}")
@@ -40,10 +45,12 @@ def run_problem(problem: Problem, t_eval=None) -> CrawlResult:
 
 
 def no_start_reason(problem: Problem) -> str | None:
-    """Why the torque-driven ``problem`` has no released equilibrium at t = 0 (status no_start), or None.
+    """Why the torque-driven ``problem`` has no released equilibrium at t = 0 (status no_start), or
+    None.
 
     Cheap (one equilibrium solve), for checking before a long run; every torque solver starts there.
-    The angles drive returns None: its contact is checked over the whole cycle when the problem is built.
+    The angles drive returns None: its contact is checked over the whole cycle when the problem is
+    built.
     """
     if problem.drive != "torque":
         return None
@@ -54,13 +61,15 @@ def no_start_reason(problem: Problem) -> str | None:
     return None
 
 
-#: phases at which a sampled or Fourier reference is averaged for its centre (exact for Fourier orders below it)
+#: phases at which a sampled or Fourier reference is averaged for its centre (exact for Fourier
+#: orders below it)
 CENTRE_GRID = 720
 
 
 def centre_deg(problem: Problem) -> float:
-    """The centre of the problem's reference angles [deg], mean of both joints: (gamma1 + gamma2)/2 for the
-    harmonic and pulse waveforms, else the mean over the cycle (the OCP's envelope is centred there)."""
+    """The centre of the problem's reference angles [deg], mean of both joints: (gamma1 + gamma2)/2
+    for the harmonic and pulse waveforms, else the mean over the cycle (the OCP's envelope is
+    centred there)."""
     gait = problem.gait
     if isinstance(gait, (Harmonic, Pulse)):
         return math.degrees(0.5 * (gait.gamma1 + gait.gamma2))
@@ -70,8 +79,9 @@ def centre_deg(problem: Problem) -> float:
 def ocp_settings(problem: Problem) -> OCPSettings:
     """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma.
 
-    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError otherwise, as
-    for any other rule between keys that OCPSettings checks (e.g. sigma_min < sigma0, at most MAX_STAGES stages).
+    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError
+    otherwise, as for any other rule between keys that OCPSettings checks (e.g. sigma_min < sigma0,
+    at most MAX_STAGES stages).
     """
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:  # a problem built in code: the schema's defaults
@@ -79,11 +89,14 @@ def ocp_settings(problem: Problem) -> OCPSettings:
     gamma = centre_deg(problem)
     if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
         gait = problem.sections.get("gait", {})
-        given = ", ".join(f"{k} = {format_value(gait[k])}" for k in ("gamma_deg", "gamma1_deg", "gamma2_deg")
+        given = ", ".join(f"{k} = "
+                          f"{format_value(gait[k])}" for k in ("gamma_deg", "gamma1_deg",
+                                                               "gamma2_deg")
                           if k in gait)
-        raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} with [gait] "
-                           f"{given or f'gamma = {gamma:g} deg'} is invalid: the envelope gamma +- A_max_deg must "
-                           f"lie in (0, 180) deg (here {gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
+        raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(sec['A_max_deg'])} "
+                           f"with [gait] {given or f'gamma = {gamma:g} deg'} is invalid: the "
+                           "envelope gamma +- A_max_deg must lie in (0, 180) deg (here "
+                           f"{gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
     if "constraint" in sec:  # one [[ocp.constraint]] table per bound
         sec["constraints"] = tuple(dict(c) for c in sec.pop("constraint"))
     if "ipopt" in sec:
@@ -91,13 +104,15 @@ def ocp_settings(problem: Problem) -> OCPSettings:
     try:
         settings = OCPSettings(**sec, gamma_deg=gamma)
     except ValueError as exc:  # a rule between keys (each key alone passed the schema)
-        raise ProblemError(f"{problem.source}: [ocp] {exc}".replace("OCPSettings: ", "").replace("OCPSettings.", "")) \
+        raise ProblemError(f"{problem.source}: [ocp] {exc}".replace("OCPSettings: ",
+                                                                    "").replace("OCPSettings.",
+                                                                                "")) \
             from None
     try:  # every friction scenario a valid robot (a level or ratio may take mu out of its bounds)
         settings.scenarios(problem.robot)
     except ValueError as exc:
-        raise ProblemError(f"{problem.source}: [ocp] a friction scenario (mu_levels, mu_ratio_eps) makes an "
-                           f"invalid robot: {exc}") from None
+        raise ProblemError(f"{problem.source}: [ocp] a friction scenario (mu_levels, mu_ratio_eps) "
+                           f"makes an invalid robot: {exc}") from None
     return settings
 
 
@@ -112,8 +127,8 @@ def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Proble
     jobs : int, optional
         Worker processes of the baselines' search (None: the CPUs available).
     start : Problem, optional
-        A gait to start from instead of the harmonic baseline: its torque input and ``[gait] period``
-        (e.g. a previous optimum's ``optimal_gait.toml``).
+        A gait to start from instead of the harmonic baseline: its torque input and
+        ``[gait] period`` (e.g. a previous optimum's ``optimal_gait.toml``).
     verbose : bool
         IPOPT's log on stdout.
 
@@ -125,25 +140,26 @@ def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Proble
     Raises
     ------
     ProblemError
-        For a problem of the angles drive, a start without a period, or ``[ocp]`` values that break a rule
-        between keys.
+        For a problem of the angles drive, a start without a period, or ``[ocp]`` values that break
+        a rule between keys.
     """
     from dataclasses import replace
 
     from ocp_crawl.ocp import optimize_gait
 
     if problem.drive != "torque":
-        raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = "
-                           f"\"torque\", got {format_value(problem.drive)}")
+        raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] "
+                           f"drive = \"torque\", got {format_value(problem.drive)}")
     if start is not None and (start.drive != "torque" or start.period is None):
-        raise ProblemError(f"{start.source}: a start needs a torque-drive gait with a [gait] period [s] (as "
-                           "the optimal_gait.toml that optimize --out writes)")
+        raise ProblemError(f"{start.source}: a start needs a torque-drive gait with a [gait] "
+                           "period [s] (as the optimal_gait.toml that optimize --out writes)")
     settings = replace(ocp_settings(problem), verbose=verbose)
     given = None if start is None else (start.torque, start.period)
     return optimize_gait(problem.robot, problem.gravity, settings, jobs=jobs, start=given)
 
 
-#: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as problems/paper_gait.toml.
+#: The paper's robot (Table I) and gait (gamma 90, A 30, psi 45 deg); same values as
+#: problems/paper_gait.toml.
 PAPER_GAIT: Mapping[str, Mapping[str, Any]] = freeze({
     "robot": {"M": 0.052, "L": 0.120, "beta": 2.0, "k": 0.1677, "mu": 0.389, "g": 9.81},
     "gait": {"drive": "torque", "gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0},

@@ -1,11 +1,13 @@
-"""The example problem files and scripts shipped inside the package, and writing them out (``ocp-crawl init``).
+"""The example problem files and scripts shipped inside the package, and writing them out
+(``ocp-crawl init``).
 
 The package data folders ``ocp_crawl/data/problems/`` (``paper_gait.toml``, ``ocp_max_speed.toml``,
 ...) and ``ocp_crawl/data/examples/`` (the examples gallery) are the one source of these files.
-:func:`write_problems` copies them into ``DIR/problems/`` and ``DIR/examples/``, so that the documentation's
-commands (``ocp-crawl simulate problems/paper_gait.toml``, ``python examples/01_simulate_one_gait.py``)
-work from any install; the repository's top-level ``problems/`` and ``examples/`` folders are exactly
-what ``ocp-crawl init`` writes at the repository root (a test checks that they never differ).
+:func:`write_problems` copies them into ``DIR/problems/`` and ``DIR/examples/``, so that the
+documentation's commands (``ocp-crawl simulate problems/paper_gait.toml``,
+``python examples/01_simulate_one_gait.py``) work from any install; the repository's top-level
+``problems/`` and ``examples/`` folders are exactly what ``ocp-crawl init`` writes at the repository
+root (a test checks that they never differ).
 """
 from __future__ import annotations
 
@@ -44,7 +46,8 @@ def shipped_files(folder: str = "problems") -> dict[str, Path]:
 
 
 def shipped_problems() -> dict[str, Path]:
-    """The shipped example problem files: file name -> path inside the installed package (see :func:`shipped_files`)."""
+    """The shipped example problem files: file name -> path inside the installed package (see
+    :func:`shipped_files`)."""
     return shipped_files("problems")
 
 
@@ -59,7 +62,8 @@ def shipped_problem(name: str) -> Path:
     Returns
     -------
     Path
-        The file inside the installed package (read it with :func:`~ocp_crawl.problem.load_problem`).
+        The file inside the installed package (read it with
+        :func:`~ocp_crawl.problem.load_problem`).
 
     Raises
     ------
@@ -73,13 +77,16 @@ def shipped_problem(name: str) -> Path:
     return files[key]
 
 
-def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> list[tuple[Path, Path]]:
-    """Check that the shipped files can be written into ``directory/problems/`` and ``directory/examples/``.
+def init_plan(directory: str | os.PathLike = ".", *,
+              force: bool = False) -> list[tuple[Path, Path]]:
+    """Check that the shipped files can be written into ``directory/problems/`` and
+    ``directory/examples/``.
 
     Parameters
     ----------
     directory : str or path-like
-        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current directory.
+        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current
+        directory.
     force : bool
         Allow overwriting files that already exist there.
 
@@ -93,23 +100,27 @@ def init_plan(directory: str | os.PathLike = ".", *, force: bool = False) -> lis
     FileExistsError
         A target exists and ``force`` is false (``filename`` is the first such file).
     NotADirectoryError, IsADirectoryError, OSError
-        ``directory`` or one of its two folders is not a directory, a target is a directory, or a folder cannot
-        be created or written.
+        ``directory`` or one of its two folders is not a directory, a target is a directory, or a
+        folder cannot be created or written.
         The folders are created if needed; no file is written.
     """
     root = Path(directory)
-    plan = [(src, root / folder / name) for folder in SHIPPED_FOLDERS for name, src in shipped_files(folder).items()]
+    plan = [(src,
+             root / folder
+             / name) for folder in SHIPPED_FOLDERS for name, src in shipped_files(folder).items()]
     for path in (root, *(root / folder for folder in SHIPPED_FOLDERS)):
         if os.path.lexists(path) and not path.is_dir():
             raise NotADirectoryError(errno.ENOTDIR, "exists and is not a directory", str(path))
     for _, target in plan:
         if target.is_dir():  # not even --force overwrites a directory with a file
-            raise IsADirectoryError(errno.EISDIR, "is a directory where a shipped file goes", str(target))
+            raise IsADirectoryError(errno.EISDIR, "is a directory where a shipped file goes",
+                                    str(target))
         if not force and os.path.lexists(target):
             raise FileExistsError(errno.EEXIST, "exists", str(target))
     for folder in SHIPPED_FOLDERS:
         (root / folder).mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=root / folder):  # writable: refused now rather than after the first file
+        # writable: refused now rather than after the first file
+        with tempfile.TemporaryFile(dir=root / folder):
             pass
     return plan
 
@@ -124,14 +135,17 @@ def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -
     Parameters
     ----------
     directory : str or path-like
-        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current directory.
+        Where to create (or fill) the ``problems/`` and ``examples/`` folders; default the current
+        directory.
     force : bool
-        Overwrite files that already exist (without it a FileExistsError is raised and nothing is written).
+        Overwrite files that already exist (without it a FileExistsError is raised and nothing is
+        written).
 
     Returns
     -------
     list of Path
-        The files written: ``directory/problems/...`` then ``directory/examples/...``, each in name order.
+        The files written: ``directory/problems/...`` then ``directory/examples/...``, each in name
+        order.
     """
     root = Path(directory)
     plan = init_plan(directory, force=force)
@@ -142,6 +156,7 @@ def write_problems(directory: str | os.PathLike = ".", *, force: bool = False) -
             data = src.read_bytes()
             path = staging / target.relative_to(root)
             path.parent.mkdir(exist_ok=True)
-            written.append(atomic_write(path, lambda fh, data=data: fh.write(data)))
+            # atomic_write calls the writer before it returns: data is this iteration's
+            written.append(atomic_write(path, lambda fh: fh.write(data)))
         return written
     return write_set(root, write, overwrite=force)

@@ -7,8 +7,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ocp_crawl.problem.messages import format_value, suggest, toml_type
-from ocp_crawl.problem.schema import (MAX_ARRAY, TYPE_WORDS, Key, ProblemError, Tables,
-                                     constraint_error)
+from ocp_crawl.ocp.objectives import check_terms
+from ocp_crawl.problem.keys import MAX_ARRAY, TYPE_WORDS, Key, ProblemError, Tables
+from ocp_crawl.problem.schema import constraint_error
 
 
 class Context:
@@ -71,14 +72,21 @@ def _check_tables(ctx: Context, section: str, key: Key, value: Any) -> list[dict
 
 
 def _check_table(ctx: Context, section: str, key: Key, value: Any) -> dict:
-    """A table key's value (``[ocp.ipopt]``): names and finite numbers or strings, then the names
-    and ranges as IPOPT checks them."""
+    """A table key's value: ``[ocp.terms]`` quantities and their weights; ``[ocp.ipopt]`` names and
+    finite numbers or strings, then the names and ranges as IPOPT checks them."""
     from ocp_crawl.nlp.ipopt import check_ipopt_options
 
     where = ctx.at(section, key.name, value)
     if not isinstance(value, Mapping):
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[dict]}, a "
                            f"[{section}.{key.name}] table ({key.what})")
+    if key.name == "terms":  # quantity -> weight
+        try:
+            check_terms(value)
+        except ValueError as exc:
+            raise ProblemError(f"{where} is invalid: "
+                               f"{str(exc).replace('OCPSettings.terms: ', '')}") from None
+        return dict(value)
     try:
         options = check_ipopt_options(f"[{section}.{key.name}]", dict(value), by_ipopt=True)
     except (TypeError, ValueError) as exc:

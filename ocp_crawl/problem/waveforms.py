@@ -1,13 +1,13 @@
-"""The input of a problem's ``[gait]`` section: harmonic, Fourier series, samples (inline or a CSV file), pulses,
-pressures of the ``[pressure]`` actuator.
+"""The input of a problem's ``[gait]`` section: harmonic, Fourier series, samples (inline or a CSV
+file), pulses, pressures of the ``[pressure]`` actuator.
 
-``[gait] waveform`` selects the keys (schema: ``Key.variants``); :func:`gait_input` turns the validated
-values into the reference angles [rad] and, for torque samples, the joint torques [N m] themselves.
-Sample files follow the package's CSV convention (:mod:`ocp_crawl.io.tables`): a header with the unit
-in every column name, ``phase [-]`` and either ``tau1 [N m]``, ``tau2 [N m]`` or ``phi1_ref [deg]``,
-``phi2_ref [deg]``, optionally ``period [s]`` (the same on every row: the ``[gait] period`` of the
-samples, as the ``torques.csv`` of ``optimize --out`` carries it); an error names the file and the line.
-Relative file names are read from the directory of the problem file.
+``[gait] waveform`` selects the keys (schema: ``Key.variants``); :func:`gait_input` turns the
+validated values into the reference angles [rad] and, for torque samples, the joint torques [N m]
+themselves.  Sample files follow the package's CSV convention (:mod:`ocp_crawl.io.tables`): a header
+with the unit in every column name, ``phase [-]`` and either ``tau1 [N m]``, ``tau2 [N m]`` or
+``phi1_ref [deg]``, ``phi2_ref [deg]``, optionally ``period [s]`` (the same on every row: the
+``[gait] period`` of the samples, as the ``torques.csv`` of ``optimize --out`` carries it); an error
+names the file and the line.  Relative file names are read from the directory of the problem file.
 """
 from __future__ import annotations
 
@@ -21,13 +21,15 @@ import numpy as np
 from ocp_crawl.io.tables import TableError, read_table
 from ocp_crawl.model.inputs import (MAX_KNOTS, FourierSeries, Harmonic, PeriodicLinear,
                                     PeriodicPchip, PeriodicSignal, PeriodicSpline, TorqueReference)
-from ocp_crawl.model.pressure import FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference, PressureWaveform
+from ocp_crawl.model.pressure import (FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference,
+                                      PressureWaveform)
 from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.problem.messages import format_value
-from ocp_crawl.problem.schema import ProblemError
+from ocp_crawl.problem.keys import ProblemError
 
 #: the interpolations of sampled waveforms and the fewest samples each needs over one period
-INTERPOLANTS = {"pchip": (PeriodicPchip, 3), "linear": (PeriodicLinear, 2), "spline": (PeriodicSpline, 3)}
+INTERPOLANTS = {"pchip": (PeriodicPchip, 3), "linear": (PeriodicLinear, 2),
+                "spline": (PeriodicSpline, 3)}
 #: most harmonics of a Fourier waveform (per joint and kind)
 MAX_HARMONICS = 100
 #: the columns of a sample file: the phase, and one pair of torques or reference angles
@@ -36,10 +38,11 @@ TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
 ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
 #: the optional column of a sample file giving the period of one cycle (the same on every row)
 PERIOD_COLUMN = {"period": "time"}
-#: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17 digits)
+#: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17
+#: digits)
 CLOSING_RTOL = 1e-9
-#: smallest distance of two sample phases [cycles] (also across the end of the cycle): closer samples make the
-#: interpolants' slopes overflow or their knots coincide
+#: smallest distance of two sample phases [cycles] (also across the end of the cycle): closer
+#: samples make the interpolants' slopes overflow or their knots coincide
 MIN_PHASE_GAP = 1e-9
 
 #: ``at(section, key, value)``: the message prefix naming the file, the key and the value
@@ -55,12 +58,13 @@ class GaitInput:
     torque: PeriodicSignal | None
     """joint torques [N m] when the waveform gives them directly; None: tau = k (phi_ref - pi)"""
     values: dict
-    """the section's values as validated (a sample file's name resolved to an absolute path, its period column
-    as ``period``)"""
+    """the section's values as validated (a sample file's name resolved to an absolute path, its
+    period column as ``period``)"""
 
 
 def _joint(g: Mapping[str, Any], name: str) -> tuple[float, float]:
-    """Per-joint degrees of ``name`` (``gamma``, ``A``): ``name1_deg`` / ``name2_deg`` over ``name_deg``."""
+    """Per-joint degrees of ``name`` (``gamma``, ``A``): ``name1_deg`` / ``name2_deg`` over
+    ``name_deg``."""
     return tuple(g.get(f"{name}{i}_deg", g.get(f"{name}_deg")) for i in (1, 2))
 
 
@@ -68,8 +72,8 @@ def _fourier(g: Mapping[str, Any], at: At) -> FourierSeries:
     arrays = [np.radians(g[f"{kind}{i}_deg"]) for i in (1, 2) for kind in ("cos", "sin")]
     for (i, kind), arr in zip(((1, "cos"), (1, "sin"), (2, "cos"), (2, "sin")), arrays):
         if arr.size > MAX_HARMONICS:
-            raise ProblemError(f"{at('gait', f'{kind}{i}_deg', g[f'{kind}{i}_deg'])} is invalid: {arr.size} "
-                               f"harmonics, at most {MAX_HARMONICS}")
+            raise ProblemError(f"{at('gait', f'{kind}{i}_deg', g[f'{kind}{i}_deg'])} is invalid: "
+                               f"{arr.size} harmonics, at most {MAX_HARMONICS}")
     n = max(1, max(arr.size for arr in arrays))
     a, b = np.zeros((2, n)), np.zeros((2, n))
     for i in (0, 1):
@@ -80,17 +84,18 @@ def _fourier(g: Mapping[str, Any], at: At) -> FourierSeries:
 
 def _pulse(g: Mapping[str, Any], at: At) -> Pulse:
     if not 2 * g["rise"] + g["hold"] <= 1:
-        raise ProblemError(f"{at('gait', 'rise', g['rise'])} and hold = {format_value(g['hold'])} are invalid: "
-                           f"2 rise + hold = {2 * g['rise'] + g['hold']:g} must be <= 1 (two edges and the high level "
-                           "fit in one cycle)")
+        raise ProblemError(f"{at('gait', 'rise', g['rise'])} and hold = {format_value(g['hold'])} "
+                           f"are invalid: 2 rise + hold = {2 * g['rise'] + g['hold']:g} must be <= "
+                           "1 (two edges and the high level fit in one cycle)")
     (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
-    return Pulse(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2), math.radians(g["psi_deg"]),
-                 g["rise"], g["hold"], g["ramp"])
+    return Pulse(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2),
+                 math.radians(g["psi_deg"]), g["rise"], g["hold"], g["ramp"])
 
 
 @dataclass(frozen=True)
 class _Samples:
-    """Samples over one period before the checks: phases, values (2, N) in SI units, and where row j is."""
+    """Samples over one period before the checks: phases, values (2, N) in SI units, and where row j
+    is."""
 
     phase: np.ndarray
     values: np.ndarray
@@ -102,99 +107,116 @@ class _Samples:
 
 
 def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str, float | None]:
-    """The samples of ``g["file"]``, its resolved path and the period of its ``period [s]`` column (None: none)."""
+    """The samples of ``g["file"]``, its resolved path and the period of its ``period [s]`` column
+    (None: none)."""
     path = Path(g["file"]).expanduser()
     path = path if path.is_absolute() else base / path
     try:
-        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS, **PERIOD_COLUMN}, min_rows=2)
+        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS, **PERIOD_COLUMN},
+                           min_rows=2)
     except TableError as exc:
         raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {exc}") from None
     pairs = [cols for cols in (TORQUE_COLUMNS, ANGLE_COLUMNS) if any(c in table for c in cols)]
     if len(pairs) != 1 or not all(c in table for c in pairs[0]):
         have = ", ".join(f"'{n} [{u}]'" for n, u in table.units.items())
-        raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {path}: needs 'phase [-]' and either "
-                           f"'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', 'phi2_ref [deg]' (header has {have})")
+        raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {path}: needs 'phase [-]' "
+                           "and either 'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', 'phi2_ref "
+                           f"[deg]' (header has {have})")
     cols = list(pairs[0])
-    where = lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}"  # noqa: E731
-    samples = _Samples(table["phase"], np.array([table[c] for c in cols]), pairs[0] is TORQUE_COLUMNS, where,
-                       (cols[0], cols[1]))
+    # noqa: E731
+    where = lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}"
+    samples = _Samples(table["phase"], np.array([table[c] for c in cols]),
+                       pairs[0] is TORQUE_COLUMNS, where, (cols[0], cols[1]))
     return samples, str(path.resolve()), _file_period(table, where)
 
 
 def _file_period(table, where: Callable[[int], str]) -> float | None:
-    """The period [s] of a sample table's ``period`` column, one positive number on every row; None without it."""
+    """The period [s] of a sample table's ``period`` column, one positive number on every row; None
+    without it."""
     if "period" not in table:
         return None
     column = table["period"]
     for j, value in enumerate(column):
         if not value > 0:
-            raise ProblemError(f"{where(j)}: period {float(value)!r} s must be > 0 (the duration of one cycle)")
+            raise ProblemError(f"{where(j)}: period {float(value)!r} s must be > 0 (the duration "
+                               "of one cycle)")
         if value != column[0]:
-            raise ProblemError(f"{where(j)}: period {float(value)!r} s differs from {float(column[0])!r} s on the "
-                               "first row: the column gives the one period of the cycle")
+            raise ProblemError(f"{where(j)}: period {float(value)!r} s differs from "
+                               f"{float(column[0])!r} s on the first row: the column gives the one "
+                               "period of the cycle")
     return float(column[0])
 
 
 def _period(g: Mapping[str, Any], file_period: float | None, at: At) -> float | None:
-    """The samples' period [s]: ``[gait] period`` and the file's period column agree (to :data:`CLOSING_RTOL`)
-    when both are given; either one alone is the period."""
+    """The samples' period [s]: ``[gait] period`` and the file's period column agree (to
+    :data:`CLOSING_RTOL`) when both are given; either one alone is the period."""
     given = g.get("period")
-    if given is not None and file_period is not None and abs(given - file_period) > CLOSING_RTOL * file_period:
-        raise ProblemError(f"{at('gait', 'period', given)} is invalid: the sample file {g['file']} gives the period "
-                           f"{file_period!r} s in its period column: give one period (drop the key or the column)")
+    if (given is not None and file_period is not None and abs(given - file_period) > CLOSING_RTOL
+        * file_period):
+        raise ProblemError(f"{at('gait', 'period', given)} is invalid: the sample file {g['file']} "
+                           f"gives the period {file_period!r} s in its period column: give one "
+                           "period (drop the key or the column)")
     return given if given is not None else file_period
 
 
 def _inline(g: Mapping[str, Any], at: At) -> _Samples:
-    pair = ("tau1", "tau2") if "tau1" in g else ("phi1_ref_deg", "phi2_ref_deg") if "phi1_ref_deg" in g else None
+    pair = ("tau1", "tau2") if "tau1" in g else ("phi1_ref_deg",
+                                                 "phi2_ref_deg") if "phi1_ref_deg" in g else None
     if "phase" not in g or pair is None:
-        given = ", ".join(k for k in ("phase", "tau1", "tau2", "phi1_ref_deg", "phi2_ref_deg") if k in g)
-        raise ProblemError(f"{at('gait', 'waveform', 'samples')} needs file, or phase with tau1 and tau2 (or "
-                           f"phi1_ref_deg and phi2_ref_deg) (given: {given or 'none of them'})")
-    if not g["phase"]:   # the rows are counted per period in _periodic; there is no row to name here
-        raise ProblemError(f"{at('gait', 'phase', g['phase'])} is invalid: no samples (phases of one cycle, with "
-                           f"{pair[0]} and {pair[1]} at them)")
+        given = ", ".join(k for k in ("phase", "tau1", "tau2", "phi1_ref_deg", "phi2_ref_deg")
+                          if k in g)
+        raise ProblemError(f"{at('gait', 'waveform', 'samples')} needs file, or phase with tau1 "
+                           "and tau2 (or phi1_ref_deg and phi2_ref_deg) (given: "
+                           f"{given or 'none of them'})")
+    # the rows are counted per period in _periodic; there is no row to name here
+    if not g["phase"]:
+        raise ProblemError(f"{at('gait', 'phase', g['phase'])} is invalid: no samples (phases of "
+                           f"one cycle, with {pair[0]} and {pair[1]} at them)")
     for name in pair:
         if len(g[name]) != len(g["phase"]):
-            raise ProblemError(f"{at('gait', name, g[name])} is invalid: {len(g[name])} entries where phase has "
-                               f"{len(g['phase'])} (one value per phase)")
+            raise ProblemError(f"{at('gait', name, g[name])} is invalid: {len(g[name])} entries "
+                               f"where phase has {len(g['phase'])} (one value per phase)")
     torque = pair[0] == "tau1"
     values = np.array([g[pair[0]], g[pair[1]]], dtype=float)
-    return _Samples(np.array(g["phase"], dtype=float), values if torque else np.radians(values), torque,
+    return _Samples(np.array(g["phase"], dtype=float), values if torque else np.radians(values),
+                    torque,
                     lambda j: f"{at('gait', 'phase', g['phase'])} is invalid: entry {j}", pair)
 
 
 def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
-    """Phases in [0, 1) and values of one period: sorted, unique, a closing sample at phase 1 repeating the
-    sample at phase 0 dropped; anything else is a ProblemError naming the row."""
+    """Phases in [0, 1) and values of one period: sorted, unique, a closing sample at phase 1
+    repeating the sample at phase 0 dropped; anything else is a ProblemError naming the row."""
     t, v = s.phase, s.values
     for j in range(t.size):
         if not 0 <= t[j] <= 1:
-            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} outside [0, 1] (phases of one cycle)")
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} outside [0, 1] (phases of one "
+                               "cycle)")
         if j and not t[j] > t[j - 1]:
-            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be sorted "
-                               "and unique")
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: "
+                               "phases must be sorted and unique")
         if j and t[j] - t[j - 1] < MIN_PHASE_GAP and not (t[j] == 1.0 and j == t.size - 1):
-            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: phases must be at "
-                               f"least {MIN_PHASE_GAP:g} cycles apart (the interpolants divide by their differences)")
+            raise ProblemError(f"{s.where(j)}: phase {float(t[j])!r} after {float(t[j - 1])!r}: "
+                               f"phases must be at least {MIN_PHASE_GAP:g} cycles apart (the "
+                               "interpolants divide by their differences)")
     if t[-1] == 1.0:
         scale = max(float(np.max(np.abs(v))), np.finfo(float).tiny)
         gap = np.abs(v[:, -1] - v[:, 0])
         if t[0] != 0.0 or np.any(gap > CLOSING_RTOL * scale):
             first = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, 0]))
             last = ", ".join(f"{n} {float(a)!r}" for n, a in zip(s.names, v[:, -1]))
-            raise ProblemError(f"{s.where(t.size - 1)}: not periodic: the sample at phase 1 must repeat the sample at "
-                               f"phase 0 (phase {float(t[0])!r}: {first}; phase 1: {last}), or give phases in [0, 1) "
-                               "only")
+            raise ProblemError(f"{s.where(t.size - 1)}: not periodic: the sample at phase 1 must "
+                               f"repeat the sample at phase 0 (phase {float(t[0])!r}: {first}; "
+                               f"phase 1: {last}), or give phases in [0, 1) only")
         t, v = t[:-1], v[:, :-1]
     if t.size and t[0] + 1.0 - t[-1] < MIN_PHASE_GAP:
-        raise ProblemError(f"{s.where(t.size - 1)}: phase {float(t[-1])!r} is less than {MIN_PHASE_GAP:g} cycles "
-                           f"before phase {float(t[0])!r} of the next cycle: phases must be at least that far apart")
+        raise ProblemError(f"{s.where(t.size - 1)}: phase {float(t[-1])!r} is less than "
+                           f"{MIN_PHASE_GAP:g} cycles before phase {float(t[0])!r} of the next "
+                           "cycle: phases must be at least that far apart")
     cls, fewest = INTERPOLANTS[interpolation]
     if t.size > MAX_KNOTS:
         raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period, at most "
-                           f"{MAX_KNOTS}: each sample is work of the solvers in every cycle (a kink "
-                           "where the event-driven stepper stops, for linear interpolation)")
+                           f"{MAX_KNOTS}: each sample is work of the solvers in every cycle (a "
+                           "kink where the event-driven stepper stops, for linear interpolation)")
     if t.size < fewest:
         raise ProblemError(f"{s.where(t.size - 1)}: {t.size} samples in one period; interpolation "
                            f"{format_value(interpolation)} needs at least {fewest}")
@@ -202,7 +224,8 @@ def _periodic(s: _Samples, interpolation: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_angles(s: _Samples) -> None:
-    """Reference angles inside the geometry: each in (0, 360) deg, the limits of the harmonic keys."""
+    """Reference angles inside the geometry: each in (0, 360) deg, the limits of the harmonic
+    keys."""
     bad = np.argwhere(~((s.values > 0) & (s.values < 2 * math.pi)))
     if bad.size:
         i, j = (int(x) for x in bad[0])
@@ -221,8 +244,9 @@ def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> 
     else:
         samples = _inline(g, at)
     if samples.torque and drive != "torque":
-        raise ProblemError(f"{at('gait', 'drive', drive)} is invalid with torque samples ({', '.join(samples.names)}):"
-                           " prescribed angles need reference angles (phi1_ref, phi2_ref)")
+        raise ProblemError(f"{at('gait', 'drive', drive)} is invalid with torque samples "
+                           f"({', '.join(samples.names)}): prescribed angles need reference angles "
+                           "(phi1_ref, phi2_ref)")
     if not samples.torque:
         _check_angles(samples)
     t, v = _periodic(samples, g["interpolation"])
@@ -232,24 +256,27 @@ def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> 
     return GaitInput(signal, None, values)
 
 
-def _pressure(g: Mapping[str, Any], pressure: Mapping[str, Any], gravity: str, at: At) -> PressureReference:
-    """The reference angles of the pressure-driven robot: the ``[pressure]`` actuator at ``[gait] p0_bar``,
-    ``psi_deg`` (:func:`ocp_crawl.model.pressure.pressure_torque` with k (phi_ref - pi) the torque)."""
+def _pressure(g: Mapping[str, Any], pressure: Mapping[str, Any], gravity: str,
+              at: At) -> PressureReference:
+    """The reference angles of the pressure-driven robot: the ``[pressure]`` actuator at
+    ``[gait] p0_bar``, ``psi_deg`` (:func:`ocp_crawl.model.pressure.pressure_torque` with k
+    (phi_ref - pi) the torque)."""
     paper = pressure["form"] == "paper"
     rest = pressure.get("phi_rest_deg", FLAT_REST_DEG if paper else FITTED_REST_DEG[gravity])
-    amplitude = pressure["amplitude_bar"] if paper else None   # the raised sine has none: p0 is its peak
+    # the raised sine has none: p0 is its peak
+    amplitude = pressure["amplitude_bar"] if paper else None
     try:
         waveform = PressureWaveform(g["p0_bar"], math.radians(g["psi_deg"]), amplitude)
     except ValueError:
-        raise ProblemError(f"{at('gait', 'p0_bar', g['p0_bar'])} is invalid with [pressure] amplitude_bar = "
-                           f"{format_value(amplitude)}: the amplitude must be at most p0 (the pressure p0 - "
-                           "amplitude must not be negative)") from None
+        raise ProblemError(f"{at('gait', 'p0_bar', g['p0_bar'])} is invalid with [pressure] "
+                           f"amplitude_bar = {format_value(amplitude)}: the amplitude must be at "
+                           "most p0 (the pressure p0 - amplitude must not be negative)") from None
     bending = BendingMap(*(pressure[name] for name in ("a1", "a2", "b1", "b2")))
     return PressureReference(waveform, math.radians(rest), bending)
 
 
-def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path, pressure: Mapping[str, Any] | None = None,
-               gravity: str = "physical") -> GaitInput:
+def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path,
+               pressure: Mapping[str, Any] | None = None, gravity: str = "physical") -> GaitInput:
     """The signals of the validated ``[gait]`` values ``g`` (schema checked, defaults filled in).
 
     Parameters
@@ -270,12 +297,14 @@ def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path, pressure: Map
     Returns
     -------
     GaitInput
-        Reference angles [rad], the torques [N m] if the waveform gives them, the values (file resolved).
+        Reference angles [rad], the torques [N m] if the waveform gives them, the values (file
+        resolved).
 
     Raises
     ------
     ProblemError
-        A waveform that is not periodic, not finite, unsorted, outside the geometry or an unreadable file.
+        A waveform that is not periodic, not finite, unsorted, outside the geometry or an unreadable
+        file.
     """
     waveform = g["waveform"]
     if waveform == "samples":
@@ -287,28 +316,34 @@ def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path, pressure: Map
     if waveform == "pressure":
         return GaitInput(_pressure(g, pressure, gravity, at), None, dict(g))
     (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
-    gait = Harmonic.from_degrees(gamma1_deg=g1, gamma2_deg=g2, A1_deg=a1, A2_deg=a2, psi_deg=g["psi_deg"])
+    gait = Harmonic.from_degrees(gamma1_deg=g1, gamma2_deg=g2, A1_deg=a1, A2_deg=a2,
+                                 psi_deg=g["psi_deg"])
     return GaitInput(gait, None, dict(g))
 
 
-def samples_problem(problem: Mapping[str, Mapping[str, Any]], file: str, interpolation: str = "pchip") -> dict:
-    """A problem dict that drives ``problem``'s robot (and gravity convention) with the torques or reference
-    angles of the sample file ``file`` (the ``samples`` waveform, torque drive, default simulation options).
+def samples_problem(problem: Mapping[str, Mapping[str, Any]], file: str,
+                    interpolation: str = "pchip") -> dict:
+    """A problem dict that drives ``problem``'s robot (and gravity convention) with the torques or
+    reference angles of the sample file ``file`` (the ``samples`` waveform, torque drive, default
+    simulation options).
 
-    ``problem``: sections as ``Problem.to_dict()``; ``file``: the CSV file, relative to where the problem file
-    will be written; ``interpolation``: one of :data:`INTERPOLANTS`.  Returns the sections ``robot``, ``gait``
-    and ``model``.
+    ``problem``: sections as ``Problem.to_dict()``; ``file``: the CSV file, relative to where the
+    problem file will be written; ``interpolation``: one of :data:`INTERPOLANTS`.  Returns the
+    sections ``robot``, ``gait`` and ``model``.
     """
     if interpolation not in INTERPOLANTS:
-        raise ValueError(f"interpolation must be one of {tuple(INTERPOLANTS)}, got {interpolation!r}")
+        raise ValueError(f"interpolation must be one of {tuple(INTERPOLANTS)}, got "
+                         f"{interpolation!r}")
     return {"robot": dict(problem["robot"]),
-            "gait": {"drive": "torque", "waveform": "samples", "file": str(file), "interpolation": interpolation},
+            "gait": {"drive": "torque", "waveform": "samples", "file": str(file),
+                     "interpolation": interpolation},
             "model": dict(problem.get("model", {}))}
 
 
 def waveform_text(g: Mapping[str, Any]) -> str:
-    """One line describing a ``[gait]`` section's input: the harmonic keys in degrees (``gamma = 90 deg, ...``),
-    preceded by the waveform's name and its own settings for the other waveforms."""
+    """One line describing a ``[gait]`` section's input: the harmonic keys in degrees
+    (``gamma = 90 deg, ...``), preceded by the waveform's name and its own settings for the other
+    waveforms."""
     degrees = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in g.items() if k.endswith("_deg") and
                         isinstance(v, (int, float)))
     waveform = g.get("waveform", "harmonic")

@@ -80,7 +80,8 @@ class Work:
     seconds: float
     detail: str
     keys: tuple[str, ...] = ()
-    typical: float | None = None
+    # None stands for ``seconds``: replaced in __post_init__, a float from then on
+    typical: float = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if self.typical is None:
@@ -193,7 +194,7 @@ def sweep_work(problem, grid, jobs: int = 1) -> Work:
     """The work of a sweep of ``problem`` over ``grid`` (axis name -> values) on ``jobs`` workers:
     the points times the costliest point's :func:`simulation_work` over the axes that size a
     simulation ([simulation] keys, the drive, the waveform; the others at their first value)."""
-    from ocp_crawl.problem.schema import ProblemError
+    from ocp_crawl.problem.keys import ProblemError
 
     sizing = [k for k in grid
               if k.startswith("simulation.") or k in ("gait.drive", "gait.waveform")]

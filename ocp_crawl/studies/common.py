@@ -1,4 +1,5 @@
-"""What the paper's studies share: the paper's robot and gait, the grid evaluation, small grid helpers.
+"""What the paper's studies share: the paper's robot and gait, the grid evaluation, small grid
+helpers.
 
 Every grid is evaluated by :func:`ocp_crawl.sweep.run_sweep` (parallel workers, progress, an
 optional journal on disk) through :class:`SweepOptions`.  Failed points are data: each study keeps
@@ -50,7 +51,8 @@ class SweepOptions:
     out_dir: Path | None = None
     """if given, each sweep is journaled in ``out_dir/<name>`` (results.csv, settings.json)"""
     resume: bool = False
-    """reuse the finished points of an interrupted run in ``out_dir`` (else its sweeps are overwritten)"""
+    """reuse the finished points of an interrupted run in ``out_dir`` (else its sweeps are
+    overwritten)"""
     scheduler: str | None = None
     """Dask scheduler address or "local" (None: local worker processes)"""
 
@@ -60,17 +62,22 @@ class SweepOptions:
                              "and out_dir is None: give out_dir or drop resume")
 
     def run(self, problem: Problem, grid: Mapping[str, Any], name: str) -> SweepResult:
-        """Evaluate ``problem`` on ``grid`` ({SECTION.KEY: values}), journaled as ``out_dir/name`` if out_dir is set."""
+        """Evaluate ``problem`` on ``grid`` ({SECTION.KEY: values}), journaled as ``out_dir/name``
+        if out_dir is set."""
         out = None if self.out_dir is None else Path(self.out_dir) / name
-        return run_sweep(problem, grid, out_dir=out, jobs=self.jobs, resume=self.resume and out is not None,
-                         force=out is not None and not self.resume, progress=self.progress, scheduler=self.scheduler)
+        return run_sweep(problem, grid, out_dir=out, jobs=self.jobs,
+                         resume=self.resume and out is not None,
+                         force=out is not None and not self.resume, progress=self.progress,
+                         scheduler=self.scheduler)
 
 
 def base_problem(gravity: str = "physical", values: Mapping[str, Any] | None = None) -> Problem:
-    """The paper's gait (Table I robot; gamma 90, A 30, psi 45 deg; torque drive) in a gravity convention.
+    """The paper's gait (Table I robot; gamma 90, A 30, psi 45 deg; torque drive) in a gravity
+    convention.
 
     ``gravity``: "physical" or "paper"; ``values``: typed values by ``SECTION.KEY`` in the problem
-    files' units (e.g. ``{"robot.k": 0.2, "gait.A_deg": 20.0}``), set with :meth:`Problem.with_values`.
+    files' units (e.g. ``{"robot.k": 0.2, "gait.A_deg": 20.0}``), set with
+    :meth:`Problem.with_values`.
     """
     return paper_problem().with_values({"model.gravity": gravity, **(values or {})})
 
@@ -99,7 +106,8 @@ def outcome_runs(x, outcomes) -> list[tuple[str, float, float, int]]:
 
 
 def parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    """Maximum (x, y) of y(x) on a grid, refined by the parabola through the best point and its neighbours."""
+    """Maximum (x, y) of y(x) on a grid, refined by the parabola through the best point and its
+    neighbours."""
     ok = np.isfinite(y)
     if not ok.any():
         return float("nan"), float("nan")

@@ -1,8 +1,9 @@
-"""Studies of the gait's shape: one gait in detail (Fig. simu_conf, simu_forces), S over the psi-gamma
-plane (Fig. parametric) and the friction sensitivity over psi (Fig. d_mu).
+"""Studies of the gait's shape: one gait in detail (Fig. simu_conf, simu_forces), S over the
+psi-gamma plane (Fig. parametric) and the friction sensitivity over psi (Fig. d_mu).
 
-Single gaits call the solvers directly; grids go through :class:`~ocp_crawl.studies.common.SweepOptions`.
-S < 0 is progress towards foot 1 (psi > 0), see :mod:`ocp_crawl.studies.common`.
+Single gaits call the solvers directly; grids go through
+:class:`~ocp_crawl.studies.common.SweepOptions`.  S < 0 is progress towards foot 1 (psi > 0), see
+:mod:`ocp_crawl.studies.common`.
 """
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ import numpy as np
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.problem import run_problem
 from ocp_crawl.sim.result import CrawlResult
-from ocp_crawl.studies.common import (LOW_K_RATIO, PAPER_ROBOT, REALISTIC_K_RATIO, STUCK_TOL, SweepOptions,
-                                      base_problem, parabolic_max, status_counts)
+from ocp_crawl.studies.common import (LOW_K_RATIO, PAPER_ROBOT, REALISTIC_K_RATIO, STUCK_TOL,
+                                      SweepOptions, base_problem, parabolic_max, status_counts)
 
 # --------------------------------------------------------------------------------------------
 # Fig. simu_conf and simu_forces: one gait, prescribed angles vs torque drive
@@ -40,12 +41,14 @@ class GaitComparison:
     def S(self) -> dict[str, float]:
         """S [m] by run name (NaN for a failed run)."""
         out = {"prescribed": self.prescribed.S}
-        out.update({f"k={r:.3g}": res.S if res.success else math.nan for r, res in zip(self.k_ratios, self.torque)})
+        out.update({f"k={r:.3g}": res.S if res.success
+                    else math.nan for r, res in zip(self.k_ratios, self.torque)})
         return out
 
     @staticmethod
     def stick_fraction(res: CrawlResult) -> float:
-        """Fraction of the cycle in stick-stick (both feet fixed), from the events of the steady cycle."""
+        """Fraction of the cycle in stick-stick (both feet fixed), from the events of the steady
+        cycle."""
         if not res.success:
             return math.nan
         # an event at the end of the cycle is the one at its start, one period later
@@ -66,7 +69,8 @@ class GaitComparison:
 
     @staticmethod
     def force_jump(res: CrawlResult) -> float:
-        """Largest change of f_t [N] across an event (samples EVENT_SIDE either side): a discontinuity if large."""
+        """Largest change of f_t [N] across an event (samples EVENT_SIDE either side): a
+        discontinuity if large."""
         t, ft = np.asarray(res.t), np.asarray(res.f_t)
         if t.size < 2:
             return 0.0
@@ -85,10 +89,12 @@ def _dense(run, t_grid: np.ndarray) -> CrawlResult:
     if not first.success:
         return first
     ev = np.array([e.t - first.t0 for e in first.steady_events()], float)
-    return run(np.unique(np.clip(np.concatenate([t_grid, ev - EVENT_SIDE, ev + EVENT_SIDE]), 0.0, 1.0)))
+    return run(np.unique(np.clip(np.concatenate([t_grid, ev - EVENT_SIDE, ev + EVENT_SIDE]), 0.0,
+                                 1.0)))
 
 
-def gait_comparison(gravity: str = "physical", k_ratios: Sequence[float] = (REALISTIC_K_RATIO, LOW_K_RATIO),
+def gait_comparison(gravity: str = "physical",
+                    k_ratios: Sequence[float] = (REALISTIC_K_RATIO, LOW_K_RATIO),
                     samples: int = 401) -> GaitComparison:
     """Fig. simu_conf / simu_forces: gamma 90, A 30, psi 45 deg, prescribed angles vs torque drive.
 
@@ -127,7 +133,8 @@ class PsiGammaMap:
 
     @property
     def gamma_opt(self) -> np.ndarray:
-        """Nominal angle of largest progress at each psi [deg] (parabolic refinement; NaN if none moves)."""
+        """Nominal angle of largest progress at each psi [deg] (parabolic refinement; NaN if none
+        moves)."""
         out = np.full(len(self.psi_deg), np.nan)
         for j in range(len(self.psi_deg)):
             col = self.progress[:, j]
@@ -147,7 +154,8 @@ class PsiGammaMap:
         return status_counts(self.status)
 
 
-def psi_gamma_map(gravity: str = "physical", psi_deg=tuple(range(0, 181, 15)), gamma_deg=tuple(range(60, 151, 10)),
+def psi_gamma_map(gravity: str = "physical", psi_deg=tuple(range(0, 181, 15)),
+                  gamma_deg=tuple(range(60, 151, 10)),
                   A_deg: float = 30.0, sweep: SweepOptions = SweepOptions()) -> PsiGammaMap:
     """Fig. parametric: S over the psi-gamma plane for amplitude A (paper: A = 30 deg).
 
@@ -155,10 +163,11 @@ def psi_gamma_map(gravity: str = "physical", psi_deg=tuple(range(0, 181, 15)), g
     amplitude [deg]; ``sweep``: how the grid is evaluated.  Returns a :class:`PsiGammaMap`.
     """
     res = sweep.run(base_problem(gravity, {"gait.A_deg": float(A_deg)}),
-                    {"gait.gamma_deg": np.asarray(gamma_deg, float), "gait.psi_deg": np.asarray(psi_deg, float)},
+                    {"gait.gamma_deg": np.asarray(gamma_deg, float),
+                     "gait.psi_deg": np.asarray(psi_deg, float)},
                     f"parametric_{gravity}")
-    return PsiGammaMap(gravity, float(A_deg), res.axes["gait.gamma_deg"], res.axes["gait.psi_deg"], res.array("S"),
-                       res.status_array())
+    return PsiGammaMap(gravity, float(A_deg), res.axes["gait.gamma_deg"], res.axes["gait.psi_deg"],
+                       res.array("S"), res.status_array())
 
 
 # --------------------------------------------------------------------------------------------
@@ -166,7 +175,8 @@ def psi_gamma_map(gravity: str = "physical", psi_deg=tuple(range(0, 181, 15)), g
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class FrictionBand:
-    """S over psi for friction ratios mu1/mu2 in [1 - eps, 1 + eps]; arrays shaped (len(ratios), len(psi_deg)).
+    """S over psi for friction ratios mu1/mu2 in [1 - eps, 1 + eps]; arrays shaped (len(ratios),
+    len(psi_deg)).
 
     The ratio is varied at a fixed geometric mean sqrt(mu1 mu2) = mu (Table I), so that only the
     asymmetry between the feet changes, not the overall friction level.
@@ -208,7 +218,8 @@ class FrictionBand:
 
     @property
     def psi_opt_negative(self) -> tuple[float, float]:
-        """(psi [deg] in [-180, 0) of largest average progress along +x, S [m]): the mirror of psi_opt."""
+        """(psi [deg] in [-180, 0) of largest average progress along +x, S [m]): the mirror of
+        psi_opt."""
         neg = self.psi_deg < 0
         return parabolic_max(self.psi_deg[neg], self.average[neg])
 
@@ -229,13 +240,15 @@ class FrictionBand:
 
 def friction_band(gravity: str = "physical", psi_deg=tuple(range(-180, 181, 15)), eps: float = 0.1,
                   n_ratios: int = 5, sweep: SweepOptions = SweepOptions()) -> FrictionBand:
-    """Fig. d_mu: S against psi for mu1/mu2 = 1 - eps ... 1 + eps (``n_ratios`` values, odd, so 1 is one).
+    """Fig. d_mu: S against psi for mu1/mu2 = 1 - eps ... 1 + eps (``n_ratios`` values, odd, so 1 is
+    one).
 
     ``gravity``: "physical" or "paper"; ``psi_deg``: phase differences [deg], both signs allowed;
     ``sweep``: how the grids are evaluated.  Returns a :class:`FrictionBand`.
     """
     if not (isinstance(n_ratios, int) and n_ratios >= 1 and n_ratios % 2 == 1):
-        raise ValueError(f"n_ratios must be an odd integer >= 1 (so that mu1 = mu2 is included), got {n_ratios!r}")
+        raise ValueError("n_ratios must be an odd integer >= 1 (so that mu1 = mu2 is included), "
+                         f"got {n_ratios!r}")
     if not 0 <= eps < 1:
         raise ValueError(f"eps must be in [0, 1), got {eps!r}")
     ratios = np.linspace(1.0 - eps, 1.0 + eps, n_ratios) if n_ratios > 1 else np.ones(1)
@@ -243,7 +256,8 @@ def friction_band(gravity: str = "physical", psi_deg=tuple(range(-180, 181, 15))
     rows, status = [], []
     psi = np.asarray(psi_deg, float)
     for i, r in enumerate(ratios):
-        base = base_problem(gravity, {"robot.mu1": mu * math.sqrt(r), "robot.mu2": mu / math.sqrt(r)})
+        base = base_problem(gravity,
+                            {"robot.mu1": mu * math.sqrt(r), "robot.mu2": mu / math.sqrt(r)})
         res = sweep.run(base, {"gait.psi_deg": psi}, f"d_mu_{gravity}_ratio{i}")
         rows.append(res.array("S"))
         status.append(res.status_array())

@@ -9,8 +9,8 @@ by a coarse grid, and reported as the relative error ours/paper - 1 per figure: 
 
 CoT+ is ill-conditioned near the friction threshold: a published point whose CoT+ changes by more
 than :data:`ILL_CONDITIONED_PER_DEG` per degree of amplitude (central difference of +-
-:data:`SLOPE_STEP_DEG`) may instead be matched by an amplitude within :data:`MATCH_WINDOW_DEG` of the
-published one: :func:`amplitude_match` finds it with a root bracket.
+:data:`SLOPE_STEP_DEG`) may instead be matched by an amplitude within :data:`MATCH_WINDOW_DEG` of
+the published one: :func:`amplitude_match` finds it with a root bracket.
 """
 from __future__ import annotations
 
@@ -37,8 +37,9 @@ MATCH_WINDOW_DEG = 0.2
 SLOPE_STEP_DEG = 0.1
 #: the columns of ``fig_cot_vs_amplitude.csv`` in the order of COT_K_RATIOS
 COT_COLUMNS = ("CoT_plus_large_k", "CoT_plus_realistic_k", "CoT_plus_low_k")
-#: phase difference [deg] with which the paper's low-stiffness CoT+ curve was computed, inferred from its 30
-#: points (least squares with k = 0.3 M g L: 42.03 deg; the paper states none, the other two curves are at 45)
+#: phase difference [deg] with which the paper's low-stiffness CoT+ curve was computed, inferred
+#: from its 30 points (least squares with k = 0.3 M g L: 42.03 deg; the paper states none, the other
+#: two curves are at 45)
 LOW_K_PAPER_PSI_DEG = 42.0
 #: the paper's gait phase difference [deg]
 PAPER_PSI_DEG = 45.0
@@ -92,25 +93,32 @@ class PaperCurve:
 
     def summary(self) -> dict:
         w, at = self.worst
-        return {"label": self.label, "x": self.x_name, "points": int(self.x.size), "median_abs_rel": self.median,
-                "worst_rel": w, "worst_at": at, "beyond_2pc": self.beyond(COT_TOL), "missing": self.missing}
+        return {"label": self.label, "x": self.x_name, "points": int(self.x.size),
+                "median_abs_rel": self.median,
+                "worst_rel": w, "worst_at": at, "beyond_2pc": self.beyond(COT_TOL),
+                "missing": self.missing}
 
 
-def cot_at(gravity: str, k_ratio: float, A_deg: float, psi_deg: float = PAPER_PSI_DEG) -> tuple[float, str]:
-    """CoT+ [-] of the paper's gait (gamma 90 deg, phase difference ``psi_deg`` [deg]) at k/(M g L) = ``k_ratio``
-    and amplitude ``A_deg`` [deg], and the run's status (CoT+ NaN unless the run succeeds and the robot moves)."""
-    r = run_problem(base_problem(gravity, {"robot.k": float(k_ratio * PAPER_ROBOT.MgL), "gait.A_deg": float(A_deg),
-                                           "gait.psi_deg": float(psi_deg)}))
+def cot_at(gravity: str, k_ratio: float, A_deg: float,
+           psi_deg: float = PAPER_PSI_DEG) -> tuple[float, str]:
+    """CoT+ [-] of the paper's gait (gamma 90 deg, phase difference ``psi_deg`` [deg]) at k/(M g
+    L) = ``k_ratio`` and amplitude ``A_deg`` [deg], and the run's status (CoT+ NaN unless the run
+    succeeds and the robot moves)."""
+    r = run_problem(base_problem(gravity,
+                                 {"robot.k": float(k_ratio * PAPER_ROBOT.MgL),
+                                  "gait.A_deg": float(A_deg), "gait.psi_deg": float(psi_deg)}))
     ok = r.status_name == SUCCESS and math.isfinite(r.CoT_plus)
     return (float(r.CoT_plus) if ok else math.nan), r.status_name
 
 
 def cot_curves(gravity: str = "paper") -> list[PaperCurve]:
-    """CoT+ at every published point of Fig. CoT, one :class:`PaperCurve` per stiffness (``gravity``:
-    "paper" or "physical"); in the paper's convention also the low-stiffness curve at the inferred
-    :data:`LOW_K_PAPER_PSI_DEG` (key ``cot_low_psi<deg>``)."""
+    """CoT+ at every published point of Fig. CoT, one :class:`PaperCurve` per stiffness
+    (``gravity``: "paper" or "physical"); in the paper's convention also the low-stiffness curve at
+    the inferred :data:`LOW_K_PAPER_PSI_DEG` (key ``cot_low_psi<deg>``)."""
     data = read_paper_csv("fig_cot_vs_amplitude.csv")
-    rows = [(ratio, label, col, PAPER_PSI_DEG) for ratio, label, col in zip(COT_K_RATIOS, COT_K_LABELS, COT_COLUMNS)]
+    rows = [(ratio, label, col, PAPER_PSI_DEG) for ratio, label, col in zip(COT_K_RATIOS,
+                                                                            COT_K_LABELS,
+                                                                            COT_COLUMNS)]
     if gravity == "paper":
         rows.append((COT_K_RATIOS[2], COT_K_LABELS[2], COT_COLUMNS[2], LOW_K_PAPER_PSI_DEG))
     out = []
@@ -120,14 +128,17 @@ def cot_curves(gravity: str = "paper") -> list[PaperCurve]:
         runs = [cot_at(gravity, ratio, a, psi) for a in A]
         tag = "" if psi == PAPER_PSI_DEG else f"_psi{psi:g}"
         how = "" if psi == PAPER_PSI_DEG else f", psi {psi:g} deg (inferred)"
-        out.append(PaperCurve(f"cot_{label}{tag}", f"CoT+ {label} k ({ratio:.3g} M g L){how}", "A [deg]", A, paper,
-                              np.array([r[0] for r in runs]), tuple(r[1] for r in runs), ratio, psi))
+        out.append(PaperCurve(f"cot_{label}{tag}", f"CoT+ {label} k ({ratio:.3g} M g L){how}",
+                              "A [deg]", A, paper,
+                              np.array([r[0] for r in runs]), tuple(r[1] for r in runs), ratio,
+                              psi))
     return out
 
 
 def relative_slope(gravity: str, k_ratio: float, A_deg: float, h: float = SLOPE_STEP_DEG,
                    psi_deg: float = PAPER_PSI_DEG) -> float:
-    """|d CoT+/d A| / CoT+ [1/deg] at ``A_deg`` by a central difference of +-h [deg] (NaN if a run fails)."""
+    """|d CoT+/d A| / CoT+ [1/deg] at ``A_deg`` by a central difference of +-h [deg] (NaN if a run
+    fails)."""
     lo, _ = cot_at(gravity, k_ratio, A_deg - h, psi_deg)
     mid, _ = cot_at(gravity, k_ratio, A_deg, psi_deg)
     hi, _ = cot_at(gravity, k_ratio, A_deg + h, psi_deg)
@@ -136,20 +147,22 @@ def relative_slope(gravity: str, k_ratio: float, A_deg: float, h: float = SLOPE_
 
 def amplitude_match(gravity: str, k_ratio: float, A_deg: float, target: float,
                     window: float = MATCH_WINDOW_DEG, psi_deg: float = PAPER_PSI_DEG) -> float:
-    """An amplitude [deg] within +-``window`` of ``A_deg`` at which CoT+ equals ``target`` (brentq on a
-    bracket; the window is split in four so that a sign change inside it is found); NaN if none."""
+    """An amplitude [deg] within +-``window`` of ``A_deg`` at which CoT+ equals ``target`` (brentq
+    on a bracket; the window is split in four so that a sign change inside it is found); NaN if
+    none."""
     edges = np.linspace(A_deg - window, A_deg + window, 5)
     vals = [cot_at(gravity, k_ratio, a, psi_deg)[0] - target for a in edges]
     for a, b, fa, fb in zip(edges[:-1], edges[1:], vals[:-1], vals[1:]):
         if np.isfinite(fa) and np.isfinite(fb) and fa * fb <= 0:
-            return float(brentq(lambda x: cot_at(gravity, k_ratio, x, psi_deg)[0] - target, a, b, xtol=1e-4))
+            return float(brentq(lambda x: cot_at(gravity, k_ratio, x, psi_deg)[0] - target, a, b,
+                                xtol=1e-4))
     return math.nan
 
 
 def point_verdicts(curve: PaperCurve, gravity: str) -> list[dict]:
-    """For each published point of a CoT+ curve beyond :data:`COT_TOL`: its conditioning and, if ill-conditioned,
-    the matching amplitude within the window (runs at the curve's ``k_ratio`` and ``psi_deg``).  Returns dicts
-    (A, paper, ours, rel, slope, match_A, verdict)."""
+    """For each published point of a CoT+ curve beyond :data:`COT_TOL`: its conditioning and, if
+    ill-conditioned, the matching amplitude within the window (runs at the curve's ``k_ratio`` and
+    ``psi_deg``).  Returns dicts (A, paper, ours, rel, slope, match_A, verdict)."""
     k_ratio, psi = curve.k_ratio, curve.psi_deg
     rows = []
     for A, p, o, r in zip(curve.x, curve.paper, curve.ours, curve.rel):
@@ -159,34 +172,38 @@ def point_verdicts(curve: PaperCurve, gravity: str) -> list[dict]:
         ill = bool(slope > ILL_CONDITIONED_PER_DEG)
         match = amplitude_match(gravity, k_ratio, A, p, psi_deg=psi) if ill else math.nan
         verdict = ("matched at A " + f"{match:.3f} deg" if math.isfinite(match) else
-                   ("ill-conditioned, no match within " + f"{MATCH_WINDOW_DEG:g} deg" if ill else "beyond 2 %"))
-        rows.append({"A_deg": float(A), "paper": float(p), "ours": float(o), "rel": float(r), "slope_per_deg": slope,
-                     "match_A_deg": match, "verdict": verdict})
+                   ("ill-conditioned, no match within " + f"{MATCH_WINDOW_DEG:g} deg" if ill
+                    else "beyond 2 %"))
+        rows.append({"A_deg": float(A), "paper": float(p), "ours": float(o), "rel": float(r),
+                     "slope_per_deg": slope, "match_A_deg": match, "verdict": verdict})
     return rows
 
 
-def pressure_points(gravity: str, phi_rest_deg: float, amplitudes: tuple[float, float] | None = None,
+def pressure_points(gravity: str, phi_rest_deg: float,
+                    amplitudes: tuple[float, float] | None = None,
                     tag: str = "") -> list[PaperCurve]:
-    """S/max S of the pressure-driven robot (rest angle ``phi_rest_deg`` [deg]) at every point of the paper's
-    simulated curves of Fig. exp (:func:`~ocp_crawl.studies.pressure.evaluate_fit` on the paper's grids).
+    """S/max S of the pressure-driven robot (rest angle ``phi_rest_deg`` [deg]) at every point of
+    the paper's simulated curves of Fig. exp (:func:`~ocp_crawl.studies.pressure.evaluate_fit` on
+    the paper's grids).
 
-    ``amplitudes``: None for the raised sine, else the pressure amplitudes [bar] of the paper's form (ref)
-    on the p0 and the psi curve; ``tag``: appended to the curves' keys and labels.
+    ``amplitudes``: None for the raised sine, else the pressure amplitudes [bar] of the paper's form
+    (ref) on the p0 and the psi curve; ``tag``: appended to the curves' keys and labels.
     """
     a0, a1 = (None, None) if amplitudes is None else amplitudes
     fit = evaluate_fit(phi_rest_deg, gravity, amplitude_p0_bar=a0, amplitude_psi_bar=a1)
     c = fit.curves
     how = (f", raised sine, rest {phi_rest_deg:g} deg" if amplitudes is None else
            f", form (ref), A_p {a0:g}/{a1:.3g} bar")
-    return [PaperCurve("exp_p0" + tag, "S/S(1.7 bar) against p0" + how, "p0 [bar]", c.p0_bar, fit.ref_p0,
-                       c.progress_p0, c.status_p0),
-            PaperCurve("exp_psi" + tag, "S/max S against psi" + how, "psi [deg]", c.psi_deg, fit.ref_psi,
-                       c.progress_psi, c.status_psi)]
+    return [PaperCurve("exp_p0" + tag, "S/S(1.7 bar) against p0" + how, "p0 [bar]", c.p0_bar,
+                       fit.ref_p0, c.progress_p0, c.status_p0),
+            PaperCurve("exp_psi" + tag, "S/max S against psi" + how, "psi [deg]", c.psi_deg,
+                       fit.ref_psi, c.progress_psi, c.status_psi)]
 
 
 @dataclass(frozen=True)
 class PaperPoints:
-    """Every published curve in one gravity convention, with the verdicts of the CoT+ points beyond 2 %."""
+    """Every published curve in one gravity convention, with the verdicts of the CoT+ points beyond
+    2 %."""
 
     gravity: str
     curves: tuple[PaperCurve, ...]
@@ -194,16 +211,18 @@ class PaperPoints:
     """CoT+ curve key -> :func:`point_verdicts`"""
 
     def numbers(self) -> dict:
-        return {c.key: {**c.summary(), **({"points_beyond_2pc": self.verdicts[c.key]} if c.key in self.verdicts
-                                          else {})} for c in self.curves}
+        return {c.key: {**c.summary(),
+                        **({"points_beyond_2pc": self.verdicts[c.key]} if c.key in self.verdicts
+                           else {})} for c in self.curves}
 
 
 def paper_points(gravity: str = "paper", psi_amplitude_bar: float | None = None) -> PaperPoints:
-    """Our values at every published point of Figs. CoT and exp in ``gravity`` ("paper" or "physical").
+    """Our values at every published point of Figs. CoT and exp in ``gravity`` ("paper" or
+    "physical").
 
-    Fig. exp twice: with the paper's form (ref) of the pressure input (flat rest, amplitude 0.4 bar on the
-    p0 curve, ``psi_amplitude_bar`` [bar] on the psi curve, None: the stored fit), and with the raised
-    sine and the stored fitted rest angle.  Some tens of seconds.
+    Fig. exp twice: with the paper's form (ref) of the pressure input (flat rest, amplitude 0.4 bar
+    on the p0 curve, ``psi_amplitude_bar`` [bar] on the psi curve, None: the stored fit), and with
+    the raised sine and the stored fitted rest angle.  Some tens of seconds.
     """
     cot = cot_curves(gravity)
     # the verdicts are for the paper's convention, in which its figures were computed
@@ -215,35 +234,39 @@ def paper_points(gravity: str = "paper", psi_amplitude_bar: float | None = None)
 
 
 def markdown(points: dict[str, PaperPoints]) -> str:
-    """The report section: per figure and convention the median and largest relative error at the published
-    points, and each CoT+ point beyond 2 % with its conditioning and amplitude match."""
+    """The report section: per figure and convention the median and largest relative error at the
+    published points, and each CoT+ point beyond 2 % with its conditioning and amplitude match."""
     out = ["\n## Every published point\n",
-           "Each point the paper publishes (Figs. CoT and exp, `ocp_crawl/data/paper`) evaluated at its own "
-           "abscissa, in both gravity conventions: relative error ours/paper - 1 (S/max S for Fig. exp).\n"]
+           "Each point the paper publishes (Figs. CoT and exp, `ocp_crawl/data/paper`) evaluated "
+           "at its own abscissa, in both gravity conventions: relative error ours/paper - 1 (S/max "
+           "S for Fig. exp).\n"]
     rows = []
     for g, pts in points.items():
         for c in pts.curves:
             w, at = c.worst
             unit = c.x_name.split()[-1].strip("[]")
-            rows.append([g, c.label, str(c.x.size), _pc(c.median), _pc(w, "+"), f"{num(at, '.4g')} {unit}",
-                         str(c.beyond(COT_TOL)), str(c.missing)])
-    out.append(table(["convention", "curve", "points", "median abs. rel.", "worst rel.", "at", "beyond 2 %", "missing"],
+            rows.append([g, c.label, str(c.x.size), _pc(c.median), _pc(w, "+"),
+                         f"{num(at, '.4g')} {unit}", str(c.beyond(COT_TOL)), str(c.missing)])
+    out.append(table(["convention", "curve", "points", "median abs. rel.", "worst rel.", "at",
+                      "beyond 2 %", "missing"],
                      rows))
     for g, pts in points.items():
         for key, rows_v in pts.verdicts.items():
             if not rows_v:
                 continue
-            out.append(f"\nCoT+ points of `{key}` beyond 2 % ({g} convention; ill-conditioned: more than "
-                       f"{ILL_CONDITIONED_PER_DEG:.0%} change per degree; matched: some amplitude within "
-                       f"+-{MATCH_WINDOW_DEG:g} deg gives the published value):\n")
+            out.append(f"\nCoT+ points of `{key}` beyond 2 % ({g} convention; ill-conditioned: "
+                       f"more than {ILL_CONDITIONED_PER_DEG:.0%} change per degree; matched: some "
+                       f"amplitude within +-{MATCH_WINDOW_DEG:g} deg gives the published value):\n")
             out.append(table(["A [deg]", "paper", "ours", "rel", "change per deg", "verdict"],
-                             [[f"{r['A_deg']:.2f}", f"{r['paper']:.4g}", num(r["ours"]), _pc(r["rel"], "+"),
+                             [[f"{r['A_deg']:.2f}", f"{r['paper']:.4g}", num(r["ours"]),
+                               _pc(r["rel"], "+"),
                                _pc(r["slope_per_deg"]), r["verdict"]] for r in rows_v]))
     out.append(FINDINGS)
     return "\n".join(out) + "\n"
 
 
-#: what the published points tell about the paper's inputs (measured at every published point; paper's convention)
+#: what the published points tell about the paper's inputs (measured at every published point;
+#: paper's convention)
 FINDINGS = """
 What the differences are (measured at every published point, paper's convention):
 

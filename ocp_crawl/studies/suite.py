@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from ocp_crawl.io.paper_data import read_paper_csv
 from ocp_crawl.studies.common import SweepOptions
-from ocp_crawl.studies.cot import AmplitudeStudy, HigherFriction, StiffnessStudy, amplitude_study, higher_friction, stiffness_study
-from ocp_crawl.studies.gaits import FrictionBand, GaitComparison, PsiGammaMap, friction_band, gait_comparison, psi_gamma_map
+from ocp_crawl.studies.cot import (AmplitudeStudy, HigherFriction, StiffnessStudy, amplitude_study,
+                                   higher_friction, stiffness_study)
+from ocp_crawl.studies.gaits import (FrictionBand, GaitComparison, PsiGammaMap, friction_band,
+                                     gait_comparison, psi_gamma_map)
 from ocp_crawl.studies.pressure import PressureStudy, paper_grids, pressure_study
 
 
@@ -61,9 +63,12 @@ class Grids:
             "friction band: psi [deg] x mu1/mu2": f"{axis(self.band_psi)} x {self.band_ratios}",
             "amplitude: A [deg] x 3 stiffnesses": axis(self.amplitude_A),
             "higher friction: psi [deg] x 4 factors": axis(self.friction_psi),
-            "stiffness: k/(M g L), bisection steps": f"{axis(self.stiffness_k)}, {self.bisection_steps}",
-            "pressure: fit / p0 [bar] / psi [deg]": f"{'fit' if self.pressure_fit else 'stored fit'} / "
-                                                     f"{axis(self.pressure_p0)} / {axis(self.pressure_psi)}",
+            "stiffness: k/(M g L), bisection steps": f"{axis(self.stiffness_k)}, "
+                                                     f"{self.bisection_steps}",
+            "pressure: fit / p0 [bar] / psi "
+            "[deg]": f"{'fit' if self.pressure_fit else 'stored fit'} / "
+                                                     f"{axis(self.pressure_p0)} / "
+                                                     f"{axis(self.pressure_psi)}",
         }
 
 
@@ -77,21 +82,27 @@ def _grids() -> dict[str, Grids]:
     small = [0, 1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60]
     return {
         "quick": Grids(
-            gait_samples=201, map_psi=np.arange(0.0, 181.0, 30.0), map_gamma=np.arange(70.0, 151.0, 20.0),
-            band_psi=_sym([0, 5, 15, 30, 45, 60, 90, 135, 180]), band_ratios=3, amplitude_A=A[::6].copy(),
+            gait_samples=201, map_psi=np.arange(0.0, 181.0, 30.0),
+            map_gamma=np.arange(70.0, 151.0, 20.0),
+            band_psi=_sym([0, 5, 15, 30, 45, 60, 90, 135, 180]), band_ratios=3,
+            amplitude_A=A[::6].copy(),
             friction_psi=np.array([0.0, 10, 30, 60, 90, 120, 150, 165, 175, 180]),
             stiffness_k=np.geomspace(0.05, 5.0, 10), bisection_steps=6,
-            pressure_fit=False, pressure_p0=p0[[0, 6, 13, 18, 26]], pressure_psi=psi[[0, 1, 2, 3, 5, 12, 24, 36, 48]]),
+            pressure_fit=False, pressure_p0=p0[[0, 6, 13, 18, 26]],
+            pressure_psi=psi[[0, 1, 2, 3, 5, 12, 24, 36, 48]]),
         "full": Grids(
-            gait_samples=601, map_psi=np.arange(0.0, 181.0, 5.0), map_gamma=np.arange(50.0, 151.0, 5.0),
+            gait_samples=601, map_psi=np.arange(0.0, 181.0, 5.0),
+            map_gamma=np.arange(50.0, 151.0, 5.0),
             band_psi=_sym(small + list(range(70, 181, 10))), band_ratios=9, amplitude_A=A.copy(),
             friction_psi=np.concatenate([np.arange(0.0, 150.0, 5.0), np.arange(150.0, 181.0, 2.5)]),
-            stiffness_k=np.unique(np.concatenate([np.geomspace(0.03, 10.0, 36), np.arange(0.06, 0.2, 0.01)])),
+            stiffness_k=np.unique(np.concatenate([np.geomspace(0.03, 10.0, 36),
+                                                  np.arange(0.06, 0.2, 0.01)])),
             bisection_steps=14, pressure_fit=True, pressure_p0=None, pressure_psi=None),
     }
 
 
-#: the one table of grid sizes: "quick" (coarse, for tests and a first look) and "full" (the default)
+#: the one table of grid sizes: "quick" (coarse, for tests and a first look) and "full" (the
+#: default)
 GRIDS: dict[str, Grids] = _grids()
 
 
@@ -123,19 +134,24 @@ def run_studies(gravity: str, grids: Grids, sweep: SweepOptions = SweepOptions()
     """
     say = log or (lambda msg: None)
     elapsed: dict[str, float] = {}
-    out: dict[str, object] = {}
+    out: dict[str, Any] = {}  # name -> that study's result (a field of StudySet)
     steps = (
         ("gait", lambda: gait_comparison(gravity=gravity, samples=grids.gait_samples)),
-        ("parametric", lambda: psi_gamma_map(gravity=gravity, psi_deg=grids.map_psi, gamma_deg=grids.map_gamma,
-                                             sweep=sweep)),
-        ("band", lambda: friction_band(gravity=gravity, psi_deg=grids.band_psi, n_ratios=grids.band_ratios,
-                                       sweep=sweep)),
-        ("amplitude", lambda: amplitude_study(gravity=gravity, A_deg=grids.amplitude_A, sweep=sweep)),
-        ("friction", lambda: higher_friction(gravity=gravity, psi_deg=grids.friction_psi, sweep=sweep)),
+        ("parametric",
+         lambda: psi_gamma_map(gravity=gravity, psi_deg=grids.map_psi, gamma_deg=grids.map_gamma,
+                               sweep=sweep)),
+        ("band",
+         lambda: friction_band(gravity=gravity, psi_deg=grids.band_psi, n_ratios=grids.band_ratios,
+                               sweep=sweep)),
+        ("amplitude",
+         lambda: amplitude_study(gravity=gravity, A_deg=grids.amplitude_A, sweep=sweep)),
+        ("friction",
+         lambda: higher_friction(gravity=gravity, psi_deg=grids.friction_psi, sweep=sweep)),
         ("stiffness", lambda: stiffness_study(gravity=gravity, k_ratios=grids.stiffness_k,
                                               bisection_steps=grids.bisection_steps, sweep=sweep)),
-        ("pressure", lambda: pressure_study(gravity=gravity, fit=grids.pressure_fit, p0_bar=grids.pressure_p0,
-                                            psi_deg=grids.pressure_psi, compare_flat=True)),
+        ("pressure",
+         lambda: pressure_study(gravity=gravity, fit=grids.pressure_fit, p0_bar=grids.pressure_p0,
+                                psi_deg=grids.pressure_psi, compare_flat=True)),
     )
     for name, run in steps:
         t = time.perf_counter()

@@ -8,8 +8,8 @@ from ocp_crawl.io import units
 
 
 def num(x: float, fmt: str = ".3f") -> str:
-    """A number, or "n/a" when it could not be computed (e.g. the normalising run failed); a value that
-    rounds to zero prints without a sign (never "-0.000")."""
+    """A number, or "n/a" when it could not be computed (e.g. the normalising run failed); a value
+    that rounds to zero prints without a sign (never "-0.000")."""
     x = finite_or_none(x)
     if x is None:
         return "n/a"
@@ -19,7 +19,8 @@ def num(x: float, fmt: str = ".3f") -> str:
 
 
 def dec(x: float, decimals: int = 2) -> str:
-    """A number with ``decimals`` decimals for a table cell, "-" when it is missing; zero never prints as -0.00."""
+    """A number with ``decimals`` decimals for a table cell, "-" when it is missing; zero never
+    prints as -0.00."""
     return units.fixed(x, decimals)
 
 
@@ -31,7 +32,8 @@ def threshold_text(k_ratio: float, digits: int = 4) -> str:
 def rel(ours: float, paper: float) -> str:
     """ours/paper - 1, or "-" where the paper's value is too small for a ratio to mean anything."""
     # rounded first (+ 0.0): a difference below 0.05 % prints as +0.0%, never -0.0%
-    return f"{round(ours / paper - 1, 3) + 0.0:+.1%}" if np.isfinite(ours) and abs(paper) >= 0.05 else "-"
+    return (f"{round(ours / paper - 1, 3) + 0.0:+.1%}" if np.isfinite(ours) and abs(paper) >= 0.05
+            else "-")
 
 
 def fmt_mm(S: float) -> str:
@@ -40,8 +42,10 @@ def fmt_mm(S: float) -> str:
 
 
 def runs_text(runs, var: str) -> str:
-    """Outcome runs (from :func:`~ocp_crawl.studies.common.outcome_runs`) as "name for var = a..b; ..."."""
-    return "; ".join(f"{name} for {var} = {a:.3g}" + (f"..{b:.3g}" if b != a else "") for name, a, b, _ in runs)
+    """Outcome runs (from :func:`~ocp_crawl.studies.common.outcome_runs`) as "name for var = a..b;
+    ..."."""
+    return "; ".join(f"{name} for {var} = {a:.3g}"
+                     + (f"..{b:.3g}" if b != a else "") for name, a, b, _ in runs)
 
 
 def _cell(text) -> str:
@@ -50,7 +54,8 @@ def _cell(text) -> str:
 
 
 def table(header: list[str], rows: list[list[str]]) -> str:
-    """A markdown table, a blank line before it; a "|" in the header or a cell is escaped ("\\|")."""
+    """A markdown table, a blank line before it; a "|" in the header or a cell is escaped
+    ("\\|")."""
     lines = ["", "| " + " | ".join(_cell(h) for h in header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(_cell(c) for c in r) + " |" for r in rows]
     return "\n".join(lines)

@@ -1,4 +1,5 @@
-"""Parameter sweeps: grids, executors (serial, process pool, Dask), the journal store and SweepResult."""
+"""Parameter sweeps: grids, executors (serial, process pool, Dask), the journal store and
+SweepResult."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -15,8 +16,9 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "JOURNAL_FILE", "RESULTS_FILE", "SETTINGS_FILE", "SUCCESS", "SUMMARY_FILE", "SweepError", "SweepFailed",
-    "SweepResult", "SweepSettings", "check_some_point_valid", "default_jobs", "grid_from_specs", "normalize_grid",
-    "parse_grid", "run_sweep",
+    "JOURNAL_FILE", "RESULTS_FILE", "SETTINGS_FILE", "SUCCESS", "SUMMARY_FILE", "SweepError",
+    "SweepFailed",
+    "SweepResult", "SweepSettings", "check_some_point_valid", "default_jobs", "grid_from_specs",
+    "normalize_grid", "parse_grid", "run_sweep",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,4 +1,5 @@
-"""CSV cells of the sweep's files: exact round trip (floats by repr), so a resumed sweep writes the same file."""
+"""CSV cells of the sweep's files: exact round trip (floats by repr), so a resumed sweep writes the
+same file."""
 from __future__ import annotations
 
 import csv
@@ -16,7 +17,8 @@ from ocp_crawl.sweep.grid import schema_key
 
 
 def cell(value: Any) -> str:
-    """A value as CSV cell text: "" for None and NaN, floats by repr, one-line strings, JSON for lists."""
+    """A value as CSV cell text: "" for None and NaN, floats by repr, one-line strings, JSON for
+    lists."""
     if value is None:
         return ""
     if isinstance(value, (bool, np.bool_)):
@@ -52,8 +54,10 @@ def parse_cell(text: str) -> Any:
 
 
 def _status(text: str) -> str:
-    """A status cell: the label of a :class:`~ocp_crawl.status.Status` as written (ValueError for any other text)."""
-    if Status.from_label(text).label != text:  # from_label takes any case; the files hold the lower-case label
+    """A status cell: the label of a :class:`~ocp_crawl.status.Status` as written (ValueError for
+    any other text)."""
+    # from_label takes any case; the files hold the lower-case label
+    if Status.from_label(text).label != text:
         raise ValueError(f"unknown status {text!r}; valid: {', '.join(s.label for s in Status)}")
     return text
 
@@ -80,14 +84,14 @@ def row_line(cells: Sequence[str]) -> str:
 
 def parse_rows(lines: Sequence[str], columns: Sequence[str], settings: SweepSettings, where: str,
                first_line: int) -> list[dict[str, Any]]:
-    """Rows of CSV ``lines`` (the first is line ``first_line`` of ``where``), typed per column; SweepError
-    names the line of a malformed row."""
+    """Rows of CSV ``lines`` (the first is line ``first_line`` of ``where``), typed per column;
+    SweepError names the line of a malformed row."""
     parsers = [_parser(settings, c) for c in columns]
     out = []
     for n, cells in enumerate(csv.reader(lines), first_line):
         if len(cells) != len(columns):
-            raise SweepError(f"{where}:{n}: malformed row ({len(cells)} fields, expected {len(columns)}); "
-                             "start the sweep again with --force")
+            raise SweepError(f"{where}:{n}: malformed row ({len(cells)} fields, expected "
+                             f"{len(columns)}); start the sweep again with --force")
         try:
             row = {c: p(t) for c, p, t in zip(columns, parsers, cells)}
             success = Status.SUCCESS.label
@@ -95,6 +99,7 @@ def parse_rows(lines: Sequence[str], columns: Sequence[str], settings: SweepSett
                 raise ValueError(f"status {success!r} with an empty S (every success has a stride)")
             out.append(row)
         except ValueError as exc:
-            raise SweepError(f"{where}:{n}: malformed row: {exc}; start the sweep again with --force") from None
+            raise SweepError(f"{where}:{n}: malformed row: {exc}; start the sweep again with "
+                             "--force") from None
     return out
 

@@ -24,43 +24,49 @@ from ocp_crawl.problem.overrides import toml_loads
 _GRID_KEY_RE = re.compile(r"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)$")
 #: numpy dtype of the values of a key of each schema type
 VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
-#: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event solver, so 20,000
-#: points are 10 to 20 minutes of the paper's gaits on 2 cores (the full reproduce grids have 777 at most)
+#: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event
+#: solver, so 20,000 points are 10 to 20 minutes of the paper's gaits on 2 cores (the full reproduce
+#: grids have 777 at most)
 MAX_GRID_POINTS = 20_000
-_GRID_HELP = ("expected SECTION.KEY=START:STOP:NUM (NUM values), SECTION.KEY=START:STOP:step=STEP or "
-              "SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5")
-#: relative tolerance of "STEP divides STOP - START" (decimal steps such as 0.1 are not exact in binary)
+_GRID_HELP = ("expected SECTION.KEY=START:STOP:NUM (NUM values), SECTION.KEY=START:STOP:step=STEP "
+              "or SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5")
+#: relative tolerance of "STEP divides STOP - START" (decimal steps such as 0.1 are not exact in
+#: binary)
 STEP_RTOL = 1e-9
-#: values of an axis echoed one by one; longer axes are shown by their first and last values and step
+#: values of an axis echoed one by one; longer axes are shown by their first and last values and
+#: step
 ECHO_ALL = 20
 
 
 def schema_key(name: str, where: str) -> Key:
-    """The schema entry of a grid key ``section.key``; unknown keys raise ProblemError with a hint."""
+    """The schema entry of a grid key ``section.key``; unknown keys raise ProblemError with a
+    hint."""
     m = _GRID_KEY_RE.match(name)
     if not m:
-        raise ProblemError(f"{where} is invalid: the key {name!r} must be SECTION.KEY ({_GRID_HELP})")
+        raise ProblemError(f"{where} is invalid: the key {name!r} must be SECTION.KEY "
+                           f"({_GRID_HELP})")
     section, key = m.groups()
     if section not in SCHEMA:
         close = difflib.get_close_matches(section, list(SCHEMA), n=1)
         hint = f"did you mean {close[0]}? " if close else ""
-        raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid sections: "
-                           f"{', '.join(SCHEMA)}")
+        raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid "
+                           f"sections: {', '.join(SCHEMA)}")
     keys = SCHEMA[section].key_map
     if key not in keys:
         close = difflib.get_close_matches(key, list(keys), n=1)
         hint = f"did you mean {section}.{close[0]}? " if close else ""
-        raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid keys: "
-                           f"{', '.join(keys)}")
+        raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid "
+                           f"keys: {', '.join(keys)}")
     if keys[key].type not in (float, int, str):
         what = "an array key" if keys[key].type is list else "a table key"
-        raise ProblemError(f"{where} is invalid: {name} is {what}; an axis varies a number or a string "
-                           "(sweep a key with one value, or one problem file per array)")
+        raise ProblemError(f"{where} is invalid: {name} is {what}; an axis varies a number or a "
+                           "string (sweep a key with one value, or one problem file per array)")
     return keys[key]
 
 
-def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarray:
-    """Values of one axis as a 1-D array of the key's type; wrong types and duplicates raise ProblemError."""
+def _coerce(values: Sequence[Any] | np.ndarray, key: Key, name: str, where: str) -> np.ndarray:
+    """Values of one axis as a 1-D array of the key's type; wrong types and duplicates raise
+    ProblemError."""
     if len(values) == 0:
         raise ProblemError(f"{where} is invalid: no values ({_GRID_HELP})")
     out: list[Any] = []
@@ -68,23 +74,27 @@ def _coerce(values: Sequence[Any], key: Key, name: str, where: str) -> np.ndarra
         v = v.item() if isinstance(v, np.generic) else v
         if key.type is str:
             if not isinstance(v, str):
-                raise ProblemError(f"{where} is invalid: {name} takes strings, {key.valid_text}; got {v!r}")
+                raise ProblemError(f"{where} is invalid: {name} takes strings, {key.valid_text}; "
+                                   f"got {v!r}")
             if key.choices and v not in key.choices:
                 raise ProblemError(f"{where} is invalid: {name} = {v!r} must be {key.valid_text}")
         else:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ProblemError(f"{where} is invalid: {name} takes numbers ({key.what}); got {v!r}")
+                raise ProblemError(f"{where} is invalid: {name} takes numbers ({key.what}); got "
+                                   f"{v!r}")
             if not is_finite(v):
                 raise ProblemError(f"{where} is invalid: {name} = {short_repr(v)} must be finite")
             if key.type is int:
                 if v != int(v):
-                    raise ProblemError(f"{where} is invalid: {name} takes integers ({key.what}); got {v!r}")
+                    raise ProblemError(f"{where} is invalid: {name} takes integers ({key.what}); "
+                                       f"got {v!r}")
                 v = int(v)
             else:
                 v = float(v)
             # a value its own key rejects makes every point with it invalid: bad input, not data
             if key.rule is not None and not key.rule.test(v):
-                raise ProblemError(f"{where} is invalid: {name} = {v!r} must be {key.rule.text} ({key.what})")
+                raise ProblemError(f"{where} is invalid: {name} = {v!r} must be {key.rule.text} "
+                                   f"({key.what})")
         out.append(v)
     seen: set = set()
     for v in out:
@@ -104,7 +114,8 @@ def _list_item(text: str, key: Key, where: str) -> Any:
         if key.type is str:
             return text  # bare words for string keys, as --set accepts them
         try:
-            return parse_number(text)  # Python spellings TOML lacks, e.g. "1e3" is TOML but "1." is not
+            # Python spellings TOML lacks, e.g. "1e3" is TOML but "1." is not
+            return parse_number(text)
         except ValueError:
             raise ProblemError(f"{where} is invalid: {text!r} is not a number") from None
 
@@ -118,7 +129,8 @@ def _endpoints(parts: Sequence[str], where: str) -> tuple[float, float]:
                            f"{parts[1]!r}") from None
     for name, text, value in (("START", parts[0], start), ("STOP", parts[1], stop)):
         if not math.isfinite(value):
-            raise ProblemError(f"{where} is invalid: START and STOP must be finite, got {name} = {text}")
+            raise ProblemError(f"{where} is invalid: START and STOP must be finite, got {name} = "
+                               f"{text}")
     return start, stop
 
 
@@ -127,13 +139,14 @@ def _count(text: str, where: str) -> int:
     try:
         num = parse_integer(text)
     except ValueError:
-        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {text!r} (for a step "
-                           f"write START:STOP:step=STEP)") from None
+        raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {text!r} (for a "
+                           f"step write START:STOP:step=STEP)") from None
     if num < 1:
         raise ProblemError(f"{where} is invalid: NUM must be an integer >= 1, got {num}")
     if num > MAX_GRID_POINTS:
-        raise ProblemError(f"{where} is invalid: NUM = {text} is more than the {MAX_GRID_POINTS} points a sweep "
-                           "may have (about 10 to 20 minutes on 2 cores); split the sweep")
+        raise ProblemError(f"{where} is invalid: NUM = {text} is more than the {MAX_GRID_POINTS} "
+                           "points a sweep may have (about 10 to 20 minutes on 2 cores); split the "
+                           "sweep")
     return num
 
 
@@ -158,8 +171,9 @@ def _step_count(start: float, stop: float, text: str, where: str) -> int:
                            f"{value_text(span)}; the last value would be {value_text(below)}, "
                            "not STOP: change STOP or STEP")
     if n + 1 > MAX_GRID_POINTS:
-        raise ProblemError(f"{where} is invalid: STEP = {text} gives {n + 1} values, more than the {MAX_GRID_POINTS} "
-                           "points a sweep may have (about 10 to 20 minutes on 2 cores); take a larger STEP")
+        raise ProblemError(f"{where} is invalid: STEP = {text} gives {n + 1} values, more than the "
+                           f"{MAX_GRID_POINTS} points a sweep may have (about 10 to 20 minutes on "
+                           "2 cores); take a larger STEP")
     return n + 1
 
 
@@ -167,20 +181,22 @@ def _range(rhs: str, where: str) -> np.ndarray:
     """The values of a range ``START:STOP:NUM`` or ``START:STOP:step=STEP`` (both ends included)."""
     parts = [p.strip() for p in rhs.split(":")]
     if len(parts) != 3:
-        raise ProblemError(f"{where} is invalid: a range is START:STOP:NUM or START:STOP:step=STEP, got "
-                           f"{len(parts)} fields")
+        raise ProblemError(f"{where} is invalid: a range is START:STOP:NUM or "
+                           f"START:STOP:step=STEP, got {len(parts)} fields")
     start, stop = _endpoints(parts, where)
     form, _, value = parts[2].rpartition("=")
     form = form.strip().lower()
     if form not in ("", "num", "step"):
-        raise ProblemError(f"{where} is invalid: the third field is NUM, num=NUM or step=STEP, got {parts[2]!r}")
-    num = _step_count(start, stop, value.strip(), where) if form == "step" else _count(value.strip(), where)
+        raise ProblemError(f"{where} is invalid: the third field is NUM, num=NUM or step=STEP, got "
+                           f"{parts[2]!r}")
+    num = _step_count(start, stop, value.strip(),
+                      where) if form == "step" else _count(value.strip(), where)
     if num == 1 and start != stop:
         raise ProblemError(f"{where} is invalid: NUM = 1 gives one value, but START != STOP; "
                            f"write a single value instead")
     if not math.isfinite(stop - start):
-        raise ProblemError(f"{where} is invalid: STOP - START = {stop!r} - {start!r} overflows a float; "
-                           "give closer ends")
+        raise ProblemError(f"{where} is invalid: STOP - START = {stop!r} - {start!r} overflows a "
+                           "float; give closer ends")
     return np.array(decimal_linspace(start, stop, num))
 
 
@@ -201,8 +217,8 @@ def decimal_linspace(start: float, stop: float, num: int) -> list[float]:
 def parse_grid(spec: str) -> tuple[str, np.ndarray]:
     """Parse one axis: ``SECTION.KEY=START:STOP:NUM`` (NUM values, both ends included, like
     ``numpy.linspace``; ``num=NUM`` says the same), ``SECTION.KEY=START:STOP:step=STEP`` (START,
-    START + STEP, ... up to STOP included; STEP must divide STOP - START) or ``SECTION.KEY=A,B,C`` (a
-    list; one value is a list of one).
+    START + STEP, ... up to STOP included; STEP must divide STOP - START) or ``SECTION.KEY=A,B,C``
+    (a list; one value is a list of one).
 
     Returns the key and its values (float, int or str array after the schema type of the key).
     Bad specs raise :class:`ProblemError` with a one-line message naming the spec.
@@ -225,7 +241,8 @@ def parse_grid(spec: str) -> tuple[str, np.ndarray]:
 def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
     """Validate a grid ``{key: values}`` (arrays, lists or single values) and type its values."""
     if not isinstance(grid, Mapping) or not grid:
-        raise ProblemError(f"a sweep needs a grid {{key: values}} with at least one key, got {grid!r}")
+        raise ProblemError(f"a sweep needs a grid {{key: values}} with at least one key, got "
+                           f"{grid!r}")
     out: dict[str, np.ndarray] = {}
     for name, values in grid.items():
         where = f"grid key {name!r}"
@@ -240,7 +257,8 @@ def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
         section, key = name.split(".")
         for other in SCHEMA[section].key_map[key].exclusive_with:
             if f"{section}.{other}" in out:
-                raise ProblemError(f"grid keys {name} and {section}.{other} are alternatives: sweep one of them")
+                raise ProblemError(f"grid keys {name} and {section}.{other} are alternatives: "
+                                   "sweep one of them")
     return out
 
 
@@ -249,8 +267,9 @@ def _check_size(grid: Mapping[str, np.ndarray]) -> None:
     points = math.prod(len(v) for v in grid.values())
     if points > MAX_GRID_POINTS:
         shape = " x ".join(f"{len(v)} ({k})" for k, v in grid.items())
-        raise ProblemError(f"the grid has {points} points, {shape}: more than the {MAX_GRID_POINTS} points a sweep "
-                           "may have (about 10 to 20 minutes on 2 cores); coarsen it or split the sweep")
+        raise ProblemError(f"the grid has {points} points, {shape}: more than the "
+                           f"{MAX_GRID_POINTS} points a sweep may have (about 10 to 20 minutes on "
+                           "2 cores); coarsen it or split the sweep")
 
 
 def grid_from_specs(specs: Iterable[str]) -> dict[str, np.ndarray]:
@@ -265,9 +284,9 @@ def grid_from_specs(specs: Iterable[str]) -> dict[str, np.ndarray]:
 
 
 def check_some_point_valid(problem: Problem, grid: Mapping[str, Any]) -> None:
-    """Raise ProblemError if no point of the grid is a valid problem (checked in grid order up to the
-    first valid point, usually the first: cheap).  Invalid points of a partly valid grid are data
-    (status ``bad_input``); a grid of invalid points only is bad input."""
+    """Raise ProblemError if no point of the grid is a valid problem (checked in grid order up to
+    the first valid point, usually the first: cheap).  Invalid points of a partly valid grid are
+    data (status ``bad_input``); a grid of invalid points only is bad input."""
     grid = normalize_grid(grid)
     first = None
     n = 0
@@ -288,8 +307,9 @@ def value_text(v: Any) -> str:
 
 
 def axis_text(values: Sequence[Any]) -> str:
-    """The values of one axis as text, e.g. "0, 45, 90, 135, 180 (5 values, step 45)": every value up to
-    :data:`ECHO_ALL` of them, else the first four and the last two (and the step of an evenly spaced axis)."""
+    """The values of one axis as text, e.g. "0, 45, 90, 135, 180 (5 values, step 45)": every value
+    up to :data:`ECHO_ALL` of them, else the first four and the last two (and the step of an evenly
+    spaced axis)."""
     vals = list(values)
     texts = [value_text(v) for v in vals]
     text = ", ".join(texts if len(vals) <= ECHO_ALL else texts[:4] + ["..."] + texts[-2:])

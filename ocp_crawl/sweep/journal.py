@@ -5,8 +5,8 @@ written to the operating system as it arrives, so that a killed run loses only t
 flight; a line torn by a kill is cut off by the resuming run.  It is fsync'd when a row arrives
 :data:`FSYNC_SECONDS` or more after the last fsync, and when the sweep stops: an fsync costs ~4 ms,
 as much as a fast point, and guards only against a crash of the machine (not of the process), which
-may lose the rows written since the last fsync (the resumed sweep computes them again).  One writer at a time (an advisory ``flock`` on
-``.sweep.lock``, released when its process dies).
+may lose the rows written since the last fsync (the resumed sweep computes them again).  One writer
+at a time (an advisory ``flock`` on ``.sweep.lock``, released when its process dies).
 """
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import IO, Any, Sequence
 
 from ocp_crawl.io.files import naming, remove_stale_temps, write_json
 from ocp_crawl.status import Status
@@ -32,14 +32,14 @@ FSYNC_SECONDS = 1.0
 
 
 def _decoded(raw: bytes, path: Path) -> str:
-    """``raw`` (the bytes of ``path``) as UTF-8 text; bytes that are not UTF-8 are a damaged file like a garbage
-    row: SweepError naming the file, the line and the byte."""
+    """``raw`` (the bytes of ``path``) as UTF-8 text; bytes that are not UTF-8 are a damaged file
+    like a garbage row: SweepError naming the file, the line and the byte."""
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = raw.count(b"\n", 0, exc.start) + 1
-        raise SweepError(f"{path}:{line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); the file is damaged: "
-                         "start again with --force") from None
+        raise SweepError(f"{path}:{line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); the file "
+                         "is damaged: start again with --force") from None
 
 
 #: the first header cell of the journal: the flat index of the row's point
@@ -71,8 +71,8 @@ class SweepStore:
         self.journal_path = out_dir / JOURNAL_FILE
         self.results_path = out_dir / RESULTS_FILE
         self.summary_path = out_dir / SUMMARY_FILE
-        self._journal = None
-        self._lock = None
+        self._journal: IO[str] | None = None  # open while writing (after begin)
+        self._lock: IO[str] | None = None
         self._synced = 0.0  # time.monotonic() of the last fsync
         self._dirty = False  # lines written since
 
@@ -90,22 +90,25 @@ class SweepStore:
     def read_done(self, settings: SweepSettings, repair: bool = False) -> dict[int, dict[str, Any]]:
         """Finished rows by flat index: all of results.csv, else those of the journal.
 
-        ``repair`` (the writer only) cuts a line torn by a kill off the journal before appending to it.
+        ``repair`` (the writer only) cuts a line torn by a kill off the journal before appending to
+        it.
         """
         done: dict[int, dict[str, Any]] = {}
         if self.results_path.exists():
-            lines = _decoded(self.results_path.read_bytes(), self.results_path).splitlines(keepends=True)
+            lines = _decoded(self.results_path.read_bytes(),
+                             self.results_path).splitlines(keepends=True)
             if not lines:
                 raise SweepError(f"{self.results_path}: empty file (no header); "
                                  "start again with --force")
             check_header(self.results_path, lines[0], settings.header(), settings.columns)
             rows = parse_rows(lines[1:], settings.columns, settings, str(self.results_path), 2)
             if len(rows) != settings.size:
-                raise SweepError(f"{self.results_path}: {len(rows)} rows for {settings.size} points; "
-                                 "start again with --force")
+                raise SweepError(f"{self.results_path}: {len(rows)} rows for {settings.size} "
+                                 "points; start again with --force")
             for i, row in enumerate(rows):
                 self._check_point(settings, i, row, self.results_path)
-                if row["status"] != Status.MISSING.label:   # a point not computed is computed on --resume
+                # a point not computed is computed on --resume
+                if row["status"] != Status.MISSING.label:
                     done[i] = row
         if self.journal_path.exists():
             for i, row in self._read_journal(settings, repair).items():
@@ -125,10 +128,12 @@ class SweepStore:
             return {}
         check_header(self.journal_path, lines[0], (INDEX_COLUMN,) + settings.header(), columns)
         done: dict[int, dict[str, Any]] = {}
-        for n, row in enumerate(parse_rows(lines[1:], columns, settings, str(self.journal_path), 2), 2):
+        for n, row in enumerate(parse_rows(lines[1:], columns, settings, str(self.journal_path), 2),
+                                2):
             index = row.pop("index")
             if not isinstance(index, int) or not 0 <= index < settings.size:
-                raise SweepError(f"{self.journal_path}:{n}: index {index!r} is not a point of the grid")
+                raise SweepError(f"{self.journal_path}:{n}: index {index!r} is not a point of the "
+                                 "grid")
             self._check_point(settings, index, row, self.journal_path)
             if row["status"] != Status.MISSING.label:
                 done.setdefault(index, row)
@@ -138,8 +143,9 @@ class SweepStore:
     def _check_point(settings: SweepSettings, index: int, row: dict, path: Path) -> None:
         expected = settings.point(index)
         if any(row[k] != v for k, v in expected.items()):
-            raise SweepError(f"{path}: row of point {index} has grid values {[row[k] for k in expected]}, "
-                             f"expected {list(expected.values())}; start again with --force")
+            raise SweepError(f"{path}: row of point {index} has grid values "
+                             f"{[row[k] for k in expected]}, expected {list(expected.values())}; "
+                             "start again with --force")
 
     # ---- writing
     def _acquire(self) -> None:
@@ -166,28 +172,32 @@ class SweepStore:
             self.close()
             raise
 
-    def _open(self, settings: SweepSettings, resume: bool, force: bool) -> dict[int, dict[str, Any]]:
+    def _open(self, settings: SweepSettings, resume: bool,
+              force: bool) -> dict[int, dict[str, Any]]:
         ours = [p for p in (self.settings_path, self.journal_path, self.results_path) if p.exists()]
         done: dict[int, dict[str, Any]] = {}
         if resume and self.settings_path.exists():
             old = self.read_settings()
             diff = settings.differences(old)
             if diff:
-                raise SweepError(f"{self.dir}: cannot resume: this sweep differs from its {SETTINGS_FILE} "
-                                 f"(saved -> now: {'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); "
-                                 "use another output directory, or --force to start over")
+                raise SweepError(f"{self.dir}: cannot resume: this sweep differs from its "
+                                 f"{SETTINGS_FILE} (saved -> now: "
+                                 f"{'; '.join(diff[:4])}{'; ...' if len(diff) > 4 else ''}); use "
+                                 "another output directory, or --force to start over")
             done = self.read_done(settings, repair=True)
         elif resume and ours:
-            raise SweepError(f"{self.dir}: cannot resume: no {SETTINGS_FILE} to check the settings against; "
-                             "use --force to start over")
+            raise SweepError(f"{self.dir}: cannot resume: no {SETTINGS_FILE} to check the settings "
+                             "against; use --force to start over")
         elif ours and not force:
-            raise SweepError(f"{self.dir}: already holds a sweep ({', '.join(p.name for p in ours)}); "
-                             "continue it with --resume, or overwrite it with --force")
+            raise SweepError(f"{self.dir}: already holds a sweep "
+                             f"({', '.join(p.name for p in ours)}); continue it with --resume, or "
+                             "overwrite it with --force")
         else:
             for p in (self.journal_path, self.results_path, self.summary_path):
                 p.unlink(missing_ok=True)
             write_json(self.settings_path, settings.to_dict())
-        # a journal killed before its header was complete is empty (repaired above): it needs the header
+        # a journal killed before its header was complete is empty (repaired above): it needs the
+        # header
         fresh = not self.journal_path.exists() or self.journal_path.stat().st_size == 0
         self._journal = open(self.journal_path, "a", encoding="utf-8", newline="")
         if fresh:
@@ -195,6 +205,7 @@ class SweepStore:
         return done
 
     def _write_line(self, line: str, sync: bool = False) -> None:
+        assert self._journal is not None  # called while the journal is open
         try:
             self._journal.write(line)
             self._journal.flush()
@@ -205,18 +216,22 @@ class SweepStore:
             raise naming(exc, self.journal_path) from exc
 
     def _sync(self) -> None:
+        assert self._journal is not None  # called while the journal is open
         os.fsync(self._journal.fileno())
         self._synced, self._dirty = time.monotonic(), False
 
     def append(self, settings: SweepSettings, index: int, row: dict[str, Any]) -> None:
-        """Journal the finished row of point ``index`` (flushed; fsync'd at most every FSYNC_SECONDS)."""
+        """Journal the finished row of point ``index`` (flushed; fsync'd at most every
+        FSYNC_SECONDS)."""
         self._write_line(row_line([str(index)] + [cell(row[c]) for c in settings.columns]))
 
     def finish(self, result) -> None:
-        """Write results.csv and summary.json of the complete ``result`` (a SweepResult), then drop the journal."""
+        """Write results.csv and summary.json of the complete ``result`` (a SweepResult), then drop
+        the journal."""
         result.to_csv(self.results_path)
         write_json(self.summary_path, result.summary())
-        # results.csv holds every row now; a kill before this unlink leaves a journal that resume ignores
+        # results.csv holds every row now; a kill before this unlink leaves a journal that resume
+        # ignores
         self.journal_path.unlink(missing_ok=True)
         self._dirty = False
 

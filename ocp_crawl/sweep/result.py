@@ -17,7 +17,8 @@ from ocp_crawl.sweep.grid import axis_text, value_text
 from ocp_crawl.sweep.journal import RESULTS_FILE, SweepStore
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
-#: the status of a successful row (the other rows have the simulator's status, or bad_input, error, missing)
+#: the status of a successful row (the other rows have the simulator's status, or bad_input, error,
+#: missing)
 SUCCESS = Status.SUCCESS.label
 
 
@@ -27,7 +28,8 @@ class SweepResult:
 
     settings: SweepSettings
     rows: list[dict[str, Any]]
-    """one dict per point in grid order (C order: the last key varies fastest); keys are the columns"""
+    """one dict per point in grid order (C order: the last key varies fastest); keys are the
+    columns"""
     out_dir: Path | None = None
     elapsed: float = math.nan
     """wall time of this run [s] (NaN when read from files)"""
@@ -36,7 +38,8 @@ class SweepResult:
 
     def __post_init__(self) -> None:
         if len(self.rows) != self.settings.size:
-            raise ValueError(f"SweepResult: {len(self.rows)} rows for a grid of {self.settings.size} points")
+            raise ValueError(f"SweepResult: {len(self.rows)} rows for a grid of "
+                             f"{self.settings.size} points")
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -143,25 +146,29 @@ class SweepResult:
         return self.settings.column_units()
 
     def to_pandas(self):
-        """The rows as a :class:`pandas.DataFrame` in grid order, one column per grid key and result.
+        """The rows as a :class:`pandas.DataFrame` in grid order, one column per grid key and
+        result.
 
         Numbers are in SI units as in ``results.csv``; ``df.attrs["units"]`` maps each column to its
-        unit (e.g. ``{"gait.psi_deg": "deg", "S": "m", "W_plus": "J", ...}``), ``df.attrs["grid"]`` the
-        axes and ``df.attrs["problem"]`` the base problem file.  Needs pandas (``pip install
+        unit (e.g. ``{"gait.psi_deg": "deg", "S": "m", "W_plus": "J", ...}``), ``df.attrs["grid"]``
+        the axes and ``df.attrs["problem"]`` the base problem file.  Needs pandas (``pip install
         'ocp-crawl[pandas]'``); raises ImportError naming the extra otherwise.
         """
         try:
             import pandas as pd
         except ImportError:
-            raise ImportError("SweepResult.to_pandas needs pandas: pip install 'ocp-crawl[pandas]'") from None
-        df = pd.DataFrame([{c: r[c] for c in self.columns} for r in self.rows], columns=list(self.columns))
+            raise ImportError("SweepResult.to_pandas needs pandas: pip install "
+                              "'ocp-crawl[pandas]'") from None
+        df = pd.DataFrame([{c: r[c] for c in self.columns} for r in self.rows],
+                          columns=list(self.columns))
         df.attrs["units"] = self.column_units()
         df.attrs["grid"] = {k: list(v) for k, v in self.settings.grid}
         df.attrs["problem"] = self.settings.source
         return df
 
     def format_summary(self) -> str:
-        """Readable summary (the CLI's output): every axis with its values, counts, best points, timing."""
+        """Readable summary (the CLI's output): every axis with its values, counts, best points,
+        timing."""
         def at(p) -> str:
             return ", ".join(f"{k} = {value_text(v)}" for k, v in p["point"].items())
 
@@ -176,8 +183,10 @@ class SweepResult:
         else:
             lines.append(f"best S     {units.distance(best['S'])} per cycle at {at(best)} "
                          f"(W+ {units.work(best['W_plus'])}, CoT+ {units.cot(best['CoT_plus'])})")
-        if low is not None and low["point"] != best["point"]:   # else its CoT+ is on the line above
-            lines.append(f"lowest CoT+ {units.cot(low['CoT_plus'])} at {at(low)} (S {units.distance(low['S'])})")
+        # (low is None when best is: no successful point; low == best: its CoT+ is above)
+        if low is not None and best is not None and low["point"] != best["point"]:
+            lines.append(f"lowest CoT+ {units.cot(low['CoT_plus'])} at {at(low)} (S "
+                         f"{units.distance(low['S'])})")
         if np.isfinite(self.elapsed):
             lines.append(f"time       {self._time_text()}")
         return "\n".join(lines)
@@ -211,15 +220,16 @@ class SweepResult:
         settings = store.read_settings()
         done = store.read_done(settings)
         if len(done) < settings.size and not partial:
-            raise SweepError(f"{out_dir}: the sweep is incomplete ({len(done)} of {settings.size} points); "
-                             "finish it with --resume, or read it with partial=True")
+            raise SweepError(f"{out_dir}: the sweep is incomplete ({len(done)} of {settings.size} "
+                             "points); finish it with --resume, or read it with partial=True")
         rows = [done.get(i) or _missing_row(settings, i) for i in range(settings.size)]
         return cls(settings=settings, rows=rows, out_dir=Path(out_dir))
 
 
 def _missing_row(settings: SweepSettings, index: int) -> dict[str, Any]:
     row = settings.point(index)
-    row.update({"S": math.nan, "W_plus": math.nan, "CoT_plus": math.nan, "status": Status.MISSING.label,
+    row.update({"S": math.nan, "W_plus": math.nan, "CoT_plus": math.nan,
+                "status": Status.MISSING.label,
                 "message": "not computed (the sweep was interrupted)"})
     row.update({c: math.nan for c in settings.extra_columns})
     return row

@@ -6,8 +6,8 @@ cluster node, or in a container image, building them once beforehand keeps that 
 first sweep points and out of every worker that would otherwise compile them at the same time.
 
 Every compiled function of the package is made by a builder registered with
-:func:`ocp_crawl.model.compiled.compiled_function`; :func:`warmup` imports the package's modules up to
-this floor (so that each registers its builders) and builds them all.
+:func:`ocp_crawl.model.compiled.compiled_function`; :func:`warmup` imports the package's modules up
+to this floor (so that each registers its builders) and builds them all.
 """
 from __future__ import annotations
 
@@ -21,7 +21,8 @@ from pathlib import Path
 from ocp_crawl.model.compiled import BUILD_FAILURES, BUILDERS, cache_dir, usable_cache_dir
 
 #: subpackages whose modules may define compiled functions (the floors up to sweep, ARCHITECTURE.md)
-PACKAGES = ("ocp_crawl.model", "ocp_crawl.nlp", "ocp_crawl.sim", "ocp_crawl.ocp", "ocp_crawl.problem", "ocp_crawl.sweep")
+PACKAGES = ("ocp_crawl.model", "ocp_crawl.nlp", "ocp_crawl.sim", "ocp_crawl.ocp",
+            "ocp_crawl.problem", "ocp_crawl.sweep")
 
 
 @dataclass(frozen=True)
@@ -83,8 +84,9 @@ def _register_all() -> None:
 
 
 def warmup() -> WarmupResult:
-    """Build every compiled function of the package into the cache (:func:`~ocp_crawl.model.compiled.cache_dir`:
-    ``$OCP_CRAWL_CACHE``, else ``$XDG_CACHE_HOME/ocp_crawl`` or ``~/.cache/ocp_crawl``).
+    """Build every compiled function of the package into the cache
+    (:func:`~ocp_crawl.model.compiled.cache_dir`: ``$OCP_CRAWL_CACHE``, else
+    ``$XDG_CACHE_HOME/ocp_crawl`` or ``~/.cache/ocp_crawl``).
 
     A library already in the cache is not rebuilt; builds are safe to run concurrently with other
     processes (each library is renamed into place when complete).
@@ -95,11 +97,13 @@ def warmup() -> WarmupResult:
 
     Raises
     ------
-    CacheError : the cache is not a writable directory (checked first; unless OCP_CRAWL_NO_COMPILE is set).
+    CacheError : the cache is not a writable directory (checked first; unless OCP_CRAWL_NO_COMPILE
+    is set).
     """
     start = time.perf_counter()
     disabled = os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0")
-    # an unusable cache would fail every build, which then looks like a missing compiler: say what is wrong
+    # an unusable cache would fail every build, which then looks like a missing compiler: say what
+    # is wrong
     cache = cache_dir() if disabled else usable_cache_dir()
     _register_all()
     functions = []

@@ -38,7 +38,8 @@ def mode_color(code: int) -> str:
     return MODE_COLORS.get(mode, _FALLBACK_COLORS[int(mode) % len(_FALLBACK_COLORS)])
 
 
-#: what each contact mode means, for legends (foot i slips along -x or +x while the other foot sticks)
+#: what each contact mode means, for legends (foot i slips along -x or +x while the other foot
+#: sticks)
 MODE_MEANINGS = {
     Mode.STICK: "both feet stick",
     Mode.SLIP1_POS: "foot 1 slips towards +x", Mode.SLIP1_NEG: "foot 1 slips towards -x",
@@ -56,8 +57,8 @@ def mode_label(code: int) -> str:
 
 
 def mode_legend(codes, alpha: float = 1.0) -> tuple[list[Patch], list[str]]:
-    """Legend handles (background patches of opacity ``alpha``) and labels of the contact modes ``codes``,
-    each explained, e.g. "mode slip1-: foot 1 slips towards -x"."""
+    """Legend handles (background patches of opacity ``alpha``) and labels of the contact modes
+    ``codes``, each explained, e.g. "mode slip1-: foot 1 slips towards -x"."""
     codes = sorted({int(c) for c in codes})
     labels = []
     for c in codes:
@@ -85,7 +86,8 @@ def mode_runs(t: np.ndarray, mode: np.ndarray) -> list[tuple[float, float, int]]
 def shade_modes(ax, runs, **kw) -> set[int]:
     """Shade the background of ``ax`` by contact mode over ``runs`` (from :func:`mode_runs`).
 
-    ``kw`` goes to ``axvspan`` (e.g. ``alpha``).  Returns the mode codes drawn (runs of positive length).
+    ``kw`` goes to ``axvspan`` (e.g. ``alpha``).  Returns the mode codes drawn (runs of positive
+    length).
     """
     drawn: set[int] = set()
     for a, b, m in runs:
@@ -95,8 +97,10 @@ def shade_modes(ax, runs, **kw) -> set[int]:
     return drawn
 
 
-def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"), lw: float | None = None,
-                         scale: float = 1.0, labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
+def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"),
+                         lw: float | None = None,
+                         scale: float = 1.0,
+                         labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
     """The friction limits +-mu1 f_n1 and +-mu2 f_n2 as dashed lines over ``t``.
 
     ``f_n1``, ``f_n2``: normal forces [N]; ``scale``: factor of the plotted force (1e3: mN);
@@ -133,7 +137,8 @@ def _gait_title(result: CrawlResult) -> str:
 
 
 def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None = None, *,
-              reference: PeriodicSignal | None = None, snapshots: int = 5, title: str | None = None) -> Figure:
+              reference: PeriodicSignal | None = None, snapshots: int = 5,
+              title: str | None = None) -> Figure:
     """Three panels over the phase of the reported cycle, background shaded by contact mode.
 
     (a) joint angles phi1, phi2 [deg] (and the reference angles if ``reference`` is given),
@@ -172,7 +177,8 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     handles, labels = ax_c.get_legend_handles_labels()
     patches, names = mode_legend(m for a, b, m in runs if b > a)
     # below the panels: inside (d) the legend would hide the force at the friction limits
-    fig.legend(handles + patches, labels + names, loc="outside lower center", fontsize="small", ncol=2)
+    fig.legend(handles + patches, labels + names, loc="outside lower center", fontsize="small",
+               ncol=2)
     # lay out once and freeze: constrained layout would otherwise rerun (slowly) at every save
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
@@ -195,8 +201,10 @@ def _draw_angles(ax, result: CrawlResult, phase, reference: PeriodicSignal | Non
 
 
 def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
-    ax.plot(phase, 1e3 * (np.asarray(result.x1, float) - origin), color="C0", label="$x_1$ (foot 1)")
-    ax.plot(phase, 1e3 * (np.asarray(result.x2, float) - origin), color="C3", label="$x_2$ (foot 2)")
+    ax.plot(phase, 1e3 * (np.asarray(result.x1, float) - origin), color="C0",
+            label="$x_1$ (foot 1)")
+    ax.plot(phase, 1e3 * (np.asarray(result.x2, float) - origin), color="C3",
+            label="$x_2$ (foot 2)")
     ax.set_ylabel("contact position [mm]")
     ax.set_title("(b) contact positions", loc="left", fontsize="medium")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small", frameon=False)
@@ -218,12 +226,14 @@ def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float,
     if n <= 0:
         return
     span = phase[-1] - phase[0]
-    # equally spaced phases including both ends: the last snapshot repeats the first shape shifted by S
+    # equally spaced phases including both ends: the last snapshot repeats the first shape shifted
+    # by S
     targets = phase[0] + span * np.arange(n) / max(n - 1, 1) if span > 0 else phase[:1]
     idx = sorted({int(np.argmin(np.abs(phase - s))) for s in targets})
     phi1 = np.asarray(result.phi, float)[0]
     for j, i in enumerate(idx):
-        pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin, phi1[i], result.theta[i])
+        pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin, phi1[i],
+                                 result.theta[i])
         gray = 0.75 - 0.6 * j / max(len(idx) - 1, 1)
         ax.plot(pts[0], pts[1], "-o", color=str(gray), lw=1.5, ms=2.5, label=f"t = {phase[i]:.2f}")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)

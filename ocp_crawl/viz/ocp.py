@@ -1,10 +1,12 @@
-"""Files and figures of an optimal-gait solve: torques.csv, optimal_gait.toml, arrays.npz, summary.json, figures."""
+"""Files and figures of an optimal-gait solve: torques.csv, optimal_gait.toml, arrays.npz,
+summary.json, figures."""
 from __future__ import annotations
 
 import io
 import math
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -20,30 +22,35 @@ from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, scenario_labels
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
 from ocp_crawl.sim.event import simulate_torque
-from ocp_crawl.viz.gait import mode_legend, mode_runs, plot_friction_limits, save_figure, shade_modes
+from ocp_crawl.viz.gait import (mode_legend, mode_runs, plot_friction_limits, save_figure,
+                                shade_modes)
 
 
 def torques_csv(result: OCPResult) -> str:
-    """CSV text of the optimal torques in the package's table convention (:mod:`ocp_crawl.io.tables`):
-    ``phase [-]`` in [0, 1), ``tau1 [N m]``, ``tau2 [N m]``, one row per node, and ``period [s]``, the OCP's
-    period T on every row (without a finite T, no such column); full precision (read back, the numbers are the
-    very same, so that ``simulate`` of :data:`OPTIMAL_GAIT_TOML` reproduces the replay and its speed)."""
-    columns = [("phase", "-", result.phase), ("tau1", "N m", result.tau[0]), ("tau2", "N m", result.tau[1])]
+    """CSV text of the optimal torques in the package's table convention
+    (:mod:`ocp_crawl.io.tables`): ``phase [-]`` in [0, 1), ``tau1 [N m]``, ``tau2 [N m]``, one row
+    per node, and ``period [s]``, the OCP's period T on every row (without a finite T, no such
+    column); full precision (read back, the numbers are the very same, so that ``simulate`` of
+    :data:`OPTIMAL_GAIT_TOML` reproduces the replay and its speed)."""
+    columns = [("phase", "-", result.phase), ("tau1", "N m", result.tau[0]),
+               ("tau2", "N m", result.tau[1])]
     if math.isfinite(result.T_ocp):
         columns.append(("period", "s", np.full(result.phase.size, result.T_ocp)))
     return table_text(columns, comments=[
-        f"optimal {result.objective} torques at the {result.phase.size} nodes of one cycle of period T = "
-        f"{units.seconds(result.T_ocp)} (status {result.status.label}); replay: ocp-crawl simulate "
-        f"{OPTIMAL_GAIT_TOML}"])
+        f"optimal {result.objective} torques at the {result.phase.size} nodes of one cycle of "
+        f"period T = {units.seconds(result.T_ocp)} (status {result.status.label}); replay: "
+        f"ocp-crawl simulate {OPTIMAL_GAIT_TOML}"])
 
 
-#: the problem file ``write_outputs`` writes next to torques.csv: the robot driven by the optimal torques
+#: the problem file ``write_outputs`` writes next to torques.csv: the robot driven by the optimal
+#: torques
 OPTIMAL_GAIT_TOML = "optimal_gait.toml"
 
 
 def _gait_sections(result: OCPResult, problem: dict) -> dict:
-    """``problem``'s robot and gravity convention (sections as ``Problem.to_dict()``) driven by torques.csv with the
-    replay's interpolation, over the OCP's period (``[gait] period``, when finite)."""
+    """``problem``'s robot and gravity convention (sections as ``Problem.to_dict()``) driven by
+    torques.csv with the replay's interpolation, over the OCP's period (``[gait] period``, when
+    finite)."""
     sections = samples_problem(problem, "torques.csv", REPLAY_INTERPOLATION)
     if math.isfinite(result.T_ocp):
         sections["gait"]["period"] = float(result.T_ocp)
@@ -52,43 +59,51 @@ def _gait_sections(result: OCPResult, problem: dict) -> dict:
 
 def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
     """A problem file replaying the optimum: ``problem``'s robot and gravity convention (sections as
-    ``Problem.to_dict()``), the samples waveform reading torques.csv with the replay's interpolation, the OCP's
-    period as ``[gait] period``."""
+    ``Problem.to_dict()``), the samples waveform reading torques.csv with the replay's
+    interpolation, the OCP's period as ``[gait] period``."""
     return toml_text(_gait_sections(result, problem), comments=[
-        f"The optimal {result.objective} torque profile ({result.status.label}), written by ocp-crawl optimize.",
-        f"Run:  ocp-crawl simulate {OPTIMAL_GAIT_TOML}  (S and the speed reproduce the optimize replay's, S_replay "
-        "and v_replay).",
-        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full precision."])
+        f"The optimal {result.objective} torque profile ({result.status.label}), written by "
+        "ocp-crawl optimize.",
+        f"Run:  ocp-crawl simulate {OPTIMAL_GAIT_TOML}  (S and the speed reproduce the optimize "
+        "replay's, S_replay and v_replay).",
+        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full "
+        "precision."])
 
 
 def scenario_files(settings: OCPSettings) -> list[str]:
-    """The problem files replaying each friction scenario of a friction set, named by its ratio mu1/mu2
-    (``optimal_gait_mu1_mu2_0.9.toml``, ...; with friction levels ``..._0.9_level_0.5.toml``, or
-    ``optimal_gait_level_0.5.toml`` at the robot's own ratio: :func:`~ocp_crawl.ocp.judge.scenario_labels`);
-    [] without a set."""
+    """The problem files replaying each friction scenario of a friction set, named by its ratio
+    mu1/mu2 (``optimal_gait_mu1_mu2_0.9.toml``, ...; with friction levels
+    ``..._0.9_level_0.5.toml``, or ``optimal_gait_level_0.5.toml`` at the robot's own ratio:
+    :func:`~ocp_crawl.ocp.judge.scenario_labels`); [] without a set."""
     if not settings.friction_set:
         return []
-    return [f"optimal_gait_level_{label.removeprefix('own_level_')}.toml" if label.startswith("own_")
+    return [f"optimal_gait_level_{label.removeprefix('own_level_')}.toml"
+            if label.startswith("own_")
             else f"optimal_gait_mu1_mu2_{label}.toml" for label in scenario_labels(settings)]
 
 
 def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str, name: str) -> str:
     """The problem file ``name`` replaying the optimum in one friction scenario ``label``
     (:func:`~ocp_crawl.ocp.judge.scenario_labels`): as
-    :func:`optimal_gait_toml`, the robot's friction coefficients those of ``scenario`` (mu1, mu2, full precision)."""
+    :func:`optimal_gait_toml`, the robot's friction coefficients those of ``scenario`` (mu1, mu2,
+    full precision)."""
     sections = _gait_sections(result, problem)
-    robot = {}
-    for key, value in sections["robot"].items():   # mu1 and mu2 where the problem gives its friction
+    robot: dict[str, Any] = {}
+    # mu1 and mu2 where the problem gives its friction
+    for key, value in sections["robot"].items():
         if key in ("mu", "mu1"):
             robot.update(mu1=scenario.mu1, mu2=scenario.mu2)
         elif key != "mu2":
             robot[key] = value
     sections["robot"] = robot
     return toml_text(sections, comments=[
-        f"The optimal {result.objective} torque profile ({result.status.label}) in the friction scenario "
-        f"mu1 = {scenario.mu1:.6g}, mu2 = {scenario.mu2:.6g} ({label}), written by ocp-crawl optimize.",
-        f"Run:  ocp-crawl simulate {name}  (S and the speed reproduce the optimize replay's in this scenario).",
-        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full precision."])
+        f"The optimal {result.objective} torque profile ({result.status.label}) in the friction "
+        f"scenario mu1 = {scenario.mu1:.6g}, mu2 = {scenario.mu2:.6g} ({label}), written by "
+        "ocp-crawl optimize.",
+        f"Run:  ocp-crawl simulate {name}  (S and the speed reproduce the optimize replay's in "
+        "this scenario).",
+        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full "
+        "precision."])
 
 
 #: colours of joint/foot 1 and 2
@@ -351,11 +366,12 @@ def _write_text(path: Path, text: str) -> Path:
     return atomic_write(path, lambda fh: fh.write(data))
 
 
-def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, summary: dict) -> list[Path]:
-    """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary`` holds
-    the ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction scenario,
-    :func:`scenario_files`), arrays.npz, summary.json and the figure (PNG, PDF) atomically into out_dir;
-    returns the paths written."""
+def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike,
+                  summary: dict) -> list[Path]:
+    """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary``
+    holds the ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction
+    scenario, :func:`scenario_files`), arrays.npz, summary.json and the figure (PNG, PDF) atomically
+    into out_dir; returns the paths written."""
     out = Path(out_dir)
     written = [_write_text(out / "torques.csv", torques_csv(result))]
     if result.phase.size and "problem" in summary:
@@ -364,7 +380,8 @@ def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike, s
         labels = scenario_labels(result.settings)
         for name, label, scenario in zip(scenario_files(result.settings), labels,
                                          result.settings.scenarios(robot)):
-            written.append(_write_text(out / name, scenario_toml(result, problem, scenario, label, name)))
+            written.append(_write_text(out / name,
+                                       scenario_toml(result, problem, scenario, label, name)))
     arrays = {"phase": result.phase, "tau": result.tau}
     for j, (phi, x1, ft) in enumerate(zip(result.phi, result.x1, result.f_t)):
         arrays[f"phi_{j}"] = phi
