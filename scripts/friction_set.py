@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp.slip_margin import result_margins
 from ocp_crawl.sim.event import simulate_torque

@@ -1,7 +1,7 @@
-"""Shared by the property-based tests (hypothesis) of the prescribed-angle simulator, the input signals
-and the problem files (tests/test_properties_prescribed.py, test_properties_signals.py and
-test_properties_problem_files.py): the example settings, the strategies more than one of them draws from, and
-the independent checks of a prescribed-angle result.
+"""Shared by the property-based tests (hypothesis) of the prescribed-angle simulator, the input
+signals and the problem files (tests/test_properties_prescribed.py, test_properties_signals.py and
+test_properties_problem_files.py): the example settings, the strategies more than one of them draws
+from, and the independent checks of a prescribed-angle result.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25).
 """
@@ -23,7 +23,8 @@ from ocp_crawl.status import STATUS_MESSAGES
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
 #: expensive properties (one or more simulations per example)
-#: (a small fixed set by default, as docs/benchmarks.md says, so that CI is deterministic; random with the variable set)
+#: (a small fixed set by default, as docs/benchmarks.md says, so that CI is deterministic; random
+#: with the variable set)
 DERANDOMIZE = "OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ
 SIMS = settings(max_examples=EXAMPLES, deadline=None, derandomize=DERANDOMIZE,
                 suppress_health_check=[HealthCheck.too_slow])
@@ -62,7 +63,8 @@ FINE = 3000
 
 
 def guard_scales(robot):
-    return {"d": robot.L, "fn1": robot.M * robot.g, "fn2": robot.M * robot.g, "zj1": robot.L, "zj2": robot.L}
+    return {"d": robot.L, "fn1": robot.M * robot.g, "fn2": robot.M * robot.g, "zj1": robot.L,
+            "zj2": robot.L}
 
 
 def valid_config(kin) -> np.ndarray:
@@ -70,27 +72,31 @@ def valid_config(kin) -> np.ndarray:
 
 
 def run_prescribed(model: Model, angles):
-    """simulate_angles, or None when the input is rejected up front; a rejection must be justified."""
+    """simulate_angles, or None when the input is rejected up front; a rejection must be
+    justified."""
     try:
         return simulate_angles(model, angles)
     except ValueError as exc:
         msg = str(exc)
         assert "\n" not in msg and msg.startswith("prescribed configuration at t = 0:"), msg
-        # documented rejection: the start configuration has a foot off the ground, a joint on it, or d <= 0
+        # documented rejection: the start configuration has a foot off the ground, a joint on it, or
+        # d <= 0
         assert not valid_config(model.kinematics(angles(0.0))), msg
         event("rejected: no valid start configuration")
         return None
 
 
 def slip_weight(model: Model, kin) -> np.ndarray:
-    """Share of d' taken by foot 1: 1 if its friction limit is the smaller, 0 if foot 2's, 1/2 for a tie."""
+    """Share of d' taken by foot 1: 1 if its friction limit is the smaller, 0 if foot 2's, 1/2 for a
+    tie."""
     r = model.robot
     h = (r.mu1 * kin["fn1"] - r.mu2 * kin["fn2"]) / (r.M * r.g)
     return np.where(np.abs(h) <= TIE, 0.5, np.where(h < 0, 1.0, 0.0))
 
 
 def displacement_oracle(model: Model, angles, n: int = FINE) -> tuple[float, float]:
-    """S = -integral of w dd (foot 1 moves by -dd when it slips) on a fine grid, and its error bound:
+    """S = -integral of w dd (foot 1 moves by -dd when it slips) on a fine grid, and its error
+    bound:
     |dd| of every interval in which the slipping foot changes (elsewhere the sum is exact)."""
     t = np.linspace(0.0, 1.0, 2 * n + 1)
     kin = model.kinematics(angles(t))
@@ -141,7 +147,8 @@ def dissipation_oracle(model: Model, angles, n: int = FINE) -> tuple[float, floa
 
 
 def check_success(model: Model, angles, res) -> None:
-    """Every property of a successful prescribed-angle run (each part below), against the model and oracles."""
+    """Every property of a successful prescribed-angle run (each part below), against the model and
+    oracles."""
     _check_outputs(model, angles, res)
     _check_contact(model, angles, res)
     _check_friction(model, angles, res)
@@ -185,10 +192,12 @@ def _check_contact(model: Model, angles, res) -> None:
         assert np.all(kin[name] > 0), name
     np.testing.assert_allclose(res.f_n1, kin["fn1"], rtol=1e-13, atol=1e-13 * Mg)
     np.testing.assert_allclose(res.d, kin["d"], rtol=1e-13, atol=1e-13 * L)
-    # ... and on a fine grid of the whole cycle (a loss of contact between the scan phases is a failure)
+    # ... and on a fine grid of the whole cycle (a loss of contact between the scan phases is a
+    # failure)
     fine = model.kinematics(angles(np.linspace(0.0, 1.0, FINE + 1)))
     for name in GUARDS:
-        assert np.min(fine[name]) > 0, f"{name} reaches {np.min(fine[name]):.3g} although the run succeeded"
+        assert np.min(fine[name]) > 0, \
+            f"{name} reaches {np.min(fine[name]):.3g} although the run succeeded"
     # joint equilibrium with the holding torques, residual relative to the torque scale
     for j in range(res.t.size):
         F = model.equilibrium_residual(res.phi[:, j], res.tau[:, j], res.f_t[j])
@@ -209,12 +218,15 @@ def _check_friction(model: Model, angles, res) -> None:
     modes = [Mode(int(m)) for m in res.mode]
     slip = np.array([m.foot != 0 for m in modes])
     slip_lim = np.array([lim1[j] if m.foot in (1, 3) else lim2[j] for j, m in enumerate(modes)])
-    assert np.all(np.abs(np.abs(res.f_t[slip]) - slip_lim[slip]) <= 1e-12 * np.maximum(Mg, slip_lim[slip]))
+    assert np.all(np.abs(np.abs(res.f_t[slip]) - slip_lim[slip])
+                  <= 1e-12 * np.maximum(Mg, slip_lim[slip]))
     # friction opposes the slip: f_t d' >= 0, d' from central differences of the kinematics
     h = 1e-7
-    ddot = (model.kinematics(angles(res.t + h))["d"] - model.kinematics(angles(res.t - h))["d"]) / (2 * h)
+    ddot = (model.kinematics(angles(res.t + h))["d"]
+            - model.kinematics(angles(res.t - h))["d"]) / (2 * h)
     smooth = np.ones(n, bool)
-    for knot in getattr(angles, "t_knots", ()):  # the derivative of a sampled input may jump at its knots
+    # the derivative of a sampled input may jump at its knots
+    for knot in getattr(angles, "t_knots", ()):
         smooth &= np.abs((res.t - knot + 0.5) % 1.0 - 0.5) > 2 * h
     clear = smooth & (np.abs(ddot) > 1e-5 * L * (1 + np.max(np.abs(ddot)) / L))
     sig = np.array([m.sigma for m in modes])
@@ -271,8 +283,10 @@ def _check_energy(model: Model, angles, res) -> None:
         assert res.CoT_plus == math.inf
 
 
-EVENT_KINDS = ("slip_reversal", "slip_switch", "slip_to_stick", "slip_onset_1", "slip_onset_2", "slip_onset_both")
-FAILURE_KINDS = {Status.LIFT_OFF: ("lift_off_1", "lift_off_2"), Status.FEET_CROSSED: ("feet_crossed",),
+EVENT_KINDS = ("slip_reversal", "slip_switch", "slip_to_stick", "slip_onset_1", "slip_onset_2",
+               "slip_onset_both")
+FAILURE_KINDS = {Status.LIFT_OFF: ("lift_off_1", "lift_off_2"),
+                 Status.FEET_CROSSED: ("feet_crossed",),
                  Status.JOINT_ON_GROUND: ("joint_1_on_ground", "joint_2_on_ground")}
 
 

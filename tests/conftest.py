@@ -14,8 +14,10 @@ from ocp_crawl.model import compiled  # noqa: E402
 # under test: the checks of stderr in this process do not see it (test_warmup.py checks it)
 compiled.ANNOUNCE_BUILDS = False
 
-#: why a heavy test is skipped: the default suite stays within its time budget (docs/benchmarks.md, "The test suite")
-HEAVY_REASON = "a convergence, dense-grid or fuzz run: by hand, OCP_CRAWL_HEAVY=1 python -m pytest -q -m heavy"
+#: why a heavy test is skipped: the default suite stays within its time budget (docs/benchmarks.md,
+#: "The test suite")
+HEAVY_REASON = ("a convergence, dense-grid or fuzz run: by hand, "
+                "OCP_CRAWL_HEAVY=1 python -m pytest -q -m heavy")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -73,17 +75,18 @@ def make_torque():
 @pytest.fixture
 def model_of():
     def build(robot=None, gravity="physical", **robot_changes):
-        robot = (robot or Robot.paper()).replace(**robot_changes) if robot_changes else (robot or Robot.paper())
+        robot = ((robot or Robot.paper()).replace(**robot_changes) if robot_changes
+                 else (robot or Robot.paper()))
         return Model(robot, gravity=gravity)
     return build
 
 
 @pytest.fixture(scope="session")
 def cli_optimize_run(tmp_path_factory):
-    """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30 (a cheap
-    search of every waveform family), shared by the tests of its JSON, progress bar and output files, and
-    by the worker processes of pytest-xdist (the first to take the lock runs it): (exit code, stdout,
-    stderr, the --out directory, N)."""
+    """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30
+    (a cheap search of every waveform family), shared by the tests of its JSON, progress bar and
+    output files, and by the worker processes of pytest-xdist (the first to take the lock runs it):
+    (exit code, stdout, stderr, the --out directory, N)."""
     import contextlib
     import fcntl
     import io
@@ -104,8 +107,8 @@ def cli_optimize_run(tmp_path_factory):
             with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
                 code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set",
                              "ocp.harmonic_psi=8", "--set", "ocp.baseline_samples=8", "--set",
-                             "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json",
-                             "--out", str(out), "--progress"])
+                             "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40",
+                             "--json", "--out", str(out), "--progress"])
             record.write_text(json.dumps([code, stdout.getvalue(), stderr.getvalue()]))
         code, stdout, stderr = json.loads(record.read_text())
     return code, stdout, stderr, out, nodes

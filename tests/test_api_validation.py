@@ -7,7 +7,7 @@ and the rule, not silently sorted, computed or ignored.
 import numpy as np
 import pytest
 
-from ocp_crawl.model.inputs import MAX_KNOTS, PeriodicLinear, PeriodicPchip
+from ocp_crawl.model.sampled import MAX_KNOTS, PeriodicLinear, PeriodicPchip
 from ocp_crawl.problem import paper_problem, run_problem
 from ocp_crawl.sim.assemble import MAX_OUTPUT_PHASES
 from ocp_crawl.studies.common import SweepOptions

@@ -12,7 +12,8 @@ import pytest
 PKG = Path(__file__).resolve().parent.parent / "ocp_crawl"
 
 #: floors from the bottom; one floor per subpackage (or floor-0 module)
-FLOORS = ["version", "status", "checks", "io", "model", "nlp", "sim", "ocp", "problem", "viz", "sweep", "fit", "studies", "cli"]
+FLOORS = ["version", "status", "checks", "io", "model", "nlp", "sim", "ocp", "problem", "viz",
+          "sweep", "fit", "studies", "cli"]
 FLOOR = {name: i for i, name in enumerate(FLOORS)}
 FLOOR["status"] = FLOOR["checks"] = FLOOR["io"] = FLOOR["version"] = FLOOR["workers"] = 0
 TOP = {"__init__", "__main__"}  # the package's front door may import anything
@@ -22,7 +23,8 @@ MAX_FUNCTION_LINES = 80
 
 
 def _modules():
-    # ocp_crawl/data/ holds shipped files (the examples gallery's scripts, written out by `ocp-crawl init`), not modules
+    # ocp_crawl/data/ holds shipped files (the examples gallery's scripts, written out by `ocp-crawl
+    # init`), not modules
     return sorted(p for p in PKG.rglob("*.py") if p.relative_to(PKG).parts[0] != "data")
 
 
@@ -52,7 +54,8 @@ def _floor(dotted: str) -> int | None:
     parts = dotted.split(".")
     if len(parts) < 2 or parts[1] in TOP:
         return None
-    if parts[1].startswith("__"):  # a name of the front door (``from ocp_crawl import __version__``)
+    # a name of the front door (``from ocp_crawl import __version__``)
+    if parts[1].startswith("__"):
         return len(FLOORS)
     return FLOOR[parts[1]]
 
@@ -79,7 +82,8 @@ def test_no_upward_import(path):
 def test_no_import_cycle():
     graph = {_dotted(p): {t for t in _imports(p, top_level_only=True)} for p in _modules()}
     names = set(graph)
-    graph = {k: {t if t in names else t.rsplit(".", 1)[0] for t in v} & names for k, v in graph.items()}
+    graph = {k: {t if t in names else t.rsplit(".", 1)[0] for t in v} & names
+             for k, v in graph.items()}
     state: dict[str, int] = {}
 
     def visit(node, stack):
@@ -88,7 +92,8 @@ def test_no_import_cycle():
             if nxt == node or nxt in ("ocp_crawl",):
                 continue
             if state.get(nxt) == 1:
-                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(nxt):] + [nxt]))
+                raise AssertionError("import cycle: "
+                                     + " -> ".join(stack[stack.index(nxt):] + [nxt]))
             if nxt not in state:
                 visit(nxt, stack + [nxt])
         state[node] = 2
@@ -109,14 +114,14 @@ def test_module_and_function_size(path):
 
 
 def test_ruff_finds_nothing():
-    """ruff with the project's configuration (pyproject.toml: pyflakes' errors, syntax errors) on the
-    package, the tests, the scripts and the docs' extensions."""
+    """ruff with the project's configuration (pyproject.toml: pyflakes' errors, syntax errors) on
+    the package, the tests, the scripts and the docs' extensions."""
     import shutil
     import subprocess
 
     ruff = shutil.which("ruff")
     if ruff is None:
         pytest.skip("ruff is not installed (pip install -e .[test])")
-    proc = subprocess.run([ruff, "check", "ocp_crawl", "tests", "scripts", "docs/_ext"], cwd=PKG.parent,
-                          capture_output=True, text=True)
+    proc = subprocess.run([ruff, "check", "ocp_crawl", "tests", "scripts", "docs/_ext"],
+                          cwd=PKG.parent, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -1,9 +1,11 @@
-"""The waveform baselines (ocp/baseline.py, ocp/family.py, ocp/search.py) against independent grids of gaits.
+"""The waveform baselines (ocp/baseline.py, ocp/family.py, ocp/search.py) against independent grids
+of gaits.
 
-The grids are simulated here directly with the event-driven stepper, and the objectives are written out
-here from their definitions (v = direction * S / T, CoT+ = W+/(M g |S|), T >= 2 pi max(A1, A2) / R for a
-sine, 4 max(A1, A2) / R for a triangle wave), not taken from the modules under test.  The dense grid (15 gamma x 8 A x 36 psi x 5 periods) is the slow
-test below; set OCP_CRAWL_BASELINE_GRID="15,8,36" to run it at full size (default: a small grid).
+The grids are simulated here directly with the event-driven stepper, and the objectives are written
+out here from their definitions (v = direction * S / T, CoT+ = W+/(M g |S|), T >= 2 pi max(A1, A2) /
+R for a sine, 4 max(A1, A2) / R for a triangle wave), not taken from the modules under test.  The
+dense grid (15 gamma x 8 A x 36 psi x 5 periods) is the slow test below; set
+OCP_CRAWL_BASELINE_GRID="15,8,36" to run it at full size (default: a small grid).
 """
 import json
 import math
@@ -22,46 +24,54 @@ from ocp_crawl.sim.event import simulate_torque
 
 GAMMA, A_MAX, RATE, DIRECTION = 90.0, 30.0, 180.0, -1
 RTOL = 1e-9
-#: the default friction tolerance: the family admits only gaits whose slipping foot does not depend on it
+#: the default friction tolerance: the family admits only gaits whose slipping foot does not depend
+#: on it
 FRICTION_TOL = OCPSettings().friction_tol
 
 
 def shipped_settings(**changes) -> OCPSettings:
     """The envelope and bandwidth of problems/ocp_max_speed.toml."""
-    return OCPSettings(gamma_deg=GAMMA, A_max_deg=A_MAX, max_rate_deg_s=RATE, direction=DIRECTION, **changes)
+    return OCPSettings(gamma_deg=GAMMA, A_max_deg=A_MAX, max_rate_deg_s=RATE, direction=DIRECTION,
+                       **changes)
 
 
 def grid(n_gamma: int, amps, psis, robots, periods=(1.0, 1.25, 2.0)) -> list[dict]:
-    """Symmetric harmonic gaits (gamma1 = gamma2, A1 = A2) inside the envelope, simulated in every robot
-    (scenario); each gait at several periods T >= 2 pi A / R (factors ``periods`` of that bound)."""
+    """Symmetric harmonic gaits (gamma1 = gamma2, A1 = A2) inside the envelope, simulated in every
+    robot (scenario); each gait at several periods T >= 2 pi A / R (factors ``periods`` of that
+    bound)."""
     rows = []
     for A in amps:
         for gamma in GAMMA + np.linspace(-1.0, 1.0, n_gamma) * (A_MAX - A):
             for psi in psis:
                 gait = Harmonic.from_degrees(float(gamma), float(A), float(psi))
-                sims = [simulate_torque(Model(r, gravity="physical"), ReferenceTorque(gait, r.k)) for r in robots]
+                sims = [simulate_torque(Model(r, gravity="physical"),
+                                        ReferenceTorque(gait, r.k)) for r in robots]
                 if not all(s.success for s in sims):
                     continue
                 if min(result_margins(s, r)[0] for s, r in zip(sims, robots)) < FRICTION_TOL:
-                    continue  # not admissible (the rule is checked on its own in test_slip_margin.py)
+                    # not admissible (the rule is checked on its own in test_slip_margin.py)
+                    continue
                 t_min = 2 * math.pi * A / RATE
                 for f in periods:
                     T = f * t_min
                     v = [DIRECTION * s.S / T for s in sims]
-                    cot = sims[0].W_plus / (robots[0].M * robots[0].g * abs(sims[0].S)) if sims[0].S else math.inf
+                    cot = (sims[0].W_plus / (robots[0].M * robots[0].g * abs(sims[0].S))
+                           if sims[0].S else math.inf)
                     rows.append({"gamma": gamma, "A": A, "psi": psi, "T": T, "v": v, "cot": cot})
     return rows
 
 
 def check_choice(choice, settings: OCPSettings, robots) -> None:
-    """The baseline's gait is in the envelope at the bandwidth's shortest period, and a fresh simulation of
-    its parameters gives its S, W+ and speeds."""
+    """The baseline's gait is in the envelope at the bandwidth's shortest period, and a fresh
+    simulation of its parameters gives its S, W+ and speeds."""
     assert choice is not None
     for g, a in ((choice.gamma1_deg, choice.A1_deg), (choice.gamma2_deg, choice.A2_deg)):
         assert a >= 0 and abs(g - GAMMA) + a <= A_MAX * (1 + RTOL)
-    assert choice.T == pytest.approx(2 * math.pi * max(choice.A1_deg, choice.A2_deg) / RATE, rel=1e-12)
+    assert choice.T == pytest.approx(2 * math.pi * max(choice.A1_deg, choice.A2_deg) / RATE,
+                                     rel=1e-12)
     gait = Harmonic.from_degrees(psi_deg=choice.psi_deg, gamma1_deg=choice.gamma1_deg,
-                                 gamma2_deg=choice.gamma2_deg, A1_deg=choice.A1_deg, A2_deg=choice.A2_deg)
+                                 gamma2_deg=choice.gamma2_deg, A1_deg=choice.A1_deg,
+                                 A2_deg=choice.A2_deg)
     for j, r in enumerate(robots):
         sim = simulate_torque(Model(r, gravity="physical"), ReferenceTorque(gait, r.k))
         assert sim.success
@@ -79,12 +89,14 @@ def scenario_robots(ratios=(0.9, 1.0, 1.1)) -> list[Robot]:
 
 
 def assert_beats_speed(rows, objective: str, robust: str = "mean"):
-    """best_harmonic for a speed objective is at least as fast as every grid row; returns (choice, margin)."""
+    """best_harmonic for a speed objective is at least as fast as every grid row; returns (choice,
+    margin)."""
     settings = shipped_settings(objective=objective, robust=robust)
     robots = scenario_robots() if objective == "robust_speed" else [Robot.paper()]
     choice = best_harmonic(Robot.paper(), "physical", settings)
     check_choice(choice, settings, robots)
-    speed = (lambda v: float(np.mean(v) if robust == "mean" else np.min(v))) if len(robots) > 1 else (lambda v: v[0])
+    speed = ((lambda v: float(np.mean(v) if robust == "mean" else np.min(v)))
+             if len(robots) > 1 else (lambda v: v[0]))
     assert choice.value == pytest.approx(speed(choice.v), rel=1e-12)
     grid_best = max(speed(r["v"]) for r in rows)
     assert choice.value >= grid_best * (1 - RTOL), (choice.to_dict(), grid_best)
@@ -92,8 +104,8 @@ def assert_beats_speed(rows, objective: str, robust: str = "mean"):
 
 
 def assert_beats_cot(rows, fraction: float = 0.5):
-    """best_harmonic for min_cot (speed_min: met by some grid rows, not all) has a CoT+ at most every
-    feasible grid row's; returns (choice, margin)."""
+    """best_harmonic for min_cot (speed_min: met by some grid rows, not all) has a CoT+ at most
+    every feasible grid row's; returns (choice, margin)."""
     speeds = sorted(r["v"][0] for r in rows if r["v"][0] > 0)
     speed_min = speeds[int(fraction * len(speeds))]
     feasible = [r for r in rows if r["v"][0] >= speed_min]
@@ -103,7 +115,8 @@ def assert_beats_cot(rows, fraction: float = 0.5):
     check_choice(choice, settings, [Robot.paper()])
     robot = Robot.paper()
     cot = choice.W_plus[0] / (robot.M * robot.g * abs(choice.S[0]))
-    assert choice.feasible and choice.v[0] >= speed_min and choice.value == pytest.approx(cot, rel=1e-12)
+    assert (choice.feasible and choice.v[0] >= speed_min
+            and choice.value == pytest.approx(cot, rel=1e-12))
     grid_best = min(r["cot"] for r in feasible)
     assert choice.value <= grid_best * (1 + RTOL), (choice.to_dict(), grid_best)
     return choice, 1 - choice.value / grid_best
@@ -111,8 +124,8 @@ def assert_beats_cot(rows, fraction: float = 0.5):
 
 @pytest.fixture(scope="module")
 def coarse_rows():
-    """5 gamma x 3 A x 12 psi x 3 periods, independent of the baseline's own scan (A = 7.5, 15, 22.5, 30;
-    psi multiples of 10 deg)."""
+    """5 gamma x 3 A x 12 psi x 3 periods, independent of the baseline's own scan (A = 7.5, 15,
+    22.5, 30; psi multiples of 10 deg)."""
     return grid(5, (5.0, 17.0, 29.0), np.linspace(-165.0, 165.0, 12), [Robot.paper()])
 
 
@@ -135,10 +148,11 @@ def dense_sizes() -> tuple[int, int, int]:
 @pytest.mark.heavy
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot", "robust_speed"])
 def test_beats_dense_grid(objective):
-    """The dense grid (OCP_CRAWL_BASELINE_GRID="15,8,36": 15 gamma x 8 A x 36 psi x 5 periods) by hand;
-    a small one by default.  Prints the margin of the baseline over the grid's best."""
+    """The dense grid (OCP_CRAWL_BASELINE_GRID="15,8,36": 15 gamma x 8 A x 36 psi x 5 periods) by
+    hand; a small one by default.  Prints the margin of the baseline over the grid's best."""
     n_gamma, n_a, n_psi = dense_sizes()
-    amps = np.linspace(A_MAX / n_a, A_MAX, n_a) - A_MAX / (4 * n_a)  # off the baseline scan's amplitudes
+    # off the baseline scan's amplitudes
+    amps = np.linspace(A_MAX / n_a, A_MAX, n_a) - A_MAX / (4 * n_a)
     psis = np.linspace(-180.0, 180.0, n_psi + 1)[1:] - 180.0 / n_psi  # odd multiples of half a step
     robots = scenario_robots() if objective == "robust_speed" else [Robot.paper()]
     rows = grid(n_gamma, amps, psis, robots, periods=(1.0, 1.1, 1.5, 2.0, 3.0))
@@ -146,25 +160,30 @@ def test_beats_dense_grid(objective):
         choice, margin = assert_beats_cot(rows, fraction=0.4)
     else:
         choice, margin = assert_beats_speed(rows, objective)
-    print(f"{objective}: {len(rows)} grid rows; baseline value {choice.value:.9g} better by {margin:.3e} "
-          f"(relative); {choice.evaluated} evaluations in {choice.time_s:.2f} s")
+    print(f"{objective}: {len(rows)} grid rows; baseline value {choice.value:.9g} better by "
+          f"{margin:.3e} (relative); {choice.evaluated} evaluations in {choice.time_s:.2f} s")
 
 
 def test_value_definitions():
-    """value_from: mean speed v = direction S / T, robust mean/worst, CoT+ with the speed requirement."""
+    """value_from: mean speed v = direction S / T, robust mean/worst, CoT+ with the speed
+    requirement."""
     S, cot, T = [-0.03, -0.02, 0.01], [20.0, 30.0, 40.0], 0.5
     assert value_from(shipped_settings(), S[:1], cot[:1], T) == pytest.approx(0.06)
-    assert value_from(shipped_settings(objective="robust_speed"), S, cot, T) == pytest.approx(0.04 / 3 * 2)
-    assert value_from(shipped_settings(objective="robust_speed", robust="worst"), S, cot, T) == pytest.approx(-0.02)
+    assert value_from(shipped_settings(objective="robust_speed"), S, cot,
+                      T) == pytest.approx(0.04 / 3 * 2)
+    assert value_from(shipped_settings(objective="robust_speed", robust="worst"), S, cot,
+                      T) == pytest.approx(-0.02)
     need = shipped_settings(objective="min_cot", speed_min=0.07)
     assert value_from(need, S[:1], cot[:1], T) == 20.0
     assert required_value(need, S[:1], cot[:1], T) == math.inf
-    assert value_from(shipped_settings(objective="min_cot"), [0.03], [20.0], T) == math.inf  # wrong way
+    # wrong way
+    assert value_from(shipped_settings(objective="min_cot"), [0.03], [20.0], T) == math.inf
 
 
 def test_value_over_a_friction_set():
-    """Every objective over a friction set: max_speed's is robust_speed's (mean or worst speed); min_cot's
-    the mean or the largest CoT+, +inf when one scenario misses speed_min or moves the wrong way."""
+    """Every objective over a friction set: max_speed's is robust_speed's (mean or worst speed);
+    min_cot's the mean or the largest CoT+, +inf when one scenario misses speed_min or moves the
+    wrong way."""
     S, cot, T = [-0.03, -0.02, -0.025], [20.0, 30.0, 40.0], 0.5
     for robust in ("mean", "worst"):
         own = shipped_settings(objective="max_speed", mu_ratio_eps=0.05, robust=robust)
@@ -172,7 +191,8 @@ def test_value_over_a_friction_set():
         assert value_from(own, S, cot, T) == value_from(
             shipped_settings(objective="robust_speed", robust=robust), S, cot, T)
     assert value_from(shipped_settings(objective="min_cot", mu_ratio_eps=0.05), S, cot, T) == 30.0
-    worst = shipped_settings(objective="min_cot", mu_ratio_eps=0.05, robust="worst", speed_min=0.045)
+    worst = shipped_settings(objective="min_cot", mu_ratio_eps=0.05, robust="worst",
+                             speed_min=0.045)
     assert value_from(worst, S, cot, T) == 40.0
     assert required_value(worst, S, cot, T) == math.inf  # 0.04 m/s in scenario 2
     assert value_from(worst, [-0.03, 0.001, -0.03], cot, T) == math.inf  # the wrong way in one
@@ -181,8 +201,8 @@ def test_value_over_a_friction_set():
 
 
 def test_family_box_is_the_envelope():
-    """Every box point maps into the envelope (gamma_i +- A_i within gamma +- A_max), corners reach its
-    edges, and to_box inverts from_box."""
+    """Every box point maps into the envelope (gamma_i +- A_i within gamma +- A_max), corners reach
+    its edges, and to_box inverts from_box."""
     settings = shipped_settings()
     rng = np.random.default_rng(0)
     lo, hi = np.array(BOX).T
@@ -197,8 +217,8 @@ def test_family_box_is_the_envelope():
 
 
 def test_min_cot_unreachable_speed_gives_a_fallback():
-    """A speed requirement above every harmonic gait's speed: value +inf, not feasible, but a gait (the
-    fastest found) is returned as initial guess."""
+    """A speed requirement above every harmonic gait's speed: value +inf, not feasible, but a gait
+    (the fastest found) is returned as initial guess."""
     settings = shipped_settings(objective="min_cot", speed_min=1.0, harmonic_A=2, harmonic_psi=8,
                                 baseline_samples=8)
     choice = best_harmonic(Robot.paper(), "physical", settings, local_starts=1, maxfev=40)
@@ -209,16 +229,19 @@ def test_min_cot_unreachable_speed_gives_a_fallback():
 
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
 def test_twice_per_cycle_has_the_same_value(objective):
-    """A harmonic gait run twice per cycle at twice the period: S and W+ double, and value_from is unchanged
-    (v = direction S / T and CoT+ are both invariant), as the OCP's free period requires."""
+    """A harmonic gait run twice per cycle at twice the period: S and W+ double, and value_from is
+    unchanged (v = direction S / T and CoT+ are both invariant), as the OCP's free period
+    requires."""
     robot = Robot.paper()
     model = Model(robot, gravity="physical")
-    once = ReferenceTorque(Harmonic.from_degrees(psi_deg=30.0, gamma1_deg=100.0, gamma2_deg=96.0, A1_deg=12.0,
-                                                 A2_deg=15.0), robot.k)
-    twice = CallableSignal(lambda t: once((2.0 * t) % 1.0), lambda t: 2.0 * once.derivative((2.0 * t) % 1.0))
+    once = ReferenceTorque(Harmonic.from_degrees(psi_deg=30.0, gamma1_deg=100.0, gamma2_deg=96.0,
+                                                 A1_deg=12.0, A2_deg=15.0), robot.k)
+    twice = CallableSignal(lambda t: once((2.0 * t) % 1.0),
+                           lambda t: 2.0 * once.derivative((2.0 * t) % 1.0))
     r1, r2 = simulate_torque(model, once), simulate_torque(model, twice)
     assert r1.success and r2.success
-    assert r2.S == pytest.approx(2 * r1.S, rel=1e-9) and r2.W_plus == pytest.approx(2 * r1.W_plus, rel=1e-9)
+    assert r2.S == pytest.approx(2 * r1.S, rel=1e-9) and r2.W_plus == pytest.approx(2 * r1.W_plus,
+                                                                                    rel=1e-9)
     settings = shipped_settings(objective=objective, speed_min=0.01)
     T = 2 * math.pi * 15.0 / RATE
     v1 = required_value(settings, [r1.S], [r1.CoT_plus], T)
@@ -228,17 +251,18 @@ def test_twice_per_cycle_has_the_same_value(objective):
 
 @pytest.mark.slow
 def test_worker_processes_change_nothing_but_the_time():
-    """The scan and the local searches on two worker processes give the serial search's choice, field by field
-    (the simulations are deterministic), and ``meanwhile`` runs once; a worker pool that breaks falls back to the
-    serial search; jobs < 1 is refused by name."""
+    """The scan and the local searches on two worker processes give the serial search's choice,
+    field by field (the simulations are deterministic), and ``meanwhile`` runs once; a worker pool
+    that breaks falls back to the serial search; jobs < 1 is refused by name."""
     import ocp_crawl.ocp.search as search
     from concurrent.futures.process import BrokenProcessPool
     from dataclasses import asdict
 
-    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8, baseline_samples=16)
+    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8,
+                                baseline_samples=16)
     called = []
-    runs = [asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=j,
-                                 meanwhile=lambda: called.append(j))) for j in (1, 2)]
+    runs = [asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30,
+                                 jobs=j, meanwhile=lambda: called.append(j))) for j in (1, 2)]
     assert called == [1, 2]  # once each, with and without workers
     for run in runs:
         run.pop("time_s")
@@ -254,7 +278,8 @@ def test_worker_processes_change_nothing_but_the_time():
 
     real_pool, search._pool = search._pool, broken
     try:
-        again = asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30, jobs=2))
+        again = asdict(best_harmonic(Robot.paper(), "physical", settings, local_starts=2, maxfev=30,
+                                     jobs=2))
     finally:
         search._pool = real_pool
     assert calls == [2, 1]

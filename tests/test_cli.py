@@ -16,7 +16,8 @@ REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
 PAPER_TEXT = PAPER.read_text()
 
-JSON_KEYS = {"status", "success", "message", "S", "W_plus", "CoT_plus", "events", "cycles", "problem"}
+JSON_KEYS = {"status", "success", "message", "S", "W_plus", "CoT_plus", "events", "cycles",
+             "problem"}
 
 
 def run(capsys, *argv):
@@ -44,8 +45,8 @@ def test_simulate_prints_a_readable_summary(capsys):
     code, out, err = run(capsys, "simulate", PAPER)
     assert code == 0, err
     assert err == ""
-    for word in ("status     success", "S          -55.8", "mm per cycle", "W+ ", "mJ", "CoT+", "cycles",
-                 "events in the steady cycle: 4", "stick-stick"):
+    for word in ("status     success", "S          -55.8", "mm per cycle", "W+ ", "mJ", "CoT+",
+                 "cycles", "events in the steady cycle: 4", "stick-stick"):
         assert word in out, word
 
 
@@ -94,8 +95,9 @@ def test_simulate_json_labels_the_events_the_text_lists(capsys, sets):
 
 
 def test_simulate_reports_the_speed_of_a_problem_with_a_period(capsys):
-    """[gait] period gives the mean speed |S| / period (text in mm/s, JSON in m/s); without it the speed is "-"
-    and null, and S is the same either way (the quasistatic S per cycle does not depend on time)."""
+    """[gait] period gives the mean speed |S| / period (text in mm/s, JSON in m/s); without it the
+    speed is "-" and null, and S is the same either way (the quasistatic S per cycle does not depend
+    on time)."""
     code, out, err = run(capsys, "simulate", PAPER, "--json")
     plain = json.loads(out)
     assert code == 0, err
@@ -122,11 +124,13 @@ def test_simulate_out_writes_the_files(capsys, tmp_path):
     assert (out_dir / "notes.txt").read_text() == "mine\n"
     (out_dir / "notes.txt").unlink()
     names = {p.name for p in out_dir.iterdir()}
-    assert names == {"arrays.npz", "summary.json", "gait.png", "gait.pdf"}  # no temporary files left
+    # no temporary files left
+    assert names == {"arrays.npz", "summary.json", "gait.png", "gait.pdf"}
     summary = json.loads((out_dir / "summary.json").read_text())
     assert summary["gravity"] == "paper" and summary["success"] is True
     with np.load(out_dir / "arrays.npz") as arrays:
-        assert arrays["phi"].shape == (2, arrays["t"].size) and arrays["x1"].shape == arrays["t"].shape
+        assert arrays["phi"].shape == (2,
+                                       arrays["t"].size) and arrays["x1"].shape == arrays["t"].shape
     assert (out_dir / "gait.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out_dir / "gait.pdf").read_bytes()[:5] == b"%PDF-"
     refuse_then_force(capsys, argv, out_dir, names, 0)
@@ -135,8 +139,8 @@ def test_simulate_out_writes_the_files(capsys, tmp_path):
 @pytest.mark.slow
 def test_numerical_failure_exits_1_and_still_prints_json(capsys, tmp_path):
     # a stiff robot with a large amplitude: foot 2 lifts off during the first cycle
-    code, out, err = run(capsys, "simulate", PAPER, "--set", "robot.k=0.612", "--set", "gait.A_deg=60", "--json",
-                         "--out", tmp_path)
+    code, out, err = run(capsys, "simulate", PAPER, "--set", "robot.k=0.612", "--set",
+                         "gait.A_deg=60", "--json", "--out", tmp_path)
     assert code == 1
     data = json.loads(out)
     assert data["success"] is False and data["status_name"] == "lift_off" and data["S"] is None
@@ -154,7 +158,8 @@ def test_demo(capsys, tmp_path, monkeypatch):
     assert out.count("success") == 3
     files = {p.name for p in (tmp_path / "demo").iterdir()}
     for case in ("torque_physical", "torque_paper", "angles"):
-        assert {f"{case}_gait.png", f"{case}_gait.pdf", f"{case}_summary.json", f"{case}_arrays.npz"} <= files
+        assert {f"{case}_gait.png", f"{case}_gait.pdf", f"{case}_summary.json",
+                f"{case}_arrays.npz"} <= files
     summary = json.loads((tmp_path / "demo" / "demo_summary.json").read_text())
     # the physical and the printed gravity sign differ by a few percent in S (MODEL_NOTES erratum)
     s_phys, s_paper = summary["torque_physical"]["S"], summary["torque_paper"]["S"]
@@ -164,7 +169,8 @@ def test_demo(capsys, tmp_path, monkeypatch):
     from ocp_crawl.io.files import atomic_write
 
     def cheap_outputs(out, result, problem, data, stem=""):
-        return [atomic_write(out / f"{stem}{name}", lambda fh: fh.write(b"stand-in")) for name in cli.RUN_FILES]
+        return [atomic_write(out / f"{stem}{name}",
+                             lambda fh: fh.write(b"stand-in")) for name in cli.RUN_FILES]
 
     monkeypatch.setattr(cli, "write_outputs", cheap_outputs)
     refuse_then_force(capsys, argv, tmp_path / "demo", files, 0)
@@ -177,36 +183,39 @@ def test_help_and_version(capsys):
     assert code == 0 and "ocp-crawl" in out
 
 
-# ------------------------------------------------------------------------------------------ bad input
-# the table of malformed inputs of every command is tests/test_bad_input.py (its rows in tests/_bad_input_rows.py
-# and tests/_bad_input_data_rows.py)
+# ------------------------------------------------------------------------------------------ bad
+# input the table of malformed inputs of every command is tests/test_bad_input.py (its rows in
+# tests/_bad_input_rows.py and tests/_bad_input_data_rows.py)
 
 
 @pytest.mark.slow
 def test_real_subprocess_bad_input_and_json(tmp_path):
     env = dict(os.environ, MPLBACKEND="Agg")
     bad = write(tmp_path, edit("k = 0.1677", "k = -1.0"))
-    proc = subprocess.run([sys.executable, "-m", "ocp_crawl.cli", "simulate", str(bad)], capture_output=True,
-                          text=True, env=env, timeout=120)
+    proc = subprocess.run([sys.executable, "-m", "ocp_crawl.cli", "simulate", str(bad)],
+                          capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 2
-    assert proc.stderr.strip() == (f"ocp-crawl: error: {bad}: [robot] k = -1.0 is invalid: must be in [1e-12, 1e12] "
-                                   "(torsion stiffness, N m/rad): so that M g L, k/(M g L) and their squares stay far "
-                                   "inside the floating-point range")
+    assert proc.stderr.strip() == (f"ocp-crawl: error: {bad}: [robot] k = -1.0 is invalid: "
+                                   "must be in [1e-12, 1e12] (torsion stiffness, N m/rad): "
+                                   "so that M g L, k/(M g L) "
+                                   "and their squares stay far inside the floating-point range")
     proc = subprocess.run([sys.executable, "-m", "ocp_crawl", "simulate", str(PAPER), "--json"],
                           capture_output=True, text=True, env=env, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert JSON_KEYS <= set(json.loads(proc.stdout))
 
 
-# ------------------------------------------------------------------------------------------ internal errors
+# ------------------------------------------------------------------------------------------
+# internal errors
 def one_line(err: str) -> str:
     lines = err.splitlines()
     assert len(lines) == 1 and "Traceback" not in err, err
     return lines[0]
 
 
-@pytest.mark.parametrize("exc", [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
-                                 TypeError("unsupported operand")])
+@pytest.mark.parametrize("exc",
+                         [ZeroDivisionError("float division by zero"), ValueError("bad shape (2,)"),
+                          TypeError("unsupported operand")])
 def test_an_internal_error_exits_1_not_2(exc, capsys, monkeypatch):
     import ocp_crawl.cli.run_commands as cli
 
@@ -252,12 +261,15 @@ def test_an_io_error_while_writing_exits_1(capsys, monkeypatch, tmp_path):
     code, out, err = run(capsys, "simulate", PAPER, "--out", tmp_path / "o")
     assert code == 1
     line = one_line(err)
-    assert line.startswith("ocp-crawl: I/O error: ") and "No space left on device" in line and "arrays.npz" in line
+    assert line.startswith("ocp-crawl: I/O "
+                           "error: ") and "No space left on device" in line and "arrays.npz" in line
 
 
-# ------------------------------------------------------------------------------------------ no_start
+# ------------------------------------------------------------------------------------------
+# no_start
 def test_no_start_check_agrees_with_the_solver():
-    """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as no_start."""
+    """check_start (the CLI's pre-check) rejects exactly the problems simulate_torque reports as
+    no_start."""
     from ocp_crawl.cli.app import BadInput
     from ocp_crawl.cli.run_commands import check_start
     from ocp_crawl.problem import load_problem, run_problem
@@ -277,7 +289,8 @@ def test_no_start_check_agrees_with_the_solver():
             assert f"k = {k}" in str(info.value)
 
 
-# ------------------------------------------------------------------------------------------ --out and --force
+# ------------------------------------------------------------------------------------------ --out
+# and --force
 def snapshot(directory: Path) -> dict:
     """name -> (bytes, mtime_ns, inode) of every file under directory."""
     out = {}
@@ -288,8 +301,10 @@ def snapshot(directory: Path) -> dict:
     return out
 
 
-#: a cheap optimize: few nodes, the harmonic baseline alone (every family: the shared run of conftest.py)
-OCP_CHEAP = ["--set", "ocp.nodes=8", "--set", "ocp.harmonic_psi=4", "--set", "ocp.baselines=harmonic",
+#: a cheap optimize: few nodes, the harmonic baseline alone (every family: the shared run of
+#: conftest.py)
+OCP_CHEAP = ["--set", "ocp.nodes=8", "--set", "ocp.harmonic_psi=4", "--set",
+             "ocp.baselines=harmonic",
              "--set", "ocp.baseline_samples=0", "--set", "ocp.baseline_starts=1",
              "--set", "ocp.baseline_evaluations=40"]
 
@@ -297,8 +312,8 @@ OCP_CHEAP = ["--set", "ocp.nodes=8", "--set", "ocp.harmonic_psi=4", "--set", "oc
 #: (simulate and demo: in test_simulate_out_writes_the_files and test_demo)
 FORCE_CASES = {
     "optimize": ([REPO / "problems" / "ocp_max_speed.toml", *OCP_CHEAP],
-                 {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png",
-                  "optimal_gait.pdf"}),
+                 {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json",
+                  "optimal_gait.png", "optimal_gait.pdf"}),
     "sweep": ([PAPER, "--grid", "gait.psi_deg=45", "--jobs", "1", "--no-progress"],
               {"settings.json", "results.csv", "summary.json"}),
 }
@@ -330,7 +345,8 @@ def test_out_is_never_overwritten_without_force(command, capsys, tmp_path):
     out_dir = tmp_path / "out"
     argv = [command, *args, "--out", out_dir]
     first = run(capsys, *argv)[0]
-    assert first in (0, 1)  # the cheap optimisation may fail its replay; it writes its files either way
+    # the cheap optimisation may fail its replay; it writes its files either way
+    assert first in (0, 1)
     refuse_then_force(capsys, argv, out_dir, files, first)
 
 
@@ -343,15 +359,18 @@ def test_animate_never_overwrites_a_gif_without_force(capsys, tmp_path):
     assert gif.read_bytes()[:6] == b"GIF89a"
     code, out, err = run(capsys, *argv)
     assert code == 2 and out == ""
-    assert one_line(err).startswith(f"ocp-crawl: error: --out {gif}: would overwrite earlier results (a.gif)")
+    assert one_line(err).startswith(f"ocp-crawl: error: --out {gif}: "
+                                    "would overwrite earlier results (a.gif)")
     assert snapshot(tmp_path) == before
     code, _, err = run(capsys, *argv, "--force")
     assert code == 0, err
     assert gif.stat().st_ino != before["a.gif"][2] or gif.stat().st_mtime_ns != before["a.gif"][1]
 
 
-def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, tmp_path, monkeypatch):
-    """No full reproduce here: a stand-in records the calls and writes report.md like the real one."""
+def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, tmp_path,
+                                                                        monkeypatch):
+    """No full reproduce here: a stand-in records the calls and writes report.md like the real
+    one."""
     import ocp_crawl.studies.reproduce as rp
 
     calls = []
@@ -381,7 +400,8 @@ def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, 
 # ------------------------------------------------------------------------------------------ solvers
 @pytest.mark.slow
 def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
-    """``--set simulation.solver=mpcc`` runs the MPCC time-stepping; ``--solver``/``--steps`` are shortcuts.
+    """``--set simulation.solver=mpcc`` runs the MPCC time-stepping; ``--solver``/``--steps`` are
+    shortcuts.
 
     The event-driven and MPCC values of S agree to within n_events (2 h)^2, h = 1/steps: inside a
     mode the time-stepping is exact, and each of the steady cycle's stick-slip transitions is taken
@@ -394,8 +414,10 @@ def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
     code, out, err = run(capsys, "simulate", PAPER, "--set", "simulation.solver=mpcc", "--json")
     assert code == 0, err
     mpcc = json.loads(out)
-    assert mpcc["solver"] == "mpcc" and mpcc["status_name"] == "success" and "MPCC" in mpcc["message"]
-    assert mpcc["problem"]["simulation"]["solver"] == "mpcc" and mpcc["problem"]["simulation"]["steps"] == 200
+    assert (mpcc["solver"] == "mpcc" and mpcc["status_name"] == "success"
+            and "MPCC" in mpcc["message"])
+    assert (mpcc["problem"]["simulation"]["solver"] == "mpcc"
+            and mpcc["problem"]["simulation"]["steps"] == 200)
     event = run_problem(load_problem(PAPER))
     n_events, h = len(event.steady_events()), 1 / 200
     assert n_events == 4
@@ -408,10 +430,11 @@ def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
     assert code == 0 and "(solver event)" in out
 
 
-# ------------------------------------------------------------------------------------------ files, frames
+# ------------------------------------------------------------------------------------------ files,
+# frames
 def test_a_full_disk_names_the_file(capsys, monkeypatch, tmp_path):
-    """A real full disk raises OSError(ENOSPC) without a file name (from write or fsync): the one line names the file,
-    exit 1 (not bad input), and no temporary file is left."""
+    """A real full disk raises OSError(ENOSPC) without a file name (from write or fsync): the one
+    line names the file, exit 1 (not bad input), and no temporary file is left."""
     import errno
 
     import ocp_crawl.io.files as files
@@ -449,30 +472,37 @@ def test_atomic_write_names_its_target(tmp_path):
 
 
 def test_animation_frames_are_bounded():
-    """frames_of refuses sizes beyond its bounds, and a failed run is shown over its last ``cycles`` cycles only."""
+    """frames_of refuses sizes beyond its bounds, and a failed run is shown over its last ``cycles``
+    cycles only."""
     from ocp_crawl.problem import load_problem, run_problem
     from ocp_crawl.viz.animate import MAX_CYCLES, MAX_FRAMES_PER_CYCLE, frames_of
 
     ok = run_problem(load_problem(PAPER))
     assert ok.success
-    assert len(frames_of(ok, MAX_CYCLES, MAX_FRAMES_PER_CYCLE).t) == MAX_CYCLES * MAX_FRAMES_PER_CYCLE + 1
-    for cycles, per_cycle in ((MAX_CYCLES + 1, 48), (2, MAX_FRAMES_PER_CYCLE + 1), (10**9, 48), (2, 10**9)):
+    assert len(frames_of(ok, MAX_CYCLES,
+                         MAX_FRAMES_PER_CYCLE).t) == MAX_CYCLES * MAX_FRAMES_PER_CYCLE + 1
+    for cycles, per_cycle in ((MAX_CYCLES + 1, 48), (2, MAX_FRAMES_PER_CYCLE + 1), (10**9, 48),
+                              (2, 10**9)):
         with pytest.raises(ValueError, match="cycles must be in"):
             frames_of(ok, cycles, per_cycle)
-    # a run that failed after 400 cycles (samples of the shape as data): shown over its last cycle, 10 frames + 1
+    # a run that failed after 400 cycles (samples of the shape as data): shown over its last cycle,
+    # 10 frames + 1
     n = 4001
-    failed = SimpleNamespace(success=False, S=math.nan, t=np.linspace(0.0, 400.0, n), t0=0.0, x1=np.zeros(n),
-                             x2=np.full(n, 0.05), phi=np.full((2, n), 1.5), theta=np.zeros(n), mode=np.zeros(n, int))
+    failed = SimpleNamespace(success=False, S=math.nan, t=np.linspace(0.0, 400.0, n), t0=0.0,
+                             x1=np.zeros(n),
+                             x2=np.full(n, 0.05), phi=np.full((2, n), 1.5), theta=np.zeros(n),
+                             mode=np.zeros(n, int))
     fr = frames_of(failed, 1, 10)
     assert len(fr.t) == 11 and fr.t[0] == 399.0 and fr.t[-1] == 400.0
 
 
 def test_input_path_beyond_the_basic_plane(tmp_path, capsys):
-    """``--input`` with a character beyond U+FFFF in its path (before, the path became JSON's surrogate escapes,
-    which TOML does not read back, and the file was "not found")."""
+    """``--input`` with a character beyond U+FFFF in its path (before, the path became JSON's
+    surrogate escapes, which TOML does not read back, and the file was "not found")."""
     table = tmp_path / "t\U0001F600.csv"
-    table.write_text("phase [-],tau1 [N m],tau2 [N m]\n0.0,-0.29,-0.29\n0.25,-0.25,-0.33\n0.5,-0.29,-0.29\n"
-                     "0.75,-0.33,-0.25\n", encoding="utf-8")
+    table.write_text("phase [-],tau1 [N m],tau2 [N "
+                     "m]\n0.0,-0.29,-0.29\n0.25,-0.25,-0.33\n0.5,-0.29,-0.29\n0.75,-0.33,-0.25\n",
+                     encoding="utf-8")
     paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
     code = main(["simulate", str(paper), "--input", str(table), "--json"])
     out, err = capsys.readouterr()

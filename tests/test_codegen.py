@@ -1,10 +1,10 @@
 """The compiled step kernel (nlp/codegen.py) against the SX kernel it was generated from.
 
-Checked through ``map`` as an NLP uses it: values, the Jacobian and the Hessian of a random weighted sum of
-the outputs (what IPOPT's exact Hessian of the Lagrangian evaluates) agree to 1e-12 relative at random
-points, with the same sparsity; the derivatives of the mapped kernel that IPOPT's solver builds run compiled
-code only; an NLP solved by IPOPT has the same iterates (iterations, optimum) with either; without a C
-compiler the kernel itself comes back with a warning.
+Checked through ``map`` as an NLP uses it: values, the Jacobian and the Hessian of a random weighted
+sum of the outputs (what IPOPT's exact Hessian of the Lagrangian evaluates) agree to 1e-12 relative
+at random points, with the same sparsity; the derivatives of the mapped kernel that IPOPT's solver
+builds run compiled code only; an NLP solved by IPOPT has the same iterates (iterations, optimum)
+with either; without a C compiler the kernel itself comes back with a warning.
 """
 import casadi as cs
 import numpy as np
@@ -24,7 +24,8 @@ needs_cc = pytest.mark.skipif(compiled._compiler() is None, reason="no C compile
 def kernel():
     """The OCP's per-step kernel: step equations and lifting, complementarity products, of
     (phi_prev, w, tau_hat, p) (as the transcription builds it)."""
-    phi_prev, w, th, p = cs.SX.sym("phi_prev", 2), cs.SX.sym("w", NW), cs.SX.sym("tau_hat", 2), cs.SX.sym("p", NP)
+    phi_prev, w, th, p = cs.SX.sym("phi_prev",
+                                   2), cs.SX.sym("w", NW), cs.SX.sym("tau_hat", 2), cs.SX.sym("p", NP)
     g_eq, g_lift, sv, cv = step_equations(phi_prev, w, th, p)
     return cs.Function("test_kernel", [phi_prev, w, th, p], [cs.vertcat(g_eq, g_lift), sv * cv])
 
@@ -41,8 +42,8 @@ def built(kernel, tmp_path_factory):
 
 
 def _mapped(fun):
-    """x (all inputs but p, stacked) -> (outputs stacked, their Jacobian, Hessian of lam . outputs), p and lam
-    parameters, through fun.map(N)."""
+    """x (all inputs but p, stacked) -> (outputs stacked, their Jacobian, Hessian of lam . outputs),
+    p and lam parameters, through fun.map(N)."""
     syms = [cs.MX.sym(f"a{i}", fun.size1_in(i), N) for i in range(4)]
     x = cs.vertcat(*[cs.vec(s) for s in syms[:3]])
     y = cs.vertcat(*[cs.vec(o) for o in fun.map(N)(*syms)])
@@ -84,27 +85,32 @@ def test_ipopt_derivatives_of_the_mapped_kernel_run_compiled_code(built):
     solver = cs.nlpsol("s", "ipopt", {"x": x, "p": cs.vec(syms[3]), "f": cs.sumsqr(x), "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"})
     for name in ("nlp_g", "nlp_jac_g", "nlp_hess_l"):
-        kinds = {f.class_name() for f in solver.get_function(name).find_functions() if "test_kernel" in f.name()}
+        kinds = {f.class_name() for f in solver.get_function(name).find_functions()
+                 if "test_kernel" in f.name()}
         assert "External" in kinds and "SXFunction" not in kinds, (name, kinds)
 
 
 def _solve(fun, model):
     """A small NLP through fun.map(N): N independent steps of the paper robot (the step equations as
-    constraints, the complementarity products relaxed to <= 1e-3), torques near a sine, the slip of foot 1
-    rewarded; (stats, x, f)."""
+    constraints, the complementarity products relaxed to <= 1e-3), torques near a sine, the slip of
+    foot 1 rewarded; (stats, x, f)."""
     syms = [cs.MX.sym(f"a{i}", fun.size1_in(i), N) for i in range(3)]
     eqs, comp = fun.map(N)(*syms, cs.repmat(cs.DM(model.p), 1, N))
     x = cs.vertcat(*[cs.vec(s) for s in syms])
     tau = cs.vec(syms[2])
-    f = cs.sumsqr(tau - 0.2 * np.sin(np.linspace(0, 2 * np.pi, 2 * N))) - 0.05 * cs.sum2(syms[1][4, :] - syms[1][5, :])
+    f = (cs.sumsqr(tau - 0.2 * np.sin(np.linspace(0, 2 * np.pi, 2 * N)))
+         - 0.05 * cs.sum2(syms[1][4, :] - syms[1][5, :]))
     solver = cs.nlpsol("s", "ipopt", {"x": x, "f": f, "g": cs.vertcat(cs.vec(eqs), cs.vec(comp))},
-                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10})
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "ipopt.tol": 1e-10})
     lbw = np.r_[0.0, 0.0, -np.inf, -np.inf, np.zeros(8)]
     lbx = np.r_[np.zeros(2 * N), np.tile(lbw, N), np.full(2 * N, -1.0)]
-    x0 = np.r_[np.full(2 * N, 1.6), np.tile(np.r_[1.6, 1.6, 0.0, 0.0, np.zeros(4), np.full(4, 0.3)], N),
-               np.zeros(2 * N)]
-    sol = solver(x0=x0, lbx=lbx, ubx=np.r_[np.full(2 * N, np.pi), np.full(NW * N, np.inf), np.ones(2 * N)],
-                 lbg=np.r_[np.zeros(8 * N), np.full(4 * N, -np.inf)], ubg=np.r_[np.zeros(8 * N), np.full(4 * N, 1e-3)])
+    x0 = np.r_[np.full(2 * N, 1.6),
+               np.tile(np.r_[1.6, 1.6, 0.0, 0.0, np.zeros(4), np.full(4, 0.3)], N), np.zeros(2 * N)]
+    sol = solver(x0=x0, lbx=lbx,
+                 ubx=np.r_[np.full(2 * N, np.pi), np.full(NW * N, np.inf), np.ones(2 * N)],
+                 lbg=np.r_[np.zeros(8 * N), np.full(4 * N, -np.inf)],
+                 ubg=np.r_[np.zeros(8 * N), np.full(4 * N, 1e-3)])
     return solver.stats(), np.asarray(sol["x"]).ravel(), float(sol["f"])
 
 
@@ -119,7 +125,8 @@ def test_an_nlp_solved_with_the_compiled_kernel_has_the_same_iterates(kernel, bu
     np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-7 * np.max(np.abs(x_ref)))
 
 
-def test_without_a_compiler_the_kernel_itself_comes_back_with_a_warning(kernel, monkeypatch, tmp_path):
+def test_without_a_compiler_the_kernel_itself_comes_back_with_a_warning(kernel, monkeypatch,
+                                                                        tmp_path):
     monkeypatch.setenv("OCP_CRAWL_CACHE", str(tmp_path))
     monkeypatch.delenv("OCP_CRAWL_NO_COMPILE", raising=False)
     monkeypatch.setenv("PATH", "")

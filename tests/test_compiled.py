@@ -24,7 +24,8 @@ print(json.dumps({"compiled": fast_newton().compiled, "S": r.S, "W": r.W_plus, "
 
 def run(env_extra):
     env = dict(os.environ, **env_extra)
-    out = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env, timeout=300)
+    out = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, env=env,
+                         timeout=300)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout)
 

@@ -13,7 +13,8 @@ import pytest
 from scipy.integrate import quad
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.ocp import UserObjective, optimize_gait
 from ocp_crawl.ocp.judge import scenario_labels
 from ocp_crawl.ocp.quantities import (QUANTITIES, Constraint, Cycle, mean_square_nodes,

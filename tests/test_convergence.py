@@ -1,5 +1,5 @@
-"""Convergence in N: the observed order on sequences of known order, the warm start from the previous N, and
-``optimize --nodes`` (parsing, bad values, the table's text and JSON)."""
+"""Convergence in N: the observed order on sequences of known order, the warm start from the
+previous N, and ``optimize --nodes`` (parsing, bad values, the table's text and JSON)."""
 import json
 import math
 import os
@@ -26,8 +26,8 @@ OCP_FILE = REPO / "problems" / "ocp_max_speed.toml"
 @pytest.mark.parametrize("nodes, p", [([50, 100, 200, 400], 2.0), ([50, 100, 200, 400], 1.0),
                                       ([25, 50, 100, 200, 400], 1.5), ([10, 30, 90, 270], 3.0)])
 def test_observed_order_of_a_sequence_of_known_order(nodes, p):
-    """J(N) = J* + C N^-p: the changes shrink by r^p per refinement by r, so the observed order is p exactly
-    (to round-off) at every inner N, undefined (NaN) at the ends."""
+    """J(N) = J* + C N^-p: the changes shrink by r^p per refinement by r, so the observed order is p
+    exactly (to round-off) at every inner N, undefined (NaN) at the ends."""
     values = [0.0513 - 0.37 * n ** -p for n in nodes]
     orders = observed_orders(nodes, values)
     assert math.isnan(orders[0]) and math.isnan(orders[-1])
@@ -45,8 +45,10 @@ def test_observed_order_is_undefined_where_it_has_no_meaning():
 
 
 @pytest.mark.parametrize("bad, match", [([], "at least one"), ([50, 50], "increase strictly"),
-                                        ([100, 50], "increase strictly"), ([4], "not an integer in"),
-                                        ([50.0], "not an integer in"), ([True], "not an integer in")])
+                                        ([100, 50], "increase strictly"),
+                                        ([4], "not an integer in"),
+                                        ([50.0], "not an integer in"),
+                                        ([True], "not an integer in")])
 def test_check_nodes_rejects(bad, match):
     with pytest.raises(ValueError, match=match):
         check_nodes(bad)
@@ -54,9 +56,10 @@ def test_check_nodes_rejects(bad, match):
 
 def _fake_result(settings, tau, T, value):
     N = tau.shape[1]
-    return OCPResult(success=True, status=Status.SUCCESS, message="fake", objective=settings.objective,
-                     settings=settings, phase=np.arange(N) / N, tau=tau, T_ocp=T, value_ocp=value * 1.001,
-                     value_replay=value, rel_diff_replay=1e-3)
+    return OCPResult(success=True, status=Status.SUCCESS, message="fake",
+                     objective=settings.objective,
+                     settings=settings, phase=np.arange(N) / N, tau=tau, T_ocp=T,
+                     value_ocp=value * 1.001, value_replay=value, rel_diff_replay=1e-3)
 
 
 class _FakeOCP:
@@ -66,7 +69,8 @@ class _FakeOCP:
         self.settings = settings
 
     def prepare(self):
-        self.prepared.append((self.settings.nodes, os.getpid()))  # the class's record (in the parent)
+        # the class's record (in the parent)
+        self.prepared.append((self.settings.nodes, os.getpid()))
         self.done = True  # this transcription's
 
 
@@ -77,20 +81,21 @@ def _here(task, meanwhile, forward):
 
 
 def _fake_solvers(monkeypatch, fresh, warm, fork=False) -> None:
-    """Replace the cold solve (optimize_gait), the warm one (solve_from), the transcription and its solver by fakes
-    (and, unless ``fork``, run every warm solve in this process)."""
+    """Replace the cold solve (optimize_gait), the warm one (solve_from), the transcription and its
+    solver by fakes (and, unless ``fork``, run every warm solve in this process)."""
     monkeypatch.setattr(convergence, "optimize_gait", fresh)
     monkeypatch.setattr(convergence, "solve_from", warm)
     monkeypatch.setattr(convergence, "GaitOCP", _FakeOCP)
-    monkeypatch.setattr(convergence, "GaitSolver", lambda ocp: ocp)  # the fake transcription solves itself
+    # the fake transcription solves itself
+    monkeypatch.setattr(convergence, "GaitSolver", lambda ocp: ocp)
     if not fork:
         monkeypatch.setattr(convergence, "overlap", _here)
 
 
 def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
-    """The first N is solved from scratch (optimize_gait), every further N from the previous N's node profile
-    (linear in phase: at doubled N the previous nodes exactly, midpoints in between) and period; the rows carry
-    the changes and the observed order of the replayed objective."""
+    """The first N is solved from scratch (optimize_gait), every further N from the previous N's
+    node profile (linear in phase: at doubled N the previous nodes exactly, midpoints in between)
+    and period; the rows carry the changes and the observed order of the replayed objective."""
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t) ** 3])  # noqa: E731
     value = lambda n: 0.05 - 0.4 / n**2  # noqa: E731  (second order)
     seen = []
@@ -104,7 +109,8 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
         t = np.arange(N) / N
         got = signal(t)
         # the previous nodes are reproduced, the new ones lie on the chords between them
-        np.testing.assert_allclose(got[:, ::N // prev], profile(np.arange(prev) / prev), rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got[:, ::N // prev], profile(np.arange(prev) / prev), rtol=0,
+                                   atol=1e-15)
         mid = 0.5 * (profile(t[::2]) + profile(t[::2] + 1 / prev))
         np.testing.assert_allclose(got[:, 1::2], mid, rtol=0, atol=1e-15)
         assert T == pytest.approx(0.7 + 0.01 * (len(seen) - 1), rel=1e-12)
@@ -119,13 +125,15 @@ def test_each_N_is_warm_started_from_the_previous_optimum(monkeypatch):
     assert table.rows[1].change == pytest.approx(value(100) - value(50), rel=1e-12)
     assert [round(r.order, 9) for r in table.rows[1:3]] == [2.0, 2.0]
     data = table.to_dict()
-    assert data["unit"] == "m/s" and data["rows"][1]["status"] == "success" and "result" not in data["rows"][1]
+    assert (data["unit"] == "m/s" and data["rows"][1]["status"] == "success"
+            and "result" not in data["rows"][1])
     json.dumps(data, allow_nan=False)
 
 
 def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settings(monkeypatch):
-    """When the warm solve (small relaxation, monotone barrier) is not judged a success, the same start is solved
-    once more with the settings of a cold solve; the row carries the retry's result and both messages."""
+    """When the warm solve (small relaxation, monotone barrier) is not judged a success, the same
+    start is solved once more with the settings of a cold solve; the row carries the retry's result
+    and both messages."""
     settings = OCPSettings()
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
     calls = []
@@ -136,9 +144,11 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         calls.append((ocp.settings.sigma0, ocp.settings.ipopt, T))
         if len(calls) == 1:
-            return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
+            return OCPResult(success=False, status=Status.INFEASIBLE,
+                             message="infeasible: restoration failed",
                              objective=ocp.settings.objective, settings=ocp.settings)
-        return _fake_result(ocp.settings, profile(np.arange(ocp.settings.nodes) / ocp.settings.nodes), T, 0.051)
+        return _fake_result(ocp.settings,
+                            profile(np.arange(ocp.settings.nodes) / ocp.settings.nodes), T, 0.051)
 
     _fake_solvers(monkeypatch, fresh, warm)
     table = converge_in_nodes(Robot.paper(), "physical", settings, [50, 100])
@@ -149,15 +159,17 @@ def test_a_failed_warm_solve_is_retried_from_the_same_start_with_the_cold_settin
     assert "cold solve's settings" in row.message and "restoration failed" in row.message
 
 
-@pytest.mark.parametrize("own, sigma0", [(dict(stage_tol_ratio=0.1), 1e-5), (dict(sigma0=1e-3), 1e-5),
-                                         (dict(sigma_min=1e-8), 1e-5), (dict(sigma_factor=0.1), 1e-5),
-                                         (dict(sigma0=(1e-3, 1e-6), sigma_min=1e-11), (1e-5, 1e-6)),
-                                         (dict(sigma0=1e-3, sigma_min=1e-5), 1e-3)])
+@pytest.mark.parametrize("own, sigma0",
+                         [(dict(stage_tol_ratio=0.1), 1e-5), (dict(sigma0=1e-3), 1e-5),
+                          (dict(sigma_min=1e-8), 1e-5), (dict(sigma_factor=0.1), 1e-5),
+                          (dict(sigma0=(1e-3, 1e-6), sigma_min=1e-11), (1e-5, 1e-6)),
+                          (dict(sigma0=1e-3, sigma_min=1e-5), 1e-3)])
 def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch, own, sigma0):
-    """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier, from sigma = 1e-5
-    where that is below its first sigma and above its last (the previous optimum is complementary), not with the warm
-    schedule tuned on the default path, then retried with its cold settings; before the homotopy, the tightened NLP
-    alone on the same transcription; the default settings are not 'own'."""
+    """A file with its own homotopy (robust_speed's) is warm-started with it and the warm barrier,
+    from sigma = 1e-5 where that is below its first sigma and above its last (the previous optimum
+    is complementary), not with the warm schedule tuned on the default path, then retried with its
+    cold settings; before the homotopy, the tightened NLP alone on the same transcription; the
+    default settings are not 'own'."""
     settings = OCPSettings(**own)
     assert convergence.own_homotopy(settings) and not convergence.own_homotopy(OCPSettings())
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
@@ -168,7 +180,8 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False, baselines=None):
         calls.append((ocp.settings, tightened))
-        return OCPResult(success=False, status=Status.INFEASIBLE, message="infeasible: restoration failed",
+        return OCPResult(success=False, status=Status.INFEASIBLE,
+                         message="infeasible: restoration failed",
                          objective=ocp.settings.objective, settings=ocp.settings)
 
     _fake_solvers(monkeypatch, fresh, warm)
@@ -182,19 +195,24 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
 
 
 @pytest.mark.parametrize("tight, homotopy, cold, calls, row_value", [
-    (0.0501, 0.0502, None, 1, 0.0501), (0.04992, 0.0502, None, 1, 0.04992),  # not worse: the row, no homotopy
-    (0.0498, 0.0502, None, 2, 0.0502), (0.045, 0.0502, None, 2, 0.0502),  # worse: the homotopy, which does better
-    (0.0498, None, None, 3, 0.0498), (0.0498, 0.0497, None, 2, 0.0498),  # worse, but the homotopy fails or does worse
-    # the homotopy fails, its cold retry succeeds: the row if better than the tightened NLP's, else the tightened one
+    # not worse: the row, no homotopy
+    (0.0501, 0.0502, None, 1, 0.0501), (0.04992, 0.0502, None, 1, 0.04992),
+    # worse: the homotopy, which does better
+    (0.0498, 0.0502, None, 2, 0.0502), (0.045, 0.0502, None, 2, 0.0502),
+    # worse, but the homotopy fails or does worse
+    (0.0498, None, None, 3, 0.0498), (0.0498, 0.0497, None, 2, 0.0498),
+    # the homotopy fails, its cold retry succeeds: the row if better than the tightened NLP's, else
+    # the tightened one
     (0.0498, None, 0.0502, 3, 0.0502), (0.0498, None, 0.0497, 3, 0.0498),
 ])
 def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_the_homotopy(
         monkeypatch, tight, homotopy, cold, calls, row_value):
-    """With their own homotopy, the warm solve's first try, the tightened NLP on the previous optimum's branches, is the
-    row when the judge accepts it and it is not worse than the previous N's optimum beyond WORSE_TOL plus both
-    OCP-replay differences (1e-3 each in the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs
-    (then the cold retry if it fails: None), and the worse tightened success stays the row unless the homotopy (or its
-    cold retry) does better; the row's result's solve time is that of all the attempts."""
+    """With their own homotopy, the warm solve's first try, the tightened NLP on the previous
+    optimum's branches, is the row when the judge accepts it and it is not worse than the previous
+    N's optimum beyond WORSE_TOL plus both OCP-replay differences (1e-3 each in the fakes: more than
+    0.21 % below 0.05 is worse); otherwise the homotopy runs (then the cold retry if it fails:
+    None), and the worse tightened success stays the row unless the homotopy (or its cold retry)
+    does better; the row's result's solve time is that of all the attempts."""
     settings = OCPSettings(stage_tol_ratio=0.1)
     seen = []
 
@@ -203,11 +221,13 @@ def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_th
 
     def warm(ocp, models, signal, T, harmonic=None, replay=True, tightened=False, baselines=None):
         seen.append(tightened)
-        value = tight if tightened else homotopy if len(seen) == 2 else cold  # the third call: the cold retry
+        # the third call: the cold retry
+        value = tight if tightened else homotopy if len(seen) == 2 else cold
         if value is not None:
             res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, value)
         else:
-            res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="IPOPT failed: max_iter",
+            res = OCPResult(success=False, status=Status.SOLVER_FAILURE,
+                            message="IPOPT failed: max_iter",
                             objective=ocp.settings.objective, settings=ocp.settings)
         res.solve_time_s = 2.0 ** (len(seen) - 1)  # 1, 2, 4 s: each attempt's own time
         return res
@@ -219,20 +239,24 @@ def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_th
     assert ("the tightened NLP on its branches)" in row.message) == (calls == 1)
     assert ("worse than N = 50" in row.message) == (calls > 1)
     assert ("kept: the homotopy then gave" in row.message) == (calls > 1 and row_value == tight)
-    cold_row = row.message.startswith("fake (from the optimum at N = 50 with the cold solve's settings")
+    cold_row = row.message.startswith("fake (from the optimum at N = 50 with the cold solve's "
+                                      "settings")
     assert cold_row == (cold is not None and row_value == cold)
-    assert row.result.solve_time_s == 2.0 ** calls - 1  # every attempt's time, whichever attempt is the row
+    # every attempt's time, whichever attempt is the row
+    assert row.result.solve_time_s == 2.0 ** calls - 1
 
 
 @pytest.mark.parametrize("objective, values, flagged", [
-    ("max_speed", {50: 0.05, 100: 0.049, 200: 0.049, 300: 0.045}, [100]),  # 300 is no multiple of 200
+    # 300 is no multiple of 200
+    ("max_speed", {50: 0.05, 100: 0.049, 200: 0.049, 300: 0.045}, [100]),
     # 0.16 % worse: within WORSE_TOL plus both rows' OCP-replay differences (1e-3 each in the fakes)
     ("max_speed", {50: 0.05, 100: 0.04992, 200: 0.0499199}, []),
     ("min_cot", {50: 14.4, 100: 14.5, 200: 14.3}, [100]),  # CoT+ larger is worse
 ])
 def test_a_finer_n_worse_than_the_previous_optimum_says_so(monkeypatch, objective, values, flagged):
-    """The finer N can represent the previous profile when its N is a multiple of the previous one: a replayed
-    optimum worse than the previous beyond WORSE_TOL is another local optimum, and its row's message says so."""
+    """The finer N can represent the previous profile when its N is a multiple of the previous one:
+    a replayed optimum worse than the previous beyond WORSE_TOL is another local optimum, and its
+    row's message says so."""
     profile = lambda t: np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])  # noqa: E731
 
     def fresh(robot, gravity, s, jobs=None):
@@ -243,7 +267,8 @@ def test_a_finer_n_worse_than_the_previous_optimum_says_so(monkeypatch, objectiv
         return _fake_result(ocp.settings, profile(np.arange(N) / N), T, values[N])
 
     _fake_solvers(monkeypatch, fresh, warm)
-    settings = OCPSettings(objective=objective, **(dict(speed_min=0.04) if objective == "min_cot" else {}))
+    settings = OCPSettings(objective=objective,
+                           **(dict(speed_min=0.04) if objective == "min_cot" else {}))
     table = converge_in_nodes(Robot.paper(), "physical", settings, sorted(values))
     assert [r.nodes for r in table.rows if "another local optimum" in r.message] == flagged
     for r in table.rows:
@@ -280,7 +305,8 @@ def test_optimize_bad_nodes_exit_2_with_one_line(capsys, argv, words):
 def test_optimize_nodes_is_parsed_as_a_list():
     from ocp_crawl.cli.app import build_parser
 
-    args = build_parser().parse_args(["optimize", str(OCP_FILE), "--nodes", "50", "100", "200", "400"])
+    args = build_parser().parse_args(["optimize", str(OCP_FILE), "--nodes", "50", "100", "200",
+                                      "400"])
     assert args.nodes == [50, 100, 200, 400]
     assert build_parser().parse_args(["optimize", str(OCP_FILE)]).nodes is None
 
@@ -289,7 +315,8 @@ def _fake_table(settings, nodes):
     rows = []
     for n in nodes:
         res = _fake_result(OCPSettings(nodes=n), np.zeros((2, n)), 0.5236, 0.0452 - 0.3 / n**2)
-        rows.append(convergence.ConvergenceRow(n, Status.SUCCESS, "fake", 0.5236, res.value_ocp, res.value_replay,
+        rows.append(convergence.ConvergenceRow(n, Status.SUCCESS, "fake", 0.5236, res.value_ocp,
+                                               res.value_replay,
                                                1e-3, solve_time_s=1.5, result=res))
     convergence._changes(rows, settings.objective)
     return convergence.ConvergenceTable(settings.objective, rows, settings.objective_unit)
@@ -307,22 +334,26 @@ def test_optimize_nodes_prints_the_table_with_units(capsys, monkeypatch):
     assert seen == {"nodes": [50, 100, 200], "N0": 50}
     lines = out.splitlines()
     assert lines[0].startswith("convergence in N: max_speed")
-    assert lines[1].split() == ["N", "status", "T", "OCP", "replay", "diff", "change", "change", "p", "time"]
+    assert lines[1].split() == ["N", "status", "T", "OCP", "replay", "diff", "change", "change",
+                                "p", "time"]
     row100 = lines[3].split()
     # 0.0452 - 0.3/100^2 = 0.04517 m/s; change from N = 50: 0.3 (1/50^2 - 1/100^2) = 9e-5 m/s; p = 2
-    assert row100[:2] == ["100", "success"] and "45.17000" in lines[3] and "0.09000 mm/s" in lines[3]
+    assert row100[:2] == ["100",
+                          "success"] and "45.17000" in lines[3] and "0.09000 mm/s" in lines[3]
     assert row100[-3:] == ["2.00", "1.5", "s"]
     assert "finest N = 200:" in out and "period T 0.524 s" in out
     code, out, err = run(capsys, "optimize", OCP_FILE, "--nodes", "50", "100", "200", "--json")
     data = json.loads(out)
-    assert code == 0 and data["unit"] == "m/s" and [r["nodes"] for r in data["rows"]] == [50, 100, 200]
+    assert (code == 0 and data["unit"] == "m/s"
+            and [r["nodes"] for r in data["rows"]] == [50, 100, 200])
     assert data["units"]["change"] == "m/s" and data["units"]["T"] == "s"
-    assert data["rows"][1]["order"] == pytest.approx(2.0, rel=1e-9) and data["finest"]["nodes"] == 200
+    assert (data["rows"][1]["order"] == pytest.approx(2.0, rel=1e-9)
+            and data["finest"]["nodes"] == 200)
 
 
 def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
-    """An N whose optimum failed in the replay does not seed the next N: that one starts afresh from the
-    baseline (optimize_gait), and the first replayed optimum seeds the rest."""
+    """An N whose optimum failed in the replay does not seed the next N: that one starts afresh from
+    the baseline (optimize_gait), and the first replayed optimum seeds the rest."""
     seen = []
 
     def fresh(robot, gravity, s, jobs=None):
@@ -338,7 +369,8 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
 
     monkeypatch.setattr(convergence, "optimize_gait", fresh)
     monkeypatch.setattr(convergence, "solve_from", warm)
-    monkeypatch.setattr(convergence, "GaitOCP", lambda robot, gravity, settings: SimpleNamespace(settings=settings))
+    monkeypatch.setattr(convergence, "GaitOCP",
+                        lambda robot, gravity, settings: SimpleNamespace(settings=settings))
     monkeypatch.setattr(convergence, "GaitSolver", lambda ocp: ocp)
     table = converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200])
     assert seen == [("fresh", 50), ("fresh", 100), ("warm", 200)]
@@ -347,9 +379,9 @@ def test_no_warm_start_from_a_profile_the_replay_could_not_follow(monkeypatch):
 
 
 def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is_built(monkeypatch):
-    """Every warm row but the last solves in a forked process (its records reach this process's observers, in
-    order) while this process builds the next N's transcription, which the next row then uses; the table is the one
-    of the same solves run here."""
+    """Every warm row but the last solves in a forked process (its records reach this process's
+    observers, in order) while this process builds the next N's transcription, which the next row
+    then uses; the table is the one of the same solves run here."""
     parent = os.getpid()
 
     def fresh(robot, gravity, s, jobs=None):
@@ -358,7 +390,8 @@ def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is
     def warm(ocp, models, signal, T, harmonic=None, replay=True, baselines=None):
         for callback in observers():
             callback(("stage", ocp.settings.nodes, os.getpid()))
-        res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T, 0.05 + 1e-3 * ocp.settings.nodes)
+        res = _fake_result(ocp.settings, np.ones((2, ocp.settings.nodes)), T,
+                           0.05 + 1e-3 * ocp.settings.nodes)
         res.message = f"pid {os.getpid()}, prepared {getattr(ocp, 'done', False)}"
         return res
 
@@ -367,15 +400,19 @@ def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is
         _FakeOCP.prepared = []
         _fake_solvers(monkeypatch, fresh, warm, fork=fork)
         with observe(seen.append):
-            tables.append(converge_in_nodes(Robot.paper(), "physical", OCPSettings(), [50, 100, 200, 400]))
+            tables.append(converge_in_nodes(Robot.paper(), "physical", OCPSettings(),
+                                            [50, 100, 200, 400]))
         assert _FakeOCP.prepared == [(200, parent), (400, parent)]  # built here, meanwhile
     pids = [int(r.message.split()[1].rstrip(",")) for r in tables[0].rows[1:]]
     if workers.mp_context().get_start_method() == "fork":
         assert pids[0] != parent and pids[1] != parent and pids[0] != pids[1] and pids[2] == parent
-    else:  # another thread runs in this process (e.g. Dask's, left by an earlier test): every solve here
+    # another thread runs in this process (e.g. Dask's, left by an earlier test): every solve here
+    else:
         assert pids == [parent] * 3
     assert [(n, pid) for _, n, pid in seen[:3]] == [(100, pids[0]), (200, pids[1]), (400, parent)]
-    assert [n for _, n, pid in seen[3:]] == [100, 200, 400] and {pid for *_, pid in seen[3:]} == {parent}
+    assert ([n for _, n, pid in seen[3:]] == [100, 200, 400]
+            and {pid for *_, pid in seen[3:]} == {parent})
     assert [r.value_replay for r in tables[0].rows] == [r.value_replay for r in tables[1].rows]
-    assert all("prepared True" in r.message for r in tables[0].rows[2:])  # N = 200, 400 on the built ones
+    # N = 200, 400 on the built ones
+    assert all("prepared True" in r.message for r in tables[0].rows[2:])
     assert "prepared False" in tables[0].rows[1].message  # N = 100: none was built before it

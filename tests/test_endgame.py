@@ -98,8 +98,8 @@ def test_endgame_settings_name_the_schedule():
 
 @pytest.mark.slow
 def test_always_perturbed_hessian_solves_the_same_problem(whole):
-    """perturbation = "always" adds one variable in neither the objective nor the constraints (IPOPT then
-    treats the Hessian as degenerate from its first factorisation): the optimum it reaches is a
+    """perturbation = "always" adds one variable in neither the objective nor the constraints (IPOPT
+    then treats the Hessian as degenerate from its first factorisation): the optimum it reaches is a
     complementary point that the replay confirms, within 1 % of the default path's."""
     always = solve(settings(perturbation="always"))
     assert always.success, always.message
@@ -112,16 +112,19 @@ def test_always_perturbed_hessian_solves_the_same_problem(whole):
 @pytest.mark.slow
 @pytest.mark.parametrize("fork", [True, False])
 def test_both_paths_keep_the_better_by_replay(fork, monkeypatch, whole):
-    """endgame_paths = "both": the endgame and the rest of the homotopy both run (in a forked process, or
-    one after the other where none can be forked: the same result), and the better by replay is kept, so
-    the optimum is at least the whole homotopy's by replay; both are in the records."""
+    """endgame_paths = "both": the endgame and the rest of the homotopy both run (in a forked
+    process, or one after the other where none can be forked: the same result), and the better by
+    replay is kept, so the optimum is at least the whole homotopy's by replay; both are in the
+    records."""
     if not fork:
         from ocp_crawl import workers
 
-        monkeypatch.setattr(workers, "mp_context", lambda: workers.multiprocessing.get_context("spawn"))
+        monkeypatch.setattr(workers, "mp_context",
+                            lambda: workers.multiprocessing.get_context("spawn"))
     both = solve(settings(endgame_sigma=1e-4, endgame_paths="both"))
     assert both.success, both.message
     assert both.value_replay >= whole.value_replay * (1 - 1e-9)
     kinds = [h.kind for h in both.homotopy]
-    assert "endgame" in kinds and [k for k in kinds if k != "endgame"] == [h.kind for h in whole.homotopy]
+    assert ("endgame" in kinds
+            and [k for k in kinds if k != "endgame"] == [h.kind for h in whole.homotopy])
     assert "against the homotopy's optimum's" in both.path

@@ -1,5 +1,6 @@
-"""Events are located to 1e-13 of a cycle: the stepper's safeguarded Newton on the guard against an independent
-root finder (scipy's Brent method, xtol 1e-15) on the same guard of the solved branch."""
+"""Events are located to 1e-13 of a cycle: the stepper's safeguarded Newton on the guard against an
+independent root finder (scipy's Brent method, xtol 1e-15) on the same guard of the solved
+branch."""
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -23,7 +24,8 @@ def test_event_phases_match_an_independent_brent_root(gravity, gamma, amp, psi, 
     worst = 0.0
     for ev in res.events:
         before = labels[ev.mode_before]
-        seg = [s for s in stepper.segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
+        seg = [s for s in stepper.segments
+               if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
         assert seg, ev
         seg = seg[-1]
         p = min(seg.points, key=lambda pt: abs(pt.t - ev.t))
@@ -36,20 +38,22 @@ def test_event_phases_match_an_independent_brent_root(gravity, gamma, amp, psi, 
         assert guard(lo) > 0 > guard(hi), ev
         t_ref = brentq(guard, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         worst = max(worst, abs(t_ref - ev.t))
-    # measured: <= 4e-15 at k/(M g L) <= 5, 3e-14 at 1e4 (the guards' round-off grows with k/(M g L));
-    # with event_xtol = 1e-8 the same check reads 7e-12 to 6e-10
+    # measured: <= 4e-15 at k/(M g L) <= 5, 3e-14 at 1e4 (the guards' round-off grows with k/(M g
+    # L)); with event_xtol = 1e-8 the same check reads 7e-12 to 6e-10
     assert worst <= 1e-13, worst
 
 
 def test_the_steppers_scalar_torque_is_the_signals_own():
-    """sim/event_state.torque_pair re-states the harmonic torque k (phi_ref - pi) in scalar arithmetic for speed:
-    it must give the signal's own value and rate bit for bit, and its curvature the same as the generic path."""
+    """sim/event_state.torque_pair re-states the harmonic torque k (phi_ref - pi) in scalar
+    arithmetic for speed: it must give the signal's own value and rate bit for bit, and its
+    curvature the same as the generic path."""
     import numpy as np
 
     from ocp_crawl import Harmonic, ReferenceTorque
     from ocp_crawl.sim.event_state import torque_curvature, torque_pair
 
-    signal = ReferenceTorque(Harmonic.from_degrees(87.0, 31.0, 52.0, gamma2_deg=93.0, A2_deg=24.0), 0.1677)
+    signal = ReferenceTorque(Harmonic.from_degrees(87.0, 31.0, 52.0, gamma2_deg=93.0, A2_deg=24.0),
+                             0.1677)
     fast = torque_pair(signal)
     assert hasattr(fast, "rate")  # the specialised path is the one under test
     generic = lambda t: (signal(t), signal.derivative(t))  # noqa: E731

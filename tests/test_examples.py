@@ -1,7 +1,7 @@
 """The examples gallery: every script in examples/ runs headless and writes its outputs.
 
-A script that is not listed in :data:`OUTPUTS` fails the test (add it with the files it must write), so
-no example goes untested.  The default suite runs the scripts once, in the documentation's build
+A script that is not listed in :data:`OUTPUTS` fails the test (add it with the files it must write),
+so no example goes untested.  The default suite runs the scripts once, in the documentation's build
 (tests/test_docs.py, whose gallery executes them and checks their outputs with
 :func:`check_outputs`); :func:`test_example_runs` runs each in a fresh process, by hand (heavy
 tier).
@@ -25,7 +25,8 @@ OUTPUTS = {
     "05_optimise_and_replay.py": ["optimise_and_replay.png"],
     "06_custom_waveform.py": ["custom_waveform.png"],
     "07_study_to_pandas.py": ["study.png", "study.csv", "sweep/results.csv"],
-    "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png", "k_and_map/fit.json"],
+    "08_fit_pressure_robot.py": ["amplitude/fit.png", "amplitude/fit.json", "k_and_map/fit.png",
+                                 "k_and_map/fit.json"],
     "09_past_a_fold.py": ["past_a_fold.png"],
     "10_user_objective.py": ["user_objective.png"],
 }
@@ -34,8 +35,9 @@ TIMEOUT_S = 300
 
 
 def test_every_example_is_covered():
-    assert SCRIPTS == sorted(OUTPUTS), f"examples without a test entry: {set(SCRIPTS) - set(OUTPUTS)}; " \
-                                       f"entries without a script: {set(OUTPUTS) - set(SCRIPTS)}"
+    assert SCRIPTS == sorted(OUTPUTS), \
+        (f"examples without a test entry: {set(SCRIPTS) - set(OUTPUTS)}; "
+         f"entries without a script: {set(OUTPUTS) - set(SCRIPTS)}")
     for name in SCRIPTS:  # each says what it shows
         doc = ast.get_docstring(ast.parse((EXAMPLES / name).read_text(encoding="utf-8")))
         assert doc and len(doc.split()) >= 30 and "Run:" in doc, name
@@ -59,7 +61,8 @@ def check_outputs(name: str, out: Path) -> None:
 def test_example_runs(name, tmp_path):
     out = tmp_path / "out"
     # the quick budget (examples/_common.py): the full runs (08: about 4 min of CPU) are by hand
-    env = dict(os.environ, MPLBACKEND="Agg", OCP_CRAWL_EXAMPLES_QUICK="1", PYTHONPATH=os.pathsep.join(
+    env = dict(os.environ, MPLBACKEND="Agg", OCP_CRAWL_EXAMPLES_QUICK="1",
+               PYTHONPATH=os.pathsep.join(
         p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p))
     proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(out)], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=TIMEOUT_S)

@@ -1,8 +1,10 @@
-"""Bad input of ``ocp-crawl fit`` and of the fit library: exit 2 and one stderr line naming the option or the
-file and row, before any simulation; the library raises ProblemError / TableError with the same message.
+"""Bad input of ``ocp-crawl fit`` and of the fit library: exit 2 and one stderr line naming the
+option or the file and row, before any simulation; the library raises ProblemError / TableError with
+the same message.
 
-Every CLI case runs with the least-squares search and the simulations replaced by a function that fails the
-test (:func:`no_fit`): bad input must be rejected before them (a rejection after them would be exit 1).
+Every CLI case runs with the least-squares search and the simulations replaced by a function that
+fails the test (:func:`no_fit`): bad input must be rejected before them (a rejection after them
+would be exit 1).
 """
 from pathlib import Path
 
@@ -20,7 +22,8 @@ REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
 PAPER_GRAVITY = REPO / "problems" / "paper_gait_paper_gravity.toml"
 PSI_DATA = REPO / "ocp_crawl" / "data" / "examples" / "paper_pressure_psi.csv"
-GAIT_ROWS = "{col} [deg],S [mm],sigma_S [mm]\n{first},-27.7,0.2\n{bad},-41.1,0.2\n{last},-56.0,0.2\n"
+GAIT_ROWS = ("{col} [deg],S [mm],sigma_S "
+             "[mm]\n{first},-27.7,0.2\n{bad},-41.1,0.2\n{last},-56.0,0.2\n")
 
 
 def _computed(*args, **kwargs):
@@ -36,8 +39,10 @@ def no_fit(monkeypatch):
 
 
 def _fit_cli(capsys, tmp_path, problem, data, *options) -> str:
-    """Run ``ocp-crawl fit``; assert exit 2, nothing on stdout, one ``ocp-crawl: error:`` line; return it."""
-    code = main(["fit", str(problem), *map(str, data), *options, "--no-figure", "--out", str(tmp_path / "out")])
+    """Run ``ocp-crawl fit``; assert exit 2, nothing on stdout, one ``ocp-crawl: error:`` line;
+    return it."""
+    code = main(["fit", str(problem), *map(str, data), *options, "--no-figure", "--out",
+                 str(tmp_path / "out")])
     out, err = capsys.readouterr()
     assert code == 2, err
     assert out == "" and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
@@ -47,7 +52,8 @@ def _fit_cli(capsys, tmp_path, problem, data, *options) -> str:
 
 
 def _gait_file(tmp_path, col, bad, first=None, last=None):
-    first, last = first or {"psi": 30, "A": 15, "gamma": 90}[col], last or {"psi": 60, "A": 30, "gamma": 80}[col]
+    first, last = first or {"psi": 30, "A": 15, "gamma": 90}[col], last or {"psi": 60, "A": 30,
+                                                                            "gamma": 80}[col]
     path = tmp_path / "d.csv"
     path.write_text(GAIT_ROWS.format(col=col, first=first, bad=bad, last=last))
     return path
@@ -56,7 +62,8 @@ def _gait_file(tmp_path, col, bad, first=None, last=None):
 @pytest.mark.parametrize("col, bad, key, valid", [("psi", "900", "gait.psi_deg", "[-360, 360]"),
                                                   ("A", "-20", "gait.A_deg", ">= 0"),
                                                   ("gamma", "0", "gait.gamma_deg", "(0, 360)")])
-def test_a_gait_row_outside_its_key_range_is_bad_input(tmp_path, capsys, no_fit, col, bad, key, valid):
+def test_a_gait_row_outside_its_key_range_is_bad_input(tmp_path, capsys, no_fit, col, bad, key,
+                                                       valid):
     path = _gait_file(tmp_path, col, bad)
     err = _fit_cli(capsys, tmp_path, PAPER, [path], "--param", "robot.k")
     assert f"d.csv:3: {col} = {bad} deg is invalid" in err and key in err and valid in err, err
@@ -65,14 +72,17 @@ def test_a_gait_row_outside_its_key_range_is_bad_input(tmp_path, capsys, no_fit,
 
 
 def test_a_gait_row_the_problem_rejects_is_bad_input_before_simulating(tmp_path, capsys, no_fit):
-    """gamma = 30 deg is in the key's range, but with psi = 45 deg foot 1 starts off the ground: the problem's own
-    validation (Problem.with_values) rejects the row, naming file, row and key, before any simulation."""
+    """gamma = 30 deg is in the key's range, but with psi = 45 deg foot 1 starts off the ground: the
+    problem's own validation (Problem.with_values) rejects the row, naming file, row and key, before
+    any simulation."""
     path = _gait_file(tmp_path, "gamma", "30")
     err = _fit_cli(capsys, tmp_path, PAPER, [path], "--param", "robot.k")
-    assert "d.csv:3:" in err and "gamma = 30 deg" in err and "gamma_deg" in err and "off the ground" in err, err
+    assert ("d.csv:3:" in err and "gamma = 30 deg" in err and "gamma_deg" in err
+            and "off the ground" in err), err
     problem = load_problem(PAPER)
     with pytest.raises(TableError, match="d.csv:3: .*gamma_deg"):
-        fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, ["robot.k"]))
+        fit_measurements(problem, [read_measurements(path)],
+                         resolve_parameters(problem, ["robot.k"]))
 
 
 def test_a_pressure_row_phase_has_the_range_of_the_gait_phase(tmp_path, capsys, no_fit):
@@ -82,36 +92,46 @@ def test_a_pressure_row_phase_has_the_range_of_the_gait_phase(tmp_path, capsys, 
     path = tmp_path / "p.csv"
     path.write_text("\n".join(lines) + "\n")
     err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [path], "--param", "pressure.amplitude_bar")
-    assert f"p.csv:{row + 1}: psi = 4500 deg is invalid" in err and "gait.psi_deg" in err and "[-360, 360]" in err
+    assert (f"p.csv:{row + 1}: psi = 4500 deg is invalid" in err and "gait.psi_deg" in err
+            and "[-360, 360]" in err)
     with pytest.raises(TableError, match=f"p.csv:{row + 1}: psi = 4500 deg"):
         read_measurements(path)
 
 
 def test_an_amplitude_above_a_row_nominal_pressure_is_bad_input(tmp_path, capsys, no_fit):
-    """The default amplitude 0.4 bar with a row at p0 = 0.3 bar: a negative gauge pressure, named by file and row."""
+    """The default amplitude 0.4 bar with a row at p0 = 0.3 bar: a negative gauge pressure, named by
+    file and row."""
     path = tmp_path / "p.csv"
-    path.write_text("p0 [bar],psi [deg],S [mm],sigma_S [mm]\n1.0,45,2,0.1\n0.3,45,1,0.1\n1.5,45,3,0.1\n")
+    path.write_text("p0 [bar],psi [deg],S [mm],sigma_S "
+                    "[mm]\n1.0,45,2,0.1\n0.3,45,1,0.1\n1.5,45,3,0.1\n")
     err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [path], "--param", "robot.k")
-    assert "p.csv:3:" in err and "p0 = 0.3 bar" in err and "pressure.amplitude_bar = 0.4 bar" in err, err
+    assert ("p.csv:3:" in err and "p0 = 0.3 bar" in err
+            and "pressure.amplitude_bar = 0.4 bar" in err), err
     problem = load_problem(PAPER_GRAVITY)
     with pytest.raises(TableError, match="p.csv:3:.*amplitude"):
-        fit_measurements(problem, [read_measurements(path)], resolve_parameters(problem, ["robot.k"]))
+        fit_measurements(problem, [read_measurements(path)],
+                         resolve_parameters(problem, ["robot.k"]))
 
 
 def test_a_fixed_pressure_constant_outside_its_range_is_bad_input(tmp_path, capsys, no_fit):
-    err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [PSI_DATA], "--param", "robot.k", "--pressure", "amplitude_bar=-1")
+    err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [PSI_DATA], "--param", "robot.k", "--pressure",
+                   "amplitude_bar=-1")
     assert "--pressure amplitude_bar=-1 is invalid" in err and ">= 0" in err, err
     with pytest.raises(ProblemError, match="--pressure amplitude_bar=-1 is invalid"):
         fixed_pressure(["amplitude_bar=-1"])
     assert fixed_pressure(["amplitude_bar=0", "a1=-0.5"]) == {"amplitude_bar": 0.0, "a1": -0.5}
 
 
-@pytest.mark.parametrize("name, bounds, valid", [("robot.k", "-1:1", "[1e-12, 1e12]"), ("robot.k", "0:1", "[1e-12, 1e12]"),
-                                                 ("robot.mu", "0:1", "[1e-4, 1e4]"), ("gait.A_deg", "-10:40", ">= 0"),
-                                                 ("pressure.amplitude_bar", "-1:1.7", ">= 0")])
-def test_bounds_outside_the_valid_range_are_bad_input(tmp_path, capsys, no_fit, name, bounds, valid):
-    problem, data = (PAPER_GRAVITY, PSI_DATA) if name.startswith("pressure") else (PAPER, _gait_file(tmp_path, "psi", 45))
-    err = _fit_cli(capsys, tmp_path, problem, [data], "--param", name, "--bounds", f"{name}={bounds}")
+@pytest.mark.parametrize("name, bounds, valid",
+                         [("robot.k", "-1:1", "[1e-12, 1e12]"), ("robot.k", "0:1", "[1e-12, 1e12]"),
+                          ("robot.mu", "0:1", "[1e-4, 1e4]"), ("gait.A_deg", "-10:40", ">= 0"),
+                          ("pressure.amplitude_bar", "-1:1.7", ">= 0")])
+def test_bounds_outside_the_valid_range_are_bad_input(tmp_path, capsys, no_fit, name, bounds,
+                                                      valid):
+    problem, data = (PAPER_GRAVITY,
+                     PSI_DATA) if name.startswith("pressure") else (PAPER, _gait_file(tmp_path, "psi", 45))
+    err = _fit_cli(capsys, tmp_path, problem, [data], "--param", name, "--bounds",
+                   f"{name}={bounds}")
     low = bounds.split(":")[0]
     assert f"--bounds {name}={bounds}: the low end {low} is invalid" in err and valid in err, err
     with pytest.raises(ProblemError, match=f"--bounds {name}={bounds}: the low end"):
@@ -122,9 +142,10 @@ def test_a_start_outside_the_valid_range_is_bad_input(tmp_path, capsys, no_fit):
     err = _fit_cli(capsys, tmp_path, PAPER, [_gait_file(tmp_path, "A", 22)], "--param", "robot.k",
                    "--start", "robot.k=-1", "--bounds", "robot.k=1e-3:1")
     assert "--start robot.k=-1 is invalid" in err and "[1e-12, 1e12]" in err, err
-    # each start in its range, but together the problem rejects them (foot 1 off the ground at phase 0)
-    err = _fit_cli(capsys, tmp_path, PAPER, [_gait_file(tmp_path, "A", 22)], "--param", "gait.gamma_deg",
-                   "--start", "gait.gamma_deg=20")
+    # each start in its range, but together the problem rejects them (foot 1 off the ground at phase
+    # 0)
+    err = _fit_cli(capsys, tmp_path, PAPER, [_gait_file(tmp_path, "A", 22)], "--param",
+                   "gait.gamma_deg", "--start", "gait.gamma_deg=20")
     assert "--param gait.gamma_deg: the start values (gait.gamma_deg = 20) are invalid" in err, err
 
 
@@ -139,23 +160,27 @@ def test_default_bounds_end_in_the_valid_range():
     assert (mu.low, mu.high) == pytest.approx((1e-4, 5e-3), rel=1e-12)  # mu in [1e-4, 1e4]
     (psi,) = resolve_parameters(problem, ["gait.psi_deg"], start=["gait.psi_deg=340"])
     assert (psi.low, psi.high) == (295.0, 360.0)
-    flat = problem.with_values({"gait.psi_deg": 0.0, "gait.A_deg": 5.0})  # gamma 20 deg stands with these
+    # gamma 20 deg stands with these
+    flat = problem.with_values({"gait.psi_deg": 0.0, "gait.A_deg": 5.0})
     (g,) = resolve_parameters(flat, ["gait.gamma_deg"], start=["gait.gamma_deg=20"])
     assert 0 < g.low < 1e-9 and g.high == 65.0  # gamma in (0, 360): open at 0
 
 
 def test_a_constant_fitted_and_fixed_is_bad_input(tmp_path, capsys, no_fit):
-    err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [PSI_DATA], "--param", "pressure.a1", "--pressure", "a1=0.1")
-    assert "--pressure a1=0.1" in err and "--param pressure.a1" in err and "--start pressure.a1=0.1" in err, err
+    err = _fit_cli(capsys, tmp_path, PAPER_GRAVITY, [PSI_DATA], "--param", "pressure.a1",
+                   "--pressure", "a1=0.1")
+    assert ("--pressure a1=0.1" in err and "--param pressure.a1" in err
+            and "--start pressure.a1=0.1" in err), err
     problem = load_problem(PAPER_GRAVITY)
     with pytest.raises(ProblemError, match="either fitted or held fixed"):
-        fit_measurements(problem, [read_measurements(PSI_DATA)], resolve_parameters(problem, ["pressure.a1"]),
-                         pressure={"a1": 0.1})
+        fit_measurements(problem, [read_measurements(PSI_DATA)],
+                         resolve_parameters(problem, ["pressure.a1"]), pressure={"a1": 0.1})
 
 
 @pytest.mark.parametrize("names", [("robot.mu", "robot.mu1"), ("robot.mu2", "robot.mu")])
 def test_alternative_keys_cannot_be_fitted_together(tmp_path, capsys, no_fit, names):
-    err = _fit_cli(capsys, tmp_path, PAPER, [_gait_file(tmp_path, "A", 22)], *(a for n in names for a in ("--param", n)))
+    err = _fit_cli(capsys, tmp_path, PAPER, [_gait_file(tmp_path, "A", 22)],
+                   *(a for n in names for a in ("--param", n)))
     assert "--param robot.mu and --param robot.mu" in err and "alternative keys" in err, err
     with pytest.raises(ProblemError, match="alternative keys of \\[robot\\]"):
         resolve_parameters(load_problem(PAPER), list(names))
@@ -164,7 +189,8 @@ def test_alternative_keys_cannot_be_fitted_together(tmp_path, capsys, no_fit, na
 
 def test_messages_show_plain_numbers_as_written(tmp_path, capsys, no_fit):
     bending = tmp_path / "b.csv"
-    bending.write_text("p [bar],segment [-],phi [deg],sigma_phi [deg]\n1,1,10,1\n1,3,10,1\n1.5,1,12,1\n")
+    bending.write_text("p [bar],segment [-],phi [deg],sigma_phi "
+                       "[deg]\n1,1,10,1\n1,3,10,1\n1.5,1,12,1\n")
     err = _fit_cli(capsys, tmp_path, PAPER, [bending], "--param", "pressure.a1")
     assert err.endswith("b.csv:3: segment = 3: must be 1 or 2"), err
     sigma = tmp_path / "s.csv"
@@ -188,30 +214,37 @@ STIFFNESS_ROWS = "phi [deg],sigma_phi [deg],tau [N m]\n{phi},{sigma},0.03\n20,{s
 
 
 @pytest.mark.parametrize("sigma, sigma2, line", [("0.5", "1e-300", 3), ("1e-11", "0.5", 2)])
-def test_an_uncertainty_too_small_to_weight_is_bad_input(tmp_path, capsys, no_fit, sigma, sigma2, line):
-    """sigma below 1e-12 x max(largest |phi|, 1 rad) = 5.73e-11 deg: the weighted residuals and their Jacobian
-    would overflow (1e-300 deg once crashed the search with 'array must not contain infs or NaNs')."""
+def test_an_uncertainty_too_small_to_weight_is_bad_input(tmp_path, capsys, no_fit, sigma, sigma2,
+                                                         line):
+    """sigma below 1e-12 x max(largest |phi|, 1 rad) = 5.73e-11 deg: the weighted residuals and
+    their Jacobian would overflow (1e-300 deg once crashed the search with 'array must not contain
+    infs or NaNs')."""
     path = tmp_path / "d.csv"
     path.write_text(STIFFNESS_ROWS.format(phi=10, sigma=sigma, sigma2=sigma2))
     err = _fit_cli(capsys, tmp_path, PAPER, [path], "--param", "robot.k")
     bad = sigma2 if line == 3 else sigma
-    assert f"d.csv:{line}: sigma_phi = {bad} deg is too small" in err and "1e-12 x max(the largest |phi|" in err, err
+    assert (f"d.csv:{line}: sigma_phi = {bad} deg is too small" in err
+            and "1e-12 x max(the largest |phi|" in err), err
     assert "5.73e-11 deg" in err, err
     with pytest.raises(TableError, match=f"d.csv:{line}: sigma_phi = {bad} deg is too small"):
         read_measurements(path)
-    path.write_text(STIFFNESS_ROWS.format(phi=10, sigma="1e-10", sigma2="1e-10"))  # above the floor: accepted
+    # above the floor: accepted
+    path.write_text(STIFFNESS_ROWS.format(phi=10, sigma="1e-10", sigma2="1e-10"))
     assert read_measurements(path).sigma.min() > 0
 
 
 def test_the_uncertainty_floor_scales_with_the_data_and_holds_for_zero_data(tmp_path):
-    """Relative to the largest |value| above 1 SI unit (S = 1e7 mm: floor 1e-5 mm); 1e-12 m when all S are 0."""
+    """Relative to the largest |value| above 1 SI unit (S = 1e7 mm: floor 1e-5 mm); 1e-12 m when all
+    S are 0."""
     big = tmp_path / "big.csv"
     big.write_text("A [deg],S [mm],sigma_S [mm]\n15,1e7,1e-4\n22,2e6,1e-6\n30,3e6,1e-4\n")
-    with pytest.raises(TableError, match=r"big.csv:3: sigma_S = 1e-06 mm is too small.* = 1e-05 mm"):
+    with pytest.raises(TableError,
+                       match=r"big.csv:3: sigma_S = 1e-06 mm is too small.* = 1e-05 mm"):
         read_measurements(big)
     zero = tmp_path / "zero.csv"
     zero.write_text("A [deg],S [mm],sigma_S [mm]\n15,0,0.1\n22,0,1e-300\n30,0,0.1\n")
-    with pytest.raises(TableError, match=r"zero.csv:3: sigma_S = 1e-300 mm is too small.* = 1e-09 mm"):
+    with pytest.raises(TableError,
+                       match=r"zero.csv:3: sigma_S = 1e-300 mm is too small.* = 1e-09 mm"):
         read_measurements(zero)
     for example in (PSI_DATA, PSI_DATA.with_name("paper_pressure_p0.csv")):
         read_measurements(example)
@@ -219,16 +252,19 @@ def test_the_uncertainty_floor_scales_with_the_data_and_holds_for_zero_data(tmp_
 
 @pytest.mark.parametrize("header, rows, param, message", [
     ("phi [deg],sigma_phi [deg],tau [N m]", "1e308,0.5,0.03\n20,0.5,0.06", "robot.k",
-     "d.csv:2: phi = 1e+308 deg is out of range; every value of a measurement file must be at most 1e12 rad"),
-    ("p [bar],segment [-],phi [deg],sigma_phi [deg]", "1e308,1,10,1\n1,1,10,1\n1.5,1,12,1", "pressure.a1",
-     "d.csv:2: p is out of range: its value overflows when converted to Pa; every value of a measurement file must "
-     "be at most 1e12 Pa = 1e+07 bar"),
+     "d.csv:2: phi = 1e+308 deg is out of range; every value of a measurement file must be at most "
+     "1e12 rad"),
+    ("p [bar],segment [-],phi [deg],sigma_phi [deg]", "1e308,1,10,1\n1,1,10,1\n1.5,1,12,1",
+     "pressure.a1",
+     "d.csv:2: p is out of range: its value overflows when converted to Pa; "
+     "every value of a measurement file must be at most 1e12 Pa = 1e+07 bar"),
     ("phi [deg],sigma_phi [deg],tau [N m]", "10,0.5,0.03\n20,0.5,-2e12", "robot.k",
      "d.csv:3: tau = -2e+12 N m is out of range"),
 ])
-def test_a_value_that_overflows_is_bad_input(tmp_path, capsys, no_fit, header, rows, param, message):
-    """phi = 1e308 deg is finite in rad but overflows the residuals; p = 1e308 bar is not finite in Pa: both once
-    gave 'success' with 'the search did not run'."""
+def test_a_value_that_overflows_is_bad_input(tmp_path, capsys, no_fit, header, rows, param,
+                                             message):
+    """phi = 1e308 deg is finite in rad but overflows the residuals; p = 1e308 bar is not finite in
+    Pa: both once gave 'success' with 'the search did not run'."""
     path = tmp_path / "d.csv"
     path.write_text(f"{header}\n{rows}\n")
     problem = PAPER_GRAVITY if param.startswith("pressure") else PAPER

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import judge
 from ocp_crawl.ocp.baseline import value_from
@@ -130,11 +131,13 @@ def test_judge_ignores_the_margin_without_a_friction_tolerance():
 
 @pytest.mark.slow
 @pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"),
-                    reason="a whole optimisation of minutes (14 on a loaded machine); by hand, OCP_CRAWL_HEAVY=1")
+                    reason="a whole optimisation of minutes (14 on a loaded machine); by hand, "
+                           "OCP_CRAWL_HEAVY=1")
 def test_changed_geometry_max_speed_ends_in_success():
-    """ocp_max_speed.toml with M 0.08, L 0.15, beta 1.5: success, its replay's margin within replay_tol of
-    friction_tol, its speed that of an independent simulation of its own torques, and at least the stored
-    optimum's (tests/data/margin_at_friction_tol.csv, an optimum of the same problem)."""
+    """ocp_max_speed.toml with M 0.08, L 0.15, beta 1.5: success, its replay's margin within
+    replay_tol of friction_tol, its speed that of an independent simulation of its own torques, and
+    at least the stored optimum's (tests/data/margin_at_friction_tol.csv, an optimum of the same
+    problem)."""
     from ocp_crawl.ocp.solve import optimize_gait
     from ocp_crawl.problem.problem import load_problem
     from ocp_crawl.problem.run import ocp_settings

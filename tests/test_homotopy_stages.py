@@ -1,6 +1,7 @@
-"""The homotopy's stage solvers: every stage but the last is solved to a looser tolerance (it only leads to
-the next one), the last stage and the polish to the tight one; checked on a relaxed complementarity problem
-with a closed-form solution and on the gait OCP against the same solve without loose stages."""
+"""The homotopy's stage solvers: every stage but the last is solved to a looser tolerance (it only
+leads to the next one), the last stage and the polish to the tight one; checked on a relaxed
+complementarity problem with a closed-form solution and on the gait OCP against the same solve
+without loose stages."""
 import math
 
 import casadi as cs
@@ -38,7 +39,8 @@ def _exact(sigma: float) -> tuple[float, float]:
 
 
 def _homotopy(stage_tol):
-    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {}, "test", stage_tol=stage_tol)
+    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {}, "test",
+                            stage_tol=stage_tol)
     used = []
 
     def call(solver, start: Start, data: dict) -> Solve:
@@ -61,7 +63,8 @@ def test_intermediate_stages_use_the_stage_solvers_and_the_last_is_tight():
     run = hom.relax(sigmas, Start(np.array([0.5, 0.5])), _data)
     assert run.ok and len(used) == len(sigmas) == 4
     assert used == ["pair_stage_cold", "pair_stage_warm", "pair_stage_warm", "pair_warm"]
-    # the last stage is solved to the tight tolerance: its point is the closed-form solution at sigma_min
+    # the last stage is solved to the tight tolerance: its point is the closed-form solution at
+    # sigma_min
     assert run.last.x == pytest.approx(_exact(1e-4), abs=1e-9)
     # a homotopy from a warm start (multipliers given) uses the warm stage solver first
     _, hom2, used2 = _homotopy(1e-3)
@@ -70,8 +73,8 @@ def test_intermediate_stages_use_the_stage_solvers_and_the_last_is_tight():
 
 
 def test_loose_stage_is_loose():
-    """The stage solver stops earlier than the tight one on the same stage (the test can fail: if the option
-    were not passed, both would run to the same tolerance)."""
+    """The stage solver stops earlier than the tight one on the same stage (the test can fail: if
+    the option were not passed, both would run to the same tolerance)."""
     solvers, hom, _ = _homotopy(1e-2)
     x0 = np.array([0.9, 0.2])  # on the branch of the solution x near 1
     loose = call_ipopt(solvers.stage_cold, 2, 1, x0=x0, **_data(1e-3))
@@ -83,7 +86,8 @@ def test_loose_stage_is_loose():
 
 @pytest.mark.parametrize("stage_tol", [None, 1e-12])
 def test_no_stage_tolerance_means_the_same_solvers(stage_tol):
-    """Without a stage tolerance looser than the solvers' own, the stage solvers are the cold and warm ones."""
+    """Without a stage tolerance looser than the solvers' own, the stage solvers are the cold and
+    warm ones."""
     solvers, hom, used = _homotopy(stage_tol)
     assert solvers.stage_cold is solvers.cold and solvers.stage_warm is solvers.warm
     hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)
@@ -92,10 +96,11 @@ def test_no_stage_tolerance_means_the_same_solvers(stage_tol):
 
 @pytest.mark.heavy
 def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
-    """max_speed at N = 20: the loose first stage (default stage_tol) reaches the optimum of the homotopy with
-    every stage solved to 1e-10, and its first stage takes fewer IPOPT iterations.  "The optimum" to the
-    spread of neighbouring branches: both end complementary, possibly on branches whose contact modes differ
-    in a sub-step or two (measured: sub-steps 32 and 36, speeds 1.2e-6 apart), far below replay_tol."""
+    """max_speed at N = 20: the loose first stage (default stage_tol) reaches the optimum of the
+    homotopy with every stage solved to 1e-10, and its first stage takes fewer IPOPT iterations.
+    "The optimum" to the spread of neighbouring branches: both end complementary, possibly on
+    branches whose contact modes differ in a sub-step or two (measured: sub-steps 32 and 36, speeds
+    1.2e-6 apart), far below replay_tol."""
     robot = Robot.paper()
     sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
     out = {}
@@ -111,23 +116,27 @@ def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
 
 
 def test_loose_last_stage_then_tighten():
-    """With ``loose_last`` every stage uses the stage solvers, so the last point is only near the solution;
-    ``tighten`` solves that stage again with the tight warm solver, to the closed-form solution."""
+    """With ``loose_last`` every stage uses the stage solvers, so the last point is only near the
+    solution; ``tighten`` solves that stage again with the tight warm solver, to the closed-form
+    solution."""
     solvers, hom, used = _homotopy(1e-3)
     sigmas = schedule(1e-1, 0.1, 1e-3)
     run = hom.relax(sigmas, Start(np.array([0.5, 0.5])), _data, loose_last=True)
     assert run.ok and used == ["pair_stage_cold", "pair_stage_warm", "pair_stage_warm"]
-    assert np.max(np.abs(run.last.x - _exact(1e-3))) > 1e-9  # loose: not the solution to the tight tolerance
+    # loose: not the solution to the tight tolerance
+    assert np.max(np.abs(run.last.x - _exact(1e-3))) > 1e-9
     sol = hom.tighten(run.last, sigmas[-1], _data(sigmas[-1]))
-    assert used[-1] == "pair_warm" and hom.records[-1].kind == "homotopy" and hom.records[-1].sigma == sigmas[-1]
+    assert (used[-1] == "pair_warm" and hom.records[-1].kind == "homotopy"
+            and hom.records[-1].sigma == sigmas[-1])
     assert sol.x == pytest.approx(_exact(1e-3), abs=1e-9)
 
 
 @pytest.mark.slow
 def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
-    """max_speed at N = 20: from the optimum's own profile (as the convergence run's warm solves start), the solve
-    with ``loose_last`` returns to the same optimum; and when the polish from the loose last stage fails (here: no
-    candidate offered), that stage is solved again tightly and polished."""
+    """max_speed at N = 20: from the optimum's own profile (as the convergence run's warm solves
+    start), the solve with ``loose_last`` returns to the same optimum; and when the polish from the
+    loose last stage fails (here: no candidate offered), that stage is solved again tightly and
+    polished."""
     from ocp_crawl.ocp.judge import replay_signal
 
     robot = Robot.paper()
@@ -138,18 +147,22 @@ def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
     assert failed is None
     best = ocp.unpack(x)
     near = replay_signal(np.arange(20) / 20, best["tau"])
-    loose = GaitOCP(robot, "physical", OCPSettings(objective="max_speed", nodes=20, starts=1, loose_last=True,
-                                                   stage_tol=st.sigma_min))
+    loose = GaitOCP(robot, "physical",
+                    OCPSettings(objective="max_speed", nodes=20, starts=1, loose_last=True,
+                                stage_tol=st.sigma_min))
     x, hist, failed, _ = GaitSolver(loose).solve(loose.initial_guess(near, best["T"]))
     kinds = [h.kind for h in hist]
-    assert failed is None and kinds[:3] == ["homotopy", "homotopy", "polish"] and "homotopy" not in kinds[3:]
+    assert failed is None and kinds[:3] == ["homotopy", "homotopy",
+                                            "polish"] and "homotopy" not in kinds[3:]
     assert hist[-1].accepted
-    # the same local optimum (others differ by percents); 1e-5: the polishes end at IPOPT's acceptable level
+    # the same local optimum (others differ by percents); 1e-5: the polishes end at IPOPT's
+    # acceptable level
     assert loose.unpack(x)["scen"][0]["v"] == pytest.approx(best["scen"][0]["v"], rel=1e-5)
     calls = []
     candidates = GaitSolver._polish_candidates
     monkeypatch.setattr(GaitSolver, "_polish_candidates",
-                        lambda self, x: [] if not calls.append(1) and len(calls) == 1 else candidates(self, x))
+                        lambda self, x: [] if not calls.append(1) and len(calls) == 1
+                        else candidates(self, x))
     x, hist, failed, _ = GaitSolver(loose).solve(loose.initial_guess(near, best["T"]))
     kinds = [h.kind for h in hist]
     assert failed is None and kinds[:4] == ["homotopy", "homotopy", "homotopy", "polish"]
@@ -158,14 +171,18 @@ def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
 
 
 def test_loose_pairs_at_other_tolerances_are_built_once_and_named_validly():
-    """``Solvers.loose(tol)``: a working (cold, warm) pair per tolerance, kept; the tight pair when tol is not looser
-    than the solvers' own; and a homotopy with ``loose_at`` uses the pair of each stage's sigma."""
+    """``Solvers.loose(tol)``: a working (cold, warm) pair per tolerance, kept; the tight pair when
+    tol is not looser than the solvers' own; and a homotopy with ``loose_at`` uses the pair of each
+    stage's sigma."""
     solvers, base, used = _homotopy(1e-3)
     a, b = solvers.loose(1e-5), solvers.loose(1e-6)
-    assert a is solvers.loose(1e-5) and a != b and solvers.loose(1e-12) == (solvers.cold, solvers.warm)
+    assert a is solvers.loose(1e-5) and a != b and solvers.loose(1e-12) == (solvers.cold,
+                                                                            solvers.warm)
     assert solvers.loose(1e-3) == (solvers.stage_cold, solvers.stage_warm)
-    # a sigma from repeated products (1e-9 = 1e-3 0.1^6 carries rounding noise): the same pair, or the tight one
-    assert solvers.loose(1e-5 * (1 + 1e-15)) is a and solvers.loose(1e-10 * (1 + 1e-15)) == (solvers.cold, solvers.warm)
+    # a sigma from repeated products (1e-9 = 1e-3 0.1^6 carries rounding noise): the same pair, or
+    # the tight one
+    assert (solvers.loose(1e-5 * (1 + 1e-15)) is a
+            and solvers.loose(1e-10 * (1 + 1e-15)) == (solvers.cold, solvers.warm))
     hom = Homotopy.of(solvers, base.call, loose_at=lambda sigma: solvers.loose(sigma / 10))
     run = hom.relax(schedule(1e-3, 0.1, 1e-5), Start(np.array([0.5, 0.5])), _data)
     assert run.ok and used == [solvers.loose(1e-4)[0].name(), a[1].name(), "pair_warm"]
@@ -174,13 +191,15 @@ def test_loose_pairs_at_other_tolerances_are_built_once_and_named_validly():
 
 @pytest.mark.heavy
 def test_deep_homotopy_ends_complementary_without_a_polish():
-    """max_speed at N = 20 down to sigma = 1e-11 (stages to a tenth of their sigma): the last point is within
-    comp_tol, so no polish runs, and it is the optimum that the default path reaches through its polish."""
+    """max_speed at N = 20 down to sigma = 1e-11 (stages to a tenth of their sigma): the last point
+    is within comp_tol, so no polish runs, and it is the optimum that the default path reaches
+    through its polish."""
     robot = Robot.paper()
     sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
     v = {}
     for deep in (False, True):
-        extra = dict(sigma0=1e-3, sigma_factor=0.1, sigma_min=1e-11, stage_tol_ratio=0.1) if deep else {}
+        extra = dict(sigma0=1e-3, sigma_factor=0.1, sigma_min=1e-11,
+                     stage_tol_ratio=0.1) if deep else {}
         st = OCPSettings(objective="max_speed", nodes=20, starts=1, **extra)
         ocp = GaitOCP(robot, "physical", st)
         x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
@@ -196,16 +215,19 @@ def test_polish_uses_the_tight_warm_solver():
     solvers, hom, used = _homotopy(1e-3)
     run = hom.relax(schedule(1e-1, 0.1, 1e-3), Start(np.array([0.5, 0.5])), _data)
     # the tightened NLP: y on its branch (y = 0), x free
-    pol = hom.polish(run.last, [dict(_data(0.0), ubx=[math.inf, 0.0], x0=np.minimum(run.last.x, [math.inf, 0.0]))],
+    pol = hom.polish(run.last,
+                     [dict(_data(0.0), ubx=[math.inf, 0.0],
+                           x0=np.minimum(run.last.x, [math.inf, 0.0]))],
                      lambda p: True)
     assert used[-1] == "pair_warm" and pol is not None
-    assert pol.x == pytest.approx([TARGET[0], 0.0], abs=1e-9)  # the exact solution of the unrelaxed problem
+    # the exact solution of the unrelaxed problem
+    assert pol.x == pytest.approx([TARGET[0], 0.0], abs=1e-9)
 
 
 @pytest.mark.parametrize("user_tol,loose", [(1e-3, False), (1e-4, False), (1e-6, True)])
 def test_user_tolerance_at_or_above_the_stage_tolerance_means_no_loose_stages(user_tol, loose):
-    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {"tol": user_tol}, "test",
-                            stage_tol=1e-4)
+    solvers = ipopt_solvers("pair", _relaxed_pair(), OCP_IPOPT, OCP_WARM_IPOPT, {"tol": user_tol},
+                            "test", stage_tol=1e-4)
     assert (solvers.stage_cold is not solvers.cold) == loose
     assert (solvers.stage_warm is not solvers.warm) == loose
 
@@ -226,8 +248,9 @@ def _fake_call(used):
 
 @pytest.mark.parametrize("stage_solvers", [False, True])
 def test_done_ends_the_homotopy_only_without_stage_solvers(stage_solvers):
-    """``done`` true after every stage: without stage solvers (the MPCC step) the homotopy ends after its first
-    stage, as before; with them a loose stage never ends it (its point is not an answer)."""
+    """``done`` true after every stage: without stage solvers (the MPCC step) the homotopy ends
+    after its first stage, as before; with them a loose stage never ends it (its point is not an
+    answer)."""
     used = []
     extra = (_Fake("stage_cold"), _Fake("stage_warm")) if stage_solvers else (None, None)
     hom = Homotopy(_Fake("cold"), _Fake("warm"), _fake_call(used), [], *extra)

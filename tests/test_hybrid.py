@@ -7,7 +7,8 @@ import re
 import numpy as np
 import pytest
 
-from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model, PeriodicLinear,
+from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, HybridOptions, Mode, Model,
+                       PeriodicLinear,
                        PeriodicSpline, ReferenceTorque, Robot, Status, simulate_torque)
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.model.statics import AUX
@@ -28,7 +29,8 @@ def check_samples(model, res, atol_res=1e-9):
     assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + slack)
     assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + slack)
     # slipping samples sit on the friction limit of the slipping foot
-    for code, foot in ((Mode.SLIP1_POS, 1), (Mode.SLIP1_NEG, 1), (Mode.SLIP2_POS, 2), (Mode.SLIP2_NEG, 2)):
+    for code, foot in ((Mode.SLIP1_POS, 1), (Mode.SLIP1_NEG, 1), (Mode.SLIP2_POS, 2),
+                       (Mode.SLIP2_NEG, 2)):
         sel = res.mode == int(code)
         lim = (r.mu1 * res.f_n1 if foot == 1 else r.mu2 * res.f_n2)[sel]
         np.testing.assert_allclose(np.abs(res.f_t[sel]), lim, rtol=0, atol=slack)
@@ -70,7 +72,8 @@ def test_events_are_located_on_their_guards(gravity):
         assert abs(ev.guard) < 1e-9, ev
         before = {m.label: m for m in Mode}[ev.mode_before]
         # the guard of the mode before the event changes sign across it (bracket of 2e-10 in phase)
-        seg = [s for s in stepper.segments if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
+        seg = [s for s in stepper.segments
+               if s.mode == before and s.points[0].t <= ev.t <= s.points[-1].t + 1e-12]
         assert seg, ev
         p = min(seg[-1].points, key=lambda pt: abs(pt.t - ev.t))
         vals = []
@@ -112,12 +115,14 @@ def test_below_friction_threshold_nothing_moves_in_paper_convention():
 
 
 def test_below_friction_threshold_physical_robot_cannot_stand():
-    """With the physical sign gravity destabilises the Pi shape: at k = 0.05 M g L no equilibrium near the
-    reference posture keeps both joints above the ground, so the released start is rejected (MODEL_NOTES)."""
+    """With the physical sign gravity destabilises the Pi shape: at k = 0.05 M g L no equilibrium
+    near the reference posture keeps both joints above the ground, so the released start is rejected
+    (MODEL_NOTES)."""
     robot = Robot.paper().with_stiffness_ratio(0.05)
     res = simulate_torque(Model(robot, gravity="physical"), paper_torque(robot))
     assert not res.success and res.status_name == "no_start"
-    assert re.search("starting configuration: joint . at or below the ground", res.message), res.message
+    assert re.search("starting configuration: joint . at or below the ground",
+                     res.message), res.message
     assert np.isnan(res.S) and res.events == [] and res.t.size == 0
 
 
@@ -156,7 +161,8 @@ def test_lift_off_is_a_status_not_an_exception(gravity):
     last = res.events[-1]
     assert last.kind == "lift_off_2" and last.t == pytest.approx(res.failure_t, abs=0)
     assert abs(last.guard) < 1e-9  # f_n2/(M g) at the located lift-off
-    assert res.t[-1] == pytest.approx(res.failure_t, abs=1e-15)  # output runs up to the lift-off ...
+    # output runs up to the lift-off ...
+    assert res.t[-1] == pytest.approx(res.failure_t, abs=1e-15)
     assert np.all(res.f_n2[:-1] > 0)  # ... through valid states
     assert abs(res.f_n2[-1]) < 1e-9 * robot.M * robot.g
 
@@ -180,8 +186,9 @@ def _cot_reference():
         return list(csv.DictReader(fh))
 
 
-@pytest.mark.parametrize("column,ratio,tol", [("CoT_plus_large_k", 5.0, 0.03), ("CoT_plus_realistic_k", 2.74, 0.03),
-                                              ("CoT_plus_low_k", 0.3, 0.05)])
+@pytest.mark.parametrize("column,ratio,tol",
+                         [("CoT_plus_large_k", 5.0, 0.03), ("CoT_plus_realistic_k", 2.74, 0.03),
+                          ("CoT_plus_low_k", 0.3, 0.05)])
 @pytest.mark.parametrize("amplitude", [20.0, 50.0])
 def test_cot_matches_published_curve_in_paper_convention(column, ratio, tol, amplitude):
     rows = _cot_reference()
@@ -234,7 +241,8 @@ def test_general_periodic_inputs_are_accepted():
     spline = PeriodicSpline(tk, samples)
     plain = CallableSignal(lambda t: robot.k * (Harmonic.from_degrees(90, 30, 45)(t) - math.pi))
     linear = PeriodicLinear(tk, samples)
-    np.testing.assert_allclose(linear(tk + 0.5 / n), 0.5 * (samples + np.roll(samples, -1, axis=1)), atol=1e-15)
+    np.testing.assert_allclose(linear(tk + 0.5 / n), 0.5 * (samples + np.roll(samples, -1, axis=1)),
+                               atol=1e-15)
     for u, tol in ((fourier, 1e-10), (spline, 1e-7), (plain, 1e-8), (linear, 1e-4)):
         res = simulate_torque(model, u)
         assert res.success, res.message
@@ -249,8 +257,9 @@ def test_bad_starting_configuration_is_rejected():
 
 
 def test_grazing_friction_limit_keeps_the_mode():
-    """psi = 180 deg, gamma = 80 deg (physical): in stick-stick f_t touches foot 2's friction limit and
-    turns back; the stepper must stay in stick-stick (a graze event), not report an inconsistency."""
+    """psi = 180 deg, gamma = 80 deg (physical): in stick-stick f_t touches foot 2's friction limit
+    and turns back; the stepper must stay in stick-stick (a graze event), not report an
+    inconsistency."""
     robot = Robot.paper()
     stepper = HybridStepper(Model(robot), paper_torque(robot, gamma=80, psi=180))
     res = stepper.run(t_eval=np.linspace(0, 1, 20001))
@@ -266,9 +275,10 @@ def test_grazing_friction_limit_keeps_the_mode():
 
 
 def test_output_phases_go_to_the_first_segment_that_holds_them():
-    """The one-search assignment of sorted output phases to consecutive segments (event_state.phase_owners) against
-    the rule itself, phase by phase: the first segment whose [first, last] point phases hold it (boundaries, phases
-    on no segment, one-point segments and unsorted phases included)."""
+    """The one-search assignment of sorted output phases to consecutive segments
+    (event_state.phase_owners) against the rule itself, phase by phase: the first segment whose
+    [first, last] point phases hold it (boundaries, phases on no segment, one-point segments and
+    unsorted phases included)."""
     from types import SimpleNamespace
 
     from ocp_crawl.sim.event_state import phase_owners
@@ -278,7 +288,8 @@ def test_output_phases_go_to_the_first_segment_that_holds_them():
         cuts = np.sort(rng.choice(np.linspace(0, 2, 41), size=rng.integers(2, 8), replace=False))
         segs = [SimpleNamespace(points=[SimpleNamespace(t=float(a)), SimpleNamespace(t=float(b))])
                 for a, b in zip(cuts[:-1], cuts[1:])]
-        if rng.random() < 0.3:  # a one-point segment at a boundary (an event followed by another at once)
+        # a one-point segment at a boundary (an event followed by another at once)
+        if rng.random() < 0.3:
             k = int(rng.integers(0, len(segs)))
             segs.insert(k, SimpleNamespace(points=[segs[k].points[0]]))
         te = np.unique(np.concatenate([rng.uniform(-0.2, 2.2, 30), rng.choice(cuts, 3)]))
@@ -293,13 +304,17 @@ def test_output_phases_go_to_the_first_segment_that_holds_them():
 
 
 def test_cycle_ending_a_rounding_error_short_of_its_phase():
-    """A gait whose steady cycle ends 2e-16 before t = 2 (an event found at 1.9999999999999998) reports its
-    metrics (it raised IndexError), and they continue those of a neighbouring psi (a limit, not a stored value)."""
+    """A gait whose steady cycle ends 2e-16 before t = 2 (an event found at 1.9999999999999998)
+    reports its metrics (it raised IndexError), and they continue those of a neighbouring psi (a
+    limit, not a stored value)."""
     model = Model(Robot.paper(), gravity="physical")
     kw = dict(gamma1_deg=91.6456826619305, gamma2_deg=90.44124551349091, A1_deg=27.92683794884863,
               A2_deg=29.296200647806213)
-    res = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(psi_deg=180, **kw), model.robot.k))
-    near = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(psi_deg=179.999, **kw), model.robot.k))
+    res = simulate_torque(model,
+                          ReferenceTorque(Harmonic.from_degrees(psi_deg=180, **kw), model.robot.k))
+    near = simulate_torque(model,
+                           ReferenceTorque(Harmonic.from_degrees(psi_deg=179.999, **kw),
+                                           model.robot.k))
     assert res.success and near.success, (res.message, near.message)
     assert abs(res.W_plus - near.W_plus) <= 1e-5 * abs(near.W_plus)
     assert abs(res.S - near.S) <= 1e-5 * abs(near.S)

@@ -10,7 +10,8 @@ import pytest
 
 import ocp_crawl.cli.app as cli
 from ocp_crawl import load_problem
-from ocp_crawl.problem.shipped import SHIPPED_DIR, SHIPPED_FOLDERS, shipped_problem, shipped_problems, write_problems
+from ocp_crawl.problem.shipped import (SHIPPED_DIR, SHIPPED_FOLDERS, shipped_problem,
+                                       shipped_problems, write_problems)
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -21,15 +22,16 @@ def _files(folder: Path) -> dict[str, bytes]:
 
 @pytest.mark.parametrize("folder", sorted(SHIPPED_FOLDERS))
 def test_repository_copy_is_what_init_writes(folder, tmp_path, capsys):
-    """One source of truth: problems/ and examples/ at the repository root equal `ocp-crawl init` output."""
+    """One source of truth: problems/ and examples/ at the repository root equal `ocp-crawl init`
+    output."""
     assert cli.main(["init", str(tmp_path)]) == 0
     written, repo = _files(tmp_path / folder), _files(REPO / folder)
     repo = {n: b for n, b in repo.items() if not n.endswith(".pyc")}
     refresh = (f"edit ocp_crawl/data/{folder}/ (the shipped copy; new files go there too) and run "
                "'ocp-crawl init --force' at the repository root")
-    assert set(written) == set(repo), (f"{folder}/ and ocp_crawl/data/{folder}/ hold different files: only in "
-                                       f"{folder}/: {set(repo) - set(written)}, only shipped: "
-                                       f"{set(written) - set(repo)}; {refresh}")
+    assert set(written) == set(repo), (f"{folder}/ and ocp_crawl/data/{folder}/ hold different "
+                                       f"files: only in {folder}/: {set(repo) - set(written)}, "
+                                       f"only shipped: {set(written) - set(repo)}; {refresh}")
     differ = [n for n in written if written[n] != repo[n]]
     assert not differ, f"{folder}/ differs from ocp_crawl/data/{folder}/ in {differ}: {refresh}"
     assert len(written) >= 6
@@ -39,12 +41,14 @@ def test_every_shipped_problem_is_valid():
     for name, path in shipped_problems().items():
         if name.endswith(".toml"):
             assert load_problem(path).source == str(path)
-    assert shipped_problem("paper_gait") == shipped_problem("paper_gait.toml") == SHIPPED_DIR / "paper_gait.toml"
+    assert (shipped_problem("paper_gait") == shipped_problem("paper_gait.toml")
+            == SHIPPED_DIR / "paper_gait.toml")
     with pytest.raises(KeyError, match="paper_gait.toml"):
         shipped_problem("no_such_problem")
 
 
-def test_init_default_is_the_current_directory_and_json_lists_the_files(tmp_path, capsys, monkeypatch):
+def test_init_default_is_the_current_directory_and_json_lists_the_files(tmp_path, capsys,
+                                                                        monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["init", "--json"]) == 0
     out, err = capsys.readouterr()
@@ -54,13 +58,15 @@ def test_init_default_is_the_current_directory_and_json_lists_the_files(tmp_path
     assert data["files"] == expected and any(f.startswith("examples/") for f in expected)
     assert all((tmp_path / f).is_file() for f in data["files"])
     for folder in SHIPPED_FOLDERS:  # nothing else, no temporary files
-        assert sorted(p.name for p in (tmp_path / folder).iterdir()) == sorted(_files(SHIPPED_FOLDERS[folder]))
+        assert (sorted(p.name for p in (tmp_path / folder).iterdir())
+                == sorted(_files(SHIPPED_FOLDERS[folder])))
 
 
 def test_init_refuses_to_overwrite_before_writing_anything(tmp_path, capsys):
     names = list(shipped_problems())
     (tmp_path / "problems").mkdir()
-    mine = tmp_path / "problems" / names[-1]  # the last one: a refusal after writing the others would show
+    # the last one: a refusal after writing the others would show
+    mine = tmp_path / "problems" / names[-1]
     mine.write_text("# my own edits\n")
     assert cli.main(["init", str(tmp_path)]) == 2
     out, err = capsys.readouterr()
@@ -84,9 +90,10 @@ def test_write_problems_python_api(tmp_path):
 
 
 def test_every_problem_file_the_readme_names_is_shipped():
-    """The commands of the README and of the docs pages name problems/X; `ocp-crawl init` must write each (a wheel
-    install has no other)."""
-    pages = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")), *sorted((REPO / "docs" / "guide").glob("*.md"))]
+    """The commands of the README and of the docs pages name problems/X; `ocp-crawl init` must write
+    each (a wheel install has no other)."""
+    pages = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md")),
+             *sorted((REPO / "docs" / "guide").glob("*.md"))]
     text = "\n".join(page.read_text(encoding="utf-8") for page in pages)
     named = set(re.findall(r"problems/([A-Za-z0-9_.-]+\.(?:toml|csv))", text))
     assert "paper_gait.toml" in named
@@ -94,12 +101,14 @@ def test_every_problem_file_the_readme_names_is_shipped():
 
 
 def test_ci_runs_the_readme_test_command():
-    """CI runs the test command of the README's second line (the one a new machine runs), word for word."""
+    """CI runs the test command of the README's second line (the one a new machine runs), word for
+    word."""
     readme = (REPO / "README.md").read_text(encoding="utf-8")
     block = readme.split("```", 2)[1].strip().splitlines()
     assert len(block) == 2 and block[1].startswith("python3 -m venv"), block
     readme_command = block[1].split("&&")[-1].strip()
-    ci_lines = [line.strip() for line in (REPO / ".ci" / "run").read_text(encoding="utf-8").splitlines()]
+    ci_lines = [line.strip()
+                for line in (REPO / ".ci" / "run").read_text(encoding="utf-8").splitlines()]
     test_lines = [line for line in ci_lines if "pytest" in line and not line.startswith("#")]
     assert readme_command.startswith("python -m pytest")
     assert test_lines == [readme_command], (test_lines, readme_command)

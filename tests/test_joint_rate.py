@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import judge, optimize_gait
 from ocp_crawl.ocp.baseline import value_from
@@ -157,7 +157,8 @@ def bounded():
     """max_speed at N = 20 with the joint rates bounded by 180 deg/s (unbounded, the optimum's peak
     is about 194 deg/s at this N: ``test_the_bound_costs_speed``)."""
     settings = OCPSettings(nodes=20, starts=1, harmonic_psi=12, harmonic_A=2,
-                           max_joint_rate_deg_s=BOUND, baseline_samples=8, baseline_starts=1, baseline_evaluations=40)
+                           max_joint_rate_deg_s=BOUND, baseline_samples=8, baseline_starts=1,
+                           baseline_evaluations=40)
     return optimize_gait(ROBOT, "physical", settings, jobs=1)
 
 

@@ -19,29 +19,32 @@ def closed_forms(robot: Robot, phi, sign_paper: bool):
     xc = l / (2 * (2 + b)) * ((2 + b) * b * math.cos(th) - (3 + 2 * b) * math.cos(a) - math.cos(c))
     delta = (1 + b) / (2 * (2 + b)) * l * (math.cos(c) - math.cos(a))
     fn1, fn2 = (1 - xc / d) * M * g, xc / d * M * g
-    grav = (1 + b) * l**2 * m * g / (2 * d) * np.array([math.cos(a) * (b * math.cos(th) - 2 * math.cos(c)),
-                                                        math.cos(c) * (b * math.cos(th) - 2 * math.cos(a))])
+    grav = ((1 + b) * l**2 * m * g / (2 * d)
+            * np.array([math.cos(a) * (b * math.cos(th) - 2 * math.cos(c)),
+                        math.cos(c) * (b * math.cos(th) - 2 * math.cos(a))]))
 
     def residual(tau, ft):
-        base = np.asarray(tau) - robot.k * (np.asarray(phi) - math.pi) - l * np.array([math.sin(a), math.sin(c)]) * ft
+        base = (np.asarray(tau) - robot.k * (np.asarray(phi) - math.pi)
+                - l * np.array([math.sin(a), math.sin(c)]) * ft)
         # the paper prints +grav (eq. intEq); virtual work gives -grav (MODEL_NOTES erratum)
         return base + grav if sign_paper else base - grav
 
-    return dict(theta=th, d=d, xc=xc, Delta=delta, fn1=fn1, fn2=fn2, grad_d=l * np.array([math.sin(a), math.sin(c)]),
-                residual=residual)
+    return dict(theta=th, d=d, xc=xc, Delta=delta, fn1=fn1, fn2=fn2,
+                grad_d=l * np.array([math.sin(a), math.sin(c)]), residual=residual)
 
 
 robots = st.builds(
     Robot,
-    M=st.floats(0.01, 2.0), L=st.floats(0.05, 1.0), beta=st.floats(2.0, 4.0), k=st.floats(0.01, 10.0),
+    M=st.floats(0.01, 2.0), L=st.floats(0.05, 1.0), beta=st.floats(2.0, 4.0),
+    k=st.floats(0.01, 10.0),
     mu1=st.floats(0.05, 2.0), mu2=st.floats(0.05, 2.0), g=st.floats(1.0, 20.0),
 )
 angles = st.floats(math.radians(40), math.radians(150))
 
 
 @settings(max_examples=150, deadline=None)
-@given(robot=robots, p1=angles, p2=angles, t1=st.floats(-2, 2), t2=st.floats(-2, 2), ft=st.floats(-1, 1),
-       gravity=st.sampled_from(["physical", "paper"]))
+@given(robot=robots, p1=angles, p2=angles, t1=st.floats(-2, 2), t2=st.floats(-2, 2),
+       ft=st.floats(-1, 1), gravity=st.sampled_from(["physical", "paper"]))
 def test_symbolic_statics_equal_closed_forms(robot, p1, p2, t1, t2, ft, gravity):
     model = Model(robot, gravity=gravity)
     phi = np.array([p1, p2])
@@ -54,10 +57,12 @@ def test_symbolic_statics_equal_closed_forms(robot, p1, p2, t1, t2, ft, gravity)
         assert kin[name] == pytest.approx(ref[name], abs=1e-12 * L)
     for name in ("fn1", "fn2"):
         assert kin[name] == pytest.approx(ref[name], abs=1e-12 * Mg)
-    np.testing.assert_allclose([kin["grad_d1"], kin["grad_d2"]], ref["grad_d"], rtol=0, atol=1e-12 * L)
+    np.testing.assert_allclose([kin["grad_d1"], kin["grad_d2"]], ref["grad_d"], rtol=0,
+                               atol=1e-12 * L)
     tau = np.array([t1, t2]) * robot.MgL
     res = model.equilibrium_residual(phi, tau, ft * Mg)
-    np.testing.assert_allclose(res, ref["residual"](tau, ft * Mg), rtol=0, atol=1e-12 * max(robot.MgL, robot.k))
+    np.testing.assert_allclose(res, ref["residual"](tau, ft * Mg), rtol=0,
+                               atol=1e-12 * max(robot.MgL, robot.k))
 
 
 def test_conventions_differ_only_in_gravity_sign(paper_robot):
@@ -91,7 +96,8 @@ def test_flat_and_pi_shapes(paper_robot):
 
 
 @pytest.mark.parametrize("field,value,match", [
-    ("M", -1.0, "M must be >= 1e-12"), ("L", 0.0, "L must be >= 1e-12"), ("k", float("nan"), "k must be finite"),
+    ("M", -1.0, "M must be >= 1e-12"), ("L", 0.0, "L must be >= 1e-12"),
+    ("k", float("nan"), "k must be finite"),
     ("beta", -2.0, "beta must be >= 0.01"), ("mu1", -0.1, "mu1 must be >= 0.0001"),
     ("g", float("inf"), "g must be finite"),
 ])
@@ -124,11 +130,13 @@ def test_check_contact(paper_robot):
 @pytest.mark.parametrize("field, value", [("mu1", 0.0), ("mu2", 1e5), ("beta", 1e-9), ("M", 1e300),
                                           ("L", 0.0), ("k", 10 ** 400), ("g", -9.81)])
 def test_robot_refuses_what_a_problem_file_refuses(field, value, tmp_path):
-    """The API's Robot and the [robot] keys of a file share their bounds: each value is refused by both."""
+    """The API's Robot and the [robot] keys of a file share their bounds: each value is refused by
+    both."""
     from ocp_crawl.problem import ProblemError, problem_from_dict
 
     with pytest.raises(ValueError, match=field):
         Robot(**{field: value})
     robot = {"M": 0.052, "L": 0.12, "k": 0.1677, "mu1": 0.389, "mu2": 0.389, field: value}
     with pytest.raises(ProblemError, match=f"\\[robot\\] {field} = "):
-        problem_from_dict({"robot": robot, "gait": {"gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0}})
+        problem_from_dict({"robot": robot,
+                           "gait": {"gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0}})

@@ -30,7 +30,8 @@ def initial_state(model, torque) -> StepState:
 
 
 def sampled_steps(per_gait=80):
-    """(model, state, tau, h) for states taken along event-driven trajectories, with the torque one step later."""
+    """(model, state, tau, h) for states taken along event-driven trajectories, with the torque one
+    step later."""
     out = []
     for gravity, mu1, mu2, psi in SAMPLED_GAITS:
         robot = Robot.paper(mu1=mu1, mu2=mu2)
@@ -39,7 +40,8 @@ def sampled_steps(per_gait=80):
         res = HybridStepper(model, torque).run()
         assert res.success, res.message
         idx = set(np.linspace(0, res.t.size - 1, per_gait).round().astype(int).tolist())
-        # the event phases are output samples: include them (states on a friction limit or at d' = 0)
+        # the event phases are output samples: include them (states on a friction limit or at d' =
+        # 0)
         idx |= {int(np.argmin(np.abs(res.t - e.t))) for e in res.steady_events()}
         for j, k in enumerate(sorted(idx)):
             state = StepState(res.phi[:, k], res.x1[k], res.x2[k], res.f_t[k])
@@ -66,8 +68,9 @@ def steppers():
     return get
 
 
-# ---------------------------------------------------------------------------------------- IPOPT failures
-# (the status table itself and forced IPOPT failures of every kind: tests/test_ipopt_status.py)
+# ---------------------------------------------------------------------------------------- IPOPT
+# failures (the status table itself and forced IPOPT failures of every kind:
+# tests/test_ipopt_status.py)
 def test_failing_ipopt_status_fails_the_step(paper_robot):
     model = Model(paper_robot)
     torque = paper_torque(paper_robot)
@@ -80,7 +83,8 @@ def test_failing_ipopt_status_fails_the_step(paper_robot):
 
 
 def _fail_calls(step, which):
-    """Let IPOPT calls number ``which`` (1-based) of ``step`` report Search_Direction_Becomes_Too_Small."""
+    """Let IPOPT calls number ``which`` (1-based) of ``step`` report
+    Search_Direction_Becomes_Too_Small."""
     original = step._call
     count = {"n": 0}
 
@@ -108,7 +112,8 @@ def test_failed_attempts_are_retried(paper_robot):
     _fail_calls(step, {1})
     res = step.solve(state, torque(0.02), warm_start=warm)
     assert res.success and res.attempts == 2, res.message
-    assert res.homotopy[0].attempt == 0 and res.homotopy[0].return_status == "Search_Direction_Becomes_Too_Small"
+    assert (res.homotopy[0].attempt == 0
+            and res.homotopy[0].return_status == "Search_Direction_Becomes_Too_Small")
     s1 = sigmas(res, 1)
     assert all(b < a for a, b in zip(s1, s1[1:])) and s1[-1] < 1e-9
     np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL)
@@ -124,7 +129,8 @@ def test_failed_attempts_are_retried(paper_robot):
     step = MPCCStep(model, MPCCOptions(max_retries=0))
     _fail_calls(step, {1})
     res = step.solve(state, torque(0.02))
-    assert not res.success and res.status == "Search_Direction_Becomes_Too_Small" and res.attempts == 1
+    assert (not res.success and res.status == "Search_Direction_Becomes_Too_Small"
+            and res.attempts == 1)
 
 
 def test_acceptable_level_is_accepted_with_the_residual_checks(paper_robot):
@@ -140,17 +146,21 @@ def test_acceptable_level_is_accepted_with_the_residual_checks(paper_robot):
 
 
 def test_success_needs_the_complementarity_residual(paper_robot):
-    """IPOPT succeeds at every stage, but without the polish the relaxation leaves a residual above comp_tol."""
+    """IPOPT succeeds at every stage, but without the polish the relaxation leaves a residual above
+    comp_tol."""
     model = Model(paper_robot)
     torque = paper_torque(paper_robot)
     state = initial_state(model, torque)
-    res = MPCCStep(model, MPCCOptions(polish="never", comp_tol=1e-14, max_retries=0)).solve(state, torque(0.3))
+    res = MPCCStep(model,
+                   MPCCOptions(polish="never", comp_tol=1e-14,
+                               max_retries=0)).solve(state, torque(0.3))
     assert all(s.return_status == "Solve_Succeeded" for s in res.homotopy)
     assert res.homotopy[-1].comp_residual > 1e-14
     assert not res.success and "complementarity residual" in res.message
 
 
-# ---------------------------------------------------------------------------------------- options and inputs
+# ---------------------------------------------------------------------------------------- options
+# and inputs
 @pytest.mark.parametrize("kwargs,exc,match", [
     ({"formulation": "smooth"}, ValueError, "formulation"),
     ({"sigma_min": 1e-8}, ValueError, "sigma_min"),
@@ -211,15 +221,19 @@ def test_ipopt_is_quiet_unless_verbose(paper_robot, capfd):
 def test_mode_from_pairs():
     z = np.zeros(4)
     assert mode_from_pairs(z, np.ones(4))[0] == Mode.STICK
-    assert mode_from_pairs(np.array([1e-3, 0, 0, 0]), np.array([0, 0.3, 0.1, 0.1]))[0] == Mode.SLIP1_POS
-    assert mode_from_pairs(np.array([0, 0, 0, 2e-3]), np.array([0.1, 0.1, 0.3, 0]))[0] == Mode.SLIP2_NEG
+    assert mode_from_pairs(np.array([1e-3, 0, 0, 0]),
+                           np.array([0, 0.3, 0.1, 0.1]))[0] == Mode.SLIP1_POS
+    assert mode_from_pairs(np.array([0, 0, 0, 2e-3]),
+                           np.array([0.1, 0.1, 0.3, 0]))[0] == Mode.SLIP2_NEG
     # both feet move apart by comparable amounts at equal limits: slip-slip, opening (d' > 0)
-    assert mode_from_pairs(np.array([0, 1e-3, 1e-3, 0]), np.array([0.2, 0, 0, 0.2]))[0] == Mode.SLIP_BOTH_POS
+    assert mode_from_pairs(np.array([0, 1e-3, 1e-3, 0]),
+                           np.array([0.2, 0, 0, 0.2]))[0] == Mode.SLIP_BOTH_POS
     # a corner s = c = 0 is no slip
     assert mode_from_pairs(np.zeros(4), np.array([0, 0.2, 0.1, 0.1]))[0] == Mode.STICK
 
 
-# ---------------------------------------------------------------------------------------- step vs oracle
+# ---------------------------------------------------------------------------------------- step vs
+# oracle
 @pytest.mark.slow
 def test_mpcc_step_agrees_with_mode_enumeration(samples, steppers):
     assert len(samples) >= 300
@@ -231,7 +245,8 @@ def test_mpcc_step_agrees_with_mode_enumeration(samples, steppers):
         res = steppers(model).solve(state, tau)
         assert res.success, res.message
         assert res.comp_residual <= 1e-8 and res.eq_residual <= 1e-9
-        ctx = (model.gravity, model.robot.mu1, model.robot.mu2, state.phi, h, res.mode.label, ref.mode.label)
+        ctx = (model.gravity, model.robot.mu1, model.robot.mu2, state.phi, h, res.mode.label,
+               ref.mode.label)
         np.testing.assert_allclose(res.phi, ref.phi, rtol=0, atol=PHI_TOL, err_msg=str(ctx))
         # a unique consistent mode must be found; with several coinciding ones (a friction limit
         # reached exactly at the end of the step) the mode is not defined by the step
@@ -239,7 +254,8 @@ def test_mpcc_step_agrees_with_mode_enumeration(samples, steppers):
             assert res.mode == ref.mode, ctx
             compared_modes += 1
         modes_seen.add(ref.mode)
-        np.testing.assert_allclose([res.dx1, res.dx2], [ref.dx1, ref.dx2], rtol=0, atol=PHI_TOL * model.robot.L)
+        np.testing.assert_allclose([res.dx1, res.dx2], [ref.dx1, ref.dx2], rtol=0,
+                                   atol=PHI_TOL * model.robot.L)
     assert compared_modes >= 0.9 * len(samples)
     assert {Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_NEG} <= modes_seen
 
@@ -255,10 +271,11 @@ def test_alternative_formulations_agree_with_mode_enumeration(samples, steppers,
             assert res.mode == ref.mode
 
 
-@pytest.mark.parametrize("ipopt", [{}, {"tol": 1e-10, "constr_viol_tol": 1e-10}], ids=["default", "loose-tol"])
+@pytest.mark.parametrize("ipopt", [{}, {"tol": 1e-10, "constr_viol_tol": 1e-10}],
+                         ids=["default", "loose-tol"])
 def test_step_at_equal_limits_and_turning_point(ipopt):
-    """Mirror-symmetric configuration (equal friction limits) where the slip also stops (d' = 0): the
-    relaxation leaves the pairs near their corners and the polish has to find the branches."""
+    """Mirror-symmetric configuration (equal friction limits) where the slip also stops (d' = 0):
+    the relaxation leaves the pairs near their corners and the polish has to find the branches."""
     robot = Robot.paper(mu1=0.328, mu2=0.328)
     model = Model(robot, gravity="physical")
     torque = paper_torque(robot, gamma=90.5, A=38.8, psi=-142.8)
@@ -298,16 +315,19 @@ def test_incremental_step_is_exact_within_a_mode(gravity):
         if np.any((event_phases > ev.t[j] - 1e-12) & (event_phases <= ev.t[j + 1] + 1e-12)):
             continue
         ref = solve_step_enumerate(model, state, tau)
-        # the MPCC's relaxation leaves |min(s_j, c_j)| <= comp_tol = 1e-8 (scaled): about 1e-10 in phi
+        # the MPCC's relaxation leaves |min(s_j, c_j)| <= comp_tol = 1e-8 (scaled): about 1e-10 in
+        # phi
         for r in (res, ref):
             np.testing.assert_allclose(r.phi, ev.phi[:, j + 1], rtol=0, atol=1e-9)
-            np.testing.assert_allclose([r.x1, r.x2], [ev.x1[j + 1], ev.x2[j + 1]], rtol=0, atol=1e-9 * robot.L)
+            np.testing.assert_allclose([r.x1, r.x2], [ev.x1[j + 1], ev.x2[j + 1]], rtol=0,
+                                       atol=1e-9 * robot.L)
             assert int(r.mode) == ev.mode[j + 1]
         checked += 1
     assert checked >= N - 2 * len(event_phases)
 
 
-# ---------------------------------------------------------------------------------------- time-stepping
+# ----------------------------------------------------------------------------------------
+# time-stepping
 @pytest.fixture(scope="module")
 def paper_run():
     robot = Robot.paper()
@@ -323,12 +343,14 @@ def test_time_stepping_result(paper_run):
     N = 100
     assert res.success, res.message
     assert res.status == Status.SUCCESS and res.cycles >= 2
-    # the samples are the step phases and the located events of the cycle (switch-exact steps), in order
+    # the samples are the step phases and the located events of the cycle (switch-exact steps), in
+    # order
     events = sorted(e.t for e in res.events if res.t0 < e.t < res.t0 + 1 and not (e.t * N) % 1 == 0)
     assert len(events) == 4  # the paper gait's slip-to-stick and slip onsets
     n = N + 1 + len(events)
     assert res.t.shape == (n,) and res.phi.shape == (2, n) and res.tau.shape == (2, n)
-    np.testing.assert_allclose(res.t, np.sort(np.concatenate([res.t0 + np.arange(N + 1) / N, events])),
+    np.testing.assert_allclose(res.t,
+                               np.sort(np.concatenate([res.t0 + np.arange(N + 1) / N, events])),
                                rtol=0, atol=1e-12)
     np.testing.assert_allclose(res.x2 - res.x1, res.d, rtol=0, atol=1e-12)
     kin = model.kinematics(res.phi)
@@ -340,25 +362,29 @@ def test_time_stepping_result(paper_run):
     assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0)
     assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + slack)
     assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + slack)
-    # the feet move only while their mode says so (a sticking pair keeps s_j <= comp_tol = 1e-8 scaled)
+    # the feet move only while their mode says so (a sticking pair keeps s_j <= comp_tol = 1e-8
+    # scaled)
     creep = 1e-8 * r.L
     dx1, dx2 = np.diff(res.x1), np.diff(res.x2)
     moving1 = np.isin(res.mode[1:], [Mode.SLIP1_POS, Mode.SLIP1_NEG])
     moving2 = np.isin(res.mode[1:], [Mode.SLIP2_POS, Mode.SLIP2_NEG])
     assert np.all(np.abs(dx1[~moving1]) < creep) and np.all(np.abs(dx2[~moving2]) < creep)
-    assert np.all(dx1[res.mode[1:] == Mode.SLIP1_NEG] < 0) and np.all(dx2[res.mode[1:] == Mode.SLIP2_NEG] < 0)
+    assert (np.all(dx1[res.mode[1:] == Mode.SLIP1_NEG] < 0)
+            and np.all(dx2[res.mode[1:] == Mode.SLIP2_NEG] < 0))
     # metrics: displacement of foot 1, CoT+, positive work, dissipation
     assert res.S == pytest.approx(res.x1[-1] - res.x1[0], abs=1e-15) and res.S < 0
     assert res.CoT_plus == pytest.approx(res.W_plus / (r.M * r.g * abs(res.S)), rel=1e-14)
-    assert res.W_plus == pytest.approx(res.W_plus_joint.sum(), rel=1e-14) and np.all(res.W_plus_joint > 0)
+    assert res.W_plus == pytest.approx(res.W_plus_joint.sum(),
+                                       rel=1e-14) and np.all(res.W_plus_joint > 0)
     assert res.energy["dissipation"] > 0 and abs(res.energy["balance_residual"]) < 1e-2
     assert res.periodicity_residual < 1e-8
     assert res.extra["max_comp_residual"] <= 1e-8 and res.extra["retried_steps"] == 0
 
 
 def test_events_are_located_on_step_boundaries(paper_run):
-    """Switch-exact steps: every mode change of the samples starts at a located event, which is a sample
-    (a step boundary) and agrees with the event-driven stepper's event phase (an independent locator)."""
+    """Switch-exact steps: every mode change of the samples starts at a located event, which is a
+    sample (a step boundary) and agrees with the event-driven stepper's event phase (an independent
+    locator)."""
     model, torque, res = paper_run
     changes = [res.t[j - 1] for j in range(1, res.t.size) if res.mode[j] != res.mode[j - 1]]
     steady = [e.t for e in res.steady_events() if e.t > res.t0 + 1e-12]
@@ -456,9 +482,10 @@ def test_ipopt_failure_ends_the_run_with_solver_failure(paper_robot):
 
 @pytest.mark.slow
 def test_switch_exact_event_points_satisfy_their_event_condition():
-    """Unequal friction (problems/unequal_friction.toml): at each located event the sample satisfies the event's
-    condition recomputed from the model's kinematics: at a change of the slipping foot both feet are on their
-    friction limits (mu1 f_n1 = mu2 f_n2 = |f_t|); at a slip onset the new foot is on its limit."""
+    """Unequal friction (problems/unequal_friction.toml): at each located event the sample satisfies
+    the event's condition recomputed from the model's kinematics: at a change of the slipping foot
+    both feet are on their friction limits (mu1 f_n1 = mu2 f_n2 = |f_t|); at a slip onset the new
+    foot is on its limit."""
     robot = Robot.paper(mu1=0.35, mu2=0.43)
     model = Model(robot)
     res = simulate_mpcc(model, paper_torque(robot), steps=50)

@@ -1,9 +1,9 @@
-"""Multi-start: the starts lie in the envelope and the bandwidth, are reproducible, and the reported optimum is
-the best start by replay among those the judge accepts, with the spread of the others.
+"""Multi-start: the starts lie in the envelope and the bandwidth, are reproducible, and the reported
+optimum is the best start by replay among those the judge accepts, with the spread of the others.
 
-The solve itself is replaced by a stand-in (the "optimum" of a start is the start itself, its S computed by the
-other simulator, the MPCC time-stepping) so that these checks of the orchestration run in seconds; the
-transcription's own tests solve the real NLP.
+The solve itself is replaced by a stand-in (the "optimum" of a start is the start itself, its S
+computed by the other simulator, the MPCC time-stepping) so that these checks of the orchestration
+run in seconds; the transcription's own tests solve the real NLP.
 """
 import math
 from types import SimpleNamespace
@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.ocp import solve
 from ocp_crawl.ocp.baseline import Baselines
 from ocp_crawl.ocp.settings import OCPSettings
@@ -28,7 +29,8 @@ N = 40
 def baseline(settings):
     """The envelope's full harmonic gait at its shortest period (peak rate = the bandwidth)."""
     gait = Harmonic.from_degrees(settings.gamma_deg, settings.A_max_deg, 45.0)
-    return ReferenceTorque(gait, ROBOT.k), settings.min_period(settings.A_max_deg, settings.A_max_deg)
+    return ReferenceTorque(gait, ROBOT.k), settings.min_period(settings.A_max_deg,
+                                                               settings.A_max_deg)
 
 
 def test_starts_are_in_the_envelope_and_the_bandwidth_and_reproducible():
@@ -36,11 +38,14 @@ def test_starts_are_in_the_envelope_and_the_bandwidth_and_reproducible():
     signal, T = baseline(st)
     base = signal(np.arange(N) / N)
     guesses = start_guesses(st, ROBOT, base, T)
-    assert [g.label for g in guesses] == ["harmonic baseline", "second harmonic"] + [f"perturbed {i}" for i in
+    assert [g.label for g in guesses] == ["harmonic baseline",
+                                          "second harmonic"] + [f"perturbed {i}" for i in
                                                                                       range(1, 5)]
-    # the baseline's nodes, shifted so that node 0 is tau_1's largest (the phase pin): the same samples
+    # the baseline's nodes, shifted so that node 0 is tau_1's largest (the phase pin): the same
+    # samples
     shift = int(np.argmax(base[0]))
-    assert guesses[0].T == T and np.array_equal(guesses[0].tau, np.roll(base, -shift, axis=1)) and shift > 0
+    assert guesses[0].T == T and np.array_equal(guesses[0].tau,
+                                                np.roll(base, -shift, axis=1)) and shift > 0
     lo, hi = st.torque_bounds(ROBOT)
     rate = ROBOT.k * math.radians(st.max_rate_deg_s)  # k R [N m/s]
     for g in guesses:
@@ -49,7 +54,8 @@ def test_starts_are_in_the_envelope_and_the_bandwidth_and_reproducible():
         assert steepest <= rate * (1 + 1e-12), g.label
         assert g.T >= T
         assert g.tau[0, 0] == np.max(g.tau[0]), g.label
-    # the starts differ from the baseline and from each other; the same settings give the same starts
+    # the starts differ from the baseline and from each other; the same settings give the same
+    # starts
     for a, b in zip(guesses, guesses[1:]):
         assert np.max(np.abs(a.tau - b.tau)) > 1e-3 * (hi - lo)
     again = start_guesses(st, ROBOT, base, T)
@@ -79,12 +85,14 @@ def test_a_start_the_simulator_does_not_follow_is_drawn_again_smaller():
     calls.clear()
     never = start_guesses(st, ROBOT, base, T, lambda tau: calls.append(tau) and False)
     assert len(calls) == 2 * ATTEMPTS
-    assert np.array_equal(never[2].tau, perturbed_start(st, ROBOT, pinned(base), T, 1, ATTEMPTS - 1).tau)
+    assert np.array_equal(never[2].tau,
+                          perturbed_start(st, ROBOT, pinned(base), T, 1, ATTEMPTS - 1).tau)
 
 
 class StandInOCP:
-    """GaitOCP's interface; the "optimum" of a start is the start (its node torques and period), its S by the
-    MPCC time-stepping; ``claims`` scales the claimed S of the i-th solve (a forged claim)."""
+    """GaitOCP's interface; the "optimum" of a start is the start (its node torques and period), its
+    S by the MPCC time-stepping; ``claims`` scales the claimed S of the i-th solve (a forged
+    claim)."""
 
     claims = {}
 
@@ -109,8 +117,10 @@ class StandInOCP:
         res = simulate(self.scen[0], PeriodicLinear(np.arange(n) / n, x["tau"]), "mpcc",
                        TimeSteppingOptions(steps=n, s_error_tol=0.0))
         S = res.S * x["claim"]
-        sc = {"phi": res.phi, "x1": res.x1, "f_t": res.f_t, "modes": [], "theta": np.full(n, 0.5), "S": S,
-              "v": self.settings.direction * S / x["T"], "W_plus": res.W_plus, "comp": 0.0, "periodic": 0.0}
+        sc = {"phi": res.phi, "x1": res.x1, "f_t": res.f_t, "modes": [], "theta": np.full(n, 0.5),
+              "S": S,
+              "v": self.settings.direction * S / x["T"], "W_plus": res.W_plus, "comp": 0.0,
+              "periodic": 0.0}
         return {"tau": x["tau"], "T": x["T"], "scen": [sc]}
 
     def equation_residual(self, x):
@@ -126,18 +136,22 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
                            feasible=True, to_dict=lambda: {"value": -harm_S / T})
     monkeypatch.setattr(solve, "best_baselines",  # (the other families: none simulates)
                         lambda robot, gravity, settings, shapes, **kw: Baselines(
-                            settings.objective, {s: harm if s == "harmonic" else None for s in shapes}))
+                            settings.objective,
+                            {s: harm if s == "harmonic" else None for s in shapes}))
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
-    monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})  # the second start solved overclaims by 20 %
+    # the second start solved overclaims by 20 %
+    monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})
     res = solve.optimize_gait(ROBOT, "physical", st)
     assert len(res.starts) == 4 and res.starts[0].label == "harmonic baseline"
     statuses = [s.status for s in res.starts]
-    # a start whose gait the simulator cannot follow is not solved; the second one solved is forged; a start
-    # whose "optimum" (here the start itself) is worse than the baseline beyond replay_tol is not an optimum
+    # a start whose gait the simulator cannot follow is not solved; the second one solved is forged;
+    # a start whose "optimum" (here the start itself) is worse than the baseline beyond replay_tol
+    # is not an optimum
     assert set(statuses) <= {Status.SUCCESS, Status.REPLAY_MISMATCH, Status.WORSE_THAN_BASELINE,
                              Status.NO_INITIAL_GUESS}
     solved = [s for s in res.starts if s.status != Status.NO_INITIAL_GUESS]
-    assert len(solved) == 4 and solved[1].status == Status.REPLAY_MISMATCH  # every start followed (redrawn if not)
+    # every start followed (redrawn if not)
+    assert len(solved) == 4 and solved[1].status == Status.REPLAY_MISMATCH
     assert solved[0].status == Status.SUCCESS  # the baseline itself
     for s in solved[2:]:
         worse = s.value_replay < harm.value - st.replay_tol * abs(harm.value)
@@ -149,10 +163,12 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     assert high == max(s.value_replay for s in solved)
     assert f"best of 4 starts ({len(solved)} converged" in res.message
     starts = {s.label: s for s in res.starts}
-    # the baseline start replays the harmonic gait's linear interpolant: its speed is the harmonic one to O(1/N^2)
+    # the baseline start replays the harmonic gait's linear interpolant: its speed is the harmonic
+    # one to O(1/N^2)
     assert starts["harmonic baseline"].value_replay == pytest.approx(harm.value, rel=5e-3)
     assert res.gain == pytest.approx((res.value_replay - harm.value) / abs(harm.value), rel=1e-12)
     assert res.gain_significant == (abs(res.gain) > st.replay_tol)
     summary = res.summary()
-    assert summary["starts_converged"] == len(solved) and summary["gain_significant"] == res.gain_significant
+    assert (summary["starts_converged"] == len(solved)
+            and summary["gain_significant"] == res.gain_significant)
     assert [s["label"] for s in summary["starts"]][0] == "harmonic baseline"

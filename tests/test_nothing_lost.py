@@ -1,4 +1,5 @@
-"""Nothing lost: every file is written atomically, and a writer killed half-way leaves the previous file.
+"""Nothing lost: every file is written atomically, and a writer killed half-way leaves the previous
+file.
 
 The kill-and-resume tests of sweeps and of ``reproduce`` are in test_sweep.py and test_studies.py.
 """
@@ -91,21 +92,25 @@ KILLED_WRITER = textwrap.dedent("""
 
 
 def test_a_writer_killed_half_way_leaves_the_previous_file_and_its_temporary_is_cleaned(tmp_path):
-    """SIGKILL in the middle of a write: the old file intact; the orphaned temporary file is removed by
-    the next write of that file, and only temporaries of dead writers on this host are ever removed."""
+    """SIGKILL in the middle of a write: the old file intact; the orphaned temporary file is removed
+    by the next write of that file, and only temporaries of dead writers on this host are ever
+    removed."""
     target = tmp_path / "report.md"
     target.write_bytes(b"the old report\n")
-    proc = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(target)], stderr=subprocess.PIPE)
+    proc = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(target)],
+                            stderr=subprocess.PIPE)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == -signal.SIGKILL, err
     assert target.read_bytes() == b"the old report\n"
     (orphan,) = temps(tmp_path)
     m = TEMP_RE.match(orphan)
-    assert m and m["name"] == "report.md" and int(m["pid"]) == proc.pid and m["host"] == files.HOST_TAG
+    assert (m and m["name"] == "report.md" and int(m["pid"]) == proc.pid
+            and m["host"] == files.HOST_TAG)
     assert (tmp_path / orphan).read_bytes() == b"half of the new "
 
     # temporaries that must survive: of this process and of another running one (writers still at
-    # work), of another host (its pids mean nothing here), of another file's name, not of this package
+    # work), of another host (its pids mean nothing here), of another file's name, not of this
+    # package
     running = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:
         live = f".report.md.{os.getpid()}-{files.HOST_TAG}.abc123.tmp"
@@ -185,13 +190,15 @@ MONITOR = textwrap.dedent("""
     Path(log).write_text(json.dumps({"codes": codes, "events": events}))
 """)
 
-#: written directly by design: the sweep's lock (empty) and its append-only journal (deleted at the end)
+#: written directly by design: the sweep's lock (empty) and its append-only journal (deleted at the
+#: end)
 DIRECT_OK = {".sweep.lock", "results.partial.csv"}
 
 
 def _staged(path: str, renamed: dict) -> str | None:
-    """Where ``path`` was before the staging of ``files.write_set`` moved it: the file itself renamed out of
-    a staging directory (``.<DIR>.<pid>-<host>.<random>.tmp``), or a directory above it renamed from one."""
+    """Where ``path`` was before the staging of ``files.write_set`` moved it: the file itself
+    renamed out of a staging directory (``.<DIR>.<pid>-<host>.<random>.tmp``), or a directory above
+    it renamed from one."""
     src = renamed.get(path)
     if src is not None and TEMP_RE.match(Path(src).parent.name):
         return src
@@ -203,11 +210,12 @@ def _staged(path: str, renamed: dict) -> str | None:
 
 
 def _atomic(path: str, renamed: dict, written: set) -> bool:
-    """``path`` renamed into place from a temporary file of its directory (atomic_write), itself or as
-    staged by write_set (all or nothing)."""
+    """``path`` renamed into place from a temporary file of its directory (atomic_write), itself or
+    as staged by write_set (all or nothing)."""
     src = renamed.get(path)
     m = TEMP_RE.match(Path(src).name) if src else None
-    if m and m["name"] == Path(path).name and Path(src).parent == Path(path).parent and src in written:
+    if (m and m["name"] == Path(path).name and Path(src).parent == Path(path).parent
+        and src in written):
         return True
     staged = _staged(path, renamed)
     return staged is not None and staged != path and _atomic(staged, renamed, written)
@@ -215,8 +223,8 @@ def _atomic(path: str, renamed: dict, written: set) -> bool:
 
 def non_atomic(events, root):
     """Final files under ``root`` that were not renamed into place from a temporary of the same
-    directory (directly, or inside the staging directory of an all-or-nothing set), or that were opened
-    for writing directly; and temporary files left behind."""
+    directory (directly, or inside the staging directory of an all-or-nothing set), or that were
+    opened for writing directly; and temporary files left behind."""
     written = {e[1] for e in events if e[0] == "write"}
     renamed = {}
     for e in events:
@@ -233,7 +241,8 @@ def non_atomic(events, root):
         elif not _atomic(str(f), renamed, written):
             problems.append(f"{f}: not renamed from a temporary file of its directory "
                             f"(source {renamed.get(str(f))})")
-    # files written directly and deleted again are harmless scratch files; the rest was checked above
+    # files written directly and deleted again are harmless scratch files; the rest was checked
+    # above
     return problems
 
 
@@ -247,42 +256,49 @@ def test_every_output_file_is_renamed_into_place(tmp_path):
         ["demo", "--out", str(out / "demo")],
         ["animate", str(PAPER), "--out", str(out / "animate" / "crawl.gif"), "--cycles", "1",
          "--frames-per-cycle", "4"],
-        ["sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:3", "--out", str(out / "sweep"), "--jobs", "1",
-         "--no-progress"],
+        ["sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:3", "--out", str(out / "sweep"),
+         "--jobs", "1", "--no-progress"],
         ["optimize", str(REPO / "problems" / "ocp_max_speed.toml"), "--set", "ocp.nodes=8",
-         "--set", "ocp.harmonic_psi=4", "--set", "ocp.baselines=harmonic", "--set", "ocp.baseline_samples=0", "--set", "ocp.baseline_starts=1",
+         "--set", "ocp.harmonic_psi=4", "--set", "ocp.baselines=harmonic", "--set",
+         "ocp.baseline_samples=0", "--set", "ocp.baseline_starts=1",
          "--set", "ocp.baseline_evaluations=40", "--out", str(out / "optimize")],
     ]
     log = tmp_path / "events.json"
-    proc = subprocess.run([sys.executable, "-c", MONITOR, str(tmp_path), json.dumps(commands), str(log)],
-                          capture_output=True, text=True, cwd=tmp_path, env=dict(os.environ, MPLBACKEND="Agg"),
-                          timeout=300)
+    proc = subprocess.run([sys.executable, "-c", MONITOR, str(tmp_path), json.dumps(commands),
+                           str(log)],
+                          capture_output=True, text=True, cwd=tmp_path,
+                          env=dict(os.environ, MPLBACKEND="Agg"), timeout=300)
     assert proc.returncode == 0, proc.stderr
     data = json.loads(log.read_text())
-    # simulate, demo, animate and sweep succeed; optimize may fail its replay (exit 1) but writes its files
-    assert data["codes"][:4] == [0, 0, 0, 0] and data["codes"][4] in (0, 1), (data["codes"], proc.stderr)
+    # simulate, demo, animate and sweep succeed; optimize may fail its replay (exit 1) but writes
+    # its files
+    assert data["codes"][:4] == [0, 0, 0, 0] and data["codes"][4] in (0, 1), (data["codes"],
+                                                                              proc.stderr)
     expected = {"simulate": {"arrays.npz", "summary.json", "gait.png", "gait.pdf"},
                 "animate": {"crawl.gif"},
                 "sweep": {"settings.json", "results.csv", "summary.json"},
-                "optimize": {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json", "optimal_gait.png",
-                             "optimal_gait.pdf"}}
+                "optimize": {"torques.csv", "optimal_gait.toml", "arrays.npz", "summary.json",
+                             "optimal_gait.png", "optimal_gait.pdf"}}
     for name, want in expected.items():
         assert want <= {p.name for p in (out / name).iterdir()}, name
-    assert len(list((out / "demo").glob("*_gait.png"))) >= 2 and (out / "demo" / "demo_summary.json").exists()
+    assert (len(list((out / "demo").glob("*_gait.png"))) >= 2
+            and (out / "demo" / "demo_summary.json").exists())
     n_files = sum(1 for p in out.rglob("*") if p.is_file())
     assert n_files >= 25
     assert non_atomic(data["events"], out) == []
     # the monitor sees non-atomic writers: fig.savefig(path), np.savez(path), Path.write_text
     flagged = non_atomic(data["events"], tmp_path / "control")
-    assert [Path(p.split(":")[0]).name for p in flagged] == ["direct.npz", "direct.png", "direct.txt"], flagged
+    assert [Path(p.split(":")[0]).name for p in flagged] == ["direct.npz", "direct.png",
+                                                             "direct.txt"], flagged
 
 
 # --------------------------------------------------------------------------------------------
 # the compiled-library cache
 # --------------------------------------------------------------------------------------------
 def test_a_killed_library_build_is_cleaned_up_and_rebuilt(tmp_path, monkeypatch):
-    """The C source and the library are built in a private temporary directory and the library renamed
-    into the cache: a build killed half-way leaves only that directory, which the next build removes."""
+    """The C source and the library are built in a private temporary directory and the library
+    renamed into the cache: a build killed half-way leaves only that directory, which the next build
+    removes."""
     cs = pytest.importorskip("casadi")
     from ocp_crawl.model import compiled
 
@@ -293,7 +309,8 @@ def test_a_killed_library_build_is_cleaned_up_and_rebuilt(tmp_path, monkeypatch)
     fun = cs.Function("nothing_lost_f", [x], [cs.vertcat(x[0] * x[1], cs.sin(x[0]))])
     lib = compiled.build_library(fun)
     assert lib is not None and lib.parent == tmp_path
-    # the state after a build killed by SIGKILL: no library, the dead builder's directory with a partial file
+    # the state after a build killed by SIGKILL: no library, the dead builder's directory with a
+    # partial file
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     lib.unlink()

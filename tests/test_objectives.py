@@ -34,7 +34,8 @@ NAMED_FORMS = {
 
 
 def _named_settings(tmp_path, name: str) -> tuple[OCPSettings, OCPSettings, object]:
-    """(the shipped file's settings, those of the same file with the named objective, the problem)."""
+    """(the shipped file's settings, those of the same file with the named objective, the
+    problem)."""
     text = shipped_problem(name).read_text()
     vocab, named, extra = NAMED_FORMS[name]
     assert vocab in text
@@ -55,7 +56,8 @@ def test_the_shipped_files_state_the_named_objectives_nlp(tmp_path, name):
     mine, named, problem = _named_settings(tmp_path, name)
     assert mine.requirements == named.requirements
     if name == "ocp_robust":
-        assert named.objective == "robust_speed" and dataclasses.replace(named, objective="max_speed") == mine
+        assert (named.objective == "robust_speed"
+                and dataclasses.replace(named, objective="max_speed") == mine)
     elif name == "ocp_max_speed":
         assert mine == named
     else:
@@ -74,8 +76,8 @@ def test_the_shipped_files_state_the_named_objectives_nlp(tmp_path, name):
 
 
 def test_min_cot_ranks_members_the_same_in_both_forms(tmp_path):
-    """The baselines' search ranks a member missing the speed requirement and one meeting it the same
-    whether the file says speed_min or a speed constraint (the same search, the same start)."""
+    """The baselines' search ranks a member missing the speed requirement and one meeting it the
+    same whether the file says speed_min or a speed constraint (the same search, the same start)."""
     mine, named, problem = _named_settings(tmp_path, "ocp_min_cot")
     small = {"baseline_samples": 0, "harmonic_psi": 8, "harmonic_A": 2}
     mine, named = (dataclasses.replace(s, **small) for s in (mine, named))
@@ -99,8 +101,8 @@ def _harmonic_cycle(settings: OCPSettings, robot: Robot, A: float = 25.0):
 
 def test_vocabulary_values_on_a_simulated_gait():
     """Each single-quantity objective's value is the simulation's own number (speed, distance, W+,
-    CoT+, period), the mean squared torque a quadrature of the torque signal (midpoint rule on 20,000
-    phases); a sum is the weighted sum of its terms."""
+    CoT+, period), the mean squared torque a quadrature of the torque signal (midpoint rule on
+    20,000 phases); a sum is the weighted sum of its terms."""
     robot = Robot.paper()
     settings = OCPSettings(objective="min:mean_torque_sq", baseline_samples=0)
     params, ev, cycle = _harmonic_cycle(settings, robot)
@@ -126,11 +128,11 @@ def test_vocabulary_values_on_a_simulated_gait():
 
 
 def test_vocabulary_nlp_agrees_with_the_value_at_a_simulated_guess():
-    """The NLP expression of "min:sum" (W+, speed, mean squared torque, period) at the transcription's
-    initial guess from a simulated harmonic gait equals the value of the same gait's cycle, over the
-    normalisation the NLP uses (the sum of |weight| times each quantity's reference size): the NLP
-    and the judge measure the same thing.  The guess samples the simulation on sub-steps, so the two
-    agree to the transcription's resolution (0.5 %), not bitwise."""
+    """The NLP expression of "min:sum" (W+, speed, mean squared torque, period) at the
+    transcription's initial guess from a simulated harmonic gait equals the value of the same gait's
+    cycle, over the normalisation the NLP uses (the sum of |weight| times each quantity's reference
+    size): the NLP and the judge measure the same thing.  The guess samples the simulation on
+    sub-steps, so the two agree to the transcription's resolution (0.5 %), not bitwise."""
     robot = Robot.paper()
     terms = {"W_plus": 1.0, "speed": -2.0, "mean_torque_sq": 30.0, "period": 0.05}
     settings = OCPSettings(objective="min:sum", terms=terms, nodes=40, baseline_samples=0,
@@ -160,8 +162,8 @@ def test_terms_nlp_is_normalised_by_the_reference_sizes():
 def test_min_mean_torque_sq_at_40_mm_s_is_a_judged_optimum():
     """The least mean squared torque at >= 40 mm/s (N = 16, harmonic baseline): success, the replay
     meets the speed within replay_tol, the value is the mean of tau1^2 + tau2^2 of the optimum's own
-    linear profile by an independent quadrature (20,000 midpoints), and it is not worse than the best
-    harmonic member under the same requirement."""
+    linear profile by an independent quadrature (20,000 midpoints), and it is not worse than the
+    best harmonic member under the same requirement."""
     from ocp_crawl.ocp import optimize_gait
 
     settings = OCPSettings(objective="min:mean_torque_sq", nodes=16, starts=1, baselines="harmonic",

@@ -1,5 +1,5 @@
-"""Periodic-gait optimal control: statuses, settings validation and the command line (each shipped problem file
-solved, judged and converged in N: tests/test_ocp_problems.py)."""
+"""Periodic-gait optimal control: statuses, settings validation and the command line (each shipped
+problem file solved, judged and converged in N: tests/test_ocp_problems.py)."""
 
 from dataclasses import replace
 
@@ -14,9 +14,10 @@ from ocp_crawl.ocp import OCPSettings, optimize_gait
 @pytest.mark.slow
 def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
-                        OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12, harmonic_A=2,
-                                    starts=1, baselines="harmonic", baseline_samples=0, baseline_starts=1,
-                                    baseline_evaluations=40))
+                        OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12,
+                                    harmonic_A=2,
+                                    starts=1, baselines="harmonic", baseline_samples=0,
+                                    baseline_starts=1, baseline_evaluations=40))
     assert not res.success
     assert res.status == Status.INFEASIBLE, res.message
     assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message
@@ -61,7 +62,8 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
     assert sum(stage["iterations"] for stage in data["homotopy"]) in [s["iterations"] for s in data["starts"]]
     assert f"optimize: {iterations} IPOPT it" in stderr and "polish" in stderr
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
-                "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s", "complementarity_residual"):
+                "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s",
+                "complementarity_residual"):
         assert key in data, key
     assert data["objective"] == "max_speed" and 0 < data["best_harmonic"]["A1_deg"] <= 30.0
     lines = [r for r in (out / "torques.csv").read_text().splitlines() if not r.startswith("#")]
@@ -73,8 +75,8 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
 
 
 def test_optimize_text_of_a_failed_run_has_no_raw_values():
-    """A run that found nothing (no replay, no harmonic gait) reads "-" where a number is missing, never
-    None or nan; numbers carry their units."""
+    """A run that found nothing (no replay, no harmonic gait) reads "-" where a number is missing,
+    never None or nan; numbers carry their units."""
     from ocp_crawl.cli.optimize_command import format_optimize
     from ocp_crawl.ocp import OCPResult, OCPSettings
     from ocp_crawl.status import Status
@@ -84,11 +86,12 @@ def test_optimize_text_of_a_failed_run_has_no_raw_values():
     text = format_optimize(empty)
     assert "None" not in text and "nan" not in text.lower()
     assert "replay -" in text and "(relative difference -)" in text
-    done = dict(empty, S_ocp=-0.0791484, S_replay=-0.0778866, objective_value_replay=0.0778866, gain=0.2987,
-                rel_diff_replay=0.01620, solve_time_s=4.1098)
+    done = dict(empty, S_ocp=-0.0791484, S_replay=-0.0778866, objective_value_replay=0.0778866,
+                gain=0.2987, rel_diff_replay=0.01620, solve_time_s=4.1098)
     text = format_optimize(done)
     assert "S           OCP -79.148 mm, replay -77.887 mm" in text
-    assert "+29.9 %" in text and "(relative difference +1.62 %)" in text and "time        4.1 s" in text
+    assert ("+29.9 %" in text and "(relative difference +1.62 %)" in text
+            and "time        4.1 s" in text)
 
 
 def test_optimize_text_counts_its_starts_in_words():
@@ -128,7 +131,8 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
 
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_min_cot.toml"
     code = main(["optimize", str(problem), "--set", "ocp.nodes=24", "--set", "ocp.harmonic_psi=8",
-                 "--set", "ocp.speed_min=5.0", "--set", "ocp.baseline_samples=0", "--set", "ocp.baselines=harmonic", "--set",
+                 "--set", "ocp.speed_min=5.0", "--set", "ocp.baseline_samples=0", "--set",
+                 "ocp.baselines=harmonic", "--set",
                  "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json"])
     captured = capsys.readouterr()
     assert code == 1
@@ -138,16 +142,17 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_figure_of_an_unreplayed_result_says_so():
-    """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a note instead
-    of an empty axes and an empty legend; the other panels keep their legends."""
+    """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a
+    note instead of an empty axes and an empty legend; the other panels keep their legends."""
     import warnings
 
     from ocp_crawl.viz.ocp import plot_optimal_gait
 
     robot = Robot.paper()
-    res = optimize_gait(robot, "physical", OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8,
-                                                       harmonic_A=2, baselines="harmonic", baseline_samples=0,
-                                                       baseline_starts=1, baseline_evaluations=40))
+    res = optimize_gait(robot, "physical",
+                        OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8,
+                                    harmonic_A=2, baselines="harmonic", baseline_samples=0,
+                                    baseline_starts=1, baseline_evaluations=40))
     assert res.tau.size and res.replay
     failed = replace(res, replay=[], status=Status.SOLVER_FAILURE, success=False)
     with warnings.catch_warnings():
@@ -160,8 +165,9 @@ def test_figure_of_an_unreplayed_result_says_so():
 
 
 def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
-    """After a loose last stage: the polish failed, then the stage solved again tightly failed too; the kept point is
-    the loose stage's, and the message names both rejected calls (the last of each kind) with IPOPT's words."""
+    """After a loose last stage: the polish failed, then the stage solved again tightly failed too;
+    the kept point is the loose stage's, and the message names both rejected calls (the last of each
+    kind) with IPOPT's words."""
     from ocp_crawl.nlp.homotopy import Stage
     from ocp_crawl.ocp.solve import _not_kept
 
@@ -169,7 +175,8 @@ def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
         return Stage(1e-9, "x", accepted, 10, 1e-9, 0.1, kind=kind, message=message)
 
     run = [stage("homotopy", True, "ok"), stage("polish", False, "polish A failed"),
-           stage("polish", False, "polish B failed"), stage("homotopy", False, "maximum iterations")]
+           stage("polish", False, "polish B failed"),
+           stage("homotopy", False, "maximum iterations")]
     note = _not_kept(run)
     assert "the last stage solved again tightly not kept: IPOPT maximum iterations" in note
     assert "polish not kept: IPOPT polish B failed" in note and "polish A" not in note
@@ -178,8 +185,9 @@ def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
 
 @pytest.mark.slow
 def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
-    """solve_from(..., tightened=True): no homotopy, only polish calls (the tightened NLP on the branches of the coarser
-    optimum's simulated guess at twice the nodes), a complementary point that the event-driven replay confirms."""
+    """solve_from(..., tightened=True): no homotopy, only polish calls (the tightened NLP on the
+    branches of the coarser optimum's simulated guess at twice the nodes), a complementary point
+    that the event-driven replay confirms."""
     from ocp_crawl.model.statics import Model
     from ocp_crawl.ocp.judge import replay_signal
     from ocp_crawl.ocp.solve import solve_from
@@ -188,11 +196,13 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
 
     robot = Robot.paper()
     settings = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
-                           baselines="harmonic", baseline_samples=0, baseline_starts=1, baseline_evaluations=40)
+                           baselines="harmonic", baseline_samples=0, baseline_starts=1,
+                           baseline_evaluations=40)
     coarse = optimize_gait(robot, "physical", settings)
     assert coarse.success, coarse.message
     fine = replace(settings, nodes=32)
-    res = solve_from(GaitSolver(GaitOCP(robot, "physical", fine)), [Model(robot)], replay_signal(coarse.phase, coarse.tau),
+    res = solve_from(GaitSolver(GaitOCP(robot, "physical", fine)), [Model(robot)],
+                     replay_signal(coarse.phase, coarse.tau),
                      coarse.T_ocp, coarse.harmonic, tightened=True)
     assert res.success, res.message
     assert res.homotopy and {h.kind for h in res.homotopy} == {"polish"}
@@ -201,11 +211,12 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
 
 
 def test_robust_files_replay_each_friction_scenario(tmp_path, capsys, monkeypatch):
-    """robust_speed's files replay every friction scenario: the writer of optimize --out adds one problem file per
-    scenario, named by its ratio mu1/mu2, and simulating each gives that scenario's replayed S and speed, which
-    summary.json and the text label with the same ratio.  The profile is a triangle wave spanning the envelope at
-    the bandwidth's shortest period (an OCP solve of robust_speed takes minutes), judged by the optimum's replay
-    (judge_replay) and written by the optimum's writers (the figure left out: tests/test_ocp.py draws it)."""
+    """robust_speed's files replay every friction scenario: the writer of optimize --out adds one
+    problem file per scenario, named by its ratio mu1/mu2, and simulating each gives that scenario's
+    replayed S and speed, which summary.json and the text label with the same ratio.  The profile is
+    a triangle wave spanning the envelope at the bandwidth's shortest period (an OCP solve of
+    robust_speed takes minutes), judged by the optimum's replay (judge_replay) and written by the
+    optimum's writers (the figure left out: tests/test_ocp.py draws it)."""
     import json
     import math
     from pathlib import Path
@@ -227,17 +238,22 @@ def test_robust_files_replay_each_friction_scenario(tmp_path, capsys, monkeypatc
     tri = lambda i: lo + (hi - lo) * (1 - np.abs(((i % n) - n / 2) / (n / 2)))  # noqa: E731
     tau = np.vstack([tri(np.arange(n) + n // 2), tri(np.arange(n) + n // 4)])
     T = 4 * settings.A_max_deg / settings.max_rate_deg_s
-    v = judge_replay([Model(r, gravity=problem.gravity) for r in settings.scenarios(problem.robot)], settings, tau,
-                     T, math.nan)
+    v = judge_replay([Model(r, gravity=problem.gravity) for r in settings.scenarios(problem.robot)],
+                     settings, tau, T, math.nan)
     assert len(v.replay) == 3 and all(r.success for r in v.replay)
     nodes = [np.zeros((2, n + 1))] * 3
-    res = OCPResult(True, Status.SUCCESS, "a triangle wave judged by its replay", "robust_speed", settings,
+    res = OCPResult(True, Status.SUCCESS, "a triangle wave judged by its replay", "robust_speed",
+                    settings,
                     phase=np.arange(n) / n, tau=tau, T_ocp=T, phi=nodes, x1=[np.zeros(n + 1)] * 3,
-                    f_t=[np.zeros(n + 1)] * 3, modes=[np.zeros(n, int)] * 3, S_ocp=v.S, v_ocp=v.speed,
-                    W_plus_ocp=v.W_plus, CoT_plus_ocp=v.CoT_plus, value_ocp=v.value, replay=v.replay, S_replay=v.S,
-                    v_replay=v.speed, W_plus_replay=v.W_plus, CoT_plus_replay=v.CoT_plus, value_replay=v.value)
+                    f_t=[np.zeros(n + 1)] * 3, modes=[np.zeros(n, int)] * 3, S_ocp=v.S,
+                    v_ocp=v.speed,
+                    W_plus_ocp=v.W_plus, CoT_plus_ocp=v.CoT_plus, value_ocp=v.value,
+                    replay=v.replay, S_replay=v.S,
+                    v_replay=v.speed, W_plus_replay=v.W_plus, CoT_plus_replay=v.CoT_plus,
+                    value_replay=v.value)
     names = scenario_files(settings)
-    assert names == ["optimal_gait_mu1_mu2_0.9.toml", "optimal_gait_mu1_mu2_1.toml", "optimal_gait_mu1_mu2_1.1.toml"]
+    assert names == ["optimal_gait_mu1_mu2_0.9.toml", "optimal_gait_mu1_mu2_1.toml",
+                     "optimal_gait_mu1_mu2_1.1.toml"]
     monkeypatch.setattr(viz_ocp, "plot_optimal_gait", lambda result, robot: None)
     monkeypatch.setattr(viz_ocp, "save_figure", lambda fig, path: path)
     write_outputs(res, problem.robot, tmp_path, _optimize_data(res, problem))
@@ -251,7 +267,9 @@ def test_robust_files_replay_each_friction_scenario(tmp_path, capsys, monkeypatc
         robot = data["problem"]["robot"]
         assert robot["mu1"] / robot["mu2"] == pytest.approx(scenario["mu1_mu2"], rel=1e-12)
         assert data["S"] == pytest.approx(scenario["S_replay"], rel=1e-9), name
-        assert data["speed"] == pytest.approx(abs(scenario["v_replay"]), rel=1e-9) and data["period"] == T
+        assert data["speed"] == pytest.approx(abs(scenario["v_replay"]),
+                                              rel=1e-9) and data["period"] == T
         label = f"mu1/mu2 = {scenario['label']}"
         assert f"{label}: OCP {units.distance(S)}, replay {units.distance(data['S'])}" in text
-        assert f"{label}: OCP {units.speed(scenario['v_ocp'])}, replay {units.speed(data['speed'])}" in text
+        assert (f"{label}: OCP {units.speed(scenario['v_ocp'])}, "
+                f"replay {units.speed(data['speed'])}" in text)

@@ -1,5 +1,6 @@
-"""The switch-exact, time-explicit OCP transcription: time-scale invariance, agreement with the event-driven
-simulator on a fixed profile with foot switches, and each objective solved on the paper's robot."""
+"""The switch-exact, time-explicit OCP transcription: time-scale invariance, agreement with the
+event-driven simulator on a fixed profile with foot switches, and each objective solved on the
+paper's robot."""
 import os
 from pathlib import Path
 
@@ -7,7 +8,8 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import CallableSignal, Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import CallableSignal, Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 from ocp_crawl.ocp.substeps import TIE_END, TIE_SLOPE, onset_products, onset_residual, tie_rows
@@ -34,8 +36,9 @@ def packed_twice(signal):
 
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
 def test_objective_is_time_scale_invariant_at_the_guess(objective):
-    """The NLP objective (speed or CoT+ with the regularisation) of a harmonic profile at N nodes and period T
-    equals that of the same profile repeated twice at 2N nodes and period 2T: S, W+ and T double."""
+    """The NLP objective (speed or CoT+ with the regularisation) of a harmonic profile at N nodes
+    and period T equals that of the same profile repeated twice at 2N nodes and period 2T: S, W+ and
+    T double."""
     sig = paper_torque()
     st = OCPSettings(objective=objective, nodes=20)
     T = st.min_period(30.0, 30.0)
@@ -55,10 +58,11 @@ def test_objective_is_time_scale_invariant_at_the_guess(objective):
 
 @pytest.mark.parametrize("objective", ["max_speed", "min_cot"])
 def test_objective_over_a_friction_set_at_the_guess(objective):
-    """The NLP objective over a friction set at a harmonic profile: with two copies of the robot's own
-    friction (worst) it equals the one-scenario objective; over mu1/mu2 = {0.9, 1, 1.1} it is the mean
-    or the worst of the scenarios' values, each from an event-driven simulation of the guess's profile
-    (its node torques, linear in phase) in that scenario: speed direction S_j / T, CoT+_j."""
+    """The NLP objective over a friction set at a harmonic profile: with two copies of the robot's
+    own friction (worst) it equals the one-scenario objective; over mu1/mu2 = {0.9, 1, 1.1} it is
+    the mean or the worst of the scenarios' values, each from an event-driven simulation of the
+    guess's profile (its node torques, linear in phase) in that scenario: speed direction S_j / T,
+    CoT+_j."""
     sig, T = paper_torque(), OCPSettings().min_period(30.0, 30.0)
     base = dict(objective=objective, nodes=10, speed_min=0.01, regularization=0.0, friction_tol=0.0)
     one = GaitOCP(PAPER, "physical", OCPSettings(**base))
@@ -74,17 +78,21 @@ def test_objective_over_a_friction_set_at_the_guess(objective):
         values = []
         for r in st.scenarios(PAPER):
             res = simulate_torque(Model(r, gravity="physical"), profile)
-            values.append(st.direction * res.S / sol["T"] if objective == "max_speed" else res.CoT_plus)
+            values.append(st.direction * res.S / sol["T"] if objective == "max_speed"
+                          else res.CoT_plus)
         assert np.ptp(values) > 1e-3 * abs(np.mean(values))  # the scenarios differ
         worst = min(values) if objective == "max_speed" else max(values)
         want = np.mean(values) if robust == "mean" else worst
-        got = -ocp.objective(x) * PAPER.L / st.period_ref() if objective == "max_speed" else ocp.objective(x)
-        # S is the simulation's; W+ the transcription's midpoint rule on its sub-steps (CoT+ within 1 %)
+        got = (-ocp.objective(x) * PAPER.L / st.period_ref() if objective == "max_speed"
+               else ocp.objective(x))
+        # S is the simulation's; W+ the transcription's midpoint rule on its sub-steps (CoT+ within
+        # 1 %)
         assert got == pytest.approx(want, rel=1e-9 if objective == "max_speed" else 1e-2), robust
 
 
 def _best_speed(ocp: GaitOCP, starts) -> tuple[float, dict]:
-    """The best mean speed [m/s] of the solves from ``starts`` (signal, period) and its unpacked solution."""
+    """The best mean speed [m/s] of the solves from ``starts`` (signal, period) and its unpacked
+    solution."""
     best = (-np.inf, None)
     for signal, period in starts:
         x, _, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(signal, period))
@@ -94,42 +102,50 @@ def _best_speed(ocp: GaitOCP, starts) -> tuple[float, dict]:
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"), reason="four solves at N = 50 and 100 (minutes); by hand, "
-                    "OCP_CRAWL_HEAVY=1")
+@pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"),
+                    reason="four solves at N = 50 and 100 (minutes); by hand, " "OCP_CRAWL_HEAVY=1")
 def test_the_best_one_stroke_gait_at_N_equals_the_best_two_stroke_gait_at_2N():
-    """Time-scale invariance of the optimum: the best of the solves at N = 50 (from the harmonic gait and from one
-    stroke of the 2N optimum) equals the best at 2N = 100 (from the harmonic gait packed twice and from the N
-    optimum packed twice, period doubled).  Each start alone may end in another local optimum (from the harmonic
-    start 83.8 mm/s at N = 50, 86.0 at 2N), which is why the OCP runs several starts.  Not at N = 20: there the
-    discretisation error (about 5 % of the speed with slip onsets on sub-step boundaries, one event per interval)
-    exceeds the tolerance, and the 2N problem, free to make its two strokes differ, recovers part of it.  The
-    best gaits found need not be the same gait: equal speeds with periods 2.4 % apart were measured (T is then not
-    compared)."""
+    """Time-scale invariance of the optimum: the best of the solves at N = 50 (from the harmonic
+    gait and from one stroke of the 2N optimum) equals the best at 2N = 100 (from the harmonic gait
+    packed twice and from the N optimum packed twice, period doubled).  Each start alone may end in
+    another local optimum (from the harmonic start 83.8 mm/s at N = 50, 86.0 at 2N), which is why
+    the OCP runs several starts.  Not at N = 20: there the discretisation error (about 5 % of the
+    speed with slip onsets on sub-step boundaries, one event per interval) exceeds the tolerance,
+    and the 2N problem, free to make its two strokes differ, recovers part of it.  The best gaits
+    found need not be the same gait: equal speeds with periods 2.4 % apart were measured (T is then
+    not compared)."""
     N = 50
     sig, T = paper_torque(), OCPSettings().min_period(30.0, 30.0)
     once = GaitOCP(PAPER, "physical", OCPSettings(nodes=N))
     twice = GaitOCP(PAPER, "physical", OCPSettings(nodes=2 * N))
     v1, u1 = _best_speed(once, [(sig, T)])
     v2, u2 = _best_speed(twice, [(packed_twice(sig), 2 * T),
-                                 (packed_twice(PeriodicLinear(np.arange(N) / N, u1["tau"])), 2 * u1["T"])])
-    v1, u1 = max((v1, u1), _best_speed(once, [(PeriodicLinear(np.arange(N) / N, u2["tau"][:, :N]), u2["T"] / 2)]),
+                                 (packed_twice(PeriodicLinear(np.arange(N) / N, u1["tau"])),
+                                  2 * u1["T"])])
+    v1, u1 = max((v1, u1),
+                 _best_speed(once,
+                             [(PeriodicLinear(np.arange(N) / N, u2["tau"][:, :N]), u2["T"] / 2)]),
                  key=lambda vu: vu[0])
-    # (and the same once more the other way: the N optimum from one stroke packed twice, as a 2N start)
-    v2, u2 = max((v2, u2), _best_speed(twice, [(packed_twice(PeriodicLinear(np.arange(N) / N, u1["tau"])),
-                                                2 * u1["T"])]), key=lambda vu: vu[0])
+    # (and the same once more the other way: the N optimum from one stroke packed twice, as a 2N
+    # start)
+    v2, u2 = max((v2, u2),
+                 _best_speed(twice, [(packed_twice(PeriodicLinear(np.arange(N) / N, u1["tau"])),
+                                      2 * u1["T"])]), key=lambda vu: vu[0])
     assert v1 == pytest.approx(v2, rel=0.01)
 
 
 def fixed_profile_solve(N: int):
-    """The transcription with the torques and the period fixed (problems/unequal_friction.toml's gait, two
-    changes of the slipping foot per cycle), from a guess with every interior point mid-interval; and the
-    event-driven simulation of the same linear-in-phase input (the independent reference)."""
+    """The transcription with the torques and the period fixed (problems/unequal_friction.toml's
+    gait, two changes of the slipping foot per cycle), from a guess with every interior point
+    mid-interval; and the event-driven simulation of the same linear-in-phase input (the independent
+    reference)."""
     prob = load_problem(REPO / "problems" / "unequal_friction.toml")
     sig = ReferenceTorque(prob.gait, prob.robot.k)
     st = OCPSettings(nodes=N, sigma0=(1e-6,), sigma_min=1e-8)
     ocp = GaitOCP(prob.robot, "physical", st)
     solver = GaitSolver(ocp)
-    x, _, failed, status = solver.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0), switches=False),
+    x, _, failed, status = solver.solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0),
+                                                          switches=False),
                                         fix_profile=True)
     assert failed is None, status
     sc = solver.unpack(x)["scen"][0]
@@ -142,8 +158,9 @@ def fixed_profile_solve(N: int):
 
 @pytest.mark.slow
 def test_fixed_profile_places_the_foot_switches_and_matches_the_event_driven_S():
-    """The solve moves the interior points from mid-interval to the simulated changes of the slipping foot and
-    then reproduces the event-driven S (the slip-to-stick events of this gait fall on nodes: no O(h^2) error)."""
+    """The solve moves the interior points from mid-interval to the simulated changes of the
+    slipping foot and then reproduces the event-driven S (the slip-to-stick events of this gait fall
+    on nodes: no O(h^2) error)."""
     sc, ref, switches = fixed_profile_solve(50)
     for pos in switches:
         k = int(pos)
@@ -153,8 +170,10 @@ def test_fixed_profile_places_the_foot_switches_and_matches_the_event_driven_S()
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="N = 100: from the mid-interval guess IPOPT reports "
-                   "Infeasible_Problem_Detected at sigma = 1e-6; from the guess with the switches placed the relaxation "
-                   "moves a near-tie (margin 1.2e-4 M g) onto the wrong branch and fails at sigma = 1e-8 (H1 report)")
+                   "Infeasible_Problem_Detected at sigma = 1e-6; "
+                   "from the guess with the switches placed the relaxation moves a near-tie "
+                   "(margin 1.2e-4 M g) onto the wrong branch and fails at sigma = 1e-8 (H1 "
+                   "report)")
 def test_fixed_profile_converges_at_finer_N():
     errors = []
     for N in (100, 200):
@@ -166,13 +185,16 @@ def test_fixed_profile_converges_at_finer_N():
 @pytest.mark.parametrize("objective,extra", [
     ("max_speed", {}),
     pytest.param("min_cot", {"speed_min": 0.03}, marks=pytest.mark.slow),
-    pytest.param("robust_speed", {"sigma0": (1e-6,), "sigma_min": 1e-8}, marks=[pytest.mark.slow, HEAVY])])
+    pytest.param("robust_speed", {"sigma0": (1e-6,), "sigma_min": 1e-8},
+                 marks=[pytest.mark.slow, HEAVY])])
 def test_each_objective_solves_on_the_paper_robot(objective, extra):
-    # the start decides at this coarse N: from the harmonic optimum of the default search (min_cot: CoT+ 16.459)
-    # the polish fails (Error_In_Step_Computation, not_complementary at 14.382), from this search's (16.691)
-    # it solves (14.468); the shipped N = 50 file solves from the default search's (test_ocp_problems.py)
+    # the start decides at this coarse N: from the harmonic optimum of the default search (min_cot:
+    # CoT+ 16.459) the polish fails (Error_In_Step_Computation, not_complementary at 14.382), from
+    # this search's (16.691) it solves (14.468); the shipped N = 50 file solves from the default
+    # search's (test_ocp_problems.py)
     st = OCPSettings(objective=objective, nodes=24, harmonic_psi=8, starts=1, baselines="harmonic",
-                     baseline_samples=8, baseline_evaluations=200, **extra)  # multi-start: test_multistart
+                     # multi-start: test_multistart
+                     baseline_samples=8, baseline_evaluations=200, **extra)
     res = optimize_gait(PAPER, "physical", st, replay=False)
     assert res.success, res.message
     assert res.complementarity_residual <= st.comp_tol and res.equation_residual <= 1e-8
@@ -191,11 +213,12 @@ def test_each_objective_solves_on_the_paper_robot(objective, extra):
 
 
 def test_a_held_tie_is_excluded_and_a_change_of_the_slipping_foot_is_not():
-    """tie_rows: foot 2 slipping (s2-) while foot 1 sits at its limit on the same side (c1+ = 0) at both ends of the
-    sub-step, or from stick to that limit at its end, or from that limit at its start (the slip-slip mode in
-    disguise), is excluded; the same slip starting from a change of the slipping foot (foot 1 slipped just before,
-    c1+ = 0 at the start only, growing with the slip) passes, whatever the sub-step's length, and so does a slip
-    that ends at the tie where foot 1 takes the slip over (s1+ next)."""
+    """tie_rows: foot 2 slipping (s2-) while foot 1 sits at its limit on the same side (c1+ = 0) at
+    both ends of the sub-step, or from stick to that limit at its end, or from that limit at its
+    start (the slip-slip mode in disguise), is excluded; the same slip starting from a change of the
+    slipping foot (foot 1 slipped just before, c1+ = 0 at the start only, growing with the slip)
+    passes, whatever the sub-step's length, and so does a slip that ends at the tie where foot 1
+    takes the slip over (s1+ next)."""
     theta = np.full(2, 0.5)
     W = np.zeros((12, 4))
     W[8:12] = 0.3  # every margin well inside the friction cone
@@ -204,35 +227,43 @@ def test_a_held_tie_is_excluded_and_a_change_of_the_slipping_foot_is_not():
     assert np.min(tie_rows(W, theta)) < 0 and np.argmin(np.min(tie_rows(W, theta), axis=0)) == 2
     W[8, 1] = 0.3  # from stick (foot 1 well inside) to the tie within sub-step 2
     assert np.min(tie_rows(W, theta)) < 0 and np.argmin(np.min(tie_rows(W, theta), axis=0)) == 2
-    W[4, 3] = 1e-3  # ... where foot 1 takes the slip over (a change of the slipping foot at the tie)
+    # ... where foot 1 takes the slip over (a change of the slipping foot at the tie)
+    W[4, 3] = 1e-3
     assert np.min(tie_rows(W, theta)) >= 0
-    W[4, 3], W[8, 1], W[8, 2] = 0.0, 0.0, 0.3  # from the tie (c1+ = 0 at the start) into foot 1's cone ...
-    assert np.min(tie_rows(W, theta)) < 0  # ... without a slip of foot 1 before: a slip starting at the tie
-    W[4, 1] = 1e-3  # foot 1 slipped (+) in sub-step 1: a change of the slipping foot at the boundary
-    for length in (1.0, 1e-3):  # margin and slip both proportional to the sub-step's length after a switch
-        W[7, 2], W[8, 2] = 1e-3 * length, 0.5 * 1e-3 * length  # (margin growth 0.5 M g per slip L > TIE_END)
+    # from the tie (c1+ = 0 at the start) into foot 1's cone ...
+    W[4, 3], W[8, 1], W[8, 2] = 0.0, 0.0, 0.3
+    # ... without a slip of foot 1 before: a slip starting at the tie
+    assert np.min(tie_rows(W, theta)) < 0
+    # foot 1 slipped (+) in sub-step 1: a change of the slipping foot at the boundary
+    W[4, 1] = 1e-3
+    # margin and slip both proportional to the sub-step's length after a switch
+    for length in (1.0, 1e-3):
+        # (margin growth 0.5 M g per slip L > TIE_END)
+        W[7, 2], W[8, 2] = 1e-3 * length, 0.5 * 1e-3 * length
         assert np.min(tie_rows(W, theta)) >= 0
     assert TIE_SLOPE < 0.5 and TIE_END < 0.5
 
 
 def test_a_slip_onset_inside_a_sub_step_violates_the_onset_condition():
-    """onset_products / onset_residual: a pair that slips in sub-step j while its margin at the start of j is
-    positive (the onset inside the sub-step) violates the onset condition; the same slip after a sub-step that ends
-    at the limit (onset at the boundary) does not."""
+    """onset_products / onset_residual: a pair that slips in sub-step j while its margin at the
+    start of j is positive (the onset inside the sub-step) violates the onset condition; the same
+    slip after a sub-step that ends at the limit (onset at the boundary) does not."""
     W = np.zeros((12, 4))
     W[8:12] = 0.3
     W[5, 2], W[9, 2] = 2e-3, 0.0  # sub-step 2: foot 1 slips (-) and ends at its - limit
     assert onset_residual(W) == pytest.approx(2e-3)  # margin 0.3 at the start: onset inside
-    assert np.argmax(onset_products(W, 2)) == 2 and np.max(onset_products(W, 2)) == pytest.approx(2 * 2e-3 * 0.3)
+    assert np.argmax(onset_products(W,
+                                    2)) == 2 and np.max(onset_products(W, 2)) == pytest.approx(2 * 2e-3 * 0.3)
     W[9, 1] = 0.0  # at the limit already at the end of sub-step 1
     assert onset_residual(W) == 0.0 and np.max(np.abs(onset_products(W, 2))) == 0.0
 
 
 def test_polish_candidates_are_distinct():
-    """The polish tries the branches with the ties of the foot switches fixed, then without; the second only when it
-    is another NLP.  With the onset pairs on their branches (the optimiser's NLP) the tie of a foot switch is already
-    fixed (the new foot slips in the next sub-step from a zero margin), so one candidate; the profile-fixed NLP
-    (no onset rule) has two where the slipping foot changes (unequal friction) and one where it does not."""
+    """The polish tries the branches with the ties of the foot switches fixed, then without; the
+    second only when it is another NLP.  With the onset pairs on their branches (the optimiser's
+    NLP) the tie of a foot switch is already fixed (the new foot slips in the next sub-step from a
+    zero margin), so one candidate; the profile-fixed NLP (no onset rule) has two where the slipping
+    foot changes (unequal friction) and one where it does not."""
     unequal = Robot(M=PAPER.M, L=PAPER.L, beta=PAPER.beta, k=PAPER.k, mu1=0.35, mu2=0.43, g=PAPER.g)
     expected = {(PAPER, False): 1, (unequal, False): 1, (PAPER, True): 1, (unequal, True): 2}
     for (robot, fixed), count in expected.items():
@@ -250,15 +281,20 @@ def test_polish_candidates_are_distinct():
 
 
 @pytest.mark.parametrize("outcomes, kept, calls, failed", [
-    ([(True, 0.0), (True, 0.0)], 0, 1, None),  # the first, accepted and complementary: no second call
-    ([(True, 1e-3), (True, 0.0)], 1, 2, None),  # the first accepted but not complementary: the second, complementary
-    ([(True, 1e-3), (False, 0.0)], 0, 2, None),  # none complementary: the first accepted point (the caller rejects it)
+    # the first, accepted and complementary: no second call
+    ([(True, 0.0), (True, 0.0)], 0, 1, None),
+    # the first accepted but not complementary: the second, complementary
+    ([(True, 1e-3), (True, 0.0)], 1, 2, None),
+    # none complementary: the first accepted point (the caller rejects it)
+    ([(True, 1e-3), (False, 0.0)], 0, 2, None),
     ([(False, 0.0), (False, 0.0)], None, 2, "(Restoration_Failed, Infeasible_Problem_Detected)"),
 ])
-def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure(outcomes, kept, calls, failed):
-    """solve_tightened tries the polish candidates in reverse order (the branches alone first): the first that IPOPT
-    accepts and that is complementary to comp_tol; else the first IPOPT accepted (its residual then fails the caller's check, NOT_COMPLEMENTARY); else no
-    point, and the failure names each candidate's IPOPT status."""
+def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure(outcomes, kept,
+                                                                                 calls, failed):
+    """solve_tightened tries the polish candidates in reverse order (the branches alone first): the
+    first that IPOPT accepts and that is complementary to comp_tol; else the first IPOPT accepted
+    (its residual then fails the caller's check, NOT_COMPLEMENTARY); else no point, and the failure
+    names each candidate's IPOPT status."""
     from ocp_crawl.nlp.homotopy import Solve
 
     ocp = GaitOCP(PAPER, "physical", OCPSettings(nodes=8))
@@ -276,7 +312,8 @@ def test_solve_tightened_keeps_a_complementary_candidate_and_names_every_failure
 
     solver = GaitSolver(ocp)
     solver._call = call
-    solver._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0, tag=tag) for tag in ("ties", "alone")]
+    solver._polish_candidates = lambda x: [dict(x0=x, lbx=0, ubx=0, lbg=0, ubg=0,
+                                                tag=tag) for tag in ("ties", "alone")]
     x, records, why, status = solver.solve_tightened(x0)
     assert order == ["alone", "ties"][:calls]  # the branches alone first
     assert [r.kind for r in records] == ["polish"] * calls

@@ -140,5 +140,6 @@ def test_write_set_into_a_symbolic_link_keeps_the_link(tmp_path):
     target.mkdir()
     link = tmp_path / "link"
     link.symlink_to(target)
-    assert write_set(link, lambda d: [(d / "a.txt").write_text("a") and d / "a.txt"]) == [link / "a.txt"]
+    assert write_set(link,
+                     lambda d: [(d / "a.txt").write_text("a") and d / "a.txt"]) == [link / "a.txt"]
     assert link.is_symlink() and (target / "a.txt").read_text() == "a"

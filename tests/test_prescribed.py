@@ -14,7 +14,8 @@ def test_prescribed_gait_invariants(gravity, mu1, mu2):
     res = simulate_angles(model, gait)
     assert res.success, res.message
     np.testing.assert_allclose(res.phi, gait(res.t), rtol=0, atol=1e-15)
-    # one foot always slips: f_t on the friction limit of the slipping foot, the other inside its cone
+    # one foot always slips: f_t on the friction limit of the slipping foot, the other inside its
+    # cone
     Mg = robot.M * robot.g
     for j in range(res.t.size):
         m = Mode(int(res.mode[j]))
@@ -49,7 +50,8 @@ def test_switching_instants_are_located(gravity):
 
 
 def test_ideal_switching_for_symmetric_gait():
-    """Equal friction and symmetric angles: d' and Delta vanish together (paper, 'ideal switching')."""
+    """Equal friction and symmetric angles: d' and Delta vanish together (paper, 'ideal
+    switching')."""
     res = simulate_angles(Model(Robot.paper()), Harmonic.from_degrees(90, 30, 45))
     rev = sorted(e.t for e in res.events if e.kind == "slip_reversal")
     sw = sorted(e.t for e in res.events if e.kind == "slip_switch")

@@ -14,12 +14,14 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from ocp_crawl import FourierSeries, Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot, simulate_torque
+from ocp_crawl import (FourierSeries, Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot,
+                       simulate_torque)
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import STATUS_MESSAGES, Status
 
 EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "25"))
-SETTINGS = settings(max_examples=EXAMPLES, deadline=None, derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
+SETTINGS = settings(max_examples=EXAMPLES, deadline=None,
+                    derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
                     suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -29,8 +31,10 @@ def log_uniform(lo, hi):
 
 @st.composite
 def robots(draw):
-    """Physical robots: mass, length, body ratio, stiffness 0.05-100 M g L, friction 0.05-2 per foot."""
-    robot = Robot(M=draw(log_uniform(0.005, 5.0)), L=draw(log_uniform(0.02, 1.0)), beta=draw(log_uniform(0.3, 5.0)),
+    """Physical robots: mass, length, body ratio, stiffness 0.05-100 M g L, friction 0.05-2 per
+    foot."""
+    robot = Robot(M=draw(log_uniform(0.005, 5.0)), L=draw(log_uniform(0.02, 1.0)),
+                  beta=draw(log_uniform(0.3, 5.0)),
                   k=1.0, mu1=draw(log_uniform(0.05, 2.0)), mu2=draw(log_uniform(0.05, 2.0)),
                   g=draw(st.sampled_from([9.81, 1.62, 3.71])))
     return robot.with_stiffness_ratio(draw(log_uniform(0.05, 100.0)))
@@ -38,7 +42,8 @@ def robots(draw):
 
 @st.composite
 def references(draw):
-    """Reference angles: the paper's harmonic (per-joint gamma), or a random periodic input built on it."""
+    """Reference angles: the paper's harmonic (per-joint gamma), or a random periodic input built on
+    it."""
     gamma = draw(st.floats(45.0, 135.0))
     base = Harmonic.from_degrees(gamma, draw(st.floats(0.0, 60.0)), draw(st.floats(-180.0, 180.0)),
                                  gamma2_deg=gamma + draw(st.floats(-15.0, 15.0)))
@@ -49,12 +54,14 @@ def references(draw):
     t = np.arange(4 * n + 8) / (4 * n + 8)
     ripple = np.array([[draw(st.floats(-0.15, 0.15)) for _ in range(n)] for _ in range(2)])
     phase = np.array([[draw(st.floats(0.0, 2 * math.pi)) for _ in range(n)] for _ in range(2)])
-    values = base(t) + np.einsum("in,int->it", ripple, np.sin(2 * np.pi * np.arange(1, n + 1)[None, :, None]
-                                                               * t[None, None, :] + phase[..., None]))
+    values = base(t) + np.einsum("in,int->it", ripple,
+                                 np.sin(2 * np.pi * np.arange(1, n + 1)[None, :, None]
+                                        * t[None, None, :] + phase[..., None]))
     if kind == "fourier":
         return FourierSeries.fit(values, order=n)
     knots = np.arange(2 * n + 4) / (2 * n + 4)
-    return PeriodicPchip(knots, base(knots) + np.array([[draw(st.floats(-0.1, 0.1)) for _ in knots] for _ in range(2)]))
+    return PeriodicPchip(knots, base(knots) + np.array([[draw(st.floats(-0.1, 0.1)) for _ in knots]
+                                                        for _ in range(2)]))
 
 
 def check_run(model: Model, torque) -> tuple[str, object]:
@@ -77,7 +84,8 @@ def check_run(model: Model, torque) -> tuple[str, object]:
     assert res.CoT_plus > 0 and not math.isnan(res.CoT_plus)
     assert res.extra["max_residual_scaled"] <= 1e-9
     phi, ft = res.phi, res.f_t
-    F = np.array([model.equilibrium_residual(phi[:, j], res.tau[:, j], ft[j]) for j in range(0, res.t.size, 10)])
+    F = np.array([model.equilibrium_residual(phi[:, j], res.tau[:, j],
+                                             ft[j]) for j in range(0, res.t.size, 10)])
     assert np.max(np.abs(F)) <= 1e-8 * Mg * L
     assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0)
     assert np.all(res.d > 0)
@@ -97,7 +105,8 @@ def check_run(model: Model, torque) -> tuple[str, object]:
     # periodic: the state at the end of the steady cycle equals the state at its start
     assert np.allclose(res.phi[:, 0], res.phi[:, -1], rtol=0, atol=1e-7)
     assert abs(res.d[0] - res.d[-1]) <= 1e-7 * L
-    assert abs((res.x1[-1] - res.x1[0]) - (res.x2[-1] - res.x2[0])) <= 1e-7 * L  # both feet advance by S
+    # both feet advance by S
+    assert abs((res.x1[-1] - res.x1[0]) - (res.x2[-1] - res.x2[0])) <= 1e-7 * L
     for ev in res.steady_events():
         assert abs(ev.guard) <= 1e-8, ev
     return res.status_name, res
@@ -130,6 +139,7 @@ def test_paper_robot_sample_covers_success_and_failures():
     statuses = set()
     for k_ratio, gamma, A in ((1.3, 90, 30), (0.2, 90, 60), (20.0, 70, 40), (0.06, 100, 20)):
         robot = Robot.paper().with_stiffness_ratio(k_ratio)
-        name, _ = check_run(Model(robot), ReferenceTorque(Harmonic.from_degrees(gamma, A, 45), robot.k))
+        name, _ = check_run(Model(robot),
+                            ReferenceTorque(Harmonic.from_degrees(gamma, A, 45), robot.k))
         statuses.add(name)
     assert "success" in statuses and len(statuses) >= 2

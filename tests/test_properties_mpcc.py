@@ -1,15 +1,15 @@
 """Property-based tests of the MPCC step and the MPCC time-stepping over random physical robots.
 
-One MPCC step from a random admissible state (an equilibrium inside the friction cone, possibly on its
-edge) with a random torque increment either succeeds with every invariant holding (equilibrium,
+One MPCC step from a random admissible state (an equilibrium inside the friction cone, possibly on
+its edge) with a random torque increment either succeeds with every invariant holding (equilibrium,
 Coulomb's inequalities, complementarity of slip and friction cone, positive normal forces, kinematic
 closure, agreement with the mode-enumeration oracle) or fails with a status of the solver status
 table and a message, its solution fields NaN.  A short MPCC time-stepping run on a random robot and
-gait either succeeds with the invariants along the steady cycle (equilibrium, Coulomb, normal forces,
-periodicity, energy balance) or returns a documented failure status.  Never an exception.
+gait either succeeds with the invariants along the steady cycle (equilibrium, Coulomb, normal
+forces, periodicity, energy balance) or returns a documented failure status.  Never an exception.
 
-The example count is small by default (fast CI, fixed examples); set ``OCP_CRAWL_HYPOTHESIS_EXAMPLES``
-for a large random run (``-s`` prints the outcome counts), e.g.
+The example count is small by default (fast CI, fixed examples); set
+``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` for a large random run (``-s`` prints the outcome counts), e.g.
 ``OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -s tests/test_properties_mpcc.py``.
 """
 import collections
@@ -36,20 +36,21 @@ SETTINGS = settings(max_examples=EXAMPLES, deadline=None, database=None,
                     derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 
-#: tolerances of the step (MPCCOptions defaults): equations and bounds 1e-9, complementarity 1e-8 (scaled);
-#: the invariants are recomputed here from the model, so they get a factor 2 for round-off
+#: tolerances of the step (MPCCOptions defaults): equations and bounds 1e-9, complementarity 1e-8
+#: (scaled); the invariants are recomputed here from the model, so they get a factor 2 for round-off
 EQ_TOL = 2e-9
 COMP_TOL = 1e-8
 #: agreement of phi with the mode-enumeration oracle [rad] (as tests/test_mpcc.py)
 PHI_TOL = 1e-7
-#: a step whose exact solution moves phi by at most this [rad] is a small step (the time-stepping's steps are
-#: about 2 pi A / N ~ 0.08 rad at A = 30 deg, N = 40); larger steps of the incremental law are path-dependent and
-#: can have several solutions far apart (found: from a state near a fold the oracle's unique solution 0.6 rad
-#: away, the MPCC's another valid one 1.2 rad from it, and ten substeps ending at a third), so only small steps
-#: are compared with the oracle and must be solved
+#: a step whose exact solution moves phi by at most this [rad] is a small step (the time-stepping's
+#: steps are about 2 pi A / N ~ 0.08 rad at A = 30 deg, N = 40); larger steps of the incremental law
+#: are path-dependent and can have several solutions far apart (found: from a state near a fold the
+#: oracle's unique solution 0.6 rad away, the MPCC's another valid one 1.2 rad from it, and ten
+#: substeps ending at a third), so only small steps are compared with the oracle and must be solved
 SMALL_STEP = 0.1
-#: bound on N^2 |energy balance residual| of a successful run: the midpoint/trapezoid rules leave O(1/N^2)
-#: (measured over 2 x 500 random runs: N^2 |residual| at most 2.3, median 0.013), an O(1) error would give ~N^2
+#: bound on N^2 |energy balance residual| of a successful run: the midpoint/trapezoid rules leave
+#: O(1/N^2) (measured over 2 x 500 random runs: N^2 |residual| at most 2.3, median 0.013), an O(1)
+#: error would give ~N^2
 BALANCE_N2 = 10.0
 
 #: outcome counts, printed at the end of the module with ``-s`` (the figures of a large run)
@@ -82,7 +83,8 @@ def robots(draw):
     (sometimes exactly equal, where the split of a slip between the feet is a tie)."""
     mu1 = draw(log_uniform(0.05, 2.0))
     mu2 = mu1 if draw(st.booleans()) and draw(st.booleans()) else draw(log_uniform(0.05, 2.0))
-    robot = Robot(M=draw(log_uniform(0.005, 5.0)), L=draw(log_uniform(0.02, 1.0)), beta=draw(log_uniform(0.3, 5.0)),
+    robot = Robot(M=draw(log_uniform(0.005, 5.0)), L=draw(log_uniform(0.02, 1.0)),
+                  beta=draw(log_uniform(0.3, 5.0)),
                   k=1.0, mu1=mu1, mu2=mu2, g=draw(st.sampled_from([9.81, 1.62, 3.71])))
     return robot.with_stiffness_ratio(draw(log_uniform(0.05, 100.0)))
 
@@ -95,14 +97,15 @@ def stepper(model: Model) -> MPCCStep:
 
 def admissible(model: Model, phi) -> bool:
     kin = model.kinematics(phi)
-    return bool(kin["d"] > 0 and kin["fn1"] > 0 and kin["fn2"] > 0 and kin["zj1"] > 0 and kin["zj2"] > 0)
+    return bool(kin["d"] > 0 and kin["fn1"] > 0 and kin["fn2"] > 0 and kin["zj1"] > 0
+                and kin["zj2"] > 0)
 
 
 @st.composite
 def steps(draw):
-    """(model, state, tau): an admissible equilibrium state phi_k with a tangential force inside the friction
-    cone (a quarter of the examples exactly on its edge, where slip starts) and the torque after a random
-    change of the reference angles pi + tau/k by up to 0.2 rad (from 1e-5 rad)."""
+    """(model, state, tau): an admissible equilibrium state phi_k with a tangential force inside the
+    friction cone (a quarter of the examples exactly on its edge, where slip starts) and the torque
+    after a random change of the reference angles pi + tau/k by up to 0.2 rad (from 1e-5 rad)."""
     model = Model(draw(robots()), gravity=draw(st.sampled_from(["physical", "paper"])))
     phi = np.array([draw(st.floats(0.15, math.pi - 0.02)), draw(st.floats(0.15, math.pi - 0.02))])
     assume(admissible(model, phi))
@@ -126,11 +129,13 @@ def check_failed_step(res) -> None:
 
 
 def check_step(model: Model, state: StepState, tau: np.ndarray, res) -> None:
-    """The invariants of a solved step, recomputed from the model (not from the step's own residuals)."""
+    """The invariants of a solved step, recomputed from the model (not from the step's own
+    residuals)."""
     r = model.robot
     Mg, L, MgL = r.M * r.g, r.L, r.M * r.g * r.L
     assert ipopt_status(res.status).usable and res.message
-    assert np.all(np.isfinite(res.phi)) and all(math.isfinite(getattr(res, f)) for f in RESULT_FIELDS)
+    assert (np.all(np.isfinite(res.phi))
+            and all(math.isfinite(getattr(res, f)) for f in RESULT_FIELDS))
     assert res.comp_residual <= COMP_TOL and res.eq_residual <= 1e-9
     # joint equilibrium at the end of the step with the step's torque and tangential force
     F = model.equilibrium_residual(res.phi, tau, res.f_t)
@@ -138,13 +143,15 @@ def check_step(model: Model, state: StepState, tau: np.ndarray, res) -> None:
     kin = model.kinematics(res.phi)
     assert res.f_n1 == pytest.approx(kin["fn1"], rel=1e-12, abs=1e-15 * Mg)
     assert res.f_n2 == pytest.approx(kin["fn2"], rel=1e-12, abs=1e-15 * Mg)
-    # positive normal forces (the margins mu_i f_n,i +- f_t >= 0 allow f_n,i = 0 only on the model's edge)
+    # positive normal forces (the margins mu_i f_n,i +- f_t >= 0 allow f_n,i = 0 only on the model's
+    # edge)
     assert kin["fn1"] > -EQ_TOL * Mg / r.mu1 and kin["fn2"] > -EQ_TOL * Mg / r.mu2
     # Coulomb: the tangential force is inside both friction cones
     assert abs(res.f_t) <= r.mu1 * kin["fn1"] + EQ_TOL * Mg
     assert abs(res.f_t) <= r.mu2 * kin["fn2"] + EQ_TOL * Mg
-    # slips are nonnegative and complementary to the margins: a foot slips only on its friction limit,
-    # with the friction force opposing the slip (slip1+ needs f_t = -mu1 f_n1, slip2+ needs f_t = +mu2 f_n2)
+    # slips are nonnegative and complementary to the margins: a foot slips only on its friction
+    # limit, with the friction force opposing the slip (slip1+ needs f_t = -mu1 f_n1, slip2+ needs
+    # f_t = +mu2 f_n2)
     s = res.slips / L
     c = np.array([r.mu1 * kin["fn1"] + res.f_t, r.mu1 * kin["fn1"] - res.f_t,
                   r.mu2 * kin["fn2"] - res.f_t, r.mu2 * kin["fn2"] + res.f_t]) / Mg
@@ -155,8 +162,9 @@ def check_step(model: Model, state: StepState, tau: np.ndarray, res) -> None:
     assert abs((kin["d"] - d0) - (res.dx2 - res.dx1)) <= EQ_TOL * L
     assert res.dx1 == res.s1p - res.s1m and res.dx2 == res.s2p - res.s2m
     assert res.x1 == state.x1 + res.dx1 and res.x2 == state.x2 + res.dx2
-    # the reported mode is that of the slips: stick-stick has no slip beyond the complementarity tolerance;
-    # in a slip mode the slipping pair (largest slip, > SLIP_EPS) is on its friction limit
+    # the reported mode is that of the slips: stick-stick has no slip beyond the complementarity
+    # tolerance; in a slip mode the slipping pair (largest slip, > SLIP_EPS) is on its friction
+    # limit
     if res.mode == Mode.STICK:
         assert np.all(s <= COMP_TOL)
     else:
@@ -166,22 +174,25 @@ def check_step(model: Model, state: StepState, tau: np.ndarray, res) -> None:
 
 def _case(k, mu2, L, x2, f_t, tau):
     robot = Robot(M=1.0, L=L, beta=1.0, k=k, mu1=1.0, mu2=mu2, g=9.81)
-    return Model(robot, gravity="physical"), StepState(np.array([2.0, 1.5]), 0.0, x2, f_t), np.array(tau)
+    return Model(robot, gravity="physical"), StepState(np.array([2.0, 1.5]), 0.0, x2,
+                                                       f_t), np.array(tau)
 
 
 @SETTINGS
 @given(steps())
-# cases found by large runs (shrunk): near a fold, a large step where the MPCC finds no solution although the
-# oracle finds one 0.6 rad away; a large step where the MPCC's valid solution is 1.2 rad from the oracle's; a
-# slip mode with a slip of 2e-10 L on the friction limit; an exact slip of 9e-9 L (below comp_tol)
+# cases found by large runs (shrunk): near a fold, a large step where the MPCC finds no solution
+# although the oracle finds one 0.6 rad away; a large step where the MPCC's valid solution is 1.2
+# rad from the oracle's; a slip mode with a slip of 2e-10 L on the friction limit; an exact slip of
+# 9e-9 L (below comp_tol)
 @pytest.mark.slow
-@example(_case(0.48841114068874536, math.exp(-1), math.exp(-1), 0.16533696542425982, 2.1266352114877525,
-               [-0.4183002747842387, -0.5052319298181006]))
+@example(_case(0.48841114068874536, math.exp(-1), math.exp(-1), 0.16533696542425982,
+               2.1266352114877525, [-0.4183002747842387, -0.5052319298181006]))
 @example(_case(1.3276391285511706, math.exp(-1), 1.0, 0.4494324686853269, 2.1266352114877525,
                [-1.1370580357854219, -1.28352457]))
 @example(_case(3.6088973178918495, 1.0, 1.0, 0.4494324686853269, -4.029206148851684,
                [-5.659017418697739, -7.260015579844463]))
-@example((Model(Robot(M=1.0, L=1.0, beta=1.0, k=72.48664033050969, mu1=1.0, mu2=1.0, g=9.81), gravity="paper"),
+@example((Model(Robot(M=1.0, L=1.0, beta=1.0, k=72.48664033050969, mu1=1.0, mu2=1.0, g=9.81),
+                gravity="paper"),
           StepState(np.array([3.0625, 0.4375]), 0.0, 0.3814019272702132, 0.1526661797708293),
           np.array([-6.171968031984357, -197.9446086038379])))
 def test_one_mpcc_step_succeeds_with_the_invariants_or_reports_a_status(case):
@@ -201,24 +212,29 @@ def test_one_mpcc_step_succeeds_with_the_invariants_or_reports_a_status(case):
         return
     check_step(model, state, tau, res)
     if not small:
-        return  # no exact reference, or a large step (see SMALL_STEP): the invariants above still hold
-    # agreement with the exact solution by enumeration of the contact modes: the unique one, or one of them
-    consistent = [np.asarray(cand["phi"]) for cand in ref.extra["candidates"] if cand.get("consistent")]
+        # no exact reference, or a large step (see SMALL_STEP): the invariants above still hold
+        return
+    # agreement with the exact solution by enumeration of the contact modes: the unique one, or one
+    # of them
+    consistent = [np.asarray(cand["phi"]) for cand in ref.extra["candidates"]
+                  if cand.get("consistent")]
     dev = min(float(np.max(np.abs(res.phi - p))) for p in consistent)
     assert dev <= PHI_TOL, (dev, res.mode.label, ref.mode.label, ref.extra["n_distinct"])
-    # the mode is determined when the exact solution is unique and no pair is within the complementarity
-    # tolerance of its corner s_j = c_j = 0 (found: an exact slip of 9e-9 L, which the MPCC resolves as a
-    # stick with s = 9e-9 L < c = 1.1e-8, both within comp_tol)
+    # the mode is determined when the exact solution is unique and no pair is within the
+    # complementarity tolerance of its corner s_j = c_j = 0 (found: an exact slip of 9e-9 L, which
+    # the MPCC resolves as a stick with s = 9e-9 L < c = 1.1e-8, both within comp_tol)
     corner = min(max(sj, cj) for sj, cj in zip(ref.slips / model.robot.L, ref.extra["margins"]))
     if ref.extra["n_consistent"] == 1 and corner > 10 * COMP_TOL:
         assert res.mode == ref.mode, (res.mode.label, ref.mode.label)
 
 
-# ---------------------------------------------------------------------------------------- time-stepping runs
+# ----------------------------------------------------------------------------------------
+# time-stepping runs
 #: cycles of a run: the released start plus one cycle to test periodicity, and one more to converge
 RUN_OPTIONS = TimeSteppingOptions(max_cycles=3)
 #: statuses a time-stepping run may end with
-RUN_STATUSES = {Status.SUCCESS, Status.LIFT_OFF, Status.FEET_CROSSED, Status.FOLD, Status.NOT_PERIODIC,
+RUN_STATUSES = {Status.SUCCESS, Status.LIFT_OFF, Status.FEET_CROSSED, Status.FOLD,
+                Status.NOT_PERIODIC,
                 Status.SOLVER_FAILURE, Status.JOINT_ON_GROUND, Status.NO_START, Status.UNSTABLE,
                 Status.ENERGY_IMBALANCE}
 
@@ -246,17 +262,21 @@ def test_mpcc_time_stepping_succeeds_with_the_invariants_or_reports_a_status(cas
     r = model.robot
     Mg, MgL = r.M * r.g, r.M * r.g * r.L
     for name, arr in res.arrays().items():
-        assert np.all(np.isfinite(arr)), name  # also for a failed run: the steps solved before the failure
+        # also for a failed run: the steps solved before the failure
+        assert np.all(np.isfinite(arr)), name
     if not res.success:
-        assert res.message.startswith(STATUS_MESSAGES[status]) and len(res.message) > len(STATUS_MESSAGES[status]) + 5
+        assert (res.message.startswith(STATUS_MESSAGES[status])
+                and len(res.message) > len(STATUS_MESSAGES[status]) + 5)
         assert res.failure_t is not None and res.failure_mode
         assert math.isnan(res.S) and math.isnan(res.W_plus)
         if status == Status.SOLVER_FAILURE:
             assert "return status" in res.message
         return
     # the samples: the N + 1 step phases and the events located inside steps (switch-exact steps)
-    # (an event that falls on a step boundary, e.g. a slip that stops at a turning point t = 1/4, is that boundary)
-    located = [e for e in res.events if res.t0 < e.t < res.t0 + 1 and e.guard_name != "mode_change_between_steps"
+    # (an event that falls on a step boundary, e.g. a slip that stops at a turning point t = 1/4, is
+    # that boundary)
+    located = [e for e in res.events
+               if res.t0 < e.t < res.t0 + 1 and e.guard_name != "mode_change_between_steps"
                and abs(e.t * N - round(e.t * N)) > 1e-9]
     assert res.cycles >= 2 and res.t.size == N + 1 + len(located)
     assert math.isfinite(res.S) and math.isfinite(res.W_plus) and res.W_plus >= 0
@@ -267,12 +287,13 @@ def test_mpcc_time_stepping_succeeds_with_the_invariants_or_reports_a_status(cas
     assert np.all(res.f_n1 > 0) and np.all(res.f_n2 > 0) and np.all(res.d > 0)
     assert np.all(np.abs(res.f_t) <= r.mu1 * res.f_n1 + EQ_TOL * Mg)
     assert np.all(np.abs(res.f_t) <= r.mu2 * res.f_n2 + EQ_TOL * Mg)
-    # friction only dissipates: at the end of each step -(f_t dx1 - f_t dx2) = sum of mu_i f_n,i |dx_i| >= 0
-    # (complementarity), up to the complementarity residual
+    # friction only dissipates: at the end of each step -(f_t dx1 - f_t dx2) = sum of mu_i f_n,i
+    # |dx_i| >= 0 (complementarity), up to the complementarity residual
     per_step = -(res.f_t[1:] * np.diff(res.x1) - res.f_t[1:] * np.diff(res.x2))
     assert np.all(per_step >= -2 * COMP_TOL * Mg * r.L), per_step.min()
     # energy per cycle: input work = potential change + dissipation, up to the O(1/N^2) error of the
-    # midpoint (work) and trapezoid (dissipation) rules; an O(1) error (a missing or wrong term) exceeds it
+    # midpoint (work) and trapezoid (dissipation) rules; an O(1) error (a missing or wrong term)
+    # exceeds it
     e = res.energy
     assert e["gross_work"] >= abs(e["input_work"])
     BALANCE.append((abs(e["balance_residual"]), N**2 * abs(e["balance_residual"])))

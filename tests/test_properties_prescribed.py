@@ -6,8 +6,8 @@ that the file runs in well under a minute); a large run::
 
     OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_prescribed.py --hypothesis-show-statistics
 
-The statistics list the outcomes (``event``) of the random runs: success, failure status, input rejected.
-Every assertion holds for every example, whatever the seed.
+The statistics list the outcomes (``event``) of the random runs: success, failure status, input
+rejected.  Every assertion holds for every example, whatever the seed.
 """
 from __future__ import annotations
 
@@ -18,12 +18,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, Mode, Model, PeriodicLinear, PeriodicPchip,
-                       PeriodicSpline, Robot, Status)
+from ocp_crawl import (CallableSignal, FourierSeries, Harmonic, Mode, Model, PeriodicLinear,
+                       PeriodicPchip, PeriodicSpline, Robot, Status)
 from ocp_crawl.sim.angles import simulate_angles
 
-from _properties_common import (SIMS, amplitudes, check_failure, check_outcome, check_success, gammas, knots,
-                                run_prescribed)
+from _properties_common import (SIMS, amplitudes, check_failure, check_outcome, check_success,
+                                gammas, knots, run_prescribed)
 
 DEG = math.pi / 180
 
@@ -33,7 +33,8 @@ DEG = math.pi / 180
 # ============================================================================================
 @st.composite
 def robots(draw):
-    """Physical robots: M 5 g - 5 kg, L 2 cm - 1 m, beta 0.2-5, k 0.05-100 M g L, mu 0.05-2, g 1-20."""
+    """Physical robots: M 5 g - 5 kg, L 2 cm - 1 m, beta 0.2-5, k 0.05-100 M g L, mu 0.05-2, g
+    1-20."""
     M = draw(st.floats(0.005, 5.0))
     L = draw(st.floats(0.02, 1.0))
     beta = draw(st.floats(0.2, 5.0))
@@ -89,7 +90,8 @@ angle_signals = st.one_of(harmonic_gaits(), fourier_gaits(), sampled_gaits())
 @SIMS
 @given(model=models, angles=angle_signals)
 def test_prescribed_random_robots_and_gaits(model, angles):
-    """Success with every invariant holding, a documented failure status, or a justified rejection."""
+    """Success with every invariant holding, a documented failure status, or a justified
+    rejection."""
     check_outcome(model, angles, run_prescribed(model, angles))
 
 
@@ -103,7 +105,8 @@ def mirrored(model: Model, angles):
 
 
 def reversed_in_time(angles):
-    """phi(-t), as the same kind of signal (a harmonic one half a cycle later, which changes no cycle total)."""
+    """phi(-t), as the same kind of signal (a harmonic one half a cycle later, which changes no
+    cycle total)."""
     if isinstance(angles, Harmonic):
         return Harmonic(angles.gamma1, angles.gamma2, angles.A1, angles.A2, -angles.psi)
     return FourierSeries(angles.a0, angles.a, -angles.b)
@@ -172,7 +175,8 @@ def test_prescribed_phase_shift_and_harmonic_equivalence(model, angles, s):
     A = np.hypot(a, b)
     ph = np.arctan2(a, b)  # a cos + b sin = A sin(w + ph)
     first = FourierSeries(angles.a0, angles.a[:, :1], angles.b[:, :1])
-    # Harmonic: sin(w + psi/2) for joint 1 and sin(w - psi/2) for joint 2: shift the phase by the mean
+    # Harmonic: sin(w + psi/2) for joint 1 and sin(w - psi/2) for joint 2: shift the phase by the
+    # mean
     shift = 0.5 * (ph[0] + ph[1]) / (2 * np.pi)
     harm = Harmonic(angles.a0[0], angles.a0[1], A[0], A[1], ph[0] - ph[1])
     rf = run_prescribed(model, shifted(first, -shift))
@@ -194,19 +198,21 @@ def test_prescribed_hold_stretch_keeps_both_slip_directions():
     the other way afterwards: the stretch is stick-stick, and S counts both directions (the scan
     once saw one sign change across the stretch and gave the whole segment one slip direction)."""
     model = Model(Robot.paper())
-    angles = PeriodicPchip([0.0, 0.2, 0.45, 0.7], np.radians([[80, 100, 100, 70], [100, 100, 100, 90]]))
+    angles = PeriodicPchip([0.0, 0.2, 0.45, 0.7],
+                           np.radians([[80, 100, 100, 70], [100, 100, 100, 90]]))
     res = simulate_angles(model, angles)
     assert res.success, res.message
     kinds = [e.kind for e in res.events]
     assert "slip_to_stick" in kinds and any(k.startswith("slip_onset") for k in kinds)
     stick = res.mode == Mode.STICK
     assert np.all((res.t[stick] >= 0.2 - 1e-12) & (res.t[stick] <= 0.45 + 1e-12))
-    check_success(model, angles, res)  # S against the independent integration (was +5.1 mm instead of 0)
+    # S against the independent integration (was +5.1 mm instead of 0)
+    check_success(model, angles, res)
 
 
 def test_prescribed_joint_touching_the_ground_is_a_failure():
-    """Symmetric legs folding to phi = 0 at t = 3/4: the joints touch the ground without a sign change
-    (was reported as feet crossing, with d = l (beta - 2) > 0 there)."""
+    """Symmetric legs folding to phi = 0 at t = 3/4: the joints touch the ground without a sign
+    change (was reported as feet crossing, with d = l (beta - 2) > 0 there)."""
     model = Model(Robot.paper(beta=3.0))
     angles = Harmonic.from_degrees(40, 40, 0)
     res = simulate_angles(model, angles)

@@ -1,13 +1,13 @@
-"""Property-based tests (hypothesis) of the problem files, with strategies driven by the schema: round
-trips, ``--set`` overrides, invalid and missing keys, and runs with prescribed angles.
+"""Property-based tests (hypothesis) of the problem files, with strategies driven by the schema:
+round trips, ``--set`` overrides, invalid and missing keys, and runs with prescribed angles.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
 that the file runs in well under a minute); a large run::
 
     OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_problem_files.py --hypothesis-show-statistics
 
-The statistics list the outcomes (``event``) of the random runs: success, failure status, input rejected.
-Every assertion holds for every example, whatever the seed.
+The statistics list the outcomes (``event``) of the random runs: success, failure status, input
+rejected.  Every assertion holds for every example, whatever the seed.
 """
 from __future__ import annotations
 
@@ -48,7 +48,8 @@ _NUM = r"(-?[0-9.]+(?:e-?[0-9]+)?)"
 
 
 def rule_bounds(key):
-    """(low, high, low open, high open, listed values) from the rule's text, e.g. "> 0", "in (0, 0.25]", "-1 or 1"."""
+    """(low, high, low open, high open, listed values) from the rule's text, e.g. "> 0", "in (0,
+    0.25]", "-1 or 1"."""
     text = key.valid_text.removeprefix("an array of numbers, each ")
     if m := re.fullmatch(rf"(>=|>) {_NUM}", text):
         return float(m[2]), None, m[1] == ">", False, None
@@ -58,11 +59,12 @@ def rule_bounds(key):
         return None, None, False, False, [key.type(m[1]), key.type(m[2])]
     if text == "any finite number":
         return None, None, False, False, None
-    raise AssertionError(f"the property tests do not know the rule {text!r} of key {key.name}: extend rule_bounds")
+    raise AssertionError(f"the property tests do not know the rule {text!r} of key {key.name}: "
+                         "extend rule_bounds")
 
 
-#: values of the table keys: [[ocp.constraint]] tables (bounds no gait of the runs can miss) and IPOPT
-#: options
+#: values of the table keys: [[ocp.constraint]] tables (bounds no gait of the runs can miss) and
+#: IPOPT options
 TABLE_VALUES = {
     ("ocp", "constraint"): [[], [{"quantity": "peak_torque", "max": 10.0}],
                             [{"quantity": "period", "min": 1e-3, "max": 100.0}]],
@@ -98,14 +100,15 @@ def valid_values(section: str, key, ranges=None):
     return base.filter(lambda v: key.rule is None or key.rule.test(v))
 
 
-#: tables the schema must reject for [[ocp.constraint]]: an unknown quantity, no bound, a key of another name
-BAD_TABLES = [[{"quantity": "torque", "max": 1.0}], [{"quantity": "speed"}], [{"quantity": "speed", "maximum": 1.0}],
-              [{"quantity": "peak_torque", "min": 0.1}]]
+#: tables the schema must reject for [[ocp.constraint]]: an unknown quantity, no bound, a key of
+#: another name
+BAD_TABLES = [[{"quantity": "torque", "max": 1.0}], [{"quantity": "speed"}],
+              [{"quantity": "speed", "maximum": 1.0}], [{"quantity": "peak_torque", "min": 0.1}]]
 
 
 def invalid_values(key):
-    """Values the schema must reject for a key: non-finite, outside the rule, wrong type (for an array of
-    tables: tables its rule rejects)."""
+    """Values the schema must reject for a key: non-finite, outside the rule, wrong type (for an
+    array of tables: tables its rule rejects)."""
     wrong_type = st.sampled_from(["1.0", True, False, [1.0], {"x": 1.0}])
     out = [BAD_NUMBERS, wrong_type]
     if key.type is Tables:
@@ -122,15 +125,18 @@ def invalid_values(key):
                 cands += [lo - 1.0, lo - 1e-6] + ([lo] if lo_open else [])
             if hi is not None:
                 cands += [hi + 1.0, hi + 1e-3] + ([hi] if hi_open else [])
-            cands = [key.type(c) if key.type is float else int(c) for c in cands if key.type is float or c == int(c)]
+            cands = [key.type(c) if key.type is float else int(c) for c in cands
+                     if key.type is float or c == int(c)]
             cands = [c for c in cands if not key.rule.test(c)]
             if cands:
                 out.append(st.sampled_from(cands))
     return st.one_of(out)
 
 
-#: a physical robot for the runs (the schema alone admits e.g. L = 1e-302 m, where M g L S underflows)
-PHYSICAL = {**PLAUSIBLE, ("robot", "M"): st.floats(0.005, 5.0), ("robot", "L"): st.floats(0.02, 1.0),
+#: a physical robot for the runs (the schema alone admits e.g. L = 1e-302 m, where M g L S
+#: underflows)
+PHYSICAL = {**PLAUSIBLE, ("robot", "M"): st.floats(0.005, 5.0),
+            ("robot", "L"): st.floats(0.02, 1.0),
             ("robot", "k"): st.floats(1e-3, 100.0), ("robot", "g"): st.floats(1.0, 20.0),
             ("robot", "mu"): st.floats(0.05, 2.0), ("robot", "mu1"): st.floats(0.05, 2.0),
             ("robot", "mu2"): st.floats(0.05, 2.0), ("robot", "beta"): st.floats(0.2, 5.0),
@@ -140,8 +146,9 @@ PHYSICAL = {**PLAUSIBLE, ("robot", "M"): st.floats(0.005, 5.0), ("robot", "L"): 
 
 @st.composite
 def section_values(draw, section, ranges=None):
-    """A valid set of keys for one section: required keys, a random choice of optional ones, pairing rules kept
-    (the default waveform's keys: the other waveforms have their own tests, tests/test_waveforms.py)."""
+    """A valid set of keys for one section: required keys, a random choice of optional ones, pairing
+    rules kept (the default waveform's keys: the other waveforms have their own tests,
+    tests/test_waveforms.py)."""
     keys = section.key_map
     given = set()
     for key in default_variant_keys(section):
@@ -170,7 +177,8 @@ def section_values(draw, section, ranges=None):
         # the solver choice is covered by tests/test_problem.py; here every problem runs the default
         # solver of its drive, with its own keys (an MPCC or MuJoCo run per example would be slow)
         given &= {f.name for f in fields(HybridOptions)}
-    return {name: draw(valid_values(section.name, keys[name], ranges)) for name in (k.name for k in section.keys)
+    return {name: draw(valid_values(section.name, keys[name],
+                                    ranges)) for name in (k.name for k in section.keys)
             if name in given}
 
 
@@ -192,7 +200,8 @@ def toml_value(v) -> str:
     if isinstance(v, str):
         return json.dumps(v)
     if isinstance(v, float):
-        return "nan" if math.isnan(v) else ("inf" if v == math.inf else "-inf" if v == -math.inf else repr(v))
+        return "nan" if math.isnan(v) else ("inf" if v == math.inf else "-inf" if v == -math.inf
+                                            else repr(v))
     if isinstance(v, list):
         return "[" + ", ".join(toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
@@ -201,28 +210,34 @@ def toml_value(v) -> str:
 
 
 def to_toml(data: dict) -> str:
-    return "\n".join(f"[{s}]\n" + "\n".join(f"{k} = {toml_value(v)}" for k, v in keys.items()) for s, keys in data.items())
+    return "\n".join(f"[{s}]\n" + "\n".join(f"{k} = {toml_value(v)}" for k, v in keys.items())
+                     for s, keys in data.items())
 
 
 def load_or_contact_error(data: dict, source: str = "<dict>", overrides=()):
-    """The problem, or None when the only fault is a gait without contact (then the message says so)."""
+    """The problem, or None when the only fault is a gait without contact (then the message says
+    so)."""
     try:
         return problem_from_dict(data, source=source, overrides=overrides)
     except ProblemError as exc:
         msg = str(exc)
         if msg.startswith(f"{source}: [robot] k = ") and "k/(M g L)" in msg and not overrides:
-            # the torque drive's documented bound on the nondimensional stiffness, recomputed from the data
+            # the torque drive's documented bound on the nondimensional stiffness, recomputed from
+            # the data
             r = data["robot"]
-            assert r["k"] / (r["M"] * r.get("g", Robot.paper().g) * r["L"]) > MAX_STIFFNESS_RATIO, msg
+            assert (r["k"] / (r["M"] * r.get("g", Robot.paper().g) * r["L"])
+                    > MAX_STIFFNESS_RATIO), msg
             assert "\n" not in msg
             return None
-        assert "\n" not in msg and msg.startswith(f"{source}: [gait] ") and " are invalid" in msg, msg
+        assert "\n" not in msg and msg.startswith(f"{source}: "
+                                                  "[gait] ") and " are invalid" in msg, msg
         return None
 
 
 def edited(data: dict, section: str, name: str, value) -> dict:
-    """The dict edit that ``--set section.name=value`` documents: set the key; mu and mu1/mu2 replace each other,
-    and one foot's friction set on a robot given one mu leaves the other foot at mu."""
+    """The dict edit that ``--set section.name=value`` documents: set the key; mu and mu1/mu2
+    replace each other, and one foot's friction set on a robot given one mu leaves the other foot at
+    mu."""
     out = {s: dict(v) for s, v in data.items()}
     sec = out.setdefault(section, {})
     key = SCHEMA[section].key_map[name]
@@ -238,7 +253,8 @@ def edited(data: dict, section: str, name: str, value) -> dict:
 
 
 def default_variant_keys(section):
-    """The keys of a section with its selector (``[gait] waveform``) at its default, the selector left out."""
+    """The keys of a section with its selector (``[gait] waveform``) at its default, the selector
+    left out."""
     if section.selector is None:
         return list(section.keys)
     default = section.key_map[section.selector].default
@@ -246,14 +262,16 @@ def default_variant_keys(section):
 
 
 def schema_keys(numeric_only=False):
-    return [(s.name, k) for s in SECTIONS for k in default_variant_keys(s) if not numeric_only or k.type in (int, float)]
+    return [(s.name, k) for s in SECTIONS for k in default_variant_keys(s)
+            if not numeric_only or k.type in (int, float)]
 
 
 @pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts())
 def test_problem_round_trip(data):
-    """problem_from_dict(p.to_dict()) == p, directly and through TOML text; the values are the ones given."""
+    """problem_from_dict(p.to_dict()) == p, directly and through TOML text; the values are the ones
+    given."""
     p = load_or_contact_error(data)
     assume(p is not None)
     assert problem_from_dict(p.to_dict()) == p
@@ -266,7 +284,8 @@ def test_problem_round_trip(data):
     assert p.gait.psi == math.radians(g["psi_deg"])
     assert p.gait.gamma1 == math.radians(g.get("gamma1_deg", g.get("gamma_deg")))
     assert p.gait.A2 == math.radians(g.get("A2_deg", g.get("A_deg")))
-    assert p.drive == g.get("drive", "torque") and p.gravity == data.get("model", {}).get("gravity", "physical")
+    assert (p.drive == g.get("drive", "torque")
+            and p.gravity == data.get("model", {}).get("gravity", "physical"))
     for name, value in data.get("simulation", {}).items():
         assert getattr(p.hybrid, name) == value
     for section, keys in data.items():
@@ -278,10 +297,13 @@ def test_problem_round_trip(data):
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from(schema_keys()), st_data=st.data())
 def test_set_override_equals_dict_edit(data, st_key, st_data):
-    """--set SECTION.KEY=VALUE gives the same problem as editing the dict, or the same error (marked "from --set")."""
+    """--set SECTION.KEY=VALUE gives the same problem as editing the dict, or the same error (marked
+    "from --set")."""
     section, key = st_key
-    value = st_data.draw(st.one_of(valid_values(section, key), invalid_values(key)) if key.type is not str
-                         else st.one_of(valid_values(section, key), st.sampled_from(["walk", "", "Physical"])))
+    value = st_data.draw(st.one_of(valid_values(section, key), invalid_values(key))
+                         if key.type is not str
+                         else st.one_of(valid_values(section, key),
+                                        st.sampled_from(["walk", "", "Physical"])))
     text = f"{section}.{key.name}={toml_value(value)}"
     try:
         via_set = problem_from_dict(data, source="f.toml", overrides=[text])
@@ -298,9 +320,11 @@ def test_set_override_equals_dict_edit(data, st_key, st_data):
         assert str(via_set).replace(" (from --set)", "") == str(via_dict)
         event("both rejected")
     # a bare word is accepted for string keys
-    if key.type is str and re.fullmatch(r"[A-Za-z_]+", value) and value not in ("true", "false", "inf", "nan"):
+    if key.type is str and re.fullmatch(r"[A-Za-z_]+", value) and value not in ("true", "false",
+                                                                                "inf", "nan"):
         try:
-            bare = problem_from_dict(data, source="f.toml", overrides=[f"{section}.{key.name}={value}"])
+            bare = problem_from_dict(data, source="f.toml",
+                                     overrides=[f"{section}.{key.name}={value}"])
         except ProblemError as exc:
             bare = exc
         assert str(bare) == str(via_set) if isinstance(bare, ProblemError) else bare == via_set
@@ -308,14 +332,17 @@ def test_set_override_equals_dict_edit(data, st_key, st_data):
 
 @pytest.mark.slow
 @CHEAP
-@given(data=problem_dicts(), st_key=st.sampled_from(schema_keys(numeric_only=True)), st_data=st.data())
+@given(data=problem_dicts(), st_key=st.sampled_from(schema_keys(numeric_only=True)),
+       st_data=st.data())
 def test_invalid_numeric_values_name_the_key_and_value(data, st_key, st_data):
-    """Every numeric key of the schema rejects NaN, infinities, values outside its rule and wrong types
-    with a one-line ProblemError naming the file, the key and the value; from --set too."""
+    """Every numeric key of the schema rejects NaN, infinities, values outside its rule and wrong
+    types with a one-line ProblemError naming the file, the key and the value; from --set too."""
     section, key = st_key
     value = st_data.draw(invalid_values(key))
-    assume(not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-                and key.rule is not None and key.rule.test(value) and not (key.type is int and value != int(value))))
+    assume(not (isinstance(value, (int, float)) and not isinstance(value, bool)
+                and math.isfinite(value)
+                and key.rule is not None and key.rule.test(value)
+                and not (key.type is int and value != int(value))))
     bad = edited(data, section, key.name, value)
     with pytest.raises(ProblemError) as info:
         problem_from_dict(bad, source="problems/x.toml")
@@ -323,15 +350,18 @@ def test_invalid_numeric_values_name_the_key_and_value(data, st_key, st_data):
     assert "\n" not in msg and msg.startswith("problems/x.toml: ")
     assert f"[{section}] {key.name} = {toml_value(value)} is invalid" in msg, msg
     with pytest.raises(ProblemError) as info:
-        problem_from_dict(data, source="problems/x.toml", overrides=[f"{section}.{key.name}={toml_value(value)}"])
-    assert f"[{section}] {key.name} = {toml_value(value)} (from --set) is invalid" in str(info.value), str(info.value)
+        problem_from_dict(data, source="problems/x.toml",
+                          overrides=[f"{section}.{key.name}={toml_value(value)}"])
+    assert (f"[{section}] {key.name} = {toml_value(value)} (from --set) "
+            "is invalid" in str(info.value)), str(info.value)
     assert isinstance(info.value, ValueError)
 
 
 @pytest.mark.slow
 @CHEAP
 @given(data=problem_dicts(), st_key=st.sampled_from([(s.name, k) for s in SECTIONS if s.required
-                                                     for k in default_variant_keys(s) if k.required]))
+                                                     for k in default_variant_keys(s)
+                                                     if k.required]))
 def test_missing_required_key_is_named(data, st_key):
     section, key = st_key
     bad = {s: dict(v) for s, v in data.items()}
@@ -362,7 +392,8 @@ def test_run_problem_with_prescribed_angles(data, model_gravity):
         try:  # the torque drive checks the start configuration only
             q = problem_from_dict(edited(data, "gait", "drive", "torque"))
         except ProblemError:
-            return  # no contact at phase 0: simulate_angles rejects it as well (test_prescribed_random_...)
+            # no contact at phase 0: simulate_angles rejects it as well (test_prescribed_random_...)
+            return
         res = run_prescribed(q.model, q.gait)
         assert res is not None and not res.success
         return

@@ -17,7 +17,8 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from ocp_crawl import FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSpline, ReferenceTorque
+from ocp_crawl import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSpline,
+                       ReferenceTorque)
 
 from _properties_common import BAD_NUMBERS, CHEAP, knots
 
@@ -46,7 +47,8 @@ def sampled_signals(draw):
 
 
 plain_signals = st.one_of(
-    st.builds(Harmonic, st.floats(-4, 4), st.floats(-4, 4), st.floats(0, 3), st.floats(0, 3), st.floats(-7, 7)),
+    st.builds(Harmonic, st.floats(-4, 4), st.floats(-4, 4), st.floats(0, 3), st.floats(0, 3),
+              st.floats(-7, 7)),
     fourier_series(), sampled_signals())
 signals = st.one_of(plain_signals, st.builds(ReferenceTorque, plain_signals, st.floats(1e-3, 1e3)))
 
@@ -74,7 +76,8 @@ def test_signal_periodic(u, t, k):
     rounding = 8 * EPS * (abs(t) + abs(k) + 2)  # round-off of the phase t + k
     np.testing.assert_allclose(u(t + k), u(t), rtol=0, atol=1e-12 * su + rounding * sdu)
     if not near_knot(u, t, 1e-9):
-        np.testing.assert_allclose(u.derivative(t + k), u.derivative(t), rtol=0, atol=1e-12 * (sdu + 1) + rounding * sddu)
+        np.testing.assert_allclose(u.derivative(t + k), u.derivative(t), rtol=0,
+                                   atol=1e-12 * (sdu + 1) + rounding * sddu)
 
 
 @CHEAP
@@ -122,13 +125,15 @@ def test_fourier_fit_reproduces_a_sampled_series(u, extra):
 
 
 @CHEAP
-@given(n=st.integers(1, 12).map(lambda m: 2 * m + 1), v=st.lists(st.floats(-3, 3), min_size=50, max_size=50))
+@given(n=st.integers(1, 12).map(lambda m: 2 * m + 1),
+       v=st.lists(st.floats(-3, 3), min_size=50, max_size=50))
 def test_fourier_fit_interpolates_odd_samples(n, v):
     """With N odd samples, the fit of order (N - 1)/2 passes through every sample (discrete Fourier
     interpolation), e.g. samples of a spline."""
     samples = np.array(v[:2 * n]).reshape(2, n)
     fit = FourierSeries.fit(samples, (n - 1) // 2)
-    np.testing.assert_allclose(fit(np.arange(n) / n), samples, rtol=0, atol=1e-12 * (1 + np.max(np.abs(samples))))
+    np.testing.assert_allclose(fit(np.arange(n) / n), samples, rtol=0,
+                               atol=1e-12 * (1 + np.max(np.abs(samples))))
 
 
 def _corrupt(draw, arr, value):
@@ -142,8 +147,10 @@ def _corrupt(draw, arr, value):
 @st.composite
 def invalid_constructions(draw):
     """(constructor call, name of the argument the message must name)."""
-    which = draw(st.sampled_from(["fourier_nan", "fourier_shape", "knots_nan", "knots_order", "knots_range",
-                                  "knots_few", "values_nan", "values_shape", "harmonic", "torque_k"]))
+    which = draw(st.sampled_from(["fourier_nan", "fourier_shape", "knots_nan", "knots_order",
+                                  "knots_range",
+                                  "knots_few", "values_nan", "values_shape", "harmonic",
+                                  "torque_k"]))
     order = draw(st.integers(1, 3))
     a0, a, b = np.zeros(2), np.ones((2, order)), np.ones((2, order))
     kind = draw(st.sampled_from([PeriodicSpline, PeriodicPchip, PeriodicLinear]))
@@ -157,7 +164,8 @@ def invalid_constructions(draw):
     if which == "fourier_shape":
         arg = draw(st.sampled_from(["a0", "a", "b"]))
         bad = {"a0": a0, "a": a, "b": b}
-        bad[arg] = np.ones(draw(st.sampled_from([(3,), (1,), (3, order), (2, order + 1), (2, 2, order)])))
+        bad[arg] = np.ones(draw(st.sampled_from([(3,), (1,), (3, order), (2, order + 1),
+                                                 (2, 2, order)])))
         if arg == "a0" and bad[arg].size == 2:
             bad[arg] = np.ones(3)
         return (lambda: FourierSeries(**bad)), arg
@@ -171,7 +179,8 @@ def invalid_constructions(draw):
     if which == "knots_range":
         tt = t.copy()
         if draw(st.booleans()):
-            tt[-1] = draw(st.floats(1.0, 2.0))  # the period's end is the first knot again: not a knot
+            # the period's end is the first knot again: not a knot
+            tt[-1] = draw(st.floats(1.0, 2.0))
         else:
             tt[0] = draw(st.floats(-1.0, -1e-9))
         return (lambda: kind(tt, v)), "t_knots"
@@ -185,7 +194,8 @@ def invalid_constructions(draw):
         return (lambda: kind(t, np.ones(shape))), "values"
     if which == "harmonic":
         arg = draw(st.sampled_from(["gamma1", "gamma2", "A1", "A2", "psi"]))
-        value = draw(st.one_of(BAD_NUMBERS, st.floats(-10, -1e-9) if arg.startswith("A") else BAD_NUMBERS))
+        value = draw(st.one_of(BAD_NUMBERS,
+                               st.floats(-10, -1e-9) if arg.startswith("A") else BAD_NUMBERS))
         return (lambda: Harmonic(**{arg: value})), arg
     k = draw(st.one_of(BAD_NUMBERS, st.floats(-10, 0)))
     return (lambda: ReferenceTorque(Harmonic(), k)), "k"

@@ -1,13 +1,14 @@
-"""``sweep --resume`` over damaged files of a sweep directory: bytes that are not UTF-8 and rows with an unknown
-status are bad input like a garbage row (exit 2, one stderr line naming the file and line), never an internal
-error, and never counted as results."""
+"""``sweep --resume`` over damaged files of a sweep directory: bytes that are not UTF-8 and rows
+with an unknown status are bad input like a garbage row (exit 2, one stderr line naming the file and
+line), never an internal error, and never counted as results."""
 import shutil
 from pathlib import Path
 
 import pytest
 
 from ocp_crawl.cli.app import main
-from ocp_crawl.sweep import JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, run_sweep
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult,
+                             run_sweep)
 
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
@@ -36,7 +37,8 @@ def _journal_of(out: Path) -> bytes:
 
 
 def _resume(out: Path, capsys) -> tuple[int, str]:
-    code = main(["sweep", str(PAPER), "--grid", GRID, "--out", str(out), "--resume", "--no-progress"])
+    code = main(["sweep", str(PAPER), "--grid", GRID, "--out", str(out), "--resume",
+                 "--no-progress"])
     return code, capsys.readouterr().err
 
 
@@ -59,7 +61,8 @@ def _journal_not_utf8(out: Path) -> bytes:
 
 # each case: file, its damaged bytes (a function of the finished directory), words of the message
 NOT_UTF8 = {
-    "results.csv: two bytes": (RESULTS_FILE, lambda out: b"\xff\xfe", [f"{RESULTS_FILE}:1", "not UTF-8"]),
+    "results.csv: two bytes": (RESULTS_FILE, lambda out: b"\xff\xfe",
+                               [f"{RESULTS_FILE}:1", "not UTF-8"]),
     "results.csv: a row": (RESULTS_FILE, _row_not_utf8, [f"{RESULTS_FILE}:2", "not UTF-8", "0xe9"]),
     "settings.json": (SETTINGS_FILE, lambda out: b"\xff\xfe", [SETTINGS_FILE, "not UTF-8"]),
     "journal: two bytes": (JOURNAL_FILE, _journal_not_utf8, [f"{JOURNAL_FILE}:1", "not UTF-8"]),
@@ -100,13 +103,16 @@ def test_resume_keeps_rows_of_every_known_status(finished, tmp_path, capsys):
 
 
 def test_a_missing_row_is_computed_on_resume(finished, tmp_path, capsys):
-    """A row with status ``missing`` (a point not computed, as ``SweepResult.read(partial=True)`` shows it) is not a
-    result: ``--resume`` computes the point (before, it was counted as finished and kept as missing)."""
+    """A row with status ``missing`` (a point not computed, as ``SweepResult.read(partial=True)``
+    shows it) is not a result: ``--resume`` computes the point (before, it was counted as finished
+    and kept as missing)."""
     out = _copy(finished, tmp_path)
     text = (out / RESULTS_FILE).read_text()
     first_success = text.index("success")
-    (out / RESULTS_FILE).write_text(text[:first_success] + "missing" + text[first_success + len("success"):])
-    code = main(["sweep", str(PAPER), "--grid", GRID, "--out", str(out), "--resume", "--no-progress", "--json"])
+    (out / RESULTS_FILE).write_text(text[:first_success] + "missing"
+                                    + text[first_success + len("success"):])
+    code = main(["sweep", str(PAPER), "--grid", GRID, "--out", str(out), "--resume",
+                 "--no-progress", "--json"])
     assert code == 0, capsys.readouterr().err
     rows = SweepResult.read(out).rows
     assert [r["status"] for r in rows] == [r["status"] for r in SweepResult.read(finished).rows]

@@ -3,7 +3,8 @@ together than the step, many events per cycle (fast chattering inputs), the even
 import numpy as np
 import pytest
 
-from ocp_crawl import FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot, Status, simulate_torque
+from ocp_crawl import (FourierSeries, Harmonic, HybridOptions, Model, ReferenceTorque, Robot,
+                       Status, simulate_torque)
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_kinks import input_step
 from ocp_crawl.sim.event_guards import cubic_min
@@ -14,7 +15,8 @@ REFINED = dict(max_step=1 / 2048)
 
 
 def chattering(robot, n, amp):
-    """The paper's gait with a fast ripple: harmonic n (per cycle) of amplitude amp [rad] in the reference."""
+    """The paper's gait with a fast ripple: harmonic n (per cycle) of amplitude amp [rad] in the
+    reference."""
     base = Harmonic.from_degrees(90, 30, 45)
     t = np.arange(4 * n + 8) / (4 * n + 8)
     ripple = amp * np.vstack([np.sin(2 * np.pi * n * t), np.cos(2 * np.pi * n * t)])
@@ -24,7 +26,8 @@ def chattering(robot, n, amp):
 def same_events(a, b, tol=1e-8):
     assert [e.kind for e in a] == [e.kind for e in b]
     assert [e.mode_after for e in a] == [e.mode_after for e in b]
-    assert np.max(np.abs(np.array([e.t for e in a]) - np.array([e.t for e in b])), initial=0.0) <= tol
+    assert np.max(np.abs(np.array([e.t for e in a]) - np.array([e.t for e in b])),
+                  initial=0.0) <= tol
 
 
 def check_coulomb(res, robot, tol=1e-9):
@@ -41,7 +44,8 @@ def test_chattering_input_loses_no_event():
     torque = chattering(robot, 40, 0.01)
     t_eval = np.linspace(0, 1, 2001)
     res = simulate_torque(Model(robot), torque, t_eval=t_eval)
-    ref = simulate_torque(Model(robot), torque, HybridOptions(**REFINED, max_events_per_cycle=1000), t_eval=t_eval)
+    ref = simulate_torque(Model(robot), torque, HybridOptions(**REFINED, max_events_per_cycle=1000),
+                          t_eval=t_eval)
     assert res.success and ref.success, (res.message, ref.message)
     assert len(res.steady_events()) >= 20
     same_events(res.steady_events(), ref.steady_events())
@@ -69,7 +73,8 @@ def test_events_closer_than_the_step_are_located_inside_it():
     fine = HybridOptions(max_step=1 / 512)
 
     def run(A, options=None):
-        res = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(90, A, 45), robot.k), options)
+        res = simulate_torque(model, ReferenceTorque(Harmonic.from_degrees(90, A, 45), robot.k),
+                              options)
         assert res.success, res.message
         return res, [e for e in res.steady_events() if not e.kind.startswith("graze")]
 
@@ -116,7 +121,8 @@ def test_grazing_guard_keeps_the_mode_and_the_answer_is_continuous():
 
 def test_event_cap_ends_the_run_with_a_clear_status():
     robot = Robot.paper()
-    res = simulate_torque(Model(robot), chattering(robot, 80, 0.01), HybridOptions(max_events_per_cycle=10))
+    res = simulate_torque(Model(robot), chattering(robot, 80, 0.01),
+                          HybridOptions(max_events_per_cycle=10))
     assert res.status == Status.TOO_MANY_EVENTS and not res.success
     assert "more than 10 events in cycle 1" in res.message
     assert len(res.events) == 11 and np.isnan(res.S)

@@ -1,5 +1,5 @@
-"""The batched roots of the W+ sign split (ocp_crawl.sim.quadrature.legendre_roots) against numpy's legroots,
-row by row, including rows whose leading coefficients vanish (lower degree)."""
+"""The batched roots of the W+ sign split (ocp_crawl.sim.quadrature.legendre_roots) against numpy's
+legroots, row by row, including rows whose leading coefficients vanish (lower degree)."""
 import numpy as np
 from numpy.polynomial import legendre
 
@@ -21,4 +21,5 @@ def test_legendre_roots_are_numpys_legroots_row_by_row():
         assert np.array_equal(got, ref)
     # the roots are zeros of the series (an independent check of the companion matrices)
     for row, r in zip(coefs[20:40], roots[20:40]):
-        assert np.all(np.abs(legendre.legval(r, row)) <= 1e-9 * np.sum(np.abs(row)) * (1 + np.abs(r)) ** 4)
+        assert np.all(np.abs(legendre.legval(r, row))
+                      <= 1e-9 * np.sum(np.abs(row)) * (1 + np.abs(r)) ** 4)

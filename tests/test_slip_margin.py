@@ -1,14 +1,16 @@
-"""The friction tolerance (ocp.friction_tol): which foot slips must not depend on friction coefficients known
-only to +-eps/2.  The slip-weighted margin of a simulation is checked against an independent computation from
-the result arrays on a fine output grid (the slipping foot read from ``mode``, not from the displacements;
-rectangle rule instead of the trapezoid), and the rule against the harmonic family and the replay judge."""
+"""The friction tolerance (ocp.friction_tol): which foot slips must not depend on friction
+coefficients known only to +-eps/2.  The slip-weighted margin of a simulation is checked against an
+independent computation from the result arrays on a fine output grid (the slipping foot read from
+``mode``, not from the displacements; rectangle rule instead of the trapezoid), and the rule against
+the harmonic family and the replay judge."""
 import math
 
 import numpy as np
 import pytest
 
 from ocp_crawl import Robot
-from ocp_crawl.model.inputs import Harmonic, PeriodicLinear, ReferenceTorque
+from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import judge
 from ocp_crawl.ocp.baseline import value_from
@@ -28,7 +30,8 @@ def harmonic(psi_deg: float, robot: Robot = ROBOT) -> ReferenceTorque:
 
 
 def margin_from_modes(res, robot: Robot) -> float:
-    """Independent: on output samples, the foot that slips after sample k is ``Mode(mode[k]).foot``; its slip is
+    """Independent: on output samples, the foot that slips after sample k is ``Mode(mode[k]).foot``;
+    its slip is
     |x_foot,k+1 - x_foot,k|; the limits are taken at sample k (rectangle rule)."""
     l1, l2 = robot.mu1 * res.f_n1, robot.mu2 * res.f_n2
     num = den = 0.0
@@ -44,14 +47,16 @@ def margin_from_modes(res, robot: Robot) -> float:
     return num / den
 
 
-@pytest.mark.parametrize("psi, robot", [(45.0, ROBOT), (-30.0, ROBOT), (45.0, ROBOT.replace(mu1=0.35, mu2=0.43))])
+@pytest.mark.parametrize("psi, robot",
+                         [(45.0, ROBOT), (-30.0, ROBOT), (45.0, ROBOT.replace(mu1=0.35, mu2=0.43))])
 def test_margin_of_a_simulation_matches_the_independent_computation(psi, robot):
     model = Model(robot, gravity="physical")
     res = simulate_torque(model, harmonic(psi, robot))
     fine = simulate_torque(model, harmonic(psi, robot), t_eval=np.linspace(0.0, 1.0, 20001))
     assert res.success and fine.success
     m, low = result_margins(res, robot)
-    assert -1e-12 < low < m  # unequal friction: a direct change of the slipping foot passes the tie (low = 0)
+    # unequal friction: a direct change of the slipping foot passes the tie (low = 0)
+    assert -1e-12 < low < m
     assert m == pytest.approx(margin_from_modes(fine, robot), rel=2e-3)
 
 
@@ -85,7 +90,8 @@ def test_judge_rejects_a_replay_that_holds_the_tie(psi, status):
     tau = np.asarray(harmonic(psi)(phase), float).reshape(2, N)
     T = 2.0 * settings.min_period(30.0, 30.0)  # well inside the bandwidth
     ref = simulate_torque(MODEL, PeriodicLinear(phase, tau))
-    claim = value_from(settings, [ref.S], [ref.CoT_plus], T)  # an honest claim: only the margin can fail
+    # an honest claim: only the margin can fail
+    claim = value_from(settings, [ref.S], [ref.CoT_plus], T)
     verdict = judge.judge_replay([MODEL], settings, tau, T, claim)
     assert verdict.status == status, verdict.message
     if status == Status.REPLAY_MISMATCH:
@@ -93,8 +99,9 @@ def test_judge_rejects_a_replay_that_holds_the_tie(psi, status):
 
 
 def test_transcription_friction_rows_give_the_simulated_margin():
-    """The OCP's constraint terms on sub-step variables sampled from a simulation (trapezoid limits, N = 200)
-    give the slip-weighted margin of the simulation (trapezoid limits on its own steps) to O(1/N)."""
+    """The OCP's constraint terms on sub-step variables sampled from a simulation (trapezoid limits,
+    N = 200) give the slip-weighted margin of the simulation (trapezoid limits on its own steps) to
+    O(1/N)."""
     from ocp_crawl.ocp.substeps import friction_rows, guess_block, sample_phases
 
     N, eps = 200, 0.05
@@ -105,6 +112,8 @@ def test_transcription_friction_rows_give_the_simulated_margin():
     m_ocp = num / den
     assert np.sum(friction_rows(W, eps)) == pytest.approx(num - eps * den, rel=1e-12)
     m_sim, _ = result_margins(simulate_torque(MODEL, harmonic(45.0)), ROBOT)
-    # measured: 5.2e-4 at N = 50, 8.8e-5 at N = 200 (the simulation's own steps give its m to about 1e-4)
+    # measured: 5.2e-4 at N = 50, 8.8e-5 at N = 200 (the simulation's own steps give its m to about
+    # 1e-4)
     assert m_ocp == pytest.approx(m_sim, rel=1e-3)
-    assert (np.sum(friction_rows(W, m_sim * 1.05)) < 0) and (np.sum(friction_rows(W, m_sim * 0.95)) > 0)
+    assert (np.sum(friction_rows(W, m_sim * 1.05)) < 0) and (np.sum(friction_rows(W, m_sim * 0.95))
+                                                             > 0)

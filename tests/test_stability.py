@@ -1,7 +1,7 @@
 """Stability of quasistatic equilibria, each number checked against something independent:
-the paper gait (stable), the issue's soft-spring counterexample (unstable), a finite-difference second
-derivative of the potential along the constraint curve, the mode Jacobian's determinant, and short
-damped-dynamics runs for the slip criterion."""
+the paper gait (stable), the issue's soft-spring counterexample (unstable), a finite-difference
+second derivative of the potential along the constraint curve, the mode Jacobian's determinant, and
+short damped-dynamics runs for the slip criterion."""
 import math
 import time
 
@@ -11,8 +11,8 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from ocp_crawl import Model, ReferenceTorque, simulate_torque
-from ocp_crawl.model.stability import (fast_stability, reduced_stiffness, slip_stiffness, stability, stability_function,
-                                       stability_margin, stability_margins)
+from ocp_crawl.model.stability import (fast_stability, reduced_stiffness, slip_stiffness, stability,
+                                       stability_function, stability_margin, stability_margins)
 from ocp_crawl.model.statics import symbolic
 from ocp_crawl.problem import paper_problem, problem_from_dict
 from ocp_crawl.sim.event import HybridStepper
@@ -20,10 +20,12 @@ from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
 
 #: counterexample 1: a robot whose steady cycle the simulator reports with a jump (snap-through)
-SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983, "beta": 0.613461927615284,
+SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983,
+                          "beta": 0.613461927615284,
                           "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
                           "mu2": 0.07199087717290628},
-                "gait": {"drive": "torque", "psi_deg": -274.5634823796951, "gamma_deg": 118.31006032658763,
+                "gait": {"drive": "torque", "psi_deg": -274.5634823796951,
+                         "gamma_deg": 118.31006032658763,
                          "A_deg": 23.534673118354448}, "model": {"gravity": "physical"}}
 
 
@@ -42,7 +44,8 @@ def _run(problem, **kw):
 
 
 def _start(problem):
-    """The first released equilibrium the event simulator finds: phi and f_t (= 0) at t = 0 (stable or not)."""
+    """The first released equilibrium the event simulator finds: phi and f_t (= 0) at t = 0 (stable
+    or not)."""
     return next(HybridStepper(problem.model, problem.torque).released_states(0.0)).x
 
 
@@ -67,9 +70,10 @@ def test_paper_gait_start_and_steady_cycle_are_stable(gravity):
 # ------------------------------------------------------------------ counterexample 2
 @pytest.mark.parametrize("k, expected", [(0.002, -0.0035), (1e-3, -0.0047)])
 def test_soft_spring_counterexample_is_a_maximum(k, expected):
-    """Paper gait with k = 0.002 (1e-3) N m/rad: the simulator used to report success, stuck in stick-stick
-    near the released start; the reduced stiffness there is negative (issue: about -0.0035 N m/rad), so
-    the run is now ``no_start`` (the released robot can only settle on a maximum of the potential)."""
+    """Paper gait with k = 0.002 (1e-3) N m/rad: the simulator used to report success, stuck in
+    stick-stick near the released start; the reduced stiffness there is negative (issue: about
+    -0.0035 N m/rad), so the run is now ``no_start`` (the released robot can only settle on a
+    maximum of the potential)."""
     pr = paper_problem().with_values({"robot.k": k})
     m = pr.model
     r = m.robot
@@ -100,8 +104,8 @@ def _curve_point(model, phi0, d0, s):
 
 
 def _fd_kappa(model, phi0, f_t, h=2e-3):
-    """Second derivative of Pi - tau.phi along d = d0 at an exact equilibrium (tau = holding torque),
-    central differences with one Richardson step [N m/rad]."""
+    """Second derivative of Pi - tau.phi along d = d0 at an exact equilibrium (tau = holding
+    torque), central differences with one Richardson step [N m/rad]."""
     tau = model.hold_torque(phi0, f_t)
     d0 = model.kinematics(phi0)["d"]
 
@@ -140,7 +144,8 @@ def test_reduced_stiffness_is_second_derivative_along_constraint(k, gravity, phi
 
 
 def test_sign_of_kappa_and_det_K_follow_the_mode_jacobian():
-    """det J = -kappa |grad d|^2/(M g L^3) in stick-stick and det K/(M g L)^2 in slip (J from statics.system)."""
+    """det J = -kappa |grad d|^2/(M g L^3) in stick-stick and det K/(M g L)^2 in slip (J from
+    statics.system)."""
     rng = np.random.default_rng(11)
     sys = symbolic().system
     for k in (0.1677, 0.002):
@@ -155,8 +160,10 @@ def test_sign_of_kappa_and_det_K_follow_the_mode_jacobian():
             assert np.linalg.det(J) == pytest.approx(-s["kappa"] * g2 / r.L**2, rel=1e-9)
             for mode in (Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG):
                 q = mode_q(mode)
-                # on the mode's solution set: f_t at the friction limit (J uses x[2], K the friction law)
-                x[2] = q[1] * (q[2] * r.mu1 * kin["fn1"] + (1 - q[2]) * r.mu2 * kin["fn2"]) / (r.M * r.g)
+                # on the mode's solution set: f_t at the friction limit (J uses x[2], K the friction
+                # law)
+                x[2] = q[1] * (q[2] * r.mu1 * kin["fn1"]
+                               + (1 - q[2]) * r.mu2 * kin["fn2"]) / (r.M * r.g)
                 J = np.asarray(sys(x, np.zeros(2), q, m.p)[1])
                 K = slip_stiffness(m, x[:2], q[1], q[2]) / r.MgL
                 assert np.linalg.det(J) == pytest.approx(np.linalg.det(K), rel=1e-9)
@@ -165,8 +172,8 @@ def test_sign_of_kappa_and_det_K_follow_the_mode_jacobian():
 
 
 def test_margin_falls_to_zero_at_a_reported_fold():
-    """Physical gravity, k = 0.3 M g L: the simulator reports a fold of the slip2- branch (det J = 0);
-    the margin decreases towards zero along the branch and is still positive before it."""
+    """Physical gravity, k = 0.3 M g L: the simulator reports a fold of the slip2- branch (det J =
+    0); the margin decreases towards zero along the branch and is still positive before it."""
     pr = paper_problem()
     r = pr.robot.with_stiffness_ratio(0.3)
     m = Model(r)
@@ -179,10 +186,12 @@ def test_margin_falls_to_zero_at_a_reported_fold():
     assert tail[-1] < 0.03 < margins.max()
 
 
-# ------------------------------------------------------------------ slip criterion vs damped dynamics
+# ------------------------------------------------------------------ slip criterion vs damped
+# dynamics
 def _damped_run(model, phi_star, sigma, w, T, eps=1e-7):
-    """Overdamped run phi' = F(phi)/(M g L) (identity damping, time in units of damping/(M g L)) with the
-    torque held at the value that makes phi_star a slip equilibrium, from phi_star + eps (0.6, 0.8).
+    """Overdamped run phi' = F(phi)/(M g L) (identity damping, time in units of damping/(M g L))
+    with the torque held at the value that makes phi_star a slip equilibrium, from phi_star + eps
+    (0.6, 0.8).
 
     Uses only the model's residual and normal forces (not the stability module).
     Returns (dphi(0), dphi(T))."""
@@ -196,8 +205,8 @@ def _damped_run(model, phi_star, sigma, w, T, eps=1e-7):
     assert np.abs(model.equilibrium_residual(phi_star, tau, ft(phi_star))).max() < 1e-14 * r.MgL
     dphi0 = eps * np.array([0.6, 0.8])
     # integrate the perturbation itself (not phi), so that its accuracy is relative to its size
-    sol = solve_ivp(lambda t, y: model.equilibrium_residual(phi_star + y, tau, ft(phi_star + y)) / r.MgL, (0, T),
-                    dphi0, method="LSODA", rtol=1e-10, atol=1e-14 * eps)
+    sol = solve_ivp(lambda t, y: model.equilibrium_residual(phi_star + y, tau, ft(phi_star + y))
+                    / r.MgL, (0, T), dphi0, method="LSODA", rtol=1e-10, atol=1e-14 * eps)
     assert sol.success
     return dphi0, sol.y[:, -1]
 
@@ -214,7 +223,8 @@ def _check_against_dynamics(model, phi, q, stable):
     growth = np.linalg.norm(dphiT) / np.linalg.norm(dphi0)
     assert (growth < 1e-2) if stable else (growth > 1e2), growth
     linear = expm(-K * T) @ dphi0
-    assert np.linalg.norm(dphiT - linear) < 1e-3 * np.linalg.norm(linear)  # nonlinear terms: O(|dphi(T)|)
+    # nonlinear terms: O(|dphi(T)|)
+    assert np.linalg.norm(dphiT - linear) < 1e-3 * np.linalg.norm(linear)
     return s
 
 
@@ -237,10 +247,11 @@ def test_slip_stable_on_the_paper_gait_perturbation_decays():
 
 
 def test_slip_saddle_on_the_snap_through_robot_perturbation_grows():
-    """The issue's snap-through robot: its slip2+ stretch has det K < 0 (a saddle): a perturbation grows."""
+    """The issue's snap-through robot: its slip2+ stretch has det K < 0 (a saddle): a perturbation
+    grows."""
     pr = problem_from_dict(SNAP_THROUGH)
-    # the run now ends as snap_through before its slip2+ stretch: solve the slip2+ equilibrium at phase
-    # 0.09 from a guess near the one the simulator used to report there
+    # the run now ends as snap_through before its slip2+ stretch: solve the slip2+ equilibrium at
+    # phase 0.09 from a guess near the one the simulator used to report there
     st = HybridStepper(pr.model, pr.torque)
     pt = st.solver.solve(1.09, np.array([1.0457, 2.7819, 0.0216]), mode_q(Mode.SLIP2_POS))
     phi = pt.x[:2]
@@ -251,7 +262,8 @@ def test_slip_saddle_on_the_snap_through_robot_perturbation_grows():
 @pytest.mark.parametrize("mode", [Mode.SLIP1_POS, Mode.SLIP1_NEG])
 def test_slip_unstable_at_the_soft_spring_start_perturbation_grows(mode):
     """k = 0.002 N m/rad, the released start's configuration held at foot 1's friction limit: both
-    eigenvalues of K have negative real parts (slip1-: real; slip1+: a complex pair): the perturbation grows."""
+    eigenvalues of K have negative real parts (slip1-: real; slip1+: a complex pair): the
+    perturbation grows."""
     pr = paper_problem().with_values({"robot.k": 0.002})
     phi = _start(pr)[:2]
     pr.model.check_contact(phi)
@@ -264,7 +276,8 @@ def test_margin_accepts_short_and_full_q_and_rejects_bad_input():
     m = paper_problem().model
     x = np.array([math.radians(100), math.radians(80), 0.05])
     assert stability_margin(m, x, (0, -1, 1)) == stability_margin(m, x, (0, -1, 1, 0.07))
-    assert stability_margin(m, x, (1, 0, 0)) == reduced_stiffness(m, x[:2], x[2] * m.robot.M * m.robot.g) / m.robot.MgL
+    assert (stability_margin(m, x, (1, 0, 0))
+            == reduced_stiffness(m, x[:2], x[2] * m.robot.M * m.robot.g) / m.robot.MgL)
     with pytest.raises(ValueError):
         stability_margin(m, x[:2], (1, 0, 0))
     with pytest.raises(ValueError):
@@ -287,8 +300,8 @@ def test_margin_is_scale_invariant():
 
 
 def test_cost_of_one_evaluation():
-    """Reports the time of one call (CasADi VM, compiled, batch); no timing assertion beyond a hang guard.
-    The compiled function gives the VM's numbers."""
+    """Reports the time of one call (CasADi VM, compiled, batch); no timing assertion beyond a hang
+    guard.  The compiled function gives the VM's numbers."""
     f = stability_function()
     fast = fast_stability()
     m = paper_problem().model

@@ -20,10 +20,12 @@ from PIL import Image
 import ocp_crawl.studies as st
 from ocp_crawl.cli.app import main
 from ocp_crawl.io.paper_data import read_paper_csv
-from ocp_crawl.model.pressure import FITTED_REST_DEG, BendingMap, PressureReference, PressureWaveform, pressure_torque
+from ocp_crawl.model.pressure import (FITTED_REST_DEG, BendingMap, PressureReference,
+                                      PressureWaveform, pressure_torque)
 from ocp_crawl.studies import FIGURES, GRIDS, STATEMENTS, evaluate_fit, fit_rest_angle
 from ocp_crawl.problem import paper_problem
-from ocp_crawl.studies.plots import plot_amplitude, plot_friction_band, plot_parametric, plot_stiffness
+from ocp_crawl.studies.gait_plots import plot_friction_band, plot_parametric
+from ocp_crawl.studies.plots import plot_amplitude, plot_stiffness
 
 from conftest import markdown_table_shapes
 
@@ -40,7 +42,8 @@ CONVENTIONS = ("paper", "physical")
 # --------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("gravity", CONVENTIONS)
 def test_progress_is_largest_near_gamma_90(gravity):
-    m = st.psi_gamma_map(gravity, psi_deg=[30.0, 90.0, 150.0], gamma_deg=[70.0, 80.0, 90.0, 100.0, 110.0])
+    m = st.psi_gamma_map(gravity, psi_deg=[30.0, 90.0, 150.0],
+                         gamma_deg=[70.0, 80.0, 90.0, 100.0, 110.0])
     assert m.counts == {"success": 15}
     np.testing.assert_allclose(m.gamma_opt, 90.0, atol=1.0)
     g, p, s = m.best
@@ -111,7 +114,8 @@ def test_friction_band_needs_an_odd_number_of_ratios():
 # --------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("gravity", CONVENTIONS)
 def test_S_grows_with_amplitude(gravity):
-    a = st.amplitude_study(gravity, A_deg=[5.0, 15.0, 25.0, 35.0, 45.0], k_ratios=[st.REALISTIC_K_RATIO])
+    a = st.amplitude_study(gravity, A_deg=[5.0, 15.0, 25.0, 35.0, 45.0],
+                           k_ratios=[st.REALISTIC_K_RATIO])
     assert a.counts == {"success": 5}
     progress = -a.S[0]
     assert np.all(np.diff(progress) > 5e-3), progress
@@ -129,7 +133,8 @@ def test_large_amplitude_lifts_off_only_with_the_physical_sign():
 
 @pytest.fixture(scope="module")
 def cot():
-    """CoT+ at two of the paper's amplitudes (19.15 and 29.74 deg) for the three stiffnesses, both conventions."""
+    """CoT+ at two of the paper's amplitudes (19.15 and 29.74 deg) for the three stiffnesses, both
+    conventions."""
     A = read_paper_csv("fig_cot_vs_amplitude.csv")["A_deg"][[12, 19]]
     return {g: st.amplitude_study(g, A_deg=A) for g in CONVENTIONS}
 
@@ -149,8 +154,8 @@ def test_cot_matches_the_paper_with_its_gravity_sign(cot):
 def test_softer_robot_is_cheaper(cot):
     paper = cot["paper"].CoT_plus
     assert np.all(paper[2] < paper[1]) and np.all(paper[1] < paper[0])
-    # physical sign: the same order where the low-stiffness robot crawls (A = 19 deg); at A = 30 deg it
-    # reaches a fold (or touches the ground) and has no CoT+: a documented change
+    # physical sign: the same order where the low-stiffness robot crawls (A = 19 deg); at A = 30 deg
+    # it reaches a fold (or touches the ground) and has no CoT+: a documented change
     phys = cot["physical"]
     assert phys.CoT_plus[2, 0] < phys.CoT_plus[1, 0] < phys.CoT_plus[0, 0]
     assert phys.status[2, 1] != "success" and phys.status[:2, 1].tolist() == ["success", "success"]
@@ -186,12 +191,14 @@ def test_physical_sign_has_no_smooth_friction_threshold(stiffness):
 
 
 def test_stiffness_effect_on_S(stiffness):
-    # paper's sign: S falls smoothly as k decreases (MODEL_NOTES: 0.2 -> -19.9, 0.3 -> -29.7, 1 -> -47 mm)
+    # paper's sign: S falls smoothly as k decreases (MODEL_NOTES: 0.2 -> -19.9, 0.3 -> -29.7, 1 ->
+    # -47 mm)
     p = stiffness["paper"]
     moving = p.k_ratios > p.threshold
     assert np.all(p.status == "success")
     assert np.all(np.diff(-p.S[moving]) > 0)
-    np.testing.assert_allclose(MM * p.S[np.isin(p.k_ratios, [0.2, 0.3, 1.0])], [-19.9, -29.7, -47.0], atol=0.1)
+    np.testing.assert_allclose(MM * p.S[np.isin(p.k_ratios, [0.2, 0.3, 1.0])],
+                               [-19.9, -29.7, -47.0], atol=0.1)
     # physical sign: where the robot crawls (k >= 0.5), S grows as k decreases
     q = stiffness["physical"]
     above = q.k_ratios >= 0.5
@@ -237,7 +244,8 @@ def test_gait_comparison(gravity):
 # --------------------------------------------------------------------------------------------
 def test_bending_map_and_waveform():
     m = BendingMap()
-    np.testing.assert_allclose(m.bending(np.array([1.0, 2.0])), [0.092 + 0.127, 0.089 * 4 + 0.144 * 2])
+    np.testing.assert_allclose(m.bending(np.array([1.0, 2.0])),
+                               [0.092 + 0.127, 0.089 * 4 + 0.144 * 2])
     w = PressureWaveform(1.7, math.radians(40.0))
     t = np.linspace(0.0, 1.0, 401)
     p = w(t)
@@ -255,7 +263,8 @@ def test_bending_map_and_waveform():
 
 @pytest.mark.parametrize("gravity", CONVENTIONS)
 def test_pressure_curves_follow_the_paper(gravity):
-    fit = evaluate_fit(FITTED_REST_DEG[gravity], gravity, p0_bar=[0.4, 1.0, 2.0, 3.0], psi_deg=[1.0, 12.0, 45.0, 90.0, 150.0])
+    fit = evaluate_fit(FITTED_REST_DEG[gravity], gravity, p0_bar=[0.4, 1.0, 2.0, 3.0],
+                       psi_deg=[1.0, 12.0, 45.0, 90.0, 150.0])
     assert fit.failures == 0
     assert fit.rms_p0 < 0.05
     assert np.all(np.diff(fit.curves.progress_p0) > 0)
@@ -264,24 +273,28 @@ def test_pressure_curves_follow_the_paper(gravity):
 
 
 def test_raised_sine_with_flat_rest_does_not_reproduce_the_p0_curve():
-    """The earlier assumption (raised sine, p0 the peak) needs a fitted rest angle; the paper's form (ref) with
-    the flat rest does not (tests/test_paper_points.py)."""
+    """The earlier assumption (raised sine, p0 the peak) needs a fitted rest angle; the paper's form
+    (ref) with the flat rest does not (tests/test_paper_points.py)."""
     flat = evaluate_fit(180.0, "paper", p0_bar=[0.4, 1.0, 2.0, 3.0], psi_deg=[45.0])
-    fitted = evaluate_fit(FITTED_REST_DEG["paper"], "paper", p0_bar=[0.4, 1.0, 2.0, 3.0], psi_deg=[45.0])
+    fitted = evaluate_fit(FITTED_REST_DEG["paper"], "paper", p0_bar=[0.4, 1.0, 2.0, 3.0],
+                          psi_deg=[45.0])
     assert flat.rms_p0 > 10 * fitted.rms_p0
 
 
 def test_fit_recovers_the_stored_rest_angle():
-    fit = fit_rest_angle("paper", p0_bar=[0.6, 1.2, 2.4, 3.0], psi_deg=[45.0], bounds=(115.0, 150.0), xatol=0.5)
+    fit = fit_rest_angle("paper", p0_bar=[0.6, 1.2, 2.4, 3.0], psi_deg=[45.0],
+                         bounds=(115.0, 150.0), xatol=0.5)
     assert fit.fitted and fit.nfev > 3
     assert fit.phi_rest_deg == pytest.approx(FITTED_REST_DEG["paper"], abs=4.0)
 
 
 def test_pressure_study_against_experiments():
-    p = st.pressure_study("paper", fit=False, p0_bar=[0.6, 1.1, 1.7], psi_deg=[1.0, 10.0, 50.0, 130.0, 180.0])
+    p = st.pressure_study("paper", fit=False, p0_bar=[0.6, 1.1, 1.7],
+                          psi_deg=[1.0, 10.0, 50.0, 130.0, 180.0])
     e_p0, e_psi = p.experiment_rms()
     assert e_p0 < 0.1
-    assert e_psi < 0.6  # psi = 0 and 5 deg: the experiments move (manufacturing asymmetry, Sec. III)
+    # psi = 0 and 5 deg: the experiments move (manufacturing asymmetry, Sec. III)
+    assert e_psi < 0.6
 
 
 # --------------------------------------------------------------------------------------------
@@ -328,7 +341,8 @@ def test_reproduce_quick(reproduced):
     assert len(shapes) >= 10
     for header, rows in shapes:
         assert rows == [header] * len(rows), (header, rows)
-    assert not re.search(r"(?<![\d.])-0\.0+(?![\d])", report), re.search(r".{40}-0\.0+.{10}", report)
+    assert not re.search(r"(?<![\d.])-0\.0+(?![\d])", report), re.search(r".{40}-0\.0+.{10}",
+                                                                         report)
     assert not re.search(r"\bnan\b", report, re.I)
     assert "max /S" not in report and "median \\|rel. diff.\\|" in report
     numbers = json.loads((out / "numbers.json").read_text())
@@ -344,8 +358,8 @@ def test_reproduce_quick(reproduced):
 
 
 def _comparable_numbers(path):
-    """numbers.json without the wall times of the studies (elapsed_s): they are the only numbers that
-    differ between two runs, interrupted or not."""
+    """numbers.json without the wall times of the studies (elapsed_s): they are the only numbers
+    that differ between two runs, interrupted or not."""
     data = json.loads(path.read_text())
     for conv in ("paper", "physical"):
         assert isinstance(data[conv].pop("elapsed_s"), dict)
@@ -358,7 +372,8 @@ def _comparable_report(path):
     text = path.read_text()
     head, timing, tail = text.partition("\n## Timing\n")
     assert timing and "\n## " not in tail
-    head, n = re.subn(r"\(quick run, ocp_crawl (\S+), \d+ s with", r"(quick run, ocp_crawl \1, <elapsed> s with", head)
+    head, n = re.subn(r"\(quick run, ocp_crawl (\S+), \d+ s with",
+                      r"(quick run, ocp_crawl \1, <elapsed> s with", head)
     assert n == 1
     return head
 
@@ -392,7 +407,8 @@ def test_a_killed_reproduce_leaves_no_worker_and_its_resume_starts(tmp_path):
     within seconds, and ``--resume`` is not refused (a lingering worker would hold the directory's
     lock) but runs on, past the stage it was killed in (the heavy test below resumes to the end)."""
     out = tmp_path / "repro"
-    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs", "2"]
+    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs",
+           "2"]
     env = dict(os.environ, MPLBACKEND="Agg")
     for i, (wait_for, kill) in enumerate([("paper convention: band ...", os.kill),
                                           ("paper convention: friction ...", os.killpg)]):
@@ -408,48 +424,56 @@ def test_a_killed_reproduce_leaves_no_worker_and_its_resume_starts(tmp_path):
         finally:
             kill(proc.pid, signal.SIGKILL)
             proc.wait()
-        assert proc.returncode == -signal.SIGKILL, f"run {i} ended before the kill: {err.read_text()}"
+        assert (proc.returncode
+                == -signal.SIGKILL), f"run {i} ended before the kill: {err.read_text()}"
         assert wait_for in err.read_text(), err.read_text()
         assert _group_ends(proc.pid, 10.0), f"a worker of run {i} outlived the kill by 10 s"
 
 
 @pytest.mark.heavy
 def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduced, tmp_path):
-    """``reproduce --quick`` killed by SIGKILL during the grids (its main process alone: its workers end
-    within seconds) and again (the whole group, resuming) while drawing the figures, then resumed to the
-    end: the same numbers, report, grids and figures as an uninterrupted run, and no temporary file left
-    behind (a kill while a figure is written leaves its temporary)."""
+    """``reproduce --quick`` killed by SIGKILL during the grids (its main process alone: its workers
+    end within seconds) and again (the whole group, resuming) while drawing the figures, then
+    resumed to the end: the same numbers, report, grids and figures as an uninterrupted run, and no
+    temporary file left behind (a kill while a figure is written leaves its temporary)."""
     rng = random.Random(611)
     out = tmp_path / "repro"
-    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs", "2"]
+    cmd = [sys.executable, "-m", "ocp_crawl", "reproduce", "--quick", "--out", str(out), "--jobs",
+           "2"]
     # (stage line on stderr after which to kill, largest random delay [s]): one kill in the friction
     # band's grids, one (of the resumed run) while drawing the figures and writing the report
     stages = [("paper convention: band ...", 1.2), ("figures ...", 2.5)]
     for i, (stage, delay) in enumerate(stages):
         err = tmp_path / f"stderr{i}.txt"
         with open(err, "wb") as fh:
-            proc = subprocess.Popen(cmd + (["--resume"] if i else []), stdout=subprocess.DEVNULL, stderr=fh,
+            proc = subprocess.Popen(cmd + (["--resume"] if i else []), stdout=subprocess.DEVNULL,
+                                    stderr=fh,
                                     start_new_session=True, env=dict(os.environ, MPLBACKEND="Agg"))
         try:
             deadline = time.monotonic() + 120
-            while proc.poll() is None and time.monotonic() < deadline and stage not in err.read_text():
+            while (proc.poll() is None and time.monotonic() < deadline
+                   and stage not in err.read_text()):
                 time.sleep(0.01)
             time.sleep(rng.uniform(0.0, delay))
-        finally:  # the first kill to the main process alone: its workers must follow it within seconds
+        # the first kill to the main process alone: its workers must follow it within seconds
+        finally:
             os.kill(proc.pid, signal.SIGKILL) if i == 0 else os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-        assert proc.returncode == -signal.SIGKILL, f"run {i} ended before it was killed: {err.read_text()}"
+        assert (proc.returncode
+                == -signal.SIGKILL), f"run {i} ended before it was killed: {err.read_text()}"
         assert _group_ends(proc.pid, 10.0), f"a worker of run {i} outlived the kill by 10 s"
         assert stage in err.read_text() and "done in" not in err.read_text()
     finished = subprocess.run(cmd + ["--resume", "--no-progress"], capture_output=True, text=True,
                               env=dict(os.environ, MPLBACKEND="Agg"))
     assert finished.returncode == 0, finished.stderr
 
-    assert _comparable_numbers(out / "numbers.json") == _comparable_numbers(reproduced / "numbers.json")
+    assert _comparable_numbers(out
+                               / "numbers.json") == _comparable_numbers(reproduced / "numbers.json")
     assert _comparable_report(out / "report.md") == _comparable_report(reproduced / "report.md")
     for stem in FIGURES:
         for ext in ("png", "pdf"):
-            got, want = _complete_figure(out / f"{stem}.{ext}"), _complete_figure(reproduced / f"{stem}.{ext}")
+            got, want = _complete_figure(out
+                                         / f"{stem}.{ext}"), _complete_figure(reproduced / f"{stem}.{ext}")
             if ext == "png":
                 np.testing.assert_array_equal(got, want, err_msg=stem)
     sweeps = sorted(p.relative_to(out) for p in (out / "sweeps").glob("*/results.csv"))
@@ -466,7 +490,8 @@ def test_animate_command(tmp_path):
     problem.write_text('[robot]\nM = 0.052\nL = 0.120\nk = 0.1677\nmu = 0.389\n'
                        '[gait]\ngamma_deg = 90.0\nA_deg = 30.0\npsi_deg = 45.0\n')
     gif = tmp_path / "crawl.gif"
-    assert main(["animate", str(problem), "--out", str(gif), "--cycles", "2", "--frames-per-cycle", "6"]) == 0
+    assert main(["animate", str(problem), "--out", str(gif), "--cycles", "2", "--frames-per-cycle",
+                 "6"]) == 0
     with Image.open(gif) as im:
         assert im.n_frames == 13
     # a failed run is animated up to the failure and exits 1

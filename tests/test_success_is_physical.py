@@ -1,10 +1,10 @@
 """No silent success: a torque-driven run is ``success`` only if every equilibrium it reports is
 stable, the state is continuous across its events and the energy balance of its steady cycle closes.
 
-Each verdict is checked against something independent of the code that makes it: the stability verdicts
-against short damped (overdamped) dynamics runs built from the model's joint balance only, the jump
-against the equilibria on both sides of it, the energy gate against the run's own residual, the repaired
-dense output against a run with a finer continuation step.
+Each verdict is checked against something independent of the code that makes it: the stability
+verdicts against short damped (overdamped) dynamics runs built from the model's joint balance only,
+the jump against the equilibria on both sides of it, the energy gate against the run's own residual,
+the repaired dense output against a run with a finer continuation step.
 """
 import math
 
@@ -24,22 +24,26 @@ from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 from ocp_crawl.status import STATUS_MESSAGES, Status
 
 #: counterexample 1: reported success with a jump at phase 0.0975 of the steady cycle
-SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983, "beta": 0.613461927615284,
+SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983,
+                          "beta": 0.613461927615284,
                           "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
                           "mu2": 0.07199087717290628},
-                "gait": {"drive": "torque", "psi_deg": -274.5634823796951, "gamma_deg": 118.31006032658763,
+                "gait": {"drive": "torque", "psi_deg": -274.5634823796951,
+                         "gamma_deg": 118.31006032658763,
                          "A_deg": 23.534673118354448}, "model": {"gravity": "physical"}}
 
-#: two random robots (k/(M g L) about 0.045) whose stick-stick cycle passes close to a fold: the dense output
-#: used to land on other roots of the mode equations there (energy residual 3e-5 and 1e-4, W+ off by 9e-4
-#: and 6e-3), which the energy gate caught
+#: two random robots (k/(M g L) about 0.045) whose stick-stick cycle passes close to a fold: the
+#: dense output used to land on other roots of the mode equations there (energy residual 3e-5 and
+#: 1e-4, W+ off by 9e-4 and 6e-3), which the energy gate caught
 NEAR_FOLD = [
     {"robot": {"M": 2.3877886819781526, "L": 0.22648969419138656, "beta": 1.5111820930099082,
-               "k": 0.2390059508595425, "g": 9.81, "mu1": 0.7752320555912096, "mu2": 0.8851063791543987},
+               "k": 0.2390059508595425, "g": 9.81, "mu1": 0.7752320555912096,
+               "mu2": 0.8851063791543987},
      "gait": {"drive": "torque", "psi_deg": 166.4025944231273, "gamma_deg": 84.4432533600534,
               "A_deg": 35.886000305131084}, "model": {"gravity": "physical"}},
     {"robot": {"M": 1.6769455264706707, "L": 0.2664547636300657, "beta": 0.8083817986291837,
-               "k": 0.1914478659632936, "g": 9.81, "mu1": 0.377010542038843, "mu2": 0.6549228845061807},
+               "k": 0.1914478659632936, "g": 9.81, "mu1": 0.377010542038843,
+               "mu2": 0.6549228845061807},
      "gait": {"drive": "torque", "psi_deg": -9.324419770511355, "gamma_deg": 71.6779541432795,
               "A_deg": 22.704663998489718}, "model": {"gravity": "physical"}},
 ]
@@ -47,16 +51,19 @@ NEAR_FOLD = [
 
 def _failure_is_reported(res, status):
     assert res.status == status and not res.success, res.message
-    assert res.message.startswith(STATUS_MESSAGES[status]) and len(res.message) > len(STATUS_MESSAGES[status]) + 5
+    assert (res.message.startswith(STATUS_MESSAGES[status])
+            and len(res.message) > len(STATUS_MESSAGES[status]) + 5)
     assert res.failure_t is not None and res.failure_mode
     assert math.isnan(res.S) and math.isnan(res.W_plus) and math.isnan(res.CoT_plus)
 
 
-# ------------------------------------------------------------------ damped dynamics, from the joint balance only
+# ------------------------------------------------------------------ damped dynamics, from the joint
+# balance only
 def _stick_flow(model, phi0, tau):
-    """Overdamped flow along the stick-stick constraint d(phi) = d(phi0) with the torque held at tau:
-    phi' = F(phi, tau, f_t)/(M g L), f_t the multiplier that makes d' = 0, plus a restoring term
-    -(d - d0) grad d/|grad d|^2 against drift.  F from ``Model.equilibrium_residual`` (linear in f_t)."""
+    """Overdamped flow along the stick-stick constraint d(phi) = d(phi0) with the torque held at
+    tau: phi' = F(phi, tau, f_t)/(M g L), f_t the multiplier that makes d' = 0, plus a restoring
+    term -(d - d0) grad d/|grad d|^2 against drift.  F from ``Model.equilibrium_residual`` (linear
+    in f_t)."""
     r = model.robot
     d0 = float(model.kinematics(phi0)["d"])
 
@@ -72,21 +79,23 @@ def _stick_flow(model, phi0, tau):
 
 
 def _stick_growth(model, phi0, tau, T, eps=1e-6):
-    """|dphi(T)|/|dphi(0)| of the constrained damped run from phi0 displaced by eps along the constraint."""
+    """|dphi(T)|/|dphi(0)| of the constrained damped run from phi0 displaced by eps along the
+    constraint."""
     kin = model.kinematics(phi0)
     g = np.array([float(kin["grad_d1"]), float(kin["grad_d2"])])
     v = np.array([-g[1], g[0]]) / np.linalg.norm(g)
-    sol = solve_ivp(_stick_flow(model, phi0, tau), (0, T), phi0 + eps * v, method="LSODA", rtol=1e-11,
-                    atol=1e-15)
+    sol = solve_ivp(_stick_flow(model, phi0, tau), (0, T), phi0 + eps * v, method="LSODA",
+                    rtol=1e-11, atol=1e-15)
     assert sol.success
     return np.linalg.norm(sol.y[:, -1] - phi0) / eps
 
 
 @pytest.mark.parametrize("values, stable", [({}, True), ({"model.gravity": "paper"}, True),
-                                            ({"robot.k": 0.002}, False), ({"robot.k": 1e-3}, False)])
+                                            ({"robot.k": 0.002}, False),
+                                            ({"robot.k": 1e-3}, False)])
 def test_start_verdict_agrees_with_damped_dynamics(values, stable):
-    """The released start (f_t = 0, both feet held) is kept by the simulators iff a damped run along the
-    constraint returns to it; the margin only sets the run's length (e^5 of growth or decay)."""
+    """The released start (f_t = 0, both feet held) is kept by the simulators iff a damped run along
+    the constraint returns to it; the margin only sets the run's length (e^5 of growth or decay)."""
     pr = paper_problem().with_values(values)
     m = pr.model
     st = HybridStepper(m, pr.torque)
@@ -101,9 +110,9 @@ def test_start_verdict_agrees_with_damped_dynamics(values, stable):
 
 
 def test_start_skips_an_unstable_released_equilibrium():
-    """k = 0.0354 M g L (paper gait, physical gravity): the first released equilibrium found (near 84, 99 deg)
-    is a maximum along the constraint; a later guess finds a stable one, which the run starts from (it used
-    to start from the unstable one).  Both verdicts checked by damped runs."""
+    """k = 0.0354 M g L (paper gait, physical gravity): the first released equilibrium found (near
+    84, 99 deg) is a maximum along the constraint; a later guess finds a stable one, which the run
+    starts from (it used to start from the unstable one).  Both verdicts checked by damped runs."""
     pr = paper_problem()
     r = pr.robot.with_stiffness_ratio(0.035416325837244335)
     m = Model(r)
@@ -120,35 +129,42 @@ def test_start_skips_an_unstable_released_equilibrium():
     assert simulate_torque(m, torque).success
 
 
-# ------------------------------------------------------------------ counterexample 2: soft springs, heavy robot
-@pytest.mark.parametrize("values", [{"robot.k": 0.002}, {"robot.k": 1e-3}, {"robot.k": 1e-6}, {"robot.M": 1e9}])
+# ------------------------------------------------------------------ counterexample 2: soft springs,
+# heavy robot
+@pytest.mark.parametrize("values",
+                         [{"robot.k": 0.002}, {"robot.k": 1e-3}, {"robot.k": 1e-6},
+                          {"robot.M": 1e9}])
 def test_soft_spring_counterexamples_are_no_start_in_both_torque_solvers(values):
-    """Gravity dominates the springs: the only released equilibrium is the near-Pi shape, a maximum of the
-    potential along the constraint (kappa < 0), so the robot cannot stand there: no_start, not success
-    (the event-driven stepper and the MPCC time-stepping share the start and agree)."""
+    """Gravity dominates the springs: the only released equilibrium is the near-Pi shape, a maximum
+    of the potential along the constraint (kappa < 0), so the robot cannot stand there: no_start,
+    not success (the event-driven stepper and the MPCC time-stepping share the start and agree)."""
     pr = paper_problem().with_values(values)
     for res in (simulate_torque(pr.model, pr.torque), simulate_mpcc(pr.model, pr.torque, steps=40)):
         _failure_is_reported(res, Status.NO_START)
-        assert "unstable equilibrium" in res.message and "reduced stiffness" in res.message, res.message
+        assert ("unstable equilibrium" in res.message
+                and "reduced stiffness" in res.message), res.message
 
 
 # ------------------------------------------------------------------ counterexample 1: snap-through
 def _slip_K_fd(model, phi, tau, sigma, mu, foot, h=1e-6):
-    """Finite-difference Jacobian of -F(phi, tau, f_t(phi)) with f_t = sigma mu f_n,foot(phi) [N m/rad]."""
+    """Finite-difference Jacobian of -F(phi, tau, f_t(phi)) with f_t = sigma mu f_n,foot(phi) [N
+    m/rad]."""
 
     def force(p):
         fn = model.normal_forces(p)[foot - 1]
         return model.equilibrium_residual(p, tau, sigma * mu * float(fn))
 
-    return -np.stack([(force(phi + h * e) - force(phi - h * e)) / (2 * h) for e in np.eye(2)], axis=1)
+    return -np.stack([(force(phi + h * e) - force(phi - h * e)) / (2 * h) for e in np.eye(2)],
+                     axis=1)
 
 
 def test_snap_through_counterexample():
-    """Stick-stick reaches foot 2's friction limit (f_t = +mu2 f_n2) at phase 0.2215 of the first cycle.
-    The stick-stick equilibrium is stable there (kappa > 0, no fold), but the slip2+ continuation is a
-    saddle (det K < 0, so the quasistatic slip would run backwards in time: inconsistent), and the only
-    consistent mode, slip2-, lies 8 deg away: the robot snaps through.  Status snap_through, with the
-    jump; before, the run reported success with a -4.4 % energy residual."""
+    """Stick-stick reaches foot 2's friction limit (f_t = +mu2 f_n2) at phase 0.2215 of the first
+    cycle.  The stick-stick equilibrium is stable there (kappa > 0, no fold), but the slip2+
+    continuation is a saddle (det K < 0, so the quasistatic slip would run backwards in time:
+    inconsistent), and the only consistent mode, slip2-, lies 8 deg away: the robot snaps through.
+    Status snap_through, with the jump; before, the run reported success with a -4.4 % energy
+    residual."""
     pr = problem_from_dict(SNAP_THROUGH)
     m, r = pr.model, pr.robot
     res = simulate_torque(m, pr.torque)
@@ -189,15 +205,17 @@ def test_success_samples_all_have_positive_margin(case):
     m, r = pr.model, pr.robot
     res = simulate_torque(m, pr.torque, t_eval=np.linspace(0, 1, 401))
     assert res.success, res.message
-    margins = [stability_margin(m, np.array([*res.phi[:, j], res.f_t[j] / (r.M * r.g)]), mode_q(Mode(int(c))))
+    margins = [stability_margin(m, np.array([*res.phi[:, j], res.f_t[j] / (r.M * r.g)]),
+                                mode_q(Mode(int(c))))
                for j, c in enumerate(res.mode)]
     assert min(margins) > 0
 
 
 @pytest.mark.parametrize("i", [0, 1])
 def test_near_fold_dense_output_stays_on_the_branch(i):
-    """Regression: the steep stick-stick stretch near a fold.  The energy balance closes and W+ agrees with a
-    run whose continuation step is 8 times finer (its dense output needs no repair)."""
+    """Regression: the steep stick-stick stretch near a fold.  The energy balance closes and W+
+    agrees with a run whose continuation step is 8 times finer (its dense output needs no
+    repair)."""
     pr = problem_from_dict(NEAR_FOLD[i])
     res = simulate_torque(pr.model, pr.torque)
     fine = simulate_torque(pr.model, pr.torque, HybridOptions(max_step=1 / 512))
@@ -207,9 +225,9 @@ def test_near_fold_dense_output_stays_on_the_branch(i):
 
 
 def test_cycle_integrals_resolve_a_near_fold():
-    """k = 0.43325 M g L (paper gait, physical gravity), just above a fold at phase 0.75: phi' spikes there.
-    The energy balance closes (8 panel halvings used to leave -9e-6, now caught as energy_imbalance) and W+
-    agrees with 32 times finer panels."""
+    """k = 0.43325 M g L (paper gait, physical gravity), just above a fold at phase 0.75: phi'
+    spikes there.  The energy balance closes (8 panel halvings used to leave -9e-6, now caught as
+    energy_imbalance) and W+ agrees with 32 times finer panels."""
     pr = paper_problem()
     r = pr.robot.with_stiffness_ratio(0.43325)
     torque = ReferenceTorque(pr.gait, r.k)
@@ -235,13 +253,15 @@ def test_energy_gate_of_the_event_solver_fires_at_its_tolerance():
 
 @pytest.mark.slow
 def test_energy_gate_of_the_mpcc_solver_scales_with_the_steps():
-    """N = 16: residual O(1/N^2) (0.04/N^2 on the paper gait) passes the default 10/N^2, fails a tight 0.01/N^2."""
+    """N = 16: residual O(1/N^2) (0.04/N^2 on the paper gait) passes the default 10/N^2, fails a
+    tight 0.01/N^2."""
     pr = paper_problem()
     res = simulate_mpcc(pr.model, pr.torque, steps=16)
     assert res.success, res.message
     r = abs(res.energy["balance_residual"])
     assert 1e-3 / 16**2 < r < 10 / 16**2
-    tight = simulate_mpcc(pr.model, pr.torque, steps=16, options=TimeSteppingOptions(energy_tol_n2=0.01))
+    tight = simulate_mpcc(pr.model, pr.torque, steps=16,
+                          options=TimeSteppingOptions(energy_tol_n2=0.01))
     _failure_is_reported(tight, Status.ENERGY_IMBALANCE)
     assert "energy_tol_n2" in tight.message
 
@@ -250,7 +270,8 @@ def test_energy_gate_on_a_constructed_result():
     m = Model(paper_problem().robot)
     for residual, ok in ((1e-3, False), (1e-8, True)):
         res = new_result(m, "torque", Status.SUCCESS)
-        # input work 1 J, potential change 0, dissipation 1 - residual: the balance misses `residual`
+        # input work 1 J, potential change 0, dissipation 1 - residual: the balance misses
+        # `residual`
         set_cycle_metrics(res, m.robot, -0.05, np.array([0.5, 0.5]), 1.0, 0.0, 1.0 - residual, 1.0)
         energy_gate(res, 1e-6, "tol")
         assert res.success == ok and (ok or res.status == Status.ENERGY_IMBALANCE)

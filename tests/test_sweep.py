@@ -1,5 +1,5 @@
-"""Sweeps: rows equal to point-by-point runs, failures as data, resume after a kill, the command line, Dask
-(grid parsing: test_sweep_grid.py)."""
+"""Sweeps: rows equal to point-by-point runs, failures as data, resume after a kill, the command
+line, Dask (grid parsing: test_sweep_grid.py)."""
 import csv
 import json
 import math
@@ -16,8 +16,8 @@ import pytest
 
 from ocp_crawl.cli.app import main
 from ocp_crawl.problem import ProblemError, load_problem, run_problem
-from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult, grid_from_specs,
-                             run_sweep)
+from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SweepError, SweepResult,
+                             grid_from_specs, run_sweep)
 from ocp_crawl.sweep.journal import SweepStore
 
 REPO = Path(__file__).resolve().parent.parent
@@ -59,13 +59,15 @@ def test_sweep_equals_point_by_point_runs(tmp_path):
     assert res.computed == 6 and len(res.rows) == 6
     for i, psi in enumerate(grid["gait.psi_deg"]):
         for j, gamma in enumerate(grid["gait.gamma_deg"]):
-            ref = run_problem(load_problem(PAPER, [f"gait.psi_deg={psi}", f"gait.gamma_deg={gamma}"]))
+            ref = run_problem(load_problem(PAPER, [f"gait.psi_deg={psi}",
+                                                   f"gait.gamma_deg={gamma}"]))
             row = res.rows[2 * i + j]  # grid order: the last key varies fastest
             assert (row["gait.psi_deg"], row["gait.gamma_deg"]) == (psi, gamma)
             assert row["status"] == ref.status_name and row["message"] == ref.message
             for col in NUMBERS:
                 assert same_number(row[col], float(getattr(ref, col))), col
-            assert same_number(float(res.array("S")[i, j]), float(ref.S) if ref.success else math.nan)
+            assert same_number(float(res.array("S")[i, j]),
+                               float(ref.S) if ref.success else math.nan)
     assert res.status_array().shape == (3, 2)
     assert res.array("gait.gamma_deg")[:, 1].tolist() == [100.0] * 3
     # the file holds the same rows, in grid order, with the documented columns
@@ -96,10 +98,12 @@ def reference_status(overrides):
 
 
 def test_failures_are_recorded_with_status_and_message(tmp_path):
-    # physical gravity: psi 45 with gamma 30 starts with foot 1 off the ground (bad input), psi 0 with
-    # gamma 60 folds, psi 45 with A 60 loses a contact
-    grid = {"gait.psi_deg": [0.0, 45.0], "gait.gamma_deg": [30.0, 60.0, 90.0], "gait.A_deg": [30.0, 60.0]}
-    res = run_sweep(PAPER, grid, out_dir=tmp_path / "f", jobs=2, extra_columns=("W_plus_joint", "cycles"))
+    # physical gravity: psi 45 with gamma 30 starts with foot 1 off the ground (bad input), psi 0
+    # with gamma 60 folds, psi 45 with A 60 loses a contact
+    grid = {"gait.psi_deg": [0.0, 45.0], "gait.gamma_deg": [30.0, 60.0, 90.0],
+            "gait.A_deg": [30.0, 60.0]}
+    res = run_sweep(PAPER, grid, out_dir=tmp_path / "f", jobs=2,
+                    extra_columns=("W_plus_joint", "cycles"))
     status = res.status_array()
     assert status.shape == (2, 3, 2)
     assert status[0, 1, 0] == "fold"
@@ -183,9 +187,11 @@ def test_resume_from_a_journal_with_a_torn_last_line(tmp_path):
     grid = {"gait.psi_deg": [0.0, 45.0, 90.0], "gait.A_deg": [30.0, 60.0]}
     ref = run_sweep(PAPER, grid, out_dir=out)
     expected = (out / RESULTS_FILE).read_text()
-    # the state of a run killed while writing its fourth row: a journal of three rows and a torn line
+    # the state of a run killed while writing its fourth row: a journal of three rows and a torn
+    # line
     lines = expected.splitlines(keepends=True)
-    journal = ["index," + lines[0]] + [f"{i}," + lines[1 + i] for i in (4, 0, 2)] + ["1,0.0,60.0,,,,fo"]
+    journal = (["index," + lines[0]] + [f"{i}," + lines[1 + i] for i in (4, 0, 2)]
+               + ["1,0.0,60.0,,,,fo"])
     (out / JOURNAL_FILE).write_text("".join(journal))
     (out / RESULTS_FILE).unlink()
     with pytest.raises(SweepError, match="incomplete .3 of 6 points"):
@@ -209,24 +215,26 @@ def _journal_rows(journal: Path) -> int:
 
 @pytest.mark.slow
 def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
-    """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last, then
-    --resume to the end: the same file as an uninterrupted run, and nothing left behind."""
+    """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last,
+    then --resume to the end: the same file as an uninterrupted run, and nothing left behind."""
     rng = random.Random(20240611)
     specs = ["gait.psi_deg=0:180:40", "gait.gamma_deg=80:100:4"]
     n_points = 160
-    # ~40 ms per point (500 continuation steps per cycle), 160 points sent in chunks of ~50 ms of work: four
-    # kills after at most a few rows each can never reach the end of the sweep (the first kill may come after
-    # ~1 s of rows)
+    # ~40 ms per point (500 continuation steps per cycle), 160 points sent in chunks of ~50 ms of
+    # work: four kills after at most a few rows each can never reach the end of the sweep (the first
+    # kill may come after ~1 s of rows)
     args = ["--set", "simulation.max_step=0.002"]
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), *[a for s in specs for a in ("--grid", s)],
+    cmd = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER),
+           *[a for s in specs for a in ("--grid", s)],
            *args, "--jobs", "2", "--out", str(out), "--no-progress"]
     journal = out / JOURNAL_FILE
     n_done = 0
     # the first kill while the process starts (before or while it opens the sweep's files), then
     # kills after a random number of further rows plus a random delay (between and during writes)
     for kill in range(4):
-        proc = subprocess.Popen(cmd + (["--resume"] if kill else []), cwd=tmp_path, start_new_session=True,
+        proc = subprocess.Popen(cmd + (["--resume"] if kill else []), cwd=tmp_path,
+                                start_new_session=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
             if kill == 0:
@@ -234,16 +242,19 @@ def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
             else:
                 target = n_done + rng.randint(1, 5)
                 deadline = time.monotonic() + 60
-                while time.monotonic() < deadline and proc.poll() is None and _journal_rows(journal) < target:
+                while (time.monotonic() < deadline and proc.poll() is None
+                       and _journal_rows(journal) < target):
                     time.sleep(0.002)
                 time.sleep(rng.uniform(0.0, 0.05))
         finally:
             os.killpg(proc.pid, signal.SIGKILL)
             _, err = proc.communicate()
-        assert proc.returncode == -signal.SIGKILL, f"run {kill} ended before it could be killed: {err}"
+        assert proc.returncode == -signal.SIGKILL, \
+            f"run {kill} ended before it could be killed: {err}"
         assert not (out / RESULTS_FILE).exists()
         if (out / SETTINGS_FILE).exists():
-            finished = SweepResult.read(out, partial=True)  # a torn journal line is not a finished point
+            # a torn journal line is not a finished point
+            finished = SweepResult.read(out, partial=True)
             done_now = int((finished.status_array() != "missing").sum())
             assert n_done <= done_now < n_points
             n_done = done_now
@@ -260,8 +271,8 @@ def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
     assert_same_rows(SweepResult.read(out).rows, ref.rows)
     assert (out / RESULTS_FILE).read_bytes() == (tmp_path / "ref" / RESULTS_FILE).read_bytes()
     assert not journal.exists()
-    assert sorted(p.name for p in out.iterdir()) == sorted([".sweep.lock", SETTINGS_FILE, RESULTS_FILE,
-                                                            "summary.json"])
+    assert sorted(p.name for p in out.iterdir()) == sorted([".sweep.lock", SETTINGS_FILE,
+                                                            RESULTS_FILE, "summary.json"])
 
 
 def test_resume_after_a_kill_while_the_journal_header_was_written(tmp_path, monkeypatch):
@@ -327,36 +338,41 @@ def test_files_without_units_in_the_header_are_read_and_other_units_refused(tmp_
 # --------------------------------------------------------------------------------------------
 def test_cli_sweep_json_and_summary(tmp_path, capsys):
     out = tmp_path / "c"
-    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15", "--jobs", "1",
-                 "--out", str(out), "--json"])
+    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15",
+                 "--jobs", "1", "--out", str(out), "--json"])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     data = json.loads(captured.out)
-    assert data["points"] == 2 and data["successes"] == 1 and data["failures"] == 1  # A 60 loses a contact
-    assert data["out_dir"] == str(out) and data["elapsed_s"] > 0 and data["best"]["point"] == {"gait.A_deg": 30.0}
-    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15", "--out", str(out),
-                 "--resume"])
+    # A 60 loses a contact
+    assert data["points"] == 2 and data["successes"] == 1 and data["failures"] == 1
+    assert (data["out_dir"] == str(out) and data["elapsed_s"] > 0
+            and data["best"]["point"] == {"gait.A_deg": 30.0})
+    code = main(["sweep", str(PAPER), "--grid", "gait.A_deg=30,60", "--set", "robot.k=0.15",
+                 "--out", str(out), "--resume"])
     captured = capsys.readouterr()
     assert code == 0
     assert "2 points" in captured.out and "success 1" in captured.out and "best S" in captured.out
 
 
 def test_cli_sweep_echoes_the_resolved_values(tmp_path, capsys):
-    """Every value of every axis is echoed, in the text summary and in --json (the step form included)."""
-    argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=30:60:step=15", "--grid", "robot.k=0.1,0.2", "--jobs", "1"]
+    """Every value of every axis is echoed, in the text summary and in --json (the step form
+    included)."""
+    argv = ["sweep", str(PAPER), "--grid", "gait.psi_deg=30:60:step=15", "--grid",
+            "robot.k=0.1,0.2", "--jobs", "1"]
     assert main(argv + ["--out", str(tmp_path / "a"), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["grid"] == {"gait.psi_deg": [30.0, 45.0, 60.0], "robot.k": [0.1, 0.2]}
-    assert data["units"] == {"gait.psi_deg": "deg", "robot.k": "N m/rad", "S": "m", "W_plus": "J", "CoT_plus": "-",
-                             "elapsed_s": "s"}
+    assert data["units"] == {"gait.psi_deg": "deg", "robot.k": "N m/rad", "S": "m", "W_plus": "J",
+                             "CoT_plus": "-", "elapsed_s": "s"}
     assert main(argv + ["--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
     assert "  gait.psi_deg = 30, 45, 60 (3 values, step 15)" in out.splitlines()
     assert "  robot.k = 0.1, 0.2 (2 values)" in out.splitlines()
     # a long axis: its ends, its length and its step
-    assert main(["sweep", str(PAPER), "--grid", "gait.psi_deg=0:44:step=2", "--set", "robot.k=0.5", "--jobs", "1",
-                 "--out", str(tmp_path / "c")]) == 0
-    assert "  gait.psi_deg = 0, 2, 4, 6, ..., 42, 44 (23 values, step 2)" in capsys.readouterr().out.splitlines()
+    assert main(["sweep", str(PAPER), "--grid", "gait.psi_deg=0:44:step=2", "--set", "robot.k=0.5",
+                 "--jobs", "1", "--out", str(tmp_path / "c")]) == 0
+    assert ("  gait.psi_deg = 0, 2, 4, 6, ..., 42, 44 (23 values, "
+            "step 2)" in capsys.readouterr().out.splitlines())
 
 
 def test_cli_sweep_shows_decimal_values_and_counts_in_words(tmp_path, capsys):
@@ -388,8 +404,8 @@ def test_cli_sweep_shows_decimal_values_and_counts_in_words(tmp_path, capsys):
 
 
 def test_sweep_over_one_foot_expands_mu(tmp_path, capsys):
-    """A file giving mu swept over robot.mu1 (or mu2): the other foot keeps mu.  Each row equals the run of
-    the file with both feet set explicitly, through the command line as through run_sweep."""
+    """A file giving mu swept over robot.mu1 (or mu2): the other foot keeps mu.  Each row equals the
+    run of the file with both feet set explicitly, through the command line as through run_sweep."""
     values = [0.3, 0.35]
     for key, other in (("mu1", "mu2"), ("mu2", "mu1")):
         res = run_sweep(load_problem(PAPER), {f"robot.{key}": values}, jobs=1)
@@ -397,12 +413,13 @@ def test_sweep_over_one_foot_expands_mu(tmp_path, capsys):
             ref = run_problem(load_problem(PAPER, [f"robot.{key}={v}", f"robot.{other}=0.389"]))
             assert ref.success and row["status"] == "success"
             assert row["S"] == ref.S and row["W_plus"] == ref.W_plus
-        # the two feet are not the same: friction on one foot changes S differently than on the other
+        # the two feet are not the same: friction on one foot changes S differently than on the
+        # other
         assert res.array("S")[0] != run_problem(load_problem(PAPER, ["robot.mu=0.3"])).S
     for extra in ([], ["--set", "robot.mu2=0.389"]):
         out = tmp_path / f"cli{len(extra)}"
-        assert main(["sweep", str(PAPER), "--grid", "robot.mu1=0.3,0.35", *extra, "--jobs", "1", "--out", str(out),
-                     "--json"]) == 0
+        assert main(["sweep", str(PAPER), "--grid", "robot.mu1=0.3,0.35", *extra, "--jobs", "1",
+                     "--out", str(out), "--json"]) == 0
         data = json.loads(capsys.readouterr().out)
         assert data["successes"] == 2
         rows = SweepResult.read(out).rows
@@ -418,9 +435,11 @@ def test_to_pandas_keeps_rows_and_units(tmp_path):
     assert isinstance(df, pd.DataFrame) and list(df.columns) == list(res.columns) and len(df) == 4
     for i, row in enumerate(res.rows):
         for col in res.columns:
-            assert df[col].iloc[i] == row[col] or (isinstance(row[col], float) and math.isnan(row[col]))
+            assert df[col].iloc[i] == row[col] or (isinstance(row[col], float)
+                                                   and math.isnan(row[col]))
     # units from the schema (grid keys) and SI units of the results, as results.csv holds them
-    assert df.attrs["units"] == {"gait.psi_deg": "deg", "robot.mu": "-", "S": "m", "W_plus": "J", "CoT_plus": "-"}
+    assert df.attrs["units"] == {"gait.psi_deg": "deg", "robot.mu": "-", "S": "m", "W_plus": "J",
+                                 "CoT_plus": "-"}
     assert df.attrs["grid"] == {"gait.psi_deg": [30.0, 45.0], "robot.mu": [0.3, 0.389]}
     # the same frame from the directory, and S in mm by the unit it carries
     again = SweepResult.read(tmp_path / "p").to_pandas()
@@ -457,7 +476,8 @@ def test_cli_refuses_existing_output(tmp_path, capsys):
     before = (tmp_path / RESULTS_FILE).read_bytes()
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert "holds a sweep" in err and "--resume" in err and "--force" in err and "Traceback" not in err
+    assert ("holds a sweep" in err and "--resume" in err and "--force" in err
+            and "Traceback" not in err)
     assert (tmp_path / RESULTS_FILE).read_bytes() == before
     assert main(argv + ["--force"]) == 0
 
@@ -467,7 +487,9 @@ def test_cli_refuses_existing_output(tmp_path, capsys):
 # --------------------------------------------------------------------------------------------
 @pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_rows(tmp_path):
-    distributed = pytest.importorskip("distributed", reason="the [cluster] extra (dask.distributed) is not installed")
+    distributed = pytest.importorskip("distributed",
+                                      reason="the [cluster] extra (dask.distributed) "
+                                             "is not installed")
     grid = {"gait.psi_deg": [0.0, 45.0, 90.0], "gait.A_deg": [30.0, 60.0]}
     pool = run_sweep(PAPER, grid, out_dir=tmp_path / "pool", jobs=2)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -475,17 +497,19 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
         res = run_sweep(PAPER, grid, out_dir=tmp_path / "dask", scheduler=cluster.scheduler_address)
     assert res.computed == 6
     assert_same_rows(res.rows, pool.rows)
-    assert (tmp_path / "dask" / RESULTS_FILE).read_text() == (tmp_path / "pool" / RESULTS_FILE).read_text()
+    assert ((tmp_path / "dask" / RESULTS_FILE).read_text()
+            == (tmp_path / "pool" / RESULTS_FILE).read_text())
 
 
 @pytest.mark.slow
 def test_cli_sweep_over_the_solver(tmp_path, capsys):
-    """``--grid simulation.solver=event,mpcc``: both simulators in one sweep, S agreeing to n_events (2 h)^2
-    relative (h = 1/steps: each stick-slip transition is taken up to two MPCC steps late, the slip over
-    that window being quadratic in its length; 4 events per cycle, 200 steps: 4e-4)."""
+    """``--grid simulation.solver=event,mpcc``: both simulators in one sweep, S agreeing to n_events
+    (2 h)^2 relative (h = 1/steps: each stick-slip transition is taken up to two MPCC steps late,
+    the slip over that window being quadratic in its length; 4 events per cycle, 200 steps:
+    4e-4)."""
     out = tmp_path / "solvers"
-    code = main(["sweep", str(PAPER), "--grid", "simulation.solver=event,mpcc", "--grid", "gait.psi_deg=30,45",
-                 "--out", str(out), "--jobs", "1", "--no-progress"])
+    code = main(["sweep", str(PAPER), "--grid", "simulation.solver=event,mpcc", "--grid",
+                 "gait.psi_deg=30,45", "--out", str(out), "--jobs", "1", "--no-progress"])
     capsys.readouterr()
     assert code == 0
     res = SweepResult.read(out)
@@ -515,8 +539,8 @@ def test_an_io_error_of_a_sweep_names_the_file(tmp_path):
     path = os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])
     env = dict(os.environ, PYTHONPATH=path)
     env.pop("OCP_CRAWL_TRACEBACK", None)
-    argv = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), "--grid", "gait.psi_deg=0:90:40",
-            "--out", str(out), "--no-progress", "--jobs", "1"]
+    argv = [sys.executable, "-m", "ocp_crawl", "sweep", str(PAPER), "--grid",
+            "gait.psi_deg=0:90:40", "--out", str(out), "--no-progress", "--jobs", "1"]
     proc = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=tmp_path,
                           preexec_fn=limit, timeout=300)
     assert proc.returncode == 1

@@ -1,5 +1,5 @@
-"""Sweep grids: ``--grid`` specifications (the count and step forms) parsed or rejected, grids of several keys,
-the bound on a grid's size (the sweeps themselves: test_sweep.py)."""
+"""Sweep grids: ``--grid`` specifications (the count and step forms) parsed or rejected, grids of
+several keys, the bound on a grid's size (the sweeps themselves: test_sweep.py)."""
 import math
 
 import numpy as np
@@ -47,7 +47,8 @@ def test_parse_grid(spec, key, values):
     ("gaitt.psi_deg=0:180:3", "unknown section \\[gaitt\\]; did you mean gait"),
     ("gait.psi_deg=", "no values"),
     ("gait.psi_deg=0:180", "START:STOP:step=STEP, got 2 fields"),
-    ("gait.psi_deg=0:180:step=7", "STEP = 7 does not divide STOP - START = 180; the last value would be 175"),
+    ("gait.psi_deg=0:180:step=7",
+     "STEP = 7 does not divide STOP - START = 180; the last value would be 175"),
     ("gait.psi_deg=0:180:step=-5", "goes away from STOP; use step=5"),
     ("gait.psi_deg=0:180:step=0", "finite non-zero"),
     ("gait.psi_deg=0:180:step=x", "STEP must be a number"),
@@ -75,11 +76,12 @@ def test_parse_grid_rejects(spec, match):
     assert "--grid" in str(info.value)
 
 
-@pytest.mark.parametrize("start, stop, step", [(0, 180, 5), (0.3, 0.5, 0.05), (-45, 45, 7.5), (1, 2, 0.1),
+@pytest.mark.parametrize("start, stop, step",
+                         [(0, 180, 5), (0.3, 0.5, 0.05), (-45, 45, 7.5), (1, 2, 0.1),
                                                 (180, 0, -10)])
 def test_step_form_is_the_arange_of_numpy_with_stop_included(start, stop, step):
-    """START:STOP:step=STEP gives start, start + step, ... up to STOP, as numpy.arange would with the
-    end included (the count form START:STOP:NUM keeps meaning NUM values)."""
+    """START:STOP:step=STEP gives start, start + step, ... up to STOP, as numpy.arange would with
+    the end included (the count form START:STOP:NUM keeps meaning NUM values)."""
     _, values = parse_grid(f"gait.psi_deg={start}:{stop}:step={step}")
     ref = np.arange(start, stop + step / 2, step)
     assert values.shape == ref.shape
@@ -103,21 +105,26 @@ def test_grids_of_several_keys():
     assert list(normalize_grid({"robot.k": 0.1})["robot.k"]) == [0.1]
 
 
-# ------------------------------------------------------------------------------------------ grid size
+# ------------------------------------------------------------------------------------------ grid
+# size
 def test_grid_size_is_bounded():
-    """A grid of MAX_GRID_POINTS points is fine; one more, in one axis or in the product, is bad input naming the
-    keys and the limit (checked through the API too, not only on the command line)."""
+    """A grid of MAX_GRID_POINTS points is fine; one more, in one axis or in the product, is bad
+    input naming the keys and the limit (checked through the API too, not only on the command
+    line)."""
     from ocp_crawl.sweep import normalize_grid, parse_grid
     from ocp_crawl.sweep.grid import MAX_GRID_POINTS
 
     name, values = parse_grid(f"gait.psi_deg=-180:180:{MAX_GRID_POINTS}")
     assert len(values) == MAX_GRID_POINTS
-    with pytest.raises(ProblemError, match=f"NUM = {MAX_GRID_POINTS + 1} is more than the {MAX_GRID_POINTS} points"):
+    with pytest.raises(ProblemError,
+                       match=f"NUM = {MAX_GRID_POINTS + 1} is more than the {MAX_GRID_POINTS} "
+                             "points"):
         parse_grid(f"gait.psi_deg=-180:180:{MAX_GRID_POINTS + 1}")
     side = math.isqrt(MAX_GRID_POINTS) + 1
     grid = {"gait.psi_deg": np.linspace(0, 180, side), "gait.gamma_deg": np.linspace(60, 120, side)}
-    with pytest.raises(ProblemError, match=rf"the grid has {side * side} points, {side} \(gait.psi_deg\) x {side} "
-                                           rf"\(gait.gamma_deg\): more than the {MAX_GRID_POINTS}"):
+    with pytest.raises(ProblemError,
+                       match=rf"the grid has {side * side} points, {side} \(gait.psi_deg\) "
+                             rf"x {side} \(gait.gamma_deg\): more than the {MAX_GRID_POINTS}"):
         normalize_grid(grid)
     with pytest.raises(ProblemError, match="START and STOP must be finite, got STOP = inf"):
         parse_grid("gait.psi_deg=0:inf:3")

@@ -21,7 +21,8 @@ def _rows(res):
 
 @pytest.fixture
 def constructions(tmp_path, monkeypatch):
-    """Log the pid of every FastFunction built from now on (fresh builders: their per-process caches cleared)."""
+    """Log the pid of every FastFunction built from now on (fresh builders: their per-process caches
+    cleared)."""
     log = tmp_path / "built.log"
     init = compiled.FastFunction.__init__
 
@@ -52,10 +53,10 @@ def test_compiled_functions_are_built_once_per_process_not_per_point(constructio
     forked = executors.mp_context().get_start_method() == "fork"
     res = run_sweep(PAPER, GRID, jobs=2)
     parallel = constructions()
-    # forked workers inherit the parent's functions (it runs the first points); without fork (a thread of an
-    # earlier test still running) the parent runs no point but may build what its own checks of the problem
-    # use (at most once each), and the workers, which do not inherit the logging either, build their own
-    # (once each)
+    # forked workers inherit the parent's functions (it runs the first points); without fork (a
+    # thread of an earlier test still running) the parent runs no point but may build what its own
+    # checks of the problem use (at most once each), and the workers, which do not inherit the
+    # logging either, build their own (once each)
     parent = parallel[os.getpid()] - n_functions
     assert parent == n_functions if forked else 0 <= parent <= n_functions
     workers = {pid: n for pid, n in parallel.items() if pid != os.getpid()}
@@ -81,7 +82,8 @@ def test_points_go_to_the_workers_in_chunks_with_the_same_rows(monkeypatch):
 
 
 def test_chunk_size():
-    # ~3 ms points: 16 per chunk (50 ms), unless there would be fewer than CHUNKS_PER_WORKER chunks per worker
+    # ~3 ms points: 16 per chunk (50 ms), unless there would be fewer than CHUNKS_PER_WORKER chunks
+    # per worker
     assert executors.chunk_size(1147, 2, 0.003) == 16
     assert executors.chunk_size(40, 2, 0.003) == 40 // (2 * executors.CHUNKS_PER_WORKER)
     # a point longer than a chunk's time: one per chunk
@@ -99,12 +101,14 @@ def test_journal_is_fsynced_about_once_a_second_not_per_row(tmp_path, monkeypatc
 
     monkeypatch.setattr(SweepStore, "_sync", counted)
     res = run_sweep(PAPER, GRID, out_dir=tmp_path / "a", jobs=1)
-    # the header, then at most one per FSYNC_SECONDS while the 8 rows come (none at the end: results.csv is written)
+    # the header, then at most one per FSYNC_SECONDS while the 8 rows come (none at the end:
+    # results.csv is written)
     assert 1 <= len(syncs) <= 2 + res.elapsed / journal.FSYNC_SECONDS
     syncs.clear()
     monkeypatch.setattr(journal, "FSYNC_SECONDS", 0.0)
     run_sweep(PAPER, GRID, out_dir=tmp_path / "b", jobs=1)
-    assert len(syncs) == 1 + len(GRID["gait.psi_deg"])  # the counter sees every fsync: header and each row
+    # the counter sees every fsync: header and each row
+    assert len(syncs) == 1 + len(GRID["gait.psi_deg"])
 
 
 def test_an_interrupted_sweep_syncs_its_journal_on_the_way_out(tmp_path, monkeypatch):
@@ -122,7 +126,8 @@ def test_an_interrupted_sweep_syncs_its_journal_on_the_way_out(tmp_path, monkeyp
 
     monkeypatch.setattr(SweepStore, "_sync", counted)
     monkeypatch.setattr(SweepStore, "append", interrupted_at_the_fourth)
-    monkeypatch.setattr(journal, "FSYNC_SECONDS", 1e9)  # no fsync while the rows come: only the one at the end
+    # no fsync while the rows come: only the one at the end
+    monkeypatch.setattr(journal, "FSYNC_SECONDS", 1e9)
     with pytest.raises(KeyboardInterrupt):
         run_sweep(PAPER, GRID, out_dir=tmp_path / "s", jobs=1)
     assert synced[-1] == 4  # the header and three rows are on disk

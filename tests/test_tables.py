@@ -1,5 +1,5 @@
-"""The one CSV convention (ocp_crawl/io/tables.py): units in the header, SI conversion, errors naming
-file and line, full-precision round trip."""
+"""The one CSV convention (ocp_crawl/io/tables.py): units in the header, SI conversion, errors
+naming file and line, full-precision round trip."""
 import math
 
 import numpy as np
@@ -15,7 +15,9 @@ def _write(tmp_path, text, name="t.csv"):
 
 
 def test_units_convert_to_si_and_comments_are_skipped(tmp_path):
-    p = _write(tmp_path, "# measured 2026-11-23\nphase [-],phi1 [deg],tau1 [N mm]\n0,90,1000\n\n0.5,180,-250\n")
+    p = _write(tmp_path,
+               "# measured 2026-11-23\nphase [-],phi1 [deg],tau1 [N "
+               "mm]\n0,90,1000\n\n0.5,180,-250\n")
     t = read_table(p, {"phase": "dimensionless", "phi1": "angle", "tau1": "torque"})
     np.testing.assert_allclose(t["phi1"], [math.pi / 2, math.pi])
     np.testing.assert_allclose(t["tau1"], [1.0, -0.25])
@@ -26,7 +28,8 @@ def test_units_convert_to_si_and_comments_are_skipped(tmp_path):
 def test_round_trip_keeps_every_bit(tmp_path):
     rng = np.random.default_rng(3)
     x, y = rng.random(7), rng.standard_normal(7) * 1e-3
-    p = write_table(tmp_path / "w.csv", [("phase", "-", x), ("tau1", "N m", y)], comments=["from a test"])
+    p = write_table(tmp_path / "w.csv", [("phase", "-", x), ("tau1", "N m", y)],
+                    comments=["from a test"])
     t = read_table(p, {"phase": "dimensionless", "tau1": "torque"})
     assert np.array_equal(t["phase"], x) and np.array_equal(t["tau1"], y)
 

@@ -1,5 +1,6 @@
-"""The formatting layer (ocp_crawl.io.units): text numbers read back to the SI values they stand for, and
-every command's text output uses it (S in mm, W+ in mJ, CoT+ to 3 significant digits, times in s)."""
+"""The formatting layer (ocp_crawl.io.units): text numbers read back to the SI values they stand
+for, and every command's text output uses it (S in mm, W+ in mJ, CoT+ to 3 significant digits, times
+in s)."""
 import json
 import math
 import re
@@ -64,7 +65,8 @@ def test_seconds_and_ratio():
 
 
 def test_markdown_table_with_bars_keeps_its_shape():
-    text = table(["stiffness", "median |rel. diff.|", "max |S(psi) + S(-psi)|"], [["large", "|x|", "a|b"]])
+    text = table(["stiffness", "median |rel. diff.|", "max |S(psi) + S(-psi)|"],
+                 [["large", "|x|", "a|b"]])
     (header, rows), = markdown_table_shapes(text)
     assert header == 3 and rows == [3, 3]
     assert text.startswith("\n"), "a table needs a blank line before it"
@@ -81,4 +83,5 @@ def test_simulate_text_agrees_with_its_json(capsys):
     cot = re.search(r"^CoT\+\s+(\S+)$", out, re.M).group(1)
     assert S == pytest.approx(1e3 * data["S"], abs=5e-4)
     assert W == pytest.approx(1e3 * data["W_plus"], abs=5e-4)
-    assert cot == units.cot(data["CoT_plus"]) and float(cot) == pytest.approx(data["CoT_plus"], rel=5e-3)
+    assert cot == units.cot(data["CoT_plus"]) and float(cot) == pytest.approx(data["CoT_plus"],
+                                                                              rel=5e-3)

@@ -26,8 +26,8 @@ def _cli(args, cache: Path, **env_extra) -> subprocess.CompletedProcess:
     env = dict(os.environ, OCP_CRAWL_CACHE=str(cache), **env_extra)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
     env.pop("OCP_CRAWL_NO_COMPILE", None)
-    return subprocess.run([sys.executable, "-m", "ocp_crawl", *args], capture_output=True, text=True, env=env,
-                          cwd=ROOT, timeout=300)
+    return subprocess.run([sys.executable, "-m", "ocp_crawl", *args], capture_output=True,
+                          text=True, env=env, cwd=ROOT, timeout=300)
 
 
 @pytest.mark.slow
@@ -37,16 +37,19 @@ def test_warmup_builds_every_function_once_and_simulations_compile_nothing_more(
     assert first.returncode == 0, first.stderr
     built = json.loads(first.stdout)
     assert built["cache"] == str(cache)
-    assert built["built"] == len(built["functions"]) >= 5 and built["cached"] == built["not compiled"] == 0
+    assert built["built"] == len(built["functions"]) >= 5 and built["cached"] == built["not "
+                                                                                       "compiled"] == 0
     libraries = {Path(f["library"]) for f in built["functions"]}
-    assert len(libraries) == len(built["functions"]) and all(lib.parent == cache for lib in libraries)
+    assert (len(libraries) == len(built["functions"])
+            and all(lib.parent == cache for lib in libraries))
     assert set(cache.glob("*.so")) == libraries
 
     again = json.loads(_cli(["warmup", "--json"], cache).stdout)
     assert again["cached"] == len(again["functions"]) and again["built"] == 0
     assert {Path(f["library"]) for f in again["functions"]} == libraries
 
-    # the torque drive (event stepper, sampled stability) and the angles drive after warm-up: no new library
+    # the torque drive (event stepper, sampled stability) and the angles drive after warm-up: no new
+    # library
     for extra in ([], ["--set", "gait.drive=angles"]):
         run = _cli(["simulate", "problems/paper_gait.toml", "--json", *extra], cache)
         assert run.returncode == 0, run.stderr
@@ -92,7 +95,8 @@ def _bad_caches(tmp_path: Path) -> dict[str, tuple[Path, str]]:
     readonly.mkdir(mode=0o555)
     return {"regular file": (afile, "not a directory (it is a regular file)"),
             "device": (Path(os.devnull), "not a directory (it is a character device)"),
-            "under a file": (afile / "sub", f"not a directory ({afile} in its path is a regular file)"),
+            "under a file": (afile / "sub",
+                             f"not a directory ({afile} in its path is a regular file)"),
             "name too long": (tmp_path / ("a" * 300), "name too long"),
             "read-only directory": (readonly, "not writable"),
             "under a read-only directory": (readonly / "sub", "not writable")}
@@ -110,11 +114,12 @@ def _deny_writes(monkeypatch, created: Path | None) -> None:
     monkeypatch.setattr(Path, "mkdir", denied)
 
 
-@pytest.mark.parametrize("case", ["regular file", "device", "under a file", "name too long", "read-only directory",
-                                  "under a read-only directory"])
+@pytest.mark.parametrize("case",
+                         ["regular file", "device", "under a file", "name too long",
+                          "read-only directory", "under a read-only directory"])
 def test_warmup_refuses_a_cache_that_is_not_a_writable_directory(tmp_path, monkeypatch, case):
-    """Checked before anything is built: the message names OCP_CRAWL_CACHE, the path and the real reason (not the
-    "no working C compiler" of a build that failed in the unusable directory)."""
+    """Checked before anything is built: the message names OCP_CRAWL_CACHE, the path and the real
+    reason (not the "no working C compiler" of a build that failed in the unusable directory)."""
     cache, reason = _bad_caches(tmp_path)[case]
     if "read-only" in case and os.access(cache.parent if "under" in case else cache, os.W_OK):
         _deny_writes(monkeypatch, cache if "under" in case else None)  # root writes anywhere
@@ -126,7 +131,8 @@ def test_warmup_refuses_a_cache_that_is_not_a_writable_directory(tmp_path, monke
     with pytest.raises(getattr(compiled, "CacheError", ())) as info:
         warmup_module.warmup()
     message = str(info.value)
-    assert message.startswith(f"OCP_CRAWL_CACHE={cache}: ") and reason in message and "\n" not in message
+    assert (message.startswith(f"OCP_CRAWL_CACHE={cache}: ") and reason in message
+            and "\n" not in message)
     assert not built
 
 
@@ -141,7 +147,8 @@ def test_cli_warmup_with_an_unusable_cache_is_one_line_naming_the_variable(tmp_p
 def test_cli_warmup_with_an_unusable_cache_is_bad_input(tmp_path):
     (tmp_path / "afile").write_text("x")
     out = _cli(["warmup"], tmp_path / "afile")
-    assert out.returncode == 2 and out.stderr.startswith("ocp-crawl: error: OCP_CRAWL_CACHE="), out.stderr
+    assert out.returncode == 2 and out.stderr.startswith("ocp-crawl: error: "
+                                                         "OCP_CRAWL_CACHE="), out.stderr
 
 
 def _decorators(node: ast.FunctionDef) -> set[str]:
@@ -154,7 +161,8 @@ def _decorators(node: ast.FunctionDef) -> set[str]:
 
 @pytest.mark.slow
 def test_every_fast_function_is_made_by_a_registered_builder():
-    """A FastFunction made outside a ``@compiled_function`` builder would be compiled on first use only."""
+    """A FastFunction made outside a ``@compiled_function`` builder would be compiled on first use
+    only."""
     unregistered, found = [], 0
     for path in PKG.rglob("*.py"):
         if path.name == "compiled.py" and path.parent.name == "model":
@@ -162,7 +170,8 @@ def test_every_fast_function_is_made_by_a_registered_builder():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 continue
-            makes = any(isinstance(c, ast.Call) and getattr(c.func, "id", getattr(c.func, "attr", None)) == "FastFunction"
+            makes = any(isinstance(c, ast.Call)
+                        and getattr(c.func, "id", getattr(c.func, "attr", None)) == "FastFunction"
                         for c in ast.walk(node))
             if makes:
                 found += 1
@@ -174,7 +183,8 @@ def test_every_fast_function_is_made_by_a_registered_builder():
 
 def _gcc_out_of_space(args, **kwargs):
     return subprocess.CompletedProcess(args, 1, "", "/usr/bin/ld: final link failed: No space "
-                                       "left on device\ncollect2: error: ld returned 1 exit status\n")
+                                       "left on device\ncollect2: error: "
+                                       "ld returned 1 exit status\n")
 
 
 def _no_space_for_the_directory(*args, **kwargs):

@@ -1,10 +1,12 @@
-"""The waveform families' baselines (ocp/family.py, ocp/search.py) against gaits simulated here directly.
+"""The waveform families' baselines (ocp/family.py, ocp/search.py) against gaits simulated here
+directly.
 
 The triangle waves of the independent grids are built here as piecewise-linear samples
 (:class:`~ocp_crawl.model.inputs.PeriodicLinear`), not with the family's pulses, and the speeds are
-written out here (v = direction * S / T, T = 4 max(A1, A2) / R for a triangle wave, 2 pi max(A1, A2) / R
-for a sine).  The asymmetric robot's dense grid runs by hand:
-``OCP_CRAWL_ASYM_GRID="7,7,5,12" python -m pytest -q -s tests/test_waveform_baselines.py -k asymmetric``.
+written out here (v = direction * S / T, T = 4 max(A1, A2) / R for a triangle wave, 2 pi max(A1, A2)
+/ R for a sine).  The asymmetric robot's dense grid runs by hand:
+``OCP_CRAWL_ASYM_GRID="7,7,5,12" python -m pytest -q -s tests/test_waveform_baselines.py -k
+asymmetric``.
 """
 import math
 import os
@@ -28,12 +30,14 @@ AUDIT_TRIANGLE_SPEED = 0.086293
 
 def settings(**changes) -> OCPSettings:
     """The envelope and bandwidth of problems/ocp_max_speed.toml."""
-    return OCPSettings(gamma_deg=GAMMA, A_max_deg=A_MAX, max_rate_deg_s=RATE, direction=DIRECTION, **changes)
+    return OCPSettings(gamma_deg=GAMMA, A_max_deg=A_MAX, max_rate_deg_s=RATE, direction=DIRECTION,
+                       **changes)
 
 
 def triangle(g1, g2, a1, a2, psi_deg, k) -> ReferenceTorque:
-    """Triangle waves built here: joint i at gamma_i - A_i at phase -s_i, gamma_i + A_i half a cycle later,
-    joint 1 leading by psi (s_1 = psi/720 cycles, s_2 = -psi/720), as piecewise-linear samples."""
+    """Triangle waves built here: joint i at gamma_i - A_i at phase -s_i, gamma_i + A_i half a cycle
+    later, joint 1 leading by psi (s_1 = psi/720 cycles, s_2 = -psi/720), as piecewise-linear
+    samples."""
     s = psi_deg / 720.0
     knots = np.unique(np.mod([-s, 0.5 - s, s, 0.5 + s], 1.0))
 
@@ -45,7 +49,8 @@ def triangle(g1, g2, a1, a2, psi_deg, k) -> ReferenceTorque:
 
 
 def speed(robot: Robot, torque, T: float) -> float:
-    """direction * S / T [m/s] of an admissible gait (friction margin >= the default friction_tol), else NaN."""
+    """direction * S / T [m/s] of an admissible gait (friction margin >= the default friction_tol),
+    else NaN."""
     r = simulate_torque(Model(robot, gravity="physical"), torque)
     if not r.success or result_margins(r, robot)[0] < OCPSettings().friction_tol:
         return math.nan
@@ -54,8 +59,8 @@ def speed(robot: Robot, torque, T: float) -> float:
 
 @pytest.mark.parametrize("shape", SHAPES)
 def test_members_use_the_whole_bandwidth_inside_the_envelope(shape):
-    """At its period, every member's fastest reference rate is R (finite differences of its angles) and its
-    angles stay within gamma +- A_max."""
+    """At its period, every member's fastest reference rate is R (finite differences of its angles)
+    and its angles stay within gamma +- A_max."""
     st = settings()
     rng = np.random.default_rng(1)
     lo, hi = np.array(shape_box(shape)).T
@@ -68,7 +73,8 @@ def test_members_use_the_whole_bandwidth_inside_the_envelope(shape):
         rate = np.max(np.abs(np.diff(phi, axis=1))) / (t[1] * p.period(st))
         assert rate == pytest.approx(RATE, rel=2e-3 if shape == "harmonic" else 1e-9)
         assert np.all(np.abs(phi - GAMMA) <= A_MAX * (1 + 1e-12))
-        assert np.allclose(WaveParams.from_box(st, p.to_box(st), shape).as_dict()["A1_deg"], p.A1_deg)
+        assert np.allclose(WaveParams.from_box(st, p.to_box(st), shape).as_dict()["A1_deg"],
+                           p.A1_deg)
 
 
 def test_triangle_member_is_the_triangle_wave():
@@ -78,16 +84,17 @@ def test_triangle_member_is_the_triangle_wave():
     ours = simulate_torque(Model(robot), p.torque(robot.k))
     here = simulate_torque(Model(robot), triangle(87.5, 92.0, 27.5, 20.0, 35.0, robot.k))
     assert ours.success and here.success
-    assert ours.S == pytest.approx(here.S, rel=1e-9) and ours.W_plus == pytest.approx(here.W_plus, rel=1e-9)
+    assert ours.S == pytest.approx(here.S, rel=1e-9) and ours.W_plus == pytest.approx(here.W_plus,
+                                                                                      rel=1e-9)
     assert p.period(settings()) == pytest.approx(4 * 27.5 / RATE, rel=1e-15)
 
 
 def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
-    """Triangle and linear pulses are linear between their kinks (cosine pulses and sines are not), and
-    their default runs, which take those pieces whole, give the S and W+ of runs in steps of 1/1024
-    cycle (what the input's Fourier content would ask for), in a fifth of the steps or fewer; so does a
-    triangle wave whose corners at phases 0 and 1, shifted by psi/2 and wrapped, differ by round-off
-    (psi = -140 deg), which must not leave a piece of round-off length."""
+    """Triangle and linear pulses are linear between their kinks (cosine pulses and sines are not),
+    and their default runs, which take those pieces whole, give the S and W+ of runs in steps of
+    1/1024 cycle (what the input's Fourier content would ask for), in a fifth of the steps or fewer;
+    so does a triangle wave whose corners at phases 0 and 1, shifted by psi/2 and wrapped, differ by
+    round-off (psi = -140 deg), which must not leave a piece of round-off length."""
     from ocp_crawl.model.pulse import Pulse
     from ocp_crawl.sim.event import HybridOptions
     from ocp_crawl.sim.event_kinks import linear_pieces
@@ -101,7 +108,8 @@ def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
               WaveParams(67.5, 67.5, 7.5, 7.5, -140.0, "triangle"),
               WaveParams(80.0, 95.0, 10.0, 20.0, 60.0, "pulse", 0.1, 0.3)):
         fine = HybridOptions(max_step=1 / 1024)
-        whole, capped = (simulate_torque(Model(robot), p.torque(robot.k), opt) for opt in (None, fine))
+        whole, capped = (simulate_torque(Model(robot), p.torque(robot.k),
+                                         opt) for opt in (None, fine))
         assert whole.success and capped.success
         assert 5 * whole.nsteps <= capped.nsteps, (whole.nsteps, capped.nsteps)
         assert whole.S == pytest.approx(capped.S, rel=1e-12, abs=1e-15)
@@ -110,14 +118,15 @@ def test_members_linear_between_kinks_are_simulated_in_whole_pieces():
 
 @pytest.mark.heavy
 def test_paper_robot_triangle_baseline_beats_an_independent_grid():
-    """max_speed on the paper robot: the triangle family's best is at least the best of a grid of triangle
-    waves built here, and within 0.1 % of the audit's 86.293 mm/s or above it."""
+    """max_speed on the paper robot: the triangle family's best is at least the best of a grid of
+    triangle waves built here, and within 0.1 % of the audit's 86.293 mm/s or above it."""
     robot = Robot.paper()
     st = settings(harmonic_psi=12, harmonic_A=4, baseline_samples=16, baseline_starts=2,
                   baseline_evaluations=250)
     choice = best_baselines(robot, "physical", st, shapes=("triangle",)).choices["triangle"]
     rows = [speed(robot, triangle(g, g, a, a, psi, robot.k), 4 * a / RATE)
-            for a in (25.0, 27.5, 30.0) for g in (GAMMA - (A_MAX - a), GAMMA) for psi in (6.0, 9.0, 12.0, 20.0)]
+            for a in (25.0, 27.5, 30.0) for g in (GAMMA - (A_MAX - a),
+                                                  GAMMA) for psi in (6.0, 9.0, 12.0, 20.0)]
     grid_best = np.nanmax(rows)
     assert choice.value >= grid_best * (1 - 1e-9), (choice.to_dict(), grid_best)
     assert choice.value >= AUDIT_TRIANGLE_SPEED * (1 - 1e-3)
@@ -133,9 +142,9 @@ def asym_grid_sizes() -> tuple[int, int, int, int]:
 
 @pytest.mark.slow
 def test_asymmetric_robot_sine_baseline_beats_an_independent_grid():
-    """mu1 = 0.30, mu2 = 0.45, max_speed: the harmonic family's best reaches 45.9 mm/s (a sine of the family
-    reaches 45.98) and beats a grid of sines with unequal centres simulated here (gamma1, gamma2, A, psi;
-    4 x 4 x 3 x 6 by default, OCP_CRAWL_ASYM_GRID by hand)."""
+    """mu1 = 0.30, mu2 = 0.45, max_speed: the harmonic family's best reaches 45.9 mm/s (a sine of
+    the family reaches 45.98) and beats a grid of sines with unequal centres simulated here (gamma1,
+    gamma2, A, psi; 4 x 4 x 3 x 6 by default, OCP_CRAWL_ASYM_GRID by hand)."""
     n1, n2, na, npsi = asym_grid_sizes()
     st = settings()
     choice = best_baselines(ASYM, "physical", st, shapes=("harmonic",)).choices["harmonic"]
@@ -144,7 +153,8 @@ def test_asymmetric_robot_sine_baseline_beats_an_independent_grid():
         for g1 in np.linspace(GAMMA - (A_MAX - a), GAMMA, n1):
             for g2 in np.linspace(GAMMA - (A_MAX - a) / 2, GAMMA + (A_MAX - a) / 2, n2):
                 for psi in np.linspace(40.0, 75.0, npsi):
-                    gait = Harmonic.from_degrees(psi_deg=psi, gamma1_deg=g1, gamma2_deg=g2, A1_deg=a, A2_deg=a)
+                    gait = Harmonic.from_degrees(psi_deg=psi, gamma1_deg=g1, gamma2_deg=g2,
+                                                 A1_deg=a, A2_deg=a)
                     rows.append(speed(ASYM, ReferenceTorque(gait, ASYM.k), 2 * math.pi * a / RATE))
     grid_best = np.nanmax(rows)
     print(f"asymmetric robot: {len(rows)} grid gaits, best {grid_best * 1e3:.3f} mm/s; baseline "
@@ -155,8 +165,9 @@ def test_asymmetric_robot_sine_baseline_beats_an_independent_grid():
 
 @pytest.mark.slow
 def test_asymmetric_robot_min_cot_finds_a_feasible_sine():
-    """min_cot at speed_min 40 mm/s on the asymmetric robot: a sine meets it (CoT+ 19.99 at 40.05 mm/s in the
-    audit); the baseline is feasible with CoT+ <= 20.0, confirmed by a fresh simulation."""
+    """min_cot at speed_min 40 mm/s on the asymmetric robot: a sine meets it (CoT+ 19.99 at 40.05
+    mm/s in the audit); the baseline is feasible with CoT+ <= 20.0, confirmed by a fresh
+    simulation."""
     st = settings(objective="min_cot", speed_min=0.040)
     choice = best_baselines(ASYM, "physical", st, shapes=("harmonic",)).choices["harmonic"]
     assert choice.feasible and choice.value <= 20.0, choice.to_dict()
@@ -167,10 +178,11 @@ def test_asymmetric_robot_min_cot_finds_a_feasible_sine():
 
 @pytest.mark.slow
 def test_every_family_is_searched_and_the_best_is_their_best():
-    """best_baselines with every family (small search): a choice per family, each confirmed by a fresh
-    simulation of its member, and ``best`` the fastest of them."""
+    """best_baselines with every family (small search): a choice per family, each confirmed by a
+    fresh simulation of its member, and ``best`` the fastest of them."""
     robot = Robot.paper()
-    st = settings(harmonic_psi=8, harmonic_A=2, baseline_samples=8, baseline_starts=1, baseline_evaluations=30)
+    st = settings(harmonic_psi=8, harmonic_A=2, baseline_samples=8, baseline_starts=1,
+                  baseline_evaluations=30)
     base = best_baselines(robot, "physical", st, jobs=1)
     assert list(base.choices) == list(SHAPES)
     for shape, c in base.choices.items():

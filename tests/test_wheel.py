@@ -3,10 +3,10 @@ environment, run the README's quick start (``ocp-crawl init``, ``ocp-crawl simul
 an example script).
 
 The wheel is built from a copy of the files a build reads (pyproject.toml, README.md, LICENSE,
-ocp_crawl/), so that nothing is written into the checkout, with pip's ordinary isolated build (as CI's
-``pip install -e .``).  The new environment gets its dependencies (numpy, scipy, casadi, matplotlib,
-tqdm) from the running one through a ``.pth`` file, which keeps the test fast; the ``ocp_crawl`` that
-runs is the installed wheel's, which the test asserts.
+ocp_crawl/), so that nothing is written into the checkout, with pip's ordinary isolated build (as
+CI's ``pip install -e .``).  The new environment gets its dependencies (numpy, scipy, casadi,
+matplotlib, tqdm) from the running one through a ``.pth`` file, which keeps the test fast; the
+``ocp_crawl`` that runs is the installed wheel's, which the test asserts.
 """
 import json
 import os
@@ -33,7 +33,8 @@ def _run(argv, cwd, env=None, check=True):
     proc = subprocess.run([str(a) for a in argv], cwd=cwd, env=env, capture_output=True, text=True,
                           timeout=TIMEOUT_S)
     if check:
-        assert proc.returncode == 0, (argv, proc.returncode, proc.stdout[-3000:], proc.stderr[-3000:])
+        assert proc.returncode == 0, (argv, proc.returncode, proc.stdout[-3000:],
+                                      proc.stderr[-3000:])
     return proc
 
 
@@ -45,11 +46,12 @@ def wheel(tmp_path_factory) -> Path:
     src.mkdir()
     for name in SOURCES:
         if (REPO / name).is_dir():
-            shutil.copytree(REPO / name, src / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+            shutil.copytree(REPO / name, src / name,
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         else:
             shutil.copy2(REPO / name, src / name)
-    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--disable-pip-version-check", "-w", root / "dist",
-          f"{src}{os.sep}"], cwd=root)
+    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--disable-pip-version-check", "-w",
+          root / "dist", f"{src}{os.sep}"], cwd=root)
     wheels = list((root / "dist").glob("ocp_crawl-*.whl"))
     assert len(wheels) == 1, wheels
     return wheels[0]
@@ -57,11 +59,13 @@ def wheel(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def venv(wheel, tmp_path_factory) -> Path:
-    """A fresh virtual environment with the wheel installed (dependencies borrowed through a .pth file)."""
+    """A fresh virtual environment with the wheel installed (dependencies borrowed through a .pth
+    file)."""
     env_dir = tmp_path_factory.mktemp("venv") / "venv"
     _run([sys.executable, "-m", "venv", env_dir], cwd=env_dir.parent)
     python = env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
-    _run([python, "-m", "pip", "install", "--no-deps", "--no-index", "--disable-pip-version-check", wheel],
+    _run([python, "-m", "pip", "install", "--no-deps", "--no-index", "--disable-pip-version-check",
+          wheel],
          cwd=env_dir.parent)
     site = Path(_run([python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                      cwd=env_dir.parent).stdout.strip())
@@ -86,13 +90,14 @@ def _bin(venv: Path, name: str) -> Path:
 def test_wheel_holds_the_data_files(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     shipped = {f"ocp_crawl/data/{folder}/{n}" for folder in SHIPPED_FOLDERS for n in shipped_files(folder)}
-    paper = {f"ocp_crawl/data/paper/{p.name}" for p in (REPO / "ocp_crawl" / "data" / "paper").iterdir()
-             if p.is_file()}
+    paper = {f"ocp_crawl/data/paper/{p.name}"
+             for p in (REPO / "ocp_crawl" / "data" / "paper").iterdir() if p.is_file()}
     assert shipped and paper
     assert shipped <= names, shipped - names
     assert paper <= names, paper - names
     assert "ocp_crawl/py.typed" in names
-    licenses = [n for n in names if re.fullmatch(r"ocp_crawl-[^/]+\.dist-info/(licenses/)?LICENSE", n)]
+    licenses = [n for n in names
+                if re.fullmatch(r"ocp_crawl-[^/]+\.dist-info/(licenses/)?LICENSE", n)]
     assert licenses, sorted(n for n in names if "dist-info" in n)
     with zipfile.ZipFile(wheel) as z:
         assert z.read(licenses[0]) == (REPO / "LICENSE").read_bytes()
@@ -107,10 +112,12 @@ def test_quick_start_from_a_wheel_install(venv, tmp_path):
     env = _clean_env()
     work = tmp_path / "new_user"
     work.mkdir()
-    where = _run([_bin(venv, "python"), "-c", "import ocp_crawl; print(ocp_crawl.__file__)"], cwd=work, env=env)
+    where = _run([_bin(venv, "python"), "-c", "import ocp_crawl; print(ocp_crawl.__file__)"],
+                 cwd=work, env=env)
     assert Path(where.stdout.strip()).resolve().is_relative_to(venv.resolve()), where.stdout
     # the paper's data are found in the installed package
-    _run([_bin(venv, "python"), "-c", "from ocp_crawl.io.paper_data import paper_data_dir, read_paper_csv; "
+    _run([_bin(venv, "python"), "-c",
+          "from ocp_crawl.io.paper_data import paper_data_dir, read_paper_csv; "
           "assert paper_data_dir().is_relative_to(__import__('sys').prefix); "
           "assert len(read_paper_csv('fig_cot_vs_amplitude.csv')) > 0"], cwd=work, env=env)
 
@@ -122,7 +129,8 @@ def test_quick_start_from_a_wheel_install(venv, tmp_path):
     again = _run([_bin(venv, "ocp-crawl"), "init"], cwd=work, env=env, check=False)
     assert again.returncode == 2 and "--force" in again.stderr, again
 
-    sim = _run([_bin(venv, "ocp-crawl"), "simulate", "problems/paper_gait.toml", "--json"], cwd=work, env=env)
+    sim = _run([_bin(venv, "ocp-crawl"), "simulate", "problems/paper_gait.toml", "--json"],
+               cwd=work, env=env)
     report = json.loads(sim.stdout)
     assert report["success"] and report["problem_file"] == "problems/paper_gait.toml"
     # the installed code computes what the checkout computes
@@ -132,14 +140,16 @@ def test_quick_start_from_a_wheel_install(venv, tmp_path):
 
     fresh = tmp_path / "readme"  # the README's quick start, as written, in an empty directory
     fresh.mkdir()
-    path = dict(env, PATH=f"{_bin(venv, '')}{os.pathsep}{env.get('PATH', '')}")  # the venv's ocp-crawl and python
+    # the venv's ocp-crawl and python
+    path = dict(env, PATH=f"{_bin(venv, '')}{os.pathsep}{env.get('PATH', '')}")
     for line in _readme_quick_start():
         proc = _run(line.split(), cwd=fresh, env=path, check=False)
         assert proc.returncode == 0, (line, proc.stdout[-2000:], proc.stderr[-2000:])
 
 
 def _readme_quick_start() -> list[str]:
-    """The `ocp-crawl ...` and `python examples/...` lines of the README's quick start after 'From a wheel'."""
+    """The `ocp-crawl ...` and `python examples/...` lines of the README's quick start after 'From a
+    wheel'."""
     text = (REPO / "README.md").read_text(encoding="utf-8")
     block = re.search(r"From a wheel.*?```\n(.*?)```", text, re.S)
     assert block, "README: no 'From a wheel' block"

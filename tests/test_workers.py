@@ -16,9 +16,11 @@ from ocp_crawl.workers import overlap
 
 
 def _fresh(code: str) -> dict:
-    """Run ``code`` (which prints one JSON object) in a fresh interpreter: no other thread runs there, so fork is used
-    (in this one, an earlier test may have left a thread running, e.g. Dask's offload thread)."""
-    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=120)
+    """Run ``code`` (which prints one JSON object) in a fresh interpreter: no other thread runs
+    there, so fork is used (in this one, an earlier test may have left a thread running, e.g. Dask's
+    offload thread)."""
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout)
 
@@ -86,7 +88,8 @@ def test_an_exception_of_the_task_is_raised_here_and_a_dead_child_leaves_the_tas
     assert out["unbuildable"] == ["RuntimeError", "Unbuildable: x y"]
     # the child's message, then the rest of the task here (its first message not forwarded twice)
     assert out["died"] == ["done here", 7]
-    assert [m[0] for m in out["got"]] == ["first", "second"] and out["got"][0][1] != out["parent"] == out["got"][1][1]
+    assert ([m[0] for m in out["got"]] == ["first", "second"]
+            and out["got"][0][1] != out["parent"] == out["got"][1][1])
 
 
 def test_the_child_ends_when_its_parent_is_killed():
@@ -158,9 +161,10 @@ def _rows(journal) -> int:
 @pytest.mark.slow
 @pytest.mark.parametrize("whole_group", [False, True], ids=["main_process_only", "process_group"])
 def test_a_killed_sweep_leaves_no_worker_and_resumes_to_the_same_file(tmp_path, whole_group):
-    """SIGKILL to the sweep's main process alone (a timeout, an out-of-memory kill) or to its whole group,
-    after a few rows: within seconds no process of the run is left (a worker holding the directory's lock
-    would refuse --resume), and --resume ends on the bytes of an uninterrupted run."""
+    """SIGKILL to the sweep's main process alone (a timeout, an out-of-memory kill) or to its whole
+    group, after a few rows: within seconds no process of the run is left (a worker holding the
+    directory's lock would refuse --resume), and --resume ends on the bytes of an uninterrupted
+    run."""
     from pathlib import Path
 
     paper = Path(__file__).resolve().parent.parent / "problems" / "paper_gait.toml"
@@ -172,7 +176,8 @@ def test_a_killed_sweep_leaves_no_worker_and_resumes_to_the_same_file(tmp_path, 
     proc = subprocess.Popen(base + ["--out", str(out)], cwd=tmp_path, start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and proc.poll() is None and _rows(out / "results.partial.csv") < 3:
+    while (time.monotonic() < deadline and proc.poll() is None
+           and _rows(out / "results.partial.csv") < 3):
         time.sleep(0.005)
     if whole_group:
         os.killpg(proc.pid, signal.SIGKILL)
@@ -187,8 +192,8 @@ def test_a_killed_sweep_leaves_no_worker_and_resumes_to_the_same_file(tmp_path, 
         os.killpg(proc.pid, signal.SIGKILL)
         pytest.fail("a worker outlived its killed sweep by 10 s")
     assert not (out / "results.csv").exists()
-    resumed = subprocess.run(base + ["--out", str(out), "--resume"], cwd=tmp_path, capture_output=True,
-                             text=True, timeout=300)
+    resumed = subprocess.run(base + ["--out", str(out), "--resume"], cwd=tmp_path,
+                             capture_output=True, text=True, timeout=300)
     assert resumed.returncode == 0, resumed.stderr
     ref = subprocess.run(base + ["--out", str(tmp_path / "ref")], cwd=tmp_path, capture_output=True,
                          text=True, timeout=300)

@@ -328,10 +328,10 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int,
     return Status.SUCCESS, f"converged after {nfev} evaluations"
 
 
-def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter], *,
-                     pressure: Mapping[str, float] | None = None, absolute_sigma: bool = True,
-                     max_nfev: int = 100, jobs: int = 1, rcond: float = RCOND, form: str | None = None
-                     ) -> FitResult:
+def fit_measurements(problem: Problem, datasets: Sequence[Measurements],
+                     params: Sequence[Parameter], *, pressure: Mapping[str, float] | None = None,
+                     absolute_sigma: bool = True, max_nfev: int = 100, jobs: int = 1,
+                     rcond: float = RCOND, form: str | None = None) -> FitResult:
     """Fit ``params`` to the measurements by weighted least squares on simulations.
 
     Parameters
@@ -343,9 +343,10 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     params : sequence of Parameter
         What to fit, with start values and bounds (:func:`ocp_crawl.fit.params.resolve_parameters`).
     pressure : mapping of str to float, optional
-        Pressure constants held fixed (``a1``, ``a2``, ``b1``, ``b2`` [rad/bar^2, rad/bar], ``phi_rest_deg``
-        [deg], ``amplitude_bar`` [bar]); default the problem's ``[pressure]`` values as given, else Table I and
-        the constants of ``form`` (:func:`ocp_crawl.fit.params.problem_pressure`).
+        Pressure constants held fixed (``a1``, ``a2``, ``b1``, ``b2`` [rad/bar^2, rad/bar],
+        ``phi_rest_deg`` [deg], ``amplitude_bar`` [bar]); default the problem's ``[pressure]``
+        values as given, else Table I and the constants of ``form``
+        (:func:`ocp_crawl.fit.params.problem_pressure`).
     absolute_sigma : bool
         True: the sigmas are standard uncertainties, covariance (J^T J)^-1; False: relative weights,
         covariance scaled by the reduced chi-square.
@@ -356,25 +357,27 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
     rcond : float
         Relative singular value below which a direction is unidentifiable.
     form : str, optional
-        The pressure input form (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`): "paper" (as the pressure
-        study), the paper's form (ref) with nominal p0, amplitude 0.4 bar and rest angle 180 deg; "raised", the
-        raised sine from 0 to the peak p0 with the stored fitted rest angle; None (default): the problem's
-        ``[pressure] form``, "paper" when it gives none (:func:`ocp_crawl.fit.params.pressure_form`).
+        The pressure input form (:data:`ocp_crawl.model.pressure.PRESSURE_FORMS`): "paper" (as the
+        pressure study), the paper's form (ref) with nominal p0, amplitude 0.4 bar and rest angle
+        180 deg; "raised", the raised sine from 0 to the peak p0 with the stored fitted rest angle;
+        None (default): the problem's ``[pressure] form``, "paper" when it gives none
+        (:func:`ocp_crawl.fit.params.pressure_form`).
 
     Returns
     -------
     FitResult
         Its ``status`` is ``success``, ``no_convergence``, or the status of the first point whose
         simulation fails at the fitted (or, if the start fails, the start) parameters: never raised.
-        ``no_convergence`` also when the search did not run or failed (a weighted residual that overflows),
-        or the weighted Jacobian is not finite or zero (rank 0), or the covariance is NaN: never ``success``.
+        ``no_convergence`` also when the search did not run or failed (a weighted residual that
+        overflows), or the weighted Jacobian is not finite or zero (rank 0), or the covariance is
+        NaN: never ``success``.
 
     Raises
     ------
     TableError, ProblemError
-        Bad input, before any simulation (:func:`check_inputs`): fewer measurements than parameters + 1, a
-        fitted gait key that a file sets, a pressure constant both fitted and fixed, a row the model rejects
-        at the start values (naming the file and row).
+        Bad input, before any simulation (:func:`check_inputs`): fewer measurements than
+        parameters + 1, a fitted gait key that a file sets, a pressure constant both fitted and
+        fixed, a row the model rejects at the start values (naming the file and row).
     """
     check_inputs(problem, datasets, params, pressure, form)
     executor = worker_pool(jobs) if jobs > 1 else None
@@ -388,24 +391,34 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements], params:
         lo = np.array([p.low for p in params]) / obj.scale
         hi = np.array([p.high for p in params]) / obj.scale
         try:
-            res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev, method="trf",
-                                x_scale=1.0)
-        except ValueError as exc:  # scipy refuses a Jacobian that is not finite (residuals overflow when differenced)
-            status, msg = _final_status(obj.files(), 1, obj.calls, "the last evaluation")
-            if status == Status.SUCCESS:
-                status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {obj.calls} evaluations: {exc} "
-                                                      "(the weighted residuals overflow); no uncertainties")
-            assert obj.last is not None  # obj.files() above needs an evaluation
-            return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, obj.calls, absolute_sigma,
-                           rcond)
+            res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev,
+                                method="trf", x_scale=1.0)
+        except ValueError as exc:  # scipy refuses a Jacobian that is not finite
+            return _refused_search(obj, exc, absolute_sigma, rcond)
         if obj.last is None or not np.array_equal(obj.last[0], res.x):
             obj(res.x)
         files = obj.files()
         status, msg = _final_status(files, res.status, res.nfev)
-        return _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev, absolute_sigma, rcond)
+        return _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev,
+                       absolute_sigma, rcond)
     finally:
         if executor is not None:
             executor.shutdown(cancel_futures=True)
+
+
+def _refused_search(obj: _Objective, exc: ValueError, absolute_sigma: bool,
+                    rcond: float) -> FitResult:
+    """The result of a search that scipy refused (``exc``: a weighted Jacobian that is not finite,
+    the residuals overflowing when differenced), at the last evaluation: the status of its first
+    failed point, else NO_CONVERGENCE; no uncertainties."""
+    status, msg = _final_status(obj.files(), 1, obj.calls, "the last evaluation")
+    if status == Status.SUCCESS:
+        status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {obj.calls} "
+                                              f"evaluations: {exc} (the weighted residuals "
+                                              "overflow); no uncertainties")
+    assert obj.last is not None  # obj.files() above needs an evaluation
+    return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, obj.calls,
+                   absolute_sigma, rcond)
 
 
 def _trusted(status: Status, message: str, jac: np.ndarray | None, cov: np.ndarray,

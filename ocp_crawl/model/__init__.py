@@ -6,9 +6,9 @@ from ocp_crawl.io.lazy import lazy_exports
 _EXPORTS = {
     "Model": "ocp_crawl.model.statics", "Robot": "ocp_crawl.model.statics",
     "CallableSignal": "ocp_crawl.model.inputs", "FourierSeries": "ocp_crawl.model.inputs",
-    "Harmonic": "ocp_crawl.model.inputs", "PeriodicLinear": "ocp_crawl.model.inputs",
-    "PeriodicPchip": "ocp_crawl.model.inputs", "PeriodicSignal": "ocp_crawl.model.inputs",
-    "PeriodicSpline": "ocp_crawl.model.inputs", "ReferenceTorque": "ocp_crawl.model.inputs",
+    "Harmonic": "ocp_crawl.model.inputs", "PeriodicLinear": "ocp_crawl.model.sampled",
+    "PeriodicPchip": "ocp_crawl.model.sampled", "PeriodicSignal": "ocp_crawl.model.inputs",
+    "PeriodicSpline": "ocp_crawl.model.sampled", "ReferenceTorque": "ocp_crawl.model.inputs",
     "Pulse": "ocp_crawl.model.pulse", "TorqueReference": "ocp_crawl.model.inputs",
     "as_signal": "ocp_crawl.model.inputs",
 }

@@ -4,16 +4,19 @@ Quasistatic solutions are time-scalable, so only the phase matters: every signal
 1-periodic in t and returns a 2-vector (joint 1, joint 2).  Derivatives are with respect to the
 phase t (per cycle), not per second.
 
-* :class:`Harmonic`: the paper's reference angles, eq. (ref), phi_ref,i = gamma_i + A_i sin(2 pi t +- psi/2).
+* :class:`Harmonic`: the paper's reference angles, eq. (ref),
+  phi_ref,i = gamma_i + A_i sin(2 pi t +- psi/2).
 * :class:`FourierSeries`: any truncated Fourier series.
-* :class:`PeriodicSpline`: a periodic cubic spline through samples.
-* :class:`PeriodicLinear`: periodic piecewise-linear interpolation of samples.
-* :class:`PeriodicPchip`: periodic shape-preserving C1 cubic interpolation of samples.
-* :class:`~ocp_crawl.model.pulse.Pulse` (``model/pulse.py``): trapezoidal (or cosine-edged) pulses of soft
-  actuators, per-joint phase shift.
+* :class:`~ocp_crawl.model.sampled.PeriodicSpline`,
+  :class:`~ocp_crawl.model.sampled.PeriodicLinear`, :class:`~ocp_crawl.model.sampled.PeriodicPchip`
+  (``model/sampled.py``): periodic cubic spline, piecewise-linear and shape-preserving C1 cubic
+  interpolation of samples.
+* :class:`~ocp_crawl.model.pulse.Pulse` (``model/pulse.py``): trapezoidal (or cosine-edged) pulses
+  of soft actuators, per-joint phase shift.
 * :class:`CallableSignal`: any callable of phase (derivative by central differences if not given).
 * :class:`ReferenceTorque`: the torque tau = k (phi_ref - pi) of eq. (tau) for any reference signal.
-* :class:`TorqueReference`: its inverse, the reference angles phi_ref = pi + tau/k of a torque input.
+* :class:`TorqueReference`: its inverse, the reference angles phi_ref = pi + tau/k of a torque
+  input.
 """
 from __future__ import annotations
 
@@ -44,11 +47,13 @@ class PeriodicSignal:
 
 
 def _float_array(owner: str, name: str, value) -> np.ndarray:
-    """``value`` as a float array whose entries are all finite, or ValueError naming ``owner``'s argument ``name``."""
+    """``value`` as a float array whose entries are all finite, or ValueError naming ``owner``'s
+    argument ``name``."""
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be an array of real numbers, got {value!r:.60}") from None
+        raise ValueError(f"{owner}: {name} must be an array of real numbers, got "
+                         f"{value!r:.60}") from None
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         idx = tuple(int(i) for i in bad[0])
@@ -58,7 +63,8 @@ def _float_array(owner: str, name: str, value) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Harmonic(PeriodicSignal):
-    """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 = gamma2 + A2 sin(2 pi t - psi/2).
+    """Reference angles of eq. (ref) [rad]: phi_1 = gamma1 + A1 sin(2 pi t + psi/2), phi_2 =
+    gamma2 + A2 sin(2 pi t - psi/2).
 
     Parameters
     ----------
@@ -86,12 +92,14 @@ class Harmonic(PeriodicSignal):
 
     def __post_init__(self) -> None:
         for name in ("gamma1", "gamma2", "A1", "A2", "psi"):
-            object.__setattr__(self, name, real(name, getattr(self, name), nonneg=name in ("A1", "A2")))
+            object.__setattr__(self, name,
+                               real(name, getattr(self, name), nonneg=name in ("A1", "A2")))
 
     @classmethod
-    def from_degrees(cls, gamma_deg=90.0, A_deg=30.0, psi_deg=45.0, *, gamma1_deg=None, gamma2_deg=None,
-                     A1_deg=None, A2_deg=None) -> "Harmonic":
-        """The harmonic reference from angles in degrees, as in the problem files' ``[gait]`` section.
+    def from_degrees(cls, gamma_deg=90.0, A_deg=30.0, psi_deg=45.0, *, gamma1_deg=None,
+                     gamma2_deg=None, A1_deg=None, A2_deg=None) -> "Harmonic":
+        """The harmonic reference from angles in degrees, as in the problem files' ``[gait]``
+        section.
 
         Parameters
         ----------
@@ -109,10 +117,12 @@ class Harmonic(PeriodicSignal):
         g2 = gamma_deg if gamma2_deg is None else gamma2_deg
         a1 = A_deg if A1_deg is None else A1_deg
         a2 = A_deg if A2_deg is None else A2_deg
-        return cls(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2), math.radians(psi_deg))
+        return cls(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2),
+                   math.radians(psi_deg))
 
     def __call__(self, t):
-        if isinstance(t, float):  # the steppers' hot path: scalar phases, math is ~5x faster than numpy
+        # the steppers' hot path: scalar phases, math is ~5x faster than numpy
+        if isinstance(t, float):
             w = TWO_PI * t
             return np.array([self.gamma1 + self.A1 * math.sin(w + self.psi / 2),
                              self.gamma2 + self.A2 * math.sin(w - self.psi / 2)])
@@ -132,8 +142,10 @@ class Harmonic(PeriodicSignal):
                          TWO_PI * self.A2 * np.cos(w - self.psi / 2)])
 
     def describe(self) -> dict:
-        return {"type": "Harmonic", "gamma1_deg": math.degrees(self.gamma1), "gamma2_deg": math.degrees(self.gamma2),
-                "A1_deg": math.degrees(self.A1), "A2_deg": math.degrees(self.A2), "psi_deg": math.degrees(self.psi)}
+        return {"type": "Harmonic", "gamma1_deg": math.degrees(self.gamma1),
+                "gamma2_deg": math.degrees(self.gamma2),
+                "A1_deg": math.degrees(self.A1), "A2_deg": math.degrees(self.A2),
+                "psi_deg": math.degrees(self.psi)}
 
 
 @dataclass(frozen=True)
@@ -162,22 +174,27 @@ class FourierSeries(PeriodicSignal):
         b = _float_array("FourierSeries", "b", self.b)
         for name, arr in (("a", a), ("b", b)):
             if arr.ndim != 2 or arr.shape[0] != 2:
-                raise ValueError(f"FourierSeries: {name} must have shape (2, N) for N harmonics, got {arr.shape}")
+                raise ValueError(f"FourierSeries: {name} must have shape (2, N) for N harmonics, "
+                                 f"got {arr.shape}")
         if a.shape != b.shape:
-            raise ValueError(f"FourierSeries: a and b must have the same shape (2, N), got a {a.shape} and b {b.shape}")
+            raise ValueError("FourierSeries: a and b must have the same shape (2, N), got a "
+                             f"{a.shape} and b {b.shape}")
         object.__setattr__(self, "a0", a0)
         object.__setattr__(self, "a", a)
         object.__setattr__(self, "b", b)
 
     @classmethod
     def fit(cls, samples, order: int) -> "FourierSeries":
-        """Least-squares series of the given order through equally spaced samples (shape (2, N), t = j/N).
+        """Least-squares series of the given order through equally spaced samples
+        (shape (2, N), t = j/N).
 
-        The order is capped at (N - 1) // 2; with N odd and that order the series interpolates the samples.
+        The order is capped at (N - 1) // 2; with N odd and that order the series interpolates the
+        samples.
         """
         s = _float_array("FourierSeries.fit", "samples", samples)
         if s.ndim != 2 or s.shape[0] != 2 or s.shape[1] < 1:
-            raise ValueError(f"FourierSeries.fit: samples must have shape (2, N) with N >= 1, got {s.shape}")
+            raise ValueError("FourierSeries.fit: samples must have shape (2, N) with N >= 1, got "
+                             f"{s.shape}")
         if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 0:
             raise ValueError(f"FourierSeries.fit: order must be an integer >= 0, got {order!r}")
         n = s.shape[1]
@@ -191,7 +208,8 @@ class FourierSeries(PeriodicSignal):
     def __call__(self, t):
         t = np.asarray(t, dtype=float)
         w = TWO_PI * np.multiply.outer(t, self._n())  # (..., N)
-        out = self.a0.reshape((2,) + (1,) * t.ndim) + np.einsum("in,...n->i...", self.a, np.cos(w)) \
+        out = self.a0.reshape((2,) + (1,) * t.ndim) \
+            + np.einsum("in,...n->i...", self.a, np.cos(w)) \
             + np.einsum("in,...n->i...", self.b, np.sin(w))
         return out
 
@@ -227,155 +245,10 @@ def merged_knots(t_knots) -> np.ndarray:
     return b
 
 
-#: most samples (knots) of a sampled signal over one period.  Each knot of a piecewise-linear
-#: input is a kink where the event-driven stepper ends a step (about 2 ms and 12 kB per knot and
-#: cycle, measured: 20,000 knots took 51 s and 0.3 GB), and 1e-4 cycles resolve far finer than
-#: any solver step or OCP node (<= 1000 nodes)
-MAX_KNOTS = 10_000
-
-
-def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarray, np.ndarray]:
-    """Validated knots (increasing, in [0, 1)) and values of shape (2, N).
-
-    The knots cover one period: the first knot plus one closes it, so the last knot lies before
-    t_knots[0] + 1 and must not repeat the first (give t in [0, 1), not the closing t = 1).
-    """
-    t = _float_array(name, "t_knots", t_knots)
-    if t.ndim != 1 or not min_knots <= t.size <= MAX_KNOTS:
-        raise ValueError(f"{name}: t_knots must be a 1-D array of {min_knots} to {MAX_KNOTS} "
-                         f"phases (each knot is work of the solvers in every cycle), got shape "
-                         f"{t.shape}")
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        j = int(np.argmax(steps <= 0))
-        raise ValueError(f"{name}: t_knots must be strictly increasing, got t_knots[{j}] = {t[j]!r} followed by "
-                         f"{t[j + 1]!r}")
-    if t[0] < 0 or t[-1] >= 1:
-        raise ValueError(f"{name}: t_knots must lie in [0, 1) (one period; the closing knot t_knots[0] + 1 is "
-                         f"implied), got {t[0]!r} ... {t[-1]!r}")
-    v = _float_array(name, "values", values)
-    if v.shape != (2, t.size):
-        raise ValueError(f"{name}: values must have shape (2, {t.size}) (one column per knot), got {v.shape}")
-    return t, v
-
-
-class _Sampled(PeriodicSignal):
-    """Base of the signals interpolating samples at knots ``t_knots`` in [0, 1)."""
-
-    t_knots: np.ndarray
-    values: np.ndarray
-
-    def __repr__(self) -> str:
-        with np.printoptions(precision=17, threshold=10_000):
-            return f"{type(self).__name__}(t_knots={self.t_knots!r}, values={self.values!r})"
-
-    def _wrap(self, t):
-        """Phases mapped into [t_knots[0], t_knots[0] + 1), the period the interpolant is built on."""
-        return self.t_knots[0] + np.mod(np.asarray(t, float) - self.t_knots[0], 1.0)
-
-
-class PeriodicSpline(_Sampled):
-    """Periodic cubic spline through samples at phases ``t_knots`` in [0, 1) (values shape (2, N)).
-
-    Parameters
-    ----------
-    t_knots : array_like, shape (N,)
-        Strictly increasing phases [cycles] in [0, 1), N >= 3 (the closing knot t_knots[0] + 1 is implied).
-    values : array_like, shape (2, N)
-        The two joints' values at the knots, in the signal's unit (angles [rad] or torques [N m]).
-    """
-
-    def __init__(self, t_knots, values):
-        from scipy.interpolate import CubicSpline  # scipy only when a spline is built (start-up time)
-
-        t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
-        tt = np.append(t, t[0] + 1.0)
-        vv = np.concatenate([v, v[:, :1]], axis=1)
-        self._spline = CubicSpline(tt, vv, axis=1, bc_type="periodic")
-        self._dspline = self._spline.derivative()
-        self.t_knots, self.values = t, v
-
-    def __call__(self, t):
-        return self._spline(self._wrap(t))
-
-    def derivative(self, t):
-        return self._dspline(self._wrap(t))
-
-    def describe(self) -> dict:
-        return {"type": "PeriodicSpline", "knots": int(self.t_knots.size)}
-
-
-class PeriodicLinear(_Sampled):
-    """Periodic piecewise-linear interpolation of samples at phases ``t_knots`` in [0, 1) (values (2, N)).
-
-    It keeps every bound and rate limit that the samples satisfy (a cubic spline may overshoot);
-    the derivative is piecewise constant (the simulators split their quadrature at the knots, ``t_knots``).
-
-    Parameters
-    ----------
-    t_knots, values : array_like, shapes (N,) and (2, N)
-        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 2.
-    """
-
-    def __init__(self, t_knots, values):
-        t, v = _check_samples("PeriodicLinear", t_knots, values, min_knots=2)
-        self.t_knots, self.values = t, v
-        self._tt = np.append(t, t[0] + 1.0)
-        self._vv = np.concatenate([v, v[:, :1]], axis=1)
-        self._slope = np.diff(self._vv, axis=1) / np.diff(self._tt)
-
-
-    def __call__(self, t):
-        tw = self._wrap(t)
-        return np.array([np.interp(tw, self._tt, self._vv[i]) for i in range(2)])
-
-    def derivative(self, t):
-        tw = self._wrap(t)
-        k = np.clip(np.searchsorted(self._tt, tw, side="right") - 1, 0, self.t_knots.size - 1)
-        return self._slope[:, k]
-
-    def describe(self) -> dict:
-        return {"type": "PeriodicLinear", "knots": int(self.t_knots.size)}
-
-
-class PeriodicPchip(_Sampled):
-    """Periodic shape-preserving cubic (PCHIP) interpolation of samples at phases ``t_knots`` in [0, 1).
-
-    C1 (continuous derivative, unlike :class:`PeriodicLinear`) and without overshoot: it stays within
-    the range of neighbouring samples, so bounds the samples satisfy hold between them too.  The
-    optimal-control replay uses it.
-
-    Parameters
-    ----------
-    t_knots, values : array_like, shapes (N,) and (2, N)
-        Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 3.
-    """
-
-    def __init__(self, t_knots, values):
-        from scipy.interpolate import PchipInterpolator  # scipy only when a PCHIP is built (start-up time)
-
-        t, v = _check_samples("PeriodicPchip", t_knots, values, min_knots=3)
-        self.t_knots, self.values = t, v
-        # three periods, so that the interpolant of the middle one sees its periodic neighbours
-        tt = np.concatenate([t - 1.0, t, t + 1.0])
-        vv = np.concatenate([v, v, v], axis=1)
-        self._f = PchipInterpolator(tt, vv, axis=1)
-        self._df = self._f.derivative()
-
-
-    def __call__(self, t):
-        return self._f(self._wrap(t))
-
-    def derivative(self, t):
-        return self._df(self._wrap(t))
-
-    def describe(self) -> dict:
-        return {"type": "PeriodicPchip", "knots": int(self.t_knots.size)}
-
-
 class CallableSignal(PeriodicSignal):
-    """Any callable ``f(t) -> (2,)`` of the phase, assumed 1-periodic; derivative by central differences
-    (step ``h`` = 1e-6: round-off error ~1e-10 relative to |f|) unless ``df`` is given."""
+    """Any callable ``f(t) -> (2,)`` of the phase, assumed 1-periodic; derivative by central
+    differences (step ``h`` = 1e-6: round-off error ~1e-10 relative to |f|) unless ``df`` is
+    given."""
 
     def __init__(self, f: Callable, df: Callable | None = None, h: float = 1e-6):
         if not callable(f):
@@ -391,8 +264,8 @@ class CallableSignal(PeriodicSignal):
     def _one(g, t: float) -> np.ndarray:
         v = np.asarray(g(t), float)
         if v.size != 2:
-            raise ValueError(f"CallableSignal: the function must return 2 values (joint 1, joint 2), got shape "
-                             f"{v.shape} at t = {t!r}")
+            raise ValueError("CallableSignal: the function must return 2 values "
+                             f"(joint 1, joint 2), got shape {v.shape} at t = {t!r}")
         return v.reshape(2)
 
     def _eval(self, g, t):
@@ -401,7 +274,8 @@ class CallableSignal(PeriodicSignal):
             return self._one(g, float(t))
         if t.size == 0:
             return np.zeros((2,) + t.shape)
-        return np.stack([self._one(g, float(ti)) for ti in t.ravel()], axis=1).reshape((2,) + t.shape)
+        return (np.stack([self._one(g, float(ti)) for ti in t.ravel()], axis=1)
+                .reshape((2,) + t.shape))
 
     def __call__(self, t):
         return self._eval(self.f, t)
@@ -415,12 +289,14 @@ class CallableSignal(PeriodicSignal):
 
 @dataclass(frozen=True)
 class ReferenceTorque(PeriodicSignal):
-    """Torque input of eq. (tau): tau_i = k (phi_ref,i(t) - pi) [N m], i.e. a spring whose rest angle is phi_ref.
+    """Torque input of eq. (tau): tau_i = k (phi_ref,i(t) - pi) [N m], i.e. a spring whose rest
+    angle is phi_ref.
 
     Parameters
     ----------
     reference : PeriodicSignal
-        The reference angles phi_ref(t) [rad] (e.g. :class:`Harmonic`, or a sampled signal of angles).
+        The reference angles phi_ref(t) [rad] (e.g. :class:`Harmonic`, or a sampled signal of
+        angles).
     k : float
         Joint stiffness [N m/rad] (> 0), normally the robot's ``k``.
     """
@@ -431,7 +307,8 @@ class ReferenceTorque(PeriodicSignal):
 
     def __post_init__(self) -> None:
         if not isinstance(self.reference, PeriodicSignal):
-            raise TypeError(f"ReferenceTorque.reference must be a PeriodicSignal, got {type(self.reference).__name__}")
+            raise TypeError("ReferenceTorque.reference must be a PeriodicSignal, got "
+                            f"{type(self.reference).__name__}")
         object.__setattr__(self, "k", real("ReferenceTorque.k", self.k, positive=True))
 
     def __call__(self, t):
@@ -446,8 +323,9 @@ class ReferenceTorque(PeriodicSignal):
 
 @dataclass(frozen=True)
 class TorqueReference(PeriodicSignal):
-    """Reference angles phi_ref,i = pi + tau_i(t)/k [rad] of a torque input: the inverse of :class:`ReferenceTorque`
-    (the spring rest angles that a given torque profile stands for; for figures and geometry checks)."""
+    """Reference angles phi_ref,i = pi + tau_i(t)/k [rad] of a torque input: the inverse of
+    :class:`ReferenceTorque` (the spring rest angles that a given torque profile stands for; for
+    figures and geometry checks)."""
 
     torque: PeriodicSignal
     """joint torques [N m]"""
@@ -456,7 +334,8 @@ class TorqueReference(PeriodicSignal):
 
     def __post_init__(self) -> None:
         if not isinstance(self.torque, PeriodicSignal):
-            raise TypeError(f"TorqueReference.torque must be a PeriodicSignal, got {type(self.torque).__name__}")
+            raise TypeError("TorqueReference.torque must be a PeriodicSignal, got "
+                            f"{type(self.torque).__name__}")
         object.__setattr__(self, "k", real("TorqueReference.k", self.k, positive=True))
 
     def __call__(self, t):
@@ -491,4 +370,5 @@ def as_signal(u) -> PeriodicSignal:
         return u
     if callable(u):
         return CallableSignal(u)
-    raise TypeError(f"an input must be a PeriodicSignal or a callable of phase, got {type(u).__name__}")
+    raise TypeError("an input must be a PeriodicSignal or a callable of phase, got "
+                    f"{type(u).__name__}")

@@ -1,6 +1,7 @@
 """NLP layer (above ``model``, below ``sim``): IPOPT plumbing (the status table, building and
-calling a solver, the option sets), the one relaxation homotopy shared by the MPCC step and the gait
-OCP, and the compiled evaluation of an NLP's per-step kernel (``codegen.py``)."""
+calling a solver, the option sets), the process's heap and BLAS threads around a solve
+(``process.py``), the one relaxation homotopy shared by the MPCC step and the gait OCP, and the
+compiled evaluation of an NLP's per-step kernel (``codegen.py``)."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)

@@ -154,6 +154,7 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
         return MISS_RANK + miss
     v = speeds(settings, ev.S, ev.T)
     speed, others = settings.speed_requirement, list(settings.requirements)
+    assert speed is not None and speed.min is not None  # min_cot always has one
     others.remove(speed)  # its shortfall in m/s, the others' relative
     rest = sum(shortfall(c, cycle) for c in others)
     return MISS_RANK + max(speed.min - min(v), 0.0) + (0.0 if all(ev.S) else 1.0) + rest

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.statics import GravityConvention, Model, Robot
 from ocp_crawl.nlp.homotopy import observe, observers
 from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.limits import NODES_BOUNDS
@@ -160,7 +160,7 @@ class ConvergenceTable:
 def check_nodes(nodes) -> list[int]:
     """The list of N, validated: integers in NODES_BOUNDS, strictly increasing, at least one;
     ValueError naming the first bad value otherwise."""
-    out = []
+    out: list[int] = []
     for n in nodes:
         if isinstance(n,
                       bool) or not isinstance(n, (int, np.integer)) or not NODES_BOUNDS[0] <= n <= NODES_BOUNDS[1]:
@@ -174,7 +174,7 @@ def check_nodes(nodes) -> list[int]:
     return out
 
 
-def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, log=None,
+def converge_in_nodes(robot: Robot, gravity: GravityConvention, settings: OCPSettings, nodes, log=None,
                       jobs: int | None = None) -> ConvergenceTable:
     """Solve the OCP at each N of ``nodes``, warm-starting each from the previous optimum, replay
     each.
@@ -223,7 +223,7 @@ def converge_in_nodes(robot: Robot, gravity: str, settings: OCPSettings, nodes, 
     return ConvergenceTable(settings.objective, rows, settings.objective_unit)
 
 
-def _warm_row(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult,
+def _warm_row(robot: Robot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
               ready: GaitSolver | None, later: list[int]) -> tuple[OCPResult, GaitSolver | None]:
     """The warm solve at settings.nodes (on the transcription ``ready`` if it is of this N: built
     while the previous row solved) and the next N's transcription: when a finer N follows, the solve
@@ -247,7 +247,7 @@ def _warm_row(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult
                    forward)
 
 
-def warm_transcription(robot: Robot, gravity: str, settings: OCPSettings) -> GaitSolver:
+def warm_transcription(robot: Robot, gravity: GravityConvention, settings: OCPSettings) -> GaitSolver:
     """The transcription of a solve warm-started from the previous N's optimum (:func:`_near`) and
     its solver, the first IPOPT solver built (:meth:`~ocp_crawl.ocp.solver.GaitSolver.prepare`: at
     N = 400, about 8 s of derivative generation)."""
@@ -279,7 +279,7 @@ def _near(settings: OCPSettings) -> tuple[OCPSettings, str]:
             "with the warm schedule")
 
 
-def _warm_solve(robot: Robot, gravity: str, settings: OCPSettings, prev: OCPResult,
+def _warm_solve(robot: Robot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
                 solver: GaitSolver | None = None) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as
     before), with the settings of :func:`_near` (on ``solver`` when given: their transcription's

@@ -46,7 +46,7 @@ import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
 from ocp_crawl.model.pulse import Pulse
-from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.statics import GravityConvention, Model, Robot
 from ocp_crawl.ocp.quantities import PROFILE_QUANTITIES, profile_of_signal
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
@@ -100,9 +100,10 @@ class WaveParams:
                                          gamma2_deg=self.gamma2_deg, A1_deg=self.A1_deg,
                                          A2_deg=self.A2_deg)
         rise = 0.5 if self.shape == "triangle" else self.rise
-        r = [math.radians(v) for v in (self.gamma1_deg, self.gamma2_deg, self.A1_deg, self.A2_deg,
-                                      self.psi_deg)]
-        return Pulse(*r, rise=rise, hold=self.duty * (1.0 - 2.0 * rise) if rise < 0.5 else 0.0)
+        g1, g2, a1, a2, psi = (math.radians(v) for v in (self.gamma1_deg, self.gamma2_deg,
+                                                          self.A1_deg, self.A2_deg, self.psi_deg))
+        return Pulse(g1, g2, a1, a2, psi, rise=rise,
+                     hold=self.duty * (1.0 - 2.0 * rise) if rise < 0.5 else 0.0)
 
     def torque(self, k: float) -> ReferenceTorque:
         """The torque input tau = k (phi_ref - pi) [N m] of the gait for the joint stiffness ``k``
@@ -215,7 +216,7 @@ class WaveFamily:
     every friction scenario of ``settings.scenarios(robot)``.  Evaluations are cached by parameters;
     ``evaluations`` counts the simulated members."""
 
-    def __init__(self, robot: Robot, gravity: str, settings: OCPSettings,
+    def __init__(self, robot: Robot, gravity: GravityConvention, settings: OCPSettings,
                  shape: str = "harmonic") -> None:
         shape_box(shape)
         self.robot = robot

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.step_equations import PHI_ROWS, S1M, S1P
 from ocp_crawl.ocp.layout import fourier_basis
 from ocp_crawl.ocp.substeps import (THETA_GUESS, friction_rows, guess_block, sample_phases,

@@ -1,7 +1,7 @@
 """Replay is the judge: the OCP's optimum counts only when the event-driven simulator confirms it.
 
 The replay signal is the transcription's own interpolant: the node torques tau_k at phases k/N,
-linear in phase between nodes (:class:`~ocp_crawl.model.inputs.PeriodicLinear`, the
+linear in phase between nodes (:class:`~ocp_crawl.model.sampled.PeriodicLinear`, the
 ``[gait] waveform = "samples"`` with ``interpolation = "linear"``), run with the OCP's period T.
 :func:`judge_replay` replays it in every friction scenario and accepts the optimum only when
 
@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocp_crawl.io import units
-from ocp_crawl.model.inputs import PeriodicLinear
+from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp.baseline import cycle_of, value_from
 from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes, reference_sizes
@@ -305,7 +305,8 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) 
                    f"{units.significant(settings.max_accel_deg_s2)} deg/s^2 (tolerance "
                    f"{units.scientific(BOUND_RTOL)})")
     out += [f"the replay misses {text} by more than replay_tol {units.ratio(tol)}"
-            for text in missed(settings.requirements, v.cycle, tol, sizes)]
+            for text in (missed(settings.requirements, v.cycle, tol, sizes)
+                         if v.cycle is not None else [])]
     out += _joint_rate_problems(v, settings)
     low = min(v.margin, default=math.inf)
     if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc

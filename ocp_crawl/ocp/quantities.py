@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Any, Callable, Mapping
 
 import casadi as cs
 import numpy as np
@@ -158,8 +158,8 @@ class Symbols:
     ``T`` (2, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L
     (``S``) and W+ over M g L (``W``, None where not built), and the scales."""
 
-    T: object
-    Th: object
+    T: Any
+    Th: Any
     S: list
     W: list
     MgL: float
@@ -196,16 +196,18 @@ def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
                 rows = [d * S - bound / sym.L for S in sym.S]
             out.append((_over(c, rows), lb, ub))
         return out
+    # W+, CoT+ and the peak torque: an upper bound always (Quantity.bounds, checked by Constraint)
+    hi = c.max if c.max is not None else math.inf
     if q == "W_plus":
-        return [(_over(c, [W - c.max / sym.MgL for W in sym.W]), -np.inf, 0.0)]
+        return [(_over(c, [W - hi / sym.MgL for W in sym.W]), -np.inf, 0.0)]
     if q == "CoT_plus":
         if c.over == "mean":  # each scenario forwards (a backwards one would lower the mean)
             rows = [W / (d * S) for W, S in zip(sym.W, sym.S)]
             return [(cs.vertcat(*[d * S for S in sym.S]), 0.0, np.inf),
-                    (sum(rows) / len(rows) - c.max, -np.inf, 0.0)]
-        return [(cs.vertcat(*[W - c.max * d * S for W, S in zip(sym.W, sym.S)]), -np.inf, 0.0)]
+                    (sum(rows) / len(rows) - hi, -np.inf, 0.0)]
+        return [(cs.vertcat(*[W - hi * d * S for W, S in zip(sym.W, sym.S)]), -np.inf, 0.0)]
     if q == "peak_torque":
-        b = c.max / sym.MgL
+        b = hi / sym.MgL
         return [(cs.vec(sym.T), -b, b)]
     if q == "mean_torque_sq":
         value = mean_square_nodes(sym.T)
@@ -315,10 +317,10 @@ def shortfall(c: Constraint, cycle: Cycle, sizes: dict | None = None) -> float:
     for value in cycle_values(c, cycle):
         if not math.isfinite(value):
             return math.inf
-        for bound, miss in ((c.min, None if c.min is None else c.min - value),
-                            (c.max, None if c.max is None else value - c.max)):
-            if bound is not None:
-                worst = max(worst, miss / (abs(bound) or size))
+        if c.min is not None:
+            worst = max(worst, (c.min - value) / (abs(c.min) or size))
+        if c.max is not None:
+            worst = max(worst, (value - c.max) / (abs(c.max) or size))
     return worst
 
 
@@ -353,8 +355,8 @@ class UserObjective:
     the forkserver and spawn start methods."""
 
     name: str
-    nlp: object
-    value: object
+    nlp: Callable[[Physical], Any]
+    value: Callable[[Cycle], float]
     sense: str = "min"
     unit: str = "-"
     scale: float = 1.0
@@ -387,11 +389,11 @@ class Physical:
     reference size of each quantity on the robot (:func:`reference_sizes`: e.g. to make an
     expression of order one)."""
 
-    tau: object
-    T: object
+    tau: Any
+    T: Any
     S: list
     W_plus: list
-    mean_torque_sq: object
+    mean_torque_sq: Any
     direction: int
     sizes: dict
 

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from ocp_crawl.model.statics import Robot
+from ocp_crawl.model.statics import GravityConvention, Robot
 from ocp_crawl.checks import real
 from ocp_crawl.ocp.baseline import (FAIL_RANK, Baselines, WaveChoice, choice_of, search_rank,
                                      value_of)
@@ -63,7 +63,7 @@ def scan_points(settings: OCPSettings, shape: str = "harmonic") -> list[np.ndarr
     grid, then the Sobol sample of the whole box."""
     n_a = settings.harmonic_A
     extra = list(PULSE_SCAN) if shape == "pulse" else []
-    out = []
+    out: list[np.ndarray] = []
     for u in np.linspace(1.0 / n_a, 1.0, n_a):
         for w in (SCAN_W if u < 1 else (0.0,)):
             out.extend(np.array([w, w, u, 0.0, p, *extra])
@@ -150,7 +150,7 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
             "evaluations": fam.evaluations - n0}
 
 
-def search_families(robot: Robot, gravity: str, settings: OCPSettings, shapes, local_starts: int,
+def search_families(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes, local_starts: int,
                     maxfev: int, jobs: int, meanwhile: Callable[[], object] | None = None
                     ) -> dict[str, tuple[WaveFamily, list[dict]]]:
     """Scan and local searches of every shape's family: per shape, the family (every evaluation, in
@@ -214,7 +214,7 @@ _WORKER: dict = {}
 
 
 @contextlib.contextmanager
-def _pool(robot: Robot, gravity: str, settings: OCPSettings, shapes, jobs: int):
+def _pool(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes, jobs: int):
     """A pool of ``jobs`` worker processes, each with the families of the problem (None for one
     job)."""
     if jobs < 2:
@@ -229,7 +229,7 @@ def _pool(robot: Robot, gravity: str, settings: OCPSettings, shapes, jobs: int):
     pool.shutdown()
 
 
-def _init_worker(robot: Robot, gravity: str, settings: OCPSettings, shapes) -> None:
+def _init_worker(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes) -> None:
     _WORKER.update({s: WaveFamily(robot, gravity, settings, s) for s in shapes})
 
 
@@ -250,7 +250,7 @@ def _local_task(shape: str, z0: np.ndarray, maxfev: int, known: list) -> tuple[d
     return summary, fam.evaluated()[n:]
 
 
-def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=None,
+def best_baselines(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes=None,
                    local_starts: int | None = None, maxfev: int | None = None,
                    jobs: int | None = None,
                    meanwhile: Callable[[], object] | None = None) -> Baselines:
@@ -301,14 +301,14 @@ def best_baselines(robot: Robot, gravity: str, settings: OCPSettings, shapes=Non
     for s, (fam, summaries) in found.items():
         rank, best = min(((search_rank(settings, ev), ev) for ev in fam.evaluated()),
                          key=lambda x: x[0], default=(FAIL_RANK, None))
-        choice = None if rank >= FAIL_RANK else choice_of(settings, best)
+        choice = None if rank >= FAIL_RANK or best is None else choice_of(settings, best)
         if choice is not None:
             choice.evaluated, choice.starts, choice.time_s = fam.evaluations, summaries, dt
         choices[s] = choice
     return Baselines(settings.objective, choices, dt)
 
 
-def best_harmonic(robot: Robot, gravity: str, settings: OCPSettings,
+def best_harmonic(robot: Robot, gravity: GravityConvention, settings: OCPSettings,
                   local_starts: int | None = None,
                   maxfev: int | None = None, jobs: int | None = None,
                   meanwhile: Callable[[], object] | None = None) -> WaveChoice | None:

@@ -22,7 +22,8 @@ import time
 import numpy as np
 
 from ocp_crawl.io import units
-from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.statics import GravityConvention, Model, Robot
+from ocp_crawl.nlp.homotopy import Stage
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_value, value_from
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
@@ -49,7 +50,7 @@ def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
     return harm.torque_signal(robot.k), harm.T
 
 
-def optimize_gait(robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
+def optimize_gait(robot: Robot, gravity: GravityConvention = "physical", settings: OCPSettings | None = None,
                   replay: bool = True, jobs: int | None = None,
                   start: tuple | None = None) -> OCPResult:
     """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the
@@ -297,7 +298,7 @@ def _not_kept(run: list) -> str:
     """A note on the IPOPT calls after the kept point that IPOPT did not accept, the last of each
     kind: the polish, and the loose last stage solved again tightly
     (:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve`); '' if none."""
-    last = {}
+    last: dict[str, Stage] = {}
     for stage in reversed(run):
         if stage.accepted:
             break
@@ -435,6 +436,7 @@ def _worse_than_baseline(res: OCPResult, gain: float) -> None:
     envelope and bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both
     values."""
     objective = res.settings.objective
+    assert res.harmonic is not None  # a gain over the baseline was measured
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
     res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "

@@ -71,8 +71,9 @@ class GaitSolver:
             self._fixed_x = np.asarray(x0, float)
         if fix_profile and self._fixed_solvers is None:
             self._fixed_solvers = self._solvers("gait_ocp_fixed", ocp.fixed_nlp)
-        hom = Homotopy.of(self._fixed_solvers if fix_profile else self.solvers, self._call,
-                          loose_at=None if fix_profile else self._loose_at)
+        solvers = self._fixed_solvers if fix_profile else self.solvers
+        assert solvers is not None
+        hom = Homotopy.of(solvers, self._call, loose_at=None if fix_profile else self._loose_at)
         best = None
         runs = []
         f0 = ocp.objective(x0)  # objective of the (nearly feasible) initial guess
@@ -103,10 +104,11 @@ class GaitSolver:
         x0's own branches; the better of the two (objective, x, records, status)."""
         x, hist, failed, status = self.solve_tightened(x0)
         records.extend(hist)
-        if (failed is None and max(sc["comp"] for sc in self.unpack(x)["scen"])
-            > self.settings.comp_tol):
-            failed = "not complementary"
-        f = self.ocp.objective(x) if failed is None else np.inf
+        if x is None or failed is not None:
+            return best
+        if max(sc["comp"] for sc in self.unpack(x)["scen"]) > self.settings.comp_tol:
+            return best  # not complementary
+        f = self.ocp.objective(x)
         return (f, x, hist, status) if f < best[0] else best
 
     def solve_tightened(self, x0: np.ndarray, max_iter: int | None = None, kind: str = "polish"
@@ -125,6 +127,7 @@ class GaitSolver:
         self._fixed = None
         hom = Homotopy.of(self.solvers, self._call)
         if max_iter is not None:
+            assert self.solvers.capped is not None  # ipopt_solvers sets it
             hom.warm = self.solvers.capped(max_iter)
         start = Solve(x0, np.zeros(self.ocp.nx), np.zeros(self.ocp.ng), "", True, 0)
         kept = None
@@ -157,6 +160,7 @@ class GaitSolver:
         s = self.settings
         tol = s.stage_tol if s.stage_tol_ratio is None else min(s.stage_tol,
                                                                 s.stage_tol_ratio * sigma)
+        assert self.solvers.loose is not None  # ipopt_solvers sets it
         return self.solvers.loose(tol)
 
     def _call(self, solver, start: Start, data: dict) -> Solve:
@@ -228,14 +232,16 @@ class GaitSolver:
         if not run.ok:
             run.stages = len(sigmas)
             return self._finish(hom, run, sigmas)
+        last = run.last
+        assert endgame is not None and last is not None  # a head, each of its stages accepted
 
         def rest() -> tuple:  # the homotopy from the endgame's stage on
-            tail = hom.relax(sigmas[len(head):], run.last.start(), self._stage_data,
+            tail = hom.relax(sigmas[len(head):], last.start(), self._stage_data,
                              loose_last=loose_last)
-            tail.last = tail.last or run.last
+            tail.last = tail.last or last
             tail.stage, tail.stages = tail.stage + len(head), len(sigmas)
             return self._finish(hom, tail, sigmas)
-        return endgame.race(run.last.x, hom.records, rest)
+        return endgame.race(last.x, hom.records, rest)
 
     def _finish(self, hom: Homotopy, run, sigmas: tuple) -> tuple[np.ndarray | None, str | None,
                                                                   str]:

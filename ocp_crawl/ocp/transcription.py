@@ -28,10 +28,12 @@ identified branches.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.statics import GravityConvention, Model, Robot
 from ocp_crawl.model.step_equations import (C1P, C2P, FT1, MARGIN_ROWS, NW, PHI_ROWS, S1M, S1P,
                                             SLIP_ROWS)
 from ocp_crawl.nlp.codegen import compiled_kernel
@@ -57,7 +59,7 @@ KERNELS = ("expanded", "compiled")
 class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
-    def __init__(self, robot: Robot, gravity: str = "physical", settings: OCPSettings | None = None,
+    def __init__(self, robot: Robot, gravity: GravityConvention = "physical", settings: OCPSettings | None = None,
                  kernel: str = "expanded"):
         """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the
         whole NLP as one SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than
@@ -296,7 +298,7 @@ class GaitOCP:
         N, Mg = s.nodes, r.M * r.g
         tau = np.asarray(self._T(x)).reshape(2, N)
         period = float(x[self._slices["T_hat"]][0]) * s.period_ref()
-        out = {"tau": tau, "T": period, "scen": []}
+        out: dict[str, Any] = {"tau": tau, "T": period, "scen": []}
         for j in range(len(self.scen)):
             W = x[self._slices[f"w_{j}"]].reshape(NW, 2 * N, order="F")
             theta = x[self._slices[f"theta_{j}"]].copy()

@@ -100,7 +100,7 @@ _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, 
 
 #: the waveforms of ``[gait] waveform``: the reference angles (or torques) over one cycle
 WAVEFORMS = ("harmonic", "fourier", "samples", "pulse", "pressure")
-#: interpolations of ``[gait] waveform = "samples"`` (the classes of ocp_crawl.model.inputs)
+#: interpolations of ``[gait] waveform = "samples"`` (the classes of ocp_crawl.model.sampled)
 INTERPOLATIONS = ("pchip", "linear", "spline")
 _HFP, _HP = ("harmonic", "fourier", "pulse"), ("harmonic", "pulse")
 _FOURIER_WHY = "harmonics n = 1, 2, ... of the reference angle; at most 100"

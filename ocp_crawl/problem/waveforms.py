@@ -19,8 +19,8 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ocp_crawl.io.tables import TableError, read_table
-from ocp_crawl.model.inputs import (MAX_KNOTS, FourierSeries, Harmonic, PeriodicLinear,
-                                    PeriodicPchip, PeriodicSignal, PeriodicSpline, TorqueReference)
+from ocp_crawl.model.inputs import FourierSeries, Harmonic, PeriodicSignal, TorqueReference
+from ocp_crawl.model.sampled import MAX_KNOTS, PeriodicLinear, PeriodicPchip, PeriodicSpline
 from ocp_crawl.model.pressure import (FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference,
                                       PressureWaveform)
 from ocp_crawl.model.pulse import Pulse

@@ -1,4 +1,5 @@
-"""Simulators of the hybrid-quasistatic crawler, their one entry :func:`simulate` and the result they share."""
+"""Simulators of the hybrid-quasistatic crawler, their one entry :func:`simulate` and the result
+they share."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -11,13 +12,15 @@ _EXPORTS = {
     "TimeSteppingOptions": "ocp_crawl.sim.timestepping",
     "MujocoOptions": "ocp_crawl.sim.dynamic", "unavailable_solvers": "ocp_crawl.sim.registry",
     "unusable": "ocp_crawl.sim.registry", "MUJOCO_SOLVERS": "ocp_crawl.sim.registry",
-    "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result", "Mode": "ocp_crawl.sim.result",
+    "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result",
+    "Mode": "ocp_crawl.sim.result",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }
 
 __all__ = [
-    "DEFAULT_SOLVER", "SOLVERS", "AnglesOptions", "CycleOptions", "HybridOptions", "Solver", "TimeSteppingOptions",
-    "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate", "solver_named", "CrawlResult",
-    "Event", "Mode", "SimulationError", "Status",
+    "DEFAULT_SOLVER", "SOLVERS", "AnglesOptions", "CycleOptions", "HybridOptions", "Solver",
+    "TimeSteppingOptions",
+    "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate",
+    "solver_named", "CrawlResult", "Event", "Mode", "SimulationError", "Status",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

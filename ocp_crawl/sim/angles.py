@@ -3,10 +3,10 @@
 The joint angles phi(t) are imposed, so the configuration, d(t) and the normal forces are known
 at every phase. Generically d' != 0, so one foot slips at every instant: the one with the smaller
 friction limit mu_i f_n,i (equal friction: the foot with the smaller normal force, sign of Delta in
-eq. (delta); for a tie, as in mirror-symmetric gaits, both feet slip symmetrically), in the direction that changes d; then f_t = mu_s f_n,s sign(d') (eq. (ft)) and the
-holding torques follow from the joint balance.  The switching instants (d' = 0: slip direction
-reverses; mu1 f_n1 = mu2 f_n2: slipping foot changes) are located by Brent's method on the exact
-kinematics.
+eq. (delta); for a tie, as in mirror-symmetric gaits, both feet slip symmetrically), in the
+direction that changes d; then f_t = mu_s f_n,s sign(d') (eq. (ft)) and the holding torques follow
+from the joint balance.  The switching instants (d' = 0: slip direction reverses; mu1 f_n1 = mu2
+f_n2: slipping foot changes) are located by Brent's method on the exact kinematics.
 """
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ import numpy as np
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import KIN, Model, call_mapped, symbolic
 from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
-from ocp_crawl.sim.assemble import (default_phases, failure_message, new_result, output_phases, set_cycle_metrics,
-                                    set_samples)
+from ocp_crawl.sim.assemble import (default_phases, failure_message, new_result, output_phases,
+                                    set_cycle_metrics, set_samples)
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
 
@@ -62,8 +62,10 @@ def _classes(name: str, v: np.ndarray) -> np.ndarray:
     return np.sign(v).astype(int)
 
 
-def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | None = None) -> float | None:
-    """First phase in [0, t_end) at which the guard ``f`` (values ``v`` on the scan phases ``ts``) reaches zero.
+def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float,
+                t_end: float | None = None) -> float | None:
+    """First phase in [0, t_end) at which the guard ``f`` (values ``v`` on the scan phases ``ts``)
+    reaches zero.
 
     A sign change on the scan is located by Brent's method.  A guard may also reach zero between two
     scan phases without changing sign on the scan (it touches zero, as d in a symmetric fold, or
@@ -89,8 +91,8 @@ def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float, t_end: float | N
     # at the cycle ends the neighbour on the scan side counts
     left = np.concatenate([[v[1]], v[:-1]])
     right = np.concatenate([v[1:], [v[-2]]])
-    for j in np.nonzero((v > 0) & (v < 0.05 * scale) & (v <= left) & (v <= right))[0]:
-        lo, hi = ts[max(j - 1, 0)], min(ts[min(j + 1, n - 1)], limit)
+    for m in np.nonzero((v > 0) & (v < 0.05 * scale) & (v <= left) & (v <= right))[0].tolist():
+        lo, hi = ts[max(m - 1, 0)], min(ts[min(m + 1, n - 1)], limit)
         if (found is not None and lo >= found) or lo >= hi:
             break
         opt = minimize_scalar(f, bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
@@ -111,10 +113,11 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     model : Model
         The robot and the gravity convention.
     angles : PeriodicSignal or callable
-        1-periodic joint angles (phi1, phi2) [rad] of the phase t [cycles], interior angles below the
-        body (pi = flat), e.g. :class:`~ocp_crawl.model.inputs.Harmonic`.
+        1-periodic joint angles (phi1, phi2) [rad] of the phase t [cycles], interior angles below
+        the body (pi = flat), e.g. :class:`~ocp_crawl.model.inputs.Harmonic`.
     t_eval : array_like of float, optional
-        Output phases in [0, 1] [cycles]; by default 201 equally spaced phases plus the switching instants.
+        Output phases in [0, 1] [cycles]; by default 201 equally spaced phases plus the switching
+        instants.
     n_scan : int
         Phases scanned for sign changes of the switching functions before Brent's method (>= 8).
 
@@ -125,8 +128,8 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
 
     A loss of contact during the cycle (a foot lifting off, a joint reaching the ground, the feet
     meeting) is returned as a failure status with its phase (``failure_t``) and the contact mode
-    just before it (``failure_mode``).  Invalid input raises ValueError (TypeError for a wrong type):
-    angles that are not finite or not 1-periodic, bad ``t_eval`` or ``n_scan``, and a start
+    just before it (``failure_mode``).  Invalid input raises ValueError (TypeError for a wrong
+    type): angles that are not finite or not 1-periodic, bad ``t_eval`` or ``n_scan``, and a start
     configuration (the angles at t = 0) without a valid two-foot contact.
     """
     if not isinstance(model, Model):
@@ -144,12 +147,15 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         return _failure_result(model, kin, *failure)
     switches = _switching_instants(kin, ts, K)
     anchors, S = _anchors(kin, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
-    res = new_result(model, "angles", Status.SUCCESS, f"prescribed-angle gait: {len(switches)} switching instants "
-                     "per cycle", cycles=1, events=[_event(kin, t_ev, name) for t_ev, name in switches])
+    res = new_result(model, "angles", Status.SUCCESS,
+                     f"prescribed-angle gait: {len(switches)} switching instants "
+                     "per cycle", cycles=1,
+                     events=[_event(kin, t_ev, name) for t_ev, name in switches])
     if te is None:
         te = default_phases([e[0] for e in switches])
     _store_samples(res, model, kin(te), te, anchors)
-    wplus, w_in, w_abs, diss = _cycle_integrals(model, kin, anchors, np.asarray(getattr(angles, "t_knots", ()), float))
+    wplus, w_in, w_abs, diss = _cycle_integrals(model, kin, anchors,
+                                                np.asarray(getattr(angles, "t_knots", ()), float))
     dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
     set_cycle_metrics(res, model.robot, S, wplus, w_in, dV, diss, w_abs)
     res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
@@ -157,17 +163,21 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
 
 
 def _check_angles(model: Model, angles: PeriodicSignal, ts: np.ndarray) -> None:
-    """ValueError unless the angles have shape (2, N), are finite with their derivative on the scan phases
-    ``ts``, are 1-periodic and give a two-foot contact at t = 0."""
+    """ValueError unless the angles have shape (2, N), are finite with their derivative on the scan
+    phases ``ts``, are 1-periodic and give a two-foot contact at t = 0."""
     phi_scan = np.asarray(angles(ts), float)
     if phi_scan.shape != (2, ts.size):
-        raise ValueError(f"simulate_angles: angles(t) must have shape (2, N) for N phases, got {phi_scan.shape}")
-    nonfinite = ~np.all(np.isfinite(phi_scan), axis=0) | ~np.all(np.isfinite(angles.derivative(ts)), axis=0)
+        raise ValueError("simulate_angles: angles(t) must have shape (2, N) for N phases, "
+                         f"got {phi_scan.shape}")
+    nonfinite = ~np.all(np.isfinite(phi_scan), axis=0) | ~np.all(np.isfinite(angles.derivative(ts)),
+                                                                 axis=0)
     if nonfinite.any():
-        raise ValueError(f"simulate_angles: angles or their derivative not finite at phase t = {ts[np.argmax(nonfinite)]:.6g}")
+        raise ValueError("simulate_angles: angles or their derivative not finite at phase t "
+                         f"= {ts[np.argmax(nonfinite)]:.6g}")
     gap = float(np.max(np.abs(np.asarray(angles(1.0), float) - np.asarray(angles(0.0), float))))
     if not gap <= PERIODIC_TOL:
-        raise ValueError(f"simulate_angles: angles must be 1-periodic in the phase, got |phi(1) - phi(0)| = {gap:.3g} rad")
+        raise ValueError("simulate_angles: angles must be 1-periodic in the phase, got |phi(1) "
+                         f"- phi(0)| = {gap:.3g} rad")
     model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
 
 
@@ -182,8 +192,10 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
     t_cross = _first_zero(kin.scalar("d"), ts, K["d"], robot.L)
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
-    checks = [(f"fn{i}", Mg, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}") for i in (1, 2)]
-    checks += [(f"zj{i}", robot.L, Status.JOINT_ON_GROUND, f"joint {i} reaches the ground", f"joint_{i}_on_ground")
+    checks = [(f"fn{i}", Mg, Status.LIFT_OFF, f"foot {i} lifts off",
+               f"lift_off_{i}") for i in (1, 2)]
+    checks += [(f"zj{i}", robot.L, Status.JOINT_ON_GROUND, f"joint {i} reaches the ground",
+                f"joint_{i}_on_ground")
                for i in (1, 2)]
     for name, scale, status, label, kind in checks:
         f = kin.scalar(name)
@@ -199,19 +211,23 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
     return failure
 
 
-def _failure_result(model: Model, kin: KinematicGait, tf: float, status: Status, label: str, kind: str) -> CrawlResult:
+def _failure_result(model: Model, kin: KinematicGait, tf: float, status: Status, label: str,
+                    kind: str) -> CrawlResult:
     """The result of a cycle that loses contact at phase tf, with the mode just before it."""
     k0 = kin(max(tf - 1e-9, 0.0))
     h0 = k0["h"][0]
     mode = Mode.slip(3 if abs(h0) <= TIE else (1 if h0 < 0 else 2), 1 if k0["ddot"][0] > 0 else -1)
-    return new_result(model, "angles", status, failure_message(status, f"{label} at phase t = {tf:.10f} (prescribed "
-                      "angles)"), cycles=1, failure_t=tf, failure_mode=mode.label, events=[Event(tf, kind, "", "failure")])
+    return new_result(model, "angles", status,
+                      failure_message(status,
+                                      f"{label} at phase t = {tf:.10f} (prescribed angles)"),
+                      cycles=1, failure_t=tf, failure_mode=mode.label,
+                      events=[Event(tf, kind, "", "failure")])
 
 
 def _switching_instants(kin: KinematicGait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
-    """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or vanishes on a
-    stretch (the input holds still: both feet stick); the smaller friction limit changes feet (slip switch),
-    or both are equal on a stretch (|h| <= TIE: both feet slip)."""
+    """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or
+    vanishes on a stretch (the input holds still: both feet stick); the smaller friction limit
+    changes feet (slip switch), or both are equal on a stretch (|h| <= TIE: both feet slip)."""
     events: list[tuple[float, str]] = []
     for name in ("ddot", "h"):
         f = kin.scalar(name)
@@ -228,7 +244,8 @@ def _switching_instants(kin: KinematicGait, ts: np.ndarray, K: dict) -> list[tup
 
 
 def _next_switch(f, name: str, ts: np.ndarray, runs: list, k: int) -> tuple[float | None, int]:
-    """The switch between the runs k and k + 1 of sign classes of ``f`` (None for a touch) and the next k."""
+    """The switch between the runs k and k + 1 of sign classes of ``f`` (None for a touch) and the
+    next k."""
     from scipy.optimize import brentq  # scipy only where used (start-up time)
 
     rtol = 4 * np.finfo(float).eps
@@ -261,8 +278,8 @@ def _mode_at(kin: KinematicGait, tm: float) -> Mode:
 
 
 def _anchors(kin: KinematicGait, breaks: list[float], d_start: float) -> tuple[list, float]:
-    """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's end [m]
-    (foot 1 starts at 0): the slipping foot follows d, the other stays."""
+    """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's
+    end [m] (foot 1 starts at 0): the slipping foot follows d, the other stays."""
     x1, x2 = 0.0, d_start
     anchors = []
     for a, b in zip(breaks[:-1], breaks[1:]):
@@ -298,7 +315,8 @@ def _event(kin: KinematicGait, t_ev: float, name: str) -> Event:
 
 
 def _friction(mu, k1: dict, m: Mode):
-    """f_t [N] in mode m: the slipping foot's friction limit along sign(d') (foot 1's in slip-slip)."""
+    """f_t [N] in mode m: the slipping foot's friction limit along sign(d') (foot 1's in
+    slip-slip)."""
     return (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
 
 
@@ -327,8 +345,8 @@ def _store_samples(res: CrawlResult, model: Model, Ko: dict, te: np.ndarray, anc
 
 
 def _cycle_integrals(model: Model, kin: KinematicGait, anchors: list, knots: np.ndarray) -> tuple:
-    """(W+ per actuator, input work, gross work, friction dissipation) [J] over the cycle, stretch by stretch
-    (f_t and the holding torques jump at the switching instants).
+    """(W+ per actuator, input work, gross work, friction dissipation) [J] over the cycle, stretch
+    by stretch (f_t and the holding torques jump at the switching instants).
 
     Sampled inputs (splines, PCHIP, piecewise linear) are smooth only between their ``knots``: the
     quadrature panels end at the knots too, or its error grows from ~1e-12 to ~1e-6.  Within a piece

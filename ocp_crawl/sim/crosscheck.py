@@ -14,10 +14,10 @@ not have: the time-stepping cannot see one inside a step (the step starts and en
 kink of the input it can show one that the event-driven stepper has not.  Excursions are taken out
 of both sequences before they are compared, and listed; their cost is judged by the S criterion.
 
-PASS/FAIL is decided by :func:`criteria` only (the table of docs/guide/simulators.md, each with its value and bound).
-The order of S and the largest deviation of phi are information: where S carries an error its
-size is what the S criterion bounds; phi follows the foot positions, whose net change (S) and
-switches (the events) are judged.
+PASS/FAIL is decided by :func:`criteria` only (the table of docs/guide/simulators.md, each with its
+value and bound).  The order of S and the largest deviation of phi are information: where S carries
+an error its size is what the S criterion bounds; phi follows the foot positions, whose net change
+(S) and switches (the events) are judged.
 
 What to expect.  Inside a mode the step equations are the mode's equations at t_n, so the
 time-stepping is exact there; errors come from transitions.  Switch-exact steps

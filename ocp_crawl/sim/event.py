@@ -246,6 +246,7 @@ class HybridStepper:
         d0 = start.aux[_D]
         seg = _Segment(Mode.STICK, mode_q(Mode.STICK, d0), 0.0, d0)
         pt = self.solver.solve(0.0, start.x, seg.q)
+        assert pt is not None  # the released start is an equilibrium of stick-stick
         seg.points.append(pt)
         return _Run(seg, pt, self.ctx.max_step, np.sign(pt.aux[_DET]) or 1.0, [seg])
 
@@ -326,16 +327,17 @@ class HybridStepper:
         run). ``left``: t_new is a kink of the input, solved with the rate before it (the end of the
         step's piece)."""
         pt, seg = run.pt, run.seg
+        assert pt is not None  # a run has a point from its start on
         px, xd = pt.xl, pt.xdl
         gx = [px[0] + hh * xd[0], px[1] + hh * xd[1], px[2] + hh * xd[2]]  # (as pt.x + hh pt.x')
         new = self.solver.solve(t_new, gx, seg.q, step=True, left=left)
         ok = new is not None
-        if ok:
+        if new is not None:
             nx = new.xl
             jump = max(abs(nx[0] - gx[0]), abs(nx[1] - gx[1]))
             ok = jump <= 0.05 + 0.5 * max(abs(gx[0] - px[0]), abs(gx[1] - px[1])) and \
                 max(abs(nx[0] - px[0]), abs(nx[1] - px[1])) < 0.35
-        if ok:
+        if ok and new is not None:
             det = new.a[_DET]
             # (else it crossed a fold onto another branch: locate it)
             ok = (det > 0) - (det < 0) == run.det_sign

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 
 from ocp_crawl.checks import real
 
-#: bounds on the options that size a run's work (docs/guide/problem_files.md, "Bounds"), checked here and read by
-#: the problem schema:
-#: the event solver's largest step and quadrature panel [cycles] (at most 1e4 per cycle), the cycles a run may
-#: take, and the MPCC's steps per cycle (each an IPOPT solve of about 2 ms)
+#: bounds on the options that size a run's work (docs/guide/problem_files.md, "Bounds"), checked
+#: here and read by the problem schema:
+#: the event solver's largest step and quadrature panel [cycles] (at most 1e4 per cycle), the cycles
+#: a run may take, and the MPCC's steps per cycle (each an IPOPT solve of about 2 ms)
 MAX_STEP_BOUNDS = (1e-4, 0.25)
 MAX_CYCLES_BOUNDS = (2, 500)
 STEPS_BOUNDS = (4, 10_000)
@@ -23,19 +23,20 @@ MAX_EVENTS_BOUNDS = (1, 100_000)
 
 
 def count(name: str, value, low: int, high: int | None = None) -> int:
-    """``value`` as an integer in [``low``, ``high``] (:func:`~ocp_crawl.checks.real`); a bool is refused as not an
-    integer.
+    """``value`` as an integer in [``low``, ``high``] (:func:`~ocp_crawl.checks.real`); a bool is
+    refused as not an integer.
 
     Raises ValueError for a bool, a non-integer or a value out of range, TypeError for a non-number.
     """
     if isinstance(value, bool):
         raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return real(name, value, integer=True, low=low, high=high)
+    return int(real(name, value, integer=True, low=low, high=high))  # an int already
 
 
 @dataclass(frozen=True)
 class CycleOptions:
-    """When a run of cycles stops: periodic after ``min_cycles``, or not periodic after ``max_cycles``."""
+    """When a run of cycles stops: periodic after ``min_cycles``, or not periodic after
+    ``max_cycles``."""
 
     max_cycles: int = 12
     """cycles to run before declaring the gait non-periodic"""
@@ -51,14 +52,16 @@ class CycleOptions:
                                       MAX_CYCLES_BOUNDS[1]))
         self._set("min_cycles", count(f"{owner}.min_cycles", self.min_cycles, 1))
         if self.min_cycles > self.max_cycles:
-            raise ValueError(f"{owner}.min_cycles must be an integer in [1, max_cycles], got {self.min_cycles!r}")
+            raise ValueError(f"{owner}.min_cycles must be an integer in [1, max_cycles], "
+                             f"got {self.min_cycles!r}")
 
     def _set(self, name: str, value) -> None:
         object.__setattr__(self, name, value)
 
     def cycle_verdict(self, cycle: int, deviation: float, same_mode: bool) -> bool | None:
-        """After ``cycle`` cycles whose last two ends differ by ``deviation`` (``same_mode``: in the same
-        contact mode): True if the gait is periodic, None to run on, False if it is not periodic."""
+        """After ``cycle`` cycles whose last two ends differ by ``deviation`` (``same_mode``: in the
+        same contact mode): True if the gait is periodic, None to run on, False if it is not
+        periodic."""
         if cycle >= self.min_cycles and deviation <= self.periodic_tol and same_mode:
             return True
         return False if cycle >= self.max_cycles else None

@@ -1,4 +1,5 @@
-"""Exact solution of one incremental step by enumerating the contact modes (reference for the MPCC step).
+"""Exact solution of one incremental step by enumerating the contact modes (reference for the MPCC
+step).
 
 The incremental problem of :mod:`ocp_crawl.sim.mpcc` has, generically, one of five contact modes at
 the end of a step.  In each mode the unknowns z = (phi1, phi2, f_t/(M g)) solve three equations:
@@ -8,8 +9,9 @@ the joint balance F(phi, tau, f_t) = 0 (the model's compiled residual) and
 mode             equation                                   consistency (all other pairs, scaled)
 ===============  =========================================  ============================================
 stick-stick      d(phi) = d(phi_k)                          every friction margin c_j >= 0
-slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0  dx1 = d_k - d >= 0 / <= 0, other c_j >= 0
-slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0  dx2 = d - d_k >= 0 / <= 0, other c_j >= 0
+slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0  dx1 = d_k - d >= 0 / <= 0, other c_j >=
+0 slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0  dx2 = d - d_k >= 0 / <= 0, other c_j
+>= 0
 ===============  =========================================  ============================================
 
 with f_t1 = f_t, f_t2 = -f_t and normal forces at phi_{k+1}; a slipping foot's partner sticks.
@@ -31,7 +33,8 @@ import numpy as np
 from ocp_crawl.model.statics import KIN, NP, Model, params, symbolic
 from ocp_crawl.model.step_equations import NPAIR, friction_margins
 from ocp_crawl.sim.result import Mode
-from ocp_crawl.sim.step import StepResult, StepState, check_tau, failed_step_result, step_result_from_w
+from ocp_crawl.sim.step import (StepResult, StepState, check_tau, failed_step_result,
+                                step_result_from_w)
 
 #: modes enumerated, in the order of the selector vector; slip modes are indexed like the pairs
 ENUM_MODES = (Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
@@ -46,7 +49,8 @@ DISTINCT_TOL = 1e-9
 
 @lru_cache(maxsize=1)
 def mode_system() -> cs.Function:
-    """(z[3], P[4+NP], sel[5]) -> (G[3], J[3x3], dd, c[4], fn[2]), all scaled; built once per process.
+    """(z[3], P[4+NP], sel[5]) -> (G[3], J[3x3], dd, c[4], fn[2]), all scaled; built once per
+    process.
 
     P = (phi_k, tau/(M g L), p); sel is one-hot over :data:`ENUM_MODES`; dd = (d(phi) - d(phi_k))/L.
     """
@@ -65,7 +69,8 @@ def mode_system() -> cs.Function:
     c = cs.vertcat(*friction_margins(prm.mu1, fn1, ft, prm.mu2, fn2, -ft))  # f_t2 = -f_t on foot 2
     mode_eq = sel[0] * dd + cs.dot(sel[1:], c)
     G = cs.vertcat(sym.residual(phi, tau_hat * Mg * L, ft * Mg, p) / (Mg * L), mode_eq)
-    return cs.Function("step_mode_system", [z, P, sel], [G, cs.jacobian(G, z), dd, c, cs.vertcat(fn1, fn2)],
+    return cs.Function("step_mode_system", [z, P, sel],
+                       [G, cs.jacobian(G, z), dd, c, cs.vertcat(fn1, fn2)],
                        ["z", "P", "sel"], ["G", "J", "dd", "c", "fn"])
 
 
@@ -75,7 +80,8 @@ def selector(mode: Mode) -> np.ndarray:
     return sel
 
 
-def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray, max_iter: int = 40) -> tuple[np.ndarray, bool, int]:
+def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray,
+            max_iter: int = 40) -> tuple[np.ndarray, bool, int]:
     """Damped Newton on G(z) = 0 (backtracking on max|G|)."""
     z = z0.copy()
     G, J = (np.asarray(a) for a in f(z, P, sel)[:2])
@@ -112,9 +118,10 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
     """Solve the incremental step exactly by enumerating the contact modes with Newton.
 
     Returns a :class:`~ocp_crawl.sim.step.StepResult` with status ``"Enumeration_Succeeded"`` or
-    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`; a failed result has NaN
-    solution fields); ``extra['candidates']`` lists every mode tried, ``extra['lift_off']``
-    is True when no mode is consistent and a mode solution has a normal force <= 0.
+    ``"No_Consistent_Mode"`` (both in :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`; a failed
+    result has NaN solution fields); ``extra['candidates']`` lists every mode tried,
+    ``extra['lift_off']`` is True when no mode is consistent and a mode solution has a normal force
+    <= 0.
     """
     if not isinstance(model, Model):
         raise TypeError(f"model must be a Model, got {type(model).__name__}")
@@ -140,19 +147,21 @@ def solve_step_enumerate(model: Model, state: StepState, tau) -> StepResult:
              "lift_off": False}
     elapsed = time.perf_counter() - t_start
     if distinct:
-        # among coinciding consistent solutions (a mode boundary) prefer the one with the most margin
+        # among coinciding consistent solutions (a mode boundary) prefer the one with the most
+        # margin
         chosen = max((c for c in consistent if _dphi(c["phi"], distinct[0]["phi"]) < DISTINCT_TOL),
                      key=lambda c: c["margin"])
         msg = f"consistent mode {chosen['mode']}"
         if len(distinct) > 1:
             msg += f" (closest to phi_k of {len(distinct)} distinct consistent solutions)"
         return step_result_from_w(model, state, chosen["_w"], tau=tau, success=True,
-                                  status="Enumeration_Succeeded", message=msg, iterations=iterations,
-                                  solve_time=elapsed, extra=extra)
+                                  status="Enumeration_Succeeded", message=msg,
+                                  iterations=iterations, solve_time=elapsed, extra=extra)
     extra["lift_off"] = any(c.get("converged") and c["fn_min"] <= 0 for c in candidates)
-    msg = "no consistent contact mode" + (" (a normal force would be <= 0: lift-off)" if extra["lift_off"] else "")
-    return failed_step_result(model, state, tau, status="No_Consistent_Mode", message=msg, iterations=iterations,
-                              solve_time=elapsed, extra=extra)
+    msg = "no consistent contact mode" + (" (a normal force would be <= 0: lift-off)"
+                                          if extra["lift_off"] else "")
+    return failed_step_result(model, state, tau, status="No_Consistent_Mode", message=msg,
+                              iterations=iterations, solve_time=elapsed, extra=extra)
 
 
 def _dphi(a, b) -> float:
@@ -160,9 +169,11 @@ def _dphi(a, b) -> float:
     return float(np.max(np.abs(np.asarray(a) - np.asarray(b))))
 
 
-def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple, Mg: float) -> tuple[dict, int]:
-    """The candidate of one contact mode: Newton from phi_k (and, for a slip mode, from the slipping foot's
-    friction limit at phi_k), then its consistency.  Returns (candidate dict, Newton iterations)."""
+def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple,
+                Mg: float) -> tuple[dict, int]:
+    """The candidate of one contact mode: Newton from phi_k (and, for a slip mode, from the slipping
+    foot's friction limit at phi_k), then its consistency.  Returns (candidate dict, Newton
+    iterations)."""
     f = mode_system()
     sel = selector(mode)
     guesses = [np.r_[state.phi, state.f_t / Mg]]
@@ -191,5 +202,6 @@ def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple, Mg: flo
         margins[j] = np.inf  # c_j = 0 holds by construction
     consistent = bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)
     w = np.r_[best[:2], best[2], -best[2], np.maximum(s, 0.0)]
-    return {"mode": mode.label, "converged": True, "consistent": consistent, "phi": best[:2].tolist(),
+    return {"mode": mode.label, "converged": True, "consistent": consistent,
+            "phi": best[:2].tolist(),
             "margin": float(np.min(margins)), "fn_min": float(np.min(fn)) * Mg, "_w": w}, iterations

@@ -24,7 +24,8 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
                            n_probe: int = 17) -> float:
     """Integral of max(0, f) over [a, b] for a smooth f, splitting at the sign changes of f.
 
-    ``f_vec(t_array)`` evaluates f on many points at once; ``f_scalar(t)`` one point (root refinement).
+    ``f_vec(t_array)`` evaluates f on many points at once; ``f_scalar(t)`` one point (root
+    refinement).
     """
     from scipy.optimize import brentq  # scipy only where used (start-up time)
 
@@ -35,7 +36,8 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
     fp = f_vec(probes)
     roots = []
     for j in np.nonzero(np.sign(fp[:-1]) * np.sign(fp[1:]) < 0)[0]:
-        roots.append(brentq(f_scalar, probes[j], probes[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps))
+        roots.append(brentq(f_scalar, probes[j], probes[j + 1], xtol=1e-14,
+                            rtol=4 * np.finfo(float).eps))
     edges = [a] + roots + [b]
     nodes, weights = [], []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -48,10 +50,11 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
 
 
 def legendre_roots(coefs: np.ndarray) -> np.ndarray:
-    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in the rows of
-    ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of each row (the eigenvalues of
-    its rotated companion matrix, built here as ``legcompanion`` does, for all rows at once, and taken in one
-    batched call); a row whose leading coefficient is 0 goes through legroots itself."""
+    """Roots (complex, (k, m - 1), padded with nan) of the Legendre series with the coefficients in
+    the rows of ``coefs`` (k, m), m >= 3: the values of ``numpy.polynomial.legendre.legroots`` of
+    each row (the eigenvalues of its rotated companion matrix, built here as ``legcompanion`` does,
+    for all rows at once, and taken in one batched call); a row whose leading coefficient is 0 goes
+    through legroots itself."""
     coefs = np.atleast_2d(np.asarray(coefs, float))
     full = coefs[:, -1] != 0
     out = np.full((len(coefs), coefs.shape[1] - 1), np.nan, dtype=complex)
@@ -70,8 +73,9 @@ def legendre_roots(coefs: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=8)
 def _companion_base(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The part of the scaled Legendre companion matrix (n, n) of ``legcompanion`` that does not depend on the
-    coefficients, and the ratios scl/scl[-1] (n,) of the last column's coefficient term (read-only: shared)."""
+    """The part of the scaled Legendre companion matrix (n, n) of ``legcompanion`` that does not
+    depend on the coefficients, and the ratios scl/scl[-1] (n,) of the last column's coefficient
+    term (read-only: shared)."""
     scl = 1. / np.sqrt(2 * np.arange(n) + 1)
     base = np.zeros((n, n))
     top = base.reshape(-1)[1::n + 1]

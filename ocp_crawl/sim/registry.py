@@ -27,11 +27,13 @@ class Solver:
 
     name: str
     drive: str
-    """the input it takes: ``"torque"`` (joint torques [N m]) or ``"angles"`` (prescribed joint angles [rad])"""
+    """the input it takes: ``"torque"`` (joint torques [N m]) or ``"angles"`` (prescribed joint
+    angles [rad])"""
     options: type
     """its options dataclass (``options()`` gives the defaults)"""
     run: Callable[[Model, Any, Any, Any], CrawlResult]
-    """``run(model, signal, options, t_eval) -> CrawlResult`` (``status`` a :class:`~ocp_crawl.status.Status`)"""
+    """``run(model, signal, options, t_eval) -> CrawlResult`` (``status`` a
+    :class:`~ocp_crawl.status.Status`)"""
     description: str
     available: Callable[[], bool] = lambda: True
     """whether its optional dependency can be imported (``install`` says how to get it otherwise)"""
@@ -72,11 +74,14 @@ class AnglesOptions:
 
 SOLVERS: dict[str, Solver] = {
     "event": Solver("event", "torque", HybridOptions, _run_event,
-                    "event-driven hybrid stepper: equilibrium continuation, events located to 1e-13 of a cycle"),
+                    "event-driven hybrid stepper: equilibrium continuation, "
+                    "events located to 1e-13 of a cycle"),
     "mpcc": Solver("mpcc", "torque", TimeSteppingOptions, _run_mpcc,
-                   "MPCC time-stepping: one IPOPT solve of the incremental Coulomb problem per step"),
+                   "MPCC time-stepping: one IPOPT solve of the incremental Coulomb problem per "
+                   "step"),
     "angles": Solver("angles", "angles", AnglesOptions, _run_angles,
-                     "prescribed joint angles: kinematic contact modes, events by bracketing and root finding"),
+                     "prescribed joint angles: kinematic contact modes, "
+                     "events by bracketing and root finding"),
     "mujoco": Solver("mujoco", "torque", MujocoOptions, _run_mujoco,
                      "dynamic simulation in MuJoCo: the torques played at a period T [s]",
                      available=mujoco_available, install=INSTALL),
@@ -90,10 +95,10 @@ MUJOCO_SOLVERS = {"torque": "mujoco", "angles": "mujoco_angles"}
 
 
 def unusable(name: str, gravity: str, values=None) -> str:
-    """Why the solver ``name`` cannot simulate a model of the ``gravity`` convention with the options
-    ``values`` (a mapping of ``[simulation]`` keys, None: not checked); "" if it can.  Its optional
-    dependency is missing (the message names the install command), the convention is the paper's
-    printed one, which MuJoCo's gravity is not, or the options break a rule between them."""
+    """Why the solver ``name`` cannot simulate a model of the ``gravity`` convention with the
+    options ``values`` (a mapping of ``[simulation]`` keys, None: not checked); "" if it can.  Its
+    optional dependency is missing (the message names the install command), the convention is the
+    paper's printed one, which MuJoCo's gravity is not, or the options break a rule between them."""
     spec = solver_named(name)
     if not spec.available():
         return f"needs an optional dependency that is not installed: {spec.install}"
@@ -140,16 +145,19 @@ def simulate(model: Model, signal, solver: str = "event", options=None, t_eval=N
     options : the solver's options dataclass, optional
         ``SOLVERS[solver].options``; None for its defaults.
     t_eval : array_like, optional
-        output phases [cycles] inside the reported steady cycle; None for the solver's default sampling.
+        output phases [cycles] inside the reported steady cycle; None for the solver's default
+        sampling.
 
     Returns
     -------
     CrawlResult
-        ``success``/``status``/``message`` and, on success, S [m], W+ [J], CoT+ [-] and the sampled trajectories.
+        ``success``/``status``/``message`` and, on success, S [m], W+ [J], CoT+ [-] and the sampled
+        trajectories.
     """
     spec = solver_named(solver)
     if options is None:
         options = spec.options()
     elif not isinstance(options, spec.options):
-        raise TypeError(f"options of solver {solver!r} must be {spec.options.__name__}, got {type(options).__name__}")
+        raise TypeError(f"options of solver {solver!r} must be {spec.options.__name__}, "
+                        f"got {type(options).__name__}")
     return spec.run(model, signal, options, t_eval)

@@ -20,14 +20,15 @@ class Mode(IntEnum):
     SLIP2_POS = 3
     SLIP2_NEG = 4
     SLIP_BOTH_POS = 5
-    """both feet slip apart (d' > 0); only when mu1 f_n1 = mu2 f_n2 identically (mirror-symmetric gaits)"""
+    """both feet slip apart (d' > 0); only when mu1 f_n1 = mu2 f_n2 identically (mirror-symmetric
+    gaits)"""
     SLIP_BOTH_NEG = 6
     """both feet slip together (d' < 0); see SLIP_BOTH_POS"""
 
     @property
     def label(self) -> str:
-        return {0: "stick-stick", 1: "slip1+", 2: "slip1-", 3: "slip2+", 4: "slip2-", 5: "slip-slip+",
-                6: "slip-slip-"}[int(self)]
+        return {0: "stick-stick", 1: "slip1+", 2: "slip1-", 3: "slip2+", 4: "slip2-",
+                5: "slip-slip+", 6: "slip-slip-"}[int(self)]
 
     @property
     def foot(self) -> int:
@@ -45,7 +46,8 @@ class Mode(IntEnum):
 
     @classmethod
     def slip(cls, foot: int, sigma: int) -> "Mode":
-        """Mode in which ``foot`` slips with sign(d') = sigma (foot 1 moves along -sigma, foot 2 along +sigma)."""
+        """Mode in which ``foot`` slips with sign(d') = sigma (foot 1 moves along -sigma, foot 2
+        along +sigma)."""
         if foot == 1:
             return cls.SLIP1_POS if sigma < 0 else cls.SLIP1_NEG
         if foot == 2:
@@ -54,8 +56,9 @@ class Mode(IntEnum):
 
 
 def mode_change_kind(before: Mode, after: Mode) -> str:
-    """The :class:`Event` kind of a change of contact mode from ``before`` to ``after``, for a change decided
-    by the modes (the MPCC time-stepping's steps, the event-driven stepper's decisions by the rates)."""
+    """The :class:`Event` kind of a change of contact mode from ``before`` to ``after``, for a
+    change decided by the modes (the MPCC time-stepping's steps, the event-driven stepper's
+    decisions by the rates)."""
     if before == Mode.STICK:
         return "slip_onset_both" if after.foot == 3 else f"slip_onset_{after.foot}"
     if after == Mode.STICK:
@@ -69,15 +72,17 @@ def mode_change_kind(before: Mode, after: Mode) -> str:
 
 @dataclass(frozen=True)
 class Event:
-    """A located event: phase t (cycles, counted from the start of the run), kind, modes before/after.
+    """A located event: phase t (cycles, counted from the start of the run), kind, modes
+    before/after.
 
     Kinds: ``slip_onset_1``/``slip_onset_2`` (stick-stick -> foot i slips; the direction is in
     ``mode_after``), ``slip_to_stick`` (d' = 0), ``slip_switch`` (the slipping foot changes),
     ``slip_slip_end``, ``lift_off_1``/``lift_off_2``, ``feet_crossed``, ``joint_1_on_ground``/
     ``joint_2_on_ground``, ``fold``; ``graze_<kind>`` when a guard touches zero and turns back, so
-    that the mode continues (for example f_t touching a friction limit in stick-stick); prescribed angles: ``slip_reversal``, ``slip_switch``, and ``slip_to_stick``/``slip_onset_*`` where
-    the input holds still; MPCC
-    time-stepping (mode changes between steps): also ``slip_onset_both``, ``slip_slip_start``.
+    that the mode continues (for example f_t touching a friction limit in stick-stick); prescribed
+    angles: ``slip_reversal``, ``slip_switch``, and ``slip_to_stick``/``slip_onset_*`` where the
+    input holds still; MPCC time-stepping (mode changes between steps): also ``slip_onset_both``,
+    ``slip_slip_start``.
     """
 
     t: float
@@ -91,7 +96,8 @@ class Event:
 
     def to_dict(self) -> dict:
         """JSON-safe dict of the event (a non-finite guard value is None)."""
-        return {"t": float(self.t), "kind": self.kind, "mode_before": self.mode_before, "mode_after": self.mode_after,
+        return {"t": float(self.t), "kind": self.kind, "mode_before": self.mode_before,
+                "mode_after": self.mode_after,
                 "guard": finite_or_none(self.guard), "guard_name": self.guard_name}
 
 
@@ -103,17 +109,20 @@ def cost_of_transport(w_plus: float, robot, S: float) -> float:
     return float(w_plus / den)
 
 
-def energy_balance(input_work: float, potential_change: float, dissipation: float, gross_work: float,
-                   robot) -> dict:
+def energy_balance(input_work: float, potential_change: float, dissipation: float,
+                   gross_work: float, robot) -> dict:
     """Energy balance of a cycle [J]: input work = potential change + friction dissipation.
 
-    ``balance_residual`` is relative to the gross work (integral of sum |tau_i phi_i'|, which the springs
-    store and return even when the net work is a small difference of large works), floored at
-    1e-12 M g L for a robot that does not move (and at 1e-300 against underflow).
+    ``balance_residual`` is relative to the gross work (integral of sum |tau_i phi_i'|, which the
+    springs store and return even when the net work is a small difference of large works), floored
+    at 1e-12 M g L for a robot that does not move (and at 1e-300 against underflow).
     """
-    scale = max(abs(input_work), abs(dissipation), abs(potential_change), gross_work, 1e-12 * robot.MgL, 1e-300)
-    return {"input_work": input_work, "potential_change": potential_change, "dissipation": dissipation,
-            "gross_work": gross_work, "balance_residual": (input_work - potential_change - dissipation) / scale}
+    scale = max(abs(input_work), abs(dissipation), abs(potential_change), gross_work,
+                1e-12 * robot.MgL, 1e-300)
+    return {"input_work": input_work, "potential_change": potential_change,
+            "dissipation": dissipation,
+            "gross_work": gross_work,
+            "balance_residual": (input_work - potential_change - dissipation) / scale}
 
 
 ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")
@@ -144,7 +153,8 @@ class CrawlResult:
     f_t, f_n1, f_n2 : ndarray, shape (N,)
         Tangential force and normal forces at the feet [N].
     S, W_plus, CoT_plus : float
-        Displacement per cycle [m], positive work per cycle [J], cost of transport [-]; NaN on failure.
+        Displacement per cycle [m], positive work per cycle [J], cost of transport [-]; NaN on
+        failure.
     events : list of Event
         The located contact events (``steady_events()``: those of the steady cycle).
 
@@ -177,7 +187,8 @@ class CrawlResult:
     t0: float = 0.0
     """phase at which the reported steady cycle starts"""
     energy: dict = field(default_factory=dict)
-    """per-cycle energy balance of the steady cycle: input work, potential change, dissipation [J]"""
+    """per-cycle energy balance of the steady cycle: input work, potential change, dissipation
+    [J]"""
     periodicity_residual: float = float("nan")
     S_error: float = float("nan")
     """estimate of the discretisation error of S [m] (MPCC time-stepping: |S_N - S_2N+1|, see
@@ -190,9 +201,9 @@ class CrawlResult:
     extra: dict = field(default_factory=dict)
 
     def __repr__(self) -> str:
-        return (f"CrawlResult(success={self.success}, status={self.status}, message={self.message!r}, "
-                f"S={self.S:.6g} m, W_plus={self.W_plus:.6g} J, CoT_plus={self.CoT_plus:.6g}, "
-                f"events={len(self.events)}, cycles={self.cycles})")
+        return (f"CrawlResult(success={self.success}, status={self.status}, "
+                f"message={self.message!r}, S={self.S:.6g} m, W_plus={self.W_plus:.6g} J, "
+                f"CoT_plus={self.CoT_plus:.6g}, events={len(self.events)}, cycles={self.cycles})")
 
     @property
     def status_name(self) -> str:
@@ -217,12 +228,13 @@ class CrawlResult:
     def summary(self) -> dict:
         """JSON-friendly summary (no arrays; non-finite numbers are None)."""
         return {
-            "status": int(self.status), "status_name": self.status_name, "success": bool(self.success),
+            "status": int(self.status), "status_name": self.status_name,
+            "success": bool(self.success),
             "message": self.message, "drive": self.drive, "gravity": self.gravity,
             "S": finite_or_none(self.S), "W_plus": finite_or_none(self.W_plus),
             "W_plus_joint": [finite_or_none(w) for w in self.W_plus_joint],
-            "CoT_plus": finite_or_none(self.CoT_plus), "cycles": int(self.cycles), "t0": float(self.t0),
-            "events": self.event_dicts(),
+            "CoT_plus": finite_or_none(self.CoT_plus), "cycles": int(self.cycles),
+            "t0": float(self.t0), "events": self.event_dicts(),
             "energy": {k: finite_or_none(v) for k, v in self.energy.items()},
             "periodicity_residual": finite_or_none(self.periodicity_residual),
             "S_error": finite_or_none(self.S_error),

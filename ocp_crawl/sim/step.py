@@ -1,9 +1,10 @@
 """One incremental step of the time-stepping: its state, its result and the result's assembly.
 
 Shared by the MPCC step solver (:mod:`ocp_crawl.sim.mpcc`) and the mode-enumeration oracle
-(:mod:`ocp_crawl.sim.oracle`): both solve the step equations of :mod:`ocp_crawl.model.step_equations` for
-the scaled point z = (phi, f_t1/Mg, f_t2/Mg, s/L) and report it as a :class:`StepResult` built by
-:func:`step_result_from_w` (or :func:`failed_step_result`).
+(:mod:`ocp_crawl.sim.oracle`): both solve the step equations of
+:mod:`ocp_crawl.model.step_equations` for the scaled point z = (phi, f_t1/Mg, f_t2/Mg, s/L) and
+report it as a :class:`StepResult` built by :func:`step_result_from_w` (or
+:func:`failed_step_result`).
 """
 from __future__ import annotations
 
@@ -36,7 +37,9 @@ class StepState:
         object.__setattr__(self, "phi", phi)
         for name in ("x1", "x2", "f_t"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+            if isinstance(v,
+                          bool) or not isinstance(v, (int, float, np.integer,
+                                                      np.floating)) or not math.isfinite(v):
                 raise ValueError(f"StepState.{name} must be a finite real number, got {v!r}")
             object.__setattr__(self, name, float(v))
 
@@ -53,7 +56,8 @@ class StepResult:
 
     success: bool
     status: str
-    """IPOPT return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`) or the oracle's own status"""
+    """IPOPT return status (see :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`) or the oracle's
+    own status"""
     message: str
     phi: np.ndarray
     """joint angles after the step [rad], shape (2,)"""
@@ -86,7 +90,8 @@ class StepResult:
     comp_residual: float
     """max_j |min(s_j/L, c_j/(M g))| [-]"""
     eq_residual: float
-    """largest scaled residual of the equilibrium, balance and closure equations and the bounds [-]"""
+    """largest scaled residual of the equilibrium, balance and closure equations and the bounds
+    [-]"""
     iterations: int
     """IPOPT iterations (Newton iterations for the oracle), all attempts"""
     solve_time: float
@@ -112,18 +117,21 @@ class StepResult:
         return StepState(self.phi, self.x1, self.x2, self.f_t)
 
 
-#: a scaled slip below this is no slip (round-off of the solvers); classifies modes at a corner s = c = 0
+#: a scaled slip below this is no slip (round-off of the solvers); classifies modes at a corner s =
+#: c = 0
 SLIP_EPS = 1e-12
 SLIP_PAIR_MODES = (Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
-#: both feet count as slipping (SLIP_BOTH_*) when the smaller foot slip is at least this part of the larger
+#: both feet count as slipping (SLIP_BOTH_*) when the smaller foot slip is at least this part of the
+#: larger
 BOTH_RATIO = 1e-3
 
 
 @lru_cache(maxsize=1)
 def step_outputs() -> cs.Function:
-    """(z[8], P[4+NP]) -> out[10]: f_n1/Mg, f_n2/Mg, d [m], d_k [m], margins[4]/Mg, equation residual,
-    complementarity residual, for a point z = (phi, f_t1/Mg, f_t2/Mg, s/L) of the step from phi_k
-    with P = (phi_k, tau/(M g L), p).  Built once per process from the shared step equations."""
+    """(z[8], P[4+NP]) -> out[10]: f_n1/Mg, f_n2/Mg, d [m], d_k [m], margins[4]/Mg, equation
+    residual, complementarity residual, for a point z = (phi, f_t1/Mg, f_t2/Mg, s/L) of the step
+    from phi_k with P = (phi_k, tau/(M g L), p).  Built once per process from the shared step
+    equations."""
     z = cs.SX.sym("z", 8)
     P = cs.SX.sym("P", 4 + NP)
     phi_k, tau_hat, p = P[0:2], P[2:4], P[4:4 + NP]
@@ -136,12 +144,14 @@ def step_outputs() -> cs.Function:
     kin0 = sym.kin(phi_k, p)
     eq = cs.fmax(cs.mmax(cs.fabs(g_eq)), cs.fmax(cs.mmax(cs.fmax(-s, 0)), cs.mmax(cs.fmax(-c, 0))))
     comp = cs.mmax(cs.fabs(cs.fmin(s, c)))
-    out = cs.vertcat(kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg, kin1[KIN["d"]], kin0[KIN["d"]], c, eq, comp)
+    out = cs.vertcat(kin1[KIN["fn1"]] / Mg, kin1[KIN["fn2"]] / Mg, kin1[KIN["d"]], kin0[KIN["d"]],
+                     c, eq, comp)
     return cs.Function("step_outputs", [z, P], [out], ["z", "P"], ["out"])
 
 
 def mode_from_pairs(s: np.ndarray, c: np.ndarray) -> tuple[Mode, int]:
-    """Contact mode from the scaled pairs (s1+, s1-, s2+, s2-): pair j slips when s_j > max(c_j, SLIP_EPS).
+    """Contact mode from the scaled pairs (s1+, s1-, s2+, s2-): pair j slips when s_j > max(c_j,
+    SLIP_EPS).
 
     Returns (mode, number of slipping pairs).  Both feet slipping (possible only when the friction
     limits are equal, e.g. mirror-symmetric gaits) is ``SLIP_BOTH_*`` when the smaller foot slip is
@@ -155,7 +165,8 @@ def mode_from_pairs(s: np.ndarray, c: np.ndarray) -> tuple[Mode, int]:
     feet = {0 if i < 2 else 1: i for i in slipping}
     if len(feet) == 2:
         i1, i2 = feet[0], feet[1]
-        # d' sign of each foot's slip: foot 1 moving -x (s1-) and foot 2 moving +x (s2+) open the feet
+        # d' sign of each foot's slip: foot 1 moving -x (s1-) and foot 2 moving +x (s2+) open the
+        # feet
         sig1, sig2 = (-1 if i1 == 0 else 1), (1 if i2 == 2 else -1)
         if sig1 == sig2 and min(s[i1], s[i2]) >= BOTH_RATIO * max(s[i1], s[i2]):
             return (Mode.SLIP_BOTH_POS if sig1 > 0 else Mode.SLIP_BOTH_NEG), len(slipping)
@@ -168,8 +179,10 @@ def step_params(model: Model, state: StepState, tau: np.ndarray) -> np.ndarray:
     return np.concatenate([state.phi, tau / (r.M * r.g * r.L), model.p])
 
 
-def step_result_from_w(model: Model, state: StepState, z: np.ndarray, tau: np.ndarray, **fields) -> StepResult:
-    """Physical step result from a scaled solution z = (phi, f_t1/Mg, f_t2/Mg, s/L, ...) (MPCC and oracle)."""
+def step_result_from_w(model: Model, state: StepState, z: np.ndarray, tau: np.ndarray,
+                       **fields) -> StepResult:
+    """Physical step result from a scaled solution z = (phi, f_t1/Mg, f_t2/Mg, s/L, ...) (MPCC and
+    oracle)."""
     r = model.robot
     Mg, L = r.M * r.g, r.L
     z = np.asarray(z, float)
@@ -179,9 +192,11 @@ def step_result_from_w(model: Model, state: StepState, z: np.ndarray, tau: np.nd
     sl = s * L
     dx1, dx2 = float(sl[0] - sl[1]), float(sl[2] - sl[3])
     extra = dict(fields.pop("extra", {}), slipping_pairs=nslip, margins=c.tolist())
-    return StepResult(phi=z[:2].copy(), f_t=float(z[2] * Mg), f_n1=float(out[0] * Mg), f_n2=float(out[1] * Mg),
+    return StepResult(phi=z[:2].copy(), f_t=float(z[2] * Mg), f_n1=float(out[0] * Mg),
+                      f_n2=float(out[1] * Mg),
                       s1p=float(sl[0]), s1m=float(sl[1]), s2p=float(sl[2]), s2m=float(sl[3]),
-                      dx1=dx1, dx2=dx2, x1=state.x1 + dx1, x2=state.x2 + dx2, d=float(out[2]), mode=mode,
+                      dx1=dx1, dx2=dx2, x1=state.x1 + dx1, x2=state.x2 + dx2, d=float(out[2]),
+                      mode=mode,
                       comp_residual=float(out[9]), eq_residual=float(out[8]), extra=extra, **fields)
 
 
@@ -194,17 +209,20 @@ def check_tau(tau) -> np.ndarray:
 
 
 #: the numeric fields of a StepResult that a successful step must have finite
-RESULT_FIELDS = ("f_t", "f_n1", "f_n2", "s1p", "s1m", "s2p", "s2m", "dx1", "dx2", "x1", "x2", "d", "comp_residual",
-                 "eq_residual")
+RESULT_FIELDS = ("f_t", "f_n1", "f_n2", "s1p", "s1m", "s2p", "s2m", "dx1", "dx2", "x1", "x2", "d",
+                 "comp_residual", "eq_residual")
 
 
 def finite_result(res: StepResult) -> bool:
-    return bool(np.all(np.isfinite(res.phi))) and all(math.isfinite(getattr(res, f)) for f in RESULT_FIELDS)
+    return (bool(np.all(np.isfinite(res.phi)))
+            and all(math.isfinite(getattr(res, f)) for f in RESULT_FIELDS))
 
 
 def failed_step_result(model: Model, state: StepState, tau: np.ndarray, **fields) -> StepResult:
-    """A failed :class:`StepResult`: every solution field is NaN, so that nothing can pass for a solution."""
+    """A failed :class:`StepResult`: every solution field is NaN, so that nothing can pass for a
+    solution."""
     nan = float("nan")
-    return StepResult(success=False, phi=np.full(2, nan), f_t=nan, f_n1=nan, f_n2=nan, s1p=nan, s1m=nan,
+    return StepResult(success=False, phi=np.full(2, nan), f_t=nan, f_n1=nan, f_n2=nan, s1p=nan,
+                      s1m=nan,
                       s2p=nan, s2m=nan, dx1=nan, dx2=nan, x1=nan, x2=nan, d=nan, mode=Mode.STICK,
                       comp_residual=nan, eq_residual=nan, **fields)

@@ -1,26 +1,27 @@
 """Switch-exact time-stepping: locate a contact event inside a step and split the step there.
 
-A step of the MPCC time-stepping (:mod:`ocp_crawl.sim.timestepping`) from t_a to t_b is exact as long as
-one contact mode holds over it (quasistatics: the step equations are then the mode's equations at
-t_b).  A step whose MPCC solution ends in another mode than it started contains an event.  Single
-events of the slip onset kind lose nothing (the end state is the same), but a change of the slipping
-foot gives the whole slip of the step to the foot slipping at its end, an O(h) error in the foot
-positions per switch, and slip-to-stick an O(h^2) one.  Here the event is found as the root of the step
-equations as a function of the step fraction theta, so that it falls on a step boundary:
+A step of the MPCC time-stepping (:mod:`ocp_crawl.sim.timestepping`) from t_a to t_b is exact as
+long as one contact mode holds over it (quasistatics: the step equations are then the mode's
+equations at t_b).  A step whose MPCC solution ends in another mode than it started contains an
+event.  Single events of the slip onset kind lose nothing (the end state is the same), but a change
+of the slipping foot gives the whole slip of the step to the foot slipping at its end, an O(h) error
+in the foot positions per switch, and slip-to-stick an O(h^2) one.  Here the event is found as the
+root of the step equations as a function of the step fraction theta, so that it falls on a step
+boundary:
 
-* the step is solved *in the mode it started in* (:meth:`~ocp_crawl.sim.mpcc.MPCCStep.solve_in_mode`,
-  one IPOPT call on the step's own NLP with the pairs' branches imposed by bounds) at the torque of
-  t_a + theta (t_b - t_a);
-* the guards of that mode are read from the solution: the friction margin c_k (scaled by M g) of every
-  pair that does not slip (slip onset, change of the slipping foot: the other foot's limit is reached),
-  and the slip rate ds_j/dtheta of the slipping pair (slip-to-stick or direction reversal: the rate
-  changes sign), by a central difference of the mode's slip increment;
+* the step is solved *in the mode it started in*
+  (:meth:`~ocp_crawl.sim.mpcc.MPCCStep.solve_in_mode`, one IPOPT call on the step's own NLP with the
+  pairs' branches imposed by bounds) at the torque of t_a + theta (t_b - t_a);
+* the guards of that mode are read from the solution: the friction margin c_k (scaled by M g) of
+  every pair that does not slip (slip onset, change of the slipping foot: the other foot's limit is
+  reached), and the slip rate ds_j/dtheta of the slipping pair (slip-to-stick or direction reversal:
+  the rate changes sign), by a central difference of the mode's slip increment;
 * every guard that is negative at theta = 1 is brought to its root in (0, 1) by Brent's method
   (:func:`scipy.optimize.brentq`), and the earliest root is the event.
 
-This search uses only the step NLP (no event function or locator of the event-driven stepper), so the
-time-stepping stays an independent check of :mod:`ocp_crawl.sim.event`.  For the gait OCP the same
-split reads as a step with two sub-steps of free lengths theta h and (1 - theta) h whose common
+This search uses only the step NLP (no event function or locator of the event-driven stepper), so
+the time-stepping stays an independent check of :mod:`ocp_crawl.sim.event`.  For the gait OCP the
+same split reads as a step with two sub-steps of free lengths theta h and (1 - theta) h whose common
 boundary carries the guard equation (c_k = 0 there), i.e. a finite element with switch detection.
 """
 from __future__ import annotations
@@ -38,7 +39,8 @@ from ocp_crawl.sim.step import SLIP_PAIR_MODES, StepState
 
 #: half width of the central difference of the slip rate [step fraction]
 RATE_DELTA = 1e-3
-#: roots closer than this to the step's start [step fraction] are the start itself (the event is on the boundary)
+#: roots closer than this to the step's start [step fraction] are the start itself (the event is on
+#: the boundary)
 MIN_FRACTION = 1e-9
 #: a guard counts as violated at the step's end when below -GUARD_TOL (scaled margin or slip rate)
 GUARD_TOL = 1e-10
@@ -48,24 +50,29 @@ XTOL = 1e-12
 
 @dataclass(frozen=True)
 class Split:
-    """A located event: step fraction, the solution in the old mode there, the guard that crossed."""
+    """A located event: step fraction, the solution in the old mode there, the guard that
+    crossed."""
 
     theta: float
-    """fraction of the step at the event, in (lo, 1) (negative: in the previous step; 0: at the step's start)"""
+    """fraction of the step at the event, in (lo, 1) (negative: in the previous step; 0: at the
+    step's start)"""
     solve: Solve
-    """the step to the event solved in the mode it started in (its point w is the state at the event)"""
+    """the step to the event solved in the mode it started in (its point w is the state at the
+    event)"""
     guard: str
     """name of the guard: '<pair> margin' or '<pair> slip rate'"""
     value: float
     """the guard's value at the event (about 0)"""
     mode_after: Mode
-    """the mode the guard leads to: slip of the pair whose margin reached zero, stick when the slip rate did"""
+    """the mode the guard leads to: slip of the pair whose margin reached zero, stick when the slip
+    rate did"""
     calls: int
     """IPOPT calls of the search"""
 
 
 def slip_pair(mode: Mode) -> int | None:
-    """Index of the slipping pair of a single-foot slip mode, None for stick-stick (ValueError for both feet)."""
+    """Index of the slipping pair of a single-foot slip mode, None for stick-stick (ValueError for
+    both feet)."""
     if mode == Mode.STICK:
         return None
     if mode in SLIP_PAIR_MODES:
@@ -76,8 +83,8 @@ def slip_pair(mode: Mode) -> int | None:
 class _Guards:
     """Guards of one mode along the step fraction, each mode solve cached."""
 
-    def __init__(self, step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[[float], np.ndarray],
-                 x0: np.ndarray | None):
+    def __init__(self, step: MPCCStep, state: StepState, mode: Mode,
+                 tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None):
         self.step, self.state, self.tau_at = step, state, tau_at
         self.pair = slip_pair(mode)
         self.x0 = x0
@@ -89,9 +96,11 @@ class _Guards:
             near = min(self.cache, key=lambda t: abs(t - theta)) if self.cache else None
             x0 = self.x0 if near is None else self.cache[near].x
             sol = self.step.solve_in_mode(self.state, self.tau_at(theta), self.pair, x0)
-            if not (sol.accepted and sol.eq <= self.step.options.eq_tol and np.all(np.isfinite(sol.x))):
+            if not (sol.accepted and sol.eq <= self.step.options.eq_tol
+                    and np.all(np.isfinite(sol.x))):
                 self.failed = True
-                raise _SearchFailed(f"mode solve at theta = {theta:.6g}: IPOPT {sol.status}, residual {sol.eq:.3g}")
+                raise _SearchFailed(f"mode solve at theta = {theta:.6g}: IPOPT {sol.status}, "
+                                    f"residual {sol.eq:.3g}")
             self.cache[theta] = sol
         return self.cache[theta]
 
@@ -102,7 +111,8 @@ class _Guards:
     def value(self, name: str, theta: float) -> float:
         if name.endswith("slip rate"):
             j = 4 + self.pair
-            return float(self.solve(theta + RATE_DELTA).x[j] - self.solve(theta - RATE_DELTA).x[j]) / (2 * RATE_DELTA)
+            return float(self.solve(theta + RATE_DELTA).x[j]
+                         - self.solve(theta - RATE_DELTA).x[j]) / (2 * RATE_DELTA)
         return float(self.solve(theta).c[PAIR_NAMES.index(name.split()[0])])
 
 
@@ -110,7 +120,8 @@ class _SearchFailed(Exception):
     pass
 
 
-def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[[float], np.ndarray],
+def locate_event(step: MPCCStep, state: StepState, mode: Mode,
+                 tau_at: Callable[[float], np.ndarray],
                  x0: np.ndarray | None = None, lo: float = 0.0) -> tuple[Split | None, str]:
     """The first event of ``mode`` inside a step (see the module docstring).
 
@@ -121,16 +132,17 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
     mode : the contact mode at the start of the step (stick-stick or a single-foot slip)
     tau_at : torque [N m] (shape (2,)) at the step fraction theta (0 = start, 1 = end of the step)
     x0 : a scaled step point to start the first mode solve from (e.g. the previous step's solution)
-    lo : lowest step fraction searched, in [-1, 0]: with lo < 0 a guard that is already negative at the
-        step's start is traced back to a root in [lo, 0] (an event the previous step passed without a
-        change of mode, as slip-to-stick: the slip increment of that step is still positive); the
-        caller then redoes the previous step from the event
+    lo : lowest step fraction searched, in [-1, 0]: with lo < 0 a guard that is already negative at
+        the step's start is traced back to a root in [lo, 0] (an event the previous step passed
+        without a change of mode, as slip-to-stick: the slip increment of that step is still
+        positive); the caller then redoes the previous step from the event
 
     Returns
     -------
-    (split or None, reason): None when no guard of ``mode`` is violated at the step's end (the change of
-    mode seen by the MPCC is not an event of ``mode``, e.g. a tie), or when a mode solve fails; ``reason``
-    then says which.  A root within ``MIN_FRACTION`` of the step's start is returned as theta = 0.
+    (split or None, reason): None when no guard of ``mode`` is violated at the step's end (the
+    change of mode seen by the MPCC is not an event of ``mode``, e.g. a tie), or when a mode solve
+    fails; ``reason`` then says which.  A root within ``MIN_FRACTION`` of the step's start is
+    returned as theta = 0.
     """
     try:
         slip_pair(mode)
@@ -159,11 +171,13 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode, tau_at: Callable[
         return None, "the violated guards are not positive at the start of the step"
     theta, name = min(roots)
     if abs(theta) < MIN_FRACTION:
-        theta = 0.0  # the event is the step's start (e.g. a slip that stops exactly at a step phase)
+        # the event is the step's start (e.g. a slip that stops exactly at a step phase)
+        theta = 0.0
     try:
         value = g.value(name, theta)
         sol = g.solve(theta)
     except _SearchFailed as exc:
         return None, str(exc)
-    after = Mode.STICK if name.endswith("slip rate") else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])]
+    after = Mode.STICK if name.endswith("slip "
+                                        "rate") else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])]
     return Split(theta, sol, name, value, after, step.ncalls - calls0), ""

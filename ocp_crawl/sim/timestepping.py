@@ -4,41 +4,43 @@ The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n 
 t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
 from step n-1.  Steps are switch-exact (``switch_exact``, default): when a step's solution ends in
 another contact mode than it started in, the event is located inside the step as the root of a guard
-of the starting mode in the step fraction (:mod:`ocp_crawl.sim.step_split`: the step NLP solved in that
-mode, with the friction margins and the slip rate as guards) and the step is split there, so that every
-event (slip onset, slip-to-stick, change of the slipping foot, direction reversal) is a step boundary and
-a sample of the result (up to ``MAX_SPLITS`` events per step; a slip-to-stick that the previous step
-passed with a positive net slip is traced back into it and that step redone).  The foot positions, and
-so S, then carry no discretisation error.  The run starts like the event-driven stepper (a released start at t = 0: equilibrium
-with f_t = 0, stick-stick) and continues cycle by cycle until the state at the end of a cycle
-repeats (or for a given number of cycles); the last cycle is reported in a
-:class:`~ocp_crawl.sim.result.CrawlResult` with the same fields as the event-driven result.
+of the starting mode in the step fraction (:mod:`ocp_crawl.sim.step_split`: the step NLP solved in
+that mode, with the friction margins and the slip rate as guards) and the step is split there, so
+that every event (slip onset, slip-to-stick, change of the slipping foot, direction reversal) is a
+step boundary and a sample of the result (up to ``MAX_SPLITS`` events per step; a slip-to-stick that
+the previous step passed with a positive net slip is traced back into it and that step redone).  The
+foot positions, and so S, then carry no discretisation error.  The run starts like the event-driven
+stepper (a released start at t = 0: equilibrium with f_t = 0, stick-stick) and continues cycle by
+cycle until the state at the end of a cycle repeats (or for a given number of cycles); the last
+cycle is reported in a :class:`~ocp_crawl.sim.result.CrawlResult` with the same fields as the
+event-driven result.
 
 Metrics on the samples of the reported cycle (the step phases and the located events):
 
 * S = x1(t0 + 1) - x1(t0) [m];
-* W+ by the midpoint rule on each step: sum_n sum_i max(0, tau_i(t_{n-1/2}) (phi_i,n - phi_i,n-1)) [J]
-  (second order on smooth stretches, where the right-end rule tau_i(t_n) would be first order);
+* W+ by the midpoint rule on each step: sum_n sum_i max(0, tau_i(t_{n-1/2}) (phi_i,n - phi_i,n-1))
+  [J] (second order on smooth stretches, where the right-end rule tau_i(t_n) would be first order);
 * energy: input work sum_n tau(t_{n-1/2}) . (phi_n - phi_{n-1}), potential change, friction
-  dissipation sum_n -(f_t1 dx1 + f_t2 dx2) with the forces averaged over the ends of step n (trapezoid
-  rule), so that the balance residual (input work - potential change - dissipation, relative to the
-  gross work sum |tau_i dphi_i| as in the event-driven stepper) is O(1/N^2).
+  dissipation sum_n -(f_t1 dx1 + f_t2 dx2) with the forces averaged over the ends of step n
+  (trapezoid rule), so that the balance residual (input work - potential change - dissipation,
+  relative to the gross work sum |tau_i dphi_i| as in the event-driven stepper) is O(1/N^2).
 
 Failures stop the run with a status: a step that IPOPT cannot solve (after retries) gives
 ``SOLVER_FAILURE``, or ``LIFT_OFF`` if the mode-enumeration oracle finds that every equilibrium of
 the step has a normal force <= 0; the message names the step, its phase and the return status with
-its meaning from :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`, and the result keeps the steps of the
-failing cycle solved before it.  A torque input that is not finite at a step gives ``SOLVER_FAILURE``
-too, and no released equilibrium at t = 0 gives ``NO_START`` (as the event-driven stepper).
-A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint at or below
-the ground ``JOINT_ON_GROUND``; a sign change of the
+its meaning from :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`, and the result keeps the steps of
+the failing cycle solved before it.  A torque input that is not finite at a step gives
+``SOLVER_FAILURE`` too, and no released equilibrium at t = 0 gives ``NO_START`` (as the event-driven
+stepper).  A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint
+at or below the ground ``JOINT_ON_GROUND``; a sign change of the
 Jacobian determinant of the active mode's equations within one mode, or a jump of phi larger than
-``max_dphi`` in one step, gives ``FOLD`` (the tracked equilibrium branch was lost).  Every solved step's
-equilibrium must be stable in its contact mode (:mod:`ocp_crawl.model.stability`, the criterion of the
-event-driven stepper), else ``UNSTABLE``; the released start must be stable, else ``NO_START``; a steady
-cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is ``ENERGY_IMBALANCE``.  S's
-discretisation error is estimated by re-running the steady cycle with 2 N + 1 steps
-(:mod:`ocp_crawl.sim.discretisation`); above ``s_error_tol (|S| + 1e-3 L)`` it is ``COARSE_STEPS``.
+``max_dphi`` in one step, gives ``FOLD`` (the tracked equilibrium branch was lost).  Every solved
+step's equilibrium must be stable in its contact mode (:mod:`ocp_crawl.model.stability`, the
+criterion of the event-driven stepper), else ``UNSTABLE``; the released start must be stable, else
+``NO_START``; a steady cycle whose energy balance residual exceeds ``energy_tol_n2 / N^2`` is
+``ENERGY_IMBALANCE``.  S's discretisation error is estimated by re-running the steady cycle with
+2 N + 1 steps (:mod:`ocp_crawl.sim.discretisation`); above ``s_error_tol (|S| + 1e-3 L)`` it is
+``COARSE_STEPS``.
 """
 from __future__ import annotations
 
@@ -52,8 +54,8 @@ from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
 from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
-from ocp_crawl.sim.assemble import (energy_gate, failure_message, new_result, no_start_result, output_phases,
-                                    set_cycle_metrics, set_samples, success_message)
+from ocp_crawl.sim.assemble import (energy_gate, failure_message, new_result, no_start_result,
+                                    output_phases, set_cycle_metrics, set_samples, success_message)
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
 from ocp_crawl.sim.event_state import mode_q
@@ -79,14 +81,16 @@ class TimeSteppingOptions(CycleOptions):
     steps: int = 200
     """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an argument)"""
     switch_exact: bool = True
-    """split a step whose contact mode changes at the event located inside it (:mod:`ocp_crawl.sim.step_split`),
-    so that every event falls on a step boundary; False: the plain incremental step (the whole step in its
-    end mode: an O(1/N) error in S per change of the slipping foot)"""
+    """split a step whose contact mode changes at the event located inside it
+    (:mod:`ocp_crawl.sim.step_split`), so that every event falls on a step boundary; False: the
+    plain incremental step (the whole step in its end mode: an O(1/N) error in S per change of the
+    slipping foot)"""
     energy_tol_n2: float = 10.0
-    """a successful cycle's |energy balance residual| (relative to the gross work) must be <= energy_tol_n2 / N^2
-    (N steps per cycle), else ``energy_imbalance``.  The midpoint work and trapezoid dissipation rules leave
-    an O(1/N^2) residual (N^2 |residual| = 0.04 on the paper's gait, <= 10 over the random problems of the
-    property test), while a missing term or a snap-through between steps leaves an O(1) one"""
+    """a successful cycle's |energy balance residual| (relative to the gross work) must be <=
+    energy_tol_n2 / N^2 (N steps per cycle), else ``energy_imbalance``.  The midpoint work and
+    trapezoid dissipation rules leave an O(1/N^2) residual (N^2 |residual| = 0.04 on the paper's
+    gait, <= 10 over the random problems of the property test), while a missing term or a
+    snap-through between steps leaves an O(1) one"""
     s_error_tol: float = 1e-3
     """bound on the estimate of S's discretisation error, relative: s_error_tol (|S| + 1e-3 L)
     [-]; the estimate re-runs the steady cycle with 2 N + 1 steps
@@ -126,8 +130,8 @@ class TimeStepper:
             raise TypeError(f"model must be a Model, got {type(model).__name__}")
         if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) \
                 or not STEPS_BOUNDS[0] <= steps <= STEPS_BOUNDS[1]:
-            raise ValueError(f"steps must be an integer in [{STEPS_BOUNDS[0]}, {STEPS_BOUNDS[1]}] (steps per cycle), "
-                             f"got {steps!r}")
+            raise ValueError(f"steps must be an integer in [{STEPS_BOUNDS[0]}, "
+                             f"{STEPS_BOUNDS[1]}] (steps per cycle), got {steps!r}")
         if options is None:
             options = TimeSteppingOptions()
         elif isinstance(options, MPCCOptions):
@@ -153,8 +157,8 @@ class TimeStepper:
 
     def _diagnose(self, state: StepState, tau: np.ndarray, mode: Mode) -> tuple[Status, str]:
         """Status of a step IPOPT could not solve, from the mode-enumeration oracle: lift-off when
-        every mode solution has a normal force <= 0, a fold when no mode is consistent and the current
-        mode's equations have no solution near the last state, else a solver failure."""
+        every mode solution has a normal force <= 0, a fold when no mode is consistent and the
+        current mode's equations have no solution near the last state, else a solver failure."""
         orc = solve_step_enumerate(self.model, state, tau)
         check = f"mode-enumeration check: {orc.message}"
         if orc.extra.get("lift_off"):
@@ -167,10 +171,11 @@ class TimeStepper:
         return Status.SOLVER_FAILURE, check
 
     def run(self, cycles: int | None = None, t_eval=None) -> CrawlResult:
-        """Simulate from the released start; ``cycles``: exact number of cycles, or None to run until
-        periodic (at most ``max_cycles``).  ``t_eval``: phases in [0, 1] of the reported cycle for the
-        output arrays (linear interpolation between steps); by default the step phases."""
-        if cycles is not None and (isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1):
+        """Simulate from the released start; ``cycles``: exact number of cycles, or None to run
+        until periodic (at most ``max_cycles``).  ``t_eval``: phases in [0, 1] of the reported cycle
+        for the output arrays (linear interpolation between steps); by default the step phases."""
+        if cycles is not None and (isinstance(cycles, bool)
+                                   or not isinstance(cycles, (int, np.integer)) or cycles < 1):
             raise ValueError(f"cycles must be a positive integer or None, got {cycles!r}")
         te = output_phases(t_eval)
         try:
@@ -192,9 +197,10 @@ class TimeStepper:
                  "retried_steps": run.retries,
                  "step_time_median": float(np.median(run.times)) if run.times else float("nan"),
                  "step_time_total": float(np.sum(run.times)), "max_comp_residual": run.comp_max,
-                 "max_eq_residual": run.eq_max, "polished_steps": run.polished, "W_plus_rule": "midpoint",
-                 "periodicity_deviation": run.periodic_dev,
-                 "split_steps": sum(e.guard_name != "mode_change_between_steps" for e in run.events),
+                 "max_eq_residual": run.eq_max, "polished_steps": run.polished,
+                 "W_plus_rule": "midpoint", "periodicity_deviation": run.periodic_dev,
+                 "split_steps": sum(e.guard_name != "mode_change_between_steps"
+                                    for e in run.events),
                  "split_ipopt_calls": run.split_calls, "unsplit_mode_changes": run.unsplit}
         check = None
         if status == Status.SUCCESS and self.opt.s_error_tol > 0:
@@ -235,11 +241,11 @@ class TimeStepper:
         return self._advance(run, (run.n - 1) / N, run.n / N, rewind=True)
 
     def _advance(self, run: "_Run", ta: float, tb: float, rewind: bool) -> StepResult:
-        """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with ``switch_exact``,
-        when the step's mode changes, sub-steps split at the events located inside it
-        (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the previous step
-        passed without a change of mode (slip-to-stick) may be traced back into it, and the previous step
-        redone from there."""
+        """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with
+        ``switch_exact``, when the step's mode changes, sub-steps split at the events located inside
+        it (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the
+        previous step passed without a change of mode (slip-to-stick) may be traced back into it,
+        and the previous step redone from there."""
         tau = self._tau(tb, run)
         for k in range(MAX_SPLITS + 1):
             state, mode = run.state, run.mode
@@ -251,8 +257,8 @@ class TimeStepper:
             split, why = locate_event(self.step, state, mode, lambda th: self._tau(ta + th * (tb - ta), run),
                                       None if run.prev is None else run.prev.w, lo=-1.0 if t_prev is not None else 0.0)
             run.split_calls += self.step.ncalls - run.calls_mark
-            te = None if split is None else ta + split.theta * (tb - ta)
-            if split is not None and split.theta < 0 and not te > t_prev + 1e-12:
+            te = ta + (0.0 if split is None else split.theta) * (tb - ta)  # theta < 0: t_prev set
+            if split is not None and split.theta < 0 and not te > (t_prev or 0.0) + 1e-12:
                 split, why = None, f"the event at t = {te:.9f} precedes the previous step's start"
             if split is None:
                 run.unsplit.append(f"t = {tb:.6f}: {why}")
@@ -291,8 +297,8 @@ class TimeStepper:
     def _mode_change(run: "_Run", split, te: float) -> None:
         """Record the located event at phase ``te`` and continue in the guard's mode."""
         mode = run.mode
-        run.events.append(Event(te, mode_change_kind(mode, split.mode_after), mode.label, split.mode_after.label,
-                                split.value, split.guard))
+        run.events.append(Event(te, mode_change_kind(mode, split.mode_after), mode.label,
+                                split.mode_after.label, split.value, split.guard))
         run.mode, run.det_ref = split.mode_after, None
 
     def _where(self, run: "_Run", t1: float) -> str:
@@ -322,16 +328,17 @@ class TimeStepper:
         run.polished += bool(res.extra.get("polished"))
         return res
 
-    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray, t1: float) -> None:
-        """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of mode not
-        located before (:meth:`_advance`) is recorded as an event at t1."""
+    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray,
+                t1: float) -> None:
+        """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of
+        mode not located before (:meth:`_advance`) is recorded as an event at t1."""
         mode, where = run.mode, self._where(run, t1)
         kin = self._check_contact(res, state, where, t1, mode)
         det = self._det(res, state, tau)
         if res.mode != mode:
             # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
-            run.events.append(Event(t1, mode_change_kind(mode, res.mode), mode.label, res.mode.label, float("nan"),
-                                    "mode_change_between_steps"))
+            run.events.append(Event(t1, mode_change_kind(mode, res.mode), mode.label,
+                                    res.mode.label, float("nan"), "mode_change_between_steps"))
             run.det_ref = None
         if run.det_ref is not None and np.sign(det) != run.det_ref:
             raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
@@ -339,8 +346,8 @@ class TimeStepper:
         run.det_ref = np.sign(det) or run.det_ref
         self._check_stable(res, where, t1)
         run.mode = res.mode
-        run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2,
-                         int(res.mode)))
+        run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1,
+                         res.f_n2, int(res.mode)))
         run.state = res.next_state()
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
@@ -416,9 +423,9 @@ class TimeStepper:
         tau_mid = np.asarray(self.torque(0.5 * (t[1:] + t[:-1])), float).reshape(2, -1)
         work = tau_mid * np.diff(phi, axis=1)
         dx1, dx2 = np.diff(cols["x1"]), np.diff(cols["x2"])
-        # friction on the robot is f_t at foot 1 and -f_t at foot 2, averaged over the step's ends (trapezoid:
-        # second order like the work's midpoint rule; the end-of-step force alone leaves an O(1/N) balance error,
-        # measured e.g. -0.89/N against 9/N^2 with the average)
+        # friction on the robot is f_t at foot 1 and -f_t at foot 2, averaged over the step's ends
+        # (trapezoid: second order like the work's midpoint rule; the end-of-step force alone leaves
+        # an O(1/N) balance error, measured e.g. -0.89/N against 9/N^2 with the average)
         f_mid = 0.5 * (cols["f_t"][1:] + cols["f_t"][:-1])
         diss = float(np.sum(-(f_mid * dx1 - f_mid * dx2)))
         dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))

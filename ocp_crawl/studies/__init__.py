@@ -3,8 +3,9 @@
 One module per group of studies: :mod:`~ocp_crawl.studies.gaits` (one gait in detail, the psi-gamma
 map, the friction band), :mod:`~ocp_crawl.studies.cot` (amplitude and CoT+, higher friction,
 stiffness and the friction threshold), :mod:`~ocp_crawl.studies.pressure` (the pressure-driven
-robot); what they share is :mod:`~ocp_crawl.studies.common`.  :mod:`~ocp_crawl.studies.plots` draws
-them; :mod:`~ocp_crawl.studies.statements` checks the paper's statements,
+robot); what they share is :mod:`~ocp_crawl.studies.common`.  :mod:`~ocp_crawl.studies.gait_plots`
+(the gait studies) and :mod:`~ocp_crawl.studies.plots` (the others) draw them;
+:mod:`~ocp_crawl.studies.statements` checks the paper's statements,
 :mod:`~ocp_crawl.studies.report` writes ``report.md`` and
 :func:`ocp_crawl.studies.reproduce.reproduce` runs it all (``ocp-crawl reproduce``).  The function
 ``reproduce`` is not re-exported here: the name is its module's, which the CLI and the tests use.

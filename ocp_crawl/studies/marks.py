@@ -1,9 +1,13 @@
-"""Marks the study figures share (:mod:`ocp_crawl.studies.plots`): failed points as markers whose
-shape names the status, values above an axis's top as arrows, curves broken at failed points, log
-axes with plain tick labels, and stiffnesses k/(M g L) of the paper's robot in N m/rad."""
+"""What the study figures share (:mod:`ocp_crawl.studies.gait_plots`,
+:mod:`ocp_crawl.studies.plots`): a figure on the Agg canvas whose layout is frozen once drawn, the
+paper's two colours, the name of a gravity convention; failed points as markers whose shape names
+the status, values above an axis's top as arrows, curves broken at failed points, log axes with
+plain tick labels, and stiffnesses k/(M g L) of the paper's robot in N m/rad."""
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
@@ -21,6 +25,26 @@ STATUS_LABELS = {"no_start": "no equilibrium to start from", "unstable": "unstab
                  "set_valued": "set-valued (friction tie)"}
 #: colour of failure markers on maps
 FAIL_COLOR = "#b2182b"
+#: the paper's colours: joint/foot 1 blue, joint/foot 2 purple
+BLUE = (0.0, 0.447, 0.741)
+PURPLE = (0.494, 0.184, 0.556)
+
+
+def _figure(size: tuple[float, float], rows: int = 1, cols: int = 1, **kw):
+    fig = Figure(figsize=size, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(rows, cols, squeeze=False, **kw)
+
+
+def _finish(fig: Figure) -> Figure:
+    # lay out once and freeze: constrained layout would otherwise rerun (slowly) at every save
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    return fig
+
+
+def _gravity_text(gravity: str) -> str:
+    return "paper's printed gravity sign" if gravity == "paper" else "physical gravity sign"
 
 
 def plain_log_ticks(axis) -> None:
@@ -90,5 +114,5 @@ def stiffness_axis(ax) -> None:
     plain_log_ticks(top.xaxis)
 
 
-__all__ = ["STATUS_MARKERS", "STATUS_LABELS", "FAIL_COLOR", "plain_log_ticks", "mark_failures",
-           "successful", "mark_off_axis", "stiffness_text", "stiffness_axis"]
+__all__ = ["STATUS_MARKERS", "STATUS_LABELS", "FAIL_COLOR", "BLUE", "PURPLE", "plain_log_ticks",
+           "mark_failures", "successful", "mark_off_axis", "stiffness_text", "stiffness_axis"]

@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING, Callable
 from ocp_crawl.io.files import atomic_write, remove_stale_temps, write_json
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS
 from ocp_crawl.studies.common import SweepOptions
-from ocp_crawl.studies.plots import (plot_amplitude, plot_configuration, plot_conventions,
-                                     plot_forces,
-                                     plot_friction_band, plot_higher_friction, plot_parametric,
+from ocp_crawl.studies.gait_plots import (plot_configuration, plot_forces, plot_friction_band,
+                                          plot_parametric)
+from ocp_crawl.studies.plots import (plot_amplitude, plot_conventions, plot_higher_friction,
                                      plot_pressure, plot_stiffness)
 from ocp_crawl.studies.paper_points import markdown as points_markdown, paper_points
 from ocp_crawl.studies.report import numbers, report

@@ -201,6 +201,13 @@ def _title(result: OCPResult, best) -> str:
         head += f"\nreplay: {_motion(rep.S, result.T_ocp, rep.W_plus, rep.CoT_plus)} ({sign})"
         if best is not None:
             head += f"\n{name}: {_motion(best.S[0], best.T, best.W_plus[0], best.CoT_plus[0])}"
+    user = result.settings.user_objective
+    if user is not None:  # its value, which the speeds and works above do not show
+        unit = "" if user.unit == "-" else f" {user.unit}"
+        theirs = (f", {name} {units.significant(best.value, 4)}{unit}" if best is not None
+                  else "")
+        head += (f"\n{result.objective} by replay: "
+                 f"{units.significant(result.value_replay, 4)}{unit}{theirs}")
     significance = "" if result.gain_significant else " (not significant)"
     return head + "\n" + _gains_text(result, significance)
 

@@ -21,7 +21,8 @@ def main() -> None:
     result = run_problem(problem)
     if not result.success:
         raise SystemExit(f"{result.status_name}: {result.message}")
-    print(f"S = {1e3 * result.S:.2f} mm per cycle, W+ = {1e3 * result.W_plus:.1f} mJ, CoT+ = {result.CoT_plus:.2f}")
+    print(f"S = {1e3 * result.S:.2f} mm per cycle, W+ = {1e3 * result.W_plus:.1f} mJ, "
+          f"CoT+ = {result.CoT_plus:.2f}")
     for e in result.steady_events():
         print(f"  phase {e.t - result.t0:.4f}: {e.kind} ({e.mode_before} -> {e.mode_after})")
     fig = plot_gait(result, problem.robot, reference=problem.gait)

@@ -1,12 +1,13 @@
 """The two gravity conventions side by side.
 
 The paper's printed statics carry the gravity term with the opposite sign of the virtual-work
-derivation (see docs/guide/model.md, "Gravity conventions"). This example runs the paper's gait under both
-conventions (``model.gravity = "physical"`` and ``"paper"``) and plots, over the steady cycle, the
-joint angles phi1, phi2 [deg] and the position of foot 1 [mm], with S of each in the title, so that the
-size of the difference is visible at a glance.
+derivation (see docs/guide/model.md, "Gravity conventions"). This example runs the paper's gait
+under both conventions (``model.gravity = "physical"`` and ``"paper"``) and plots, over the steady
+cycle, the joint angles phi1, phi2 [deg] and the position of foot 1 [mm], with S of each in the
+title, so that the size of the difference is visible at a glance.
 
-Run: ``python examples/02_gravity_conventions.py [OUT_DIR]``; writes ``OUT_DIR/gravity_conventions.png``.
+Run: ``python examples/02_gravity_conventions.py [OUT_DIR]``; writes
+``OUT_DIR/gravity_conventions.png``.
 """
 import numpy as np
 from _common import output_dir, save
@@ -25,8 +26,8 @@ def main() -> None:
         if not result.success:
             raise SystemExit(f"{gravity}: {result.status_name}: {result.message}")
         results[gravity] = result
-        print(f"{gravity:>8} gravity: S = {1e3 * result.S:.2f} mm per cycle, W+ = {1e3 * result.W_plus:.1f} mJ, "
-              f"CoT+ = {result.CoT_plus:.2f}")
+        print(f"{gravity:>8} gravity: S = {1e3 * result.S:.2f} mm per cycle, "
+              f"W+ = {1e3 * result.W_plus:.1f} mJ, CoT+ = {result.CoT_plus:.2f}")
     S = {g: 1e3 * r.S for g, r in results.items()}
     fig = Figure(figsize=(9.0, 3.8), layout="constrained")
     ax_phi, ax_x = fig.subplots(1, 2)
@@ -45,8 +46,8 @@ def main() -> None:
     for ax in (ax_phi, ax_x):
         ax.grid(True, lw=0.3)
     diff = 100 * (abs(S["paper"]) - abs(S["physical"])) / abs(S["physical"])
-    fig.suptitle(f"Paper gait: S = {S['physical']:.2f} mm/cycle (physical gravity), {S['paper']:.2f} mm/cycle "
-                 f"(paper's sign: |S| {diff:+.1f} %)")
+    fig.suptitle(f"Paper gait: S = {S['physical']:.2f} mm/cycle (physical gravity), "
+                 f"{S['paper']:.2f} mm/cycle (paper's sign: |S| {diff:+.1f} %)")
     save(fig, out / "gravity_conventions.png")
 
 

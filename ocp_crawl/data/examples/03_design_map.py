@@ -30,9 +30,11 @@ def edges(centres: np.ndarray) -> np.ndarray:
 
 def main() -> None:
     out = output_dir()
-    sweep = run_sweep(paper_problem(), {"gait.psi_deg": PSI_DEG, "gait.gamma_deg": GAMMA_DEG}, jobs=1)
+    sweep = run_sweep(paper_problem(), {"gait.psi_deg": PSI_DEG, "gait.gamma_deg": GAMMA_DEG},
+                      jobs=1)
     sweep.to_csv(out / "design_map.csv")
-    print(f"{sweep.shape[0]} x {sweep.shape[1]} points in {sweep.elapsed:.1f} s; statuses {sweep.counts()}")
+    print(f"{sweep.shape[0]} x {sweep.shape[1]} points in {sweep.elapsed:.1f} s; "
+          f"statuses {sweep.counts()}")
     progress = -1e3 * sweep.array("S").T          # -S [mm], (gamma, psi): gamma up, psi across
     failed = sweep.status_array().T != "success"
     best = sweep.best()                           # the row of largest |S|

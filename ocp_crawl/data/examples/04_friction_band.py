@@ -26,8 +26,10 @@ RATIOS = (0.9, 1.0, 1.1)                    # mu1 / mu2 [-]
 
 
 def S_of(mu: float, ratio: float) -> float:
-    """S [m] of the paper's gait with feet mu1 = mu sqrt(ratio), mu2 = mu / sqrt(ratio); NaN if it failed."""
-    problem = paper_problem().with_values({"robot.mu1": mu * math.sqrt(ratio), "robot.mu2": mu / math.sqrt(ratio)})
+    """S [m] of the paper's gait with feet mu1 = mu sqrt(ratio), mu2 = mu / sqrt(ratio); NaN if it
+    failed."""
+    problem = paper_problem().with_values({"robot.mu1": mu * math.sqrt(ratio),
+                                           "robot.mu2": mu / math.sqrt(ratio)})
     result = run_problem(problem)
     if not result.success:
         print(f"mu = {mu:g}, mu1/mu2 = {ratio:g}: {result.status_name} ({result.message})")
@@ -45,7 +47,8 @@ def main() -> None:
 
     fig = Figure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.subplots()
-    ax.fill_between(levels, low, high, color="C0", alpha=0.25, label=r"band: $\mu_1/\mu_2 \in [0.9, 1.1]$")
+    ax.fill_between(levels, low, high, color="C0", alpha=0.25,
+                    label=r"band: $\mu_1/\mu_2 \in [0.9, 1.1]$")
     for r, ls in zip(RATIOS, (":", "-", "--")):
         ax.plot(levels, S[RATIOS.index(r)], "C0" + ls, marker="o" if r == 1.0 else None, ms=4,
                 label=rf"$\mu_1/\mu_2$ = {r:g}")
@@ -56,7 +59,8 @@ def main() -> None:
     ax.legend(fontsize="small", loc="center right")
     i = int(np.argmin(np.abs(levels - MU_PAPER)))
     ax.set_title(f"Paper gait: S = {nominal[i]:.1f} mm/cycle at mu = {MU_PAPER} (mu1 = mu2);\n"
-                 f"+-10 % friction asymmetry between the feet: S in [{low[i]:.1f}, {high[i]:.1f}] mm/cycle",
+                 f"+-10 % friction asymmetry between the feet: S in [{low[i]:.1f}, "
+                 f"{high[i]:.1f}] mm/cycle",
                  fontsize="medium")
     save(fig, out / "friction_band.png")
 

@@ -1,16 +1,17 @@
 """Optimise a gait and replay it.
 
 Solves the periodic-gait optimal control problem (objective ``max_speed``: the largest mean speed
-v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most 180 deg/s)
-on a coarse transcription (30 nodes, one start, so that the example runs in CI time; the shipped
-``ocp_max_speed.toml`` uses 50), then replays the optimal torques, linear in phase between the nodes
-as in the transcription, in the event-driven simulator through the plain Python API,
+v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most
+180 deg/s) on a coarse transcription (30 nodes, one start, so that the example runs in CI time; the
+shipped ``ocp_max_speed.toml`` uses 50), then replays the optimal torques, linear in phase between
+the nodes as in the transcription, in the event-driven simulator through the plain Python API,
 :func:`ocp_crawl.simulate`, as any other input signal.  The replayed S must match the one
 :func:`~ocp_crawl.ocp.optimize_gait` reports for its own replay (the judge); the figure compares the
 optimal torques and foot motion with the best gait of the whole harmonic family (gamma1, gamma2, A1,
 A2, psi and the period under the same bandwidth).
 
-Run: ``python examples/05_optimise_and_replay.py [OUT_DIR]``; writes ``OUT_DIR/optimise_and_replay.png``.
+Run: ``python examples/05_optimise_and_replay.py [OUT_DIR]``; writes
+``OUT_DIR/optimise_and_replay.png``.
 """
 import math
 
@@ -22,9 +23,10 @@ from ocp_crawl import Model, PeriodicLinear, Robot, simulate
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 from ocp_crawl.viz.ocp import pinned
 
-#: a coarse transcription and a small search of the baselines (harmonic, triangle, pulse), in CI time
-SETTINGS = OCPSettings(objective="max_speed", nodes=30, harmonic_psi=12, starts=1, baseline_samples=16,
-                       baseline_starts=1, baseline_evaluations=60)
+#: a coarse transcription and a small search of the baselines (harmonic, triangle, pulse),
+#: in CI time
+SETTINGS = OCPSettings(objective="max_speed", nodes=30, harmonic_psi=12, starts=1,
+                       baseline_samples=16, baseline_starts=1, baseline_evaluations=60)
 
 
 def main() -> None:
@@ -35,17 +37,21 @@ def main() -> None:
     if not opt.success:
         raise SystemExit(1)
     h = opt.harmonic
-    harmonic = simulate(Model(robot), h.torque_signal(robot.k))    # the best harmonic gait, torque drive
-    mine = simulate(Model(robot), PeriodicLinear(opt.phase, opt.tau))   # the optimal torques [N m] as a signal
+    # the best harmonic gait, torque drive
+    harmonic = simulate(Model(robot), h.torque_signal(robot.k))
+    # the optimal torques [N m] as a signal
+    mine = simulate(Model(robot), PeriodicLinear(opt.phase, opt.tau))
     if not (mine.success and math.isclose(mine.S, opt.S_replay[0], rel_tol=1e-9)):
-        raise SystemExit(f"replay through simulate: {mine.status_name}, S = {mine.S} m, optimize_gait's replay "
-                         f"S = {opt.S_replay[0]} m")
+        raise SystemExit(f"replay through simulate: {mine.status_name}, S = {mine.S} m, "
+                         f"optimize_gait's replay S = {opt.S_replay[0]} m")
     v_h, v_opt = abs(harmonic.S) / h.T, abs(mine.S) / opt.T_ocp   # mean speeds [m/s]
-    print(f"best harmonic (gamma {h.gamma1_deg:.1f}/{h.gamma2_deg:.1f} deg, A {h.A1_deg:.1f}/{h.A2_deg:.1f} deg, "
-          f"psi {h.psi_deg:.1f} deg, T {h.T:.3f} s): v = {1e3 * v_h:.2f} mm/s")
-    print(f"optimum: v = {1e3 * opt.v_ocp[0]:.2f} mm/s in the OCP, {1e3 * v_opt:.2f} mm/s replayed, T = "
-          f"{opt.T_ocp:.3f} s (gain {100 * opt.gains['harmonic']:+.1f} % over the best harmonic), solved in "
-          f"{opt.solve_time_s:.1f} s")
+    print(f"best harmonic (gamma {h.gamma1_deg:.1f}/{h.gamma2_deg:.1f} deg, "
+          f"A {h.A1_deg:.1f}/{h.A2_deg:.1f} deg, psi {h.psi_deg:.1f} deg, T {h.T:.3f} s): "
+          f"v = {1e3 * v_h:.2f} mm/s")
+    print(f"optimum: v = {1e3 * opt.v_ocp[0]:.2f} mm/s in the OCP, "
+          f"{1e3 * v_opt:.2f} mm/s replayed, T = {opt.T_ocp:.3f} s (gain "
+          f"{100 * opt.gains['harmonic']:+.1f} % over the best harmonic), "
+          f"solved in {opt.solve_time_s:.1f} s")
     for shape, gain in opt.gains.items():  # a triangle wave in the same bandwidth is nearly as fast
         print(f"  gain over the best {shape} gait: {100 * gain:+.2f} %")
 

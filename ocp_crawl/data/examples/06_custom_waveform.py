@@ -16,7 +16,8 @@ import numpy as np
 from _common import output_dir, save
 from matplotlib.figure import Figure
 
-from ocp_crawl import FourierSeries, Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot, simulate
+from ocp_crawl import (FourierSeries, Harmonic, Model, PeriodicPchip, ReferenceTorque, Robot,
+                       simulate)
 
 GAMMA_DEG, A_DEG, PSI_DEG = 90.0, 30.0, 90.0
 RISE = 0.25         # rise (and fall) time [cycles]
@@ -24,7 +25,8 @@ KNOTS = 40          # samples per cycle
 
 
 def trapezoid(t: np.ndarray) -> np.ndarray:
-    """A 1-periodic trapezoid in [-1, 1]: rise over RISE from t = 0, hold, fall from t = 0.5, hold."""
+    """A 1-periodic trapezoid in [-1, 1]: rise over RISE from t = 0, hold, fall from t = 0.5,
+    hold."""
     t = np.mod(t, 1.0)
     up = np.clip(t / RISE, 0.0, 1.0)
     down = np.clip((t - 0.5) / RISE, 0.0, 1.0)
@@ -35,8 +37,10 @@ def main() -> None:
     out = output_dir()
     robot = Robot.paper()
     t = np.arange(KNOTS) / KNOTS
-    lead = PSI_DEG / 360.0 / 2.0       # joint 1 leads by psi/2, joint 2 lags by psi/2 (as the harmonic gait)
-    samples = np.radians(GAMMA_DEG + A_DEG * np.vstack([trapezoid(t + lead), trapezoid(t - lead)]))   # (2, N) [rad]
+    # joint 1 leads by psi/2, joint 2 lags by psi/2 (as the harmonic gait)
+    lead = PSI_DEG / 360.0 / 2.0
+    # (2, N) [rad]
+    samples = np.radians(GAMMA_DEG + A_DEG * np.vstack([trapezoid(t + lead), trapezoid(t - lead)]))
     references = {
         "harmonic (the paper's gait)": Harmonic.from_degrees(GAMMA_DEG, A_DEG, PSI_DEG),
         "trapezoid (PCHIP)": PeriodicPchip(t, samples),
@@ -45,8 +49,8 @@ def main() -> None:
     results = {}
     for name, ref in references.items():
         r = simulate(Model(robot, gravity="physical"), ReferenceTorque(ref, robot.k))
-        print(f"{name:>28}: {r.status_name}, S = {1e3 * r.S:.2f} mm/cycle, W+ = {1e3 * r.W_plus:.1f} mJ, "
-              f"CoT+ = {r.CoT_plus:.2f}")
+        print(f"{name:>28}: {r.status_name}, S = {1e3 * r.S:.2f} mm/cycle, "
+              f"W+ = {1e3 * r.W_plus:.1f} mJ, CoT+ = {r.CoT_plus:.2f}")
         if not r.success:
             raise SystemExit(r.message)
         results[name] = r
@@ -63,7 +67,8 @@ def main() -> None:
                   label=f"{name}: S = {1e3 * r.S:.1f} mm")
     ax_ref.plot(t, np.degrees(samples[0]), "C0.", ms=3, label="samples (40 per cycle)")
     ax_ref.plot(t, np.degrees(samples[1]), "C3.", ms=3)
-    ax_ref.set(xlabel="phase t [cycles]", ylabel="reference angle [deg]", title="(a) reference angles")
+    ax_ref.set(xlabel="phase t [cycles]", ylabel="reference angle [deg]",
+               title="(a) reference angles")
     ax_x.set(xlabel="phase t [cycles]", ylabel=r"foot 1 position $x_1 - x_1(0)$ [mm]",
              title="(b) foot 1 over the steady cycle")
     ax_ref.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
@@ -71,7 +76,8 @@ def main() -> None:
     for ax in (ax_ref, ax_x):
         ax.grid(True, lw=0.3)
     S = {name: 1e3 * r.S for name, r in results.items()}
-    fig.suptitle("Paper robot, gamma 90 deg, A 30 deg, psi 90 deg, torque drive tau = k (phi_ref - pi):\nS = "
+    fig.suptitle("Paper robot, gamma 90 deg, A 30 deg, psi 90 deg, "
+                 "torque drive tau = k (phi_ref - pi):\nS = "
                  + ", ".join(f"{v:.1f} mm/cycle ({k})" for k, v in S.items()), fontsize="medium")
     save(fig, out / "custom_waveform.png")
 

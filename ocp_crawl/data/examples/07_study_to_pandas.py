@@ -42,11 +42,13 @@ def main() -> None:
     print(f"wrote {out / 'study.csv'}")
     print(df.groupby("status").size().rename("points").to_string())
     ok = df[df["status"] == "success"]
-    best = ok.loc[ok.groupby("gait.A_deg")["S_mm"].idxmin(), ["gait.A_deg", "gait.psi_deg", "S_mm", "CoT_plus"]]
+    best = ok.loc[ok.groupby("gait.A_deg")["S_mm"].idxmin(),
+                  ["gait.A_deg", "gait.psi_deg", "S_mm", "CoT_plus"]]
     print("fastest psi per amplitude (largest progress towards foot 1):")
     print(best.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
 
-    table = df.pivot(index="gait.psi_deg", columns="gait.A_deg", values="S_mm")   # NaN where a point failed
+    # NaN where a point failed
+    table = df.pivot(index="gait.psi_deg", columns="gait.A_deg", values="S_mm")
     fig = Figure(figsize=(6.4, 4.4), layout="constrained")
     ax = fig.subplots()
     for A, color in zip(table.columns, ("C0", "C1", "C2")):
@@ -58,9 +60,10 @@ def main() -> None:
     ax.grid(True, lw=0.3)
     ax.legend(fontsize="small")
     top = best.loc[best["S_mm"].idxmin()]
-    ax.set_title(f"Paper robot: S over psi for three amplitudes ({len(ok)} of {len(df)} points succeeded)\n"
-                 f"fastest: S = {top['S_mm']:.1f} mm/cycle at A = {top['gait.A_deg']:g} deg, "
-                 f"psi = {top['gait.psi_deg']:g} deg", fontsize="medium")
+    ax.set_title(f"Paper robot: S over psi for three amplitudes ({len(ok)} of {len(df)} points "
+                 f"succeeded)\nfastest: S = {top['S_mm']:.1f} mm/cycle at "
+                 f"A = {top['gait.A_deg']:g} deg, psi = {top['gait.psi_deg']:g} deg",
+                 fontsize="medium")
     save(fig, out / "study.png")
 
 

@@ -24,8 +24,8 @@ Same as the command line (step 1):
 
 Run: ``python examples/08_fit_pressure_robot.py [OUT_DIR]``; writes ``OUT_DIR/amplitude/`` and
 ``OUT_DIR/k_and_map/`` (fitted_problem.toml, fit.json, residuals.csv, fit.png each); about 4 min of
-CPU (step 2 on two worker processes).  With ``OCP_CRAWL_EXAMPLES_QUICK=1`` (the examples' test) both fits stop
-after a few evaluations: the same outputs, not converged (the report says so).
+CPU (step 2 on two worker processes).  With ``OCP_CRAWL_EXAMPLES_QUICK=1`` (the examples' test) both
+fits stop after a few evaluations: the same outputs, not converged (the report says so).
 """
 from pathlib import Path
 
@@ -53,15 +53,18 @@ def main(out: Path) -> None:
     print("wrote", ", ".join(str(p) for p in write_fit(amp, out / "amplitude")), "\n")
 
     names = ["robot.k", "pressure.a1", "pressure.b1", "pressure.a2", "pressure.b2"]
-    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=nfev_map, jobs=2,
-                            pressure={"amplitude_bar": float(amp.x[0])})
+    both = fit_measurements(problem, data, resolve_parameters(problem, names), max_nfev=nfev_map,
+                            jobs=2, pressure={"amplitude_bar": float(amp.x[0])})
     print("== 2. k and the pressure map ==\n" + fit_report(both))
     print("wrote", ", ".join(str(p) for p in write_fit(both, out / "k_and_map")))
-    table = {"robot.k": Robot.paper().k, **{f"pressure.{k}": v for k, v in PAPER_PRESSURE_COEFFS.items()}}
+    table = {"robot.k": Robot.paper().k,
+             **{f"pressure.{k}": v for k, v in PAPER_PRESSURE_COEFFS.items()}}
     print("\n== fitted constants against Table I ==")
-    print(f"{'parameter':<14} {'Table I':>9} {'fitted':>9} {'sigma':>9} {'(fit - Table I)/sigma':>22}")
+    print(f"{'parameter':<14} {'Table I':>9} {'fitted':>9} {'sigma':>9} "
+          f"{'(fit - Table I)/sigma':>22}")
     for p, x, s in zip(both.parameters, both.x, both.sigma):
-        print(f"{p.name:<14} {table[p.name]:9.4f} {x:9.4f} {s:9.3g} {(x - table[p.name]) / s:22.2f}")
+        print(f"{p.name:<14} {table[p.name]:9.4f} {x:9.4f} {s:9.3g} "
+              f"{(x - table[p.name]) / s:22.2f}")
 
 
 if __name__ == "__main__":
