@@ -90,9 +90,9 @@ def test_a_start_the_simulator_does_not_follow_is_drawn_again_smaller():
 
 
 class StandInOCP:
-    """GaitOCP's interface; the "optimum" of a start is the start (its node torques and period), its
-    S by the MPCC time-stepping; ``claims`` scales the claimed S of the i-th solve (a forged
-    claim)."""
+    """The interfaces of GaitOCP and of its GaitSolver in one (``ocp`` is itself); the "optimum" of
+    a start is the start (its node torques and period), its S by the MPCC time-stepping; ``claims``
+    scales the claimed S of the i-th solve (a forged claim)."""
 
     claims = {}
 
@@ -100,6 +100,7 @@ class StandInOCP:
         self.settings, self.robot = settings, robot
         self.scen = [solve.Model(robot, gravity=gravity)]
         self.kept_run, self.calls = [], 0
+        self.ocp = self
 
     def prepare(self):
         pass
@@ -139,6 +140,7 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
                             settings.objective,
                             {s: harm if s == "harmonic" else None for s in shapes}))
     monkeypatch.setattr(solve, "GaitOCP", StandInOCP)
+    monkeypatch.setattr(solve, "GaitSolver", lambda ocp: ocp)
     # the second start solved overclaims by 20 %
     monkeypatch.setattr(StandInOCP, "claims", {2: 1.2})
     res = solve.optimize_gait(ROBOT, "physical", st)

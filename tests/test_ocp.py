@@ -131,7 +131,8 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
 
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_min_cot.toml"
     code = main(["optimize", str(problem), "--set", "ocp.nodes=24", "--set", "ocp.harmonic_psi=8",
-                 "--set", "ocp.speed_min=5.0", "--set", "ocp.baseline_samples=0", "--set",
+                 "--set", 'ocp.constraint=[{quantity = "speed", min = 5.0}]', "--set",
+                 "ocp.baseline_samples=0", "--set",
                  "ocp.baselines=harmonic", "--set",
                  "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json"])
     captured = capsys.readouterr()
