@@ -227,17 +227,19 @@ def format_convergence(table: dict) -> str:
     their relative difference, the change of the replayed objective from the previous N and the
     observed order p."""
     obj, unit = table["objective"], table.get("unit", "-")
+    own = obj not in ("max_speed", "robust_speed", "min_cot") and unit != "-"
+    in_unit = f", in {unit}" if own else ""  # a user objective's unit, once (speeds say mm/s)
     head = (f"{'N':>5}  {'status':<16} {'T':>9}  {'OCP':>14}  {'replay':>14}  {'diff':>11}  "
             f"{'change':>14}  {'change':>10}  {'p':>6}  {'time':>7}")
-    lines = [f"convergence in N: {obj} (T: period; OCP and replay: the objective; diff: "
+    lines = [f"convergence in N: {obj}{in_unit} (T: period; OCP and replay: the objective; diff: "
              f"|OCP - replay| / |replay|; change: replay minus the previous N's, absolute and "
              f"relative; p: observed order)", head]
     for r in table["rows"]:
         lines.append(f"{r['nodes']:>5}  {r['status']:<16} {units.seconds(r['T']):>9}  "
-                     f"{_value(obj, r['value_ocp'], 5, unit):>14}  "
-                     f"{_value(obj, r['value_replay'], 5, unit):>14}  "
+                     f"{_value(obj, r['value_ocp'], 5):>14}  "
+                     f"{_value(obj, r['value_replay'], 5):>14}  "
                      f"{units.ratio(r['rel_diff_replay']):>11}  "
-                     f"{_value(obj, r['change'], 5, unit):>14}  "
+                     f"{_value(obj, r['change'], 5):>14}  "
                      f"{units.ratio(r['rel_change']):>10}  {units.fixed(r['order'], 2):>6}  "
                      f"{units.seconds(r['solve_time_s']):>7}")
     return "\n".join(lines)
