@@ -127,16 +127,20 @@ def test_vocabulary_values_on_a_simulated_gait():
                                               rel=1e-12)
 
 
-def test_vocabulary_nlp_agrees_with_the_value_at_a_simulated_guess():
-    """The NLP expression of "min:sum" (W+, speed, mean squared torque, period) at the
+@pytest.mark.parametrize("friction", [{}, {"mu_ratio_eps": 0.1}],
+                         ids=["one friction", "three friction ratios"])
+def test_vocabulary_nlp_agrees_with_the_value_at_a_simulated_guess(friction):
+    """The NLP expression of "min:sum" (W+, speed, CoT+, mean squared torque, period) at the
     transcription's initial guess from a simulated harmonic gait equals the value of the same gait's
     cycle, over the normalisation the NLP uses (the sum of |weight| times each quantity's reference
-    size): the NLP and the judge measure the same thing.  The guess samples the simulation on
-    sub-steps, so the two agree to the transcription's resolution (0.5 %), not bitwise."""
+    size), with one friction scenario and over a set of three (each scenario quantity as its mean):
+    the NLP and the judge measure the same thing.  The guess samples the simulation on sub-steps, so
+    the two agree to the transcription's resolution (0.5 %), not bitwise."""
     robot = Robot.paper()
-    terms = {"W_plus": 1.0, "speed": -2.0, "mean_torque_sq": 30.0, "period": 0.05}
+    terms = {"W_plus": 1.0, "speed": -2.0, "CoT_plus": 0.01, "mean_torque_sq": 30.0,
+             "period": 0.05}
     settings = OCPSettings(objective="min:sum", terms=terms, nodes=40, baseline_samples=0,
-                           regularization=0.0)
+                           regularization=0.0, **friction)
     params, ev, cycle = _harmonic_cycle(settings, robot)
     ocp = GaitOCP(robot, "physical", settings)
     x = ocp.initial_guess(params.torque(robot.k), ev.T)
