@@ -182,3 +182,22 @@ def test_min_mean_torque_sq_at_40_mm_s_is_a_judged_optimum():
     assert res.value_replay == pytest.approx(float(np.mean(np.sum(tau**2, axis=0))), rel=1e-7)
     assert res.harmonic.feasible and res.value_replay <= res.harmonic.value * (1 + 1e-9)
     assert math.isfinite(res.gain) and res.objective == "min:mean_torque_sq"
+
+
+def test_every_setting_belongs_to_one_layer():
+    """The layers (problem, transcription, solver, baselines, judge) partition the settings, and
+    ``OCPSettings.layer`` returns a layer's fields; the key reference names each [ocp] key's layer."""
+    import dataclasses
+
+    from ocp_crawl.ocp.limits import LAYERS
+    from ocp_crawl.problem import schema_markdown
+
+    fields = [f.name for f in dataclasses.fields(OCPSettings)]
+    listed = [name for names in LAYERS.values() for name in names]
+    assert sorted(listed) == sorted(fields) and len(set(listed)) == len(listed)
+    settings = OCPSettings(objective="min:W_plus", nodes=20)
+    assert settings.layer("transcription")["nodes"] == 20
+    assert settings.layer("problem")["objective"] == "min:W_plus"
+    with pytest.raises(ValueError, match="one of"):
+        settings.layer("physics")
+    assert "| (solver) homotopy: first relaxation parameter" in schema_markdown()

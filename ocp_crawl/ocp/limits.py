@@ -97,3 +97,23 @@ def check_physical(name: str, value, optional: bool = False):
 #: most homotopy stages a schedule may have (sigma0 down to sigma_min by sigma_factor): each is an
 #: IPOPT solve
 MAX_STAGES = 40
+
+
+#: the layer of the OCP each setting belongs to: what is asked ("problem": the optimum changes with
+#: it), how it becomes an NLP ("transcription": the optimum converges as it is refined), how the NLP
+#: is solved ("solver": the path, and so which local optimum is found), what the optimum is compared
+#: with ("baselines") and when it is accepted ("judge")
+LAYERS = {
+    "problem": ("objective", "terms", "user_objective", "direction", "gamma_deg", "A_max_deg",
+                "max_rate_deg_s", "max_accel_deg_s2", "max_joint_rate_deg_s", "speed_min",
+                "constraints", "mu_ratio_eps", "mu_ratios", "mu_levels", "robust", "friction_tol"),
+    "transcription": ("nodes", "parametrization", "fourier_order", "regularization"),
+    "solver": ("starts", "sigma0", "sigma_min", "sigma_factor", "stage_tol", "stage_tol_ratio",
+               "loose_last", "endgame_sigma", "endgame_paths", "endgame_max_iter", "perturbation",
+               "warm_barrier", "ipopt", "verbose"),
+    "baselines": ("baselines", "harmonic_psi", "harmonic_A", "baseline_samples", "baseline_starts",
+                  "baseline_evaluations"),
+    "judge": ("replay_tol", "comp_tol", "periodic_tol", "dynamic_margin"),
+}
+#: the layer of each setting
+LAYER_OF = {name: layer for layer, names in LAYERS.items() for name in names}

@@ -16,9 +16,9 @@ from ocp_crawl.nlp.ipopt import check_ipopt_options
 from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   BASELINE_SAMPLES_BOUNDS, BASELINE_STARTS_BOUNDS,
                                   ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
-                                  HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, MAX_STAGES, NODES_BOUNDS,
-                                  PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS, STARTS_BOUNDS,
-                                  WARM_BARRIERS, check_physical)
+                                  HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, LAYERS, MAX_STAGES,
+                                  NODES_BOUNDS, PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS,
+                                  STARTS_BOUNDS, WARM_BARRIERS, check_physical)
 from ocp_crawl.ocp.objectives import resolve_objective
 from ocp_crawl.ocp.quantities import Constraint, UserObjective, minimises
 
@@ -229,6 +229,13 @@ class OCPSettings:
         """Whether the objective is minimised (min_cot, a "min:" user objective) rather than
         maximised."""
         return minimises(self.objective)
+
+    def layer(self, name: str) -> dict:
+        """The settings of one layer (:data:`~ocp_crawl.ocp.limits.LAYERS`: "problem",
+        "transcription", "solver", "baselines", "judge"), by field name."""
+        if name not in LAYERS:
+            raise ValueError(f"OCPSettings.layer: one of {tuple(LAYERS)}, got {name!r}")
+        return {field: getattr(self, field) for field in LAYERS[name]}
 
     @property
     def objective_unit(self) -> str:

@@ -26,7 +26,7 @@ from ocp_crawl.ocp.quantities import QUANTITIES, Constraint
 from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   BASELINE_SAMPLES_BOUNDS, BASELINE_STARTS_BOUNDS,
                                   ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
-                                  HARMONIC_PSI_BOUNDS, NODES_BOUNDS, OBJECTIVE_CHOICES,
+                                  HARMONIC_PSI_BOUNDS, LAYER_OF, NODES_BOUNDS, OBJECTIVE_CHOICES,
                                   PERTURBATIONS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS,
                                   WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
@@ -420,7 +420,7 @@ def _requirement(k: Key, selector: str | None) -> str:
 
 def schema_markdown() -> str:
     """The schema as a Markdown table (section, key, type, unit, required/default, valid values,
-    meaning)."""
+    meaning; an ``[ocp]`` key's meaning starts with its layer, :data:`~ocp_crawl.ocp.limits.LAYERS`)."""
     rows = ["| key | type | unit | required / default | valid | meaning |",
             "|---|---|---|---|---|---|"]
     for sec in SECTIONS:
@@ -429,6 +429,7 @@ def schema_markdown() -> str:
                     Tables: "array of tables", dict: "table"}[k.type]
             valid = (k.rule.explained if k.rule is not None and not k.choices
                      and k.type not in (list, Tables, dict) else k.valid_text)
+            layer = f"({LAYER_OF[k.name]}) " if sec.name == "ocp" and k.name in LAYER_OF else ""
             rows.append(f"| `{sec.name}.{k.name}` | {kind} | {k.unit} | "
-                        f"{_requirement(k, sec.selector)} | {valid} | {k.help} |")
+                        f"{_requirement(k, sec.selector)} | {valid} | {layer}{k.help} |")
     return "\n".join(rows)
