@@ -107,7 +107,8 @@ def test_gait_ocp_optimum_does_not_depend_on_the_stage_tolerance():
     for tol in (OCPSettings().stage_tol, 1e-10):
         st = OCPSettings(objective="max_speed", nodes=20, starts=1, stage_tol=tol)
         ocp = GaitOCP(robot, "physical", st)
-        x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        x0 = ocp.initial_guess(sig, st.min_period(30.0, 30.0))
+        x, hist, failed, _ = GaitSolver(ocp).solve(x0)
         assert failed is None
         out[tol] = (ocp.unpack(x)["scen"][0]["v"], hist[0].iterations)
     (v_loose, it_loose), (v_tight, it_tight) = out.values()
@@ -202,7 +203,8 @@ def test_deep_homotopy_ends_complementary_without_a_polish():
                      stage_tol_ratio=0.1) if deep else {}
         st = OCPSettings(objective="max_speed", nodes=20, starts=1, **extra)
         ocp = GaitOCP(robot, "physical", st)
-        x, hist, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
+        x0 = ocp.initial_guess(sig, st.min_period(30.0, 30.0))
+        x, hist, failed, _ = GaitSolver(ocp).solve(x0)
         assert failed is None and hist[-1].accepted
         assert (hist[-1].kind == "homotopy") == deep and (hist[-1].sigma == 1e-11) == deep
         sc = ocp.unpack(x)["scen"][0]

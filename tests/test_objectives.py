@@ -186,7 +186,8 @@ def test_min_mean_torque_sq_at_40_mm_s_is_a_judged_optimum():
 
 def test_every_setting_belongs_to_one_layer():
     """The layers (problem, transcription, solver, baselines, judge) partition the settings, and
-    ``OCPSettings.layer`` returns a layer's fields; the key reference names each [ocp] key's layer."""
+    ``OCPSettings.layer`` returns a layer's fields; the key reference names each [ocp] key's
+    layer."""
     import dataclasses
 
     from ocp_crawl.ocp.limits import LAYERS

@@ -162,8 +162,8 @@ def check_nodes(nodes) -> list[int]:
     ValueError naming the first bad value otherwise."""
     out: list[int] = []
     for n in nodes:
-        if isinstance(n,
-                      bool) or not isinstance(n, (int, np.integer)) or not NODES_BOUNDS[0] <= n <= NODES_BOUNDS[1]:
+        low, high = NODES_BOUNDS
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not low <= n <= high:
             raise ValueError(f"nodes: {n!r} is not an integer in [{NODES_BOUNDS[0]}, "
                              f"{NODES_BOUNDS[1]}]")
         if out and n <= out[-1]:
@@ -174,8 +174,8 @@ def check_nodes(nodes) -> list[int]:
     return out
 
 
-def converge_in_nodes(robot: Robot, gravity: GravityConvention, settings: OCPSettings, nodes, log=None,
-                      jobs: int | None = None) -> ConvergenceTable:
+def converge_in_nodes(robot: Robot, gravity: GravityConvention, settings: OCPSettings, nodes,
+                      log=None, jobs: int | None = None) -> ConvergenceTable:
     """Solve the OCP at each N of ``nodes``, warm-starting each from the previous optimum, replay
     each.
 
@@ -247,7 +247,8 @@ def _warm_row(robot: Robot, gravity: GravityConvention, settings: OCPSettings, p
                    forward)
 
 
-def warm_transcription(robot: Robot, gravity: GravityConvention, settings: OCPSettings) -> GaitSolver:
+def warm_transcription(robot: Robot, gravity: GravityConvention,
+                       settings: OCPSettings) -> GaitSolver:
     """The transcription of a solve warm-started from the previous N's optimum (:func:`_near`) and
     its solver, the first IPOPT solver built (:meth:`~ocp_crawl.ocp.solver.GaitSolver.prepare`: at
     N = 400, about 8 s of derivative generation)."""

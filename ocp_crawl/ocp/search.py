@@ -150,7 +150,8 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
             "evaluations": fam.evaluations - n0}
 
 
-def search_families(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes, local_starts: int,
+def search_families(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes,
+                    local_starts: int,
                     maxfev: int, jobs: int, meanwhile: Callable[[], object] | None = None
                     ) -> dict[str, tuple[WaveFamily, list[dict]]]:
     """Scan and local searches of every shape's family: per shape, the family (every evaluation, in

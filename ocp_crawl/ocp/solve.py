@@ -50,8 +50,8 @@ def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
     return harm.torque_signal(robot.k), harm.T
 
 
-def optimize_gait(robot: Robot, gravity: GravityConvention = "physical", settings: OCPSettings | None = None,
-                  replay: bool = True, jobs: int | None = None,
+def optimize_gait(robot: Robot, gravity: GravityConvention = "physical",
+                  settings: OCPSettings | None = None, replay: bool = True, jobs: int | None = None,
                   start: tuple | None = None) -> OCPResult:
     """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the
     best.
@@ -365,7 +365,8 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     res.value_replay, res.rel_diff_replay = verdict.value, verdict.rel_diff
     if verdict.cycle is not None:
         res.requirements = [{"text": c.text(), "constraint": c.to_dict(),
-                             "replay": cycle_values(c, verdict.cycle)} for c in res.settings.requirements]
+                             "replay": cycle_values(c, verdict.cycle)}
+                            for c in res.settings.requirements]
     if not verdict.ok:
         res.success = False
         res.status = verdict.status

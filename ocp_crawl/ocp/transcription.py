@@ -59,8 +59,8 @@ KERNELS = ("expanded", "compiled")
 class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
-    def __init__(self, robot: Robot, gravity: GravityConvention = "physical", settings: OCPSettings | None = None,
-                 kernel: str = "expanded"):
+    def __init__(self, robot: Robot, gravity: GravityConvention = "physical",
+                 settings: OCPSettings | None = None, kernel: str = "expanded"):
         """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the
         whole NLP as one SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than
         the map of the compiled kernel at N = 100), or "compiled" the compiled step kernel

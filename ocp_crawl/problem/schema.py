@@ -420,7 +420,8 @@ def _requirement(k: Key, selector: str | None) -> str:
 
 def schema_markdown() -> str:
     """The schema as a Markdown table (section, key, type, unit, required/default, valid values,
-    meaning; an ``[ocp]`` key's meaning starts with its layer, :data:`~ocp_crawl.ocp.limits.LAYERS`)."""
+    meaning; an ``[ocp]`` key's meaning starts with its layer,
+    :data:`~ocp_crawl.ocp.limits.LAYERS`)."""
     rows = ["| key | type | unit | required / default | valid | meaning |",
             "|---|---|---|---|---|---|"]
     for sec in SECTIONS:
