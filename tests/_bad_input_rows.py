@@ -682,7 +682,11 @@ COMMAND_ROWS.update({
         text=OCP_TEXT + '\n[ocp.terms]\nW_plus = 1.0\n'),
     "optimize: min:sum without [ocp.terms]": R(
         "optimize", ["{ocp}", "--set", 'ocp.objective="min:sum"'],
-        ["[ocp]", "min:sum", "needs terms"]),
+        ["[ocp] terms is missing", 'objective = "min:sum"', "quantity = weight"]),
+    "optimize: a weight that is not a number": R(
+        "optimize", ["{ocp}", "--set", 'ocp.objective="min:sum"', "--set",
+                     "ocp.terms={W_plus = true}"],
+        ["[ocp] terms = {W_plus = true} (from --set)", "the weight of W_plus is a boolean (true)"]),
     "optimize: the peak torque as a term": R(
         "optimize", ["{file}"], ["x.toml", "[ocp] terms", "'peak_torque' cannot be a term",
                                  "[[ocp.constraint]]"],

@@ -20,7 +20,7 @@ from ocp_crawl.ocp import GaitOCP, OCPSettings
 from ocp_crawl.ocp.baseline import cycle_of, search_rank
 from ocp_crawl.ocp.family import WaveFamily, WaveParams
 from ocp_crawl.ocp.objectives import VOCABULARY, TermsNLP, TermsValue, vocabulary_objective
-from ocp_crawl.ocp.quantities import Physical, reference_sizes
+from ocp_crawl.ocp.quantities import Cycle, Physical, reference_sizes
 from ocp_crawl.problem import load_problem
 from ocp_crawl.problem.run import ocp_settings
 from ocp_crawl.problem.shipped import shipped_problem
@@ -159,7 +159,44 @@ def test_terms_nlp_is_normalised_by_the_reference_sizes():
     assert f == pytest.approx((2.0 - 0.4) / (4.0 + 2.0), rel=1e-14)
     cot = TermsNLP((("CoT_plus", 1.0),))(q)  # W / (M g d S), M g = sizes W+ / sizes distance
     assert cot == pytest.approx((1.0 / (4.0 * 0.1) + 3.0 / (4.0 * 0.3)) / 2, rel=1e-14)
-    assert TermsValue((("period", 2.0),))  # a picklable callable (worker processes)
+    value = TermsValue((("W_plus", 1.0), ("distance", -10.0)))
+    cycle = Cycle((-0.05,), (0.4,), (8.0,), 0.5, -1, 0.2, 0.01)
+    assert value(cycle) == pytest.approx(0.4 - 0.5) and value.magnitude(cycle) == pytest.approx(0.9)
+
+
+def test_vocabulary_settings_pickle_and_are_rebuilt_by_replace():
+    """Settings with a vocabulary objective go to the baselines' workers (pickle) unchanged, and
+    ``dataclasses.replace`` builds the objective again from the new objective and terms instead of
+    keeping the earlier one; a user's own objective still conflicts with another named one."""
+    import dataclasses
+    import pickle
+
+    from ocp_crawl.ocp.quantities import UserObjective
+
+    s = OCPSettings(objective="min:sum", terms={"W_plus": 1.0, "distance": -2.0})
+    assert pickle.loads(pickle.dumps(s)) == s
+    t = dataclasses.replace(s, terms={"mean_torque_sq": 1.0})
+    assert t.user_objective.nlp == TermsNLP((("mean_torque_sq", 1.0),))
+    assert t.user_objective.work is False and t.objective_unit == "N^2 m^2"
+    u = dataclasses.replace(OCPSettings(objective="min:W_plus"), objective="max_speed")
+    assert u.objective == "max_speed" and u.user_objective is None
+    own = UserObjective("heat", TermsNLP((("W_plus", 1.0),)).__call__,
+                        TermsValue((("W_plus", 1.0),)))
+    with pytest.raises(ValueError, match="give one"):
+        OCPSettings(objective="max:speed", user_objective=own)
+
+
+def test_a_sum_with_cot_moves_forwards():
+    """CoT+ = W+ / (M g d S) turns negative backwards (where the judge's CoT+ is +inf): a sum with
+    a CoT+ term requires speed >= 0 in every scenario, as min_cot does; a speed constraint of the
+    user's replaces it."""
+    s = OCPSettings(objective="min:sum", terms={"CoT_plus": 1.0, "mean_torque_sq": 1.0})
+    assert [c.to_dict() for c in s.requirements] == [{"quantity": "speed", "min": 0.0,
+                                                       "over": "every"}]
+    mine = OCPSettings(objective="min:sum", terms={"CoT_plus": 1.0},
+                       constraints=({"quantity": "speed", "min": 0.03},))
+    assert [c.min for c in mine.requirements] == [0.03]
+    assert OCPSettings(objective="min:sum", terms={"W_plus": 1.0}).requirements == ()
 
 
 @pytest.mark.slow
@@ -202,3 +239,20 @@ def test_every_setting_belongs_to_one_layer():
     with pytest.raises(ValueError, match="one of"):
         settings.layer("physics")
     assert "| (solver) homotopy: first relaxation parameter" in schema_markdown()
+
+
+def test_a_max_objective_is_maximised():
+    """The NLP minimises: "max:distance" enters negated, as "min:sum" with a weight of -1 on the
+    distance does (the same number at a guess moving forwards), and "max:distance" is the negative
+    of the guess's own distance over its reference size L."""
+    robot = Robot.paper()
+    params, ev, _ = _harmonic_cycle(OCPSettings(baseline_samples=0), robot)
+    values = []
+    for kw in ({"objective": "max:distance"},
+               {"objective": "min:sum", "terms": {"distance": -1.0}}):
+        settings = OCPSettings(nodes=40, regularization=0.0, **kw)
+        ocp = GaitOCP(robot, "physical", settings)
+        values.append(ocp.objective(ocp.initial_guess(params.torque(robot.k), ev.T)))
+    distance = settings.direction * ev.S[0]
+    assert distance > 0 and values[0] == pytest.approx(values[1], rel=1e-12)
+    assert values[0] == pytest.approx(-distance / robot.L, rel=5e-3)

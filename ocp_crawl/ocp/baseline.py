@@ -147,7 +147,8 @@ def search_rank(settings: OCPSettings, ev: Evaluation) -> float:
     miss = shortfalls(settings, cycle)
     value = value_from(settings, ev.S, ev.CoT_plus, ev.T, feasible=miss <= 0, cycle=cycle)
     if math.isfinite(value):
-        # a user objective in its own unit, over its typical size: below MISS_RANK whatever its unit
+        # a user objective in its own unit, over its typical size (of order one, far below
+        # MISS_RANK, unless its scale or weights say otherwise)
         size = 1.0 if settings.user_objective is None else settings.user_objective.scale
         return (value if settings.minimises else -value) / size
     if settings.objective != "min_cot":

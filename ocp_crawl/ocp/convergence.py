@@ -139,7 +139,7 @@ class ConvergenceTable:
 
     objective: str
     rows: list
-    unit: str = "-"
+    unit: str
     """the objective's unit (:meth:`~ocp_crawl.ocp.settings.OCPSettings.objective_unit`)"""
 
     @property

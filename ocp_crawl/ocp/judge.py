@@ -202,7 +202,8 @@ class Verdict:
     value: float = float("nan")
     """replayed objective value (speeds [m/s], CoT+ [-])"""
     rel_diff: float = float("nan")
-    """|value_replay - value_ocp| / |value_replay| [-]"""
+    """|value_replay - value_ocp| / |value_replay| [-] (a vocabulary sum: over the sum of its
+    terms' magnitudes, ``TermsValue.magnitude``)"""
     envelope_excess: float = float("nan")
     rate_ratio: float = float("nan")
     accel_ratio: float = float("nan")
@@ -313,8 +314,12 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) 
         out.append(admissible_text(low, settings.friction_tol)
                    + f" by more than replay_tol {units.significant(tol)} (of the mean friction "
                      "limit)")
-    if v.value != 0:
-        v.rel_diff = abs(v.value - value_ocp) / abs(v.value)
+    size = abs(v.value)
+    magnitude = getattr(getattr(settings.user_objective, "value", None), "magnitude", None)
+    if magnitude is not None and v.cycle is not None:  # a sum near 0: relative to its terms
+        size = max(size, magnitude(v.cycle))
+    if size != 0:
+        v.rel_diff = abs(v.value - value_ocp) / size
     else:
         v.rel_diff = 0.0 if value_ocp == 0 else math.inf
     if not v.rel_diff <= tol:

@@ -34,9 +34,11 @@ OBJECTIVES = ("max_speed", "min_cot", "robust_speed")
 #: the vocabulary's forms of the named objectives (the same NLP, stored under the name)
 NAMED = {"max:speed": "max_speed", "min:CoT_plus": "min_cot"}
 #: the sense each quantity may be optimised in alone: W+ and CoT+ only pressed down, the peak
-#: torque not at all (a maximum over nodes: bound it with a constraint)
-SENSES = {"speed": ("max",), "distance": ("max", "min"), "W_plus": ("min",),
-          "CoT_plus": ("min",), "mean_torque_sq": ("min", "max"), "period": ("min", "max")}
+#: torque not at all (a maximum over nodes: bound it with a constraint); the senses that only
+#: stop the robot, slow it or lengthen its period alone (min:distance, max:period, ...) are left
+#: out: the baselines run at the shortest period the bandwidth allows and would not measure them
+SENSES = {"speed": ("max",), "distance": ("max",), "W_plus": ("min",), "CoT_plus": ("min",),
+          "mean_torque_sq": ("min",), "period": ("min",)}
 #: the weighted sum of ``terms``
 SUM = "min:sum"
 #: every objective of the vocabulary
@@ -117,6 +119,11 @@ class TermsValue:
     def __call__(self, cycle: Cycle) -> float:
         return float(sum(w * np.mean(quantity_values(name, cycle)) for name, w in self.terms))
 
+    def magnitude(self, cycle: Cycle) -> float:
+        """Sum of |weight * term|: the size a difference of the value is relative to (a sum of
+        terms of both signs may be near zero where none of its terms is)."""
+        return float(sum(abs(w * np.mean(quantity_values(name, cycle))) for name, w in self.terms))
+
 
 def vocabulary_objective(objective: str, terms=None) -> UserObjective:
     """The :class:`~ocp_crawl.ocp.quantities.UserObjective` of a vocabulary objective other than the
@@ -151,11 +158,16 @@ def resolve_objective(objective: str, user: UserObjective | None, terms, robust:
     objective under its label; ValueError (naming the ``OCPSettings`` field) for a combination that
     says two things or that the objective cannot take."""
     choices = OBJECTIVES + VOCABULARY
+    if user is not None and isinstance(user.nlp, TermsNLP):
+        user = None  # built from an earlier objective (dataclasses.replace): built again below
     if objective not in choices and (user is None or objective != user.label):
         raise ValueError(f"OCPSettings.objective must be one of {choices}, got {objective!r}")
     if terms is not None and objective != SUM:
         raise ValueError(f"OCPSettings.terms: only objective {SUM!r} takes terms, not "
                          f"{objective!r}")
+    if user is not None and objective not in (user.label, "max_speed"):  # default, or its label
+        raise ValueError(f"OCPSettings: objective {objective!r} and user_objective {user.label!r}: "
+                         "give one")
     objective = canonical(objective)  # the same NLP under its name
     if user is None:
         if objective not in VOCABULARY:
@@ -167,9 +179,6 @@ def resolve_objective(objective: str, user: UserObjective | None, terms, robust:
         return objective, vocabulary_objective(objective, terms), terms and dict(terms)
     if not isinstance(user, UserObjective):
         raise ValueError(f"OCPSettings.user_objective must be a UserObjective, got {user!r}")
-    if objective not in (user.label, "max_speed"):  # the default, or its own label
-        raise ValueError(f"OCPSettings: objective {objective!r} and user_objective {user.label!r}: "
-                         "give one")
     if robust != "mean":
         raise ValueError("OCPSettings.robust: a user objective takes the scenarios' numbers itself "
                          "(Physical.S, Cycle.S are per scenario); robust must stay 'mean'")

@@ -343,7 +343,9 @@ class OCPSettings:
         self._set("constraints", tuple(Constraint.of(c) for c in self.constraints))
         if self.objective == "min_cot" and self.speed_min > 0 and self._own_speed_min():
             raise ValueError("OCPSettings: speed_min and a speed constraint with min in every "
-                             "scenario both give min_cot's speed requirement: give one")
+                             "scenario both give min_cot's speed requirement: give one (to change "
+                             "a file's speed constraint: --set 'ocp.constraint=[{quantity = "
+                             "\"speed\", min = 0.05}]')")
 
     def schedule(self) -> tuple[float, ...]:
         """The relaxation parameters of the homotopy from the first sigma0 (sigma0, sigma0
@@ -384,10 +386,15 @@ class OCPSettings:
     def requirements(self) -> tuple[Constraint, ...]:
         """Every bound on a cycle quantity: min_cot's speed requirement (a speed at least speed_min
         in every scenario; unless a constraint bounds the speed from below in every scenario
-        itself), then :attr:`constraints`."""
-        if self.objective != "min_cot" or self._own_speed_min():
+        itself), or a sum with a CoT+ term moving forwards (speed >= 0: CoT+ = W+ / (M g d S) turns
+        negative backwards, where the judge's CoT+ is +inf), then :attr:`constraints`."""
+        if self._own_speed_min():
             return self.constraints
-        return (Constraint("speed", min=self.speed_min),) + self.constraints
+        if self.objective == "min_cot":
+            return (Constraint("speed", min=self.speed_min),) + self.constraints
+        if self.terms is not None and "CoT_plus" in self.terms:
+            return (Constraint("speed", min=0.0),) + self.constraints
+        return self.constraints
 
     @property
     def speed_requirement(self) -> Constraint | None:

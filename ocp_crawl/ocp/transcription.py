@@ -1,6 +1,6 @@
 """Direct transcription of the periodic-gait OCP: the NLP's variables, constraints and objective,
-its initial guess from simulations, the residuals of a solution, and its solve by the relaxation
-homotopy.
+the bounds of its relaxation and of its identified branches, its initial guess from simulations and
+the residuals of a solution (its solve: :class:`~ocp_crawl.ocp.solver.GaitSolver`).
 
 Time is explicit.  The period T [s] of the gait is a variable, scaled as ``T_hat = T / period_ref``
 (:meth:`~ocp_crawl.ocp.settings.OCPSettings.period_ref`).  Node k sits at phase k/N (k = 0..N-1) and
@@ -22,9 +22,9 @@ profile and one T; robust_speed is max_speed over a set) ``-mean_j v_j`` or ``-m
 ``regularization * (N sum |dtau|^2/(M g L)^2) / T_hat^2`` (the mean squared torque rate, a
 tie-breaker) and ``regularization * sum (theta - 1/2)^2 / N`` (interior points without an event are
 otherwise free); both are invariant under repeating the profile k times with T multiplied by k, as
-the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma) is driven
-to sigma_min by the homotopy engine of :mod:`ocp_crawl.nlp.homotopy`, then polished on the
-identified branches.
+the objectives are.  Scholtes' relaxation (s c <= sigma and the cross conditions <= sigma,
+:meth:`GaitOCP.relaxed_ubg`) is driven to sigma_min by the solver, then polished on the identified
+branches (:meth:`GaitOCP.branch_ubx`).
 """
 from __future__ import annotations
 

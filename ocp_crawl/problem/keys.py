@@ -128,7 +128,8 @@ class Key:
             return "an array of tables, each " + (self.rule.text if self.rule is not None
                                                   else "a table")
         if self.type is dict:
-            return "a table of names and numbers or strings"
+            return (self.rule.text if self.rule is not None
+                    else "a table of names and numbers or strings")
         if self.rule is not None:
             return self.rule.text
         return "any finite number" if self.type in (float, int) else "any string"

@@ -22,6 +22,7 @@ from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.keys import (ANGLE, COEFFICIENT, GE0, GT0, PHASE, Key, Rule, Section, Tables,
                                    field_default, within)
 from ocp_crawl.problem.messages import format_value
+from ocp_crawl.ocp.objectives import SENSES
 from ocp_crawl.ocp.quantities import QUANTITIES, Constraint
 from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   BASELINE_SAMPLES_BOUNDS, BASELINE_STARTS_BOUNDS,
@@ -262,7 +263,9 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
     Key("terms", dict, "-",
         "objective min:sum: one [ocp.terms] table of quantity = weight (the sum "
         "of weight times each quantity in its SI unit, a scenario quantity as its mean over the "
-        "scenarios; a negative weight maximises it)", variants=("min:sum",)),
+        "scenarios; a negative weight maximises it)", required=True, variants=("min:sum",),
+        rule=Rule(lambda v: True, "a table of quantity = weight (numbers), the quantities "
+                  + ", ".join(SENSES))),
     Key("nodes", int, "-", "steps per cycle of the transcription", default=_ocp("nodes"),
         rule=within(*NODES_BOUNDS,
                     "the shipped files use 50: 15 to 30 s per start with one friction scenario, "

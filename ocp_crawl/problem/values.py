@@ -81,6 +81,11 @@ def _check_table(ctx: Context, section: str, key: Key, value: Any) -> dict:
         raise ProblemError(f"{where} is invalid: expected {TYPE_WORDS[dict]}, a "
                            f"[{section}.{key.name}] table ({key.what})")
     if key.name == "terms":  # quantity -> weight
+        for name, weight in value.items():
+            if isinstance(weight, bool) or not isinstance(weight, (int, float)):
+                raise ProblemError(f"{where} is invalid: the weight of {name} is "
+                                   f"{toml_type(weight)} ({format_value(weight)}), expected a "
+                                   "number")
         try:
             check_terms(value)
         except ValueError as exc:
