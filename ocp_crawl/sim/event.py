@@ -213,12 +213,11 @@ class HybridStepper:
         te = output_phases(t_eval)
         self.solver.reset()
         try:
-            start = self.initial_state(0.0)
+            run = self._start_run(self.initial_state(0.0))
         except ValueError as exc:
             self.segments = []
             return no_start_result(self.ctx.model, str(exc), nfev=self.solver.nfev,
                                    extra={"segments": 0})
-        run = self._start_run(start)
         try:
             end = _Outcome(Status.SUCCESS, periodic_at=self._run_cycles(run))
         except _Failure as f:
@@ -246,7 +245,8 @@ class HybridStepper:
         d0 = start.aux[_D]
         seg = _Segment(Mode.STICK, mode_q(Mode.STICK, d0), 0.0, d0)
         pt = self.solver.solve(0.0, start.x, seg.q)
-        assert pt is not None  # the released start is an equilibrium of stick-stick
+        if pt is None:  # a NO_START status, as a start that does not release
+            raise ValueError("the released start does not solve in stick-stick at t = 0")
         seg.points.append(pt)
         return _Run(seg, pt, self.ctx.max_step, np.sign(pt.aux[_DET]) or 1.0, [seg])
 
