@@ -302,9 +302,9 @@ def solve_many(x0: np.ndarray, tau: np.ndarray, dtau: np.ndarray, q: np.ndarray,
     the batching); chunks of BATCH columns, the last ones in chunks of SMALL_BATCH (less
     padding)."""
     n = x0.shape[1]
-    widths: list[int] = []
-    while sum(widths) < n:
-        widths.append(BATCH if n - sum(widths) > 3 * SMALL_BATCH else SMALL_BATCH)
+    # wide chunks while more than three narrow ones remain, then narrow ones
+    n_wide = max(0, -(-(n - 3 * SMALL_BATCH) // BATCH))
+    widths = [BATCH] * n_wide + [SMALL_BATCH] * max(0, -(-(n - n_wide * BATCH) // SMALL_BATCH))
     total = sum(widths)
     # the inputs padded with copies of the last column, column-major
     last = np.full(total - n, n - 1, dtype=int)

@@ -23,6 +23,10 @@ from ocp_crawl.sim.quadrature import gauss_nodes, legendre_roots
 #: halved)
 QUAD_TOL = 1e-4
 QUAD_DEPTH = 16
+#: the tail of a segment whose integrands are round-off of the cycle's largest integrand value (a
+#: hold: the joints at rest, their powers ~1e-15 W) is accepted below this fraction of that value
+#: (its noise never meets QUAD_TOL of itself: every panel would be halved QUAD_DEPTH times)
+QUAD_FLOOR = 1e-12
 #: 5-point Gauss-Legendre nodes and weights on [-1, 1]; Legendre coefficients of the degree-4
 #: interpolant through values at the nodes (c = values @ _LEG_FIT) and its values at -1 and 1
 _XG, _WG = np.polynomial.legendre.leggauss(5)
@@ -66,8 +70,9 @@ class CycleQuadrature:
 
         Panels start no longer than ``quad_h``; a panel is halved (up to QUAD_DEPTH times) while the
         two highest Legendre coefficients of the degree-4 interpolant of an integrand (actuator
-        powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece, so
-        steep stretches (low stiffness, large amplitudes) are resolved.  The pieces are refined
+        powers, friction power) exceed QUAD_TOL times the largest integrand value on its piece (and
+        QUAD_FLOOR times the largest of all pieces), so steep stretches (low stiffness, large
+        amplitudes) are resolved.  The pieces are refined
         together (one batched solve per depth).  Returns per piece the panel edges (lo, hi), nodes,
         weights and integrands (power (2, n, 5), friction power (n, 5)), and (``positive``) the W+
         sign split of all panels (:meth:`_merge_splits`; the split nodes of the panels accepted at
@@ -89,7 +94,8 @@ class CycleQuadrature:
             f = np.concatenate([power, fric[None]], axis=0)  # (3, npan, 5)
             np.maximum.at(scale, owner, np.abs(f).max(axis=(0, 2)))
             tail = np.abs(f.reshape(-1, 5) @ _LEG_TAIL).max(axis=1).reshape(3, -1)
-            ok = np.all(tail <= QUAD_TOL * scale[owner], axis=0) | (depth == QUAD_DEPTH)
+            bound = np.maximum(QUAD_TOL * scale[owner], QUAD_FLOOR * scale.max())
+            ok = np.all(tail <= bound, axis=0) | (depth == QUAD_DEPTH)
             w = (half * wg).reshape(-1, 5)
             t = t.reshape(-1, 5)
             every = bool(ok.all())  # (then the accepted panels are all of them, in order)
