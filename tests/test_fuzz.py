@@ -44,7 +44,7 @@ invariants of a success), then one line with the counts per (waveform, drive, so
 from __future__ import annotations
 
 import collections
-import copy
+import dataclasses
 import json
 import math
 import os
@@ -592,15 +592,13 @@ def test_the_checks_see_a_wrong_success():
     problem = problem_from_dict(PAPER)
     res = run_problem(problem)
     assert res.success and not event_violations(problem, res)
-    bad = copy.deepcopy(res)
-    bad.f_t = 1.01 * bad.f_t
+    bad = dataclasses.replace(res, f_t=1.01 * res.f_t)
     assert any(m.startswith("friction") for m in event_violations(problem, bad))
-    bad = copy.deepcopy(res)
-    bad.S = 1.001 * bad.S
+    bad = dataclasses.replace(res, S=1.001 * res.S)
     assert any("changes to" in m for m in event_violations(problem, bad))
     problem = problem_from_dict({**PAPER, "gait": {**PAPER["gait"], "drive": "angles"}})
     res = run_problem(problem)
     assert res.success and not angles_violations(problem, res)
-    bad = copy.deepcopy(res)
-    bad.S, bad.x1, bad.x2 = bad.S + 1e-6, bad.x1 + 1e-6 * bad.t, bad.x2 + 1e-6 * bad.t
+    bad = dataclasses.replace(res, S=res.S + 1e-6, x1=res.x1 + 1e-6 * res.t,
+                              x2=res.x2 + 1e-6 * res.t)
     assert any("angles_feet" in m for m in angles_violations(problem, bad))

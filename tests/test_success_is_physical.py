@@ -16,7 +16,7 @@ from ocp_crawl import Model, simulate_torque
 from ocp_crawl.model.inputs import CallableSignal, ReferenceTorque
 from ocp_crawl.model.stability import stability_margin
 from ocp_crawl.problem import paper_problem, problem_from_dict
-from ocp_crawl.sim.assemble import energy_gate, new_result, set_cycle_metrics
+from ocp_crawl.sim.assemble import balance_metrics, energy_gate, new_result
 from ocp_crawl.sim.event import HybridOptions, HybridStepper
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
@@ -269,11 +269,12 @@ def test_energy_gate_of_the_mpcc_solver_scales_with_the_steps():
 def test_energy_gate_on_a_constructed_result():
     m = Model(paper_problem().robot)
     for residual, ok in ((1e-3, False), (1e-8, True)):
-        res = new_result(m, "torque", Status.SUCCESS)
         # input work 1 J, potential change 0, dissipation 1 - residual: the balance misses
         # `residual`
-        set_cycle_metrics(res, m.robot, -0.05, np.array([0.5, 0.5]), 1.0, 0.0, 1.0 - residual, 1.0)
-        energy_gate(res, 1e-6, "tol")
+        res = new_result(m, "torque", Status.SUCCESS,
+                         **balance_metrics(m.robot, -0.05, np.array([0.5, 0.5]), 1.0, 0.0,
+                                           1.0 - residual, 1.0))
+        res = energy_gate(res, 1e-6, "tol")
         assert res.success == ok and (ok or res.status == Status.ENERGY_IMBALANCE)
         assert res.energy["balance_residual"] == pytest.approx(residual)
 

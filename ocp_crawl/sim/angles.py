@@ -11,16 +11,26 @@ f_n2: slipping foot changes) are located by Brent's method on the exact kinemati
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import KIN, Model, call_mapped, symbolic
 from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
-from ocp_crawl.sim.assemble import (default_phases, failure_message, new_result, output_phases,
-                                    set_cycle_metrics, set_samples)
+from ocp_crawl.sim.assemble import (balance_metrics, default_phases, failure_message, new_result,
+                                    output_phases, sample_fields)
 from ocp_crawl.sim.result import CrawlResult, Event, Mode
 from ocp_crawl.status import Status
+
+if TYPE_CHECKING:  # (the chain's prescribed-angle simulator shares these functions)
+    from ocp_crawl.model.chain_model import ChainModel
+    from ocp_crawl.sim.chain_angles import ChainGait
+
+    from typing import TypeAlias
+
+    _Gait: TypeAlias = "KinematicGait | ChainGait"
+    _AnyModel: TypeAlias = "Model | ChainModel"
 
 
 class KinematicGait:
@@ -147,19 +157,18 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
         return _failure_result(model, kin, *failure)
     switches = _switching_instants(kin, ts, K)
     anchors, S = _anchors(kin, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
-    res = new_result(model, "angles", Status.SUCCESS,
-                     f"prescribed-angle gait: {len(switches)} switching instants "
-                     "per cycle", cycles=1,
-                     events=[_event(kin, t_ev, name) for t_ev, name in switches])
+    events = [_event(kin, t_ev, name) for t_ev, name in switches]
     if te is None:
         te = default_phases([e[0] for e in switches])
-    _store_samples(res, model, kin(te), te, anchors)
+    samples = _samples(model, kin(te), te, anchors)
     wplus, w_in, w_abs, diss = _cycle_integrals(model, kin, anchors,
                                                 np.asarray(getattr(angles, "t_knots", ()), float))
     dV = float(model.potential(angles(1.0)) - model.potential(angles(0.0)))
-    set_cycle_metrics(res, model.robot, S, wplus, w_in, dV, diss, w_abs)
-    res.periodicity_residual = float(np.max(np.abs(angles(1.0) - angles(0.0))))
-    return res
+    return new_result(model, "angles", Status.SUCCESS,
+                      f"prescribed-angle gait: {len(switches)} switching instants per cycle",
+                      cycles=1, events=events, **samples,
+                      **balance_metrics(model.robot, S, wplus, w_in, dV, diss, w_abs),
+                      periodicity_residual=float(np.max(np.abs(angles(1.0) - angles(0.0)))))
 
 
 def _check_angles(model: Model, angles: PeriodicSignal, ts: np.ndarray) -> None:
@@ -211,7 +220,7 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
     return failure
 
 
-def _failure_result(model: Model, kin: KinematicGait, tf: float, status: Status, label: str,
+def _failure_result(model: _AnyModel, kin: _Gait, tf: float, status: Status, label: str,
                     kind: str) -> CrawlResult:
     """The result of a cycle that loses contact at phase tf, with the mode just before it."""
     k0 = kin(max(tf - 1e-9, 0.0))
@@ -224,7 +233,7 @@ def _failure_result(model: Model, kin: KinematicGait, tf: float, status: Status,
                       events=[Event(tf, kind, "", "failure")])
 
 
-def _switching_instants(kin: KinematicGait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
+def _switching_instants(kin: _Gait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
     """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or
     vanishes on a stretch (the input holds still: both feet stick); the smaller friction limit
     changes feet (slip switch), or both are equal on a stretch (|h| <= TIE: both feet slip)."""
@@ -268,7 +277,7 @@ def _next_switch(f, name: str, ts: np.ndarray, runs: list, k: int) -> tuple[floa
     return 0.5 * (lo + hi), k + 1
 
 
-def _mode_at(kin: KinematicGait, tm: float) -> Mode:
+def _mode_at(kin: _Gait, tm: float) -> Mode:
     """Contact mode at phase tm: the foot with the smaller friction limit slips along sign(d')."""
     k1 = kin(tm)
     h, dd = k1["h"][0], k1["ddot"][0]
@@ -277,7 +286,7 @@ def _mode_at(kin: KinematicGait, tm: float) -> Mode:
     return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
 
 
-def _anchors(kin: KinematicGait, breaks: list[float], d_start: float) -> tuple[list, float]:
+def _anchors(kin: _Gait, breaks: list[float], d_start: float) -> tuple[list, float]:
     """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's
     end [m] (foot 1 starts at 0): the slipping foot follows d, the other stays."""
     x1, x2 = 0.0, d_start
@@ -299,7 +308,7 @@ def _anchors(kin: KinematicGait, breaks: list[float], d_start: float) -> tuple[l
     return anchors, x1 - 0.0
 
 
-def _event(kin: KinematicGait, t_ev: float, name: str) -> Event:
+def _event(kin: _Gait, t_ev: float, name: str) -> Event:
     """The event of a switching instant of the function ``name`` ("ddot" or "h") at phase t_ev."""
     before = _mode_at(kin, max(t_ev - 1e-9, 0.0))
     after = _mode_at(kin, min(t_ev + 1e-9, 1.0))
@@ -320,8 +329,9 @@ def _friction(mu, k1: dict, m: Mode):
     return (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
 
 
-def _store_samples(res: CrawlResult, model: Model, Ko: dict, te: np.ndarray, anchors: list) -> None:
-    """Output arrays at the phases te, with the kinematics Ko there."""
+def _samples(model: Model, Ko: dict, te: np.ndarray, anchors: list) -> dict:
+    """The output array fields (:func:`~ocp_crawl.sim.assemble.sample_fields`) at the phases te,
+    with the kinematics Ko there."""
     n = len(te)
     modes, ft, x1o, x2o = np.empty(n, int), np.empty(n), np.empty(n), np.empty(n)
     mu = (model.robot.mu1, model.robot.mu2)
@@ -340,8 +350,8 @@ def _store_samples(res: CrawlResult, model: Model, Ko: dict, te: np.ndarray, anc
         else:
             mid = 0.5 * (xa1 + xa2)
             x1o[j], x2o[j] = mid - 0.5 * Ko["d"][j], mid + 0.5 * Ko["d"][j]
-    set_samples(res, te, Ko["phi"], Ko["theta"], Ko["d"], x1o, x2o, ft, Ko["fn1"], Ko["fn2"],
-                model.hold_torque(Ko["phi"], ft), modes)
+    return sample_fields(te, Ko["phi"], Ko["theta"], Ko["d"], x1o, x2o, ft, Ko["fn1"], Ko["fn2"],
+                         model.hold_torque(Ko["phi"], ft), modes)
 
 
 def _cycle_integrals(model: Model, kin: KinematicGait, anchors: list, knots: np.ndarray) -> tuple:
@@ -384,7 +394,7 @@ QUAD_PANEL, QUAD_PANEL_MIN = 1.0 / 64, 1.0 / 8192
 QUAD_RTOL = 1e-11
 
 
-def _piece_sums(model: Model, kin: KinematicGait, mu, a: float, b: float, m) -> tuple:
+def _piece_sums(model: _AnyModel, kin: _Gait, mu, a: float, b: float, m) -> tuple:
     """(input work, gross work, dissipation) [J] on [a, b] in mode ``m`` by order-5 Gauss panels of
     at most :data:`QUAD_PANEL`, their number doubled until the input work and the dissipation of two
     counts agree (:data:`QUAD_RTOL`); and the panel width.  (Doubling the count, not halving a

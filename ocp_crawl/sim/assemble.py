@@ -1,25 +1,27 @@
 """The one assembly of a :class:`~ocp_crawl.sim.result.CrawlResult`, shared by every simulator.
 
 A simulator computes its own samples and cycle integrals; this module checks the output phases a
-user asks for, writes the status and its message, stores the sampled arrays and turns the cycle's
-displacement, positive work and energy terms into S, W+, CoT+ and the energy balance, the same
-way for the event-driven stepper, the prescribed angles and the MPCC time-stepping.
+user asks for, gives the status and its message, the fields of the sampled arrays and turns the
+cycle's displacement, positive work and energy terms into S, W+, CoT+ and the energy balance, the
+same way for the event-driven stepper, the prescribed angles, the MPCC time-stepping and MuJoCo.
 
 It also holds the physical gates of a periodic result of the torque solvers: a steady
 cycle whose energy balance does not close within the solver's tolerance is not a success
 (:func:`imbalance`), nor one with an unstable equilibrium at a sampled phase
 (:func:`unstable_sample`);
-:func:`failed_metrics` are the fields of such a failure.  A solver that builds its result in one
-call (the event-driven stepper) takes the fields of :func:`cycle_metrics` and
-:func:`failed_metrics`; the others store them on a result they have made (:func:`set_cycle_metrics`,
-:func:`energy_gate`,
-:func:`stability_gate`, :func:`demote`).
+:func:`failed_metrics` are the fields of such a failure.  A :class:`CrawlResult` is frozen: every
+simulator collects its fields (:func:`sample_fields`, :func:`cycle_metrics`,
+:func:`balance_metrics`, :func:`failed_metrics`) and builds it in one call (:func:`new_result`);
+:func:`energy_gate`, :func:`stability_gate` and :func:`demote` return a derived result
+(``dataclasses.replace``).
 """
 from __future__ import annotations
 
-import numpy as np
-
+from dataclasses import replace
+from typing import TYPE_CHECKING
 from functools import lru_cache
+
+import numpy as np
 
 from ocp_crawl.model.compiled import FastFunction, compiled_function
 from ocp_crawl.model.stability import stability_function
@@ -27,6 +29,9 @@ from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import CrawlResult, Mode, cost_of_transport, energy_balance
 from ocp_crawl.status import STATUS_MESSAGES, Status
+
+if TYPE_CHECKING:  # (the chain's prescribed-angle simulator builds its results here too)
+    from ocp_crawl.model.chain_model import ChainModel
 
 #: phases of the default output grid over the steady cycle (the event phases are added)
 DEFAULT_OUTPUT_POINTS = 201
@@ -91,7 +96,7 @@ def success_message(cycles: int, t0: float, how: str = "") -> str:
             f"[{t0:g}, {t0 + 1:g}]")
 
 
-def new_result(model: Model, drive: str, status: Status, message: str = "",
+def new_result(model: Model | ChainModel, drive: str, status: Status, message: str = "",
                **fields) -> CrawlResult:
     """A result with its status (a :class:`~ocp_crawl.status.Status`) and message; ``fields``: any
     other :class:`CrawlResult` field."""
@@ -105,13 +110,12 @@ def no_start_result(model: Model, detail: str, **fields) -> CrawlResult:
                       failure_t=0.0, failure_mode="released start", **fields)
 
 
-def set_samples(res: CrawlResult, t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, tau, mode) -> None:
-    """Store the output arrays on the phases ``t`` [cycles]: angles phi [rad] (2, N), body angle
-    theta [rad], foot distance d and foot positions x1, x2 [m], tangential and normal forces [N],
-    torques tau [N m] (2, N) and the contact mode codes."""
-    res.t, res.phi, res.theta, res.d = t, phi, theta, d
-    res.x1, res.x2, res.f_t, res.f_n1, res.f_n2 = x1, x2, f_t, f_n1, f_n2
-    res.tau, res.mode = tau, mode
+def sample_fields(t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, tau, mode) -> dict:
+    """The output array fields of a :class:`CrawlResult` on the phases ``t`` [cycles]: angles phi
+    [rad] (2, N), body angle theta [rad], foot distance d and foot positions x1, x2 [m], tangential
+    and normal forces [N], torques tau [N m] (2, N) and the contact mode codes."""
+    return {"t": t, "phi": phi, "theta": theta, "d": d, "x1": x1, "x2": x2, "f_t": f_t,
+            "f_n1": f_n1, "f_n2": f_n2, "tau": tau, "mode": mode}
 
 
 def cycle_metrics(robot, S: float, w_plus_joint, energy: dict) -> dict:
@@ -123,13 +127,13 @@ def cycle_metrics(robot, S: float, w_plus_joint, energy: dict) -> dict:
             "CoT_plus": cost_of_transport(w_plus, robot, S), "energy": energy}
 
 
-def set_cycle_metrics(res: CrawlResult, robot, S: float, w_plus_joint, input_work: float,
-                      potential_change: float, dissipation: float, gross_work: float) -> None:
-    """Store the metrics of the reported cycle: S [m], W+ per actuator and summed [J], CoT+ [-] and
-    the energy balance of input work, potential change, friction dissipation and gross work [J]."""
+def balance_metrics(robot, S: float, w_plus_joint, input_work: float, potential_change: float,
+                    dissipation: float, gross_work: float) -> dict:
+    """The metric fields of the reported cycle (:func:`cycle_metrics`): S [m], W+ per actuator and
+    summed [J], CoT+ [-] and the energy balance of input work, potential change, friction
+    dissipation and gross work [J]."""
     energy = energy_balance(input_work, potential_change, dissipation, gross_work, robot)
-    for name, value in cycle_metrics(robot, S, w_plus_joint, energy).items():
-        setattr(res, name, value)
+    return cycle_metrics(robot, S, w_plus_joint, energy)
 
 
 def failed_metrics(t: float | None, mode: str | None) -> dict:
@@ -142,15 +146,12 @@ def failed_metrics(t: float | None, mode: str | None) -> dict:
 
 
 def demote(res: CrawlResult, status: Status, detail: str, t: float | None,
-           mode: str | None) -> None:
-    """Turn a result that its solver found periodic into the failure ``status`` (a physical check
+           mode: str | None) -> CrawlResult:
+    """The failure ``status`` of a result that its solver found periodic (a physical check
     failed): the message says ``detail``, ``failure_t`` [cycles] and ``failure_mode`` say where
-    (:func:`failed_metrics`)."""
-    res.success = False
-    res.status = Status(status)
-    res.message = failure_message(status, detail)
-    for name, value in failed_metrics(t, mode).items():
-        setattr(res, name, value)
+    (:func:`failed_metrics`); the other fields are those of ``res``."""
+    return replace(res, success=False, status=Status(status),
+                   message=failure_message(status, detail), **failed_metrics(t, mode))
 
 
 def imbalance(energy: dict, tol: float, why: str, t0: float) -> str | None:
@@ -164,13 +165,14 @@ def imbalance(energy: dict, tol: float, why: str, t0: float) -> str | None:
             f"exceeds {why} = {tol:.3g}")
 
 
-def energy_gate(res: CrawlResult, tol: float, why: str) -> None:
-    """Demote a successful result to ENERGY_IMBALANCE when |balance residual| (relative to the gross
-    work) exceeds ``tol`` (:func:`imbalance`); ``why`` names the option and the reason for its value
-    (for the message)."""
+def energy_gate(res: CrawlResult, tol: float, why: str) -> CrawlResult:
+    """``res``, or its ENERGY_IMBALANCE failure (:func:`demote`) when it is a success whose
+    |balance residual| (relative to the gross work) exceeds ``tol`` (:func:`imbalance`); ``why``
+    names the option and the reason for its value (for the message)."""
     detail = imbalance(res.energy, tol, why, res.t0) if res.success else None
-    if detail is not None:
-        demote(res, Status.ENERGY_IMBALANCE, detail, res.t0, "steady cycle")
+    if detail is None:
+        return res
+    return demote(res, Status.ENERGY_IMBALANCE, detail, res.t0, "steady cycle")
 
 
 def unstable_sample(model: Model, t: np.ndarray, phi: np.ndarray, f_t: np.ndarray,
@@ -194,15 +196,14 @@ def unstable_sample(model: Model, t: np.ndarray, phi: np.ndarray, f_t: np.ndarra
             f"(cycle {int(np.floor(tj)) + 1}, phase {tj % 1:.10f}) in mode {label}", tj, label)
 
 
-def stability_gate(res: CrawlResult, model: Model) -> None:
-    """Demote a successful result to UNSTABLE when the equilibrium at one of its sampled phases has
-    a stability margin <= 0 in its sample's contact mode (:func:`unstable_sample`); the message
-    names the first such phase, its mode and margin."""
+def stability_gate(res: CrawlResult, model: Model) -> CrawlResult:
+    """``res``, or its UNSTABLE failure (:func:`demote`) when it is a success and the equilibrium
+    at one of its sampled phases has a stability margin <= 0 in its sample's contact mode
+    (:func:`unstable_sample`); the message names the first such phase, its mode and margin."""
     if not res.success or res.t.size == 0:
-        return
+        return res
     found = unstable_sample(model, res.t, res.phi, res.f_t, res.mode)
-    if found is not None:
-        demote(res, Status.UNSTABLE, *found)
+    return res if found is None else demote(res, Status.UNSTABLE, *found)
 
 
 #: mode_q of each mode (4, number of modes), by mode code

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import copy
 import time
+from dataclasses import replace
 
 from ocp_crawl.sim.assemble import demote
 from ocp_crawl.sim.result import CrawlResult, Mode
@@ -96,18 +97,19 @@ def estimate_S_error(stepper, run, stop) -> dict:
     return out
 
 
-def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> None:
-    """Set ``res.S_error`` [m] from the check run and demote a successful result to COARSE_STEPS
-    when the estimate exceeds :func:`error_bound` (or the check run failed); the message names the
-    estimate, the bound and the steps to try.  ``L``: the robot's length [m]; ``tol``: the relative
-    bound [-]."""
-    if check is None:
-        return
-    if not res.success:
-        return
+def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> CrawlResult:
+    """A successful ``res`` with ``S_error`` [m] from the check run (and
+    ``extra["S_error_bound"]``), or its COARSE_STEPS failure
+    (:func:`~ocp_crawl.sim.assemble.demote`, ``extra["S_coarse"]``: its S) when the estimate
+    exceeds :func:`error_bound` (or the check run failed); the message names the estimate, the
+    bound and the steps to try.  ``res`` as it is for a failure or without a
+    check run (``check`` None).
+    ``L``: the robot's length [m]; ``tol``: the relative bound [-]."""
+    if check is None or not res.success:
+        return res
     est, N = abs(res.S - check["S_check"]), check["steps"]
-    res.S_error = est
-    bound = res.extra["S_error_bound"] = error_bound(res.S, L, tol)
+    bound = error_bound(res.S, L, tol)
+    res = replace(res, S_error=est, extra={**res.extra, "S_error_bound": bound})
     if check["check_failure"]:
         detail = (f"the check run at {check['steps_check']} steps per cycle failed: "
                   f"{check['check_failure']}; S error not estimated: use steps >= {4 * N}")
@@ -117,6 +119,6 @@ def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> No
                   f"(|S| + {ABS_FLOOR:g} L), from |S_N - S_M| at N = {N} and "
                   f"M = {check['steps_check']} steps: use steps >= {4 * N}")
     else:
-        return
-    res.extra["S_coarse"] = res.S
-    demote(res, Status.COARSE_STEPS, detail, res.t0, "steady cycle")
+        return res
+    res = replace(res, extra={**res.extra, "S_coarse": res.S})
+    return demote(res, Status.COARSE_STEPS, detail, res.t0, "steady cycle")

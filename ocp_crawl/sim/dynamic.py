@@ -29,10 +29,10 @@ import numpy as np
 from ocp_crawl.checks import real
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.assemble import (
+    cycle_metrics,
     failure_message,
     new_result,
-    set_cycle_metrics,
-    set_samples,
+    sample_fields,
     success_message,
 )
 from ocp_crawl.sim.mujoco_model import (
@@ -319,7 +319,7 @@ def simulate_mujoco(
     cyc, cycles, history, engine, controls = out
     t0 = float(cycles - 1)
     phases = np.linspace(0.0, 1.0, SAMPLES + 1) if t_eval is None else np.asarray(t_eval, float)
-    res = new_result(
+    return new_result(
         model,
         drive,
         Status.SUCCESS,
@@ -334,25 +334,20 @@ def simulate_mujoco(
             "period": options.period,
             "W_plus_steps": float(cyc.w_plus_steps.sum()),
         },
+        **sample_cycle(model, engine, cyc, controls, phases, t0),
+        **cycle_metrics(
+            model.robot,
+            cyc.S,
+            cyc.w_plus,
+            {"input_work": cyc.input_work, "gross_work": cyc.gross_work},
+        ),
     )
-    sample_cycle(res, model, engine, cyc, controls, phases)
-    set_cycle_metrics(
-        res,
-        model.robot,
-        cyc.S,
-        cyc.w_plus,
-        cyc.input_work,
-        float("nan"),
-        float("nan"),
-        cyc.gross_work,
-    )
-    res.energy = {"input_work": cyc.input_work, "gross_work": cyc.gross_work}
-    return res
 
 
-def sample_cycle(res: CrawlResult, model: Model, engine, cyc: _Cycle, controls, phases) -> None:
-    """Store the samples of the steady cycle at ``phases`` [cycles in [0, 1]] (nearest step), the
-    contact modes and events.
+def sample_cycle(model: Model, engine, cyc: _Cycle, controls, phases, t0: float) -> dict:
+    """The sample fields (:func:`~ocp_crawl.sim.assemble.sample_fields`) and ``events`` of the
+    steady cycle [t0, t0 + 1] at ``phases`` [cycles in [0, 1]] (nearest step), with the contact
+    modes.
 
     A foot slides between two samples when its mean speed there exceeds :data:`SLIP_SPEED` L / T
     (and :data:`SLIP_SHARE` times the other foot's); the mode of a sample is that of the interval
@@ -373,9 +368,8 @@ def sample_cycle(res: CrawlResult, model: Model, engine, cyc: _Cycle, controls, 
     modes = _modes(f1[:, 0], f2[:, 0], phases, r.L * SLIP_SPEED)
     tau = cyc.tau[np.minimum(idx, n - 1)].T
     phi = qpos[:, 3:5].T + math.pi
-    set_samples(
-        res,
-        res.t0 + phases,
+    samples = sample_fields(
+        t0 + phases,
         phi,
         -qpos[:, 2],
         f2[:, 0] - f1[:, 0],
@@ -387,9 +381,9 @@ def sample_cycle(res: CrawlResult, model: Model, engine, cyc: _Cycle, controls, 
         tau,
         modes,
     )
-    res.events = [
+    events = [
         Event(
-            float(res.t0 + phases[j]),
+            float(t0 + phases[j]),
             mode_change_kind(Mode(modes[j - 1]), Mode(modes[j])),
             Mode(modes[j - 1]).label,
             Mode(modes[j]).label,
@@ -397,6 +391,7 @@ def sample_cycle(res: CrawlResult, model: Model, engine, cyc: _Cycle, controls, 
         for j in range(1, len(modes))
         if modes[j] != modes[j - 1]
     ]
+    return {**samples, "events": events}
 
 
 def _modes(x1, x2, phases, speed) -> np.ndarray:

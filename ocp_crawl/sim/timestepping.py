@@ -54,8 +54,8 @@ from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
 from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
-from ocp_crawl.sim.assemble import (energy_gate, failure_message, new_result, no_start_result,
-                                    output_phases, set_cycle_metrics, set_samples, success_message)
+from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_message, new_result,
+                                    no_start_result, output_phases, sample_fields, success_message)
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
 from ocp_crawl.sim.event_state import mode_q
@@ -207,8 +207,7 @@ class TimeStepper:
             check = estimate_S_error(self, run, _Stop)
             stats.update(check)
         res = self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
-        error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
-        return res
+        return error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
 
     def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
         """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end repeats."""
@@ -387,17 +386,14 @@ class TimeStepper:
     def _build_result(self, run: "_Run", status, detail, fail_t, fail_mode, te, stats) -> CrawlResult:
         """The reported cycle (the last one, or the one of the failure) on the step phases or ``te``."""
         N, ncycles, rows = self.steps, run.ncycles, run.rows
-        res = new_result(self.model, "torque", status, events=run.events, cycles=ncycles, failure_t=fail_t,
-                         failure_mode=fail_mode, nfev=stats["ipopt_calls"], nsteps=run.n, extra=stats)
         if status == Status.SUCCESS:
             t0 = float(ncycles - 1)
-            res.message = success_message(ncycles, t0, f" of {N} MPCC steps")
-            t_end = t0 + 1.0
+            message, t_end = success_message(ncycles, t0, f" of {N} MPCC steps"), t0 + 1.0
         else:
             t0 = float(max(0, math.floor(fail_t - 1e-12)))
-            res.message = failure_message(status, detail)
-            t_end = math.inf
-        res.t0 = t0
+            message, t_end = failure_message(status, detail), math.inf
+        fields = dict(events=run.events, cycles=ncycles, failure_t=fail_t, failure_mode=fail_mode,
+                      nfev=stats["ipopt_calls"], nsteps=run.n, extra=stats, t0=t0)
         # the step phases and the located events of the cycle
         sel = [r for r in rows if t0 - 1e-12 <= r[0] <= t_end + 1e-12]
         t = np.array([r[0] for r in sel])
@@ -406,18 +402,18 @@ class TimeStepper:
                 ((2, "theta"), (3, "d"), (4, "x1"), (5, "x2"), (6, "f_t"), (7, "f_n1"), (8, "f_n2"))}
         mode = np.array([r[9] for r in sel], dtype=int)
         if status == Status.SUCCESS:
-            self._metrics(res, t, phi, cols)
-            res.periodicity_residual = stats["periodicity_deviation"]
-            energy_gate(res, self.opt.energy_tol_n2 / N**2, f"TimeSteppingOptions.energy_tol_n2 / N^2 "
-                        f"({self.opt.energy_tol_n2:g}/{N}^2; the steps may be coarser than the input's edges: "
-                        f"raise [simulation] steps)")
+            fields.update(self._metrics(t, phi, cols),
+                          periodicity_residual=stats["periodicity_deviation"])
         if te is not None:
             t, phi, cols, mode = _resample(t0 + te, t, phi, cols, mode)
-        set_samples(res, t, phi, cols["theta"], cols["d"], cols["x1"], cols["x2"], cols["f_t"], cols["f_n1"],
-                    cols["f_n2"], np.asarray(self.torque(t), float).reshape(2, -1), mode)
-        return res
+        tau = np.asarray(self.torque(t), float).reshape(2, -1)
+        res = new_result(self.model, "torque", status, message, **fields,
+                         **sample_fields(t=t, phi=phi, tau=tau, mode=mode, **cols))
+        return energy_gate(res, self.opt.energy_tol_n2 / N**2, "TimeSteppingOptions.energy_tol_n2 "
+                           f"/ N^2 ({self.opt.energy_tol_n2:g}/{N}^2; the steps may be coarser "
+                           "than the input's edges: raise [simulation] steps)")
 
-    def _metrics(self, res: CrawlResult, t, phi, cols) -> None:
+    def _metrics(self, t, phi, cols) -> dict:
         """S, W+ (midpoint rule), CoT+ and the energy balance (trapezoidal friction) on the step grid."""
         model = self.model
         tau_mid = np.asarray(self.torque(0.5 * (t[1:] + t[:-1])), float).reshape(2, -1)
@@ -429,8 +425,9 @@ class TimeStepper:
         f_mid = 0.5 * (cols["f_t"][1:] + cols["f_t"][:-1])
         diss = float(np.sum(-(f_mid * dx1 - f_mid * dx2)))
         dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))
-        set_cycle_metrics(res, model.robot, float(cols["x1"][-1] - cols["x1"][0]), np.maximum(work, 0.0).sum(axis=1),
-                          float(work.sum()), dV, diss, float(np.abs(work).sum()))
+        return balance_metrics(model.robot, float(cols["x1"][-1] - cols["x1"][0]),
+                               np.maximum(work, 0.0).sum(axis=1), float(work.sum()), dV, diss,
+                               float(np.abs(work).sum()))
 
 
 def _resample(te: np.ndarray, t, phi, cols, mode):
