@@ -1,5 +1,5 @@
 """The robot: named parameters, kinematics and statics, contact modes, step equations, input
-signals."""
+signals; planar chains of n links (``Chain``: their statics, stability and joint-angle inputs)."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -11,11 +11,14 @@ _EXPORTS = {
     "PeriodicSpline": "ocp_crawl.model.sampled", "ReferenceTorque": "ocp_crawl.model.inputs",
     "Pulse": "ocp_crawl.model.pulse", "TorqueReference": "ocp_crawl.model.inputs",
     "as_signal": "ocp_crawl.model.inputs",
+    "Chain": "ocp_crawl.model.chain", "ChainModel": "ocp_crawl.model.chain_model",
+    "JointFourier": "ocp_crawl.model.chain_inputs", "JointSamples": "ocp_crawl.model.chain_inputs",
 }
 
 __all__ = [
     "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear",
     "PeriodicPchip",
     "PeriodicSignal", "PeriodicSpline", "Pulse", "ReferenceTorque", "TorqueReference", "as_signal",
+    "Chain", "ChainModel", "JointFourier", "JointSamples",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

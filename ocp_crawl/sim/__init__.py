@@ -13,7 +13,7 @@ _EXPORTS = {
     "MujocoOptions": "ocp_crawl.sim.dynamic", "unavailable_solvers": "ocp_crawl.sim.registry",
     "unusable": "ocp_crawl.sim.registry", "MUJOCO_SOLVERS": "ocp_crawl.sim.registry",
     "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result",
-    "Mode": "ocp_crawl.sim.result",
+    "Mode": "ocp_crawl.sim.result", "simulate_chain_angles": "ocp_crawl.sim.chain_angles",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }
 
@@ -22,5 +22,6 @@ __all__ = [
     "TimeSteppingOptions",
     "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate",
     "solver_named", "CrawlResult", "Event", "Mode", "SimulationError", "Status",
+    "simulate_chain_angles",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
