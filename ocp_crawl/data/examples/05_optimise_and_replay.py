@@ -2,7 +2,7 @@
 
 Solves the periodic-gait optimal control problem (objective ``max_speed``: the largest mean speed
 v = |S|/T for torques inside the envelope gamma +- 30 deg whose reference angles move at most
-180 deg/s) on a coarse transcription (30 nodes, one start, so that the example runs in CI time; the
+180 deg/s) on a coarse transcription (20 nodes, one start, so that the example runs in CI time; the
 shipped ``ocp_max_speed.toml`` uses 50), then replays the optimal torques, linear in phase between
 the nodes as in the transcription, in the event-driven simulator through the plain Python API,
 :func:`ocp_crawl.simulate`, as any other input signal.  The replayed S must match the one
@@ -25,7 +25,7 @@ from ocp_crawl.viz.ocp import pinned
 
 #: a coarse transcription and a small search of the baselines (harmonic, triangle, pulse),
 #: in CI time
-SETTINGS = OCPSettings(objective="max_speed", nodes=30, harmonic_psi=12, starts=1,
+SETTINGS = OCPSettings(objective="max_speed", nodes=20, harmonic_psi=12, starts=1,
                        baseline_samples=16, baseline_starts=1, baseline_evaluations=60)
 
 
