@@ -72,7 +72,7 @@ def _classes(name: str, v: np.ndarray) -> np.ndarray:
     return np.sign(v).astype(int)
 
 
-def _first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float,
+def first_zero(f, ts: np.ndarray, v: np.ndarray, scale: float,
                 t_end: float | None = None) -> float | None:
     """First phase in [0, t_end) at which the guard ``f`` (values ``v`` on the scan phases ``ts``)
     reaches zero.
@@ -154,10 +154,10 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     K = kin(ts)
     failure = _first_failure(kin, ts, K, model.robot)
     if failure is not None:
-        return _failure_result(model, kin, *failure)
-    switches = _switching_instants(kin, ts, K)
-    anchors, S = _anchors(kin, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
-    events = [_event(kin, t_ev, name) for t_ev, name in switches]
+        return failure_result(model, kin, *failure)
+    switches = switching_instants(kin, ts, K)
+    anchors, S = slip_anchors(kin, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
+    events = [switch_event(kin, t_ev, name) for t_ev, name in switches]
     if te is None:
         te = default_phases([e[0] for e in switches])
     samples = _samples(model, kin(te), te, anchors)
@@ -198,7 +198,7 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
     """
     Mg = robot.M * robot.g
     failure = None
-    t_cross = _first_zero(kin.scalar("d"), ts, K["d"], robot.L)
+    t_cross = first_zero(kin.scalar("d"), ts, K["d"], robot.L)
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
     checks = [(f"fn{i}", Mg, Status.LIFT_OFF, f"foot {i} lifts off",
@@ -208,7 +208,7 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
                for i in (1, 2)]
     for name, scale, status, label, kind in checks:
         f = kin.scalar(name)
-        tf = _first_zero(f, ts, K[name], scale, t_end=t_cross)
+        tf = first_zero(f, ts, K[name], scale, t_end=t_cross)
         if tf is None:
             continue
         if name.startswith("zj") and abs(f(tf)) > 1e-6 * robot.L:
@@ -220,7 +220,7 @@ def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple 
     return failure
 
 
-def _failure_result(model: _AnyModel, kin: _Gait, tf: float, status: Status, label: str,
+def failure_result(model: _AnyModel, kin: _Gait, tf: float, status: Status, label: str,
                     kind: str) -> CrawlResult:
     """The result of a cycle that loses contact at phase tf, with the mode just before it."""
     k0 = kin(max(tf - 1e-9, 0.0))
@@ -233,7 +233,7 @@ def _failure_result(model: _AnyModel, kin: _Gait, tf: float, status: Status, lab
                       events=[Event(tf, kind, "", "failure")])
 
 
-def _switching_instants(kin: _Gait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
+def switching_instants(kin: _Gait, ts: np.ndarray, K: dict) -> list[tuple[float, str]]:
     """Sorted (phase, function) of the switching instants: d' changes sign (slip reversal) or
     vanishes on a stretch (the input holds still: both feet stick); the smaller friction limit
     changes feet (slip switch), or both are equal on a stretch (|h| <= TIE: both feet slip)."""
@@ -286,7 +286,7 @@ def _mode_at(kin: _Gait, tm: float) -> Mode:
     return Mode.slip(3 if abs(h) <= TIE else (1 if h < 0 else 2), 1 if dd > 0 else -1)
 
 
-def _anchors(kin: _Gait, breaks: list[float], d_start: float) -> tuple[list, float]:
+def slip_anchors(kin: _Gait, breaks: list[float], d_start: float) -> tuple[list, float]:
     """(a, b, mode, x1, x2 at a) of each stretch between switching instants, and x1 at the cycle's
     end [m] (foot 1 starts at 0): the slipping foot follows d, the other stays."""
     x1, x2 = 0.0, d_start
@@ -308,7 +308,7 @@ def _anchors(kin: _Gait, breaks: list[float], d_start: float) -> tuple[list, flo
     return anchors, x1 - 0.0
 
 
-def _event(kin: _Gait, t_ev: float, name: str) -> Event:
+def switch_event(kin: _Gait, t_ev: float, name: str) -> Event:
     """The event of a switching instant of the function ``name`` ("ddot" or "h") at phase t_ev."""
     before = _mode_at(kin, max(t_ev - 1e-9, 0.0))
     after = _mode_at(kin, min(t_ev + 1e-9, 1.0))
@@ -323,7 +323,7 @@ def _event(kin: _Gait, t_ev: float, name: str) -> Event:
     return Event(float(t_ev), kind, before.label, after.label, float(kin(t_ev)[name][0]))
 
 
-def _friction(mu, k1: dict, m: Mode):
+def slip_friction(mu, k1: dict, m: Mode):
     """f_t [N] in mode m: the slipping foot's friction limit along sign(d') (foot 1's in
     slip-slip)."""
     return (mu[0] * k1["fn1"] if m.foot in (1, 3) else mu[1] * k1["fn2"]) * m.sigma
@@ -360,7 +360,7 @@ def _cycle_integrals(model: Model, kin: KinematicGait, anchors: list, knots: np.
 
     Sampled inputs (splines, PCHIP, piecewise linear) are smooth only between their ``knots``: the
     quadrature panels end at the knots too, or its error grows from ~1e-12 to ~1e-6.  Within a piece
-    the panels are halved until the piece's sums agree to :data:`QUAD_RTOL` (:func:`_piece_sums`).
+    the panels are halved until the piece's sums agree to :data:`QUAD_RTOL` (:func:`piece_sums`).
     """
     mu = (model.robot.mu1, model.robot.mu2)
     wplus = np.zeros(2)
@@ -373,10 +373,10 @@ def _cycle_integrals(model: Model, kin: KinematicGait, anchors: list, knots: np.
     for a, b, m in pieces:
         def power(t, i, m=m):
             k1 = kin(t)
-            tau = model.hold_torque(k1["phi"], _friction(mu, k1, m))
+            tau = model.hold_torque(k1["phi"], slip_friction(mu, k1, m))
             return tau[i] * k1["dphi"][i]
 
-        piece, h = _piece_sums(model, kin, mu, a, b, m)
+        piece, h = piece_sums(model, kin, mu, a, b, m)
         sums += piece
         for i in range(2):
             wplus[i] += positive_part_integral(a, b, lambda t, i=i: power(t, i),
@@ -394,7 +394,7 @@ QUAD_PANEL, QUAD_PANEL_MIN = 1.0 / 64, 1.0 / 8192
 QUAD_RTOL = 1e-11
 
 
-def _piece_sums(model: _AnyModel, kin: _Gait, mu, a: float, b: float, m) -> tuple:
+def piece_sums(model: _AnyModel, kin: _Gait, mu, a: float, b: float, m) -> tuple:
     """(input work, gross work, dissipation) [J] on [a, b] in mode ``m`` by order-5 Gauss panels of
     at most :data:`QUAD_PANEL`, their number doubled until the input work and the dissipation of two
     counts agree (:data:`QUAD_RTOL`); and the panel width.  (Doubling the count, not halving a
@@ -402,7 +402,7 @@ def _piece_sums(model: _AnyModel, kin: _Gait, mu, a: float, b: float, m) -> tupl
     def sums(n: int) -> np.ndarray:
         tq, wq = gauss_nodes(a, b, (b - a) / n, 5)
         k1 = kin(tq)
-        f = _friction(mu, k1, m)
+        f = slip_friction(mu, k1, m)
         p = model.hold_torque(k1["phi"], f) * k1["dphi"]
         return np.array([np.sum(wq * np.sum(p, axis=0)), np.sum(wq * np.sum(np.abs(p), axis=0)),
                          np.sum(wq * np.abs(f * k1["ddot"]))])

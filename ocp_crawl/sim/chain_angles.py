@@ -21,8 +21,9 @@ from ocp_crawl.model.chain_inputs import as_joint_signal
 from ocp_crawl.model.chain_model import ChainModel, call_columns
 from ocp_crawl.model.chain_statics import chain_geometry, chain_params, kin_names, n_params
 from ocp_crawl.model.inputs import PeriodicSignal
-from ocp_crawl.sim.angles import (PERIODIC_TOL, _anchors, _event, _failure_result, _first_zero,
-                                  _friction, _piece_sums, _switching_instants)
+from ocp_crawl.sim.angles import (PERIODIC_TOL, failure_result, first_zero, piece_sums,
+                                  slip_anchors, slip_friction, switch_event,
+                                  switching_instants)
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, new_result, output_phases,
                                     sample_fields)
 from ocp_crawl.sim.quadrature import positive_part_integral
@@ -110,10 +111,10 @@ def simulate_chain_angles(chain_model: ChainModel, phi_of_t, t_eval=None,
     K = gait(ts)
     failure = _first_failure(gait, ts, K)
     if failure is not None:
-        return _failure_result(chain_model, gait, *failure)
-    switches = _switching_instants(gait, ts, K)
-    anchors, S = _anchors(gait, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
-    events = [_event(gait, t_ev, name) for t_ev, name in switches]
+        return failure_result(chain_model, gait, *failure)
+    switches = switching_instants(gait, ts, K)
+    anchors, S = slip_anchors(gait, [0.0] + [e[0] for e in switches] + [1.0], float(K["d"][0]))
+    events = [switch_event(gait, t_ev, name) for t_ev, name in switches]
     if te is None:
         te = default_phases([e[0] for e in switches])
     samples, extra = _samples(gait, gait(te), te, anchors)
@@ -166,7 +167,7 @@ def _first_failure(gait: ChainGait, ts: np.ndarray, K: dict) -> tuple | None:
     singular)."""
     chain = gait.model.chain
     failure = None
-    t_cross = _first_zero(gait.scalar("d"), ts, K["d"], chain.L)
+    t_cross = first_zero(gait.scalar("d"), ts, K["d"], chain.L)
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
     checks = [(f"fn{i}", gait.Mg, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}")
@@ -175,7 +176,7 @@ def _first_failure(gait: ChainGait, ts: np.ndarray, K: dict) -> tuple | None:
                 f"joint_{j}_on_ground") for j in range(1, gait.m + 1)]
     for name, scale, status, label, kind in checks:
         f = gait.scalar(name)
-        tf = _first_zero(f, ts, K[name], scale, t_end=t_cross)
+        tf = first_zero(f, ts, K[name], scale, t_end=t_cross)
         if tf is None:
             continue
         if name.startswith("zj") and abs(f(tf)) > 1e-6 * chain.L:
@@ -196,7 +197,7 @@ def _samples(gait: ChainGait, Ko: dict, te: np.ndarray, anchors: list) -> tuple[
         _, _, m, xa1, xa2 = next((s for s in anchors if s[0] <= t <= s[1]), anchors[-1])
         modes[j] = int(m)
         k1 = {"fn1": Ko["fn1"][j], "fn2": Ko["fn2"][j]}
-        ft[j] = _friction(gait.mu, k1, m)
+        ft[j] = slip_friction(gait.mu, k1, m)
         d = Ko["d"][j]
         if m.foot == 1:
             x1o[j], x2o[j] = xa2 - d, xa2
@@ -267,7 +268,7 @@ def _cycle_integrals(gait: ChainGait, anchors: list, knots: np.ndarray) -> tuple
         pieces += [(lo, hi, m) for lo, hi in zip(edges[:-1], edges[1:])]
     for a, b, m in pieces:
         power = _Power(gait, m)
-        piece, h = _piece_sums(gait.model, gait, gait.mu, a, b, m)
+        piece, h = piece_sums(gait.model, gait, gait.mu, a, b, m)
         sums += piece
         for i in range(gait.m):
             wplus[i] += positive_part_integral(a, b, lambda t, i=i: power(t)[i],
