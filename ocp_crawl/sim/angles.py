@@ -152,7 +152,8 @@ def simulate_angles(model: Model, angles, t_eval=None, n_scan: int = 512) -> Cra
     _check_angles(model, angles, ts)
     kin = KinematicGait(model, angles)
     K = kin(ts)
-    failure = _first_failure(kin, ts, K, model.robot)
+    robot = model.robot
+    failure = first_failure(kin, ts, K, robot.M * robot.g, robot.L, 2)
     if failure is not None:
         return failure_result(model, kin, *failure)
     switches = switching_instants(kin, ts, K)
@@ -190,30 +191,32 @@ def _check_angles(model: Model, angles: PeriodicSignal, ts: np.ndarray) -> None:
     model.check_contact(angles(0.0), where="prescribed configuration at t = 0")
 
 
-def _first_failure(kin: KinematicGait, ts: np.ndarray, K: dict, robot) -> tuple | None:
-    """(phase, status, label, event kind) of the first loss of contact in the cycle, or None.
+def first_failure(kin: _Gait, ts: np.ndarray, K: dict, Mg: float, L: float,
+                  joints: int) -> tuple | None:
+    """(phase, status, label, event kind) of the first loss of contact in the cycle, or None: a
+    foot lifting off (normal force over ``Mg`` [N]), one of the ``joints`` joints reaching the
+    ground (height over ``L`` [m]) or the feet meeting.
 
     The feet crossing (d = 0) is searched first and the others only before it: near d = 0 the
     normal forces x_c/d M g are singular.
     """
-    Mg = robot.M * robot.g
     failure = None
-    t_cross = first_zero(kin.scalar("d"), ts, K["d"], robot.L)
+    t_cross = first_zero(kin.scalar("d"), ts, K["d"], L)
     if t_cross is not None:
         failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
     checks = [(f"fn{i}", Mg, Status.LIFT_OFF, f"foot {i} lifts off",
                f"lift_off_{i}") for i in (1, 2)]
-    checks += [(f"zj{i}", robot.L, Status.JOINT_ON_GROUND, f"joint {i} reaches the ground",
+    checks += [(f"zj{i}", L, Status.JOINT_ON_GROUND, f"joint {i} reaches the ground",
                 f"joint_{i}_on_ground")
-               for i in (1, 2)]
+               for i in range(1, joints + 1)]
     for name, scale, status, label, kind in checks:
         f = kin.scalar(name)
         tf = first_zero(f, ts, K[name], scale, t_end=t_cross)
         if tf is None:
             continue
-        if name.startswith("zj") and abs(f(tf)) > 1e-6 * robot.L:
-            # the joint height jumps instead of vanishing: theta changes branch, which happens
-            # where the feet meet (d = 0) and the body would flip over
+        if name.startswith("zj") and abs(f(tf)) > 1e-6 * L:
+            # the joint height jumps instead of vanishing: the body angle changes branch, which
+            # happens where the feet meet (d = 0) and the chain would turn over
             status, label, kind = Status.FEET_CROSSED, "feet meet or cross", "feet_crossed"
         if failure is None or tf < failure[0]:
             failure = (tf, status, label, kind)

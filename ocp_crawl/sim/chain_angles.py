@@ -21,7 +21,7 @@ from ocp_crawl.model.chain_inputs import as_joint_signal
 from ocp_crawl.model.chain_model import ChainModel, call_columns
 from ocp_crawl.model.chain_statics import chain_geometry, chain_params, kin_names, n_params
 from ocp_crawl.model.inputs import PeriodicSignal
-from ocp_crawl.sim.angles import (PERIODIC_TOL, failure_result, first_zero, piece_sums,
+from ocp_crawl.sim.angles import (PERIODIC_TOL, failure_result, first_failure, piece_sums,
                                   slip_anchors, slip_friction, switch_event,
                                   switching_instants)
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, new_result, output_phases,
@@ -109,7 +109,7 @@ def simulate_chain_angles(chain_model: ChainModel, phi_of_t, t_eval=None,
     gait = ChainGait(chain_model, angles)
     _check_angles(gait, ts)
     K = gait(ts)
-    failure = _first_failure(gait, ts, K)
+    failure = first_failure(gait, ts, K, gait.Mg, gait.model.chain.L, gait.m)
     if failure is not None:
         return failure_result(chain_model, gait, *failure)
     switches = switching_instants(gait, ts, K)
@@ -159,33 +159,6 @@ def _check_angles(gait: ChainGait, ts: np.ndarray) -> None:
         if not k0[f"fn{i}"][0] > 0:
             raise ValueError(f"{where}: foot {i} off the ground (f_n{i} = {k0[f'fn{i}'][0]:.4g} N "
                              "<= 0): the centre of mass must lie between the feet")
-
-
-def _first_failure(gait: ChainGait, ts: np.ndarray, K: dict) -> tuple | None:
-    """(phase, status, label, event kind) of the first loss of contact in the cycle, or None
-    (the feet meeting first, the others only before it: near d = 0 the normal forces are
-    singular)."""
-    chain = gait.model.chain
-    failure = None
-    t_cross = first_zero(gait.scalar("d"), ts, K["d"], chain.L)
-    if t_cross is not None:
-        failure = (t_cross, Status.FEET_CROSSED, "feet meet or cross", "feet_crossed")
-    checks = [(f"fn{i}", gait.Mg, Status.LIFT_OFF, f"foot {i} lifts off", f"lift_off_{i}")
-              for i in (1, 2)]
-    checks += [(f"zj{j}", chain.L, Status.JOINT_ON_GROUND, f"joint {j} reaches the ground",
-                f"joint_{j}_on_ground") for j in range(1, gait.m + 1)]
-    for name, scale, status, label, kind in checks:
-        f = gait.scalar(name)
-        tf = first_zero(f, ts, K[name], scale, t_end=t_cross)
-        if tf is None:
-            continue
-        if name.startswith("zj") and abs(f(tf)) > 1e-6 * chain.L:
-            # the joint height jumps instead of vanishing: the chain turns over (the reference
-            # angle changes branch), where the feet meet
-            status, label, kind = Status.FEET_CROSSED, "feet meet or cross", "feet_crossed"
-        if failure is None or tf < failure[0]:
-            failure = (tf, status, label, kind)
-    return failure
 
 
 def _samples(gait: ChainGait, Ko: dict, te: np.ndarray, anchors: list) -> tuple[dict, dict]:
