@@ -112,7 +112,8 @@ def main(argv=None) -> int:
                      f"min {min(cs):.3f} median {statistics.median(cs):.3f} s")
         if len(trees) == 2:
             line += ("  (median ratio compare/this "
-                     f"{statistics.median(times[('compare', name)]) / statistics.median(times[('this', name)]):.2f})")
+                     f"""{statistics.median(times[('compare', name)])
+                          / statistics.median(times[('this', name)]):.2f})""")
         print(line)
     for label in trees:
         for jobs in jobs_list:

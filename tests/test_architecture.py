@@ -76,7 +76,8 @@ def test_no_upward_import(path):
         floor = _floor(target)
         assert floor is None or floor <= me, (
             f"{_dotted(path)} (floor {FLOORS[me]}) imports {target} "
-            f"({FLOORS[floor] if floor < len(FLOORS) else 'the front door, which imports every floor'}): upward import")
+            f"""({FLOORS[floor] if floor < len(FLOORS)
+                  else 'the front door, which imports every floor'}): upward import""")
 
 
 def test_no_import_cycle():

@@ -24,8 +24,8 @@ needs_cc = pytest.mark.skipif(compiled._compiler() is None, reason="no C compile
 def kernel():
     """The OCP's per-step kernel: step equations and lifting, complementarity products, of
     (phi_prev, w, tau_hat, p) (as the transcription builds it)."""
-    phi_prev, w, th, p = cs.SX.sym("phi_prev",
-                                   2), cs.SX.sym("w", NW), cs.SX.sym("tau_hat", 2), cs.SX.sym("p", NP)
+    phi_prev, w, th, p = (cs.SX.sym("phi_prev", 2), cs.SX.sym("w", NW), cs.SX.sym("tau_hat", 2),
+                          cs.SX.sym("p", NP))
     g_eq, g_lift, sv, cv = step_equations(phi_prev, w, th, p)
     return cs.Function("test_kernel", [phi_prev, w, th, p], [cs.vertcat(g_eq, g_lift), sv * cv])
 

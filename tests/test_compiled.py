@@ -18,7 +18,8 @@ from ocp_crawl import *
 from ocp_crawl.model.statics import fast_newton
 m = Model(Robot.paper(mu1=0.36, mu2=0.41))
 r = simulate_torque(m, ReferenceTorque(Harmonic.from_degrees(90, 30, 60), m.robot.k))
-print(json.dumps({"compiled": fast_newton().compiled, "S": r.S, "W": r.W_plus, "ev": [e.t for e in r.events]}))
+print(json.dumps({"compiled": fast_newton().compiled, "S": r.S, "W": r.W_plus,
+                  "ev": [e.t for e in r.events]}))
 """
 
 

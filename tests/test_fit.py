@@ -60,8 +60,8 @@ def test_recovers_k_and_mu_within_their_uncertainties(tmp_path):
     # the fitted problem file holds the fitted values and loads back
     write_fit(fit, tmp_path / "out", figure=False)
     back = load_problem(tmp_path / "out" / "fitted_problem.toml")
-    assert back.robot.k == pytest.approx(fit.x[0],
-                                         rel=1e-9) and back.robot.mu1 == pytest.approx(fit.x[1], rel=1e-9)
+    assert (back.robot.k == pytest.approx(fit.x[0], rel=1e-9)
+            and back.robot.mu1 == pytest.approx(fit.x[1], rel=1e-9))
 
 
 def test_sigma_of_k_matches_the_curvature_of_chi2(tmp_path):
@@ -323,8 +323,8 @@ def test_fitted_pressure_constants_are_keys_that_simulate_reproduces(tmp_path, c
     assert list(written["pressure"]) == keys and {s: written[s] for s in given} == given
     name = fit["parameters"][0]["name"]
     assert written["pressure"][name.split(".")[1]] == fit["parameters"][0]["value"]
-    assert written["pressure"].get("b1",
-                                   0.13) == 0.13 and written["pressure"].get("form", "paper") == fit["form"]
+    assert (written["pressure"].get("b1", 0.13) == 0.13
+            and written["pressure"].get("form", "paper") == fit["form"])
     data = read_measurements(data_file)
     # noqa: E731
     sets = lambda j: ["gait.waveform=pressure", f"gait.p0_bar={float(data.table['p0'][j]) / 1e5!r}",

@@ -128,8 +128,8 @@ def test_a_fixed_pressure_constant_outside_its_range_is_bad_input(tmp_path, caps
                           ("pressure.amplitude_bar", "-1:1.7", ">= 0")])
 def test_bounds_outside_the_valid_range_are_bad_input(tmp_path, capsys, no_fit, name, bounds,
                                                       valid):
-    problem, data = (PAPER_GRAVITY,
-                     PSI_DATA) if name.startswith("pressure") else (PAPER, _gait_file(tmp_path, "psi", 45))
+    problem, data = ((PAPER_GRAVITY, PSI_DATA) if name.startswith("pressure")
+                     else (PAPER, _gait_file(tmp_path, "psi", 45)))
     err = _fit_cli(capsys, tmp_path, problem, [data], "--param", name, "--bounds",
                    f"{name}={bounds}")
     low = bounds.split(":")[0]

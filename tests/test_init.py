@@ -54,7 +54,8 @@ def test_init_default_is_the_current_directory_and_json_lists_the_files(tmp_path
     out, err = capsys.readouterr()
     data = json.loads(out)
     assert err == "" and data["directory"] == "."
-    expected = [f"{folder}/{n}" for folder, src in SHIPPED_FOLDERS.items() for n in sorted(_files(src))]
+    expected = [f"{folder}/{n}"
+                for folder, src in SHIPPED_FOLDERS.items() for n in sorted(_files(src))]
     assert data["files"] == expected and any(f.startswith("examples/") for f in expected)
     assert all((tmp_path / f).is_file() for f in data["files"])
     for folder in SHIPPED_FOLDERS:  # nothing else, no temporary files

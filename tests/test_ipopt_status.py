@@ -376,7 +376,8 @@ import ctypes, os, casadi as cs
 from ocp_crawl.nlp.ipopt import build_ipopt
 from ocp_crawl.nlp.process import CASADI_OPENBLAS
 x = cs.SX.sym("x")
-build_ipopt("probe", {"x": x, "f": (x - 1) ** 2}, {"ipopt.print_level": 0, "print_time": False}, "probe", {})
+build_ipopt("probe", {"x": x, "f": (x - 1) ** 2}, {"ipopt.print_level": 0, "print_time": False},
+            "probe", {})
 print(ctypes.CDLL(CASADI_OPENBLAS, mode=os.RTLD_NOLOAD).openblas_get_num_threads())
 """
 

@@ -115,7 +115,8 @@ def test_a_writer_killed_half_way_leaves_the_previous_file_and_its_temporary_is_
     try:
         live = f".report.md.{os.getpid()}-{files.HOST_TAG}.abc123.tmp"
         live_other = f".report.md.{running.pid}-{files.HOST_TAG}.abc123.tmp"
-        other_host = f".report.md.{m['pid']}-{'0' * 8 if files.HOST_TAG != '0' * 8 else '1' * 8}.abc123.tmp"
+        other_host = (f".report.md.{m['pid']}-"
+                      f"{'0' * 8 if files.HOST_TAG != '0' * 8 else '1' * 8}.abc123.tmp")
         other_file = f".summary.json.{m['pid']}-{files.HOST_TAG}.abc123.tmp"
         not_ours = ".report.md.swp.tmp"
         keep = [live, live_other, other_host, not_ours]

@@ -59,7 +59,8 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
     assert code == (0 if data["success"] else 1)
     # the bar on stderr counts every IPOPT iteration of the homotopies' calls, over every start
     iterations = sum(start["iterations"] for start in data["starts"])
-    assert sum(stage["iterations"] for stage in data["homotopy"]) in [s["iterations"] for s in data["starts"]]
+    assert (sum(stage["iterations"] for stage in data["homotopy"])
+            in [s["iterations"] for s in data["starts"]])
     assert f"optimize: {iterations} IPOPT it" in stderr and "polish" in stderr
     for key in ("status", "success", "message", "objective", "S_ocp", "S_replay", "rel_diff_replay",
                 "CoT_plus_replay", "best_harmonic", "gain", "solve_time_s",

@@ -67,8 +67,8 @@ def test_objective_over_a_friction_set_at_the_guess(objective):
     base = dict(objective=objective, nodes=10, speed_min=0.01, regularization=0.0, friction_tol=0.0)
     one = GaitOCP(PAPER, "physical", OCPSettings(**base))
     two = GaitOCP(PAPER, "physical", OCPSettings(**base, mu_ratios=(1.0, 1.0), robust="worst"))
-    assert two.objective(two.initial_guess(sig, T)) == pytest.approx(one.objective(one.initial_guess(sig, T)),
-                                                                      rel=1e-12)
+    assert two.objective(two.initial_guess(sig, T)) == pytest.approx(
+        one.objective(one.initial_guess(sig, T)), rel=1e-12)
     for robust in ("mean", "worst"):
         st = OCPSettings(**base, mu_ratio_eps=0.1, robust=robust)
         ocp = GaitOCP(PAPER, "physical", st)
@@ -252,8 +252,8 @@ def test_a_slip_onset_inside_a_sub_step_violates_the_onset_condition():
     W[8:12] = 0.3
     W[5, 2], W[9, 2] = 2e-3, 0.0  # sub-step 2: foot 1 slips (-) and ends at its - limit
     assert onset_residual(W) == pytest.approx(2e-3)  # margin 0.3 at the start: onset inside
-    assert np.argmax(onset_products(W,
-                                    2)) == 2 and np.max(onset_products(W, 2)) == pytest.approx(2 * 2e-3 * 0.3)
+    assert (np.argmax(onset_products(W, 2)) == 2
+            and np.max(onset_products(W, 2)) == pytest.approx(2 * 2e-3 * 0.3))
     W[9, 1] = 0.0  # at the limit already at the end of sub-step 1
     assert onset_residual(W) == 0.0 and np.max(np.abs(onset_products(W, 2))) == 0.0
 

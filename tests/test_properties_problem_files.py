@@ -1,10 +1,11 @@
-"""Property-based tests (hypothesis) of the problem files, with strategies driven by the schema:
+r"""Property-based tests (hypothesis) of the problem files, with strategies driven by the schema:
 round trips, ``--set`` overrides, invalid and missing keys, and runs with prescribed angles.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
 that the file runs in well under a minute); a large run::
 
-    OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_problem_files.py --hypothesis-show-statistics
+    OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_problem_files.py \
+        --hypothesis-show-statistics
 
 The statistics list the outcomes (``event``) of the random runs: success, failure status, input
 rejected.  Every assertion holds for every example, whatever the seed.

@@ -1,10 +1,11 @@
-"""Property-based tests (hypothesis) of the input signals: periodicity, derivatives, vectorised
+r"""Property-based tests (hypothesis) of the input signals: periodicity, derivatives, vectorised
 evaluation, the Fourier fit and the rejection of invalid signals.
 
 The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
 that the file runs in well under a minute); a large run::
 
-    OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_signals.py --hypothesis-show-statistics
+    OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_signals.py \
+        --hypothesis-show-statistics
 
 Every assertion holds for every example, whatever the seed.
 """

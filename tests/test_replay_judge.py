@@ -81,8 +81,8 @@ def test_claim_changed_beyond_replay_tol_is_a_mismatch(claim, objective):
     assert v.status == Status.REPLAY_MISMATCH and not v.ok
     assert v.message.startswith(Status.REPLAY_MISMATCH.text)
     # both sets of numbers: the claimed value and the replayed one
-    assert judge.value_text(objective,
-                            forged) in v.message and judge.value_text(objective, v.value) in v.message
+    assert (judge.value_text(objective, forged) in v.message
+            and judge.value_text(objective, v.value) in v.message)
     assert "objective differs by" in v.message
     assert "leave the envelope" not in v.message and "times the bandwidth" not in v.message
 

@@ -472,8 +472,8 @@ def test_reproduce_killed_at_random_moments_resumes_to_the_same_results(reproduc
     assert _comparable_report(out / "report.md") == _comparable_report(reproduced / "report.md")
     for stem in FIGURES:
         for ext in ("png", "pdf"):
-            got, want = _complete_figure(out
-                                         / f"{stem}.{ext}"), _complete_figure(reproduced / f"{stem}.{ext}")
+            got, want = (_complete_figure(out / f"{stem}.{ext}"),
+                         _complete_figure(reproduced / f"{stem}.{ext}"))
             if ext == "png":
                 np.testing.assert_array_equal(got, want, err_msg=stem)
     sweeps = sorted(p.relative_to(out) for p in (out / "sweeps").glob("*/results.csv"))

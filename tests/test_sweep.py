@@ -213,7 +213,8 @@ def _journal_rows(journal: Path) -> int:
         return 0
 
 
-@pytest.mark.heavy  # (a fuzz of kill moments; the default suite kills at fixed points: test_workers)
+# (a fuzz of kill moments; the default suite kills at fixed points: test_workers)
+@pytest.mark.heavy
 def test_resume_after_the_sweep_process_is_killed_at_random_moments(tmp_path):
     """SIGKILL to the CLI's process group at random (seeded) moments, each run resuming the last,
     then --resume to the end: the same file as an uninterrupted run, and nothing left behind."""

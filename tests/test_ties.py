@@ -216,8 +216,8 @@ def step_like(draw):
     symmetric robot or with mu1/mu2 within 1 +- 2 %."""
     if draw(st.booleans()):
         rise = draw(st.integers(6, 43)) / 96
-        hold = draw(st.sampled_from([0,
-                                     1])) * draw(st.integers(0, 96 - 2 * int(round(rise * 96)))) / 96
+        hold = (draw(st.sampled_from([0, 1]))
+                * draw(st.integers(0, 96 - 2 * int(round(rise * 96)))) / 96)
         a1 = draw(st.floats(10, 30))
         a2 = draw(st.sampled_from([a1, 25.0]))
         # (the joints' shifts psi/720 cycles on the 1/192 grid)

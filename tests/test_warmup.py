@@ -37,8 +37,8 @@ def test_warmup_builds_every_function_once_and_simulations_compile_nothing_more(
     assert first.returncode == 0, first.stderr
     built = json.loads(first.stdout)
     assert built["cache"] == str(cache)
-    assert built["built"] == len(built["functions"]) >= 5 and built["cached"] == built["not "
-                                                                                       "compiled"] == 0
+    assert (built["built"] == len(built["functions"]) >= 5
+            and built["cached"] == built["not compiled"] == 0)
     libraries = {Path(f["library"]) for f in built["functions"]}
     assert (len(libraries) == len(built["functions"])
             and all(lib.parent == cache for lib in libraries))
@@ -178,7 +178,8 @@ def test_every_fast_function_is_made_by_a_registered_builder():
                 if "compiled_function" not in _decorators(node):
                     unregistered.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name}")
     assert found >= 5
-    assert not unregistered, "FastFunction made outside a @compiled_function builder: " + ", ".join(unregistered)
+    assert not unregistered, ("FastFunction made outside a @compiled_function builder: "
+                              + ", ".join(unregistered))
 
 
 def _gcc_out_of_space(args, **kwargs):

@@ -231,8 +231,8 @@ def test_optimize_torques_replayed_by_simulate(cli_optimize_run, capsys):
     for name, argv in runs.items():
         assert main(argv) == 0, name
         S = json.loads(capsys.readouterr().out)["S"]
-        assert abs(S
-                   - summary["S_replay"]) <= 1e-9 * abs(summary["S_replay"]), (name, S, summary["S_replay"])
+        assert abs(S - summary["S_replay"]) <= 1e-9 * abs(summary["S_replay"]), (
+            name, S, summary["S_replay"])
 
 
 def test_optimal_gait_toml_reports_the_speed_of_optimize(cli_optimize_run, capsys):

@@ -89,7 +89,8 @@ def _bin(venv: Path, name: str) -> Path:
 @pytest.mark.slow
 def test_wheel_holds_the_data_files(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    shipped = {f"ocp_crawl/data/{folder}/{n}" for folder in SHIPPED_FOLDERS for n in shipped_files(folder)}
+    shipped = {f"ocp_crawl/data/{folder}/{n}"
+               for folder in SHIPPED_FOLDERS for n in shipped_files(folder)}
     paper = {f"ocp_crawl/data/paper/{p.name}"
              for p in (REPO / "ocp_crawl" / "data" / "paper").iterdir() if p.is_file()}
     assert shipped and paper

@@ -37,8 +37,9 @@ def test_the_task_runs_in_a_fork_and_its_messages_arrive_in_order():
             return {"pid": os.getpid(), "big": list(range(100_000))}  # larger than a pipe's buffer
 
         result, other = overlap(task, lambda: os.getpid(), got.append)
-        print(json.dumps({"method": mp_context().get_start_method(), "parent": os.getpid(), "other": other,
-                          "child": result["pid"], "big": result["big"] == list(range(100_000)), "got": got}))
+        print(json.dumps({"method": mp_context().get_start_method(), "parent": os.getpid(),
+                          "other": other, "child": result["pid"],
+                          "big": result["big"] == list(range(100_000)), "got": got}))
         """)
     assert out["method"] == "fork" and out["other"] == out["parent"] != out["child"] and out["big"]
     assert out["got"] == [[i, out["child"]] for i in range(50)]

@@ -4,21 +4,22 @@ Every file follows the package's CSV convention (:mod:`ocp_crawl.io.tables`: uni
 ``#`` comments, errors naming file and line).  A file holds one observable with its standard
 uncertainty (one sigma, same unit) and the operating point of every row:
 
-============  ==================================  ==========================================================
-kind          columns                             model of a row
-============  ==================================  ==========================================================
-``gait``      ``S`` or ``S_norm``, and any of     S per cycle of the problem's gait (its drive), with the
-              ``psi``, ``A``, ``gamma`` [angle]   row's values of ``gait.psi_deg``, ``gait.A_deg``,
-                                                  ``gait.gamma_deg``
-``pressure``  ``S`` or ``S_norm``, ``p0``         S per cycle of the pressure-driven robot
-              [pressure] and ``psi`` [angle],     (:mod:`ocp_crawl.model.pressure`) at nominal pressure p0
-              optionally ``A_p`` [pressure]       (the peak of the raised sine) and phase difference psi;
-                                                  ``A_p``: the row's amplitude of the paper's form (ref),
-                                                  in place of the constant ``pressure.amplitude_bar``
-``stiffness`` ``phi`` [angle], ``tau`` [torque]   clamped segment: edge angle phi = tau / k
-``bending``   ``phi`` [angle], ``p`` [pressure],  clamped segment: phi = a_i p^2 + b_i p (Table I map)
-              ``segment`` [-] (1 or 2)
-============  ==================================  ==========================================================
+=============  ==================================  =================================================
+kind           columns                             model of a row
+=============  ==================================  =================================================
+``gait``       ``S`` or ``S_norm``, and any of     S per cycle of the problem's gait (its drive),
+               ``psi``, ``A``, ``gamma`` [angle]   with the row's values of ``gait.psi_deg``,
+                                                   ``gait.A_deg``, ``gait.gamma_deg``
+``pressure``   ``S`` or ``S_norm``, ``p0``         S per cycle of the pressure-driven robot
+               [pressure] and ``psi`` [angle],     (:mod:`ocp_crawl.model.pressure`) at nominal
+               optionally ``A_p`` [pressure]       pressure p0 (the peak of the raised sine) and
+                                                   phase difference psi; ``A_p``: the row's
+                                                   amplitude of the paper's form (ref), in place of
+                                                   the constant ``pressure.amplitude_bar``
+``stiffness``  ``phi`` [angle], ``tau`` [torque]   clamped segment: edge angle phi = tau / k
+``bending``    ``phi`` [angle], ``p`` [pressure],  clamped segment: phi = a_i p^2 + b_i p
+               ``segment`` [-] (1 or 2)            (Table I map)
+=============  ==================================  =================================================
 
 Every value must be finite and at most 1e12 in magnitude once converted to SI (:data:`MAX_SI`);
 every uncertainty at least 1e-12 x max(the largest |value| of the observable column, 1 in SI units)

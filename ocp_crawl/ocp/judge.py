@@ -281,7 +281,8 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
         v.status = Status.REPLAY_MISMATCH
         S_text = ", ".join(units.distance(s) for s in (S_ocp or []))
         v.message = (f"{Status.REPLAY_MISMATCH.text}: {'; '.join(problems)} (OCP: value "
-                     f"{value_text(settings.objective, value_ocp)}{', S ' + S_text if S_text else ''}; replay: value "
+                     f"{value_text(settings.objective, value_ocp)}"
+                     f"{', S ' + S_text if S_text else ''}; replay: value "
                      f"{value_text(settings.objective, v.value)}, S "
                      f"{', '.join(units.distance(s) for s in v.S)}, speed "
                      f"{', '.join(units.speed(s) for s in v.speed)}; T = {units.seconds(T)})")

@@ -216,8 +216,9 @@ def _variant(ctx: Context, section: Section, given: Mapping[str, Any]) -> str | 
         key = section.key_map[name]
         if not section.applies(key, variant):
             own = [k.name for k in section.keys if k.variants and section.applies(k, variant)]
-            owned = f"the keys of {selector.name} = {format_value(variant)} are {', '.join(own)}" if own else \
-                f"{selector.name} = {format_value(variant)} has no keys of its own"
+            owned = (f"the keys of {selector.name} = {format_value(variant)} are {', '.join(own)}"
+                     if own else
+                     f"{selector.name} = {format_value(variant)} has no keys of its own")
             raise ProblemError(f"{ctx.at(section.name, name, value)} is invalid with "
                                f"{selector.name} = {format_value(variant)}: it is a key of "
                                f"{selector.name} = "

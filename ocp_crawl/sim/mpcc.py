@@ -264,9 +264,9 @@ class MPCCStep:
         non-monotone retry, no further fallback."""
         if self._fallback is None:
             opt = self.options
-            self._fallback = MPCCStep(self.model,
-                                      replace(opt, formulation=FALLBACK_FORMULATION[opt.formulation],
-                                              max_retries=1))
+            self._fallback = MPCCStep(
+                self.model,
+                replace(opt, formulation=FALLBACK_FORMULATION[opt.formulation], max_retries=1))
         return self._fallback
 
     def _plans(self, state: StepState, tau: np.ndarray, warm_start: StepResult | None):
@@ -355,8 +355,8 @@ class MPCCStep:
             return None, f"IPOPT {run.failed.text} at sigma = {run.sigma:.3g}", run.failed.status
         sol = run.last
         if not sol.eq <= opt.eq_tol:
-            return None, f"equation residual {sol.eq:.3g} > eq_tol = {opt.eq_tol:g} (IPOPT {sol.status})", \
-                "Residual_Check_Failed"
+            return (None, f"equation residual {sol.eq:.3g} > eq_tol = {opt.eq_tol:g} "
+                    f"(IPOPT {sol.status})", "Residual_Check_Failed")
         polished = False
         if opt.polish == "always" or (opt.polish == "auto" and not sol.comp <= opt.comp_tol):
             pol = hom.polish(sol, self._polish_candidates(state, tau, prefer, sol, run.sigma),

@@ -5,14 +5,15 @@ The incremental problem of :mod:`ocp_crawl.sim.mpcc` has, generically, one of fi
 the end of a step.  In each mode the unknowns z = (phi1, phi2, f_t/(M g)) solve three equations:
 the joint balance F(phi, tau, f_t) = 0 (the model's compiled residual) and
 
-===============  =========================================  ============================================
+===============  =========================================  =====================================
 mode             equation                                   consistency (all other pairs, scaled)
-===============  =========================================  ============================================
+===============  =========================================  =====================================
 stick-stick      d(phi) = d(phi_k)                          every friction margin c_j >= 0
-slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0  dx1 = d_k - d >= 0 / <= 0, other c_j >=
-0 slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0  dx2 = d - d_k >= 0 / <= 0, other c_j
->= 0
-===============  =========================================  ============================================
+slip1+ / slip1-  mu1 f_n1 + f_t1 = 0 / mu1 f_n1 - f_t1 = 0  dx1 = d_k - d >= 0 / <= 0,
+                                                            other c_j >= 0
+slip2+ / slip2-  mu2 f_n2 + f_t2 = 0 / mu2 f_n2 - f_t2 = 0  dx2 = d - d_k >= 0 / <= 0,
+                                                            other c_j >= 0
+===============  =========================================  =====================================
 
 with f_t1 = f_t, f_t2 = -f_t and normal forces at phi_{k+1}; a slipping foot's partner sticks.
 Each mode is solved by a damped Newton method; the consistent solution is kept (normal forces > 0

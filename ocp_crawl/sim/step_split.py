@@ -178,6 +178,6 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         sol = g.solve(theta)
     except _SearchFailed as exc:
         return None, str(exc)
-    after = Mode.STICK if name.endswith("slip "
-                                        "rate") else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])]
+    after = (Mode.STICK if name.endswith("slip rate")
+             else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])])
     return Split(theta, sol, name, value, after, step.ncalls - calls0), ""

@@ -45,7 +45,8 @@ def _intro(gravity: str, mode: str, elapsed: float, jobs: int) -> list[str]:
     w("# Reproduction of \"Understanding Inchworm Crawling for Soft-Robotics\"\n")
     w(f"`ocp-crawl reproduce` ({mode} run, ocp_crawl {__version__}, {elapsed:.0f} s with {jobs} "
       f"worker(s)). Figures in the **{gravity}** gravity convention "
-      f"({'the sign printed in eq. (intEq), which the paper computed its curves with' if gravity == 'paper' else 'the virtual-work sign'}); "
+      f"""({'the sign printed in eq. (intEq), which the paper computed its curves with'
+            if gravity == 'paper' else 'the virtual-work sign'}); """
       "the statements table checks both conventions. Robot: Table I (M = 52 g, L = 120 mm, k = "
       f"0.1677 N m/rad = {REALISTIC_K_RATIO:.3f} M g L, mu = 0.389); reference gait gamma 90, A "
       "30, psi 45 deg, torque tau = k (phi_ref - pi).\n")
