@@ -14,6 +14,8 @@ _EXPORTS = {
     "unusable": "ocp_crawl.sim.registry", "MUJOCO_SOLVERS": "ocp_crawl.sim.registry",
     "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result",
     "Mode": "ocp_crawl.sim.result", "simulate_chain_angles": "ocp_crawl.sim.chain_angles",
+    "simulate_chain_torque": "ocp_crawl.sim.chain_torque",
+    "ChainReferenceTorque": "ocp_crawl.sim.chain_torque",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }
 
@@ -22,6 +24,6 @@ __all__ = [
     "TimeSteppingOptions",
     "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate",
     "solver_named", "CrawlResult", "Event", "Mode", "SimulationError", "Status",
-    "simulate_chain_angles",
+    "simulate_chain_angles", "simulate_chain_torque", "ChainReferenceTorque",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,401 @@
+"""Torque-driven hybrid-quasistatic motion of an n-link chain (the event-driven stepper of
+:mod:`ocp_crawl.sim.event` for any n >= 3).
+
+The chain follows its equilibrium branch by continuation in the phase t [cycles]: in each contact
+mode every point is a Newton solve of :meth:`~ocp_crawl.model.chain_model.ChainModel.solve` from
+the tangent predictor of the previous point, with an adaptive step (a guard that dips below zero
+and back inside a step is found by its Hermite interpolant).  Guards (positive while the mode
+holds, :meth:`~ocp_crawl.sim.chain_torque_parts.ChainSolver.guards`): in stick-stick both feet's
+friction margins mu_i f_n,i -+ f_t; in a slip of foot s with sign(d') = sigma, sigma d' and the
+other foot's margin mu_o f_n,o - mu_s f_n,s; in every mode the normal forces, d and the joint
+heights.  A guard crossing zero in a step is located by Brent's method on the guard of the solved
+state (to 1e-13 cycles); the mode after it is that of the transition table
+(:func:`ocp_crawl.sim.event_guards.transition`) when it is consistent (its guards positive and its
+equilibrium stable just after the event), else the only consistent single-foot mode, else the run
+fails (``no_consistent_mode``).  A lost contact ends the run (``lift_off``, ``joint_on_ground``,
+``feet_crossed``), so does a fold of the branch (the Newton solve fails as the step shrinks, or
+the sign of det J or of the stability margin changes: ``fold``).  A stuck foot stays; a slipping
+foot moves with d.  Only single-foot slips are modelled (a gait whose friction limits tie
+identically, mu1 f_n1 = mu2 f_n2, ends with ``no_consistent_mode``).  Cycles run until the
+state at the start of a cycle and the displacement per cycle repeat; the last cycle is reported.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ocp_crawl.checks import real
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain_inputs import as_joint_signal
+from ocp_crawl.model.chain_model import ChainModel
+from ocp_crawl.model.chain_stability import chain_stability_margins
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
+from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate,
+                                    failure_message, new_result, output_phases, sample_fields,
+                                    success_message)
+from ocp_crawl.sim.chain_torque_parts import (SINGLE_MODES, ChainSolver, Point, Segment,
+                                              mode_vector, sample_segment, segment_integrals)
+from ocp_crawl.sim.event_guards import transition
+from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
+from ocp_crawl.status import Status
+
+
+#: largest |energy balance residual| of a success, relative to the gross work (the cycle integrals
+#: close to ~1e-12 on smooth inputs; the event stepper's default tolerance)
+ENERGY_TOL = 1e-6
+
+
+class ChainReferenceTorque(PeriodicSignal):
+    """Joint torques of reference angles: ``tau_j = k_j (phi_ref_j(t) - pi - rest_j)`` [N m].
+
+    Parameters
+    ----------
+    reference : PeriodicSignal
+        Reference joint angles phi_ref(t) [rad] with m rows.
+    chain : Chain
+        The chain whose stiffnesses k_j [N m/rad] and rest bends rest_j [rad] are used.
+    """
+
+    def __init__(self, reference: PeriodicSignal, chain: Chain):
+        self.reference = as_joint_signal(reference, chain.n_joints)
+        self.k = np.asarray(chain.stiffness, float)
+        self.rest = np.asarray(chain.rest, float)
+
+    def _col(self, v, t):
+        return v.reshape((-1,) + (1,) * np.ndim(t))
+
+    def __call__(self, t):
+        return self._col(self.k, t) * (self.reference(t) - math.pi - self._col(self.rest, t))
+
+    def derivative(self, t):
+        return self._col(self.k, t) * self.reference.derivative(t)
+
+    def describe(self) -> dict:
+        return {"type": "ChainReferenceTorque", "k": self.k.tolist(), "rest": self.rest.tolist(),
+                "reference": self.reference.describe()}
+
+
+class _Stop(Exception):
+    """The end of a run by a failure status at phase t in a mode."""
+
+    def __init__(self, status: Status, t: float, mode: Mode, detail: str):
+        super().__init__(detail)
+        self.status, self.t, self.mode, self.detail = status, t, mode, detail
+
+
+class ChainTorqueStepper:
+    """The continuation of one run (see the module docstring); call :meth:`run`."""
+
+    def __init__(self, model: ChainModel, torque: PeriodicSignal, *, max_step: float,
+                 min_step: float, event_xtol: float, trial_step: float, quad_h: float):
+        self.solver = ChainSolver(model, torque)
+        self.model, self.torque = model, torque
+        self.max_step, self.min_step = max_step, min_step
+        self.event_xtol, self.trial_step, self.quad_h = event_xtol, trial_step, quad_h
+        self.segments: list[Segment] = []
+        self.events: list[Event] = []
+
+    # ------------------------------------------------------------------ start
+    def start(self) -> Point:
+        """The released start (f_t = 0) at t = 0, stable in stick-stick; ValueError if none."""
+        s, chain = self.solver, self.model.chain
+        if isinstance(self.torque, ChainReferenceTorque):
+            ref = np.asarray(self.torque.reference(0.0), float)
+        elif isinstance(self.torque, ReferenceTorque):
+            ref = np.asarray(self.torque.reference(0.0), float)
+        else:
+            ref = math.pi + np.asarray(chain.rest) + s.tau(0.0)[0] / np.asarray(chain.stiffness)
+        released = np.array([0.0, 0.0, 1.0, 0.0])
+        for lam in (1.0, 0.5, 0.25, 0.0):
+            phi = lam * ref + (1 - lam) * 0.6 * math.pi
+            pt = s.solve(0.0, np.append(phi, 0.0), released)
+            if pt is None or min(s.guards(Mode.STICK, pt.aux).values()) <= 0:
+                continue
+            q = mode_vector(Mode.STICK, pt.aux["d"])
+            if s.margin(pt.x, q) > 0:
+                return s.solve(0.0, pt.x, q) or pt
+        raise ValueError("no stable released equilibrium with both feet on the ground at t = 0")
+
+    # ------------------------------------------------------------------ stepping
+    def _step(self, seg: Segment, pt: Point, t_new: float) -> Point | None:
+        """The mode's solution at t_new from pt, or None (no convergence, a jump or a fold)."""
+        s = self.solver
+        new = s.solve(t_new, s.guess(pt, t_new), seg.q)
+        if new is None:
+            return None
+        m = s.m
+        if np.max(np.abs(new.x[:m] - pt.x[:m])) > 0.35:
+            return None
+        if np.sign(new.aux["det"]) != np.sign(pt.aux["det"]):
+            return None
+        return new
+
+    def _place(self, seg: Segment, pt: Point) -> Point:
+        """pt with the feet positions of the segment's mode (the stuck foot of its first point)."""
+        first = seg.points[0]
+        foot = seg.mode.foot
+        pt.x1 = first.x2 - pt.aux["d"] if foot == 1 else first.x1
+        pt.x2 = first.x1 + pt.aux["d"] if foot == 2 else first.x2
+        return pt
+
+    def _advance(self, seg: Segment, t_end: float, h: float) -> tuple[Segment, float]:
+        """Continue from the segment's last point to t_end through the events; returns the segment
+        at t_end and the step size."""
+        s = self.solver
+        while seg.t1 < t_end - 1e-15:
+            pt = seg.points[-1]
+            hh = min(h, t_end - pt.t)
+            t_new = t_end if t_end - (pt.t + hh) < 1e-12 else pt.t + hh
+            new = self._step(seg, pt, t_new)
+            if new is None:
+                h = hh / 4
+                if h < self.min_step:
+                    raise _Stop(Status.FOLD, pt.t, seg.mode, "the equilibrium branch of mode "
+                                f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
+                continue
+            g0, g1 = s.guards(seg.mode, pt.aux), s.guards(seg.mode, new.aux)
+            crossed = [k for k, v in g1.items() if v < 0]
+            if not crossed:
+                new, crossed = self._dip(seg, pt, new)
+            if not crossed:
+                seg.points.append(self._place(seg, new))
+                h = min(self.max_step, 2 * hh) if hh >= 0.999 * h else h
+                continue
+            self._check_stable(seg)
+            seg = self._event(seg, pt, new, g0, crossed)
+            h = min(h, self.max_step)
+        return seg, h
+
+    def _dip(self, seg: Segment, pt: Point, new: Point) -> tuple[Point, list[str]]:
+        """The end of the step [pt, new] and its crossed guards: inside the step at the first dip of
+        a guard's interpolant (:meth:`ChainSolver.dips`) where a guard is negative, else new and
+        none."""
+        s = self.solver
+        for t in s.dips(seg.mode, seg.q, pt, new):
+            pm = s.solve(t, s.guess(pt, t), seg.q)
+            if pm is None:
+                continue
+            crossed = [k for k, v in s.guards(seg.mode, pm.aux).items() if v < 0]
+            if crossed:
+                return pm, crossed
+        return new, []
+
+    def _check_stable(self, seg: Segment) -> None:
+        """A fold failure at the first point of the segment whose stability margin is <= 0."""
+        X = np.array([p.x for p in seg.points]).T
+        margins = chain_stability_margins(self.model, X, seg.q)
+        bad = np.flatnonzero(~(margins > 0))
+        if bad.size:
+            t = seg.points[bad[0]].t
+            raise _Stop(Status.FOLD, t, seg.mode, f"stability margin of mode {seg.mode.label} "
+                        f"{margins[bad[0]]:.3g} <= 0 at t = {t:.10f}")
+
+    def _locate(self, seg: Segment, pt: Point, new: Point, name: str, g0: float) -> float:
+        """Phase of the zero of guard ``name`` in (pt.t, new.t] by Brent's method."""
+        s = self.solver
+
+        def g(t: float) -> float:
+            lam = (t - pt.t) / (new.t - pt.t)
+            p = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q)
+            if p is None:
+                raise _Stop(Status.NO_CONVERGENCE, t, seg.mode, "mode solve failed locating an "
+                            f"event of {name}")
+            return s.guards(seg.mode, p.aux)[name]
+
+        lo = pt.t
+        if not g0 > 0:
+            lo = min(pt.t + self.trial_step, 0.5 * (pt.t + new.t))
+            if not g(lo) > 0:
+                return pt.t
+        return brentq(g, lo, new.t, xtol=self.event_xtol, rtol=4 * np.finfo(float).eps)
+
+    def _event(self, seg: Segment, pt: Point, new: Point, g0: dict, crossed: list) -> Segment:
+        """Locate the first crossing in the step [pt, new], record the event and return the
+        segment of the mode after it."""
+        s = self.solver
+        found = sorted((self._locate(seg, pt, new, k, g0[k]), k) for k in crossed)
+        t_ev, kind = found[0]
+        lam = (t_ev - pt.t) / (new.t - pt.t)
+        ev = s.solve(t_ev, (1 - lam) * pt.x + lam * new.x, seg.q) if t_ev > pt.t else pt
+        if ev is None:
+            raise _Stop(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
+        if ev is not pt:
+            seg.points.append(self._place(seg, ev))
+        g_ev = s.guards(seg.mode, ev.aux)[kind]
+        nxt = transition(seg.mode, kind)
+        if isinstance(nxt, Status):
+            self.events.append(Event(t_ev, kind, seg.mode.label, "failure", g_ev, kind))
+            raise _Stop(nxt, t_ev, seg.mode, f"guard {kind} reached zero at t = {t_ev:.10f}")
+        chosen, start = nxt, s.consistent(nxt, ev, self.trial_step)
+        if start is None:
+            ok = [(m, p) for m in SINGLE_MODES if m is not seg.mode
+                  for p in [s.consistent(m, ev, self.trial_step)] if p is not None]
+            if len(ok) != 1:
+                raise _Stop(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
+                            f"{len(ok)} consistent modes after {kind} at t = {t_ev:.10f}")
+            chosen, start = ok[0]
+        self.events.append(Event(t_ev, mode_change_kind(seg.mode, chosen), seg.mode.label,
+                                 chosen.label, g_ev, kind))
+        start.x1, start.x2 = ev.x1, ev.x2
+        new_seg = Segment(chosen, mode_vector(chosen, ev.aux["d"]), t_ev, [start])
+        self.segments.append(new_seg)
+        return new_seg
+
+    # ------------------------------------------------------------------ cycles
+    def run_cycles(self, cycles_max: int, periodic_tol: float) -> tuple[int, float]:
+        """Run cycles until periodic; returns (steady cycles run, periodicity deviation)."""
+        start = self.start()
+        seg = Segment(Mode.STICK, mode_vector(Mode.STICK, start.aux["d"]), 0.0, [start])
+        self.segments = [seg]
+        h = self.max_step
+        ends = [(start.x.copy(), seg.mode, 0.0)]
+        for cycle in range(1, cycles_max + 1):
+            seg, h = self._advance(seg, float(cycle), h)
+            self._check_stable(seg)
+            end = seg.points[-1]
+            ends.append((end.x.copy(), seg.mode, end.x1))
+            # (a new segment from the cycle's end, so that segments do not straddle cycles)
+            seg = Segment(seg.mode, seg.q, end.t, [end])
+            self.segments.append(seg)
+            if cycle < 2:
+                continue
+            (xa, ma, pa), (xb, mb, pb), (_, _, pc) = ends[-2], ends[-1], ends[-3]
+            dev = float(np.max(np.abs(xb - xa)))
+            dS = abs((pb - pa) - (pa - pc)) / self.model.chain.L
+            if ma == mb and max(dev, dS) <= periodic_tol:
+                return cycle, dev
+        raise _Stop(Status.NOT_PERIODIC, float(cycles_max), seg.mode,
+                    f"not periodic after {cycles_max} cycles")
+
+    # ------------------------------------------------------------------ the steady cycle
+    def steady(self, t0: float) -> list[tuple[Segment, float, float]]:
+        """The segments of the cycle [t0, t0 + 1] with their stretch in it (nonempty)."""
+        out = []
+        for i, seg in enumerate(self.segments):
+            a = seg.t0
+            b = seg.t1 if i + 1 == len(self.segments) else self.segments[i + 1].t0
+            lo, hi = max(a, t0), min(b, t0 + 1.0)
+            if hi > lo + 1e-15:
+                out.append((seg, lo, hi))
+        return out
+
+    def integrals(self, t0: float) -> tuple[np.ndarray, float, float, float]:
+        """W+ per joint (m,), input work, gross work and friction dissipation [J] of the cycle."""
+        m = self.solver.m
+        wp, work = np.zeros(m), np.zeros(m)
+        diss = 0.0
+        for seg, a, b in self.steady(t0):
+            p, wj, ds = segment_integrals(self.solver, seg, a, b, self.quad_h)
+            wp, work, diss = wp + p, work + wj, diss + ds
+        # (|p| = 2 max(p, 0) - p)
+        return wp, float(np.sum(work)), float(np.sum(2 * wp - work)), diss
+
+    def samples(self, t0: float, te: np.ndarray) -> tuple[dict, dict]:
+        """The output fields at the phases t0 + te and the ``extra`` fields."""
+        parts, modes = [], []
+        steady = self.steady(t0)
+        ts = t0 + te
+        for k, (seg, a, b) in enumerate(steady):
+            last = k + 1 == len(steady)
+            sel = ts[(ts >= a) & ((ts <= b) if last else (ts < b))]
+            if sel.size:
+                parts.append(sample_segment(self.solver, seg, sel))
+                modes.append(np.full(sel.size, int(seg.mode)))
+        f = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
+        mode = np.concatenate(modes)
+        fields = sample_fields(ts, f["phi"], f["theta"], f["d"], f["x1"], f["x2"], f["f_t"],
+                               f["f_n1"], f["f_n2"], f["tau"], mode)
+        extra = {"links": self.model.chain.n, "alpha": f["alpha"],
+                 "foot": np.array([Mode(c).foot for c in mode], int)}
+        return fields, extra
+
+
+def _as_torque(torques, model: ChainModel) -> PeriodicSignal:
+    """The torque signal (m rows) of ``torques``."""
+    if isinstance(torques, (ReferenceTorque, ChainReferenceTorque)):
+        shape = np.shape(torques(0.0))
+        if shape != (model.chain.n_joints,):
+            raise ValueError(f"torques must have {model.chain.n_joints} rows, got {shape}")
+        return torques
+    return as_joint_signal(torques, model.chain.n_joints)
+
+
+def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int = 12,
+                          t_eval=None, max_step: float = 1.0 / 64, min_step: float = 1e-11,
+                          event_xtol: float = 1e-13, trial_step: float = 1e-8,
+                          quad_h: float = 1.0 / 32, periodic_tol: float = 1e-10) -> CrawlResult:
+    """Torque-driven quasistatic gait of an n-link chain (see the module docstring).
+
+    Parameters
+    ----------
+    chain_model : ChainModel
+        The chain and the gravity convention.
+    torques : PeriodicSignal, callable or array_like
+        1-periodic joint torques tau(t) [N m] with m = n - 1 rows of the phase t [cycles]: a signal
+        (:class:`ChainReferenceTorque`, for three links also
+        :class:`~ocp_crawl.model.inputs.ReferenceTorque`), a callable or samples (m, K).
+    cycles_max : int
+        Most cycles run before the status ``not_periodic``.
+    t_eval : array_like of float, optional
+        Output phases in [0, 1] of the steady cycle [cycles]; default 201 phases and the events.
+    max_step, min_step : float
+        Largest and smallest continuation step [cycles].
+    event_xtol : float
+        Tolerance of the event phases [cycles].
+    trial_step : float
+        Phase after an event at which the next mode's guards must be positive [cycles].
+    quad_h : float
+        Largest Gauss-Legendre panel of the cycle integrals [cycles].
+    periodic_tol : float
+        Largest change of the state at the cycle start [rad, -] and of the displacement per cycle
+        (relative to L) between the last two cycles of a periodic gait.
+
+    Returns
+    -------
+    CrawlResult
+        ``S`` [m] (displacement per cycle along +x), ``W_plus`` [J] (sum over the joints of the
+        integral of max(tau_j phi_j', 0), per joint ``W_plus_joint`` (m,)), CoT+, the energy
+        balance, the events of the run and the samples on the output phases (phi, tau (m, N)).
+        A failure is a status with ``failure_t`` and ``failure_mode``.
+    """
+    if not isinstance(chain_model, ChainModel):
+        raise TypeError("simulate_chain_torque: chain_model must be a ChainModel, got "
+                        f"{type(chain_model).__name__}")
+    torque = _as_torque(torques, chain_model)
+    if isinstance(cycles_max, bool) or not isinstance(cycles_max, (int, np.integer)) \
+            or cycles_max < 1:
+        raise ValueError(f"simulate_chain_torque: cycles_max must be an integer >= 1, got "
+                         f"{cycles_max!r}")
+    steps = {k: real(k, v, positive=True) for k, v in
+             (("max_step", max_step), ("min_step", min_step), ("event_xtol", event_xtol),
+              ("trial_step", trial_step), ("quad_h", quad_h), ("periodic_tol", periodic_tol))}
+    te = output_phases(t_eval)
+    periodic_tol = steps.pop("periodic_tol")
+    st = ChainTorqueStepper(chain_model, torque, **steps)
+    try:
+        cycles, dev = st.run_cycles(int(cycles_max), periodic_tol)
+    except ValueError as exc:
+        return new_result(chain_model, "torque", Status.NO_START,
+                          failure_message(Status.NO_START, str(exc)), failure_t=0.0,
+                          failure_mode="released start", nfev=st.solver.nfev)
+    except _Stop as stop:
+        return new_result(chain_model, "torque", stop.status,
+                          failure_message(stop.status, stop.detail), events=st.events,
+                          failure_t=stop.t, failure_mode=stop.mode.label, nfev=st.solver.nfev)
+    t0 = float(cycles - 1)
+    wp, w_in, w_abs, diss = st.integrals(t0)
+    steady = st.steady(t0)
+    p0, p1 = steady[0][0].points[0], steady[-1][0].points[-1]
+    S = float(p1.x1 - p0.x1)
+    dV = float(chain_model.potential(p1.x[:-1]) - chain_model.potential(p0.x[:-1]))
+    ev_t = [e.t - t0 for e in st.events if t0 <= e.t <= t0 + 1]
+    samples, extra = st.samples(t0, default_phases(ev_t) if te is None else te)
+    extra["periodicity_deviation"] = dev
+    res = new_result(chain_model, "torque", Status.SUCCESS, success_message(cycles, t0),
+                     cycles=cycles, t0=t0, events=st.events, **samples,
+                     **balance_metrics(chain_model.chain, S, wp, w_in, dV, diss, w_abs),
+                     periodicity_residual=dev, nfev=st.solver.nfev, extra=extra)
+    # (a quadrature across an unresolved kink of the input, or a missed event, breaks the balance)
+    return energy_gate(res, ENERGY_TOL, "ENERGY_TOL, the balance of the chain's cycle integrals")

@@ -1,0 +1,327 @@
+"""Parts of the torque-driven stepper of an n-link chain (:mod:`ocp_crawl.sim.chain_torque`): the
+mode solves at a phase, the guard functions of each contact mode, the choice of the mode after an
+event and the cycle integrals and samples of constant-mode segments.
+
+States are ``x = (phi_1 .. phi_m [rad], f_t/(M g) [-])``, phases t in cycles, rates per cycle.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import casadi as cs
+import numpy as np
+
+from ocp_crawl.model.chain_model import ChainModel, call_columns, slip_mode, stick_mode
+from ocp_crawl.model.chain_statics import aux_names
+from ocp_crawl.model.chain_stability import chain_stability_margin
+from ocp_crawl.sim.event_guards import cubic_min
+from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
+from ocp_crawl.sim.result import Mode
+
+#: the modes of a generic gait (one foot slips at a time); slip-slip needs mu1 f_n1 = mu2 f_n2
+#: guard values within this of zero [-] are not decided by their sign
+GUARD_NOISE = 1e-12
+
+SINGLE_MODES = (Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
+
+
+def mode_vector(mode: Mode, d0: float = 0.0) -> np.ndarray:
+    """The mode vector ``q`` of :mod:`ocp_crawl.model.chain_model` of ``mode`` (stick distance
+    ``d0`` [m] for stick-stick)."""
+    if mode is Mode.STICK:
+        return stick_mode(d0)
+    if mode.foot not in (1, 2):
+        raise ValueError(f"mode {mode.label} (both feet slipping) is not supported")
+    return slip_mode(mode.foot, mode.sigma)
+
+
+@dataclass
+class Point:
+    """A solved equilibrium at phase ``t`` [cycles]: state ``x``, outputs ``aux``
+    (:meth:`ChainModel.evaluate`, rates per cycle) and the feet positions ``x1``, ``x2`` [m]."""
+
+    t: float
+    x: np.ndarray
+    aux: dict
+    x1: float = 0.0
+    x2: float = 0.0
+
+    def xdot(self, m: int, Mg: float) -> np.ndarray:
+        """Rate of the state along the mode's solution [1/cycle]."""
+        a = self.aux
+        return np.array([a[f"dphi{j}"] for j in range(1, m + 1)] + [a["dft"] / Mg])
+
+
+@dataclass
+class Segment:
+    """A stretch of constant contact mode from phase ``t0`` [cycles]; ``points`` in phase order."""
+
+    mode: Mode
+    q: np.ndarray
+    t0: float
+    points: list = field(default_factory=list)
+
+    @property
+    def t1(self) -> float:
+        return self.points[-1].t
+
+
+class ChainSolver:
+    """Newton solves and guards of an n-link chain under the torque signal ``torque``."""
+
+    def __init__(self, model: ChainModel, torque, residual_tol: float = 1e-10):
+        self.model, self.torque = model, torque
+        self.chain = model.chain
+        self.m = model.chain.n_joints
+        self.Mg, self.L, self.mu = model.Mg, model.chain.L, model.chain.mu
+        self.residual_tol = residual_tol
+        self.nfev = 0
+        self.p = model.p
+        self.names = aux_names(model.chain.n)
+
+    def tau(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Torques [N m] and their rate [N m/cycle] at phase t."""
+        return (np.asarray(self.torque(t), float).ravel(),
+                np.asarray(self.torque.derivative(t), float).ravel())
+
+    def taus(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Torques (m, N) [N m] and rates (m, N) [N m/cycle] at the phases ts (N,)."""
+        tau = np.asarray(self.torque(ts), float)
+        dtau = np.asarray(self.torque.derivative(ts), float)
+        if tau.shape != (self.m, ts.size) or dtau.shape != tau.shape:
+            pairs = [self.tau(float(t)) for t in ts]
+            tau = np.array([p[0] for p in pairs]).T.reshape(self.m, -1)
+            dtau = np.array([p[1] for p in pairs]).T.reshape(self.m, -1)
+        return tau, dtau
+
+    def solve(self, t: float, x0, q: np.ndarray, max_iter: int = 40) -> Point | None:
+        """The mode's equilibrium at phase t by Newton's method from ``x0`` (as
+        :meth:`ChainModel.solve`: scaled residual <= 1e-13 or a step <= 1e-14); None when it does
+        not converge or its residual exceeds ``residual_tol``."""
+        tau, dtau = self.tau(t)
+        sym, p = self.model.sym, self.p
+        x = np.array(x0, float)
+        J = None
+        for it in range(max_iter + 1):
+            G, J = sym.system(x, tau, q, p)
+            G, J = np.asarray(G).ravel(), np.asarray(J)
+            self.nfev += 1
+            if not np.all(np.isfinite(G)) or it == max_iter:
+                return None
+            if np.max(np.abs(G)) <= 1e-13:
+                break
+            try:
+                step = np.linalg.solve(J, G)
+            except np.linalg.LinAlgError:
+                return None
+            x = x - step
+            if np.max(np.abs(step)) <= 1e-14:
+                G, J = sym.system(x, tau, q, p)
+                J = np.asarray(J)
+                break
+        out = np.asarray(sym.evaluate(x, tau, dtau, q, p)).ravel()
+        aux = dict(zip(self.names, out.tolist()))
+        assert J is not None  # (the loop ran at least once)
+        aux["det"] = float(np.linalg.det(J))
+        if not abs(aux["res"]) <= self.residual_tol or not np.all(np.isfinite(x)):
+            return None
+        return Point(float(t), x, aux)
+
+    def guess(self, pt: Point, t: float) -> np.ndarray:
+        """The tangent predictor from ``pt`` to phase t."""
+        return pt.x + (t - pt.t) * pt.xdot(self.m, self.Mg)
+
+    def guards(self, mode: Mode, aux: dict) -> dict[str, float]:
+        """Guard functions of ``mode`` (scaled [-], positive while the mode holds), named as the
+        guards of :mod:`ocp_crawl.sim.event_guards` (so that its ``transition`` table applies)."""
+        Mg, L = self.Mg, self.L
+        g = {"lift_off_1": aux["fn1"] / Mg, "lift_off_2": aux["fn2"] / Mg,
+             "feet_crossed": aux["d"] / L}
+        for j in range(1, self.m + 1):
+            g[f"joint_{j}_on_ground"] = aux[f"zj{j}"] / L
+        ft, lim1, lim2 = aux["ft"], aux["lim1"], aux["lim2"]
+        if mode is Mode.STICK:
+            g.update({"slip_1+": (lim1 - ft) / Mg, "slip_1-": (lim1 + ft) / Mg,
+                      "slip_2+": (lim2 - ft) / Mg, "slip_2-": (lim2 + ft) / Mg})
+            return g
+        g["stick"] = mode.sigma * aux["ddot"] / L
+        if mode.foot == 1:
+            g["switch_to_2"] = (lim2 - lim1) / Mg
+        else:
+            g["switch_to_1"] = (lim1 - lim2) / Mg
+        return g
+
+    def guard_rates(self, mode: Mode, pt: Point, q: np.ndarray) -> dict[str, float]:
+        """Rates [1/cycle] of :meth:`guards` along the mode's solution at pt (the same keys).  The
+        slip modes' sigma d'/L needs d'' (:meth:`ChainModel.ddot2`) and so the torques' second
+        rate, taken by central differences of their rate (1e-5 cycles)."""
+        a, Mg, L = pt.aux, self.Mg, self.L
+        r = {"lift_off_1": a["dfn1"] / Mg, "lift_off_2": a["dfn2"] / Mg,
+             "feet_crossed": a["ddot"] / L}
+        for j in range(1, self.m + 1):
+            r[f"joint_{j}_on_ground"] = a[f"dzj{j}"] / L
+        dft, dlim1, dlim2 = a["dft"], self.mu[0] * a["dfn1"], self.mu[1] * a["dfn2"]
+        if mode is Mode.STICK:
+            r.update({"slip_1+": (dlim1 - dft) / Mg, "slip_1-": (dlim1 + dft) / Mg,
+                      "slip_2+": (dlim2 - dft) / Mg, "slip_2-": (dlim2 + dft) / Mg})
+            return r
+        tau, dtau = self.tau(pt.t)
+        ddtau = (self.tau(pt.t + 1e-5)[1] - self.tau(pt.t - 1e-5)[1]) / 2e-5
+        c, b = self.model.ddot2(pt.x, tau, dtau, q)
+        r["stick"] = mode.sigma * (c + float(b @ ddtau)) / L
+        if mode.foot == 1:
+            r["switch_to_2"] = (dlim2 - dlim1) / Mg
+        else:
+            r["switch_to_1"] = (dlim1 - dlim2) / Mg
+        return r
+
+    def dips(self, mode: Mode, q: np.ndarray, p0: Point, p1: Point) -> list[float]:
+        """Phases in (p0.t, p1.t) where the cubic Hermite interpolant of a guard (values and
+        rates at both ends) has a local minimum below zero: a guard that may dip below zero and
+        back inside the step, unseen by the signs at its ends (below -GUARD_NOISE); earliest
+        first."""
+        h = p1.t - p0.t
+        g0, g1 = self.guards(mode, p0.aux), self.guards(mode, p1.aux)
+        r0, r1 = self.guard_rates(mode, p0, q), self.guard_rates(mode, p1, q)
+        out = []
+        for k in g0:
+            a, b, m0, m1 = g0[k], g1[k], h * r0[k], h * r1[k]
+            if min(a, b) - 0.15 * (abs(m0) + abs(m1)) >= -GUARD_NOISE:
+                continue
+            s, v = cubic_min(a, b, m0, m1)
+            if v < -GUARD_NOISE:
+                out.append(p0.t + s * h)
+        return sorted(out)
+
+    def margin(self, x: np.ndarray, q: np.ndarray) -> float:
+        """Stability margin of the equilibrium ``x`` in mode ``q`` (> 0: stable)."""
+        return chain_stability_margin(self.model, x, q)
+
+    def consistent(self, mode: Mode, pt: Point, dt: float) -> Point | None:
+        """The solution of ``mode`` at pt (stick-stick at the distance of pt) when every guard of
+        the mode is positive just after pt.t and its equilibrium is stable there; else None.
+
+        The guards are tested at pt.t + dt, then (while the least one is within 1e-12 of zero, as
+        a guard that leaves zero quadratically, e.g. the friction margin after d' = 0) at
+        100 dt and 10^4 dt."""
+        q = mode_vector(mode, pt.aux["d"])
+        start = self.solve(pt.t, pt.x, q)
+        if start is None:
+            return None
+        for trial in (dt, 100 * dt, 1e4 * dt):
+            after = self.solve(pt.t + trial, self.guess(start, pt.t + trial), q)
+            if after is None:
+                return None
+            low = min(self.guards(mode, after.aux).values())
+            if low <= -GUARD_NOISE:
+                return None
+            if low > GUARD_NOISE:
+                return start if self.margin(after.x, q) > 0 else None
+        return None
+
+
+@lru_cache(maxsize=None)
+def _mapped_system(fun: cs.Function, size: int) -> cs.Function:
+    """``fun`` (the mode system) mapped over ``size`` columns, the mode vector and the parameters
+    shared."""
+    return fun.map(f"{fun.name()}_cols{size}", "serial", size, [2, 3], [])
+
+
+def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,
+                  max_iter: int = 40) -> tuple[np.ndarray, dict]:
+    """Newton solves of the mode ``q`` at the phases ``ts`` (N,) from the guesses ``X0`` (m+1, N)
+    at once; returns the states (m+1, N) and the outputs (:meth:`ChainModel.evaluate` rows, each
+    (N,)).  RuntimeError when a column does not converge."""
+    model, nx, N = solver.model, solver.m + 1, ts.size
+    size = max(16, 1 << (N - 1).bit_length())
+    cols = np.minimum(np.arange(size), N - 1)
+    tau, dtau = solver.taus(ts)
+    f = _mapped_system(model.sym.system, size)
+    X = np.array(X0, float)[:, cols]
+    T, p = tau[:, cols], model.p
+    done = np.zeros(size, bool)
+    for _ in range(max_iter):
+        G, J = f(X, T, q, p)
+        G = np.asarray(G)
+        done |= np.max(np.abs(G), axis=0) <= 1e-13
+        if done.all():
+            break
+        J3 = np.asarray(J).reshape(nx, size, nx).transpose(1, 0, 2)
+        step = np.linalg.solve(J3[~done], G.T[~done][..., None])[..., 0].T
+        X[:, ~done] -= step
+        small = np.max(np.abs(step), axis=0) <= 1e-14
+        done[np.flatnonzero(~done)[small]] = True
+    solver.nfev += size
+    X = X[:, :N]
+    out = call_columns(model.sym.evaluate, X, tau, dtau, q, p)
+    aux = {k: out[i] for i, k in enumerate(aux_names(solver.chain.n))}
+    if not (done[:N].all() and np.all(np.abs(aux["res"]) <= solver.residual_tol)):
+        bad = int(np.argmax(~done[:N] | ~(np.abs(aux["res"]) <= solver.residual_tol)))
+        raise RuntimeError(f"mode solve failed at t = {ts[bad]:.15g}")
+    return X, aux
+
+
+class SegmentEval:
+    """The mode's solution of a segment at many phases at once, each Newton solve started from
+    the tangent predictor of the segment's nearest stored point."""
+
+    def __init__(self, solver: ChainSolver, seg: Segment):
+        self.solver, self.seg = solver, seg
+        self.tp = np.array([p.t for p in seg.points])
+        self.Xp = np.array([p.x for p in seg.points]).T
+        self.Vp = np.array([p.xdot(solver.m, solver.Mg) for p in seg.points]).T
+        self.key, self.value = b"", np.zeros(0)
+
+    def solve(self, t: np.ndarray) -> tuple[np.ndarray, dict]:
+        """States (m+1, N) and outputs at the phases t (N,)."""
+        i = np.clip(np.searchsorted(self.tp, t), 0, len(self.tp) - 1)
+        j = np.maximum(i - 1, 0)
+        near = np.where(np.abs(self.tp[j] - t) < np.abs(self.tp[i] - t), j, i)
+        X0 = self.Xp[:, near] + (t - self.tp[near]) * self.Vp[:, near]
+        return solve_columns(self.solver, t, X0, self.seg.q)
+
+    def rows(self, t) -> np.ndarray:
+        """(m + 1, N): the joint powers tau_j phi_j' [J/cycle], then f_t d' [J/cycle] at the
+        phases t."""
+        t = np.atleast_1d(np.asarray(t, float))
+        key = t.tobytes()
+        if key != self.key:
+            m = self.solver.m
+            _, a = self.solve(t)
+            tau = self.solver.taus(t)[0]
+            out = np.empty((m + 1, t.size))
+            out[:m] = tau * np.array([a[f"dphi{j}"] for j in range(1, m + 1)])
+            out[m] = a["ft"] * a["ddot"]
+            self.key, self.value = key, out
+        return self.value
+
+
+def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
+                      h: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,) (Gauss-Legendre panels
+    of at most ``h`` cycles, split at the sign changes of each joint's power), the work per joint
+    (m,) and the friction dissipation."""
+    ev = SegmentEval(solver, seg)
+    m = solver.m
+    wp = np.zeros(m)
+    for j in range(m):
+        wp[j] = positive_part_integral(a, b, lambda t, j=j: ev.rows(t)[j],
+                                       lambda t, j=j: float(ev.rows(t)[j, 0]), h=h)
+    tq, w = gauss_nodes(a, b, h, 5)
+    r = ev.rows(tq) if tq.size else np.zeros((m + 1, 0))
+    return wp, r[:m] @ w, float(r[m] @ w)
+
+
+def sample_segment(solver: ChainSolver, seg: Segment, ts: np.ndarray) -> dict:
+    """The sampled fields at the phases ``ts`` of the segment: phi, tau (m, N), d, x1, x2, f_t,
+    f_n1, f_n2, theta (N,) and alpha (n, N)."""
+    m, n = solver.m, solver.chain.n
+    X, a = SegmentEval(solver, seg).solve(np.asarray(ts, float))
+    first, d = seg.points[0], a["d"]
+    x1 = first.x2 - d if seg.mode.foot == 1 else np.full(d.shape, first.x1)
+    x2 = first.x1 + d if seg.mode.foot == 2 else np.full(d.shape, first.x2)
+    return {"phi": X[:m], "tau": solver.taus(np.asarray(ts, float))[0], "d": d, "x1": x1,
+            "x2": x2, "f_t": a["ft"], "f_n1": a["fn1"], "f_n2": a["fn2"],
+            "theta": a[f"alpha{n // 2 + 1}"],
+            "alpha": np.array([a[f"alpha{i}"] for i in range(1, n + 1)])}
