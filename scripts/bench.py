@@ -179,14 +179,15 @@ def bench_prescribed(repeat: int) -> dict:
 
 
 def bench_chain(repeat: int) -> dict:
-    """The prescribed-angle simulator of n-link chains against the three-link one, in one run: the
-    paper gait at n = 3 through both, and a five-link chain of the same length and mass (legs and
-    joints as the paper robot's, the body in three segments, phases spread over the joints)."""
+    """The simulators of n-link chains (prescribed angles, torque drive) against the three-link ones,
+    in one run: the paper gait at n = 3 through both, and a five-link chain of the same length and
+    mass (legs and joints as the paper robot's, the body in three segments of four times the
+    stiffness, phases spread over the joints)."""
     import numpy as np
 
-    from ocp_crawl import Harmonic, Model, Robot
+    from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot, simulate
     from ocp_crawl.model import Chain, ChainModel, JointFourier
-    from ocp_crawl.sim import simulate_chain_angles
+    from ocp_crawl.sim import ChainReferenceTorque, simulate_chain_angles, simulate_chain_torque
     from ocp_crawl.sim.angles import simulate_angles
 
     robot = Robot.paper()
@@ -199,17 +200,24 @@ def bench_chain(repeat: int) -> dict:
                                   np.deg2rad([22.5, 7.5, -7.5, -22.5]))
     model, m3, m5 = Model(robot), ChainModel(three), ChainModel(five)
     harmonic = Harmonic.from_degrees(90, 30, 45)
+    torque3 = ReferenceTorque(harmonic, robot.k)
+    torque5 = ChainReferenceTorque(gait5, five)
     runs = {"three_link_angles": lambda: simulate_angles(model, harmonic),
             "chain_n3": lambda: simulate_chain_angles(m3, harmonic),
-            "chain_n5": lambda: simulate_chain_angles(m5, gait5)}
+            "chain_n5": lambda: simulate_chain_angles(m5, gait5),
+            "three_link_torque": lambda: simulate(model, torque3),
+            "chain_torque_n3": lambda: simulate_chain_torque(m3, torque3),
+            "chain_torque_n5": lambda: simulate_chain_torque(m5, torque5)}
     out: dict = {}
     for name, run in runs.items():
         low, med, res = _min_median(run, repeat)
         out[name] = {"min_ms": round(1e3 * low, 2), "median_ms": round(1e3 * med, 2),
                      "status": res.status.label, "S_mm": round(1e3 * res.S, 6)}
-    base = out["three_link_angles"]["min_ms"]
-    out["ratio_n3"] = round(out["chain_n3"]["min_ms"] / base, 2)
-    out["ratio_n5"] = round(out["chain_n5"]["min_ms"] / base, 2)
+    for drive, three, chain in (("angles", "three_link_angles", "chain_n"),
+                                ("torque", "three_link_torque", "chain_torque_n")):
+        base = out[three]["min_ms"]
+        for n in (3, 5):
+            out[f"{drive}_ratio_n{n}"] = round(out[f"{chain}{n}"]["min_ms"] / base, 2)
     return out
 
 
