@@ -16,6 +16,7 @@ _EXPORTS = {
     "Mode": "ocp_crawl.sim.result", "simulate_chain_angles": "ocp_crawl.sim.chain_angles",
     "simulate_chain_torque": "ocp_crawl.sim.chain_torque",
     "ChainReferenceTorque": "ocp_crawl.sim.chain_torque",
+    "simulate_chain_mpcc": "ocp_crawl.sim.chain_mpcc",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }
 
@@ -24,6 +25,6 @@ __all__ = [
     "TimeSteppingOptions",
     "MujocoOptions", "MUJOCO_SOLVERS", "unavailable_solvers", "unusable", "simulate",
     "solver_named", "CrawlResult", "Event", "Mode", "SimulationError", "Status",
-    "simulate_chain_angles", "simulate_chain_torque", "ChainReferenceTorque",
+    "simulate_chain_angles", "simulate_chain_torque", "ChainReferenceTorque", "simulate_chain_mpcc",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -312,7 +312,7 @@ class ChainTorqueStepper:
         return fields, extra
 
 
-def _as_torque(torques, model: ChainModel) -> PeriodicSignal:
+def as_chain_torque(torques, model: ChainModel) -> PeriodicSignal:
     """The torque signal (m rows) of ``torques``."""
     if isinstance(torques, (ReferenceTorque, ChainReferenceTorque)):
         shape = np.shape(torques(0.0))
@@ -363,7 +363,7 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
     if not isinstance(chain_model, ChainModel):
         raise TypeError("simulate_chain_torque: chain_model must be a ChainModel, got "
                         f"{type(chain_model).__name__}")
-    torque = _as_torque(torques, chain_model)
+    torque = as_chain_torque(torques, chain_model)
     if isinstance(cycles_max, bool) or not isinstance(cycles_max, (int, np.integer)) \
             or cycles_max < 1:
         raise ValueError(f"simulate_chain_torque: cycles_max must be an integer >= 1, got "

@@ -1,0 +1,119 @@
+"""Switch-exact stepping of an n-link chain: a step whose contact mode changes is split at the event
+located inside it (the chain counterpart of :mod:`ocp_crawl.sim.step_split`).
+
+A step from phase ta to tb in the mode of its start is solved for the torques at
+ta + theta (tb - ta), theta in [0, 1], by :meth:`~ocp_crawl.sim.chain_mpcc.ChainStep.mode_solution`.
+Its guards are positive while the mode holds: in stick-stick the four friction margins; in a slip
+of pair j the other three margins and the slip rate ds_j/dtheta (central differences of the mode
+solutions, scaled by L).  When the enumerated step ends in another mode, the first zero in theta
+of a guard negative at theta = 1 is located by Brent's method, the step is cut there (an event
+point in the old mode) and the rest of the step is solved from it, at most ``MAX_SPLITS`` times.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ocp_crawl.sim.chain_mpcc import ENUM_MODES, ChainStep, ChainStepResult
+from ocp_crawl.sim.result import Mode
+
+#: most events located inside one step
+MAX_SPLITS = 3
+#: phase fraction of the central differences of the slip rate [-]
+RATE_EPS = 1e-6
+#: Brent tolerance of the event's step fraction [-]
+THETA_TOL = 1e-13
+
+
+def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> dict | None:
+    """The guards of ``mode`` on the step from ``row`` at the step fraction theta; None when a
+    mode solve fails."""
+    phi_k, ft = row[1], row[4]
+    k = ENUM_MODES.index(mode)
+    cand = step.mode_solution(mode, phi_k, tau_of(theta), ft)
+    if cand is None:
+        return None
+    g = {f"c{i}": float(cand["c"][i]) for i in range(4) if i != k - 1}
+    if k:
+        lo, hi = max(theta - RATE_EPS, 0.0), theta + RATE_EPS
+        a = step.mode_solution(mode, phi_k, tau_of(lo), ft)
+        b = step.mode_solution(mode, phi_k, tau_of(hi), ft)
+        if a is None or b is None:
+            return None
+        g["rate"] = float((b["slip"][k - 1] - a["slip"][k - 1]) / (hi - lo))
+    return g
+
+
+def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of) -> float | None:
+    """The step fraction of the first event of ``mode`` in (0, 1], or None (no guard negative at
+    theta = 1, or a failed solve)."""
+    g1 = _guards(step, mode, row, tau_of, 1.0)
+    if g1 is None:
+        return None
+    found = []
+    for name in (k for k, v in g1.items() if v < 0):
+        def g(theta, name=name):
+            gv = _guards(step, mode, row, tau_of, theta)
+            return np.nan if gv is None else gv[name]
+        lo = 1e-9
+        g_lo = g(lo)
+        if not g_lo > 0:
+            found.append(0.0)
+            continue
+        try:
+            found.append(brentq(g, lo, 1.0, xtol=THETA_TOL))
+        except ValueError:
+            continue
+    return min(found) if found else None
+
+
+def _row(t: float, res: ChainStepResult, mode: Mode | None = None) -> tuple:
+    return (t, res.phi, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2, res.d,
+            res.mode if mode is None else mode)
+
+
+def _event_row(step: ChainStep, mode: Mode, row: tuple, tau: np.ndarray, t: float) -> tuple:
+    """The event point at phase t in the old ``mode`` from ``row``."""
+    cand = step.mode_solution(mode, row[1], tau, row[4])
+    assert cand is not None  # (the event's phase was located on this mode's solutions)
+    z, s = cand["z"], np.asarray(cand["slip"]) * step.L
+    x1, x2 = row[2] + s[0] - s[1], row[3] + s[2] - s[3]
+    kin = step.model.kinematics(z[:step.m])
+    return (t, z[:step.m].copy(), x1, x2, float(z[step.m] * step.Mg), float(kin["fn1"]),
+            float(kin["fn2"]), float(kin["d"]), mode)
+
+
+def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
+            switch_exact: bool = True) -> tuple[list, ChainStepResult]:
+    """Rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) from ``row`` at phase ``ta`` [cycles] to
+    ``tb``: the located event points and the step's end, and the last step's result."""
+    out = []
+    for split in range(MAX_SPLITS + 1):
+        tau = np.asarray(torque(tb), float).reshape(step.m)
+        res = step.solve(row[1], row[2], row[3], tau, row[4])
+        mode = row[8]
+        if (not res.success or res.mode == mode or not switch_exact or split == MAX_SPLITS
+                or mode not in ENUM_MODES):
+            break
+        a = ta
+
+        def tau_of(theta, a=a):
+            return np.asarray(torque(a + theta * (tb - a)), float).reshape(step.m)
+
+        theta = _locate(step, mode, row, tau_of)
+        if theta is None:
+            break
+        te = ta + theta * (tb - ta)
+        if theta > 0:
+            row = _event_row(step, mode, row, tau_of(theta), te)
+            out.append(row)
+        nxt = step.solve(row[1], row[2], row[3], tau_of(min(theta + 1e-9, 1.0)), row[4])
+        if not nxt.success or nxt.mode == mode:
+            break
+        # the event row continues in the mode taken just after the event
+        row = row[:8] + (nxt.mode,)
+        if out and out[-1][0] == te:
+            out[-1] = row
+        ta = te
+    out.append(_row(tb, res))
+    return out, res
