@@ -137,10 +137,12 @@ class CrawlResult:
     result (a physical check's failure, an added error estimate).
 
     Arrays are sampled on the output phases ``t`` (cycles; the reported steady cycle spans
-    ``[t0, t0 + 1]``). ``phi`` and ``tau`` have shape (2, N); the others shape (N,).
-    ``mode`` holds :class:`Mode` codes. ``S`` [m] is the displacement of the robot over the steady
-    cycle along +x (from foot 1 to foot 2); ``W_plus`` [J] the positive work per cycle summed over
-    the two actuators (``W_plus_joint`` per actuator); ``CoT_plus`` = W+/(M g |S|).
+    ``[t0, t0 + 1]``). ``phi`` and ``tau`` have shape (m, N) with m joints (2 for the three-link
+    robot, n - 1 for a chain of n links); the others shape (N,). ``mode`` holds :class:`Mode`
+    codes. ``S`` [m] is the displacement of the robot over the steady cycle along +x (from foot 1
+    to foot 2); ``W_plus`` [J] the positive work per cycle summed over the actuators
+    (``W_plus_joint`` per actuator); ``CoT_plus`` = W+/(M g |S|); ``theta`` the body angle (of a
+    chain: the angle of link n // 2 + 1) [rad].
 
     Attributes
     ----------
@@ -150,8 +152,8 @@ class CrawlResult:
         The outcome; ``status_name`` its label, ``message`` why (one line).
     t : ndarray, shape (N,)
         Output phases [cycles], counted from the start of the run.
-    phi, tau : ndarray, shape (2, N)
-        Joint angles [rad] and actuator torques [N m].
+    phi, tau : ndarray, shape (m, N)
+        Joint angles [rad] and actuator torques [N m] (m = 2 for the three-link robot).
     x1, x2, d : ndarray, shape (N,)
         Contact positions of the feet and their distance [m].
     f_t, f_n1, f_n2 : ndarray, shape (N,)
