@@ -38,6 +38,7 @@ from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_messag
                                     sample_fields, success_message)
 from ocp_crawl.sim.chain_torque import ChainTorqueStepper, as_chain_torque
 from ocp_crawl.sim.chain_torque_parts import mode_vector
+from ocp_crawl.sim.oracle import ENUM_MODES, damped_newton
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import mode_from_pairs
 from ocp_crawl.status import Status
@@ -46,10 +47,6 @@ from ocp_crawl.status import Status
 #: at N steps per cycle (the midpoint rule's order; the three-link MPCC's default)
 ENERGY_TOL_N2 = 10.0
 
-#: the contact modes enumerated, in the order of the selector vector (slips indexed as the pairs)
-ENUM_MODES = (Mode.STICK, Mode.SLIP1_POS, Mode.SLIP1_NEG, Mode.SLIP2_POS, Mode.SLIP2_NEG)
-NEWTON_TOL = 1e-14
-"""Newton stops when the scaled residual max|G| is below this [-]"""
 CONSISTENCY_TOL = 1e-10
 """a scaled slip or friction margin >= -CONSISTENCY_TOL counts as nonnegative [-]"""
 DISTINCT_TOL = 1e-9
@@ -117,39 +114,6 @@ def chain_mode_system(n: int) -> cs.Function:
     return cs.Function(f"chain{n}_step_modes", [z, P, sel],
                        [G, cs.jacobian(G, z), dd, c, cs.vertcat(fn1, fn2)],
                        ["z", "P", "sel"], ["G", "J", "dd", "c", "fn"])
-
-
-def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray,
-            max_iter: int = 40) -> tuple[np.ndarray, bool]:
-    """Damped Newton on G(z) = 0 (backtracking on max|G|); returns (z, converged)."""
-    z = z0.copy()
-    G, J = (np.asarray(a) for a in f(z, P, sel)[:2])
-    G = G.ravel()
-    r = float(np.max(np.abs(G)))
-    for _ in range(max_iter):
-        if r < NEWTON_TOL:
-            return z, True
-        try:
-            dz = np.linalg.solve(J, -G)
-        except np.linalg.LinAlgError:
-            return z, False
-        if not np.all(np.isfinite(dz)):
-            return z, False
-        lam = 1.0
-        while True:
-            zn = z + lam * dz
-            Gn, Jn = (np.asarray(a) for a in f(zn, P, sel)[:2])
-            Gn = Gn.ravel()
-            rn = float(np.max(np.abs(Gn))) if np.all(np.isfinite(Gn)) else np.inf
-            if rn < r or rn < NEWTON_TOL or lam < 1e-4:
-                break
-            lam *= 0.5
-        if not np.isfinite(rn):
-            return z, False
-        if rn >= r and r < 1e-11:
-            return z, True
-        z, G, J, r = zn, Gn, Jn, rn
-    return z, r < 1e-11
 
 
 @dataclass(frozen=True)
@@ -248,7 +212,7 @@ class ChainStep:
             guesses.append(np.r_[phi_k, (-1.0, 1.0, 1.0, -1.0)[j] * self._mus[j]
                                  * fn[0 if j < 2 else 1]])
         for z0 in guesses:
-            z, conv = _newton(f, z0, P, sel)
+            z, conv, _ = damped_newton(f, z0, P, sel)
             if conv:
                 break
         else:

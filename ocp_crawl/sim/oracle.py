@@ -81,7 +81,7 @@ def selector(mode: Mode) -> np.ndarray:
     return sel
 
 
-def _newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray,
+def damped_newton(f, z0: np.ndarray, P: np.ndarray, sel: np.ndarray,
             max_iter: int = 40) -> tuple[np.ndarray, bool, int]:
     """Damped Newton on G(z) = 0 (backtracking on max|G|)."""
     z = z0.copy()
@@ -185,7 +185,7 @@ def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple,
         guesses.append(np.r_[state.phi, sign * mus[j] * fn[0 if j < 2 else 1]])
     best, iterations = None, 0
     for z0 in guesses:
-        z, ok, its = _newton(f, z0, P, sel)
+        z, ok, its = damped_newton(f, z0, P, sel)
         iterations += its
         if ok:
             best = z
