@@ -179,9 +179,9 @@ def bench_prescribed(repeat: int) -> dict:
 
 
 def bench_chain(repeat: int) -> dict:
-    """The simulators of n-link chains (prescribed angles, torque drive) against the three-link ones,
-    in one run: the paper gait at n = 3 through both, and a five-link chain of the same length and
-    mass (legs and joints as the paper robot's, the body in three segments of four times the
+    """The simulators of n-link chains (prescribed angles, torque drive) against the three-link
+    ones, in one run: the paper gait at n = 3 through both, and a five-link chain of the same length
+    and mass (legs and joints as the paper robot's, the body in three segments of four times the
     stiffness, phases spread over the joints)."""
     import numpy as np
 
@@ -549,10 +549,10 @@ def bench_work(repeat: int) -> dict:
 
 
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy,
-              "prescribed": bench_prescribed, "chain": bench_chain, "paper": bench_paper, "mpcc": bench_mpcc,
-              "sweep": bench_sweep, "ocp": bench_ocp, "ocp_kernel": bench_ocp_kernel,
-              "ocp_files": bench_ocp_files, "ocp_paths": bench_ocp_paths,
-              "baselines": bench_baselines, "work": bench_work}
+              "prescribed": bench_prescribed, "chain": bench_chain, "paper": bench_paper,
+              "mpcc": bench_mpcc, "sweep": bench_sweep, "ocp": bench_ocp,
+              "ocp_kernel": bench_ocp_kernel, "ocp_files": bench_ocp_files,
+              "ocp_paths": bench_ocp_paths, "baselines": bench_baselines, "work": bench_work}
 
 
 def main(argv=None) -> int:

@@ -58,7 +58,7 @@ BOUNDARY_TOL = 1e-9
 
 @dataclass(frozen=True)
 class CrossCheckTolerances:
-    """Bounds of the PASS/FAIL criteria (docs/guide/simulators.md, "Cross-checking the simulators")."""
+    """Bounds of PASS/FAIL criteria (docs/guide/simulators.md, "Cross-checking the simulators")."""
 
     rel_S: float = 1e-4
     """largest relative difference of S at every N >= 200 (at the finest N if all are smaller)"""

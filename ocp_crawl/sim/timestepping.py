@@ -1,4 +1,5 @@
-"""Time-stepping simulation of the torque-driven crawler: one MPCC step (:mod:`ocp_crawl.sim.mpcc`) per grid phase.
+"""Time-stepping simulation of the torque-driven crawler: one MPCC step (:mod:`ocp_crawl.sim.mpcc`)
+per grid phase.
 
 The cycle is divided into N equal steps, t_n = n / N (phase in cycles).  Step n takes the state at
 t_{n-1} and the torque at t_n and solves the incremental contact problem with IPOPT, warm-started
@@ -54,8 +55,7 @@ from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
 from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
-from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_message, new_result,
-                                    no_start_result, output_phases, sample_fields, success_message)
+from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
 from ocp_crawl.sim.event_state import mode_q
@@ -67,19 +67,23 @@ from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
+from ocp_crawl.sim.timestepping_output import build_result
 
 
 @dataclass(frozen=True)
 class TimeSteppingOptions(CycleOptions):
-    """Options of the time-stepping simulator (and the cycle options of :class:`~ocp_crawl.sim.options.CycleOptions`;
-    ``max_cycles`` applies when ``cycles`` is not given)."""
+    """Options of the time-stepping simulator (and the cycle options of
+    :class:`~ocp_crawl.sim.options.CycleOptions`; ``max_cycles`` applies when ``cycles`` is not
+    given)."""
 
     mpcc: MPCCOptions = field(default_factory=MPCCOptions)
     """options of the step solver"""
     max_dphi: float = 0.35
-    """largest change of a joint angle in one step [rad]; a larger jump means the branch was lost"""
+    """largest change of a joint angle in one step [rad]; a larger jump means the branch was
+    lost"""
     steps: int = 200
-    """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an argument)"""
+    """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an
+    argument)"""
     switch_exact: bool = True
     """split a step whose contact mode changes at the event located inside it
     (:mod:`ocp_crawl.sim.step_split`), so that every event falls on a step boundary; False: the
@@ -99,13 +103,16 @@ class TimeSteppingOptions(CycleOptions):
 
     def __post_init__(self) -> None:
         if not isinstance(self.mpcc, MPCCOptions):
-            raise TypeError(f"TimeSteppingOptions.mpcc must be MPCCOptions, got {type(self.mpcc).__name__}")
+            raise TypeError("TimeSteppingOptions.mpcc must be MPCCOptions, "
+                            f"got {type(self.mpcc).__name__}")
         super().__post_init__()
         self._set("max_dphi", real("TimeSteppingOptions.max_dphi", self.max_dphi, positive=True))
         self._set("steps", count("TimeSteppingOptions.steps", self.steps, *STEPS_BOUNDS))
         if not isinstance(self.switch_exact, bool):
-            raise TypeError(f"TimeSteppingOptions.switch_exact must be a bool, got {self.switch_exact!r}")
-        self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2, positive=True))
+            raise TypeError("TimeSteppingOptions.switch_exact must be a bool, "
+                            f"got {self.switch_exact!r}")
+        self._set("energy_tol_n2", real("TimeSteppingOptions.energy_tol_n2", self.energy_tol_n2,
+                                        positive=True))
         self._set("s_error_tol", real("TimeSteppingOptions.s_error_tol", self.s_error_tol,
                                       nonneg=True))
 
@@ -122,7 +129,8 @@ class _Stop(Exception):
 
 
 class TimeStepper:
-    """MPCC time-stepping of a torque-driven gait with N steps per cycle.  Build once, call :meth:`run`."""
+    """MPCC time-stepping of a torque-driven gait with N steps per cycle.  Build once, call
+    :meth:`run`."""
 
     def __init__(self, model: Model, torque, steps: int = 200,
                  options: TimeSteppingOptions | MPCCOptions | None = None):
@@ -137,7 +145,8 @@ class TimeStepper:
         elif isinstance(options, MPCCOptions):
             options = TimeSteppingOptions(mpcc=options)
         elif not isinstance(options, TimeSteppingOptions):
-            raise TypeError(f"options must be TimeSteppingOptions or MPCCOptions, got {type(options).__name__}")
+            raise TypeError("options must be TimeSteppingOptions or MPCCOptions, "
+                            f"got {type(options).__name__}")
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
         self.steps = int(steps)
@@ -166,8 +175,10 @@ class TimeStepper:
         if not orc.success:
             current = mode if mode in ENUM_MODES else Mode.slip(1, mode.sigma)
             cand = next(c for c in orc.extra["candidates"] if c["mode"] == current.label)
-            if not cand["converged"] or np.max(np.abs(np.asarray(cand["phi"]) - state.phi)) > self.opt.max_dphi:
-                return Status.FOLD, f"{check}; the {mode.label} equilibrium branch ends within the step (fold)"
+            if not cand["converged"] \
+                    or np.max(np.abs(np.asarray(cand["phi"]) - state.phi)) > self.opt.max_dphi:
+                return Status.FOLD, (f"{check}; the {mode.label} equilibrium branch ends within "
+                                     "the step (fold)")
         return Status.SOLVER_FAILURE, check
 
     def run(self, cycles: int | None = None, t_eval=None) -> CrawlResult:
@@ -181,12 +192,15 @@ class TimeStepper:
         try:
             start = HybridStepper(self.model, self.torque).initial_state(0.0)
         except ValueError as exc:
-            # as the event-driven stepper: no released equilibrium at t = 0 is a status, not an exception
-            return no_start_result(self.model, str(exc), extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
+            # as the event-driven stepper: no released equilibrium at t = 0 is a status, not an
+            # exception
+            return no_start_result(self.model, str(exc),
+                                   extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
         kin0 = self.model.kinematics(start.x[:2])
         state = StepState(start.x[:2], 0.0, float(kin0["d"]), 0.0)
-        run = _Run(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1, state.x2, 0.0,
-                            float(kin0["fn1"]), float(kin0["fn2"]), int(Mode.STICK))])
+        run = _Run(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1,
+                            state.x2, 0.0, float(kin0["fn1"]), float(kin0["fn2"]),
+                            int(Mode.STICK))])
         status, detail, fail_t, fail_mode = Status.SUCCESS, "", None, None
         calls0 = self.step.ncalls
         try:
@@ -206,11 +220,12 @@ class TimeStepper:
         if status == Status.SUCCESS and self.opt.s_error_tol > 0:
             check = estimate_S_error(self, run, _Stop)
             stats.update(check)
-        res = self._build_result(run, status, detail, fail_t, fail_mode, te, stats)
+        res = build_result(self, run, status, detail, fail_t, fail_mode, te, stats)
         return error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
 
     def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
-        """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end repeats."""
+        """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end
+        repeats."""
         N = self.steps
         while True:
             res = self._step(run)
@@ -226,12 +241,13 @@ class TimeStepper:
                 if run.ncycles >= n_target:
                     return
                 continue
-            verdict = self.opt.cycle_verdict(run.ncycles, run.periodic_dev, len(ends) >= 2 and ends[-1][2] == ends[-2][2])
+            verdict = self.opt.cycle_verdict(run.ncycles, run.periodic_dev,
+                                             len(ends) >= 2 and ends[-1][2] == ends[-2][2])
             if verdict:
                 return
             if verdict is False:
-                raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {run.ncycles} cycles (last change "
-                                                 f"{run.periodic_dev:.3g})", run.n / N, run.mode)
+                raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {run.ncycles} cycles "
+                            f"(last change {run.periodic_dev:.3g})", run.n / N, run.mode)
 
     def _step(self, run: "_Run") -> StepResult:
         """Solve step n + 1 from the run's state, check the solution and record it."""
@@ -253,8 +269,10 @@ class TimeStepper:
                 break
             t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
                 and round(ta * self.steps) % self.steps != 0 else None
-            split, why = locate_event(self.step, state, mode, lambda th: self._tau(ta + th * (tb - ta), run),
-                                      None if run.prev is None else run.prev.w, lo=-1.0 if t_prev is not None else 0.0)
+            split, why = locate_event(self.step, state, mode,
+                                      lambda th: self._tau(ta + th * (tb - ta), run),
+                                      None if run.prev is None else run.prev.w,
+                                      lo=-1.0 if t_prev is not None else 0.0)
             run.split_calls += self.step.ncalls - run.calls_mark
             te = ta + (0.0 if split is None else split.theta) * (tb - ta)  # theta < 0: t_prev set
             if split is not None and split.theta < 0 and not te > (t_prev or 0.0) + 1e-12:
@@ -282,13 +300,15 @@ class TimeStepper:
         return res
 
     def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
-        """Record the located event at phase ``te``: the sub-step to it in the old mode (its positions from
-        ``state``, the start of the searched step) and the change to the guard's mode."""
+        """Record the located event at phase ``te``: the sub-step to it in the old mode (its
+        positions from ``state``, the start of the searched step) and the change to the guard's
+        mode."""
         mode = run.mode
         tau = self._tau(te, run)
         res = replace(step_result_from_w(self.model, state, split.solve.x, tau, success=True,
                                          status=split.solve.status, message="event point",
-                                         iterations=split.solve.iterations, solve_time=0.0), mode=mode)
+                                         iterations=split.solve.iterations, solve_time=0.0),
+                      mode=mode)
         self._record(run, res, run.state, tau, te)
         self._mode_change(run, split, te)
 
@@ -308,18 +328,21 @@ class TimeStepper:
         """The torque [N m] at phase t; _Stop with SOLVER_FAILURE when it is not finite."""
         tau = np.asarray(self.torque(t), float).reshape(2)
         if not np.all(np.isfinite(tau)):
-            raise _Stop(Status.SOLVER_FAILURE, "", f"{self._where(run, t)}: the torque input is not finite "
-                        f"(tau = {tau.tolist()} N m at t = {t:.9g}); no IPOPT call was made", t, run.mode)
+            raise _Stop(Status.SOLVER_FAILURE, "", f"{self._where(run, t)}: the torque input is "
+                        f"not finite (tau = {tau.tolist()} N m at t = {t:.9g}); no IPOPT call was "
+                        "made", t, run.mode)
         return tau
 
     def _solve(self, run: "_Run", state: StepState, tau: np.ndarray, t1: float) -> StepResult:
-        """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it fails."""
+        """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it
+        fails."""
         res = self.step.solve(state, tau, warm_start=run.prev)
         run.calls_mark = self.step.ncalls
         run.times.append(res.solve_time)
         if not res.success:
             source = "IPOPT " if ipopt_status(res.status).source == "ipopt" else ""
-            raise _Stop(*self._diagnose(state, tau, run.mode), f"{self._where(run, t1)} failed with {source}"
+            raise _Stop(*self._diagnose(state, tau, run.mode),
+                        f"{self._where(run, t1)} failed with {source}"
                         f"return status {res.status} [{res.message}]", t1, run.mode)
         run.retries += res.attempts > 1
         run.comp_max = max(run.comp_max, res.comp_residual)
@@ -340,8 +363,8 @@ class TimeStepper:
                                     res.mode.label, float("nan"), "mode_change_between_steps"))
             run.det_ref = None
         if run.det_ref is not None and np.sign(det) != run.det_ref:
-            raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations changes "
-                                     "sign (fold of the equilibrium branch)", t1, res.mode)
+            raise _Stop(Status.FOLD, "", f"{where}: the Jacobian of the {res.mode.label} equations "
+                        "changes sign (fold of the equilibrium branch)", t1, res.mode)
         run.det_ref = np.sign(det) or run.det_ref
         self._check_stable(res, where, t1)
         run.mode = res.mode
@@ -350,93 +373,45 @@ class TimeStepper:
         run.state = res.next_state()
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
-        """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its mode (the same
-        criterion as the event-driven stepper, :mod:`ocp_crawl.model.stability`)."""
-        s = fast_stability()(np.array([res.phi[0], res.phi[1], res.f_t / self.Mg]), mode_q(res.mode), self.model.p)[0]
+        """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its
+        mode (the same criterion as the event-driven stepper, :mod:`ocp_crawl.model.stability`)."""
+        s = fast_stability()(np.array([res.phi[0], res.phi[1], res.f_t / self.Mg]),
+                             mode_q(res.mode), self.model.p)[0]
         if not s[0] > 0:
-            raise _Stop(Status.UNSTABLE, "", f"{where}: the {res.mode.label} equilibrium is unstable "
-                        f"({describe_margin(s, res.mode)})", t1, res.mode)
+            raise _Stop(Status.UNSTABLE, "", f"{where}: the {res.mode.label} equilibrium is "
+                        f"unstable ({describe_margin(s, res.mode)})", t1, res.mode)
 
-    def _check_contact(self, res: StepResult, state: StepState, where: str, t1: float, mode: Mode) -> dict:
-        """The kinematics of a step's solution; _Stop if a foot lifts off, the feet cross, a joint reaches
-        the ground or phi jumps by more than ``max_dphi`` (the branch was lost)."""
+    def _check_contact(self, res: StepResult, state: StepState, where: str, t1: float,
+                       mode: Mode) -> dict:
+        """The kinematics of a step's solution; _Stop if a foot lifts off, the feet cross, a joint
+        reaches the ground or phi jumps by more than ``max_dphi`` (the branch was lost)."""
         if min(res.f_n1, res.f_n2) <= 0:
-            raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, {res.f_n2:.4g} N", t1, mode)
+            raise _Stop(Status.LIFT_OFF, "", f"{where}: normal forces {res.f_n1:.4g}, "
+                        f"{res.f_n2:.4g} N", t1, mode)
         if res.d <= 0:
             raise _Stop(Status.FEET_CROSSED, "", f"{where}: d = {res.d:.4g} m", t1, mode)
         kin = self.model.kinematics(res.phi)
         for i in (1, 2):
             if f"zj{i}" in kin and not kin[f"zj{i}"] > 0:
-                raise _Stop(Status.JOINT_ON_GROUND, "", f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m", t1, mode)
+                raise _Stop(Status.JOINT_ON_GROUND, "",
+                            f"{where}: joint {i} height {kin[f'zj{i}']:.4g} m", t1, mode)
         jump = float(np.max(np.abs(res.phi - state.phi)))
         if jump > self.opt.max_dphi:
-            # an input that itself moves by more than half of max_dphi in the step (a sharp edge of a pulse or a
-            # square wave) says that the step is too coarse, not that the equilibrium branch folds
+            # an input that itself moves by more than half of max_dphi in the step (a sharp edge of
+            # a pulse or a square wave) says that the step is too coarse, not that the equilibrium
+            # branch folds
             inside = np.linspace(t1 - 1.0 / self.steps, t1, 9)
-            edge = float(np.max(np.abs(np.asarray(self.torque.derivative(inside), float)))) / self.model.robot.k \
-                / self.steps  # (the largest rate over the step times the step: an edge inside the step counts)
+            # (the largest rate over the step times the step: an edge inside the step counts)
+            edge = float(np.max(np.abs(np.asarray(self.torque.derivative(inside), float)))) \
+                / self.model.robot.k / self.steps
             if edge > 0.5 * self.opt.max_dphi:
-                raise _Stop(Status.NO_CONVERGENCE, "", f"{where}: phi jumps by {jump:.3g} rad while the input moves "
-                            f"by {edge:.3g} rad (tau/k) in the step: the step is coarser than the input's edges; "
-                            f"raise [simulation] steps (now {self.steps}) or use the event solver", t1, mode)
-            raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi (branch lost)", t1, mode)
+                raise _Stop(Status.NO_CONVERGENCE, "", f"{where}: phi jumps by {jump:.3g} rad "
+                            f"while the input moves by {edge:.3g} rad (tau/k) in the step: the "
+                            "step is coarser than the input's edges; raise [simulation] steps "
+                            f"(now {self.steps}) or use the event solver", t1, mode)
+            raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi "
+                        "(branch lost)", t1, mode)
         return kin
-
-    # ------------------------------------------------------------------ output
-    def _build_result(self, run: "_Run", status, detail, fail_t, fail_mode, te, stats) -> CrawlResult:
-        """The reported cycle (the last one, or the one of the failure) on the step phases or ``te``."""
-        N, ncycles, rows = self.steps, run.ncycles, run.rows
-        if status == Status.SUCCESS:
-            t0 = float(ncycles - 1)
-            message, t_end = success_message(ncycles, t0, f" of {N} MPCC steps"), t0 + 1.0
-        else:
-            t0 = float(max(0, math.floor(fail_t - 1e-12)))
-            message, t_end = failure_message(status, detail), math.inf
-        fields = dict(events=run.events, cycles=ncycles, failure_t=fail_t, failure_mode=fail_mode,
-                      nfev=stats["ipopt_calls"], nsteps=run.n, extra=stats, t0=t0)
-        # the step phases and the located events of the cycle
-        sel = [r for r in rows if t0 - 1e-12 <= r[0] <= t_end + 1e-12]
-        t = np.array([r[0] for r in sel])
-        phi = np.stack([r[1] for r in sel], axis=1)
-        cols = {name: np.array([r[i] for r in sel]) for i, name in
-                ((2, "theta"), (3, "d"), (4, "x1"), (5, "x2"), (6, "f_t"), (7, "f_n1"), (8, "f_n2"))}
-        mode = np.array([r[9] for r in sel], dtype=int)
-        if status == Status.SUCCESS:
-            fields.update(self._metrics(t, phi, cols),
-                          periodicity_residual=stats["periodicity_deviation"])
-        if te is not None:
-            t, phi, cols, mode = _resample(t0 + te, t, phi, cols, mode)
-        tau = np.asarray(self.torque(t), float).reshape(2, -1)
-        res = new_result(self.model, "torque", status, message, **fields,
-                         **sample_fields(t=t, phi=phi, tau=tau, mode=mode, **cols))
-        return energy_gate(res, self.opt.energy_tol_n2 / N**2, "TimeSteppingOptions.energy_tol_n2 "
-                           f"/ N^2 ({self.opt.energy_tol_n2:g}/{N}^2; the steps may be coarser "
-                           "than the input's edges: raise [simulation] steps)")
-
-    def _metrics(self, t, phi, cols) -> dict:
-        """S, W+ (midpoint rule), CoT+ and the energy balance (trapezoidal friction) on the step grid."""
-        model = self.model
-        tau_mid = np.asarray(self.torque(0.5 * (t[1:] + t[:-1])), float).reshape(2, -1)
-        work = tau_mid * np.diff(phi, axis=1)
-        dx1, dx2 = np.diff(cols["x1"]), np.diff(cols["x2"])
-        # friction on the robot is f_t at foot 1 and -f_t at foot 2, averaged over the step's ends
-        # (trapezoid: second order like the work's midpoint rule; the end-of-step force alone leaves
-        # an O(1/N) balance error, measured e.g. -0.89/N against 9/N^2 with the average)
-        f_mid = 0.5 * (cols["f_t"][1:] + cols["f_t"][:-1])
-        diss = float(np.sum(-(f_mid * dx1 - f_mid * dx2)))
-        dV = float(model.potential(phi[:, -1]) - model.potential(phi[:, 0]))
-        return balance_metrics(model.robot, float(cols["x1"][-1] - cols["x1"][0]),
-                               np.maximum(work, 0.0).sum(axis=1), float(work.sum()), dV, diss,
-                               float(np.abs(work).sum()))
-
-
-def _resample(te: np.ndarray, t, phi, cols, mode):
-    """The step samples at the phases te [cycles] by linear interpolation (a failed run: the phases it reached)."""
-    te = te[te <= t[-1] + 1e-12]
-    phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
-    cols = {k: np.interp(te, t, v) for k, v in cols.items()}
-    mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]
-    return te, phi, cols, mode
 
 
 @dataclass
@@ -468,8 +443,10 @@ class _Run:
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,
-                  options: TimeSteppingOptions | MPCCOptions | None = None, t_eval=None) -> CrawlResult:
-    """MPCC time-stepping simulation of a torque-driven gait with ``steps`` steps per cycle (see module docstring).
+                  options: TimeSteppingOptions | MPCCOptions | None = None,
+                  t_eval=None) -> CrawlResult:
+    """MPCC time-stepping simulation of a torque-driven gait with ``steps`` steps per cycle (see
+    module docstring).
 
     Every step is an IPOPT solve of the incremental Coulomb problem with complementarity constraints
     (relaxation homotopy); the result converges to the event-driven one as ``steps`` grows.

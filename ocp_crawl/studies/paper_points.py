@@ -267,46 +267,80 @@ def markdown(points: dict[str, PaperPoints]) -> str:
 
 #: what the published points tell about the paper's inputs (measured at every published point;
 #: paper's convention)
-FINDINGS = """
-What the differences are (measured at every published point, paper's convention):
-
-- **Realistic stiffness, +0.9 % bias**: the published curve is reproduced with rms 0.09 % (the floor of
-  the k = 5 curve, 0.10 %) by k/(M g L) = 2.717 instead of Table I's 0.1677/(0.052 * 9.81 * 0.12) = 2.740:
-  the paper's realistic curve was computed with a k/(M g L) 0.84 % smaller than its Table I (CoT+ grows
-  about in proportion to k here: +0.96 % per +1 % of k).  Not a modelling error; the software keeps Table I.
-- **Low stiffness (0.3 M g L): the paper's curve was computed with psi = 42 deg, not 45.** Its text states
-  no phase difference for Fig. CoT; its other two curves are at 45 deg (CoT+ changes 0.34 % per degree of
-  psi at k = 5). With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 32 points after the
-  first are within 0.63 % (rms 0.21 %; the k = 5 curve at its stated inputs, measured the same way: 0.19
-  %; least squares: psi = 42.03 deg); the first (A = 11.59 deg, 40 %/deg) is -2.7 % and matched at A =
-  11.52 deg, within 0.2 deg. With psi = 45 the same points are +1.0 .. +6.0 % (ours higher: our robot
-  moves less, CoT+ near the friction threshold falls steeply as psi decreases). Least squares with k free:
-  k x 0.998, psi 42.15 deg, rms 0.15 %. Ruled out, single inputs at their best fit (rms / worst over the
-  same 32 points): amplitude offset +0.68 deg 1.53 / 3.2 %; amplitude scale x1.053 1.08 / 3.4 %; k 0.2954
-  2.1 / 8.0 %; mu 0.370 0.99 / 3.3 %; gamma 92.5 deg 1.19 / 4.0 %; beta 1.946 2.1 / 7.7 %; actuator gain
-  tau = s k (phi_ref - pi) (s 0.988) 2.3 / 7.9 %; unequal amplitudes A (1 -+ 0.02) 2.3 / 6.2 %; unequal
-  gamma or mu: no gain (2.45 %); the gravity term's strength x0.8 .. 1.4: 2.3 .. 2.6 %. Pairs without psi:
-  (k, mu) 0.42 / 1.0 %, (k, gamma) 0.47 / 1.1 %, (mu, gamma) 0.44 / 1.1 %. Numerics: MPCC time stepping
-  with 20 or 30 steps per cycle moves CoT+ by -0.3 .. -2.1 % irregularly in A (and k = 5 by up to -1.3 %);
-  a fixed-step scheme that detects the contact events one step late (N = 30 .. 120) moves it by 0 .. +3.5
-  % at both stiffnesses, the wrong sign (the same scheme without the lag converges to the event solver,
-  within 0.005 % at 2000 steps). Also tried, without gain: the first instead of the steady cycle, the start
-  phase, the W+ definition and unequal friction. The default stays psi = 45 deg: at it the low-stiffness
-  curve is not within 2 % (table above), an input of the paper's.
-- **Pressure robot**: the paper's "nominal pressure p0" of "inputs of the form (ref)" read literally
-  (p_i = p0 + A_p sin(2 pi t +- psi/2), flat rest, bending from the clamped-segment calibration) with
-  A_p = 0.4 bar (the p0 curve starts at 0.4 bar, where p_i reaches 0) reproduces the p0 curve with no
-  fitted parameter (RMS 0.024 over 0.4..3 bar, 0.0013 up to 1.7 bar; the physical sign
-  does not: 0.05 up to 1.7 bar).  The psi curve's operating point is not stated (at p0 = 1.7 bar the
-  amplitude fitted to it is 0.99 bar).  This input is the pressure study's default; the rows
-  `_raised` show the earlier assumption (raised sine from 0 to a peak p0, fitted rest angle).  Its RMS <= 0.03 is out of reach of this input family, for a
-  measured reason: near psi = 0 the model's S is a friction threshold.  Where the robot is stuck at
-  psi = 1 deg (every amplitude up to p0 at p0 = 1.7 bar) the published 0.33 there alone gives RMS >=
-  0.334/sqrt(49) = 0.048; where a larger input makes it move at 1 deg (p0 = A_p >= 2.2 bar) it reaches
-  its maximum by psi = 8 deg instead of the published 12 deg (best of a scan of p0 = 0.4..3 bar,
-  A_p <= p0: RMS 0.032 at p0 = A_p = 2.2 bar, best psi 8.2 deg).  The published S(180 deg) = 0.08 is not
-  reproduced either: the asymmetry of the Table I maps gives S(180 deg)/max S < 0.001 for every input tried.
-"""
+FINDINGS = (
+    "\n"
+    "What the differences are (measured at every published point, paper's convention):\n"
+    "\n"
+    "- **Realistic stiffness, +0.9 % bias**: the published curve is reproduced with rms 0.09 % "
+    "(the floor of\n"
+    "  the k = 5 curve, 0.10 %) by k/(M g L) = 2.717 instead of Table I's 0.1677/(0.052 * 9.81 * "
+    "0.12) = 2.740:\n"
+    "  the paper's realistic curve was computed with a k/(M g L) 0.84 % smaller than its Table I "
+    "(CoT+ grows\n"
+    "  about in proportion to k here: +0.96 % per +1 % of k).  Not a modelling error; the software "
+    "keeps Table I.\n"
+    "- **Low stiffness (0.3 M g L): the paper's curve was computed with psi = 42 deg, not 45.** "
+    "Its text states\n"
+    "  no phase difference for Fig. CoT; its other two curves are at 45 deg (CoT+ changes 0.34 % "
+    "per degree of\n"
+    "  psi at k = 5). With psi = 42.0 deg and Table I otherwise (row `cot_low_psi42`), the 32 "
+    "points after the\n"
+    "  first are within 0.63 % (rms 0.21 %; the k = 5 curve at its stated inputs, measured the "
+    "same way: 0.19\n"
+    "  %; least squares: psi = 42.03 deg); the first (A = 11.59 deg, 40 %/deg) is -2.7 % and "
+    "matched at A =\n"
+    "  11.52 deg, within 0.2 deg. With psi = 45 the same points are +1.0 .. +6.0 % (ours higher: "
+    "our robot\n"
+    "  moves less, CoT+ near the friction threshold falls steeply as psi decreases). Least squares "
+    "with k free:\n"
+    "  k x 0.998, psi 42.15 deg, rms 0.15 %. Ruled out, single inputs at their best fit (rms / "
+    "worst over the\n"
+    "  same 32 points): amplitude offset +0.68 deg 1.53 / 3.2 %; amplitude scale x1.053 1.08 / 3.4 "
+    "%; k 0.2954\n"
+    "  2.1 / 8.0 %; mu 0.370 0.99 / 3.3 %; gamma 92.5 deg 1.19 / 4.0 %; beta 1.946 2.1 / 7.7 %; "
+    "actuator gain\n"
+    "  tau = s k (phi_ref - pi) (s 0.988) 2.3 / 7.9 %; unequal amplitudes A (1 -+ 0.02) 2.3 / 6.2 "
+    "%; unequal\n"
+    "  gamma or mu: no gain (2.45 %); the gravity term's strength x0.8 .. 1.4: 2.3 .. 2.6 %. Pairs "
+    "without psi:\n"
+    "  (k, mu) 0.42 / 1.0 %, (k, gamma) 0.47 / 1.1 %, (mu, gamma) 0.44 / 1.1 %. Numerics: MPCC "
+    "time stepping\n"
+    "  with 20 or 30 steps per cycle moves CoT+ by -0.3 .. -2.1 % irregularly in A (and k = 5 by "
+    "up to -1.3 %);\n"
+    "  a fixed-step scheme that detects the contact events one step late (N = 30 .. 120) moves it "
+    "by 0 .. +3.5\n"
+    "  % at both stiffnesses, the wrong sign (the same scheme without the lag converges to the "
+    "event solver,\n"
+    "  within 0.005 % at 2000 steps). Also tried, without gain: the first instead of the steady "
+    "cycle, the start\n"
+    "  phase, the W+ definition and unequal friction. The default stays psi = 45 deg: at it the "
+    "low-stiffness\n"
+    "  curve is not within 2 % (table above), an input of the paper's.\n"
+    "- **Pressure robot**: the paper's \"nominal pressure p0\" of \"inputs of the form (ref)\" "
+    "read literally\n"
+    "  (p_i = p0 + A_p sin(2 pi t +- psi/2), flat rest, bending from the clamped-segment "
+    "calibration) with\n"
+    "  A_p = 0.4 bar (the p0 curve starts at 0.4 bar, where p_i reaches 0) reproduces the p0 curve "
+    "with no\n"
+    "  fitted parameter (RMS 0.024 over 0.4..3 bar, 0.0013 up to 1.7 bar; the physical sign\n"
+    "  does not: 0.05 up to 1.7 bar).  The psi curve's operating point is not stated (at p0 = 1.7 "
+    "bar the\n"
+    "  amplitude fitted to it is 0.99 bar).  This input is the pressure study's default; the rows\n"
+    "  `_raised` show the earlier assumption (raised sine from 0 to a peak p0, fitted rest "
+    "angle).  Its RMS <= 0.03 is out of reach of this input family, for a\n"
+    "  measured reason: near psi = 0 the model's S is a friction threshold.  Where the robot is "
+    "stuck at\n"
+    "  psi = 1 deg (every amplitude up to p0 at p0 = 1.7 bar) the published 0.33 there alone gives "
+    "RMS >=\n"
+    "  0.334/sqrt(49) = 0.048; where a larger input makes it move at 1 deg (p0 = A_p >= 2.2 bar) "
+    "it reaches\n"
+    "  its maximum by psi = 8 deg instead of the published 12 deg (best of a scan of p0 = 0.4..3 "
+    "bar,\n"
+    "  A_p <= p0: RMS 0.032 at p0 = A_p = 2.2 bar, best psi 8.2 deg).  The published S(180 deg) = "
+    "0.08 is not\n"
+    "  reproduced either: the asymmetry of the Table I maps gives S(180 deg)/max S < 0.001 for "
+    "every input tried.\n"
+)
 
 
 def _pc(x: float, sign: str = "") -> str:

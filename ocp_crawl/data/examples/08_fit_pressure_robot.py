@@ -1,4 +1,4 @@
-"""Calibrate the pressure-driven robot to the paper's experiments (``ocp-crawl fit``, worked example).
+"""Calibrate the pressure-driven robot to the paper's experiments (``ocp-crawl fit``, step by step).
 
 Data: the paper's measured S/max S against the nominal pressure p0 and the phase difference psi
 (Fig. exp), as measurement files of the package's CSV convention with stated uncertainties
