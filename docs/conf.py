@@ -42,16 +42,20 @@ root_doc = "index"
 # times are not written (that page would load scripts from the network)
 exclude_patterns = ["_build", "_ext", ocp_gallery.SOURCE_DIR, f"{ocp_gallery.GALLERY_DIR}/_*",
                     "**/.*", "**sg_execution_times.rst"]
-templates_path = ["_ext/templates"]
 
 # MyST: $...$ and $$...$$ math, amsmath environments, ::: fences, definition lists; headings down to
 # ### get anchors, so that [text](page.md#a-heading) links work
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
-# the API: members in the order of the source; the numpy-style docstrings are read by napoleon's
-# parser through _ext/ocp_docstrings.py
-autosummary_generate = True
+# the API: a page per package (_ext/ocp_reference.py) with an autosummary table (no stub pages:
+# autosummary generates nothing) and the autodoc entries; members in the order of the source; the
+# numpy-style docstrings are read by napoleon's parser through _ext/ocp_docstrings.py
+autosummary_generate = False
+# the API entries stay out of the pages' tables of contents: each package's page starts with its own
+# table of its names, and the theme renders the whole toctree again for every page (furo's sidebar),
+# whose cost grows with every entry in it (about 5 s of a build with the ~190 API entries)
+toc_object_entries = False
 autodoc_member_order = "bysource"
 autodoc_typehints = "signature"
 autodoc_preserve_defaults = True

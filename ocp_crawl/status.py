@@ -62,6 +62,7 @@ class Status(IntEnum):
                              f"{', '.join(s.label for s in cls)}") from None
 
 
+#: what each status means, in words (the message of a result says more)
 STATUS_MESSAGES = {
     Status.SUCCESS: "periodic gait found",
     Status.LIFT_OFF: "a foot lifts off (normal force reaches zero): the two-contact model is no "

@@ -4,11 +4,15 @@ The build is Sphinx with warnings as errors, offline, on a copy of docs/ (nothin
 the work tree).  Its examples gallery runs every example script, the one place the default suite
 runs them: their outputs are checked here as tests/test_examples.py would.  The reference pages are
 generated from the code (docs/_ext/ocp_reference.py): every problem-file key, command, option and
-status must appear in them, in the generated Markdown (quick) and in the built HTML (the build).
+status must appear in them, in the generated Markdown (quick) and in the built HTML (the build);
+every public name of every public package must have its entry, with its docstring, on its package's
+API page (or, re-exported, link to the entry of its first name).
 """
 import argparse
 import html
+import importlib
 import importlib.util
+import inspect
 import os
 import re
 import shutil
@@ -27,12 +31,40 @@ BUILD_TIMEOUT_S = 1800
 GENERATED = ("_build", "_gallery_src", "gallery", "api", "sg_execution_times.rst", "__pycache__")
 
 
-def _reference_module():
-    path = DOCS / "_ext" / "ocp_reference.py"
-    spec = importlib.util.spec_from_file_location("ocp_reference", path)
+def _ext_module(name: str):
+    """The documentation's extension ``docs/_ext/<name>.py``, imported."""
+    if name in sys.modules:
+        return sys.modules[name]
+    path = DOCS / "_ext" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module      # imported once
     spec.loader.exec_module(module)
     return module
+
+
+def _reference_module():
+    return _ext_module("ocp_reference")
+
+
+def public_names(package: str) -> list[str]:
+    return [n for n in importlib.import_module(package).__all__ if not n.startswith("__")]
+
+
+def summary_words(package: str, name: str) -> list[str]:
+    """The first words of the docstring of ``package.name`` (the ``#:`` comment of a data object,
+    as the reference shows it), without the markup of its roles and literals."""
+    obj = getattr(importlib.import_module(package), name)
+    if inspect.isclass(obj) or inspect.isroutine(obj):
+        doc = inspect.getdoc(obj) or ""
+    else:
+        doc = "\n".join(_ext_module("ocp_docstrings").comment_doc(f"{package}.{name}"))
+    line = doc.strip().split("\n")[0]
+    def role(m: re.Match) -> str:   # what a role shows: its title, or the target (~: last part)
+        title, _, target = m[1].partition("<")
+        return title if target else title.rpartition(".")[2] if title[0] == "~" else title
+    line = re.sub(r":[\w:.+-]+:`([^`]+)`", role, line)
+    return re.findall(r"[A-Za-z]{3,}", line.replace("`", " "))[:6]
 
 
 def schema_keys() -> list[str]:
@@ -91,16 +123,62 @@ def test_generated_reference_covers_the_code():
     ref = _reference_module()
     check_reference(ref.problem_files_page(), ref.cli_page(), ref.statuses_page(),
                     "(reference-cli-")
-    api = ref.api_page()
-    import ocp_crawl
-    assert all(has(api, name) for name in ocp_crawl.__all__ if not name.startswith("__"))
+    # the Python API: an overview linking a page per public package; on each, an autodoc entry of
+    # every name it documents first (all of the top-level package's), the others listed as also here
+    pages = ref.api_pages()
+    packages = ref.public_packages()
+    assert packages[0] == "ocp_crawl" and len(packages) > 1
+    entry = re.compile(r"^\.\. auto(?:class|exception|function|data):: (\w+)$", re.MULTILINE)
+    documented = {}
+    for package in packages:
+        assert has(pages["api.rst"], f"api/{package}"), package
+        page = pages[f"api/{package}.rst"]
+        assert f".. py:module:: {package}" in page
+        names = entry.findall(page)
+        documented.update((f"{package}.{name}", package) for name in names)
+        undocumented = [name for name in names if not summary_words(package, name)]
+        assert not undocumented, f"{package}: no docstring or #: comment for {undocumented}"
+        for name in public_names(package):
+            if name in names:
+                continue
+            also = re.search(rf":py:obj:`{re.escape(name)} <([\w.]+)>`", page)
+            assert also and also[1] in documented, f"{package}.{name} neither documented nor linked"
+    assert set(entry.findall(pages["api/ocp_crawl.rst"])) == set(public_names("ocp_crawl"))
 
 
 def html_text(path: Path) -> str:
     """The text of an HTML page, tags as spaces, element ids kept as ``#id=NAME`` markers."""
     page = path.read_text(encoding="utf-8")
-    page = re.sub(r"<(?:section|span|div)[^>]*\bid=\"([^\"]+)\"[^>]*>", r" #id=\1 ", page)
+    page = re.sub(r"<(?:section|span|div|dt)[^>]*\bid=\"([^\"]+)\"[^>]*>", r" #id=\1 ", page)
     return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", page)).split())
+
+
+def by_id(text: str) -> dict[str, str]:
+    """The parts of an :func:`html_text` that follow each element id (up to the next), by id."""
+    parts = re.split(r"#id=(\S+)", text)
+    return dict(zip(parts[1::2], parts[2::2]))
+
+
+def check_api(api: Path) -> None:
+    """The built API pages: every public name of every public package has its entry (its id), with
+    the first words of its docstring, on its package's page, or that page links to the entry of its
+    first name."""
+    ref = _reference_module()
+    pages = {p: api / f"{p}.html" for p in ref.public_packages()}
+    texts = {p: by_id(html_text(path)) for p, path in pages.items() if path.is_file()}
+    assert set(texts) == set(pages), f"API pages missing: {set(pages) - set(texts)}"
+    ids = {i for parts in texts.values() for i in parts}
+    for package, parts in texts.items():
+        links = set(re.findall(r'href="[\w.]*#([\w.]+)"', pages[package].read_text("utf-8")))
+        for name in public_names(package):
+            full = f"{package}.{name}"
+            if full in parts:
+                missing = [w for w in summary_words(package, name)
+                           if not re.search(rf"(?<![A-Za-z]){w}(?![A-Za-z])", parts[full])]
+                assert not missing, (full, missing, parts[full][:300])
+            else:
+                assert any(i.endswith(f".{name}") and i in ids for i in links), full
+    assert set(public_names("ocp_crawl")) <= {i.partition(".")[2] for i in texts["ocp_crawl"]}
 
 
 def build(tmp: Path) -> tuple[subprocess.CompletedProcess, Path, Path]:
@@ -128,12 +206,11 @@ def test_docs_build(tmp_path):
     ref = out_html / "reference"
     check_reference(html_text(ref / "problem_files.html"), html_text(ref / "cli.html"),
                     html_text(ref / "statuses.html"), "#id=reference-cli-")
-    # the Python API: a page for every public name of the package, with its docstring
-    import ocp_crawl
-    for name in ocp_crawl.__all__:
-        if not name.startswith("__"):
-            assert (ref / "api" / f"ocp_crawl.{name}.html").is_file(), name
-    assert "Total mass [kg]" in html_text(ref / "api" / "ocp_crawl.Robot.html")
+    # the Python API: a page per public package, an entry with its docstring for every public name
+    assert (ref / "api.html").is_file()
+    check_api(ref / "api")
+    robot = by_id(html_text(ref / "api" / "ocp_crawl.html"))["ocp_crawl.Robot"]
+    assert "Total mass [kg]" in robot
 
     # the gallery ran every example: its outputs, and its figures on its page
     for name in sorted(OUTPUTS):

@@ -4,8 +4,8 @@ The docstrings are numpy style (Parameters, Returns, Attributes sections) with r
 inline literals, and read as plain text too.  Before autodoc renders one:
 
 * a data object that has no documentation of its own (autodoc would show its type's, e.g.
-  ``dict``'s) gets the ``#:`` comment above its assignment in the module that defines it (found
-  through the packages' lazy-export tables), or nothing;
+  ``dict``'s, or nothing, e.g. for a ``mappingproxy``) gets the ``#:`` comment above its assignment
+  in the module that defines it (found through the packages' lazy-export tables), or nothing;
 * the numpy sections become field lists (:class:`sphinx.ext.napoleon.NumpyDocstring`, numpy style
   only); prose after a section's entries, an unindented paragraph after a blank line, stays prose
   (under a Notes heading) instead of being read as more entries;
@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import re
+import sys
 
 from sphinx.ext.napoleon import Config
 from sphinx.ext.napoleon.docstring import NumpyDocstring
@@ -84,17 +85,31 @@ def _defining_module(name: str) -> tuple[str, str] | None:
     return module.__name__, attr
 
 
-def comment_doc(name: str) -> list[str]:
-    """The ``#:`` comment documenting the data object ``name`` where it is defined, or []."""
+def _attr_comment(module: str, attr: str) -> list[str]:
     from sphinx.pycode import ModuleAnalyzer
+    try:
+        docs = ModuleAnalyzer.for_module(module).find_attr_docs()
+    except Exception:   # no source to analyse
+        return []
+    return list(docs.get(("", attr), []))
+
+
+def comment_doc(name: str) -> list[str]:
+    """The ``#:`` comment documenting the data object ``name`` where it is defined, or []: in the
+    module its package's lazy exports name, or else in the package's imported submodule that holds
+    the same object (a package that imports the name from a submodule)."""
     found = _defining_module(name)
     if found is None:
         return []
-    try:
-        docs = ModuleAnalyzer.for_module(found[0]).find_attr_docs()
-    except Exception:   # no source to analyse
-        return []
-    return list(docs.get(("", found[1]), []))
+    lines = _attr_comment(*found)
+    if lines:
+        return lines
+    module, attr = found
+    obj = getattr(importlib.import_module(module), attr, None)
+    for sub in sorted(m for m in sys.modules if m.startswith(module + ".")):
+        if getattr(sys.modules[sub], attr, None) is obj and (lines := _attr_comment(sub, attr)):
+            return lines
+    return []
 
 
 def _is_type_doc(obj, lines: list[str]) -> bool:
@@ -105,7 +120,7 @@ def _is_type_doc(obj, lines: list[str]) -> bool:
 
 def process_docstring(app, what, name, obj, options, lines: list[str]) -> None:
     """autodoc-process-docstring: see the module's docstring."""
-    if what == "data" and _is_type_doc(obj, lines):
+    if what == "data" and (not any(line.strip() for line in lines) or _is_type_doc(obj, lines)):
         lines[:] = comment_doc(name)
     if what not in PROSE_KINDS:
         lines[:] = NumpyDocstring(prose_after_sections(list(lines)), NAPOLEON, app, what, name,

@@ -6,17 +6,24 @@
   from the parser of :func:`ocp_crawl.cli.app.build_parser`;
 * ``reference/statuses.md``: every :class:`ocp_crawl.Status` with its text from
   :data:`ocp_crawl.STATUS_MESSAGES`;
-* ``reference/api.rst``: autosummary tables of the public names (``__all__``) of ``ocp_crawl`` and
-  of each subpackage that has them, every object documented once, under its first public name (the
-  top-level package first); autosummary writes one page per object into ``reference/api/``.
+* ``reference/api.rst`` and ``reference/api/<package>.rst``: the Python API, one page for
+  ``ocp_crawl`` and one for each subpackage that declares public names (``__all__``).  A package's
+  page has an autosummary table of its names (linking to the entries below it), then the autodoc
+  entry of each (a class with its members); every object is documented once, under its first public
+  name (the top-level package first), and the later packages list it as *also here*.
+
+  One page per package, not one per name: a theme's navigation (furo's sidebar) is the whole
+  toctree, rendered again for every page, so that ~200 per-name pages made the build quadratic.
 
 The pages are generated, not written by hand, and git-ignored; a page is rewritten only when its
-text changes, so that an unchanged page is not read again by an incremental build.
+text changes, so that an unchanged page is not read again by an incremental build, and a page left
+in ``reference/api/`` by an earlier build (an old per-name page) is removed.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import pkgutil
 from pathlib import Path
 
@@ -152,14 +159,26 @@ def _first_line(package: str) -> str:
     return doc.split("\n\n")[0].replace("\n", " ")
 
 
-@page("api.rst")
-def api_page() -> str:
+#: the directory of the packages' API pages, relative to ``reference/``
+API_DIR = "api"
+
+
+def _directive(obj) -> list[str]:
+    """The autodoc directive (and options) documenting ``obj``, as autosummary's stub pages did."""
+    if inspect.isclass(obj) and issubclass(obj, BaseException):
+        return ["autoexception"]
+    if inspect.isclass(obj):
+        return ["autoclass", ":members:", ":show-inheritance:"]
+    if inspect.isroutine(obj):
+        return ["autofunction"]
+    return ["autodata", ":no-value:"]
+
+
+def api_entries() -> dict[str, tuple[list[str], list[tuple[str, str]]]]:
+    """Each public package -> (the names it documents, in the order of its ``__all__``; the names
+    documented by an earlier package, as (name, the full name documenting it))."""
     seen: dict[tuple, str] = {}
-    title = "Python API"
-    lines = [".. _reference-api:", "", title, "=" * len(title), "",
-             "The public names of the package and of each subpackage (their ``__all__``),",
-             "generated from the code.  An object re-exported by several packages is documented",
-             "once, under its first name here; the later packages list it as *also here*.", ""]
+    out = {}
     for package in public_packages():
         mod = importlib.import_module(package)
         new, again = [], []
@@ -168,31 +187,74 @@ def api_page() -> str:
                 continue
             key = _identity(package, name, getattr(mod, name))
             if key in seen:
-                again.append(f":py:obj:`{name} <{seen[key]}>`")
+                again.append((name, seen[key]))
             else:
                 seen[key] = f"{package}.{name}"
                 new.append(name)
-        heading = f"``{package}``"
-        lines += [f".. _reference-api-{package}:", "", heading, "-" * len(heading), "",
-                  f".. py:module:: {package}", "", _first_line(package), ""]
-        if new:
-            lines += [f".. currentmodule:: {package}", "", ".. autosummary::",
-                      "   :toctree: api", "   :nosignatures:", ""]
-            lines += [f"   {name}" for name in new] + [""]
-        if again:
-            lines += ["Also here: " + ", ".join(again) + ".", ""]
+        out[package] = (new, again)
+    return out
+
+
+def _api_package_page(package: str, new: list[str], again: list[tuple[str, str]]) -> str:
+    mod = importlib.import_module(package)
+    title = f"``{package}``"
+    lines = [f".. _reference-api-{package}:", "", title, "=" * len(title), "",
+             f".. py:module:: {package}", "", _first_line(package), "",
+             f".. currentmodule:: {package}", ""]
+    if new:
+        lines += [".. autosummary::", "   :nosignatures:", ""]
+        lines += [f"   {name}" for name in new] + [""]
+    if again:
+        lines += ["Also here: " + ", ".join(f":py:obj:`{name} <{full}>`" for name, full in again)
+                  + ".", ""]
+    for name in new:
+        directive, *options = _directive(getattr(mod, name))
+        lines += [f".. {directive}:: {name}"] + [f"   {o}" for o in options] + [""]
     return "\n".join(lines)
 
 
+def api_pages() -> dict[str, str]:
+    """The Python API's pages, relative to ``reference/``: ``api.rst`` (the overview and its
+    toctree) and ``api/<package>.rst`` for each public package."""
+    entries = api_entries()
+    title = "Python API"
+    lines = [".. _reference-api:", "", title, "=" * len(title), "",
+             "The public names of the package and of each subpackage (their ``__all__``),",
+             "generated from the code: a page per package, with a table of its names and then",
+             "the documentation of each.  An object re-exported by several packages is documented",
+             "once, under its first name here; the later packages list it as *also here*.", "",
+             ".. toctree::", "   :hidden:", ""]
+    lines += [f"   {API_DIR}/{package}" for package in entries] + [""]
+    for package, (new, again) in entries.items():
+        count = f"{len(new)} names" + (f", {len(again)} also here" if again else "")
+        lines.append(f"* :doc:`{package} <{API_DIR}/{package}>` ({count}): "
+                     f"{_first_line(package)}")
+    pages = {"api.rst": "\n".join(lines) + "\n"}
+    for package, (new, again) in entries.items():
+        pages[f"{API_DIR}/{package}.rst"] = _api_package_page(package, new, again)
+    return pages
+
+
+def all_pages() -> dict[str, str]:
+    """Every generated page, relative to ``reference/`` -> its text."""
+    pages = {name: fn() for name, fn in PAGES.items()}
+    pages.update(api_pages())
+    return pages
+
+
 def write_pages(reference_dir: Path) -> list[Path]:
-    """Write every generated page into ``reference_dir`` (only those whose text changed)."""
+    """Write every generated page into ``reference_dir`` (only those whose text changed), and
+    remove the other pages of its ``api/`` directory (left by an earlier build)."""
     written = []
-    for name, fn in PAGES.items():
+    for name, text in all_pages().items():
         path = reference_dir / name
-        text = fn()
+        path.parent.mkdir(parents=True, exist_ok=True)
         if not path.is_file() or path.read_text(encoding="utf-8") != text:
             path.write_text(text, encoding="utf-8")
         written.append(path)
+    for stale in (reference_dir / API_DIR).glob("*.rst"):
+        if stale not in written:
+            stale.unlink()
     return written
 
 

@@ -76,6 +76,8 @@ class Command:
     run: Callable[[argparse.Namespace], int]
 
 
+#: the commands of ``ocp-crawl`` by name, in the order of its help (each module of the
+#: command line registers its own)
 COMMANDS: dict[str, Command] = {}
 
 

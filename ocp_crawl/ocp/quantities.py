@@ -47,6 +47,7 @@ class Quantity:
     positive: bool = False
 
 
+#: the cycle quantities of objectives and constraints, by name
 QUANTITIES = {q.name: q for q in (
     Quantity("speed", "m/s", True, "mean speed direction * S / T"),
     Quantity("distance", "m", True, "distance per cycle direction * S"),

@@ -400,6 +400,7 @@ def removed_key(section: str, name: str) -> str | None:
 #: reported.
 SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP, _PRESSURE)
 
+#: the sections of :data:`SECTIONS` by name (read-only)
 SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
 
 

@@ -72,6 +72,7 @@ class AnglesOptions:
         object.__setattr__(self, "n_scan", count("AnglesOptions.n_scan", self.n_scan, 8))
 
 
+#: the simulators by name (``simulate(..., solver=NAME)``, ``[simulation] solver``)
 SOLVERS: dict[str, Solver] = {
     "event": Solver("event", "torque", HybridOptions, _run_event,
                     "event-driven hybrid stepper: equilibrium continuation, "

@@ -33,6 +33,7 @@ PAPER_ROBOT = Robot.paper()
 REALISTIC_K_RATIO = PAPER_ROBOT.k / PAPER_ROBOT.MgL
 #: the three stiffnesses of the paper's CoT+ figure, k/(M g L): large, realistic, low
 COT_K_RATIOS = (5.0, REALISTIC_K_RATIO, 0.3)
+#: the names of :data:`COT_K_RATIOS` in the figures
 COT_K_LABELS = ("large", "realistic", "low")
 #: low stiffness of the configuration figure, k/(M g L)
 LOW_K_RATIO = 0.3

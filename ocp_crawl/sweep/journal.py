@@ -23,6 +23,8 @@ from ocp_crawl.status import Status
 from ocp_crawl.sweep.cells import cell, parse_rows, row_line
 from ocp_crawl.sweep.settings import SweepError, SweepSettings
 
+#: the files of a sweep's output directory: its settings, the journal of finished rows (appended
+#: as they finish, read by --resume), the rows in grid order, the summary
 SETTINGS_FILE, JOURNAL_FILE, RESULTS_FILE, SUMMARY_FILE = (
     "settings.json", "results.partial.csv", "results.csv", "summary.json")
 LOCK_FILE = ".sweep.lock"
