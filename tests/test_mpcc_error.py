@@ -8,9 +8,9 @@ estimate and the steps to try; the paper gait at N = 50 stays a success with a s
 on random robots and inputs every success at N = 50..100 is within its own bound of the event-driven
 S.
 
-The property test runs a few derandomised examples by default; the ``heavy`` version runs more
-(``OCP_CRAWL_HEAVY=1 python -m pytest -q -m heavy tests/test_mpcc_error.py``, and
-``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` sets its count).
+The property test is a fuzz run, by hand
+(``OCP_CRAWL_HEAVY=1 python -m pytest -q -m heavy tests/test_mpcc_error.py``; its example count is
+ten times ``OCP_CRAWL_HYPOTHESIS_EXAMPLES``, 100 without it).
 """
 import math
 import os
@@ -119,18 +119,10 @@ def check_success_within_its_bound(case):
     assert abs(res.S - ev.S) <= bound
 
 
-EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "3"))
-QUICK = settings(max_examples=EXAMPLES, deadline=None, database=None,
+EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "10"))
+HEAVY = settings(max_examples=10 * EXAMPLES, deadline=None, database=None,
                  derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
                  suppress_health_check=[HealthCheck.too_slow])
-HEAVY = settings(QUICK, max_examples=max(10 * EXAMPLES, 100))
-
-
-@pytest.mark.slow
-@QUICK
-@given(cases())
-def test_mpcc_successes_are_within_their_error_bound(case):
-    check_success_within_its_bound(case)
 
 
 @pytest.mark.heavy

@@ -35,6 +35,10 @@ EXAMPLES = int(os.environ.get("OCP_CRAWL_HYPOTHESIS_EXAMPLES", "20"))
 SETTINGS = settings(max_examples=EXAMPLES, deadline=None, database=None,
                     derandomize="OCP_CRAWL_HYPOTHESIS_EXAMPLES" not in os.environ,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+#: a time-stepping run costs about a second, a step milliseconds: the default suite takes a third
+#: of the runs (the variable sets both counts)
+RUN_SETTINGS = settings(SETTINGS, max_examples=(
+    EXAMPLES if "OCP_CRAWL_HYPOTHESIS_EXAMPLES" in os.environ else max(1, EXAMPLES // 3)))
 
 #: tolerances of the step (MPCCOptions defaults): equations and bounds 1e-9, complementarity 1e-8
 #: (scaled); the invariants are recomputed here from the model, so they get a factor 2 for round-off
@@ -249,7 +253,7 @@ def runs(draw):
 
 
 @pytest.mark.slow
-@SETTINGS
+@RUN_SETTINGS
 @given(runs())
 def test_mpcc_time_stepping_succeeds_with_the_invariants_or_reports_a_status(case):
     model, torque, N = case

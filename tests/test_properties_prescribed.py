@@ -1,8 +1,8 @@
 r"""Property-based tests (hypothesis) of the prescribed-angle simulator, and the
 regressions they found.
 
-The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (default 25, so
-that the file runs in well under a minute); a large run::
+The number of examples per property comes from ``OCP_CRAWL_HYPOTHESIS_EXAMPLES`` (without it, a
+fixed set of 10, so that the file runs in seconds); a large run::
 
     OCP_CRAWL_HYPOTHESIS_EXAMPLES=500 python -m pytest -q tests/test_properties_prescribed.py \
         --hypothesis-show-statistics

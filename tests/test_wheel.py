@@ -8,6 +8,7 @@ CI's ``pip install -e .``).  The new environment gets its dependencies (numpy, s
 matplotlib, tqdm) from the running one through a ``.pth`` file, which keeps the test fast; the
 ``ocp_crawl`` that runs is the installed wheel's, which the test asserts.
 """
+import fcntl
 import json
 import os
 import re
@@ -21,6 +22,8 @@ import pytest
 
 from ocp_crawl import load_problem, run_problem
 from ocp_crawl.problem.shipped import SHIPPED_FOLDERS, shipped_files
+
+from conftest import shared_tmp
 
 REPO = Path(__file__).resolve().parent.parent
 #: what a build reads
@@ -40,10 +43,21 @@ def _run(argv, cwd, env=None, check=True):
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory) -> Path:
-    """The wheel built from a copy of the sources."""
-    root = tmp_path_factory.mktemp("wheel")
+    """The wheel built from a copy of the sources, once for every pytest-xdist worker (the first to
+    take the lock builds it)."""
+    shared = shared_tmp(tmp_path_factory)
+    with open(shared / "wheel.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        wheels = list((shared / "wheel" / "dist").glob("ocp_crawl-*.whl"))
+        if not wheels:
+            wheels = [_build_wheel(shared / "wheel")]
+    assert len(wheels) == 1, wheels
+    return wheels[0]
+
+
+def _build_wheel(root: Path) -> Path:
     src = root / "src"
-    src.mkdir()
+    src.mkdir(parents=True)
     for name in SOURCES:
         if (REPO / name).is_dir():
             shutil.copytree(REPO / name, src / name,
