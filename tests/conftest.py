@@ -1,6 +1,7 @@
 """Shared problem factories for the tests (the paper's robot and gaits)."""
 import os
 import re
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -57,6 +58,13 @@ def paper_torque(robot: Robot, gamma=90.0, A=30.0, psi=45.0, **per_joint):
     return ReferenceTorque(Harmonic.from_degrees(gamma, A, psi, **per_joint), robot.k)
 
 
+def shared_tmp(tmp_path_factory) -> Path:
+    """A temporary directory of this test run that every pytest-xdist worker shares (the parent of
+    the workers' base directories; without xdist the base directory itself)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
 @pytest.fixture
 def paper_robot():
     return Robot.paper()
@@ -91,13 +99,12 @@ def cli_optimize_run(tmp_path_factory):
     import fcntl
     import io
     import json
-    from pathlib import Path
 
     from ocp_crawl.cli.app import main
 
     nodes = 30
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
-    shared = tmp_path_factory.getbasetemp().parent  # the same directory for every xdist worker
+    shared = shared_tmp(tmp_path_factory)
     out, record = shared / "cli_optimize" / "opt", shared / "cli_optimize.json"
     with open(shared / "cli_optimize.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
