@@ -178,8 +178,9 @@ def test_a_user_objective_that_restates_max_speed_finds_its_optimum():
     """The hook with the mean speed direction S / T, scaled as the named objective scales it (L over
     the reference period), is the max_speed NLP: the same replayed optimum (N = 16), reported under
     the user's label and compared with the same baseline."""
+    # a short search: both solves share its start and their baseline (not its quality) is compared
     base = dict(nodes=16, starts=1, direction=-1, baselines="harmonic", baseline_samples=0,
-                harmonic_A=2, harmonic_psi=8)
+                harmonic_A=2, harmonic_psi=8, baseline_starts=1, baseline_evaluations=40)
     named = optimize_gait(ROBOT, "physical", OCPSettings(**base), jobs=1)
     scale = ROBOT.L / OCPSettings(**base).period_ref()
     user = UserObjective("speed", _speed_nlp, _speed_value, sense="max", unit="m/s", scale=scale)

@@ -16,8 +16,10 @@ def test_infeasible_speed_requirement_is_a_status():
     res = optimize_gait(Robot.paper(), "physical",
                         OCPSettings(objective="min_cot", speed_min=5.0, nodes=24, harmonic_psi=12,
                                     harmonic_A=2,
+                                    # the scan's best member, no local search: the status is
+                                    # IPOPT's, whatever the start
                                     starts=1, baselines="harmonic", baseline_samples=0,
-                                    baseline_starts=1, baseline_evaluations=40))
+                                    baseline_starts=0))
     assert not res.success
     assert res.status == Status.INFEASIBLE, res.message
     assert "infeasible" in res.message and "Infeasible_Problem_Detected" in res.message
@@ -142,8 +144,20 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     assert "infeasible" in captured.err and "Traceback" not in captured.err
 
 
+#: max_speed at N = 16 from a short search of the harmonic family (:func:`coarse_max_speed`)
+COARSE = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
+                     baselines="harmonic", baseline_samples=0, baseline_starts=1,
+                     baseline_evaluations=40)
+
+
+@pytest.fixture(scope="module")
+def coarse_max_speed():
+    """One optimisation with COARSE, shared by the figure's test and the tightened NLP's."""
+    return optimize_gait(Robot.paper(), "physical", COARSE)
+
+
 @pytest.mark.slow
-def test_figure_of_an_unreplayed_result_says_so():
+def test_figure_of_an_unreplayed_result_says_so(coarse_max_speed):
     """A result without a replay (a failed solve that kept its last iterate) draws panel (d) with a
     note instead of an empty axes and an empty legend; the other panels keep their legends."""
     import warnings
@@ -151,10 +165,7 @@ def test_figure_of_an_unreplayed_result_says_so():
     from ocp_crawl.viz.ocp import plot_optimal_gait
 
     robot = Robot.paper()
-    res = optimize_gait(robot, "physical",
-                        OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8,
-                                    harmonic_A=2, baselines="harmonic", baseline_samples=0,
-                                    baseline_starts=1, baseline_evaluations=40))
+    res = coarse_max_speed
     assert res.tau.size and res.replay
     failed = replace(res, replay=[], status=Status.SOLVER_FAILURE, success=False)
     with warnings.catch_warnings():
@@ -186,7 +197,7 @@ def test_the_message_names_the_calls_after_the_kept_point_that_ipopt_rejected():
 
 
 @pytest.mark.slow
-def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
+def test_the_tightened_nlp_alone_refines_a_coarser_optimum(coarse_max_speed):
     """solve_from(..., tightened=True): no homotopy, only polish calls (the tightened NLP on the
     branches of the coarser optimum's simulated guess at twice the nodes), a complementary point
     that the event-driven replay confirms."""
@@ -197,12 +208,9 @@ def test_the_tightened_nlp_alone_refines_a_coarser_optimum():
     from ocp_crawl.ocp.transcription import GaitOCP
 
     robot = Robot.paper()
-    settings = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
-                           baselines="harmonic", baseline_samples=0, baseline_starts=1,
-                           baseline_evaluations=40)
-    coarse = optimize_gait(robot, "physical", settings)
+    coarse = coarse_max_speed
     assert coarse.success, coarse.message
-    fine = replace(settings, nodes=32)
+    fine = replace(COARSE, nodes=32)
     res = solve_from(GaitSolver(GaitOCP(robot, "physical", fine)), [Model(robot)],
                      replay_signal(coarse.phase, coarse.tau),
                      coarse.T_ocp, coarse.harmonic, tightened=True)

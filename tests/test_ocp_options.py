@@ -6,9 +6,11 @@ import pytest
 
 from ocp_crawl.cli import main
 
-#: a cheap problem: 12 nodes, the harmonic family's coarse scan only
+#: a cheap problem: 12 nodes, the harmonic family's coarse scan and one short local search (these
+#: tests check options, logs and --start, not the baseline: the default search took 3/4 of the time)
 CHEAP = ["--set", "ocp.nodes=12", "--set", "ocp.baselines=harmonic",
-         "--set", "ocp.baseline_samples=0", "--set", "ocp.harmonic_psi=8"]
+         "--set", "ocp.baseline_samples=0", "--set", "ocp.harmonic_psi=8",
+         "--set", "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40"]
 
 
 def _file(tmp_path, extra: str):

@@ -169,11 +169,11 @@ def test_fixed_profile_places_the_foot_switches_and_matches_the_event_driven_S()
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 @pytest.mark.xfail(strict=True, reason="N = 100: from the mid-interval guess IPOPT reports "
                    "Infeasible_Problem_Detected at sigma = 1e-6; "
                    "from the guess with the switches placed the relaxation moves a near-tie "
-                   "(margin 1.2e-4 M g) onto the wrong branch and fails at sigma = 1e-8 (H1 "
-                   "report)")
+                   "(margin 1.2e-4 M g) onto the wrong branch and fails at sigma = 1e-8")
 def test_fixed_profile_converges_at_finer_N():
     errors = []
     for N in (100, 200):
