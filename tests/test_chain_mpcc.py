@@ -126,7 +126,7 @@ def test_a_step_ending_on_an_unstable_equilibrium_stops_the_run():
     """The gate of every step: the slip2+ equilibrium of the snap-through robot (a saddle by the
     three-link stability module and by damped dynamics, tests/test_stability.py) stops a chain run
     as ``unstable``; the paper gait's stick-stick start passes."""
-    from test_stability import SNAP_THROUGH
+    from _counterexamples import SNAP_THROUGH
 
     from ocp_crawl.model.stability import stability
     from ocp_crawl.problem import problem_from_dict

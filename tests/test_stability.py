@@ -18,15 +18,8 @@ from ocp_crawl.problem import paper_problem, problem_from_dict
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
+from _counterexamples import SNAP_THROUGH
 
-#: counterexample 1: a robot whose steady cycle the simulator reports with a jump (snap-through)
-SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983,
-                          "beta": 0.613461927615284,
-                          "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
-                          "mu2": 0.07199087717290628},
-                "gait": {"drive": "torque", "psi_deg": -274.5634823796951,
-                         "gamma_deg": 118.31006032658763,
-                         "A_deg": 23.534673118354448}, "model": {"gravity": "physical"}}
 
 
 def _states(model, res):

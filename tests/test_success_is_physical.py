@@ -22,15 +22,8 @@ from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.timestepping import TimeSteppingOptions, simulate_mpcc
 from ocp_crawl.status import STATUS_MESSAGES, Status
+from _counterexamples import SNAP_THROUGH
 
-#: counterexample 1: reported success with a jump at phase 0.0975 of the steady cycle
-SNAP_THROUGH = {"robot": {"M": 0.41225071115315814, "L": 0.12975204385746983,
-                          "beta": 0.613461927615284,
-                          "k": 0.018389935602215093, "g": 9.81, "mu1": 0.9486174109066826,
-                          "mu2": 0.07199087717290628},
-                "gait": {"drive": "torque", "psi_deg": -274.5634823796951,
-                         "gamma_deg": 118.31006032658763,
-                         "A_deg": 23.534673118354448}, "model": {"gravity": "physical"}}
 
 #: two random robots (k/(M g L) about 0.045) whose stick-stick cycle passes close to a fold: the
 #: dense output used to land on other roots of the mode equations there (energy residual 3e-5 and
