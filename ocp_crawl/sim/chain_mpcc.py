@@ -292,7 +292,13 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
     for cycle in range(1, cycles_max + 1):
         for k in range(1, N + 1):
             ta, tb = cycle - 1 + (k - 1) / N, cycle - 1 + k / N
-            new, res = advance(step, torque, rows[-1], ta, tb, switch_exact)
+            # the step that ended in rows[-1], when it stayed in one mode (its start rows[-2]):
+            # an event it passed may be traced back into it
+            prev = (rows[-2] if len(rows) >= 2 and rows[-2][8] == rows[-1][8] and k > 1
+                    else None)
+            new, res, dropped = advance(step, torque, rows[-1], ta, tb, switch_exact, prev)
+            if dropped:
+                rows.pop()
             if not res.success:
                 raise _Stop(Status.NO_CONSISTENT_MODE, tb, rows[-1][8],
                             f"step at t = {tb:.6f}: {res.message}")

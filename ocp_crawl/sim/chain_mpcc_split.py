@@ -8,6 +8,10 @@ of pair j the other three margins and the slip rate ds_j/dtheta (central differe
 solutions, scaled by L).  When the enumerated step ends in another mode, the first zero in theta
 of a guard negative at theta = 1 is located by Brent's method, the step is cut there (an event
 point in the old mode) and the rest of the step is solved from it, at most ``MAX_SPLITS`` times.
+A guard already negative at the step's start belongs to an event the previous step passed in its
+mode (a slip that stops inside that step while its net slip over the step is still positive): it
+is located at theta < 0 on the same mode solutions, and the previous step is redone from its
+start to the event and from the event on in the new mode.
 """
 from __future__ import annotations
 
@@ -35,7 +39,8 @@ def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> di
         return None
     g = {f"c{i}": float(cand["c"][i]) for i in range(4) if i != k - 1}
     if k:
-        lo, hi = max(theta - RATE_EPS, 0.0), theta + RATE_EPS
+        # (one-sided at the step's start; a traced-back theta < 0 is inside the previous step)
+        lo, hi = (max(theta - RATE_EPS, 0.0) if theta >= 0 else theta - RATE_EPS), theta + RATE_EPS
         a = step.mode_solution(mode, phi_k, tau_of(lo), ft)
         b = step.mode_solution(mode, phi_k, tau_of(hi), ft)
         if a is None or b is None:
@@ -44,9 +49,11 @@ def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> di
     return g
 
 
-def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of) -> float | None:
+def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of, back: float = 0.0) -> float | None:
     """The step fraction of the first event of ``mode`` in (0, 1], or None (no guard negative at
-    theta = 1, or a failed solve)."""
+    theta = 1, or a failed solve).  With ``back`` < 0, a guard already negative at the step's
+    start is traced back to its zero in [back, 0) (an event the previous step passed in its mode,
+    as a slip-to-stick whose slip over that step was still positive in net)."""
     g1 = _guards(step, mode, row, tau_of, 1.0)
     if g1 is None:
         return None
@@ -57,11 +64,13 @@ def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of) -> float | None:
             return np.nan if gv is None else gv[name]
         lo = 1e-9
         g_lo = g(lo)
-        if not g_lo > 0:
-            found.append(0.0)
-            continue
         try:
-            found.append(brentq(g, lo, 1.0, xtol=THETA_TOL))
+            if g_lo > 0:
+                found.append(brentq(g, lo, 1.0, xtol=THETA_TOL))
+            elif back < 0 and g(-lo) < 0 and g(back) > 0:
+                found.append(brentq(g, back, -lo, xtol=THETA_TOL))
+            else:
+                found.append(0.0)
         except ValueError:
             continue
     return min(found) if found else None
@@ -84,10 +93,15 @@ def _event_row(step: ChainStep, mode: Mode, row: tuple, tau: np.ndarray, t: floa
 
 
 def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
-            switch_exact: bool = True) -> tuple[list, ChainStepResult]:
+            switch_exact: bool = True, prev: tuple | None = None
+            ) -> tuple[list, ChainStepResult, bool]:
     """Rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) from ``row`` at phase ``ta`` [cycles] to
-    ``tb``: the located event points and the step's end, and the last step's result."""
-    out = []
+    ``tb``: the located event points and the step's end, the last step's result, and whether
+    ``row`` is dropped.  ``prev``: the row where the step that ended in ``row`` started, in the
+    same mode; an event of that mode found before ``ta`` is then placed in that step, which is
+    redone from ``prev`` (the rows returned replace ``row``)."""
+    out: list[tuple] = []
+    dropped = False
     for split in range(MAX_SPLITS + 1):
         tau = np.asarray(torque(tb), float).reshape(step.m)
         res = step.solve(row[1], row[2], row[3], tau, row[4])
@@ -100,10 +114,25 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
         def tau_of(theta, a=a):
             return np.asarray(torque(a + theta * (tb - a)), float).reshape(step.m)
 
-        theta = _locate(step, mode, row, tau_of)
+        back = ((prev[0] - ta) / (tb - ta) if prev is not None and not dropped
+                and prev[8] == mode and not out else 0.0)
+        theta = _locate(step, mode, row, tau_of, back)
         if theta is None:
             break
         te = ta + theta * (tb - ta)
+        if theta < 0:
+            # the event is in the previous step: redo it from its start to the event, in its
+            # mode, and from the event to ta in the mode after it
+            assert prev is not None
+            event = _event_row(step, mode, prev, tau_of(theta), te)
+            after = step.solve(event[1], event[2], event[3], tau_of(min(theta + 1e-9, 0.0)),
+                               event[4])
+            if not after.success or after.mode == mode:
+                break
+            event = event[:8] + (after.mode,)
+            rest, _, _ = advance(step, torque, event, te, ta, switch_exact)
+            out, dropped, row = [event, *rest], True, rest[-1]
+            continue
         if theta > 0:
             row = _event_row(step, mode, row, tau_of(theta), te)
             out.append(row)
@@ -116,4 +145,4 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             out[-1] = row
         ta = te
     out.append(_row(tb, res))
-    return out, res
+    return out, res, dropped
