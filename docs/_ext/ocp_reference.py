@@ -16,8 +16,8 @@
   toctree, rendered again for every page, so that ~200 per-name pages made the build quadratic.
 
 The pages are generated, not written by hand, and git-ignored; a page is rewritten only when its
-text changes, so that an unchanged page is not read again by an incremental build, and a page left
-in ``reference/api/`` by an earlier build (an old per-name page) is removed.
+text changes, so that an unchanged page is not read again by an incremental build, and a page in
+``reference/api/`` that no package makes any more is removed.
 """
 from __future__ import annotations
 
@@ -164,7 +164,8 @@ API_DIR = "api"
 
 
 def _directive(obj) -> list[str]:
-    """The autodoc directive (and options) documenting ``obj``, as autosummary's stub pages did."""
+    """The autodoc directive (and options) documenting ``obj``: a class with its members and bases,
+    a data object without its value."""
     if inspect.isclass(obj) and issubclass(obj, BaseException):
         return ["autoexception"]
     if inspect.isclass(obj):
@@ -244,7 +245,7 @@ def all_pages() -> dict[str, str]:
 
 def write_pages(reference_dir: Path) -> list[Path]:
     """Write every generated page into ``reference_dir`` (only those whose text changed), and
-    remove the other pages of its ``api/`` directory (left by an earlier build)."""
+    remove the other pages of its ``api/`` directory."""
     written = []
     for name, text in all_pages().items():
         path = reference_dir / name

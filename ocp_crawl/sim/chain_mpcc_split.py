@@ -114,8 +114,8 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
         def tau_of(theta, a=a):
             return np.asarray(torque(a + theta * (tb - a)), float).reshape(step.m)
 
-        back = ((prev[0] - ta) / (tb - ta) if prev is not None and not dropped
-                and prev[8] == mode and not out else 0.0)
+        back = (prev[0] - ta) / (tb - ta) if prev is not None and not out and prev[8] == mode \
+            else 0.0
         theta = _locate(step, mode, row, tau_of, back)
         if theta is None:
             break
