@@ -336,7 +336,7 @@ def test_the_max_speed_optimum_passes(cli_optimize_run, capsys):
 
     code, _, err, out, _ = cli_optimize_run
     assert code == 0, err
-    code = cli.main(["crosscheck", str(out / "optimal_gait.toml"), "--steps", "50", "200",
+    code = cli.main(["crosscheck", str(out / "optimal_gait.toml"), "--steps", "50", "100",
                      "--json"])
     captured = capsys.readouterr()
     s = json.loads(captured.out)

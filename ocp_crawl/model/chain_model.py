@@ -13,12 +13,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ocp_crawl.model.buffered import Buffered
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_statics import (ChainSymbolic, aux_names, chain_parameters,
                                            chain_symbolic, kin_names)
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention
 
-#: mapped functions of :func:`call_columns` by (function name, column count)
+#: mapped functions of :func:`call_columns`, called through their buffers
+#: (:class:`~ocp_crawl.model.buffered.Buffered`), by (function name, column count, shared inputs)
 _MAPS: dict = {}
 
 
@@ -37,7 +39,8 @@ def call_columns(fun, *args) -> Any:
     key = (fun.name(), size, tuple(shared))
     f = _MAPS.get(key)
     if f is None:
-        f = _MAPS[key] = fun.map(f"{fun.name()}_columns{size}", "serial", size, shared, [])
+        f = _MAPS[key] = Buffered(fun.map(f"{fun.name()}_columns{size}", "serial", size, shared,
+                                          []))
     cols = []
     for a in args:
         a = np.asarray(a, float)
@@ -46,7 +49,7 @@ def call_columns(fun, *args) -> Any:
         cols.append(a)
     out = f(*cols)
     if isinstance(out, (list, tuple)):
-        return [np.asarray(o)[:, :n] for o in out]
+        return [o[:, :n] for o in out]
     return np.asarray(out)[:, :n]
 
 

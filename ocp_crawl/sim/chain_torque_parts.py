@@ -12,6 +12,7 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
+from ocp_crawl.model.buffered import Buffered
 from ocp_crawl.model.chain_model import ChainModel, call_columns, slip_mode, stick_mode
 from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
@@ -79,6 +80,8 @@ class ChainSolver:
         self.nfev = 0
         self.p = model.p
         self.names = aux_names(model.chain.n)
+        # the Newton loop's calls, through the functions' buffers
+        self._system, self._evaluate = Buffered(model.sym.system), Buffered(model.sym.evaluate)
 
     def tau(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Torques [N m] and their rate [N m/cycle] at phase t."""
@@ -100,11 +103,11 @@ class ChainSolver:
         :meth:`ChainModel.solve`: scaled residual <= 1e-13 or a step <= 1e-14); None when it does
         not converge or its residual exceeds ``residual_tol``."""
         tau, dtau = self.tau(t)
-        sym, p = self.model.sym, self.p
+        p = self.p
         x = np.array(x0, float)
         J = None
         for it in range(max_iter + 1):
-            G, J = sym.system(x, tau, q, p)
+            G, J = self._system(x, tau, q, p)
             G, J = np.asarray(G).ravel(), np.asarray(J)
             self.nfev += 1
             if not np.all(np.isfinite(G)) or it == max_iter:
@@ -117,10 +120,10 @@ class ChainSolver:
                 return None
             x = x - step
             if np.max(np.abs(step)) <= 1e-14:
-                G, J = sym.system(x, tau, q, p)
+                G, J = self._system(x, tau, q, p)
                 J = np.asarray(J)
                 break
-        out = np.asarray(sym.evaluate(x, tau, dtau, q, p)).ravel()
+        out = self._evaluate(x, tau, dtau, q, p).ravel()
         aux = dict(zip(self.names, out.tolist()))
         assert J is not None  # (the loop ran at least once)
         aux["det"] = float(np.linalg.det(J))
@@ -222,10 +225,10 @@ class ChainSolver:
 
 
 @lru_cache(maxsize=None)
-def _mapped_system(fun: cs.Function, size: int) -> cs.Function:
+def _mapped_system(fun: cs.Function, size: int) -> Buffered:
     """``fun`` (the mode system) mapped over ``size`` columns, the mode vector and the parameters
-    shared."""
-    return fun.map(f"{fun.name()}_cols{size}", "serial", size, [2, 3], [])
+    shared, called through its buffer."""
+    return Buffered(fun.map(f"{fun.name()}_cols{size}", "serial", size, [2, 3], []))
 
 
 def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,

@@ -42,7 +42,7 @@ DATA = [HERE / "paper_pressure_p0.csv", HERE / "paper_pressure_psi.csv"]
 
 
 def main(out: Path) -> None:
-    nfev_amplitude, nfev_map = (4, 4) if quick() else (30, 150)
+    nfev_amplitude, nfev_map = (2, 2) if quick() else (30, 150)
     problem = load_problem(PROBLEM)
     data = [read_measurements(p) for p in DATA]
 
