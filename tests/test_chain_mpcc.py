@@ -148,3 +148,35 @@ def test_a_step_ending_on_an_unstable_equilibrium_stops_the_run():
     paper = ChainModel(Chain.from_robot(Robot.paper()))
     _check_step(paper, (0.0, np.deg2rad([90.0, 90.0]), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
                         Mode.STICK), 0.0)
+
+
+#: a five-link chain (of the random property test's family) whose foot 1 lifts off while it slips
+LIFTING = (Chain(lengths=(0.03115881579472988, 0.02530651122084284, 0.020716027601762832,
+                          0.016078614047633128, 0.022667377615710367),
+                 masses=(0.009084732054199986, 0.0054527519390244516, 0.005487577107271681,
+                         0.014991761150650713, 0.011523691115879876),
+                 stiffness=(0.1360049603627085, 0.15730710223879646, 0.19619152157750763,
+                            0.06580075301952358),
+                 mu=(0.43583630660427297, 0.4740177004655007),
+                 com=(0.4469020403339648, 0.4869895104450284, 0.594837238651851,
+                      0.5795355216217097, 0.5688462075217482),
+                 rest=(0.005559611692072343, -0.022854839546989848, 0.03796511733349221,
+                       -0.043578556268780905)),
+           JointFourier.harmonic(np.radians([121.86344718242378, 155.6829631290227,
+                                             155.6829631290227, 121.86344718242378]),
+                                 np.radians([27.4439093604867, 10.370344353404215,
+                                             24.149911346743547, 10.023993671736573]),
+                                 np.radians(0.6055137996596045) * np.arange(4)))
+
+
+def test_a_foot_that_lifts_off_ends_both_simulators_with_lift_off():
+    """Where the event-driven chain stops at foot 1's normal force reaching zero, the steps find no
+    consistent mode at the next step's end, and the equilibrium of the mode they were in has that
+    normal force below zero: ``lift_off`` (with the forces), not ``no_consistent_mode``."""
+    chain, reference = LIFTING
+    model, torque = ChainModel(chain), ChainReferenceTorque(reference, chain)
+    ev = simulate_chain_torque(model, torque, t_eval=np.array([0.0, 1.0]))
+    steps = simulate_chain_mpcc(model, torque, steps=50)
+    assert ev.status_name == steps.status_name == "lift_off", (ev.message, steps.message)
+    assert "lift_off_1" in ev.message
+    assert "slip1+ equilibrium's normal forces are -" in steps.message

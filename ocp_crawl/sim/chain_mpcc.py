@@ -226,7 +226,7 @@ class ChainStep:
         if k:
             margins[j] = np.inf
         return {"mode": ENUM_MODES[k], "z": z, "s": np.maximum(s, 0.0), "c": c, "slip": s,
-                "margin": float(np.min(margins)),
+                "fn": fn * self.Mg, "margin": float(np.min(margins)),
                 "consistent": bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)}
 
     def _result(self, cand: dict, P: np.ndarray, x1: float, x2: float) -> ChainStepResult:
@@ -276,6 +276,26 @@ def _check_step(model: ChainModel, row: tuple, t: float) -> None:
                     f"(stability margin {margin:.3g})")
 
 
+def _diagnose(model: ChainModel, res: ChainStepResult, mode: Mode, t: float) -> None:
+    """_Stop with the contact the chain loses, when a step without a consistent mode ends where
+    the equilibrium of the mode it was in has lost it: a normal force <= 0 (``LIFT_OFF``), a joint
+    on the ground or the feet crossed (the guards the event-driven simulator stops at)."""
+    cand = next((c for c in res.extra.get("candidates", ()) if c is not None
+                 and c["mode"] == mode), None)
+    if cand is None:
+        return
+    if np.min(cand["fn"]) <= 0:
+        raise _Stop(Status.LIFT_OFF, t, mode, f"step at t = {t:.6f}: the {mode.label} "
+                    f"equilibrium's normal forces are {cand['fn'][0]:.4g} and "
+                    f"{cand['fn'][1]:.4g} N (no mode is consistent)")
+    row = (t, cand["z"][:-1], 0.0, 0.0, float(cand["z"][-1] * model.Mg), 0.0, 0.0, 0.0, mode)
+    try:
+        _check_step(model, row, t)
+    except _Stop as stop:
+        if stop.status is not Status.UNSTABLE:
+            raise
+
+
 def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
                 periodic_tol: float, switch_exact: bool) -> tuple[list, int, float]:
     """Steps of N per cycle from the released start until the state at a cycle's end repeats.
@@ -300,6 +320,7 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
             if dropped:
                 rows.pop()
             if not res.success:
+                _diagnose(step.model, res, rows[-1][8], tb)
                 raise _Stop(Status.NO_CONSISTENT_MODE, tb, rows[-1][8],
                             f"step at t = {tb:.6f}: {res.message}")
             if min(res.f_n1, res.f_n2) <= 0:
