@@ -38,6 +38,16 @@ def test_event_result_is_frozen():
     _assert_frozen(res)
 
 
+def test_a_result_is_hashable_and_equal_only_to_itself():
+    """Identity equality and hash: a result can key a dict or a cache, and comparing it with a copy
+    neither raises (its arrays have no truth value) nor claims equal arrays equal."""
+    pr = paper_problem()
+    res = simulate_torque(pr.model, pr.torque)
+    copy = dataclasses.replace(res)
+    assert {res: 1, copy: 2}[res] == 1 and hash(res) != hash(copy)
+    assert res == res and res != copy and copy.S == res.S
+
+
 def test_mpcc_result_is_frozen():
     """One cycle of 12 MPCC steps, without the check run of S's error."""
     pr = paper_problem()

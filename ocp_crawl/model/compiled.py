@@ -25,6 +25,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.io.files import remove_stale_temps, temp_prefix
+from ocp_crawl.model.buffered import Buffered
 
 
 #: zero-argument builders of the package's compiled functions ("module.qualname" -> builder
@@ -270,6 +271,8 @@ class FastFunction:
         self.compiled = False
         self.library: Path | None = None
         """the shared library in the cache (None: evaluated by CasADi)"""
+        self._buffered: Buffered | None = None
+        """without the library: CasADi's evaluation through the function's buffer"""
         if os.environ.get("OCP_CRAWL_NO_COMPILE", "") not in ("", "0"):
             return
         try:
@@ -312,11 +315,10 @@ class FastFunction:
 
     def __call__(self, *inputs) -> list[np.ndarray]:
         if not self.compiled:
-            out = self.fun(*[np.reshape(x, self.fun.size_in(i),
-                                        order="F") for i, x in enumerate(inputs)])
-            if not isinstance(out, (list, tuple)):
-                out = [out]
-            return [np.asarray(o, float).ravel(order="F") for o in out]
+            if self._buffered is None:
+                self._buffered = Buffered(self.fun)
+            out = self._buffered(*inputs)
+            return [o.ravel(order="F") for o in (out if isinstance(out, tuple) else (out,))]
         self._kept = None
         for buf, x in zip(self._in, inputs):
             np.copyto(buf, x)

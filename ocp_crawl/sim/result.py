@@ -128,13 +128,15 @@ def energy_balance(input_work: float, potential_change: float, dissipation: floa
 ARRAY_FIELDS = ("t", "phi", "theta", "d", "x1", "x2", "f_t", "f_n1", "f_n2", "tau", "mode")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CrawlResult:
     """Outcome of a simulation, in the manner of scipy's ``OdeResult``.
 
     Frozen: a simulator builds it once from all its fields, and assigning to an attribute raises
     :class:`dataclasses.FrozenInstanceError`; ``dataclasses.replace(res, ...)`` gives a derived
-    result (a physical check's failure, an added error estimate).
+    result (a physical check's failure, an added error estimate).  Equality and hash are the
+    object's identity (a result holds arrays, which have neither): compare fields, e.g. ``S``, or
+    :meth:`summary`.
 
     Arrays are sampled on the output phases ``t`` (cycles; the reported steady cycle spans
     ``[t0, t0 + 1]``). ``phi`` and ``tau`` have shape (m, N) with m joints (2 for the three-link
