@@ -57,16 +57,39 @@ def test_mapped_columns_and_shared_inputs():
         np.testing.assert_array_equal(got, want)
 
 
-def test_symbolic_inputs_and_other_threads_take_the_plain_call():
+def test_symbolic_inputs_and_other_threads_take_the_plain_call(monkeypatch):
     fun = chain_symbolic(3).kin
     b = Buffered(fun)
     phi, p = cs.MX.sym("phi", 2), cs.MX.sym("p", fun.size1_in(1))
     assert isinstance(b(phi, p), cs.MX)
     args = _random_args(fun, np.random.default_rng(2))
+    want = _plain(fun, args)[0]
+
+    def no_buffer():
+        raise AssertionError("the buffer was used")
+
+    monkeypatch.setattr(b, "_eval", no_buffer)
     seen = []
     thread = threading.Thread(target=lambda: seen.append(b(*args)))
     thread.start()
     thread.join()
-    np.testing.assert_array_equal(seen[0], _plain(fun, args)[0])
-    with pytest.raises(RuntimeError):  # a wrong size is CasADi's error, as in the plain call
-        b(np.ones(7), args[1])
+    np.testing.assert_array_equal(seen[0], want)
+    with pytest.raises(AssertionError, match="the buffer was used"):
+        b(*args)
+
+
+def test_results_are_new_arrays_and_a_wrongly_shaped_input_is_refused():
+    """A result is not overwritten by the next call; a matrix in another shape with the same
+    number of entries (transposed) is refused as by the plain call, not read column-major."""
+    x = cs.SX.sym("x", 2, 3)
+    fun = cs.Function("twice", [x], [2 * x])
+    b = Buffered(fun)
+    a = np.arange(6.0).reshape(2, 3)
+    first = b(a)
+    second = b(a + 1)
+    np.testing.assert_array_equal(first, 2 * a)
+    np.testing.assert_array_equal(second, 2 * (a + 1))
+    with pytest.raises(RuntimeError):
+        b(a.T)
+    with pytest.raises(RuntimeError):  # a wrong size, as in the plain call
+        b(np.ones(7))

@@ -180,3 +180,5 @@ def test_a_foot_that_lifts_off_ends_both_simulators_with_lift_off():
     assert ev.status_name == steps.status_name == "lift_off", (ev.message, steps.message)
     assert "lift_off_1" in ev.message
     assert "slip1+ equilibrium's normal forces are -" in steps.message
+    # at the end of the step the event-driven lift-off falls in
+    assert 0 <= steps.failure_t - ev.failure_t < 1 / 50

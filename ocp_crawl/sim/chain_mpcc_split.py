@@ -15,6 +15,8 @@ start to the event and from the event on in the new mode.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.optimize import brentq
 
@@ -144,5 +146,7 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
         if out and out[-1][0] == te:
             out[-1] = row
         ta = te
+    if not res.success:   # the mode the failed solve started in (a split may have changed it)
+        res = replace(res, extra={**res.extra, "start_mode": row[8]})
     out.append(_row(tb, res))
     return out, res, dropped

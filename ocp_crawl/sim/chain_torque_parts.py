@@ -80,7 +80,8 @@ class ChainSolver:
         self.nfev = 0
         self.p = model.p
         self.names = aux_names(model.chain.n)
-        # the Newton loop's calls, through the functions' buffers
+        # through the functions' buffers: converting each argument and result is most of the time
+        # of a plain call, and the Newton loop makes thousands of them per run
         self._system, self._evaluate = Buffered(model.sym.system), Buffered(model.sym.evaluate)
 
     def tau(self, t: float) -> tuple[np.ndarray, np.ndarray]:
