@@ -134,7 +134,7 @@ def test_loose_last_stage_then_tighten():
 
 @pytest.mark.slow
 def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
-    """max_speed at N = 20: from the optimum's own profile (as the convergence run's warm solves
+    """max_speed at N = 16: from the optimum's own profile (as the convergence run's warm solves
     start), the solve with ``loose_last`` returns to the same optimum; and when the polish from the
     loose last stage fails (here: no candidate offered), that stage is solved again tightly and
     polished."""
@@ -142,14 +142,14 @@ def test_gait_ocp_loose_last_stage_from_an_optimum_stays_there(monkeypatch):
 
     robot = Robot.paper()
     sig = ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, 45.0), robot.k)
-    st = OCPSettings(objective="max_speed", nodes=20, starts=1)
+    st = OCPSettings(objective="max_speed", nodes=16, starts=1)
     ocp = GaitOCP(robot, "physical", st)
     x, _, failed, _ = GaitSolver(ocp).solve(ocp.initial_guess(sig, st.min_period(30.0, 30.0)))
     assert failed is None
     best = ocp.unpack(x)
-    near = replay_signal(np.arange(20) / 20, best["tau"])
+    near = replay_signal(np.arange(16) / 16, best["tau"])
     loose = GaitOCP(robot, "physical",
-                    OCPSettings(objective="max_speed", nodes=20, starts=1, loose_last=True,
+                    OCPSettings(objective="max_speed", nodes=16, starts=1, loose_last=True,
                                 stage_tol=st.sigma_min))
     x, hist, failed, _ = GaitSolver(loose).solve(loose.initial_guess(near, best["T"]))
     kinds = [h.kind for h in hist]
