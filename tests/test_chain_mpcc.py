@@ -182,3 +182,28 @@ def test_a_foot_that_lifts_off_ends_both_simulators_with_lift_off():
     assert "slip1+ equilibrium's normal forces are -" in steps.message
     # at the end of the step the event-driven lift-off falls in
     assert 0 <= steps.failure_t - ev.failure_t < 1 / 50
+
+
+def test_a_failed_step_is_diagnosed_in_the_mode_it_started_in():
+    """The diagnosis of a step without a consistent mode reads the candidate of the mode the step
+    started in: its equilibrium with a joint below the ground gives ``joint_on_ground``; another
+    mode's candidate there, or positive normal forces with every joint above, leave the step's
+    ``no_consistent_mode`` to the caller."""
+    from ocp_crawl.sim.chain_mpcc import ChainStepResult, _diagnose, _Stop
+    from ocp_crawl.status import Status
+
+    model, nan = ChainModel(FIVE), float("nan")
+    low = np.array([3.3, 3.0, 3.0, 3.3])   # joint 1 and 4 just below the ground
+    assert model.kinematics(low)["zj1"] < 0 < model.kinematics(low)["zj2"]
+
+    def failed(phi, mode):
+        cand = {"mode": mode, "z": np.r_[phi, 0.1], "fn": np.array([0.2, 0.3])}
+        return ChainStepResult(False, "no consistent contact mode", np.full(4, nan), nan, nan, nan,
+                               np.full(4, nan), nan, nan, nan, Mode.STICK, nan, nan,
+                               {"candidates": [None, cand]})
+
+    with pytest.raises(_Stop) as stop:
+        _diagnose(model, failed(low, Mode.SLIP1_POS), Mode.SLIP1_POS, 0.5)
+    assert stop.value.status is Status.JOINT_ON_GROUND and "joint 1" in stop.value.detail
+    _diagnose(model, failed(low, Mode.SLIP1_POS), Mode.STICK, 0.5)   # not the step's mode
+    _diagnose(model, failed(np.array([1.9, 2.9, 2.9, 1.9]), Mode.STICK), Mode.STICK, 0.5)
