@@ -109,7 +109,7 @@ class ChainSolver:
         J = None
         for it in range(max_iter + 1):
             G, J = self._system(x, tau, q, p)
-            G, J = np.asarray(G).ravel(), np.asarray(J)
+            G = G.ravel()
             self.nfev += 1
             if not np.all(np.isfinite(G)) or it == max_iter:
                 return None
@@ -122,7 +122,6 @@ class ChainSolver:
             x = x - step
             if np.max(np.abs(step)) <= 1e-14:
                 G, J = self._system(x, tau, q, p)
-                J = np.asarray(J)
                 break
         out = self._evaluate(x, tau, dtau, q, p).ravel()
         aux = dict(zip(self.names, out.tolist()))
@@ -247,11 +246,10 @@ def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.nda
     done = np.zeros(size, bool)
     for _ in range(max_iter):
         G, J = f(X, T, q, p)
-        G = np.asarray(G)
         done |= np.max(np.abs(G), axis=0) <= 1e-13
         if done.all():
             break
-        J3 = np.asarray(J).reshape(nx, size, nx).transpose(1, 0, 2)
+        J3 = J.reshape(nx, size, nx).transpose(1, 0, 2)
         step = np.linalg.solve(J3[~done], G.T[~done][..., None])[..., 0].T
         X[:, ~done] -= step
         small = np.max(np.abs(step), axis=0) <= 1e-14
