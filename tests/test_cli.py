@@ -400,30 +400,34 @@ def test_reproduce_refuses_before_computing_and_accepts_force_or_resume(capsys, 
 # ------------------------------------------------------------------------------------------ solvers
 @pytest.mark.slow
 def test_simulate_with_the_mpcc_solver_from_the_problem_key(capsys):
-    """``--set simulation.solver=mpcc`` runs the MPCC time-stepping; ``--solver``/``--steps`` are
-    shortcuts.
+    """``--set simulation.solver=mpcc`` runs the MPCC time-stepping (200 steps per cycle unless
+    ``simulation.steps`` says otherwise); ``--solver``/``--steps`` are shortcuts.
 
     The event-driven and MPCC values of S agree to within n_events (2 h)^2, h = 1/steps: inside a
     mode the time-stepping is exact, and each of the steady cycle's stick-slip transitions is taken
     up to two steps late, the slip over that window (starting from zero slip rate) being quadratic
-    in its length (see ocp_crawl.sim.crosscheck).  The paper gait has 4 events per cycle: 4e-4 at
-    200 steps (measured: 6e-5).
+    in its length (see ocp_crawl.sim.crosscheck).  The paper gait has 4 events per cycle: 1.6e-3 at
+    100 steps.
     """
     from ocp_crawl.problem import load_problem, run_problem
 
-    code, out, err = run(capsys, "simulate", PAPER, "--set", "simulation.solver=mpcc", "--json")
+    assert load_problem(PAPER, ["simulation.solver=mpcc"]).to_dict()["simulation"]["steps"] == 200
+    steps = 100
+    code, out, err = run(capsys, "simulate", PAPER, "--set", "simulation.solver=mpcc", "--set",
+                         f"simulation.steps={steps}", "--json")
     assert code == 0, err
     mpcc = json.loads(out)
     assert (mpcc["solver"] == "mpcc" and mpcc["status_name"] == "success"
             and "MPCC" in mpcc["message"])
     assert (mpcc["problem"]["simulation"]["solver"] == "mpcc"
-            and mpcc["problem"]["simulation"]["steps"] == 200)
+            and mpcc["problem"]["simulation"]["steps"] == steps)
     event = run_problem(load_problem(PAPER))
-    n_events, h = len(event.steady_events()), 1 / 200
+    n_events, h = len(event.steady_events()), 1 / steps
     assert n_events == 4
     assert abs(mpcc["S"] - event.S) <= n_events * (2 * h) ** 2 * abs(event.S)
     # the shortcuts give the same run
-    code, out, err = run(capsys, "simulate", PAPER, "--solver", "mpcc", "--steps", "200", "--json")
+    code, out, err = run(capsys, "simulate", PAPER, "--solver", "mpcc", "--steps", str(steps),
+                         "--json")
     assert code == 0, err
     assert json.loads(out)["S"] == mpcc["S"]
     code, out, err = run(capsys, "simulate", PAPER)

@@ -506,23 +506,24 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
 def test_cli_sweep_over_the_solver(tmp_path, capsys):
     """``--grid simulation.solver=event,mpcc``: both simulators in one sweep, S agreeing to n_events
     (2 h)^2 relative (h = 1/steps: each stick-slip transition is taken up to two MPCC steps late,
-    the slip over that window being quadratic in its length; 4 events per cycle, 200 steps:
-    4e-4)."""
-    out = tmp_path / "solvers"
+    the slip over that window being quadratic in its length; 4 events per cycle, 100 steps:
+    1.6e-3)."""
+    out, steps = tmp_path / "solvers", 100
     code = main(["sweep", str(PAPER), "--grid", "simulation.solver=event,mpcc", "--grid",
-                 "gait.psi_deg=30,45", "--out", str(out), "--jobs", "1", "--no-progress"])
+                 "gait.psi_deg=30,45", "--set", f"simulation.steps={steps}", "--out", str(out),
+                 "--jobs", "1", "--no-progress"])
     capsys.readouterr()
     assert code == 0
     res = SweepResult.read(out)
     assert res.keys == ("simulation.solver", "gait.psi_deg") and res.shape == (2, 2)
     assert (res.status_array() == "success").all()
     S = res.array("S")
-    assert np.all(np.abs(S[1] - S[0]) <= 4 * (2 / 200) ** 2 * np.abs(S[0]))
+    assert np.all(np.abs(S[1] - S[0]) <= 4 * (2 / steps) ** 2 * np.abs(S[0]))
     # the event row is the run_problem of the point
     assert S[0, 1] == run_problem(load_problem(PAPER, ["gait.psi_deg=45"])).S
     settings = json.loads((out / SETTINGS_FILE).read_text())
     assert settings["problem"]["simulation"]["solver"] == "event"
-
+    assert settings["problem"]["simulation"]["steps"] == steps
 
 
 @pytest.mark.slow

@@ -73,14 +73,15 @@ def _build_wheel(root: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def venv(wheel, tmp_path_factory) -> Path:
-    """A fresh virtual environment with the wheel installed (dependencies borrowed through a .pth
-    file)."""
+    """A fresh virtual environment with the wheel installed by pip (dependencies borrowed through a
+    .pth file)."""
     env_dir = tmp_path_factory.mktemp("venv") / "venv"
-    _run([sys.executable, "-m", "venv", env_dir], cwd=env_dir.parent)
+    # without a pip of its own (ensurepip's copy is most of venv's time): the running pip installs
+    # the wheel into it, as its own would
+    _run([sys.executable, "-m", "venv", "--without-pip", env_dir], cwd=env_dir.parent)
     python = env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
-    _run([python, "-m", "pip", "install", "--no-deps", "--no-index", "--disable-pip-version-check",
-          wheel],
-         cwd=env_dir.parent)
+    _run([sys.executable, "-m", "pip", "--python", python, "install", "--no-deps", "--no-index",
+          "--disable-pip-version-check", wheel], cwd=env_dir.parent)
     site = Path(_run([python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                      cwd=env_dir.parent).stdout.strip())
     dirs = {str(Path(__import__(name).__file__).resolve().parents[1]) for name in DEPENDENCIES}
