@@ -261,6 +261,21 @@ def test_bending_map_and_waveform():
         PressureWaveform(-1.0, 0.0)
 
 
+@pytest.mark.parametrize("amplitude", [None, 0.4])
+def test_pressure_reference_at_one_phase_is_its_array_form(amplitude):
+    """The steppers call an input at one phase (a float): the reference angles and their rates
+    there, computed with math, equal the array form's column to round-off."""
+    ref = PressureReference(PressureWaveform(1.7, math.radians(40.0), amplitude),
+                            math.radians(130.0), BendingMap(0.092, 0.089, 0.127, 0.144))
+    t = np.random.default_rng(3).uniform(-1.0, 2.0, 200)
+    for fun in (ref, ref.derivative):
+        columns = fun(t)
+        for i, ti in enumerate(t):
+            one = fun(float(ti))
+            assert one.shape == (2,)
+            np.testing.assert_allclose(one, columns[:, i], rtol=4e-16, atol=1e-15)
+
+
 @pytest.mark.parametrize("gravity", CONVENTIONS)
 def test_pressure_curves_follow_the_paper(gravity):
     fit = evaluate_fit(FITTED_REST_DEG[gravity], gravity, p0_bar=[0.4, 1.0, 2.0, 3.0],

@@ -175,6 +175,20 @@ class PressureWaveform:
         a = 0.5 * self.p0 if self.amplitude is None else self.amplitude
         return a * TWO_PI * np.cos(self._phases(t))
 
+    def at(self, t: float) -> tuple[float, float, float, float]:
+        """Both pressures [bar] and their rates [bar per cycle] at one phase t [cycles], with
+        :mod:`math` (the steppers' hot path: scalar phases), in the operations of the array
+        forms."""
+        w = TWO_PI * t
+        s1, s2 = w + self.psi / 2, w - self.psi / 2
+        if self.amplitude is None:
+            a = 0.5 * self.p0
+            p1, p2 = a * (1.0 + math.sin(s1)), a * (1.0 + math.sin(s2))
+        else:
+            a = self.amplitude
+            p1, p2 = self.p0 + a * math.sin(s1), self.p0 + a * math.sin(s2)
+        return p1, p2, a * TWO_PI * math.cos(s1), a * TWO_PI * math.cos(s2)
+
     def describe(self) -> str:
         if self.amplitude is None:
             return "p0 (1 + sin(2 pi t +- psi/2)) / 2"
@@ -192,9 +206,18 @@ class PressureReference(PeriodicSignal):
     bending_map: BendingMap = field(default_factory=BendingMap)
 
     def __call__(self, t):
+        if isinstance(t, float):  # the steppers' hot path, as Harmonic's
+            p1, p2, _, _ = self.waveform.at(t)
+            m = self.bending_map
+            return np.array([self.phi_rest - (m.a1 * p1**2 + m.b1 * p1),
+                             self.phi_rest - (m.a2 * p2**2 + m.b2 * p2)])
         return self.phi_rest - self.bending_map.bending(self.waveform(t))
 
     def derivative(self, t):
+        if isinstance(t, float):
+            p1, p2, dp1, dp2 = self.waveform.at(t)
+            m = self.bending_map
+            return np.array([-(2 * m.a1 * p1 + m.b1) * dp1, -(2 * m.a2 * p2 + m.b2) * dp2])
         return -self.bending_map.slope(self.waveform(t)) * self.waveform.derivative(t)
 
     def describe(self) -> dict:
