@@ -13,6 +13,7 @@
     python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path
                                                      (endgame, ...)
     python scripts/bench.py work --repeat 3        # the work estimates against the runs they bound
+    python scripts/bench.py pressure --old REV --repeat 5  # pressure-driven gaits against REV
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
@@ -95,16 +96,71 @@ def _old_tree(commit: str) -> str:
     return tmp
 
 
-def _worker(tree: str, repeat: int) -> dict:
-    """:func:`hybrid_cpu` in a fresh process with ``tree`` first on the path."""
+def _worker(tree: str, repeat: int, kind: str = "hybrid") -> dict:
+    """:func:`hybrid_cpu` (``kind`` "hybrid") or :func:`pressure_cpu` ("pressure") in a fresh
+    process with ``tree`` first on the path."""
     import json
     import os
     import subprocess
 
     env = dict(os.environ, PYTHONPATH=tree)
-    out = subprocess.run([sys.executable, __file__, "--hybrid-worker", str(repeat)], env=env,
+    out = subprocess.run([sys.executable, __file__, f"--{kind}-worker", str(repeat)], env=env,
                          capture_output=True, text=True, check=True).stdout
     return json.loads(out.splitlines()[-1])
+
+
+#: the pressure-driven gaits of :func:`pressure_cpu`: (p0 [bar], psi [deg], amplitude [bar] or
+#: None for the raised sine)
+PRESSURE_CASES = [(p0, psi, a) for p0 in (1.2, 1.7) for psi in (20.0, 45.0, 90.0)
+                  for a in (None, 0.6)]
+
+
+def pressure_cpu(repeat: int) -> dict:
+    """CPU time [ms] per simulation of the pressure-driven robot (physical gravity, the stored rest
+    angle) over :data:`PRESSURE_CASES`, ``repeat`` samples after a warm-up pass, and the S of each
+    case.  Uses only names that the old code has too."""
+    from ocp_crawl import Model, Robot
+    from ocp_crawl.studies.pressure import simulate_pressure
+
+    model = Model(Robot.paper(), "physical")
+    runs = [simulate_pressure(model, p0, psi, amplitude_bar=a) for p0, psi, a in PRESSURE_CASES]
+    samples = []
+    for _ in range(repeat):
+        t = time.process_time()
+        for p0, psi, a in PRESSURE_CASES:
+            simulate_pressure(model, p0, psi, amplitude_bar=a)
+        samples.append(1e3 * (time.process_time() - t) / len(PRESSURE_CASES))
+    return {"sim_ms": samples, "S": [r.S if r.success else None for r in runs],
+            "status": [r.status_name for r in runs]}
+
+
+def bench_pressure(repeat: int, old: str = OLD_COMMIT, rounds: int = 2) -> dict:
+    """Simulations of the pressure-driven robot (:func:`pressure_cpu`) for the working tree and for
+    commit ``old`` in the same run, ``rounds`` alternating pairs of subprocesses: min and median
+    [ms] per simulation, their ratio, and the largest relative difference of S."""
+    import shutil
+    from pathlib import Path
+
+    new_tree = str(Path(__file__).resolve().parent.parent)
+    old_tree = _old_tree(old)
+    samples = {"new": [], "old": []}
+    try:
+        for _ in range(rounds):
+            samples["new"].append(_worker(new_tree, repeat, "pressure"))
+            samples["old"].append(_worker(old_tree, repeat, "pressure"))
+    finally:
+        shutil.rmtree(old_tree, ignore_errors=True)
+    out = {"old_commit": old}
+    for code in ("new", "old"):
+        v = [x for s in samples[code] for x in s["sim_ms"]]
+        out[f"{code}_ms"] = {"min": round(min(v), 2), "median": round(statistics.median(v), 2)}
+    for stat in ("min", "median"):
+        out[f"ratio_old_over_new_{stat}"] = round(out["old_ms"][stat] / out["new_ms"][stat], 2)
+    a, b = samples["new"][0], samples["old"][0]
+    out["same_statuses"] = a["status"] == b["status"]
+    out["S_max_rel_diff"] = max((abs(x / y - 1) for x, y in zip(a["S"], b["S"])
+                                 if x is not None and y is not None), default=None)
+    return out
 
 
 def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
@@ -552,7 +608,8 @@ BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy,
               "prescribed": bench_prescribed, "chain": bench_chain, "paper": bench_paper,
               "mpcc": bench_mpcc, "sweep": bench_sweep, "ocp": bench_ocp,
               "ocp_kernel": bench_ocp_kernel, "ocp_files": bench_ocp_files,
-              "ocp_paths": bench_ocp_paths, "baselines": bench_baselines, "work": bench_work}
+              "ocp_paths": bench_ocp_paths, "baselines": bench_baselines, "work": bench_work,
+              "pressure": bench_pressure}
 
 
 def main(argv=None) -> int:
@@ -561,21 +618,24 @@ def main(argv=None) -> int:
                     help=f"benchmarks to run: {', '.join(BENCHMARKS)} (default: all)")
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
     ap.add_argument("--old", default=OLD_COMMIT,
-                    help="commit that `hybrid` compares against (default: %(default)s)")
+                    help="commit that `hybrid` and `pressure` compare against (default: "
+                         "%(default)s)")
     ap.add_argument("--hybrid-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
+    ap.add_argument("--pressure-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.hybrid_worker:
-        import json
-        print(json.dumps(hybrid_cpu(args.hybrid_worker)))
-        return 0
+    for worker, fun in ((args.hybrid_worker, hybrid_cpu), (args.pressure_worker, pressure_cpu)):
+        if worker:
+            import json
+            print(json.dumps(fun(worker)))
+            return 0
     names = args.which or list(BENCHMARKS)
     unknown = [n for n in names if n not in BENCHMARKS]
     if unknown:
         ap.error(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}")
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
-        result = bench_hybrid(args.repeat,
-                              args.old) if name == "hybrid" else BENCHMARKS[name](args.repeat)
+        result = (BENCHMARKS[name](args.repeat, args.old) if name in ("hybrid", "pressure")
+                  else BENCHMARKS[name](args.repeat))
         print(f"{name}: {result}")
     return 0
 
