@@ -17,9 +17,10 @@
     python scripts/bench.py --repeat 50
 
 Each benchmark reports the median wall time over repeated calls after one warm-up call (the
-warm-up builds or loads the compiled functions, which happens once per process); ``hybrid`` reports
-CPU time (min and median) of this tree and of an older commit (``--old``, exported with
-``git archive``) measured in alternating subprocesses of the same run, and their ratio.
+warm-up builds or loads the compiled functions, which happens once per process); ``hybrid`` and
+``pressure`` report CPU time (min and median) of this tree and of an older commit (``--old``,
+exported with ``git archive``) measured in alternating subprocesses of the same run, and their
+ratio.
 """
 from __future__ import annotations
 
@@ -134,7 +135,12 @@ def pressure_cpu(repeat: int) -> dict:
             "status": [r.status_name for r in runs]}
 
 
-def bench_pressure(repeat: int, old: str = OLD_COMMIT, rounds: int = 2) -> dict:
+#: the commit that ``pressure`` compares against by default (the array form of the pressure inputs;
+#: its ``simulate_pressure`` takes ``amplitude_bar``)
+PRESSURE_OLD_COMMIT = "1a40791"
+
+
+def bench_pressure(repeat: int, old: str = PRESSURE_OLD_COMMIT, rounds: int = 2) -> dict:
     """Simulations of the pressure-driven robot (:func:`pressure_cpu`) for the working tree and for
     commit ``old`` in the same run, ``rounds`` alternating pairs of subprocesses: min and median
     [ms] per simulation, their ratio, and the largest relative difference of S."""
@@ -150,15 +156,17 @@ def bench_pressure(repeat: int, old: str = OLD_COMMIT, rounds: int = 2) -> dict:
             samples["old"].append(_worker(old_tree, repeat, "pressure"))
     finally:
         shutil.rmtree(old_tree, ignore_errors=True)
-    out = {"old_commit": old}
-    for code in ("new", "old"):
-        v = [x for s in samples[code] for x in s["sim_ms"]]
-        out[f"{code}_ms"] = {"min": round(min(v), 2), "median": round(statistics.median(v), 2)}
+    out: dict = {"old_commit": old}
+    stats = {code: {"min": min(v), "median": statistics.median(v)} for code, v in
+             ((c, [x for s in samples[c] for x in s["sim_ms"]]) for c in ("new", "old"))}
+    for code, st in stats.items():
+        out[f"{code}_ms"] = {k: round(v, 2) for k, v in st.items()}
     for stat in ("min", "median"):
-        out[f"ratio_old_over_new_{stat}"] = round(out["old_ms"][stat] / out["new_ms"][stat], 2)
+        out[f"ratio_old_over_new_{stat}"] = round(stats["old"][stat] / stats["new"][stat], 2)
     a, b = samples["new"][0], samples["old"][0]
     out["same_statuses"] = a["status"] == b["status"]
-    out["S_max_rel_diff"] = max((abs(x / y - 1) for x, y in zip(a["S"], b["S"])
+    out["S_max_rel_diff"] = max((abs(x - y) / abs(y) if y else abs(x - y)
+                                 for x, y in zip(a["S"], b["S"])
                                  if x is not None and y is not None), default=None)
     return out
 
@@ -617,14 +625,16 @@ def main(argv=None) -> int:
     ap.add_argument("which", nargs="*", metavar="NAME", default=[],
                     help=f"benchmarks to run: {', '.join(BENCHMARKS)} (default: all)")
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
-    ap.add_argument("--old", default=OLD_COMMIT,
-                    help="commit that `hybrid` and `pressure` compare against (default: "
-                         "%(default)s)")
+    ap.add_argument("--old", default=None,
+                    help=f"commit that `hybrid` and `pressure` compare against (default: "
+                         f"{OLD_COMMIT} and {PRESSURE_OLD_COMMIT})")
     ap.add_argument("--hybrid-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     ap.add_argument("--pressure-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.repeat < 1:
+        ap.error("--repeat must be >= 1")
     for worker, fun in ((args.hybrid_worker, hybrid_cpu), (args.pressure_worker, pressure_cpu)):
-        if worker:
+        if worker is not None:
             import json
             print(json.dumps(fun(worker)))
             return 0
@@ -635,7 +645,7 @@ def main(argv=None) -> int:
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
         result = (BENCHMARKS[name](args.repeat, args.old) if name in ("hybrid", "pressure")
-                  else BENCHMARKS[name](args.repeat))
+                  and args.old else BENCHMARKS[name](args.repeat))
         print(f"{name}: {result}")
     return 0
 

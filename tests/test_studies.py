@@ -272,8 +272,12 @@ def test_pressure_reference_at_one_phase_is_its_array_form(amplitude):
         columns = fun(t)
         for i, ti in enumerate(t):
             one = fun(float(ti))
-            assert one.shape == (2,)
+            assert one.shape == (2,) and one.dtype == np.float64
             np.testing.assert_allclose(one, columns[:, i], rtol=4e-16, atol=1e-15)
+        # a numpy scalar takes the same path; a 0-d array and an int the array form
+        for ti in (np.float64(t[0]), np.asarray(t[0]), 1):
+            np.testing.assert_allclose(fun(ti), fun(float(ti)), rtol=4e-16, atol=1e-15)
+            assert fun(ti).shape == (2,) and fun(ti).dtype == np.float64
 
 
 @pytest.mark.parametrize("gravity", CONVENTIONS)

@@ -77,16 +77,26 @@ def venv(wheel, tmp_path_factory) -> Path:
     .pth file)."""
     env_dir = tmp_path_factory.mktemp("venv") / "venv"
     # without a pip of its own (ensurepip's copy is most of venv's time): the running pip installs
-    # the wheel into it, as its own would
-    _run([sys.executable, "-m", "venv", "--without-pip", env_dir], cwd=env_dir.parent)
+    # the wheel into it, as its own would (pip >= 22.3 has --python)
+    own_pip = _pip_version() < (22, 3)
+    _run([sys.executable, "-m", "venv", *([] if own_pip else ["--without-pip"]), env_dir],
+         cwd=env_dir.parent)
     python = env_dir / ("Scripts" if os.name == "nt" else "bin") / "python"
-    _run([sys.executable, "-m", "pip", "--python", python, "install", "--no-deps", "--no-index",
-          "--disable-pip-version-check", wheel], cwd=env_dir.parent)
+    pip = [python, "-m", "pip"] if own_pip else [sys.executable, "-m", "pip", "--python", python]
+    _run([*pip, "install", "--no-deps", "--no-index", "--disable-pip-version-check", wheel],
+         cwd=env_dir.parent)
     site = Path(_run([python, "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
                      cwd=env_dir.parent).stdout.strip())
     dirs = {str(Path(__import__(name).__file__).resolve().parents[1]) for name in DEPENDENCIES}
     (site / "_ocp_crawl_test_dependencies.pth").write_text("\n".join(sorted(dirs)) + "\n")
     return env_dir
+
+
+def _pip_version() -> tuple[int, ...]:
+    """The running pip's version, its numeric leading parts."""
+    from importlib.metadata import version
+
+    return tuple(int(p) for p in re.findall(r"\d+", version("pip"))[:2])
 
 
 def _clean_env() -> dict:

@@ -179,14 +179,14 @@ class PressureWaveform:
         """Both pressures [bar] and their rates [bar per cycle] at one phase t [cycles], with
         :mod:`math` (the steppers' hot path: scalar phases), in the operations of the array
         forms."""
-        w = TWO_PI * t
-        s1, s2 = w + self.psi / 2, w - self.psi / 2
+        w, psi, p0 = TWO_PI * float(t), float(self.psi), float(self.p0)
+        s1, s2 = w + psi / 2, w - psi / 2
         if self.amplitude is None:
-            a = 0.5 * self.p0
+            a = 0.5 * p0
             p1, p2 = a * (1.0 + math.sin(s1)), a * (1.0 + math.sin(s2))
         else:
-            a = self.amplitude
-            p1, p2 = self.p0 + a * math.sin(s1), self.p0 + a * math.sin(s2)
+            a = float(self.amplitude)
+            p1, p2 = p0 + a * math.sin(s1), p0 + a * math.sin(s2)
         return p1, p2, a * TWO_PI * math.cos(s1), a * TWO_PI * math.cos(s2)
 
     def describe(self) -> str:
@@ -208,17 +208,21 @@ class PressureReference(PeriodicSignal):
     def __call__(self, t):
         if isinstance(t, float):  # the steppers' hot path, as Harmonic's
             p1, p2, _, _ = self.waveform.at(t)
-            m = self.bending_map
-            return np.array([self.phi_rest - (m.a1 * p1**2 + m.b1 * p1),
-                             self.phi_rest - (m.a2 * p2**2 + m.b2 * p2)])
+            (a1, a2, b1, b2), rest = self._coefficients(), float(self.phi_rest)
+            # p * p as numpy's p**2 of an array (the exact square; math's pow may round it)
+            return np.array([rest - (a1 * (p1 * p1) + b1 * p1), rest - (a2 * (p2 * p2) + b2 * p2)])
         return self.phi_rest - self.bending_map.bending(self.waveform(t))
 
     def derivative(self, t):
         if isinstance(t, float):
             p1, p2, dp1, dp2 = self.waveform.at(t)
-            m = self.bending_map
-            return np.array([-(2 * m.a1 * p1 + m.b1) * dp1, -(2 * m.a2 * p2 + m.b2) * dp2])
+            a1, a2, b1, b2 = self._coefficients()
+            return np.array([-(2 * a1 * p1 + b1) * dp1, -(2 * a2 * p2 + b2) * dp2])
         return -self.bending_map.slope(self.waveform(t)) * self.waveform.derivative(t)
+
+    def _coefficients(self) -> tuple[float, float, float, float]:
+        m = self.bending_map
+        return float(m.a1), float(m.a2), float(m.b1), float(m.b2)
 
     def describe(self) -> dict:
         m = self.bending_map
