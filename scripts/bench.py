@@ -110,6 +110,37 @@ def _worker(tree: str, repeat: int, kind: str = "hybrid") -> dict:
     return json.loads(out.splitlines()[-1])
 
 
+def _against_old(kind: str, repeat: int, old: str, rounds: int) -> dict:
+    """The worker ``kind`` (:func:`_worker`) on this tree and on commit ``old`` exported, in
+    ``rounds`` alternating pairs of subprocesses: {"new": [outputs], "old": [outputs]}."""
+    import shutil
+    from pathlib import Path
+
+    new_tree = str(Path(__file__).resolve().parent.parent)
+    old_tree = _old_tree(old)
+    samples: dict = {"new": [], "old": []}
+    try:
+        for _ in range(rounds):
+            samples["new"].append(_worker(new_tree, repeat, kind))
+            samples["old"].append(_worker(old_tree, repeat, kind))
+    finally:
+        shutil.rmtree(old_tree, ignore_errors=True)
+    return samples
+
+
+def _timing_stats(samples: dict, key: str, prefix: str, digits: int) -> dict:
+    """Min and median of the samples ``key`` [ms] of each code (``{prefix}new_ms``,
+    ``{prefix}old_ms``) and the ratios old/new (``{prefix}ratio_old_over_new_min``, ...)."""
+    stats = {code: {"min": min(v), "median": statistics.median(v)} for code, v in
+             ((c, [x for s in samples[c] for x in s[key]]) for c in ("new", "old"))}
+    out = {f"{prefix}{code}_ms": {k: round(v, digits) for k, v in st.items()}
+           for code, st in stats.items()}
+    for stat in ("min", "median"):
+        out[f"{prefix}ratio_old_over_new_{stat}"] = round(stats["old"][stat] / stats["new"][stat],
+                                                          2)
+    return out
+
+
 #: the pressure-driven gaits of :func:`pressure_cpu`: (p0 [bar], psi [deg], amplitude [bar] or
 #: None for the raised sine)
 PRESSURE_CASES = [(p0, psi, a) for p0 in (1.2, 1.7) for psi in (20.0, 45.0, 90.0)
@@ -144,25 +175,8 @@ def bench_pressure(repeat: int, old: str = PRESSURE_OLD_COMMIT, rounds: int = 2)
     """Simulations of the pressure-driven robot (:func:`pressure_cpu`) for the working tree and for
     commit ``old`` in the same run, ``rounds`` alternating pairs of subprocesses: min and median
     [ms] per simulation, their ratio, and the largest relative difference of S."""
-    import shutil
-    from pathlib import Path
-
-    new_tree = str(Path(__file__).resolve().parent.parent)
-    old_tree = _old_tree(old)
-    samples = {"new": [], "old": []}
-    try:
-        for _ in range(rounds):
-            samples["new"].append(_worker(new_tree, repeat, "pressure"))
-            samples["old"].append(_worker(old_tree, repeat, "pressure"))
-    finally:
-        shutil.rmtree(old_tree, ignore_errors=True)
-    out: dict = {"old_commit": old}
-    stats = {code: {"min": min(v), "median": statistics.median(v)} for code, v in
-             ((c, [x for s in samples[c] for x in s["sim_ms"]]) for c in ("new", "old"))}
-    for code, st in stats.items():
-        out[f"{code}_ms"] = {k: round(v, 2) for k, v in st.items()}
-    for stat in ("min", "median"):
-        out[f"ratio_old_over_new_{stat}"] = round(stats["old"][stat] / stats["new"][stat], 2)
+    samples = _against_old("pressure", repeat, old, rounds)
+    out: dict = {"old_commit": old, **_timing_stats(samples, "sim_ms", "", 2)}
     a, b = samples["new"][0], samples["old"][0]
     out["same_statuses"] = a["status"] == b["status"]
     out["S_max_rel_diff"] = max((abs(x - y) / abs(y) if y else abs(x - y)
@@ -177,27 +191,9 @@ def bench_hybrid(repeat: int, old: str = OLD_COMMIT, rounds: int = 3) -> dict:
     ``rounds`` alternating pairs of subprocesses of ``repeat`` timed runs each; min and median [ms]
     over all samples, their ratios, and the largest differences of S, W+ and the event phases
     between the two codes."""
-    import shutil
-    from pathlib import Path
-
-    new_tree = str(Path(__file__).resolve().parent.parent)
-    old_tree = _old_tree(old)
-    samples = {"new": [], "old": []}
-    try:
-        for _ in range(rounds):
-            samples["new"].append(_worker(new_tree, repeat))
-            samples["old"].append(_worker(old_tree, repeat))
-    finally:
-        shutil.rmtree(old_tree, ignore_errors=True)
-    out = {}
-    for which in ("gait_ms", "cycle_ms"):
-        for code in ("new", "old"):
-            v = [x for s in samples[code] for x in s[which]]
-            out[f"{which[:-3]}_{code}_ms"] = {"min": round(min(v), 3),
-                                              "median": round(statistics.median(v), 3)}
-        for stat in ("min", "median"):
-            out[f"{which[:-3]}_ratio_old_over_new_{stat}"] = round(
-                out[f"{which[:-3]}_old_ms"][stat] / out[f"{which[:-3]}_new_ms"][stat], 2)
+    samples = _against_old("hybrid", repeat, old, rounds)
+    out = {**_timing_stats(samples, "gait_ms", "gait_", 3),
+           **_timing_stats(samples, "cycle_ms", "cycle_", 3)}
     a, b = samples["new"][0], samples["old"][0]
     out["old_commit"] = old
     out["S_abs_diff"] = abs(a["S"] - b["S"])

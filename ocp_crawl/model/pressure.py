@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -179,15 +180,21 @@ class PressureWaveform:
         """Both pressures [bar] and their rates [bar per cycle] at one phase t [cycles], with
         :mod:`math` (the steppers' hot path: scalar phases), in the operations of the array
         forms."""
-        w, psi, p0 = TWO_PI * float(t), float(self.psi), float(self.p0)
-        s1, s2 = w + psi / 2, w - psi / 2
+        half_psi, p0, a = self._floats
+        w = TWO_PI * float(t)
+        s1, s2 = w + half_psi, w - half_psi
         if self.amplitude is None:
-            a = 0.5 * p0
             p1, p2 = a * (1.0 + math.sin(s1)), a * (1.0 + math.sin(s2))
         else:
-            a = float(self.amplitude)
             p1, p2 = p0 + a * math.sin(s1), p0 + a * math.sin(s2)
         return p1, p2, a * TWO_PI * math.cos(s1), a * TWO_PI * math.cos(s2)
+
+    @cached_property
+    def _floats(self) -> tuple[float, float, float]:
+        """(psi/2, p0, the sine's amplitude) as Python floats, once (frozen fields)."""
+        p0 = float(self.p0)
+        a = 0.5 * p0 if self.amplitude is None else float(self.amplitude)
+        return float(self.psi) / 2, p0, a
 
     def describe(self) -> str:
         if self.amplitude is None:
@@ -208,7 +215,7 @@ class PressureReference(PeriodicSignal):
     def __call__(self, t):
         if isinstance(t, float):  # the steppers' hot path, as Harmonic's
             p1, p2, _, _ = self.waveform.at(t)
-            (a1, a2, b1, b2), rest = self._coefficients(), float(self.phi_rest)
+            rest, a1, a2, b1, b2 = self._floats
             # p * p as numpy's p**2 of an array (the exact square; math's pow may round it)
             return np.array([rest - (a1 * (p1 * p1) + b1 * p1), rest - (a2 * (p2 * p2) + b2 * p2)])
         return self.phi_rest - self.bending_map.bending(self.waveform(t))
@@ -216,13 +223,15 @@ class PressureReference(PeriodicSignal):
     def derivative(self, t):
         if isinstance(t, float):
             p1, p2, dp1, dp2 = self.waveform.at(t)
-            a1, a2, b1, b2 = self._coefficients()
+            _, a1, a2, b1, b2 = self._floats
             return np.array([-(2 * a1 * p1 + b1) * dp1, -(2 * a2 * p2 + b2) * dp2])
         return -self.bending_map.slope(self.waveform(t)) * self.waveform.derivative(t)
 
-    def _coefficients(self) -> tuple[float, float, float, float]:
+    @cached_property
+    def _floats(self) -> tuple[float, float, float, float, float]:
+        """(phi_rest, a1, a2, b1, b2) as Python floats, once (frozen fields)."""
         m = self.bending_map
-        return float(m.a1), float(m.a2), float(m.b1), float(m.b2)
+        return float(self.phi_rest), float(m.a1), float(m.a2), float(m.b1), float(m.b2)
 
     def describe(self) -> dict:
         m = self.bending_map
