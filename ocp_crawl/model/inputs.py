@@ -321,6 +321,14 @@ class ReferenceTorque(PeriodicSignal):
         return {"type": "ReferenceTorque", "k": self.k, "reference": self.reference.describe()}
 
 
+def input_knots(signal) -> np.ndarray:
+    """The phases in [0, 1) where ``signal`` may have a kink: the knots of a sampled, triangle or
+    pulse signal (of a :class:`ReferenceTorque`'s reference angles), merged as
+    :func:`merged_knots` merges them; none for a smooth signal."""
+    source = signal.reference if isinstance(signal, ReferenceTorque) else signal
+    return merged_knots(getattr(source, "t_knots", np.zeros(0)))
+
+
 @dataclass(frozen=True)
 class TorqueReference(PeriodicSignal):
     """Reference angles phi_ref,i = pi + tau_i(t)/k [rad] of a torque input: the inverse of

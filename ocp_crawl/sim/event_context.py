@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, as_signal, merged_knots
+from ocp_crawl.model.inputs import PeriodicSignal, as_signal, input_knots
 from ocp_crawl.model.stability import fast_step
 from ocp_crawl.model.statics import Model, fast_ddot2, fast_newton, symbolic
 from ocp_crawl.sim.event_kinks import linear_pieces, step_limit
@@ -74,8 +74,7 @@ class StepperContext:
         signal = as_signal(torque)
         robot = model.robot
         noise = 1e-13 * (1.0 + robot.k / robot.MgL)
-        knots = signal.reference if isinstance(signal, ReferenceTorque) else signal
-        breakpoints = merged_knots(getattr(knots, "t_knots", np.zeros(0)))
+        breakpoints = input_knots(signal)
         max_step = opt.max_step
         if opt.resolve_input and not linear_pieces(signal, breakpoints):
             max_step = min(max_step, max(step_limit(signal), max_step / 64))

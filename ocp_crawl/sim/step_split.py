@@ -15,9 +15,16 @@ boundary:
 * the guards of that mode are read from the solution: the friction margin c_k (scaled by M g) of
   every pair that does not slip (slip onset, change of the slipping foot: the other foot's limit is
   reached), and the slip rate ds_j/dtheta of the slipping pair (slip-to-stick or direction reversal:
-  the rate changes sign), by a central difference of the mode's slip increment;
+  the rate changes sign), by a difference of the mode's slip increment that stays on one piece of
+  the input: the input's kinks (the knots of a sampled, triangle or pulse signal) and the step's end
+  bound it, so that the rate at the step's end is the rate the step ends with (a central
+  difference across a kink at the step's end would average the rates of both sides and place a
+  slip-to-stick at the kink half a difference step early);
 * every guard that is negative at theta = 1 is brought to its root in (0, 1) by Brent's method
-  (:func:`scipy.optimize.brentq`), and the earliest root is the event.
+  (:func:`scipy.optimize.brentq`), and the earliest root is the event; a guard already negative
+  just after the step's start is traced back into the previous step when it was positive there
+  (``lo``), and otherwise, where the input has a kink at the step's start, changed sign at the
+  kink: the event is the step's start.
 
 This search uses only the step NLP (no event function or locator of the event-driven stepper), so
 the time-stepping stays an independent check of :mod:`ocp_crawl.sim.event`.  For the gait OCP the
@@ -26,8 +33,9 @@ boundary carries the guard equation (c_k = 0 there), i.e. a finite element with 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -84,10 +92,12 @@ class _Guards:
     """Guards of one mode along the step fraction, each mode solve cached."""
 
     def __init__(self, step: MPCCStep, state: StepState, mode: Mode,
-                 tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None):
+                 tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None,
+                 kinks: Sequence[float] = ()):
         self.step, self.state, self.tau_at = step, state, tau_at
         self.pair = slip_pair(mode)
         self.x0 = x0
+        self.kinks = sorted(set(kinks) | {1.0})   # the input beyond the step's end is not its own
         self.cache: dict[float, Solve] = {}
         self.failed = False
 
@@ -108,11 +118,33 @@ class _Guards:
         out = [f"{PAIR_NAMES[k]} margin" for k in range(NPAIR) if k != self.pair]
         return out + ([] if self.pair is None else [f"{PAIR_NAMES[self.pair]} slip rate"])
 
+    def piece(self, theta: float) -> tuple[float, float]:
+        """The piece (a, b) of the input between kinks on which the guards at ``theta`` are read:
+        a kink at ``theta`` starts its piece, except the step's end, which closes the last."""
+        if theta >= 1.0:
+            return (max((k for k in self.kinks if k < theta), default=-math.inf),
+                    min(k for k in self.kinks if k >= theta))
+        return (max((k for k in self.kinks if k <= theta), default=-math.inf),
+                min(k for k in self.kinks if k > theta))
+
+    def slip_rate(self, theta: float) -> float:
+        """d s_j / d theta of the slipping pair on the piece of ``theta``: a central difference
+        inside the piece, a one-sided one of the same order (three points) at its ends."""
+        a, b = self.piece(theta)
+        d = min(RATE_DELTA, (b - a) / 3)
+        j = 4 + self.pair
+
+        def s(t: float) -> float:
+            return float(self.solve(t).x[j])
+        if a <= theta - d and theta + d <= b:
+            return (s(theta + d) - s(theta - d)) / (2 * d)
+        if theta + d > b:
+            return (3 * s(theta) - 4 * s(theta - d) + s(theta - 2 * d)) / (2 * d)
+        return (-3 * s(theta) + 4 * s(theta + d) - s(theta + 2 * d)) / (2 * d)
+
     def value(self, name: str, theta: float) -> float:
         if name.endswith("slip rate"):
-            j = 4 + self.pair
-            return float(self.solve(theta + RATE_DELTA).x[j]
-                         - self.solve(theta - RATE_DELTA).x[j]) / (2 * RATE_DELTA)
+            return self.slip_rate(theta)
         return float(self.solve(theta).c[PAIR_NAMES.index(name.split()[0])])
 
 
@@ -121,8 +153,8 @@ class _SearchFailed(Exception):
 
 
 def locate_event(step: MPCCStep, state: StepState, mode: Mode,
-                 tau_at: Callable[[float], np.ndarray],
-                 x0: np.ndarray | None = None, lo: float = 0.0) -> tuple[Split | None, str]:
+                 tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None = None,
+                 lo: float = 0.0, kinks: Sequence[float] = ()) -> tuple[Split | None, str]:
     """The first event of ``mode`` inside a step (see the module docstring).
 
     Parameters
@@ -136,6 +168,9 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         the step's start is traced back to a root in [lo, 0] (an event the previous step passed
         without a change of mode, as slip-to-stick: the slip increment of that step is still
         positive); the caller then redoes the previous step from the event
+    kinks : the step fractions in [lo, 1] where the input has a kink (its knots): the slip rate is
+        read on one side of them, and a guard negative just after a kink at the step's start
+        places the event there
 
     Returns
     -------
@@ -148,7 +183,7 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         slip_pair(mode)
     except ValueError as exc:
         return None, str(exc)
-    g = _Guards(step, state, mode, tau_at, x0)
+    g = _Guards(step, state, mode, tau_at, x0, kinks)
     calls0 = step.ncalls
     try:
         crossed = [n for n in g.names() if g.value(n, 1.0) < -GUARD_TOL]
@@ -162,6 +197,9 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
                 a, b = 0.0, 1.0
             elif lo < 0 and g.value(name, 0.0) < 0 and g.value(name, lo) > 0:
                 a, b = lo, 0.0
+            elif 0.0 in kinks:
+                roots.append((0.0, name))   # the guard's sign changed at the input's kink
+                continue
             else:
                 continue
             roots.append((brentq(lambda th, n=name: g.value(n, th), a, b, xtol=XTOL), name))

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.inputs import PeriodicSignal, as_signal
+from ocp_crawl.model.inputs import PeriodicSignal, as_signal, input_knots
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
 from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
@@ -149,6 +149,7 @@ class TimeStepper:
                             f"got {type(options).__name__}")
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
+        self.knots = input_knots(self.torque)
         self.steps = int(steps)
         self.opt = options
         self.step = MPCCStep(model, options.mpcc)
@@ -269,10 +270,11 @@ class TimeStepper:
                 break
             t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
                 and round(ta * self.steps) % self.steps != 0 else None
+            lo = -1.0 if t_prev is not None else 0.0
             split, why = locate_event(self.step, state, mode,
                                       lambda th: self._tau(ta + th * (tb - ta), run),
-                                      None if run.prev is None else run.prev.w,
-                                      lo=-1.0 if t_prev is not None else 0.0)
+                                      None if run.prev is None else run.prev.w, lo=lo,
+                                      kinks=self._kinks(ta, tb, lo))
             run.split_calls += self.step.ncalls - run.calls_mark
             te = ta + (0.0 if split is None else split.theta) * (tb - ta)  # theta < 0: t_prev set
             if split is not None and split.theta < 0 and not te > (t_prev or 0.0) + 1e-12:
@@ -298,6 +300,21 @@ class TimeStepper:
         self._record(run, res, state, tau, tb)
         run.prev = res
         return res
+
+    def _kinks(self, ta: float, tb: float, lo: float) -> tuple[float, ...]:
+        """The input's knots in [ta + lo (tb - ta), tb] as fractions of the step from ``ta`` to
+        ``tb`` (within 1e-9 of a step's end: that end)."""
+        if not self.knots.size:
+            return ()
+        h = tb - ta
+        cycles = np.arange(math.floor(ta + lo * h), math.floor(tb) + 1)
+        fractions = ((self.knots[None, :] + cycles[:, None]).ravel() - ta) / h
+        out = set()
+        for f in fractions:
+            snapped = next((e for e in (lo, 0.0, 1.0) if abs(f - e) <= 1e-9), float(f))
+            if lo <= snapped <= 1.0:
+                out.add(snapped)
+        return tuple(sorted(out))
 
     def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
         """Record the located event at phase ``te``: the sub-step to it in the old mode (its
