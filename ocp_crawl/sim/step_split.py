@@ -154,7 +154,8 @@ class _SearchFailed(Exception):
 
 def locate_event(step: MPCCStep, state: StepState, mode: Mode,
                  tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None = None,
-                 lo: float = 0.0, kinks: Sequence[float] = ()) -> tuple[Split | None, str]:
+                 lo: float = 0.0, kinks: Sequence[float] = (),
+                 end_mode: Mode | None = None) -> tuple[Split | None, str]:
     """The first event of ``mode`` inside a step (see the module docstring).
 
     Parameters
@@ -171,6 +172,8 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
     kinks : the step fractions in [lo, 1] where the input has a kink (its knots): the slip rate is
         read on one side of them, and a guard negative just after a kink at the step's start
         places the event there
+    end_mode : the mode the whole step's solution ends in: the mode after an event at the step's
+        start where several guards turn at once
 
     Returns
     -------
@@ -195,7 +198,8 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         for name in crossed:
             if g.value(name, 0.0) > 0:
                 a, b = 0.0, 1.0
-            elif lo < 0 and g.value(name, 0.0) < 0 and g.value(name, lo) > 0:
+            elif lo < 0 and g.value(name, 0.0) < 0 and g.value(name, lo) > GUARD_TOL:
+                # (a guard at zero there, as a slip rate while the input holds, is no crossing)
                 a, b = lo, 0.0
             elif 0.0 in kinks:
                 roots.append((0.0, name))   # the guard's sign changed at the input's kink
@@ -218,4 +222,9 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         return None, str(exc)
     after = (Mode.STICK if name.endswith("slip rate")
              else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])])
+    if (theta == 0.0 and end_mode in (Mode.STICK, *SLIP_PAIR_MODES)
+            and sum(abs(t) < MIN_FRACTION for t, _ in roots) > 1):
+        # several guards turn at the step's start (at a kink of the input): which mode follows is
+        # a tie of the guards, and the step's own solution, in one mode to its end, decides it
+        after = end_mode
     return Split(theta, sol, name, value, after, step.ncalls - calls0), ""

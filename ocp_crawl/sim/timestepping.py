@@ -58,6 +58,7 @@ from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
+from ocp_crawl.sim.event_kinks import input_holds
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
@@ -150,6 +151,7 @@ class TimeStepper:
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
         self.knots = input_knots(self.torque)
+        self.holds = input_holds(self.torque, self.knots)
         self.steps = int(steps)
         self.opt = options
         self.step = MPCCStep(model, options.mpcc)
@@ -266,6 +268,10 @@ class TimeStepper:
         for k in range(MAX_SPLITS + 1):
             state, mode = run.state, run.mode
             res = self._solve(run, state, tau, tb)
+            if res.mode != mode and self._held(ta, tb):
+                # nothing moves while the input holds still: the mode holds with it (a slip at
+                # zero rate), as in the event-driven stepper, and is decided where the hold ends
+                res = replace(res, mode=mode)
             if res.mode == mode or not self.opt.switch_exact or k == MAX_SPLITS:
                 break
             t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
@@ -274,7 +280,7 @@ class TimeStepper:
             split, why = locate_event(self.step, state, mode,
                                       lambda th: self._tau(ta + th * (tb - ta), run),
                                       None if run.prev is None else run.prev.w, lo=lo,
-                                      kinks=self._kinks(ta, tb, lo))
+                                      kinks=self._kinks(ta, tb, lo), end_mode=res.mode)
             run.split_calls += self.step.ncalls - run.calls_mark
             te = ta + (0.0 if split is None else split.theta) * (tb - ta)  # theta < 0: t_prev set
             if split is not None and split.theta < 0 and not te > (t_prev or 0.0) + 1e-12:
@@ -300,6 +306,14 @@ class TimeStepper:
         self._record(run, res, state, tau, tb)
         run.prev = res
         return res
+
+    def _held(self, ta: float, tb: float) -> bool:
+        """Whether the input holds still over the phases [ta, tb] (inside one of its holds)."""
+        for start, end in self.holds:
+            a = start + math.floor(ta - start + 1e-12)   # the hold's start at or before ta
+            if ta >= a - 1e-12 and tb <= a + (end - start) + 1e-12:
+                return True
+        return False
 
     def _kinks(self, ta: float, tb: float, lo: float) -> tuple[float, ...]:
         """The input's knots in [ta + lo (tb - ta), tb] as fractions of the step from ``ta`` to
