@@ -332,8 +332,8 @@ def test_criteria_read_without_bounds_that_say_nothing():
 def test_the_max_speed_optimum_passes(cli_optimize_run, capsys):
     """The optimum of problems/ocp_max_speed.toml (the shared optimize run) through the command:
     PASS, every documented criterion printed with its value and bound, and S exact at both N up to
-    the steps' solver tolerance (every event of the optimum's replay is at a node, a knot of the
-    input and a step boundary: the switch-exact steps end on every event)."""
+    the steps' solver tolerance (every event of the optimum's replay is at a node, where the input
+    has a kink: the split puts each on a sub-step boundary)."""
     import ocp_crawl.cli.app as cli
 
     code, _, err, out, _ = cli_optimize_run

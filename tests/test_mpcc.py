@@ -504,3 +504,30 @@ def test_switch_exact_event_points_satisfy_their_event_condition():
             assert abs(ft - (lim1 if e.kind.endswith("1") else lim2)) < 1e-8 * Mg
         kinds.append(e.kind)
     assert kinds.count("slip_switch") == 2 and "slip_to_stick" in kinds
+
+
+def test_the_slip_rate_of_the_step_split_is_read_on_one_piece_of_the_input():
+    """The slip-rate guard of the step split (sim/step_split.py) on a slip increment with a kink
+    at theta = 0.5 (rate 1 before it, -2 after) and one at the step's start: exact on each side,
+    one-sided at the kinks and at the step's end, never an average across a kink; a rate that
+    turns at a kink at the step's start turns there, a margin only at zero."""
+    from types import SimpleNamespace
+
+    from ocp_crawl.sim.step_split import _Guards
+
+    def increment(theta):   # s(theta), kinked at 0 (zero before it) and at 0.5
+        return max(theta, 0.0) if theta <= 0.5 else 0.5 - 2.0 * (theta - 0.5)
+
+    g = _Guards(None, None, Mode.SLIP1_POS, lambda th: np.zeros(2), None, kinks=(0.0, 0.5))
+    g.solve = lambda theta: SimpleNamespace(x=np.r_[np.zeros(4), increment(theta), np.zeros(7)])
+    rates = {0.25: 1.0, 0.4999: 1.0, 0.5: -2.0, 0.5001: -2.0, 0.9995: -2.0, 1.0: -2.0, 0.0: 1.0}
+    for theta, rate in rates.items():
+        assert g.slip_rate(theta) == pytest.approx(rate, abs=1e-9), theta
+    assert g.slip_rate(0.5, left=True) == pytest.approx(1.0, abs=1e-9)
+    assert g.slip_rate(0.0, left=True) == pytest.approx(0.0, abs=1e-9)
+    assert g.piece(1.0) == (0.5, 1.0) and g.piece(0.5) == (0.5, 1.0)
+    assert g.piece(0.5, left=True) == (0.0, 0.5) and g.piece(-0.3) == (-math.inf, 0.0)
+    # at the kink at the step's start: a rate turning there (zero just before), a margin at zero
+    assert g.turns_at_kink("s1+ slip rate", -2.0)
+    assert g.turns_at_kink("s2+ margin", 0.0) and not g.turns_at_kink("s2+ margin", -1e-3)
+    assert not _Guards(None, None, Mode.SLIP1_POS, None, None).turns_at_kink("s2+ margin", 0.0)

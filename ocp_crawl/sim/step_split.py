@@ -45,7 +45,8 @@ from ocp_crawl.sim.mpcc import MPCCStep
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import SLIP_PAIR_MODES, StepState
 
-#: half width of the central difference of the slip rate [step fraction]
+#: spacing of the differences of the slip rate [step fraction] (at most a third of the piece of the
+#: input they are read on)
 RATE_DELTA = 1e-3
 #: roots closer than this to the step's start [step fraction] are the start itself (the event is on
 #: the boundary)
@@ -70,7 +71,8 @@ class Split:
     guard: str
     """name of the guard: '<pair> margin' or '<pair> slip rate'"""
     value: float
-    """the guard's value at the event (about 0)"""
+    """the guard's value at the event (about 0; for an event at a kink of the input at the step's
+    start, its value just after the kink)"""
     mode_after: Mode
     """the mode the guard leads to: slip of the pair whose margin reached zero, stick when the slip
     rate did"""
@@ -118,19 +120,19 @@ class _Guards:
         out = [f"{PAIR_NAMES[k]} margin" for k in range(NPAIR) if k != self.pair]
         return out + ([] if self.pair is None else [f"{PAIR_NAMES[self.pair]} slip rate"])
 
-    def piece(self, theta: float) -> tuple[float, float]:
+    def piece(self, theta: float, left: bool = False) -> tuple[float, float]:
         """The piece (a, b) of the input between kinks on which the guards at ``theta`` are read:
-        a kink at ``theta`` starts its piece, except the step's end, which closes the last."""
-        if theta >= 1.0:
-            return (max((k for k in self.kinks if k < theta), default=-math.inf),
-                    min(k for k in self.kinks if k >= theta))
-        return (max((k for k in self.kinks if k <= theta), default=-math.inf),
-                min(k for k in self.kinks if k > theta))
+        a kink at ``theta`` starts its piece (``left``: ends it), and the step's end always ends
+        one."""
+        left = left or theta >= 1.0
+        a = max((k for k in self.kinks if (k < theta if left else k <= theta)), default=-math.inf)
+        b = min((k for k in self.kinks if (k >= theta if left else k > theta)), default=math.inf)
+        return a, b
 
-    def slip_rate(self, theta: float) -> float:
+    def slip_rate(self, theta: float, left: bool = False) -> float:
         """d s_j / d theta of the slipping pair on the piece of ``theta``: a central difference
         inside the piece, a one-sided one of the same order (three points) at its ends."""
-        a, b = self.piece(theta)
+        a, b = self.piece(theta, left)
         d = min(RATE_DELTA, (b - a) / 3)
         j = 4 + self.pair
 
@@ -142,6 +144,20 @@ class _Guards:
             return (3 * s(theta) - 4 * s(theta - d) + s(theta - 2 * d)) / (2 * d)
         return (-3 * s(theta) + 4 * s(theta + d) - s(theta + 2 * d)) / (2 * d)
 
+    def violated(self) -> list[str]:
+        """The guards of the mode violated at the step's end."""
+        return [n for n in self.names() if self.value(n, 1.0) < -GUARD_TOL]
+
+    def turns_at_kink(self, name: str, v0: float) -> bool:
+        """Whether the guard ``name``, ``v0`` just after the step's start, turned negative at a
+        kink of the input there: a slip rate not negative just before it, or a margin at zero
+        (continuous: only its rate jumps at a kink)."""
+        if 0.0 not in self.kinks:
+            return False
+        if name.endswith("slip rate"):
+            return self.slip_rate(0.0, left=True) >= -GUARD_TOL
+        return abs(v0) <= GUARD_TOL
+
     def value(self, name: str, theta: float) -> float:
         if name.endswith("slip rate"):
             return self.slip_rate(theta)
@@ -150,6 +166,23 @@ class _Guards:
 
 class _SearchFailed(Exception):
     pass
+
+
+def solve_to_end(step: MPCCStep, state: StepState, mode: Mode,
+                 tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None = None,
+                 kinks: Sequence[float] = ()) -> Solve | None:
+    """The step solved in ``mode`` (stick-stick or a single-foot slip) to its end, when no guard of
+    ``mode`` is violated there (the mode holds over the whole step); None otherwise or when the
+    mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s.""" 
+    g = _Guards(step, state, mode, tau_at, x0, kinks)
+    try:
+        if g.violated():
+            return None
+        sol = g.solve(1.0)
+    except _SearchFailed:
+        return None
+    # the slip's sign is free in the mode solve: a slip that reversed is not this mode's
+    return sol if g.pair is None or sol.x[4 + g.pair] >= 0 else None
 
 
 def locate_event(step: MPCCStep, state: StepState, mode: Mode,
@@ -169,11 +202,11 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
         the step's start is traced back to a root in [lo, 0] (an event the previous step passed
         without a change of mode, as slip-to-stick: the slip increment of that step is still
         positive); the caller then redoes the previous step from the event
-    kinks : the step fractions in [lo, 1] where the input has a kink (its knots): the slip rate is
-        read on one side of them, and a guard negative just after a kink at the step's start
-        places the event there
-    end_mode : the mode the whole step's solution ends in: the mode after an event at the step's
-        start where several guards turn at once
+    kinks : the step fractions where the input's rate jumps (from a little below ``lo`` to 1): the
+        slip rate is read on one side of them, and a guard that turns negative at a kink at the
+        step's start places the event there
+    end_mode : the mode the whole step's solution ends in: of several guards turning at once at
+        the step's start, the one leading to it gives the event
 
     Returns
     -------
@@ -189,21 +222,22 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
     g = _Guards(step, state, mode, tau_at, x0, kinks)
     calls0 = step.ncalls
     try:
-        crossed = [n for n in g.names() if g.value(n, 1.0) < -GUARD_TOL]
+        crossed = g.violated()
         if not crossed:
             return None, "no guard of the starting mode is violated at the end of the step"
         from scipy.optimize import brentq  # scipy only where used (start-up time)
 
         roots = []
         for name in crossed:
-            if g.value(name, 0.0) > 0:
+            v0 = g.value(name, 0.0)
+            if v0 > 0:
                 a, b = 0.0, 1.0
-            elif lo < 0 and g.value(name, 0.0) < 0 and g.value(name, lo) > GUARD_TOL:
+            elif g.turns_at_kink(name, v0):
+                roots.append((0.0, name))
+                continue
+            elif lo < 0 and v0 < 0 and g.value(name, lo) > GUARD_TOL:
                 # (a guard at zero there, as a slip rate while the input holds, is no crossing)
                 a, b = lo, 0.0
-            elif 0.0 in kinks:
-                roots.append((0.0, name))   # the guard's sign changed at the input's kink
-                continue
             else:
                 continue
             roots.append((brentq(lambda th, n=name: g.value(n, th), a, b, xtol=XTOL), name))
@@ -215,16 +249,21 @@ def locate_event(step: MPCCStep, state: StepState, mode: Mode,
     if abs(theta) < MIN_FRACTION:
         # the event is the step's start (e.g. a slip that stops exactly at a step phase)
         theta = 0.0
+    if theta == 0.0:
+        # several guards turning at the step's start (at a kink of the input) are a tie: the mode
+        # the step's own solution ends in decides it when it is one of theirs
+        tied = [n for t, n in roots if abs(t) < MIN_FRACTION]
+        name = next((n for n in tied if _mode_after(n) == end_mode), name)
     try:
         value = g.value(name, theta)
         sol = g.solve(theta)
     except _SearchFailed as exc:
         return None, str(exc)
-    after = (Mode.STICK if name.endswith("slip rate")
-             else SLIP_PAIR_MODES[PAIR_NAMES.index(name.split()[0])])
-    if (theta == 0.0 and end_mode in (Mode.STICK, *SLIP_PAIR_MODES)
-            and sum(abs(t) < MIN_FRACTION for t, _ in roots) > 1):
-        # several guards turn at the step's start (at a kink of the input): which mode follows is
-        # a tie of the guards, and the step's own solution, in one mode to its end, decides it
-        after = end_mode
-    return Split(theta, sol, name, value, after, step.ncalls - calls0), ""
+    return Split(theta, sol, name, value, _mode_after(name), step.ncalls - calls0), ""
+
+
+def _mode_after(guard: str) -> Mode:
+    """The mode a guard leads to: slip of the pair whose margin reached zero, stick when the slip
+    rate did."""
+    return (Mode.STICK if guard.endswith("slip rate")
+            else SLIP_PAIR_MODES[PAIR_NAMES.index(guard.split()[0])])

@@ -58,12 +58,12 @@ from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
-from ocp_crawl.sim.event_kinks import input_holds
+from ocp_crawl.sim.event_kinks import input_holds, input_kinks
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
-from ocp_crawl.sim.step_split import locate_event
+from ocp_crawl.sim.step_split import RATE_DELTA, locate_event, solve_to_end
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
@@ -150,8 +150,9 @@ class TimeStepper:
                             f"got {type(options).__name__}")
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
-        self.knots = input_knots(self.torque)
-        self.holds = input_holds(self.torque, self.knots)
+        knots = input_knots(self.torque)
+        self.kinks = input_kinks(self.torque, knots)[0]
+        self.holds = input_holds(self.torque, knots)
         self.steps = int(steps)
         self.opt = options
         self.step = MPCCStep(model, options.mpcc)
@@ -272,6 +273,8 @@ class TimeStepper:
                 # nothing moves while the input holds still: the mode holds with it (a slip at
                 # zero rate), as in the event-driven stepper, and is decided where the hold ends
                 res = replace(res, mode=mode)
+            elif res.mode.foot == 3 and mode.foot != 3 and self.opt.switch_exact:
+                res = self._single_to_end(run, state, mode, ta, tb, tau) or res
             if res.mode == mode or not self.opt.switch_exact or k == MAX_SPLITS:
                 break
             t_prev = run.rows[-2][0] if rewind and len(run.rows) >= 2 and run.rows[-1][0] == ta \
@@ -307,6 +310,25 @@ class TimeStepper:
         run.prev = res
         return res
 
+    def _single_to_end(self, run: "_Run", state: StepState, mode: Mode, ta: float, tb: float,
+                       tau: np.ndarray) -> StepResult | None:
+        """The step in its starting ``mode`` when that mode holds to the step's end (None if
+        not), for a step whose solution ends with both feet slipping: both feet at their limits
+        at the step's end is a tie, reached by either foot's slip, and the step's one-step
+        problem may share the slip out between the feet where one foot slipped; the next step
+        decides at the tie."""
+        calls = self.step.ncalls
+        sol = solve_to_end(self.step, state, mode,
+                           lambda th: self._tau(ta + th * (tb - ta), run),
+                           None if run.prev is None else run.prev.w, self._kinks(ta, tb, 0.0))
+        run.split_calls += self.step.ncalls - calls
+        if sol is None:
+            return None
+        res = step_result_from_w(self.model, state, sol.x, tau, success=True, status=sol.status,
+                                 message="the step in its starting mode",
+                                 iterations=sol.iterations, solve_time=0.0, w=sol.x)
+        return replace(res, mode=mode)
+
     def _held(self, ta: float, tb: float) -> bool:
         """Whether the input holds still over the phases [ta, tb] (inside one of its holds)."""
         for start, end in self.holds:
@@ -316,17 +338,18 @@ class TimeStepper:
         return False
 
     def _kinks(self, ta: float, tb: float, lo: float) -> tuple[float, ...]:
-        """The input's knots in [ta + lo (tb - ta), tb] as fractions of the step from ``ta`` to
-        ``tb`` (within 1e-9 of a step's end: that end)."""
-        if not self.knots.size:
+        """The input's kinks from a little below ``ta + lo (tb - ta)`` (the reach of the slip
+        rate's differences) to ``tb``, as fractions of the step from ``ta`` to ``tb`` (within 1e-9
+        of ``lo``, 0 or 1: that fraction)."""
+        if not self.kinks.size:
             return ()
-        h = tb - ta
-        cycles = np.arange(math.floor(ta + lo * h), math.floor(tb) + 1)
-        fractions = ((self.knots[None, :] + cycles[:, None]).ravel() - ta) / h
+        h, below = tb - ta, lo - 2 * RATE_DELTA
+        cycles = np.arange(math.floor(ta + below * h), math.floor(tb) + 1)
+        fractions = ((self.kinks[None, :] + cycles[:, None]).ravel() - ta) / h
         out = set()
         for f in fractions:
             snapped = next((e for e in (lo, 0.0, 1.0) if abs(f - e) <= 1e-9), float(f))
-            if lo <= snapped <= 1.0:
+            if below <= snapped <= 1.0:
                 out.add(snapped)
         return tuple(sorted(out))
 
