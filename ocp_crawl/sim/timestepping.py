@@ -51,19 +51,19 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.inputs import PeriodicSignal, as_signal, input_knots
+from ocp_crawl.model.inputs import PeriodicSignal, as_signal
 from ocp_crawl.model.statics import Model
 from ocp_crawl.model.stability import fast_stability
 from ocp_crawl.sim.discretisation import error_gate, estimate_S_error
 from ocp_crawl.sim.assemble import no_start_result, output_phases
 from ocp_crawl.sim.event import HybridStepper
 from ocp_crawl.sim.event_checks import describe_margin
-from ocp_crawl.sim.event_kinks import input_holds, input_kinks
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
-from ocp_crawl.sim.step_split import RATE_DELTA, locate_event, solve_to_end
+from ocp_crawl.sim.step_input import StepInput
+from ocp_crawl.sim.step_split import locate_event, solve_to_end
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
@@ -150,9 +150,7 @@ class TimeStepper:
                             f"got {type(options).__name__}")
         self.model = model
         self.torque: PeriodicSignal = as_signal(torque)
-        knots = input_knots(self.torque)
-        self.kinks = input_kinks(self.torque, knots)[0]
-        self.holds = input_holds(self.torque, knots)
+        self.input = StepInput(self.torque)
         self.steps = int(steps)
         self.opt = options
         self.step = MPCCStep(model, options.mpcc)
@@ -269,7 +267,7 @@ class TimeStepper:
         for k in range(MAX_SPLITS + 1):
             state, mode = run.state, run.mode
             res = self._solve(run, state, tau, tb)
-            if res.mode != mode and self._held(ta, tb):
+            if res.mode != mode and self.input.held(ta, tb):
                 # nothing moves while the input holds still: the mode holds with it (a slip at
                 # zero rate), as in the event-driven stepper, and is decided where the hold ends
                 res = replace(res, mode=mode)
@@ -283,7 +281,7 @@ class TimeStepper:
             split, why = locate_event(self.step, state, mode,
                                       lambda th: self._tau(ta + th * (tb - ta), run),
                                       None if run.prev is None else run.prev.w, lo=lo,
-                                      kinks=self._kinks(ta, tb, lo), end_mode=res.mode)
+                                      kinks=self.input.kinks_in(ta, tb, lo), end_mode=res.mode)
             run.split_calls += self.step.ncalls - run.calls_mark
             te = ta + (0.0 if split is None else split.theta) * (tb - ta)  # theta < 0: t_prev set
             if split is not None and split.theta < 0 and not te > (t_prev or 0.0) + 1e-12:
@@ -312,15 +310,13 @@ class TimeStepper:
 
     def _single_to_end(self, run: "_Run", state: StepState, mode: Mode, ta: float, tb: float,
                        tau: np.ndarray) -> StepResult | None:
-        """The step in its starting ``mode`` when that mode holds to the step's end (None if
-        not), for a step whose solution ends with both feet slipping: both feet at their limits
-        at the step's end is a tie, reached by either foot's slip, and the step's one-step
-        problem may share the slip out between the feet where one foot slipped; the next step
-        decides at the tie."""
+        """The step in its starting ``mode`` if that mode holds to its end (else None), for a step
+        ending with both feet slipping: both feet at their limits is a tie that one foot's slip
+        reaches, and the one-step problem may share the slip out; the next step decides."""
         calls = self.step.ncalls
         sol = solve_to_end(self.step, state, mode,
                            lambda th: self._tau(ta + th * (tb - ta), run),
-                           None if run.prev is None else run.prev.w, self._kinks(ta, tb, 0.0))
+                           None if run.prev is None else run.prev.w, self.input.kinks_in(ta, tb))
         run.split_calls += self.step.ncalls - calls
         if sol is None:
             return None
@@ -328,30 +324,6 @@ class TimeStepper:
                                  message="the step in its starting mode",
                                  iterations=sol.iterations, solve_time=0.0, w=sol.x)
         return replace(res, mode=mode)
-
-    def _held(self, ta: float, tb: float) -> bool:
-        """Whether the input holds still over the phases [ta, tb] (inside one of its holds)."""
-        for start, end in self.holds:
-            a = start + math.floor(ta - start + 1e-12)   # the hold's start at or before ta
-            if ta >= a - 1e-12 and tb <= a + (end - start) + 1e-12:
-                return True
-        return False
-
-    def _kinks(self, ta: float, tb: float, lo: float) -> tuple[float, ...]:
-        """The input's kinks from a little below ``ta + lo (tb - ta)`` (the reach of the slip
-        rate's differences) to ``tb``, as fractions of the step from ``ta`` to ``tb`` (within 1e-9
-        of ``lo``, 0 or 1: that fraction)."""
-        if not self.kinks.size:
-            return ()
-        h, below = tb - ta, lo - 2 * RATE_DELTA
-        cycles = np.arange(math.floor(ta + below * h), math.floor(tb) + 1)
-        fractions = ((self.kinks[None, :] + cycles[:, None]).ravel() - ta) / h
-        out = set()
-        for f in fractions:
-            snapped = next((e for e in (lo, 0.0, 1.0) if abs(f - e) <= 1e-9), float(f))
-            if below <= snapped <= 1.0:
-                out.add(snapped)
-        return tuple(sorted(out))
 
     def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
         """Record the located event at phase ``te``: the sub-step to it in the old mode (its
