@@ -16,8 +16,8 @@ boundary:
   every pair that does not slip (slip onset, change of the slipping foot: the other foot's limit is
   reached), and the slip rate ds_j/dtheta of the slipping pair (slip-to-stick or direction reversal:
   the rate changes sign), by a difference of the mode's slip increment that stays on one piece of
-  the input: the input's kinks (the knots of a sampled, triangle or pulse signal) and the step's end
-  bound it, so that the rate at the step's end is the rate the step ends with (a central
+  the input: the input's kinks (the knots where its rate jumps) and the step's end bound it, so
+  that the rate at the step's end is the rate the step ends with (a central
   difference across a kink at the step's end would average the rates of both sides and place a
   slip-to-stick at the kink half a difference step early);
 * every guard that is negative at theta = 1 is brought to its root in (0, 1) by Brent's method
@@ -173,7 +173,7 @@ def solve_to_end(step: MPCCStep, state: StepState, mode: Mode,
                  kinks: Sequence[float] = ()) -> Solve | None:
     """The step solved in ``mode`` (stick-stick or a single-foot slip) to its end, when no guard of
     ``mode`` is violated there (the mode holds over the whole step); None otherwise or when the
-    mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s.""" 
+    mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s."""
     g = _Guards(step, state, mode, tau_at, x0, kinks)
     try:
         if g.violated():
