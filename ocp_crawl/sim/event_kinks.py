@@ -174,6 +174,13 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     return holds[np.argsort(holds[:, 0])]
 
 
+def hold_spans(holds, t: float) -> list[tuple[float, float]]:
+    """The absolute spans (start, end) [cycles] of ``holds`` (rows [start, end) of
+    :func:`input_holds`) in the cycles around phase t."""
+    c = math.floor(t)
+    return [(a + k, b + k) for k in (c - 1, c, c + 1) for a, b in holds]
+
+
 def _runs(b: np.ndarray, ends: np.ndarray, held: np.ndarray) -> list[tuple[float, float]]:
     """The maximal runs (start, end) of consecutive held pieces [b_i, ends_i] around the cycle."""
     if not held.any():
@@ -292,9 +299,7 @@ class InputPieces:
         return torque_curvature(self._torque_at, t, dt)
 
     def _hold_spans(self, t: float):
-        """The holds' absolute spans (start, end) [cycles] of the cycles around phase t."""
-        c = math.floor(t)
-        return [(a + k, b + k) for k in (c - 1, c, c + 1) for a, b in self._hold_list]
+        return hold_spans(self._hold_list, t)
 
     def next_hold(self, t: float) -> float:
         """The start of the first hold after phase t [cycles] (later than t + KINK_GAP); inf without

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ocp_crawl.model.inputs import PeriodicSignal, input_knots
-from ocp_crawl.sim.event_kinks import input_holds, input_kinks
+from ocp_crawl.sim.event_kinks import hold_spans, input_holds, input_kinks
 from ocp_crawl.sim.step_split import RATE_DELTA
 
 
@@ -22,16 +22,13 @@ class StepInput:
         knots = input_knots(torque)
         self.kinks = input_kinks(torque, knots)[0]
         """phases in [0, 1) where the input's rate jumps"""
-        self.holds = input_holds(torque, knots)
-        """(m, 2) [start, end) phases of the stretches where the input holds still"""
+        self.holds = [tuple(h) for h in input_holds(torque, knots).tolist()]
+        """[start, end) phases of the stretches where the input holds still"""
 
     def held(self, ta: float, tb: float) -> bool:
         """Whether the input holds still over the phases [ta, tb] (inside one of its holds)."""
-        for start, end in self.holds:
-            a = start + math.floor(ta - start + 1e-12)   # the hold's start at or before ta
-            if ta >= a - 1e-12 and tb <= a + (end - start) + 1e-12:
-                return True
-        return False
+        return any(a - 1e-12 <= ta and tb <= b + 1e-12 and a < b
+                   for a, b in hold_spans(self.holds, ta))
 
     def kinks_in(self, ta: float, tb: float, lo: float = 0.0) -> tuple[float, ...]:
         """The kinks from a little below ``ta + lo (tb - ta)`` (the reach of the slip rate's
