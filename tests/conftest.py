@@ -9,6 +9,7 @@ import pytest
 matplotlib.use("Agg")
 
 from ocp_crawl import Harmonic, Model, ReferenceTorque, Robot  # noqa: E402
+from ocp_crawl.ocp import OCPSettings, optimize_gait  # noqa: E402
 from ocp_crawl.model import compiled  # noqa: E402
 
 # the line "compiling ... into the cache" depends on the state of the cache, not on the code
@@ -89,33 +90,59 @@ def model_of():
     return build
 
 
+def computed_once(tmp_path_factory, name: str, compute):
+    """``compute()`` once in this test run, shared by the pytest-xdist workers through a pickle in
+    :func:`shared_tmp` (the first worker to take the lock computes it, the others read it)."""
+    import fcntl
+    import pickle
+
+    shared = shared_tmp(tmp_path_factory)
+    record = shared / f"{name}.pickle"
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not record.is_file():
+            record.write_bytes(pickle.dumps(compute()))
+        return pickle.loads(record.read_bytes())
+
+
 @pytest.fixture(scope="session")
 def cli_optimize_run(tmp_path_factory):
     """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30
     (a cheap search of every waveform family), shared by the tests of its JSON, progress bar and
-    output files, and by the worker processes of pytest-xdist (the first to take the lock runs it):
-    (exit code, stdout, stderr, the --out directory, N)."""
+    output files, and by the worker processes of pytest-xdist: (exit code, stdout, stderr, the --out
+    directory, N)."""
     import contextlib
-    import fcntl
     import io
-    import json
 
     from ocp_crawl.cli.app import main
 
     nodes = 30
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
-    shared = shared_tmp(tmp_path_factory)
-    out, record = shared / "cli_optimize" / "opt", shared / "cli_optimize.json"
-    with open(shared / "cli_optimize.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not record.is_file():
-            out.parent.mkdir(exist_ok=True)
-            stdout, stderr = io.StringIO(), io.StringIO()
-            with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
-                code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set",
-                             "ocp.harmonic_psi=8", "--set", "ocp.baseline_samples=8", "--set",
-                             "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40",
-                             "--json", "--out", str(out), "--progress"])
-            record.write_text(json.dumps([code, stdout.getvalue(), stderr.getvalue()]))
-        code, stdout, stderr = json.loads(record.read_text())
+    out = shared_tmp(tmp_path_factory) / "cli_optimize" / "opt"
+
+    def run():
+        out.parent.mkdir(exist_ok=True)
+        stdout, stderr = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+            code = main(["optimize", str(problem), "--set", f"ocp.nodes={nodes}", "--set",
+                         "ocp.harmonic_psi=8", "--set", "ocp.baseline_samples=8", "--set",
+                         "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40",
+                         "--json", "--out", str(out), "--progress"])
+        return code, stdout.getvalue(), stderr.getvalue()
+
+    code, stdout, stderr = computed_once(tmp_path_factory, "cli_optimize", run)
     return code, stdout, stderr, out, nodes
+
+
+#: max_speed at N = 16 from a short search of the harmonic family (:func:`coarse_max_speed`)
+COARSE = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
+                     baselines="harmonic", baseline_samples=0, baseline_starts=1,
+                     baseline_evaluations=40)
+
+
+@pytest.fixture(scope="session")
+def coarse_max_speed(tmp_path_factory):
+    """One optimisation of the paper's robot with :data:`COARSE`, shared by the tests that read
+    it (a figure, the tightened NLP, a user objective's comparison) and by the xdist workers."""
+    return computed_once(tmp_path_factory, "coarse_max_speed",
+                         lambda: optimize_gait(Robot.paper(), "physical", COARSE, jobs=1))

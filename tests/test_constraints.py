@@ -6,6 +6,7 @@ formula), the baseline against the bound it must meet, and the optimum's torques
 by their own maximum.
 """
 import math
+from dataclasses import replace
 
 import casadi as cs
 import numpy as np
@@ -22,6 +23,8 @@ from ocp_crawl.ocp.quantities import (QUANTITIES, Constraint, Cycle, mean_square
 from ocp_crawl.ocp.search import best_harmonic
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.status import Status
+
+from conftest import COARSE
 
 ROBOT = Robot.paper()
 #: a peak torque below the envelope's 0.351 N m (phi_ref = 60 deg): the bound is active
@@ -174,17 +177,16 @@ def _speed_value(cycle):
 
 
 @pytest.mark.slow
-def test_a_user_objective_that_restates_max_speed_finds_its_optimum():
+def test_a_user_objective_that_restates_max_speed_finds_its_optimum(coarse_max_speed):
     """The hook with the mean speed direction S / T, scaled as the named objective scales it (L over
     the reference period), is the max_speed NLP: the same replayed optimum (N = 16), reported under
     the user's label and compared with the same baseline."""
     # a short search: both solves share its start and their baseline (not its quality) is compared
-    base = dict(nodes=16, starts=1, direction=-1, baselines="harmonic", baseline_samples=0,
-                harmonic_A=2, harmonic_psi=8, baseline_starts=1, baseline_evaluations=40)
-    named = optimize_gait(ROBOT, "physical", OCPSettings(**base), jobs=1)
-    scale = ROBOT.L / OCPSettings(**base).period_ref()
+    named = coarse_max_speed
+    assert named.settings.objective == "max_speed" and ROBOT == Robot.paper()
+    scale = ROBOT.L / COARSE.period_ref()
     user = UserObjective("speed", _speed_nlp, _speed_value, sense="max", unit="m/s", scale=scale)
-    mine = optimize_gait(ROBOT, "physical", OCPSettings(**base, user_objective=user), jobs=1)
+    mine = optimize_gait(ROBOT, "physical", replace(COARSE, user_objective=user), jobs=1)
     assert named.success and mine.success, (named.message, mine.message)
     assert mine.objective == "max:speed" and mine.settings.minimises is False
     assert mine.value_replay == pytest.approx(named.value_replay, rel=1e-7)

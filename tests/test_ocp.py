@@ -10,6 +10,8 @@ from ocp_crawl import Robot
 from ocp_crawl import Status
 from ocp_crawl.ocp import OCPSettings, optimize_gait
 
+from conftest import COARSE
+
 
 @pytest.mark.slow
 def test_infeasible_speed_requirement_is_a_status():
@@ -142,18 +144,6 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
     assert code == 1
     assert json.loads(captured.out)["status"] == "infeasible"
     assert "infeasible" in captured.err and "Traceback" not in captured.err
-
-
-#: max_speed at N = 16 from a short search of the harmonic family (:func:`coarse_max_speed`)
-COARSE = OCPSettings(objective="max_speed", nodes=16, starts=1, harmonic_psi=8, harmonic_A=2,
-                     baselines="harmonic", baseline_samples=0, baseline_starts=1,
-                     baseline_evaluations=40)
-
-
-@pytest.fixture(scope="module")
-def coarse_max_speed():
-    """One optimisation with COARSE, shared by the figure's test and the tightened NLP's."""
-    return optimize_gait(Robot.paper(), "physical", COARSE)
 
 
 @pytest.mark.slow
