@@ -11,7 +11,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 PAPER = REPO / "problems" / "paper_gait.toml"
 OCP = REPO / "problems" / "ocp_max_speed.toml"
-PAPER_TEXT, OCP_TEXT = PAPER.read_text(), OCP.read_text()
+CHAIN = REPO / "problems" / "five_link_chain.toml"
+PAPER_TEXT, OCP_TEXT, CHAIN_TEXT = PAPER.read_text(), OCP.read_text(), CHAIN.read_text()
 
 #: k = 0.05 M g L (Table I robot): the springs cannot hold the robot up at t = 0 (status no_start)
 SOFT = "robot.k=0.00306"
@@ -24,6 +25,10 @@ def edit(old, new, text=PAPER_TEXT):
 
 def ocp_edit(old, new):
     return edit(old, new, OCP_TEXT)
+
+
+def chain_edit(old, new):
+    return edit(old, new, CHAIN_TEXT)
 
 
 @dataclass(frozen=True)
@@ -118,8 +123,40 @@ COMMAND_ROWS = {
         R("simulate", ["{file}"], ["x.toml", "top-level key k = 0.1", "section"],
           text="k = 0.1\n" + PAPER_TEXT),
     "simulate: unknown key":
-        R("simulate", ["{file}"], ["x.toml", "stiffness = 0.1677", "unknown key"],
+        R("simulate", ["{file}"], ["x.toml", "spring_k = 0.1677", "unknown key"],
+          text=edit("k = 0.1677", "spring_k = 0.1677")),
+    # a chain ([robot] lengths, masses, stiffness): its lists, and what it cannot take
+    "simulate: a chain's stiffness as a number":
+        R("simulate", ["{file}"], ["x.toml", "[robot] stiffness = 0.1677", "an array"],
           text=edit("k = 0.1677", "stiffness = 0.1677")),
+    "simulate: a chain's masses fewer than its links":
+        R("simulate", ["{file}"], ["x.toml", "[robot] masses", "5 entries, got 4"],
+          text=chain_edit("masses = [0.013, 0.009, 0.010, 0.008, 0.012]",
+                          "masses = [0.013, 0.009, 0.010, 0.008]")),
+    "simulate: a chain's joint angles fewer than its joints":
+        R("simulate", ["{file}"], ["x.toml", "[gait] gamma_joints_deg", "4 joints"],
+          text=chain_edit("gamma_joints_deg = [95.0, 170.0, 175.0, 90.0]",
+                          "gamma_joints_deg = [95.0, 170.0, 175.0]")),
+    "simulate: a chain with the three-link mass":
+        R("simulate", ["{file}"], ["x.toml", "[robot] M = 0.052", "mutually exclusive"],
+          text=chain_edit("[robot]\n", "[robot]\nM = 0.052\n")),
+    "simulate: a chain with joint 1's angle of the three-link robot":
+        R("simulate", ["{file}"], ["x.toml", "[gait] gamma1_deg = 90", "gamma_joints_deg"],
+          text=chain_edit("[gait]\n", "[gait]\ngamma1_deg = 90.0\n")),
+    "simulate: a chain with another waveform than the harmonic":
+        R("simulate", ["{file}"], ["x.toml", '[gait] waveform = "fourier"', "harmonic"],
+          text=CHAIN_TEXT[:CHAIN_TEXT.index("[gait]")]
+          + '[gait]\nwaveform = "fourier"\ngamma_deg = 90.0\nsin1_deg = [10.0]\n'),
+    "simulate: a chain with the MuJoCo solver":
+        R("simulate", ["{file}", "--solver", "mujoco"], ["x.toml", "chain", "event, mpcc"],
+          text=chain_edit("[gait]\n", "[gait]\n")),
+    "simulate: a chain whose first joint starts below the ground":
+        R("simulate", ["{file}"], ["x.toml", "[gait] of the chain is invalid", "joint 1"],
+          text=chain_edit("gamma_joints_deg = [95.0, 170.0, 175.0, 90.0]",
+                          "gamma_joints_deg = [260.0, 170.0, 175.0, 90.0]")),
+    "optimize: a chain":
+        R("optimize", ["{file}"], ["x.toml", "chain of 5 links", "optimize", "three-link"],
+          text=chain_edit("[model]\n", '[ocp]\nobjective = "max_speed"\n\n[model]\n')),
     "simulate: unknown section":
         R("simulate", ["{file}"], ["x.toml", "[modle]", "did you mean model?"],
           text=edit("[model]", "[modle]")),
@@ -425,6 +462,8 @@ COMMAND_ROWS = {
                                    ["--periods 0", "(0, 10000]"]),
     "dynamics: too many periods": R("dynamics", ["{paper}", "--periods", *map(str, range(1, 14))],
                                     ["--periods", "13 periods given, at most 12"]),
+    "dynamics: a chain": R("dynamics", ["{file}"], ["x.toml", "chain", "three-link robot only"],
+                           text=CHAIN_TEXT),
     "dynamics: timestep 0": R("dynamics", ["{paper}", "--set", "simulation.timestep=0"],
                               ["[simulation] timestep = 0", "must be in [1e-6, 0.01]"]),
     "dynamics: the angles drive, paper gravity":

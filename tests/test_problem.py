@@ -139,7 +139,8 @@ def test_schema_is_one_table_with_units():
         for key in section.keys:
             assert key.unit and key.help
     table = schema_markdown()
-    assert "`robot.k` | float | N m/rad | required | in [1e-12, 1e12] (so that M g L" in table
+    assert ("`robot.k` | float | N m/rad | required unless `lengths` and `masses` and `stiffness` "
+            "given | in [1e-12, 1e12] (so that M g L") in table
     # the documentation shows this table through its generated reference page, and the guide links
     # to it
     guide = (REPO / "docs" / "guide" / "problem_files.md").read_text(encoding="utf-8")

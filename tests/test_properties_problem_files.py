@@ -27,7 +27,8 @@ from ocp_crawl.sim.angles import simulate_angles
 from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.problem import (SCHEMA, SECTIONS, Problem, ProblemError, problem_from_dict,
                                run_problem)
-from ocp_crawl.problem.problem import MAX_STIFFNESS_RATIO
+from ocp_crawl.problem.chain_robot import CHAIN_KEYS, JOINT_KEYS
+from ocp_crawl.problem.robot_checks import MAX_STIFFNESS_RATIO
 from ocp_crawl.problem.keys import Tables
 
 from _properties_common import (BAD_NUMBERS, CHEAP, SIMS, amplitudes, check_outcome, gammas,
@@ -152,9 +153,12 @@ def section_values(draw, section, ranges=None):
     tests/test_waveforms.py)."""
     keys = section.key_map
     given = set()
-    for key in default_variant_keys(section):
+    drawn = default_variant_keys(section)
+    for key in drawn:
         if key.required:
-            if key.required_unless and draw(st.booleans()):
+            # (alternatives among the keys drawn here: not M, L, k's, a chain's)
+            if (key.required_unless and set(key.required_unless) <= {k.name for k in drawn}
+                    and draw(st.booleans())):
                 given |= set(key.required_unless)
                 if not key.exclusive_with and draw(st.booleans()):
                     given.add(key.name)
@@ -255,11 +259,14 @@ def edited(data: dict, section: str, name: str, value) -> dict:
 
 def default_variant_keys(section):
     """The keys of a section with its selector (``[gait] waveform``) at its default, the selector
-    left out."""
+    left out, for the three-link robot (a chain's keys, ``[robot] lengths, ...`` and its joints'
+    lists, have their own tests: tests/test_chain_problems.py and the bad-input matrix)."""
+    chain = set(CHAIN_KEYS) | set(JOINT_KEYS)
+    keys = [k for k in section.keys if section.name not in ("robot", "gait") or k.name not in chain]
     if section.selector is None:
-        return list(section.keys)
+        return keys
     default = section.key_map[section.selector].default
-    return [k for k in section.keys if k.name != section.selector and section.applies(k, default)]
+    return [k for k in keys if k.name != section.selector and section.applies(k, default)]
 
 
 def schema_keys(numeric_only=False):

@@ -10,6 +10,7 @@ from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integ
                                   out_dir, prepare_out, work_arg, write_out)
 from ocp_crawl.model.pressure import PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
+from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem.work import fit_work
 
 #: most least-squares evaluations (each runs every measurement's simulation)
@@ -76,6 +77,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 
     problem = load_problem(args.problem, args.overrides)
+    three_link_only(problem, "fit")
     params = resolve_parameters(problem, args.params, args.start, args.bounds, args.form)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]

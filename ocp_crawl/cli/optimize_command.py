@@ -17,6 +17,7 @@ from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.limits import NODES_BOUNDS
+from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
                                problem_from_dict)
 from ocp_crawl.problem.overrides import read_toml
@@ -297,6 +298,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     problem = problem_from_dict(data, source=str(args.problem),
                                 overrides=[*args.overrides,
                                            *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
+    three_link_only(problem, "optimize")
     if problem.drive != "torque":
         raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = "
                        f"\"torque\", got {format_value(problem.drive)}")
@@ -321,6 +323,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
     start = None if args.start is None else load_problem(args.start)
+    if start is not None:
+        three_link_only(start, "optimize --start")
     if start is not None and (start.drive != "torque" or start.period is None):
         raise BadInput(f"--start {args.start}: needs a torque-drive gait with a [gait] period [s] "
                        f"(as the optimal_gait.toml that optimize --out writes); got drive "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -14,6 +15,8 @@ from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integ
                                   out_dir, out_file,
                                   prepare_out, real, steps_type, work_arg, write_out)
 from ocp_crawl.io import units
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.robot import Robot
 from ocp_crawl.problem.work import crosscheck_work, simulation_work
 from ocp_crawl.io.files import jsonable, write_json, write_npz
 from ocp_crawl.problem import (SCHEMA, TORQUE_SOLVERS, Problem, format_value, load_problem,
@@ -39,11 +42,12 @@ def no_start_message(problem: Problem, detail: str) -> str:
     2)."""
     d = problem.to_dict()
     r, g = d.get("robot", {}), d.get("gait", {})
-    robot = ", ".join(f"{k} = {format_value(r[k])}" for k in ("k", "M", "L", "g") if k in r)
+    robot = ", ".join(f"{k} = {format_value(r[k])}"
+                      for k in ("k", "stiffness", "M", "masses", "L", "lengths", "g") if k in r)
     gait = ", ".join(f"{k} = {format_value(v)}" for k, v in g.items() if k.endswith("_deg"))
     return (f"{problem.source}: [robot] {robot}; [model] gravity = "
             f"{format_value(problem.gravity)}; [gait] {gait}: {detail}; stiffen the joints "
-            "(robot.k) or change the gait")
+            f"(robot.{'stiffness' if problem.is_chain else 'k'}) or change the gait")
 
 
 def check_start(problem: Problem) -> None:
@@ -126,10 +130,22 @@ def _speed_text(speed: float | None, period: float | None) -> str:
     return f"{units.speed(speed)} (|S| / period, period {period:.6g} s)"
 
 
+def robot_text(robot: Robot | Chain) -> str:
+    """The robot's parameters in one line (a chain: its lists, from foot 1 to foot 2)."""
+    tail = f"mu1 = {robot.mu1:g}, mu2 = {robot.mu2:g}, g = {robot.g:g} m/s^2"
+    if isinstance(robot, Chain):
+        def listed(values, scale=1.0):
+            return "[" + ", ".join(f"{scale * v:g}" for v in values) + "]"
+        return (f"chain of {robot.n} links: lengths {listed(robot.lengths)} m, masses "
+                f"{listed(robot.masses)} kg, stiffness {listed(robot.stiffness)} N m/rad, "
+                f"com {listed(robot.com)}, rest {listed(robot.rest, 180 / math.pi)} deg, {tail}")
+    return (f"M = {robot.M:g} kg, L = {robot.L:g} m, beta = {robot.beta:g}, k = {robot.k:g} "
+            f"N m/rad, {tail}")
+
+
 def format_summary(result: CrawlResult, problem: Problem) -> str:
     """Readable summary: problem, status, S [mm], the mean speed [mm/s] ("-" without a period), W+
     [mJ], CoT+, events table, cycles."""
-    r = problem.robot
     gait = problem.sections.get("gait", {})
     gait_text = waveform_text(gait)
     direction = ""
@@ -138,8 +154,7 @@ def format_summary(result: CrawlResult, problem: Problem) -> str:
     lines = [
         f"problem    {problem.source}",
         f"drive      {problem.drive} (solver {problem.solver}), gravity {problem.gravity}",
-        f"robot      M = {r.M:g} kg, L = {r.L:g} m, beta = {r.beta:g}, k = {r.k:g} N m/rad, "
-        f"mu1 = {r.mu1:g}, mu2 = {r.mu2:g}, g = {r.g:g} m/s^2",
+        f"robot      {robot_text(problem.robot)}",
         f"gait       {gait_text}",
         f"status     {result.status_name} ({result.status}): {result.message}",
         f"S          {_per_cycle(units.distance(result.S))}{direction}",

@@ -35,6 +35,7 @@ from ocp_crawl.fit.params import Parameter, pressure_form, problem_pressure, spl
 from ocp_crawl.model.pressure import DEFAULT_FORM
 from ocp_crawl.io.tables import TableError
 from ocp_crawl.problem import Problem, ProblemError
+from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.status import Status
 from ocp_crawl.workers import worker_pool
 
@@ -291,6 +292,7 @@ def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Seq
     """Every check of a fit's input before any simulation: :func:`check_counts`,
     :func:`check_pressure`, :func:`check_rows`.  TableError (naming a file and row) or ProblemError
     (naming an option)."""
+    three_link_only(problem, "fit")
     check_counts(datasets, params, pressure_form(problem, form))
     check_pressure(params, pressure or {})
     check_rows(problem, datasets, params, pressure, form)

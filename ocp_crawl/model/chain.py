@@ -113,6 +113,16 @@ class Chain:
 
     # ------------------------------------------------------------------ sizes and totals
     @property
+    def mu1(self) -> float:
+        """Friction coefficient of foot 1 [-] (as :attr:`Robot.mu1`)."""
+        return self.mu[0]
+
+    @property
+    def mu2(self) -> float:
+        """Friction coefficient of foot 2 [-]."""
+        return self.mu[1]
+
+    @property
     def n(self) -> int:
         """number of links"""
         return len(self.lengths)

@@ -14,21 +14,20 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Sequence, cast
 
-import numpy as np
-
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
+from ocp_crawl.problem import chain_robot
 from ocp_crawl.problem.waveforms import gait_input
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, GravityConvention, Model, Robot
 from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, split_key
 from ocp_crawl.problem.messages import format_value, suggest, toml_type
 from ocp_crawl.problem.keys import ProblemError, Section, field_default
 from ocp_crawl.problem.schema import DRIVES, SCHEMA, SECTIONS, Drive, removed_key
+from ocp_crawl.problem.robot_checks import (check_chain_contact, check_chain_stiffness,
+                                            check_contact, check_stiffness_ratio)
 from ocp_crawl.problem.values import Context, check_value
 from ocp_crawl.sim import DEFAULT_SOLVER, MUJOCO_SOLVERS, solver_named, unusable
-
-#: phases at which a prescribed-angle gait is checked for contact validity before simulating
-CONTACT_GRID = 721
-
 
 def freeze(d: Mapping) -> Mapping:
     """A read-only copy of nested mappings."""
@@ -53,8 +52,9 @@ class Problem:
     """A validated simulation problem: robot, gait, drive, gravity convention, solver and its
     options."""
 
-    robot: Robot
-    """physical parameters (SI units)"""
+    robot: Robot | Chain
+    """physical parameters (SI units): the symmetric three-link robot, or an n-link chain
+    (``[robot] lengths``)"""
     gait: PeriodicSignal
     """reference angles [rad] (a :class:`Harmonic` for the default waveform); the values as given
     are in ``sections["gait"]``"""
@@ -79,10 +79,10 @@ class Problem:
     defaults of ``sections``; None: every key of ``sections`` (a problem built in code)"""
 
     def __post_init__(self) -> None:
-        for name, cls in (("robot", Robot), ("gait", PeriodicSignal)):
+        for name, cls in (("robot", (Robot, Chain)), ("gait", (PeriodicSignal,))):
             if not isinstance(getattr(self, name), cls):
-                raise TypeError(f"Problem.{name} must be a {cls.__name__}, got "
-                                f"{type(getattr(self, name)).__name__}")
+                raise TypeError(f"Problem.{name} must be a {' or '.join(c.__name__ for c in cls)}"
+                                f", got {type(getattr(self, name)).__name__}")
         if self.drive not in DRIVES:
             raise ValueError(f"Problem.drive must be one of {DRIVES}, got {self.drive!r}")
         if self.input_torque is not None and (self.drive != "torque"
@@ -122,16 +122,28 @@ class Problem:
         return abs(S) / period if period is not None and math.isfinite(S) else None
 
     @property
-    def model(self) -> Model:
-        """The robot with the problem's gravity convention."""
+    def is_chain(self) -> bool:
+        """Whether the robot is an n-link :class:`~ocp_crawl.model.chain.Chain`."""
+        return isinstance(self.robot, Chain)
+
+    @property
+    def model(self) -> Model | ChainModel:
+        """The robot with the problem's gravity convention (a ChainModel for a chain)."""
+        if isinstance(self.robot, Chain):
+            return ChainModel(self.robot, gravity=self.gravity)
         return Model(self.robot, gravity=self.gravity)
 
     @property
     def torque(self) -> PeriodicSignal:
         """The torque input [N m]: ``input_torque`` if given, else tau = k (phi_ref - pi) of eq.
-        (tau)."""
-        return (self.input_torque if self.input_torque is not None
-                else ReferenceTorque(self.gait, self.robot.k))
+        (tau) (a chain: tau_j = k_j (phi_ref_j - pi - rest_j))."""
+        if self.input_torque is not None:
+            return self.input_torque
+        if isinstance(self.robot, Chain):
+            from ocp_crawl.sim.chain_torque import ChainReferenceTorque
+
+            return ChainReferenceTorque(self.gait, self.robot)
+        return ReferenceTorque(self.gait, self.robot.k)
 
     @property
     def signal(self) -> PeriodicSignal:
@@ -175,8 +187,13 @@ class Problem:
         accepts it)."""
         out = thaw(self.sections)
         # problems built in code without sections: report the objects themselves
-        if "robot" not in out:
-            r = self.robot
+        r = self.robot
+        if "robot" not in out and isinstance(r, Chain):
+            out["robot"] = {"lengths": list(r.lengths), "masses": list(r.masses),
+                            "stiffness": list(r.stiffness), "com": list(r.com),
+                            "rest_deg": [math.degrees(x) for x in r.rest], "mu1": r.mu1,
+                            "mu2": r.mu2, "g": r.g}
+        elif "robot" not in out and isinstance(r, Robot):
             out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1,
                             "mu2": r.mu2, "g": r.g}
         if "gait" not in out:
@@ -287,34 +304,6 @@ def _check_friction_set(ctx: Context, given: Mapping[str, Any]) -> None:
                     f'objective = "robust_speed"')
 
 
-def _check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str,
-                   values: Mapping) -> None:
-    """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad
-    input."""
-    gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
-    blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
-    blame = f"[gait] {blame} (with [robot] beta = {format_value(values['robot']['beta'])})"
-    try:
-        model.check_contact(gait(0.0), where="reference angles at phase 0")
-    except ValueError as exc:
-        raise ctx.error(f"{blame} are invalid: {exc}") from None
-    if drive != "angles":
-        return
-    t = np.linspace(0.0, 1.0, CONTACT_GRID)
-    kin = model.kinematics(gait(t))
-    bad = np.nonzero(~((kin["d"] > 0) & (kin["fn1"] > 0) & (kin["fn2"] > 0)))[0]
-    if bad.size:
-        j = int(bad[0])
-        try:
-            model.check_contact(gait(t[j]), where=f"prescribed angles at phase {t[j]:.4f}")
-            detail = f"prescribed angles at phase {t[j]:.4f}: contact lost"
-        except ValueError as exc:
-            detail = str(exc)
-        raise ctx.error(f"{blame} are invalid for the angles drive: {detail} (both feet must stay "
-                        "on the ground over the whole cycle)")
-
-
-
 def _check_sections(data: Mapping[str, Any], ctx: Context) -> dict[str, dict[str, Any]]:
     """Every section's values checked, defaults filled in; unknown and misplaced sections
     rejected."""
@@ -343,13 +332,14 @@ def _check_sections(data: Mapping[str, Any], ctx: Context) -> dict[str, dict[str
     return values
 
 
-def _solver(ctx: Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical") -> str:
+def _solver(ctx: Context, drive: str, sim: Mapping[str, Any], gravity: str = "physical",
+            chain: bool = False) -> str:
     """The registry name of the problem's solver, if it can run (``unusable``): ``[simulation]
     solver`` for the torque drive; the angles drive has its own, or ``mujoco`` (servos hold the
     angles); naming another is bad input."""
     name = MUJOCO_SOLVERS[drive] if sim["solver"] == "mujoco" else sim["solver"]
     if drive == "torque" or name != sim["solver"]:
-        why = unusable(name, gravity, sim)
+        why = unusable(name, gravity, sim, chain)
         if why:
             raise ProblemError(f"{ctx.at('simulation', 'solver', sim['solver'])} {why}")
         return name
@@ -362,26 +352,6 @@ def _solver(ctx: Context, drive: str, sim: Mapping[str, Any], gravity: str = "ph
     return DEFAULT_SOLVER[drive]
 
 
-#: largest nondimensional stiffness k/(M g L) of the torque drive: the joint balance subtracts
-#: spring torques of order k from inputs of order k, so round-off in the contact forces grows like
-#: 1e-16 k/(M g L) (M g); at 1e10 that is 1e-6 M g, the solvers' force tolerance.  The stiff limit
-#: is the prescribed-angle gait (gait.drive = "angles"), which S approaches as M g L/k
-#: (tests/test_scaling.py measures the first order up to 1e8).
-MAX_STIFFNESS_RATIO = 1e10
-
-
-def _check_stiffness_ratio(ctx: Context, robot: Robot, drive: str) -> None:
-    """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the
-    keys."""
-    ratio = robot.k / robot.MgL
-    if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
-        raise ctx.error(f"[robot] k = {format_value(robot.k)} with M = {format_value(robot.M)}, L "
-                        f"= {format_value(robot.L)}, g = {format_value(robot.g)} is invalid: k/(M "
-                        f"g L) = {ratio:.3g} exceeds {MAX_STIFFNESS_RATIO:g}, beyond which "
-                        "round-off in double precision swamps the contact forces; the stiff limit "
-                        "is the prescribed-angle gait: set gait.drive = \"angles\"")
-
-
 def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> dict:
     """The validated ``values`` of the keys ``data`` gives (sections it gives, keys in the schema's
     order)."""
@@ -392,11 +362,13 @@ def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> 
 def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
+    if chain_robot.is_chain(r):
+        return _validate_chain(data, ctx, values)
     mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
     # the schema has checked every value the constructors check, so their errors would be internal
     # bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
-    _check_stiffness_ratio(ctx, robot, g["drive"])
+    check_stiffness_ratio(ctx, robot, g["drive"])
     gravity = values["model"]["gravity"]
     signals = gait_input(g, robot.k, ctx.at, ctx.base, values["pressure"], gravity)
     values["gait"] = signals.values
@@ -404,7 +376,22 @@ def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     problem = Problem(robot=robot, gait=signals.reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values,
                       source=ctx.source, input_torque=signals.torque, given=_given(values, data))
-    _check_contact(ctx, problem.model, problem.gait, problem.drive, values)
+    check_contact(ctx, Model(robot, gravity=gravity), problem.gait, problem.drive, values)
+    return problem
+
+
+def _validate_chain(data: Mapping[str, Any], ctx: Context, values: dict) -> Problem:
+    """The problem of a chain (:mod:`ocp_crawl.problem.chain_robot`)."""
+    g, sim, gravity = values["gait"], values["simulation"], values["model"]["gravity"]
+    chain = chain_robot.chain_robot(ctx, values["robot"], data["robot"])
+    values["robot"].pop("beta")   # (the three-link shorthand's default: no key of a chain)
+    check_chain_stiffness(ctx, chain, g["drive"])
+    reference = chain_robot.chain_gait(ctx, g, chain)
+    solver = _solver(ctx, g["drive"], sim, gravity, chain=True)
+    problem = Problem(robot=chain, gait=reference, drive=g["drive"], gravity=gravity,
+                      solver=solver, options=solver_options(solver, sim), sections=values,
+                      source=ctx.source, given=_given(values, data))
+    check_chain_contact(ctx, ChainModel(chain, gravity), reference, g["drive"])
     return problem
 
 

@@ -9,7 +9,9 @@ import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic
 from ocp_crawl.model.pulse import Pulse
+from ocp_crawl.model.statics import Model
 from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.keys import ProblemError
@@ -50,12 +52,14 @@ def no_start_reason(problem: Problem) -> str | None:
 
     Cheap (one equilibrium solve), for checking before a long run; every torque solver starts there.
     The angles drive returns None: its contact is checked over the whole cycle when the problem is
-    built.
+    built; so does a chain, whose simulators report the status no_start themselves.
     """
-    if problem.drive != "torque":
+    if problem.drive != "torque" or problem.is_chain:   # (a chain's stepper reports no_start)
         return None
+    model = problem.model
+    assert isinstance(model, Model)   # (not a chain: above)
     try:
-        HybridStepper(problem.model, problem.torque, problem.hybrid).initial_state(0.0)
+        HybridStepper(model, problem.torque, problem.hybrid).initial_state(0.0)
     except ValueError as exc:
         return str(exc)
     return None
@@ -147,6 +151,9 @@ def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Proble
 
     from ocp_crawl.ocp import optimize_gait
 
+    for asked in (problem, start):
+        if asked is not None:
+            three_link_only(asked, "optimize")
     if problem.drive != "torque":
         raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] "
                            f"drive = \"torque\", got {format_value(problem.drive)}")

@@ -84,11 +84,17 @@ def _ocp(name: str):
     return "none" if value is None else value
 
 
+#: the keys of a chain that replace the three-link shorthand M, L, beta, k
+_CHAIN = ("lengths", "masses", "stiffness")
+
 _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, keys=(
-    Key("M", float, "kg", "total mass", required=True, rule=MAGNITUDE_RULE),
-    Key("L", float, "m", "total length", required=True, rule=MAGNITUDE_RULE),
+    Key("M", float, "kg", "total mass", required=True, rule=MAGNITUDE_RULE,
+        required_unless=_CHAIN),
+    Key("L", float, "m", "total length", required=True, rule=MAGNITUDE_RULE,
+        required_unless=_CHAIN),
     Key("beta", float, "-", "body-to-leg length ratio", default=_robot("beta"), rule=BETA_RULE),
-    Key("k", float, "N m/rad", "torsion stiffness", required=True, rule=MAGNITUDE_RULE),
+    Key("k", float, "N m/rad", "torsion stiffness", required=True, rule=MAGNITUDE_RULE,
+        required_unless=_CHAIN),
     Key("mu", float, "-", "friction coefficient of both feet", required=True, rule=MU_RULE,
         required_unless=("mu1", "mu2"), exclusive_with=("mu1", "mu2")),
     Key("mu1", float, "-", "friction coefficient of foot 1 (left)", rule=MU_RULE,
@@ -97,6 +103,21 @@ _ROBOT = Section("robot", "physical parameters (paper Table I)", required=True, 
         requires=("mu1",)),
     Key("g", float, "m/s^2", "gravitational acceleration", default=_robot("g"),
         rule=MAGNITUDE_RULE),
+    Key("lengths", list, "m", "a chain of n >= 3 links instead of M, L, beta, k: the length of "
+        "each link from foot 1 to foot 2 (the longest at most 100 times the shortest)",
+        rule=MAGNITUDE_RULE, requires=("masses", "stiffness")),
+    Key("masses", list, "kg", "chain: the mass of each link (n entries)",
+        rule=within(0.0, MAGNITUDE[1], "a link may be massless; the total mass is a magnitude"),
+        requires=("lengths",)),
+    Key("stiffness", list, "N m/rad", "chain: the torsion stiffness of each joint (n - 1 "
+        "entries, joint j between links j and j + 1)", rule=MAGNITUDE_RULE,
+        requires=("lengths",)),
+    Key("com", list, "-", "chain: the centre of mass of each link, as the fraction of its length "
+        "from its foot-1 end (absent: 0.5 each)", rule=within(0.0, 1.0, "inside the link"),
+        requires=("lengths",)),
+    Key("rest_deg", list, "deg", "chain: the rest bend of each joint's spring from straight "
+        "(the spring is relaxed at phi_j = 180 deg + rest_j; absent: 0 each)",
+        rule=Rule(lambda v: -180 < v < 180, "in (-180, 180)"), requires=("lengths",)),
 ))
 
 #: the waveforms of ``[gait] waveform``: the reference angles (or torques) over one cycle
@@ -125,7 +146,8 @@ _GAIT = Section("gait", "reference angles or torques over one cycle", required=T
         rule=ANGLE, required_unless=("gamma1_deg", "gamma2_deg"), variants=_HFP),
     Key("A_deg", float, "deg", "amplitude (pulse: half swing)", required=True, rule=GE0,
         required_unless=("A1_deg", "A2_deg"), variants=_HP),
-    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2", required=True, rule=PHASE,
+    Key("psi_deg", float, "deg", "phase lead of joint 1 over joint 2 (a chain: of each joint over "
+        "the next)", required=True, rule=PHASE,
         variants=(*_HP, "pressure")),
     Key("p0_bar", float, "bar",
         "pressure: nominal pressure p0 of both segments (the [pressure] form \"raised\": "
@@ -138,6 +160,10 @@ _GAIT = Section("gait", "reference angles or torques over one cycle", required=T
         variants=_HFP),
     Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0, variants=_HP),
     Key("A2_deg", float, "deg", "amplitude of joint 2 (overrides A_deg)", rule=GE0, variants=_HP),
+    Key("gamma_joints_deg", list, "deg", "chain ([robot] lengths): the nominal angle of each "
+        "joint (overrides gamma_deg)", rule=ANGLE, variants=("harmonic",)),
+    Key("A_joints_deg", list, "deg", "chain ([robot] lengths): the amplitude of each joint "
+        "(overrides A_deg)", rule=GE0, variants=("harmonic",)),
     Key("cos1_deg", list, "deg", f"fourier: cosine amplitudes of joint 1 ({_FOURIER_WHY})",
         default=(), rule=COEFFICIENT, variants=("fourier",)),
     Key("sin1_deg", list, "deg", f"fourier: sine amplitudes of joint 1 ({_FOURIER_WHY})",

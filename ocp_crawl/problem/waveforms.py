@@ -347,8 +347,10 @@ def waveform_text(g: Mapping[str, Any]) -> str:
     degrees = ", ".join(f"{k[:-4]} = {v:g} deg" for k, v in g.items() if k.endswith("_deg") and
                         isinstance(v, (int, float)))
     waveform = g.get("waveform", "harmonic")
-    if waveform == "harmonic":
-        return degrees
+    if waveform == "harmonic":   # (a chain's per-joint lists after the common values)
+        joints = [f"{k[:-4]} = [{', '.join(f'{x:g}' for x in g[k])}] deg"
+                  for k in ("gamma_joints_deg", "A_joints_deg") if k in g]
+        return ", ".join([degrees, *joints])
     if waveform == "fourier":
         order = max(len(g.get(f"{kind}{i}_deg", ())) for kind in ("cos", "sin") for i in (1, 2))
         own = f"order {order}"

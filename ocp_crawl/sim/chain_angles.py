@@ -146,6 +146,13 @@ def _check_angles(gait: ChainGait, ts: np.ndarray) -> None:
     if not gap <= PERIODIC_TOL:
         raise ValueError("simulate_chain_angles: angles must be 1-periodic in the phase, got "
                          f"|phi(1) - phi(0)| = {gap:.3g} rad")
+    check_start(gait)
+
+
+def check_start(gait: ChainGait) -> None:
+    """ValueError unless the angles at t = 0 give a two-foot contact: the feet apart (d > 0), every
+    joint above the ground and both normal forces > 0."""
+    m = gait.m
     k0 = gait(0.0)
     where = (f"prescribed configuration at t = 0, phi = "
              f"{np.degrees(k0['phi'][:, 0]).round(3).tolist()} deg")

@@ -39,7 +39,7 @@ from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_messag
 from ocp_crawl.sim.chain_torque import ChainTorqueStepper, as_chain_torque
 from ocp_crawl.sim.chain_torque_parts import mode_vector
 from ocp_crawl.sim.oracle import ENUM_MODES, damped_newton
-from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.result import Event, Mode, mode_change_kind
 from ocp_crawl.sim.step import mode_from_pairs
 from ocp_crawl.status import Status
 
@@ -339,6 +339,20 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
                 f"not periodic after {cycles_max} cycles (last change {dev:.3g})")
 
 
+def _events(rows: list, N: int) -> list[Event]:
+    """The mode changes of the run's ``rows``: at the first row of the new mode, which is the event
+    point where the step split located it (off the step grid), else the end of the step the change
+    happened in (the three-link time-stepping's "mode_change_between_steps")."""
+    out = []
+    for a, b in zip(rows, rows[1:]):
+        if a[8] != b[8]:
+            located = abs(b[0] * N - round(b[0] * N)) > 1e-9
+            out.append(Event(b[0], mode_change_kind(a[8], b[8]), a[8].label, b[8].label,
+                             0.0 if located else float("nan"),
+                             "step_split" if located else "mode_change_between_steps"))
+    return out
+
+
 def _metrics(model: ChainModel, torque, rows: list) -> tuple[dict, dict]:
     """S, W+ (midpoint rule on the steps), CoT+ and the energy balance (trapezoidal friction) of
     the steps ``rows`` of one cycle, and the sample fields."""
@@ -421,7 +435,7 @@ def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
     extra = {"links": chain_model.chain.n, "steps_per_cycle": N, "periodicity_deviation": dev}
     res = new_result(chain_model, "torque", Status.SUCCESS,
                      success_message(cycles, t0, f" of {N} chain steps"), cycles=cycles, t0=t0,
-                     nsteps=len(rows) - 1, periodicity_residual=dev, extra=extra, **metrics,
-                     **fields)
+                     events=_events(rows, N), nsteps=len(rows) - 1, periodicity_residual=dev,
+                     extra=extra, **metrics, **fields)
     # (the midpoint rule's balance error is O(1/N^2): the three-link MPCC's default bound)
     return energy_gate(res, ENERGY_TOL_N2 / N**2, "ENERGY_TOL_N2 / N^2 of the chain's steps")

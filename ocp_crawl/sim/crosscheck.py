@@ -1,11 +1,11 @@
 """Cross-check of the MPCC time-stepping simulator against the event-driven hybrid stepper.
 
-Both simulators run the same model and torque input.  For every number of steps per cycle N the
-time-stepping result is compared with the event-driven one on the step phases of the steady cycle
-(the event-driven stepper is evaluated exactly there through ``t_eval``): S, W+ and CoT+ and their
-relative differences, phi at the step phases, the contact-mode sequences of the steady cycle and,
-for each mode change of the event-driven stepper, the phase of the matching mode change of the
-time-stepping (its lag, in steps).
+Both simulators run the same model (the three-link robot's or an n-link chain's) and torque input.
+For every number of steps per cycle N the time-stepping result is compared with the event-driven
+one on the step phases of the steady cycle (the event-driven stepper is evaluated exactly there
+through ``t_eval``): S, W+ and CoT+ and their relative differences, phi at the step phases, the
+contact-mode sequences of the steady cycle and, for each mode change of the event-driven stepper,
+the phase of the matching mode change of the time-stepping (its lag, in steps).
 
 The steady cycle is a circle: mode changes are taken modulo one cycle, so that an event at the
 cycle boundary is one event whether a solver lists it at phase 0 or at phase 1.  A *sub-step
@@ -19,14 +19,12 @@ value and bound).  The order of S and the largest deviation of phi are informati
 an error its size is what the S criterion bounds; phi follows the foot positions, whose net change
 (S) and switches (the events) are judged.
 
-What to expect.  Inside a mode the step equations are the mode's equations at t_n, so the
-time-stepping is exact there; errors come from transitions.  Switch-exact steps
-(:mod:`ocp_crawl.sim.step_split`) split a step at the root of the starting mode's guard: on
-harmonic gaits events agree to about 1e-6 steps and S to the solvers' tolerance accumulated over
-the steps (|dS|/|S| <= 2e-8 at N = 50..400).  A slip that stops at a kink of a piecewise-linear
-input (the OCP's optima) is located from a central difference of the slip rate over +-1e-3 of a
-step, which straddles the kink: the event lies up to 1e-3 steps off and S carries an O(1/N) error
-(1.4e-5 relative at N = 50 on the max_speed optimum).  W+ (midpoint rule) is O(h^2).  Plain steps
+What to expect. Inside a mode the step equations are the mode's equations at t_n, so the
+time-stepping is exact there; errors come from transitions. Switch-exact steps
+(:mod:`ocp_crawl.sim.step_split`) split a step at the root of the starting mode's guard, the slip
+rate read on one piece of the input between its kinks: events agree to about 1e-6 steps and S to
+the solvers' tolerance accumulated over the steps (|dS|/|S| <= 2e-8 at N = 50..400 on harmonic
+gaits, <= 3e-7 on the OCP's piecewise-linear optima). W+ (midpoint rule) is O(h^2). Plain steps
 (``TimeSteppingOptions(switch_exact=False)``) take a change of mode at the first step after the
 event: O(h) in S when the slipping foot changes (1.2 / 2.5 / 0.7 / 0.9 % at N = 50 / 100 / 200 /
 400 on problems/unequal_friction.toml).
@@ -42,6 +40,7 @@ import numpy as np
 from ocp_crawl.checks import finite_or_none, real
 from ocp_crawl.io import units
 from ocp_crawl.model.inputs import as_signal
+from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.statics import Model
 from ocp_crawl.sim.event import HybridOptions
 from ocp_crawl.sim.mpcc import MPCCOptions
@@ -455,7 +454,7 @@ def criteria(ev: CrawlResult, rows: list, tol: CrossCheckTolerances,
     return checks, information, order
 
 
-def crosscheck(model: Model, torque, steps=(50, 100, 200, 400),
+def crosscheck(model: Model | ChainModel, torque, steps=(50, 100, 200, 400),
                tolerances: CrossCheckTolerances | None = None,
                mpcc_options: TimeSteppingOptions | MPCCOptions | None = None,
                hybrid_options: HybridOptions | None = None) -> CrossCheckResult:
@@ -494,7 +493,8 @@ def crosscheck(model: Model, torque, steps=(50, 100, 200, 400),
             N, True, res.message, res.S, res.W_plus, res.CoT_plus, _rel(res.S, ev.S, tol.S_floor),
             _rel(res.W_plus, ev.W_plus), _rel(res.CoT_plus, ev.CoT_plus) if moving else math.nan,
             dev, tuple(mode_sequence(res)), lags, match, elapsed, ev_out, ts_out))
-    checks, information, order = criteria(ev, rows, tol, model.robot.L)
+    length = model.chain.L if isinstance(model, ChainModel) else model.robot.L
+    checks, information, order = criteria(ev, rows, tol, length)
     passed = all(c.passed for c in checks.values())
     return CrossCheckResult(ev, tuple(rows), order, tol, checks, passed,
                             tuple(mode_sequence(ev)), information)

@@ -25,8 +25,9 @@ from PIL import Image
 
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write
+from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.statics import Robot
-from ocp_crawl.viz.gait import robot_points
+from ocp_crawl.viz.gait import chain_points, robot_points
 from ocp_crawl.problem import Problem, run_problem
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.viz import FPS_BOUNDS
@@ -50,7 +51,8 @@ class Frames:
     t: np.ndarray
     x1: np.ndarray
     x2: np.ndarray
-    phi1: np.ndarray
+    phi: np.ndarray
+    """joint angles [rad], a row per joint"""
     theta: np.ndarray
     slip1: np.ndarray
     """foot 1 slipping at this frame"""
@@ -100,20 +102,24 @@ def frames_of(result: CrawlResult, cycles: int = 2, frames_per_cycle: int = 48) 
     idx = np.where(np.abs(t[prev] - local) < np.abs(t[idx] - local), prev, idx)
     mode = np.asarray(result.mode, int)[idx]
     return Frames(tf, np.asarray(result.x1)[idx] + shift, np.asarray(result.x2)[idx] + shift,
-                  np.asarray(result.phi)[0, idx], np.asarray(result.theta)[idx], _slipping(mode, 1),
-                  _slipping(mode, 2), mode)
+                  np.asarray(result.phi)[:, idx], np.asarray(result.theta)[idx],
+                  _slipping(mode, 1), _slipping(mode, 2), mode)
 
 
 class CrawlScene:
     """The figure of the crawling robot and its moving artists; ``update(i)`` shows frame i."""
 
-    def __init__(self, result: CrawlResult, robot: Robot, cycles: int = 2,
+    def __init__(self, result: CrawlResult, robot: Robot | Chain, cycles: int = 2,
                  frames_per_cycle: int = 48, title: str | None = None):
         fr = self.frames = frames_of(result, cycles, frames_per_cycle)
         origin = fr.x1[0]
-        self.shapes = np.stack([MM * robot_points(robot, a - origin, b - origin, p, th)
-                                # (n, 2, 4)
-                                for a, b, p, th in zip(fr.x1, fr.x2, fr.phi1, fr.theta)])
+        # (frames, 2, points): foot 1, the joints, foot 2
+        if isinstance(robot, Chain):
+            self.shapes = np.stack([MM * chain_points(robot, a - origin, fr.phi[:, i])
+                                    for i, a in enumerate(fr.x1)])
+        else:
+            self.shapes = np.stack([MM * robot_points(robot, a - origin, b - origin, p, th)
+                                    for a, b, p, th in zip(fr.x1, fr.x2, fr.phi[0], fr.theta)])
         xmin, xmax = self.shapes[:, 0].min(), self.shapes[:, 0].max()
         zmax = max(self.shapes[:, 1].max(), 1.0)
         pad = 0.08 * (xmax - xmin)
@@ -146,8 +152,8 @@ class CrawlScene:
                   loc="upper right", fontsize="small")
         # the moving artists are "animated": a full draw leaves them out, so the static background
         # is drawn once and each frame only blits them (a full draw per frame is ~30x slower)
-        self.trace1, = ax.plot([], [], color="0.75", lw=1, animated=True)
-        self.trace2, = ax.plot([], [], color="0.75", lw=1, animated=True)
+        self.traces = [ax.plot([], [], color="0.75", lw=1, animated=True)[0]
+                       for _ in range(self.shapes.shape[2] - 2)]
         self.body, = ax.plot([], [], "-o", color="0.25", lw=3, ms=5, mfc="white", animated=True)
         self.feet = ax.scatter([0, 0], [0, 0], s=90, zorder=5, edgecolor="k", animated=True)
         self.label = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize="small",
@@ -159,7 +165,7 @@ class CrawlScene:
 
     @property
     def artists(self) -> tuple:
-        return self.trace1, self.trace2, self.body, self.feet, self.label
+        return (*self.traces, self.body, self.feet, self.label)
 
     def __len__(self) -> int:
         return len(self.frames.t)
@@ -167,11 +173,11 @@ class CrawlScene:
     def update(self, i: int) -> tuple:
         fr, pts = self.frames, self.shapes[i]
         self.body.set_data(pts[0], pts[1])
-        self.feet.set_offsets(np.array([[pts[0, 0], 0.0], [pts[0, 3], 0.0]]))
+        self.feet.set_offsets(np.array([[pts[0, 0], 0.0], [pts[0, -1], 0.0]]))
         self.feet.set_facecolor([SLIP_COLOR if fr.slip1[i] else STICK_COLOR,
                                  SLIP_COLOR if fr.slip2[i] else STICK_COLOR])
-        self.trace1.set_data(self.shapes[:i + 1, 0, 1], self.shapes[:i + 1, 1, 1])
-        self.trace2.set_data(self.shapes[:i + 1, 0, 2], self.shapes[:i + 1, 1, 2])
+        for j, trace in enumerate(self.traces, start=1):
+            trace.set_data(self.shapes[:i + 1, 0, j], self.shapes[:i + 1, 1, j])
         m = _mode(fr.mode[i])
         name = m.label if m is not None else f"mode {int(fr.mode[i])}"
         self.label.set_text(f"t = {fr.t[i]:.2f} cycles, {name}")
@@ -193,8 +199,9 @@ class CrawlScene:
         return out
 
 
-def crawl_animation(result: CrawlResult, robot: Robot, cycles: int = 2, frames_per_cycle: int = 48,
-                    title: str | None = None, interval_ms: float = 50.0) -> FuncAnimation:
+def crawl_animation(result: CrawlResult, robot: Robot | Chain, cycles: int = 2,
+                    frames_per_cycle: int = 48, title: str | None = None,
+                    interval_ms: float = 50.0) -> FuncAnimation:
     """A FuncAnimation of the crawling robot (for notebooks; feet green when sticking, red when
     slipping)."""
     scene = CrawlScene(result, robot, cycles, frames_per_cycle, title)

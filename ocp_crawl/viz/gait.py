@@ -16,6 +16,7 @@ from matplotlib.patches import Patch
 
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write
+from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.inputs import PeriodicSignal
 from ocp_crawl.model.statics import Robot
 from ocp_crawl.sim.result import CrawlResult, Mode
@@ -97,7 +98,7 @@ def shade_modes(ax, runs, **kw) -> set[int]:
     return drawn
 
 
-def plot_friction_limits(ax, t, robot: Robot, f_n1, f_n2, *, colors=("C0", "C3"),
+def plot_friction_limits(ax, t, robot: Robot | Chain, f_n1, f_n2, *, colors=("C0", "C3"),
                          lw: float | None = None,
                          scale: float = 1.0,
                          labels=(r"$\pm\mu_1 f_{n1}$", r"$\pm\mu_2 f_{n2}$")) -> None:
@@ -126,6 +127,18 @@ def robot_points(robot: Robot, x1: float, x2: float, phi1: float, theta: float) 
     return np.stack([[x1, 0.0], j1, j2, [x2, 0.0]], axis=1)
 
 
+def chain_points(chain: Chain, x1: float, phi) -> np.ndarray:
+    """Foot 1, the joints and foot 2 of a chain in the sagittal plane [m], shape (2, n + 1): from
+    foot 1 at (x1, 0) along each link's direction alpha_i (its kinematics at the joint angles
+    ``phi`` [rad])."""
+    from ocp_crawl.model.chain_model import ChainModel
+
+    kin = ChainModel(chain).kinematics(np.asarray(phi, float))
+    alpha = np.array([float(kin[f"alpha{i}"]) for i in range(1, chain.n + 1)])
+    steps = np.asarray(chain.lengths) * np.stack([np.cos(alpha), np.sin(alpha)])
+    return np.concatenate([[[x1], [0.0]], [[x1], [0.0]] + np.cumsum(steps, axis=1)], axis=1)
+
+
 def _gait_title(result: CrawlResult) -> str:
     title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
     if np.isfinite(result.S):
@@ -136,12 +149,13 @@ def _gait_title(result: CrawlResult) -> str:
     return title
 
 
-def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None = None, *,
-              reference: PeriodicSignal | None = None, snapshots: int = 5,
-              title: str | None = None) -> Figure:
+def plot_gait(result: CrawlResult, robot: Robot | Chain,
+              path: str | os.PathLike | None = None, *, reference: PeriodicSignal | None = None,
+              snapshots: int = 5, title: str | None = None) -> Figure:
     """Three panels over the phase of the reported cycle, background shaded by contact mode.
 
-    (a) joint angles phi1, phi2 [deg] (and the reference angles if ``reference`` is given),
+    (a) joint angles phi1, phi2 [deg] (a chain: every joint's; and the reference angles if
+    ``reference`` is given),
     (b) contact positions x1, x2 [mm], (c) ``snapshots`` robot configurations drawn in gray,
     (d) tangential force f_t [N] with the friction limits +-mu1 f_n1 and +-mu2 f_n2 dashed.
     The title gives S [mm], W+ [mJ] and CoT+; the legend names and explains every contact mode.
@@ -186,15 +200,24 @@ def plot_gait(result: CrawlResult, robot: Robot, path: str | os.PathLike | None 
     return fig
 
 
+def joint_colors(m: int) -> list[str]:
+    """A colour per joint: C0 and C3 for the three-link robot's two (as its feet), C0, C1, ... for
+    a chain's."""
+    return ["C0", "C3"] if m == 2 else [f"C{j % 10}" for j in range(m)]
+
+
 def _draw_angles(ax, result: CrawlResult, phase, reference: PeriodicSignal | None) -> None:
     phi = np.degrees(np.asarray(result.phi, float))
-    ax.plot(phase, phi[0], color="C0", label=r"$\varphi_1$")
-    ax.plot(phase, phi[1], color="C3", label=r"$\varphi_2$")
+    colors = joint_colors(phi.shape[0])
+    for j, color in enumerate(colors):
+        ax.plot(phase, phi[j], color=color, label=rf"$\varphi_{j + 1}$")
     # the angles drive prescribes phi = phi_ref: the reference would only hide under the angles
     if reference is not None and result.drive != "angles":
-        ref = np.degrees(np.asarray(reference(np.asarray(result.t, float)), float)).reshape(2, -1)
-        ax.plot(phase, ref[0], color="C0", ls=":", label=r"$\varphi_{1,\mathrm{ref}}$")
-        ax.plot(phase, ref[1], color="C3", ls=":", label=r"$\varphi_{2,\mathrm{ref}}$")
+        ref = np.degrees(np.asarray(reference(np.asarray(result.t, float)), float))
+        ref = ref.reshape(len(colors), -1)
+        for j, color in enumerate(colors):
+            ax.plot(phase, ref[j], color=color, ls=":",
+                    label=rf"$\varphi_{{{j + 1},\mathrm{{ref}}}}$")
     ax.set_ylabel("joint angle [deg]")
     ax.set_title("(a) joint angles", loc="left", fontsize="medium")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small", frameon=False)
@@ -210,14 +233,15 @@ def _draw_positions(ax, result: CrawlResult, phase, origin: float) -> None:
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small", frameon=False)
 
 
-def _draw_forces(ax, result: CrawlResult, robot: Robot, phase) -> None:
+def _draw_forces(ax, result: CrawlResult, robot: Robot | Chain, phase) -> None:
     ax.plot(phase, np.asarray(result.f_t, float), color="k", label="$f_t$")
     plot_friction_limits(ax, phase, robot, result.f_n1, result.f_n2, lw=1.0)
     ax.set_ylabel("tangential force [N]\n($f_t$ on foot 1, along +x)")
     ax.set_title("(d) tangential force and friction limits", loc="left", fontsize="medium")
 
 
-def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float, n: int) -> None:
+def _draw_snapshots(ax, result: CrawlResult, robot: Robot | Chain, phase, origin: float,
+                    n: int) -> None:
     ax.set_title("(c) robot snapshots (later is darker)", loc="left", fontsize="medium")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("z [mm]")
@@ -230,10 +254,13 @@ def _draw_snapshots(ax, result: CrawlResult, robot: Robot, phase, origin: float,
     # by S
     targets = phase[0] + span * np.arange(n) / max(n - 1, 1) if span > 0 else phase[:1]
     idx = sorted({int(np.argmin(np.abs(phase - s))) for s in targets})
-    phi1 = np.asarray(result.phi, float)[0]
+    phi = np.asarray(result.phi, float)
     for j, i in enumerate(idx):
-        pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin, phi1[i],
-                                 result.theta[i])
+        if isinstance(robot, Chain):
+            pts = 1e3 * chain_points(robot, result.x1[i] - origin, phi[:, i])
+        else:
+            pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin,
+                                     phi[0, i], result.theta[i])
         gray = 0.75 - 0.6 * j / max(len(idx) - 1, 1)
         ax.plot(pts[0], pts[1], "-o", color=str(gray), lw=1.5, ms=2.5, label=f"t = {phase[i]:.2f}")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)

@@ -1,0 +1,95 @@
+"""A chain of n >= 3 links in a problem file: ``[robot] lengths, masses, stiffness`` (with ``com``
+and ``rest_deg``) instead of the symmetric three-link shorthand ``M, L, beta, k``.
+
+The robot is a :class:`~ocp_crawl.model.chain.Chain`; its gait is the harmonic waveform of every
+joint, ``phi_j = gamma_j + A_j sin(2 pi t + psi ((m - 1)/2 - (j - 1)))`` for the m = n - 1 joints
+(``psi_deg`` the phase lead of each joint over the next one; m = 2 is the paper's eq. (ref)),
+``gamma_deg`` and ``A_deg`` for every joint unless ``gamma_joints_deg`` and ``A_joints_deg`` give
+one per joint.  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain_inputs import JointFourier
+from ocp_crawl.problem.keys import ProblemError
+from ocp_crawl.problem.messages import format_value
+from ocp_crawl.problem.values import Context
+
+#: the [robot] keys of a chain (``lengths`` marks a chain; ``masses`` and ``stiffness`` go with it)
+CHAIN_KEYS = ("lengths", "masses", "stiffness", "com", "rest_deg")
+#: the [robot] keys of the three-link shorthand, which a chain replaces
+THREE_LINK_KEYS = ("M", "L", "beta", "k")
+#: the [gait] keys of the three-link robot's two joints, replaced by lists for a chain
+TWO_JOINT_KEYS = ("gamma1_deg", "gamma2_deg", "A1_deg", "A2_deg")
+#: the [gait] keys of a chain's joints, one entry per joint
+JOINT_KEYS = ("gamma_joints_deg", "A_joints_deg")
+
+
+
+def is_chain(robot: Mapping[str, Any]) -> bool:
+    """Whether the validated ``[robot]`` values describe a chain (``lengths`` given)."""
+    return "lengths" in robot
+
+
+def chain_robot(ctx: Context, robot: Mapping[str, Any], given: Mapping[str, Any]) -> Chain:
+    """The :class:`Chain` of the validated ``[robot]`` values; ProblemError naming the key whose
+    value the chain rejects (a count that does not match the links, a length ratio)."""
+    for name in THREE_LINK_KEYS:
+        if name in given:
+            raise ProblemError(f"{ctx.at('robot', name, given[name])} and lengths = "
+                               f"{format_value(given['lengths'])} are mutually exclusive: a chain "
+                               "([robot] lengths, masses, stiffness) has no three-link shorthand")
+    mu = (robot["mu"], robot["mu"]) if "mu" in robot else (robot["mu1"], robot["mu2"])
+    rest = [math.radians(r) for r in robot.get("rest_deg", ())]
+    try:
+        return Chain(lengths=robot["lengths"], masses=robot["masses"],
+                     stiffness=robot["stiffness"], mu=mu, com=robot.get("com") or None,
+                     rest=rest or None, g=robot["g"])
+    except ValueError as exc:
+        text = str(exc)
+        name = next((k for k in CHAIN_KEYS if text.startswith(k.replace("_deg", ""))), "lengths")
+        value = robot.get(name, robot["lengths"])
+        raise ProblemError(f"{ctx.at('robot', name, value)} is invalid: {text}") from None
+
+
+def _per_joint(ctx: Context, gait: Mapping[str, Any], name: str, common: str, m: int) -> list:
+    values = gait.get(name)
+    if values is None:
+        return [gait[common]] * m
+    if len(values) != m:
+        raise ProblemError(f"{ctx.at('gait', name, values)} is invalid: the chain has {m} joints, "
+                           f"one value each")
+    return list(values)
+
+
+def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain) -> JointFourier:
+    """The reference angles [rad] of a chain's ``[gait]`` (harmonic, one row per joint)."""
+    for name in TWO_JOINT_KEYS:
+        if name in gait:
+            raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of the three-link "
+                               "robot's two joints: a chain ([robot] lengths) gives "
+                               f"{' and '.join(JOINT_KEYS)}, one value per joint")
+    if gait["waveform"] != "harmonic":
+        raise ProblemError(f"{ctx.at('gait', 'waveform', gait['waveform'])} is invalid with a "
+                           "chain ([robot] lengths): its joints take the harmonic waveform")
+    m = chain.n_joints
+    gamma = _per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m)
+    amplitude = _per_joint(ctx, gait, "A_joints_deg", "A_deg", m)
+    lead = [gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)]
+    return JointFourier.harmonic(np.radians(gamma), np.radians(amplitude), np.radians(lead))
+
+
+def three_link_only(problem, what: str) -> None:
+    """ProblemError when ``problem`` (a :class:`~ocp_crawl.problem.Problem`) has a chain: ``what``
+    (``"optimize"``, ``"fit"``) models the three-link robot only."""
+    if problem.is_chain:
+        lengths = problem.sections["robot"]["lengths"]
+        raise ProblemError(f"{problem.source}: [robot] lengths = {format_value(lengths)} is a "
+                           f"chain of {len(lengths)} links: {what} models the three-link robot "
+                           "only ([robot] M, L, beta, k); a chain is simulated, cross-checked, "
+                           "swept and animated (ocp-crawl simulate, crosscheck, sweep, animate)")
