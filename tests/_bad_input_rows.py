@@ -149,11 +149,25 @@ COMMAND_ROWS = {
           + '[gait]\nwaveform = "fourier"\ngamma_deg = 90.0\nsin1_deg = [10.0]\n'),
     "simulate: a chain with the MuJoCo solver":
         R("simulate", ["{file}", "--solver", "mujoco"], ["x.toml", "chain", "event, mpcc"],
-          text=chain_edit("[gait]\n", "[gait]\n")),
+          text=CHAIN_TEXT),
     "simulate: a chain whose first joint starts below the ground":
-        R("simulate", ["{file}"], ["x.toml", "[gait] of the chain is invalid", "joint 1"],
+        R("simulate", ["{file}"], ["x.toml", "[gait] psi_deg = 20", "gamma_joints_deg = [260",
+                                   "joint 1"],
           text=chain_edit("gamma_joints_deg = [95.0, 170.0, 175.0, 90.0]",
                           "gamma_joints_deg = [260.0, 170.0, 175.0, 90.0]")),
+    "simulate: a chain's per-joint angles on the three-link robot":
+        R("simulate", ["{file}"], ["x.toml", "[gait] gamma_joints_deg = [90.0, 90.0]", "chain"],
+          text=edit("gamma_deg = 90.0", "gamma_joints_deg = [90.0, 90.0]")),
+    "simulate: a chain with both a common and a per-joint amplitude":
+        R("simulate", ["{file}"], ["x.toml", "A_joints_deg", "A_deg = 10", "mutually exclusive"],
+          text=chain_edit("[gait]\n", "[gait]\nA_deg = 10.0\n")),
+    "simulate: a chain with the time-stepping's error estimate":
+        R("simulate", ["{file}", "--solver", "mpcc", "--set", "simulation.s_error_tol=1e-3"],
+          ["x.toml", "[simulation] s_error_tol = 0.001", "chain"], text=CHAIN_TEXT),
+    "crosscheck: a chain too soft to stand":
+        R("crosscheck", ["{file}"], ["x.toml", "released equilibrium", "robot.stiffness"],
+          text=chain_edit("stiffness = [0.17, 0.30, 0.25, 0.20]",
+                          "stiffness = [0.0001, 0.0001, 0.0001, 0.0001]")),
     "optimize: a chain":
         R("optimize", ["{file}"], ["x.toml", "chain of 5 links", "optimize", "three-link"],
           text=chain_edit("[model]\n", '[ocp]\nobjective = "max_speed"\n\n[model]\n')),

@@ -124,7 +124,28 @@ def test_the_five_link_file_through_every_command_that_takes_a_chain(tmp_path, c
     assert [float(r["gait.psi_deg [deg]"]) for r in rows] == [10.0, 20.0]
     assert float(rows[1]["S [m]"]) == pytest.approx(sim["S"], rel=1e-12)
 
-    gif = tmp_path / "crawl.gif"
-    assert main(["animate", str(CHAIN), "--out", str(gif), "--cycles", "1",
-                 "--frames-per-cycle", "4"]) == 0
-    assert gif.read_bytes()[:6] == b"GIF89a"
+    for solver in ("event", "mpcc"):   # (the animation samples the steady cycle densely)
+        gif = tmp_path / f"crawl_{solver}.gif"
+        assert main(["animate", str(CHAIN), "--out", str(gif), "--cycles", "1",
+                     "--frames-per-cycle", "4", "--set", f"simulation.solver={solver}"]) == 0
+        assert gif.read_bytes()[:6] == b"GIF89a"
+
+
+def test_the_chain_steps_sampled_at_phases_interpolate_the_steps():
+    """t_eval of the chain's time-stepping: the step samples interpolated linearly, as the
+    three-link time-stepping's; the events it located on the steps, at the event-driven phases."""
+    problem = load_problem(CHAIN, ["simulation.solver=mpcc", "simulation.steps=50"])
+    steps = run_problem(problem)
+    te = np.linspace(0.0, 1.0, 37)
+    sampled = run_problem(problem, t_eval=te)
+    assert steps.success and sampled.success
+    np.testing.assert_allclose(sampled.t - sampled.t0, te, atol=1e-12)
+    for j in range(4):
+        np.testing.assert_allclose(sampled.phi[j], np.interp(sampled.t, steps.t, steps.phi[j]))
+    np.testing.assert_allclose(sampled.x1, np.interp(sampled.t, steps.t, steps.x1))
+    assert sampled.S == steps.S
+    exact = run_problem(load_problem(CHAIN))
+    located = [e for e in steps.steady_events()]
+    assert [e.guard_name for e in located] == ["step_split"] * len(located)
+    np.testing.assert_allclose([e.t - steps.t0 for e in located],
+                               [e.t - exact.t0 for e in exact.steady_events()], atol=1e-8)

@@ -4,8 +4,8 @@ and ``rest_deg``) instead of the symmetric three-link shorthand ``M, L, beta, k`
 The robot is a :class:`~ocp_crawl.model.chain.Chain`; its gait is the harmonic waveform of every
 joint, ``phi_j = gamma_j + A_j sin(2 pi t + psi ((m - 1)/2 - (j - 1)))`` for the m = n - 1 joints
 (``psi_deg`` the phase lead of each joint over the next one; m = 2 is the paper's eq. (ref)),
-``gamma_deg`` and ``A_deg`` for every joint unless ``gamma_joints_deg`` and ``A_joints_deg`` give
-one per joint.  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``.
+``gamma_deg`` and ``A_deg`` for every joint, or ``gamma_joints_deg`` and ``A_joints_deg`` one per
+joint.  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``.
 """
 from __future__ import annotations
 
@@ -30,7 +30,6 @@ TWO_JOINT_KEYS = ("gamma1_deg", "gamma2_deg", "A1_deg", "A2_deg")
 JOINT_KEYS = ("gamma_joints_deg", "A_joints_deg")
 
 
-
 def is_chain(robot: Mapping[str, Any]) -> bool:
     """Whether the validated ``[robot]`` values describe a chain (``lengths`` given)."""
     return "lengths" in robot
@@ -44,23 +43,29 @@ def chain_robot(ctx: Context, robot: Mapping[str, Any], given: Mapping[str, Any]
             raise ProblemError(f"{ctx.at('robot', name, given[name])} and lengths = "
                                f"{format_value(given['lengths'])} are mutually exclusive: a chain "
                                "([robot] lengths, masses, stiffness) has no three-link shorthand")
-    mu = (robot["mu"], robot["mu"]) if "mu" in robot else (robot["mu1"], robot["mu2"])
     rest = [math.radians(r) for r in robot.get("rest_deg", ())]
     try:
         return Chain(lengths=robot["lengths"], masses=robot["masses"],
-                     stiffness=robot["stiffness"], mu=mu, com=robot.get("com") or None,
-                     rest=rest or None, g=robot["g"])
+                     stiffness=robot["stiffness"], mu=feet_friction(robot),
+                     com=robot.get("com") or None, rest=rest or None, g=robot["g"])
     except ValueError as exc:
         text = str(exc)
-        name = next((k for k in CHAIN_KEYS if text.startswith(k.replace("_deg", ""))), "lengths")
-        value = robot.get(name, robot["lengths"])
-        raise ProblemError(f"{ctx.at('robot', name, value)} is invalid: {text}") from None
+        # the key the chain's message names first ("total mass sum(masses) ...": masses)
+        named = [(text.find(k.removesuffix("_deg")), k) for k in CHAIN_KEYS
+                 if k in robot and k.removesuffix("_deg") in text]
+        name = min(named)[1] if named else "lengths"
+        raise ProblemError(f"{ctx.at('robot', name, robot[name])} is invalid: {text}") from None
+
+
+def feet_friction(robot: Mapping[str, Any]) -> tuple[float, float]:
+    """(mu1, mu2) of the validated ``[robot]`` values: ``mu`` for both feet, or ``mu1``, ``mu2``."""
+    return (robot["mu"], robot["mu"]) if "mu" in robot else (robot["mu1"], robot["mu2"])
 
 
 def _per_joint(ctx: Context, gait: Mapping[str, Any], name: str, common: str, m: int) -> list:
     values = gait.get(name)
     if values is None:
-        return [gait[common]] * m
+        return [gait[common]] * m   # (the schema asks for one of the two)
     if len(values) != m:
         raise ProblemError(f"{ctx.at('gait', name, values)} is invalid: the chain has {m} joints, "
                            f"one value each")
@@ -88,8 +93,17 @@ def three_link_only(problem, what: str) -> None:
     """ProblemError when ``problem`` (a :class:`~ocp_crawl.problem.Problem`) has a chain: ``what``
     (``"optimize"``, ``"fit"``) models the three-link robot only."""
     if problem.is_chain:
-        lengths = problem.sections["robot"]["lengths"]
+        lengths = list(problem.robot.lengths)
         raise ProblemError(f"{problem.source}: [robot] lengths = {format_value(lengths)} is a "
                            f"chain of {len(lengths)} links: {what} models the three-link robot "
                            "only ([robot] M, L, beta, k); a chain is simulated, cross-checked, "
                            "swept and animated (ocp-crawl simulate, crosscheck, sweep, animate)")
+
+
+def joint_keys_of_a_chain(ctx: Context, gait: Mapping[str, Any]) -> None:
+    """ProblemError for a chain's per-joint key in the ``[gait]`` of the three-link robot."""
+    for name in JOINT_KEYS:
+        if name in gait:
+            raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of a chain ([robot] "
+                               "lengths, masses, stiffness): the three-link robot's joints take "
+                               "gamma1_deg, gamma2_deg, A1_deg, A2_deg")

@@ -14,6 +14,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Sequence, cast
 
+import numpy as np
+
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
@@ -24,10 +26,11 @@ from ocp_crawl.problem.overrides import apply_overrides, read_toml, set_values, 
 from ocp_crawl.problem.messages import format_value, suggest, toml_type
 from ocp_crawl.problem.keys import ProblemError, Section, field_default
 from ocp_crawl.problem.schema import DRIVES, SCHEMA, SECTIONS, Drive, removed_key
-from ocp_crawl.problem.robot_checks import (check_chain_contact, check_chain_stiffness,
-                                            check_contact, check_stiffness_ratio)
+from ocp_crawl.problem.robot_checks import (check_chain_contact, check_contact,
+                                            check_stiffness_ratio)
 from ocp_crawl.problem.values import Context, check_value
 from ocp_crawl.sim import DEFAULT_SOLVER, MUJOCO_SOLVERS, solver_named, unusable
+
 
 def freeze(d: Mapping) -> Mapping:
     """A read-only copy of nested mappings."""
@@ -85,6 +88,10 @@ class Problem:
                                 f", got {type(getattr(self, name)).__name__}")
         if self.drive not in DRIVES:
             raise ValueError(f"Problem.drive must be one of {DRIVES}, got {self.drive!r}")
+        joints = self.robot.n_joints if isinstance(self.robot, Chain) else 2
+        if np.shape(self.gait(0.0)) != (joints,):
+            raise ValueError(f"Problem.gait must have a row per joint of the robot ({joints}), got "
+                             f"shape {np.shape(self.gait(0.0))}")
         if self.input_torque is not None and (self.drive != "torque"
                                               or not isinstance(self.input_torque,
                                                                 PeriodicSignal)):
@@ -273,9 +280,11 @@ def _check_section(ctx: Context, section: Section, given: Mapping[str, Any]) -> 
             if other not in given:
                 raise ProblemError(f"{ctx.at(section.name, name, given[name])} is given without "
                                    f"{other}: give both {name} and {other} ({key.what})")
+    # a key that a given key excludes is not asked for (gamma_deg beside a chain's per-joint list)
+    excluded = {o for name in given for o in keys[name].exclusive_with}
     for key in section.keys:
         name = key.name
-        if name in given or not section.applies(key, variant):
+        if name in given or name in excluded or not section.applies(key, variant):
             continue
         if key.required and not (key.required_unless
                                  and all(u in given for u in key.required_unless)):
@@ -364,7 +373,8 @@ def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     if chain_robot.is_chain(r):
         return _validate_chain(data, ctx, values)
-    mu1, mu2 = (r["mu"], r["mu"]) if "mu" in r else (r["mu1"], r["mu2"])
+    chain_robot.joint_keys_of_a_chain(ctx, g)
+    mu1, mu2 = chain_robot.feet_friction(r)
     # the schema has checked every value the constructors check, so their errors would be internal
     # bugs
     robot = Robot(M=r["M"], L=r["L"], beta=r["beta"], k=r["k"], mu1=mu1, mu2=mu2, g=r["g"])
@@ -383,15 +393,21 @@ def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
 def _validate_chain(data: Mapping[str, Any], ctx: Context, values: dict) -> Problem:
     """The problem of a chain (:mod:`ocp_crawl.problem.chain_robot`)."""
     g, sim, gravity = values["gait"], values["simulation"], values["model"]["gravity"]
+    if "s_error_tol" in data.get("simulation", {}):   # (ctx.at names --set too)
+        raise ProblemError(f"{ctx.at('simulation', 's_error_tol', sim['s_error_tol'])} is "
+                           "invalid with a chain ([robot] lengths): the chain's steps solve each "
+                           "mode exactly and estimate no error of S")
     chain = chain_robot.chain_robot(ctx, values["robot"], data["robot"])
-    values["robot"].pop("beta")   # (the three-link shorthand's default: no key of a chain)
-    check_chain_stiffness(ctx, chain, g["drive"])
+    # (defaults of the three-link robot's keys: no keys of a chain)
+    values["robot"].pop("beta")
+    values["simulation"].pop("s_error_tol")
+    check_stiffness_ratio(ctx, chain, g["drive"])
     reference = chain_robot.chain_gait(ctx, g, chain)
     solver = _solver(ctx, g["drive"], sim, gravity, chain=True)
     problem = Problem(robot=chain, gait=reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values,
                       source=ctx.source, given=_given(values, data))
-    check_chain_contact(ctx, ChainModel(chain, gravity), reference, g["drive"])
+    check_chain_contact(ctx, ChainModel(chain, gravity), reference, g["drive"], values)
     return problem
 
 

@@ -25,35 +25,40 @@ CONTACT_GRID = 721
 MAX_STIFFNESS_RATIO = 1e10
 
 
-def check_stiffness_ratio(ctx: Context, robot: Robot, drive: str) -> None:
-    """k/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive, naming the
-    keys."""
-    ratio = robot.k / robot.MgL
+def check_stiffness_ratio(ctx: Context, robot: Robot | Chain, drive: str) -> None:
+    """k/(M g L) (a chain: its stiffest joint's) above :data:`MAX_STIFFNESS_RATIO` is bad input for
+    the torque drive, naming the keys."""
+    if isinstance(robot, Chain):
+        ratio = max(robot.stiffness) / robot.MgL
+        keys = (f"stiffness = {format_value(list(robot.stiffness))} with masses = "
+                f"{format_value(list(robot.masses))}, lengths = "
+                f"{format_value(list(robot.lengths))}")
+        what = "max k_j/(M g L)"
+    else:
+        ratio = robot.k / robot.MgL
+        keys = (f"k = {format_value(robot.k)} with M = {format_value(robot.M)}, L = "
+                f"{format_value(robot.L)}")
+        what = "k/(M g L)"
     if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
-        raise ctx.error(f"[robot] k = {format_value(robot.k)} with M = {format_value(robot.M)}, L "
-                        f"= {format_value(robot.L)}, g = {format_value(robot.g)} is invalid: k/(M "
-                        f"g L) = {ratio:.3g} exceeds {MAX_STIFFNESS_RATIO:g}, beyond which "
-                        "round-off in double precision swamps the contact forces; the stiff limit "
-                        "is the prescribed-angle gait: set gait.drive = \"angles\"")
-
-
-def check_chain_stiffness(ctx: Context, chain: Chain, drive: str) -> None:
-    """k_j/(M g L) above :data:`MAX_STIFFNESS_RATIO` is bad input for the torque drive."""
-    ratio = max(chain.stiffness) / chain.MgL
-    if drive == "torque" and not ratio <= MAX_STIFFNESS_RATIO:
-        raise ctx.error(f"[robot] stiffness = {format_value(list(chain.stiffness))} is invalid: "
-                        f"max k_j/(M g L) = {ratio:.3g} exceeds {MAX_STIFFNESS_RATIO:g}, beyond "
-                        "which round-off swamps the contact forces; the stiff limit is the "
+        raise ctx.error(f"[robot] {keys}, g = {format_value(robot.g)} is invalid: {what} = "
+                        f"{ratio:.3g} exceeds {MAX_STIFFNESS_RATIO:g}, beyond which round-off in "
+                        "double precision swamps the contact forces; the stiff limit is the "
                         "prescribed-angle gait: set gait.drive = \"angles\"")
+
+
+def _blame(values: Mapping, robot_key: str) -> str:
+    """The ``[gait]`` keys given (and the robot's key that shapes it) as a message names them."""
+    gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
+    blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
+    return (f"[gait] {blame} (with [robot] {robot_key} = "
+            f"{format_value(values['robot'][robot_key])})")
 
 
 def check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str,
                   values: Mapping) -> None:
     """A starting configuration (or, prescribed, any phase) with a foot off the ground is bad
     input."""
-    gait_keys = [k for k in values["gait"] if k not in ("drive", "waveform", "interpolation")]
-    blame = ", ".join(f"{k} = {format_value(values['gait'][k])}" for k in gait_keys)
-    blame = f"[gait] {blame} (with [robot] beta = {format_value(values['robot']['beta'])})"
+    blame = _blame(values, "beta")
     try:
         model.check_contact(gait(0.0), where="reference angles at phase 0")
     except ValueError as exc:
@@ -72,23 +77,25 @@ def check_contact(ctx: Context, model: Model, gait: PeriodicSignal, drive: str,
                         "on the ground over the whole cycle)")
 
 
-def check_chain_contact(ctx: Context, model: ChainModel, gait: PeriodicSignal, drive: str) -> None:
+def check_chain_contact(ctx: Context, model: ChainModel, gait: PeriodicSignal, drive: str,
+                        values: Mapping) -> None:
     """Both feet of a chain on the ground with every joint above it at phase 0 (and, for the angles
     drive, over the cycle on :data:`CONTACT_GRID` phases); bad input naming the gait otherwise."""
     from ocp_crawl.sim.chain_angles import ChainGait, check_start
 
+    blame = _blame(values, "lengths")
     try:
         check_start(ChainGait(model, gait))
     except ValueError as exc:
-        raise ctx.error(f"[gait] of the chain is invalid: {exc}") from None
+        raise ctx.error(f"{blame} are invalid: {exc}") from None
     if drive != "angles":
         return
     t = np.linspace(0.0, 1.0, CONTACT_GRID)
     j = _first_lost(model.kinematics(gait(t)), model.chain.n_joints)
     if j is not None:
-        raise ctx.error(f"[gait] of the chain is invalid for the angles drive: contact lost at "
-                        f"phase {t[j]:.4f} (both feet must stay on the ground, every joint above "
-                        "it, over the whole cycle)")
+        raise ctx.error(f"{blame} are invalid for the angles drive: contact lost at phase "
+                        f"{t[j]:.4f} (both feet must stay on the ground, every joint above it, "
+                        "over the whole cycle)")
 
 
 def _first_lost(kin: Mapping, joints: int = 0) -> int | None:

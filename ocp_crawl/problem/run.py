@@ -9,7 +9,7 @@ import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic
 from ocp_crawl.model.pulse import Pulse
-from ocp_crawl.model.statics import Model
+from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.ocp import OCPSettings
 from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
@@ -52,14 +52,22 @@ def no_start_reason(problem: Problem) -> str | None:
 
     Cheap (one equilibrium solve), for checking before a long run; every torque solver starts there.
     The angles drive returns None: its contact is checked over the whole cycle when the problem is
-    built; so does a chain, whose simulators report the status no_start themselves.
+    built.
     """
-    if problem.drive != "torque" or problem.is_chain:   # (a chain's stepper reports no_start)
+    if problem.drive != "torque":
         return None
     model = problem.model
-    assert isinstance(model, Model)   # (not a chain: above)
     try:
-        HybridStepper(model, problem.torque, problem.hybrid).initial_state(0.0)
+        if isinstance(model, ChainModel):
+            from ocp_crawl.sim.chain_torque import ChainTorqueStepper   # (scipy: at run time)
+
+            ChainTorqueStepper(model, problem.torque, max_step=problem.hybrid.max_step,
+                               min_step=problem.hybrid.min_step,
+                               event_xtol=problem.hybrid.event_xtol,
+                               trial_step=problem.hybrid.trial_step,
+                               quad_h=problem.hybrid.quad_h).start()
+        else:
+            HybridStepper(model, problem.torque, problem.hybrid).initial_state(0.0)
     except ValueError as exc:
         return str(exc)
     return None
@@ -85,8 +93,9 @@ def ocp_settings(problem: Problem) -> OCPSettings:
 
     ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError
     otherwise, as for any other rule between keys that OCPSettings checks (e.g. sigma_min < sigma0,
-    at most MAX_STAGES stages).
+    at most MAX_STAGES stages), and for a chain (the OCP models the three-link robot).
     """
+    three_link_only(problem, "the optimal-gait problem ([ocp])")
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:  # a problem built in code: the schema's defaults
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}

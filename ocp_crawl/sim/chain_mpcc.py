@@ -35,12 +35,13 @@ from ocp_crawl.model.chain_stability import chain_stability_margins
 from ocp_crawl.model.chain_statics import chain_symbolic, kin_names, n_params
 from ocp_crawl.model.step_equations import NPAIR, friction_margins
 from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_message, new_result,
-                                    sample_fields, success_message)
+                                    output_phases, sample_fields, success_message)
 from ocp_crawl.sim.chain_torque import ChainTorqueStepper, as_chain_torque
 from ocp_crawl.sim.chain_torque_parts import mode_vector
 from ocp_crawl.sim.oracle import ENUM_MODES, damped_newton
 from ocp_crawl.sim.result import Event, Mode, mode_change_kind
 from ocp_crawl.sim.step import mode_from_pairs
+from ocp_crawl.sim.timestepping_output import resample
 from ocp_crawl.status import Status
 
 #: a success's |energy balance residual| (relative to the gross work) is at most ENERGY_TOL_N2 / N^2
@@ -299,18 +300,18 @@ def _diagnose(model: ChainModel, res: ChainStepResult, mode: Mode, t: float) -> 
 
 
 def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
-                periodic_tol: float, switch_exact: bool) -> tuple[list, int, float]:
+                periodic_tol: float, switch_exact: bool) -> tuple[list, int, float, set]:
     """Steps of N per cycle from the released start until the state at a cycle's end repeats.
 
-    Returns the rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) of every step, the cycles run and
-    the last periodicity deviation [rad, -].
+    Returns the rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) of every step, the cycles run,
+    the last periodicity deviation [rad, -] and the phases of the events the steps located.
     """
     from ocp_crawl.sim.chain_mpcc_split import advance
     kin = step.model.kinematics(start.x[:-1])
     rows = [(0.0, start.x[:-1].copy(), 0.0, float(kin["d"]), 0.0, float(kin["fn1"]),
              float(kin["fn2"]), float(kin["d"]), Mode.STICK)]
     ends = [(rows[0][1], 0.0, Mode.STICK)]
-    dev = float("nan")
+    dev, located = float("nan"), set()
     for cycle in range(1, cycles_max + 1):
         for k in range(1, N + 1):
             ta, tb = cycle - 1 + (k - 1) / N, cycle - 1 + k / N
@@ -318,7 +319,9 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
             # an event it passed may be traced back into it
             prev = (rows[-2] if len(rows) >= 2 and rows[-2][8] == rows[-1][8] and k > 1
                     else None)
-            new, res, dropped = advance(step, torque, rows[-1], ta, tb, switch_exact, prev)
+            new, res, dropped, found = advance(step, torque, rows[-1], ta, tb, switch_exact,
+                                               prev)
+            located.update(found)
             if dropped:
                 rows.pop()
             if not res.success:
@@ -334,28 +337,29 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
         (pa, fa, ma), (pb, fb, mb) = ends[-2], ends[-1]
         dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
         if cycle >= 2 and ma == mb and dev <= periodic_tol:
-            return rows, cycle, dev
+            return rows, cycle, dev, located
     raise _Stop(Status.NOT_PERIODIC, float(cycles_max), rows[-1][8],
                 f"not periodic after {cycles_max} cycles (last change {dev:.3g})")
 
 
-def _events(rows: list, N: int) -> list[Event]:
-    """The mode changes of the run's ``rows``: at the first row of the new mode, which is the event
-    point where the step split located it (off the step grid), else the end of the step the change
-    happened in (the three-link time-stepping's "mode_change_between_steps")."""
+def _events(rows: list, located: set) -> list[Event]:
+    """The mode changes of the run's ``rows``: at the first row of the new mode, an event point
+    where the step split located it (its phase in ``located``), else the end of the step the
+    change happened in (the three-link time-stepping's "mode_change_between_steps")."""
     out = []
     for a, b in zip(rows, rows[1:]):
         if a[8] != b[8]:
-            located = abs(b[0] * N - round(b[0] * N)) > 1e-9
+            found = b[0] in located
             out.append(Event(b[0], mode_change_kind(a[8], b[8]), a[8].label, b[8].label,
-                             0.0 if located else float("nan"),
-                             "step_split" if located else "mode_change_between_steps"))
+                             0.0 if found else float("nan"),
+                             "step_split" if found else "mode_change_between_steps"))
     return out
 
 
-def _metrics(model: ChainModel, torque, rows: list) -> tuple[dict, dict]:
+def _metrics(model: ChainModel, torque, rows: list, te) -> tuple[dict, dict]:
     """S, W+ (midpoint rule on the steps), CoT+ and the energy balance (trapezoidal friction) of
-    the steps ``rows`` of one cycle, and the sample fields."""
+    the steps ``rows`` of one cycle, and the sample fields: on the step phases, or on the phases
+    ``te`` of the cycle by linear interpolation between the steps."""
     t = np.array([r[0] for r in rows])
     phi = np.stack([r[1] for r in rows], axis=1)
     x1, x2, ft, fn1, fn2, d = (np.array([r[i] for r in rows]) for i in range(2, 8))
@@ -369,15 +373,17 @@ def _metrics(model: ChainModel, torque, rows: list) -> tuple[dict, dict]:
                               float(np.abs(work).sum()))
     kin = model.kinematics(phi)
     mode = np.array([int(r[8]) for r in rows], int)
+    cols = {"theta": kin[f"alpha{model.chain.n // 2 + 1}"], "d": d, "x1": x1, "x2": x2,
+            "f_t": ft, "f_n1": fn1, "f_n2": fn2}
+    if te is not None:
+        t, phi, cols, mode = resample(t[0] + te, t, phi, cols, mode)
     tau = np.asarray(torque(t), float).reshape(phi.shape[0], -1)
-    fields = sample_fields(t, phi, kin[f"alpha{model.chain.n // 2 + 1}"], d, x1, x2, ft, fn1,
-                           fn2, tau, mode)
-    return metrics, fields
+    return metrics, sample_fields(t=t, phi=phi, tau=tau, mode=mode, **cols)
 
 
 def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
                         cycles_max: int = 12, periodic_tol: float = 1e-10,
-                        switch_exact: bool = True):
+                        switch_exact: bool = True, t_eval=None):
     """Time-stepping gait of an n-link chain: ``steps`` exact incremental steps per cycle.
 
     Parameters
@@ -397,6 +403,9 @@ def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
     switch_exact : bool
         Split a step whose contact mode changes at the event located inside it
         (:mod:`ocp_crawl.sim.chain_mpcc_split`); False: each step entirely in its end mode.
+    t_eval : array_like of float, optional
+        Output phases in [0, 1] of the steady cycle [cycles], by linear interpolation between the
+        steps; default the step phases and the located events.
 
     Returns
     -------
@@ -414,6 +423,7 @@ def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
                          f"{cycles_max!r}")
     step = ChainStep(chain_model)
     torque = as_chain_torque(torques, chain_model)
+    te = output_phases(t_eval)
     try:
         start = ChainTorqueStepper(chain_model, torque, max_step=1.0 / 64, min_step=1e-11,
                                    event_xtol=1e-13, trial_step=1e-8, quad_h=1.0 / 32).start()
@@ -423,19 +433,19 @@ def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
                           failure_mode="released start")
     N = int(steps)
     try:
-        rows, cycles, dev = _run_cycles(step, torque, start, N, int(cycles_max), periodic_tol,
-                                        bool(switch_exact))
+        rows, cycles, dev, located = _run_cycles(step, torque, start, N, int(cycles_max),
+                                                 periodic_tol, bool(switch_exact))
     except _Stop as stop:
         return new_result(chain_model, "torque", stop.status,
                           failure_message(stop.status, stop.detail), failure_t=stop.t,
                           failure_mode=stop.mode.label)
     t0 = float(cycles - 1)
     metrics, fields = _metrics(chain_model, torque,
-                               [r for r in rows if t0 - 1e-12 <= r[0] <= t0 + 1 + 1e-12])
+                               [r for r in rows if t0 - 1e-12 <= r[0] <= t0 + 1 + 1e-12], te)
     extra = {"links": chain_model.chain.n, "steps_per_cycle": N, "periodicity_deviation": dev}
     res = new_result(chain_model, "torque", Status.SUCCESS,
                      success_message(cycles, t0, f" of {N} chain steps"), cycles=cycles, t0=t0,
-                     events=_events(rows, N), nsteps=len(rows) - 1, periodicity_residual=dev,
+                     events=_events(rows, located), nsteps=len(rows) - 1, periodicity_residual=dev,
                      extra=extra, **metrics, **fields)
     # (the midpoint rule's balance error is O(1/N^2): the three-link MPCC's default bound)
     return energy_gate(res, ENERGY_TOL_N2 / N**2, "ENERGY_TOL_N2 / N^2 of the chain's steps")

@@ -96,13 +96,16 @@ def _event_row(step: ChainStep, mode: Mode, row: tuple, tau: np.ndarray, t: floa
 
 def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             switch_exact: bool = True, prev: tuple | None = None
-            ) -> tuple[list, ChainStepResult, bool]:
+            ) -> tuple[list, ChainStepResult, bool, list]:
     """Rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) from ``row`` at phase ``ta`` [cycles] to
-    ``tb``: the located event points and the step's end, the last step's result, and whether
-    ``row`` is dropped.  ``prev``: the row where the step that ended in ``row`` started, in the
-    same mode; an event of that mode found before ``ta`` is then placed in that step, which is
-    redone from ``prev`` (the rows returned replace ``row``)."""
+    ``tb``: the located event points and the step's end, the last step's result, whether ``row``
+    is dropped, and the phases of the located events.  An event point carries the mode after the
+    event; one at ``ta`` itself repeats ``row``'s phase in that mode.  ``prev``: the row where the
+    step that ended in ``row`` started, in the same mode; an event of that mode found before
+    ``ta`` is then placed in that step, which is redone from ``prev`` (the rows returned replace
+    ``row``)."""
     out: list[tuple] = []
+    located: list[float] = []
     dropped = False
     for split in range(MAX_SPLITS + 1):
         tau = np.asarray(torque(tb), float).reshape(step.m)
@@ -132,8 +135,9 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             if not after.success or after.mode == mode:
                 break
             event = event[:8] + (after.mode,)
-            rest, _, _ = advance(step, torque, event, te, ta, switch_exact)
+            rest, _, _, found = advance(step, torque, event, te, ta, switch_exact)
             out, dropped, row = [event, *rest], True, rest[-1]
+            located += [te, *found]
             continue
         if theta > 0:
             row = _event_row(step, mode, row, tau_of(theta), te)
@@ -145,8 +149,11 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
         row = row[:8] + (nxt.mode,)
         if out and out[-1][0] == te:
             out[-1] = row
+        else:
+            out.append(row)
+        located.append(te)
         ta = te
     if not res.success:   # the mode the failed solve started in (a split may have changed it)
         res = replace(res, extra={**res.extra, "start_mode": row[8]})
     out.append(_row(tb, res))
-    return out, res, dropped
+    return out, res, dropped, located

@@ -77,11 +77,9 @@ def _chain_event(model, signal, options, t_eval):
 def _chain_mpcc(model, signal, options, t_eval):
     from ocp_crawl.sim.chain_mpcc import simulate_chain_mpcc
 
-    if t_eval is not None:  # (the chain's steps report the step ends only)
-        raise ValueError("the mpcc solver of a chain reports its step ends: t_eval must be None")
     return simulate_chain_mpcc(model, signal, steps=options.steps, cycles_max=options.max_cycles,
                                periodic_tol=options.periodic_tol,
-                               switch_exact=options.switch_exact)
+                               switch_exact=options.switch_exact, t_eval=t_eval)
 
 
 def _chain_angles(model, signal, options, t_eval):
@@ -120,6 +118,8 @@ SOLVERS: dict[str, Solver] = {
                             "servos, played at a period T [s]",
                             available=mujoco_available, install=INSTALL),
 }
+#: the solvers that simulate a chain too, as messages list them
+CHAIN_SOLVERS = ", ".join(name for name, spec in SOLVERS.items() if spec.chain is not None)
 #: the MuJoCo solver of each drive (``[simulation] solver = "mujoco"`` names both)
 MUJOCO_SOLVERS = {"torque": "mujoco", "angles": "mujoco_angles"}
 
@@ -133,7 +133,7 @@ def unusable(name: str, gravity: str, values=None, chain: bool = False) -> str:
     spec = solver_named(name)
     if chain and spec.chain is None:
         return ("is invalid with a chain ([robot] lengths): it simulates the three-link robot "
-                f"only; a chain's solvers: {', '.join(n for n, s in SOLVERS.items() if s.chain)}")
+                f"only; a chain's solvers: {CHAIN_SOLVERS}")
     if not spec.available():
         return f"needs an optional dependency that is not installed: {spec.install}"
     if name in MUJOCO_SOLVERS.values() and gravity != "physical":
@@ -199,6 +199,6 @@ def simulate(model: Model | ChainModel, signal, solver: str = "event", options=N
     if isinstance(model, ChainModel):
         if spec.chain is None:
             raise ValueError(f"solver {solver!r} simulates the three-link robot only; for a chain: "
-                             f"{', '.join(n for n, s in SOLVERS.items() if s.chain)}")
+                             f"{CHAIN_SOLVERS}")
         return spec.chain(model, signal, options, t_eval)
     return spec.run(model, signal, options, t_eval)

@@ -69,7 +69,7 @@ def resample(te: np.ndarray, t, phi, cols, mode):
     """The step samples at the phases te [cycles] by linear interpolation (a failed run: the
     phases it reached)."""
     te = te[te <= t[-1] + 1e-12]
-    phi = np.stack([np.interp(te, t, phi[i]) for i in range(2)])
+    phi = np.stack([np.interp(te, t, row) for row in phi])
     cols = {k: np.interp(te, t, v) for k, v in cols.items()}
     mode = mode[np.clip(np.searchsorted(t, te - 1e-12, side="left"), 0, len(t) - 1)]
     return te, phi, cols, mode

@@ -27,7 +27,7 @@ from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.statics import Robot
-from ocp_crawl.viz.gait import chain_points, robot_points
+from ocp_crawl.viz.gait import shape_points
 from ocp_crawl.problem import Problem, run_problem
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.viz import FPS_BOUNDS
@@ -114,12 +114,8 @@ class CrawlScene:
         fr = self.frames = frames_of(result, cycles, frames_per_cycle)
         origin = fr.x1[0]
         # (frames, 2, points): foot 1, the joints, foot 2
-        if isinstance(robot, Chain):
-            self.shapes = np.stack([MM * chain_points(robot, a - origin, fr.phi[:, i])
-                                    for i, a in enumerate(fr.x1)])
-        else:
-            self.shapes = np.stack([MM * robot_points(robot, a - origin, b - origin, p, th)
-                                    for a, b, p, th in zip(fr.x1, fr.x2, fr.phi[0], fr.theta)])
+        self.shapes = np.stack([MM * shape_points(robot, a - origin, b - origin, fr.phi[:, i], th)
+                                for i, (a, b, th) in enumerate(zip(fr.x1, fr.x2, fr.theta))])
         xmin, xmax = self.shapes[:, 0].min(), self.shapes[:, 0].max()
         zmax = max(self.shapes[:, 1].max(), 1.0)
         pad = 0.08 * (xmax - xmin)

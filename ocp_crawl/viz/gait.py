@@ -139,6 +139,15 @@ def chain_points(chain: Chain, x1: float, phi) -> np.ndarray:
     return np.concatenate([[[x1], [0.0]], [[x1], [0.0]] + np.cumsum(steps, axis=1)], axis=1)
 
 
+def shape_points(robot: Robot | Chain, x1: float, x2: float, phi, theta: float) -> np.ndarray:
+    """Foot 1, the joints and foot 2 [m] of either robot, shape (2, joints + 2): the three-link
+    robot's from :func:`robot_points`, a chain's from :func:`chain_points` (its joint angles
+    ``phi`` [rad]; ``x2`` and ``theta`` follow from them)."""
+    if isinstance(robot, Chain):
+        return chain_points(robot, x1, phi)
+    return robot_points(robot, x1, x2, float(np.asarray(phi)[0]), theta)
+
+
 def _gait_title(result: CrawlResult) -> str:
     title = f"{result.drive} drive, {result.gravity} gravity: {result.status_name}"
     if np.isfinite(result.S):
@@ -256,11 +265,8 @@ def _draw_snapshots(ax, result: CrawlResult, robot: Robot | Chain, phase, origin
     idx = sorted({int(np.argmin(np.abs(phase - s))) for s in targets})
     phi = np.asarray(result.phi, float)
     for j, i in enumerate(idx):
-        if isinstance(robot, Chain):
-            pts = 1e3 * chain_points(robot, result.x1[i] - origin, phi[:, i])
-        else:
-            pts = 1e3 * robot_points(robot, result.x1[i] - origin, result.x2[i] - origin,
-                                     phi[0, i], result.theta[i])
+        pts = 1e3 * shape_points(robot, result.x1[i] - origin, result.x2[i] - origin, phi[:, i],
+                                 result.theta[i])
         gray = 0.75 - 0.6 * j / max(len(idx) - 1, 1)
         ax.plot(pts[0], pts[1], "-o", color=str(gray), lw=1.5, ms=2.5, label=f"t = {phase[i]:.2f}")
     ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="x-small", frameon=False)
