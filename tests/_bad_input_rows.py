@@ -206,6 +206,23 @@ COMMAND_ROWS = {
           text=edit('solver = "event"', 'solver = "rk4"')),
     "simulate: --set syntax":
         R("simulate", ["{paper}", "--set", "robot.k"], ["robot.k", "SECTION.KEY=VALUE"]),
+    "simulate: --set an entry past the array's end":
+        R("simulate", ["{file}", "--set", "robot.stiffness[4]=0.2"],
+          ["x.toml", "robot.stiffness[4] = 0.2", "4 entries, indices 0 to 3"], text=CHAIN_TEXT),
+    "simulate: --set an entry of a number":
+        R("simulate", ["{paper}", "--set", "robot.k[0]=0.2"],
+          ["robot.k[0]", "not an array"]),
+    "simulate: --set an entry of an array the problem does not give":
+        R("simulate", ["{file}", "--set", "robot.com[0]=0.5"],
+          ["x.toml", "robot.com[0] = 0.5", "give the whole array"],
+          text=chain_edit("com = [0.45, 0.50, 0.55, 0.50, 0.60]", "")),
+    "simulate: --set an entry to a value its array refuses":
+        R("simulate", ["{file}", "--set", "robot.stiffness[1]=-1"],
+          ["x.toml", "[robot] stiffness = [0.17, -1, 0.25, 0.2] (from --set)", "entry 1 = -1"],
+          text=CHAIN_TEXT),
+    "sweep: an axis over an entry of a number":
+        R("sweep", ["{paper}", "--grid", "robot.k[0]=0.1,0.2", "--out", "{tmp}"],
+          ["robot.k[0]", "not an array key"]),
     "simulate: --set unknown key":
         R("simulate", ["{paper}", "--set", "robot.kay=1"], ["robot.kay=1", "did you mean k?"]),
     "simulate: --set string for a number": R("simulate", ["{paper}", "--set", "robot.k=soft"],

@@ -12,7 +12,7 @@ import pytest
 
 from ocp_crawl.cli import main
 from ocp_crawl.model.chain import Chain
-from ocp_crawl.problem import load_problem, problem_from_dict, run_problem
+from ocp_crawl.problem import ProblemError, load_problem, problem_from_dict, run_problem
 from ocp_crawl.problem.overrides import read_toml
 
 from _bad_input_rows import CHAIN, PAPER
@@ -69,7 +69,7 @@ def test_the_paper_robot_as_a_chain_is_the_three_link_robot(overrides):
 def test_a_chain_problem_round_trips_through_its_dict():
     problem = load_problem(CHAIN)
     again = problem_from_dict(problem.to_dict())
-    assert again.robot == problem.robot and "beta" not in problem.to_dict()["robot"]
+    assert again == problem and "beta" not in problem.to_dict()["robot"]
     np.testing.assert_array_equal(again.torque(np.linspace(0, 1, 7)),
                                   problem.torque(np.linspace(0, 1, 7)))
     given = problem_from_dict(problem.given_dict())
@@ -149,3 +149,29 @@ def test_the_chain_steps_sampled_at_phases_interpolate_the_steps():
     assert [e.guard_name for e in located] == ["step_split"] * len(located)
     np.testing.assert_allclose([e.t - steps.t0 for e in located],
                                [e.t - exact.t0 for e in exact.steady_events()], atol=1e-8)
+
+
+def test_an_entry_of_an_array_set_as_the_file_would_set_it():
+    """``--set robot.stiffness[1]=0.5`` and ``with_values({"robot.stiffness[1]": 0.5})`` are the
+    file with that entry changed; an entry set twice to two values is refused."""
+    data = read_toml(CHAIN)
+    data["robot"]["stiffness"][1] = 0.5
+    edited = problem_from_dict(data, source=str(CHAIN))
+    assert load_problem(CHAIN, ["robot.stiffness[1]=0.5"]) == edited
+    assert load_problem(CHAIN).with_values({"robot.stiffness[1]": 0.5}) == edited
+    assert edited.robot.stiffness == (0.17, 0.5, 0.25, 0.2)
+    with pytest.raises(ProblemError, match=r"robot.stiffness\[1\] is set twice"):
+        load_problem(CHAIN, ["robot.stiffness[1]=0.5", "robot.stiffness[1]=0.4"])
+
+
+def test_a_sweep_over_an_entry_gives_the_simulations_of_its_values(tmp_path, capsys):
+    values = (0.2, 0.4)
+    assert main(["sweep", str(CHAIN), "--grid", "robot.stiffness[1]=0.2,0.4", "--out",
+                 str(tmp_path / "sweep"), "--jobs", "1", "--no-progress"]) == 0
+    capsys.readouterr()
+    with open(tmp_path / "sweep" / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [float(r["robot.stiffness[1] [N m/rad]"]) for r in rows] == list(values)
+    for row, value in zip(rows, values):
+        alone = run_problem(load_problem(CHAIN, [f"robot.stiffness[1]={value}"]))
+        assert float(row["S [m]"]) == pytest.approx(alone.S, rel=1e-12, abs=1e-15)

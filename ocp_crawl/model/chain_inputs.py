@@ -46,6 +46,15 @@ class JointFourier(PeriodicSignal):
         self.a0, self.a, self.b = a0, a, b
         self._k = np.arange(1, a.shape[1] + 1)
 
+    def __eq__(self, other) -> bool:
+        """The same coefficients (as the three-link signals, compared by value)."""
+        return type(other) is type(self) and all(
+            np.array_equal(x, y) for x, y in zip((self.a0, self.a, self.b),
+                                                 (other.a0, other.a, other.b)))
+
+    def __hash__(self) -> int:
+        return hash((self.a.shape, self.a0.tobytes(), self.a.tobytes(), self.b.tobytes()))
+
     @classmethod
     def harmonic(cls, mean, amplitude, phase) -> "JointFourier":
         """``phi_j(t) = mean_j + amplitude_j sin(2 pi t + phase_j)`` [rad] (phases [rad], each

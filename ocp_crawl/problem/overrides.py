@@ -21,17 +21,27 @@ from ocp_crawl.problem.messages import format_value, suggest
 from ocp_crawl.problem.keys import TYPE_WORDS, ProblemError
 from ocp_crawl.problem.schema import SCHEMA, removed_key
 
-_KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)\s*$")
+_KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)(\[[0-9]+\])?\s*$")
+_ENTRY_RE = re.compile(r"^([A-Za-z0-9_-]+)\[([0-9]+)\]$")
+
+
+def entry(name: str) -> tuple[str, int | None]:
+    """The key and the index of an entry name: ``("stiffness", 1)`` of ``"stiffness[1]"`` (entry 1,
+    counted from 0, of an array key); ``(name, None)`` of a plain key."""
+    m = _ENTRY_RE.match(name)
+    return (m[1], int(m[2])) if m else (name, None)
 
 
 def split_key(dotted: str, where: str) -> tuple[str, str]:
-    """``"SECTION.KEY"`` as (section, key) of the schema, or ProblemError naming ``where``."""
+    """``"SECTION.KEY"`` (or ``"SECTION.KEY[i]"``, entry i of an array key) as (section, key) of the
+    schema (the key with its ``[i]``), or ProblemError naming ``where``."""
     m = _KEY_RE.match(dotted) if isinstance(dotted, str) else None
     if not m:
         shown = format_value(dotted.strip()) if isinstance(dotted, str) else repr(dotted)
         raise ProblemError(f"{where} is invalid: the key {shown} must be SECTION.KEY, e.g. "
-                           "robot.k=0.05")
-    section, name = m.groups()
+                           "robot.k=0.05 (or an array's entry SECTION.KEY[i], e.g. "
+                           "robot.stiffness[1]=0.2)")
+    section, name, index = m.groups()
     if section not in SCHEMA:
         hint = suggest(section, list(SCHEMA))
         raise ProblemError(f"{where} is invalid: unknown section [{section}]; {hint}valid "
@@ -44,7 +54,10 @@ def split_key(dotted: str, where: str) -> tuple[str, str]:
         hint = suggest(name, list(keys))
         raise ProblemError(f"{where} is invalid: unknown key {name} in [{section}]; {hint}valid "
                            f"keys: {', '.join(keys)}")
-    return section, name
+    if index is not None and keys[name].type is not list:
+        raise ProblemError(f"{where} is invalid: {section}.{name}{index} names an entry, and "
+                           f"{section}.{name} is {TYPE_WORDS[keys[name].type]}, not an array")
+    return section, name + (index or "")
 
 
 def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
@@ -60,7 +73,8 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
         raise ProblemError(f"{where} is invalid: expected SECTION.KEY=VALUE, e.g. robot.k=0.05")
     lhs, rhs = text.split("=", 1)
     section, name = split_key(lhs, where)
-    key = SCHEMA[section].key_map[name]
+    base, index = entry(name)
+    key = SCHEMA[section].key_map[base]
     rhs = rhs.strip()
     if not rhs or "\n" in rhs or "\r" in rhs:
         example = key.default if key.default is not None else (key.choices or (1.0,))[0]
@@ -73,8 +87,9 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
         value = parsed["v"]
     except tomllib.TOMLDecodeError:
         if key.type is not str:
+            expected = TYPE_WORDS[key.type if index is None else float]
             raise ProblemError(f"{where} is invalid: {format_value(rhs)} is not a TOML value; "
-                               f"expected {TYPE_WORDS[key.type]} ({key.what})") from None
+                               f"expected {expected} ({key.what})") from None
         value = rhs
     return section, name, value
 
@@ -105,6 +120,11 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]],
                                f"{format_value(done[section, name])} and to {format_value(value)}: "
                                "give it once")
         schema = SCHEMA[section]
+        base, index = entry(name)
+        if index is not None:   # one entry of an array the problem gives
+            sec[base] = _with_entry(sec.get(base), index, value, f"{section}.{name}", source)
+            done[section, name], done[section, base] = value, sec[base]
+            continue
         if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
             # one foot's friction changed on a robot given one mu: the other foot keeps mu
             sec.setdefault("mu1" if name == "mu2" else "mu2", sec["mu"])
@@ -122,6 +142,20 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]],
               {k.name for k in schema.keys if k.name in sec and (section, k.name) not in done
                and not schema.applies(k, variant)}, done, "", source)
     return out, set(done)
+
+
+def _with_entry(values: Any, index: int, value: Any, name: str, source: str) -> list:
+    """A copy of the array ``values`` with entry ``index`` set to ``value``; ProblemError naming
+    ``name`` when the problem gives no array with that entry."""
+    if not isinstance(values, (list, tuple)):
+        raise ProblemError(f"{source}: {name} = {format_value(value)} sets an entry of an array "
+                           "the problem does not give: give the whole array")
+    if index >= len(values):
+        raise ProblemError(f"{source}: {name} = {format_value(value)} is invalid: the array has "
+                           f"{len(values)} entries, indices 0 to {len(values) - 1}")
+    out = list(values)
+    out[index] = value
+    return out
 
 
 def _drop(sec: dict, schema, names: set[str], done: Mapping[tuple[str, str], Any], by: str,

@@ -171,9 +171,9 @@ class Problem:
         """A new problem with typed values set:
         ``problem.with_values({"robot.mu1": 0.35, "gait.psi_deg": 30.0})``.
 
-        Keys are ``SECTION.KEY`` of the schema (units as in the problem files); the new problem is
-        validated as a whole, so a bad value raises ProblemError naming the key.  No text round
-        trip.
+        Keys are ``SECTION.KEY`` of the schema (units as in the problem files), or
+        ``SECTION.KEY[i]`` for entry i of an array the problem gives; the new problem is validated
+        as a whole, so a bad value raises ProblemError naming the key.  No text round trip.
         """
         if not isinstance(values, Mapping):
             raise TypeError("Problem.with_values needs a mapping of SECTION.KEY to values, got "

@@ -7,6 +7,7 @@ base problem with :meth:`~ocp_crawl.problem.Problem.with_values` (no text round 
 """
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import itertools
 import math
@@ -19,9 +20,9 @@ import numpy as np
 
 from ocp_crawl.checks import is_finite, parse_integer, parse_number, short_repr
 from ocp_crawl.problem import SCHEMA, Key, Problem, ProblemError
-from ocp_crawl.problem.overrides import toml_loads
+from ocp_crawl.problem.overrides import entry, toml_loads
 
-_GRID_KEY_RE = re.compile(r"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)$")
+_GRID_KEY_RE = re.compile(r"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)(\[[0-9]+\])?$")
 #: numpy dtype of the values of a key of each schema type
 VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
 #: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event
@@ -39,13 +40,13 @@ ECHO_ALL = 20
 
 
 def schema_key(name: str, where: str) -> Key:
-    """The schema entry of a grid key ``section.key``; unknown keys raise ProblemError with a
-    hint."""
+    """The schema entry of a grid key ``section.key``, or of ``section.key[i]`` (entry i of an
+    array key: a number under the array's rule); unknown keys raise ProblemError with a hint."""
     m = _GRID_KEY_RE.match(name)
     if not m:
         raise ProblemError(f"{where} is invalid: the key {name!r} must be SECTION.KEY "
                            f"({_GRID_HELP})")
-    section, key = m.groups()
+    section, key, index = m.groups()
     if section not in SCHEMA:
         close = difflib.get_close_matches(section, list(SCHEMA), n=1)
         hint = f"did you mean {close[0]}? " if close else ""
@@ -57,10 +58,14 @@ def schema_key(name: str, where: str) -> Key:
         hint = f"did you mean {section}.{close[0]}? " if close else ""
         raise ProblemError(f"{where} is invalid: unknown key {key} in [{section}]; {hint}valid "
                            f"keys: {', '.join(keys)}")
-    if keys[key].type not in (float, int, str):
-        what = "an array key" if keys[key].type is list else "a table key"
-        raise ProblemError(f"{where} is invalid: {name} is {what}; an axis varies a number or a "
-                           "string (sweep a key with one value, or one problem file per array)")
+    if index is not None and keys[key].type is list:
+        return dataclasses.replace(keys[key], name=key + index, type=float)
+    if keys[key].type not in (float, int, str) or index is not None:
+        what = ("an array key (an axis may vary one of its entries, e.g. "
+                f"{section}.{key}[0])" if keys[key].type is list else
+                "a table key" if index is None else "not an array key")
+        raise ProblemError(f"{where} is invalid: {section}.{key} is {what}; an axis varies a "
+                           "number or a string")
     return keys[key]
 
 
@@ -255,6 +260,7 @@ def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
     names = list(out)
     for name in names:
         section, key = name.split(".")
+        key = entry(key)[0]
         for other in SCHEMA[section].key_map[key].exclusive_with:
             if f"{section}.{other}" in out:
                 raise ProblemError(f"grid keys {name} and {section}.{other} are alternatives: "
