@@ -137,6 +137,9 @@ COMMAND_ROWS = {
         R("simulate", ["{file}"], ["x.toml", "[gait] gamma_joints_deg", "4 joints"],
           text=chain_edit("gamma_joints_deg = [95.0, 170.0, 175.0, 90.0]",
                           "gamma_joints_deg = [95.0, 170.0, 175.0]")),
+    "simulate: a chain's centres of mass as an empty array":
+        R("simulate", ["{file}"], ["x.toml", "[robot] com = []", "leave the key out"],
+          text=chain_edit("com = [0.45, 0.50, 0.55, 0.50, 0.60]", "com = []")),
     "simulate: a chain with the three-link mass":
         R("simulate", ["{file}"], ["x.toml", "[robot] M = 0.052", "mutually exclusive"],
           text=chain_edit("[robot]\n", "[robot]\nM = 0.052\n")),

@@ -127,7 +127,8 @@ def test_the_five_link_file_through_every_command_that_takes_a_chain(tmp_path, c
     for solver in ("event", "mpcc"):   # (the animation samples the steady cycle densely)
         gif = tmp_path / f"crawl_{solver}.gif"
         assert main(["animate", str(CHAIN), "--out", str(gif), "--cycles", "1",
-                     "--frames-per-cycle", "4", "--set", f"simulation.solver={solver}"]) == 0
+                     "--frames-per-cycle", "4", "--set", f"simulation.solver={solver}",
+                     "--set", "simulation.steps=40"]) == 0
         assert gif.read_bytes()[:6] == b"GIF89a"
 
 
@@ -175,3 +176,32 @@ def test_a_sweep_over_an_entry_gives_the_simulations_of_its_values(tmp_path, cap
     for row, value in zip(rows, values):
         alone = run_problem(load_problem(CHAIN, [f"robot.stiffness[1]={value}"]))
         assert float(row["S [m]"]) == pytest.approx(alone.S, rel=1e-12, abs=1e-15)
+
+
+#: a four-link chain whose equilibrium branch folds at the start (found by fuzzing the commands)
+FOLDS = """
+[robot]
+lengths = [0.0237, 0.02, 0.0378, 0.0185]
+masses = [0.0, 0.02858, 0.00596, 0.02026]
+stiffness = [29.92, 27.83, 193.5]
+mu = 2.271
+
+[gait]
+psi_deg = 187.6
+gamma_joints_deg = [83.5, 148.3, 134.4]
+A_joints_deg = [0.4, 14.5, 10.0]
+"""
+
+
+def test_a_failed_chain_run_is_a_status_in_simulate_and_animate(tmp_path, capsys):
+    """The chain's failure carries no samples: animate says so (exit 1) and writes nothing."""
+    path = tmp_path / "folds.toml"
+    path.write_text(FOLDS)
+    assert main(["simulate", str(path), "--json"]) == 1
+    assert json.loads(capsys.readouterr().out)["status_name"] == "fold"
+    gif = tmp_path / "crawl.gif"
+    assert main(["animate", str(path), "--out", str(gif), "--cycles", "1",
+                 "--frames-per-cycle", "4"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "nothing written" in err and "fold" in err
+    assert not gif.exists()

@@ -43,6 +43,11 @@ def chain_robot(ctx: Context, robot: Mapping[str, Any], given: Mapping[str, Any]
             raise ProblemError(f"{ctx.at('robot', name, given[name])} and lengths = "
                                f"{format_value(given['lengths'])} are mutually exclusive: a chain "
                                "([robot] lengths, masses, stiffness) has no three-link shorthand")
+    for name in ("com", "rest_deg"):   # (absent: the defaults; given: one value each)
+        if name in robot and len(robot[name]) == 0:
+            raise ProblemError(f"{ctx.at('robot', name, robot[name])} is invalid: give a value per "
+                               f"{'link' if name == 'com' else 'joint'}, or leave the key out for "
+                               "the default")
     rest = [math.radians(r) for r in robot.get("rest_deg", ())]
     try:
         return Chain(lengths=robot["lengths"], masses=robot["masses"],

@@ -220,12 +220,15 @@ def save_gif(scene: CrawlScene, path: str | os.PathLike, fps: float = 20.0) -> P
 
 
 def animate_problem(problem: Problem, path: str | os.PathLike, cycles: int = 2,
-                    frames_per_cycle: int = 48, fps: int = 20) -> tuple[CrawlResult, Path]:
+                    frames_per_cycle: int = 48, fps: int = 20) -> tuple[CrawlResult, Path | None]:
     """Simulate a problem and write its animation; returns the result (check ``success``) and the
-    GIF path."""
+    GIF path, None when a failed run has no samples to draw (a failure at the start, or a
+    simulator that reports none on failure, as the chain's)."""
     result = run_problem(problem)
     if result.success:
         # dense samples of the steady cycle; the frames pick the nearest one
         result = run_problem(problem, t_eval=np.linspace(0.0, 1.0, 8 * frames_per_cycle + 1))
+    elif len(result.t) == 0:
+        return result, None
     scene = CrawlScene(result, problem.robot, cycles, frames_per_cycle)
     return result, save_gif(scene, path, fps)
