@@ -77,6 +77,15 @@ def _per_joint(ctx: Context, gait: Mapping[str, Any], name: str, common: str, m:
     return list(values)
 
 
+def harmonic_only(ctx: Context, gait: Mapping[str, Any]) -> None:
+    """ProblemError for a chain's ``[gait]`` of another waveform than the harmonic (checked on the
+    keys as given, before the other waveforms' own keys are asked for)."""
+    waveform = gait.get("waveform", "harmonic")
+    if waveform != "harmonic":
+        raise ProblemError(f"{ctx.at('gait', 'waveform', waveform)} is invalid with a chain "
+                           "([robot] lengths): its joints take the harmonic waveform")
+
+
 def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain) -> JointFourier:
     """The reference angles [rad] of a chain's ``[gait]`` (harmonic, one row per joint)."""
     for name in TWO_JOINT_KEYS:
@@ -84,9 +93,7 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain) -> JointFour
             raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of the three-link "
                                "robot's two joints: a chain ([robot] lengths) gives "
                                f"{' and '.join(JOINT_KEYS)}, one value per joint")
-    if gait["waveform"] != "harmonic":
-        raise ProblemError(f"{ctx.at('gait', 'waveform', gait['waveform'])} is invalid with a "
-                           "chain ([robot] lengths): its joints take the harmonic waveform")
+    harmonic_only(ctx, gait)
     m = chain.n_joints
     gamma = _per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m)
     amplitude = _per_joint(ctx, gait, "A_joints_deg", "A_deg", m)

@@ -369,6 +369,9 @@ def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> 
 
 
 def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
+    robot, gait = data.get("robot"), data.get("gait")
+    if isinstance(robot, Mapping) and "lengths" in robot and isinstance(gait, Mapping):
+        chain_robot.harmonic_only(ctx, gait)
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     if chain_robot.is_chain(r):
