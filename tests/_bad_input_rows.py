@@ -212,6 +212,19 @@ COMMAND_ROWS = {
     "simulate: --set an entry past the array's end":
         R("simulate", ["{file}", "--set", "robot.stiffness[4]=0.2"],
           ["x.toml", "robot.stiffness[4] = 0.2", "4 entries, indices 0 to 3"], text=CHAIN_TEXT),
+    "simulate: --set an entry with a leading zero":
+        R("simulate", ["{file}", "--set", "robot.stiffness[01]=0.2"],
+          ["robot.stiffness[01]", "SECTION.KEY[i]"], text=CHAIN_TEXT),
+    "simulate: --set a whole array that changes an entry set before it":
+        R("simulate", ["{file}", "--set", "robot.stiffness[1]=0.4", "--set",
+                       "robot.stiffness=[0.2, 0.3, 0.3, 0.2]"],
+          ["robot.stiffness = [0.2, 0.3, 0.3, 0.2] changes robot.stiffness[1] = 0.4"],
+          text=CHAIN_TEXT),
+    "sweep: an axis over an entry of an array the --set gives whole":
+        R("sweep", ["{file}", "--set", "robot.stiffness=[0.2, 0.3, 0.3, 0.2]", "--grid",
+                    "robot.stiffness[1]=0.3,0.4", "--out", "{tmp}"],
+          ["robot.stiffness[1]=0.4 undoes --set", "drop the --set"], text=CHAIN_TEXT,
+          absent=["or sweep"]),
     "simulate: --set an entry of a number":
         R("simulate", ["{paper}", "--set", "robot.k[0]=0.2"],
           ["robot.k[0]", "not an array"]),

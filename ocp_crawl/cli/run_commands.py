@@ -354,15 +354,14 @@ def cmd_animate(args: argparse.Namespace) -> int:
     check_start(problem)
     announce(work)
     result, written = animate_problem(problem, path, args.cycles, args.frames_per_cycle, args.fps)
-    if written is None:
-        print(f"{PROG}: simulation failed: {result.message} (no samples to animate: nothing "
-              "written)", file=sys.stderr)
-        return EXIT_FAILURE
-    print(f"wrote {written}: {result.status_name}, "
-          + (f"S = {units.distance(result.S, 2)} per cycle" if result.success else result.message))
+    if written is not None:
+        print(f"wrote {written}: {result.status_name}, "
+              + (f"S = {units.distance(result.S, 2)} per cycle" if result.success
+                 else result.message))
     if not result.success:
-        print(f"{PROG}: simulation failed: {result.message} (animated up to the failure)",
-              file=sys.stderr)
+        what = ("animated up to the failure" if written is not None
+                else "no samples to animate: nothing written")
+        print(f"{PROG}: simulation failed: {result.message} ({what})", file=sys.stderr)
         return EXIT_FAILURE
     return EXIT_OK
 

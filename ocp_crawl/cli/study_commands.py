@@ -12,7 +12,7 @@ from ocp_crawl.cli.common import (address, announce, check_scheduler, check_work
                                   out_dir, prepare_out, work_arg)
 from ocp_crawl.io import units
 from ocp_crawl.problem import SCHEMA, format_value, problem_from_dict
-from ocp_crawl.problem.overrides import first_loss, parse_override, read_toml
+from ocp_crawl.problem.overrides import entry, first_loss, parse_override, read_toml
 from ocp_crawl.problem.work import sweep_work
 from ocp_crawl.sim import solver_named
 from ocp_crawl.sweep import (JOURNAL_FILE, RESULTS_FILE, SETTINGS_FILE, SUMMARY_FILE, SweepError,
@@ -142,7 +142,9 @@ def _check_grid_keeps_sets(args: argparse.Namespace, data, grid) -> None:
             if loss is not None:
                 given = next(t for t, (sec, k, _) in zip(args.overrides, sets)
                              if f"{sec}.{k}" == loss[1])
-                also = f" (or sweep {loss[1]})" if loss[1] != name else ""
+                # (an array, the --set of an entry's whole array, is no axis to suggest)
+                whole = f"{section}.{entry(key)[0]}"
+                also = f" (or sweep {loss[1]})" if loss[1] not in (name, whole) else ""
                 raise BadInput(f"--grid {name}={format_value(value)} undoes --set {given}: the "
                                f"grid gives {name} at every point, so drop the --set{also}")
 

@@ -52,7 +52,7 @@ def chain_robot(ctx: Context, robot: Mapping[str, Any], given: Mapping[str, Any]
     try:
         return Chain(lengths=robot["lengths"], masses=robot["masses"],
                      stiffness=robot["stiffness"], mu=feet_friction(robot),
-                     com=robot.get("com") or None, rest=rest or None, g=robot["g"])
+                     com=robot.get("com"), rest=rest or None, g=robot["g"])
     except ValueError as exc:
         text = str(exc)
         # the key the chain's message names first ("total mass sum(masses) ...": masses)

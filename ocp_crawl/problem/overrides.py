@@ -21,15 +21,27 @@ from ocp_crawl.problem.messages import format_value, suggest
 from ocp_crawl.problem.keys import TYPE_WORDS, ProblemError
 from ocp_crawl.problem.schema import SCHEMA, removed_key
 
-_KEY_RE = re.compile(r"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)(\[[0-9]+\])?\s*$")
-_ENTRY_RE = re.compile(r"^([A-Za-z0-9_-]+)\[([0-9]+)\]$")
+#: an entry's index as written after an array key: a count from 0, no leading zeros (one spelling
+#: per entry), at most 9 digits
+INDEX = r"\[(?:0|[1-9][0-9]{0,8})\]"
+_KEY_RE = re.compile(rf"^\s*([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)({INDEX})?\s*$")
+_ENTRY_RE = re.compile(rf"^([A-Za-z0-9_-]+)({INDEX})$")
 
 
 def entry(name: str) -> tuple[str, int | None]:
     """The key and the index of an entry name: ``("stiffness", 1)`` of ``"stiffness[1]"`` (entry 1,
     counted from 0, of an array key); ``(name, None)`` of a plain key."""
     m = _ENTRY_RE.match(name)
-    return (m[1], int(m[2])) if m else (name, None)
+    return (m[1], int(m[2][1:-1])) if m else (name, None)
+
+
+def entry_value(sec: Mapping[str, Any], name: str, missing: Any = None) -> Any:
+    """The value of key or entry ``name`` in the section ``sec``, ``missing`` if it has none."""
+    base, index = entry(name)
+    value = sec.get(base, missing)
+    if index is None or value is missing:
+        return value
+    return value[index] if isinstance(value, (list, tuple)) and index < len(value) else missing
 
 
 def split_key(dotted: str, where: str) -> tuple[str, str]:
@@ -56,7 +68,8 @@ def split_key(dotted: str, where: str) -> tuple[str, str]:
                            f"keys: {', '.join(keys)}")
     if index is not None and keys[name].type is not list:
         raise ProblemError(f"{where} is invalid: {section}.{name}{index} names an entry, and "
-                           f"{section}.{name} is {TYPE_WORDS[keys[name].type]}, not an array")
+                           f"{section}.{name} is {TYPE_WORDS[keys[name].type]}, not an array of "
+                           "numbers")
     return section, name + (index or "")
 
 
@@ -77,7 +90,12 @@ def parse_override(text: str, source: str = "--set") -> tuple[str, str, Any]:
     key = SCHEMA[section].key_map[base]
     rhs = rhs.strip()
     if not rhs or "\n" in rhs or "\r" in rhs:
-        example = key.default if key.default is not None else (key.choices or (1.0,))[0]
+        if index is not None:
+            example: Any = 1.0
+        elif key.default is not None:
+            example = key.default
+        else:
+            example = (key.choices or (1.0,))[0]
         raise ProblemError(f"{where} is invalid: the value must be one TOML value, e.g. "
                            f"{section}.{name}={format_value(example)}")
     try:
@@ -120,10 +138,11 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]],
                                f"{format_value(done[section, name])} and to {format_value(value)}: "
                                "give it once")
         schema = SCHEMA[section]
+        _check_entries(done, section, name, value, source)
         base, index = entry(name)
         if index is not None:   # one entry of an array the problem gives
             sec[base] = _with_entry(sec.get(base), index, value, f"{section}.{name}", source)
-            done[section, name], done[section, base] = value, sec[base]
+            done[section, name] = value
             continue
         if section == "robot" and name in ("mu1", "mu2") and "mu" in sec:
             # one foot's friction changed on a robot given one mu: the other foot keeps mu
@@ -141,7 +160,29 @@ def set_values(data: Mapping[str, Any], items: Iterable[tuple[str, str, Any]],
         _drop(sec, schema,
               {k.name for k in schema.keys if k.name in sec and (section, k.name) not in done
                and not schema.applies(k, variant)}, done, "", source)
-    return out, set(done)
+    # (an entry set is its array's key set, as the messages name it)
+    return out, set(done) | {(section, entry(name)[0]) for section, name in done}
+
+
+def _check_entries(done: Mapping[tuple[str, str], Any], section: str, name: str, value: Any,
+                   source: str) -> None:
+    """ProblemError when ``name`` = ``value`` and an earlier item disagree on an array's entry: an
+    entry of an array given whole before it, or a whole array that changes an entry given before
+    it."""
+    base, index = entry(name)
+    for (sec, earlier), before in done.items():
+        if sec != section or entry(earlier)[0] != base or earlier == name:
+            continue
+        if index is not None and entry(earlier)[1] is None:
+            same = entry_value({base: before}, name, value) == value
+        elif index is None and entry(earlier)[1] is not None:
+            same = entry_value({base: value}, earlier, before) == before
+        else:
+            continue
+        if not same:
+            raise ProblemError(f"{source}: {section}.{name} = {format_value(value)} changes "
+                               f"{section}.{earlier} = {format_value(before)} given before it: "
+                               "give one of them")
 
 
 def _with_entry(values: Any, index: int, value: Any, name: str, source: str) -> list:
@@ -188,11 +229,12 @@ def first_loss(data: Mapping[str, Any], first: Sequence[tuple[str, str, Any]],
         before = current
         current, _ = set_values(current, [item])
         for section, name in kept:
-            was, sec = base[section][name], current.get(section, {})
-            if name in sec and sec[name] == was:
+            gone = object()
+            was, sec = entry_value(base[section], name), current.get(section, {})
+            if entry_value(sec, name, gone) == was:
                 continue
             added = set(sec) - set(before.get(section, {})) - {item[1]}
-            if name not in sec and any(sec[n] == was for n in added):
+            if entry_value(sec, name, gone) is gone and any(sec[n] == was for n in added):
                 continue
             return i, f"{section}.{name}"
     return None

@@ -20,9 +20,9 @@ import numpy as np
 
 from ocp_crawl.checks import is_finite, parse_integer, parse_number, short_repr
 from ocp_crawl.problem import SCHEMA, Key, Problem, ProblemError
-from ocp_crawl.problem.overrides import entry, toml_loads
+from ocp_crawl.problem.overrides import INDEX, entry, toml_loads
 
-_GRID_KEY_RE = re.compile(r"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)(\[[0-9]+\])?$")
+_GRID_KEY_RE = re.compile(rf"^([A-Za-z0-9_-]+)\.([A-Za-z0-9_-]+)({INDEX})?$")
 #: numpy dtype of the values of a key of each schema type
 VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
 #: most points of one sweep (and values of one axis): a point takes 0.03 to 1 s with the event
@@ -30,7 +30,8 @@ VALUE_DTYPES = {str: str, int: np.int64, float: np.float64}
 #: grids have 777 at most)
 MAX_GRID_POINTS = 20_000
 _GRID_HELP = ("expected SECTION.KEY=START:STOP:NUM (NUM values), SECTION.KEY=START:STOP:step=STEP "
-              "or SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5")
+              "or SECTION.KEY=A,B,C, e.g. gait.psi_deg=0:180:37 or gait.psi_deg=0:180:step=5 "
+              "(an array's entry: SECTION.KEY[i], e.g. robot.stiffness[1]=0.1:0.5:5)")
 #: relative tolerance of "STEP divides STOP - START" (decimal steps such as 0.1 are not exact in
 #: binary)
 STEP_RTOL = 1e-9
@@ -257,14 +258,14 @@ def normalize_grid(grid: Mapping[str, Any]) -> dict[str, np.ndarray]:
             raise ProblemError(f"{where} is invalid: values must be 1-D, got shape {arr.shape}")
         out[str(name)] = _coerce(list(np.atleast_1d(arr)), key, str(name), where)
     _check_size(out)
-    names = list(out)
-    for name in names:
-        section, key = name.split(".")
-        key = entry(key)[0]
+    bases = {name: entry(name.split(".", 1)[1])[0] for name in out}   # (an entry: its array)
+    for name, key in bases.items():
+        section = name.split(".")[0]
         for other in SCHEMA[section].key_map[key].exclusive_with:
-            if f"{section}.{other}" in out:
-                raise ProblemError(f"grid keys {name} and {section}.{other} are alternatives: "
-                                   "sweep one of them")
+            clash = [n for n, k in bases.items() if n.startswith(f"{section}.") and k == other]
+            if clash:
+                raise ProblemError(f"grid keys {name} and {clash[0]} are alternatives: sweep one "
+                                   "of them")
     return out
 
 
