@@ -575,7 +575,9 @@ WORK_CASES = (("paper_gait.toml", []), ("pulse_gait.toml", []),
               ("paper_gait.toml", ["simulation.solver=mpcc", "simulation.steps=50"]),
               ("paper_gait.toml", ["simulation.solver=mpcc", "simulation.steps=400"]),
               ("pulse_gait.toml", ["simulation.solver=mpcc", "simulation.steps=200"]),
-              ("paper_gait.toml", ["simulation.solver=mujoco", "simulation.period=5"]))
+              ("paper_gait.toml", ["simulation.solver=mujoco", "simulation.period=5"]),
+              ("five_link_chain.toml", []),
+              ("five_link_chain.toml", ["simulation.solver=mpcc", "simulation.steps=100"]))
 
 
 def bench_work(repeat: int) -> dict:

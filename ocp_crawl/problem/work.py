@@ -38,7 +38,9 @@ ANNOUNCE_SECONDS = 60.0
 # MPCC's  set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one
 # IPOPT  iteration, a member of a baseline family
 UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco_step": 3e-5,
-             "ocp_node_iteration": 1.5e-3, "family_member": 0.025}
+             "ocp_node_iteration": 1.5e-3, "family_member": 0.025, "chain_event_cycle": 0.015}
+#  (chain_event_cycle: a typical cycle of the event-driven chain simulator per link squared [s]; a
+# cycle of n = 3..7 links took 0.0074 to 0.0134 n^2 s, scripts/bench.py work)
 #: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
 OCP_ITERATIONS = 1000
 #  event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped
@@ -134,6 +136,13 @@ def simulation_work(problem) -> Work:
     if solver == "angles":   # closed form at every phase, sized by the samples of its input
         return Work(0.5, "prescribed angles", ("gait.drive",))
     cycles = opts.max_cycles
+    if solver == "event" and problem.is_chain:   # (its steps: a Newton solve of n - 1 joints)
+        n = problem.robot.n
+        cycle = UNIT_COST["chain_event_cycle"] * n**2
+        return Work(cycle * cycles * EVENT_STEPS / EVENT_STEPS_TYPICAL,
+                    f"chain event solver, {n} links: ~{cycle:.2g} s a typical cycle, up to "
+                    f"{EVENT_STEPS // EVENT_STEPS_TYPICAL}x that x {cycles} cycles",
+                    ("simulation.max_cycles",), cycle * TYPICAL_CYCLES)
     if solver == "mpcc":
         check = (2 * opts.steps + 1) * (opts.s_error_tol > 0)   # the error estimate's run
         seconds = [UNIT_COST["mpcc_setup"] + (opts.steps * n + check) * UNIT_COST["mpcc_step"]
