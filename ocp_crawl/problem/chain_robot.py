@@ -93,8 +93,7 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain) -> JointFour
             raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of the three-link "
                                "robot's two joints: a chain ([robot] lengths) gives "
                                f"{' and '.join(JOINT_KEYS)}, one value per joint")
-    harmonic_only(ctx, gait)
-    m = chain.n_joints
+    m = chain.n_joints   # (a harmonic waveform: harmonic_only, before the sections' checks)
     gamma = _per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m)
     amplitude = _per_joint(ctx, gait, "A_joints_deg", "A_deg", m)
     lead = [gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)]
