@@ -1,7 +1,17 @@
 """Shared problem factories for the tests (the paper's robot and gaits)."""
+import compileall
 import os
 import re
 from pathlib import Path
+
+#: the package's sources, compiled to bytecode once by the first pytest process (the controller
+#: of pytest-xdist's workers, or the only process): with PYTHONDONTWRITEBYTECODE set (as in CI's
+#: environment) no process writes it, and each of the suite's processes (the workers, every
+#: ``ocp-crawl`` subprocess and worker pool, the documentation's build) would compile the package
+#: again; stale files are never read (their source's time and size are checked on import)
+PACKAGE = Path(__file__).resolve().parents[1] / "ocp_crawl"
+if "PYTEST_XDIST_WORKER" not in os.environ:
+    compileall.compile_dir(PACKAGE, quiet=1)
 
 import matplotlib
 import pytest
