@@ -323,9 +323,11 @@ class ReferenceTorque(PeriodicSignal):
 
 def input_knots(signal) -> np.ndarray:
     """The phases in [0, 1) where ``signal`` may have a kink: the knots of a sampled, triangle or
-    pulse signal (of a :class:`ReferenceTorque`'s reference angles), merged as
+    pulse signal (of the reference angles of a :class:`ReferenceTorque`, or of a chain's torques
+    of reference angles, whichever signal holds them as ``reference``), merged as
     :func:`merged_knots` merges them; none for a smooth signal."""
-    source = signal.reference if isinstance(signal, ReferenceTorque) else signal
+    reference = getattr(signal, "reference", None)
+    source = reference if isinstance(reference, PeriodicSignal) else signal
     return merged_knots(getattr(source, "t_knots", np.zeros(0)))
 
 

@@ -21,8 +21,10 @@ from ocp_crawl.model.inputs import PeriodicSignal, _float_array
 MAX_KNOTS = 10_000
 
 
-def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarray, np.ndarray]:
-    """Validated knots (increasing, in [0, 1)) and values of shape (2, N).
+def _check_samples(name: str, t_knots, values, min_knots: int,
+                   rows: int | None = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Validated knots (increasing, in [0, 1)) and values of shape (rows, N) (any number of rows
+    >= 1 for ``rows=None``).
 
     The knots cover one period: the first knot plus one closes it, so the last knot lies before
     t_knots[0] + 1 and must not repeat the first (give t in [0, 1), not the closing t = 1).
@@ -41,9 +43,11 @@ def _check_samples(name: str, t_knots, values, min_knots: int) -> tuple[np.ndarr
         raise ValueError(f"{name}: t_knots must lie in [0, 1) (one period; the closing knot "
                          f"t_knots[0] + 1 is implied), got {t[0]!r} ... {t[-1]!r}")
     v = _float_array(name, "values", values)
-    if v.shape != (2, t.size):
-        raise ValueError(f"{name}: values must have shape (2, {t.size}) (one column per knot), got "
-                         f"{v.shape}")
+    if (v.ndim != 2 or v.shape[1] != t.size or v.shape[0] < 1
+            or (rows is not None and v.shape[0] != rows)):
+        want = "(m" if rows is None else f"({rows}"
+        raise ValueError(f"{name}: values must have shape {want}, {t.size}) (one column per knot), "
+                         f"got {v.shape}")
     return t, v
 
 
@@ -110,17 +114,19 @@ class PeriodicLinear(_Sampled):
         Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 2.
     """
 
+    #: the rows the values must have (None: any number, :class:`JointLinear`)
+    _rows: int | None = 2
+
     def __init__(self, t_knots, values):
-        t, v = _check_samples("PeriodicLinear", t_knots, values, min_knots=2)
+        t, v = _check_samples(type(self).__name__, t_knots, values, min_knots=2, rows=self._rows)
         self.t_knots, self.values = t, v
         self._tt = np.append(t, t[0] + 1.0)
         self._vv = np.concatenate([v, v[:, :1]], axis=1)
         self._slope = np.diff(self._vv, axis=1) / np.diff(self._tt)
 
-
     def __call__(self, t):
         tw = self._wrap(t)
-        return np.array([np.interp(tw, self._tt, self._vv[i]) for i in range(2)])
+        return np.array([np.interp(tw, self._tt, row) for row in self._vv])
 
     def derivative(self, t):
         tw = self._wrap(t)
@@ -128,7 +134,14 @@ class PeriodicLinear(_Sampled):
         return self._slope[:, k]
 
     def describe(self) -> dict:
-        return {"type": "PeriodicLinear", "knots": int(self.t_knots.size)}
+        return {"type": type(self).__name__, "knots": int(self.t_knots.size)}
+
+
+class JointLinear(PeriodicLinear):
+    """:class:`PeriodicLinear` with any number of rows: the m joints of an n-link chain
+    (values (m, N)), in the signal's unit (angles [rad] or torques [N m])."""
+
+    _rows = None
 
 
 class PeriodicPchip(_Sampled):

@@ -20,7 +20,10 @@ checked against the MPCC equations of :func:`chain_step_nlp` (``eq_residual``,
 ``comp_residual``).  The simulation (:func:`simulate_chain_mpcc`) takes N such steps per cycle;
 a step whose contact mode changes is split at the event located inside it
 (:mod:`ocp_crawl.sim.chain_mpcc_split`), so that the foot positions and S carry no discretisation
-error; without the splits each step is entirely in its end mode (an O(1/N) error in S).
+error; without the splits each step is entirely in its end mode (an O(1/N) error in S).  The
+switch-exact steps also end at the input's kinks (:func:`step_phases`), and a step keeps the mode
+it starts in while that mode's solution is consistent (a tie of the feet's limits, a hold of the
+input), as the event-driven stepper does.
 """
 from __future__ import annotations
 
@@ -174,9 +177,17 @@ class ChainStep:
         """The parameter vector P = (phi_k [rad], tau/(M g L), p) of the scaled step."""
         return np.concatenate([phi_k, np.asarray(tau, float) / (self.Mg * self.L), self.p])
 
-    def solve(self, phi_k, x1: float, x2: float, tau, f_t: float = 0.0) -> ChainStepResult:
+    def solve(self, phi_k, x1: float, x2: float, tau, f_t: float = 0.0,
+              prefer: Mode | None = None) -> ChainStepResult:
         """The step from the angles ``phi_k`` [rad] and feet ``x1``, ``x2`` [m] to the torques
-        ``tau`` [N m] at the step's end; ``f_t`` [N] (the last force) seeds the Newton guesses."""
+        ``tau`` [N m] at the step's end; ``f_t`` [N] (the last force) seeds the Newton guesses.
+
+        Of several consistent solutions the one closest to phi_k, but the solution of the mode
+        ``prefer`` (the mode the step starts in) when it is consistent: at a tie of the feet's
+        friction limits at the step's end either foot's slip closes the step, and the slip goes
+        on in the foot that slipped, as the event-driven stepper continues a mode until one of
+        its guards crosses zero; a slip mode whose slip over the step is zero (the input holds
+        still) keeps its name."""
         phi_k = np.asarray(phi_k, float).reshape(self.m)
         tau = np.asarray(tau, float).reshape(self.m)
         P = self.params(phi_k, tau)
@@ -187,6 +198,9 @@ class ChainStep:
             return ChainStepResult(False, "no consistent contact mode", np.full(self.m, nan), nan,
                                    nan, nan, np.full(4, nan), nan, nan, nan, Mode.STICK, nan,
                                    nan, {"candidates": cands})
+        kept = [c for c in ok if c["mode"] is prefer]
+        if kept:
+            return self._result(kept[0], P, x1, x2, kept[0]["mode"])
         ok.sort(key=lambda c: float(np.max(np.abs(c["z"][:self.m] - phi_k))))
         near = [c for c in ok if np.max(np.abs(c["z"][:self.m] - ok[0]["z"][:self.m]))
                 < DISTINCT_TOL]
@@ -230,8 +244,10 @@ class ChainStep:
                 "fn": fn * self.Mg, "margin": float(np.min(margins)),
                 "consistent": bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)}
 
-    def _result(self, cand: dict, P: np.ndarray, x1: float, x2: float) -> ChainStepResult:
-        """The physical result of a consistent candidate, checked on the MPCC equations."""
+    def _result(self, cand: dict, P: np.ndarray, x1: float, x2: float,
+                mode: Mode | None = None) -> ChainStepResult:
+        """The physical result of a consistent candidate, checked on the MPCC equations; its mode
+        ``mode``, or the one its complementarity pairs show."""
         m, z, s = self.m, cand["z"], cand["s"]
         _, _, dd, c, fn = (np.asarray(a).ravel() for a in self._f(z, P, np.eye(5)[0]))
         w = np.r_[z, -z[m], s, c]
@@ -245,7 +261,8 @@ class ChainStep:
         return ChainStepResult(True, f"consistent mode {cand['mode'].label}", z[:m].copy(),
                                float(z[m] * self.Mg), float(fn[0] * self.Mg),
                                float(fn[1] * self.Mg), sl, float(x1 + dx1), float(x2 + dx2), d,
-                               mode_from_pairs(s, c)[0], eq, comp, {"w": w})
+                               mode_from_pairs(s, c)[0] if mode is None else mode, eq, comp,
+                               {"w": w})
 
 
 class _Stop(Exception):
@@ -299,6 +316,20 @@ def _diagnose(model: ChainModel, res: ChainStepResult, mode: Mode, t: float) -> 
     _check_contact(model, cand["z"][:-1], mode, t)
 
 
+def step_phases(torque, N: int, switch_exact: bool = True) -> np.ndarray:
+    """The ends of one cycle's steps [cycles]: k / N, k = 0..N, and, for switch-exact steps, the
+    input's kinks (:class:`~ocp_crawl.sim.chain_pieces.ChainPieces`), so that no step straddles a
+    jump of the torques' rate (a slip stopped by a kink is an event there, located at the start of
+    the step after it)."""
+    grid = np.arange(N + 1) / N
+    if not switch_exact:
+        return grid
+    from ocp_crawl.sim.chain_pieces import ChainPieces
+    kinks = ChainPieces(torque).kinks
+    near = np.min(np.abs(kinks[:, None] - grid[None, :]), axis=1) if kinks.size else kinks
+    return np.sort(np.concatenate([grid, kinks[near > 1e-12]]))
+
+
 def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
                 periodic_tol: float, switch_exact: bool) -> tuple[list, int, float, set]:
     """Steps of N per cycle from the released start until the state at a cycle's end repeats.
@@ -312,9 +343,10 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
              float(kin["fn2"]), float(kin["d"]), Mode.STICK)]
     ends = [(rows[0][1], 0.0, Mode.STICK)]
     dev, located = float("nan"), set()
+    grid = step_phases(torque, N, switch_exact)
     for cycle in range(1, cycles_max + 1):
-        for k in range(1, N + 1):
-            ta, tb = cycle - 1 + (k - 1) / N, cycle - 1 + k / N
+        for k in range(1, grid.size):
+            ta, tb = cycle - 1 + grid[k - 1], cycle - 1 + grid[k]
             # the step that ended in rows[-1], when it stayed in one mode (its start rows[-2]):
             # an event it passed may be traced back into it
             prev = (rows[-2] if len(rows) >= 2 and rows[-2][8] == rows[-1][8] and k > 1

@@ -41,8 +41,12 @@ def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> di
         return None
     g = {f"c{i}": float(cand["c"][i]) for i in range(4) if i != k - 1}
     if k:
-        # (one-sided at the step's start; a traced-back theta < 0 is inside the previous step)
-        lo, hi = (max(theta - RATE_EPS, 0.0) if theta >= 0 else theta - RATE_EPS), theta + RATE_EPS
+        # (one-sided at the step's start, from either side: a traced-back theta < 0 is inside the
+        # previous step, and the input may have a kink at the start)
+        if theta >= 0:
+            lo, hi = max(theta - RATE_EPS, 0.0), theta + RATE_EPS
+        else:
+            lo, hi = theta - RATE_EPS, min(theta + RATE_EPS, 0.0)
         a = step.mode_solution(mode, phi_k, tau_of(lo), ft)
         b = step.mode_solution(mode, phi_k, tau_of(hi), ft)
         if a is None or b is None:
@@ -109,8 +113,8 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
     dropped = False
     for split in range(MAX_SPLITS + 1):
         tau = np.asarray(torque(tb), float).reshape(step.m)
-        res = step.solve(row[1], row[2], row[3], tau, row[4])
         mode = row[8]
+        res = step.solve(row[1], row[2], row[3], tau, row[4], prefer=mode)
         if (not res.success or res.mode == mode or not switch_exact or split == MAX_SPLITS
                 or mode not in ENUM_MODES):
             break
@@ -143,10 +147,15 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             row = _event_row(step, mode, row, tau_of(theta), te)
             out.append(row)
         nxt = step.solve(row[1], row[2], row[3], tau_of(min(theta + 1e-9, 1.0)), row[4])
-        if not nxt.success or nxt.mode == mode:
+        new_mode = nxt.mode if nxt.success else None
+        if theta == 0.0 and new_mode in (None, mode):
+            # an event at the step's start (a slip that a kink of the input stops there): so
+            # short a step cannot tell the modes apart, the step's own end mode follows it
+            new_mode = res.mode
+        if new_mode is None or new_mode == mode:
             break
         # the event row continues in the mode taken just after the event
-        row = row[:8] + (nxt.mode,)
+        row = row[:8] + (new_mode,)
         if out and out[-1][0] == te:
             out[-1] = row
         else:

@@ -18,6 +18,12 @@ the sign of det J or of the stability margin changes: ``fold``).  A stuck foot s
 foot moves with d.  Only single-foot slips are modelled (a gait whose friction limits tie
 identically, mu1 f_n1 = mu2 f_n2, ends with ``no_consistent_mode``).  Cycles run until the
 state at the start of a cycle and the displacement per cycle repeat; the last cycle is reported.
+
+An input with kinks or holds (piecewise-linear tables, pulses, optimal-control profiles) is taken
+piece by piece (:mod:`ocp_crawl.sim.chain_pieces`): steps end at its kinks, where the mode after
+a guard that turns negative is decided by the rates after the kink; a hold is crossed in one
+step and the mode after it decided by the rates after it; the cycle integrals are split at its
+knots.
 """
 from __future__ import annotations
 
@@ -35,8 +41,9 @@ from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate,
                                     failure_message, new_result, output_phases, sample_fields,
                                     success_message)
-from ocp_crawl.sim.chain_torque_parts import (SINGLE_MODES, ChainSolver, Point, Segment,
-                                              mode_vector, sample_segment, segment_integrals)
+from ocp_crawl.sim.chain_torque_parts import (GUARD_NOISE, SINGLE_MODES, ChainSolver, Point,
+                                              Segment, mode_vector, sample_segment,
+                                              segment_integrals)
 from ocp_crawl.sim.event_guards import transition
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
@@ -96,6 +103,8 @@ class ChainTorqueStepper:
         self.event_xtol, self.trial_step, self.quad_h = event_xtol, trial_step, quad_h
         self.segments: list[Segment] = []
         self.events: list[Event] = []
+        self._rest_left: float | None = None
+        """the hold of zero length (a rest of the input) the run has just left"""
 
     # ------------------------------------------------------------------ start
     def start(self) -> Point:
@@ -119,10 +128,11 @@ class ChainTorqueStepper:
         raise ValueError("no stable released equilibrium with both feet on the ground at t = 0")
 
     # ------------------------------------------------------------------ stepping
-    def _step(self, seg: Segment, pt: Point, t_new: float) -> Point | None:
-        """The mode's solution at t_new from pt, or None (no convergence, a jump or a fold)."""
+    def _step(self, seg: Segment, pt: Point, t_new: float, left: bool = False) -> Point | None:
+        """The mode's solution at t_new from pt (at a kink with the rates before it when
+        ``left``), or None (no convergence, a jump or a fold)."""
         s = self.solver
-        new = s.solve(t_new, s.guess(pt, t_new), seg.q)
+        new = s.solve(t_new, s.guess(pt, t_new), seg.q, left=left)
         if new is None:
             return None
         m = s.m
@@ -141,14 +151,21 @@ class ChainTorqueStepper:
         return pt
 
     def _advance(self, seg: Segment, t_end: float, h: float) -> tuple[Segment, float]:
-        """Continue from the segment's last point to t_end through the events; returns the segment
-        at t_end and the step size."""
-        s = self.solver
+        """Continue from the segment's last point to t_end through the events, the input's kinks
+        and holds (:mod:`ocp_crawl.sim.chain_pieces`); returns the segment at t_end and the step
+        size."""
+        s, pieces = self.solver, self.solver.pieces
         while seg.t1 < t_end - 1e-15:
             pt = seg.points[-1]
-            hh = min(h, t_end - pt.t)
-            t_new = t_end if t_end - (pt.t + hh) < 1e-12 else pt.t + hh
-            new = self._step(seg, pt, t_new)
+            span = pieces.hold_at(pt.t, self._rest_left)
+            if span is not None:
+                seg = self._cross_hold(seg, pt, span, t_end)
+                continue
+            stop = min(t_end, pieces.next_break(pt.t))
+            hh = min(h, stop - pt.t)
+            t_new = stop if stop - (pt.t + hh) < 1e-12 else pt.t + hh
+            at_kink = pieces.is_kink(t_new)
+            new = self._step(seg, pt, t_new, left=at_kink)
             if new is None:
                 h = hh / 4
                 if h < self.min_step:
@@ -156,12 +173,17 @@ class ChainTorqueStepper:
                                 f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
                 continue
             g0, g1 = s.guards(seg.mode, pt.aux), s.guards(seg.mode, new.aux)
-            crossed = [k for k, v in g1.items() if v < 0]
+            # (a guard at zero to round-off at a kink, such as the feet's friction limits tying
+            # where a table's sample makes the shape symmetric, is decided by the rates after it)
+            floor = -GUARD_NOISE if at_kink else 0.0
+            crossed = [k for k, v in g1.items() if v < floor]
             if not crossed:
                 new, crossed = self._dip(seg, pt, new)
             if not crossed:
                 seg.points.append(self._place(seg, new))
                 h = min(self.max_step, 2 * hh) if hh >= 0.999 * h else h
+                if at_kink and new.t == t_new:
+                    seg = self._cross_kink(seg, new)
                 continue
             self._check_stable(seg)
             seg = self._event(seg, pt, new, g0, crossed)
@@ -223,6 +245,13 @@ class ChainTorqueStepper:
             raise _Stop(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
         if ev is not pt:
             seg.points.append(self._place(seg, ev))
+        return self._switch(seg, ev, kind)
+
+    def _switch(self, seg: Segment, ev: Point, kind: str) -> Segment:
+        """The segment of the mode after guard ``kind`` of the segment's mode reached zero at the
+        point ``ev`` (the transition table's mode when it is consistent, else the only
+        consistent single-foot mode), the event recorded."""
+        s, t_ev = self.solver, ev.t
         g_ev = s.guards(seg.mode, ev.aux)[kind]
         nxt = transition(seg.mode, kind)
         if isinstance(nxt, Status):
@@ -236,12 +265,72 @@ class ChainTorqueStepper:
                 raise _Stop(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
                             f"{len(ok)} consistent modes after {kind} at t = {t_ev:.10f}")
             chosen, start = ok[0]
-        self.events.append(Event(t_ev, mode_change_kind(seg.mode, chosen), seg.mode.label,
+        return self._start_mode(seg, ev, chosen, start, kind, g_ev)
+
+    def _start_mode(self, seg: Segment, ev: Point, chosen: Mode, start: Point, kind: str,
+                    g_ev: float) -> Segment:
+        """A new segment of mode ``chosen`` from ``start`` (at ev, the feet where they are), the
+        event recorded."""
+        self.events.append(Event(ev.t, mode_change_kind(seg.mode, chosen), seg.mode.label,
                                  chosen.label, g_ev, kind))
         start.x1, start.x2 = ev.x1, ev.x2
-        new_seg = Segment(chosen, mode_vector(chosen, ev.aux["d"]), t_ev, [start])
+        new_seg = Segment(chosen, mode_vector(chosen, ev.aux["d"]), ev.t, [start])
         self.segments.append(new_seg)
         return new_seg
+
+    # ------------------------------------------------------------------ kinks and holds
+    def _cross_kink(self, seg: Segment, left: Point) -> Segment:
+        """At a kink of the input (the segment's last point, solved with the rates before it): the
+        point again with the rates after it, which continues the segment when every guard stays
+        positive, else an event at the kink (the first negative guard's)."""
+        s = self.solver
+        right = s.solve(left.t, left.x, seg.q)
+        if right is None:
+            raise _Stop(Status.NO_CONVERGENCE, left.t, seg.mode, "mode solve failed at a kink "
+                        f"of the input at t = {left.t:.10f}")
+        right.x1, right.x2 = left.x1, left.x2
+        g = s.guards(seg.mode, right.aux)
+        crossed = sorted((v, k) for k, v in g.items() if v < -GUARD_NOISE)
+        if not crossed:
+            seg.points[-1] = right
+            return seg
+        self._check_stable(seg)
+        return self._switch(seg, right, crossed[0][1])
+
+    def _cross_hold(self, seg: Segment, pt: Point, span: tuple[float, float],
+                    t_end: float) -> Segment:
+        """Across the hold ``span`` of the input from pt in one step, to its end or to t_end (the
+        cycle's end) if sooner: a quasistatic state does not move while its input does not; at the
+        hold's end, the mode after it (:meth:`_leave_hold`)."""
+        s = self.solver
+        stop = min(span[1], t_end)
+        end = pt
+        if stop > pt.t:
+            solved = s.solve(stop, pt.x, seg.q)
+            if solved is None:
+                raise _Stop(Status.NO_CONVERGENCE, stop, seg.mode, "mode solve failed at the "
+                            f"end of a hold of the input at t = {stop:.10f}")
+            end = self._place(seg, solved)
+            seg.points.append(end)
+        if span[0] == span[1]:
+            self._rest_left = span[0]
+        return self._leave_hold(seg, end) if stop == span[1] else seg
+
+    def _leave_hold(self, seg: Segment, end: Point) -> Segment:
+        """The mode after a hold: the segment's own when it is consistent with the rates after the
+        hold, else the one single-foot mode that is (NO_CONSISTENT_MODE for none, SET_VALUED for
+        several: the statics leave the motion undecided)."""
+        s = self.solver
+        if s.consistent(seg.mode, end, self.trial_step) is not None:
+            return seg
+        ok = [(m, p) for m in SINGLE_MODES if m is not seg.mode
+              for p in [s.consistent(m, end, self.trial_step)] if p is not None]
+        if len(ok) != 1:
+            status = Status.SET_VALUED if ok else Status.NO_CONSISTENT_MODE
+            names = ", ".join(m.label for m, _ in ok) or "none"
+            raise _Stop(status, end.t, seg.mode, "at the end of a hold of the input the modes "
+                        f"that continue from the state are {names}")
+        return self._start_mode(seg, end, ok[0][0], ok[0][1], "decided", 0.0)
 
     # ------------------------------------------------------------------ cycles
     def run_cycles(self, cycles_max: int, periodic_tol: float) -> tuple[int, float]:

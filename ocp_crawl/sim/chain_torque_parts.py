@@ -16,6 +16,7 @@ from ocp_crawl.model.buffered import Buffered
 from ocp_crawl.model.chain_model import ChainModel, call_columns, slip_mode, stick_mode
 from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
+from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import cubic_min
 from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
 from ocp_crawl.sim.result import Mode
@@ -40,13 +41,15 @@ def mode_vector(mode: Mode, d0: float = 0.0) -> np.ndarray:
 @dataclass
 class Point:
     """A solved equilibrium at phase ``t`` [cycles]: state ``x``, outputs ``aux``
-    (:meth:`ChainModel.evaluate`, rates per cycle) and the feet positions ``x1``, ``x2`` [m]."""
+    (:meth:`ChainModel.evaluate`, rates per cycle) and the feet positions ``x1``, ``x2`` [m];
+    ``left``: at a kink of the input, its rates are those of the piece before it."""
 
     t: float
     x: np.ndarray
     aux: dict
     x1: float = 0.0
     x2: float = 0.0
+    left: bool = False
 
     def xdot(self, m: int, Mg: float) -> np.ndarray:
         """Rate of the state along the mode's solution [1/cycle]."""
@@ -83,27 +86,33 @@ class ChainSolver:
         # through the functions' buffers: converting each argument and result is most of the time
         # of a plain call, and the Newton loop makes thousands of them per run
         self._system, self._evaluate = Buffered(model.sym.system), Buffered(model.sym.evaluate)
+        self.pieces = ChainPieces(torque)
 
-    def tau(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Torques [N m] and their rate [N m/cycle] at phase t."""
+    def tau(self, t: float, left: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Torques [N m] and their rate [N m/cycle] at phase t (at a kink of the input the rate
+        after it, or before it when ``left``)."""
         return (np.asarray(self.torque(t), float).ravel(),
-                np.asarray(self.torque.derivative(t), float).ravel())
+                np.asarray(self.torque.derivative(self.pieces.rate_phase(t, left)),
+                           float).ravel())
 
-    def taus(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Torques (m, N) [N m] and rates (m, N) [N m/cycle] at the phases ts (N,)."""
+    def taus(self, ts: np.ndarray, upto: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Torques (m, N) [N m] and rates (m, N) [N m/cycle] at the phases ts (N,) (at a kink the
+        rate after it, but at ``upto`` the rate before it)."""
         tau = np.asarray(self.torque(ts), float)
-        dtau = np.asarray(self.torque.derivative(ts), float)
+        dtau = np.asarray(self.torque.derivative(self.pieces.rate_phases(ts, upto)), float)
         if tau.shape != (self.m, ts.size) or dtau.shape != tau.shape:
-            pairs = [self.tau(float(t)) for t in ts]
+            pairs = [self.tau(float(t), t == upto) for t in ts]
             tau = np.array([p[0] for p in pairs]).T.reshape(self.m, -1)
             dtau = np.array([p[1] for p in pairs]).T.reshape(self.m, -1)
         return tau, dtau
 
-    def solve(self, t: float, x0, q: np.ndarray, max_iter: int = 40) -> Point | None:
+    def solve(self, t: float, x0, q: np.ndarray, max_iter: int = 40,
+              left: bool = False) -> Point | None:
         """The mode's equilibrium at phase t by Newton's method from ``x0`` (as
         :meth:`ChainModel.solve`: scaled residual <= 1e-13 or a step <= 1e-14); None when it does
-        not converge or its residual exceeds ``residual_tol``."""
-        tau, dtau = self.tau(t)
+        not converge or its residual exceeds ``residual_tol``.  At a kink of the input its rates
+        are those after it, or before it when ``left``."""
+        tau, dtau = self.tau(t, left)
         p = self.p
         x = np.array(x0, float)
         J = None
@@ -129,7 +138,7 @@ class ChainSolver:
         aux["det"] = float(np.linalg.det(J))
         if not abs(aux["res"]) <= self.residual_tol or not np.all(np.isfinite(x)):
             return None
-        return Point(float(t), x, aux)
+        return Point(float(t), x, aux, left=left and self.pieces.is_kink(t))
 
     def guess(self, pt: Point, t: float) -> np.ndarray:
         """The tangent predictor from ``pt`` to phase t."""
@@ -158,7 +167,8 @@ class ChainSolver:
     def guard_rates(self, mode: Mode, pt: Point, q: np.ndarray) -> dict[str, float]:
         """Rates [1/cycle] of :meth:`guards` along the mode's solution at pt (the same keys).  The
         slip modes' sigma d'/L needs d'' (:meth:`ChainModel.ddot2`) and so the torques' second
-        rate, taken by central differences of their rate (1e-5 cycles)."""
+        rate, taken by central differences of their rate (1e-5 cycles) inside the input's piece
+        that holds pt."""
         a, Mg, L = pt.aux, self.Mg, self.L
         r = {"lift_off_1": a["dfn1"] / Mg, "lift_off_2": a["dfn2"] / Mg,
              "feet_crossed": a["ddot"] / L}
@@ -169,8 +179,9 @@ class ChainSolver:
             r.update({"slip_1+": (dlim1 - dft) / Mg, "slip_1-": (dlim1 + dft) / Mg,
                       "slip_2+": (dlim2 - dft) / Mg, "slip_2-": (dlim2 + dft) / Mg})
             return r
-        tau, dtau = self.tau(pt.t)
-        ddtau = (self.tau(pt.t + 1e-5)[1] - self.tau(pt.t - 1e-5)[1]) / 2e-5
+        tau, dtau = self.tau(pt.t, pt.left)
+        tc = self.pieces.curvature_phase(pt.t, pt.left)
+        ddtau = (self.tau(tc + 1e-5)[1] - self.tau(tc - 1e-5)[1]) / 2e-5
         c, b = self.model.ddot2(pt.x, tau, dtau, q)
         r["stick"] = mode.sigma * (c + float(b @ ddtau)) / L
         if mode.foot == 1:
@@ -232,14 +243,15 @@ def _mapped_system(fun: cs.Function, size: int) -> Buffered:
 
 
 def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,
-                  max_iter: int = 40) -> tuple[np.ndarray, dict]:
+                  max_iter: int = 40, upto: float | None = None) -> tuple[np.ndarray, dict]:
     """Newton solves of the mode ``q`` at the phases ``ts`` (N,) from the guesses ``X0`` (m+1, N)
     at once; returns the states (m+1, N) and the outputs (:meth:`ChainModel.evaluate` rows, each
-    (N,)).  RuntimeError when a column does not converge."""
+    (N,); their rates at a kink of the input those after it, at ``upto`` those before it).
+    RuntimeError when a column does not converge."""
     model, nx, N = solver.model, solver.m + 1, ts.size
     size = max(16, 1 << (N - 1).bit_length())
     cols = np.minimum(np.arange(size), N - 1)
-    tau, dtau = solver.taus(ts)
+    tau, dtau = solver.taus(ts, upto)
     f = _mapped_system(model.sym.system, size)
     X = np.array(X0, float)[:, cols]
     T, p = tau[:, cols], model.p
@@ -266,10 +278,11 @@ def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.nda
 
 class SegmentEval:
     """The mode's solution of a segment at many phases at once, each Newton solve started from
-    the tangent predictor of the segment's nearest stored point."""
+    the tangent predictor of the segment's nearest stored point (rates at ``upto``, the end of
+    an interval, those before it)."""
 
-    def __init__(self, solver: ChainSolver, seg: Segment):
-        self.solver, self.seg = solver, seg
+    def __init__(self, solver: ChainSolver, seg: Segment, upto: float | None = None):
+        self.solver, self.seg, self.upto = solver, seg, upto
         self.tp = np.array([p.t for p in seg.points])
         self.Xp = np.array([p.x for p in seg.points]).T
         self.Vp = np.array([p.xdot(solver.m, solver.Mg) for p in seg.points]).T
@@ -281,7 +294,7 @@ class SegmentEval:
         j = np.maximum(i - 1, 0)
         near = np.where(np.abs(self.tp[j] - t) < np.abs(self.tp[i] - t), j, i)
         X0 = self.Xp[:, near] + (t - self.tp[near]) * self.Vp[:, near]
-        return solve_columns(self.solver, t, X0, self.seg.q)
+        return solve_columns(self.solver, t, X0, self.seg.q, upto=self.upto)
 
     def rows(self, t) -> np.ndarray:
         """(m + 1, N): the joint powers tau_j phi_j' [J/cycle], then f_t d' [J/cycle] at the
@@ -302,17 +315,19 @@ class SegmentEval:
 def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
                       h: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,) (Gauss-Legendre panels
-    of at most ``h`` cycles, split at the sign changes of each joint's power), the work per joint
-    (m,) and the friction dissipation."""
-    ev = SegmentEval(solver, seg)
+    of at most ``h`` cycles, split at the input's kinks and at the sign changes of each joint's
+    power), the work per joint (m,) and the friction dissipation."""
     m = solver.m
-    wp = np.zeros(m)
-    for j in range(m):
-        wp[j] = positive_part_integral(a, b, lambda t, j=j: ev.rows(t)[j],
-                                       lambda t, j=j: float(ev.rows(t)[j, 0]), h=h)
-    tq, w = gauss_nodes(a, b, h, 5)
-    r = ev.rows(tq) if tq.size else np.zeros((m + 1, 0))
-    return wp, r[:m] @ w, float(r[m] @ w)
+    wp, work, diss = np.zeros(m), np.zeros(m), 0.0
+    for lo, hi in solver.pieces.split(a, b):
+        ev = SegmentEval(solver, seg, upto=hi)
+        for j in range(m):
+            wp[j] += positive_part_integral(lo, hi, lambda t, j=j: ev.rows(t)[j],
+                                            lambda t, j=j: float(ev.rows(t)[j, 0]), h=h)
+        tq, w = gauss_nodes(lo, hi, h, 5)
+        r = ev.rows(tq) if tq.size else np.zeros((m + 1, 0))
+        work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
+    return wp, work, diss
 
 
 def sample_segment(solver: ChainSolver, seg: Segment, ts: np.ndarray) -> dict:

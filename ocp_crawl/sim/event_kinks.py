@@ -113,12 +113,12 @@ def linear_pieces(signal, breakpoints: np.ndarray, probes=(0.2, 0.5, 0.8)) -> bo
 
 
 def one_sided_rates(signal, t: np.ndarray, e: float) -> tuple[np.ndarray, np.ndarray]:
-    """Rates tau'(t - e) and tau'(t + e) (2, n) of ``signal`` at the phases t (n,) [cycles]: the
-    left and right rates at knots t when e is inside the pieces next to them (exact for
+    """Rates tau'(t - e) and tau'(t + e) (joints, n) of ``signal`` at the phases t (n,) [cycles]:
+    the left and right rates at knots t when e is inside the pieces next to them (exact for
     piecewise-linear pieces)."""
     n = t.size
-    return (np.asarray(signal.derivative(t - e), float).reshape(2, n),
-            np.asarray(signal.derivative(t + e), float).reshape(2, n))
+    return (np.asarray(signal.derivative(t - e), float).reshape(-1, n),
+            np.asarray(signal.derivative(t + e), float).reshape(-1, n))
 
 
 def input_kinks(signal, breakpoints: np.ndarray) -> tuple[np.ndarray, float]:
@@ -142,10 +142,10 @@ def input_kinks(signal, breakpoints: np.ndarray) -> tuple[np.ndarray, float]:
 
 def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
     """The holds of ``signal``: maximal stretches of the pieces between its ``breakpoints`` (phases
-    in [0, 1)) on which both rates are zero to HELD_PIECE_RTOL of the input's largest rate (tested
-    at three interior phases of each piece, which is exact for the pieces of piecewise-linear
-    samples, pulses and PCHIP plateaus; the tolerance takes flats whose samples differ by round-off,
-    as an optimiser's or a CSV's may).
+    in [0, 1)) on which every joint's rate is zero to HELD_PIECE_RTOL of the input's largest rate
+    (tested at three interior phases of each piece, which is exact for the pieces of
+    piecewise-linear samples, pulses and PCHIP plateaus; the tolerance takes flats whose samples
+    differ by round-off, as an optimiser's or a CSV's may).
 
     Returns an array (m, 2) of [start, end) phases [cycles] with start in [0, 1) and start < end <
     start + 1 (a hold across the period's end ends after 1); m = 0 for an input without holds or one
@@ -156,7 +156,7 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
         return np.zeros((0, 2))
     ends = np.append(b[1:], b[0] + 1.0)
     t = b[:, None] + np.array([0.25, 0.5, 0.75])[None, :] * (ends - b)[:, None]
-    rate = np.asarray(signal.derivative(t.ravel()), float).reshape(2, b.size, 3)
+    rate = np.asarray(signal.derivative(t.ravel()), float).reshape(-1, b.size, 3)
     scale = float(np.max(np.abs(np.asarray(signal.derivative(np.linspace(0.0, 1.0, 257)), float))))
     tol = HELD_PIECE_RTOL * max(scale, float(np.max(np.abs(rate))))
     held = np.all(np.abs(rate) <= tol, axis=(0, 2))
@@ -164,7 +164,8 @@ def input_holds(signal, breakpoints: np.ndarray) -> np.ndarray:
         return np.zeros((0, 2))
     # breakpoints where both rates vanish (two half-cosine edges meeting at rest): holds of zero
     # length
-    rest = b[np.all(np.abs(np.asarray(signal.derivative(b), float).reshape(2, -1)) <= tol, axis=0)]
+    rest = b[np.all(np.abs(np.asarray(signal.derivative(b), float).reshape(-1, b.size)) <= tol,
+                    axis=0)]
     out = [(r, r) for r in rest.tolist()
            if not (held[np.searchsorted(b, r)] or held[np.searchsorted(b, r) - 1])]
     holds = _runs(b, ends, held) + out

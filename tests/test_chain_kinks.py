@@ -1,0 +1,193 @@
+"""Inputs with kinks and holds through the chain's simulators (ocp_crawl.sim.chain_pieces).
+
+Piecewise-linear tables, pulses with straight or half-cosine edges, a square table whose holds end
+at a friction tie of the symmetric robot, and an optimal-control profile: the paper's robot
+written as a chain must move as the three-link event stepper moves it (its own rules at kinks,
+holds and ties); a five-link chain under tables must pass the crosscheck of its event-driven
+stepper against its switch-exact steps; reading the chain from the other end mirrors S.
+"""
+import json
+
+import numpy as np
+import pytest
+
+from ocp_crawl import load_problem, simulate
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain_model import ChainModel
+from ocp_crawl.model.inputs import ReferenceTorque
+from ocp_crawl.model.robot import Robot
+from ocp_crawl.model.sampled import JointLinear, PeriodicLinear
+from ocp_crawl.model.statics import Model
+from ocp_crawl.problem.shipped import shipped_files
+from ocp_crawl.sim.chain_mpcc import simulate_chain_mpcc, step_phases
+from ocp_crawl.sim.chain_pieces import ChainPieces
+from ocp_crawl.sim.chain_torque import ChainReferenceTorque, simulate_chain_torque
+from ocp_crawl.sim.crosscheck import crosscheck
+
+ROBOT = Robot.paper()
+MODEL = Model(ROBOT, "physical")
+CHAIN3 = ChainModel(Chain.from_robot(ROBOT), "physical")
+PROBLEMS = shipped_files("problems")
+#: relative agreement of S and W+ with the three-link stepper (the same equations, two codes)
+RTOL = 1e-9
+
+
+def _random_table(seed: int) -> ReferenceTorque:
+    """Reference angles linear between 8 random knots around the paper's gait."""
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0.0, 1.0, 8))
+    t[0] = 0.0
+    ref = np.pi / 2 + np.radians(30) * np.vstack([np.sin(2 * np.pi * t + 0.8),
+                                                  np.sin(2 * np.pi * t)])
+    return ReferenceTorque(PeriodicLinear(t, ref + np.radians(3) * rng.standard_normal((2, 8))),
+                           ROBOT.k)
+
+
+#: each joint steps between 60 and 120 deg and holds, in turn; at t = 0.5 both are up (a friction
+#: tie of the symmetric robot at a kink)
+SQUARE = ReferenceTorque(PeriodicLinear(
+    [0.0, 0.1, 0.4, 0.5, 0.6, 0.9],
+    np.pi / 2 + np.radians(30) * np.array([[-1, 1, 1, 1, -1, -1], [-1, -1, -1, 1, 1, 1.0]])),
+    ROBOT.k)
+
+
+def _pulse(ramp: str) -> ReferenceTorque:
+    torque = load_problem(PROBLEMS["pulse_gait.toml"], [f'gait.ramp="{ramp}"']).torque
+    assert isinstance(torque, ReferenceTorque)
+    return torque
+
+
+INPUTS = {"table-1": lambda: _random_table(1), "table-2": lambda: _random_table(2),
+          "square": lambda: SQUARE, "trapezoid": lambda: _pulse("linear"),
+          "cosine-pulse": lambda: _pulse("cosine")}
+
+
+def _steady(res) -> list[tuple[float, str, str]]:
+    return [(e.t - res.t0, e.mode_before, e.mode_after) for e in res.steady_events()]
+
+
+def _same_run(chain_res, ref) -> None:
+    assert chain_res.success and ref.success, (chain_res.message, ref.message)
+    assert abs(chain_res.S - ref.S) <= RTOL * abs(ref.S)
+    assert abs(chain_res.W_plus - ref.W_plus) <= RTOL * ref.W_plus
+    a, b = _steady(chain_res), _steady(ref)
+    assert [m for _, *m in a] == [m for _, *m in b]
+    np.testing.assert_allclose([t for t, *_ in a], [t for t, *_ in b], atol=1e-8)
+
+
+@pytest.mark.parametrize("name", INPUTS)
+def test_kinked_and_held_inputs_move_the_chain_as_the_three_link_stepper(name):
+    """The paper's robot as a chain: S, W+ and the steady cycle's events of the three-link event
+    stepper, whose kinks, holds and ties it reads the same way."""
+    torque = INPUTS[name]()
+    _same_run(simulate_chain_torque(CHAIN3, torque), simulate(MODEL, torque, "event"))
+
+
+@pytest.mark.parametrize("name", ["table-1", "square"])
+def test_the_chains_steps_end_at_the_kinks(name):
+    """The chain's switch-exact steps (N = 40) give the event-driven S to 1e-9 and place the
+    events the stepper locates at the kinks; the step grid holds every kink."""
+    torque = INPUTS[name]()
+    kinks = ChainPieces(torque).kinks
+    assert kinks.size >= 4
+    grid = step_phases(torque, 40)
+    assert np.all(np.min(np.abs(kinks[:, None] - grid[None, :]), axis=1) <= 1e-12)
+    ref = simulate_chain_torque(CHAIN3, torque)
+    steps = simulate_chain_mpcc(CHAIN3, torque, steps=40)
+    assert steps.success and abs(steps.S - ref.S) <= RTOL * abs(ref.S)
+    at_kinks = [t for t, *_ in _steady(ref) if np.min(np.abs(kinks - t)) <= 1e-12]
+    assert at_kinks, "no event of this input at a kink"
+    located = [t for t, *_ in _steady(steps)]
+    for t in at_kinks:
+        assert np.min(np.abs(np.array(located) - t)) <= 1e-12, (t, located)
+
+
+def test_the_optimum_replayed_through_the_chain(cli_optimize_run):
+    """The OCP's optimal torques (linear between the nodes) through the chain's event stepper and
+    its steps: the three-link replay's S."""
+    code, stdout, _, out, nodes = cli_optimize_run
+    assert code == 0, stdout
+    arrays = np.load(out / "arrays.npz")
+    torque = PeriodicLinear(arrays["phase"], arrays["tau"])
+    ref = simulate(MODEL, torque, "event")
+    assert abs(ref.S - json.loads(stdout)["S_replay"]) <= 1e-9 * abs(ref.S)
+    _same_run(simulate_chain_torque(CHAIN3, torque), ref)
+    steps = simulate_chain_mpcc(CHAIN3, torque, steps=nodes)
+    assert steps.success and abs(steps.S - ref.S) <= RTOL * abs(ref.S)
+
+
+def _five_link():
+    problem = load_problem(PROBLEMS["five_link_chain.toml"])
+    return problem.model, problem.torque.reference
+
+
+def _five_link_tables() -> dict:
+    """Two tables of the five-link file's joints: its gait sampled at 10 random knots and moved by
+    2 deg; the joints stepping by +-20 deg around their means in two groups, as SQUARE's joints,
+    every joint holding still over [0.1, 0.4] and [0.6, 0.9]."""
+    _, ref = _five_link()
+    rng = np.random.default_rng(4)
+    t = np.sort(rng.uniform(0.0, 1.0, 10))
+    t[0] = 0.0
+    mean = np.asarray(ref(np.linspace(0.0, 1.0, 64, endpoint=False))).mean(axis=1)
+    first, second = [-1, 1, 1, 1, -1, -1], [-1, -1, -1, 1, 1, 1.0]
+    levels = np.array([first, second, second, first])
+    return {"random": JointLinear(t, ref(t) + np.radians(2) * rng.standard_normal((4, 10))),
+            "steps": JointLinear(SQUARE.reference.t_knots,
+                                 mean[:, None] + np.radians(20) * levels)}
+
+
+def test_the_square_table_passes_the_crosscheck_as_a_chain():
+    """Its holds and the ties at their ends: the chain's event-driven stepper against its
+    switch-exact steps at N = 40 and 80 (S, W+, the modes, the events' lags)."""
+    check = crosscheck(CHAIN3, SQUARE, steps=(40, 80))
+    assert check.passed, {k: c.text() for k, c in check.checks.items() if not c.passed}
+    assert all(r.rel_diff_S <= 1e-9 for r in check.rows)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["random", "steps"])
+def test_five_link_tables_pass_the_crosscheck(name):
+    """Unequal links, masses, stiffnesses, rest bends and friction under joint tables: the chain's
+    event-driven stepper against its switch-exact steps at N = 40 and 80 (S, W+, the modes, the
+    events' lags)."""
+    model, _ = _five_link()
+    torque = ChainReferenceTorque(_five_link_tables()[name], model.chain)
+    assert name == "random" or len(ChainPieces(torque).holds) == 2
+    check = crosscheck(model, torque, steps=(40, 80))
+    assert check.passed, {k: c.text() for k, c in check.checks.items() if not c.passed}
+    assert all(r.rel_diff_S <= 1e-9 for r in check.rows)
+
+
+def test_a_reversed_chain_under_the_reversed_table_mirrors_s():
+    """The five-link chain read from its other end, the table's rows reversed: -S, the same W+."""
+    model, _ = _five_link()
+    table = _five_link_tables()["steps"]
+    chain = model.chain
+    res = simulate_chain_torque(model, ChainReferenceTorque(table, chain))
+    back = chain.reversed()
+    # (the configuration phi of the chain is phi[::-1] of the reversed one)
+    mirrored = JointLinear(table.t_knots, table.values[::-1])
+    rev = simulate_chain_torque(ChainModel(back, model.gravity), ChainReferenceTorque(mirrored,
+                                                                                      back))
+    assert res.success and rev.success, (res.message, rev.message)
+    assert abs(rev.S + res.S) <= 1e-9 * abs(res.S)
+    assert abs(rev.W_plus - res.W_plus) <= 1e-9 * res.W_plus
+
+
+def test_joint_tables_of_any_number_of_rows():
+    """JointLinear: the two-row PeriodicLinear for two rows, any number of rows >= 1, and its
+    shape errors name the class."""
+    t = np.array([0.0, 0.3, 0.7])
+    v = np.array([[1.0, 2.0, 0.5], [0.0, -1.0, 1.0]])
+    a, b = JointLinear(t, v), PeriodicLinear(t, v)
+    ts = np.linspace(-1.0, 2.0, 41)
+    np.testing.assert_array_equal(a(ts), b(ts))
+    np.testing.assert_array_equal(a.derivative(ts), b.derivative(ts))
+    four = JointLinear(t, np.vstack([v, 2 * v]))
+    assert four(0.15).shape == (4,) and four(ts).shape == (4, ts.size)
+    np.testing.assert_allclose(four(0.15), [1.5, -0.5, 3.0, -1.0])
+    with pytest.raises(ValueError, match=r"JointLinear: values must have shape \(m, 3\)"):
+        JointLinear(t, np.zeros((2, 4)))
+    with pytest.raises(ValueError, match=r"PeriodicLinear: values must have shape \(2, 3\)"):
+        PeriodicLinear(t, np.zeros((3, 3)))
