@@ -13,13 +13,15 @@ _EXPORTS = {
     "as_signal": "ocp_crawl.model.inputs",
     "Chain": "ocp_crawl.model.chain", "ChainModel": "ocp_crawl.model.chain_model",
     "JointFourier": "ocp_crawl.model.chain_inputs", "JointSamples": "ocp_crawl.model.chain_inputs",
-    "JointLinear": "ocp_crawl.model.sampled",
+    "JointLinear": "ocp_crawl.model.sampled", "JointPchip": "ocp_crawl.model.sampled",
+    "JointSpline": "ocp_crawl.model.sampled",
 }
 
 __all__ = [
     "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear",
     "PeriodicPchip",
     "PeriodicSignal", "PeriodicSpline", "Pulse", "ReferenceTorque", "TorqueReference", "as_signal",
-    "Chain", "ChainModel", "JointFourier", "JointSamples", "JointLinear",
+    "Chain", "ChainModel", "JointFourier", "JointSamples", "JointLinear", "JointPchip",
+    "JointSpline",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -7,8 +7,9 @@ with a phase t (scalar -> shape (m,), N phases -> (m, N)), ``derivative`` per cy
 * :class:`JointFourier`: a truncated Fourier series per joint (:meth:`JointFourier.harmonic`: one
   sine per joint with its own mean, amplitude and phase).
 * :class:`JointSamples`: a periodic cubic spline through equally spaced samples of one cycle.
-* :class:`~ocp_crawl.model.sampled.JointLinear`: piecewise-linear between samples at any knots
-  (kinks and holds, as the OCP's profiles and soft actuators' tables have them).
+* :class:`~ocp_crawl.model.sampled.JointLinear`, :class:`~ocp_crawl.model.sampled.JointPchip`,
+  :class:`~ocp_crawl.model.sampled.JointSpline`: the interpolants of samples at any knots (the
+  linear one with kinks and holds, as the OCP's profiles and soft actuators' tables have them).
 * :class:`JointCallable`: any callable of the phase (derivative by central differences if not
   given).
 

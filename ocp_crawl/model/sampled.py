@@ -56,6 +56,8 @@ class _Sampled(PeriodicSignal):
 
     t_knots: np.ndarray
     values: np.ndarray
+    #: the rows the values must have (None: any number, the ``Joint*`` classes of a chain's joints)
+    _rows: int | None = 2
 
     def __repr__(self) -> str:
         with np.printoptions(precision=17, threshold=10_000):
@@ -83,7 +85,8 @@ class PeriodicSpline(_Sampled):
         # scipy only when a spline is built (start-up time)
         from scipy.interpolate import CubicSpline
 
-        t, v = _check_samples("PeriodicSpline", t_knots, values, min_knots=3)
+        t, v = _check_samples(type(self).__name__, t_knots, values, min_knots=3,
+                              rows=self._rows)
         tt = np.append(t, t[0] + 1.0)
         vv = np.concatenate([v, v[:, :1]], axis=1)
         self._spline = CubicSpline(tt, vv, axis=1, bc_type="periodic")
@@ -97,7 +100,7 @@ class PeriodicSpline(_Sampled):
         return self._dspline(self._wrap(t))
 
     def describe(self) -> dict:
-        return {"type": "PeriodicSpline", "knots": int(self.t_knots.size)}
+        return {"type": type(self).__name__, "knots": int(self.t_knots.size)}
 
 
 class PeriodicLinear(_Sampled):
@@ -113,9 +116,6 @@ class PeriodicLinear(_Sampled):
     t_knots, values : array_like, shapes (N,) and (2, N)
         Phases [cycles] and values as for :class:`PeriodicSpline`, with N >= 2.
     """
-
-    #: the rows the values must have (None: any number, :class:`JointLinear`)
-    _rows: int | None = 2
 
     def __init__(self, t_knots, values):
         t, v = _check_samples(type(self).__name__, t_knots, values, min_knots=2, rows=self._rows)
@@ -162,7 +162,8 @@ class PeriodicPchip(_Sampled):
         # scipy only when a PCHIP is built (start-up time)
         from scipy.interpolate import PchipInterpolator
 
-        t, v = _check_samples("PeriodicPchip", t_knots, values, min_knots=3)
+        t, v = _check_samples(type(self).__name__, t_knots, values, min_knots=3,
+                              rows=self._rows)
         self.t_knots, self.values = t, v
         # three periods, so that the interpolant of the middle one sees its periodic neighbours
         tt = np.concatenate([t - 1.0, t, t + 1.0])
@@ -178,4 +179,16 @@ class PeriodicPchip(_Sampled):
         return self._df(self._wrap(t))
 
     def describe(self) -> dict:
-        return {"type": "PeriodicPchip", "knots": int(self.t_knots.size)}
+        return {"type": type(self).__name__, "knots": int(self.t_knots.size)}
+
+
+class JointSpline(PeriodicSpline):
+    """:class:`PeriodicSpline` with any number of rows: the m joints of an n-link chain."""
+
+    _rows = None
+
+
+class JointPchip(PeriodicPchip):
+    """:class:`PeriodicPchip` with any number of rows: the m joints of an n-link chain."""
+
+    _rows = None

@@ -5,7 +5,11 @@ The robot is a :class:`~ocp_crawl.model.chain.Chain`; its gait is the harmonic w
 joint, ``phi_j = gamma_j + A_j sin(2 pi t + psi ((m - 1)/2 - (j - 1)))`` for the m = n - 1 joints
 (``psi_deg`` the phase lead of each joint over the next one; m = 2 is the paper's eq. (ref)),
 ``gamma_deg`` and ``A_deg`` for every joint, or ``gamma_joints_deg`` and ``A_joints_deg`` one per
-joint.  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``.
+joint; or samples of one cycle from a CSV file with a column per joint (``waveform =
+"samples"``, ``file``: ``phase [-]`` and ``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m>
+[N m]``, interpolated as ``interpolation`` says).  The torque drive is ``tau_j = k_j (phi_ref_j -
+pi - rest_j)``; torque samples stand for the reference angles ``pi + rest_j + tau_j / k_j``, the
+same torques (every interpolation is linear in its samples).
 """
 from __future__ import annotations
 
@@ -16,9 +20,11 @@ import numpy as np
 
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_inputs import JointFourier
+from ocp_crawl.model.inputs import PeriodicSignal
 from ocp_crawl.problem.keys import ProblemError
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.values import Context
+from ocp_crawl.problem.waveforms import JOINT_INTERPOLANTS, driven_samples, file_samples
 
 #: the [robot] keys of a chain (``lengths`` marks a chain; ``masses`` and ``stiffness`` go with it)
 CHAIN_KEYS = ("lengths", "masses", "stiffness", "com", "rest_deg")
@@ -28,6 +34,10 @@ THREE_LINK_KEYS = ("M", "L", "beta", "k")
 TWO_JOINT_KEYS = ("gamma1_deg", "gamma2_deg", "A1_deg", "A2_deg")
 #: the [gait] keys of a chain's joints, one entry per joint
 JOINT_KEYS = ("gamma_joints_deg", "A_joints_deg")
+#: the waveforms of a chain's joints
+CHAIN_WAVEFORMS = ("harmonic", "samples")
+#: the [gait] keys of the three-link robot's inline samples (a chain's samples come from a file)
+INLINE_SAMPLE_KEYS = ("phase", "phi1_ref_deg", "phi2_ref_deg", "tau1", "tau2")
 
 
 def is_chain(robot: Mapping[str, Any]) -> bool:
@@ -77,27 +87,53 @@ def _per_joint(ctx: Context, gait: Mapping[str, Any], name: str, common: str, m:
     return list(values)
 
 
-def harmonic_only(ctx: Context, gait: Mapping[str, Any]) -> None:
-    """ProblemError for a chain's ``[gait]`` of another waveform than the harmonic (checked on the
-    keys as given, before the other waveforms' own keys are asked for)."""
+def chain_waveform(ctx: Context, gait: Mapping[str, Any]) -> None:
+    """ProblemError for a chain's ``[gait]`` of a waveform its joints do not take (checked on the
+    keys as given, before that waveform's own keys are asked for)."""
     waveform = gait.get("waveform", "harmonic")
-    if waveform != "harmonic":
+    if waveform not in CHAIN_WAVEFORMS:
         raise ProblemError(f"{ctx.at('gait', 'waveform', waveform)} is invalid with a chain "
-                           "([robot] lengths): its joints take the harmonic waveform")
+                           "([robot] lengths): its joints take the waveforms "
+                           f"{', '.join(map(format_value, CHAIN_WAVEFORMS))} (samples from a file "
+                           "with a column per joint)")
 
 
-def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain) -> JointFourier:
-    """The reference angles [rad] of a chain's ``[gait]`` (harmonic, one row per joint)."""
+def chain_gait(ctx: Context, gait: Mapping[str, Any],
+               chain: Chain) -> tuple[PeriodicSignal, dict]:
+    """The reference angles [rad] of a chain's ``[gait]`` (one row per joint) and the section's
+    values (a sample file's name resolved, its period)."""
     for name in TWO_JOINT_KEYS:
         if name in gait:
             raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of the three-link "
                                "robot's two joints: a chain ([robot] lengths) gives "
                                f"{' and '.join(JOINT_KEYS)}, one value per joint")
-    m = chain.n_joints   # (a harmonic waveform: harmonic_only, before the sections' checks)
+    if gait["waveform"] == "samples":
+        return _chain_samples(ctx, gait, chain)
+    m = chain.n_joints
     gamma = _per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m)
     amplitude = _per_joint(ctx, gait, "A_joints_deg", "A_deg", m)
     lead = [gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)]
-    return JointFourier.harmonic(np.radians(gamma), np.radians(amplitude), np.radians(lead))
+    harmonic = JointFourier.harmonic(np.radians(gamma), np.radians(amplitude), np.radians(lead))
+    return harmonic, dict(gait)
+
+
+def _chain_samples(ctx: Context, gait: Mapping[str, Any],
+                   chain: Chain) -> tuple[PeriodicSignal, dict]:
+    """The reference angles [rad] of a chain's sample file (torques as the reference angles that
+    stand for them) and the section's values."""
+    if "file" not in gait:
+        given = [k for k in INLINE_SAMPLE_KEYS if k in gait]
+        key = given[0] if given else "waveform"
+        raise ProblemError(f"{ctx.at('gait', key, gait[key])} is invalid with a chain ([robot] "
+                           "lengths): its samples come from a file, [gait] file, with 'phase [-]' "
+                           "and a column per joint")
+    values = dict(gait)
+    samples = file_samples(gait, ctx.at, ctx.base, values, chain.n_joints)
+    t, v = driven_samples(samples, gait["interpolation"], gait["drive"], ctx.at)
+    if samples.torque:
+        v = (math.pi + np.asarray(chain.rest)[:, None]
+             + v / np.asarray(chain.stiffness)[:, None])
+    return JOINT_INTERPOLANTS[gait["interpolation"]](t, v), values
 
 
 def three_link_only(problem, what: str) -> None:

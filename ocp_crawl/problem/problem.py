@@ -371,7 +371,7 @@ def _given(values: Mapping[str, Mapping[str, Any]], data: Mapping[str, Any]) -> 
 def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     robot, gait = data.get("robot"), data.get("gait")
     if isinstance(robot, Mapping) and "lengths" in robot and isinstance(gait, Mapping):
-        chain_robot.harmonic_only(ctx, gait)
+        chain_robot.chain_waveform(ctx, gait)
     values = _check_sections(data, ctx)
     r, g, sim = values["robot"], values["gait"], values["simulation"]
     if chain_robot.is_chain(r):
@@ -405,7 +405,7 @@ def _validate_chain(data: Mapping[str, Any], ctx: Context, values: dict) -> Prob
     values["robot"].pop("beta")
     values["simulation"].pop("s_error_tol")
     check_stiffness_ratio(ctx, chain, g["drive"])
-    reference = chain_robot.chain_gait(ctx, g, chain)
+    reference, values["gait"] = chain_robot.chain_gait(ctx, g, chain)
     solver = _solver(ctx, g["drive"], sim, gravity, chain=True)
     problem = Problem(robot=chain, gait=reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values,

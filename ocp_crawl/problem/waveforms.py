@@ -20,7 +20,8 @@ import numpy as np
 
 from ocp_crawl.io.tables import TableError, read_table
 from ocp_crawl.model.inputs import FourierSeries, Harmonic, PeriodicSignal, TorqueReference
-from ocp_crawl.model.sampled import MAX_KNOTS, PeriodicLinear, PeriodicPchip, PeriodicSpline
+from ocp_crawl.model.sampled import (MAX_KNOTS, JointLinear, JointPchip, JointSpline,
+                                     PeriodicLinear, PeriodicPchip, PeriodicSpline)
 from ocp_crawl.model.pressure import (FITTED_REST_DEG, FLAT_REST_DEG, BendingMap, PressureReference,
                                       PressureWaveform)
 from ocp_crawl.model.pulse import Pulse
@@ -30,12 +31,12 @@ from ocp_crawl.problem.keys import ProblemError
 #: the interpolations of sampled waveforms and the fewest samples each needs over one period
 INTERPOLANTS = {"pchip": (PeriodicPchip, 3), "linear": (PeriodicLinear, 2),
                 "spline": (PeriodicSpline, 3)}
+#: the same interpolations of a chain's joints (any number of rows)
+JOINT_INTERPOLANTS = {"pchip": JointPchip, "linear": JointLinear, "spline": JointSpline}
 #: most harmonics of a Fourier waveform (per joint and kind)
 MAX_HARMONICS = 100
-#: the columns of a sample file: the phase, and one pair of torques or reference angles
+#: the phase column of a sample file (its other columns: :func:`sample_columns`)
 PHASE_COLUMN = {"phase": "dimensionless"}
-TORQUE_COLUMNS = {"tau1": "torque", "tau2": "torque"}
-ANGLE_COLUMNS = {"phi1_ref": "angle", "phi2_ref": "angle"}
 #: the optional column of a sample file giving the period of one cycle (the same on every row)
 PERIOD_COLUMN = {"period": "time"}
 #: relative tolerance of a closing sample at phase 1 against the sample at phase 0 (files keep ~17
@@ -103,30 +104,44 @@ class _Samples:
     """True: joint torques [N m]; False: reference angles [rad]"""
     where: Callable[[int], str]
     """the message prefix naming row j (file and line, or the key and the entry)"""
-    names: tuple[str, str]
+    names: tuple[str, ...]
 
 
-def _from_file(g: Mapping[str, Any], at: At, base: Path) -> tuple[_Samples, str, float | None]:
-    """The samples of ``g["file"]``, its resolved path and the period of its ``period [s]`` column
-    (None: none)."""
+def _sample_columns(joints: int) -> tuple[dict[str, str], dict[str, str]]:
+    """The torque and the reference-angle columns of a sample file of ``joints`` joints:
+    ``tau1 .. tau<m> [N m]``, ``phi1_ref .. phi<m>_ref [deg]``."""
+    return ({f"tau{j}": "torque" for j in range(1, joints + 1)},
+            {f"phi{j}_ref": "angle" for j in range(1, joints + 1)})
+
+
+def _listed(columns: Mapping[str, str]) -> str:
+    unit = {"torque": "N m", "angle": "deg"}
+    return ", ".join(f"'{n} [{unit[d]}]'" for n, d in columns.items())
+
+
+def _sample_file(g: Mapping[str, Any], at: At, base: Path,
+                joints: int = 2) -> tuple[_Samples, str, float | None]:
+    """The samples of ``g["file"]`` for ``joints`` joints, its resolved path and the period of its
+    ``period [s]`` column (None: none)."""
     path = Path(g["file"]).expanduser()
     path = path if path.is_absolute() else base / path
+    torques, angles = _sample_columns(joints)
     try:
-        table = read_table(path, PHASE_COLUMN, {**TORQUE_COLUMNS, **ANGLE_COLUMNS, **PERIOD_COLUMN},
+        table = read_table(path, PHASE_COLUMN, {**torques, **angles, **PERIOD_COLUMN},
                            min_rows=2)
     except TableError as exc:
         raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {exc}") from None
-    pairs = [cols for cols in (TORQUE_COLUMNS, ANGLE_COLUMNS) if any(c in table for c in cols)]
-    if len(pairs) != 1 or not all(c in table for c in pairs[0]):
+    sets = [cols for cols in (torques, angles) if any(c in table for c in cols)]
+    if len(sets) != 1 or not all(c in table for c in sets[0]):
         have = ", ".join(f"'{n} [{u}]'" for n, u in table.units.items())
         raise ProblemError(f"{at('gait', 'file', g['file'])} is invalid: {path}: needs 'phase [-]' "
-                           "and either 'tau1 [N m]', 'tau2 [N m]' or 'phi1_ref [deg]', 'phi2_ref "
-                           f"[deg]' (header has {have})")
-    cols = list(pairs[0])
+                           f"and either {_listed(torques)} or {_listed(angles)} (header has "
+                           f"{have})")
+    cols = list(sets[0])
     # noqa: E731
     where = lambda j: f"{at('gait', 'file', g['file'])} is invalid: {path}:{table.line_of(j)}"
     samples = _Samples(table["phase"], np.array([table[c] for c in cols]),
-                       pairs[0] is TORQUE_COLUMNS, where, (cols[0], cols[1]))
+                       sets[0] is torques, where, tuple(cols))
     return samples, str(path.resolve()), _file_period(table, where)
 
 
@@ -234,22 +249,35 @@ def _check_angles(s: _Samples) -> None:
                            "(an interior joint angle)")
 
 
+def file_samples(g: Mapping[str, Any], at: At, base: Path, values: dict,
+                 joints: int = 2) -> _Samples:
+    """The samples of the file ``g["file"]`` of ``joints`` joints; ``values`` (the section's) get
+    the file's resolved name and the period (the key's or the file's column)."""
+    samples, values["file"], file_period = _sample_file(g, at, base, joints)
+    period = _period(g, file_period, at)
+    if period is not None:
+        values["period"] = period
+    return samples
+
+
+def driven_samples(s: _Samples, interpolation: str, drive: str,
+                   at: At) -> tuple[np.ndarray, np.ndarray]:
+    """The phases and values of one period (:func:`_periodic`) of samples that the drive
+    can take (torques drive torques only; reference angles inside the geometry)."""
+    if s.torque and drive != "torque":
+        angles = ", ".join(f"phi{n.removeprefix('tau')}_ref" for n in s.names)
+        raise ProblemError(f"{at('gait', 'drive', drive)} is invalid with torque samples "
+                           f"({', '.join(s.names)}): prescribed angles need reference angles "
+                           f"({angles})")
+    if not s.torque:
+        _check_angles(s)
+    return _periodic(s, interpolation)
+
+
 def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> GaitInput:
     values = dict(g)
-    if "file" in g:
-        samples, values["file"], file_period = _from_file(g, at, base)
-        period = _period(g, file_period, at)
-        if period is not None:
-            values["period"] = period
-    else:
-        samples = _inline(g, at)
-    if samples.torque and drive != "torque":
-        raise ProblemError(f"{at('gait', 'drive', drive)} is invalid with torque samples "
-                           f"({', '.join(samples.names)}): prescribed angles need reference angles "
-                           "(phi1_ref, phi2_ref)")
-    if not samples.torque:
-        _check_angles(samples)
-    t, v = _periodic(samples, g["interpolation"])
+    samples = file_samples(g, at, base, values) if "file" in g else _inline(g, at)
+    t, v = driven_samples(samples, g["interpolation"], drive, at)
     signal = INTERPOLANTS[g["interpolation"]][0](t, v)
     if samples.torque:
         return GaitInput(TorqueReference(signal, k), signal, values)

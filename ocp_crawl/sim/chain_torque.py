@@ -37,7 +37,7 @@ from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_inputs import as_joint_signal
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.chain_stability import chain_stability_margins
-from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, input_knots
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate,
                                     failure_message, new_result, output_phases, sample_fields,
                                     success_message)
@@ -45,6 +45,7 @@ from ocp_crawl.sim.chain_torque_parts import (GUARD_NOISE, SINGLE_MODES, ChainSo
                                               Segment, mode_vector, sample_segment,
                                               segment_integrals)
 from ocp_crawl.sim.event_guards import transition
+from ocp_crawl.sim.event_kinks import linear_pieces, step_limit
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 
@@ -99,6 +100,12 @@ class ChainTorqueStepper:
                  min_step: float, event_xtol: float, trial_step: float, quad_h: float):
         self.solver = ChainSolver(model, torque)
         self.model, self.torque = model, torque
+        # the step resolves the input's harmonics as the three-link stepper's does (a short dip of
+        # a friction margin between the knots of a spline is an event), unless it is linear
+        # between its knots
+        knots = input_knots(torque)
+        if not linear_pieces(torque, knots):
+            max_step = min(max_step, max(step_limit(torque), max_step / 64))
         self.max_step, self.min_step = max_step, min_step
         self.event_xtol, self.trial_step, self.quad_h = event_xtol, trial_step, quad_h
         self.segments: list[Segment] = []
