@@ -13,15 +13,16 @@ _EXPORTS = {
     "as_signal": "ocp_crawl.model.inputs",
     "Chain": "ocp_crawl.model.chain", "ChainModel": "ocp_crawl.model.chain_model",
     "JointFourier": "ocp_crawl.model.chain_inputs", "JointSamples": "ocp_crawl.model.chain_inputs",
+    "ChainReferenceTorque": "ocp_crawl.model.chain_inputs",
     "JointLinear": "ocp_crawl.model.sampled", "JointPchip": "ocp_crawl.model.sampled",
-    "JointSpline": "ocp_crawl.model.sampled",
+    "JointSpline": "ocp_crawl.model.sampled", "JointPulse": "ocp_crawl.model.pulse",
 }
 
 __all__ = [
     "Model", "Robot", "CallableSignal", "FourierSeries", "Harmonic", "PeriodicLinear",
     "PeriodicPchip",
     "PeriodicSignal", "PeriodicSpline", "Pulse", "ReferenceTorque", "TorqueReference", "as_signal",
-    "Chain", "ChainModel", "JointFourier", "JointSamples", "JointLinear", "JointPchip",
-    "JointSpline",
+    "Chain", "ChainModel", "ChainReferenceTorque", "JointFourier", "JointSamples", "JointLinear",
+    "JointPchip", "JointSpline", "JointPulse",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

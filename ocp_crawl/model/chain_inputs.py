@@ -13,16 +13,21 @@ with a phase t (scalar -> shape (m,), N phases -> (m, N)), ``derivative`` per cy
 * :class:`JointCallable`: any callable of the phase (derivative by central differences if not
   given).
 
-:func:`as_joint_signal` turns what a user gives (a signal, a callable, a sampled array) into one.
+:func:`as_joint_signal` turns what a user gives (a signal, a callable, a sampled array) into one;
+:class:`ChainReferenceTorque` makes the joints' torques of reference angles.
 """
 from __future__ import annotations
 
-from typing import Callable
+import math
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal, _float_array
+
+if TYPE_CHECKING:
+    from ocp_crawl.model.chain import Chain
 
 #: most samples of one cycle in a :class:`JointSamples` (that of the two-joint sampled signals)
 MAX_SAMPLES = 10_000
@@ -188,3 +193,33 @@ def as_joint_signal(u, n_joints: int) -> PeriodicSignal:
         raise ValueError(f"joint angles must have {n_joints} rows (one per joint), got shape "
                          f"{shape} at t = 0")
     return sig
+
+
+class ChainReferenceTorque(PeriodicSignal):
+    """Joint torques of reference angles: ``tau_j = k_j (phi_ref_j(t) - pi - rest_j)`` [N m].
+
+    Parameters
+    ----------
+    reference : PeriodicSignal
+        Reference joint angles phi_ref(t) [rad] with m rows.
+    chain : Chain
+        The chain whose stiffnesses k_j [N m/rad] and rest bends rest_j [rad] are used.
+    """
+
+    def __init__(self, reference: PeriodicSignal, chain: Chain):
+        self.reference = as_joint_signal(reference, chain.n_joints)
+        self.k = np.asarray(chain.stiffness, float)
+        self.rest = np.asarray(chain.rest, float)
+
+    def _col(self, v, t):
+        return v.reshape((-1,) + (1,) * np.ndim(t))
+
+    def __call__(self, t):
+        return self._col(self.k, t) * (self.reference(t) - math.pi - self._col(self.rest, t))
+
+    def derivative(self, t):
+        return self._col(self.k, t) * self.reference.derivative(t)
+
+    def describe(self) -> dict:
+        return {"type": "ChainReferenceTorque", "k": self.k.tolist(), "rest": self.rest.tolist(),
+                "reference": self.reference.describe()}

@@ -1,11 +1,14 @@
 """Pulses of soft actuators as a periodic input: trapezoids or cosine-edged pulses, per-joint phase
-shift (the ``[gait] waveform = "pulse"`` of problem files)."""
+shift (the ``[gait] waveform = "pulse"`` of problem files): :class:`Pulse` of the three-link robot's
+two joints, :class:`JointPulse` of a chain's m joints."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ocp_crawl.checks import real
 from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal, merged_knots
@@ -14,6 +17,60 @@ from ocp_crawl.model.inputs import TWO_PI, PeriodicSignal, merged_knots
 #: edge shapes of :class:`Pulse`: straight ramps (a trapezoid) or half-cosine ramps (C1 at the
 #: corners)
 PULSE_RAMPS = ("linear", "cosine")
+
+
+def unit_pulse(s: Any, rise: float, hold: float, ramp: str) -> tuple[Any, Any]:
+    """(p, dp/ds) of the unit pulse at phases s [cycles] (a scalar or an array): rises from 0 to 1
+    over ``rise``, holds 1 for ``hold``, falls back to 0 over ``rise`` and stays 0 for the rest of
+    the cycle; ``ramp`` one of :data:`PULSE_RAMPS`."""
+    # the event stepper's calls: one phase at a time, without numpy's overhead
+    if np.ndim(s) == 0:
+        return _unit_scalar(float(s), rise, hold, ramp)
+    s = np.mod(s, 1.0)
+    r, h = rise, hold
+    up, down = s < r, (s >= r + h) & (s < 2 * r + h)
+    lin = np.where(up, s / r,
+                   np.where(s < r + h, 1.0, np.where(down, 1.0 - (s - r - h) / r, 0.0)))
+    dlin = np.where(up, 1.0 / r, np.where(down, -1.0 / r, 0.0))
+    if ramp == "linear":
+        return lin, dlin
+    return 0.5 * (1.0 - np.cos(math.pi * lin)), 0.5 * math.pi * np.sin(math.pi * lin) * dlin
+
+
+def _unit_scalar(s: float, rise: float, hold: float, ramp: str) -> tuple[float, float]:
+    """:func:`unit_pulse` at one phase s (the same branches, in floats)."""
+    s %= 1.0
+    r, h = rise, hold
+    if s < r:
+        lin, dlin = s / r, 1.0 / r
+    elif s < r + h:
+        lin, dlin = 1.0, 0.0
+    elif s < 2 * r + h:
+        lin, dlin = 1.0 - (s - r - h) / r, -1.0 / r
+    else:
+        lin, dlin = 0.0, 0.0
+    if ramp == "linear":
+        return lin, dlin
+    return 0.5 * (1.0 - math.cos(math.pi * lin)), 0.5 * math.pi * math.sin(math.pi * lin) * dlin
+
+
+def pulse_knots(rise: float, hold: float, shifts: ArrayLike) -> np.ndarray:
+    """The corners of unit pulses shifted by ``shifts`` [cycles] (the pulse of a joint at phase t
+    is the unit pulse at t + shift), merged (:func:`merged_knots`), sorted in [0, 1)."""
+    corners = np.array([0.0, rise, rise + hold, 2 * rise + hold])
+    return merged_knots(np.concatenate([corners - shift for shift in np.atleast_1d(shifts)]))
+
+
+def check_pulse(rise: float, hold: float, ramp: str, name: str = "Pulse") -> None:
+    """ValueError unless 0 < rise <= 0.5, hold >= 0, 2 rise + hold <= 1 and ramp is one of
+    :data:`PULSE_RAMPS`."""
+    if not 0 < rise <= 0.5:
+        raise ValueError(f"{name}: rise must be in (0, 0.5] cycles, got {rise!r}")
+    if not 2 * rise + hold <= 1:
+        raise ValueError(f"{name}: 2 rise + hold must be <= 1 cycle, got rise {rise!r} and "
+                         f"hold {hold!r}")
+    if ramp not in PULSE_RAMPS:
+        raise ValueError(f"{name}: ramp must be one of {PULSE_RAMPS}, got {ramp!r}")
 
 
 @dataclass(frozen=True)
@@ -49,44 +106,11 @@ class Pulse(PeriodicSignal):
             nonneg = name in ("A1", "A2", "hold")
             object.__setattr__(self, name,
                                real(f"Pulse.{name}", getattr(self, name), nonneg=nonneg))
-        if not 0 < self.rise <= 0.5:
-            raise ValueError(f"Pulse: rise must be in (0, 0.5] cycles, got {self.rise!r}")
-        if not 2 * self.rise + self.hold <= 1:
-            raise ValueError(f"Pulse: 2 rise + hold must be <= 1 cycle, got rise {self.rise!r} and "
-                             f"hold {self.hold!r}")
-        if self.ramp not in PULSE_RAMPS:
-            raise ValueError(f"Pulse: ramp must be one of {PULSE_RAMPS}, got {self.ramp!r}")
+        check_pulse(self.rise, self.hold, self.ramp)
 
     def _unit(self, s):
         """(p, dp/ds) of the unit pulse at phases s (any shape)."""
-        # the event stepper's calls: one phase at a time, without numpy's overhead
-        if np.ndim(s) == 0:
-            return self._unit_scalar(float(s))
-        s = np.mod(s, 1.0)
-        r, h = self.rise, self.hold
-        up, down = s < r, (s >= r + h) & (s < 2 * r + h)
-        lin = np.where(up, s / r,
-                       np.where(s < r + h, 1.0, np.where(down, 1.0 - (s - r - h) / r, 0.0)))
-        dlin = np.where(up, 1.0 / r, np.where(down, -1.0 / r, 0.0))
-        if self.ramp == "linear":
-            return lin, dlin
-        return 0.5 * (1.0 - np.cos(math.pi * lin)), 0.5 * math.pi * np.sin(math.pi * lin) * dlin
-
-    def _unit_scalar(self, s: float) -> tuple[float, float]:
-        """:meth:`_unit` at one phase s (the same branches, in floats)."""
-        s %= 1.0
-        r, h = self.rise, self.hold
-        if s < r:
-            lin, dlin = s / r, 1.0 / r
-        elif s < r + h:
-            lin, dlin = 1.0, 0.0
-        elif s < 2 * r + h:
-            lin, dlin = 1.0 - (s - r - h) / r, -1.0 / r
-        else:
-            lin, dlin = 0.0, 0.0
-        if self.ramp == "linear":
-            return lin, dlin
-        return 0.5 * (1.0 - math.cos(math.pi * lin)), 0.5 * math.pi * math.sin(math.pi * lin) * dlin
+        return unit_pulse(s, self.rise, self.hold, self.ramp)
 
     def _shifts(self, t):
         t = np.asarray(t, dtype=float)
@@ -98,9 +122,8 @@ class Pulse(PeriodicSignal):
         """Phases of the corners of both joints' pulses [cycles], sorted in [0, 1): the slope jumps
         there (linear edges; the curvature, cosine edges), so the simulators' quadratures split
         their panels there."""
-        corners = np.array([0.0, self.rise, self.rise + self.hold, 2 * self.rise + self.hold])
         shift = self.psi / (2.0 * TWO_PI)
-        return merged_knots(np.concatenate([corners - shift, corners + shift]))
+        return pulse_knots(self.rise, self.hold, [shift, -shift])
 
     def __call__(self, t):
         s1, s2 = self._shifts(t)
@@ -116,4 +139,63 @@ class Pulse(PeriodicSignal):
                 "gamma2_deg": math.degrees(self.gamma2),
                 "A1_deg": math.degrees(self.A1), "A2_deg": math.degrees(self.A2),
                 "psi_deg": math.degrees(self.psi),
+                "rise": self.rise, "hold": self.hold, "ramp": self.ramp}
+
+
+class JointPulse(PeriodicSignal):
+    """Pulses of the m joints of an n-link chain [rad]: phi_j(t) = gamma_j + A_j (2 p(t + s_j) -
+    1) with the unit pulse p of :class:`Pulse` and shifts s_j = lead_j / (2 pi) cycles; for two
+    joints with leads (psi/2, -psi/2) it is :class:`Pulse`.
+
+    Parameters
+    ----------
+    gamma, A, lead : array_like, shape (m,)
+        Centres of the swings [rad], half swings [rad] (>= 0) and phase leads [rad] of the joints.
+    rise, hold : float
+        Durations of each edge (in (0, 0.5]) and of the high level (>= 0, 2 rise + hold <= 1)
+        [cycles].
+    ramp : str
+        Edge shape, one of :data:`PULSE_RAMPS`.
+    """
+
+    def __init__(self, gamma: ArrayLike, A: ArrayLike, lead: ArrayLike, rise: float, hold: float,
+                 ramp: str = "linear"):
+        arrays = [np.array([real(f"JointPulse.{name}[{j}]", v, nonneg=name == "A")
+                            for j, v in enumerate(np.atleast_1d(np.asarray(a, float)))])
+                  for name, a in (("gamma", gamma), ("A", A), ("lead", lead))]
+        if arrays[0].ndim != 1 or not arrays[0].size or any(a.shape != arrays[0].shape
+                                                            for a in arrays):
+            raise ValueError("JointPulse: gamma, A and lead must have one entry per joint, got "
+                             f"sizes {[a.size for a in arrays]}")
+        self.gamma, self.A, self.lead = arrays
+        self.rise, self.hold = real("JointPulse.rise", rise), real("JointPulse.hold", hold,
+                                                                   nonneg=True)
+        self.ramp = ramp
+        check_pulse(self.rise, self.hold, ramp, "JointPulse")
+        self._shift = self.lead / TWO_PI
+
+    def _unit(self, t):
+        t = np.asarray(t, dtype=float)
+        shifted = t[None, ...] + self._shift.reshape((-1,) + (1,) * t.ndim)
+        p, dp = unit_pulse(shifted, self.rise, self.hold, self.ramp)
+        col = (-1,) + (1,) * t.ndim
+        return p, dp, col
+
+    def __call__(self, t):
+        p, _, col = self._unit(t)
+        return self.gamma.reshape(col) + self.A.reshape(col) * (2.0 * p - 1.0)
+
+    def derivative(self, t):
+        _, dp, col = self._unit(t)
+        return 2.0 * self.A.reshape(col) * dp
+
+    @property
+    def t_knots(self) -> np.ndarray:
+        """Phases of the corners of every joint's pulse [cycles], sorted in [0, 1) (as
+        :attr:`Pulse.t_knots`)."""
+        return pulse_knots(self.rise, self.hold, self._shift)
+
+    def describe(self) -> dict:
+        return {"type": "JointPulse", "gamma_deg": np.degrees(self.gamma).tolist(),
+                "A_deg": np.degrees(self.A).tolist(), "lead_deg": np.degrees(self.lead).tolist(),
                 "rise": self.rise, "hold": self.hold, "ramp": self.ramp}

@@ -5,11 +5,13 @@ The robot is a :class:`~ocp_crawl.model.chain.Chain`; its gait is the harmonic w
 joint, ``phi_j = gamma_j + A_j sin(2 pi t + psi ((m - 1)/2 - (j - 1)))`` for the m = n - 1 joints
 (``psi_deg`` the phase lead of each joint over the next one; m = 2 is the paper's eq. (ref)),
 ``gamma_deg`` and ``A_deg`` for every joint, or ``gamma_joints_deg`` and ``A_joints_deg`` one per
-joint; or samples of one cycle from a CSV file with a column per joint (``waveform =
-"samples"``, ``file``: ``phase [-]`` and ``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m>
-[N m]``, interpolated as ``interpolation`` says).  The torque drive is ``tau_j = k_j (phi_ref_j -
-pi - rest_j)``; torque samples stand for the reference angles ``pi + rest_j + tau_j / k_j``, the
-same torques (every interpolation is linear in its samples).
+joint; or pulses with those centres, half swings and phase leads (``waveform = "pulse"``, with
+``rise``, ``hold`` and ``ramp`` as for the three-link robot's pulses); or samples of one cycle
+from a CSV file with a column per joint (``waveform = "samples"``, ``file``: ``phase [-]`` and
+``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m> [N m]``, interpolated as ``interpolation``
+says).  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``; torque samples stand for
+the reference angles ``pi + rest_j + tau_j / k_j``, the same torques (every interpolation is
+linear in its samples).
 """
 from __future__ import annotations
 
@@ -21,10 +23,12 @@ import numpy as np
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_inputs import JointFourier
 from ocp_crawl.model.inputs import PeriodicSignal
+from ocp_crawl.model.pulse import JointPulse
 from ocp_crawl.problem.keys import ProblemError
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.values import Context
-from ocp_crawl.problem.waveforms import JOINT_INTERPOLANTS, driven_samples, file_samples
+from ocp_crawl.problem.waveforms import (JOINT_INTERPOLANTS, check_pulse_fits, driven_samples,
+                                         file_samples)
 
 #: the [robot] keys of a chain (``lengths`` marks a chain; ``masses`` and ``stiffness`` go with it)
 CHAIN_KEYS = ("lengths", "masses", "stiffness", "com", "rest_deg")
@@ -35,7 +39,7 @@ TWO_JOINT_KEYS = ("gamma1_deg", "gamma2_deg", "A1_deg", "A2_deg")
 #: the [gait] keys of a chain's joints, one entry per joint
 JOINT_KEYS = ("gamma_joints_deg", "A_joints_deg")
 #: the waveforms of a chain's joints
-CHAIN_WAVEFORMS = ("harmonic", "samples")
+CHAIN_WAVEFORMS = ("harmonic", "pulse", "samples")
 #: the [gait] keys of the three-link robot's inline samples (a chain's samples come from a file)
 INLINE_SAMPLE_KEYS = ("phase", "phi1_ref_deg", "phi2_ref_deg", "tau1", "tau2")
 
@@ -110,11 +114,14 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any],
     if gait["waveform"] == "samples":
         return _chain_samples(ctx, gait, chain)
     m = chain.n_joints
-    gamma = _per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m)
-    amplitude = _per_joint(ctx, gait, "A_joints_deg", "A_deg", m)
-    lead = [gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)]
-    harmonic = JointFourier.harmonic(np.radians(gamma), np.radians(amplitude), np.radians(lead))
-    return harmonic, dict(gait)
+    gamma = np.radians(_per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m))
+    amplitude = np.radians(_per_joint(ctx, gait, "A_joints_deg", "A_deg", m))
+    lead = np.radians([gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)])
+    if gait["waveform"] == "pulse":
+        check_pulse_fits(gait, ctx.at)
+        pulse = JointPulse(gamma, amplitude, lead, gait["rise"], gait["hold"], gait["ramp"])
+        return pulse, dict(gait)
+    return JointFourier.harmonic(gamma, amplitude, lead), dict(gait)
 
 
 def _chain_samples(ctx: Context, gait: Mapping[str, Any],

@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence, cast
 import numpy as np
 
 from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain_inputs import ChainReferenceTorque
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.inputs import Harmonic, PeriodicSignal, ReferenceTorque
 from ocp_crawl.problem import chain_robot
@@ -147,8 +148,6 @@ class Problem:
         if self.input_torque is not None:
             return self.input_torque
         if isinstance(self.robot, Chain):
-            from ocp_crawl.sim.chain_torque import ChainReferenceTorque
-
             return ChainReferenceTorque(self.gait, self.robot)
         return ReferenceTorque(self.gait, self.robot.k)
 

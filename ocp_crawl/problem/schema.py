@@ -161,10 +161,11 @@ _GAIT = Section("gait", "reference angles or torques over one cycle", required=T
     Key("A1_deg", float, "deg", "amplitude of joint 1 (overrides A_deg)", rule=GE0, variants=_HP),
     Key("A2_deg", float, "deg", "amplitude of joint 2 (overrides A_deg)", rule=GE0, variants=_HP),
     Key("gamma_joints_deg", list, "deg", "chain ([robot] lengths): the nominal angle of each "
-        "joint (instead of gamma_deg)", rule=ANGLE, variants=("harmonic",),
+        "joint (instead of gamma_deg; pulse: the centre of each swing)", rule=ANGLE, variants=_HP,
         exclusive_with=("gamma_deg",)),
     Key("A_joints_deg", list, "deg", "chain ([robot] lengths): the amplitude of each joint "
-        "(instead of A_deg)", rule=GE0, variants=("harmonic",), exclusive_with=("A_deg",)),
+        "(instead of A_deg; pulse: each half swing)", rule=GE0, variants=_HP,
+        exclusive_with=("A_deg",)),
     Key("cos1_deg", list, "deg", f"fourier: cosine amplitudes of joint 1 ({_FOURIER_WHY})",
         default=(), rule=COEFFICIENT, variants=("fourier",)),
     Key("sin1_deg", list, "deg", f"fourier: sine amplitudes of joint 1 ({_FOURIER_WHY})",

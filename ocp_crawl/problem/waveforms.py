@@ -83,11 +83,16 @@ def _fourier(g: Mapping[str, Any], at: At) -> FourierSeries:
     return FourierSeries(np.radians(_joint(g, "gamma")), a, b)
 
 
-def _pulse(g: Mapping[str, Any], at: At) -> Pulse:
+def check_pulse_fits(g: Mapping[str, Any], at: At) -> None:
+    """ProblemError unless a pulse's two edges and high level fit in one cycle."""
     if not 2 * g["rise"] + g["hold"] <= 1:
         raise ProblemError(f"{at('gait', 'rise', g['rise'])} and hold = {format_value(g['hold'])} "
                            f"are invalid: 2 rise + hold = {2 * g['rise'] + g['hold']:g} must be <= "
                            "1 (two edges and the high level fit in one cycle)")
+
+
+def _pulse(g: Mapping[str, Any], at: At) -> Pulse:
+    check_pulse_fits(g, at)
     (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
     return Pulse(math.radians(g1), math.radians(g2), math.radians(a1), math.radians(a2),
                  math.radians(g["psi_deg"]), g["rise"], g["hold"], g["ramp"])

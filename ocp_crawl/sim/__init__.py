@@ -15,7 +15,7 @@ _EXPORTS = {
     "CrawlResult": "ocp_crawl.sim.result", "Event": "ocp_crawl.sim.result",
     "Mode": "ocp_crawl.sim.result", "simulate_chain_angles": "ocp_crawl.sim.chain_angles",
     "simulate_chain_torque": "ocp_crawl.sim.chain_torque",
-    "ChainReferenceTorque": "ocp_crawl.sim.chain_torque",
+    "ChainReferenceTorque": "ocp_crawl.model.chain_inputs",
     "simulate_chain_mpcc": "ocp_crawl.sim.chain_mpcc",
     "SimulationError": "ocp_crawl.sim.result", "Status": "ocp_crawl.sim.result",
 }

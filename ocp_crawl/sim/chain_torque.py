@@ -33,16 +33,15 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.chain import Chain
-from ocp_crawl.model.chain_inputs import as_joint_signal
+from ocp_crawl.model.chain_inputs import ChainReferenceTorque, as_joint_signal
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.chain_stability import chain_stability_margins
 from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, input_knots
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate,
                                     failure_message, new_result, output_phases, sample_fields,
                                     success_message)
-from ocp_crawl.sim.chain_torque_parts import (GUARD_NOISE, SINGLE_MODES, ChainSolver, Point,
-                                              Segment, mode_vector, sample_segment,
+from ocp_crawl.sim.chain_torque_parts import (GUARD_NOISE, JUMP_TOL, SINGLE_MODES, ChainSolver,
+                                              Point, Segment, mode_vector, sample_segment,
                                               segment_integrals)
 from ocp_crawl.sim.event_guards import transition
 from ocp_crawl.sim.event_kinks import linear_pieces, step_limit
@@ -53,36 +52,6 @@ from ocp_crawl.status import Status
 #: largest |energy balance residual| of a success, relative to the gross work (the cycle integrals
 #: close to ~1e-12 on smooth inputs; the event stepper's default tolerance)
 ENERGY_TOL = 1e-6
-
-
-class ChainReferenceTorque(PeriodicSignal):
-    """Joint torques of reference angles: ``tau_j = k_j (phi_ref_j(t) - pi - rest_j)`` [N m].
-
-    Parameters
-    ----------
-    reference : PeriodicSignal
-        Reference joint angles phi_ref(t) [rad] with m rows.
-    chain : Chain
-        The chain whose stiffnesses k_j [N m/rad] and rest bends rest_j [rad] are used.
-    """
-
-    def __init__(self, reference: PeriodicSignal, chain: Chain):
-        self.reference = as_joint_signal(reference, chain.n_joints)
-        self.k = np.asarray(chain.stiffness, float)
-        self.rest = np.asarray(chain.rest, float)
-
-    def _col(self, v, t):
-        return v.reshape((-1,) + (1,) * np.ndim(t))
-
-    def __call__(self, t):
-        return self._col(self.k, t) * (self.reference(t) - math.pi - self._col(self.rest, t))
-
-    def derivative(self, t):
-        return self._col(self.k, t) * self.reference.derivative(t)
-
-    def describe(self) -> dict:
-        return {"type": "ChainReferenceTorque", "k": self.k.tolist(), "rest": self.rest.tolist(),
-                "reference": self.reference.describe()}
 
 
 class _Stop(Exception):
@@ -168,10 +137,11 @@ class ChainTorqueStepper:
             if span is not None:
                 seg = self._cross_hold(seg, pt, span, t_end)
                 continue
-            stop = min(t_end, pieces.next_break(pt.t))
+            brk = pieces.next_break(pt.t)
+            stop = min(t_end, brk)
             hh = min(h, stop - pt.t)
             t_new = stop if stop - (pt.t + hh) < 1e-12 else pt.t + hh
-            at_kink = pieces.is_kink(t_new)
+            at_kink, at_break = pieces.is_kink(t_new), t_new == brk
             new = self._step(seg, pt, t_new, left=at_kink)
             if new is None:
                 h = hh / 4
@@ -180,9 +150,10 @@ class ChainTorqueStepper:
                                 f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
                 continue
             g0, g1 = s.guards(seg.mode, pt.aux), s.guards(seg.mode, new.aux)
-            # (a guard at zero to round-off at a kink, such as the feet's friction limits tying
-            # where a table's sample makes the shape symmetric, is decided by the rates after it)
-            floor = -GUARD_NOISE if at_kink else 0.0
+            # (a guard at zero to round-off at a kink or where a hold starts, such as the feet's
+            # friction limits tying where a table's sample makes the shape symmetric, is decided
+            # by the rates after it)
+            floor = -GUARD_NOISE if at_kink or at_break else 0.0
             crossed = [k for k, v in g1.items() if v < floor]
             if not crossed:
                 new, crossed = self._dip(seg, pt, new)
@@ -268,10 +239,17 @@ class ChainTorqueStepper:
         if start is None:
             ok = [(m, p) for m in SINGLE_MODES if m is not seg.mode
                   for p in [s.consistent(m, ev, self.trial_step)] if p is not None]
+            if len(ok) > 1:   # (a mode that continues the state wins)
+                ok = [c for c in ok if s.jump(ev, c[1]) <= JUMP_TOL] or ok
             if len(ok) != 1:
                 raise _Stop(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
                             f"{len(ok)} consistent modes after {kind} at t = {t_ev:.10f}")
             chosen, start = ok[0]
+        size = s.jump(ev, start)
+        if size > JUMP_TOL:
+            raise _Stop(Status.SNAP_THROUGH, t_ev, seg.mode,
+                        f"{kind} from {seg.mode.label} to {chosen.label} needs a jump of the state "
+                        f"of {size:.3g} at t = {t_ev:.10f}")
         return self._start_mode(seg, ev, chosen, start, kind, g_ev)
 
     def _start_mode(self, seg: Segment, ev: Point, chosen: Mode, start: Point, kind: str,
@@ -325,13 +303,15 @@ class ChainTorqueStepper:
 
     def _leave_hold(self, seg: Segment, end: Point) -> Segment:
         """The mode after a hold: the segment's own when it is consistent with the rates after the
-        hold, else the one single-foot mode that is (NO_CONSISTENT_MODE for none, SET_VALUED for
-        several: the statics leave the motion undecided)."""
+        hold, else the one single-foot mode that is and continues the state without a jump
+        (NO_CONSISTENT_MODE for none, SET_VALUED for several: the statics leave the motion
+        undecided)."""
         s = self.solver
         if s.consistent(seg.mode, end, self.trial_step) is not None:
             return seg
         ok = [(m, p) for m in SINGLE_MODES if m is not seg.mode
-              for p in [s.consistent(m, end, self.trial_step)] if p is not None]
+              for p in [s.consistent(m, end, self.trial_step)]
+              if p is not None and s.jump(end, p) <= JUMP_TOL]
         if len(ok) != 1:
             status = Status.SET_VALUED if ok else Status.NO_CONSISTENT_MODE
             names = ", ".join(m.label for m, _ in ok) or "none"

@@ -21,6 +21,10 @@ from ocp_crawl.sim.event_guards import cubic_min
 from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
 from ocp_crawl.sim.result import Mode
 
+#: largest change of the state from an event to the start of the mode after it that is not a jump
+#: (a snap-through): |d phi| [rad], |d f_t|/(M g)/(1 + max k/(M g L)), |d d|/L (the three-link
+#: stepper's ``jump_tol``)
+JUMP_TOL = 1e-6
 #: the modes of a generic gait (one foot slips at a time); slip-slip needs mu1 f_n1 = mu2 f_n2
 #: guard values within this of zero [-] are not decided by their sign
 GUARD_NOISE = 1e-12
@@ -211,6 +215,13 @@ class ChainSolver:
     def margin(self, x: np.ndarray, q: np.ndarray) -> float:
         """Stability margin of the equilibrium ``x`` in mode ``q`` (> 0: stable)."""
         return chain_stability_margin(self.model, x, q)
+
+    def jump(self, pt: Point, start: Point) -> float:
+        """Size of the change of the state from pt to start (:data:`JUMP_TOL`'s measure)."""
+        m = self.m
+        ft_scale = 1.0 + max(self.chain.stiffness) / (self.Mg * self.L)
+        return max(float(np.max(np.abs(start.x[:m] - pt.x[:m]))),
+                   abs(start.x[m] - pt.x[m]) / ft_scale, abs(start.aux["d"] - pt.aux["d"]) / self.L)
 
     def consistent(self, mode: Mode, pt: Point, dt: float) -> Point | None:
         """The solution of ``mode`` at pt (stick-stick at the distance of pt) when every guard of

@@ -1,8 +1,9 @@
-"""A chain's joints driven by samples from a file ([gait] waveform = "samples", a column per
-joint): the paper's robot written as a chain under a sample file moves as the three-link robot
-under that file (every interpolation, both drives); torque samples are the reference angles that
-stand for them; the five-link file's gait as a table goes through every command that takes a
-chain; what a chain's samples cannot be is one line naming the key or the file."""
+"""A chain's joints driven by pulses ([gait] waveform = "pulse") and by samples from a file
+(waveform = "samples", a column per joint): the paper's robot written as a chain moves as the
+three-link robot under the same pulses and under the same sample file (every interpolation, both
+drives); torque samples are the reference angles that stand for them; the five-link file's gait as
+pulses and as a table goes through every command that takes a chain; what a chain's waveform
+cannot be is one line naming the key or the file."""
 import csv
 import json
 import tomllib
@@ -11,7 +12,9 @@ import numpy as np
 import pytest
 
 from ocp_crawl.cli import main
+from ocp_crawl.model.pulse import JointPulse, Pulse
 from ocp_crawl.problem import ProblemError, load_problem, problem_from_dict, run_problem
+from ocp_crawl.status import Status
 
 from _bad_input_rows import CHAIN, PAPER
 from test_chain_problems import PAPER_AS_CHAIN
@@ -35,6 +38,52 @@ def _samples_text(text: str, file: str, interpolation: str) -> str:
     tail = rest[rest.index("\n["):] if "\n[" in rest else ""
     return (f'{head}[gait]\nwaveform = "samples"\nfile = "{file}"\n'
             f'interpolation = "{interpolation}"\n{tail}')
+
+
+def _pulses(ramp: str, psi: float) -> list[str]:
+    return ['gait.waveform="pulse"', "gait.rise=0.3", "gait.hold=0.1", f'gait.ramp="{ramp}"',
+            f"gait.psi_deg={psi}"]
+
+
+@pytest.mark.parametrize("ramp", ["linear", "cosine"])
+@pytest.mark.parametrize("psi", [90.0, 30.0, -45.0])
+def test_the_paper_robot_as_a_chain_under_pulses(ramp, psi):
+    """Trapezoids (kinks) and half-cosine edges (rests), with holds of every joint whose ends tie
+    the feet's friction limits: S, W+ and the steady cycle's events of the three-link robot."""
+    three = run_problem(load_problem(PAPER, _pulses(ramp, psi)))
+    chain = run_problem(problem_from_dict(tomllib.loads(PAPER_AS_CHAIN),
+                                          overrides=_pulses(ramp, psi)))
+    assert three.success and chain.success, (three.message, chain.message)
+    assert abs(chain.S - three.S) <= RTOL * abs(three.S)
+    assert abs(chain.W_plus - three.W_plus) <= RTOL * three.W_plus
+    a, b = chain.steady_events(), three.steady_events()
+    assert [(e.mode_before, e.mode_after) for e in a] == [(e.mode_before, e.mode_after) for e in b]
+    np.testing.assert_allclose([e.t - chain.t0 for e in a], [e.t - three.t0 for e in b],
+                               atol=1e-8)
+
+
+def test_mirror_symmetric_pulses_share_the_slip_which_a_chain_does_not_model():
+    """psi = 0 on the symmetric robot: the feet's limits tie all the time and the three-link robot
+    shares the slip between its feet (S = 0); the chain, whose slips are one foot's, says so by a
+    status."""
+    three = run_problem(load_problem(PAPER, _pulses("linear", 0.0)))
+    chain = run_problem(problem_from_dict(tomllib.loads(PAPER_AS_CHAIN),
+                                          overrides=_pulses("linear", 0.0)))
+    assert three.success and abs(three.S) <= 1e-15
+    assert chain.status in (Status.NO_CONSISTENT_MODE, Status.SET_VALUED), chain.message
+
+
+def test_joint_pulses_of_two_joints_are_the_pulse():
+    """JointPulse with the leads (psi/2, -psi/2): Pulse's values, rates and knots, bitwise."""
+    t = np.linspace(-1.0, 2.0, 997)
+    for ramp in ("linear", "cosine"):
+        for psi in (0.3, -2.0):
+            a = Pulse(1.5, 1.6, 0.4, 0.3, psi, 0.3, 0.1, ramp)
+            b = JointPulse([1.5, 1.6], [0.4, 0.3], [psi / 2, -psi / 2], 0.3, 0.1, ramp)
+            assert np.array_equal(a(t), b(t)) and np.array_equal(a.derivative(t), b.derivative(t))
+            assert np.array_equal(a(0.37), b(0.37)) and np.array_equal(a.t_knots, b.t_knots)
+    with pytest.raises(ValueError, match="JointPulse: 2 rise"):
+        JointPulse([1.5, 1.6, 1.7], [0.1] * 3, [0.0] * 3, 0.4, 0.3)
 
 
 def _paper_table(tmp_path):
@@ -79,6 +128,7 @@ def _five_link_tables(tmp_path, knots: int = 24) -> dict:
     return out
 
 
+@pytest.mark.slow
 def test_torque_samples_are_the_reference_angles_that_stand_for_them(tmp_path):
     """A chain's torque table and the reference angles of those torques: the same signal to
     round-off and the same gait (S to 1e-12), for every interpolation."""
@@ -93,6 +143,18 @@ def test_torque_samples_are_the_reference_angles_that_stand_for_them(tmp_path):
         assert abs(ra.S - rb.S) <= 1e-12 * abs(ra.S)
     spline = run_problem(load_problem(files["angles"], ['gait.interpolation="spline"']))
     assert abs(spline.S - run_problem(load_problem(CHAIN)).S) <= 1e-3 * abs(spline.S)
+
+
+@pytest.mark.slow
+def test_five_link_pulses_pass_the_crosscheck(capsys):
+    """The five-link file's joints as trapezoid pulses: the chain's event-driven stepper against
+    its switch-exact steps at N = 40 and 80."""
+    argv = ["crosscheck", str(CHAIN), "--steps", "40", "80", "--json", "--set",
+            'gait.waveform="pulse"', "--set", "gait.rise=0.25", "--set", "gait.hold=0.2"]
+    assert main(argv) == 0
+    check = json.loads(capsys.readouterr().out)
+    assert check["passed"] is True, check["checks"]
+    assert all(r["rel_diff_S"] <= 1e-9 for r in check["per_steps"])
 
 
 @pytest.mark.slow
@@ -142,5 +204,9 @@ def test_what_a_chains_samples_cannot_be(tmp_path):
     with pytest.raises(ProblemError, match=r'drive = "angles" .* torque samples \(tau1, tau2, '
                                            r'tau3, tau4\)'):
         load_problem(files["torques"], ['gait.drive="angles"'])
-    with pytest.raises(ProblemError, match=r'waveform = "pulse" .* "harmonic", "samples"'):
-        load_problem(CHAIN, ['gait.waveform="pulse"'])
+    with pytest.raises(ProblemError, match=r'waveform = "fourier" .* "harmonic", "pulse", '
+                                           r'"samples"'):
+        load_problem(CHAIN, ['gait.waveform="fourier"'])
+    with pytest.raises(ProblemError, match=r"rise = 0.4 \(from --set\) and hold = 0.3 are "
+                                           r"invalid"):
+        load_problem(CHAIN, ['gait.waveform="pulse"', "gait.rise=0.4", "gait.hold=0.3"])
