@@ -62,6 +62,19 @@ def test_the_paper_robot_as_a_chain_under_pulses(ramp, psi):
                                atol=1e-8)
 
 
+@pytest.mark.parametrize("psi", [12.0, 45.0, 90.0])
+def test_the_paper_robot_as_a_chain_under_pressure(psi):
+    """The pressure actuator of the paper's robot (Table I's map, a segment per joint) on the
+    paper's robot written as a chain: the three-link robot's S and W+ to 1e-9."""
+    over = ['gait.waveform="pressure"', "gait.p0_bar=1.0", f"gait.psi_deg={psi}",
+            'model.gravity="paper"']
+    three = run_problem(load_problem(PAPER, over))
+    chain = run_problem(problem_from_dict(tomllib.loads(PAPER_AS_CHAIN), overrides=over))
+    assert three.success and chain.success, (three.message, chain.message)
+    assert abs(chain.S - three.S) <= RTOL * abs(three.S)
+    assert abs(chain.W_plus - three.W_plus) <= RTOL * three.W_plus
+
+
 def test_mirror_symmetric_pulses_share_the_slip_which_a_chain_does_not_model():
     """psi = 0 on the symmetric robot: the feet's limits tie all the time and the three-link robot
     shares the slip between its feet (S = 0); the chain, whose slips are one foot's, says so by a
@@ -207,6 +220,10 @@ def test_what_a_chains_samples_cannot_be(tmp_path):
     with pytest.raises(ProblemError, match=r'waveform = "fourier" .* "harmonic", "pulse", '
                                            r'"samples"'):
         load_problem(CHAIN, ['gait.waveform="fourier"'])
+    with pytest.raises(ProblemError, match=r'waveform = "pressure" \(from --set\) is invalid with a '
+                                           r"chain of 5 links: the pressure actuator has two "
+                                           r"segments"):
+        load_problem(CHAIN, ['gait.waveform="pressure"', "gait.p0_bar=1.0"])
     with pytest.raises(ProblemError, match=r"rise = 0.4 \(from --set\) and hold = 0.3 are "
                                            r"invalid"):
         load_problem(CHAIN, ['gait.waveform="pulse"', "gait.rise=0.4", "gait.hold=0.3"])

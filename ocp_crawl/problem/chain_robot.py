@@ -11,7 +11,9 @@ from a CSV file with a column per joint (``waveform = "samples"``, ``file``: ``p
 ``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m> [N m]``, interpolated as ``interpolation``
 says).  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``; torque samples stand for
 the reference angles ``pi + rest_j + tau_j / k_j``, the same torques (every interpolation is
-linear in its samples).
+linear in its samples).  A chain of three links also takes the pressure actuator of the paper's
+robot (``waveform = "pressure"`` and its ``[pressure]`` section: a segment per joint), so that its
+joints, legs and rest bends may differ.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ from ocp_crawl.problem.keys import ProblemError
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.values import Context
 from ocp_crawl.problem.waveforms import (JOINT_INTERPOLANTS, check_pulse_fits, driven_samples,
-                                         file_samples)
+                                         file_samples, pressure_reference)
 
 #: the [robot] keys of a chain (``lengths`` marks a chain; ``masses`` and ``stiffness`` go with it)
 CHAIN_KEYS = ("lengths", "masses", "stiffness", "com", "rest_deg")
@@ -39,7 +41,7 @@ TWO_JOINT_KEYS = ("gamma1_deg", "gamma2_deg", "A1_deg", "A2_deg")
 #: the [gait] keys of a chain's joints, one entry per joint
 JOINT_KEYS = ("gamma_joints_deg", "A_joints_deg")
 #: the waveforms of a chain's joints
-CHAIN_WAVEFORMS = ("harmonic", "pulse", "samples")
+CHAIN_WAVEFORMS = ("harmonic", "pulse", "samples", "pressure")
 #: the [gait] keys of the three-link robot's inline samples (a chain's samples come from a file)
 INLINE_SAMPLE_KEYS = ("phase", "phi1_ref_deg", "phi2_ref_deg", "tau1", "tau2")
 
@@ -102,10 +104,11 @@ def chain_waveform(ctx: Context, gait: Mapping[str, Any]) -> None:
                            "with a column per joint)")
 
 
-def chain_gait(ctx: Context, gait: Mapping[str, Any],
-               chain: Chain) -> tuple[PeriodicSignal, dict]:
+def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain,
+               pressure: Mapping[str, Any], gravity: str) -> tuple[PeriodicSignal, dict]:
     """The reference angles [rad] of a chain's ``[gait]`` (one row per joint) and the section's
-    values (a sample file's name resolved, its period)."""
+    values (a sample file's name resolved, its period); ``pressure``: the validated ``[pressure]``
+    values, ``gravity``: the convention (the pressure waveform's rest angle depends on it)."""
     for name in TWO_JOINT_KEYS:
         if name in gait:
             raise ProblemError(f"{ctx.at('gait', name, gait[name])} is a key of the three-link "
@@ -114,6 +117,12 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any],
     if gait["waveform"] == "samples":
         return _chain_samples(ctx, gait, chain)
     m = chain.n_joints
+    if gait["waveform"] == "pressure":
+        if m != 2:
+            raise ProblemError(f"{ctx.at('gait', 'waveform', 'pressure')} is invalid with a chain "
+                               f"of {chain.n} links: the pressure actuator has two segments, one "
+                               "per joint of a chain of three links")
+        return pressure_reference(gait, pressure, gravity, ctx.at), dict(gait)
     gamma = np.radians(_per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m))
     amplitude = np.radians(_per_joint(ctx, gait, "A_joints_deg", "A_deg", m))
     lead = np.radians([gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)])

@@ -404,7 +404,7 @@ def _validate_chain(data: Mapping[str, Any], ctx: Context, values: dict) -> Prob
     values["robot"].pop("beta")
     values["simulation"].pop("s_error_tol")
     check_stiffness_ratio(ctx, chain, g["drive"])
-    reference, values["gait"] = chain_robot.chain_gait(ctx, g, chain)
+    reference, values["gait"] = chain_robot.chain_gait(ctx, g, chain, values["pressure"], gravity)
     solver = _solver(ctx, g["drive"], sim, gravity, chain=True)
     problem = Problem(robot=chain, gait=reference, drive=g["drive"], gravity=gravity,
                       solver=solver, options=solver_options(solver, sim), sections=values,

@@ -289,7 +289,7 @@ def _samples(g: Mapping[str, Any], k: float, drive: str, at: At, base: Path) -> 
     return GaitInput(signal, None, values)
 
 
-def _pressure(g: Mapping[str, Any], pressure: Mapping[str, Any], gravity: str,
+def pressure_reference(g: Mapping[str, Any], pressure: Mapping[str, Any], gravity: str,
               at: At) -> PressureReference:
     """The reference angles of the pressure-driven robot: the ``[pressure]`` actuator at
     ``[gait] p0_bar``, ``psi_deg`` (:func:`ocp_crawl.model.pressure.pressure_torque` with k
@@ -347,7 +347,7 @@ def gait_input(g: Mapping[str, Any], k: float, at: At, base: Path,
     if waveform == "pulse":
         return GaitInput(_pulse(g, at), None, dict(g))
     if waveform == "pressure":
-        return GaitInput(_pressure(g, pressure, gravity, at), None, dict(g))
+        return GaitInput(pressure_reference(g, pressure, gravity, at), None, dict(g))
     (g1, g2), (a1, a2) = _joint(g, "gamma"), _joint(g, "A")
     gait = Harmonic.from_degrees(gamma1_deg=g1, gamma2_deg=g2, A1_deg=a1, A2_deg=a2,
                                  psi_deg=g["psi_deg"])
