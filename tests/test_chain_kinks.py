@@ -57,9 +57,20 @@ def _pulse(ramp: str) -> ReferenceTorque:
     return torque
 
 
+def _edges(ramp: str, rise: float, hold: float, psi: float) -> ReferenceTorque:
+    over = [f'gait.ramp="{ramp}"', f"gait.rise={rise}", f"gait.hold={hold}", f"gait.psi_deg={psi}"]
+    torque = load_problem(PROBLEMS["pulse_gait.toml"], over).torque
+    assert isinstance(torque, ReferenceTorque)
+    return torque
+
+
 INPUTS = {"table-1": lambda: _random_table(1), "table-2": lambda: _random_table(2),
           "square": lambda: SQUARE, "trapezoid": lambda: _pulse("linear"),
-          "cosine-pulse": lambda: _pulse("cosine")}
+          "cosine-pulse": lambda: _pulse("cosine"),
+          # edges without flats: a slip ends in the cycle's last step
+          "rests": lambda: _edges("cosine", 0.5, 0.0, 90.0),
+          # a hold whose end leaves a slip mode on another branch (a jump) and stick-stick
+          "hold-end": lambda: _edges("cosine", 0.35, 0.1, 45.0)}
 
 
 def _steady(res) -> list[tuple[float, str, str]]:
@@ -83,20 +94,39 @@ def test_kinked_and_held_inputs_move_the_chain_as_the_three_link_stepper(name):
     _same_run(simulate_chain_torque(CHAIN3, torque), simulate(MODEL, torque, "event"))
 
 
-@pytest.mark.parametrize("name", ["table-1", "square"])
+def test_a_tie_held_over_whole_steps_is_a_status_of_the_chains_steps():
+    """Mirror-symmetric pulses (psi = 0) on the symmetric robot: its feet's limits tie for whole
+    steps, and the three-link robot shares its slips between the feet (S = 0); the chain's
+    event-driven stepper and its switch-exact steps, whose slips are one foot's, end with a
+    status, whatever the number of steps."""
+    torque = _edges("cosine", 0.3, 0.2, 0.0)
+    ref = simulate(MODEL, torque, "event")
+    assert ref.success and abs(ref.S) <= 1e-15
+    assert not simulate_chain_torque(CHAIN3, torque).success
+    for n in (40, 200):
+        steps = simulate_chain_mpcc(CHAIN3, torque, steps=n)
+        assert not steps.success and "tie over the whole step" in steps.message
+
+
+@pytest.mark.parametrize("name", ["table-1", "square", "rests", "hold-end"])
 def test_the_chains_steps_end_at_the_kinks(name):
-    """The chain's switch-exact steps (N = 40) give the event-driven S to 1e-9 and place the
-    events the stepper locates at the kinks; the step grid holds every kink."""
+    """The chain's switch-exact steps (N = 40) give the event-driven S to 1e-9 and its modes, and
+    place the events the stepper locates at the kinks and the holds' ends; the step grid holds
+    every kink and hold end."""
     torque = INPUTS[name]()
-    kinks = ChainPieces(torque).kinks
-    assert kinks.size >= 4
+    pieces = ChainPieces(torque)
+    kinks = np.mod(np.concatenate([pieces.kinks, np.ravel(pieces.holds)]), 1.0)
+    assert kinks.size >= 2 or name == "rests"
     grid = step_phases(torque, 40)
-    assert np.all(np.min(np.abs(kinks[:, None] - grid[None, :]), axis=1) <= 1e-12)
+    assert all(np.min(np.abs(grid - k)) <= 1e-12 for k in kinks)
     ref = simulate_chain_torque(CHAIN3, torque)
     steps = simulate_chain_mpcc(CHAIN3, torque, steps=40)
-    assert steps.success and abs(steps.S - ref.S) <= RTOL * abs(ref.S)
-    at_kinks = [t for t, *_ in _steady(ref) if np.min(np.abs(kinks - t)) <= 1e-12]
-    assert at_kinks, "no event of this input at a kink"
+    assert steps.success and abs(steps.S - ref.S) <= RTOL * abs(ref.S), (steps.S, ref.S)
+    # (the modes of the cycle [0, 1): an event at its end is the next cycle's first)
+    assert ([m for t, *m in _steady(steps) if t < 1 - 1e-12]
+            == [m for t, *m in _steady(ref) if t < 1 - 1e-12])
+    at_kinks = [t for t, *_ in _steady(ref) if np.any(np.abs(kinks - t) <= 1e-12)]
+    assert at_kinks or name == "rests", "no event of this input at a kink or a hold's end"
     located = [t for t, *_ in _steady(steps)]
     for t in at_kinks:
         assert np.min(np.abs(np.array(located) - t)) <= 1e-12, (t, located)

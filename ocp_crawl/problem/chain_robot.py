@@ -10,10 +10,10 @@ joint; or pulses with those centres, half swings and phase leads (``waveform = "
 from a CSV file with a column per joint (``waveform = "samples"``, ``file``: ``phase [-]`` and
 ``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m> [N m]``, interpolated as ``interpolation``
 says).  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``; torque samples stand for
-the reference angles ``pi + rest_j + tau_j / k_j``, the same torques (every interpolation is
-linear in its samples).  A chain of three links also takes the pressure actuator of the paper's
-robot (``waveform = "pressure"`` and its ``[pressure]`` section: a segment per joint), so that its
-joints, legs and rest bends may differ.
+the reference angles ``pi + rest_j + tau_j / k_j``, the same torques (each interpolation
+commutes with that increasing affine map of the samples).  A chain of three links also takes the
+pressure actuator of the paper's robot (``waveform = "pressure"`` and its ``[pressure]`` section:
+a segment per joint), so that its joints, legs and rest bends may differ.
 """
 from __future__ import annotations
 

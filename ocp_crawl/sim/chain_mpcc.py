@@ -21,9 +21,9 @@ checked against the MPCC equations of :func:`chain_step_nlp` (``eq_residual``,
 a step whose contact mode changes is split at the event located inside it
 (:mod:`ocp_crawl.sim.chain_mpcc_split`), so that the foot positions and S carry no discretisation
 error; without the splits each step is entirely in its end mode (an O(1/N) error in S).  The
-switch-exact steps also end at the input's kinks (:func:`step_phases`), and a step keeps the mode
-it starts in while that mode's solution is consistent (a tie of the feet's limits, a hold of the
-input), as the event-driven stepper does.
+switch-exact steps also end at the input's kinks (:func:`step_phases`), and a step stays in the
+mode it starts in when that mode holds to its end (at a tie of the feet's limits at the step's
+end, or a hold of the input, several modes close the step), as the event-driven stepper does.
 """
 from __future__ import annotations
 
@@ -182,12 +182,10 @@ class ChainStep:
         """The step from the angles ``phi_k`` [rad] and feet ``x1``, ``x2`` [m] to the torques
         ``tau`` [N m] at the step's end; ``f_t`` [N] (the last force) seeds the Newton guesses.
 
-        Of several consistent solutions the one closest to phi_k, but the solution of the mode
-        ``prefer`` (the mode the step starts in) when it is consistent: at a tie of the feet's
-        friction limits at the step's end either foot's slip closes the step, and the slip goes
-        on in the foot that slipped, as the event-driven stepper continues a mode until one of
-        its guards crosses zero; a slip mode whose slip over the step is zero (the input holds
-        still) keeps its name."""
+        Of several consistent solutions the one closest to phi_k; with ``prefer``, the solution
+        of that mode when it is consistent, named by it (a slip with zero slip over the step
+        keeps its name), which the switch-exact steps ask for when the mode the step starts in
+        holds to its end (:func:`~ocp_crawl.sim.chain_mpcc_split.advance`)."""
         phi_k = np.asarray(phi_k, float).reshape(self.m)
         tau = np.asarray(tau, float).reshape(self.m)
         P = self.params(phi_k, tau)
@@ -318,16 +316,17 @@ def _diagnose(model: ChainModel, res: ChainStepResult, mode: Mode, t: float) -> 
 
 def step_phases(torque, N: int, switch_exact: bool = True) -> np.ndarray:
     """The ends of one cycle's steps [cycles]: k / N, k = 0..N, and, for switch-exact steps, the
-    input's kinks (:class:`~ocp_crawl.sim.chain_pieces.ChainPieces`), so that no step straddles a
-    jump of the torques' rate (a slip stopped by a kink is an event there, located at the start of
-    the step after it)."""
+    input's kinks and the ends of its holds (:class:`~ocp_crawl.sim.chain_pieces.ChainPieces`), so
+    that no step straddles a jump of the torques' rate or the end of a hold (a slip stopped there
+    is an event there, located at the start of the step after it)."""
     grid = np.arange(N + 1) / N
     if not switch_exact:
         return grid
     from ocp_crawl.sim.chain_pieces import ChainPieces
-    kinks = ChainPieces(torque).kinks
-    near = np.min(np.abs(kinks[:, None] - grid[None, :]), axis=1) if kinks.size else kinks
-    return np.sort(np.concatenate([grid, kinks[near > 1e-12]]))
+    pieces = ChainPieces(torque)
+    breaks = np.mod(np.concatenate([pieces.kinks, np.ravel(pieces.holds)]), 1.0)
+    near = np.min(np.abs(breaks[:, None] - grid[None, :]), axis=1) if breaks.size else breaks
+    return np.unique(np.concatenate([grid, breaks[near > 1e-12]]))
 
 
 def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,

@@ -20,7 +20,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import brentq
 
-from ocp_crawl.sim.chain_mpcc import ENUM_MODES, ChainStep, ChainStepResult
+from ocp_crawl.sim.chain_mpcc import CONSISTENCY_TOL, ENUM_MODES, ChainStep, ChainStepResult
 from ocp_crawl.sim.result import Mode
 
 #: most events located inside one step
@@ -29,11 +29,15 @@ MAX_SPLITS = 3
 RATE_EPS = 1e-6
 #: Brent tolerance of the event's step fraction [-]
 THETA_TOL = 1e-13
+#: a scaled friction margin [-] at most this in the middle of a step ties the feet's limits there
+TIE_TOL = 1e-9
 
 
-def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> dict | None:
-    """The guards of ``mode`` on the step from ``row`` at the step fraction theta; None when a
-    mode solve fails."""
+def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float,
+            end: bool = False) -> dict | None:
+    """The guards of ``mode`` on the step from ``row`` at the step fraction theta (``end``: the
+    slip rate differenced before theta only, at the step's end, which may be a kink of the
+    input); None when a mode solve fails."""
     phi_k, ft = row[1], row[4]
     k = ENUM_MODES.index(mode)
     cand = step.mode_solution(mode, phi_k, tau_of(theta), ft)
@@ -43,7 +47,9 @@ def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float) -> di
     if k:
         # (one-sided at the step's start, from either side: a traced-back theta < 0 is inside the
         # previous step, and the input may have a kink at the start)
-        if theta >= 0:
+        if end:
+            lo, hi = theta - RATE_EPS, theta
+        elif theta >= 0:
             lo, hi = max(theta - RATE_EPS, 0.0), theta + RATE_EPS
         else:
             lo, hi = theta - RATE_EPS, min(theta + RATE_EPS, 0.0)
@@ -98,6 +104,36 @@ def _event_row(step: ChainStep, mode: Mode, row: tuple, tau: np.ndarray, t: floa
             float(kin["fn2"]), float(kin["d"]), mode)
 
 
+def _solve_step(step: ChainStep, row: tuple, tau_of, switch_exact: bool) -> ChainStepResult:
+    """The step from ``row`` to the torques ``tau_of(1)``: its consistent solution closest to the
+    start (:meth:`ChainStep.solve`), or, for switch-exact steps, the solution in the mode the step
+    starts in when that mode holds to the step's end (its margins and a slip's rate there
+    nonnegative): where the feet's friction limits tie at the step's end, or the input holds still,
+    several modes close the step, and the mode that holds goes on, as in the event-driven
+    stepper."""
+    mode = row[8]
+    res = step.solve(row[1], row[2], row[3], tau_of(1.0), row[4])
+    if not switch_exact or not res.success or res.mode == mode or mode not in ENUM_MODES:
+        return res
+    kept = step.solve(row[1], row[2], row[3], tau_of(1.0), row[4], prefer=mode)
+    if kept.mode != mode:
+        return res
+    g = _guards(step, mode, row, tau_of, 1.0, end=True)
+    if g is None or min(g.values()) < -CONSISTENCY_TOL:
+        return res
+    if res.mode.foot in (1, 2) and mode.foot in (1, 2) and res.mode.foot != mode.foot:
+        # the other foot's slip closes the step too: at a tie of the feet's limits at the step's
+        # end the slip goes on; a tie held over the whole step leaves which foot slips (or both)
+        # undecided, which the chain's steps do not model (one foot slips at a time)
+        mid = _guards(step, mode, row, tau_of, 0.5)
+        other = (2, 3) if mode.foot == 1 else (0, 1)
+        if mid is not None and min(mid[f"c{i}"] for i in other) <= TIE_TOL:
+            return replace(kept, success=False, message="the feet's friction limits tie over the "
+                           "whole step: either foot's slip (or both) closes it, and the chain's "
+                           "steps move one foot at a time")
+    return kept
+
+
 def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             switch_exact: bool = True, prev: tuple | None = None
             ) -> tuple[list, ChainStepResult, bool, list]:
@@ -112,16 +148,16 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
     located: list[float] = []
     dropped = False
     for split in range(MAX_SPLITS + 1):
-        tau = np.asarray(torque(tb), float).reshape(step.m)
         mode = row[8]
-        res = step.solve(row[1], row[2], row[3], tau, row[4], prefer=mode)
-        if (not res.success or res.mode == mode or not switch_exact or split == MAX_SPLITS
-                or mode not in ENUM_MODES):
-            break
         a = ta
 
         def tau_of(theta, a=a):
             return np.asarray(torque(a + theta * (tb - a)), float).reshape(step.m)
+
+        res = _solve_step(step, row, tau_of, switch_exact)
+        if (not res.success or res.mode == mode or not switch_exact or split == MAX_SPLITS
+                or mode not in ENUM_MODES):
+            break
 
         back = (prev[0] - ta) / (tb - ta) if prev is not None and not out and prev[8] == mode \
             else 0.0

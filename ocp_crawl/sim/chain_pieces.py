@@ -3,7 +3,7 @@
 A piecewise-linear input (:class:`~ocp_crawl.model.sampled.JointLinear` tables, trapezoid pulses,
 the optimal-control profiles) has kinks, knots where its rate jumps, and may hold still over
 pieces.  The chain's stepper (:mod:`ocp_crawl.sim.chain_torque`) follows the rules of the
-three-link stepper (:mod:`ocp_crawl.sim.event_kinks`, whose detection it shares):
+three-link stepper (:mod:`ocp_crawl.sim.event_kinks`, whose detection and helpers it shares):
 
 * every continuation step ends at the next kink; the point there is solved with the rate of the
   piece before it, then again with the rate of the piece after it: a guard that is negative with
@@ -16,6 +16,7 @@ three-link stepper (:mod:`ocp_crawl.sim.event_kinks`, whose detection it shares)
   does (:meth:`ChainTorqueStepper._leave_hold`).
 
 An input without kinks or holds (the harmonic, a Fourier series, splines) reads none of this.
+Phases are located among the kinks by bisection (a table may have thousands of knots).
 """
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ import math
 import numpy as np
 
 from ocp_crawl.model.inputs import input_knots
-from ocp_crawl.sim.event_kinks import KINK_GAP, hold_spans, input_holds, input_kinks
+from ocp_crawl.sim.event_kinks import (KINK_GAP, hold_holding, hold_spans, input_holds,
+                                       input_kinks, inside_piece)
 
 
 class ChainPieces:
@@ -36,33 +38,36 @@ class ChainPieces:
         knots = input_knots(torque)
         self.kinks, self.e = input_kinks(torque, knots)
         self.holds = [tuple(h) for h in input_holds(torque, knots).tolist()]
-        self._k = self.kinks.tolist()
-        self._knots = knots.tolist()
+        self._k = sorted(self.kinks.tolist())
+        self._knots = sorted(knots.tolist())
 
-    def _around(self, t: float, phases: list[float] | None = None) -> list[float]:
-        """The absolute phases of the kinks (or of ``phases`` in [0, 1)) in the cycles around
-        phase t, sorted."""
+    def _neighbours(self, t: float, phases: list[float]) -> tuple[float, float]:
+        """The absolute phases of the last of ``phases`` (in [0, 1), sorted, nonempty) at or
+        before t and the first after it [cycles]."""
         c = math.floor(t)
-        return [k + j for j in (c - 1, c, c + 1) for k in (self._k if phases is None else phases)]
+        i = bisect.bisect_right(phases, t - c)
+        before = c + phases[i - 1] if i > 0 else c - 1 + phases[-1]
+        after = c + phases[i] if i < len(phases) else c + 1 + phases[0]
+        return before, after
 
     def is_kink(self, t: float) -> bool:
-        """Whether phase t [cycles] is a kink (to 1e-12 of a cycle)."""
-        return bool(self._k) and min(abs((t - k) - round(t - k)) for k in self._k) <= KINK_GAP
+        """Whether phase t [cycles] is a kink (to KINK_GAP)."""
+        if not self._k:
+            return False
+        before, after = self._neighbours(t, self._k)
+        return t - before <= KINK_GAP or after - t <= KINK_GAP
 
     def next_break(self, t: float) -> float:
         """The first kink or hold start after phase t (later than t + KINK_GAP); inf if none."""
-        kinks = self._around(t) + [a for a, _ in hold_spans(self.holds, t)]
-        return min((k for k in kinks if k > t + KINK_GAP), default=math.inf)
+        nxt = self._neighbours(t + KINK_GAP, self._k)[1] if self._k else math.inf
+        starts = (a for a, _ in hold_spans(self.holds, t) if a > t + KINK_GAP)
+        return min(nxt, min(starts, default=math.inf))
 
     def hold_at(self, t: float, rest_left: float | None = None) -> tuple[float, float] | None:
         """The absolute span (start, end) of the hold that holds phase t (from its start on, to
         KINK_GAP), or None; a hold of zero length at t counts unless it is ``rest_left``, the one
         the run has just left."""
-        for a, b in hold_spans(self.holds, t):
-            if a - KINK_GAP <= t < b - KINK_GAP or (a == b and abs(t - a) <= KINK_GAP
-                                                     and a != rest_left):
-                return a, b
-        return None
+        return hold_holding(self.holds, t, rest_left) if self.holds else None
 
     def rate_phase(self, t: float, left: bool = False) -> float:
         """The phase at which the rate of the piece holding t is read: t, or at a kink t -+ e (the
@@ -76,30 +81,35 @@ class ChainPieces:
         (the end of an interval of the phases: the piece before it)."""
         if not self._k:
             return ts
-        out = np.array(ts, float)
-        for i, t in enumerate(out.tolist()):
-            if self.is_kink(t):
-                out[i] = t - self.e if upto is not None and t == upto else t + self.e
-        return out
+        ts = np.asarray(ts, float)
+        k = np.asarray(self._k)
+        f = ts - np.floor(ts)
+        i = np.searchsorted(k, f)
+        gap = np.minimum(np.abs(f - np.append(k, k[0] + 1.0)[i]),
+                         np.abs(f - np.insert(k, 0, k[-1] - 1.0)[i]))
+        at_kink = gap <= KINK_GAP
+        left = at_kink & (ts == upto) if upto is not None else np.zeros(ts.shape, bool)
+        return np.where(left, ts - self.e, np.where(at_kink, ts + self.e, ts))
 
     def curvature_phase(self, t: float, left: bool = False, dt: float = 1e-5) -> float:
         """The centre of a central difference of step ``dt`` [cycles] of the rate near t that stays
-        inside the piece holding t (at a kink: the piece before it when ``left``)."""
+        inside the piece holding t (at a kink: the piece before it when ``left``), as the
+        three-link stepper's (:func:`inside_piece`)."""
         if not self._k:
             return t
-        kl = self._around(t)
-        i = bisect.bisect_left(kl, t - KINK_GAP) if left else bisect.bisect_right(kl, t + KINK_GAP)
-        lo = kl[i - 1] if i > 0 else -math.inf
-        hi = kl[i] if i < len(kl) else math.inf
-        if hi - lo <= 4 * dt:
-            return 0.5 * (lo + hi)
-        return min(max(t, lo + 2 * dt), hi - 2 * dt)
+        if self.is_kink(t) and left:
+            lo, hi = self._neighbours(t - KINK_GAP, self._k)[0], t
+        elif self.is_kink(t):
+            lo, hi = t, self._neighbours(t + KINK_GAP, self._k)[1]
+        else:
+            lo, hi = self._neighbours(t, self._k)
+        return inside_piece(t, lo, hi, dt)
 
     def split(self, a: float, b: float) -> list[tuple[float, float]]:
         """[a, b] cut at the input's knots inside it (its kinks, and the knots where a higher
         derivative jumps, such as a half-cosine edge meeting a flat: quadrature panels end
         there)."""
-        knots = self._around(a, self._knots) + self._around(b, self._knots)
-        inner = [k for k in knots if a + KINK_GAP < k < b - KINK_GAP]
-        edges = [a, *sorted(set(inner)), b]
+        inner = [k + c for c in range(math.floor(a), math.floor(b) + 1) for k in self._knots
+                 if a + KINK_GAP < k + c < b - KINK_GAP]
+        edges = [a, *sorted(inner), b]
         return list(zip(edges[:-1], edges[1:]))

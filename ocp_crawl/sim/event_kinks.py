@@ -182,6 +182,25 @@ def hold_spans(holds, t: float) -> list[tuple[float, float]]:
     return [(a + k, b + k) for k in (c - 1, c, c + 1) for a, b in holds]
 
 
+def hold_holding(holds, t: float, rest_left: float | None) -> tuple[float, float] | None:
+    """The absolute span (start, end) [cycles] of the hold among ``holds`` (rows [start, end) of
+    :func:`input_holds`) that holds phase t, from its start on to round-off; a hold of zero length
+    at t (a rest of the input) counts unless it is ``rest_left``, the one the run has just left."""
+    return next(((a, b) for a, b in hold_spans(holds, t) if a - KINK_GAP <= t < b - KINK_GAP or
+                 (a == b and abs(t - a) <= KINK_GAP and a != rest_left)), None)
+
+
+def inside_piece(t: float, lo: float, hi: float, dt: float) -> float:
+    """The centre of a central difference of step dt near t that stays inside the piece (lo, hi)
+    between kinks [cycles]: t, moved inside by 2 dt from an end, or the piece's middle if it is
+    shorter than 4 dt."""
+    if hi - lo <= 4 * dt:
+        return 0.5 * (lo + hi)
+    if t - lo < 2 * dt or hi - t < 2 * dt:
+        return min(max(t, lo + 2 * dt), hi - 2 * dt)
+    return t
+
+
 def _runs(b: np.ndarray, ends: np.ndarray, held: np.ndarray) -> list[tuple[float, float]]:
     """The maximal runs (start, end) of consecutive held pieces [b_i, ends_i] around the cycle."""
     if not held.any():
@@ -293,10 +312,7 @@ class InputPieces:
             i = bisect.bisect_left(kl, t) if left else bisect.bisect_right(kl, t)
             lo = kl[i - 1] if i > 0 else -math.inf
             hi = kl[i] if i < len(kl) else math.inf
-            if hi - lo <= 4 * dt:
-                t = 0.5 * (lo + hi)
-            elif t - lo < 2 * dt or hi - t < 2 * dt:
-                t = min(max(t, lo + 2 * dt), hi - 2 * dt)
+            t = inside_piece(t, lo, hi, dt)
         return torque_curvature(self._torque_at, t, dt)
 
     def _hold_spans(self, t: float):
@@ -312,8 +328,7 @@ class InputPieces:
         on, to round-off), or None."""
         if not self._hold_list:
             return None
-        return next(((a, b) for a, b in self._hold_spans(t) if a - KINK_GAP <= t < b - KINK_GAP or
-                     (a == b and abs(t - a) <= KINK_GAP and a != self._rest_left)), None)
+        return hold_holding(self._hold_list, t, self._rest_left)
 
     def leave_rest(self, span: tuple[float, float]) -> None:
         """Note that the run crosses the hold ``span``: one of zero length (a rest of the input) is
