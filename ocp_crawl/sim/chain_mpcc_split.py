@@ -184,9 +184,10 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             out.append(row)
         nxt = step.solve(row[1], row[2], row[3], tau_of(min(theta + 1e-9, 1.0)), row[4])
         new_mode = nxt.mode if nxt.success else None
-        if theta == 0.0 and new_mode in (None, mode):
-            # an event at the step's start (a slip that a kink of the input stops there): so
-            # short a step cannot tell the modes apart, the step's own end mode follows it
+        if new_mode in (None, mode):
+            # a guard of the mode crossed zero at the event, so the mode ends there; so short a
+            # step after it cannot tell the modes apart (a slip that starts with zero rate, or
+            # that a kink at the step's start stops): the step's own end mode follows it
             new_mode = res.mode
         if new_mode is None or new_mode == mode:
             break

@@ -54,6 +54,10 @@ from ocp_crawl.status import Status
 ENERGY_TOL = 1e-6
 
 
+class NoStart(ValueError):
+    """No stable released equilibrium at t = 0 (:meth:`ChainTorqueStepper.start`)."""
+
+
 class _Stop(Exception):
     """The end of a run by a failure status at phase t in a mode."""
 
@@ -101,7 +105,7 @@ class ChainTorqueStepper:
             q = mode_vector(Mode.STICK, pt.aux["d"])
             if s.margin(pt.x, q) > 0:
                 return s.solve(0.0, pt.x, q) or pt
-        raise ValueError("no stable released equilibrium with both feet on the ground at t = 0")
+        raise NoStart("no stable released equilibrium with both feet on the ground at t = 0")
 
     # ------------------------------------------------------------------ stepping
     def _step(self, seg: Segment, pt: Point, t_new: float, left: bool = False) -> Point | None:
@@ -196,9 +200,9 @@ class ChainTorqueStepper:
         """Phase of the zero of guard ``name`` in (pt.t, new.t] by Brent's method."""
         s = self.solver
 
-        def g(t: float) -> float:
+        def g(t: float) -> float:   # (at a kink ending the step: with the rates before it)
             lam = (t - pt.t) / (new.t - pt.t)
-            p = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q)
+            p = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q, left=new.left and t == new.t)
             if p is None:
                 raise _Stop(Status.NO_CONVERGENCE, t, seg.mode, "mode solve failed locating an "
                             f"event of {name}")
@@ -209,6 +213,10 @@ class ChainTorqueStepper:
             lo = min(pt.t + self.trial_step, 0.5 * (pt.t + new.t))
             if not g(lo) > 0:
                 return pt.t
+        if not g(new.t) < 0:   # (the solve from the interpolated guess found another branch)
+            raise _Stop(Status.NO_CONVERGENCE, new.t, seg.mode, f"guard {name} changes sign "
+                        f"between the step's ends but not on the mode's solutions through them "
+                        f"(another equilibrium branch) at t = {new.t:.10f}")
         return brentq(g, lo, new.t, xtol=self.event_xtol, rtol=4 * np.finfo(float).eps)
 
     def _event(self, seg: Segment, pt: Point, new: Point, g0: dict, crossed: list) -> Segment:
@@ -363,7 +371,11 @@ class ChainTorqueStepper:
         wp, work = np.zeros(m), np.zeros(m)
         diss = 0.0
         for seg, a, b in self.steady(t0):
-            p, wj, ds = segment_integrals(self.solver, seg, a, b, self.quad_h)
+            try:
+                p, wj, ds = segment_integrals(self.solver, seg, a, b, self.quad_h)
+            except RuntimeError as exc:   # (a Newton solve at a quadrature node)
+                raise _Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the steady cycle's integrals: "
+                            f"{exc}") from None
             wp, work, diss = wp + p, work + wj, diss + ds
         # (|p| = 2 max(p, 0) - p)
         return wp, float(np.sum(work)), float(np.sum(2 * wp - work)), diss
@@ -377,7 +389,11 @@ class ChainTorqueStepper:
             last = k + 1 == len(steady)
             sel = ts[(ts >= a) & ((ts <= b) if last else (ts < b))]
             if sel.size:
-                parts.append(sample_segment(self.solver, seg, sel))
+                try:
+                    parts.append(sample_segment(self.solver, seg, sel))
+                except RuntimeError as exc:   # (a Newton solve at an output phase)
+                    raise _Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the output samples: {exc}"
+                                ) from None
                 modes.append(np.full(sel.size, int(seg.mode)))
         f = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
         mode = np.concatenate(modes)
@@ -452,7 +468,11 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
     st = ChainTorqueStepper(chain_model, torque, **steps)
     try:
         cycles, dev = st.run_cycles(int(cycles_max), periodic_tol)
-    except ValueError as exc:
+        t0 = float(cycles - 1)
+        wp, w_in, w_abs, diss = st.integrals(t0)
+        ev_t = [e.t - t0 for e in st.events if t0 <= e.t <= t0 + 1]
+        samples, extra = st.samples(t0, default_phases(ev_t) if te is None else te)
+    except NoStart as exc:
         return new_result(chain_model, "torque", Status.NO_START,
                           failure_message(Status.NO_START, str(exc)), failure_t=0.0,
                           failure_mode="released start", nfev=st.solver.nfev)
@@ -460,14 +480,10 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
         return new_result(chain_model, "torque", stop.status,
                           failure_message(stop.status, stop.detail), events=st.events,
                           failure_t=stop.t, failure_mode=stop.mode.label, nfev=st.solver.nfev)
-    t0 = float(cycles - 1)
-    wp, w_in, w_abs, diss = st.integrals(t0)
     steady = st.steady(t0)
     p0, p1 = steady[0][0].points[0], steady[-1][0].points[-1]
     S = float(p1.x1 - p0.x1)
     dV = float(chain_model.potential(p1.x[:-1]) - chain_model.potential(p0.x[:-1]))
-    ev_t = [e.t - t0 for e in st.events if t0 <= e.t <= t0 + 1]
-    samples, extra = st.samples(t0, default_phases(ev_t) if te is None else te)
     extra["periodicity_deviation"] = dev
     res = new_result(chain_model, "torque", Status.SUCCESS, success_message(cycles, t0),
                      cycles=cycles, t0=t0, events=st.events, **samples,

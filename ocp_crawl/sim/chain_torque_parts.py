@@ -305,6 +305,10 @@ class SegmentEval:
         j = np.maximum(i - 1, 0)
         near = np.where(np.abs(self.tp[j] - t) < np.abs(self.tp[i] - t), j, i)
         X0 = self.Xp[:, near] + (t - self.tp[near]) * self.Vp[:, near]
+        # (inside a hold of the input, crossed in one step, the state is that of the hold's start;
+        # the rates at its end are those after it)
+        held = np.max(np.abs(self.Xp[:, i] - self.Xp[:, j]), axis=0) <= 1e-14
+        X0 = np.where(held, self.Xp[:, j], X0)
         return solve_columns(self.solver, t, X0, self.seg.q, upto=self.upto)
 
     def rows(self, t) -> np.ndarray:
