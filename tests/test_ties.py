@@ -151,6 +151,19 @@ def test_shared_slip_whose_split_matters_is_set_valued():
         assert min(abs(mpcc.S - up), abs(mpcc.S - down)) <= 1e-4 * abs(mpcc.S)
 
 
+def test_a_tie_held_over_whole_steps_is_set_valued_in_the_time_stepping():
+    """Mirror-symmetric pulses (psi = 0) on the symmetric robot: the feet's limits tie while both
+    joints move alike, and the event-driven stepper shares the slip between the feet (S = 0). The
+    MPCC time-stepping, whose one-step problem may give the slip to either foot for the whole
+    stretch (one foot's S is 60 mm per cycle), says that the statics leave it undecided."""
+    ref = pulse(psi=0.0, rise=0.35, hold=0.1, ramp="linear")
+    res = run(ref)
+    assert res.success and abs(res.S) <= 1e-12 * ROBOT.L
+    mpcc = run(ref, solver="mpcc", steps=200)
+    assert mpcc.status == Status.SET_VALUED and not mpcc.success, mpcc.message
+    assert "tie over the whole step" in mpcc.message
+
+
 @HEAVY
 @pytest.mark.parametrize("rise, hold", [(0.11, 0.1), (0.35, 0.0)])
 def test_pulse_gait_agrees_with_the_mpcc_time_stepping(rise, hold):

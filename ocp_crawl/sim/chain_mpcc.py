@@ -357,7 +357,7 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
                 rows.pop()
             if not res.success:
                 _diagnose(step.model, res, res.extra.get("start_mode", rows[-1][8]), tb)
-                raise _Stop(Status.NO_CONSISTENT_MODE, tb, rows[-1][8],
+                raise _Stop(res.extra.get("status", Status.NO_CONSISTENT_MODE), tb, rows[-1][8],
                             f"step at t = {tb:.6f}: {res.message}")
             if min(res.f_n1, res.f_n2) <= 0:
                 raise _Stop(Status.LIFT_OFF, tb, res.mode, f"normal force <= 0 at t = {tb:.6f}")

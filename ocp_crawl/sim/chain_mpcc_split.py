@@ -22,6 +22,7 @@ from scipy.optimize import brentq
 
 from ocp_crawl.sim.chain_mpcc import CONSISTENCY_TOL, ENUM_MODES, ChainStep, ChainStepResult
 from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
 
 #: most events located inside one step
 MAX_SPLITS = 3
@@ -130,7 +131,8 @@ def _solve_step(step: ChainStep, row: tuple, tau_of, switch_exact: bool) -> Chai
         if mid is not None and min(mid[f"c{i}"] for i in other) <= TIE_TOL:
             return replace(kept, success=False, message="the feet's friction limits tie over the "
                            "whole step: either foot's slip (or both) closes it, and the chain's "
-                           "steps move one foot at a time")
+                           "steps move one foot at a time",
+                           extra={**kept.extra, "status": Status.SET_VALUED})
     return kept
 
 

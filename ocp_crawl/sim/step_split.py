@@ -168,17 +168,30 @@ class _SearchFailed(Exception):
     pass
 
 
+class TieHeld(Exception):
+    """The feet's friction limits tie over a whole step (:func:`solve_to_end`)."""
+
+
 def solve_to_end(step: MPCCStep, state: StepState, mode: Mode,
                  tau_at: Callable[[float], np.ndarray], x0: np.ndarray | None = None,
                  kinks: Sequence[float] = ()) -> Solve | None:
     """The step solved in ``mode`` (stick-stick or a single-foot slip) to its end, when no guard of
     ``mode`` is violated there (the mode holds over the whole step); None otherwise or when the
-    mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s."""
+    mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s.
+
+    Raises TieHeld when the other foot of a slip mode is at its friction limit in the middle of the
+    step too: the feet's limits tie over the step, and which foot slips (or how the feet share the
+    slip) is left undecided by the statics; the step's end alone is a tie that the slip reaches.
+    """
     g = _Guards(step, state, mode, tau_at, x0, kinks)
     try:
         if g.violated():
             return None
         sol = g.solve(1.0)
+        other = [PAIR_NAMES[k] for k in ((2, 3) if g.pair in (0, 1) else (0, 1))]
+        if g.pair is not None and min(g.value(f"{n} margin", 0.5) for n in other) <= GUARD_TOL:
+            raise TieHeld("the feet's friction limits tie over the whole step: either foot's slip, "
+                          "or both shared, closes it (the statics leave the motion undecided)")
     except _SearchFailed:
         return None
     # the slip's sign is free in the mode solve: a slip that reversed is not this mode's

@@ -63,7 +63,7 @@ from ocp_crawl.nlp.ipopt import ipopt_status
 from ocp_crawl.sim.mpcc import MPCCOptions, MPCCStep
 from ocp_crawl.sim.step import StepResult, StepState, step_params, step_result_from_w
 from ocp_crawl.sim.step_input import StepInput
-from ocp_crawl.sim.step_split import locate_event, solve_to_end
+from ocp_crawl.sim.step_split import TieHeld, locate_event, solve_to_end
 from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
@@ -73,18 +73,15 @@ from ocp_crawl.sim.timestepping_output import build_result
 
 @dataclass(frozen=True)
 class TimeSteppingOptions(CycleOptions):
-    """Options of the time-stepping simulator (and the cycle options of
-    :class:`~ocp_crawl.sim.options.CycleOptions`; ``max_cycles`` applies when ``cycles`` is not
-    given)."""
+    """Options of the time-stepping simulator and the cycle options of
+    :class:`~ocp_crawl.sim.options.CycleOptions` (``max_cycles`` applies without ``cycles``)."""
 
     mpcc: MPCCOptions = field(default_factory=MPCCOptions)
     """options of the step solver"""
     max_dphi: float = 0.35
-    """largest change of a joint angle in one step [rad]; a larger jump means the branch was
-    lost"""
+    """largest change of a joint angle in one step [rad]; a larger jump: the branch was lost"""
     steps: int = 200
-    """steps per cycle (used by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc`` takes it as an
-    argument)"""
+    """steps per cycle (read by :func:`ocp_crawl.sim.simulate`; ``simulate_mpcc``: an argument)"""
     switch_exact: bool = True
     """split a step whose contact mode changes at the event located inside it
     (:mod:`ocp_crawl.sim.step_split`), so that every event falls on a step boundary; False: the
@@ -311,19 +308,22 @@ class TimeStepper:
     def _single_to_end(self, run: "_Run", state: StepState, mode: Mode, ta: float, tb: float,
                        tau: np.ndarray) -> StepResult | None:
         """The step in its starting ``mode`` if that mode holds to its end (else None), for a step
-        ending with both feet slipping: both feet at their limits is a tie that one foot's slip
-        reaches, and the one-step problem may share the slip out; the next step decides."""
-        calls = self.step.ncalls
-        sol = solve_to_end(self.step, state, mode,
-                           lambda th: self._tau(ta + th * (tb - ta), run),
-                           None if run.prev is None else run.prev.w, self.input.kinks_in(ta, tb))
+        ending with both feet slipping at a tie that one foot's slip reaches (the one-step problem
+        may share the slip out; the next step decides); a tie over the whole step: SET_VALUED."""
+        calls, x0 = self.step.ncalls, None if run.prev is None else run.prev.w
+        try:
+            sol = solve_to_end(self.step, state, mode,
+                               lambda th: self._tau(ta + th * (tb - ta), run), x0,
+                               self.input.kinks_in(ta, tb))
+        except TieHeld as tie:
+            raise _Stop(Status.SET_VALUED, "", f"step at t = {tb:.6f}: {tie}", tb, mode) from None
         run.split_calls += self.step.ncalls - calls
         if sol is None:
             return None
-        res = step_result_from_w(self.model, state, sol.x, tau, success=True, status=sol.status,
-                                 message="the step in its starting mode",
-                                 iterations=sol.iterations, solve_time=0.0, w=sol.x)
-        return replace(res, mode=mode)
+        return replace(step_result_from_w(self.model, state, sol.x, tau, success=True,
+                                          status=sol.status, message="the step in its starting "
+                                          "mode", iterations=sol.iterations, solve_time=0.0,
+                                          w=sol.x), mode=mode)
 
     def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
         """Record the located event at phase ``te``: the sub-step to it in the old mode (its
