@@ -74,10 +74,10 @@ INPUTS = {"table-1": lambda: _random_table(1), "table-2": lambda: _random_table(
           "hold-end": lambda: _edges("cosine", 0.35, 0.1, 45.0)}
 
 
-#: tables found by a random search where the chain's stepper once differed from the three-link
-#: stepper: (mu1, mu2, beta, knots, reference angles [rad]); a hold of both joints over [0.13, 0.6]
-#: (a quadrature node inside it solved from the rates after it), and a slip that stops at a kink
-#: ending a step (its guard located with the rates after the kink)
+#: tables of a random search that a chain stepper without these rules gets wrong: (mu1, mu2, beta,
+#: knots, reference angles [rad]); a hold of both joints over [0.13, 0.6] (a quadrature node inside
+#: it solved from the rates after it fails), and a slip that stops at a kink ending a step (its
+#: guard located with the rates after the kink does not change sign)
 FOUND = {
     "long-hold": (0.4060097645480456, 0.46174861265144945, 2.326709972967004,
                   [0.06, 0.07, 0.13, 0.6, 0.66, 0.72, 0.86],

@@ -151,12 +151,16 @@ def test_shared_slip_whose_split_matters_is_set_valued():
         assert min(abs(mpcc.S - up), abs(mpcc.S - down)) <= 1e-4 * abs(mpcc.S)
 
 
-def test_a_tie_held_over_whole_steps_is_set_valued_in_the_time_stepping():
-    """Mirror-symmetric pulses (psi = 0) on the symmetric robot: the feet's limits tie while both
-    joints move alike, and the event-driven stepper shares the slip between the feet (S = 0). The
+@pytest.mark.parametrize("ref", [pulse(psi=0.0, rise=0.35, hold=0.1, ramp="linear"),
+                                 square([[120, 120, 60, 60, 60, 60, 120, 120]] * 2)],
+                         ids=["pulses", "square"])
+def test_a_tie_held_over_whole_steps_is_set_valued_in_the_time_stepping(ref):
+    """Mirror-symmetric inputs on the symmetric robot (pulses at psi = 0, one square table for
+    both joints): the feet's limits tie while both joints move alike, and the event-driven
+    stepper shares the slip between the feet (S = 0, the limit of both one-sided frictions). The
     MPCC time-stepping, whose one-step problem may give the slip to either foot for the whole
-    stretch (one foot's S is 60 mm per cycle), says that the statics leave it undecided."""
-    ref = pulse(psi=0.0, rise=0.35, hold=0.1, ramp="linear")
+    stretch (one foot's S on the pulses is 60 mm per cycle), says that the statics leave it
+    undecided."""
     res = run(ref)
     assert res.success and abs(res.S) <= 1e-12 * ROBOT.L
     mpcc = run(ref, solver="mpcc", steps=200)

@@ -24,12 +24,19 @@ NEQ = 4
 """equations: joint balance (2), horizontal balance, kinematic closure"""
 NPAIR = 4
 PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
+
 #: the rows of w by name: the joint angles, the tangential forces, the slips and the friction
 #: margins
 PHI_ROWS, FT1, FT2 = slice(0, 2), 2, 3
 SLIP_ROWS, MARGIN_ROWS = slice(4, 8), slice(8, 12)
 S1P, S1M, S2P, S2M = 4, 5, 6, 7
 C1P, C1M, C2P, C2M = 8, 9, 10, 11
+
+
+def other_foot(pair: int) -> tuple[int, int]:
+    """The complementarity pairs (indices into :data:`PAIR_NAMES`) of the foot that pair ``pair``
+    is not of."""
+    return (2, 3) if pair in (0, 1) else (0, 1)
 
 
 def friction_margins(mu1, fn1, ft1, mu2, fn2, ft2) -> tuple:

@@ -21,7 +21,9 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ocp_crawl.sim.chain_mpcc import CONSISTENCY_TOL, ENUM_MODES, ChainStep, ChainStepResult
+from ocp_crawl.model.step_equations import other_foot
 from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.step_split import GUARD_TOL
 from ocp_crawl.status import Status
 
 #: most events located inside one step
@@ -30,8 +32,6 @@ MAX_SPLITS = 3
 RATE_EPS = 1e-6
 #: Brent tolerance of the event's step fraction [-]
 THETA_TOL = 1e-13
-#: a scaled friction margin [-] at most this in the middle of a step ties the feet's limits there
-TIE_TOL = 1e-9
 
 
 def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float,
@@ -124,11 +124,15 @@ def _solve_step(step: ChainStep, row: tuple, tau_of, switch_exact: bool) -> Chai
         return res
     if res.mode.foot in (1, 2) and mode.foot in (1, 2) and res.mode.foot != mode.foot:
         # the other foot's slip closes the step too: at a tie of the feet's limits at the step's
-        # end the slip goes on; a tie held over the whole step leaves which foot slips (or both)
-        # undecided, which the chain's steps do not model (one foot slips at a time)
+        # end the slip goes on; a tie held over the whole step (read in its middle) leaves which
+        # foot slips (or both) undecided, which the chain's steps do not model (one foot slips at
+        # a time); a margin below zero there: the mode broke inside the step
         mid = _guards(step, mode, row, tau_of, 0.5)
-        other = (2, 3) if mode.foot == 1 else (0, 1)
-        if mid is not None and min(mid[f"c{i}"] for i in other) <= TIE_TOL:
+        other = min(mid[f"c{i}"] for i in other_foot(ENUM_MODES.index(mode) - 1)) \
+            if mid is not None else -1.0
+        if other < -GUARD_TOL:
+            return res
+        if other <= GUARD_TOL:
             return replace(kept, success=False, message="the feet's friction limits tie over the "
                            "whole step: either foot's slip (or both) closes it, and the chain's "
                            "steps move one foot at a time",

@@ -39,7 +39,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ocp_crawl.model.step_equations import NPAIR, PAIR_NAMES
+from ocp_crawl.model.step_equations import NPAIR, PAIR_NAMES, other_foot
 from ocp_crawl.nlp.homotopy import Solve
 from ocp_crawl.sim.mpcc import MPCCStep
 from ocp_crawl.sim.result import Mode
@@ -179,23 +179,29 @@ def solve_to_end(step: MPCCStep, state: StepState, mode: Mode,
     ``mode`` is violated there (the mode holds over the whole step); None otherwise or when the
     mode solve fails, or the slip of a slip mode reversed.  Arguments as :func:`locate_event`'s.
 
-    Raises TieHeld when the other foot of a slip mode is at its friction limit in the middle of the
-    step too: the feet's limits tie over the step, and which foot slips (or how the feet share the
-    slip) is left undecided by the statics; the step's end alone is a tie that the slip reaches.
+    Raises TieHeld when the other foot of a slip mode is at its friction limit (to GUARD_TOL) in the
+    middle of the step too: the feet's limits tie over the step, and which foot slips (or how the
+    feet share the slip) is left undecided by the statics; the step's end alone is a tie that the
+    slip reaches.  (One phase is read: a tie over part of a step away from its middle is not seen.)
     """
     g = _Guards(step, state, mode, tau_at, x0, kinks)
     try:
         if g.violated():
             return None
         sol = g.solve(1.0)
-        other = [PAIR_NAMES[k] for k in ((2, 3) if g.pair in (0, 1) else (0, 1))]
-        if g.pair is not None and min(g.value(f"{n} margin", 0.5) for n in other) <= GUARD_TOL:
-            raise TieHeld("the feet's friction limits tie over the whole step: either foot's slip, "
-                          "or both shared, closes it (the statics leave the motion undecided)")
+        # the slip's sign is free in the mode solve: a slip that reversed is not this mode's
+        if g.pair is not None and sol.x[4 + g.pair] < 0:
+            return None
+        mid = (0.0 if g.pair is None else
+               min(g.value(f"{PAIR_NAMES[k]} margin", 0.5) for k in other_foot(g.pair)))
     except _SearchFailed:
         return None
-    # the slip's sign is free in the mode solve: a slip that reversed is not this mode's
-    return sol if g.pair is None or sol.x[4 + g.pair] >= 0 else None
+    if mid < -GUARD_TOL:   # (the mode broke inside the step: not this mode's)
+        return None
+    if g.pair is not None and mid <= GUARD_TOL:
+        raise TieHeld("the feet's friction limits tie over the whole step: either foot's slip, or "
+                      "both shared, closes it (the statics leave the motion undecided)")
+    return sol
 
 
 def locate_event(step: MPCCStep, state: StepState, mode: Mode,

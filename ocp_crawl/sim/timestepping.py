@@ -307,9 +307,8 @@ class TimeStepper:
 
     def _single_to_end(self, run: "_Run", state: StepState, mode: Mode, ta: float, tb: float,
                        tau: np.ndarray) -> StepResult | None:
-        """The step in its starting ``mode`` if that mode holds to its end (else None), for a step
-        ending with both feet slipping at a tie that one foot's slip reaches (the one-step problem
-        may share the slip out; the next step decides); a tie over the whole step: SET_VALUED."""
+        """The step in its starting ``mode`` if that mode holds to its end (else None) when it ends
+        with both feet slipping, a tie one foot's slip reaches; a tie over the step: set-valued."""
         calls, x0 = self.step.ncalls, None if run.prev is None else run.prev.w
         try:
             sol = solve_to_end(self.step, state, mode,
@@ -317,7 +316,8 @@ class TimeStepper:
                                self.input.kinks_in(ta, tb))
         except TieHeld as tie:
             raise _Stop(Status.SET_VALUED, "", f"step at t = {tb:.6f}: {tie}", tb, mode) from None
-        run.split_calls += self.step.ncalls - calls
+        finally:
+            run.split_calls += self.step.ncalls - calls
         if sol is None:
             return None
         return replace(step_result_from_w(self.model, state, sol.x, tau, success=True,
