@@ -38,6 +38,8 @@ class ChainPieces:
         knots = input_knots(torque)
         self.kinks, self.e = input_kinks(torque, knots)
         self.holds = [tuple(h) for h in input_holds(torque, knots).tolist()]
+        self.knots = knots
+        """the input's knots (:func:`input_knots`), phases in [0, 1)"""
         self._k = sorted(self.kinks.tolist())
         self._knots = sorted(knots.tolist())
 

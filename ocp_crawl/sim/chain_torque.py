@@ -36,7 +36,7 @@ from ocp_crawl.checks import real
 from ocp_crawl.model.chain_inputs import ChainReferenceTorque, as_joint_signal
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.chain_stability import chain_stability_margins
-from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque, input_knots
+from ocp_crawl.model.inputs import PeriodicSignal, ReferenceTorque
 from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate,
                                     failure_message, new_result, output_phases, sample_fields,
                                     success_message)
@@ -76,8 +76,7 @@ class ChainTorqueStepper:
         # the step resolves the input's harmonics as the three-link stepper's does (a short dip of
         # a friction margin between the knots of a spline is an event), unless it is linear
         # between its knots
-        knots = input_knots(torque)
-        if not linear_pieces(torque, knots):
+        if not linear_pieces(torque, self.solver.pieces.knots):
             max_step = min(max_step, max(step_limit(torque), max_step / 64))
         self.max_step, self.min_step = max_step, min_step
         self.event_xtol, self.trial_step, self.quad_h = event_xtol, trial_step, quad_h
@@ -275,7 +274,7 @@ class ChainTorqueStepper:
     def _cross_kink(self, seg: Segment, left: Point) -> Segment:
         """At a kink of the input (the segment's last point, solved with the rates before it): the
         point again with the rates after it, which continues the segment when every guard stays
-        positive, else an event at the kink (the first negative guard's)."""
+        positive, else an event at the kink (of the most negative guard)."""
         s = self.solver
         right = s.solve(left.t, left.x, seg.q)
         if right is None:
