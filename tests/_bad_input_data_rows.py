@@ -1,6 +1,6 @@
 """The rows of the bad-input matrix (tests/test_bad_input.py) for data files and waveforms: fit's
 measurement files and parameters, and the non-harmonic gait waveforms with their sample tables."""
-from _bad_input_rows import PAPER_TEXT, R
+from _bad_input_rows import CHAIN_TEXT, PAPER_TEXT, REPO, R
 
 # ---- fit: measurement files (the CSV convention) and parameters
 _FIT_HEAD = b"A [deg],S [mm],sigma_S [mm]\n"
@@ -34,6 +34,7 @@ DATA_ROWS = {
     "fit: start outside the bounds":
         _fit(["--param robot.k", "within bounds"], "--bounds", "robot.k=0.2:0.3"),
     "fit: --max-nfev 0": _fit(["--max-nfev 0", "in [1, 10000]"], "--max-nfev", "0"),
+    "fit: --starts -1": _fit(["--starts -1", "in [0, 10000]"], "--starts", "-1"),
     "fit: rows x evaluations, hours":
         _fit(["20000 rows x 10000 evaluations", "DATA.csv rows", "--max-nfev"],
              "--max-nfev", "10000",
@@ -43,6 +44,27 @@ DATA_ROWS = {
         _fit(["--pressure pressure.c1", "unknown pressure constant"], "--pressure",
              "pressure.c1=0.1"),
 }
+_CHAIN_FIT = ["{file}", "{tmp}/d.csv", "--param", "robot.stiffness[0]", "--out", "{tmp}/out"]
+_PRESSURE_ROWS = (b"psi [deg],p0 [bar],S_norm [-],sigma_S_norm [-]\n10,1.7,1,0.1\n45,1.7,0.9,0.1\n"
+                  b"90,1.7,0.7,0.1\n")
+DATA_ROWS.update({
+    "fit: stiffness rows on a chain":
+        R("fit", _CHAIN_FIT, ["d.csv", "stiffness rows", "chain", "robot.stiffness[j]"],
+          text=CHAIN_TEXT, files={"d.csv": b"tau [N m],phi [deg],sigma_phi [deg]\n"
+                                           b"0.01,3,0.1\n0.02,6,0.1\n0.03,9,0.1\n"}),
+    "fit: pressure rows on a chain of five links":
+        R("fit", _CHAIN_FIT, ["d.csv:2", 'waveform = "pressure"', "chain of 5 links"],
+          text=CHAIN_TEXT, files={"d.csv": _PRESSURE_ROWS}),
+    "fit: the joints' segments as a parameter":
+        R("fit", ["{tmp}/five.toml", "{tmp}/d.csv", "--param", "pressure.segments[0]", "--out",
+                  "{tmp}/out"], ["--param pressure.segments[0]", "unknown parameter"],
+          files={"d.csv": _PRESSURE_ROWS,
+                 "five.toml": (REPO / "problems" / "pressure_robot_five_links.toml").read_bytes()}),
+    "fit: an entry past a chain's array":
+        R("fit", [*_CHAIN_FIT, "--param", "robot.stiffness[4]"],
+          ["--param robot.stiffness[4]", "unknown parameter", "robot.stiffness[3]"],
+          text=CHAIN_TEXT, files={"d.csv": _PRESSURE_ROWS}),
+})
 DATA_ROWS["fit: earlier results"] = R("fit",
                                       ["{paper}", "{tmp}/d.csv", "--param", "robot.k", "--out",
                                        "{tmp}/out"],

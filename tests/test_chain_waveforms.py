@@ -220,9 +220,8 @@ def test_what_a_chains_samples_cannot_be(tmp_path):
     with pytest.raises(ProblemError, match=r'waveform = "fourier" .* "harmonic", "pulse", '
                                            r'"samples"'):
         load_problem(CHAIN, ['gait.waveform="fourier"'])
-    with pytest.raises(ProblemError, match=r'waveform = "pressure" \(from --set\) is invalid '
-                                           r"with a chain of 5 links: the pressure actuator has "
-                                           r"two segments"):
+    with pytest.raises(ProblemError, match=r'waveform = "pressure" \(from --set\) with a chain '
+                                           r"of 5 links needs \[pressure\] segments"):
         load_problem(CHAIN, ['gait.waveform="pressure"', "gait.p0_bar=1.0"])
     with pytest.raises(ProblemError, match=r"rise = 0.4 \(from --set\) and hold = 0.3 are "
                                            r"invalid"):

@@ -10,13 +10,14 @@ from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integ
                                   out_dir, prepare_out, work_arg, write_out)
 from ocp_crawl.model.pressure import PRESSURE_FORMS
 from ocp_crawl.problem import load_problem
-from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem.work import fit_work
 
 #: most least-squares evaluations (each runs every measurement's simulation)
 MAX_NFEV = 10000
 nfev_type = integer("--max-nfev", 1, " (evaluations of all rows)", high=MAX_NFEV,
                     why="each evaluation simulates every row; more is a runaway, not a fit")
+starts_type = integer("--starts", 0, " (points of the sample)", high=MAX_NFEV,
+                      why="each point simulates every row; more is a runaway, not a fit")
 
 
 def _fit_args(p: argparse.ArgumentParser) -> None:
@@ -28,7 +29,8 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--param", dest="params", action="append", default=[], metavar="NAME",
                    required=True,
                    help="a parameter to fit, named by its problem key (robot.k, robot.mu, "
-                        "robot.mu1, gait.gamma_deg, ...) or "
+                        "robot.mu1, gait.gamma_deg, ...; a chain's array entry, "
+                        "robot.stiffness[1]) or "
                         "pressure.a1/a2/b1/b2/phi_rest_deg/amplitude_bar (repeatable)")
     p.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                    help="start value of a fitted parameter (default: the problem's value; for "
@@ -50,6 +52,11 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--relative-sigma", action="store_true",
                    help="the sigmas are relative weights: scale the covariance by chi2/dof "
                         "(default: they are standard uncertainties)")
+    p.add_argument("--starts", type=starts_type, default=0, metavar="N",
+                   help="evaluate N Latin hypercube points of the bounds first and start the "
+                        "search at the best of them and the start values (default 0: at the "
+                        "start values); for a chi2 that is flat or jumps near the start, as at "
+                        "a tie of the feet's friction limits")
     p.add_argument("--max-nfev", type=nfev_type, default=100, metavar="N",
                    help="most least-squares evaluations (default 100)")
     p.add_argument("--jobs", type=jobs_type, default=1, metavar="N",
@@ -71,25 +78,25 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     # scipy and matplotlib are imported when the command runs, not when the parser is built
     # (start-up time)
-    from ocp_crawl.fit import solve
+    from ocp_crawl.fit import checks, solve
     from ocp_crawl.fit.data import read_measurements
     from ocp_crawl.fit.params import fixed_pressure, resolve_parameters
     from ocp_crawl.fit.report import FIT_FILES, fit_dict, fit_report, write_fit
 
     problem = load_problem(args.problem, args.overrides)
-    three_link_only(problem, "fit")
     params = resolve_parameters(problem, args.params, args.start, args.bounds, args.form)
     pressure = fixed_pressure(args.pressure)
     datasets = [read_measurements(path) for path in args.data]
     # the work first: the rows' checks build a problem per row
     work = check_work(args, fit_work(problem, sum(len(d.y) for d in datasets), args.max_nfev,
-                                     len(params), args.jobs))
-    solve.check_inputs(problem, datasets, params, pressure, args.form)   # before --out is made
+                                     len(params), args.jobs, args.starts))
+    checks.check_inputs(problem, datasets, params, pressure, args.form)   # before --out is made
     names = [v for k, v in FIT_FILES.items() if k != "figure" or not args.no_figure]
     out = prepare_out(args.out or f"fit_{Path(args.problem).stem}", names, args.force, staged=True)
     announce(work)
     result = solve.fit_measurements(problem, datasets, params, pressure=pressure,
                                     absolute_sigma=not args.relative_sigma, max_nfev=args.max_nfev,
+                                    starts=args.starts,
                                     jobs=args.jobs, form=args.form)
     files = write_out(out, lambda d: write_fit(result, d, figure=not args.no_figure), args.force)
     if args.json:

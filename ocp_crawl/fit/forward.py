@@ -26,6 +26,9 @@ SUCCESS = Status.SUCCESS.label
 PA_PER_BAR = 1e5
 #: the source of the rows' problems, at the start of their error messages
 SOURCE = "<fit>"
+#: |S| [m] at or below which a robot does not move: the simulators' round-off of S is about
+#: 1e-14 m (a symmetric gait's S), a crawler's S is millimetres
+S_STILL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -48,26 +51,43 @@ def _base(problem_json: str) -> Problem:
     return problem_from_dict(json.loads(problem_json), source=SOURCE)
 
 
-def _problem(task: RowTask, extra: Mapping[str, float]) -> Problem:
+def _problem(task: RowTask, extra: Mapping[str, object]) -> Problem:
     values = {**dict(task.values), **extra}
     base = _base(task.problem_json)
     return base.with_values(values) if values else base
 
 
 def _setup(task: RowTask) -> tuple[Problem, ReferenceTorque | None]:
-    """The problem of a gait or pressure row and, for a pressure row, its torque input; ValueError
-    (a ProblemError naming the key) for an operating point or parameter value the model rejects.
+    """The problem of a gait or pressure row and, for a pressure row of the three-link robot, its
+    torque input (a chain's pressure row: its problem's ``pressure`` waveform); ValueError (a
+    ProblemError naming the key) for an operating point or parameter value the model rejects.
     Nothing is simulated."""
     inputs = dict(task.inputs)
     if task.kind == "gait":
         return _problem(task, {GAIT_KEYS[n]: math.degrees(v) for n, v in inputs.items()}), None
-    problem = _problem(task, {})
     c = dict(task.pressure)
-    bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
     amplitude = inputs["A_p"] / PA_PER_BAR if "A_p" in inputs else c.get("amplitude_bar", math.nan)
+    if _base(task.problem_json).is_chain:
+        return _problem(task, _chain_pressure(inputs, c, amplitude)), None
+    problem = _problem(task, {})
+    bmap = BendingMap(c["a1"], c["a2"], c["b1"], c["b2"])
     signal = pressure_torque(problem.robot, inputs["p0"] / PA_PER_BAR, math.degrees(inputs["psi"]),
                              c["phi_rest_deg"], bmap, None if math.isnan(amplitude) else amplitude)
     return problem, signal
+
+
+def _chain_pressure(inputs: Mapping[str, float], constants: Mapping[str, float],
+                    amplitude: float) -> dict[str, object]:
+    """The problem keys of a chain's pressure row: the ``pressure`` waveform at the row's p0 and
+    psi, every pressure constant (the raised sine where the amplitude is NaN)."""
+    keys: dict[str, object] = {"gait.waveform": "pressure",
+                               "gait.p0_bar": inputs["p0"] / PA_PER_BAR,
+                               "gait.psi_deg": math.degrees(inputs["psi"]),
+                               "pressure.form": "raised" if math.isnan(amplitude) else "paper"}
+    keys.update({f"pressure.{n}": constants[n] for n in ("a1", "a2", "b1", "b2", "phi_rest_deg")})
+    if not math.isnan(amplitude):
+        keys["pressure.amplitude_bar"] = amplitude
+    return keys
 
 
 def _simulated(task: RowTask) -> tuple[float, str]:
@@ -151,8 +171,13 @@ def evaluate_rows(tasks: Sequence[RowTask],
 
 def model_values(data: Measurements, results: Sequence[tuple[float, str]]) -> np.ndarray:
     """The model's values in the file's observable: S [m], phi [rad], or S normalised at the
-    reference row."""
+    reference row (NaN where the model's S there is at most :data:`S_STILL`: it does not
+    move)."""
     y = np.array([r[0] for r in results], dtype=float)
     ref = data.reference_row
-    return y / y[ref] if ref is not None else y
+    if ref is None:
+        return y
+    if not abs(y[ref]) > S_STILL:   # (NaN too) a failed evaluation, not a huge residual
+        return np.full_like(y, math.nan)
+    return y / y[ref]
 

@@ -2,15 +2,17 @@
 
 A parameter is named like a problem key, ``SECTION.KEY`` (``robot.k``, ``robot.mu``, ``robot.mu1``,
 ``gait.gamma_deg``, ...: any number of the ``[robot]`` and ``[gait]`` sections, and of any section
-the schema gains that is not a numerics setting), or ``pressure.NAME``, a key of the ``[pressure]``
-section, for the pressure-driven robot of :mod:`ocp_crawl.model.pressure`: ``pressure.a1``,
-``pressure.a2`` [rad/bar^2], ``pressure.b1``, ``pressure.b2`` [rad/bar] (Table I's map),
-``pressure.phi_rest_deg`` [deg] (the rest angle) and ``pressure.amplitude_bar`` [bar] (the
-waveform's amplitude A_p).  The pressure constants are those of the problem's ``[pressure]`` section
-as given, else those of the input ``form`` (:func:`ocp_crawl.model.pressure.form_constants`): the
-default form is the pressure study's, the paper's form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0
-the nominal (mean) pressure, A_p = 0.4 bar and the flat rest shape, 180 deg; ``form="raised"`` is
-the earlier raised sine from 0 to the peak p0 (no amplitude, NaN) with the stored fitted rest angle.
+the schema gains that is not a numerics setting), ``SECTION.KEY[i]`` for entry i of an array of
+numbers the problem gives (a chain's ``robot.stiffness[0]``, ``robot.lengths[2]``), or
+``pressure.NAME``, a key of the ``[pressure]`` section, for the pressure-driven robot of
+:mod:`ocp_crawl.model.pressure`: ``pressure.a1``, ``pressure.a2`` [rad/bar^2], ``pressure.b1``,
+``pressure.b2`` [rad/bar] (Table I's map), ``pressure.phi_rest_deg`` [deg] (the rest angle) and
+``pressure.amplitude_bar`` [bar] (the waveform's amplitude A_p).  The pressure constants are those
+of the problem's ``[pressure]`` section as given, else those of the input ``form``
+(:func:`ocp_crawl.model.pressure.form_constants`): the default form is the pressure study's, the
+paper's form (ref), p0 + A_p sin(2 pi t +- psi/2) with p0 the nominal (mean) pressure, A_p = 0.4
+bar and the flat rest shape, 180 deg; ``form="raised"`` is the earlier raised sine from 0 to the
+peak p0 (no amplitude, NaN) with the stored fitted rest angle.
 Values are in the units of the problem files (degrees for angles).
 """
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ocp_crawl.model.pressure import (DEFAULT_FORM, PRESSURE_FORMS, BendingMap, 
 from ocp_crawl.problem import Problem, ProblemError
 from ocp_crawl.problem.messages import suggest
 from ocp_crawl.problem.keys import Rule
+from ocp_crawl.problem.overrides import entry, entry_value
 from ocp_crawl.problem.schema import SCHEMA
 
 #: pressure parameters -> unit
@@ -82,9 +85,23 @@ class Parameter:
 
 
 def fittable_names() -> list[str]:
-    """Every name :func:`resolve_parameters` accepts."""
+    """Every name :func:`resolve_parameters` accepts of any problem (a problem's array entries,
+    :func:`array_entries`, besides)."""
     keys = [f"{s}.{k.name}" for s in FIT_SECTIONS for k in SCHEMA[s].keys if k.type is float]
     return list(dict.fromkeys(keys + [f"pressure.{n}" for n in PRESSURE_UNITS]))
+
+
+def array_entries(problem: Problem) -> list[str]:
+    """The entries ``SECTION.KEY[i]`` of the arrays of numbers ``problem`` gives in a fitted
+    section (a chain's ``robot.stiffness[1]``, ``robot.lengths[0]``, ...)."""
+    out = []
+    # (the pressure section's array, the joints' segments, is a choice of the model, not a number)
+    for section in (s for s in FIT_SECTIONS if s != "pressure"):
+        for key in SCHEMA[section].keys:
+            value = problem.sections.get(section, {}).get(key.name)
+            if key.type is list and isinstance(value, (list, tuple)):
+                out += [f"{section}.{key.name}[{i}]" for i in range(len(value))]
+    return out
 
 
 def pressure_defaults(gravity: str, form: str = DEFAULT_FORM) -> dict[str, float]:
@@ -117,11 +134,19 @@ def problem_pressure(problem: Problem, form: str | None = None) -> dict[str, flo
             **{k: float(v) for k, v in given.items() if k in PRESSURE_UNITS}}
 
 
+def _schema_key(name: str) -> tuple[str, str]:
+    """(section, key) of a parameter name, an array entry's index dropped (``robot.stiffness[1]``:
+    ``("robot", "stiffness")``)."""
+    section, key = name.split(".", 1)
+    return section, entry(key)[0]
+
+
 def value_rule(name: str) -> tuple[Rule | None, str]:
     """The rule every value of the parameter ``name`` must pass (None: any finite number) and what
-    it is: the schema's rule of a problem key (the one ``Problem.with_values`` applies); for a
-    pressure constant :data:`PRESSURE_RULES`, else its key's in ``[pressure]``."""
-    section, key = name.split(".", 1)
+    it is: the schema's rule of a problem key (the one ``Problem.with_values`` applies; an array's
+    entry: the array's rule of each entry); for a pressure constant :data:`PRESSURE_RULES`, else
+    its key's in ``[pressure]``."""
+    section, key = _schema_key(name)
     if section == "pressure":
         rule = PRESSURE_RULES.get(key) or SCHEMA["pressure"].key_map[key].rule
         return rule, f"pressure constant, {PRESSURE_UNITS[key]}"
@@ -157,7 +182,7 @@ def _exclusive(names: Sequence[str]) -> None:
     """ProblemError for two fitted keys the schema gives as alternatives (``robot.mu`` and
     ``robot.mu1``/``mu2``)."""
     for name in names:
-        section, key = name.split(".", 1)
+        section, key = _schema_key(name)
         if section == "pressure":
             continue
         others = SCHEMA[section].key_map[key].exclusive_with
@@ -173,8 +198,8 @@ def _current(problem: Problem, name: str, form: str | None) -> tuple[float | Non
     if section == "pressure":
         return problem_pressure(problem, form)[key], PRESSURE_UNITS[key]
     values = problem.sections.get(section, {})
-    unit = SCHEMA[section].key_map[key].unit
-    value = values.get(key)
+    unit = SCHEMA[section].key_map[entry(key)[0]].unit
+    value = entry_value(values, key)
     if value is None and key in ("mu1", "mu2"):
         value = values.get("mu")
     if value is None and key.endswith(("1_deg", "2_deg")):
@@ -221,7 +246,8 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
         The problem whose values are the start values (pressure constants:
         :func:`problem_pressure`).
     names : sequence of str
-        ``SECTION.KEY`` names (see the module docstring), each once.
+        ``SECTION.KEY`` names (see the module docstring), or ``SECTION.KEY[i]``, entry i (from 0)
+        of an array the problem gives (a chain's ``robot.stiffness[1]``), each once.
     start : sequence of str
         ``NAME=VALUE`` start values replacing the problem's (problem-file units).
     bounds : sequence of str
@@ -247,7 +273,7 @@ def resolve_parameters(problem: Problem, names: Sequence[str], start: Sequence[s
         unknown form.
     """
     pressure_form(problem, form)
-    valid = fittable_names()
+    valid = fittable_names() + array_entries(problem)
     if not names:
         raise ProblemError(f"no parameter to fit: give --param NAME (one of {', '.join(valid)})")
     starts = {k: _number(v, f"--start {k}") for k, v in _pairs(start, "--start").items()}

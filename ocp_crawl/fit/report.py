@@ -63,6 +63,8 @@ def fit_report(fit: FitResult) -> str:
     lines = [f"fit        {fit.status.label}: {fit.message}",
              f"chi2       {fit.chi2:.4g} for {fit.dof} degrees of freedom (chi2/dof "
              f"{_num(fit.chi2_red)}); covariance from {how}"]
+    if fit.scan is not None:
+        lines.append(f"start      {fit.scan.text()}")
     for p, x, s in zip(fit.parameters, fit.x, fit.sigma):
         bound = "  AT A BOUND" if at_bound(p, x) else ""
         lines.append(f"  {p.name:<22} {x:12.6g} +- {_num(s):<10} {p.unit:<10} (start {p.x0:g}, "
@@ -97,6 +99,11 @@ def fit_dict(fit: FitResult) -> dict[str, Any]:
         "unidentified": [{"singular_ratio": d.singular_ratio, "relative_sd": d.relative_sd,
                           "components": d.components} for d in fit.unidentified],
         "pressure": fit.pressure, "form": fit.form,
+        "scan": None if fit.scan is None else {
+            "points": fit.scan.points, "failed": fit.scan.failed,
+            "chi2_start": fit.scan.chi2_start, "chi2_best": fit.scan.chi2_best,
+            "search_start": None if fit.scan.best is None else list(fit.scan.best),
+            "from_start": fit.scan.from_start},
         "files": [{"path": f.data.path, "kind": f.data.kind, "observable": f.data.observable,
                    "lines": f.data.table.lines.tolist(), "data_si": f.data.y.tolist(),
                    "sigma_si": f.data.sigma.tolist(),

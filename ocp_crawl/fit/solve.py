@@ -22,6 +22,7 @@ shows the trade-offs.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
@@ -29,13 +30,13 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from ocp_crawl.fit.data import GAIT_KEYS, Measurements
-from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_error, row_tasks
+from ocp_crawl.fit.checks import check_inputs
+from ocp_crawl.fit.data import Measurements
+from ocp_crawl.fit.forward import SUCCESS, evaluate_rows, model_values, row_tasks
 from ocp_crawl.fit.params import Parameter, pressure_form, problem_pressure, split_values
+from ocp_crawl.fit.starts import Scan, scan_starts
 from ocp_crawl.model.pressure import DEFAULT_FORM
-from ocp_crawl.io.tables import TableError
-from ocp_crawl.problem import Problem, ProblemError
-from ocp_crawl.problem.chain_robot import three_link_only
+from ocp_crawl.problem import Problem
 from ocp_crawl.status import Status
 from ocp_crawl.workers import worker_pool
 
@@ -113,6 +114,8 @@ class FitResult:
     """the pressure constants of the fit (fitted or not); empty when no row uses them"""
     form: str = DEFAULT_FORM
     """the pressure input form of the fit (:data:`~ocp_crawl.model.pressure.PRESSURE_FORMS`)"""
+    scan: Scan | None = None
+    """the sample evaluated for the search's start (``starts``), None without one"""
 
     @property
     def success(self) -> bool:
@@ -182,10 +185,6 @@ class _Objective:
         return [FileFit(d, m, s) for d, (m, s) in zip(self.datasets, self.last[1])]
 
 
-def _n_residuals(datasets: Sequence[Measurements]) -> int:
-    return sum(len(d) - (d.reference_row is not None) for d in datasets)
-
-
 def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: float = 1.0,
                 rcond: float = RCOND) -> tuple[np.ndarray, np.ndarray, np.ndarray, int,
                                                tuple[Direction, ...]]:
@@ -233,76 +232,11 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
     return cov, corr, s, rank, dirs
 
 
-def check_counts(datasets: Sequence[Measurements], params: Sequence[Parameter],
-                 form: str = DEFAULT_FORM) -> None:
-    """TableError naming a file: fewer measurements than parameters + 1, a fitted gait key that a
-    file's column sets, or an amplitude column ``A_p`` (the paper's form) with ``form`` "raised"."""
-    for d in datasets:
-        if form == "raised" and "A_p" in d.inputs:
-            raise TableError(d.path,
-                             "column 'A_p' is an amplitude of the paper's form (ref): it cannot be "
-                             "used with the raised sine (--form raised)")
-        for name in d.inputs:
-            key = GAIT_KEYS.get(name)
-            if d.kind == "gait" and key in {p.name for p in params}:
-                raise TableError(d.path,
-                                 f"column {name!r} sets {key} in every row: it cannot also be "
-                                 f"fitted (--param {key})")
-    n = _n_residuals(datasets)
-    if n < len(params) + 1:
-        names = ", ".join(d.path for d in datasets)
-        raise TableError(datasets[0].path,
-                         f"too few points: {n} measurement(s) in {names} (normalising rows not "
-                         f"counted) for {len(params)} parameter(s); at least {len(params) + 1} "
-                         "needed")
-
-
-def check_pressure(params: Sequence[Parameter], pressure: Mapping[str, float]) -> None:
-    """ProblemError for a pressure constant both fitted and held fixed (``--pressure`` and
-    ``--param``)."""
-    for p in params:
-        key = p.name.removeprefix("pressure.")
-        if p.name.startswith("pressure.") and key in pressure:
-            raise ProblemError(f"--pressure {key}={pressure[key]:g} and --param {p.name}: a "
-                               "constant is either fitted or held fixed, not both (to start the "
-                               f"fit there: --start {p.name}={pressure[key]:g})")
-
-
-def check_rows(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
-               pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
-    """TableError naming the file and row whose operating point the model rejects at the start
-    values: a gait row's keys that ``Problem.with_values`` rejects (a range, a foot off the ground,
-    a key of another waveform), a pressure row whose waveform is invalid (an amplitude above its
-    p0).  Nothing is simulated."""
-    keys, fitted = split_values(params, [p.x0 for p in params])
-    constants = {**problem_pressure(problem, form), **(pressure or {}), **fitted}
-    for d in datasets:
-        for j, task in enumerate(row_tasks(problem, d, keys, constants)):
-            why = row_error(task)
-            if why is not None:
-                amp = (f" (amplitude pressure.amplitude_bar = {constants['amplitude_bar']:g} bar)"
-                       if d.kind == "pressure" and "A_p" not in d.inputs
-                       and math.isfinite(constants.get("amplitude_bar", math.nan)) else "")
-                raise d.table.error("at the start values the model rejects the operating point "
-                                    f"{d.point(j)}{amp}: {why}", j)
-
-
-def check_inputs(problem: Problem, datasets: Sequence[Measurements], params: Sequence[Parameter],
-                 pressure: Mapping[str, float] | None = None, form: str | None = None) -> None:
-    """Every check of a fit's input before any simulation: :func:`check_counts`,
-    :func:`check_pressure`, :func:`check_rows`.  TableError (naming a file and row) or ProblemError
-    (naming an option)."""
-    three_link_only(problem, "fit")
-    check_counts(datasets, params, pressure_form(problem, form))
-    check_pressure(params, pressure or {})
-    check_rows(problem, datasets, params, pressure, form)
-
-
 def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int,
                   where: str = "the fitted parameters" ) -> tuple[Status, str]:
-    """The first failing row's status; NO_CONVERGENCE for a row whose weighted residual is not
-    finite although its model is (it overflows), or for a search that did not converge; else
-    SUCCESS."""
+    """The first failing row's status; NO_CONVERGENCE for a file normalised at a row where the
+    model does not move, for a row whose weighted residual is not finite although its model is
+    (it overflows), or for a search that did not converge; else SUCCESS."""
     failed = [(f.data.table.line_of(j), f.data.path,
                s) for f in files for j, s in enumerate(f.statuses)
               if s != SUCCESS]
@@ -315,6 +249,15 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int,
             status = Status.ERROR
         return status, (f"{len(failed)} point(s) fail at {where}; the first, {path}:{line}: "
                         f"{' '.join(text.split())}")
+    still = [(f, ref) for f in files if (ref := f.data.reference_row) is not None
+             and not np.isfinite(f.model[ref])]
+    if still:
+        f, ref = still[0]
+        return Status.NO_CONVERGENCE, (
+            f"the model does not move at the normalising row {f.data.path}:"
+            f"{f.data.table.line_of(ref)} (S = 0 there) at {where}, so its "
+            "S_norm is not defined; start elsewhere (--start, --starts)"
+            + ("; the search did not run, no uncertainties" if where == START else ""))
     overflow = [(f, j) for f in files for j in np.flatnonzero(~np.isfinite(f.residuals))]
     if overflow:
         f, j = overflow[0]
@@ -333,7 +276,8 @@ def _final_status(files: Sequence[FileFit], ls_status: int, nfev: int,
 def fit_measurements(problem: Problem, datasets: Sequence[Measurements],
                      params: Sequence[Parameter], *, pressure: Mapping[str, float] | None = None,
                      absolute_sigma: bool = True, max_nfev: int = 100, jobs: int = 1,
-                     rcond: float = RCOND, form: str | None = None) -> FitResult:
+                     rcond: float = RCOND, form: str | None = None,
+                     starts: int = 0) -> FitResult:
     """Fit ``params`` to the measurements by weighted least squares on simulations.
 
     Parameters
@@ -364,6 +308,10 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements],
         180 deg; "raised", the raised sine from 0 to the peak p0 with the stored fitted rest angle;
         None (default): the problem's ``[pressure] form``, "paper" when it gives none
         (:func:`ocp_crawl.fit.params.pressure_form`).
+    starts : int
+        Latin hypercube points of the bounds evaluated first; the search starts at the best of
+        them and the start values where no row fails (:mod:`ocp_crawl.fit.starts`; 0: at the
+        start values).
 
     Returns
     -------
@@ -377,49 +325,75 @@ def fit_measurements(problem: Problem, datasets: Sequence[Measurements],
     Raises
     ------
     TableError, ProblemError
-        Bad input, before any simulation (:func:`check_inputs`): fewer measurements than
-        parameters + 1, a fitted gait key that a file sets, a pressure constant both fitted and
-        fixed, a row the model rejects at the start values (naming the file and row).
+        Bad input, before any simulation (:func:`~ocp_crawl.fit.checks.check_inputs`): fewer
+        measurements than parameters + 1, a fitted gait key that a file sets, a pressure constant
+        both fitted and fixed, stiffness rows on a chain, a row the model rejects at the start
+        values (naming the file and row).
+    ValueError
+        ``starts`` not an integer >= 0.
     """
+    if isinstance(starts, bool) or not isinstance(starts, int) or starts < 0:
+        raise ValueError(f"fit_measurements: starts must be an integer >= 0, got {starts!r}")
     check_inputs(problem, datasets, params, pressure, form)
     executor = worker_pool(jobs) if jobs > 1 else None
     try:
         obj = _Objective(problem, datasets, params, executor, dict(pressure or {}), form)
-        z0 = np.array([p.x0 for p in params]) / obj.scale
-        r0 = obj(z0)
-        if obj.failed_evaluations:
-            status, msg = _final_status(obj.files(), 1, 1, START)
-            return _result(obj, z0, None, r0, obj.files(), status, msg, 1, absolute_sigma, rcond)
-        lo = np.array([p.low for p in params]) / obj.scale
-        hi = np.array([p.high for p in params]) / obj.scale
-        try:
-            res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev,
-                                method="trf", x_scale=1.0)
-        except ValueError as exc:  # scipy refuses a Jacobian that is not finite
-            return _refused_search(obj, exc, absolute_sigma, rcond)
-        if obj.last is None or not np.array_equal(obj.last[0], res.x):
-            obj(res.x)
-        files = obj.files()
-        status, msg = _final_status(files, res.status, res.nfev)
-        return _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev,
-                       absolute_sigma, rcond)
+        return _search(obj, max_nfev, starts, absolute_sigma, rcond)
     finally:
         if executor is not None:
             executor.shutdown(cancel_futures=True)
 
 
-def _refused_search(obj: _Objective, exc: ValueError, absolute_sigma: bool,
-                    rcond: float) -> FitResult:
+def _search(obj: _Objective, max_nfev: int, starts: int, absolute_sigma: bool,
+            rcond: float) -> FitResult:
+    """The start's evaluation, the sample of ``starts`` points (the search starts at the best
+    point without a failed row), the least squares and the result; a failure at the start (and at
+    every point of the sample) is the fit's status."""
+    z0 = np.array([p.x0 for p in obj.params]) / obj.scale
+    r0 = obj(z0)
+    start_failed, start_files = obj.failed_evaluations > 0, obj.files()
+    lo = np.array([p.low for p in obj.params]) / obj.scale
+    hi = np.array([p.high for p in obj.params]) / obj.scale
+    scan = None
+    if starts:
+        z, scan = scan_starts(obj, z0, None if start_failed else r0, lo, hi, starts, obj.scale,
+                              lambda: bool(np.any(obj.residual == FAILED_RESIDUAL)))
+    if start_failed and (scan is None or scan.best is None):
+        status, msg = _final_status(start_files, 1, 1, START)
+        if scan is not None:
+            msg += f"; a row fails at every one of the {starts} sampled points too"
+        fit = _result(obj, z0, None, r0, start_files, status, msg, 1, absolute_sigma, rcond)
+        return dataclasses.replace(fit, scan=scan)
+    if scan is not None:
+        z0 = z
+    before = obj.calls
+    try:
+        res = least_squares(obj, z0, bounds=(lo, hi), diff_step=DIFF_STEP, max_nfev=max_nfev,
+                            method="trf", x_scale=1.0)
+    except ValueError as exc:  # scipy refuses a Jacobian that is not finite
+        fit = _refused_search(obj, exc, absolute_sigma, rcond, obj.calls - before)
+        return dataclasses.replace(fit, scan=scan)
+    if obj.last is None or not np.array_equal(obj.last[0], res.x):
+        obj(res.x)
+    files = obj.files()
+    status, msg = _final_status(files, res.status, res.nfev)
+    fit = _result(obj, res.x, res.jac / obj.scale, res.fun, files, status, msg, res.nfev,
+                  absolute_sigma, rcond)
+    return dataclasses.replace(fit, scan=scan)
+
+
+def _refused_search(obj: _Objective, exc: ValueError, absolute_sigma: bool, rcond: float,
+                    calls: int) -> FitResult:
     """The result of a search that scipy refused (``exc``: a weighted Jacobian that is not finite,
-    the residuals overflowing when differenced), at the last evaluation: the status of its first
-    failed point, else NO_CONVERGENCE; no uncertainties."""
-    status, msg = _final_status(obj.files(), 1, obj.calls, "the last evaluation")
+    the residuals overflowing when differenced) after ``calls`` evaluations, at the last one: the
+    status of its first failed point, else NO_CONVERGENCE; no uncertainties."""
+    status, msg = _final_status(obj.files(), 1, calls, "the last evaluation")
     if status == Status.SUCCESS:
-        status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {obj.calls} "
+        status, msg = Status.NO_CONVERGENCE, (f"least squares failed after {calls} "
                                               f"evaluations: {exc} (the weighted residuals "
                                               "overflow); no uncertainties")
     assert obj.last is not None  # obj.files() above needs an evaluation
-    return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, obj.calls,
+    return _result(obj, obj.last[0], None, obj.residual, obj.files(), status, msg, calls,
                    absolute_sigma, rcond)
 
 

@@ -44,6 +44,9 @@ The published psi curve has two features this family does not reproduce (they do
 error, see :class:`PressureFit`): S/S_max = 0.34 already at psi = 1 deg, and 0.08 at psi = 180 deg.
 Here both ends give S close to 0, as for the symmetric harmonic gait; only the small difference
 between the two segments' maps (a1 != a2, b1 != b2) breaks the symmetry.
+
+On a chain of more than three links the joints of a segment share its bend
+(:class:`SegmentJoints`): the soft segment bent as an arc of hinges rather than at one joint.
 """
 from __future__ import annotations
 
@@ -239,6 +242,51 @@ class PressureReference(PeriodicSignal):
                 "psi_deg": math.degrees(self.waveform.psi),
                 "phi_rest_deg": math.degrees(self.phi_rest), "a": [m.a1, m.a2], "b": [m.b1, m.b2],
                 "waveform": self.waveform.describe()}
+
+
+@dataclass(frozen=True)
+class SegmentJoints(PeriodicSignal):
+    """Reference angles of a chain's joints that share the bends of the actuator's two segments
+    [rad]: a joint of segment s, one of its n_s joints, takes the share 1/n_s of the segment's
+    bend, phi_ref,j = pi + (phi_ref,s - pi) / n_s (a segment bent as an arc of n_s hinges; one
+    joint per segment is the three-link robot's :class:`PressureReference`).
+
+    Parameters
+    ----------
+    reference : PressureReference
+        The two segments' reference angles [rad].
+    segments : tuple of int
+        The segment of each joint, 0 or 1, joint 1 first.
+    """
+
+    reference: PressureReference
+    segments: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        if sorted(set(self.segments)) != [0, 1]:
+            raise ValueError(f"SegmentJoints: segments must name both segments, 0 and 1, got "
+                             f"{self.segments!r}")
+
+    @cached_property
+    def _rows(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the segment of each joint, the share of its segment's bend)."""
+        rows = np.array(self.segments, dtype=int)
+        return rows, 1.0 / np.bincount(rows)[rows]
+
+    def __call__(self, t):
+        rows, share = self._rows
+        v = self.reference(t)[rows]
+        return math.pi + (share * (v - math.pi) if v.ndim == 1
+                          else share[:, None] * (v - math.pi))
+
+    def derivative(self, t):
+        rows, share = self._rows
+        d = self.reference.derivative(t)[rows]
+        return share * d if d.ndim == 1 else share[:, None] * d
+
+    def describe(self) -> dict:
+        return {"type": "SegmentJoints", "segments": [s + 1 for s in self.segments],
+                "reference": self.reference.describe()}
 
 
 def pressure_torque(robot: Robot, p0_bar: float, psi_deg: float, phi_rest_deg: float,

@@ -11,9 +11,11 @@ from a CSV file with a column per joint (``waveform = "samples"``, ``file``: ``p
 ``phi1_ref .. phi<m>_ref [deg]`` or ``tau1 .. tau<m> [N m]``, interpolated as ``interpolation``
 says).  The torque drive is ``tau_j = k_j (phi_ref_j - pi - rest_j)``; torque samples stand for
 the reference angles ``pi + rest_j + tau_j / k_j``, the same torques (each interpolation
-commutes with that increasing affine map of the samples).  A chain of three links also takes the
-pressure actuator of the paper's robot (``waveform = "pressure"`` and its ``[pressure]`` section:
-a segment per joint), so that its joints, legs and rest bends may differ.
+commutes with that increasing affine map of the samples).  A chain also takes the pressure
+actuator of the paper's robot (``waveform = "pressure"`` and its ``[pressure]`` section): a
+segment per joint on three links, so that its joints, legs and rest bends may differ; on more
+links ``[pressure] segments`` gives the segment of each joint, and the joints of a segment share
+its bend equally (the segment bent as an arc of hinges).
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ import numpy as np
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_inputs import JointFourier
 from ocp_crawl.model.inputs import PeriodicSignal
+from ocp_crawl.model.pressure import SegmentJoints
 from ocp_crawl.model.pulse import JointPulse
 from ocp_crawl.problem.keys import ProblemError
 from ocp_crawl.problem.messages import format_value
@@ -118,11 +121,7 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain,
         return _chain_samples(ctx, gait, chain)
     m = chain.n_joints
     if gait["waveform"] == "pressure":
-        if m != 2:
-            raise ProblemError(f"{ctx.at('gait', 'waveform', 'pressure')} is invalid with a chain "
-                               f"of {chain.n} links: the pressure actuator has two segments, one "
-                               "per joint of a chain of three links")
-        return pressure_reference(gait, pressure, gravity, ctx.at), dict(gait)
+        return _chain_pressure(ctx, gait, chain, pressure, gravity), dict(gait)
     gamma = np.radians(_per_joint(ctx, gait, "gamma_joints_deg", "gamma_deg", m))
     amplitude = np.radians(_per_joint(ctx, gait, "A_joints_deg", "A_deg", m))
     lead = np.radians([gait["psi_deg"] * ((m - 1) / 2 - j) for j in range(m)])
@@ -131,6 +130,34 @@ def chain_gait(ctx: Context, gait: Mapping[str, Any], chain: Chain,
         pulse = JointPulse(gamma, amplitude, lead, gait["rise"], gait["hold"], gait["ramp"])
         return pulse, dict(gait)
     return JointFourier.harmonic(gamma, amplitude, lead), dict(gait)
+
+
+def _chain_pressure(ctx: Context, gait: Mapping[str, Any], chain: Chain,
+                    pressure: Mapping[str, Any], gravity: str) -> PeriodicSignal:
+    """The reference angles [rad] of a chain driven by the pressure actuator: its two segments'
+    (:func:`pressure_reference`) on a chain of three links, else shared by the joints of each
+    segment as ``[pressure] segments`` assigns them (:class:`SegmentJoints`)."""
+    reference = pressure_reference(gait, pressure, gravity, ctx.at)
+    segments, m = pressure.get("segments"), chain.n_joints
+    if segments is None:
+        if m == 2:
+            return reference
+        example = [1] * (m // 2) + [2] * (m - m // 2)
+        raise ProblemError(f"{ctx.at('gait', 'waveform', 'pressure')} with a chain of {chain.n} "
+                           f"links needs [pressure] segments, the segment (1 or 2) of each of its "
+                           f"{m} joints (e.g. segments = {format_value(example)})")
+    segments = _whole(segments)
+    if len(segments) != m or segments != sorted(segments) or set(segments) != {1, 2}:
+        raise ProblemError(f"{ctx.at('pressure', 'segments', segments)} is invalid with a "
+                           f"chain of {chain.n} links: give the segment (1 or 2) of each of its "
+                           f"{m} joints, segment 1's first, each segment at least one")
+    return SegmentJoints(reference, tuple(int(s) - 1 for s in segments))
+
+
+def _whole(segments) -> list:
+    """The segment numbers as the file writes them (the schema reads arrays as floats; each entry
+    has passed its rule, 1 or 2)."""
+    return [int(s) for s in segments]
 
 
 def _chain_samples(ctx: Context, gait: Mapping[str, Any],
@@ -154,13 +181,22 @@ def _chain_samples(ctx: Context, gait: Mapping[str, Any],
 
 def three_link_only(problem, what: str) -> None:
     """ProblemError when ``problem`` (a :class:`~ocp_crawl.problem.Problem`) has a chain: ``what``
-    (``"optimize"``, ``"fit"``) models the three-link robot only."""
+    (``"optimize"``) models the three-link robot only."""
     if problem.is_chain:
         lengths = list(problem.robot.lengths)
         raise ProblemError(f"{problem.source}: [robot] lengths = {format_value(lengths)} is a "
                            f"chain of {len(lengths)} links: {what} models the three-link robot "
                            "only ([robot] M, L, beta, k); a chain is simulated, cross-checked, "
-                           "swept and animated (ocp-crawl simulate, crosscheck, sweep, animate)")
+                           "swept, animated and fitted (ocp-crawl simulate, crosscheck, sweep, "
+                           "animate, fit)")
+
+
+def segments_of_a_chain(ctx: Context, pressure: Mapping[str, Any]) -> None:
+    """ProblemError for ``[pressure] segments`` given to the three-link robot."""
+    if "segments" in pressure:
+        raise ProblemError(f"{ctx.at('pressure', 'segments', _whole(pressure['segments']))} is a "
+                           "key of a chain ([robot] lengths): the three-link robot has one joint "
+                           "per segment")
 
 
 def joint_keys_of_a_chain(ctx: Context, gait: Mapping[str, Any]) -> None:

@@ -376,6 +376,7 @@ def _validate(data: Mapping[str, Any], ctx: Context) -> Problem:
     if chain_robot.is_chain(r):
         return _validate_chain(data, ctx, values)
     chain_robot.joint_keys_of_a_chain(ctx, g)
+    chain_robot.segments_of_a_chain(ctx, values["pressure"])
     mu1, mu2 = chain_robot.feet_friction(r)
     # the schema has checked every value the constructors check, so their errors would be internal
     # bugs

@@ -226,6 +226,10 @@ _PRESSURE = Section("pressure",
         "the stored fitted rest angle of the gravity convention for \"raised\")", rule=ANGLE),
     Key("amplitude_bar", float, "bar", "pressure amplitude A_p of the paper's form (at most p0)",
         default=PAPER_FORM_AMPLITUDE_BAR, rule=GE0, variants=("paper",)),
+    Key("segments", list, "-", "chain: the segment (1 or 2) of each joint, segment 1's first; a "
+        "segment of several joints bends as an arc, each taking an equal share of its bend "
+        "(absent: one joint per segment, a chain of three links)",
+        rule=Rule(lambda v: v in (1, 2), "1 or 2")),
 ))
 
 _MODEL = Section("model", "model conventions", keys=(

@@ -182,16 +182,19 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     return solve + search
 
 
-def fit_work(problem, rows: int, max_nfev: int, n_params: int, jobs: int = 1) -> Work:
+def fit_work(problem, rows: int, max_nfev: int, n_params: int, jobs: int = 1,
+             starts: int = 0) -> Work:
     """The work of fitting ``n_params`` parameters of ``problem`` to ``rows`` measured rows in at
-    most ``max_nfev`` evaluations (each simulates every row, a Jacobian ``n_params`` times more) on
-    ``jobs`` workers, each row a typical run (:func:`simulation_work`)."""
+    most ``max_nfev`` evaluations (each simulates every row, a Jacobian ``n_params`` times more),
+    after ``starts`` evaluations of a sample, on ``jobs`` workers, each row a typical run
+    (:func:`simulation_work`)."""
     row = simulation_work(problem)
-    sims = rows * max_nfev * (1 + n_params) / max(jobs, 1)
+    sims = rows * (max_nfev * (1 + n_params) + starts) / max(jobs, 1)
+    sample = f" + {rows} rows x {starts} starts" if starts else ""
     return Work(sims * row.typical,
-                f"{rows} rows x {max_nfev} evaluations x {1 + n_params} (Jacobian) / {jobs} "
-                "workers "
-                f"x a typical ({row.detail})", ("DATA.csv rows", "--max-nfev", *row.keys))
+                f"{rows} rows x {max_nfev} evaluations x {1 + n_params} (Jacobian){sample} / "
+                f"{jobs} workers x a typical ({row.detail})",
+                ("DATA.csv rows", "--max-nfev", *(("--starts",) if starts else ()), *row.keys))
 
 
 def _ms(unit: str) -> str:

@@ -1,0 +1,1 @@
+../ocp_crawl/data/examples/11_lumped_models.py
