@@ -30,7 +30,7 @@ OUTPUTS = {
     "09_past_a_fold.py": ["past_a_fold.png"],
     "10_user_objective.py": ["user_objective.png"],
     "11_lumped_models.py": ["lumped_models.png", "symmetric/fit.json", "asymmetric/fit.json",
-                            "asymmetric/fitted_problem.toml", "five_links/fit.json"],
+                            "five_links/fit.json"],
 }
 SCRIPTS = sorted(p.name for p in EXAMPLES.glob("*.py") if not p.name.startswith("_"))
 TIMEOUT_S = 300

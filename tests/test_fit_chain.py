@@ -116,6 +116,7 @@ def test_the_fitted_asymmetric_robot_moves_at_psi_0_as_measured():
 
 
 @pytest.mark.slow
+@pytest.mark.heavy   # a convergence run of about 45 s: by hand (OCP_CRAWL_HEAVY=1)
 def test_a_fit_recovers_an_asymmetric_pair_of_stiffnesses(tmp_path):
     """S [mm] of a chain with k = (0.22, 0.12) N m/rad at five phase differences, with noise of
     0.1 mm: the fit from equal joints recovers both within three of its standard uncertainties."""
