@@ -318,7 +318,7 @@ def _ocp_run(problem, settings, harm, kernel: str) -> dict:
     t = time.perf_counter()
     ocp = GaitOCP(problem.robot, problem.gravity, settings, kernel=kernel)
     build = time.perf_counter() - t
-    start = ocp.initial_guess(*baseline_gait(harm, problem.robot))
+    start = ocp.initial_guess(*baseline_gait(harm, problem.robot, settings))
     x, hist, failed, _ = GaitSolver(ocp).solve(start)
     return {"build_s": build, "ipopt_s": sum(h.time for h in hist),
             "eval_s": sum(h.eval_time for h in hist),

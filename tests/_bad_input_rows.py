@@ -171,9 +171,10 @@ COMMAND_ROWS = {
         R("crosscheck", ["{file}"], ["x.toml", "released equilibrium", "robot.stiffness"],
           text=chain_edit("stiffness = [0.17, 0.30, 0.25, 0.20]",
                           "stiffness = [0.0001, 0.0001, 0.0001, 0.0001]")),
-    "optimize: a chain":
-        R("optimize", ["{file}"], ["x.toml", "chain of 5 links", "optimize", "three-link"],
-          text=chain_edit("[model]\n", '[ocp]\nobjective = "max_speed"\n\n[model]\n')),
+    "optimize: a chain of prescribed angles":
+        R("optimize", ["{file}"], ["x.toml", "joint torques", 'drive = "torque"', '"angles"'],
+          text=chain_edit("[model]\n", '[ocp]\nobjective = "max_speed"\n\n[model]\n').replace(
+              'drive = "torque"', 'drive = "angles"')),
     "simulate: unknown section":
         R("simulate", ["{file}"], ["x.toml", "[modle]", "did you mean model?"],
           text=edit("[model]", "[modle]")),

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from ocp_crawl import Robot
+from ocp_crawl import Model, Robot
 from ocp_crawl.model.inputs import Harmonic, ReferenceTorque
 from ocp_crawl.model.sampled import PeriodicLinear
 from ocp_crawl.ocp import solve
@@ -98,7 +98,8 @@ class StandInOCP:
 
     def __init__(self, robot, gravity, settings):
         self.settings, self.robot = settings, robot
-        self.scen = [solve.Model(robot, gravity=gravity)]
+        self.scen = [Model(robot, gravity=gravity)]
+        self.m = 2
         self.kept_run, self.calls = [], 0
         self.ocp = self
 
@@ -132,8 +133,8 @@ class StandInOCP:
 def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     st = OCPSettings(starts=4, nodes=N, direction=-1)
     signal, T = baseline(st)
-    harm_S = simulate(solve.Model(ROBOT, gravity="physical"), signal).S
-    harm = SimpleNamespace(torque_signal=lambda k: signal, T=T, value=-harm_S / T, shape="harmonic",
+    harm_S = simulate(Model(ROBOT, gravity="physical"), signal).S
+    harm = SimpleNamespace(signal_for=lambda robot, settings: signal, T=T, value=-harm_S / T, shape="harmonic",
                            feasible=True, to_dict=lambda: {"value": -harm_S / T})
     monkeypatch.setattr(solve, "best_baselines",  # (the other families: none simulates)
                         lambda robot, gravity, settings, shapes, **kw: Baselines(

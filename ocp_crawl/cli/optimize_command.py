@@ -17,7 +17,6 @@ from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.limits import NODES_BOUNDS
-from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
                                problem_from_dict)
 from ocp_crawl.problem.overrides import read_toml
@@ -116,8 +115,13 @@ def _gain(s: dict) -> str:
 
 
 def _member(h: dict) -> str:
-    """A waveform family's best member: its angles [deg], a pulse's rise and duty, its period."""
+    """A waveform family's best member: its angles [deg], a pulse's rise and duty, its period (a
+    chain's travelling wave: its amplitude and phase lead, the envelope's centres)."""
     deg = lambda key: units.significant(h.get(key))  # noqa: E731
+    if "A_deg" in h:
+        centres = "/".join(units.significant(g) for g in h.get("gamma_joints_deg") or [])
+        return (f"travelling wave A {deg('A_deg')} psi {deg('psi_deg')} deg (centres {centres} "
+                f"deg), T {units.seconds(h.get('T'))}")
     pulse = ""
     # at rise 0.5 no level is held: a triangle wave, whatever the duty
     if h.get("shape") == "pulse":
@@ -298,7 +302,6 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     problem = problem_from_dict(data, source=str(args.problem),
                                 overrides=[*args.overrides,
                                            *([f"ocp.nodes={args.nodes[0]}"] if args.nodes else [])])
-    three_link_only(problem, "optimize")
     if problem.drive != "torque":
         raise BadInput(f"{problem.source}: optimize designs joint torques: it needs [gait] drive = "
                        f"\"torque\", got {format_value(problem.drive)}")
@@ -323,8 +326,6 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
     start = None if args.start is None else load_problem(args.start)
-    if start is not None:
-        three_link_only(start, "optimize --start")
     if start is not None and (start.drive != "torque" or start.period is None):
         raise BadInput(f"--start {args.start}: needs a torque-drive gait with a [gait] period [s] "
                        f"(as the optimal_gait.toml that optimize --out writes); got drive "

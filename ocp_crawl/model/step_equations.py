@@ -14,6 +14,8 @@ pairs 0 <= s_j _|_ c_j >= 0 (MODEL_NOTES, incremental Coulomb law).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import casadi as cs
 
 from ocp_crawl.model.statics import KIN, params, symbolic
@@ -25,8 +27,60 @@ NEQ = 4
 NPAIR = 4
 PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
 
-#: the rows of w by name: the joint angles, the tangential forces, the slips and the friction
-#: margins
+
+
+@dataclass(frozen=True)
+class StepRows:
+    """The rows of the step variables w of a robot of m joints by name: the m joint angles, the
+    tangential forces, the four slips and the four friction margins,
+    w = (phi_1 .. phi_m, f_t1, f_t2, s1+, s1-, s2+, s2-, c1+, c1-, c2+, c2-) (the n-link chain's
+    layout, :func:`ocp_crawl.sim.chain_mpcc.chain_step_nlp`; m = 2 is this module's)."""
+
+    m: int
+
+    @property
+    def nw(self) -> int:
+        """number of step variables, m + 10"""
+        return self.m + 10
+
+    @property
+    def phi(self) -> slice:
+        return slice(0, self.m)
+
+    @property
+    def ft1(self) -> int:
+        return self.m
+
+    @property
+    def ft2(self) -> int:
+        return self.m + 1
+
+    @property
+    def s1p(self) -> int:
+        """the first slip row (s1+; then s1-, s2+, s2-)"""
+        return self.m + 2
+
+    @property
+    def c1p(self) -> int:
+        """the first margin row (c1+; then c1-, c2+, c2-)"""
+        return self.m + 6
+
+    @property
+    def slips(self) -> slice:
+        return slice(self.s1p, self.s1p + NPAIR)
+
+    @property
+    def margins(self) -> slice:
+        return slice(self.c1p, self.c1p + NPAIR)
+
+
+def rows_of(w) -> StepRows:
+    """The row layout of step variables ``w`` (m + 10 rows, any array or CasADi matrix)."""
+    return StepRows(int(w.shape[0]) - 10)
+
+
+#: the rows of w by name for the three-link robot (m = 2): the joint angles, the tangential forces,
+#: the slips and the friction margins
 PHI_ROWS, FT1, FT2 = slice(0, 2), 2, 3
 SLIP_ROWS, MARGIN_ROWS = slice(4, 8), slice(8, 12)
 S1P, S1M, S2P, S2M = 4, 5, 6, 7

@@ -16,13 +16,16 @@ _EXPORTS = {
     "ConvergenceRow": "ocp_crawl.ocp.convergence", "converge_in_nodes": "ocp_crawl.ocp.convergence",
     "observed_orders": "ocp_crawl.ocp.convergence",
     "Constraint": "ocp_crawl.ocp.quantities", "UserObjective": "ocp_crawl.ocp.quantities",
-    "QUANTITIES": "ocp_crawl.ocp.quantities",
+    "QUANTITIES": "ocp_crawl.ocp.quantities", "Plant": "ocp_crawl.ocp.plant",
+    "best_chain_baselines": "ocp_crawl.ocp.chain_search",
+    "ChainWaveChoice": "ocp_crawl.ocp.chain_search",
 }
 
 __all__ = [
-    "Baselines", "Constraint", "ConvergenceRow", "GaitOCP", "GaitSolver", "OBJECTIVES", "OCPResult",
-    "OCPSettings", "QUANTITIES", "SHAPES", "UserObjective", "VOCABULARY",
-    "WaveChoice", "WaveParams", "best_baselines", "best_harmonic", "converge_in_nodes",
-    "judge_replay", "objective_value", "observed_orders", "optimize_gait", "replay_signal",
+    "Baselines", "ChainWaveChoice", "Constraint", "ConvergenceRow", "GaitOCP", "GaitSolver",
+    "OBJECTIVES", "OCPResult", "OCPSettings", "Plant", "QUANTITIES", "SHAPES", "UserObjective",
+    "VOCABULARY", "WaveChoice", "WaveParams", "best_baselines", "best_chain_baselines",
+    "best_harmonic", "converge_in_nodes", "judge_replay", "objective_value", "observed_orders",
+    "optimize_gait", "replay_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -221,6 +221,11 @@ class WaveChoice:
         guess)."""
         return self.params.torque(k)
 
+    def signal_for(self, robot, settings: OCPSettings) -> ReferenceTorque:
+        """:meth:`torque_signal` for the stiffness of ``robot`` (the interface it shares with a
+        chain's :class:`~ocp_crawl.ocp.chain_search.ChainWaveChoice`; ``settings`` unused)."""
+        return self.torque_signal(robot.k)
+
     def to_dict(self) -> dict:
         """JSON-able (strict: a non-finite number, e.g. the infinite value of a gait short of
         speed_min, is None)."""

@@ -27,10 +27,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ocp_crawl.io.files import jsonable
-from ocp_crawl.model.statics import GravityConvention, Model, Robot
+from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.nlp.homotopy import observe, observers
 from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.limits import NODES_BOUNDS
+from ocp_crawl.ocp.plant import AnyRobot, Plant
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.solve import OCPResult, optimize_gait, solve_from
 from ocp_crawl.ocp.solver import GaitSolver
@@ -174,14 +175,14 @@ def check_nodes(nodes) -> list[int]:
     return out
 
 
-def converge_in_nodes(robot: Robot, gravity: GravityConvention, settings: OCPSettings, nodes,
+def converge_in_nodes(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, nodes,
                       log=None, jobs: int | None = None) -> ConvergenceTable:
     """Solve the OCP at each N of ``nodes``, warm-starting each from the previous optimum, replay
     each.
 
     Parameters
     ----------
-    robot : Robot
+    robot : Robot or Chain
         The robot (SI units).
     gravity : str
         The gravity convention ("physical" or "paper").
@@ -223,7 +224,7 @@ def converge_in_nodes(robot: Robot, gravity: GravityConvention, settings: OCPSet
     return ConvergenceTable(settings.objective, rows, settings.objective_unit)
 
 
-def _warm_row(robot: Robot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
+def _warm_row(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
               ready: GaitSolver | None, later: list[int]) -> tuple[OCPResult, GaitSolver | None]:
     """The warm solve at settings.nodes (on the transcription ``ready`` if it is of this N: built
     while the previous row solved) and the next N's transcription: when a finer N follows, the solve
@@ -247,7 +248,7 @@ def _warm_row(robot: Robot, gravity: GravityConvention, settings: OCPSettings, p
                    forward)
 
 
-def warm_transcription(robot: Robot, gravity: GravityConvention,
+def warm_transcription(robot: AnyRobot, gravity: GravityConvention,
                        settings: OCPSettings) -> GaitSolver:
     """The transcription of a solve warm-started from the previous N's optimum (:func:`_near`) and
     its solver, the first IPOPT solver built (:meth:`~ocp_crawl.ocp.solver.GaitSolver.prepare`: at
@@ -280,7 +281,7 @@ def _near(settings: OCPSettings) -> tuple[OCPSettings, str]:
             "with the warm schedule")
 
 
-def _warm_solve(robot: Robot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
+def _warm_solve(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, prev: OCPResult,
                 solver: GaitSolver | None = None) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as
     before), with the settings of :func:`_near` (on ``solver`` when given: their transcription's
@@ -292,7 +293,7 @@ def _warm_solve(robot: Robot, gravity: GravityConvention, settings: OCPSettings,
     that was worse than the previous optimum is still the row when the homotopy gives no success or
     a worse one.  The row's ``solve_time_s`` [s] is that of every attempt made (tightened, homotopy,
     cold retry), whichever gave the row."""
-    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
+    models = [Plant(r, gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     n_prev = prev.tau.shape[1]
     near, how = _near(settings)

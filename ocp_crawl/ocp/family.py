@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 
@@ -179,7 +180,9 @@ class Evaluation:
     slip-weighted friction margin of at least ``friction_tol``; ``message`` the first failure's
     message."""
 
-    params: WaveParams
+    params: Any
+    """the member: a :class:`WaveParams` (a chain's
+    :class:`~ocp_crawl.ocp.chain_search.ChainWave`)"""
     T: float
     S: tuple
     W_plus: tuple
@@ -210,6 +213,17 @@ def allowed_period(settings: OCPSettings, T: float, S) -> float:
     return T
 
 
+def screen(settings: OCPSettings, runs, robots) -> tuple[tuple, str | None]:
+    """The slip-weighted friction margins [-] of a member's successful simulations ``runs`` (one
+    per friction scenario, of ``robots``) and, where one is below ``friction_tol``, why the member
+    is not admissible (which foot slips depends on friction known to +-friction_tol/2); else
+    None."""
+    margins = tuple(result_margins(r, robot)[0] for r, robot in zip(runs, robots))
+    eps = settings.friction_tol
+    low = next((x for x in margins if not x >= eps), None)
+    return margins, None if low is None else admissible_text(low, eps)
+
+
 class WaveFamily:
     """The members of one shape in the envelope and bandwidth of ``settings`` for ``robot`` (SI
     units) under the gravity convention ``gravity``, simulated with the event-driven stepper in
@@ -222,7 +236,7 @@ class WaveFamily:
         self.robot = robot
         self.settings = settings
         self.shape = shape
-        self.models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
+        self.models = [Model(cast(Robot, r), gravity=gravity) for r in settings.scenarios(robot)]
         self.evaluations = 0
         self._cache: dict[tuple, Evaluation] = {}
 
@@ -276,11 +290,9 @@ class WaveFamily:
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)
             sims.append(r)
-        margins = tuple(result_margins(r, m.robot)[0] for r, m in zip(sims, self.models))
-        eps = self.settings.friction_tol
-        low = next((x for x in margins if not x >= eps), None)
-        if low is not None:  # not admissible: which foot slips depends on friction known to +-eps/2
-            return Evaluation(params, T, nan, nan, nan, False, admissible_text(low, eps), margins)
+        margins, why = screen(self.settings, sims, [m.robot for m in self.models])
+        if why is not None:
+            return Evaluation(params, T, nan, nan, nan, False, why, margins)
         S = tuple(r.S for r in sims)
         T = allowed_period(self.settings, T, S)
         profile = (math.nan, math.nan)

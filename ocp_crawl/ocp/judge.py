@@ -46,14 +46,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocp_crawl.io import units
-from ocp_crawl.model.sampled import PeriodicLinear
-from ocp_crawl.model.statics import Model, Robot
+from ocp_crawl.model.sampled import JointLinear, PeriodicLinear
+from ocp_crawl.ocp.plant import (AnyRobot, as_plant, joint_accel_bounds, joint_rate_bounds,
+                                 joint_torque_bounds)
 from ocp_crawl.ocp.baseline import cycle_of, value_from
 from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes, reference_sizes
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
-from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.status import Status
 
 #: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal`
@@ -71,14 +71,17 @@ def replay_signal(phase: np.ndarray, tau: np.ndarray) -> PeriodicLinear:
     ----------
     phase : array_like, shape (N,)
         Node phases [cycles] in [0, 1) (k/N).
-    tau : array_like, shape (2, N)
-        Joint torques [N m] at the nodes.
+    tau : array_like, shape (m, N)
+        Joint torques [N m] at the nodes (m = 2 for the three-link robot).
 
     Returns
     -------
     PeriodicLinear
-        tau(t) [N m] of the phase t [cycles]; its extremes and slopes are those of the nodes.
+        tau(t) [N m] of the phase t [cycles]; its extremes and slopes are those of the nodes (a
+        :class:`~ocp_crawl.model.sampled.JointLinear` for m != 2).
     """
+    if np.shape(tau)[0] != 2:
+        return JointLinear(phase, tau)
     return PeriodicLinear(phase, tau)
 
 
@@ -145,7 +148,7 @@ def gain_over(objective: str, value: float, baseline: float) -> float:
     return (value - baseline) / abs(baseline)
 
 
-def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray,
+def bound_ratios(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray,
                  T: float) -> tuple[float, float, float]:
     """How far a node profile goes to its limits.
 
@@ -154,10 +157,10 @@ def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray,
     settings : OCPSettings
         The envelope (gamma, A_max), the bandwidth (max_rate_deg_s) and the optional
         max_accel_deg_s2.
-    robot : Robot
-        The robot (its stiffness k [N m/rad] turns angles into torques).
-    tau : array_like, shape (2, N)
-        Node torques [N m] at phases k/N (periodic).
+    robot : Robot or Chain
+        The robot (its stiffness per joint [N m/rad] turns angles into torques).
+    tau : array_like, shape (m, N)
+        Node torques of the m joints [N m] at phases k/N (periodic).
     T : float
         Period [s].
 
@@ -167,20 +170,25 @@ def bound_ratios(settings: OCPSettings, robot: Robot, tau: np.ndarray,
         The largest excursion beyond the envelope relative to its half-width k A_max (<= 0 inside);
         the largest slope |d tau_i/dt| of the linear interpolant over the bound k R (<= 1 within the
         bandwidth); the largest second difference over its bound k a (T/N)^2 (<= 1 within it; NaN
-        without max_accel_deg_s2).
+        without max_accel_deg_s2); each the largest over the joints.
     """
     tau = np.asarray(tau, float)
     N = tau.shape[1]
-    lo, hi = settings.torque_bounds(robot)
-    excess = float(np.max(np.maximum(lo - tau, tau - hi))) / (0.5 * (hi - lo))
+    lo, hi = joint_torque_bounds(settings, robot)
+    # each joint's largest value over its own bound, then the largest over the joints
+    outside = np.max(np.maximum(lo[:, None] - tau, tau - hi[:, None]), axis=1)
+    excess = float(np.max(outside / (0.5 * (hi - lo))))
     steps = np.diff(np.c_[tau, tau[:, :1]], axis=1)  # tau_k+1 - tau_k, periodic
-    rate = float(np.max(np.abs(steps))) * N / T / settings.rate_bound(robot) if T > 0 else math.inf
-    accel = settings.accel_bound(robot)
+    bound = joint_rate_bounds(settings, robot)
+    rate = (float(np.max(np.max(np.abs(steps), axis=1) * N / T / bound)) if T > 0
+            else math.inf)
+    accel = joint_accel_bounds(settings, robot)
     if accel is None:
         return excess, rate, math.nan
     second = np.diff(np.c_[steps[:, -1:], steps], axis=1)  # tau_k+1 - 2 tau_k + tau_k-1
     return (excess, rate,
-            float(np.max(np.abs(second))) / (accel * (T / N) ** 2) if T > 0 else math.inf)
+            float(np.max(np.max(np.abs(second), axis=1) / (accel * (T / N) ** 2))) if T > 0
+            else math.inf)
 
 
 @dataclass
@@ -226,19 +234,19 @@ class Verdict:
         return self.status == Status.SUCCESS
 
 
-def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T: float,
+def judge_replay(models: list, settings: OCPSettings, tau: np.ndarray, T: float,
                  value_ocp: float, S_ocp: list | None = None) -> Verdict:
     """Replay node torques in the event-driven simulator and judge the OCP's claim (see the module
     docstring).
 
     Parameters
     ----------
-    models : list of Model
+    models : list of Model, ChainModel or Plant
         One model per friction scenario (the OCP's scenarios, in its order).
     settings : OCPSettings
         Objective, envelope, bandwidth, speed_min and replay_tol.
-    tau : array_like, shape (2, N)
-        Node torques [N m] at phases k/N.
+    tau : array_like, shape (m, N)
+        Node torques of the m joints [N m] at phases k/N.
     T : float
         The OCP's period [s].
     value_ocp : float
@@ -254,13 +262,14 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     """
     tau = np.asarray(tau, float)
     N = tau.shape[1]
+    plants = [as_plant(m) for m in models]
     v = Verdict(Status.SUCCESS, "the replay confirms the optimum")
-    v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, models[0].robot, tau, T)
+    v.envelope_excess, v.rate_ratio, v.accel_ratio = bound_ratios(settings, plants[0].robot, tau, T)
     # the transcription's own interpolant from phase 0 (the event-driven stepper passes the input's
     # kinks, also one at the cycle boundary: ocp_crawl/sim/event_kinks.py), as torques.csv replays
     # it
     sig = replay_signal(np.arange(N) / N, tau)
-    v.replay = [simulate_torque(m, sig) for m in models]
+    v.replay = [p.simulate(sig) for p in plants]
     bad = next((r for r in v.replay if not r.success), None)
     if bad is not None:
         v.status = Status.REPLAY_FAILED
@@ -272,9 +281,9 @@ def judge_replay(models: list[Model], settings: OCPSettings, tau: np.ndarray, T:
     v.speed = [settings.direction * s / T for s in v.S]
     v.cycle = cycle_of(settings, v.S, v.W_plus, v.CoT_plus, T, profile_of_nodes(tau))
     v.value = value_from(settings, v.S, v.CoT_plus, T, cycle=v.cycle)
-    v.margin = [result_margins(r, m.robot)[0] for r, m in zip(v.replay, models)]
-    v.peaks = [replay_peaks(m, sig, T, r, N) for r, m in zip(v.replay, models)]
-    r = models[0].robot
+    v.margin = [result_margins(r, p.robot)[0] for r, p in zip(v.replay, plants)]
+    v.peaks = [replay_peaks(p, sig, T, r, N) for r, p in zip(v.replay, plants)]
+    r = plants[0].robot
     problems = _problems(v, settings, value_ocp,
                          reference_sizes(r.M, r.g, r.L, settings.period_ref()))
     if problems:

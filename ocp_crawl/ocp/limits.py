@@ -104,8 +104,9 @@ MAX_STAGES = 40
 #: is solved ("solver": the path, and so which local optimum is found), what the optimum is compared
 #: with ("baselines") and when it is accepted ("judge")
 LAYERS = {
-    "problem": ("objective", "terms", "user_objective", "direction", "gamma_deg", "A_max_deg",
-                "max_rate_deg_s", "max_accel_deg_s2", "max_joint_rate_deg_s", "speed_min",
+    "problem": ("objective", "terms", "user_objective", "direction", "gamma_deg",
+                "gamma_joints_deg", "A_max_deg", "max_rate_deg_s", "max_accel_deg_s2",
+                "max_joint_rate_deg_s", "speed_min",
                 "constraints", "mu_ratio_eps", "mu_ratios", "mu_levels", "robust", "friction_tol"),
     "transcription": ("nodes", "parametrization", "fourier_order", "regularization"),
     "solver": ("starts", "sigma0", "sigma_min", "sigma_factor", "stage_tol", "stage_tol_ratio",

@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp_crawl.model.statics import Model
-from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.ocp.plant import as_plant
 
 #: degree of each smooth piece's interpolating polynomial (PIECE_DEGREE + 1 samples per piece)
 PIECE_DEGREE = 8
@@ -45,7 +44,7 @@ class Peaks:
     """Peak actual rates of a replayed steady cycle (NaN where not measured)."""
 
     joint_rate_deg_s: tuple = (math.nan, math.nan)
-    """largest |d phi_i/dt| of joints 1 and 2 [deg/s]"""
+    """largest |d phi_i/dt| of each joint [deg/s]"""
     slip_speed_m_s: tuple = (math.nan, math.nan)
     """largest sliding speed |d x_i/dt| of feet 1 and 2 [m/s] (0 for a foot that never slips)"""
 
@@ -100,23 +99,25 @@ def peak_rate(t: np.ndarray, y: np.ndarray, slices: list[slice]) -> float:
     return max(piece_peak(t[s], y[s]) for s in slices)
 
 
-def replay_peaks(model: Model, signal, T: float, res, nodes: int | None = None) -> Peaks:
+def replay_peaks(model, signal, T: float, res, nodes: int | None = None) -> Peaks:
     """Peak joint rates [deg/s] and foot sliding speeds [m/s] of the successful replay ``res`` of
     ``signal`` (the torque input, phases in cycles) at the period T [s]: the replay sampled again on
-    its pieces (module docstring).  ``nodes``: the input's kinks at k/N (the linear interpolant of N
-    nodes), None for a smooth input.  NaNs if the dense replay fails or T is not positive."""
+    its pieces (module docstring).  ``model``: a three-link Model, a ChainModel or a
+    :class:`~ocp_crawl.ocp.plant.Plant` (a rate per joint).  ``nodes``: the input's kinks at k/N
+    (the linear interpolant of N nodes), None for a smooth input.  NaNs if the dense replay fails or
+    T is not positive."""
     if not res.success or not T > 0:
         return Peaks()
     te, slices = piece_phases(breakpoints(res, nodes))
-    dense = simulate_torque(model, signal, t_eval=te)
+    dense = as_plant(model).simulate(signal, t_eval=te)
     if not dense.success or dense.t.size != te.size:
         return Peaks()
-    rates = [math.degrees(peak_rate(te, dense.phi[i], slices)) / T for i in range(2)]
+    rates = [math.degrees(peak_rate(te, row, slices)) / T for row in dense.phi]
     speeds = [peak_rate(te, x, slices) / T for x in (dense.x1, dense.x2)]
     return Peaks(tuple(rates), tuple(speeds))
 
 
-def signal_peaks(model: Model, signal, T: float, nodes: int | None = None) -> Peaks:
+def signal_peaks(model, signal, T: float, nodes: int | None = None) -> Peaks:
     """:func:`replay_peaks` of ``signal`` at the period T [s], replayed here first (e.g. the
     harmonic baseline)."""
-    return replay_peaks(model, signal, T, simulate_torque(model, signal), nodes)
+    return replay_peaks(model, signal, T, as_plant(model).simulate(signal), nodes)

@@ -90,7 +90,7 @@ def seeds(scored: list[tuple[float, np.ndarray]], count: int, min_dist: float) -
     return chosen
 
 
-def _simplex(z: np.ndarray, steps, box) -> np.ndarray:
+def first_simplex(z: np.ndarray, steps, box) -> np.ndarray:
     """Nelder-Mead's first simplex: z and one point per coordinate, ``steps`` away inside
     ``box``."""
     pts = [z]
@@ -132,13 +132,14 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
         first = (0.25, 0.5 / settings.harmonic_A, 1.0 / settings.harmonic_psi, 0.2, 0.2)[:len(idx)]
         sym = minimize(lambda y: rank(_full(y)), z[idx], method="Nelder-Mead", bounds=sym_box,
                        options={**NM_TOL, "maxfev": maxfev // 3,
-                                "initial_simplex": _simplex(z[idx], first, sym_box)})
+                                "initial_simplex": first_simplex(z[idx], first, sym_box)})
         if sym.fun <= f:
             z, f = _full(sym.x), sym.fun
     while fam.evaluations - n0 < maxfev:
         left = min(ROUND_FEV, maxfev - (fam.evaluations - n0))
         out = minimize(rank, z, method="Nelder-Mead", bounds=box, options={
-            **NM_TOL, "maxfev": left, "initial_simplex": _simplex(z, FULL_STEPS[:len(box)], box)})
+            **NM_TOL, "maxfev": left,
+            "initial_simplex": first_simplex(z, FULL_STEPS[:len(box)], box)})
         gained = f - out.fun
         if out.fun <= f:
             z, f = out.x, out.fun

@@ -20,6 +20,7 @@ from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   NODES_BOUNDS, PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS,
                                   STARTS_BOUNDS, WARM_BARRIERS, check_physical)
 from ocp_crawl.ocp.objectives import resolve_objective
+from ocp_crawl.ocp.plant import AnyRobot, with_friction
 from ocp_crawl.ocp.quantities import Constraint, UserObjective, minimises
 
 
@@ -51,6 +52,9 @@ class OCPSettings:
     ``[gait] gamma_deg``)"""
     A_max_deg: float = 30.0
     """half-width of the reference-angle envelope [deg]"""
+    gamma_joints_deg: tuple | None = None
+    """an n-link chain's envelope centre per joint [deg] (a problem file gives it as ``[gait]
+    gamma_joints_deg``); None (default): gamma_deg for every joint"""
     parametrization: str = "free"
     """'free' torque at every node (default, sparse), or 'fourier' series of order fourier_order
     (band-limited, but its dense coefficient columns make IPOPT iterations much slower)"""
@@ -267,6 +271,18 @@ class OCPSettings:
             raise TypeError("OCPSettings.loose_last must be True or False, got "
                             f"{self.loose_last!r}")
 
+    def _check_joint_centres(self) -> None:
+        """A chain's envelope centres: one per joint, each inside (A_max, 360 - A_max) deg."""
+        if self.gamma_joints_deg is None:
+            return
+        a = self.A_max_deg
+        g = tuple(real(f"OCPSettings.gamma_joints_deg[{i}]", v, low=a, high=360.0 - a)
+                  for i, v in enumerate(self.gamma_joints_deg))
+        if len(g) < 2:
+            raise ValueError("OCPSettings.gamma_joints_deg needs one angle per joint (at least 2), "
+                             f"got {len(g)}")
+        self._set("gamma_joints_deg", g)
+
     def _check_numbers(self) -> None:
         for name, (low, high) in (("nodes", NODES_BOUNDS), ("fourier_order", FOURIER_ORDER_BOUNDS),
                                   ("harmonic_psi", HARMONIC_PSI_BOUNDS),
@@ -295,6 +311,7 @@ class OCPSettings:
             raise ValueError(f"OCPSettings.A_max_deg must be in (0, 90), got {self.A_max_deg}")
         if not (0 < self.gamma_deg - self.A_max_deg and self.gamma_deg + self.A_max_deg < 180):
             raise ValueError("OCPSettings: the envelope gamma +- A_max must lie in (0, 180) deg")
+        self._check_joint_centres()
         s0 = (self.sigma0,) if is_real(self.sigma0) else tuple(self.sigma0)
         if not s0 or any(not is_real(v) or not 0 < v < 1 for v in s0):
             raise ValueError(f"OCPSettings.sigma0 must be numbers in (0, 1), got {self.sigma0!r}")
@@ -353,16 +370,16 @@ class OCPSettings:
         return tuple(float(f"{v:.12g}") for v in sigma_schedule(self.sigma0[0], self.sigma_factor,
                                                                 self.sigma_min))
 
-    def scenarios(self, robot: Robot) -> list[Robot]:
-        """The robots of the friction scenarios: each level of :attr:`levels`, at it each ratio of
-        :attr:`friction_ratios` (just ``robot`` without a set)."""
+    def scenarios(self, robot: AnyRobot) -> list[AnyRobot]:
+        """The robots (a Robot or a Chain) of the friction scenarios: each level of :attr:`levels`,
+        at it each ratio of :attr:`friction_ratios` (just ``robot`` without a set)."""
         if not self.friction_set:
             return [robot]
         if not self.ratio_set:  # levels of the robot's own coefficients
-            return [robot.replace(mu1=level * robot.mu1,
-                                  mu2=level * robot.mu2) for level in self.levels]
+            return [with_friction(robot, level * robot.mu1, level * robot.mu2)
+                    for level in self.levels]
         mu = math.sqrt(robot.mu1 * robot.mu2)
-        return [robot.replace(mu1=level * mu * math.sqrt(r), mu2=level * mu / math.sqrt(r))
+        return [with_friction(robot, level * mu * math.sqrt(r), level * mu / math.sqrt(r))
                 for level in self.levels for r in self.friction_ratios]
 
     @property

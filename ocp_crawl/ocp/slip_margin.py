@@ -40,6 +40,7 @@ import math
 
 import numpy as np
 
+from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.statics import Robot
 
 #: a step slips when its foot moves by more than this fraction of the robot's length L
@@ -52,7 +53,7 @@ def steady_slice(res) -> np.ndarray:
     return (t >= res.t0 - 1e-12) & (t <= res.t0 + 1 + 1e-12)
 
 
-def slip_margins(robot: Robot, f_n1, f_n2, x1, x2) -> tuple[float, float]:
+def slip_margins(robot: Robot | Chain, f_n1, f_n2, x1, x2) -> tuple[float, float]:
     """Slip-weighted relative friction margin and the smallest margin over the slipping steps.
 
     Parameters
@@ -84,7 +85,7 @@ def slip_margins(robot: Robot, f_n1, f_n2, x1, x2) -> tuple[float, float]:
     return m, float(np.min(ends_all)) if ends_all.size else math.inf
 
 
-def result_margins(res, robot: Robot) -> tuple[float, float]:
+def result_margins(res, robot: Robot | Chain) -> tuple[float, float]:
     """:func:`slip_margins` of an event-driven CrawlResult over its steady cycle (its steps and
     events)."""
     sel = steady_slice(res)

@@ -22,35 +22,38 @@ import time
 import numpy as np
 
 from ocp_crawl.io import units
-from ocp_crawl.model.statics import GravityConvention, Model, Robot
+from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.nlp.homotopy import Stage
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_value, value_from
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
+from ocp_crawl.ocp.plant import AnyRobot, Plant, as_plant
 from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, replay_signal, spread_text,
                                  value_text)
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
+from ocp_crawl.ocp.chain_search import SHAPES as CHAIN_SHAPES, best_chain_baselines
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import StartGuess, given_start, start_guesses
 from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.workers import overlap
-from ocp_crawl.sim.event import simulate_torque
 from ocp_crawl.sim.result import cost_of_transport
 from ocp_crawl.status import Status
 
 
-def baseline_gait(harm: WaveChoice, robot: Robot) -> tuple:
-    """The harmonic baseline as a start: its torque signal (``signal(t)`` [N m] at phases t
-    [cycles]) and its period T [s]."""
-    return harm.torque_signal(robot.k), harm.T
+def baseline_gait(harm, robot: AnyRobot, settings: OCPSettings) -> tuple:
+    """The harmonic baseline (a :class:`~ocp_crawl.ocp.baseline.WaveChoice`, or a chain's
+    :class:`~ocp_crawl.ocp.chain_search.ChainWaveChoice`) as a start: its torque signal
+    (``signal(t)`` [N m] at phases t [cycles]) and its period T [s]."""
+    return harm.signal_for(robot, settings), harm.T
 
 
-def optimize_gait(robot: Robot, gravity: GravityConvention = "physical",
+def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
                   settings: OCPSettings | None = None, replay: bool = True, jobs: int | None = None,
                   start: tuple | None = None) -> OCPResult:
     """Solve the periodic-gait OCP from several starts, judge each optimum by replay, report the
@@ -58,8 +61,10 @@ def optimize_gait(robot: Robot, gravity: GravityConvention = "physical",
 
     Parameters
     ----------
-    robot : Robot
-        The robot (SI units).
+    robot : Robot or Chain
+        The robot (SI units): the three-link robot, or an n-link chain (n - 1 torque profiles; its
+        baselines are travelling waves, harmonic and triangle,
+        :func:`~ocp_crawl.ocp.chain_search.best_chain_baselines`).
     gravity : str
         The gravity convention ("physical" or "paper").
     settings : OCPSettings, optional
@@ -90,35 +95,35 @@ def optimize_gait(robot: Robot, gravity: GravityConvention = "physical",
     settings = settings or OCPSettings()
     t_start = time.perf_counter()
     solver = GaitSolver(GaitOCP(robot, gravity, settings))
-    harmonic = best_baselines(robot, gravity, settings, ("harmonic",), jobs=jobs,
-                              meanwhile=solver.prepare)  # the NLP built meanwhile
+    # the NLP built meanwhile
+    harmonic = _baselines(robot, gravity, settings, ("harmonic",), jobs, solver.prepare)
     harm = harmonic.choices["harmonic"]
     if harm is None:
         return OCPResult(success=False, status=Status.NO_INITIAL_GUESS,
                          objective=settings.objective, settings=settings,
                          message="no harmonic gait of the family simulates successfully: no "
                                  "initial guess")
-    models = [Model(r, gravity=gravity) for r in settings.scenarios(robot)]
-    signal, T0 = baseline_gait(harm, robot)
-    N = settings.nodes
+    models = [Plant(r, gravity) for r in settings.scenarios(robot)]
+    signal, T0 = baseline_gait(harm, robot, settings)
+    N, m = settings.nodes, solver.ocp.m
     phase = np.arange(N) / N
 
     def follows(tau: np.ndarray) -> bool:
-        return all(simulate_torque(m, replay_signal(phase, tau)).success for m in models)
+        return all(p.simulate(replay_signal(phase, tau)).success for p in models)
 
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
-        guesses = start_guesses(settings, robot, signal(phase).reshape(2, N), T0, follows)
+        guesses = start_guesses(settings, robot, signal(phase).reshape(m, N), T0, follows)
         if start is not None:
-            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(2, N),
+            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(m, N),
                                      start[1])
         return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T, harm, replay,
                                baselines=harmonic)) for g in guesses]
-    others = settings.baseline_shapes[1:]
+    others = tuple(s for s in settings.baseline_shapes[1:]
+                   if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
     if others:  # the other families, the gains' comparators only, searched while the OCP solves
         # (on all the workers: the search takes longer than the solve, whose core it then takes
         # over)
-        rest, solved = overlap(lambda send: best_baselines(robot, gravity, settings, others,
-                                                           jobs=jobs),
+        rest, solved = overlap(lambda send: _baselines(robot, gravity, settings, others, jobs),
                                solve_starts, lambda message: None)
         base = harmonic.merged(rest)
     else:
@@ -128,7 +133,15 @@ def optimize_gait(robot: Robot, gravity: GravityConvention = "physical",
     return res
 
 
-def _best_start(solved: list, base: Baselines, models: list[Model], settings: OCPSettings,
+def _baselines(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, shapes,
+               jobs: int | None, meanwhile=None) -> Baselines:
+    """The best member of each family of ``shapes`` (a chain's: its travelling waves)."""
+    if isinstance(robot, Chain):
+        return best_chain_baselines(robot, gravity, settings, shapes, jobs, meanwhile)
+    return best_baselines(robot, gravity, settings, shapes, jobs=jobs, meanwhile=meanwhile)
+
+
+def _best_start(solved: list, base: Baselines, models: list, settings: OCPSettings,
                 replay: bool) -> OCPResult:
     """The best of the starts' outcomes (``solved``: (guess, result) pairs), each measured against
     the baselines ``base``, with the record of every start and their spread."""
@@ -165,7 +178,7 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
     return runs[0]
 
 
-def solve_from(solver: GaitSolver, models: list[Model], signal, T: float,
+def solve_from(solver: GaitSolver, models: list, signal, T: float,
                harmonic: WaveChoice | None = None, replay: bool = True, tightened: bool = False,
                baselines: Baselines | None = None) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
@@ -176,7 +189,7 @@ def solve_from(solver: GaitSolver, models: list[Model], signal, T: float,
         The solver of the transcription (both built once for its settings:
         :class:`~ocp_crawl.ocp.solver.GaitSolver` of a
         :class:`~ocp_crawl.ocp.transcription.GaitOCP`).
-    models : list of Model
+    models : list of Plant (or Model, ChainModel)
         The friction scenarios' models (the judge's replays), in the order of
         ``solver.settings.scenarios``.
     signal : callable
@@ -205,7 +218,8 @@ def solve_from(solver: GaitSolver, models: list[Model], signal, T: float,
     res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
                     objective=settings.objective,
                     settings=settings, harmonic=harmonic, baselines=baselines)
-    bad = next((r for r in (simulate_torque(m, signal) for m in models) if not r.success), None)
+    bad = next((r for r in (as_plant(m).simulate(signal) for m in models) if not r.success),
+               None)
     if bad is not None:
         res.status = Status.NO_INITIAL_GUESS
         res.message = (f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: "
@@ -229,7 +243,7 @@ def solve_from(solver: GaitSolver, models: list[Model], signal, T: float,
     return res
 
 
-def _endgame(solver: GaitSolver, models: list[Model]) -> Endgame | None:
+def _endgame(solver: GaitSolver, models: list) -> Endgame | None:
     """The settings' endgame (None without ``endgame_sigma``), judged by replay: the endgame's point
     is kept when the replay judge accepts it and its replayed objective is at least that of the
     point it is compared with (the stage's profile, or the homotopy's optimum on both paths)."""
@@ -240,7 +254,7 @@ def _endgame(solver: GaitSolver, models: list[Model]) -> Endgame | None:
 
     def replays(x: np.ndarray) -> tuple[list, float]:
         u = ocp.unpack(x)
-        return [simulate_torque(m, replay_signal(phase, u["tau"])) for m in models], u["T"]
+        return [as_plant(m).simulate(replay_signal(phase, u["tau"])) for m in models], u["T"]
 
     def guess(x_stage: np.ndarray) -> np.ndarray | None:
         runs, T = replays(x_stage)
@@ -351,7 +365,7 @@ def _check_solution(res: OCPResult, settings: OCPSettings, outcome) -> bool:
     return True
 
 
-def _judge(res: OCPResult, models: list[Model]) -> None:
+def _judge(res: OCPResult, models: list) -> None:
     """Replay the optimal profile (every scenario) and let the judge decide; the gain over the
     baseline."""
     verdict = judge_replay(models, res.settings, res.tau, res.T_ocp, res.value_ocp, res.S_ocp)
@@ -378,7 +392,7 @@ def _judge(res: OCPResult, models: list[Model]) -> None:
     _gains(res, models)
 
 
-def _gains(res: OCPResult, models: list[Model]) -> None:
+def _gains(res: OCPResult, models: list) -> None:
     """The gains by replay over each family's best member and over the best of them; an optimum
     significantly worse than the harmonic baseline (its first start) is not one
     (WORSE_THAN_BASELINE); one worse than another family's best says so in its message (a local
@@ -404,18 +418,18 @@ def _gains(res: OCPResult, models: list[Model]) -> None:
                         f"resolution of N = {res.settings.nodes} nodes or a local optimum")
 
 
-def harmonic_peaks(res: OCPResult, models: list[Model]) -> None:
+def harmonic_peaks(res: OCPResult, models: list) -> None:
     """The harmonic baseline's peak joint rates and foot sliding speeds (its replay in every
     scenario), unless measured already or there is no baseline."""
     if res.harmonic is None or res.harmonic_peak_joint_rate_deg_s:
         return
-    signal = res.harmonic.torque_signal(models[0].robot.k)
+    signal = res.harmonic.signal_for(as_plant(models[0]).robot, res.settings)
     peaks = [signal_peaks(m, signal, res.harmonic.T) for m in models]
     res.harmonic_peak_joint_rate_deg_s = [list(p.joint_rate_deg_s) for p in peaks]
     res.harmonic_peak_slip_speed_m_s = [list(p.slip_speed_m_s) for p in peaks]
 
 
-def _baseline_within(res: OCPResult, models: list[Model], gain: float) -> bool:
+def _baseline_within(res: OCPResult, models: list, gain: float) -> bool:
     """Whether the harmonic baseline meets the optional max_joint_rate_deg_s (the bandwidth and the
     envelope it meets by construction); a baseline beyond it is no gait of the problem, so a profile
     worse than it is no failure (the message says so)."""

@@ -18,6 +18,13 @@ from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.transcription import GaitOCP
 
 
+#: the largest move of a variable (scaled: a friction margin by M g) that fixing the ties of the
+#: identified foot switches may make for the polish to try it
+#: (:meth:`GaitSolver._polish_candidates`); at a tie of the relaxation's point the margin is of the
+#: order of sigma / s (about 1e-5 at the three-link optima)
+TIE_GAP = 1e-2
+
+
 class GaitSolver:
     """IPOPT on one transcription: its solvers are built once (each on first use) and serve every
     start; :meth:`solve` and :meth:`solve_tightened` return (x, history, failed, status)."""
@@ -201,7 +208,14 @@ class GaitSolver:
         from a zero margin), so there is usually one; the profile-fixed NLP has no onset rule and
         two where the slipping foot changes."""
         first, second = self._polish_data(x), self._polish_data(x, ties=False)
-        return [first] if np.array_equal(first["ubx"], second["ubx"]) else [first, second]
+        if np.array_equal(first["ubx"], second["ubx"]):
+            return [first]
+        # a tie fixed where the margin is far from zero is none: the switch is the round-off of a
+        # pair at zero on both sides (s, c ~ 1e-12) next to the slip of the other foot; fixed,
+        # it made the polish infeasible (a four-link max_speed optimum: a margin of 0.39 set to
+        # 0, 2000 iterations)
+        moved = float(np.max(np.where(first["ubx"] < second["ubx"], x - first["ubx"], 0.0)))
+        return [second] if moved > TIE_GAP else [first, second]
 
     def _polish_data(self, x: np.ndarray, ties: bool = True) -> dict:
         """The tightened NLP from x: each pair on its identified branch

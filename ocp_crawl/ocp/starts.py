@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from ocp_crawl.model.statics import Robot
+from ocp_crawl.ocp.plant import AnyRobot, joint_rate_bounds, joint_torque_bounds, stiffness_of
 from ocp_crawl.ocp.settings import OCPSettings
 
 #: seed of the perturbed starts (start i uses the generator seeded with (START_SEED, i))
@@ -38,42 +38,43 @@ class StartGuess:
 
     label: str
     tau: np.ndarray
-    """torques [N m] at the node phases k/N, shape (2, N)"""
+    """torques [N m] at the node phases k/N, shape (m, N) of the m joints"""
     T: float
     """period [s]"""
 
 
-def feasible_period(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> float:
-    """The period [s] of the node profile ``tau`` (2, N) [N m]: ``T`` [s], or longer when the
-    profile's linear interpolant would exceed the bandwidth k R at ``T`` (max |tau_k - tau_k-1| N /
-    T <= k R)."""
+def feasible_period(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray, T: float) -> float:
+    """The period [s] of the node profile ``tau`` (m, N) [N m]: ``T`` [s], or longer when the
+    profile's linear interpolant would exceed the bandwidth k_i R of a joint at ``T``
+    (max |tau_k - tau_k-1| N / T <= k_i R)."""
     steps = np.abs(np.diff(np.c_[tau, tau[:, :1]], axis=1))
-    return max(T, float(np.max(steps)) * tau.shape[1] / settings.rate_bound(robot))
+    bound = joint_rate_bounds(settings, robot)
+    return max(T, float(np.max(np.max(steps, axis=1) * tau.shape[1] / bound)))
 
 
 def pinned(tau: np.ndarray) -> np.ndarray:
-    """The node profile (2, N) shifted by whole nodes so that node 0 is where tau_1 is largest (the
+    """The node profile (m, N) shifted by whole nodes so that node 0 is where tau_1 is largest (the
     OCP's phase pin, tau_1,k <= tau_1,0): the same periodic gait, started at another phase."""
     return np.roll(tau, -int(np.argmax(tau[0])), axis=1)
 
 
-def _profile(settings: OCPSettings, robot: Robot, label: str, tau: np.ndarray,
+def _profile(settings: OCPSettings, robot: AnyRobot, label: str, tau: np.ndarray,
              T: float) -> StartGuess:
     """The profile clipped to the envelope and pinned, with the period that keeps it within the
     bandwidth."""
-    lo, hi = settings.torque_bounds(robot)
-    tau = pinned(np.clip(tau, lo, hi))
+    lo, hi = joint_torque_bounds(settings, robot)
+    tau = pinned(np.clip(tau, lo[:, None], hi[:, None]))
     return StartGuess(label, tau, feasible_period(settings, robot, tau, T))
 
 
-def given_start(settings: OCPSettings, robot: Robot, tau: np.ndarray, T: float) -> StartGuess:
-    """A start of the user's: node torques ``tau`` (2, N) [N m] and a period ``T`` [s] (e.g. a
+def given_start(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray, T: float) -> StartGuess:
+    """A start of the user's: node torques ``tau`` (m, N) [N m] and a period ``T`` [s] (e.g. a
     previous optimum), clipped to the envelope, pinned, the period lengthened if the bandwidth
     requires."""
     return _profile(settings, robot, "given start", np.asarray(tau, float), T)
 
 
-def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
+def second_harmonic_start(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: float,
                           attempt: int = 0) -> StartGuess:
     """The baseline plus a second harmonic: each joint's profile plus SECOND_HARMONIC / 2^attempt
     times its half-range times sin(4 pi t) (clipped to the envelope, the period lengthened if the
@@ -84,7 +85,7 @@ def second_harmonic_start(settings: OCPSettings, robot: Robot, base: np.ndarray,
     return _profile(settings, robot, "second harmonic", base + half[:, None] * wave, T)
 
 
-def perturbed_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float, i: int,
+def perturbed_start(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: float, i: int,
                     attempt: int = 0) -> StartGuess:
     """The baseline plus a smooth random perturbation (Fourier orders 1..PERTURBATION_ORDERS, random
     coefficients of the generator seeded with (START_SEED, i, attempt)), scaled to at most
@@ -95,14 +96,14 @@ def perturbed_start(settings: OCPSettings, robot: Robot, base: np.ndarray, T: fl
     t = np.arange(N) / N
     n = np.arange(1, PERTURBATION_ORDERS + 1)[:, None]
     # (joint, cos/sin, order), decaying with order
-    coef = rng.normal(size=(2, 2, PERTURBATION_ORDERS)) / n.T
+    coef = rng.normal(size=(base.shape[0], 2, PERTURBATION_ORDERS)) / n.T
     delta = coef[:, 0] @ np.cos(2 * math.pi * n * t) + coef[:, 1] @ np.sin(2 * math.pi * n * t)
-    half_width = robot.k * math.radians(settings.A_max_deg)
+    half_width = stiffness_of(robot)[:, None] * math.radians(settings.A_max_deg)
     delta *= PERTURBATION / 2**attempt * half_width / np.max(np.abs(delta))
     return _profile(settings, robot, f"perturbed {i}", base + delta, T)
 
 
-def start_guesses(settings: OCPSettings, robot: Robot, base: np.ndarray, T: float,
+def start_guesses(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: float,
                   follows: Callable[[np.ndarray], bool] | None = None) -> list[StartGuess]:
     """The ``settings.starts`` starts of the multi-start OCP.
 
@@ -110,14 +111,14 @@ def start_guesses(settings: OCPSettings, robot: Robot, base: np.ndarray, T: floa
     ----------
     settings : OCPSettings
         Number of starts, envelope and bandwidth.
-    robot : Robot
-        The robot (stiffness k).
-    base : array_like, shape (2, N)
+    robot : Robot or Chain
+        The robot (its joints' stiffnesses).
+    base : array_like, shape (m, N)
         The harmonic baseline's torques [N m] at the node phases k/N.
     T : float
         The baseline's period [s].
     follows : callable, optional
-        ``follows(tau)``: whether the simulator follows the node profile tau (2, N) [N m] (the OCP's
+        ``follows(tau)``: whether the simulator follows the node profile tau (m, N) [N m] (the OCP's
         initial guess simulates its start).  A start it does not follow is drawn again, up to
         ATTEMPTS times, each with half the amplitude (perturbed starts: a new draw of their
         generator); the last is kept if none is followed.  None: the first draw.

@@ -69,10 +69,8 @@ import math
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.statics import NP, Model
-from ocp_crawl.model.step_equations import (C1M, C1P, C2M, C2P, FT1, FT2, MARGIN_ROWS, NPAIR, NW,
-                                            PHI_ROWS,
-                                            S1M, S1P, S2M, S2P, SLIP_ROWS, friction_margins,
+from ocp_crawl.model.statics import NP
+from ocp_crawl.model.step_equations import (NPAIR, NW, StepRows, friction_margins, rows_of,
                                             step_equations)
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import SLIP_PAIR_MODES
@@ -89,7 +87,8 @@ THETA_EDGE = 1e-6
 
 
 def step_function() -> cs.Function:
-    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p)."""
+    """One step's (equations and lifting, complementarity products) of (phi_prev, w, tau_hat, p)
+    of the three-link robot (a chain's: :meth:`~ocp_crawl.ocp.plant.Plant.step_function`)."""
     phi_prev = cs.SX.sym("phi_prev", 2)
     w = cs.SX.sym("w", NW)
     th = cs.SX.sym("tau_hat", 2)
@@ -99,16 +98,17 @@ def step_function() -> cs.Function:
 
 
 def substep_torques(T, theta):
-    """Scaled torques at the ends of the 2N sub-steps (2, 2N): interior point of interval k at
-    ``T_k-1 + theta_k (T_k - T_k-1)``, then node k (node N = node 0).  ``T``: node torques (2, N);
-    ``theta``: (N,) or (1, N) interval fractions (CasADi or numpy)."""
+    """Scaled torques at the ends of the 2N sub-steps (m, 2N): interior point of interval k at
+    ``T_k-1 + theta_k (T_k - T_k-1)``, then node k (node N = node 0).  ``T``: node torques (m, N)
+    of the m joints; ``theta``: (N,) or (1, N) interval fractions (CasADi or numpy)."""
+    m = T.shape[0]
     if isinstance(T, np.ndarray):
         Tn = np.roll(T, -1, axis=1)
         Ta = T + np.reshape(theta, (1, -1)) * (Tn - T)
-        return np.stack([Ta, Tn], axis=2).reshape(2, -1)
+        return np.stack([Ta, Tn], axis=2).reshape(m, -1)
     Tn = cs.horzcat(T[:, 1:], T[:, 0])
-    Ta = T + cs.repmat(cs.reshape(theta, 1, -1), 2, 1) * (Tn - T)
-    return cs.reshape(cs.vertcat(Ta, Tn), 2, -1)
+    Ta = T + cs.repmat(cs.reshape(theta, 1, -1), m, 1) * (Tn - T)
+    return cs.reshape(cs.vertcat(Ta, Tn), m, -1)
 
 
 def _roll(x, n: int):
@@ -131,15 +131,22 @@ def pass_weights(theta):
     return cs.fmax(0.0, 1.0 - length / SHORT) ** 2
 
 
+def _foot_slips(W):
+    """The slips (1, 2N) of foot 1 and of foot 2 (both directions) of sub-step variables W."""
+    sp = rows_of(W).s1p
+    return W[sp, :] + W[sp + 1, :], W[sp + 2, :] + W[sp + 3, :]
+
+
 def switch_windows(W, theta):
     """The slips that the switch condition at boundary j reads: per foot, the slip of sub-step j
     plus its predecessors' passed through sub-steps of (nearly) zero length (``before``: s_j + w_j
     (s_j-1 + w_j-1 s_j-2)), and per pair the slip of sub-step j+1 (``after``, rows s1+, s1-, s2+,
     s2-).  Returns (s1, s2, before, after)."""
-    s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
+    s1, s2 = _foot_slips(W)
     w = pass_weights(theta)
     before = [s + w * (_roll(s, 1) + _roll(w, 1) * _roll(s, 2)) for s in (s1, s2)]
-    after = [_roll(W[S1P + q, :], -1) for q in range(NPAIR)]
+    sp = rows_of(W).s1p
+    after = [_roll(W[sp + q, :], -1) for q in range(NPAIR)]
     return s1, s2, before, after
 
 
@@ -149,9 +156,10 @@ def cross_products(W, theta, N: int):
     switches at boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).
     Returns (3, 2N)."""
     s1, s2, before, after = switch_windows(W, theta)
+    c = rows_of(W).c1p
     both = N * s1 * s2
-    to2 = N * before[0] * (after[2] * W[C2P, :] + after[3] * W[C2M, :])
-    to1 = N * before[1] * (after[0] * W[C1P, :] + after[1] * W[C1M, :])
+    to2 = N * before[0] * (after[2] * W[c + 2, :] + after[3] * W[c + 3, :])
+    to1 = N * before[1] * (after[0] * W[c, :] + after[1] * W[c + 1, :])
     if isinstance(W, np.ndarray):
         return np.vstack((both, to2, to1))
     return cs.vertcat(both, to2, to1)
@@ -161,14 +169,16 @@ def onset_products(W, N: int):
     """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in
     sub-step j only if its margin is already zero at the sub-step's start; see the module
     docstring).  ``W``: (NW, 2N) sub-step variables (CasADi or numpy)."""
-    return N * sum(W[S1P + q, :] * _roll(W[C1P + q, :], 1) for q in range(NPAIR))
+    R = rows_of(W)
+    return N * sum(W[R.s1p + q, :] * _roll(W[R.c1p + q, :], 1) for q in range(NPAIR))
 
 
 def onset_residual(W: np.ndarray) -> float:
     """Largest violation of the onset condition as a min-residual: min(s_q,j, c_q,j-1) over pairs
     and sub-steps [-]."""
-    return float(max(np.max(np.abs(np.minimum(W[S1P + q, :],
-                                              _roll(W[C1P + q, :], 1)))) for q in range(NPAIR)))
+    R = rows_of(W)
+    return float(max(np.max(np.abs(np.minimum(W[R.s1p + q, :],
+                                              _roll(W[R.c1p + q, :], 1)))) for q in range(NPAIR)))
 
 
 def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
@@ -177,37 +187,41 @@ def cross_residual(W: np.ndarray, theta: np.ndarray) -> float:
     slip after it of the other in direction d, that foot's margin c_d at j) (both switch directions,
     d = +, -) [-]."""
     s1, s2, before, after = switch_windows(W, theta)
+    c = rows_of(W).c1p
     res = [np.minimum(s1, s2)]
     for d in range(2):
-        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[C2P + d]))
-        res.append(np.minimum(np.minimum(before[1], after[d]), W[C1P + d]))
+        res.append(np.minimum(np.minimum(before[0], after[2 + d]), W[c + 2 + d]))
+        res.append(np.minimum(np.minimum(before[1], after[d]), W[c + d]))
     return float(np.max(np.abs(np.vstack(res))))
 
 
 class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
-    def __init__(self, nlp, j: int, model: Model, T, Th, step_map, N: int, with_work: bool,
+    def __init__(self, nlp, j: int, model, T, Th, step_map, N: int, with_work: bool,
                  friction_tol: float = 0.0, joint_rate: float | None = None):
         """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross
-        conditions, S and (``with_work``) W+ by the midpoint rule per sub-step.  ``T``: scaled node
-        torques (2, N); ``Th``: the scaled period, which divides the relaxed products (a relaxation
-        per unit time: the spurious slip that a relaxation sigma allows then cannot buy speed by
-        shrinking the period); ``friction_tol`` > 0 adds the friction-tolerance constraint
-        (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
+        conditions, S and (``with_work``) W+ by the midpoint rule per sub-step.  ``model``: the
+        scenario's :class:`~ocp_crawl.ocp.plant.Plant` (its parameter vector ``p``); ``T``: scaled
+        node torques (m, N) of its m joints; ``Th``: the scaled period, which divides the relaxed
+        products (a relaxation per unit time: the spurious slip that a relaxation sigma allows then
+        cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the friction-tolerance
+        constraint (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
         (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad])."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
-        phi0, ft0 = nlp.sym(f"phi0_{j}", 2), nlp.sym(f"ft0_{j}")
+        m = T.shape[0]
+        R = StepRows(m)
+        phi0, ft0 = nlp.sym(f"phi0_{j}", m), nlp.sym(f"ft0_{j}")
         theta = nlp.sym(f"theta_{j}", N)
-        W = nlp.sym(f"w_{j}", NW, 2 * N)
+        W = nlp.sym(f"w_{j}", R.nw, 2 * N)
         nlp.var(f"phi0_{j}", phi0, 0.0, math.pi)
         nlp.var(f"ft0_{j}", ft0, -inf, inf)
         nlp.var(f"theta_{j}", theta, 0.0, 1.0)
-        lbw = np.r_[0.0, 0.0, -inf, -inf, np.zeros(2 * NPAIR)]
-        ubw = np.r_[math.pi, math.pi, inf, inf, np.full(2 * NPAIR, inf)]
+        lbw = np.r_[np.zeros(m), -inf, -inf, np.zeros(2 * NPAIR)]
+        ubw = np.r_[np.full(m, math.pi), inf, inf, np.full(2 * NPAIR, inf)]
         nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, 2 * N), np.tile(ubw, 2 * N))
-        PHI = cs.horzcat(phi0, W[PHI_ROWS, :])  # (2, 2N+1)
+        PHI = cs.horzcat(phi0, W[R.phi, :])  # (m, 2N+1)
         Tsub = substep_torques(T, theta)
         eqs, comp = step_map(PHI[:, :-1], W, Tsub, cs.repmat(cs.DM(model.p), 1, 2 * N))
         nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0, ("equation",))
@@ -215,7 +229,7 @@ class Scenario:
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0, ("complementarity",))
         nlp.con(f"cross_{j}", cs.vec(cross_products(W, theta, N)) / Th, -inf, 0.0, ("cross",))
         nlp.con(f"onset_{j}", cs.vec(onset_products(W, N)) / Th, -inf, 0.0, ("cross", "rule"))
-        nlp.con(f"periodic_{j}", cs.vertcat(W[PHI_ROWS, -1] - phi0, W[FT1, -1] - ft0), 0.0, 0.0,
+        nlp.con(f"periodic_{j}", cs.vertcat(W[R.phi, -1] - phi0, W[R.ft1, -1] - ft0), 0.0, 0.0,
                 ("equation",))
         nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf, ("rule",))
         if joint_rate is not None:
@@ -230,12 +244,12 @@ class Scenario:
         # their definitions make a dense row (a dense row costs one Jacobian direction per variable
         # it touches: 2.4x the evaluation time per IPOPT iteration at N = 100)
         # foot-1 displacement / L
-        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[S1P, :] - W[S1M, :])
+        self.S = _running_sum(nlp, f"Sc_{j}", f"S_def_{j}", W[R.s1p, :] - W[R.s1p + 1, :])
         self.theta, self.W_plus = theta, None
         if with_work:
             # positive work per actuator and sub-step with slacks v >= tau_mid dphi, v >= 0 (scaled
             # by M g L)
-            V = nlp.sym(f"v_{j}", 2, 2 * N)
+            V = nlp.sym(f"v_{j}", m, 2 * N)
             nlp.var(f"v_{j}", cs.vec(V), 0.0, inf)
             tau_mid = 0.5 * (Tsub + cs.horzcat(Tsub[:, -1], Tsub[:, :-1]))
             nlp.con(f"wplus_{j}", cs.vec(V - tau_mid * (PHI[:, 1:] - PHI[:, :-1])), 0.0, inf)
@@ -250,10 +264,10 @@ TIE_SLOPE = 0.01
 #: same side (or its slip on that side just after, resp. just before: a change of the slipping foot)
 #: is at least this times the sub-step's slip [M g / L]
 TIE_END = 0.1
-#: (slip row, margin row of the other foot on the same side, slip row of the other foot into that
-#: side) of :func:`tie_rows`: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2-
-#: with c1+ and s1+
-TIE_PAIRS = ((S1P, C2M, S2M), (S1M, C2P, S2P), (S2P, C1M, S1M), (S2M, C1P, S1P))
+#: (slip pair, margin pair of the other foot on the same side, slip pair of the other foot into
+#: that side) of :func:`tie_rows`, as indices into (s1+, s1-, s2+, s2-) and (c1+, c1-, c2+, c2-):
+#: s1+ with c2- and s2-, s1- with c2+ and s2+, s2+ with c1- and s1-, s2- with c1+ and s1+
+TIE_PAIRS = ((0, 3, 3), (1, 2, 2), (2, 1, 1), (3, 0, 0))
 
 
 def tie_rows(W, theta):
@@ -266,13 +280,15 @@ def tie_rows(W, theta):
     the tie unless it comes from the other foot).  ``W``: (NW, 2N) sub-step variables, ``theta``:
     (N,) interior fractions (CasADi or numpy)."""
     w = pass_weights(theta)
+    R = rows_of(W)
+    pairs = [(R.s1p + q, R.c1p + c, R.s1p + o) for q, c, o in TIE_PAIRS]
     rows = [_roll(W[c:c + 1, :], 1) + W[c:c + 1, :] - TIE_SLOPE
-            * W[q:q + 1, :] for q, c, _ in TIE_PAIRS]
+            * W[q:q + 1, :] for q, c, _ in pairs]
     # the end of sub-step j (the other foot's slip after it), then its start (before it)
     for shift in (-1, 1):
         rows += [_roll(W[c:c + 1, :], max(shift, 0)) + _roll(W[o:o + 1, :], shift)
                  + _roll(w, shift) * _roll(W[o:o + 1, :], 2 * shift) - TIE_END
-                 * W[q:q + 1, :] for q, c, o in TIE_PAIRS]
+                 * W[q:q + 1, :] for q, c, o in pairs]
     return np.vstack(rows) if isinstance(W, np.ndarray) else cs.vertcat(*rows)
 
 
@@ -284,8 +300,9 @@ def friction_rows(W, eps: float):
     by M g) at its two ends (the trapezoid rule of the simulation's margin; the start of sub-step 0
     is the end of the last one, periodicity).  ``W``: (NW, 2N) sub-step variables (CasADi or
     numpy)."""
-    s1, s2 = W[S1P, :] + W[S1M, :], W[S2P, :] + W[S2M, :]
-    e1, e2 = 0.5 * (W[C1P, :] + W[C1M, :]), 0.5 * (W[C2P, :] + W[C2M, :])
+    s1, s2 = _foot_slips(W)
+    c = rows_of(W).c1p
+    e1, e2 = 0.5 * (W[c, :] + W[c + 1, :]), 0.5 * (W[c + 2, :] + W[c + 3, :])
     l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
     return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
 
@@ -296,12 +313,12 @@ SUBSTEP_RATE_SLACK = 0.005
 
 
 def joint_rate_rows(PHI, theta, step):
-    """Rows (4, 3N) that must be >= 0: the optional bound on the actual joint rates of both joints,
-    first on each interval, ``step -+ dphi_i,k`` (dphi_i,k the change of joint angle i from node k-1
-    to node k), then on each sub-step, ``(1 + SUBSTEP_RATE_SLACK) step l_j -+ dphi_i,j`` (l_j the
-    sub-step's length as a fraction of its interval: theta_k, then 1 - theta_k).  ``step``: the
-    largest change of a joint angle over an interval [rad], radians(max_joint_rate_deg_s) T / N (a
-    CasADi expression of the period).
+    """Rows (2m, 3N) that must be >= 0: the optional bound on the actual joint rates of the m
+    joints, first on each interval, ``step -+ dphi_i,k`` (dphi_i,k the change of joint angle i from
+    node k-1 to node k), then on each sub-step, ``(1 + SUBSTEP_RATE_SLACK) step l_j -+ dphi_i,j``
+    (l_j the sub-step's length as a fraction of its interval: theta_k, then 1 - theta_k).  ``step``:
+    the largest change of a joint angle over an interval [rad], radians(max_joint_rate_deg_s) T / N
+    (a CasADi expression of the period).
 
     The interval rows bound the mean rate where the rate is smooth (inside an interval without a
     contact event it changes by O(1/N)).  The sub-step rows bound it on each side of a slip onset or
@@ -312,15 +329,15 @@ def joint_rate_rows(PHI, theta, step):
     sub-step's mean is the interval's, the weakest bound) and the polish found no feasible point
     (max_speed, N = 50).  The replay's peak is thus within the bound to SUBSTEP_RATE_SLACK plus
     O(1/N) (the judge's tolerance, :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`).  ``PHI``: the
-    angles (2, 2N+1) at node 0 and every sub-step end; ``theta``: (N,) interior fractions (CasADi or
-    numpy)."""
+    angles (m, 2N+1) of the m joints at node 0 and every sub-step end; ``theta``: (N,) interior
+    fractions (CasADi or numpy)."""
     loose = (1 + SUBSTEP_RATE_SLACK) * step
     if isinstance(PHI, np.ndarray):
         length = np.column_stack([theta, 1.0 - theta]).ravel()[None, :]
         dnode, dsub = np.diff(PHI[:, ::2], axis=1), np.diff(PHI, axis=1)
         return np.hstack([np.vstack([step - dnode, step + dnode]),
                           np.vstack([loose * length - dsub, loose * length + dsub])])
-    length = cs.repmat(cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1), 2, 1)
+    length = cs.repmat(cs.reshape(cs.horzcat(theta, 1.0 - theta).T, 1, -1), PHI.shape[0], 1)
     nodes = PHI[:, ::2]
     dnode, dsub = nodes[:, 1:] - nodes[:, :-1], PHI[:, 1:] - PHI[:, :-1]
     return cs.horzcat(cs.vertcat(step - dnode, step + dnode),
@@ -341,8 +358,8 @@ def _running_sum(nlp, var: str, con: str, terms):
 def positive_work(tau_sub: np.ndarray, phi_sub: np.ndarray) -> float:
     """Discrete W+ of the transcription (the units of the inputs: [J] from [N m] and [rad]): the
     midpoint rule per sub-step, sum over actuators and sub-steps of max(0, tau_mid dphi).
-    ``tau_sub``: torques at the sub-step ends (2, 2N) (the last one is node 0's); ``phi_sub``:
-    angles (2, 2N+1) from node 0."""
+    ``tau_sub``: torques at the sub-step ends (m, 2N) (the last one is node 0's); ``phi_sub``:
+    angles (m, 2N+1) from node 0."""
     tau_mid = 0.5 * (tau_sub + np.roll(tau_sub, 1, axis=1))
     return float(np.sum(np.maximum(tau_mid * np.diff(phi_sub, axis=1), 0.0)))
 
@@ -365,24 +382,26 @@ def switch_fractions(res, N: int) -> np.ndarray:
     return theta
 
 
-def guess_block(res, model: Model, N: int) -> dict:
+def guess_block(res, model, N: int) -> dict:
     """Scaled variables of one scenario sampled from an event-driven simulation ``res`` whose output
-    phases are node 0 and the 2N sub-step ends: the state of node 0, the (NW, 2N) sub-step variables
-    and S."""
+    phases are node 0 and the 2N sub-step ends: the state of node 0, the (m + 10, 2N) sub-step
+    variables and S.  ``model``: the scenario's model (its ``robot``: a Robot or a Chain)."""
     r = model.robot
     Mg, L = r.M * r.g, r.L
     phi, ft = res.phi, res.f_t / Mg
-    W = np.zeros((NW, 2 * N))
-    W[PHI_ROWS] = phi[:, 1:]
-    W[FT1], W[FT2] = ft[1:], -ft[1:]
+    R = StepRows(phi.shape[0])
+    W = np.zeros((R.nw, 2 * N))
+    W[R.phi] = phi[:, 1:]
+    W[R.ft1], W[R.ft2] = ft[1:], -ft[1:]
     dx1, dx2 = np.diff(res.x1) / L, np.diff(res.x2) / L
-    W[S1P], W[S1M] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
-    W[S2P], W[S2M] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
+    sp = R.s1p
+    W[sp], W[sp + 1] = np.maximum(dx1, 0), np.maximum(-dx1, 0)
+    W[sp + 2], W[sp + 3] = np.maximum(dx2, 0), np.maximum(-dx2, 0)
     fn1, fn2 = res.f_n1[1:] / Mg, res.f_n2[1:] / Mg
     # lifted margins at the simulated points (f_t2 = -f_t on foot 2), clipped to >= 0
-    W[MARGIN_ROWS] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2,
-                                                           -ft[1:])), 0.0)
-    return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[S1P] - W[S1M]))}
+    W[R.margins] = np.maximum(np.vstack(friction_margins(r.mu1, fn1, ft[1:], r.mu2, fn2,
+                                                         -ft[1:])), 0.0)
+    return {"phi0": phi[:, 0], "ft0": ft[0], "w": W, "S": float(np.sum(W[sp] - W[sp + 1]))}
 
 
 def sample_phases(theta: np.ndarray) -> np.ndarray:
@@ -396,7 +415,8 @@ def sample_phases(theta: np.ndarray) -> np.ndarray:
 def modes_of(W: np.ndarray) -> list[int]:
     """Contact mode of each sub-step (the pair that slips most, stick when none slips beyond its
     margin)."""
-    sv, cv = W[SLIP_ROWS], W[MARGIN_ROWS]
+    R = rows_of(W)
+    sv, cv = W[R.slips], W[R.margins]
     modes = []
     for k in range(W.shape[1]):
         sl = [i for i in range(NPAIR) if sv[i, k] > cv[i, k]]

@@ -33,16 +33,17 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.statics import GravityConvention, Model, Robot
-from ocp_crawl.model.step_equations import (C1P, C2P, FT1, MARGIN_ROWS, NW, PHI_ROWS, S1M, S1P,
-                                            SLIP_ROWS)
+from ocp_crawl.model.statics import GravityConvention
+from ocp_crawl.model.step_equations import StepRows
 from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.ocp.guess import simulated_guess
 from ocp_crawl.ocp.layout import KINDS, Layout, fourier_basis, rows_of
+from ocp_crawl.ocp.plant import (AnyRobot, Plant, joint_accel_bounds, joint_rate_bounds,
+                                 joint_torque_bounds, joints_of)
 from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work, physical
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual,
-                                    positive_work, step_function, substep_torques, switch_windows)
+                                    positive_work, substep_torques, switch_windows)
 
 #: bounds of the scaled period variable T_hat = T / period_ref.  The upper bound is the
 #: transcription's resolution: a node may move a reference angle by up to R T / N, so at T = 2
@@ -59,11 +60,13 @@ KERNELS = ("expanded", "compiled")
 class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
-    def __init__(self, robot: Robot, gravity: GravityConvention = "physical",
+    def __init__(self, robot: AnyRobot, gravity: GravityConvention = "physical",
                  settings: OCPSettings | None = None, kernel: str = "expanded"):
-        """``kernel``: how the NLP evaluates the sub-steps' equations: "expanded" (default) the
-        whole NLP as one SX graph (the kernel inlined at every sub-step; its Hessian 8x faster than
-        the map of the compiled kernel at N = 100), or "compiled" the compiled step kernel
+        """``robot``: the three-link :class:`~ocp_crawl.model.robot.Robot` or an n-link
+        :class:`~ocp_crawl.model.chain.Chain` (m = n - 1 torque profiles).  ``kernel``: how the NLP
+        evaluates the sub-steps' equations: "expanded" (default) the whole NLP as one SX graph (the
+        kernel inlined at every sub-step; its Hessian 8x faster than the map of the compiled kernel
+        at N = 100), or "compiled" the compiled step kernel
         (:func:`~ocp_crawl.nlp.codegen.compiled_kernel`) mapped over the sub-steps in an MX graph
         (``scripts/bench.py ocp_kernel`` compares the two)."""
         if kernel not in KERNELS:
@@ -72,27 +75,31 @@ class GaitOCP:
         self.robot = robot
         self.gravity = gravity
         self.settings = settings or OCPSettings()
-        self.scen = [Model(r, gravity=gravity) for r in self.settings.scenarios(robot)]
+        self.m = joints_of(robot)
+        """the number of torque profiles (the robot's joints)"""
+        self.scen = [Plant(r, gravity) for r in self.settings.scenarios(robot)]
+        """each friction scenario's :class:`~ocp_crawl.ocp.plant.Plant`"""
         self._build()
 
     # ------------------------------------------------------------------ the NLP (built once)
     def _torque_nodes(self, z_tau, N):
         """Scaled torques at the N node phases as expressions of the torque variables."""
-        s = self.settings
+        s, m = self.settings, self.m
         if s.parametrization == "free":
-            return cs.reshape(z_tau, 2, N)
-        return cs.reshape(z_tau, 2,
+            return cs.reshape(z_tau, m, N)
+        return cs.reshape(z_tau, m,
                           2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
 
     def _torques(self, nlp: Layout, MgL: float):
         """Torque and period variables, envelope, bandwidth, optional smoothness bound and phase
-        pin; returns the scaled node torques T (2, N), their periodic differences dT and the scaled
-        period Th."""
-        s, N, r = self.settings, self.settings.nodes, self.robot
-        ntau = 2 * N if s.parametrization == "free" else 2 * (2 * s.fourier_order + 1)
+        pin; returns the scaled node torques T (m, N), their periodic differences dT and the scaled
+        period Th.  Per joint: its envelope and bandwidth through its stiffness (and rest bend), the
+        same numbers on every node (column-major as ``cs.vec``)."""
+        s, N, r, m = self.settings, self.settings.nodes, self.robot, self.m
+        ntau = m * N if s.parametrization == "free" else m * (2 * s.fourier_order + 1)
         z_tau = nlp.sym("tau", ntau)
-        T = self._torque_nodes(z_tau, N)  # (2, N) scaled
-        tau_lo, tau_hi = (b / MgL for b in s.torque_bounds(r))
+        T = self._torque_nodes(z_tau, N)  # (m, N) scaled
+        tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
         if s.parametrization == "free":
             nlp.var("tau", z_tau, tau_lo, tau_hi)
         else:
@@ -102,12 +109,13 @@ class GaitOCP:
         nlp.var("T_hat", Th, *PERIOD_HAT_BOUNDS)
         Tref = s.period_ref()
         dT = T - cs.horzcat(T[:, -1], T[:, :-1])  # periodic differences tau_k - tau_{k-1}
-        c_rate = s.rate_bound(r) * Tref / (MgL * N)  # |dT| <= c_rate T_hat
+        # |dT| <= c_rate T_hat
+        c_rate = np.tile(joint_rate_bounds(s, r) * Tref / (MgL * N), N)
         nlp.con("rate_up", cs.vec(dT) - c_rate * Th, -np.inf, 0.0)
         nlp.con("rate_down", cs.vec(dT) + c_rate * Th, 0.0, np.inf)
-        accel = s.accel_bound(r)
+        accel = joint_accel_bounds(s, r)
         if accel is not None:
-            c_acc = accel * Tref**2 / (MgL * N**2)  # |d2T| <= c_acc T_hat^2
+            c_acc = np.tile(accel * Tref**2 / (MgL * N**2), N)  # |d2T| <= c_acc T_hat^2
             d2T = cs.vec(cs.horzcat(dT[:, 1:], dT[:, 0]) - dT)  # periodic second differences
             nlp.con("accel_up", d2T - c_acc * Th**2, -np.inf, 0.0)
             nlp.con("accel_down", d2T + c_acc * Th**2, 0.0, np.inf)
@@ -166,7 +174,8 @@ class GaitOCP:
         MgL = r.M * r.g * r.L
         nlp = Layout(cs.SX.sym if self.kernel == "expanded" else cs.MX.sym)
         T, dT, Th = self._torques(nlp, MgL)
-        kernel = step_function() if self.kernel == "expanded" else compiled_kernel(step_function())
+        step = self.scen[0].step_function
+        kernel = step if self.kernel == "expanded" else compiled_kernel(step)
         step_map = kernel.map(2 * s.nodes)
         work = (s.objective == "min_cot" or needs_work(s.requirements)
                 or (s.user_objective is not None and s.user_objective.work))
@@ -242,26 +251,27 @@ class GaitOCP:
         margin in its slip direction fixed to 0 at the boundary (the tie)."""
         N = self.settings.nodes
         ubx = ubx.copy()
+        R = StepRows(self.m)
         for j in range(len(self.scen)):
             sl = self._slices[f"w_{j}"]
-            W = x[sl].reshape(NW, 2 * N, order="F")
-            slip = W[SLIP_ROWS] > W[MARGIN_ROWS]
-            fix = np.zeros((NW, 2 * N), bool)
-            fix[SLIP_ROWS] = ~slip
-            fix[MARGIN_ROWS] = slip
+            W = x[sl].reshape(R.nw, 2 * N, order="F")
+            slip = W[R.slips] > W[R.margins]
+            fix = np.zeros((R.nw, 2 * N), bool)
+            fix[R.slips] = ~slip
+            fix[R.margins] = slip
             if onset:  # the onset pairs (s_j, c_j-1), each on its identified branch too
-                early = W[SLIP_ROWS] > np.roll(W[MARGIN_ROWS], 1, axis=1)
-                fix[SLIP_ROWS] |= ~early
-                fix[MARGIN_ROWS] |= np.roll(early, -1, axis=1)
-            ident = np.zeros((NW, 2 * N))
-            ident[SLIP_ROWS] = slip
+                early = W[R.slips] > np.roll(W[R.margins], 1, axis=1)
+                fix[R.slips] |= ~early
+                fix[R.margins] |= np.roll(early, -1, axis=1)
+            ident = np.zeros((R.nw, 2 * N))
+            ident[R.slips] = slip
             _, _, before, after = switch_windows(ident, x[self._slices[f"theta_{j}"]])
             for d in range(2 if ties else 0):
                 # foot 1 -> foot 2: c2d = 0 at the boundary
-                fix[C2P + d] |= (before[0] > 0) & (after[2 + d] > 0)
+                fix[R.c1p + 2 + d] |= (before[0] > 0) & (after[2 + d] > 0)
                 # foot 2 -> foot 1: c1d = 0 at the boundary
-                fix[C1P + d] |= (before[1] > 0) & (after[d] > 0)
-            ub = ubx[sl].reshape(NW, 2 * N, order="F").copy()
+                fix[R.c1p + d] |= (before[1] > 0) & (after[d] > 0)
+            ub = ubx[sl].reshape(R.nw, 2 * N, order="F").copy()
             ub[fix] = 0.0
             ubx[sl] = ub.ravel(order="F")
         return ubx
@@ -285,28 +295,28 @@ class GaitOCP:
         the optimiser's NLP states them; False for a profile-fixed solution, whose NLP has no onset
         rule).
 
-        Returns a dict: ``tau`` (2, N) node torques [N m], ``T`` period [s], and per scenario
-        (``scen``): ``theta`` (N,) interior fractions [-], ``phi`` (2, N+1) node angles [rad] (node
-        N = node 0 after one cycle), ``phi_sub`` (2, 2N+1) the angles at node 0 and every sub-step
-        end, ``tau_sub`` (2, 2N) [N m] the torques at the sub-step ends, ``f_t`` (N+1,) [N], ``x1``
-        (N+1,) and ``x1_sub`` (2N+1,) foot-1 positions [m], ``S`` [m], ``v = direction S / T``
-        [m/s], ``W_plus`` [J] (midpoint rule per sub-step), the contact ``modes`` per interval and
-        ``modes_sub`` per sub-step, and the complementarity (``comp``, including the cross
-        conditions) and periodicity (``periodic``) residuals [-].
+        Returns a dict: ``tau`` (m, N) node torques of the m joints [N m], ``T`` period [s], and per
+        scenario (``scen``): ``theta`` (N,) interior fractions [-], ``phi`` (m, N+1) node angles
+        [rad] (node N = node 0 after one cycle), ``phi_sub`` (m, 2N+1) the angles at node 0 and
+        every sub-step end, ``tau_sub`` (m, 2N) [N m] the torques at the sub-step ends, ``f_t``
+        (N+1,) [N], ``x1`` (N+1,) and ``x1_sub`` (2N+1,) foot-1 positions [m], ``S`` [m], ``v =
+        direction S / T`` [m/s], ``W_plus`` [J] (midpoint rule per sub-step), the contact ``modes``
+        per interval and ``modes_sub`` per sub-step, and the complementarity (``comp``, including
+        the cross conditions) and periodicity (``periodic``) residuals [-].
         """
         s, r = self.settings, self.robot
-        N, Mg = s.nodes, r.M * r.g
-        tau = np.asarray(self._T(x)).reshape(2, N)
+        N, Mg, R = s.nodes, r.M * r.g, StepRows(self.m)
+        tau = np.asarray(self._T(x)).reshape(self.m, N)
         period = float(x[self._slices["T_hat"]][0]) * s.period_ref()
         out: dict[str, Any] = {"tau": tau, "T": period, "scen": []}
         for j in range(len(self.scen)):
-            W = x[self._slices[f"w_{j}"]].reshape(NW, 2 * N, order="F")
+            W = x[self._slices[f"w_{j}"]].reshape(R.nw, 2 * N, order="F")
             theta = x[self._slices[f"theta_{j}"]].copy()
-            phi_sub = np.c_[x[self._slices[f"phi0_{j}"]], W[PHI_ROWS]]
-            ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[FT1]] * Mg
-            x1_sub = np.r_[0.0, np.cumsum(W[S1P] - W[S1M])] * r.L
+            phi_sub = np.c_[x[self._slices[f"phi0_{j}"]], W[R.phi]]
+            ft_sub = np.r_[x[self._slices[f"ft0_{j}"]], W[R.ft1]] * Mg
+            x1_sub = np.r_[0.0, np.cumsum(W[R.s1p] - W[R.s1p + 1])] * r.L
             tau_sub = substep_torques(tau, theta)
-            comp = max(float(np.max(np.abs(np.minimum(W[SLIP_ROWS], W[MARGIN_ROWS])))),
+            comp = max(float(np.max(np.abs(np.minimum(W[R.slips], W[R.margins])))),
                        cross_residual(W, theta), onset_residual(W) if onset else 0.0)
             modes_sub = modes_of(W)
             S = float(x1_sub[-1])

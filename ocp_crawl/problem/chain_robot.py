@@ -179,18 +179,6 @@ def _chain_samples(ctx: Context, gait: Mapping[str, Any],
     return JOINT_INTERPOLANTS[gait["interpolation"]](t, v), values
 
 
-def three_link_only(problem, what: str) -> None:
-    """ProblemError when ``problem`` (a :class:`~ocp_crawl.problem.Problem`) has a chain: ``what``
-    (``"optimize"``) models the three-link robot only."""
-    if problem.is_chain:
-        lengths = list(problem.robot.lengths)
-        raise ProblemError(f"{problem.source}: [robot] lengths = {format_value(lengths)} is a "
-                           f"chain of {len(lengths)} links: {what} models the three-link robot "
-                           "only ([robot] M, L, beta, k); a chain is simulated, cross-checked, "
-                           "swept, animated and fitted (ocp-crawl simulate, crosscheck, sweep, "
-                           "animate, fit)")
-
-
 def segments_of_a_chain(ctx: Context, pressure: Mapping[str, Any]) -> None:
     """ProblemError for ``[pressure] segments`` given to the three-link robot."""
     if "segments" in pressure:

@@ -9,9 +9,9 @@ import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic
 from ocp_crawl.model.pulse import Pulse
+from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.ocp import OCPSettings
-from ocp_crawl.problem.chain_robot import three_link_only
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.keys import ProblemError
@@ -88,17 +88,38 @@ def centre_deg(problem: Problem) -> float:
     return math.degrees(float(np.mean(gait(np.arange(CENTRE_GRID) / CENTRE_GRID))))
 
 
-def ocp_settings(problem: Problem) -> OCPSettings:
-    """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma.
+def _joints(problem: Problem) -> int:
+    robot = problem.robot
+    return robot.n_joints if isinstance(robot, Chain) else 2
 
-    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg; ProblemError
-    otherwise, as for any other rule between keys that OCPSettings checks (e.g. sigma_min < sigma0,
-    at most MAX_STAGES stages), and for a chain (the OCP models the three-link robot).
+
+def joint_centres_deg(problem: Problem) -> tuple[float, ...]:
+    """A chain's reference angles' centre per joint [deg], the mean over the cycle (the OCP's
+    envelope of each joint is centred there)."""
+    ref = np.asarray(problem.gait(np.arange(CENTRE_GRID) / CENTRE_GRID), float)
+    return tuple(float(v) for v in np.degrees(ref.mean(axis=1)))
+
+
+def ocp_settings(problem: Problem) -> OCPSettings:
+    """OCPSettings from the problem's ``[ocp]`` section (defaults when absent) and its gait's gamma
+    (a chain's: its centre per joint, ``gamma_joints_deg``).
+
+    ``A_max_deg`` [deg] must keep the envelope gamma +- A_max_deg inside (0, 180) deg (a chain's
+    joints: inside (0, 360) deg); ProblemError otherwise, as for any other rule between keys that
+    OCPSettings checks (e.g. sigma_min < sigma0, at most MAX_STAGES stages).
     """
-    three_link_only(problem, "the optimal-gait problem ([ocp])")
     sec = dict(problem.sections.get("ocp", {}))
     if not sec:  # a problem built in code: the schema's defaults
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
+    if problem.is_chain:
+        centres, a = joint_centres_deg(problem), sec["A_max_deg"]
+        bad = next((j for j, c in enumerate(centres) if not (0 < c - a and c + a < 360)), None)
+        if bad is not None:
+            raise ProblemError(f"{problem.source}: [ocp] A_max_deg = {format_value(a)} with the "
+                               f"[gait] centre of joint {bad + 1}, {centres[bad]:g} deg, is "
+                               "invalid: each joint's envelope centre +- A_max_deg must lie in "
+                               f"(0, 360) deg (here {centres[bad] - a:g} to {centres[bad] + a:g})")
+        return _settings(problem, sec, gamma_joints_deg=centres)
     gamma = centre_deg(problem)
     if not (0 < gamma - sec["A_max_deg"] and gamma + sec["A_max_deg"] < 180):
         gait = problem.sections.get("gait", {})
@@ -110,12 +131,18 @@ def ocp_settings(problem: Problem) -> OCPSettings:
                            f"with [gait] {given or f'gamma = {gamma:g} deg'} is invalid: the "
                            "envelope gamma +- A_max_deg must lie in (0, 180) deg (here "
                            f"{gamma - sec['A_max_deg']:g} to {gamma + sec['A_max_deg']:g})")
+    return _settings(problem, sec, gamma_deg=gamma)
+
+
+def _settings(problem: Problem, sec: dict, **centre) -> OCPSettings:
+    """OCPSettings of the ``[ocp]`` values ``sec`` and the envelope's ``centre``; ProblemError for
+    a rule between keys or a friction scenario that makes an invalid robot."""
     if "constraint" in sec:  # one [[ocp.constraint]] table per bound
         sec["constraints"] = tuple(dict(c) for c in sec.pop("constraint"))
     if "ipopt" in sec:
         sec["ipopt"] = dict(sec["ipopt"])
     try:
-        settings = OCPSettings(**sec, gamma_deg=gamma)
+        settings = OCPSettings(**sec, **centre)
     except ValueError as exc:  # a rule between keys (each key alone passed the schema)
         raise ProblemError(f"{problem.source}: [ocp] {exc}".replace("OCPSettings: ",
                                                                     "").replace("OCPSettings.",
@@ -160,9 +187,9 @@ def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Proble
 
     from ocp_crawl.ocp import optimize_gait
 
-    for asked in (problem, start):
-        if asked is not None:
-            three_link_only(asked, "optimize")
+    if start is not None and _joints(start) != _joints(problem):
+        raise ProblemError(f"{start.source}: a start needs a robot of the problem's "
+                           f"{_joints(problem)} joints, got {_joints(start)}")
     if problem.drive != "torque":
         raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] "
                            f"drive = \"torque\", got {format_value(problem.drive)}")

@@ -27,9 +27,9 @@ from ocp_crawl.ocp.quantities import QUANTITIES, Constraint
 from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   BASELINE_SAMPLES_BOUNDS, BASELINE_STARTS_BOUNDS,
                                   ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
-                                  HARMONIC_PSI_BOUNDS, LAYER_OF, NODES_BOUNDS, OBJECTIVE_CHOICES,
-                                  PERTURBATIONS, PHYSICAL_BOUNDS, REMOVED_KEYS, STARTS_BOUNDS,
-                                  WARM_BARRIERS)
+                                  HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, LAYER_OF, NODES_BOUNDS,
+                                  OBJECTIVE_CHOICES, PERTURBATIONS, PHYSICAL_BOUNDS, REMOVED_KEYS,
+                                  STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.sim.dynamic import CONES
@@ -355,6 +355,10 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         default=_ocp("harmonic_psi"),
         rule=within(*HARMONIC_PSI_BOUNDS, "one event-driven run per psi, amplitude "
                     "and friction scenario; 180 is a 2 deg grid")),
+    Key("harmonic_A", int, "-", "amplitudes of the harmonic sweep, up to A_max_deg (initial "
+        "guess, comparison)", default=_ocp("harmonic_A"),
+        rule=within(*HARMONIC_A_BOUNDS, "one event-driven run per amplitude, psi and friction "
+                    "scenario")),
     Key("baselines", str, "-",
         "waveform families an optimum is compared with (the harmonic one is also its "
         "first start)", default=_ocp("baselines"), choices=BASELINE_CHOICES),

@@ -168,11 +168,22 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     families are searched in another process while the OCP solves)."""
     nodes = list(nodes or [settings.nodes])
     scen = len(settings.scenarios(problem.robot))
-    per_it = sum(nodes) * scen * UNIT_COST["ocp_node_iteration"]
+    # a sub-step's variables grow with the joints m: m + 10, 12 for the three-link robot
+    size = (problem.robot.n_joints + 10) / 12 if problem.is_chain else 1.0
+    per_it = sum(nodes) * scen * size * UNIT_COST["ocp_node_iteration"]
     solve = Work(per_it * OCP_ITERATIONS * settings.starts,
                  f"{settings.starts} starts x {OCP_ITERATIONS} iterations x N = "
                  f"{'+'.join(map(str, nodes))} x {scen} scenarios at ~{_ms('ocp_node_iteration')}",
                  ("ocp.nodes", "ocp.starts", "--nodes"))
+    if problem.is_chain:   # its travelling waves, each a simulation of the chain
+        from ocp_crawl.ocp.chain_search import local_budget, scan_points as chain_points
+
+        members = len(chain_points(settings)) + settings.baseline_starts * local_budget(settings)
+        member = simulation_work(problem)
+        return solve + Work(members * scen * member.typical,
+                            f"{members} travelling waves x {scen} scenarios x a typical "
+                            f"({member.detail})",
+                            ("ocp.harmonic_A", "ocp.harmonic_psi", "ocp.baseline_starts"))
     from ocp_crawl.ocp.search import scan_points
 
     members = len(scan_points(settings)) + settings.baseline_starts * settings.baseline_evaluations

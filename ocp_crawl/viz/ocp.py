@@ -15,25 +15,25 @@ from matplotlib.figure import Figure
 from ocp_crawl.io import units
 from ocp_crawl.io.files import atomic_write, jsonable, write_json
 from ocp_crawl.io.tables import table_text
+from ocp_crawl.model.chain_inputs import JointCallable
 from ocp_crawl.model.inputs import CallableSignal
-from ocp_crawl.model.statics import Model, Robot
 from ocp_crawl.ocp import OCPResult, OCPSettings
 from ocp_crawl.ocp.judge import REPLAY_INTERPOLATION, scenario_labels
 from ocp_crawl.problem.overrides import toml_text
 from ocp_crawl.problem.waveforms import samples_problem
-from ocp_crawl.sim.event import simulate_torque
+from ocp_crawl.ocp.plant import Plant
 from ocp_crawl.viz.gait import (mode_legend, mode_runs, plot_friction_limits, save_figure,
                                 shade_modes)
 
 
 def torques_csv(result: OCPResult) -> str:
     """CSV text of the optimal torques in the package's table convention
-    (:mod:`ocp_crawl.io.tables`): ``phase [-]`` in [0, 1), ``tau1 [N m]``, ``tau2 [N m]``, one row
-    per node, and ``period [s]``, the OCP's period T on every row (without a finite T, no such
-    column); full precision (read back, the numbers are the very same, so that ``simulate`` of
-    :data:`OPTIMAL_GAIT_TOML` reproduces the replay and its speed)."""
-    columns = [("phase", "-", result.phase), ("tau1", "N m", result.tau[0]),
-               ("tau2", "N m", result.tau[1])]
+    (:mod:`ocp_crawl.io.tables`): ``phase [-]`` in [0, 1), ``tau1 [N m]`` .. ``taum [N m]`` (the m
+    joints), one row per node, and ``period [s]``, the OCP's period T on every row (without a finite
+    T, no such column); full precision (read back, the numbers are the very same, so that
+    ``simulate`` of :data:`OPTIMAL_GAIT_TOML` reproduces the replay and its speed)."""
+    columns = [("phase", "-", result.phase),
+               *((f"tau{i + 1}", "N m", row) for i, row in enumerate(result.tau))]
     if math.isfinite(result.T_ocp):
         columns.append(("period", "s", np.full(result.phase.size, result.T_ocp)))
     return table_text(columns, comments=[
@@ -66,8 +66,14 @@ def optimal_gait_toml(result: OCPResult, problem: dict) -> str:
         "ocp-crawl optimize.",
         f"Run:  ocp-crawl simulate {OPTIMAL_GAIT_TOML}  (S and the speed reproduce the optimize "
         "replay's, S_replay and v_replay).",
-        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full "
+        f"torques.csv (next to this file): phase [-], {_tau_columns(result)} at the nodes, full "
         "precision."])
+
+
+def _tau_columns(result: OCPResult) -> str:
+    m = result.tau.shape[0]
+    return ", ".join(f"tau{i + 1} [N m]" for i in range(m)) if m <= 3 else \
+        f"tau1 [N m] .. tau{m} [N m]"
 
 
 def scenario_files(settings: OCPSettings) -> list[str]:
@@ -82,7 +88,7 @@ def scenario_files(settings: OCPSettings) -> list[str]:
             else f"optimal_gait_mu1_mu2_{label}.toml" for label in scenario_labels(settings)]
 
 
-def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str, name: str) -> str:
+def scenario_toml(result: OCPResult, problem: dict, scenario, label: str, name: str) -> str:
     """The problem file ``name`` replaying the optimum in one friction scenario ``label``
     (:func:`~ocp_crawl.ocp.judge.scenario_labels`): as
     :func:`optimal_gait_toml`, the robot's friction coefficients those of ``scenario`` (mu1, mu2,
@@ -102,12 +108,22 @@ def scenario_toml(result: OCPResult, problem: dict, scenario: Robot, label: str,
         "ocp-crawl optimize.",
         f"Run:  ocp-crawl simulate {name}  (S and the speed reproduce the optimize replay's in "
         "this scenario).",
-        "torques.csv (next to this file): phase [-], tau1 [N m], tau2 [N m] at the nodes, full "
+        f"torques.csv (next to this file): phase [-], {_tau_columns(result)} at the nodes, full "
         "precision."])
 
 
 #: colours of joint/foot 1 and 2
 JOINT_COLORS = ("tab:blue", "tab:purple")
+#: colours of the joints of a chain of more than two joints
+CHAIN_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink",
+                "tab:olive", "tab:cyan")
+
+
+def joint_colors(m: int) -> tuple:
+    """The colours of m joints (the three-link robot's two: :data:`JOINT_COLORS`)."""
+    if m == 2:
+        return JOINT_COLORS
+    return tuple(CHAIN_COLORS[i % len(CHAIN_COLORS)] for i in range(m))
 #: opacity of the contact-mode shading
 MODE_ALPHA = 0.45
 #: the sign of f_t, in the label of every force axis
@@ -134,7 +150,7 @@ def pinned(signal, t: np.ndarray) -> np.ndarray:
     return np.asarray(signal((np.asarray(t) + pin_shift(signal)) % 1.0))
 
 
-def baseline_replays(result: OCPResult, robot: Robot) -> list:
+def baseline_replays(result: OCPResult, robot) -> list:
     """The event-driven replays of the best simple gait (:func:`_baseline`), its torque pinned as
     the optimum's (:func:`pinned`), in every friction scenario of the optimum and in its gravity
     convention: the actual motion to compare the optimum's with; [] without a baseline or without
@@ -142,12 +158,13 @@ def baseline_replays(result: OCPResult, robot: Robot) -> list:
     best = _baseline(result)
     if best is None or not result.replay:
         return []
-    torque = best.torque_signal(robot.k)
+    torque = best.signal_for(robot, result.settings)
     shift = pin_shift(torque)
-    signal = CallableSignal(lambda t: torque((np.asarray(t) + shift) % 1.0),
-                            lambda t: torque.derivative((np.asarray(t) + shift) % 1.0))
+    shifted = CallableSignal if result.tau.shape[0] == 2 else JointCallable
+    signal = shifted(lambda t: torque((np.asarray(t) + shift) % 1.0),
+                     lambda t: torque.derivative((np.asarray(t) + shift) % 1.0))
     gravity = result.replay[0].gravity
-    return [simulate_torque(Model(r, gravity), signal) for r in result.settings.scenarios(robot)]
+    return [Plant(r, gravity).simulate(signal) for r in result.settings.scenarios(robot)]
 
 
 #: the label of the time axis in cycles
@@ -232,15 +249,15 @@ def _column_title(result: OCPResult, best, j: int, label: str) -> str:
     return text + "\n\n"
 
 
-def plot_optimal_gait(result: OCPResult, robot: Robot, baselines: list | None = None) -> Figure:
-    """Four panels over the cycle, one column per friction scenario: (a) the optimal torques
-    [mN m] against the best simple gaits', (b) the actual joint angles [deg] and (c) contact
-    positions [mm] of the replay and the OCP's nodes against the best simple gait's own replay
-    (``baselines``, one per scenario; default: :func:`baseline_replays`), (d) the tangential force
-    [N] with the friction limits; every panel shaded by the contact modes of the optimum's replay.
-    Time in seconds when the optimum's and the baseline's periods differ, else the phase.  The
-    title gives S, v, W+ and CoT+ of the event-driven replays and the gains.  Returns the figure
-    (Agg canvas)."""
+def plot_optimal_gait(result: OCPResult, robot, baselines: list | None = None) -> Figure:
+    """Four panels over the cycle, one column per friction scenario: (a) the optimal torques [mN m]
+    against the best simple gaits', (b) the actual joint angles [deg] and (c) contact positions [mm]
+    of the replay and the OCP's nodes against the best simple gait's own replay (``baselines``, one
+    per scenario; default: :func:`baseline_replays`), (d) the tangential force [N] with the friction
+    limits; every panel shaded by the contact modes of the optimum's replay.  ``robot``: the
+    three-link Robot or a Chain (a curve per joint).  Time in seconds when the optimum's and the
+    baseline's periods differ, else the phase.  The title gives S, v, W+ and CoT+ of the
+    event-driven replays and the gains.  Returns the figure (Agg canvas)."""
     best = _baseline(result)
     runs = baseline_replays(result, robot) if baselines is None else baselines
     clock = _clock(result, best)
@@ -289,7 +306,7 @@ def _label(ax, title: str, ylabel: str) -> None:
     ax.tick_params(labelbottom=True)
 
 
-def _torques(ax, result: OCPResult, robot: Robot, best, clock) -> None:
+def _torques(ax, result: OCPResult, robot, best, clock) -> None:
     """Panel (a): the optimal node torques, the best harmonic gait's and the best simple gait's
     (when that is of another family), both pinned as the optimum (:func:`pinned`), each over its
     own period."""
@@ -299,11 +316,11 @@ def _torques(ax, result: OCPResult, robot: Robot, best, clock) -> None:
     if best is not None and best is not h:
         others.append((best, "-.", f"best {best.shape}"))
     nodes = np.r_[result.phase, 1.0] * clock[0]
-    for i, c in enumerate(JOINT_COLORS):
+    for i, c in enumerate(joint_colors(result.tau.shape[0])):
         ax.plot(nodes, np.r_[result.tau[i], result.tau[i, 0]] * 1e3, color=c, marker=".", ms=4,
                 label=f"optimal $\\tau_{i + 1}$ (nodes)")
         for choice, ls, name in others:   # each over its own period, when in seconds
-            tau = pinned(choice.torque_signal(robot.k), tt)[i] * 1e3
+            tau = pinned(choice.signal_for(robot, result.settings), tt)[i] * 1e3
             period = 1.0 if clock[2] == PHASE_LABEL else choice.T
             ax.plot(tt * period, tau, color=c, ls=ls, lw=1.0, label=f"{name} $\\tau_{i + 1}$")
     _label(ax, f"(a) joint torques ({result.objective})", "joint torque [mN m]")
@@ -312,23 +329,25 @@ def _torques(ax, result: OCPResult, robot: Robot, best, clock) -> None:
 def _angles(ax, result: OCPResult, j: int, rep, baseline: tuple, clock) -> None:
     """Panel (b): the actual joint angles of the optimum (replay and OCP nodes) and of the best
     simple gait (``baseline``: its own replay and its name)."""
+    colors = joint_colors(result.tau.shape[0])
     if rep is not None:
         tr = (rep.t - rep.t0) * clock[0]
-        # joint 1 wide and below, joint 2 thin on top: optimal gaits often move both joints alike
-        ax.plot(tr, np.degrees(rep.phi[0]), color=JOINT_COLORS[0], lw=3.0, alpha=0.6, zorder=3,
-                label="optimal $\\varphi_1$ (replay)")
-        ax.plot(tr, np.degrees(rep.phi[1]), color=JOINT_COLORS[1], lw=1.4, zorder=4,
-                label="optimal $\\varphi_2$ (replay)")
+        # joint 1 wide and below, the others thin on top: optimal gaits often move joints alike
+        for i, c in enumerate(colors):
+            ax.plot(tr, np.degrees(rep.phi[i]), color=c, lw=3.0 if i == 0 else 1.4,
+                    alpha=0.6 if i == 0 else 1.0, zorder=3 if i == 0 else 4,
+                    label=f"optimal $\\varphi_{i + 1}$ (replay)")
     if j < len(result.phi):
         phi = result.phi[j]
         nodes = np.arange(phi.shape[1]) / (phi.shape[1] - 1) * clock[0]
-        for i, marker in enumerate(("o", "s")):
-            ax.plot(nodes, np.degrees(phi[i]), ls="none", marker=marker, ms=3.0, mfc="none",
-                    mec="0.35", mew=0.6, zorder=5, label=f"OCP nodes $\\varphi_{i + 1}$")
+        for i in range(phi.shape[0]):
+            ax.plot(nodes, np.degrees(phi[i]), ls="none", marker="osD^v<>p"[i % 8], ms=3.0,
+                    mfc="none", mec="0.35", mew=0.6, zorder=5,
+                    label=f"OCP nodes $\\varphi_{i + 1}$")
     base, name = baseline
     if base is not None and base.t.size:
         tb = (base.t - base.t0) * clock[1]
-        for i, c in enumerate(JOINT_COLORS):
+        for i, c in enumerate(colors):
             ax.plot(tb, np.degrees(base.phi[i]), color=c, ls="--", lw=1.0, zorder=4,
                     label=f"{name} $\\varphi_{i + 1}$ (its replay)")
     _label(ax, "(b) actual joint angles", "joint angle [deg]")
@@ -355,7 +374,7 @@ def _positions(ax, result: OCPResult, j: int, rep, baseline: tuple, clock) -> No
     _label(ax, "(c) contact positions (from foot 1 at the start)", "contact position [mm]")
 
 
-def _forces(ax, result: OCPResult, rep, robot: Robot, clock) -> None:
+def _forces(ax, result: OCPResult, rep, robot, clock) -> None:
     """Panel (d): the replay's tangential force [N] and the friction limits of the scenario's
     ``robot``."""
     if rep is not None:
@@ -373,7 +392,7 @@ def _write_text(path: Path, text: str) -> Path:
     return atomic_write(path, lambda fh: fh.write(data))
 
 
-def write_outputs(result: OCPResult, robot: Robot, out_dir: str | os.PathLike,
+def write_outputs(result: OCPResult, robot, out_dir: str | os.PathLike,
                   summary: dict) -> list[Path]:
     """Write torques.csv, optimal_gait.toml (a problem file replaying torques.csv, when ``summary``
     holds the ``problem`` as ``Problem.to_dict()``; over a friction set: also one per friction
