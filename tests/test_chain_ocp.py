@@ -2,6 +2,8 @@
 three-link robot's optimum, a four-link optimum is confirmed by the chain's own event-driven replay
 and beats the best travelling wave (checked against a grid of independent simulations), and the
 problem-file layer (the envelope's centres, bad input)."""
+import csv
+import json
 import math
 from pathlib import Path
 
@@ -10,6 +12,7 @@ import numpy as np
 import pytest
 
 from ocp_crawl import Harmonic, ReferenceTorque, Robot
+from ocp_crawl.cli import main
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_inputs import ChainReferenceTorque, JointFourier
 from ocp_crawl.model.chain_model import ChainModel
@@ -80,20 +83,40 @@ def test_the_joint_bounds_of_a_chain_are_each_joints_own():
     assert hi3 == pytest.approx(2 * [ROBOT.k * math.radians(120 - 180)])
 
 
-def test_a_four_link_optimum_is_confirmed_by_its_replay_and_beats_its_harmonic_baseline():
-    """max_speed on four links (three torque profiles) from a small search of the harmonic
-    travelling waves (the search's own check is the heavy test below): success, the chain's event-driven replay within 1e-6 of the OCP (every event
-    of this optimum on a sub-step boundary), inside its envelope and bandwidth, better than its
-    start."""
-    settings = OCPSettings(nodes=20, A_max_deg=27.5, gamma_joints_deg=CENTRES, starts=1,
-                           harmonic_A=1, harmonic_psi=4, baseline_starts=1,
-                           baseline_evaluations=8, baselines="harmonic")
-    res = optimize_gait(FOUR, "physical", settings, jobs=1)
-    assert res.success, res.message
-    assert res.tau.shape == (3, 20) and res.rel_diff_replay <= 1e-6
-    assert res.envelope_excess <= 1e-9 and res.rate_ratio <= 1 + 1e-9
-    assert list(res.baselines.choices) == ["harmonic"]
-    assert res.value_replay > res.harmonic.value * (1 + settings.replay_tol)
+def test_optimize_on_the_four_link_file_is_confirmed_and_its_files_replay_it(tmp_path, capsys):
+    """``optimize`` on problems/ocp_four_links.toml (three torque profiles) from a small search of
+    the harmonic travelling waves (the search's own check is the heavy test below): success, the
+    chain's event-driven replay within 1e-6 of the OCP (every event of this optimum on a sub-step
+    boundary), inside its envelope and bandwidth, better than its start; torques.csv has a column
+    per joint and ``simulate`` of the written optimal_gait.toml gives the replay's S."""
+    out = tmp_path / "out"
+    args = ["optimize", str(FILE), "--json", "--jobs", "1", "--out", str(out)]
+    for key in ("nodes=20", "A_max_deg=27.5", "harmonic_A=1", "harmonic_psi=4",
+                "baseline_evaluations=8", "baselines=harmonic"):
+        args += ["--set", f"ocp.{key}"]
+    assert main(args) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["status"] == "success" and res["rel_diff_replay"] <= 1e-6
+    assert res["envelope_excess"] <= 1e-9 and res["rate_ratio"] <= 1 + 1e-9
+    assert [r["shape"] for r in res["baselines"]] == ["harmonic"]
+    assert res["gain"] > res["replay_tol"]
+    with open(out / "torques.csv", newline="") as fh:
+        header = next(csv.reader(row for row in fh if not row.startswith("#")))
+    assert header == ["phase [-]", "tau1 [N m]", "tau2 [N m]", "tau3 [N m]", "period [s]"]
+    assert main(["simulate", str(out / "optimal_gait.toml"), "--json"]) == 0
+    sim = json.loads(capsys.readouterr().out)
+    assert sim["S"] == pytest.approx(res["S_replay"], rel=1e-9)
+
+
+def test_a_start_of_another_robot_is_bad_input(tmp_path, capsys):
+    """``optimize --start`` with the three-link robot's gait for a chain of four links: exit 2, one
+    line naming the start file and both joint counts."""
+    start = tmp_path / "start.toml"
+    paper = (FILE.parent / "paper_gait.toml").read_text()
+    start.write_text(paper.replace('[gait]\n', '[gait]\nperiod = 0.5\n', 1))
+    assert main(["optimize", str(FILE), "--start", str(start), "--jobs", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "start.toml" in err[0] and "3 joints, got 2" in err[0], err
 
 
 @pytest.mark.heavy

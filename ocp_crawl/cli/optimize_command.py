@@ -20,6 +20,7 @@ from ocp_crawl.ocp.limits import NODES_BOUNDS
 from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
                                problem_from_dict)
 from ocp_crawl.problem.overrides import read_toml
+from ocp_crawl.problem.run import check_start_robot
 from ocp_crawl.problem.work import optimize_work
 
 
@@ -326,6 +327,8 @@ def cmd_optimize(args: argparse.Namespace) -> int:
     out = optional_out(args, (*OCP_FILES, *scenario_files(settings)))
     check_start(problem)
     start = None if args.start is None else load_problem(args.start)
+    if start is not None:
+        check_start_robot(problem, start)
     if start is not None and (start.drive != "torque" or start.period is None):
         raise BadInput(f"--start {args.start}: needs a torque-drive gait with a [gait] period [s] "
                        f"(as the optimal_gait.toml that optimize --out writes); got drive "

@@ -9,9 +9,9 @@ import numpy as np
 
 from ocp_crawl.model.inputs import Harmonic
 from ocp_crawl.model.pulse import Pulse
-from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.ocp import OCPSettings
+from ocp_crawl.ocp.plant import joints_of
 from ocp_crawl.problem.problem import Problem, freeze, problem_from_dict, thaw
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.problem.keys import ProblemError
@@ -88,9 +88,12 @@ def centre_deg(problem: Problem) -> float:
     return math.degrees(float(np.mean(gait(np.arange(CENTRE_GRID) / CENTRE_GRID))))
 
 
-def _joints(problem: Problem) -> int:
-    robot = problem.robot
-    return robot.n_joints if isinstance(robot, Chain) else 2
+def check_start_robot(problem: Problem, start: Problem) -> None:
+    """ProblemError when the start's robot has another number of joints than the problem's."""
+    m, m_start = joints_of(problem.robot), joints_of(start.robot)
+    if m_start != m:
+        raise ProblemError(f"{start.source}: a start needs a robot of the problem's {m} joints, "
+                           f"got {m_start}")
 
 
 def joint_centres_deg(problem: Problem) -> tuple[float, ...]:
@@ -187,9 +190,8 @@ def optimize_problem(problem: Problem, *, jobs: int | None = None, start: Proble
 
     from ocp_crawl.ocp import optimize_gait
 
-    if start is not None and _joints(start) != _joints(problem):
-        raise ProblemError(f"{start.source}: a start needs a robot of the problem's "
-                           f"{_joints(problem)} joints, got {_joints(start)}")
+    if start is not None:
+        check_start_robot(problem, start)
     if problem.drive != "torque":
         raise ProblemError(f"{problem.source}: optimize designs joint torques: it needs [gait] "
                            f"drive = \"torque\", got {format_value(problem.drive)}")
