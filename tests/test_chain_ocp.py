@@ -36,8 +36,9 @@ FILE = Path(__file__).resolve().parents[1] / "problems" / "ocp_four_links.toml"
 
 def test_the_paper_robot_as_a_chain_has_the_three_link_nlp_and_optimum():
     """The OCP of the paper robot through the chain's statics (another symbolic model of the same
-    robot) is the three-link robot's NLP: the same initial guess, objective, constraints and
-    constraint Jacobian at the guess and at the three-link optimum (to 1e-12); and the tightened
+    robot) is the three-link robot's NLP with its joint heights: the same initial guess, objective,
+    constraints and constraint Jacobian at the guess and at the three-link optimum (to 1e-12), the
+    heights positive there; and the tightened
     NLP of either started at that optimum ends at one point (to 1e-8, IPOPT's stopping point).
     (Separate homotopies need not agree: round-off differences of 1e-14 in the two models' values
     take a nonconvex NLP to other points along the relaxation path.)"""
@@ -49,12 +50,20 @@ def test_the_paper_robot_as_a_chain_has_the_three_link_nlp_and_optimum():
     assert np.max(np.abs(ocpc.initial_guess(start, T0) - x0)) < 1e-12
     x3, _, failed, _ = GaitSolver(ocp3).solve(x0)
     assert failed is None and ocpc.m == 2
+    # the chain's NLP has the rows of its joint heights too (and joint angles up to 2 pi): the
+    # three-link robot's rows compared by name, the heights positive (inactive)
+    rows3, rowsc = (np.concatenate([np.arange(o.ng)[sl] for k, sl in o.slices.items()
+                                    if k.startswith("g_") and k != "g_height_0"])
+                    for o in (ocp3, ocpc))
+    assert ocp3.nx == ocpc.nx and rows3.size == ocp3.ng
     for x in (x0, x3):
         assert ocpc.objective(x) == pytest.approx(ocp3.objective(x), rel=1e-12)
         g3, gc = (np.asarray(o._g(x)).ravel() for o in (ocp3, ocpc))
-        assert np.max(np.abs(gc - g3)) <= 1e-12 * max(1.0, np.max(np.abs(g3)))
+        assert np.max(np.abs(gc[rowsc] - g3[rows3])) <= 1e-12 * max(1.0, np.max(np.abs(g3)))
+        assert np.min(gc[ocpc.slices["g_height_0"]]) > 0
         J3, Jc = (cs.Function("J", [o.nlp["x"]], [cs.jacobian(o.nlp["g"], o.nlp["x"])])(x)
                   for o in (ocp3, ocpc))
+        J3, Jc = J3[rows3.tolist(), :], Jc[rowsc.tolist(), :]
         assert float(cs.mmax(cs.fabs(Jc - J3))) <= 1e-12 * float(cs.mmax(cs.fabs(J3)))
     # the polished point leaves the cross conditions at sigma_min: solved again it moves within
     # that slack, alike in both NLPs
@@ -76,7 +85,10 @@ def test_the_joint_bounds_of_a_chain_are_each_joints_own():
     k, rest = np.array(chain.stiffness), np.array(chain.rest)
     assert np.degrees(math.pi + rest + lo / k) == pytest.approx(np.array(CENTRES) - 20.0)
     assert np.degrees(math.pi + rest + hi / k) == pytest.approx(np.array(CENTRES) + 20.0)
-    with pytest.raises(ValueError, match="gamma_joints_deg has 3 angles for a robot of 2 joints"):
+    with pytest.raises(ValueError, match="gamma_joints_deg has 3 angles for a robot of 4 joints"):
+        joint_torque_bounds(settings, FOUR.replace(lengths=(0.03,) * 5, masses=(0.013,) * 5,
+                                                   stiffness=(ROBOT.k,) * 4, com=(), rest=()))
+    with pytest.raises(ValueError, match="gamma_joints_deg is a chain's"):
         joint_torque_bounds(settings, ROBOT)
     lo3, hi3 = joint_torque_bounds(OCPSettings(), ROBOT)
     assert lo3 == pytest.approx(2 * [ROBOT.k * math.radians(60 - 180)])
@@ -163,7 +175,8 @@ def test_a_travelling_wave_is_the_chain_gait_of_the_same_keys():
 
 
 def test_the_four_link_file_centres_the_envelope_on_its_gait():
-    """ocp_settings of a chain: the envelope's centre of each joint is its gait's mean."""
+    """ocp_settings of a chain: the envelope's centre of each joint is its gait's mean; an envelope
+    outside (0, 360) deg and the MuJoCo check are bad input."""
     settings = ocp_settings(load_problem(FILE))
     assert settings.gamma_joints_deg == pytest.approx(CENTRES, abs=1e-9)
     with pytest.raises(ProblemError, match=r"A_max_deg = 80.0 with the \[gait\] centre of "
@@ -171,6 +184,8 @@ def test_the_four_link_file_centres_the_envelope_on_its_gait():
         ocp_settings(load_problem(FILE, overrides=[
             "ocp.A_max_deg=80.0", "gait.gamma_joints_deg=[120.0, 70.0, 120.0]",
             "gait.A_joints_deg=[5.0, 5.0, 5.0]"]))
+    with pytest.raises(ProblemError, match="MuJoCo models the three-link robot only"):
+        ocp_settings(load_problem(FILE, overrides=["ocp.dynamic_margin=2.0"]))
 
 
 def test_a_plant_simulates_with_the_robots_own_stepper():
@@ -180,3 +195,22 @@ def test_a_plant_simulates_with_the_robots_own_stepper():
     s3 = Plant(ROBOT).simulate(torque)
     sc = Plant(THREE).simulate(torque)
     assert s3.success and sc.success and sc.S == pytest.approx(s3.S, rel=1e-9)
+
+
+def test_the_polish_skips_ties_that_would_move_a_margin_far():
+    """GaitSolver._polish_candidates: with the ties fixed first and the branches alone second,
+    unless fixing the ties moves a variable of the point by more than TIE_GAP (then the branches
+    alone); one candidate where both are the same NLP."""
+    from ocp_crawl.ocp import solver as solver_module
+
+    x = np.array([0.3, 5e-6, 0.2])
+    alone = np.array([np.inf, np.inf, np.inf])
+    cases = {"near": np.array([np.inf, 0.0, np.inf]), "far": np.array([0.0, 0.0, np.inf]),
+             "same": alone}
+    solver = solver_module.GaitSolver.__new__(solver_module.GaitSolver)
+    for name, tied in cases.items():
+        solver._polish_data = lambda x, ties=True, tied=tied: {"ubx": tied if ties else alone}
+        got = [c["ubx"] for c in solver._polish_candidates(x)]
+        want = {"near": [tied, alone], "far": [alone], "same": [alone]}[name]
+        assert len(got) == len(want) and all(np.array_equal(g, w) for g, w in zip(got, want))
+    assert solver_module.TIE_GAP < 0.3 and 5e-6 < solver_module.TIE_GAP

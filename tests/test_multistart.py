@@ -134,8 +134,8 @@ def test_best_start_by_replay_is_reported_with_the_spread(monkeypatch):
     st = OCPSettings(starts=4, nodes=N, direction=-1)
     signal, T = baseline(st)
     harm_S = simulate(Model(ROBOT, gravity="physical"), signal).S
-    harm = SimpleNamespace(signal_for=lambda robot, settings: signal, T=T, value=-harm_S / T, shape="harmonic",
-                           feasible=True, to_dict=lambda: {"value": -harm_S / T})
+    harm = SimpleNamespace(signal_for=lambda robot, settings: signal, T=T, value=-harm_S / T,
+                           shape="harmonic", feasible=True, to_dict=lambda: {"value": -harm_S / T})
     monkeypatch.setattr(solve, "best_baselines",  # (the other families: none simulates)
                         lambda robot, gravity, settings, shapes, **kw: Baselines(
                             settings.objective,

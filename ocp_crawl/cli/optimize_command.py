@@ -154,8 +154,8 @@ def _baseline_lines(s: dict) -> list[str]:
 
 
 def _pair(value, text) -> str:
-    """A pair of peaks (joints or feet 1, 2), or one pair per friction scenario ("a, b; c, d"); "-"
-    if missing."""
+    """The peaks of each joint (or foot), or one such list per friction scenario ("a, b; c, d");
+    "-" if missing."""
     if not value:
         return units.MISSING
     pairs = value if isinstance(value[0], list) else [value]

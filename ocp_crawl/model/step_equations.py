@@ -28,7 +28,6 @@ NPAIR = 4
 PAIR_NAMES = ("s1+", "s1-", "s2+", "s2-")
 
 
-
 @dataclass(frozen=True)
 class StepRows:
     """The rows of the step variables w of a robot of m joints by name: the m joint angles, the

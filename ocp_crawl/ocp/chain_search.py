@@ -39,6 +39,7 @@ from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.ocp.baseline import FAIL_RANK, Baselines, search_rank, speeds, value_of
 from ocp_crawl.ocp.family import A_MIN_DEG, Evaluation, allowed_period, screen
 from ocp_crawl.ocp.plant import Plant, envelope_centres
+from ocp_crawl.ocp.quantities import PROFILE_QUANTITIES, profile_of_signal
 from ocp_crawl.ocp.search import NM_TOL, first_simplex, seeds
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.workers import default_jobs, worker_pool
@@ -139,9 +140,13 @@ class ChainWaveFamily:
         if why is not None:
             return Evaluation(wave, T, nan, nan, nan, False, why, margins)
         S = tuple(r.S for r in sims)
+        profile = (math.nan, math.nan)
+        if (self.settings.user_objective is not None
+                or any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements)):
+            profile = profile_of_signal(wave.torque(self.settings, self.chain))
         return Evaluation(wave, allowed_period(self.settings, T, S), S,
                           tuple(r.W_plus for r in sims), tuple(r.CoT_plus for r in sims), True,
-                          margin=margins)
+                          margin=margins, profile=profile)
 
     def rank(self, z) -> float:
         """The search rank (:func:`~ocp_crawl.ocp.baseline.search_rank`) of the member at z."""

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocp_crawl.io import units
+from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.statics import Model
 from ocp_crawl.status import Status
 
@@ -170,7 +171,7 @@ def _nominal(settings) -> int:
                           + abs(math.log(lv)) for lv, r in settings.scenario_pairs()]))
 
 
-def check_dynamic_margin(res, models: list[Model]) -> None:
+def check_dynamic_margin(res, models: list) -> None:
     """With ``[ocp] dynamic_margin``: check a judged optimum ``res`` (an OCPResult) in MuJoCo, set
     ``res.dynamic_margin`` and refuse it (``replay_mismatch``) when it is not quasistatic at its
     period; nothing without the setting or without a confirmed optimum."""
@@ -180,12 +181,17 @@ def check_dynamic_margin(res, models: list[Model]) -> None:
     if factor is None or not res.success:
         return
     i = _nominal(res.settings)
+    model = getattr(models[i], "model", models[i])   # a Plant's statics, or the model itself
+    if isinstance(model, ChainModel):
+        res.dynamic_margin = {"message": "MuJoCo models the three-link robot only"}
+        _refuse(res, "dynamic_margin needs the three-link robot (MuJoCo models it only)")
+        return
     if models[i].gravity != "physical":
         res.dynamic_margin = {"message": "MuJoCo simulates physical gravity only"}
         _refuse(res, "dynamic_margin needs [model] gravity = \"physical\" (MuJoCo has no other)")
         return
     N = res.tau.shape[1]
-    check = margin_check(models[i], replay_signal(np.arange(N) / N, res.tau), res.T_ocp,
+    check = margin_check(model, replay_signal(np.arange(N) / N, res.tau), res.T_ocp,
                          res.S_replay[i], factor)
     res.dynamic_margin = check.to_dict()
     if check.ok:

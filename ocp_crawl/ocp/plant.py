@@ -59,6 +59,9 @@ def envelope_centres(settings, robot: AnyRobot) -> np.ndarray:
     g = settings.gamma_joints_deg
     if g is None:
         return np.full(m, math.radians(settings.gamma_deg))
+    if not isinstance(robot, Chain):
+        raise ValueError("OCPSettings.gamma_joints_deg is a chain's: the three-link robot's "
+                         "envelope is centred on gamma_deg")
     if len(g) != m:
         raise ValueError(f"OCPSettings.gamma_joints_deg has {len(g)} angles for a robot of {m} "
                          "joints")
@@ -96,6 +99,8 @@ class Plant:
         The robot (SI units).
     gravity : str
         The gravity convention ("physical" or "paper").
+    model : Model or ChainModel, optional
+        The robot's statics, when built already (None: built here).
     """
 
     def __init__(self, robot: AnyRobot, gravity: GravityConvention = "physical",
@@ -149,6 +154,30 @@ class Plant:
         g_eq, g_lift, sv, cv = step(w, cs.vertcat(phi_prev, th, p))
         return cs.Function(f"ocp_chain{n}_step", [phi_prev, w, th, p],
                            [cs.vertcat(g_eq, g_lift), sv * cv])
+
+    @property
+    def phi_max(self) -> float:
+        """The largest joint angle of the transcription [rad]: pi for the three-link robot (its
+        joints above the line of its feet), 2 pi for a chain, whose joint heights are rows of their
+        own (:attr:`height_function`)."""
+        return 2.0 * math.pi if self.chain else math.pi
+
+    @cached_property
+    def height_function(self) -> cs.Function | None:
+        """A chain's joint heights over L (m,) of (phi [m], p) (SX), which the transcription keeps
+        >= 0 at every sub-step end; None for the three-link robot."""
+        if not self.chain:
+            return None
+        from ocp_crawl.model.chain_statics import chain_symbolic, kin_names
+
+        assert isinstance(self.robot, Chain)
+        n, m = self.robot.n, self.m
+        rows = {k: i for i, k in enumerate(kin_names(n))}
+        phi, p = cs.SX.sym("phi", m), cs.SX.sym("p", self.p.size)
+        kin = chain_symbolic(n).kin(phi, p)
+        L = sum(p[i] for i in range(n))
+        z = cs.vertcat(*[kin[rows[f"zj{j}"]] for j in range(1, n)]) / L
+        return cs.Function(f"ocp_chain{n}_heights", [phi, p], [z])
 
     def simulate(self, torque, t_eval=None):
         """The event-driven torque simulation of ``torque`` (a 1-periodic signal of the phase with

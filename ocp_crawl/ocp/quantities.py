@@ -57,8 +57,8 @@ QUANTITIES = {q.name: q for q in (
     Quantity("peak_torque", "N m", False, "largest joint torque |tau_i| over the cycle", ("max",),
              True),
     Quantity("mean_torque_sq", "N^2 m^2", False,
-             "mean over the cycle of tau_1^2 + tau_2^2 (the joule heating of the actuators, "
-             "up to a factor)",
+             "mean over the cycle of the sum of tau_i^2 over the joints (the joule heating of the "
+             "actuators, up to a factor)",
              positive=True),
     Quantity("period", "s", False, "period T of the gait", positive=True),
 )}
@@ -156,7 +156,7 @@ _WHY_ONE_SIDED = ("W+ and CoT+ are sums of slacks v >= tau dphi, v >= 0 and the 
 @dataclass(frozen=True)
 class Symbols:
     """The transcription's expressions a constraint is stated in, scaled as the NLP is: node torques
-    ``T`` (2, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L
+    ``T`` (m, N) over M g L, the period ``Th`` over ``period_ref`` [s], per scenario S over L
     (``S``) and W+ over M g L (``W``, None where not built), and the scales."""
 
     T: Any
@@ -222,7 +222,7 @@ def constraint_rows(c: Constraint, sym: Symbols) -> list[tuple]:
 
 def mean_square_nodes(T):
     """Mean over the cycle of the sum over joints of the squared linear interpolant of node values
-    ``T`` (2, N) (periodic): per interval (a^2 + a b + b^2) / 3; a CasADi expression or a float."""
+    ``T`` (m, N) (periodic): per interval (a^2 + a b + b^2) / 3; a CasADi expression or a float."""
     if isinstance(T, np.ndarray):
         nxt = np.roll(T, -1, axis=1)
         return float(np.sum(T**2 + T * nxt + nxt**2) / (3 * T.shape[1]))
@@ -252,7 +252,7 @@ class Cycle:
 
 def profile_of_nodes(tau: np.ndarray) -> tuple[float, float]:
     """(peak |tau| [N m], mean squared torque [N^2 m^2]) of the linear interpolant of node torques
-    ``tau`` (2, N), exactly."""
+    ``tau`` (m, N), exactly."""
     tau = np.asarray(tau, float)
     return float(np.max(np.abs(tau))), mean_square_nodes(tau)
 
@@ -264,7 +264,7 @@ def profile_of_signal(signal) -> tuple[float, float]:
     by the trapezoid rule on the uniform phases (relative error O(1e-7) on the paper's
     waveforms)."""
     t = np.arange(PROFILE_SAMPLES) / PROFILE_SAMPLES
-    tau = np.asarray(signal(t), float).reshape(2, -1)
+    tau = np.asarray(signal(t), float).reshape(-1, t.size)   # a row per joint
     knots = np.mod(np.asarray(getattr(signal, "t_knots", ()), float).ravel(), 1.0)
     peak = float(np.max(np.abs(tau)))
     if knots.size:
@@ -384,7 +384,7 @@ class UserObjective:
 @dataclass(frozen=True)
 class Physical:
     """The transcription's symbols in physical units, for a :class:`UserObjective`: node torques
-    ``tau`` (2, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S``
+    ``tau`` (m, N) [N m] (linear in phase between nodes), the period ``T`` [s], per scenario ``S``
     [m] and ``W_plus`` [J] (None unless the objective says ``work``), the mean squared torque
     ``mean_torque_sq`` [N^2 m^2], ``direction`` (the sign of S pursued) and ``sizes``, the
     reference size of each quantity on the robot (:func:`reference_sizes`: e.g. to make an

@@ -106,12 +106,13 @@ def replay_peaks(model, signal, T: float, res, nodes: int | None = None) -> Peak
     :class:`~ocp_crawl.ocp.plant.Plant` (a rate per joint).  ``nodes``: the input's kinks at k/N
     (the linear interpolant of N nodes), None for a smooth input.  NaNs if the dense replay fails or
     T is not positive."""
+    nan = Peaks((math.nan,) * np.shape(signal(0.0))[0])   # a NaN per joint
     if not res.success or not T > 0:
-        return Peaks()
+        return nan
     te, slices = piece_phases(breakpoints(res, nodes))
     dense = as_plant(model).simulate(signal, t_eval=te)
     if not dense.success or dense.t.size != te.size:
-        return Peaks()
+        return nan
     rates = [math.degrees(peak_rate(te, row, slices)) / T for row in dense.phi]
     speeds = [peak_rate(te, x, slices) / T for x in (dense.x1, dense.x2)]
     return Peaks(tuple(rates), tuple(speeds))

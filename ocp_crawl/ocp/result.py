@@ -56,9 +56,9 @@ class OCPResult:
     settings: OCPSettings
     phase: np.ndarray = field(default_factory=lambda: np.zeros(0))
     tau: np.ndarray = field(default_factory=lambda: np.zeros((2, 0)))
-    """optimal torques [N m] at the node phases (2, N)"""
+    """optimal torques [N m] at the node phases (m, N), a row per joint"""
     phi: list = field(default_factory=list)
-    """per scenario: angles (2, N+1) [rad] at phases k/N, k = 0..N"""
+    """per scenario: angles (m, N+1) [rad] at phases k/N, k = 0..N"""
     x1: list = field(default_factory=list)
     f_t: list = field(default_factory=list)
     modes: list = field(default_factory=list)
@@ -104,7 +104,7 @@ class OCPResult:
     """largest second difference over the bound of max_accel_deg_s2 (<= 1: within; NaN: no such
     bound)"""
     peak_joint_rate_deg_s: list = field(default_factory=list)
-    """per scenario: the replay's peak actual joint rates |d phi_i/dt| of joints 1, 2 [deg/s]
+    """per scenario: the replay's peak actual joint rates |d phi_i/dt| of each joint [deg/s]
     (:mod:`~ocp_crawl.ocp.rates`)"""
     peak_slip_speed_m_s: list = field(default_factory=list)
     """per scenario: the replay's peak sliding speeds |d x_i/dt| of feet 1, 2 [m/s]"""

@@ -93,6 +93,9 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
         from); ``starts`` holds every start's outcome.
     """
     settings = settings or OCPSettings()
+    if isinstance(robot, Chain) and settings.baselines not in ("all", *CHAIN_SHAPES):
+        raise ValueError(f"optimize_gait: a chain's baselines are travelling waves of the shapes "
+                         f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
     t_start = time.perf_counter()
     solver = GaitSolver(GaitOCP(robot, gravity, settings))
     # the NLP built meanwhile

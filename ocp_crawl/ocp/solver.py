@@ -203,10 +203,11 @@ class GaitSolver:
     def _polish_candidates(self, x: np.ndarray) -> list[dict]:
         """The tightened NLPs tried in turn: the pairs' branches with the ties of the identified
         foot switches fixed, then the pairs' branches alone (the cross products keep the bound
-        sigma_min); the second only if it is another NLP (else it would fail the same way).  In the
-        optimiser's NLP the onset pairs on their branches already fix the ties (the new foot slips
-        from a zero margin), so there is usually one; the profile-fixed NLP has no onset rule and
-        two where the slipping foot changes."""
+        sigma_min); the second only if it is another NLP (else it would fail the same way), and
+        alone where fixing the ties would move a variable of x by more than :data:`TIE_GAP`.  In
+        the optimiser's NLP the onset pairs on their branches already fix the ties (the new foot
+        slips from a zero margin), so there is usually one; the profile-fixed NLP has no onset rule
+        and two where the slipping foot changes."""
         first, second = self._polish_data(x), self._polish_data(x, ties=False)
         if np.array_equal(first["ubx"], second["ubx"]):
             return [first]

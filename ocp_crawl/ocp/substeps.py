@@ -6,7 +6,7 @@ split into two sub-steps, ``a`` from node k-1 to an interior point at the torque
 ``tau_k-1 + theta_k (tau_k - tau_k-1)`` (``theta_k`` in [0, 1] a variable, the phase (k-1+theta_k)/N
 on the linear-in-phase interpolant) and ``b`` from there to node k.  Each sub-step carries the full
 incremental step equations and complementarity of :mod:`ocp_crawl.model.step_equations`.  Sub-step j
-is column j of the (NW, 2N) step variables (a of interval k is column 2k-2, b column 2k-1).  Cross
+is column j of the (m+10, 2N) step variables (a of interval k is column 2k-2, b column 2k-1).  Cross
 conditions (relaxed by the homotopy's sigma like the complementarity products, each scaled by N so
 that it is of the size of a product s c):
 
@@ -151,10 +151,10 @@ def switch_windows(W, theta):
 
 
 def cross_products(W, theta, N: int):
-    """The cross conditions' products of the (NW, 2N) sub-step variables and the interior fractions
-    (N,) (CasADi or numpy): both feet slipping per sub-step, foot 1 -> foot 2 and foot 2 -> foot 1
-    switches at boundary j (:func:`switch_windows`), each scaled by N (see the module docstring).
-    Returns (3, 2N)."""
+    """The cross conditions' products of the (m+10, 2N) sub-step variables and the interior
+    fractions (N,) (CasADi or numpy): both feet slipping per sub-step, foot 1 -> foot 2 and foot 2
+    -> foot 1 switches at boundary j (:func:`switch_windows`), each scaled by N (see the module
+    docstring). Returns (3, 2N)."""
     s1, s2, before, after = switch_windows(W, theta)
     c = rows_of(W).c1p
     both = N * s1 * s2
@@ -168,7 +168,7 @@ def cross_products(W, theta, N: int):
 def onset_products(W, N: int):
     """The slip onsets' products (1, 2N): N sum over the pairs q of s_q,j c_q,j-1 (a pair slips in
     sub-step j only if its margin is already zero at the sub-step's start; see the module
-    docstring).  ``W``: (NW, 2N) sub-step variables (CasADi or numpy)."""
+    docstring).  ``W``: (m+10, 2N) sub-step variables (CasADi or numpy)."""
     R = rows_of(W)
     return N * sum(W[R.s1p + q, :] * _roll(W[R.c1p + q, :], 1) for q in range(NPAIR))
 
@@ -215,11 +215,11 @@ class Scenario:
         phi0, ft0 = nlp.sym(f"phi0_{j}", m), nlp.sym(f"ft0_{j}")
         theta = nlp.sym(f"theta_{j}", N)
         W = nlp.sym(f"w_{j}", R.nw, 2 * N)
-        nlp.var(f"phi0_{j}", phi0, 0.0, math.pi)
+        nlp.var(f"phi0_{j}", phi0, 0.0, model.phi_max)
         nlp.var(f"ft0_{j}", ft0, -inf, inf)
         nlp.var(f"theta_{j}", theta, 0.0, 1.0)
         lbw = np.r_[np.zeros(m), -inf, -inf, np.zeros(2 * NPAIR)]
-        ubw = np.r_[np.full(m, math.pi), inf, inf, np.full(2 * NPAIR, inf)]
+        ubw = np.r_[np.full(m, model.phi_max), inf, inf, np.full(2 * NPAIR, inf)]
         nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, 2 * N), np.tile(ubw, 2 * N))
         PHI = cs.horzcat(phi0, W[R.phi, :])  # (m, 2N+1)
         Tsub = substep_torques(T, theta)
@@ -232,6 +232,10 @@ class Scenario:
         nlp.con(f"periodic_{j}", cs.vertcat(W[R.phi, -1] - phi0, W[R.ft1, -1] - ft0), 0.0, 0.0,
                 ("equation",))
         nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf, ("rule",))
+        if model.height_function is not None:   # a chain's joints above the ground
+            heights = model.height_function.map(2 * N)(W[R.phi, :], cs.repmat(cs.DM(model.p), 1,
+                                                                              2 * N))
+            nlp.con(f"height_{j}", cs.vec(heights), 0.0, inf)
         if joint_rate is not None:
             rows = joint_rate_rows(PHI, theta, joint_rate * Th)
             nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf, ("rule",))
@@ -277,7 +281,7 @@ def tie_rows(W, theta):
     (its margin at the end, or its slip on that side just after, through a sub-step of nearly zero
     length with the weight w of :func:`pass_weights`), then
     ``c_j-1 + s'_j-1 + w_j-1 s'_j-2 - TIE_END s_j`` (the same at the start: a slip does not start at
-    the tie unless it comes from the other foot).  ``W``: (NW, 2N) sub-step variables, ``theta``:
+    the tie unless it comes from the other foot).  ``W``: (m+10, 2N) sub-step variables, ``theta``:
     (N,) interior fractions (CasADi or numpy)."""
     w = pass_weights(theta)
     R = rows_of(W)
@@ -298,7 +302,7 @@ def friction_rows(W, eps: float):
     replay judge's): ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with
     s_i the slip of foot i in sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled
     by M g) at its two ends (the trapezoid rule of the simulation's margin; the start of sub-step 0
-    is the end of the last one, periodicity).  ``W``: (NW, 2N) sub-step variables (CasADi or
+    is the end of the last one, periodicity).  ``W``: (m+10, 2N) sub-step variables (CasADi or
     numpy)."""
     s1, s2 = _foot_slips(W)
     c = rows_of(W).c1p
@@ -384,7 +388,7 @@ def switch_fractions(res, N: int) -> np.ndarray:
 
 def guess_block(res, model, N: int) -> dict:
     """Scaled variables of one scenario sampled from an event-driven simulation ``res`` whose output
-    phases are node 0 and the 2N sub-step ends: the state of node 0, the (m + 10, 2N) sub-step
+    phases are node 0 and the 2N sub-step ends: the state of node 0, the (m+10, 2N) sub-step
     variables and S.  ``model``: the scenario's model (its ``robot``: a Robot or a Chain)."""
     r = model.robot
     Mg, L = r.M * r.g, r.L

@@ -6,13 +6,13 @@ Time is explicit.  The period T [s] of the gait is a variable, scaled as ``T_hat
 (:meth:`~ocp_crawl.ocp.settings.OCPSettings.period_ref`).  Node k sits at phase k/N (k = 0..N-1) and
 carries the torques tau_k; between nodes the torque is linear in phase (the replay's own
 interpolant).  The actuator bandwidth reads ``|tau_i,k - tau_i,k-1| <= k R T / N`` (R =
-max_rate_deg_s), the optional smoothness bound
-``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a (T/N)^2``, the envelope ``phi_ref = pi + tau/k`` within
-gamma +- A_max, the phase pin ``tau_1,k <= tau_1,0`` and ``T <= 2 period_ref`` (the resolution of
-the nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is two switch-exact sub-steps
-(:mod:`ocp_crawl.ocp.substeps`, with the optional bound max_joint_rate_deg_s on the mean joint
-rates); periodicity (angles and tangential force) is a constraint and the body displacement over the
-cycle is S = sum of the slips of foot 1.
+max_rate_deg_s), the optional smoothness bound ``|tau_i,k+1 - 2 tau_i,k + tau_i,k-1| <= k a
+(T/N)^2``, the envelope ``phi_ref = pi + rest + tau/k`` within gamma +- A_max (each joint with its
+own k, rest bend and centre: :mod:`~ocp_crawl.ocp.plant`), the phase pin ``tau_1,k <= tau_1,0`` and
+``T <= 2 period_ref`` (the resolution of the nodes: :data:`PERIOD_HAT_BOUNDS`).  Each interval is
+two switch-exact sub-steps (:mod:`ocp_crawl.ocp.substeps`, with the optional bound
+max_joint_rate_deg_s on the mean joint rates); periodicity (angles and tangential force) is a
+constraint and the body displacement over the cycle is S = sum of the slips of foot 1.
 
 Objectives (to minimise; v = direction S / T the mean speed): max_speed ``-v``; min_cot
 ``CoT+ = W+/(M g |S|)`` with ``v >= speed_min``; every objective with the bounds of ``constraints``

@@ -115,6 +115,15 @@ def ocp_settings(problem: Problem) -> OCPSettings:
     if not sec:  # a problem built in code: the schema's defaults
         sec = {k.name: k.default for k in SCHEMA["ocp"].keys if k.default is not None}
     if problem.is_chain:
+        if sec.get("baselines", "all") not in ("all", "harmonic", "triangle"):
+            raise ProblemError(f"{problem.source}: [ocp] baselines = "
+                               f"{format_value(sec['baselines'])} with a chain ([robot] lengths): "
+                               "a chain's baselines are travelling waves, \"harmonic\" or "
+                               "\"triangle\" (\"all\": both)")
+        if sec.get("dynamic_margin") is not None:
+            raise ProblemError(f"{problem.source}: [ocp] dynamic_margin = "
+                               f"{format_value(sec['dynamic_margin'])} with a chain ([robot] "
+                               "lengths): MuJoCo models the three-link robot only")
         centres, a = joint_centres_deg(problem), sec["A_max_deg"]
         bad = next((j for j, c in enumerate(centres) if not (0 < c - a and c + a < 360)), None)
         if bad is not None:
