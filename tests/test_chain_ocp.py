@@ -49,7 +49,7 @@ def test_the_paper_robot_as_a_chain_has_the_three_link_nlp_and_optimum():
     x0 = ocp3.initial_guess(start, T0)
     assert np.max(np.abs(ocpc.initial_guess(start, T0) - x0)) < 1e-12
     x3, _, failed, _ = GaitSolver(ocp3).solve(x0)
-    assert failed is None and ocpc.m == 2
+    assert failed is None and ocpc.n_joints == 2
     # the chain's NLP has the rows of its joint heights too (and joint angles up to 2 pi): the
     # three-link robot's rows compared by name, the heights positive (inactive)
     rows3, rowsc = (np.concatenate([np.arange(o.ng)[sl] for k, sl in o.slices.items()

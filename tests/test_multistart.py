@@ -99,7 +99,7 @@ class StandInOCP:
     def __init__(self, robot, gravity, settings):
         self.settings, self.robot = settings, robot
         self.scen = [Model(robot, gravity=gravity)]
-        self.m = 2
+        self.n_joints = 2
         self.kept_run, self.calls = [], 0
         self.ocp = self
 

@@ -193,10 +193,11 @@ def uncertainty(jac: np.ndarray, x: np.ndarray, names: Sequence[str], scale2: fl
 
     Parameters
     ----------
-    jac : numpy.ndarray, shape (n, p)
-        d r / d x of the weighted residuals r = (model - y) / sigma, per unit of each parameter.
-    x : numpy.ndarray, shape (p,)
-        The parameter values (the relative scale D = diag(|x|); 1 where x = 0).
+    jac : numpy.ndarray
+        d r / d x of the weighted residuals r = (model - y) / sigma, per unit of each parameter (a
+        row per residual, a column per parameter).
+    x : numpy.ndarray
+        The parameter values, one per parameter (the relative scale D = diag(|x|); 1 where x = 0).
     names : sequence of str
         Parameter names, for the directions.
     scale2 : float

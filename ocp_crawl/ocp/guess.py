@@ -40,8 +40,8 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
     np.ndarray
         The NLP's variable vector (scaled).
     """
-    s, r, m = ocp.settings, ocp.robot, ocp.m
-    N, R = s.nodes, StepRows(ocp.m)
+    s, r, m = ocp.settings, ocp.robot, ocp.n_joints
+    N, R = s.nodes, StepRows(ocp.n_joints)
     MgL = r.M * r.g * r.L
     x = np.zeros(ocp.nx)
     t_nodes = np.arange(N) / N

@@ -117,8 +117,8 @@ class Plant:
         """the robot's statics (a :class:`Model` or a :class:`ChainModel`)"""
 
     @property
-    def m(self) -> int:
-        """number of actuated joints"""
+    def n_joints(self) -> int:
+        """number of actuated joints m"""
         return joints_of(self.robot)
 
     @property
@@ -147,7 +147,7 @@ class Plant:
             return step_function()
         from ocp_crawl.sim.chain_mpcc import chain_step_nlp
         assert isinstance(self.robot, Chain)
-        n, m = self.robot.n, self.m
+        n, m = self.robot.n, self.n_joints
         step = chain_step_nlp(n)
         phi_prev, w = cs.SX.sym("phi_prev", m), cs.SX.sym("w", m + 10)
         th, p = cs.SX.sym("tau_hat", m), cs.SX.sym("p", self.p.size)
@@ -171,7 +171,7 @@ class Plant:
         from ocp_crawl.model.chain_statics import chain_symbolic, kin_names
 
         assert isinstance(self.robot, Chain)
-        n, m = self.robot.n, self.m
+        n, m = self.robot.n, self.n_joints
         rows = {k: i for i, k in enumerate(kin_names(n))}
         phi, p = cs.SX.sym("phi", m), cs.SX.sym("p", self.p.size)
         kin = chain_symbolic(n).kin(phi, p)

@@ -108,7 +108,7 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
                                  "initial guess")
     models = [Plant(r, gravity) for r in settings.scenarios(robot)]
     signal, T0 = baseline_gait(harm, robot, settings)
-    N, m = settings.nodes, solver.ocp.m
+    N, m = settings.nodes, solver.ocp.n_joints
     phase = np.arange(N) / N
 
     def follows(tau: np.ndarray) -> bool:

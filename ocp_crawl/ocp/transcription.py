@@ -75,7 +75,7 @@ class GaitOCP:
         self.robot = robot
         self.gravity = gravity
         self.settings = settings or OCPSettings()
-        self.m = joints_of(robot)
+        self.n_joints = joints_of(robot)
         """the number of torque profiles (the robot's joints)"""
         self.scen = [Plant(r, gravity) for r in self.settings.scenarios(robot)]
         """each friction scenario's :class:`~ocp_crawl.ocp.plant.Plant`"""
@@ -84,7 +84,7 @@ class GaitOCP:
     # ------------------------------------------------------------------ the NLP (built once)
     def _torque_nodes(self, z_tau, N):
         """Scaled torques at the N node phases as expressions of the torque variables."""
-        s, m = self.settings, self.m
+        s, m = self.settings, self.n_joints
         if s.parametrization == "free":
             return cs.reshape(z_tau, m, N)
         return cs.reshape(z_tau, m,
@@ -95,7 +95,7 @@ class GaitOCP:
         pin; returns the scaled node torques T (m, N), their periodic differences dT and the scaled
         period Th.  Per joint: its envelope and bandwidth through its stiffness (and rest bend), the
         same numbers on every node (column-major as ``cs.vec``)."""
-        s, N, r, m = self.settings, self.settings.nodes, self.robot, self.m
+        s, N, r, m = self.settings, self.settings.nodes, self.robot, self.n_joints
         ntau = m * N if s.parametrization == "free" else m * (2 * s.fourier_order + 1)
         z_tau = nlp.sym("tau", ntau)
         T = self._torque_nodes(z_tau, N)  # (m, N) scaled
@@ -251,7 +251,7 @@ class GaitOCP:
         margin in its slip direction fixed to 0 at the boundary (the tie)."""
         N = self.settings.nodes
         ubx = ubx.copy()
-        R = StepRows(self.m)
+        R = StepRows(self.n_joints)
         for j in range(len(self.scen)):
             sl = self._slices[f"w_{j}"]
             W = x[sl].reshape(R.nw, 2 * N, order="F")
@@ -305,8 +305,8 @@ class GaitOCP:
         the cross conditions) and periodicity (``periodic``) residuals [-].
         """
         s, r = self.settings, self.robot
-        N, Mg, R = s.nodes, r.M * r.g, StepRows(self.m)
-        tau = np.asarray(self._T(x)).reshape(self.m, N)
+        N, Mg, R = s.nodes, r.M * r.g, StepRows(self.n_joints)
+        tau = np.asarray(self._T(x)).reshape(self.n_joints, N)
         period = float(x[self._slices["T_hat"]][0]) * s.period_ref()
         out: dict[str, Any] = {"tau": tau, "T": period, "scen": []}
         for j in range(len(self.scen)):
