@@ -98,7 +98,6 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
                          f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
     t_start = time.perf_counter()
     solver = GaitSolver(GaitOCP(robot, gravity, settings))
-    # the NLP built meanwhile
     harmonic = _baselines(robot, gravity, settings, ("harmonic",), jobs, solver.prepare)
     harm = harmonic.choices["harmonic"]
     if harm is None:
@@ -138,7 +137,8 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
 
 def _baselines(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, shapes,
                jobs: int | None, meanwhile=None) -> Baselines:
-    """The best member of each family of ``shapes`` (a chain's: its travelling waves)."""
+    """The best member of each family of ``shapes`` (a chain's: its travelling waves);
+    ``meanwhile`` runs while the workers scan (the OCP's solvers built)."""
     if isinstance(robot, Chain):
         return best_chain_baselines(robot, gravity, settings, shapes, jobs, meanwhile)
     return best_baselines(robot, gravity, settings, shapes, jobs=jobs, meanwhile=meanwhile)
