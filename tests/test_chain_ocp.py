@@ -214,3 +214,21 @@ def test_the_polish_skips_ties_that_would_move_a_margin_far():
         want = {"near": [tied, alone], "far": [alone], "same": [alone]}[name]
         assert len(got) == len(want) and all(np.array_equal(g, w) for g, w in zip(got, want))
     assert solver_module.TIE_GAP < 0.3 and 5e-6 < solver_module.TIE_GAP
+
+
+def test_a_chain_start_that_fails_is_a_status_with_a_torque_row_per_joint():
+    """solve_from with a start the chain's simulator cannot follow (torques that fold the chain
+    onto the ground): NO_INITIAL_GUESS with the simulator's message, its (empty) torques of three
+    rows, so that its torques.csv names tau1..tau3."""
+    from ocp_crawl.ocp.solve import solve_from
+    from ocp_crawl.viz.ocp import torques_csv
+
+    settings = OCPSettings(nodes=8, A_max_deg=27.5, gamma_joints_deg=CENTRES)
+    solver = GaitSolver(GaitOCP(FOUR, "physical", settings))
+    crushing = ChainReferenceTorque(JointFourier.harmonic(np.radians([90.0, 300.0, 90.0]),
+                                                          np.radians([1.0, 1.0, 1.0]),
+                                                          np.zeros(3)), FOUR)
+    res = solve_from(solver, [Plant(FOUR)], crushing, 0.5)
+    assert res.status.label == "no_initial_guess" and "fails in the simulator" in res.message
+    assert res.tau.shape == (3, 0)
+    assert "tau3 [N m]" in torques_csv(res)

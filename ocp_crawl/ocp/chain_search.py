@@ -132,7 +132,11 @@ class ChainWaveFamily:
         self.evaluations += 1
         sims = []
         for plant in self.plants:
-            r = plant.simulate(wave.torque(self.settings, cast(Chain, plant.robot)))
+            try:
+                r = plant.simulate(wave.torque(self.settings, cast(Chain, plant.robot)))
+            except (ValueError, IndexError) as exc:   # the stepper refuses the input (as the
+                # three-link family's members)
+                return Evaluation(wave, T, nan, nan, nan, False, f"{type(exc).__name__}: {exc}")
             if not r.success:
                 return Evaluation(wave, T, nan, nan, nan, False, r.message)
             sims.append(r)

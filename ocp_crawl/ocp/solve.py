@@ -101,10 +101,7 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
     harmonic = _baselines(robot, gravity, settings, ("harmonic",), jobs, solver.prepare)
     harm = harmonic.choices["harmonic"]
     if harm is None:
-        return OCPResult(success=False, status=Status.NO_INITIAL_GUESS,
-                         objective=settings.objective, settings=settings,
-                         message="no harmonic gait of the family simulates successfully: no "
-                                 "initial guess")
+        return _no_harmonic(settings, solver.ocp.n_joints)
     models = [Plant(r, gravity) for r in settings.scenarios(robot)]
     signal, T0 = baseline_gait(harm, robot, settings)
     N, m = settings.nodes, solver.ocp.n_joints
@@ -133,6 +130,15 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
     res = _best_start(solved, base, models, settings, replay)
     res.solve_time_s = time.perf_counter() - t_start
     return res
+
+
+def _no_harmonic(settings: OCPSettings, joints: int) -> OCPResult:
+    """NO_INITIAL_GUESS: no member of the harmonic family simulates (its torques: none, of
+    ``joints`` rows)."""
+    return OCPResult(success=False, status=Status.NO_INITIAL_GUESS, objective=settings.objective,
+                     settings=settings, tau=np.zeros((joints, 0)),
+                     message="no harmonic gait of the family simulates successfully: no initial "
+                             "guess")
 
 
 def _baselines(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings, shapes,
@@ -219,7 +225,7 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     settings, ocp = solver.settings, solver.ocp
     t_start = time.perf_counter()
     res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
-                    objective=settings.objective,
+                    objective=settings.objective, tau=np.zeros((ocp.n_joints, 0)),
                     settings=settings, harmonic=harmonic, baselines=baselines)
     bad = next((r for r in (as_plant(m).simulate(signal) for m in models) if not r.success),
                None)
