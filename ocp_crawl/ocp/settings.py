@@ -20,7 +20,8 @@ from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   NODES_BOUNDS, PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS,
                                   STARTS_BOUNDS, WARM_BARRIERS, check_physical)
 from ocp_crawl.ocp.objectives import resolve_objective
-from ocp_crawl.ocp.plant import AnyRobot, with_friction
+from ocp_crawl.ocp.plant import (AnyRobot, joint_accel_bounds, joint_rate_bounds,
+                                 joint_torque_bounds, with_friction)
 from ocp_crawl.ocp.quantities import Constraint, UserObjective, minimises
 
 
@@ -455,13 +456,16 @@ class OCPSettings:
         return ("harmonic",) + tuple(s for s in rest if s != "harmonic")
 
     def rate_bound(self, robot: Robot) -> float:
-        """Largest torque rate |d tau_i / d t| [N m/s]: k times the reference-angle rate bound."""
-        return robot.k * math.radians(self.max_rate_deg_s)
+        """Largest torque rate |d tau_i / d t| [N m/s] of the three-link robot's joints: k times the
+        reference-angle rate bound (a chain's, per joint:
+        :func:`~ocp_crawl.ocp.plant.joint_rate_bounds`)."""
+        return float(joint_rate_bounds(self, robot)[0])
 
     def accel_bound(self, robot: Robot) -> float | None:
-        """Largest torque acceleration |d^2 tau_i / d t^2| [N m/s^2], or None (no bound)."""
-        return (None if self.max_accel_deg_s2 is None else robot.k
-                * math.radians(self.max_accel_deg_s2))
+        """Largest torque acceleration |d^2 tau_i / d t^2| [N m/s^2] of the three-link robot's
+        joints, or None (no bound)."""
+        accel = joint_accel_bounds(self, robot)
+        return None if accel is None else float(accel[0])
 
     def joint_rate_step(self) -> float | None:
         """The joint-rate bound as the transcription uses it: the largest change of a joint angle
@@ -484,6 +488,8 @@ class OCPSettings:
         return 2 * math.pi * max(A1_deg, A2_deg) / self.max_rate_deg_s
 
     def torque_bounds(self, robot: Robot) -> tuple[float, float]:
-        """Torque range [N m] that keeps phi_ref = pi + tau/k inside the envelope."""
-        g, a = math.radians(self.gamma_deg), math.radians(self.A_max_deg)
-        return robot.k * (g - a - math.pi), robot.k * (g + a - math.pi)
+        """Torque range [N m] of the three-link robot's joints that keeps phi_ref = pi + tau/k
+        inside the envelope (a chain's, per joint:
+        :func:`~ocp_crawl.ocp.plant.joint_torque_bounds`)."""
+        lo, hi = joint_torque_bounds(self, robot)
+        return float(lo[0]), float(hi[0])
