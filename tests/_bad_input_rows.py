@@ -13,6 +13,7 @@ PAPER = REPO / "problems" / "paper_gait.toml"
 OCP = REPO / "problems" / "ocp_max_speed.toml"
 CHAIN = REPO / "problems" / "five_link_chain.toml"
 PAPER_TEXT, OCP_TEXT, CHAIN_TEXT = PAPER.read_text(), OCP.read_text(), CHAIN.read_text()
+DESIGN_TEXT = (REPO / "problems" / "codesign_stiffness.toml").read_text()
 
 #: k = 0.05 M g L (Table I robot): the springs cannot hold the robot up at t = 0 (status no_start)
 SOFT = "robot.k=0.00306"
@@ -406,6 +407,35 @@ COMMAND_ROWS = {
     "crosscheck: --set bad value":
         R("crosscheck", ["{paper}", "--set", "robot.mu=nan"],
           ["paper_gait.toml", "[robot] mu = nan (from --set)", "finite"]),
+    # ------------------------------------------------------------------ codesign
+    "codesign: no [design] section":
+        R("codesign", ["{ocp}"], ["ocp_max_speed.toml", "no [design] section"]),
+    "codesign: no [ocp] section":
+        R("codesign", ["{paper}"], ["paper_gait.toml", "no [ocp] section"]),
+    "codesign: bounds without the robot":
+        R("codesign", ["{file}", "--set", "design.stiffness_min=[0.5]"],
+          ["x.toml", "[design] stiffness[0]", "0.1677", "outside"], text=DESIGN_TEXT),
+    "codesign: bounds of the wrong count":
+        R("codesign", ["{file}", "--set", "design.stiffness_max=[1, 1, 1]"],
+          ["x.toml", "[design] stiffness_max", "3 entries", "one per joint (2)"],
+          text=DESIGN_TEXT),
+    "codesign: no bounds":
+        R("codesign", ["{file}"], ["x.toml", "no [design] bounds", "stiffness_min"],
+          text=OCP_TEXT + "\n[design]\nscan = 4\n"),
+    "codesign: a lower bound alone":
+        R("codesign", ["{file}"], ["x.toml", "stiffness_min", "stiffness_max"],
+          text=OCP_TEXT + "\n[design]\nstiffness_min = [0.1]\n"),
+    "codesign: no designs scanned":
+        R("codesign", ["{file}", "--set", "design.scan=0"], ["x.toml", "[design] scan = 0",
+                                                             "in [1, 256]"], text=DESIGN_TEXT),
+    "codesign: lengths of a chain whose masses are not uniform":
+        R("codesign", ["{file}", "--set", "design.lengths_min=[0.01]", "--set",
+                       "design.lengths_max=[0.1]"], ["x.toml", "uniform body"],
+          text=CHAIN_TEXT.replace('drive = "angles"', 'drive = "torque"')
+          + "\n[ocp]\nnodes = 12\n\n[design]\nscan = 2\n"),
+    "codesign: the angles drive":
+        R("codesign", ["{file}", "--set", 'gait.drive="angles"'],
+          ["x.toml", "joint torques", 'drive = "torque"'], text=DESIGN_TEXT),
     # ------------------------------------------------------------------ optimize
     "optimize: no [ocp] section":
         R("optimize", ["{paper}"], ["paper_gait.toml", "no [ocp] section"]),

@@ -7,7 +7,7 @@ here.
 # the command modules register their commands when imported
 from ocp_crawl.cli import (fit_commands, init_command, optimize_command, run_commands,  # noqa: F401
                            study_commands, warmup_command)
-from ocp_crawl.cli import dynamics_command  # noqa: F401
+from ocp_crawl.cli import codesign_command, dynamics_command  # noqa: F401
 from ocp_crawl.cli.app import COMMANDS, main
 
 __all__ = ["COMMANDS", "main"]

@@ -1,5 +1,5 @@
 """The periodic-gait optimal control problem: settings, waveform baselines, transcription, solve and
-replay."""
+replay, and the co-design of the robot's parameters with its gait."""
 from ocp_crawl.io.lazy import lazy_exports
 
 #: public name -> the module that defines it (imported on first use: start-up time, see io/lazy.py)
@@ -19,13 +19,15 @@ _EXPORTS = {
     "QUANTITIES": "ocp_crawl.ocp.quantities", "Plant": "ocp_crawl.ocp.plant",
     "best_chain_baselines": "ocp_crawl.ocp.chain_search",
     "ChainWaveChoice": "ocp_crawl.ocp.chain_search",
+    "Design": "ocp_crawl.ocp.design", "CodesignResult": "ocp_crawl.ocp.codesign",
+    "codesign_gait": "ocp_crawl.ocp.codesign",
 }
 
 __all__ = [
-    "Baselines", "ChainWaveChoice", "Constraint", "ConvergenceRow", "GaitOCP", "GaitSolver",
-    "OBJECTIVES", "OCPResult", "OCPSettings", "Plant", "QUANTITIES", "SHAPES", "UserObjective",
-    "VOCABULARY", "WaveChoice", "WaveParams", "best_baselines", "best_chain_baselines",
-    "best_harmonic", "converge_in_nodes", "judge_replay", "objective_value", "observed_orders",
-    "optimize_gait", "replay_signal",
+    "Baselines", "ChainWaveChoice", "CodesignResult", "Constraint", "ConvergenceRow", "Design",
+    "GaitOCP", "GaitSolver", "OBJECTIVES", "OCPResult", "OCPSettings", "Plant", "QUANTITIES",
+    "SHAPES", "UserObjective", "VOCABULARY", "WaveChoice", "WaveParams", "best_baselines",
+    "best_chain_baselines", "best_harmonic", "codesign_gait", "converge_in_nodes", "judge_replay",
+    "objective_value", "observed_orders", "optimize_gait", "replay_signal",
 ]
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

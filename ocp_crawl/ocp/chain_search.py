@@ -195,8 +195,9 @@ class ChainWaveChoice:
     time_s: float = 0.0
     shape: str = "harmonic"
 
-    def signal_for(self, chain: Chain, settings: OCPSettings) -> ChainReferenceTorque:
-        """The torque input tau(t) [N m] of the gait on ``chain`` at the phase t [cycles]."""
+    def signal_for(self, chain, settings: OCPSettings) -> ChainReferenceTorque:
+        """The torque input tau(t) [N m] of the gait on ``chain`` (a :class:`Chain`; the interface
+        it shares with :class:`~ocp_crawl.ocp.baseline.WaveChoice`) at the phase t [cycles]."""
         return ChainWave(self.A_deg, self.psi_deg, self.shape).torque(settings, chain)
 
     def to_dict(self) -> dict:

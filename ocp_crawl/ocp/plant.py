@@ -68,13 +68,21 @@ def envelope_centres(settings, robot: AnyRobot) -> np.ndarray:
     return np.radians(np.asarray(g, float))
 
 
-def joint_torque_bounds(settings, robot: AnyRobot) -> tuple[np.ndarray, np.ndarray]:
-    """The torque range of each joint (m,), (m,) [N m] that keeps its reference angle
+def envelope_offsets(settings, robot: AnyRobot) -> tuple[np.ndarray, np.ndarray]:
+    """The range of tau/k of each joint (m,), (m,) [rad] that keeps its reference angle
     phi_ref = pi + rest + tau/k inside the envelope centre +- A_max (``settings``: an
     :class:`~ocp_crawl.ocp.settings.OCPSettings`)."""
-    k, a = stiffness_of(robot), math.radians(settings.A_max_deg)
+    a = math.radians(settings.A_max_deg)
     g, rest = envelope_centres(settings, robot), rest_of(robot)
-    return k * (g - a - math.pi - rest), k * (g + a - math.pi - rest)
+    return g - a - math.pi - rest, g + a - math.pi - rest
+
+
+def joint_torque_bounds(settings, robot: AnyRobot) -> tuple[np.ndarray, np.ndarray]:
+    """The torque range of each joint (m,), (m,) [N m]: its stiffness times
+    :func:`envelope_offsets`."""
+    k = stiffness_of(robot)
+    lo, hi = envelope_offsets(settings, robot)
+    return k * lo, k * hi
 
 
 def joint_rate_bounds(settings, robot: AnyRobot) -> np.ndarray:
@@ -178,6 +186,41 @@ class Plant:
         L = sum(p[i] for i in range(n))
         z = cs.vertcat(*[kin[rows[f"zj{j}"]] for j in range(1, n)]) / L
         return cs.Function(f"ocp_chain{n}_heights", [phi, p], [z])
+
+    @cached_property
+    def stability_function(self) -> cs.Function:
+        """A chain's stick-stick stability rows (m,) of (phi [m], f_t / (M g), p, kappa_min) (SX):
+        the leading principal minors of ``A = P H P / (M g L) + (1 + kappa_min) u u^T -
+        kappa_min I``, with ``H`` the symmetric part of hess Pi + f_t hess d, ``u`` the unit
+        gradient of the feet distance d and ``P = I - u u^T``
+        (:mod:`~ocp_crawl.model.chain_stability`).  A's eigenvalues are those of the reduced
+        stiffness K_red over M g L less kappa_min, and 1 (along u): every row >= 0 (Sylvester's
+        criterion, exact where the lower minors are > 0; a lower minor at exactly 0 is a
+        degenerate boundary) holds the equilibrium at least kappa_min M g L stiff along the
+        stick-stick manifold, away from a fold.  The rows hold at every sub-step end, slipping
+        ones too: a foot that stops slipping there sticks into that equilibrium.  The three-link robot has none (a
+        ValueError)."""
+        if not self.chain:
+            raise ValueError("Plant.stability_function: a chain's (Chain.from_robot gives the "
+                             "three-link robot as one)")
+        from ocp_crawl.model.chain_stability import chain_stiffness_function
+
+        assert isinstance(self.robot, Chain)
+        n, m = self.robot.n, self.n_joints
+        phi, ft, p = cs.SX.sym("phi", m), cs.SX.sym("ft_hat"), cs.SX.sym("p", self.p.size)
+        kappa_min = cs.SX.sym("kappa_min")
+        M = sum(p[n + i] for i in range(n))
+        g_acc, L = p[self.p.size - 2], sum(p[i] for i in range(n))
+        MgL = M * g_acc * L
+        s = chain_stiffness_function(n)(phi, ft * M * g_acc, cs.DM.zeros(4), p)
+        grad = s[:m]
+        H = cs.reshape(s[m:m + m * m], m, m)
+        u = grad / cs.norm_2(grad)
+        P = cs.SX.eye(m) - u @ u.T
+        A = (P @ (0.5 * (H + H.T)) @ P / MgL + (1.0 + kappa_min) * (u @ u.T)
+             - kappa_min * cs.SX.eye(m))
+        minors = cs.vertcat(*[cs.det(A[:k, :k]) for k in range(1, m + 1)])
+        return cs.Function(f"ocp_chain{n}_stability", [phi, ft, p, kappa_min], [minors])
 
     def simulate(self, torque, t_eval=None):
         """The event-driven torque simulation of ``torque`` (a 1-periodic signal of the phase with

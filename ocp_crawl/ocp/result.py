@@ -10,6 +10,7 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice
+from ocp_crawl.ocp.chain_search import ChainWaveChoice
 from ocp_crawl.ocp.judge import scenario_labels
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.status import Status
@@ -82,8 +83,9 @@ class OCPResult:
     path: str = ""
     """with ``endgame_sigma``: what the endgame did (kept, or why not and the homotopy went on)"""
     solve_time_s: float = float("nan")
-    harmonic: WaveChoice | None = None
-    """the best harmonic gait of the family: the first start"""
+    harmonic: WaveChoice | ChainWaveChoice | None = None
+    """the best harmonic gait of the family (a chain's: its best harmonic travelling wave): the
+    first start"""
     baselines: Baselines | None = None
     """the best member of each waveform family searched (``settings.baseline_shapes``)"""
     replay: list = field(default_factory=list)

@@ -36,7 +36,8 @@ from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, replay_sign
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
-from ocp_crawl.ocp.chain_search import SHAPES as CHAIN_SHAPES, best_chain_baselines
+from ocp_crawl.ocp.chain_search import (SHAPES as CHAIN_SHAPES, ChainWaveChoice,
+                                        best_chain_baselines)
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import StartGuess, given_start, start_guesses
 from ocp_crawl.ocp.solver import GaitSolver
@@ -188,7 +189,8 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
 
 
 def solve_from(solver: GaitSolver, models: list, signal, T: float,
-               harmonic: WaveChoice | None = None, replay: bool = True, tightened: bool = False,
+               harmonic: WaveChoice | ChainWaveChoice | None = None, replay: bool = True,
+               tightened: bool = False,
                baselines: Baselines | None = None) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
 
@@ -274,7 +276,7 @@ def _endgame(solver: GaitSolver, models: list) -> Endgame | None:
     def keep(x: np.ndarray, x_ref: np.ndarray, against: str) -> tuple[bool, str]:
         trial = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
                           objective=settings.objective, settings=settings)
-        _fill_solution(trial, solver, x)
+        fill_solution(trial, solver, x)
         verdict = judge_replay(models, settings, trial.tau, trial.T_ocp, trial.value_ocp,
                                trial.S_ocp)
         if not verdict.ok:
@@ -302,7 +304,7 @@ def _accept(res: OCPResult, solver: GaitSolver, x, failed: str | None, status: s
                        f"IPOPT {outcome.describe()} at {failed}")
     if x is None:
         return False
-    _fill_solution(res, solver, x)
+    fill_solution(res, solver, x)
     if failed is not None:
         res.message += "; the last accepted iterate is reported (not an optimum)"
         return False
@@ -331,7 +333,7 @@ def _not_kept(run: list) -> str:
                    f"{stage.message}" for kind, stage in last.items())
 
 
-def _fill_solution(res: OCPResult, solver: GaitSolver, x: np.ndarray) -> None:
+def fill_solution(res: OCPResult, solver: GaitSolver, x: np.ndarray) -> None:
     """The profile, period, trajectories, S, v, W+, CoT+ and residuals of the NLP point x."""
     ocp = solver.ocp
     un = solver.unpack(x)
@@ -407,6 +409,7 @@ def _gains(res: OCPResult, models: list) -> None:
     (WORSE_THAN_BASELINE); one worse than another family's best says so in its message (a local
     optimum: that gait is a start to try)."""
     objective = res.settings.objective
+    best: WaveChoice | ChainWaveChoice | None
     if res.baselines is not None:
         res.gains = res.baselines.gains(res.value_replay, gain_over)
         best = res.baselines.best

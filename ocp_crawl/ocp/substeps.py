@@ -199,7 +199,8 @@ class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
     def __init__(self, nlp, j: int, model, T, Th, step_map, N: int, with_work: bool,
-                 friction_tol: float = 0.0, joint_rate: float | None = None):
+                 friction_tol: float = 0.0, joint_rate: float | None = None, p=None,
+                 stability: float | None = None):
         """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross
         conditions, S and (``with_work``) W+ by the midpoint rule per sub-step.  ``model``: the
         scenario's :class:`~ocp_crawl.ocp.plant.Plant` (its parameter vector ``p``); ``T``: scaled
@@ -207,7 +208,10 @@ class Scenario:
         products (a relaxation per unit time: the spurious slip that a relaxation sigma allows then
         cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the friction-tolerance
         constraint (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
-        (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad])."""
+        (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad]);
+        ``p``: the parameter vector as an expression (a design's; None: the Plant's numbers);
+        ``stability`` (not None): every sub-step end's stick-stick reduced stiffness at least this
+        times M g L (a chain's :attr:`~ocp_crawl.ocp.plant.Plant.stability_function`)."""
         inf = np.inf
         self.j, self.model, self.N = j, model, N
         m = T.shape[0]
@@ -223,7 +227,8 @@ class Scenario:
         nlp.var(f"w_{j}", cs.vec(W), np.tile(lbw, 2 * N), np.tile(ubw, 2 * N))
         PHI = cs.horzcat(phi0, W[R.phi, :])  # (m, 2N+1)
         Tsub = substep_torques(T, theta)
-        eqs, comp = step_map(PHI[:, :-1], W, Tsub, cs.repmat(cs.DM(model.p), 1, 2 * N))
+        P = cs.repmat(cs.DM(model.p) if p is None else p, 1, 2 * N)
+        eqs, comp = step_map(PHI[:, :-1], W, Tsub, P)
         nlp.con(f"eq_{j}", cs.vec(eqs), 0.0, 0.0, ("equation",))
         # the relaxed products' upper bound is sigma, set per homotopy stage
         nlp.con(f"comp_{j}", cs.vec(comp) / Th, -inf, 0.0, ("complementarity",))
@@ -233,9 +238,12 @@ class Scenario:
                 ("equation",))
         nlp.con(f"tie_{j}", cs.vec(tie_rows(W, theta)), 0.0, inf, ("rule",))
         if model.height_function is not None:   # a chain's joints above the ground
-            heights = model.height_function.map(2 * N)(W[R.phi, :], cs.repmat(cs.DM(model.p), 1,
-                                                                              2 * N))
+            heights = model.height_function.map(2 * N)(W[R.phi, :], P)
             nlp.con(f"height_{j}", cs.vec(heights), 0.0, inf)
+        if stability is not None:   # no fold of the stick-stick equilibrium
+            rows = model.stability_function.map(2 * N)(W[R.phi, :], W[R.ft1, :], P,
+                                                       cs.DM.ones(1, 2 * N) * stability)
+            nlp.con(f"stability_{j}", cs.vec(rows), 0.0, inf)
         if joint_rate is not None:
             rows = joint_rate_rows(PHI, theta, joint_rate * Th)
             nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf, ("rule",))

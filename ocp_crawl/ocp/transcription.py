@@ -33,13 +33,15 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
+from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.model.step_equations import StepRows
 from ocp_crawl.nlp.codegen import compiled_kernel
 from ocp_crawl.ocp.guess import simulated_guess
 from ocp_crawl.ocp.layout import KINDS, Layout, fourier_basis, rows_of
-from ocp_crawl.ocp.plant import (AnyRobot, Plant, joint_accel_bounds, joint_rate_bounds,
-                                 joint_torque_bounds, joints_of)
+from ocp_crawl.ocp.design import Design
+from ocp_crawl.ocp.plant import (AnyRobot, Plant, envelope_offsets, joint_accel_bounds,
+                                 joint_rate_bounds, joint_torque_bounds, joints_of, stiffness_of)
 from ocp_crawl.ocp.quantities import Symbols, constraint_rows, needs_work, physical
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.substeps import (Scenario, cross_residual, modes_of, onset_residual,
@@ -61,16 +63,40 @@ class GaitOCP:
     """The periodic-gait NLP of one robot, gravity convention and settings, built once."""
 
     def __init__(self, robot: AnyRobot, gravity: GravityConvention = "physical",
-                 settings: OCPSettings | None = None, kernel: str = "expanded"):
+                 settings: OCPSettings | None = None, kernel: str = "expanded",
+                 design: Design | None = None, rate_weights=None,
+                 stability: float | None = None):
         """``robot``: the three-link :class:`~ocp_crawl.model.robot.Robot` or an n-link
         :class:`~ocp_crawl.model.chain.Chain` (m = n - 1 torque profiles).  ``kernel``: how the NLP
         evaluates the sub-steps' equations: "expanded" (default) the whole NLP as one SX graph (the
         kernel inlined at every sub-step; its Hessian 8x faster than the map of the compiled kernel
         at N = 100), or "compiled" the compiled step kernel
         (:func:`~ocp_crawl.nlp.codegen.compiled_kernel`) mapped over the sub-steps in an MX graph
-        (``scripts/bench.py ocp_kernel`` compares the two)."""
+        (``scripts/bench.py ocp_kernel`` compares the two).  ``design``: robot parameters the NLP
+        chooses too (a chain's; :mod:`~ocp_crawl.ocp.design`), its block ``design`` of variables
+        scaled by the robot's values (:meth:`design_values` reads them); the regularisation then
+        weighs each joint's torque rate by k_j / k_j(design), the rate of its reference angle in
+        the robot's torque units (a tie-breaker that does not favour soft joints).
+        ``rate_weights``: those weights (m,) of a fixed robot [-] (None: 1; a chosen design's NLP
+        as the co-design NLP states it, k_start / k_chosen).  ``stability``: a chain's
+        stick-stick reduced stiffness at every sub-step end at least this times M g L [-] (None:
+        no such rows; :attr:`~ocp_crawl.ocp.plant.Plant.stability_function`)."""
         if kernel not in KERNELS:
             raise ValueError(f"GaitOCP: kernel must be one of {KERNELS}, got {kernel!r}")
+        self.design: Design | None = None
+        """the robot parameters the NLP chooses too (:class:`~ocp_crawl.ocp.design.Design`), or
+        None"""
+        if design is not None:
+            if not isinstance(robot, Chain):
+                raise ValueError("GaitOCP: a design is a chain's (Chain.from_robot gives the "
+                                 "three-link robot as one)")
+            self.design = design.checked(robot)
+        self._rate_weights = None if rate_weights is None else np.asarray(rate_weights, float)
+        if stability is not None and not isinstance(robot, Chain):
+            raise ValueError("GaitOCP: stability rows are a chain's (Chain.from_robot gives the "
+                             "three-link robot as one)")
+        self.stability = stability
+        """the smallest stick-stick reduced stiffness over M g L at every sub-step end, or None"""
         self.kernel = kernel
         self.robot = robot
         self.gravity = gravity
@@ -90,19 +116,27 @@ class GaitOCP:
         return cs.reshape(z_tau, m,
                           2 * s.fourier_order + 1) @ cs.DM(fourier_basis(N, s.fourier_order))
 
-    def _torques(self, nlp: Layout, MgL: float):
+    def _torques(self, nlp: Layout, MgL: float, k=None):
         """Torque and period variables, envelope, bandwidth, optional smoothness bound and phase
         pin; returns the scaled node torques T (m, N), their periodic differences dT and the scaled
         period Th.  Per joint: its envelope and bandwidth through its stiffness (and rest bend), the
-        same numbers on every node (column-major as ``cs.vec``)."""
+        same numbers on every node (column-major as ``cs.vec``); ``k``: the stiffnesses (m,) as
+        expressions of a design's variables (None: the robot's, the envelope as bounds of the
+        variables)."""
         s, N, r, m = self.settings, self.settings.nodes, self.robot, self.n_joints
         ntau = m * N if s.parametrization == "free" else m * (2 * s.fourier_order + 1)
         z_tau = nlp.sym("tau", ntau)
         T = self._torque_nodes(z_tau, N)  # (m, N) scaled
-        tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
-        if s.parametrization == "free":
+        if k is not None:  # the envelope as rows linear in tau and k
+            nlp.var("tau", z_tau, -np.inf, np.inf)
+            lo, hi = (cs.repmat(k * cs.DM(b) / MgL, N, 1) for b in envelope_offsets(s, r))
+            nlp.con("tau_low", cs.vec(T) - lo, 0.0, np.inf)
+            nlp.con("tau_high", hi - cs.vec(T), 0.0, np.inf)
+        elif s.parametrization == "free":
+            tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
             nlp.var("tau", z_tau, tau_lo, tau_hi)
         else:
+            tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
             nlp.var("tau", z_tau, -np.inf, np.inf)
             nlp.con("tau_bounds", cs.vec(T), tau_lo, tau_hi)
         Th = nlp.sym("T_hat")
@@ -110,18 +144,38 @@ class GaitOCP:
         Tref = s.period_ref()
         dT = T - cs.horzcat(T[:, -1], T[:, :-1])  # periodic differences tau_k - tau_{k-1}
         # |dT| <= c_rate T_hat
-        c_rate = np.tile(joint_rate_bounds(s, r) * Tref / (MgL * N), N)
+        c_rate = (np.tile(joint_rate_bounds(s, r) * Tref / (MgL * N), N) if k is None else
+                  cs.repmat(k * (np.radians(s.max_rate_deg_s) * Tref / (MgL * N)), N, 1))
         nlp.con("rate_up", cs.vec(dT) - c_rate * Th, -np.inf, 0.0)
         nlp.con("rate_down", cs.vec(dT) + c_rate * Th, 0.0, np.inf)
         accel = joint_accel_bounds(s, r)
         if accel is not None:
-            c_acc = np.tile(accel * Tref**2 / (MgL * N**2), N)  # |d2T| <= c_acc T_hat^2
+            c_acc = (np.tile(accel * Tref**2 / (MgL * N**2), N) if k is None else
+                     cs.repmat(k * (accel / stiffness_of(r) * Tref**2 / (MgL * N**2)),
+                               N, 1))  # |d2T| <= c_acc T_hat^2
             d2T = cs.vec(cs.horzcat(dT[:, 1:], dT[:, 0]) - dT)  # periodic second differences
             nlp.con("accel_up", d2T - c_acc * Th**2, -np.inf, 0.0)
             nlp.con("accel_down", d2T + c_acc * Th**2, 0.0, np.inf)
         # node 0 is where tau_1 is largest
         nlp.con("phase_pin", cs.vec(T[0, 1:] - T[0, 0]), -np.inf, 0.0)
         return T, dT, Th
+
+    def _design(self, nlp: Layout) -> tuple:
+        """The design's scaled variables z (1 at the robot) and its fixed total length; returns
+        the stiffnesses as expressions of z and each scenario's parameter vector (None, None
+        without a design)."""
+        d, r = self.design, self.robot
+        if d is None:
+            return None, [None] * len(self.scen)
+        assert isinstance(r, Chain)
+        scale = d.initial(r)
+        lo, hi = d.limits()
+        z = nlp.sym("design", scale.size)
+        nlp.var("design", z, lo / scale, hi / scale)
+        total = d.total_row(r, z)
+        if total is not None:
+            nlp.con("design_total", total, 0.0, 0.0, ("equation",))
+        return d.stiffness_expr(r, z), [d.parameters(r, plant.p, z) for plant in self.scen]
 
     def _symbols(self, scen: list[Scenario], T, Th) -> Symbols:
         s, r = self.settings, self.robot
@@ -136,13 +190,14 @@ class GaitOCP:
             for k, (expr, lb, ub) in enumerate(constraint_rows(c, sym)):
                 nlp.con(f"require_{i}_{k}", expr, lb, ub, ("requirement",))
 
-    def _objective(self, nlp: Layout, scen: list[Scenario], T, dT, Th):
-        """The objective (to minimise) with the regularisation, and its extra constraints (the
-        requirements first)."""
+    def _objective(self, nlp: Layout, scen: list[Scenario], T, dT, Th, weights=None):
+        """The objective (to minimise) with the regularisation (``weights``: of each joint's
+        torque rate, (m,) or None), and its extra constraints (the requirements first)."""
         s, inf, N = self.settings, np.inf, self.settings.nodes
         d = s.direction
         theta = cs.vertcat(*[sc.theta for sc in scen])
-        reg = s.regularization * (N * cs.sumsqr(dT) / Th**2 + cs.sumsqr(theta - 0.5)
+        rates = dT if weights is None else dT * cs.repmat(weights, 1, N)
+        reg = s.regularization * (N * cs.sumsqr(rates) / Th**2 + cs.sumsqr(theta - 0.5)
                                   / (N * len(scen)))
         S_list = [sc.S for sc in scen]
         sym = self._symbols(scen, T, Th)
@@ -173,15 +228,19 @@ class GaitOCP:
         s, r = self.settings, self.robot
         MgL = r.M * r.g * r.L
         nlp = Layout(cs.SX.sym if self.kernel == "expanded" else cs.MX.sym)
-        T, dT, Th = self._torques(nlp, MgL)
+        k, p_design = self._design(nlp)
+        T, dT, Th = self._torques(nlp, MgL, k)
         step = self.scen[0].step_function
         kernel = step if self.kernel == "expanded" else compiled_kernel(step)
         step_map = kernel.map(2 * s.nodes)
         work = (s.objective == "min_cot" or needs_work(s.requirements)
                 or (s.user_objective is not None and s.user_objective.work))
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, work,
-                         s.friction_tol, s.joint_rate_step()) for j, model in enumerate(self.scen)]
-        f = self._objective(nlp, scen, T, dT, Th)
+                         s.friction_tol, s.joint_rate_step(), p=p, stability=self.stability)
+                for j, (model, p) in enumerate(zip(self.scen, p_design))]
+        weights = (cs.DM(stiffness_of(r)) / k if k is not None
+                   else None if self._rate_weights is None else cs.DM(self._rate_weights))
+        f = self._objective(nlp, scen, T, dT, Th, weights)
         if s.perturbation == "always":  # in neither f nor g: IPOPT finds the Hessian degenerate
             nlp.var("free", nlp.sym("free"), -np.inf, np.inf)
         X = cs.vertcat(*[cs.vec(x) for x in nlp.xs])
@@ -285,8 +344,20 @@ class GaitOCP:
     def initial_guess(self, torque_signal, period: float, switches: bool = True) -> np.ndarray:
         """Variables sampled from event-driven simulations (one per scenario) of a torque input
         ``torque_signal(t)`` [N m] at phases t [cycles] of period ``period`` [s]: see
-        :func:`~ocp_crawl.ocp.guess.simulated_guess`."""
-        return simulated_guess(self, torque_signal, period, switches)
+        :func:`~ocp_crawl.ocp.guess.simulated_guess`; a design's variables at the robot's
+        values."""
+        x = simulated_guess(self, torque_signal, period, switches)
+        if self.design is not None:
+            x[self._slices["design"]] = 1.0
+        return x
+
+    def design_values(self, x: np.ndarray) -> np.ndarray:
+        """The design's variables at x in SI units (:meth:`~ocp_crawl.ocp.design.Design.names`
+        order); empty without a design."""
+        if self.design is None:
+            return np.zeros(0)
+        assert isinstance(self.robot, Chain)
+        return x[self._slices["design"]] * self.design.initial(self.robot)
 
     # ------------------------------------------------------------------ the solution in physical
     # units

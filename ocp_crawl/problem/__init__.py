@@ -7,6 +7,7 @@ _EXPORTS = {
     "PAPER_GAIT": "ocp_crawl.problem.run", "no_start_reason": "ocp_crawl.problem.run",
     "ocp_settings": "ocp_crawl.problem.run", "paper_problem": "ocp_crawl.problem.run",
     "optimize_problem": "ocp_crawl.problem.run",
+    "codesign_problem": "ocp_crawl.problem.codesign",
     "run_problem": "ocp_crawl.problem.run",
     "SCHEMA": "ocp_crawl.problem.schema", "SECTIONS": "ocp_crawl.problem.schema",
     "TORQUE_SOLVERS": "ocp_crawl.problem.schema", "Key": "ocp_crawl.problem.keys",
@@ -23,7 +24,7 @@ _EXPORTS = {
 
 __all__ = [
     "PAPER_GAIT", "SCHEMA", "SECTIONS", "TORQUE_SOLVERS", "Key", "Problem", "ProblemError",
-    "apply_overrides",
+    "apply_overrides", "codesign_problem",
     "format_value", "load_problem", "no_start_reason", "ocp_settings", "optimize_problem",
     "paper_problem", "parse_override",
     "problem_from_dict", "read_toml", "run_problem", "schema_markdown", "set_values",

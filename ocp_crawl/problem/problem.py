@@ -51,6 +51,14 @@ def solver_options(solver: str, values: Mapping[str, Any]):
     return cls(**{k: v for k, v in values.items() if k in names})
 
 
+def chain_section(chain: Chain) -> dict[str, Any]:
+    """``[robot]`` of a chain as a problem file gives it (SI units, rest bends in degrees)."""
+    return {"lengths": list(chain.lengths), "masses": list(chain.masses),
+            "stiffness": list(chain.stiffness), "com": list(chain.com),
+            "rest_deg": [math.degrees(x) for x in chain.rest], "mu1": chain.mu1,
+            "mu2": chain.mu2, "g": chain.g}
+
+
 @dataclass(frozen=True)
 class Problem:
     """A validated simulation problem: robot, gait, drive, gravity convention, solver and its
@@ -195,10 +203,7 @@ class Problem:
         # problems built in code without sections: report the objects themselves
         r = self.robot
         if "robot" not in out and isinstance(r, Chain):
-            out["robot"] = {"lengths": list(r.lengths), "masses": list(r.masses),
-                            "stiffness": list(r.stiffness), "com": list(r.com),
-                            "rest_deg": [math.degrees(x) for x in r.rest], "mu1": r.mu1,
-                            "mu2": r.mu2, "g": r.g}
+            out["robot"] = chain_section(r)
         elif "robot" not in out and isinstance(r, Robot):
             out["robot"] = {"M": r.M, "L": r.L, "beta": r.beta, "k": r.k, "mu1": r.mu1,
                             "mu2": r.mu2, "g": r.g}
