@@ -120,9 +120,12 @@ class CodesignResult:
 
     @property
     def at_bounds(self) -> list[str]:
-        """The design variables at a bound (within 1e-6 relative), with the bound's side."""
+        """The design variables at a bound (within 1e-6 relative), with the bound's side (not
+        those whose bounds are equal: fixed)."""
         out = []
         for name, v, lo, hi in zip(self.names, self.chosen, self.low, self.high):
+            if lo == hi:
+                continue
             if abs(v - lo) <= 1e-6 * lo:
                 out.append(f"{name} at its low bound")
             elif abs(v - hi) <= 1e-6 * hi:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 import casadi as cs
 import numpy as np
@@ -70,8 +71,8 @@ class Design:
         through), which the quasistatic model cannot follow.
     """
 
-    stiffness: tuple | None = None
-    lengths: tuple | None = None
+    stiffness: Sequence | None = None
+    lengths: Sequence | None = None
     min_reduced_stiffness: float = 0.05
 
     def __post_init__(self) -> None:

@@ -28,19 +28,37 @@ def _label(res: CodesignResult) -> str:
 
 
 def codesign_figure(res: CodesignResult) -> Figure:
-    """Left: the scanned designs in their first two variables (one variable: the value against
-    it), coloured by their best harmonic gait's objective, with the given robot, the start and the
+    """Left: the scanned designs in their first two free variables (one: the value against it),
+    coloured by their best harmonic gait's objective, with the given robot, the start and the
     chosen design marked; right: the objective of the given robot's best harmonic gait, of the
-    best scanned design's, and of the co-design optimum by replay."""
-    fig = Figure(figsize=(11.0, 4.6), constrained_layout=True)
+    best scanned design's, of the given robot's optimal gait and of the co-design optimum by
+    replay."""
+    fig = Figure(figsize=(11.0, 5.4), constrained_layout=True)
     ax, bx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.4, 1.0]})
-    obj = res.objective
+    free = [i for i, (lo, hi) in enumerate(zip(res.low, res.high)) if lo < hi]
+    if free:
+        _scan_panel(fig, ax, res, free[:2])
+    else:
+        ax.set_axis_off()
+    _value_bars(bx, res)
+    chosen = ", ".join(f"{res.names[i]} {units.significant(res.chosen[i], 4)} "
+                       f"{_unit(res.names[i])}" for i in free if res.chosen) or "none"
+    gains = res.gains()
+    fig.suptitle(f"Co-design ({res.objective}, {res.status.label}): {chosen}\n"
+                 f"{units.ratio(gains['over_given_optimum'])} over the given robot's optimal "
+                 f"gait, {units.ratio(gains['over_scan'])} over the best of {len(res.scan)} "
+                 "scanned designs' harmonic gaits", fontsize=10)
+    return fig
+
+
+def _scan_panel(fig: Figure, ax, res: CodesignResult, axes: list[int]) -> None:
+    """The scanned designs in the variables ``axes`` (one or two indices)."""
     label = _label(res)
     values = np.array([_shown(res, d.value) for d in res.scan])
     pts = np.array([d.values for d in res.scan])
-    two = len(res.names) >= 2
-    x = pts[:, 0]
-    y = pts[:, 1] if two else values
+    two = len(axes) == 2
+    x = pts[:, axes[0]]
+    y = pts[:, axes[1]] if two else values
     ok = np.isfinite(values)
     if two:
         sc = ax.scatter(x[ok], y[ok], c=values[ok], cmap="viridis", s=60,
@@ -51,26 +69,32 @@ def codesign_figure(res: CodesignResult) -> Figure:
     if not ok.all():
         ax.plot(x[~ok], y[~ok] if two else np.zeros((~ok).sum()), "x", color="tab:red",
                 label="scanned design without a harmonic gait")
-    for i, line in enumerate((ax.axvline, ax.axhline)[:2 if two else 1]):
-        for j, bound in enumerate((res.low[i], res.high[i])):
+    for k, line in enumerate((ax.axvline, ax.axhline)[:len(axes)]):
+        for j, bound in enumerate((res.low[axes[k]], res.high[axes[k]])):
             line(bound, color="gray", ls="--", lw=0.8,
-                 label="the design's bounds" if i == j == 0 else None)
+                 label="the design's bounds" if k == j == 0 else None)
     marks = [(0, "s", "the given robot")]
     if res.start is not None:
         marks.append((res.start, "^", "the start of the co-design NLP"))
     for i, marker, text in marks:
         ax.plot(x[i], y[i], marker, mfc="none", mec="k", ms=13, label=text)
     if res.chosen:
-        cy = res.chosen[1] if two else _shown(res, res.value_replay)
-        ax.plot(res.chosen[0], cy, "*", color="tab:red", ms=16,
+        cy = res.chosen[axes[1]] if two else _shown(res, res.value_replay)
+        ax.plot(res.chosen[axes[0]], cy, "*", color="tab:red", ms=16,
                 label="the chosen design" + ("" if two else ", its optimal gait (replay)"))
-    for axis, name in ((ax.set_xscale, res.names[0]), (ax.set_yscale, res.names[1] if two else "")):
+    names = [res.names[i] for i in axes]
+    for axis, name in zip((ax.set_xscale, ax.set_yscale), names if two else names[:1]):
         if name.startswith("stiffness"):
             axis("log")
-    ax.set_xlabel(f"{res.names[0]} [{_unit(res.names[0])}]")
-    ax.set_ylabel(f"{res.names[1]} [{_unit(res.names[1])}]" if two else label)
-    ax.legend(fontsize=8, loc="best")
+    ax.set_xlabel(f"{names[0]} [{_unit(names[0])}]")
+    ax.set_ylabel(f"{names[1]} [{_unit(names[1])}]" if two else label)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     ax.grid(alpha=0.3)
+
+
+def _value_bars(bx, res: CodesignResult) -> None:
+    """The four objective values as bars."""
+    label = _label(res)
     best = res.best_scanned
     bars = [("given robot,\nbest harmonic", res.scan[0].value if res.scan else math.nan),
             ("best scanned\ndesign, best\nharmonic", best.value if best else math.nan),
@@ -85,11 +109,3 @@ def codesign_figure(res: CodesignResult) -> Figure:
         if math.isfinite(h):
             bx.annotate(f"{h:.4g}", (i, h), ha="center", va="bottom", fontsize=9)
     bx.grid(axis="y", alpha=0.3)
-    chosen = ", ".join(f"{n} {units.significant(v, 4)} {_unit(n)}"
-                       for n, v in zip(res.names, res.chosen)) or "none"
-    gains = res.gains()
-    fig.suptitle(f"Co-design ({obj}, {res.status.label}): {chosen}\n"
-                 f"{units.ratio(gains['over_given_optimum'])} over the given robot's optimal "
-                 f"gait, {units.ratio(gains['over_scan'])} over the best of {len(res.scan)} "
-                 "scanned designs' harmonic gaits", fontsize=10)
-    return fig
