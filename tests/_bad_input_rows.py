@@ -410,6 +410,9 @@ COMMAND_ROWS = {
     # ------------------------------------------------------------------ codesign
     "codesign: no [design] section":
         R("codesign", ["{ocp}"], ["ocp_max_speed.toml", "no [design] section"]),
+    "codesign: no bounds in --set either":
+        R("codesign", ["{ocp}", "--set", "design.scan=2"],
+          ["ocp_max_speed.toml", "no [design] bounds", "stiffness_min"]),
     "codesign: no [ocp] section":
         R("codesign", ["{paper}"], ["paper_gait.toml", "no [ocp] section"]),
     "codesign: bounds without the robot":

@@ -81,11 +81,12 @@ def cmd_codesign(args: argparse.Namespace) -> int:
     from ocp_crawl.viz.ocp import scenario_files, write_outputs
 
     data = read_toml(args.problem)   # once: the file may be a named pipe
+    given = {o.split("=", 1)[0].strip().split(".", 1)[0] for o in args.overrides}
     for section in ("ocp", "design"):
-        if section not in data:
+        if section not in data and (section == "ocp" or section not in given):
             raise BadInput(f"{args.problem}: no [{section}] section: codesign needs [ocp] (the "
-                           "objective) and [design] (the bounds); see "
-                           "problems/codesign_stiffness.toml")
+                           "objective) and [design] (the bounds, in the file or as --set "
+                           "design.KEY=VALUE); see problems/codesign_stiffness.toml")
     problem = problem_from_dict(data, source=str(args.problem), overrides=args.overrides)
     design_of(problem)   # bad bounds before any work
     settings = ocp_settings(problem)

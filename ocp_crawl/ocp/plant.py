@@ -198,8 +198,8 @@ class Plant:
         criterion, exact where the lower minors are > 0; a lower minor at exactly 0 is a
         degenerate boundary) holds the equilibrium at least kappa_min M g L stiff along the
         stick-stick manifold, away from a fold.  The rows hold at every sub-step end, slipping
-        ones too: a foot that stops slipping there sticks into that equilibrium.  The three-link robot has none (a
-        ValueError)."""
+        ones too: a foot that stops slipping there sticks into that equilibrium.  The three-link
+        robot has none (a ValueError)."""
         if not self.chain:
             raise ValueError("Plant.stability_function: a chain's (Chain.from_robot gives the "
                              "three-link robot as one)")
