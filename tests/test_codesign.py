@@ -130,7 +130,8 @@ def test_free_lengths_need_a_uniform_body():
 
 
 def test_codesign_end_to_end(tmp_path, capsys):
-    """The shipped file at N = 12 with two scanned designs (coarse harmonic searches): success;
+    """The shipped file at N = 12 with two scanned designs (coarse harmonic searches) and one round
+    of the local search: success;
     the co-design NLP's value equals the replay at the chosen design (the fixed robot's NLP on
     the optimum's branches);
     better than the given robot's optimal gait and every scanned design's harmonic gait; the
@@ -138,7 +139,8 @@ def test_codesign_end_to_end(tmp_path, capsys):
     out = tmp_path / "out"
     code = main(["codesign", str(FILE), "--set", "ocp.nodes=12", "--set", "design.scan=2",
                  "--set", "ocp.harmonic_A=1", "--set", "ocp.harmonic_psi=6",
-                 "--set", "ocp.baseline_evaluations=10", "--jobs", "2", "--json",
+                 "--set", "ocp.baseline_evaluations=10", "--set", "design.search_rounds=1",
+                 "--jobs", "2", "--json",
                  "--out", str(out)])
     data = json.loads(capsys.readouterr().out)
     assert code == 0, data["message"]

@@ -29,7 +29,7 @@ from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.chain_search import ChainWaveChoice, best_chain_baselines
 from ocp_crawl.ocp.design import Design
-from ocp_crawl.ocp.design_search import DesignSearch, nlp_value
+from ocp_crawl.ocp.design_search import ROUNDS, DesignSearch, nlp_value
 from ocp_crawl.ocp.judge import gain_over, is_better, replay_signal, value_text
 from ocp_crawl.ocp.plant import AnyRobot, Plant
 from ocp_crawl.ocp.result import OCPResult
@@ -223,7 +223,8 @@ def scan_designs(chain: Chain, design: Design, gravity: GravityConvention,
 
 def codesign_gait(robot: AnyRobot, design: Design, gravity: GravityConvention = "physical",
                   settings: OCPSettings | None = None, scan: int = 9,
-                  jobs: int | None = None, log=None) -> CodesignResult:
+                  jobs: int | None = None, log=None, search_rounds: int = ROUNDS
+                  ) -> CodesignResult:
     """The design and the gait of the best objective together (see the module docstring).
 
     Parameters
@@ -245,6 +246,9 @@ def codesign_gait(robot: AnyRobot, design: Design, gravity: GravityConvention = 
         Worker processes of the scan (None: the CPUs available).
     log : callable, optional
         Called with a line of text as each stage starts (the command's progress on a terminal).
+    search_rounds : int
+        Rounds of the local search at most (:class:`~ocp_crawl.ocp.design_search.DesignSearch`;
+        0: the homotopy's optimum as it is); most of the time after the scan.
 
     Returns
     -------
@@ -281,7 +285,7 @@ def codesign_gait(robot: AnyRobot, design: Design, gravity: GravityConvention = 
         say("the given robot's optimal gait")
         out.given = _fixed_optimum(chain, gravity, settings, out.scan[0].harmonic)
     say(f"the co-design NLP from scanned design {out.start + 1} and its local search")
-    _solve_design(out, chain, design, gravity, settings, best)
+    _solve_design(out, chain, design, gravity, settings, best, search_rounds)
     out.time_s = time.perf_counter() - t0
     return out
 
@@ -296,7 +300,7 @@ def _fixed_optimum(chain: Chain, gravity: GravityConvention, settings: OCPSettin
 
 def _solve_design(out: CodesignResult, chain: Chain, design: Design,
                   gravity: GravityConvention, settings: OCPSettings,
-                  start: ScannedDesign) -> None:
+                  start: ScannedDesign, rounds: int = ROUNDS) -> None:
     """The co-design NLP from ``start``'s design and wave and its local search
     (:class:`~ocp_crawl.ocp.design_search.DesignSearch`), then the gait at the chosen design
     judged by replay and against the scan (fills ``out``)."""
@@ -316,7 +320,7 @@ def _solve_design(out: CodesignResult, chain: Chain, design: Design,
         out.status = Status.NOT_COMPLEMENTARY
         out.message = "the co-design NLP's point is not complementary (a relaxed, unphysical gait)"
         return
-    search = DesignSearch(solver, chain)
+    search = DesignSearch(solver, chain, rounds)
     x = search.run(x)
     out.iterations += search.iterations
     out.probes = search.probes

@@ -15,7 +15,8 @@ beyond them, each kept only when it improves the objective:
   neighbour better than the optimum starts the co-design NLP on its branches (the same robot,
   N = 20: the optimum at 89.77 mm/s, the fixed robot with k1 1.3 times larger at 89.91 mm/s).
 
-Both repeat until neither improves (at most :data:`ROUNDS` rounds); every probe is recorded.
+Both repeat until neither improves (at most ``rounds``, default :data:`ROUNDS`); every probe is
+recorded.
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.status import Status
 
-#: rounds of the local search at most
+#: rounds of the local search at most, by default
 ROUNDS = 4
 #: the relative improvement of the objective that keeps a move
 GAIN = 1e-6
@@ -49,10 +50,10 @@ def nlp_value(solver: GaitSolver, x: np.ndarray) -> float:
 
 class DesignSearch:
     """The local search of the co-design NLP of ``solver`` (its design's variables free), for the
-    chain ``chain`` whose totals the designs keep."""
+    chain ``chain`` whose totals the designs keep, in at most ``rounds`` rounds (0: none)."""
 
-    def __init__(self, solver: GaitSolver, chain: Chain):
-        self.solver, self.chain = solver, chain
+    def __init__(self, solver: GaitSolver, chain: Chain, rounds: int = ROUNDS):
+        self.solver, self.chain, self.rounds = solver, chain, int(rounds)
         self.ocp = ocp = solver.ocp
         assert ocp.design is not None and isinstance(ocp.robot, Chain)
         self.design = ocp.design
@@ -69,7 +70,7 @@ class DesignSearch:
 
     def run(self, x: np.ndarray) -> np.ndarray:
         """The search from the co-design NLP's point x; the best point found."""
-        for _ in range(ROUNDS):
+        for _ in range(self.rounds):
             x = self.simulated_branches(x)
             better = self.neighbours(x)
             if better is None:
@@ -117,7 +118,7 @@ class DesignSearch:
 
     def simulated_branches(self, x: np.ndarray) -> np.ndarray:
         """Rounds of the simulated branches (see the module docstring) while they improve."""
-        for _ in range(ROUNDS):
+        for _ in range(self.rounds):
             values = self.ocp.design_values(x)
             fixed = self.fixed_solver(values)
             u = self.ocp.unpack(x)

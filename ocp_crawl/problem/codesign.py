@@ -83,7 +83,8 @@ def codesign_problem(problem: Problem, *, jobs: int | None = None, log=None):
         raise ProblemError(f"{problem.source}: [ocp] dynamic_margin is the three-link robot's "
                            "(MuJoCo's model); codesign designs a chain: drop the key")
     return codesign_gait(problem.robot, design, problem.gravity, settings,
-                         scan=int(problem.sections["design"]["scan"]), jobs=jobs, log=log)
+                         scan=int(problem.sections["design"]["scan"]), jobs=jobs, log=log,
+                         search_rounds=int(problem.sections["design"]["search_rounds"]))
 
 
 def chosen_problem_dict(problem: Problem, chain: Chain) -> dict:

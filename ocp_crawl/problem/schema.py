@@ -19,9 +19,9 @@ from ocp_crawl.model.pulse import PULSE_RAMPS
 from ocp_crawl.model.robot import BETA_BOUNDS, MAGNITUDE, MU_BOUNDS
 from ocp_crawl.model.statics import GRAVITY_CONVENTIONS, Model, Robot
 from ocp_crawl.ocp import OCPSettings
-from ocp_crawl.ocp.design import Design
 from ocp_crawl.problem.keys import (ANGLE, COEFFICIENT, GE0, GT0, PHASE, Key, Rule, Section, Tables,
                                    field_default, within)
+from ocp_crawl.problem.design_schema import DESIGN
 from ocp_crawl.problem.messages import format_value
 from ocp_crawl.ocp.objectives import SENSES
 from ocp_crawl.ocp.quantities import QUANTITIES, Constraint
@@ -233,29 +233,6 @@ _PRESSURE = Section("pressure",
         rule=Rule(lambda v: v in (1, 2), "1 or 2")),
 ))
 
-#: designs scanned by ocp-crawl codesign by default (the robot's own included)
-DESIGN_SCAN = 9
-_DESIGN = Section("design", "robot parameters that ocp-crawl codesign chooses with the gait, "
-                  "and their bounds (the other keys of the problem fixed)", keys=(
-    Key("stiffness_min", list, "N m/rad", "lowest stiffness of each joint (one entry: every "
-        "joint)", rule=MAGNITUDE_RULE, requires=("stiffness_max",)),
-    Key("stiffness_max", list, "N m/rad", "highest stiffness of each joint (one entry: every "
-        "joint)", rule=MAGNITUDE_RULE, requires=("stiffness_min",)),
-    Key("lengths_min", list, "m", "shortest length of each link (one entry: every link); the "
-        "total length stays the robot's, the masses follow the lengths (a uniform body)",
-        rule=MAGNITUDE_RULE, requires=("lengths_max",)),
-    Key("lengths_max", list, "m", "longest length of each link (one entry: every link)",
-        rule=MAGNITUDE_RULE, requires=("lengths_min",)),
-    Key("min_reduced_stiffness", float, "-", "smallest stick-stick reduced stiffness of the "
-        "equilibrium at every step of the chosen gait, over M g L (0: any short of a fold; soft "
-        "joints reach folds, where the robot snaps through)",
-        default=field_default(Design, "min_reduced_stiffness"),
-        rule=Rule(lambda v: 0 <= v < 1, "in [0, 1)")),
-    Key("scan", int, "-", "designs scanned, each with its best harmonic gait, the robot's own "
-        "first; the co-design NLP starts from the best", default=DESIGN_SCAN,
-        rule=within(1, 256, "each design is a search of its harmonic gaits")),
-))
-
 _MODEL = Section("model", "model conventions", keys=(
     Key("gravity", str, "-",
         "sign of the gravity term: physical (virtual work) or paper (as printed)",
@@ -458,7 +435,7 @@ def removed_key(section: str, name: str) -> str | None:
 
 #: The schema: every section and key of a problem file, in the order they are validated and
 #: reported.
-SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP, _PRESSURE, _DESIGN)
+SECTIONS: tuple[Section, ...] = (_ROBOT, _GAIT, _MODEL, _SIMULATION, _OCP, _PRESSURE, DESIGN)
 
 #: the sections of :data:`SECTIONS` by name (read-only)
 SCHEMA: Mapping[str, Section] = MappingProxyType({s.name: s for s in SECTIONS})
