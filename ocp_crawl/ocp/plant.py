@@ -204,15 +204,16 @@ class Plant:
             raise ValueError("Plant.stability_function: a chain's (Chain.from_robot gives the "
                              "three-link robot as one)")
         from ocp_crawl.model.chain_stability import chain_stiffness_function
+        from ocp_crawl.model.chain_statics import chain_params
 
         assert isinstance(self.robot, Chain)
         n, m = self.robot.n, self.n_joints
         phi, ft, p = cs.SX.sym("phi", m), cs.SX.sym("ft_hat"), cs.SX.sym("p", self.p.size)
         kappa_min = cs.SX.sym("kappa_min")
-        M = sum(p[n + i] for i in range(n))
-        g_acc, L = p[self.p.size - 2], sum(p[i] for i in range(n))
-        MgL = M * g_acc * L
-        s = chain_stiffness_function(n)(phi, ft * M * g_acc, cs.DM.zeros(4), p)
+        par = chain_params(p, n)
+        Mg = sum(par.masses) * par.g
+        MgL = Mg * sum(par.lengths)
+        s = chain_stiffness_function(n)(phi, ft * Mg, cs.DM.zeros(4), p)
         grad = s[:m]
         H = cs.reshape(s[m:m + m * m], m, m)
         u = grad / cs.norm_2(grad)

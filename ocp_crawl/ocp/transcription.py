@@ -132,13 +132,12 @@ class GaitOCP:
             lo, hi = (cs.repmat(k * cs.DM(b) / MgL, N, 1) for b in envelope_offsets(s, r))
             nlp.con("tau_low", cs.vec(T) - lo, 0.0, np.inf)
             nlp.con("tau_high", hi - cs.vec(T), 0.0, np.inf)
-        elif s.parametrization == "free":
-            tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
-            nlp.var("tau", z_tau, tau_lo, tau_hi)
         else:
             tau_lo, tau_hi = (np.tile(b / MgL, N) for b in joint_torque_bounds(s, r))
-            nlp.var("tau", z_tau, -np.inf, np.inf)
-            nlp.con("tau_bounds", cs.vec(T), tau_lo, tau_hi)
+            free = s.parametrization == "free"
+            nlp.var("tau", z_tau, *((tau_lo, tau_hi) if free else (-np.inf, np.inf)))
+            if not free:
+                nlp.con("tau_bounds", cs.vec(T), tau_lo, tau_hi)
         Th = nlp.sym("T_hat")
         nlp.var("T_hat", Th, *PERIOD_HAT_BOUNDS)
         Tref = s.period_ref()
@@ -149,9 +148,9 @@ class GaitOCP:
         nlp.con("rate_up", cs.vec(dT) - c_rate * Th, -np.inf, 0.0)
         nlp.con("rate_down", cs.vec(dT) + c_rate * Th, 0.0, np.inf)
         accel = joint_accel_bounds(s, r)
-        if accel is not None:
+        if accel is not None and s.max_accel_deg_s2 is not None:
             c_acc = (np.tile(accel * Tref**2 / (MgL * N**2), N) if k is None else
-                     cs.repmat(k * (accel / stiffness_of(r) * Tref**2 / (MgL * N**2)),
+                     cs.repmat(k * (np.radians(s.max_accel_deg_s2) * Tref**2 / (MgL * N**2)),
                                N, 1))  # |d2T| <= c_acc T_hat^2
             d2T = cs.vec(cs.horzcat(dT[:, 1:], dT[:, 0]) - dT)  # periodic second differences
             nlp.con("accel_up", d2T - c_acc * Th**2, -np.inf, 0.0)
