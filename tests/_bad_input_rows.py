@@ -436,6 +436,10 @@ COMMAND_ROWS = {
                        "design.lengths_max=[0.1]"], ["x.toml", "uniform body"],
           text=CHAIN_TEXT.replace('drive = "angles"', 'drive = "torque"')
           + "\n[ocp]\nnodes = 12\n\n[design]\nscan = 2\n"),
+    "codesign: length bounds beyond the chain's ratio":
+        R("codesign", ["{file}", "--set", "design.lengths_min=[0.0001]", "--set",
+                       "design.lengths_max=[0.1]"],
+          ["x.toml", "lengths", "more than 100 times shorter"], text=DESIGN_TEXT),
     "codesign: the angles drive":
         R("codesign", ["{file}", "--set", 'gait.drive="angles"'],
           ["x.toml", "joint torques", 'drive = "torque"'], text=DESIGN_TEXT),

@@ -24,7 +24,7 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.checks import real
-from ocp_crawl.model.chain import Chain
+from ocp_crawl.model.chain import LENGTH_RATIO_MAX, Chain
 
 #: masses proportional to the lengths to this relative tolerance count as a uniform body
 UNIFORM_RTOL = 1e-9
@@ -98,6 +98,12 @@ class Design:
                     raise ValueError(f"{name}[{i}]: the robot's {v:.6g} is outside the bounds "
                                      f"[{pair[0]:.6g}, {pair[1]:.6g}]")
         if lengths is not None:
+            longest, shortest = max(h for _, h in lengths), min(lo for lo, _ in lengths)
+            if longest > LENGTH_RATIO_MAX * shortest:
+                raise ValueError(f"lengths: the bounds allow a link of {longest:.6g} m and one of "
+                                 f"{shortest:.6g} m, more than {LENGTH_RATIO_MAX:g} times shorter "
+                                 "(a chain's longest link is at most that many times its "
+                                 "shortest)")
             rho = np.asarray(chain.masses) / np.asarray(chain.lengths)
             if np.ptp(rho) > UNIFORM_RTOL * np.max(rho):
                 raise ValueError("lengths: a design of link lengths needs a uniform body (masses "
