@@ -270,7 +270,9 @@ def test_a_reversed_chain_under_the_reversed_table_mirrors_s():
     rev = simulate_chain_torque(ChainModel(back, model.gravity), ChainReferenceTorque(mirrored,
                                                                                       back))
     assert res.success and rev.success, (res.message, rev.message)
-    assert abs(rev.S + res.S) <= 1e-9 * abs(res.S)
+    # (this gait slips foot 1 back and forth: S is zero but for the round-off of the feet's
+    # positions, hence the floor of 1e-12 of the chain's length)
+    assert abs(rev.S + res.S) <= 1e-9 * abs(res.S) + 1e-12 * chain.L
     assert abs(rev.W_plus - res.W_plus) <= 1e-9 * res.W_plus
 
 

@@ -178,30 +178,31 @@ def test_a_sweep_over_an_entry_gives_the_simulations_of_its_values(tmp_path, cap
         assert float(row["S [m]"]) == pytest.approx(alone.S, rel=1e-12, abs=1e-15)
 
 
-#: a four-link chain whose equilibrium branch folds at the start (found by fuzzing the commands)
-FOLDS = """
+#: a soft four-link chain whose foot 2 lifts off at phase 0.644 (a guard's event: the two-contact
+#: model ends there)
+LIFTS = """
 [robot]
-lengths = [0.0237, 0.02, 0.0378, 0.0185]
-masses = [0.0, 0.02858, 0.00596, 0.02026]
-stiffness = [29.92, 27.83, 193.5]
-mu = 2.271
+lengths = [0.03, 0.03, 0.03, 0.03]
+masses = [0.013, 0.013, 0.013, 0.013]
+stiffness = [0.05, 0.05, 0.05]
+mu = 0.389
 
 [gait]
-psi_deg = 187.6
-gamma_joints_deg = [83.5, 148.3, 134.4]
-A_joints_deg = [0.4, 14.5, 10.0]
+psi_deg = 45.0
+gamma_joints_deg = [90.0, 170.0, 90.0]
+A_joints_deg = [30.0, 10.0, 30.0]
 """
 
 
 def test_a_failed_chain_run_is_a_status_in_simulate_and_animate(tmp_path, capsys):
     """The chain's failure carries no samples: animate says so (exit 1) and writes nothing."""
-    path = tmp_path / "folds.toml"
-    path.write_text(FOLDS)
+    path = tmp_path / "lifts.toml"
+    path.write_text(LIFTS)
     assert main(["simulate", str(path), "--json"]) == 1
-    assert json.loads(capsys.readouterr().out)["status_name"] == "fold"
+    assert json.loads(capsys.readouterr().out)["status_name"] == "lift_off"
     gif = tmp_path / "crawl.gif"
     assert main(["animate", str(path), "--out", str(gif), "--cycles", "1",
                  "--frames-per-cycle", "4"]) == 1
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "nothing written" in err and "fold" in err
+    assert err.count("\n") == 1 and "nothing written" in err and "lifts off" in err
     assert not gif.exists()

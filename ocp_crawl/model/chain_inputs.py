@@ -53,6 +53,8 @@ class JointFourier(PeriodicSignal):
                              f"(m, H), got {a0.shape}, {a.shape}, {b.shape}")
         self.a0, self.a, self.b = a0, a, b
         self._k = np.arange(1, a.shape[1] + 1)
+        # the derivative's coefficients, once (the steppers evaluate a signal thousands of times)
+        self._da, self._db = self.a * TWO_PI * self._k, self.b * TWO_PI * self._k
 
     def __eq__(self, other) -> bool:
         """The same coefficients (as the three-link signals, compared by value)."""
@@ -73,15 +75,23 @@ class JointFourier(PeriodicSignal):
         return cls(mean, (amp * np.sin(ph))[:, None], (amp * np.cos(ph))[:, None])
 
     def __call__(self, t):
-        w = TWO_PI * np.multiply.outer(np.asarray(t, float), self._k)
+        t = np.asarray(t, float)
+        if t.ndim <= 1:   # (a phase or a row of phases: products of matrices, the fast path)
+            w = TWO_PI * np.multiply.outer(t, self._k)
+            return ((self.a0 if t.ndim == 0 else self.a0[:, None])
+                    + self.a @ np.cos(w).T + self.b @ np.sin(w).T)
+        w = TWO_PI * np.multiply.outer(t, self._k)
         return (self.a0.reshape((-1,) + (1,) * (w.ndim - 1))
                 + np.einsum("jk,...k->j...", self.a, np.cos(w))
                 + np.einsum("jk,...k->j...", self.b, np.sin(w)))
 
     def derivative(self, t):
-        w = TWO_PI * np.multiply.outer(np.asarray(t, float), self._k)
-        return (np.einsum("jk,...k->j...", self.b * TWO_PI * self._k, np.cos(w))
-                - np.einsum("jk,...k->j...", self.a * TWO_PI * self._k, np.sin(w)))
+        t = np.asarray(t, float)
+        w = TWO_PI * np.multiply.outer(t, self._k)
+        if t.ndim <= 1:
+            return self._db @ np.cos(w).T - self._da @ np.sin(w).T
+        return (np.einsum("jk,...k->j...", self._db, np.cos(w))
+                - np.einsum("jk,...k->j...", self._da, np.sin(w)))
 
     def describe(self) -> dict:
         return {"type": "JointFourier", "a0": self.a0.tolist(), "a": self.a.tolist(),
@@ -215,9 +225,13 @@ class ChainReferenceTorque(PeriodicSignal):
         return v.reshape((-1,) + (1,) * np.ndim(t))
 
     def __call__(self, t):
+        if np.ndim(t) == 0:   # (a phase: the steppers' many calls)
+            return self.k * (self.reference(t) - math.pi - self.rest)
         return self._col(self.k, t) * (self.reference(t) - math.pi - self._col(self.rest, t))
 
     def derivative(self, t):
+        if np.ndim(t) == 0:
+            return self.k * self.reference.derivative(t)
         return self._col(self.k, t) * self.reference.derivative(t)
 
     def describe(self) -> dict:

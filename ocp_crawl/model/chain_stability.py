@@ -186,6 +186,18 @@ def chain_stability_numbers(model, X, Q) -> dict[str, np.ndarray]:
         of K/(M g L) (K with the mode's friction law); ``margin`` = ``kappa`` where ``e_ss > 0.5``,
         else :func:`routh_margin` of K/(M g L).
     """
+    Q, (g, H, K) = _states(model, X, Q)
+    MgL = model.chain.MgL
+    kappa = _kappa(g, H) / MgL
+    Kn = K / MgL
+    a = hurwitz_coefficients(Kn)
+    slip = routh_margin(Kn)
+    return {"margin": np.where(Q[0] > 0.5, kappa, slip), "kappa": kappa, "trK": a[:, 0],
+            "detK": a[:, -1], "min_real": np.min(np.linalg.eigvals(Kn).real, axis=1)}
+
+
+def _states(model, X, Q) -> tuple[np.ndarray, tuple]:
+    """The modes Q (4, N) and :func:`_matrices` of the states X (n, N), both checked."""
     n, m = model.chain.n, model.chain.n_joints
     X = np.asarray(X, float)
     if X.ndim != 2 or X.shape[0] != n or not np.all(np.isfinite(X)):
@@ -196,18 +208,16 @@ def chain_stability_numbers(model, X, Q) -> dict[str, np.ndarray]:
         Q = np.tile(Q.reshape(-1, 1), (1, X.shape[1]))
     if Q.shape != (NQ, X.shape[1]) or not np.all(np.isfinite(Q)):
         raise ValueError(f"Q must be finite with shape (4,) or (4, {X.shape[1]}), got {Q.shape}")
-    MgL = model.chain.MgL
-    g, H, K = _matrices(model, X[:m], X[m] * model.Mg, np.ascontiguousarray(Q))
-    if m == 2:
+    return Q, _matrices(model, X[:m], X[m] * model.Mg, np.ascontiguousarray(Q))
+
+
+def _kappa(g: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue (N,) of the reduced stiffness of the gradients g (N, m) and
+    Hessians H (N, m, m) [N m/rad]."""
+    if g.shape[1] == 2:
         v = np.stack([-g[:, 1], g[:, 0]], axis=1) / np.linalg.norm(g, axis=1, keepdims=True)
-        kappa = np.einsum("ni,nij,nj->n", v, H, v) / MgL
-    else:
-        kappa = np.linalg.eigvalsh(reduced_matrices(g, H))[:, 0] / MgL
-    Kn = K / MgL
-    a = hurwitz_coefficients(Kn)
-    slip = routh_margin(Kn)
-    return {"margin": np.where(Q[0] > 0.5, kappa, slip), "kappa": kappa, "trK": a[:, 0],
-            "detK": a[:, -1], "min_real": np.min(np.linalg.eigvals(Kn).real, axis=1)}
+        return np.einsum("ni,nij,nj->n", v, H, v)
+    return np.linalg.eigvalsh(reduced_matrices(g, H))[:, 0]
 
 
 def chain_stability(model, x, q) -> dict[str, float]:
@@ -223,12 +233,24 @@ def chain_stability(model, x, q) -> dict[str, float]:
 def chain_stability_margin(model, x, q) -> float:
     """Stability margin of one equilibrium (nondimensional, > 0 <=> stable): ``kappa/(M g L)`` in
     stick-stick, :func:`routh_margin` of K/(M g L) in a slip mode."""
-    return chain_stability(model, x, q)["margin"]
+    q = np.asarray(q, float)
+    if q.shape == (3,):
+        q = np.append(q, 0.0)
+    return float(chain_stability_margins(model, np.asarray(x, float).reshape(-1, 1), q)[0])
 
 
 def chain_stability_margins(model, X, Q) -> np.ndarray:
-    """:func:`chain_stability_margin` of N equilibria: ``X`` (n, N), ``Q`` (4,) or (4, N)."""
-    return chain_stability_numbers(model, X, Q)["margin"]
+    """:func:`chain_stability_margin` of N equilibria: ``X`` (n, N), ``Q`` (4,) or (4, N) (the
+    ``margin`` of :func:`chain_stability_numbers`, computing only what each mode's margin needs)."""
+    Q, (g, H, K) = _states(model, X, Q)
+    MgL = model.chain.MgL
+    stick = Q[0] > 0.5
+    margin = np.empty(stick.size)
+    if stick.any():
+        margin[stick] = _kappa(g[stick], H[stick]) / MgL
+    if not stick.all():
+        margin[~stick] = routh_margin(K[~stick] / MgL)
+    return margin
 
 
 def reduced_stiffness_matrix(model, phi, f_t: float) -> np.ndarray:

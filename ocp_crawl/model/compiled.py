@@ -19,7 +19,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Sequence, TypeVar
 
 import casadi as cs
 import numpy as np
@@ -35,9 +35,13 @@ from ocp_crawl.model.buffered import Buffered
 BUILDERS: dict[str, Callable[[], "FastFunction"]] = {}
 
 
-def compiled_function(builder: Callable[[], "FastFunction"]) -> Callable[[], "FastFunction"]:
-    """Decorator: register ``builder`` (no arguments, returns a :class:`FastFunction`) in
-    :data:`BUILDERS`."""
+_Builder = TypeVar("_Builder", bound=Callable[..., "FastFunction"])
+
+
+def compiled_function(builder: _Builder) -> _Builder:
+    """Decorator: register ``builder`` (callable without arguments, returns a
+    :class:`FastFunction`; arguments with defaults choose variants, e.g. a chain's number of
+    links) in :data:`BUILDERS`."""
     BUILDERS[f"{builder.__module__}.{builder.__qualname__}"] = builder
     return builder
 

@@ -17,7 +17,7 @@ fails (``no_consistent_mode``).  A lost contact ends the run (``lift_off``, ``jo
 the sign of det J or of the stability margin changes: ``fold``).  A stuck foot stays; a slipping
 foot moves with d.  Only single-foot slips are modelled (a gait whose friction limits tie
 identically, mu1 f_n1 = mu2 f_n2, ends with ``no_consistent_mode``).  Cycles run until the
-state at the start of a cycle and the displacement per cycle repeat; the last cycle is reported.
+state and mode at the start of a cycle repeat (at least two cycles); the last cycle is reported.
 
 An input with kinks or holds (piecewise-linear tables, pulses, optimal-control profiles) is taken
 piece by piece (:mod:`ocp_crawl.sim.chain_pieces`): steps end at its kinks, where the mode after
@@ -333,21 +333,22 @@ class ChainTorqueStepper:
         seg = Segment(Mode.STICK, mode_vector(Mode.STICK, start.aux["d"]), 0.0, [start])
         self.segments = [seg]
         h = self.max_step
-        ends = [(start.x.copy(), seg.mode, 0.0)]
+        ends = [(start.x.copy(), seg.mode)]
         for cycle in range(1, cycles_max + 1):
             seg, h = self._advance(seg, float(cycle), h)
             self._check_stable(seg)
             end = seg.points[-1]
-            ends.append((end.x.copy(), seg.mode, end.x1))
+            ends.append((end.x.copy(), seg.mode))
             # (a new segment from the cycle's end, so that segments do not straddle cycles)
             seg = Segment(seg.mode, seg.q, end.t, [end])
             self.segments.append(seg)
             if cycle < 2:
                 continue
-            (xa, ma, pa), (xb, mb, pb), (_, _, pc) = ends[-2], ends[-1], ends[-3]
+            # (the state and mode at a cycle's start decide the cycle: when they repeat, so does
+            # the cycle, its displacement included)
+            (xa, ma), (xb, mb) = ends[-2], ends[-1]
             dev = float(np.max(np.abs(xb - xa)))
-            dS = abs((pb - pa) - (pa - pc)) / self.model.chain.L
-            if ma == mb and max(dev, dS) <= periodic_tol:
+            if ma == mb and dev <= periodic_tol:
                 return cycle, dev
         raise _Stop(Status.NOT_PERIODIC, float(cycles_max), seg.mode,
                     f"not periodic after {cycles_max} cycles")
@@ -440,8 +441,8 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
     quad_h : float
         Largest Gauss-Legendre panel of the cycle integrals [cycles].
     periodic_tol : float
-        Largest change of the state at the cycle start [rad, -] and of the displacement per cycle
-        (relative to L) between the last two cycles of a periodic gait.
+        Largest change of the state at the cycle start [rad, -] between the last two cycles of a
+        periodic gait.
 
     Returns
     -------

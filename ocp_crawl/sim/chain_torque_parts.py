@@ -7,18 +7,16 @@ States are ``x = (phi_1 .. phi_m [rad], f_t/(M g) [-])``, phases t in cycles, ra
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 
-import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.buffered import Buffered
-from ocp_crawl.model.chain_model import ChainModel, call_columns, slip_mode, stick_mode
+from ocp_crawl.model.chain_compiled import fast_chain_ddot2, fast_chain_newton, newton_columns
+from ocp_crawl.model.chain_model import ChainModel, slip_mode, stick_mode
 from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
 from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import cubic_min
-from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_integral
+from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_nodes, probe_phases
 from ocp_crawl.sim.result import Mode
 
 #: largest change of the state from an event to the start of the mode after it that is not a jump
@@ -54,6 +52,8 @@ class Point:
     x1: float = 0.0
     x2: float = 0.0
     left: bool = False
+    rates: dict = field(default_factory=dict, repr=False, compare=False)
+    """the guards' rates at this point by mode (:meth:`ChainSolver.guard_rates`), once each"""
 
     def xdot(self, m: int, Mg: float) -> np.ndarray:
         """Rate of the state along the mode's solution [1/cycle]."""
@@ -87,17 +87,30 @@ class ChainSolver:
         self.nfev = 0
         self.p = model.p
         self.names = aux_names(model.chain.n)
-        # through the functions' buffers: converting each argument and result is most of the time
-        # of a plain call, and the Newton loop makes thousands of them per run
-        self._system, self._evaluate = Buffered(model.sym.system), Buffered(model.sym.evaluate)
+        # compiled (model.chain_compiled): the Newton loop makes thousands of calls per run
+        n = model.chain.n
+        self._newton, self._ddot2 = fast_chain_newton(n), fast_chain_ddot2(n)
         self.pieces = ChainPieces(torque)
+        self._taus: dict = {}
+        """the torques and rates at recent phases (a phase is solved again and again: Newton
+        solves from several guesses, an event's trials; a signal's evaluation costs tens of us)"""
 
     def tau(self, t: float, left: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Torques [N m] and their rate [N m/cycle] at phase t (at a kink of the input the rate
         after it, or before it when ``left``)."""
-        return (np.asarray(self.torque(t), float).ravel(),
+        known = self._taus.get((t, left))
+        if known is None:
+            if len(self._taus) > 64:
+                self._taus.clear()
+            known = self._taus[(t, left)] = (
+                np.asarray(self.torque(t), float).ravel(),
                 np.asarray(self.torque.derivative(self.pieces.rate_phase(t, left)),
                            float).ravel())
+        return known
+
+    def rate(self, t: float) -> np.ndarray:
+        """The torques' rate [N m/cycle] at phase t (at a kink of the input the rate after it)."""
+        return np.asarray(self.torque.derivative(self.pieces.rate_phase(t)), float).ravel()
 
     def taus(self, ts: np.ndarray, upto: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Torques (m, N) [N m] and rates (m, N) [N m/cycle] at the phases ts (N,) (at a kink the
@@ -110,38 +123,20 @@ class ChainSolver:
             dtau = np.array([p[1] for p in pairs]).T.reshape(self.m, -1)
         return tau, dtau
 
-    def solve(self, t: float, x0, q: np.ndarray, max_iter: int = 40,
-              left: bool = False) -> Point | None:
+    def solve(self, t: float, x0, q: np.ndarray, left: bool = False) -> Point | None:
         """The mode's equilibrium at phase t by Newton's method from ``x0`` (as
-        :meth:`ChainModel.solve`: scaled residual <= 1e-13 or a step <= 1e-14); None when it does
-        not converge or its residual exceeds ``residual_tol``.  At a kink of the input its rates
-        are those after it, or before it when ``left``."""
+        :meth:`ChainModel.solve`: scaled residual <= 1e-13 or a step <= 1e-14, at most 40 steps,
+        :data:`~ocp_crawl.model.chain_compiled.NEWTON_OPTIONS`); None when its residual exceeds
+        ``residual_tol``.  At a kink of the input its rates are those after it, or before it when
+        ``left``."""
         tau, dtau = self.tau(t, left)
-        p = self.p
-        x = np.array(x0, float)
-        J = None
-        for it in range(max_iter + 1):
-            G, J = self._system(x, tau, q, p)
-            G = G.ravel()
-            self.nfev += 1
-            if not np.all(np.isfinite(G)) or it == max_iter:
-                return None
-            if np.max(np.abs(G)) <= 1e-13:
-                break
-            try:
-                step = np.linalg.solve(J, G)
-            except np.linalg.LinAlgError:
-                return None
-            x = x - step
-            if np.max(np.abs(step)) <= 1e-14:
-                G, J = self._system(x, tau, q, p)
-                break
-        out = self._evaluate(x, tau, dtau, q, p).ravel()
+        x, out, J = self._newton(x0, tau, dtau, q, self.p)
+        self.nfev += 1
         aux = dict(zip(self.names, out.tolist()))
-        assert J is not None  # (the loop ran at least once)
-        aux["det"] = float(np.linalg.det(J))
         if not abs(aux["res"]) <= self.residual_tol or not np.all(np.isfinite(x)):
             return None
+        nx = self.m + 1
+        aux["det"] = float(np.linalg.det(J.reshape(nx, nx, order="F")))
         return Point(float(t), x, aux, left=left and self.pieces.is_kink(t))
 
     def guess(self, pt: Point, t: float) -> np.ndarray:
@@ -172,7 +167,15 @@ class ChainSolver:
         """Rates [1/cycle] of :meth:`guards` along the mode's solution at pt (the same keys).  The
         slip modes' sigma d'/L needs d'' (:meth:`ChainModel.ddot2`) and so the torques' second
         rate, taken by central differences of their rate (1e-5 cycles) inside the input's piece
-        that holds pt."""
+        that holds pt.  Each point's rates in a mode are computed once (the points' state and
+        outputs do not change)."""
+        known = pt.rates.get(mode)
+        if known is not None:
+            return known
+        pt.rates[mode] = r = self._guard_rates(mode, pt, q)
+        return r
+
+    def _guard_rates(self, mode: Mode, pt: Point, q: np.ndarray) -> dict[str, float]:
         a, Mg, L = pt.aux, self.Mg, self.L
         r = {"lift_off_1": a["dfn1"] / Mg, "lift_off_2": a["dfn2"] / Mg,
              "feet_crossed": a["ddot"] / L}
@@ -185,9 +188,9 @@ class ChainSolver:
             return r
         tau, dtau = self.tau(pt.t, pt.left)
         tc = self.pieces.curvature_phase(pt.t, pt.left)
-        ddtau = (self.tau(tc + 1e-5)[1] - self.tau(tc - 1e-5)[1]) / 2e-5
-        c, b = self.model.ddot2(pt.x, tau, dtau, q)
-        r["stick"] = mode.sigma * (c + float(b @ ddtau)) / L
+        ddtau = (self.rate(tc + 1e-5) - self.rate(tc - 1e-5)) / 2e-5
+        ab = self._ddot2(pt.x, tau, dtau, q, self.p)[0]
+        r["stick"] = mode.sigma * (ab[0] + float(ab[1:] @ ddtau)) / L
         if mode.foot == 1:
             r["switch_to_2"] = (dlim2 - dlim1) / Mg
         else:
@@ -246,44 +249,19 @@ class ChainSolver:
         return None
 
 
-@lru_cache(maxsize=None)
-def _mapped_system(fun: cs.Function, size: int) -> Buffered:
-    """``fun`` (the mode system) mapped over ``size`` columns, the mode vector and the parameters
-    shared, called through its buffer."""
-    return Buffered(fun.map(f"{fun.name()}_cols{size}", "serial", size, [2, 3], []))
-
-
 def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,
-                  max_iter: int = 40, upto: float | None = None) -> tuple[np.ndarray, dict]:
+                  upto: float | None = None) -> tuple[np.ndarray, dict]:
     """Newton solves of the mode ``q`` at the phases ``ts`` (N,) from the guesses ``X0`` (m+1, N)
-    at once; returns the states (m+1, N) and the outputs (:meth:`ChainModel.evaluate` rows, each
-    (N,); their rates at a kink of the input those after it, at ``upto`` those before it).
-    RuntimeError when a column does not converge."""
-    model, nx, N = solver.model, solver.m + 1, ts.size
-    size = max(16, 1 << (N - 1).bit_length())
-    cols = np.minimum(np.arange(size), N - 1)
+    at once (each column as :meth:`ChainSolver.solve`); returns the states (m+1, N) and the
+    outputs (:meth:`ChainModel.evaluate` rows, each (N,); their rates at a kink of the input those
+    after it, at ``upto`` those before it).  RuntimeError when a column does not converge."""
     tau, dtau = solver.taus(ts, upto)
-    f = _mapped_system(model.sym.system, size)
-    X = np.array(X0, float)[:, cols]
-    T, p = tau[:, cols], model.p
-    done = np.zeros(size, bool)
-    for _ in range(max_iter):
-        G, J = f(X, T, q, p)
-        done |= np.max(np.abs(G), axis=0) <= 1e-13
-        if done.all():
-            break
-        J3 = J.reshape(nx, size, nx).transpose(1, 0, 2)
-        step = np.linalg.solve(J3[~done], G.T[~done][..., None])[..., 0].T
-        X[:, ~done] -= step
-        small = np.max(np.abs(step), axis=0) <= 1e-14
-        done[np.flatnonzero(~done)[small]] = True
-    solver.nfev += size
-    X = X[:, :N]
-    out = call_columns(model.sym.evaluate, X, tau, dtau, q, p)
+    X, out = newton_columns(solver.chain.n)(np.asarray(X0, float), tau, dtau, q, solver.model.p)
+    solver.nfev += ts.size
     aux = {k: out[i] for i, k in enumerate(aux_names(solver.chain.n))}
-    if not (done[:N].all() and np.all(np.abs(aux["res"]) <= solver.residual_tol)):
-        bad = int(np.argmax(~done[:N] | ~(np.abs(aux["res"]) <= solver.residual_tol)))
-        raise RuntimeError(f"mode solve failed at t = {ts[bad]:.15g}")
+    good = (np.abs(aux["res"]) <= solver.residual_tol) & np.all(np.isfinite(X), axis=0)
+    if not good.all():
+        raise RuntimeError(f"mode solve failed at t = {ts[int(np.argmin(good))]:.15g}")
     return X, aux
 
 
@@ -301,6 +279,20 @@ class SegmentEval:
 
     def solve(self, t: np.ndarray) -> tuple[np.ndarray, dict]:
         """States (m+1, N) and outputs at the phases t (N,)."""
+        return solve_columns(self.solver, t, self._guesses(t), self.seg.q, upto=self.upto)
+
+    def power(self, t: float, j: int) -> float:
+        """Joint j's power tau_j phi_j' [J/cycle] at the phase t (0-based j; the row j of
+        :meth:`rows` at one phase) by one Newton solve from the same guess."""
+        pt = self.solver.solve(t, self._guesses(np.array([t]))[:, 0], self.seg.q,
+                               left=t == self.upto)
+        if pt is None:
+            raise RuntimeError(f"mode solve failed at t = {t:.15g}")
+        return float(self.solver.tau(t)[0][j] * pt.aux[f"dphi{j + 1}"])
+
+    def _guesses(self, t: np.ndarray) -> np.ndarray:
+        """The Newton guesses (m+1, N) at the phases t (N,): the tangent predictor of the nearest
+        stored point."""
         i = np.clip(np.searchsorted(self.tp, t), 0, len(self.tp) - 1)
         j = np.maximum(i - 1, 0)
         near = np.where(np.abs(self.tp[j] - t) < np.abs(self.tp[i] - t), j, i)
@@ -308,8 +300,7 @@ class SegmentEval:
         # (inside a hold of the input, crossed in one step, the state is that of the hold's start;
         # the rates at its end are those after it)
         held = np.max(np.abs(self.Xp[:, i] - self.Xp[:, j]), axis=0) <= 1e-14
-        X0 = np.where(held, self.Xp[:, j], X0)
-        return solve_columns(self.solver, t, X0, self.seg.q, upto=self.upto)
+        return np.where(held, self.Xp[:, j], X0)
 
     def rows(self, t) -> np.ndarray:
         """(m + 1, N): the joint powers tau_j phi_j' [J/cycle], then f_t d' [J/cycle] at the
@@ -331,17 +322,25 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
                       h: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,) (Gauss-Legendre panels
     of at most ``h`` cycles, split at the input's kinks and at the sign changes of each joint's
-    power), the work per joint (m,) and the friction dissipation."""
+    power), the work per joint (m,) and the friction dissipation.  The joints share the solves:
+    one at the probes of the powers' signs, one at every joint's nodes and the work's."""
     m = solver.m
     wp, work, diss = np.zeros(m), np.zeros(m), 0.0
     for lo, hi in solver.pieces.split(a, b):
+        if hi <= lo:
+            continue
         ev = SegmentEval(solver, seg, upto=hi)
-        for j in range(m):
-            wp[j] += positive_part_integral(lo, hi, lambda t, j=j: ev.rows(t)[j],
-                                            lambda t, j=j: float(ev.rows(t)[j, 0]), h=h)
+        probes = probe_phases(lo, hi, h)
+        fp = ev.rows(probes)
+        parts = [positive_part_nodes(lo, hi, probes, fp[j], lambda t, j=j: ev.power(t, j), h)
+                 for j in range(m)]
         tq, w = gauss_nodes(lo, hi, h, 5)
-        r = ev.rows(tq) if tq.size else np.zeros((m + 1, 0))
-        work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
+        r = ev.rows(np.concatenate([t for t, _ in parts] + [tq]))
+        k = 0
+        for j, (t, wj) in enumerate(parts):
+            wp[j] += float(np.sum(wj * np.maximum(r[j, k:k + t.size], 0.0)))
+            k += t.size
+        work, diss = work + r[:m, k:] @ w, diss + float(r[m, k:] @ w)
     return wp, work, diss
 
 
