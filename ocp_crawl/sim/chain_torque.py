@@ -415,7 +415,7 @@ def as_chain_torque(torques, model: ChainModel) -> PeriodicSignal:
 
 
 def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int = 12,
-                          t_eval=None, max_step: float = 1.0 / 64, min_step: float = 1e-11,
+                          t_eval=None, max_step: float = 1.0 / 16, min_step: float = 1e-11,
                           event_xtol: float = 1e-13, trial_step: float = 1e-8,
                           quad_h: float = 1.0 / 32, periodic_tol: float = 1e-10) -> CrawlResult:
     """Torque-driven quasistatic gait of an n-link chain (see the module docstring).
@@ -433,7 +433,8 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
     t_eval : array_like of float, optional
         Output phases in [0, 1] of the steady cycle [cycles]; default 201 phases and the events.
     max_step, min_step : float
-        Largest and smallest continuation step [cycles].
+        Largest and smallest continuation step [cycles] (the largest as the three-link stepper's,
+        :class:`~ocp_crawl.sim.event.HybridOptions`; a signal's harmonics may ask for less).
     event_xtol : float
         Tolerance of the event phases [cycles].
     trial_step : float
