@@ -45,7 +45,6 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.chain_statics import chain_geometry, chain_params, n_params
-from ocp_crawl.model.chain_model import call_columns
 from ocp_crawl.model.statics import NQ
 
 #: names of the numbers of :func:`chain_stability` (those of
@@ -84,8 +83,12 @@ def chain_stiffness_function(n: int) -> cs.Function:
 def _matrices(model, phi: np.ndarray, ft: np.ndarray, Q: np.ndarray) -> tuple:
     """(grad d (N, m), H_lag (N, m, m), K (N, m, m)) at the columns ``phi`` (m, N), ``ft`` (N,)
     [N] and modes ``Q`` (4, N)."""
+    # (compiled: the steppers ask for a segment's margins at every event; the module imports this
+    # one's stiffness function)
+    from ocp_crawl.model.chain_compiled import stiffness_columns
+
     m = model.chain.n_joints
-    s = call_columns(chain_stiffness_function(model.chain.n), phi, ft.reshape(1, -1), Q, model.p)
+    s = stiffness_columns(model.chain.n)(phi, ft.reshape(1, -1), Q, model.p)[0]
     g = s[:m].T
     H = s[m:m + m * m].T.reshape(-1, m, m).transpose(0, 2, 1)
     K = s[m + m * m:].T.reshape(-1, m, m).transpose(0, 2, 1)

@@ -16,7 +16,7 @@ from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
 from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import cubic_min
-from ocp_crawl.sim.quadrature import gauss_nodes, positive_part_nodes, probe_phases
+from ocp_crawl.sim.quadrature import gauss_nodes, interpolant_roots
 from ocp_crawl.sim.result import Mode
 
 #: largest change of the state from an event to the start of the mode after it that is not a jump
@@ -281,15 +281,6 @@ class SegmentEval:
         """States (m+1, N) and outputs at the phases t (N,)."""
         return solve_columns(self.solver, t, self._guesses(t), self.seg.q, upto=self.upto)
 
-    def power(self, t: float, j: int) -> float:
-        """Joint j's power tau_j phi_j' [J/cycle] at the phase t (0-based j; the row j of
-        :meth:`rows` at one phase) by one Newton solve from the same guess."""
-        pt = self.solver.solve(t, self._guesses(np.array([t]))[:, 0], self.seg.q,
-                               left=t == self.upto)
-        if pt is None:
-            raise RuntimeError(f"mode solve failed at t = {t:.15g}")
-        return float(self.solver.tau(t)[0][j] * pt.aux[f"dphi{j + 1}"])
-
     def _guesses(self, t: np.ndarray) -> np.ndarray:
         """The Newton guesses (m+1, N) at the phases t (N,): the tangent predictor of the nearest
         stored point."""
@@ -320,27 +311,37 @@ class SegmentEval:
 
 def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
                       h: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,) (Gauss-Legendre panels
-    of at most ``h`` cycles, split at the input's kinks and at the sign changes of each joint's
-    power), the work per joint (m,) and the friction dissipation.  The joints share the solves:
-    one at the probes of the powers' signs, one at every joint's nodes and the work's."""
+    """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,), the work per joint (m,)
+    and the friction dissipation, by 5-point Gauss-Legendre panels of at most ``h`` cycles split at
+    the input's kinks; a joint's positive part also at the sign changes of its power in a panel
+    (the roots of its interpolant there, :func:`interpolant_roots`), solved at the pieces' nodes
+    (one solve for every joint)."""
     m = solver.m
     wp, work, diss = np.zeros(m), np.zeros(m), 0.0
     for lo, hi in solver.pieces.split(a, b):
         if hi <= lo:
             continue
         ev = SegmentEval(solver, seg, upto=hi)
-        probes = probe_phases(lo, hi, h)
-        fp = ev.rows(probes)
-        parts = [positive_part_nodes(lo, hi, probes, fp[j], lambda t, j=j: ev.power(t, j), h)
-                 for j in range(m)]
         tq, w = gauss_nodes(lo, hi, h, 5)
-        r = ev.rows(np.concatenate([t for t, _ in parts] + [tq]))
-        k = 0
-        for j, (t, wj) in enumerate(parts):
-            wp[j] += float(np.sum(wj * np.maximum(r[j, k:k + t.size], 0.0)))
-            k += t.size
-        work, diss = work + r[:m, k:] @ w, diss + float(r[m, k:] @ w)
+        r = ev.rows(tq)
+        work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
+        edges = np.linspace(lo, hi, tq.size // 5 + 1)   # (the panels of gauss_nodes)
+        pieces = []   # (joint, nodes, weights) of the split panels' pieces
+        for j in range(m):
+            values, weights = r[j].reshape(-1, 5), w.reshape(-1, 5)
+            roots = interpolant_roots(values)
+            whole = np.array([z.size == 0 for z in roots])
+            wp[j] += float(np.sum(np.maximum(values[whole], 0.0) * weights[whole]))
+            for k in np.flatnonzero(~whole):
+                cuts = edges[k] + 0.5 * (1.0 + roots[k]) * (edges[k + 1] - edges[k])
+                ends = np.concatenate([[edges[k]], cuts, [edges[k + 1]]])
+                pieces += [(j, *gauss_nodes(c0, c1, h, 5)) for c0, c1 in zip(ends, ends[1:])]
+        if pieces:
+            fp = ev.rows(np.concatenate([t for _, t, _ in pieces]))
+            at = 0
+            for j, t, wt in pieces:
+                wp[j] += float(np.sum(np.maximum(fp[j, at:at + t.size], 0.0) * wt))
+                at += t.size
     return wp, work, diss
 
 

@@ -20,27 +20,6 @@ def gauss_nodes(a: float, b: float, h: float = 1.0 / 64, order: int = 5):
     return (mid + half * x).ravel(), (half * w).ravel()
 
 
-def probe_phases(a: float, b: float, h: float = 1.0 / 64, n_probe: int = 17) -> np.ndarray:
-    """The phases on [a, b] at which :func:`positive_part_nodes` reads the sign of f: ``n_probe``
-    per piece no longer than h (the pieces' ends shared)."""
-    n_pieces = max(1, int(np.ceil((b - a) / h - 1e-12)))
-    return np.linspace(a, b, n_pieces * (n_probe - 1) + 1)
-
-
-def positive_part_nodes(a: float, b: float, probes: np.ndarray, fp: np.ndarray, f_scalar,
-                        h: float = 1.0 / 64, order: int = 5) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights on [a, b] (b > a) split at the sign changes of a smooth f,
-    for the integral of max(0, f): the changes seen between the values ``fp`` of f at the phases
-    ``probes`` (:func:`probe_phases`), each located by Brent's method on ``f_scalar(t)``."""
-    from scipy.optimize import brentq  # scipy only where used (start-up time)
-
-    roots = [brentq(f_scalar, probes[j], probes[j + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps)
-             for j in np.nonzero(np.sign(fp[:-1]) * np.sign(fp[1:]) < 0)[0]]
-    edges = [a] + roots + [b]
-    parts = [gauss_nodes(lo, hi, h, order) for lo, hi in zip(edges[:-1], edges[1:])]
-    return np.concatenate([t for t, _ in parts]), np.concatenate([w for _, w in parts])
-
-
 def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 / 64, order: int = 5,
                            n_probe: int = 17) -> float:
     """Integral of max(0, f) over [a, b] for a smooth f, splitting at the sign changes of f.
@@ -48,11 +27,40 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
     ``f_vec(t_array)`` evaluates f on many points at once; ``f_scalar(t)`` one point (root
     refinement).
     """
+    from scipy.optimize import brentq  # scipy only where used (start-up time)
+
     if b <= a:
         return 0.0
-    probes = probe_phases(a, b, h, n_probe)
-    t, w = positive_part_nodes(a, b, probes, f_vec(probes), f_scalar, h, order)
+    n_pieces = max(1, int(np.ceil((b - a) / h - 1e-12)))
+    probes = np.linspace(a, b, n_pieces * (n_probe - 1) + 1)
+    fp = f_vec(probes)
+    roots = []
+    for j in np.nonzero(np.sign(fp[:-1]) * np.sign(fp[1:]) < 0)[0]:
+        roots.append(brentq(f_scalar, probes[j], probes[j + 1], xtol=1e-14,
+                            rtol=4 * np.finfo(float).eps))
+    edges = [a] + roots + [b]
+    nodes, weights = [], []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        t, w = gauss_nodes(lo, hi, h, order)
+        nodes.append(t)
+        weights.append(w)
+    t = np.concatenate(nodes)
+    w = np.concatenate(weights)
     return float(np.sum(w * np.maximum(f_vec(t), 0.0)))
+
+
+#: the Legendre coefficients of the degree-4 interpolant through values at the 5-point
+#: Gauss-Legendre nodes on [-1, 1] (c = values @ _LEG_FIT5)
+_LEG_FIT5 = np.linalg.inv(np.polynomial.legendre.legvander(_GL[5][0], 4)).T
+
+
+def interpolant_roots(values: np.ndarray) -> list[np.ndarray]:
+    """The sign changes of f inside panels, from its values (k, 5) at each panel's 5 Gauss-Legendre
+    nodes: for each panel the real roots in (-1, 1) (the panel mapped onto [-1, 1]), in order, of
+    the degree-4 interpolant of its values (the polynomial the Gauss rule integrates)."""
+    roots = legendre_roots(np.atleast_2d(np.asarray(values, float)) @ _LEG_FIT5)
+    inside = (np.abs(roots.imag) <= 1e-12) & (np.abs(roots.real) < 1.0)
+    return [np.sort(r.real[k]) for r, k in zip(roots, inside)]
 
 
 def legendre_roots(coefs: np.ndarray) -> np.ndarray:
