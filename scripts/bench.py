@@ -281,6 +281,34 @@ def bench_chain(repeat: int) -> dict:
     return out
 
 
+def bench_chain_cycles(repeat: int) -> dict:
+    """A cycle of the chain's event-driven solver for n = 3 .. 7 links of equal length (0.123 m and
+    0.052 kg in all), the gait shape of ``problems/five_link_chain.toml`` (outer joints 95/90 +- 20/18
+    deg, inner ones 175 +- 5 deg, each joint 20 deg behind the previous one): the fastest run over
+    its cycles, and per link squared (the unit cost ``chain_event_cycle`` of
+    ``ocp_crawl.problem.work``)."""
+    import numpy as np
+
+    from ocp_crawl.model import Chain, ChainModel, JointFourier
+    from ocp_crawl.sim import ChainReferenceTorque, simulate_chain_torque
+
+    out: dict = {}
+    for n in range(3, 8):
+        m = n - 1
+        chain = Chain(lengths=(0.123 / n,) * n, masses=(0.052 / n,) * n,
+                      stiffness=(0.17, *((0.25,) * (m - 2)), 0.17), mu=(0.35, 0.43))
+        mean = np.deg2rad([95.0, *((175.0,) * (m - 2)), 90.0])
+        amp = np.deg2rad([20.0, *((5.0,) * (m - 2)), 18.0])
+        torque = ChainReferenceTorque(JointFourier.harmonic(mean, amp, -np.deg2rad(20.0)
+                                                            * np.arange(m)), chain)
+        model = ChainModel(chain)
+        low, _, res = _min_median(lambda: simulate_chain_torque(model, torque), repeat)
+        cycle = low / max(res.cycles, 1)
+        out[f"n{n}"] = {"status": res.status.label, "cycles": res.cycles,
+                        "cycle_s": round(cycle, 4), "per_n2_s": round(cycle / n**2, 5)}
+    return out
+
+
 def bench_ocp(repeat: int) -> dict:
     """Periodic-gait OCP on the paper robot: solve time per objective at N = 100 (one solve
     each)."""
@@ -611,7 +639,8 @@ def bench_work(repeat: int) -> dict:
 
 
 BENCHMARKS = {"hybrid": bench_hybrid, "hybrid_accuracy": bench_hybrid_accuracy,
-              "prescribed": bench_prescribed, "chain": bench_chain, "paper": bench_paper,
+              "prescribed": bench_prescribed, "chain": bench_chain,
+              "chain_cycles": bench_chain_cycles, "paper": bench_paper,
               "mpcc": bench_mpcc, "sweep": bench_sweep, "ocp": bench_ocp,
               "ocp_kernel": bench_ocp_kernel, "ocp_files": bench_ocp_files,
               "ocp_paths": bench_ocp_paths, "baselines": bench_baselines, "work": bench_work,
