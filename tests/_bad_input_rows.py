@@ -945,6 +945,11 @@ COMMAND_ROWS.update({
                                                                 "--max-hours", "0.1"],
                                                    ["N = 200+400", "ocp.nodes", "--nodes",
                                                     "above the limit of 6 min"]),
+    "codesign: designs x rounds over --max-hours":
+        R("codesign", ["{file}", "--set", "design.scan=64", "--set", "design.search_rounds=12",
+                       "--max-hours", "0.1"],
+          ["64 designs", "design.scan", "design.search_rounds", "above the limit of 6 min"],
+          text=DESIGN_TEXT),
     "dynamics: periods x timestep over --max-hours":
         R("dynamics", ["{paper}", "--periods", "50", "100",
                        "--set", "simulation.timestep=1e-4",

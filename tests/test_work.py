@@ -15,8 +15,8 @@ from ocp_crawl import load_problem, problem_from_dict, run_problem
 from ocp_crawl.cli import main
 from ocp_crawl.problem.run import ocp_settings
 from ocp_crawl.problem.work import (DEFAULT_MAX_HOURS, EVENT_STEPS, EVENT_STEPS_TYPICAL,
-                                    TYPICAL_CYCLES, UNIT_COST, Work, WorkLimit, fit_work,
-                                    optimize_work, simulation_work, sweep_work)
+                                    TYPICAL_CYCLES, UNIT_COST, Work, WorkLimit, codesign_work,
+                                    fit_work, optimize_work, simulation_work, sweep_work)
 
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
 
@@ -107,6 +107,24 @@ def test_fit_and_optimize_work_scale_with_their_counts():
     # the solves' work is linear in the nodes summed over the counts (one baseline search)
     hundred = optimize_work(ocp, settings, [100])
     assert two.seconds - one.seconds == pytest.approx(2 * (hundred.seconds - one.seconds))
+
+
+def test_codesign_work_counts_its_designs_on_the_workers_and_its_rounds():
+    from ocp_crawl.problem.codesign import design_of
+
+    p = problem("codesign_stiffness.toml")
+    settings, design = ocp_settings(p), design_of(p)
+
+    def seconds(scan, rounds, jobs):
+        return codesign_work(p, settings, design, scan, rounds, jobs).seconds
+    # the scan: linear in the designs per worker; the rounds: linear in their count
+    assert seconds(16, 4, 2) - seconds(8, 4, 2) == pytest.approx(seconds(16, 4, 2)
+                                                                  - seconds(16, 4, 4))
+    assert seconds(8, 6, 2) - seconds(8, 4, 2) == pytest.approx(seconds(8, 4, 2)
+                                                                 - seconds(8, 2, 2))
+    # each round moves the two free stiffnesses either way, then solves the co-design NLP
+    text = codesign_work(p, settings, design, 8, 4, 2).detail
+    assert "8 designs / 2 workers" in text and "23 OCP solves (2 free variables, 4 rounds)" in text
 
 
 def test_a_long_run_is_announced_before_it_starts(capsys, monkeypatch):

@@ -8,14 +8,17 @@ import sys
 from pathlib import Path
 
 from ocp_crawl.cli.app import PROG, BadInput, register
-from ocp_crawl.cli.common import finish, force_arg, jobs_type, optional_out, out_dir, write_out
+from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, jobs_type, optional_out,
+                                  out_dir, work_arg, write_out)
 from ocp_crawl.cli.optimize_command import OCP_FILES
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable, write_json
 from ocp_crawl.ocp.judge import value_text
-from ocp_crawl.problem import ocp_settings, problem_from_dict
+from ocp_crawl.problem import problem_from_dict
 from ocp_crawl.problem.overrides import read_toml
+from ocp_crawl.problem.work import codesign_work
+from ocp_crawl.workers import default_jobs
 
 #: the files of ``codesign --out`` besides those of the chosen design's gait (optimize's)
 CODESIGN_FILES = ("codesign.json", "codesign.png", "codesign.pdf")
@@ -35,6 +38,7 @@ def _codesign_args(p: argparse.ArgumentParser) -> None:
                         "simulate, arrays.npz, summary.json, optimal_gait.png/.pdf) to DIR")
     p.add_argument("--jobs", type=jobs_type, metavar="N",
                    help="worker processes of the scan of designs (default: the CPUs available)")
+    work_arg(p)
     force_arg(p)
 
 
@@ -75,7 +79,8 @@ def format_codesign(data: dict) -> str:
 @register("codesign", "choose robot parameters ([design]) and the gait together, proved by "
           "replay and against a scan of designs", _codesign_args)
 def cmd_codesign(args: argparse.Namespace) -> int:
-    from ocp_crawl.problem.codesign import chosen_problem_dict, codesign_problem, design_of
+    from ocp_crawl.problem.codesign import (chosen_problem_dict, codesign_inputs,
+                                            codesign_problem)
     from ocp_crawl.viz.codesign import codesign_figure
     from ocp_crawl.viz.gait import save_figure
     from ocp_crawl.viz.ocp import scenario_files, write_outputs
@@ -88,10 +93,14 @@ def cmd_codesign(args: argparse.Namespace) -> int:
                            "objective) and [design] (the bounds, in the file or as --set "
                            "design.KEY=VALUE); see problems/codesign_stiffness.toml")
     problem = problem_from_dict(data, source=str(args.problem), overrides=args.overrides)
-    design_of(problem)   # bad bounds before any work
-    settings = ocp_settings(problem)
+    design, settings = codesign_inputs(problem)   # bad input before any work
+    section = problem.sections["design"]
+    work = check_work(args, codesign_work(problem, settings, design, int(section["scan"]),
+                                          int(section["search_rounds"]),
+                                          args.jobs or default_jobs()))
     out = optional_out(args, (*CODESIGN_FILES, *OCP_FILES, *scenario_files(settings)))
     check_start(problem)
+    announce(work)
     log = ((lambda text: print(f"{PROG}: {text}", file=sys.stderr, flush=True))
            if sys.stderr.isatty() else None)
     result = codesign_problem(problem, jobs=args.jobs, log=log)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.ocp.design import Design
+from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.plant import joints_of
 from ocp_crawl.problem.keys import ProblemError
 from ocp_crawl.problem.messages import format_value
@@ -74,6 +75,16 @@ def codesign_problem(problem: Problem, *, jobs: int | None = None, log=None):
     """
     from ocp_crawl.ocp.codesign import codesign_gait
 
+    design, settings = codesign_inputs(problem)
+    return codesign_gait(problem.robot, design, problem.gravity, settings,
+                         scan=int(problem.sections["design"]["scan"]), jobs=jobs, log=log,
+                         search_rounds=int(problem.sections["design"]["search_rounds"]))
+
+
+def codesign_inputs(problem: Problem) -> tuple[Design, OCPSettings]:
+    """The problem's design and OCP settings for :func:`codesign_problem`, every input checked:
+    ProblemError (one line naming the key) for the angles drive, missing or bad ``[design]``
+    bounds, or ``[ocp] dynamic_margin``."""
     if problem.drive != "torque":
         raise ProblemError(f"{problem.source}: codesign designs joint torques: it needs [gait] "
                            f"drive = \"torque\", got {format_value(problem.drive)}")
@@ -82,9 +93,7 @@ def codesign_problem(problem: Problem, *, jobs: int | None = None, log=None):
     if settings.dynamic_margin is not None:
         raise ProblemError(f"{problem.source}: [ocp] dynamic_margin is the three-link robot's "
                            "(MuJoCo's model); codesign designs a chain: drop the key")
-    return codesign_gait(problem.robot, design, problem.gravity, settings,
-                         scan=int(problem.sections["design"]["scan"]), jobs=jobs, log=log,
-                         search_rounds=int(problem.sections["design"]["search_rounds"]))
+    return design, settings
 
 
 def chosen_problem_dict(problem: Problem, chain: Chain) -> dict:

@@ -13,7 +13,7 @@ per unit, and
   (``estimated about ..., up to ...``).
 
 The commands check (``ocp-crawl simulate``, ``animate``, ``crosscheck``, ``sweep``, ``optimize``,
-``fit``, ``dynamics``); the library functions run what they are given, and a program asks first,
+``codesign``, ``fit``, ``dynamics``); the library functions run what they are given, and a program asks first,
 e.g. ``simulation_work(problem).check(max_hours=1)``.
 
 The unit costs (:data:`UNIT_COST`) are those measured on the benchmarks page's machine (2 cores,
@@ -191,6 +191,34 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
                   f"{members} harmonic members x {scen} scenarios at ~{_ms('family_member')}",
                   ("ocp.harmonic_psi", "ocp.baseline_samples", "ocp.baseline_evaluations"))
     return solve + search
+
+
+def codesign_work(problem, settings, design, scan: int, rounds: int, jobs: int = 1) -> Work:
+    """The work of ``codesign`` on ``problem`` (:class:`~ocp_crawl.ocp.OCPSettings` ``settings``, a
+    :class:`~ocp_crawl.ocp.design.Design` ``design``): the scan of ``scan`` designs, each with its
+    best travelling waves (simulations of the chain, on ``jobs`` workers), then typical OCP solves
+    (as :func:`optimize_work`'s, on the chain): the given robot's, the co-design NLP's, each of at
+    most ``rounds`` rounds of the local search (each free variable moved either way, then the
+    co-design NLP) and the chosen design's."""
+    from ocp_crawl.ocp.chain_search import local_budget, scan_points as chain_points
+
+    n = problem.robot.n if problem.is_chain else 3
+    scen = len(settings.scenarios(problem.robot))
+    per_it = settings.nodes * scen * (n - 1 + 10) / 12 * UNIT_COST["ocp_node_iteration"]
+    free = sum(1 for low, high in zip(*design.limits()) if high > low)   # (not pinned)
+    solves = 3 + rounds * (2 * free + 1)
+    members = len(chain_points(settings)) + settings.baseline_starts * local_budget(settings)
+    member = UNIT_COST["chain_event_cycle"] * n**2 * TYPICAL_CYCLES
+    share = scan / max(jobs, 1)
+    return (Work(members * scen * member * share,
+                 f"{scan} designs / {jobs} workers x {members} travelling waves x {scen} scenarios "
+                 f"x a typical chain simulation (~{member:.2g} s)",
+                 ("design.scan", "ocp.harmonic_A", "ocp.harmonic_psi", "--jobs"))
+            + Work(per_it * OCP_ITERATIONS * solves,
+                   f"{solves} OCP solves ({free} free variables, {rounds} rounds) x "
+                   f"{OCP_ITERATIONS} iterations x N = {settings.nodes} x {scen} scenarios at "
+                   f"~{_ms('ocp_node_iteration')}",
+                   ("design.search_rounds", "ocp.nodes")))
 
 
 def fit_work(problem, rows: int, max_nfev: int, n_params: int, jobs: int = 1,
