@@ -283,9 +283,9 @@ def bench_chain(repeat: int) -> dict:
 
 def bench_chain_cycles(repeat: int) -> dict:
     """A cycle of the chain's event-driven solver for n = 3 .. 7 links of equal length (0.123 m and
-    0.052 kg in all), the gait shape of ``problems/five_link_chain.toml`` (outer joints 95/90 +- 20/18
-    deg, inner ones 175 +- 5 deg, each joint 20 deg behind the previous one): the fastest run over
-    its cycles, and per link squared (the unit cost ``chain_event_cycle`` of
+    0.052 kg in all), the gait shape of ``problems/five_link_chain.toml`` (outer joints 95/90 +-
+    20/18 deg, inner ones 175 +- 5 deg, each joint 20 deg behind the previous one): the fastest
+    run over its cycles, and per link (the unit cost ``chain_event_cycle`` of
     ``ocp_crawl.problem.work``)."""
     import numpy as np
 
@@ -305,7 +305,7 @@ def bench_chain_cycles(repeat: int) -> dict:
         low, _, res = _min_median(lambda: simulate_chain_torque(model, torque), repeat)
         cycle = low / max(res.cycles, 1)
         out[f"n{n}"] = {"status": res.status.label, "cycles": res.cycles,
-                        "cycle_s": round(cycle, 4), "per_n2_s": round(cycle / n**2, 5)}
+                        "cycle_s": round(cycle, 4), "per_link_s": round(cycle / n, 5)}
     return out
 
 

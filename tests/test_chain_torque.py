@@ -246,3 +246,68 @@ def test_five_links_against_brute_force():
     x = np.append(res.phi[:, 0], res.f_t[0] / model.Mg)
     S = _brute_force_cycle(model, torque, res.t0, x, Mode(int(res.mode[0])), 1000)
     assert abs(S - res.S) <= 1e-4 * abs(res.S)
+
+
+#: a soft five-link chain whose slip of foot 1 ends at a fold of its equilibrium branch (phase
+#: 0.6104)
+FOLDING = (
+    Chain(lengths=(0.03115881579472988, 0.02530651122084284, 0.020716027601762832,
+                   0.016078614047633128, 0.022667377615710367),
+          masses=(0.009084732054199986, 0.0054527519390244516, 0.005487577107271681,
+                  0.014991761150650713, 0.011523691115879876),
+          stiffness=(0.01543944424992457, 0.021317258883181246, 0.05077418893108724,
+                     0.04489167277586377),
+          mu=(0.4688462075217482, 0.3784809328669556),
+          com=(0.4986046037463485, 0.5353378703662132, 0.4121605425916112, 0.5111192233841447,
+               0.45429032090602034),
+          rest=(0.03796511733349221, -0.043578556268780905, 0.017918153302136502,
+                0.03700885023275034)),
+    JointFourier([2.126918391163502, 2.71718029586238, 2.71718029586238, 2.126918391163502],
+                 [[0.0], [0.0019127749421292163], [0.008908241448756668], [0.005545849232583677]],
+                 [[0.4789865779593843], [0.1809865461353047], [0.421401319398719],
+                  [0.1748637718613802]]))
+
+#: a stiff six-link chain whose joint 1 dips below the ground and back (phase 0.7468) inside a
+#: continuation step at whose end the slip's stick guard crosses zero
+DIPPING = (
+    Chain(lengths=(0.02556982290340406, 0.030273004796038522, 0.031233855340192143,
+                   0.025204577104014476, 0.03058679344795575, 0.030922266089200897),
+          masses=(0.010947550043408676, 0.009085780468959439, 0.011712764398047977,
+                  0.011274678298535875, 0.013400823557331746, 0.012241634885127677),
+          stiffness=(92.72679227822066, 508.5549813775502, 73.25177732340771, 279.55260046101864,
+                     345.53995888355223),
+          mu=(0.4259685865306201, 0.30938232875636607),
+          com=(0.4109774633975296, 0.42397598178572254, 0.5404618932128279, 0.40881511654760416,
+               0.5400413576206442, 0.4839750872371758),
+          rest=(-0.013062824426984719, -0.03460748651849539, -0.03936286870031459,
+                -0.037461042074025536, 0.027781029308913435)),
+    JointFourier([2.029675009069385, 2.694167018842314, 2.694167018842314, 2.694167018842314,
+                  2.029675009069385],
+                 [[-0.0], [-0.00514618678579096], [-0.014693108062187366], [-0.01317757641175845],
+                  [-0.010769740583359083]],
+                 [[0.4195338426905596], [0.35701769904936476], [0.5095627043441332],
+                  [0.3045634471603551], [0.18659412550908724]]))
+
+
+def test_a_fold_ends_the_run_where_the_incremental_steps_find_no_mode_either():
+    """The event-driven stepper's fold against the independent incremental steps, which cannot
+    continue past it (their first step after it has no consistent mode)."""
+    from ocp_crawl.sim.chain_mpcc import simulate_chain_mpcc
+
+    chain, reference = FOLDING
+    model, torque = ChainModel(chain), ChainReferenceTorque(reference, chain)
+    res = simulate_chain_torque(model, torque)
+    assert res.status_name == "fold" and res.failure_mode == "slip1+", res.message
+    steps = simulate_chain_mpcc(model, torque, steps=50)
+    assert not steps.success and res.failure_t < steps.failure_t <= res.failure_t + 1 / 50
+
+
+def test_a_guard_dipping_before_another_crosses_at_the_step_end_is_the_event():
+    """Joint 1 touches the ground inside a step whose end has the stick guard negative: the run
+    ends there (joint_on_ground), before the slip's end, at any largest step."""
+    chain, reference = DIPPING
+    for max_step in (1 / 16, 1 / 64):
+        res = simulate_chain_torque(ChainModel(chain), ChainReferenceTorque(reference, chain),
+                                    max_step=max_step)
+        assert res.status_name == "joint_on_ground", (max_step, res.message)
+        assert res.failure_t == pytest.approx(0.74685, abs=1e-4)

@@ -46,14 +46,14 @@ def test_the_estimate_bounds_the_steps_the_solver_takes(name, overrides, unit):
     assert steps <= p.options.max_cycles * max(result.nsteps / result.cycles, 1000) * 10
 
 
-def test_a_chains_event_work_grows_with_its_links_squared_and_its_cycles():
+def test_a_chains_event_work_grows_with_its_links_and_its_cycles():
     five = problem("five_link_chain.toml")
     three = problem_from_dict({"robot": {"lengths": [0.03, 0.06, 0.03],
                                          "masses": [0.013, 0.026, 0.013],
                                          "stiffness": [0.1677, 0.1677], "mu": 0.389},
                                "gait": {"gamma_deg": 90.0, "A_deg": 30.0, "psi_deg": 45.0}})
     w5, w3 = simulation_work(five), simulation_work(three)
-    assert w5.typical / w3.typical == pytest.approx(25 / 9, rel=1e-12)
+    assert w5.typical / w3.typical == pytest.approx(5 / 3, rel=1e-12)
     assert w5.seconds / w5.typical == pytest.approx(
         five.options.max_cycles * EVENT_STEPS / EVENT_STEPS_TYPICAL / TYPICAL_CYCLES, rel=1e-12)
     longer = simulation_work(five.with_values({"simulation.max_cycles": 24}))

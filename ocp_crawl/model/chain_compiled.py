@@ -134,6 +134,8 @@ class Columns:
     def __call__(self, *args) -> list[np.ndarray]:
         wide, narrow = self._widths
         n = next(np.shape(a)[1] for i, a in enumerate(args) if i not in self.shared)
+        if n == 0:
+            return [np.zeros((rows, 0)) for rows in self._rows]
         n_wide = max(0, -(-(n - 3 * narrow) // wide))
         widths = [wide] * n_wide + [narrow] * max(0, -(-(n - n_wide * wide) // narrow))
         total = sum(widths)

@@ -13,8 +13,8 @@ per unit, and
   (``estimated about ..., up to ...``).
 
 The commands check (``ocp-crawl simulate``, ``animate``, ``crosscheck``, ``sweep``, ``optimize``,
-``codesign``, ``fit``, ``dynamics``); the library functions run what they are given, and a program asks first,
-e.g. ``simulation_work(problem).check(max_hours=1)``.
+``codesign``, ``fit``, ``dynamics``); the library functions run what they are given, and a program
+asks first, e.g. ``simulation_work(problem).check(max_hours=1)``.
 
 The unit costs (:data:`UNIT_COST`) are those measured on the benchmarks page's machine (2 cores,
 ``scripts/bench.py work`` prints them against the estimates), a slow one: a faster machine takes
@@ -38,9 +38,9 @@ ANNOUNCE_SECONDS = 60.0
 # MPCC's  set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one
 # IPOPT  iteration, a member of a baseline family
 UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco_step": 3e-5,
-             "ocp_node_iteration": 1.5e-3, "family_member": 0.025, "chain_event_cycle": 0.003}
-#  (chain_event_cycle: a typical cycle of the event-driven chain simulator per link squared [s]; a
-# cycle of n = 3..7 links took 0.02 to 0.045 s, 0.0006 to 0.0035 n^2 s: docs/benchmarks.md)
+             "ocp_node_iteration": 1.5e-3, "family_member": 0.025, "chain_event_cycle": 0.009}
+#  (chain_event_cycle: a typical cycle of the event-driven chain simulator per link [s]; a cycle of
+# n = 3..7 links took 0.02 to 0.045 s, 0.004 to 0.011 n s: docs/benchmarks.md)
 #: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
 OCP_ITERATIONS = 1000
 #  event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped
@@ -138,7 +138,7 @@ def simulation_work(problem) -> Work:
     cycles = opts.max_cycles
     if solver == "event" and problem.is_chain:   # (its steps: a Newton solve of n - 1 joints)
         n = problem.robot.n
-        cycle = UNIT_COST["chain_event_cycle"] * n**2
+        cycle = UNIT_COST["chain_event_cycle"] * n
         return Work(cycle * cycles * EVENT_STEPS / EVENT_STEPS_TYPICAL,
                     f"chain event solver, {n} links: ~{cycle:.2g} s a typical cycle, up to "
                     f"{EVENT_STEPS // EVENT_STEPS_TYPICAL}x that x {cycles} cycles",
@@ -208,7 +208,7 @@ def codesign_work(problem, settings, design, scan: int, rounds: int, jobs: int =
     free = sum(1 for low, high in zip(*design.limits()) if high > low)   # (not pinned)
     solves = 3 + rounds * (2 * free + 1)
     members = len(chain_points(settings)) + settings.baseline_starts * local_budget(settings)
-    member = UNIT_COST["chain_event_cycle"] * n**2 * TYPICAL_CYCLES
+    member = UNIT_COST["chain_event_cycle"] * n * TYPICAL_CYCLES
     share = scan / max(jobs, 1)
     return (Work(members * scen * member * share,
                  f"{scan} designs / {jobs} workers x {members} travelling waves x {scen} scenarios "

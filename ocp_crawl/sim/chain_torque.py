@@ -158,8 +158,11 @@ class ChainTorqueStepper:
             # by the rates after it)
             floor = -GUARD_NOISE if at_kink or at_break else 0.0
             crossed = [k for k, v in g1.items() if v < floor]
-            if not crossed:
-                new, crossed = self._dip(seg, pt, new)
+            # (a guard that dips below zero and back inside the step, unseen by the signs at its
+            # ends, is an event; so is one that does so before another crosses at the step's end)
+            early, dipped = self._dip(seg, pt, new)
+            if dipped and (not crossed or early.t < new.t):
+                new, crossed = early, dipped
             if not crossed:
                 seg.points.append(self._place(seg, new))
                 h = min(self.max_step, 2 * hh) if hh >= 0.999 * h else h

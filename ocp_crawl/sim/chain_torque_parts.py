@@ -324,6 +324,8 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
         ev = SegmentEval(solver, seg, upto=hi)
         tq, w = gauss_nodes(lo, hi, h, 5)
         r = ev.rows(tq)
+        if not np.all(np.isfinite(r)):   # (a singular Jacobian at a node: rates without a value)
+            raise RuntimeError(f"the joints' powers are not finite in [{lo:.15g}, {hi:.15g}]")
         work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
         edges = np.linspace(lo, hi, tq.size // 5 + 1)   # (the panels of gauss_nodes)
         pieces = []   # (joint, nodes, weights) of the split panels' pieces
