@@ -14,7 +14,7 @@ import numpy as np
 from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.event_context import StepperContext
 from ocp_crawl.sim.event_dense import DenseOutput
-from ocp_crawl.sim.quadrature import gauss_nodes, legendre_roots
+from ocp_crawl.sim.quadrature import LEG_FIT5 as _LEG_FIT, gauss_nodes, legendre_roots
 
 #: adaptive quadrature of the cycle integrals: tolerance on the Legendre tail of a panel's integrand
 #: (relative to the segment's largest value) and the number of halvings allowed (16: panels down to
@@ -27,10 +27,9 @@ QUAD_DEPTH = 16
 #: hold: the joints at rest, their powers ~1e-15 W) is accepted below this fraction of that value
 #: (its noise never meets QUAD_TOL of itself: every panel would be halved QUAD_DEPTH times)
 QUAD_FLOOR = 1e-12
-#: 5-point Gauss-Legendre nodes and weights on [-1, 1]; Legendre coefficients of the degree-4
-#: interpolant through values at the nodes (c = values @ _LEG_FIT) and its values at -1 and 1
+#: 5-point Gauss-Legendre nodes and weights on [-1, 1]; the values at -1 and 1 of the degree-4
+#: interpolant through values at the nodes (its Legendre coefficients c = values @ _LEG_FIT)
 _XG, _WG = np.polynomial.legendre.leggauss(5)
-_LEG_FIT = np.linalg.inv(np.polynomial.legendre.legvander(_XG, 4)).T
 _LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 #: the columns of _LEG_FIT of the two highest coefficients (the tail of a panel's interpolant)
 _LEG_TAIL = _LEG_FIT[:, 3:]

@@ -50,15 +50,15 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
 
 
 #: the Legendre coefficients of the degree-4 interpolant through values at the 5-point
-#: Gauss-Legendre nodes on [-1, 1] (c = values @ _LEG_FIT5)
-_LEG_FIT5 = np.linalg.inv(np.polynomial.legendre.legvander(_GL[5][0], 4)).T
+#: Gauss-Legendre nodes on [-1, 1] (c = values @ LEG_FIT5)
+LEG_FIT5 = np.linalg.inv(np.polynomial.legendre.legvander(_GL[5][0], 4)).T
 
 
 def interpolant_roots(values: np.ndarray) -> list[np.ndarray]:
     """The sign changes of f inside panels, from its values (k, 5) at each panel's 5 Gauss-Legendre
     nodes: for each panel the real roots in (-1, 1) (the panel mapped onto [-1, 1]), in order, of
     the degree-4 interpolant of its values (the polynomial the Gauss rule integrates)."""
-    roots = legendre_roots(np.atleast_2d(np.asarray(values, float)) @ _LEG_FIT5)
+    roots = legendre_roots(np.atleast_2d(np.asarray(values, float)) @ LEG_FIT5)
     inside = (np.abs(roots.imag) <= 1e-12) & (np.abs(roots.real) < 1.0)
     return [np.sort(r.real[k]) for r, k in zip(roots, inside)]
 
