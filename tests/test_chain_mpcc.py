@@ -130,7 +130,7 @@ def test_a_step_ending_on_an_unstable_equilibrium_stops_the_run():
 
     from ocp_crawl.model.stability import stability
     from ocp_crawl.problem import problem_from_dict
-    from ocp_crawl.sim.chain_mpcc import _check_step, _Stop
+    from ocp_crawl.sim.chain_mpcc_checks import RunStop, check_step
     from ocp_crawl.sim.event import HybridStepper
     from ocp_crawl.sim.event_state import mode_q
     from ocp_crawl.status import Status
@@ -142,11 +142,11 @@ def test_a_step_ending_on_an_unstable_equilibrium_stops_the_run():
     model = ChainModel(Chain.from_robot(pr.model.robot), gravity=pr.model.gravity)
     Mg = model.Mg
     row = (1.09, pt.x[:2], 0.0, 0.0, pt.x[2] * Mg, 0.0, 0.0, 0.0, Mode.SLIP2_POS)
-    with pytest.raises(_Stop) as stop:
-        _check_step(model, row, 1.09)
+    with pytest.raises(RunStop) as stop:
+        check_step(model, row, 1.09)
     assert stop.value.status is Status.UNSTABLE
     paper = ChainModel(Chain.from_robot(Robot.paper()))
-    _check_step(paper, (0.0, np.deg2rad([90.0, 90.0]), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    check_step(paper, (0.0, np.deg2rad([90.0, 90.0]), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
                         Mode.STICK), 0.0)
 
 
@@ -172,16 +172,16 @@ LIFTING = (Chain(lengths=(0.03115881579472988, 0.02530651122084284, 0.0207160276
 def test_a_foot_that_lifts_off_ends_both_simulators_with_lift_off():
     """Where the event-driven chain stops at foot 1's normal force reaching zero, the steps find no
     consistent mode at the next step's end, and the equilibrium of the mode they were in has that
-    normal force below zero: ``lift_off`` (with the forces), not ``no_consistent_mode``."""
+    normal force below zero: ``lift_off``, not ``no_consistent_mode``, placed where the force
+    reaches zero inside that step."""
     chain, reference = LIFTING
     model, torque = ChainModel(chain), ChainReferenceTorque(reference, chain)
     ev = simulate_chain_torque(model, torque, t_eval=np.array([0.0, 1.0]))
     steps = simulate_chain_mpcc(model, torque, steps=50)
     assert ev.status_name == steps.status_name == "lift_off", (ev.message, steps.message)
     assert "lift_off_1" in ev.message
-    assert "slip1+ equilibrium's normal forces are -" in steps.message
-    # at the end of the step the event-driven lift-off falls in
-    assert 0 <= steps.failure_t - ev.failure_t < 1 / 50
+    assert "foot 1's normal force reaches zero" in steps.message
+    assert steps.failure_t == pytest.approx(ev.failure_t, abs=1e-8)
 
 
 def test_a_failed_step_is_diagnosed_in_the_mode_it_started_in():
@@ -189,10 +189,12 @@ def test_a_failed_step_is_diagnosed_in_the_mode_it_started_in():
     started in: its equilibrium with a joint below the ground gives ``joint_on_ground``; another
     mode's candidate there, or positive normal forces with every joint above, leave the step's
     ``no_consistent_mode`` to the caller."""
-    from ocp_crawl.sim.chain_mpcc import ChainStepResult, _diagnose, _Stop
+    from ocp_crawl.sim.chain_mpcc import ChainStepResult
+    from ocp_crawl.sim.chain_mpcc_checks import RunStop, check_end, mode_row
     from ocp_crawl.status import Status
 
     model, nan = ChainModel(FIVE), float("nan")
+    step = ChainStep(model)
     low = np.array([3.3, 3.0, 3.0, 3.3])   # joint 1 and 4 just below the ground
     assert model.kinematics(low)["zj1"] < 0 < model.kinematics(low)["zj2"]
 
@@ -202,8 +204,13 @@ def test_a_failed_step_is_diagnosed_in_the_mode_it_started_in():
                                np.full(4, nan), nan, nan, nan, Mode.STICK, nan, nan,
                                {"candidates": [None, cand]})
 
-    with pytest.raises(_Stop) as stop:
-        _diagnose(model, failed(low, Mode.SLIP1_POS), Mode.SLIP1_POS, 0.5)
+    def diagnose(res, mode):
+        end = mode_row(step, res, mode, 0.5)
+        if end is not None:
+            check_end(step, None, [], end, set(), consistent=False)
+
+    with pytest.raises(RunStop) as stop:
+        diagnose(failed(low, Mode.SLIP1_POS), Mode.SLIP1_POS)
     assert stop.value.status is Status.JOINT_ON_GROUND and "joint 1" in stop.value.detail
-    _diagnose(model, failed(low, Mode.SLIP1_POS), Mode.STICK, 0.5)   # not the step's mode
-    _diagnose(model, failed(np.array([1.9, 2.9, 2.9, 1.9]), Mode.STICK), Mode.STICK, 0.5)
+    assert mode_row(step, failed(low, Mode.SLIP1_POS), Mode.STICK, 0.5) is None
+    diagnose(failed(np.array([1.9, 2.9, 2.9, 1.9]), Mode.STICK), Mode.STICK)

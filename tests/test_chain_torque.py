@@ -311,3 +311,18 @@ def test_a_guard_dipping_before_another_crosses_at_the_step_end_is_the_event():
                                     max_step=max_step)
         assert res.status_name == "joint_on_ground", (max_step, res.message)
         assert res.failure_t == pytest.approx(0.74685, abs=1e-4)
+
+
+@pytest.mark.parametrize("steps", [50, 100])
+def test_the_incremental_steps_find_the_joint_under_the_ground_between_their_ends(steps):
+    """The same dip through the independent incremental steps: at 50 steps a cycle joint 1 is above
+    the ground at every step's end (0.74 and 0.76) and below it in between; at 100 steps below it
+    at 0.75.  Either way the run ends where the event-driven stepper's does."""
+    from ocp_crawl.sim.chain_mpcc import simulate_chain_mpcc
+
+    chain, reference = DIPPING
+    model, torque = ChainModel(chain), ChainReferenceTorque(reference, chain)
+    event = simulate_chain_torque(model, torque)
+    res = simulate_chain_mpcc(model, torque, steps=steps)
+    assert res.status_name == "joint_on_ground", res.message
+    assert res.failure_t == pytest.approx(event.failure_t, abs=1e-9)

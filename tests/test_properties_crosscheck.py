@@ -119,6 +119,9 @@ def test_switch_exact_time_stepping_matches_the_event_driven_s(case):
     ev = cc.event
     if not ev.success:
         COUNTS[f"event-driven {ev.status_name}"] += 1
+        if ev.status_name in ("joint_on_ground", "lift_off", "feet_crossed"):
+            # a contact lost is lost in the time-stepping too, wherever it falls between its steps
+            assert not any(r.success for r in cc.rows), cc.table()
         event("event-driven failed")
         assume(False)
     kinds = {e.kind for e in ev.steady_events()}

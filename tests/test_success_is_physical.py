@@ -283,3 +283,37 @@ def test_hybrid_options_validate_the_tolerances(kw):
 def test_mpcc_options_validate_energy_tol_n2(value):
     with pytest.raises(ValueError):
         TimeSteppingOptions(energy_tol_n2=value)
+
+
+#: two random robots whose contact is lost for a short stretch only (a random search near the
+#: boundary of success): joint 2 under the ground by 1e-9 m at most, and foot 1 lifting off; the
+#: incremental steps see neither at their ends (25 to 100 steps a cycle)
+SHORT_LOSSES = {
+    "joint_on_ground": (dict(M=0.12171649372120791, beta=2.2917058589221817,
+                             mu1=0.880530460495349, mu2=0.6304321993783866), 0.8869625670102979,
+                        (1.3838592493289394, 3.033187223371901, 0.4193276707412855,
+                         0.49395855124234744, 2.7045499770065615)),
+    "lift_off": (dict(M=0.15429816144175532, beta=1.628521367952375, mu1=0.35693883377975344,
+                      mu2=0.8667957832690099), 1.0208798375529244,
+                 (2.0166402940394152, 1.1112741690743078, 0.7530896877004707,
+                  0.604280022596627, 2.4361972125527793)),
+}
+
+
+@pytest.mark.parametrize("status", sorted(SHORT_LOSSES))
+def test_a_contact_lost_between_the_steps_ends_the_steps_where_the_event_stepper_ends(status):
+    """The MPCC steps look between their ends for a contact lost there (a cubic of each contact
+    guard's values and rates at the ends, the steps' own solutions inside): the same status at
+    the same phase as the event-driven stepper, at any step count."""
+    from ocp_crawl.model.inputs import Harmonic
+    from ocp_crawl.model.robot import Robot
+
+    kw, ratio, ref = SHORT_LOSSES[status]
+    robot = Robot.paper(**kw).with_stiffness_ratio(ratio)
+    model, torque = Model(robot), ReferenceTorque(Harmonic(*ref), robot.k)
+    event = simulate_torque(model, torque)
+    assert event.status_name == status, event.message
+    for steps in (25, 100):
+        res = simulate_mpcc(model, torque, steps=steps)
+        assert res.status_name == status, (steps, res.message)
+        assert res.failure_t == pytest.approx(event.failure_t, abs=1e-8), steps

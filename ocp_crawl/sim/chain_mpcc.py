@@ -34,13 +34,13 @@ import casadi as cs
 import numpy as np
 
 from ocp_crawl.model.chain_model import ChainModel
-from ocp_crawl.model.chain_stability import chain_stability_margins
 from ocp_crawl.model.chain_statics import chain_symbolic, kin_names, n_params
 from ocp_crawl.model.step_equations import NPAIR, friction_margins
 from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_message, new_result,
                                     output_phases, sample_fields, success_message)
+from ocp_crawl.sim.chain_mpcc_checks import RunStop, check_end, dip_stop, mode_row
+from ocp_crawl.sim.step_dips import CONTACT
 from ocp_crawl.sim.chain_torque import ChainTorqueStepper, as_chain_torque
-from ocp_crawl.sim.chain_torque_parts import mode_vector
 from ocp_crawl.sim.oracle import ENUM_MODES, damped_newton
 from ocp_crawl.sim.result import Event, Mode, mode_change_kind
 from ocp_crawl.sim.step import mode_from_pairs
@@ -263,57 +263,6 @@ class ChainStep:
                                {"w": w})
 
 
-class _Stop(Exception):
-    """The end of a run by a failure status at phase t."""
-
-    def __init__(self, status, t: float, mode: Mode, detail: str):
-        super().__init__(detail)
-        self.status, self.t, self.mode, self.detail = status, t, mode, detail
-
-
-def _check_contact(model: ChainModel, phi, mode: Mode, t: float) -> dict:
-    """_Stop unless the chain at ``phi`` keeps the feet apart and every joint above the ground;
-    returns its kinematics (:meth:`ChainModel.kinematics`)."""
-    kin = model.kinematics(phi)
-    if not float(kin["d"]) > 0:
-        raise _Stop(Status.FEET_CROSSED, t, mode, f"feet distance {float(kin['d']):.4g} m")
-    for j in range(1, model.chain.n_joints + 1):
-        if not float(kin[f"zj{j}"]) > 0:
-            raise _Stop(Status.JOINT_ON_GROUND, t, mode,
-                        f"joint {j} at height {float(kin[f'zj{j}']):.4g} m")
-    return kin
-
-
-def _check_step(model: ChainModel, row: tuple, t: float) -> None:
-    """_Stop unless the equilibrium ``row`` (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) at the end
-    of a step keeps its contacts (:func:`_check_contact`) and is stable in its contact mode (the
-    chain's stability margin, :mod:`ocp_crawl.model.chain_stability`, as the event-driven
-    simulators require)."""
-    phi, f_t, mode = row[1], row[4], row[8]
-    kin = _check_contact(model, phi, mode, t)
-    X = np.append(np.asarray(phi, float), f_t / model.Mg).reshape(-1, 1)
-    q = mode_vector(mode, float(kin["d"]))
-    margin = float(np.ravel(chain_stability_margins(model, X, q))[0])
-    if not margin > 0:
-        raise _Stop(Status.UNSTABLE, t, mode, f"the {mode.label} equilibrium is unstable "
-                    f"(stability margin {margin:.3g})")
-
-
-def _diagnose(model: ChainModel, res: ChainStepResult, mode: Mode, t: float) -> None:
-    """_Stop with the contact the chain loses, when a step without a consistent mode ends where
-    the equilibrium of the mode it was in has lost it: a normal force <= 0 (``LIFT_OFF``), a joint
-    on the ground or the feet crossed (the guards the event-driven simulator stops at)."""
-    cand = next((c for c in res.extra.get("candidates", ()) if c is not None
-                 and c["mode"] == mode), None)
-    if cand is None:
-        return
-    if np.min(cand["fn"]) <= 0:
-        raise _Stop(Status.LIFT_OFF, t, mode, f"step at t = {t:.6f}: the {mode.label} "
-                    f"equilibrium's normal forces are {cand['fn'][0]:.4g} and "
-                    f"{cand['fn'][1]:.4g} N (no mode is consistent)")
-    _check_contact(model, cand["z"][:-1], mode, t)
-
-
 def step_phases(torque, N: int, switch_exact: bool = True) -> np.ndarray:
     """The ends of one cycle's steps [cycles]: k / N, k = 0..N, and, for switch-exact steps, the
     input's kinks and the ends of its holds (:class:`~ocp_crawl.sim.chain_pieces.ChainPieces`), so
@@ -329,6 +278,35 @@ def step_phases(torque, N: int, switch_exact: bool = True) -> np.ndarray:
     return np.unique(np.concatenate([grid, breaks[near > 1e-12]]))
 
 
+def _take_step(step: ChainStep, torque, rows: list, span: tuple, first: int, prev: tuple | None,
+               located: set, switch_exact: bool) -> list:
+    """The rows of the step ``span`` = (ta, tb) from rows[-1] (:func:`advance`; the phases of its
+    events added to ``located``, rows[-1] dropped when the step redid the one before), checked
+    (:func:`~ocp_crawl.sim.chain_mpcc_checks.check_end`); RunStop at a failure, or at a contact
+    lost earlier in the cycle (its rows from ``first``)."""
+    from ocp_crawl.sim.chain_mpcc_split import advance
+    ta, tb = span
+    try:
+        new, res, dropped, found = advance(step, torque, rows[-1], ta, tb, switch_exact, prev)
+        located.update(found)
+        if dropped:
+            rows.pop()
+        before = rows[max(first - 1, 0):] + new[:-1]
+        if not res.success:
+            mode = res.extra.get("start_mode", rows[-1][8])
+            end = mode_row(step, res, mode, tb)
+            if end is not None:   # (the contact that mode's equilibrium has lost)
+                check_end(step, torque, before, end, located, consistent=False)
+            raise RunStop(res.extra.get("status", Status.NO_CONSISTENT_MODE), tb, rows[-1][8],
+                        f"step at t = {tb:.6f}: {res.message}")
+        check_end(step, torque, before, new[-1], located)
+    except RunStop as stop:
+        if stop.status not in CONTACT:
+            dip_stop(step, torque, rows[max(first - 1, 0):], located)
+        raise
+    return new
+
+
 def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
                 periodic_tol: float, switch_exact: bool) -> tuple[list, int, float, set]:
     """Steps of N per cycle from the released start until the state at a cycle's end repeats.
@@ -336,40 +314,31 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
     Returns the rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode) of every step, the cycles run,
     the last periodicity deviation [rad, -] and the phases of the events the steps located.
     """
-    from ocp_crawl.sim.chain_mpcc_split import advance
     kin = step.model.kinematics(start.x[:-1])
     rows = [(0.0, start.x[:-1].copy(), 0.0, float(kin["d"]), 0.0, float(kin["fn1"]),
              float(kin["fn2"]), float(kin["d"]), Mode.STICK)]
     ends = [(rows[0][1], 0.0, Mode.STICK)]
-    dev, located = float("nan"), set()
+    dev, located = float("nan"), set[float]()
     grid = step_phases(torque, N, switch_exact)
     for cycle in range(1, cycles_max + 1):
+        first = len(rows) - 1
         for k in range(1, grid.size):
             ta, tb = cycle - 1 + grid[k - 1], cycle - 1 + grid[k]
             # the step that ended in rows[-1], when it stayed in one mode (its start rows[-2]):
             # an event it passed may be traced back into it
             prev = (rows[-2] if len(rows) >= 2 and rows[-2][8] == rows[-1][8] and k > 1
                     else None)
-            new, res, dropped, found = advance(step, torque, rows[-1], ta, tb, switch_exact,
-                                               prev)
-            located.update(found)
-            if dropped:
-                rows.pop()
-            if not res.success:
-                _diagnose(step.model, res, res.extra.get("start_mode", rows[-1][8]), tb)
-                raise _Stop(res.extra.get("status", Status.NO_CONSISTENT_MODE), tb, rows[-1][8],
-                            f"step at t = {tb:.6f}: {res.message}")
-            if min(res.f_n1, res.f_n2) <= 0:
-                raise _Stop(Status.LIFT_OFF, tb, res.mode, f"normal force <= 0 at t = {tb:.6f}")
-            _check_step(step.model, new[-1], tb)
-            rows.extend(new)
+            rows.extend(_take_step(step, torque, rows, (ta, tb), first, prev, located,
+                                   switch_exact))
+        # (a contact guard may dip below zero and back inside a step, unseen at the steps' ends)
+        dip_stop(step, torque, rows[max(first - 1, 0):], located)
         end = rows[-1]
         ends.append((end[1], end[4] / step.Mg, end[8]))
         (pa, fa, ma), (pb, fb, mb) = ends[-2], ends[-1]
         dev = max(float(np.max(np.abs(pa - pb))), abs(fa - fb))
         if cycle >= 2 and ma == mb and dev <= periodic_tol:
             return rows, cycle, dev, located
-    raise _Stop(Status.NOT_PERIODIC, float(cycles_max), rows[-1][8],
+    raise RunStop(Status.NOT_PERIODIC, float(cycles_max), rows[-1][8],
                 f"not periodic after {cycles_max} cycles (last change {dev:.3g})")
 
 
@@ -466,7 +435,7 @@ def simulate_chain_mpcc(chain_model: ChainModel, torques, *, steps: int = 200,
     try:
         rows, cycles, dev, located = _run_cycles(step, torque, start, N, int(cycles_max),
                                                  periodic_tol, bool(switch_exact))
-    except _Stop as stop:
+    except RunStop as stop:
         return new_result(chain_model, "torque", stop.status,
                           failure_message(stop.status, stop.detail), failure_t=stop.t,
                           failure_mode=stop.mode.label)

@@ -68,7 +68,8 @@ from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
-from ocp_crawl.sim.timestepping_output import build_result
+from ocp_crawl.sim.step_dips import CONTACT, three_link_dip
+from ocp_crawl.sim.timestepping_output import _Run, build_result
 
 
 @dataclass(frozen=True)
@@ -222,15 +223,22 @@ class TimeStepper:
         res = build_result(self, run, status, detail, fail_t, fail_mode, te, stats)
         return error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
 
-    def _run_cycles(self, run: "_Run", n_target: int | None) -> None:
+    def _run_cycles(self, run: _Run, n_target: int | None) -> None:
         """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end
         repeats."""
         N = self.steps
         while True:
-            res = self._step(run)
+            try:
+                res = self._step(run)
+            except _Stop as stop:   # (a contact lost earlier in the cycle comes first)
+                if stop.status not in CONTACT:
+                    self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1e-12])
+                raise
             if run.n % N:
                 continue
             run.ncycles += 1
+            # (a contact guard may dip below zero and back inside a step, unseen at the steps' ends)
+            self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1 - 1e-12])
             ends = run.cycle_ends
             ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
             if len(ends) >= 2:
@@ -248,13 +256,13 @@ class TimeStepper:
                 raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {run.ncycles} cycles "
                             f"(last change {run.periodic_dev:.3g})", run.n / N, run.mode)
 
-    def _step(self, run: "_Run") -> StepResult:
+    def _step(self, run: _Run) -> StepResult:
         """Solve step n + 1 from the run's state, check the solution and record it."""
         run.n += 1
         N = self.steps
         return self._advance(run, (run.n - 1) / N, run.n / N, rewind=True)
 
-    def _advance(self, run: "_Run", ta: float, tb: float, rewind: bool) -> StepResult:
+    def _advance(self, run: _Run, ta: float, tb: float, rewind: bool) -> StepResult:
         """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with
         ``switch_exact``, when the step's mode changes, sub-steps split at the events located inside
         it (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the
@@ -305,7 +313,7 @@ class TimeStepper:
         run.prev = res
         return res
 
-    def _single_to_end(self, run: "_Run", state: StepState, mode: Mode, ta: float, tb: float,
+    def _single_to_end(self, run: _Run, state: StepState, mode: Mode, ta: float, tb: float,
                        tau: np.ndarray) -> StepResult | None:
         """The step in its starting ``mode`` if that mode holds to its end (else None) when it ends
         with both feet slipping, a tie one foot's slip reaches; a tie over the step: set-valued."""
@@ -325,7 +333,7 @@ class TimeStepper:
                                           "mode", iterations=sol.iterations, solve_time=0.0,
                                           w=sol.x), mode=mode)
 
-    def _event_point(self, run: "_Run", split, state: StepState, te: float) -> None:
+    def _event_point(self, run: _Run, split, state: StepState, te: float) -> None:
         """Record the located event at phase ``te``: the sub-step to it in the old mode (its
         positions from ``state``, the start of the searched step) and the change to the guard's
         mode."""
@@ -339,18 +347,18 @@ class TimeStepper:
         self._mode_change(run, split, te)
 
     @staticmethod
-    def _mode_change(run: "_Run", split, te: float) -> None:
+    def _mode_change(run: _Run, split, te: float) -> None:
         """Record the located event at phase ``te`` and continue in the guard's mode."""
         mode = run.mode
         run.events.append(Event(te, mode_change_kind(mode, split.mode_after), mode.label,
                                 split.mode_after.label, split.value, split.guard))
         run.mode, run.det_ref = split.mode_after, None
 
-    def _where(self, run: "_Run", t1: float) -> str:
+    def _where(self, run: _Run, t1: float) -> str:
         cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
         return f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
 
-    def _tau(self, t: float, run: "_Run") -> np.ndarray:
+    def _tau(self, t: float, run: _Run) -> np.ndarray:
         """The torque [N m] at phase t; _Stop with SOLVER_FAILURE when it is not finite."""
         tau = np.asarray(self.torque(t), float).reshape(2)
         if not np.all(np.isfinite(tau)):
@@ -359,7 +367,7 @@ class TimeStepper:
                         "made", t, run.mode)
         return tau
 
-    def _solve(self, run: "_Run", state: StepState, tau: np.ndarray, t1: float) -> StepResult:
+    def _solve(self, run: _Run, state: StepState, tau: np.ndarray, t1: float) -> StepResult:
         """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it
         fails."""
         res = self.step.solve(state, tau, warm_start=run.prev)
@@ -376,12 +384,18 @@ class TimeStepper:
         run.polished += bool(res.extra.get("polished"))
         return res
 
-    def _record(self, run: "_Run", res: StepResult, state: StepState, tau: np.ndarray,
+    def _record(self, run: _Run, res: StepResult, state: StepState, tau: np.ndarray,
                 t1: float) -> None:
         """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of
         mode not located before (:meth:`_advance`) is recorded as an event at t1."""
         mode, where = run.mode, self._where(run, t1)
-        kin = self._check_contact(res, state, where, t1, mode)
+        try:
+            kin = self._check_contact(res, state, where, t1, mode)
+        except _Stop as stop:   # (a lost contact: where its guard reached zero inside the step)
+            if stop.status in CONTACT:
+                self._dip(run, [*run.rows[-2 * self.steps:], (t1, res.phi, np.nan, res.d, res.x1,
+                                res.x2, res.f_t, res.f_n1, res.f_n2, int(res.mode))])
+            raise
         det = self._det(res, state, tau)
         if res.mode != mode:
             # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
@@ -397,6 +411,13 @@ class TimeStepper:
         run.rows.append((t1, res.phi, float(kin["theta"]), res.d, res.x1, res.x2, res.f_t, res.f_n1,
                          res.f_n2, int(res.mode)))
         run.state = res.next_state()
+
+    def _dip(self, run: _Run, rows: list) -> None:
+        """_Stop at the first zero of a contact guard inside the steps ``rows``, if any."""
+        located = {e.t for e in run.events if e.guard_name != "mode_change_between_steps"}
+        dip = three_link_dip(self, rows, located)
+        if dip is not None:
+            raise _Stop(dip[1], "", dip[3], dip[0], dip[2])
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
         """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its
@@ -438,34 +459,6 @@ class TimeStepper:
             raise _Stop(Status.FOLD, "", f"{where}: phi jumps by {jump:.3g} rad > max_dphi "
                         "(branch lost)", t1, mode)
         return kin
-
-
-@dataclass
-class _Run:
-    """What a time-stepping run has built so far."""
-
-    state: StepState
-    rows: list
-    """(t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, mode) per step, the start first"""
-    events: list = field(default_factory=list)
-    mode: Mode = Mode.STICK
-    det_ref: float | None = None
-    prev: StepResult | None = None
-    n: int = 0
-    """steps done"""
-    ncycles: int = 0
-    cycle_ends: list = field(default_factory=list)
-    periodic_dev: float = float("nan")
-    times: list = field(default_factory=list)
-    retries: int = 0
-    comp_max: float = 0.0
-    eq_max: float = 0.0
-    polished: int = 0
-    split_calls: int = 0
-    """IPOPT calls of the event searches"""
-    calls_mark: int = 0
-    unsplit: list = field(default_factory=list)
-    """why steps with a mode change were not split"""
 
 
 def simulate_mpcc(model: Model, torque, steps: int = 200, cycles: int | None = None,

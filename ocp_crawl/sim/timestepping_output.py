@@ -7,13 +7,43 @@ of the module docstring of :mod:`ocp_crawl.sim.timestepping`.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ocp_crawl.sim.assemble import (balance_metrics, energy_gate, failure_message, new_result,
                                     sample_fields, success_message)
-from ocp_crawl.sim.result import CrawlResult
+from ocp_crawl.sim.result import CrawlResult, Mode
+from ocp_crawl.sim.step import StepResult, StepState
 from ocp_crawl.status import Status
+
+
+@dataclass
+class _Run:
+    """What a time-stepping run has built so far."""
+
+    state: StepState
+    rows: list
+    """(t, phi, theta, d, x1, x2, f_t, f_n1, f_n2, mode) per step, the start first"""
+    events: list = field(default_factory=list)
+    mode: Mode = Mode.STICK
+    det_ref: float | None = None
+    prev: StepResult | None = None
+    n: int = 0
+    """steps done"""
+    ncycles: int = 0
+    cycle_ends: list = field(default_factory=list)
+    periodic_dev: float = float("nan")
+    times: list = field(default_factory=list)
+    retries: int = 0
+    comp_max: float = 0.0
+    eq_max: float = 0.0
+    polished: int = 0
+    split_calls: int = 0
+    """IPOPT calls of the event searches"""
+    calls_mark: int = 0
+    unsplit: list = field(default_factory=list)
+    """why steps with a mode change were not split"""
 
 
 def build_result(stepper, run, status, detail, fail_t, fail_mode, te, stats) -> CrawlResult:

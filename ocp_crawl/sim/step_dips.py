@@ -1,0 +1,173 @@
+"""The contact guards between the incremental steps: where a joint, a normal force or the feet's
+distance first reaches zero inside a step.
+
+The incremental (time-stepping) simulators check the contacts at the steps' ends.  A guard can dip
+below zero and back inside a step and pass that test, so that a run in which a joint goes under
+the ground would end as a success; and a guard found below zero at a step's end reached zero
+somewhere inside the step, not at its end.  Here each step of one contact mode is looked into:
+every contact guard is interpolated by the cubic Hermite polynomial of its values and exact rates
+(along the mode's solution, the models' ``evaluate``) at the step's ends, and where that cubic
+dips below zero (or would within its error estimate, the trapezoid defect of the ends' values and
+rates, as in the event-driven stepper's test), or the guard is not positive at the end, the step
+is solved inside (the mode's step from the step's start to the phase, as the steps themselves
+are) and the first zero located by Brent's method on those solutions: the interpolant only says
+where to look, the steps' own solutions decide.  :func:`first_zero` is that search; :func:`three_link_dip` its use by the
+three-link MPCC steps (:mod:`ocp_crawl.sim.timestepping`); the chain's steps have theirs in
+:mod:`ocp_crawl.sim.chain_mpcc_dips`.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from ocp_crawl.model.statics import AUX_NAMES, call_mapped
+from ocp_crawl.sim.chain_pieces import ChainPieces
+from ocp_crawl.sim.event_guards import cubic_min
+from ocp_crawl.sim.event_state import mode_q
+from ocp_crawl.sim.result import Mode
+from ocp_crawl.sim.step import StepState, step_outputs, step_params
+from ocp_crawl.sim.step_split import slip_pair
+from ocp_crawl.status import Status
+
+#: a scaled guard (heights and distance / L, normal forces / (M g)) whose interpolant falls below
+#: -DIP_FLOOR inside a step is looked at [-]
+DIP_FLOOR = 1e-12
+#: phase tolerance of the located first zero of a guard [cycles]
+DIP_XTOL = 1e-12
+#: the statuses of a lost contact
+CONTACT = (Status.LIFT_OFF, Status.FEET_CROSSED, Status.JOINT_ON_GROUND)
+#: the step fractions at which the cubic's lower bound is read
+_S = np.linspace(0.0, 1.0, 33)[1:-1]
+
+
+def contact_guards(m: int) -> list[tuple[str, str, Status]]:
+    """(value, rate, status) of the contact guards of a robot with m joints: the rows of the
+    models' ``evaluate`` outputs and the status a zero of the guard ends a run with."""
+    out = [("fn1", "dfn1", Status.LIFT_OFF), ("fn2", "dfn2", Status.LIFT_OFF),
+           ("d", "ddot", Status.FEET_CROSSED)]
+    return out + [(f"zj{j}", f"dzj{j}", Status.JOINT_ON_GROUND) for j in range(1, m + 1)]
+
+
+def describe(name: str) -> str:
+    """The guard ``name`` in words."""
+    return {"fn1": "foot 1's normal force", "fn2": "foot 2's normal force",
+            "d": "the feet's distance"}.get(name, f"joint {name[2:]}'s height")
+
+
+def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
+    """(phase, step k, guard) of each guard whose cubic dips below zero inside step k (at the
+    cubic's minimum), whose cubic less its error estimate does (at that bound's minimum), or that is
+    not positive at its end (at the end); earliest first."""
+    K, found = len(spans), []
+    for name, rate, _ in contact_guards(m):
+        g, r = ends[name], ends[rate]
+        for k, (ta, tb) in enumerate(spans):
+            g0, g1, h = g[k], g[K + k], tb - ta
+            if not g1 > 0:
+                found.append((tb, k, name))
+                continue
+            m0, m1 = h * r[k], h * r[K + k]
+            err = 6.0 * abs(g1 - g0 - 0.5 * (m0 + m1))
+            # (the Hermite basis bounds the cubic below by min(g0, g1) - 4/27 (|m0| + |m1|))
+            if min(g0, g1) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= -DIP_FLOOR:
+                continue
+            s, v = cubic_min(g0, g1, m0, m1)
+            if v < -DIP_FLOOR:
+                found.append((ta + s * h, k, name))
+                continue
+            # the cubic stays positive, but not by more than its error estimate E s^2 (1 - s)^2
+            # (E: the trapezoid defect, h^3 times the third derivative): the step is looked into
+            c3, c2 = 2 * (g0 - g1) + m0 + m1, 3 * (g1 - g0) - 2 * m0 - m1
+            low = ((c3 * _S + c2) * _S + m0) * _S + g0 - err * (_S * (1 - _S)) ** 2
+            if np.min(low) < -DIP_FLOOR:
+                found.append((ta + float(_S[np.argmin(low)]) * h, k, name))
+    return sorted(found)
+
+
+def first_zero(spans: list, ends: dict, m: int,
+               probe: Callable[[int, str], Callable[[float], float]]) -> tuple | None:
+    """The first zero of a contact guard inside the steps ``spans`` [(ta, tb)] [cycles].
+
+    ``ends``: the scaled guards and their rates [1/cycle] (rows of :func:`contact_guards`) at
+    the steps' starts (columns 0..K-1) and ends (K..2K-1) in each step's mode; ``probe(k, name)``:
+    the scaled guard on the mode's solutions of step k as a function of the phase (nan where a
+    solve fails).  Returns (phase of the zero, the step k, guard, phase of the lowest value found,
+    that value) or None when every guard stays positive."""
+    for t_min, k, name in _suspects(spans, ends, m):
+        ta, tb = spans[k]
+        g = probe(k, name)
+        lowest = t_min
+        if not g(t_min) <= 0:
+            found = minimize_scalar(g, bounds=(ta, tb), method="bounded",
+                                    options={"xatol": 1e-9 * (tb - ta), "maxiter": 60})
+            if not found.fun <= 0:
+                continue
+            lowest = float(found.x)
+        try:
+            t0 = brentq(g, ta, lowest, xtol=DIP_XTOL) if g(ta) > 0 else ta
+        except ValueError:   # (a failed solve inside: nan)
+            continue
+        return t0, k, name, lowest, g(lowest)
+    return None
+
+
+def dip_report(zero: tuple, spans: list, m: int, Mg: float, L: float) -> tuple:
+    """(phase, status, step k, message) of a zero found by :func:`first_zero` (``Mg``, ``L``:
+    the weight [N] and length [m] that scale the guards)."""
+    t0, k, name, lowest, value = zero
+    status = next(s for n, _, s in contact_guards(m) if n == name)
+    scale = Mg if name.startswith("fn") else L
+    return t0, status, k, (f"{describe(name)} reaches zero at t = {t0:.6f} in the step "
+                           f"[{spans[k][0]:.6f}, {spans[k][1]:.6f}] ({value * scale:.4g} at "
+                           f"t = {lowest:.6f})")
+
+
+def three_link_dip(stepper, rows: list, located: set) -> tuple | None:
+    """:func:`first_zero` in the three-link MPCC steps ``rows`` ((t, phi, theta, d, x1, x2, f_t,
+    f_n1, f_n2, mode) of :class:`~ocp_crawl.sim.timestepping.TimeStepper`; ``located``: the phases
+    of its located events, each the start of a step in the mode after it).  Returns (phase,
+    status, mode, message) or None."""
+    # (an event row carries the mode before the event: the step after it is in the next row's)
+    idx = [i for i in range(1, len(rows)) if rows[i][0] > rows[i - 1][0]
+           and (rows[i][9] == rows[i - 1][9] or rows[i - 1][0] in located)]
+    if not idx:
+        return None
+    model, Mg, L = stepper.model, stepper.Mg, stepper.model.robot.L
+    modes = [Mode(rows[i][9]) for i in idx]
+    pieces = ChainPieces(stepper.torque)
+    a, b = [rows[i - 1] for i in idx], [rows[i] for i in idx]
+    ts = np.array([r[0] for r in a + b])
+    tr = np.array([pieces.rate_phase(r[0]) for r in a]
+                  + [pieces.rate_phase(r[0], left=True) for r in b])
+    x = np.array([np.append(r[1], r[6] / Mg) for r in a + b]).T
+    q = np.array([mode_q(mode, r[3]) for mode, r in zip(modes + modes, a + a)]).T
+    tau = np.asarray(stepper.torque(ts), float).reshape(2, -1)
+    dtau = np.asarray(stepper.torque.derivative(tr), float).reshape(2, -1)
+    aux = call_mapped(model.sym.evaluate, x, tau, dtau, q, model.p)
+    ends = {n: aux[AUX_NAMES.index(n)] / (Mg if n.startswith(("fn", "dfn")) else L)
+            for n, r, _ in contact_guards(2) for n in (n, r)}
+
+    def probe(k: int, name: str) -> Callable[[float], float]:
+        row = a[k]
+        state = StepState(row[1], row[4], row[5], row[6])
+        pair = slip_pair(modes[k])
+
+        def g(t: float) -> float:
+            tau = np.asarray(stepper.torque(t), float).reshape(2)
+            sol = stepper.step.solve_in_mode(state, tau, pair)
+            if not (sol.accepted and sol.eq <= stepper.step.options.eq_tol):
+                return np.nan
+            if name in ("fn1", "fn2", "d"):   # (f_n / (M g) and d [m] of the step's outputs)
+                out = np.asarray(step_outputs()(sol.x[:8], step_params(model, state, tau))).ravel()
+                return float(out[("fn1", "fn2", "d").index(name)]) / (L if name == "d" else 1.0)
+            return float(model.kinematics(sol.x[:2])[name]) / L
+        return g
+
+    spans = [(r[0], s[0]) for r, s in zip(a, b)]
+    zero = first_zero(spans, ends, 2, probe)
+    if zero is None:
+        return None
+    t0, status, k, message = dip_report(zero, spans, 2, Mg, L)
+    return t0, status, modes[k], message
