@@ -24,6 +24,8 @@ error; without the splits each step is entirely in its end mode (an O(1/N) error
 switch-exact steps also end at the input's kinks (:func:`step_phases`), and a step stays in the
 mode it starts in when that mode holds to its end (at a tie of the feet's limits at the step's
 end, or a hold of the input, several modes close the step), as the event-driven stepper does.
+A contact lost inside a step, even one regained before its end, ends the run where its guard first
+reaches zero (:mod:`ocp_crawl.sim.chain_mpcc_checks`).
 """
 from __future__ import annotations
 

@@ -204,5 +204,5 @@ def _solve_mode(mode: Mode, state: StepState, P: np.ndarray, mus: tuple,
     consistent = bool(np.min(margins) >= -CONSISTENCY_TOL and np.min(fn) > 0)
     w = np.r_[best[:2], best[2], -best[2], np.maximum(s, 0.0)]
     return {"mode": mode.label, "converged": True, "consistent": consistent,
-            "phi": best[:2].tolist(),
+            "phi": best[:2].tolist(), "f_t": float(best[2]) * Mg,
             "margin": float(np.min(margins)), "fn_min": float(np.min(fn)) * Mg, "_w": w}, iterations

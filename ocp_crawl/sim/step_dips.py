@@ -11,21 +11,21 @@ dips below zero (or would within its error estimate, the trapezoid defect of the
 rates, as in the event-driven stepper's test), or the guard is not positive at the end, the step
 is solved inside (the mode's step from the step's start to the phase, as the steps themselves
 are) and the first zero located by Brent's method on those solutions: the interpolant only says
-where to look, the steps' own solutions decide.  :func:`first_zero` is that search; :func:`three_link_dip` its use by the
-three-link MPCC steps (:mod:`ocp_crawl.sim.timestepping`); the chain's steps have theirs in
-:mod:`ocp_crawl.sim.chain_mpcc_dips`.
+where to look, the steps' own solutions decide.  :func:`first_zero` is that search;
+:func:`three_link_dip` its use by the three-link MPCC steps (:mod:`ocp_crawl.sim.timestepping`);
+the chain's steps have theirs in :mod:`ocp_crawl.sim.chain_mpcc_checks`.
 """
 from __future__ import annotations
 
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from ocp_crawl.model.statics import AUX_NAMES, call_mapped
 from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import cubic_min
 from ocp_crawl.sim.event_state import mode_q
+from ocp_crawl.sim.oracle import ENUM_MODES, solve_step_enumerate
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.sim.step import StepState, step_outputs, step_params
 from ocp_crawl.sim.step_split import slip_pair
@@ -95,6 +95,7 @@ def first_zero(spans: list, ends: dict, m: int,
     the scaled guard on the mode's solutions of step k as a function of the phase (nan where a
     solve fails).  Returns (phase of the zero, the step k, guard, phase of the lowest value found,
     that value) or None when every guard stays positive."""
+    from scipy.optimize import brentq, minimize_scalar   # (not at import: the parser's modules)
     for t_min, k, name in _suspects(spans, ends, m):
         ta, tb = spans[k]
         g = probe(k, name)
@@ -124,11 +125,30 @@ def dip_report(zero: tuple, spans: list, m: int, Mg: float, L: float) -> tuple:
                            f"t = {lowest:.6f})")
 
 
-def three_link_dip(stepper, rows: list, located: set) -> tuple | None:
+def _mode_end(stepper, row: tuple, t: float, mode: Mode) -> tuple | None:
+    """The row of ``mode``'s equilibrium at phase t on the step from ``row`` (the
+    mode-enumeration oracle's candidate, which may have lost a contact), or None."""
+    if mode not in ENUM_MODES:
+        return None
+    state = StepState(row[1], row[4], row[5], row[6])
+    res = solve_step_enumerate(stepper.model, state, np.asarray(stepper.torque(t), float))
+    cand = next(c for c in res.extra["candidates"] if c["mode"] == mode.label)
+    if not cand["converged"]:
+        return None
+    nan = float("nan")
+    return (t, np.asarray(cand["phi"]), nan, row[3], nan, nan, cand["f_t"], nan, nan, int(mode))
+
+
+def three_link_dip(stepper, rows: list, located: set, end: tuple | None = None) -> tuple | None:
     """:func:`first_zero` in the three-link MPCC steps ``rows`` ((t, phi, theta, d, x1, x2, f_t,
     f_n1, f_n2, mode) of :class:`~ocp_crawl.sim.timestepping.TimeStepper`; ``located``: the phases
-    of its located events, each the start of a step in the mode after it).  Returns (phase,
-    status, mode, message) or None."""
+    of its located events, each the start of a step in the mode after it) and, with ``end`` =
+    (phase, mode), the step from the last row to that phase in that mode (a step that lost a
+    contact, or could not be solved because of it).  Returns (phase, status, mode, message) or
+    None."""
+    if end is not None and rows:
+        last = _mode_end(stepper, rows[-1], *end)
+        rows = rows if last is None else [*rows, last]
     # (an event row carries the mode before the event: the step after it is in the next row's)
     idx = [i for i in range(1, len(rows)) if rows[i][0] > rows[i - 1][0]
            and (rows[i][9] == rows[i - 1][9] or rows[i - 1][0] in located)]

@@ -33,7 +33,8 @@ its meaning from :data:`~ocp_crawl.nlp.ipopt.IPOPT_RETURN_STATUS`, and the resul
 the failing cycle solved before it.  A torque input that is not finite at a step gives
 ``SOLVER_FAILURE`` too, and no released equilibrium at t = 0 gives ``NO_START`` (as the event-driven
 stepper).  A solution with a normal force <= 0 gives ``LIFT_OFF``, d <= 0 ``FEET_CROSSED``, a joint
-at or below the ground ``JOINT_ON_GROUND``; a sign change of the
+at or below the ground ``JOINT_ON_GROUND``, also where such a guard reaches zero between two
+steps' ends (:mod:`ocp_crawl.sim.step_dips`, the run ends at its first zero); a sign change of the
 Jacobian determinant of the active mode's equations within one mode, or a jump of phi larger than
 ``max_dphi`` in one step, gives ``FOLD`` (the tracked equilibrium branch was lost).  Every solved
 step's equilibrium must be stable in its contact mode (:mod:`ocp_crawl.model.stability`, the
@@ -230,9 +231,9 @@ class TimeStepper:
         while True:
             try:
                 res = self._step(run)
-            except _Stop as stop:   # (a contact lost earlier in the cycle comes first)
-                if stop.status not in CONTACT:
-                    self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1e-12])
+            except _Stop as stop:   # (a contact lost earlier in the cycle, or in the step, first)
+                self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1e-12],
+                          (stop.t, run.mode) if stop.status in CONTACT else None, stop.detail)
                 raise
             if run.n % N:
                 continue
@@ -389,13 +390,7 @@ class TimeStepper:
         """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of
         mode not located before (:meth:`_advance`) is recorded as an event at t1."""
         mode, where = run.mode, self._where(run, t1)
-        try:
-            kin = self._check_contact(res, state, where, t1, mode)
-        except _Stop as stop:   # (a lost contact: where its guard reached zero inside the step)
-            if stop.status in CONTACT:
-                self._dip(run, [*run.rows[-2 * self.steps:], (t1, res.phi, np.nan, res.d, res.x1,
-                                res.x2, res.f_t, res.f_n1, res.f_n2, int(res.mode))])
-            raise
+        kin = self._check_contact(res, state, where, t1, mode)
         det = self._det(res, state, tau)
         if res.mode != mode:
             # not located: the change happened within the step (t1 - 1/N, t1]; no guard value
@@ -412,12 +407,14 @@ class TimeStepper:
                          res.f_n2, int(res.mode)))
         run.state = res.next_state()
 
-    def _dip(self, run: _Run, rows: list) -> None:
-        """_Stop at the first zero of a contact guard inside the steps ``rows``, if any."""
+    def _dip(self, run: _Run, rows: list, end: tuple | None = None, then: str = "") -> None:
+        """_Stop at the first zero of a contact guard inside the steps ``rows`` (and the step
+        from the last of them to ``end`` = (phase, mode), where a contact was found lost), if any;
+        ``then``: what ended the run after it."""
         located = {e.t for e in run.events if e.guard_name != "mode_change_between_steps"}
-        dip = three_link_dip(self, rows, located)
+        dip = three_link_dip(self, rows, located, end)
         if dip is not None:
-            raise _Stop(dip[1], "", dip[3], dip[0], dip[2])
+            raise _Stop(dip[1], "", dip[3] + (f"; then {then}" if then else ""), dip[0], dip[2])
 
     def _check_stable(self, res: StepResult, where: str, t1: float) -> None:
         """_Stop with UNSTABLE unless the step's equilibrium has a positive stability margin in its
