@@ -322,3 +322,37 @@ def test_a_contact_lost_between_the_steps_ends_the_steps_where_the_event_stepper
         res = simulate_mpcc(model, torque, steps=steps)
         assert res.status_name == status, (steps, res.message)
         assert res.failure_t == pytest.approx(event.failure_t, abs=1e-8), steps
+
+
+#: random robots 1e-7 past the boundary of success: a joint 4e-8 to 9e-8 m under the ground in the
+#: first cycle, inside a continuation step of 1/16 cycle whose interpolant of the joint's height
+#: stays above zero within its error estimate
+NEAR_TOUCHES = [
+    (dict(M=0.05658347793573139, beta=1.350084009093285, mu1=0.765441012084144,
+          mu2=0.7634861458758879), 1.7554971657836789,
+     (2.5587015015808765, 2.1460515457822247, 0.683602732339226, 0.6589063103914271,
+      0.6093918834035593)),
+    (dict(M=0.07017823580145748, beta=2.932065461760244, mu1=0.5901850674849958,
+          mu2=0.7797524373450846), 1.6527048975261305,
+     (2.390525089771767, 1.5124045042932726, 1.0223683859363828, 0.2506526609539727,
+      0.7148917698630484)),
+]
+
+
+@pytest.mark.parametrize("kw, ratio, ref", NEAR_TOUCHES)
+def test_a_joint_that_only_touches_the_ground_in_a_long_step_ends_the_run_there(kw, ratio, ref):
+    """The event-driven stepper at its default largest step finds the first touch where it does
+    with steps of 1/1000 cycle, and where the MPCC steps (solved inside their steps) find it."""
+    from ocp_crawl.model.inputs import Harmonic
+    from ocp_crawl.model.robot import Robot
+    from ocp_crawl.sim.event import HybridOptions
+
+    robot = Robot.paper(**kw).with_stiffness_ratio(ratio)
+    model, torque = Model(robot), ReferenceTorque(Harmonic(*ref), robot.k)
+    res = simulate_torque(model, torque)
+    fine = simulate_torque(model, torque, HybridOptions(max_step=1e-3))
+    steps = simulate_mpcc(model, torque, steps=50)
+    assert res.status_name == fine.status_name == steps.status_name == "joint_on_ground"
+    assert fine.failure_t < 1
+    assert res.failure_t == pytest.approx(fine.failure_t, abs=1e-8)
+    assert steps.failure_t == pytest.approx(fine.failure_t, abs=1e-8)

@@ -24,8 +24,9 @@ error; without the splits each step is entirely in its end mode (an O(1/N) error
 switch-exact steps also end at the input's kinks (:func:`step_phases`), and a step stays in the
 mode it starts in when that mode holds to its end (at a tie of the feet's limits at the step's
 end, or a hold of the input, several modes close the step), as the event-driven stepper does.
-A contact lost inside a step, even one regained before its end, ends the run where its guard first
-reaches zero (:mod:`ocp_crawl.sim.chain_mpcc_checks`).
+A contact the steps find lost inside a step (at its end, or in a dip of its guard that the guard's
+interpolant flags) ends the run where its guard first reaches zero
+(:mod:`ocp_crawl.sim.chain_mpcc_checks`).
 """
 from __future__ import annotations
 
@@ -288,6 +289,7 @@ def _take_step(step: ChainStep, torque, rows: list, span: tuple, first: int, pre
     lost earlier in the cycle (its rows from ``first``)."""
     from ocp_crawl.sim.chain_mpcc_split import advance
     ta, tb = span
+    before = rows[max(first - 1, 0):]
     try:
         new, res, dropped, found = advance(step, torque, rows[-1], ta, tb, switch_exact, prev)
         located.update(found)
@@ -303,8 +305,8 @@ def _take_step(step: ChainStep, torque, rows: list, span: tuple, first: int, pre
                         f"step at t = {tb:.6f}: {res.message}")
         check_end(step, torque, before, new[-1], located)
     except RunStop as stop:
-        if stop.status not in CONTACT:
-            dip_stop(step, torque, rows[max(first - 1, 0):], located)
+        if stop.status not in CONTACT:   # (the step's own rows too: a lost contact came first)
+            dip_stop(step, torque, before + ([new[-1]] if res.success else []), located)
         raise
     return new
 

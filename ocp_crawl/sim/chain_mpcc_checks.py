@@ -8,16 +8,16 @@ reaches first.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.chain_stability import chain_stability_margins
-from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.chain_torque_parts import mode_vector
 from ocp_crawl.sim.result import Mode
-from ocp_crawl.sim.step_dips import CONTACT, contact_guards, dip_report, first_zero
+from ocp_crawl.sim.step_dips import (CONTACT, contact_guards, dip_report, first_zero,
+                                     rate_phases, step_probes)
 from ocp_crawl.status import Status
 
 if TYPE_CHECKING:
@@ -103,10 +103,7 @@ def dip_stop(step: "ChainStep", torque, rows: list, located: set) -> None:
 def _ends(step, torque, a: list, b: list) -> dict:
     """The scaled contact guards and rates [1/cycle] of the mode of each step a[k] -> b[k] at its
     start (columns 0..K-1) and end (K..2K-1)."""
-    pieces = ChainPieces(torque)
-    ts = np.array([r[0] for r in a + b])
-    tr = np.array([pieces.rate_phase(r[0]) for r in a]
-                  + [pieces.rate_phase(r[0], left=True) for r in b])
+    ts, tr = rate_phases(torque, a, b)
     x = np.array([np.append(r[1], r[4] / step.Mg) for r in a + b]).T
     q = np.array([mode_vector(r[8], r[7]) for r in a + a]).T
     tau = np.asarray(torque(ts), float).reshape(step.m, -1)
@@ -128,21 +125,21 @@ def contact_dip(step, torque, rows: list, located: set) -> tuple | None:
         return None
     a, b = [rows[i - 1] for i in idx], [rows[i] for i in idx]
 
-    def probe(k: int, name: str) -> Callable[[float], float]:
-        row = a[k]
-
-        def g(t: float) -> float:
-            tau = np.asarray(torque(t), float).reshape(step.m)
-            cand = step.mode_solution(row[8], row[1], tau, row[4])
-            if cand is None:
-                return np.nan
-            if name.startswith("fn"):
-                return float(cand["fn"][int(name[2]) - 1]) / step.Mg
-            return float(step.model.kinematics(cand["z"][:step.m])[name]) / step.L
-        return g
+    def solve(k: int, t: float) -> tuple | None:
+        tau = np.asarray(torque(t), float).reshape(step.m)
+        cand = step.mode_solution(a[k][8], a[k][1], tau, a[k][4])
+        if cand is None:
+            return None
+        phi = cand["z"][:step.m]
+        kin = step.model.kinematics(phi)
+        guards = {"fn1": cand["fn"][0] / step.Mg, "fn2": cand["fn"][1] / step.Mg,
+                  "d": float(kin["d"]) / step.L}
+        guards.update({f"zj{j}": float(kin[f"zj{j}"]) / step.L for j in range(1, step.m + 1)})
+        return phi, guards
 
     spans = [(r[0], s[0]) for r, s in zip(a, b)]
-    zero = first_zero(spans, _ends(step, torque, a, b), step.m, probe)
+    zero = first_zero(spans, _ends(step, torque, a, b), step.m,
+                      step_probes(solve, [r[1] for r in b], spans))
     if zero is None:
         return None
     t0, status, k, message = dip_report(zero, spans, step.m, step.Mg, step.L)

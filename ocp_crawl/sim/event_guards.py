@@ -24,6 +24,11 @@ _FN1, _FN2, _D, _ZJ1, _ZJ2, _FT, _LIM1, _LIM2, _DDOT, _DFT, _DFN1, _DFN2, _DZJ1,
 SYMMETRY_TOL = 1e-8
 
 _S_GRID = np.linspace(0.0, 1.0, 33)[1:-1]
+#: a contact guard (a normal force, d, a joint's height) whose interpolant has an interior minimum
+#: below NEAR_TOUCH times its lower end value comes near zero inside the step: the step is suspect
+#: (the error estimate below is a heuristic, and near such a touch it has missed dips of 1e-7 L)
+NEAR_TOUCH = 0.05
+_CONTACT_GUARDS = ("lift_off", "feet_crossed", "joint_")
 _S_BUMP = (_S_GRID * (1 - _S_GRID)) ** 2
 
 
@@ -141,7 +146,8 @@ class Guards:
         the ends.  Returns the guards whose interpolant dips below zero, with the phase of its
         minimum, and whether the step is suspect: the interpolant stays positive but not by more
         than an estimate of its error, E s^2 (1 - s)^2 with E = 6 |g1 - g0 - h (g0' + g1')/2|
-        (the trapezoid defect, of order h^3 times the third derivative), so the caller halves the
+        (the trapezoid defect, of order h^3 times the third derivative), or a contact guard's
+        interpolant nears zero inside the step (:data:`NEAR_TOUCH`), so the caller halves the
         step.
         """
         h = p1.t - p0.t
@@ -162,6 +168,9 @@ class Guards:
             s, v = cubic_min(a, b, m0, m1)
             if v < floor:
                 out.append((name, p0.t + s * h))
+                continue
+            if v < NEAR_TOUCH * min(a, b) and name.startswith(_CONTACT_GUARDS):
+                suspect = True
                 continue
             if min(a, b, v) - err / 16 >= floor:
                 # (the grid test below cannot fail: the cubic >= min(a, b, v) and err s^2 (1 - s)^2

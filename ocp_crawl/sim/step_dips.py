@@ -23,7 +23,7 @@ import numpy as np
 
 from ocp_crawl.model.statics import AUX_NAMES, call_mapped
 from ocp_crawl.sim.chain_pieces import ChainPieces
-from ocp_crawl.sim.event_guards import cubic_min
+from ocp_crawl.sim.event_guards import NEAR_TOUCH, cubic_min
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.oracle import ENUM_MODES, solve_step_enumerate
 from ocp_crawl.sim.result import Mode
@@ -36,6 +36,8 @@ from ocp_crawl.status import Status
 DIP_FLOOR = 1e-12
 #: phase tolerance of the located first zero of a guard [cycles]
 DIP_XTOL = 1e-12
+#: the mode's solution at a step's end is the step's end when their angles agree to this [rad]
+SAME_BRANCH = 1e-6
 #: the statuses of a lost contact
 CONTACT = (Status.LIFT_OFF, Status.FEET_CROSSED, Status.JOINT_ON_GROUND)
 #: the step fractions at which the cubic's lower bound is read
@@ -57,9 +59,10 @@ def describe(name: str) -> str:
 
 
 def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
-    """(phase, step k, guard) of each guard whose cubic dips below zero inside step k (at the
-    cubic's minimum), whose cubic less its error estimate does (at that bound's minimum), or that is
-    not positive at its end (at the end); earliest first."""
+    """(phase, step k, guard) of each guard whose cubic dips below zero inside step k or comes near
+    zero (:data:`~ocp_crawl.sim.event_guards.NEAR_TOUCH`; at the cubic's minimum), whose cubic less
+    its error estimate does (at that bound's minimum), or that is not positive at its end (at the
+    end); earliest first."""
     K, found = len(spans), []
     for name, rate, _ in contact_guards(m):
         g, r = ends[name], ends[rate]
@@ -74,7 +77,7 @@ def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
             if min(g0, g1) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= -DIP_FLOOR:
                 continue
             s, v = cubic_min(g0, g1, m0, m1)
-            if v < -DIP_FLOOR:
+            if v < -DIP_FLOOR or v < NEAR_TOUCH * min(g0, g1):   # (a dip, or a near touch)
                 found.append((ta + s * h, k, name))
                 continue
             # the cubic stays positive, but not by more than its error estimate E s^2 (1 - s)^2
@@ -86,6 +89,27 @@ def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
     return sorted(found)
 
 
+def _zero(g: Callable[[float], float], ta: float, tb: float, t_min: float) -> tuple | None:
+    """(first zero, phase of the lowest value found, that value) of g on [ta, tb] from the
+    cubic's guess t_min; None where g stays positive or a solve fails."""
+    from scipy.optimize import brentq, minimize_scalar   # (not at import: the parser's modules)
+    lowest = t_min
+    if not g(t_min) <= 0:
+        found = minimize_scalar(g, bounds=(ta, tb), method="bounded",
+                                options={"xatol": 1e-9 * (tb - ta), "maxiter": 60})
+        if not found.fun <= 0:
+            return None
+        lowest = float(found.x)
+    g_start = g(ta)
+    if not np.isfinite(g_start):
+        return None
+    try:
+        t0 = brentq(g, ta, lowest, xtol=DIP_XTOL) if g_start > 0 else ta
+    except ValueError:   # (a failed solve inside: nan)
+        return None
+    return t0, lowest, g(lowest)
+
+
 def first_zero(spans: list, ends: dict, m: int,
                probe: Callable[[int, str], Callable[[float], float]]) -> tuple | None:
     """The first zero of a contact guard inside the steps ``spans`` [(ta, tb)] [cycles].
@@ -93,25 +117,42 @@ def first_zero(spans: list, ends: dict, m: int,
     ``ends``: the scaled guards and their rates [1/cycle] (rows of :func:`contact_guards`) at
     the steps' starts (columns 0..K-1) and ends (K..2K-1) in each step's mode; ``probe(k, name)``:
     the scaled guard on the mode's solutions of step k as a function of the phase (nan where a
-    solve fails).  Returns (phase of the zero, the step k, guard, phase of the lowest value found,
-    that value) or None when every guard stays positive."""
-    from scipy.optimize import brentq, minimize_scalar   # (not at import: the parser's modules)
+    solve fails, :func:`step_probes`).  Returns (phase of the zero, the step k, guard, phase of
+    the lowest value found, that value) or None when every guard stays positive."""
+    best = None
+    # (the suspects in phase order are in step order: every guard of the first step with a zero)
     for t_min, k, name in _suspects(spans, ends, m):
-        ta, tb = spans[k]
-        g = probe(k, name)
-        lowest = t_min
-        if not g(t_min) <= 0:
-            found = minimize_scalar(g, bounds=(ta, tb), method="bounded",
-                                    options={"xatol": 1e-9 * (tb - ta), "maxiter": 60})
-            if not found.fun <= 0:
-                continue
-            lowest = float(found.x)
-        try:
-            t0 = brentq(g, ta, lowest, xtol=DIP_XTOL) if g(ta) > 0 else ta
-        except ValueError:   # (a failed solve inside: nan)
-            continue
-        return t0, k, name, lowest, g(lowest)
-    return None
+        if best is not None and k != best[1]:
+            break
+        z = _zero(probe(k, name), *spans[k], t_min)
+        if z is not None and (best is None or z[0] < best[0]):
+            best = (z[0], k, name, z[1], z[2])
+    return best
+
+
+def step_probes(solve: Callable[[int, float], tuple | None], ends_phi: list,
+                spans: list) -> Callable[[int, str], Callable[[float], float]]:
+    """``probe(k, name)`` for :func:`first_zero` from ``solve(k, t)`` -> (phi [rad], the scaled
+    guards by name) of step k's mode at phase t, or None when the solve fails.  A step whose
+    mode's solution at its end is not the step's end ``ends_phi[k]`` (another branch, or a mode
+    change the step did not locate) is not looked into: its probe is nan."""
+    known: dict = {}
+
+    def at(k: int, t: float) -> tuple | None:
+        if (k, t) not in known:
+            known[(k, t)] = solve(k, t)
+        return known[(k, t)]
+
+    def probe(k: int, name: str) -> Callable[[float], float]:
+        end = at(k, spans[k][1])
+        if end is None or not np.max(np.abs(end[0] - ends_phi[k])) <= SAME_BRANCH:
+            return lambda t: np.nan
+
+        def g(t: float) -> float:
+            got = at(k, t)
+            return np.nan if got is None else float(got[1][name])
+        return g
+    return probe
 
 
 def dip_report(zero: tuple, spans: list, m: int, Mg: float, L: float) -> tuple:
@@ -128,10 +169,11 @@ def dip_report(zero: tuple, spans: list, m: int, Mg: float, L: float) -> tuple:
 def _mode_end(stepper, row: tuple, t: float, mode: Mode) -> tuple | None:
     """The row of ``mode``'s equilibrium at phase t on the step from ``row`` (the
     mode-enumeration oracle's candidate, which may have lost a contact), or None."""
-    if mode not in ENUM_MODES:
+    tau = np.asarray(stepper.torque(t), float)
+    if mode not in ENUM_MODES or not np.all(np.isfinite(tau)):
         return None
     state = StepState(row[1], row[4], row[5], row[6])
-    res = solve_step_enumerate(stepper.model, state, np.asarray(stepper.torque(t), float))
+    res = solve_step_enumerate(stepper.model, state, tau)
     cand = next(c for c in res.extra["candidates"] if c["mode"] == mode.label)
     if not cand["converged"]:
         return None
@@ -139,28 +181,36 @@ def _mode_end(stepper, row: tuple, t: float, mode: Mode) -> tuple | None:
     return (t, np.asarray(cand["phi"]), nan, row[3], nan, nan, cand["f_t"], nan, nan, int(mode))
 
 
+def rate_phases(torque, a: list, b: list) -> tuple[np.ndarray, np.ndarray]:
+    """The phases of the steps' starts ``a`` and ends ``b`` (rows, phase first) and where their
+    torques' rates are read: after a kink at a start, before it at an end."""
+    pieces = ChainPieces(torque)
+    ts = np.array([r[0] for r in a + b])
+    tr = np.array([pieces.rate_phase(r[0]) for r in a]
+                  + [pieces.rate_phase(r[0], left=True) for r in b])
+    return ts, tr
+
+
 def three_link_dip(stepper, rows: list, located: set, end: tuple | None = None) -> tuple | None:
     """:func:`first_zero` in the three-link MPCC steps ``rows`` ((t, phi, theta, d, x1, x2, f_t,
     f_n1, f_n2, mode) of :class:`~ocp_crawl.sim.timestepping.TimeStepper`; ``located``: the phases
     of its located events, each the start of a step in the mode after it) and, with ``end`` =
-    (phase, mode), the step from the last row to that phase in that mode (a step that lost a
-    contact, or could not be solved because of it).  Returns (phase, status, mode, message) or
-    None."""
+    (phase, mode), the step from the last row to that phase in that mode (the step the run
+    stopped in).  Returns (phase, status, mode, message) or None."""
     if end is not None and rows:
         last = _mode_end(stepper, rows[-1], *end)
         rows = rows if last is None else [*rows, last]
-    # (an event row carries the mode before the event: the step after it is in the next row's)
+    # (an event row carries the mode before the event: the step after it is in the next row's;
+    # both feet slipping is not a mode the steps are solved in one at a time)
     idx = [i for i in range(1, len(rows)) if rows[i][0] > rows[i - 1][0]
-           and (rows[i][9] == rows[i - 1][9] or rows[i - 1][0] in located)]
+           and (rows[i][9] == rows[i - 1][9] or rows[i - 1][0] in located)
+           and Mode(rows[i][9]) in ENUM_MODES]
     if not idx:
         return None
     model, Mg, L = stepper.model, stepper.Mg, stepper.model.robot.L
     modes = [Mode(rows[i][9]) for i in idx]
-    pieces = ChainPieces(stepper.torque)
     a, b = [rows[i - 1] for i in idx], [rows[i] for i in idx]
-    ts = np.array([r[0] for r in a + b])
-    tr = np.array([pieces.rate_phase(r[0]) for r in a]
-                  + [pieces.rate_phase(r[0], left=True) for r in b])
+    ts, tr = rate_phases(stepper.torque, a, b)
     x = np.array([np.append(r[1], r[6] / Mg) for r in a + b]).T
     q = np.array([mode_q(mode, r[3]) for mode, r in zip(modes + modes, a + a)]).T
     tau = np.asarray(stepper.torque(ts), float).reshape(2, -1)
@@ -169,24 +219,20 @@ def three_link_dip(stepper, rows: list, located: set, end: tuple | None = None) 
     ends = {n: aux[AUX_NAMES.index(n)] / (Mg if n.startswith(("fn", "dfn")) else L)
             for n, r, _ in contact_guards(2) for n in (n, r)}
 
-    def probe(k: int, name: str) -> Callable[[float], float]:
-        row = a[k]
-        state = StepState(row[1], row[4], row[5], row[6])
-        pair = slip_pair(modes[k])
-
-        def g(t: float) -> float:
-            tau = np.asarray(stepper.torque(t), float).reshape(2)
-            sol = stepper.step.solve_in_mode(state, tau, pair)
-            if not (sol.accepted and sol.eq <= stepper.step.options.eq_tol):
-                return np.nan
-            if name in ("fn1", "fn2", "d"):   # (f_n / (M g) and d [m] of the step's outputs)
-                out = np.asarray(step_outputs()(sol.x[:8], step_params(model, state, tau))).ravel()
-                return float(out[("fn1", "fn2", "d").index(name)]) / (L if name == "d" else 1.0)
-            return float(model.kinematics(sol.x[:2])[name]) / L
-        return g
+    def solve(k: int, t: float) -> tuple | None:
+        state = StepState(a[k][1], a[k][4], a[k][5], a[k][6])
+        tau = np.asarray(stepper.torque(t), float).reshape(2)
+        sol = stepper.step.solve_in_mode(state, tau, slip_pair(modes[k]))
+        if not (sol.accepted and sol.eq <= stepper.step.options.eq_tol):
+            return None
+        out = np.asarray(step_outputs()(sol.x[:8], step_params(model, state, tau))).ravel()
+        kin = model.kinematics(sol.x[:2])
+        # (f_n / (M g) and d [m] of the step's outputs)
+        return sol.x[:2], {"fn1": out[0], "fn2": out[1], "d": out[2] / L,
+                           "zj1": kin["zj1"] / L, "zj2": kin["zj2"] / L}
 
     spans = [(r[0], s[0]) for r, s in zip(a, b)]
-    zero = first_zero(spans, ends, 2, probe)
+    zero = first_zero(spans, ends, 2, step_probes(solve, [r[1] for r in b], spans))
     if zero is None:
         return None
     t0, status, k, message = dip_report(zero, spans, 2, Mg, L)

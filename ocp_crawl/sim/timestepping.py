@@ -69,7 +69,7 @@ from ocp_crawl.sim.options import STEPS_BOUNDS, CycleOptions, count
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
-from ocp_crawl.sim.step_dips import CONTACT, three_link_dip
+from ocp_crawl.sim.step_dips import three_link_dip
 from ocp_crawl.sim.timestepping_output import _Run, build_result
 
 
@@ -233,13 +233,13 @@ class TimeStepper:
                 res = self._step(run)
             except _Stop as stop:   # (a contact lost earlier in the cycle, or in the step, first)
                 self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1e-12],
-                          (stop.t, run.mode) if stop.status in CONTACT else None, stop.detail)
+                          (stop.t, run.mode), stop.detail)
                 raise
             if run.n % N:
                 continue
-            run.ncycles += 1
             # (a contact guard may dip below zero and back inside a step, unseen at the steps' ends)
-            self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1 - 1e-12])
+            self._dip(run, [r for r in run.rows if r[0] >= run.ncycles - 1e-12])
+            run.ncycles += 1
             ends = run.cycle_ends
             ends.append((res.phi.copy(), res.f_t / self.Mg, res.mode))
             if len(ends) >= 2:
@@ -409,7 +409,7 @@ class TimeStepper:
 
     def _dip(self, run: _Run, rows: list, end: tuple | None = None, then: str = "") -> None:
         """_Stop at the first zero of a contact guard inside the steps ``rows`` (and the step
-        from the last of them to ``end`` = (phase, mode), where a contact was found lost), if any;
+        from the last of them to ``end`` = (phase, mode), the step the run stopped in), if any;
         ``then``: what ended the run after it."""
         located = {e.t for e in run.events if e.guard_name != "mode_change_between_steps"}
         dip = three_link_dip(self, rows, located, end)

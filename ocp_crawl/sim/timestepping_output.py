@@ -55,8 +55,10 @@ def build_result(stepper, run, status, detail, fail_t, fail_mode, te, stats) -> 
         message, t_end = success_message(ncycles, t0, f" of {N} MPCC steps"), t0 + 1.0
     else:
         t0 = float(max(0, math.floor(fail_t - 1e-12)))
-        message, t_end = failure_message(status, detail), math.inf
-    fields = dict(events=run.events, cycles=ncycles, failure_t=fail_t, failure_mode=fail_mode,
+        # (a lost contact found inside an earlier step ends the run there: nothing after it)
+        message, t_end = failure_message(status, detail), fail_t
+    events = [e for e in run.events if e.t <= t_end + 1e-12]
+    fields = dict(events=events, cycles=ncycles, failure_t=fail_t, failure_mode=fail_mode,
                   nfev=stats["ipopt_calls"], nsteps=run.n, extra=stats, t0=t0)
     # the step phases and the located events of the cycle
     sel = [r for r in rows if t0 - 1e-12 <= r[0] <= t_end + 1e-12]
