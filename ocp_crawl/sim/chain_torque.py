@@ -4,7 +4,8 @@
 The chain follows its equilibrium branch by continuation in the phase t [cycles]: in each contact
 mode every point is a Newton solve of :meth:`~ocp_crawl.model.chain_model.ChainModel.solve` from
 the tangent predictor of the previous point, with an adaptive step (a guard that dips below zero
-and back inside a step is found by its Hermite interpolant).  Guards (positive while the mode
+and back inside a step is found by its Hermite interpolant; a step in which a contact's guard nears
+zero is halved).  Guards (positive while the mode
 holds, :meth:`~ocp_crawl.sim.chain_torque_parts.ChainSolver.guards`): in stick-stick both feet's
 friction margins mu_i f_n,i -+ f_t; in a slip of foot s with sign(d') = sigma, sigma d' and the
 other foot's margin mu_o f_n,o - mu_s f_n,s; in every mode the normal forces, d and the joint
@@ -20,10 +21,9 @@ identically, mu1 f_n1 = mu2 f_n2, ends with ``no_consistent_mode``).  Cycles run
 state and mode at the start of a cycle repeat (at least two cycles); the last cycle is reported.
 
 An input with kinks or holds (piecewise-linear tables, pulses, optimal-control profiles) is taken
-piece by piece (:mod:`ocp_crawl.sim.chain_pieces`): steps end at its kinks, where the mode after
-a guard that turns negative is decided by the rates after the kink; a hold is crossed in one
-step and the mode after it decided by the rates after it; the cycle integrals are split at its
-knots.
+piece by piece (:mod:`ocp_crawl.sim.chain_pieces`): steps end at its kinks, where the mode after a
+guard that turns negative is decided by the rates after the kink; a hold is crossed in one step
+and the mode after it decided by the rates after it; the cycle integrals are split at its knots.
 """
 from __future__ import annotations
 
@@ -89,9 +89,7 @@ class ChainTorqueStepper:
     def start(self) -> Point:
         """The released start (f_t = 0) at t = 0, stable in stick-stick; ValueError if none."""
         s, chain = self.solver, self.model.chain
-        if isinstance(self.torque, ChainReferenceTorque):
-            ref = np.asarray(self.torque.reference(0.0), float)
-        elif isinstance(self.torque, ReferenceTorque):
+        if isinstance(self.torque, (ChainReferenceTorque, ReferenceTorque)):
             ref = np.asarray(self.torque.reference(0.0), float)
         else:
             ref = math.pi + np.asarray(chain.rest) + s.tau(0.0)[0] / np.asarray(chain.stiffness)
@@ -160,9 +158,12 @@ class ChainTorqueStepper:
             crossed = [k for k, v in g1.items() if v < floor]
             # (a guard that dips below zero and back inside the step, unseen by the signs at its
             # ends, is an event; so is one that does so before another crosses at the step's end)
-            early, dipped = self._dip(seg, pt, new)
+            early, dipped, near = self._dip(seg, pt, new)
             if dipped and (not crossed or early.t < new.t):
                 new, crossed = early, dipped
+            elif near and not crossed and hh > 1e-5:   # (a contact nears zero: look closer)
+                h = hh / 2
+                continue
             if not crossed:
                 seg.points.append(self._place(seg, new))
                 h = min(self.max_step, 2 * hh) if hh >= 0.999 * h else h
@@ -174,19 +175,20 @@ class ChainTorqueStepper:
             h = min(h, self.max_step)
         return seg, h
 
-    def _dip(self, seg: Segment, pt: Point, new: Point) -> tuple[Point, list[str]]:
+    def _dip(self, seg: Segment, pt: Point, new: Point) -> tuple[Point, list[str], bool]:
         """The end of the step [pt, new] and its crossed guards: inside the step at the first dip of
         a guard's interpolant (:meth:`ChainSolver.dips`) where a guard is negative, else new and
-        none."""
+        none; and whether a contact's guard nears zero in the step."""
         s = self.solver
-        for t in s.dips(seg.mode, seg.q, pt, new):
+        dips, near = s.dips(seg.mode, seg.q, pt, new)
+        for t in dips:
             pm = s.solve(t, s.guess(pt, t), seg.q)
             if pm is None:
                 continue
             crossed = [k for k, v in s.guards(seg.mode, pm.aux).items() if v < 0]
             if crossed:
-                return pm, crossed
-        return new, []
+                return pm, crossed, near
+        return new, [], near
 
     def _check_stable(self, seg: Segment) -> None:
         """A fold failure at the first point of the segment whose stability margin is <= 0."""

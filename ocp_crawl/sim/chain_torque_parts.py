@@ -15,7 +15,7 @@ from ocp_crawl.model.chain_model import ChainModel, slip_mode, stick_mode
 from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
 from ocp_crawl.sim.chain_pieces import ChainPieces
-from ocp_crawl.sim.event_guards import cubic_min
+from ocp_crawl.sim.event_guards import NEAR_TOUCH, cubic_min
 from ocp_crawl.sim.quadrature import gauss_nodes, interpolant_roots
 from ocp_crawl.sim.result import Mode
 
@@ -197,15 +197,16 @@ class ChainSolver:
             r["switch_to_1"] = (dlim1 - dlim2) / Mg
         return r
 
-    def dips(self, mode: Mode, q: np.ndarray, p0: Point, p1: Point) -> list[float]:
+    def dips(self, mode: Mode, q: np.ndarray, p0: Point, p1: Point) -> tuple[list[float], bool]:
         """Phases in (p0.t, p1.t) where the cubic Hermite interpolant of a guard (values and
         rates at both ends) has a local minimum below zero: a guard that may dip below zero and
         back inside the step, unseen by the signs at its ends (below -GUARD_NOISE); earliest
-        first."""
+        first; and whether a contact's guard nears zero inside the step
+        (:data:`~ocp_crawl.sim.event_guards.NEAR_TOUCH`: the step is to be halved)."""
         h = p1.t - p0.t
         g0, g1 = self.guards(mode, p0.aux), self.guards(mode, p1.aux)
         r0, r1 = self.guard_rates(mode, p0, q), self.guard_rates(mode, p1, q)
-        out = []
+        out, near = [], False
         for k in g0:
             a, b, m0, m1 = g0[k], g1[k], h * r0[k], h * r1[k]
             if min(a, b) - 0.15 * (abs(m0) + abs(m1)) >= -GUARD_NOISE:
@@ -213,7 +214,9 @@ class ChainSolver:
             s, v = cubic_min(a, b, m0, m1)
             if v < -GUARD_NOISE:
                 out.append(p0.t + s * h)
-        return sorted(out)
+            elif v < NEAR_TOUCH * min(a, b) and k.startswith(("lift", "feet", "joint")):
+                near = True
+        return sorted(out), near
 
     def margin(self, x: np.ndarray, q: np.ndarray) -> float:
         """Stability margin of the equilibrium ``x`` in mode ``q`` (> 0: stable)."""
