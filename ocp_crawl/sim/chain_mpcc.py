@@ -302,7 +302,7 @@ def _take_step(step: ChainStep, torque, rows: list, span: tuple, first: int, pre
             if end is not None:   # (the contact that mode's equilibrium has lost)
                 check_end(step, torque, before, end, located, consistent=False)
             raise RunStop(res.extra.get("status", Status.NO_CONSISTENT_MODE), tb, rows[-1][8],
-                        f"step at t = {tb:.6f}: {res.message}")
+                          f"step at t = {tb:.6f}: {res.message}")
         check_end(step, torque, before, new[-1], located)
     except RunStop as stop:
         if stop.status not in CONTACT:   # (the step's own rows too: a lost contact came first)
@@ -343,7 +343,7 @@ def _run_cycles(step: ChainStep, torque, start, N: int, cycles_max: int,
         if cycle >= 2 and ma == mb and dev <= periodic_tol:
             return rows, cycle, dev, located
     raise RunStop(Status.NOT_PERIODIC, float(cycles_max), rows[-1][8],
-                f"not periodic after {cycles_max} cycles (last change {dev:.3g})")
+                  f"not periodic after {cycles_max} cycles (last change {dev:.3g})")
 
 
 def _events(rows: list, located: set) -> list[Event]:

@@ -64,7 +64,7 @@ def estimate_S_error(stepper, run, stop) -> dict:
     ----------
     stepper : TimeStepper
         The stepper of the run (its step NLP is shared by the check run).
-    run : _Run
+    run : SteppingRun
         The run; the row at the start of its reported cycle (the last one) starts the check run,
         from a cold start of the step NLP.
     stop : type

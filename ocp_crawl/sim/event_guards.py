@@ -24,12 +24,12 @@ _FN1, _FN2, _D, _ZJ1, _ZJ2, _FT, _LIM1, _LIM2, _DDOT, _DFT, _DFN1, _DFN2, _DZJ1,
 SYMMETRY_TOL = 1e-8
 
 _S_GRID = np.linspace(0.0, 1.0, 33)[1:-1]
+_S_BUMP = (_S_GRID * (1 - _S_GRID)) ** 2
 #: a contact guard (a normal force, d, a joint's height) whose interpolant has an interior minimum
 #: below NEAR_TOUCH times its lower end value comes near zero inside the step: the step is suspect
-#: (the error estimate below is a heuristic, and near such a touch it has missed dips of 1e-7 L)
+#: (the error estimate is a heuristic, and near such a touch it has missed dips of 1e-6 L)
 NEAR_TOUCH = 0.05
 _CONTACT_GUARDS = ("lift_off", "feet_crossed", "joint_")
-_S_BUMP = (_S_GRID * (1 - _S_GRID)) ** 2
 
 
 def cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]:

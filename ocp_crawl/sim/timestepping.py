@@ -70,7 +70,7 @@ from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
 from ocp_crawl.status import Status
 from ocp_crawl.sim.oracle import ENUM_MODES, mode_system, selector, solve_step_enumerate
 from ocp_crawl.sim.step_dips import three_link_dip
-from ocp_crawl.sim.timestepping_output import _Run, build_result
+from ocp_crawl.sim.timestepping_output import SteppingRun, build_result
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,7 @@ class TimeStepper:
                                    extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
         kin0 = self.model.kinematics(start.x[:2])
         state = StepState(start.x[:2], 0.0, float(kin0["d"]), 0.0)
-        run = _Run(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1,
+        run = SteppingRun(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1,
                             state.x2, 0.0, float(kin0["fn1"]), float(kin0["fn2"]),
                             int(Mode.STICK))])
         status, detail, fail_t, fail_mode = Status.SUCCESS, "", None, None
@@ -224,7 +224,7 @@ class TimeStepper:
         res = build_result(self, run, status, detail, fail_t, fail_mode, te, stats)
         return error_gate(res, check, self.model.robot.L, self.opt.s_error_tol)
 
-    def _run_cycles(self, run: _Run, n_target: int | None) -> None:
+    def _run_cycles(self, run: SteppingRun, n_target: int | None) -> None:
         """Steps until ``n_target`` cycles are done, or (None) until the state at a cycle's end
         repeats."""
         N = self.steps
@@ -257,13 +257,13 @@ class TimeStepper:
                 raise _Stop(Status.NOT_PERIODIC, "", f"not periodic after {run.ncycles} cycles "
                             f"(last change {run.periodic_dev:.3g})", run.n / N, run.mode)
 
-    def _step(self, run: _Run) -> StepResult:
+    def _step(self, run: SteppingRun) -> StepResult:
         """Solve step n + 1 from the run's state, check the solution and record it."""
         run.n += 1
         N = self.steps
         return self._advance(run, (run.n - 1) / N, run.n / N, rewind=True)
 
-    def _advance(self, run: _Run, ta: float, tb: float, rewind: bool) -> StepResult:
+    def _advance(self, run: SteppingRun, ta: float, tb: float, rewind: bool) -> StepResult:
         """Advance the run from its state at phase ``ta`` to ``tb``: one MPCC step, or with
         ``switch_exact``, when the step's mode changes, sub-steps split at the events located inside
         it (:mod:`ocp_crawl.sim.step_split`, at most ``MAX_SPLITS``); ``rewind``: an event the
@@ -314,7 +314,7 @@ class TimeStepper:
         run.prev = res
         return res
 
-    def _single_to_end(self, run: _Run, state: StepState, mode: Mode, ta: float, tb: float,
+    def _single_to_end(self, run: SteppingRun, state: StepState, mode: Mode, ta: float, tb: float,
                        tau: np.ndarray) -> StepResult | None:
         """The step in its starting ``mode`` if that mode holds to its end (else None) when it ends
         with both feet slipping, a tie one foot's slip reaches; a tie over the step: set-valued."""
@@ -334,7 +334,7 @@ class TimeStepper:
                                           "mode", iterations=sol.iterations, solve_time=0.0,
                                           w=sol.x), mode=mode)
 
-    def _event_point(self, run: _Run, split, state: StepState, te: float) -> None:
+    def _event_point(self, run: SteppingRun, split, state: StepState, te: float) -> None:
         """Record the located event at phase ``te``: the sub-step to it in the old mode (its
         positions from ``state``, the start of the searched step) and the change to the guard's
         mode."""
@@ -348,18 +348,18 @@ class TimeStepper:
         self._mode_change(run, split, te)
 
     @staticmethod
-    def _mode_change(run: _Run, split, te: float) -> None:
+    def _mode_change(run: SteppingRun, split, te: float) -> None:
         """Record the located event at phase ``te`` and continue in the guard's mode."""
         mode = run.mode
         run.events.append(Event(te, mode_change_kind(mode, split.mode_after), mode.label,
                                 split.mode_after.label, split.value, split.guard))
         run.mode, run.det_ref = split.mode_after, None
 
-    def _where(self, run: _Run, t1: float) -> str:
+    def _where(self, run: SteppingRun, t1: float) -> str:
         cyc, ph = int(math.floor(t1 - 1e-12)) + 1, t1 - math.floor(t1 - 1e-12)
         return f"step {run.n} (t = {t1:.6f} cycles: cycle {cyc}, phase {ph:.6f})"
 
-    def _tau(self, t: float, run: _Run) -> np.ndarray:
+    def _tau(self, t: float, run: SteppingRun) -> np.ndarray:
         """The torque [N m] at phase t; _Stop with SOLVER_FAILURE when it is not finite."""
         tau = np.asarray(self.torque(t), float).reshape(2)
         if not np.all(np.isfinite(tau)):
@@ -368,7 +368,7 @@ class TimeStepper:
                         "made", t, run.mode)
         return tau
 
-    def _solve(self, run: _Run, state: StepState, tau: np.ndarray, t1: float) -> StepResult:
+    def _solve(self, run: SteppingRun, state: StepState, tau: np.ndarray, t1: float) -> StepResult:
         """The MPCC step from ``state`` to the torque ``tau`` at t1; _Stop with a diagnosis when it
         fails."""
         res = self.step.solve(state, tau, warm_start=run.prev)
@@ -385,7 +385,7 @@ class TimeStepper:
         run.polished += bool(res.extra.get("polished"))
         return res
 
-    def _record(self, run: _Run, res: StepResult, state: StepState, tau: np.ndarray,
+    def _record(self, run: SteppingRun, res: StepResult, state: StepState, tau: np.ndarray,
                 t1: float) -> None:
         """Check a solved (sub)step from ``state`` ending at phase t1 and record it; a change of
         mode not located before (:meth:`_advance`) is recorded as an event at t1."""
@@ -407,7 +407,7 @@ class TimeStepper:
                          res.f_n2, int(res.mode)))
         run.state = res.next_state()
 
-    def _dip(self, run: _Run, rows: list, end: tuple | None = None, then: str = "") -> None:
+    def _dip(self, run: SteppingRun, rows: list, end: tuple | None = None, then: str = "") -> None:
         """_Stop at the first zero of a contact guard inside the steps ``rows`` (and the step
         from the last of them to ``end`` = (phase, mode), the step the run stopped in), if any;
         ``then``: what ended the run after it."""

@@ -19,7 +19,7 @@ from ocp_crawl.status import Status
 
 
 @dataclass
-class _Run:
+class SteppingRun:
     """What a time-stepping run has built so far."""
 
     state: StepState
