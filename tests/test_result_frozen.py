@@ -127,3 +127,9 @@ def test_demote_and_error_gate_leave_their_input():
     assert coarse.extra == {"a": 1, "S_error_bound": pytest.approx(bound), "S_coarse": -0.05}
     assert res.extra == {"a": 1} and np.isnan(res.S_error)
     assert error_gate(res, None, m.robot.L, 1e-3) is res
+    # a check run that ends at a lost contact ends the run there (not a matter of the steps' size)
+    lost = {**check, "S_check": float("nan"), "check_failure": "lift_off at phase 0.250000 (f)",
+            "check_status": "lift_off", "check_t": 0.25, "check_mode": "slip1+"}
+    ended = error_gate(dataclasses.replace(res, t0=2.0), lost, m.robot.L, 1e-3)
+    assert (ended.status, ended.failure_t, ended.failure_mode) == (Status.LIFT_OFF, 2.25, "slip1+")
+    assert "found by the check run at 17 steps per cycle: lift_off at phase 0.25" in ended.message

@@ -39,6 +39,7 @@ from dataclasses import replace
 from ocp_crawl.sim.assemble import demote
 from ocp_crawl.sim.result import CrawlResult, Mode
 from ocp_crawl.sim.step import StepState
+from ocp_crawl.sim.step_dips import CONTACT
 from ocp_crawl.status import Status
 
 #: the length scale of the floor of the bound: s_error_tol * ABS_FLOOR * L [m]
@@ -75,7 +76,8 @@ def estimate_S_error(stepper, run, stop) -> dict:
     dict
         ``S_check`` [m] (S of the check run, NaN when it failed), ``steps`` (N),
         ``steps_check`` (M), ``check_ipopt_calls``, ``check_time`` [s] and ``check_failure``
-        (the failure's status label, phase and detail, or "").
+        (the failure's status label, phase and detail, or ""; with a failure ``check_status``
+        (label), ``check_t`` [cycles from the reported cycle's start] and ``check_mode``).
     """
     t_start, calls = time.perf_counter(), stepper.step.ncalls
     M = check_steps(stepper.steps)
@@ -90,6 +92,7 @@ def estimate_S_error(stepper, run, stop) -> dict:
         check._run_cycles(start, 1)
     except stop as exc:
         out["check_failure"] = f"{exc.status.label} at phase {exc.t:.6f} ({exc.detail})"
+        out.update(check_status=exc.status.label, check_t=float(exc.t), check_mode=exc.mode.label)
     else:
         out["S_check"] = float(start.rows[-1][4] - first[4])
     out.update(check_ipopt_calls=stepper.step.ncalls - calls,
@@ -102,7 +105,8 @@ def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> Cr
     ``extra["S_error_bound"]``), or its COARSE_STEPS failure
     (:func:`~ocp_crawl.sim.assemble.demote`, ``extra["S_coarse"]``: its S) when the estimate
     exceeds :func:`error_bound` (or the check run failed); the message names the estimate, the
-    bound and the steps to try.  ``res`` as it is for a failure or without a
+    bound and the steps to try.  A check run that ends at a lost contact (``lift_off``,
+    ``joint_on_ground``, ``feet_crossed``) ends ``res`` with that status at its phase.  ``res`` as it is for a failure or without a
     check run (``check`` None).
     ``L``: the robot's length [m]; ``tol``: the relative bound [-]."""
     if check is None or not res.success:
@@ -110,6 +114,13 @@ def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> Cr
     est, N = abs(res.S - check["S_check"]), check["steps"]
     bound = error_bound(res.S, L, tol)
     res = replace(res, S_error=est, extra={**res.extra, "S_error_bound": bound})
+    if check.get("check_status") in [c.label for c in CONTACT]:
+        # (the finer steps find a contact lost in the steady cycle, between the run's steps' ends:
+        # the run ends there, whatever the steps)
+        res = replace(res, extra={**res.extra, "S_coarse": res.S})
+        return demote(res, Status.from_label(check["check_status"]),
+                      f"found by the check run at {check['steps_check']} steps per cycle: "
+                      f"{check['check_failure']}", res.t0 + check["check_t"], check["check_mode"])
     if check["check_failure"]:
         detail = (f"the check run at {check['steps_check']} steps per cycle failed: "
                   f"{check['check_failure']}; S error not estimated: use steps >= {4 * N}")
