@@ -16,8 +16,8 @@ from ocp_crawl.model.chain_model import ChainModel
 from ocp_crawl.model.chain_stability import chain_stability_margins
 from ocp_crawl.sim.chain_torque_parts import mode_vector
 from ocp_crawl.sim.result import Mode
-from ocp_crawl.sim.step_dips import (CONTACT, contact_guards, dip_report, first_zero,
-                                     rate_phases, step_probes)
+from ocp_crawl.sim.step_dips import (CONTACT, dip_report, first_zero, guard_ends,
+                                     step_probes)
 from ocp_crawl.status import Status
 
 if TYPE_CHECKING:
@@ -100,19 +100,6 @@ def dip_stop(step: "ChainStep", torque, rows: list, located: set) -> None:
         raise RunStop(dip[1], dip[0], dip[2], dip[3])
 
 
-def _ends(step, torque, a: list, b: list) -> dict:
-    """The scaled contact guards and rates [1/cycle] of the mode of each step a[k] -> b[k] at its
-    start (columns 0..K-1) and end (K..2K-1)."""
-    ts, tr = rate_phases(torque, a, b)
-    x = np.array([np.append(r[1], r[4] / step.Mg) for r in a + b]).T
-    q = np.array([mode_vector(r[8], r[7]) for r in a + a]).T
-    tau = np.asarray(torque(ts), float).reshape(step.m, -1)
-    dtau = np.asarray(torque.derivative(tr), float).reshape(step.m, -1)
-    out = step.model.evaluate(x, tau, dtau, q)
-    return {n: np.asarray(out[n]) / (step.Mg if n.startswith(("fn", "dfn")) else step.L)
-            for v, r, _ in contact_guards(step.m) for n in (v, r)}
-
-
 def contact_dip(step, torque, rows: list, located: set) -> tuple | None:
     """The first contact guard that reaches zero inside a step of ``rows`` (the incremental steps'
     rows (t, phi, x1, x2, f_t, f_n1, f_n2, d, mode); ``located``: the phases of the events the
@@ -138,8 +125,10 @@ def contact_dip(step, torque, rows: list, located: set) -> tuple | None:
         return phi, guards
 
     spans = [(r[0], s[0]) for r, s in zip(a, b)]
-    zero = first_zero(spans, _ends(step, torque, a, b), step.m,
-                      step_probes(solve, [r[1] for r in b], spans))
+    x = np.array([np.append(r[1], r[4] / step.Mg) for r in a + b]).T
+    q = np.array([mode_vector(r[8], r[7]) for r in a + a]).T
+    ends = guard_ends(torque, a, b, x, q, step.model.evaluate, step.Mg, step.L)
+    zero = first_zero(spans, ends, step.m, step_probes(solve, [r[1] for r in b], spans))
     if zero is None:
         return None
     t0, status, k, message = dip_report(zero, spans, step.m, step.Mg, step.L)

@@ -55,6 +55,33 @@ def cubic_min(g0: float, g1: float, m0: float, m1: float) -> tuple[float, float]
     return best
 
 
+def interior(a: float, b: float, m0: float, m1: float, floor: float,
+             contact: bool = False) -> tuple[str | None, float]:
+    """What the cubic Hermite interpolant of a guard over a step (values a, b and slopes m0, m1 per
+    unit step fraction at its ends) says of the step's inside: ("dip", s) its local minimum at s is
+    below ``floor``; ("near", s) the guard is a ``contact`` guard and that minimum is below
+    :data:`NEAR_TOUCH` min(a, b); ("suspect", s) the cubic less its error estimate
+    E s^2 (1 - s)^2, E = 6 |b - a - (m0 + m1)/2| (the trapezoid defect, of order h^3 times the
+    third derivative), is below ``floor`` at s; else (None, nan)."""
+    err = 6.0 * abs(b - a - 0.5 * (m0 + m1))
+    # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
+    if (b if b < a else a) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:  # (min(a, b))
+        return None, math.nan
+    s, v = cubic_min(a, b, m0, m1)
+    if v < floor:
+        return "dip", s
+    if contact and v < NEAR_TOUCH * min(a, b):
+        return "near", s
+    if min(a, b, v) - err / 16 >= floor:
+        # (the grid test below cannot fail: the cubic >= min(a, b, v) and err s^2 (1 - s)^2
+        # <= err/16)
+        return None, math.nan
+    c3, c2 = 2 * (a - b) + m0 + m1, 3 * (b - a) - 2 * m0 - m1
+    bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
+    i = int(np.argmin(bound))
+    return ("suspect", float(_S_GRID[i])) if bound[i] < floor else (None, math.nan)
+
+
 def _add_slip_guards(out: dict, lim1: float, lim2: float, ft: float, Mg: float) -> dict:
     """Add the stick-stick friction guards (lim_i - sigma f_t)/(M g) of both feet and signs to
     ``out`` (their rates, given the rates of lim_i and f_t); returns ``out``."""
@@ -160,25 +187,11 @@ class Guards:
         # (the guards and their rates have the same keys in the same order)
         for name, a, b, rate0, rate1 in zip(g0, g0.values(), g1.values(), p0.rates.values(),
                                             p1.rates.values()):
-            m0, m1 = h * rate0, h * rate1
-            err = 6.0 * abs(b - a - 0.5 * (m0 + m1))
-            # the Hermite basis bounds the cubic below by min(a, b) - 4/27 (|m0| + |m1|)
-            if (b if b < a else a) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= floor:  # (min(a, b))
-                continue
-            s, v = cubic_min(a, b, m0, m1)
-            if v < floor:
+            kind, s = interior(a, b, h * rate0, h * rate1, floor, name.startswith(_CONTACT_GUARDS))
+            if kind == "dip":
                 out.append((name, p0.t + s * h))
-                continue
-            if v < NEAR_TOUCH * min(a, b) and name.startswith(_CONTACT_GUARDS):
+            elif kind is not None:
                 suspect = True
-                continue
-            if min(a, b, v) - err / 16 >= floor:
-                # (the grid test below cannot fail: the cubic >= min(a, b, v) and err s^2 (1 - s)^2
-                # <= err/16)
-                continue
-            c3, c2 = 2 * (a - b) + m0 + m1, 3 * (b - a) - 2 * m0 - m1
-            bound = ((c3 * _S_GRID + c2) * _S_GRID + m0) * _S_GRID + a - err * _S_BUMP
-            suspect = suspect or bool(np.min(bound) < floor)
         return (sorted(out, key=lambda r: r[1]) if len(out) > 1 else out), suspect
 
     def tie_note(self, pt: _Point) -> str:

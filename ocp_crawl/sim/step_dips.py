@@ -23,7 +23,7 @@ import numpy as np
 
 from ocp_crawl.model.statics import AUX_NAMES, call_mapped
 from ocp_crawl.sim.chain_pieces import ChainPieces
-from ocp_crawl.sim.event_guards import NEAR_TOUCH, cubic_min
+from ocp_crawl.sim.event_guards import interior
 from ocp_crawl.sim.event_state import mode_q
 from ocp_crawl.sim.oracle import ENUM_MODES, solve_step_enumerate
 from ocp_crawl.sim.result import Mode
@@ -40,8 +40,6 @@ DIP_XTOL = 1e-12
 SAME_BRANCH = 1e-6
 #: the statuses of a lost contact
 CONTACT = (Status.LIFT_OFF, Status.FEET_CROSSED, Status.JOINT_ON_GROUND)
-#: the step fractions at which the cubic's lower bound is read
-_S = np.linspace(0.0, 1.0, 33)[1:-1]
 
 
 def contact_guards(m: int) -> list[tuple[str, str, Status]]:
@@ -59,10 +57,9 @@ def describe(name: str) -> str:
 
 
 def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
-    """(phase, step k, guard) of each guard whose cubic dips below zero inside step k or comes near
-    zero (:data:`~ocp_crawl.sim.event_guards.NEAR_TOUCH`; at the cubic's minimum), whose cubic less
-    its error estimate does (at that bound's minimum), or that is not positive at its end (at the
-    end); earliest first."""
+    """(phase, step k, guard) of each guard whose cubic dips below zero inside step k, comes near
+    zero or would dip within its error estimate (:func:`~ocp_crawl.sim.event_guards.interior`), or
+    that is not positive at its end (at the end); earliest first."""
     K, found = len(spans), []
     for name, rate, _ in contact_guards(m):
         g, r = ends[name], ends[rate]
@@ -71,21 +68,9 @@ def _suspects(spans: list, ends: dict, m: int) -> list[tuple[float, int, str]]:
             if not g1 > 0:
                 found.append((tb, k, name))
                 continue
-            m0, m1 = h * r[k], h * r[K + k]
-            err = 6.0 * abs(g1 - g0 - 0.5 * (m0 + m1))
-            # (the Hermite basis bounds the cubic below by min(g0, g1) - 4/27 (|m0| + |m1|))
-            if min(g0, g1) - 0.15 * (abs(m0) + abs(m1)) - err / 16 >= -DIP_FLOOR:
-                continue
-            s, v = cubic_min(g0, g1, m0, m1)
-            if v < -DIP_FLOOR or v < NEAR_TOUCH * min(g0, g1):   # (a dip, or a near touch)
+            kind, s = interior(g0, g1, h * r[k], h * r[K + k], -DIP_FLOOR, contact=True)
+            if kind is not None:   # (a dip, a near touch, or a dip within the error estimate)
                 found.append((ta + s * h, k, name))
-                continue
-            # the cubic stays positive, but not by more than its error estimate E s^2 (1 - s)^2
-            # (E: the trapezoid defect, h^3 times the third derivative): the step is looked into
-            c3, c2 = 2 * (g0 - g1) + m0 + m1, 3 * (g1 - g0) - 2 * m0 - m1
-            low = ((c3 * _S + c2) * _S + m0) * _S + g0 - err * (_S * (1 - _S)) ** 2
-            if np.min(low) < -DIP_FLOOR:
-                found.append((ta + float(_S[np.argmin(low)]) * h, k, name))
     return sorted(found)
 
 
@@ -181,14 +166,22 @@ def _mode_end(stepper, row: tuple, t: float, mode: Mode) -> tuple | None:
     return (t, np.asarray(cand["phi"]), nan, row[3], nan, nan, cand["f_t"], nan, nan, int(mode))
 
 
-def rate_phases(torque, a: list, b: list) -> tuple[np.ndarray, np.ndarray]:
-    """The phases of the steps' starts ``a`` and ends ``b`` (rows, phase first) and where their
-    torques' rates are read: after a kink at a start, before it at an end."""
+def guard_ends(torque, a: list, b: list, x: np.ndarray, q: np.ndarray, evaluate: Callable,
+               Mg: float, L: float) -> dict:
+    """The scaled contact guards and their rates [1/cycle] (rows of :func:`contact_guards`) of the
+    steps a[k] -> b[k] (rows, phase first) at their starts (columns 0..K-1) and ends (K..2K-1):
+    ``evaluate(x, tau, dtau, q)`` -> the model's outputs by name at the states ``x`` in the modes
+    ``q`` (columns), the torques' rates read after a kink at a start and before it at an end."""
     pieces = ChainPieces(torque)
     ts = np.array([r[0] for r in a + b])
     tr = np.array([pieces.rate_phase(r[0]) for r in a]
                   + [pieces.rate_phase(r[0], left=True) for r in b])
-    return ts, tr
+    m = x.shape[0] - 1
+    tau = np.asarray(torque(ts), float).reshape(m, -1)
+    dtau = np.asarray(torque.derivative(tr), float).reshape(m, -1)
+    out = evaluate(x, tau, dtau, q)
+    return {n: np.asarray(out[n]) / (Mg if n.startswith(("fn", "dfn")) else L)
+            for v, r, _ in contact_guards(m) for n in (v, r)}
 
 
 def three_link_dip(stepper, rows: list, located: set, end: tuple | None = None) -> tuple | None:
@@ -210,14 +203,13 @@ def three_link_dip(stepper, rows: list, located: set, end: tuple | None = None) 
     model, Mg, L = stepper.model, stepper.Mg, stepper.model.robot.L
     modes = [Mode(rows[i][9]) for i in idx]
     a, b = [rows[i - 1] for i in idx], [rows[i] for i in idx]
-    ts, tr = rate_phases(stepper.torque, a, b)
     x = np.array([np.append(r[1], r[6] / Mg) for r in a + b]).T
     q = np.array([mode_q(mode, r[3]) for mode, r in zip(modes + modes, a + a)]).T
-    tau = np.asarray(stepper.torque(ts), float).reshape(2, -1)
-    dtau = np.asarray(stepper.torque.derivative(tr), float).reshape(2, -1)
-    aux = call_mapped(model.sym.evaluate, x, tau, dtau, q, model.p)
-    ends = {n: aux[AUX_NAMES.index(n)] / (Mg if n.startswith(("fn", "dfn")) else L)
-            for n, r, _ in contact_guards(2) for n in (n, r)}
+
+    def evaluate(*args) -> dict:
+        return dict(zip(AUX_NAMES, call_mapped(model.sym.evaluate, *args, model.p)))
+
+    ends = guard_ends(stepper.torque, a, b, x, q, evaluate, Mg, L)
 
     def solve(k: int, t: float) -> tuple | None:
         state = StepState(a[k][1], a[k][4], a[k][5], a[k][6])
