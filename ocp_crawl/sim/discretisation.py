@@ -106,8 +106,8 @@ def error_gate(res: CrawlResult, check: dict | None, L: float, tol: float) -> Cr
     (:func:`~ocp_crawl.sim.assemble.demote`, ``extra["S_coarse"]``: its S) when the estimate
     exceeds :func:`error_bound` (or the check run failed); the message names the estimate, the
     bound and the steps to try.  A check run that ends at a lost contact (``lift_off``,
-    ``joint_on_ground``, ``feet_crossed``) ends ``res`` with that status at its phase.  ``res`` as it is for a failure or without a
-    check run (``check`` None).
+    ``joint_on_ground``, ``feet_crossed``) ends ``res`` with that status at its phase.  ``res``
+    as it is for a failure or without a check run (``check`` None).
     ``L``: the robot's length [m]; ``tol``: the relative bound [-]."""
     if check is None or not res.success:
         return res
