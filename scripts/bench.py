@@ -43,6 +43,23 @@ def _min_median(fn, repeat: int) -> tuple[float, float, object]:
     return min(times), statistics.median(times), out
 
 
+def _interleaved(runs: dict, repeat: int) -> dict:
+    """min and median [ms], status and S [mm] of each simulation in ``runs`` (name: call), timed
+    in ``repeat`` rounds that call each once in turn after one warm-up round: the machine's speed
+    drifts over seconds, and interleaving gives every run the same share of it."""
+    results = {name: run() for name, run in runs.items()}
+    times: dict = {name: [] for name in runs}
+    for _ in range(repeat):
+        for name, run in runs.items():
+            t = time.perf_counter()
+            results[name] = run()
+            times[name].append(time.perf_counter() - t)
+    return {name: {"min_ms": round(1e3 * min(times[name]), 2),
+                   "median_ms": round(1e3 * statistics.median(times[name]), 2),
+                   "status": res.status.label, "S_mm": round(1e3 * res.S, 6)}
+            for name, res in results.items()}
+
+
 def _median_time(fn, repeat: int) -> tuple[float, object]:
     _, median, out = _min_median(fn, repeat)
     return median, out
@@ -268,11 +285,7 @@ def bench_chain(repeat: int) -> dict:
             "three_link_torque": lambda: simulate(model, torque3),
             "chain_torque_n3": lambda: simulate_chain_torque(m3, torque3),
             "chain_torque_n5": lambda: simulate_chain_torque(m5, torque5)}
-    out: dict = {}
-    for name, run in runs.items():
-        low, med, res = _min_median(run, repeat)
-        out[name] = {"min_ms": round(1e3 * low, 2), "median_ms": round(1e3 * med, 2),
-                     "status": res.status.label, "S_mm": round(1e3 * res.S, 6)}
+    out = _interleaved(runs, repeat)
     for drive, three, chain in (("angles", "three_link_angles", "chain_n"),
                                 ("torque", "three_link_torque", "chain_torque_n")):
         base = out[three]["min_ms"]

@@ -466,6 +466,38 @@ def test_stability_equals_three_link(robot, gravity):
                        st.slip_stiffness(model, phi, sigma, w), MgL) <= RTOL
 
 
+@pytest.mark.parametrize("n", [4, 5, 7])
+def test_compiled_margins_equal_the_minor_sums(n):
+    """The steppers' margins (the compiled chain_margin_function: a projected Hessian's smallest
+    eigenvalue, the Faddeev-LeVerrier coefficients and the Routh recursion) equal those of
+    chain_stability_numbers (an orthonormal tangent basis, sums of principal minors and Hurwitz
+    determinants by LAPACK) on random states of soft random chains, sign for sign, in every mode;
+    to 1e-11 for n = 4 and 5.  (At n = 7 a slip margin is the quotient of Hurwitz minors that
+    nearly cancel, e.g. -119.3 from r_5 = -3.7e-9: the two ways of rounding differ there in the
+    sixth digit, so only the signs are compared.)"""
+    import dataclasses
+
+    from ocp_crawl.model.chain_stability import chain_stability_margins, chain_stability_numbers
+
+    rng = np.random.default_rng(23 + n)
+    chain = _random_chain(rng, n)
+    # (joints 50 times softer than _random_chain's: gravity makes many of the states unstable)
+    soft = tuple(0.02 * np.array(chain.stiffness))
+    model = ChainModel(dataclasses.replace(chain, stiffness=soft))
+    phi = rng.uniform(1.0, 3.0, (n - 1, 60))
+    X = np.vstack([phi, rng.uniform(-3.0, 3.0, (1, 60))])
+    d = model.kinematics(phi)["d"]
+    for kind, arg in MODES:
+        Q = np.array([stick_mode(dj) if kind == "stick" else slip_mode(*arg) for dj in d]).T
+        ref = chain_stability_numbers(model, X, Q)
+        got = chain_stability_margins(model, X, Q)
+        stable = ref["margin"] > 0
+        assert np.array_equal(got > 0, stable), kind
+        assert 0 < np.mean(stable) < 0.9, kind   # (stable and unstable states both tested)
+        if n < 7:
+            assert rel(got, ref["margin"], np.max(np.abs(ref["trK"]))) <= 1e-11, kind
+
+
 def test_routh_margin_is_the_eigenvalue_criterion():
     """routh_margin > 0 exactly when every eigenvalue has a positive real part (random matrices of
     2 to 6 rows, half of them shifted to be stable); for 2 x 2 it is min(tr, det/|tr|)."""

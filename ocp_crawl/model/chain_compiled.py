@@ -21,7 +21,7 @@ from functools import lru_cache
 import casadi as cs
 import numpy as np
 
-from ocp_crawl.model.chain_stability import chain_stiffness_function
+from ocp_crawl.model.chain_stability import chain_margin_function
 from ocp_crawl.model.chain_statics import chain_symbolic
 from ocp_crawl.model.compiled import FastFunction, compiled_function
 
@@ -99,18 +99,18 @@ def fast_chain_newton_columns_narrow(n: int = WARM_LINKS) -> FastFunction:
 
 @compiled_function
 @lru_cache(maxsize=None)
-def fast_chain_stiffness_columns(n: int = WARM_LINKS, width: int = NARROW) -> FastFunction:
-    """The stiffness matrices of
-    :func:`~ocp_crawl.model.chain_stability.chain_stiffness_function` over ``width`` columns (q
-    and p shared; the stepper asks for a segment's points at a time), compiled."""
-    return FastFunction(_mapped(chain_stiffness_function(n), width, (3,)))
+def fast_chain_margin_columns(n: int = WARM_LINKS, width: int = NARROW) -> FastFunction:
+    """What the stability margins need
+    (:func:`~ocp_crawl.model.chain_stability.chain_margin_function`) over ``width`` columns (q and
+    p shared; the stepper asks for a segment's points at a time), compiled."""
+    return FastFunction(_mapped(chain_margin_function(n), width, (3,)))
 
 
 @compiled_function
 @lru_cache(maxsize=None)
-def fast_chain_stiffness_columns_wide(n: int = WARM_LINKS) -> FastFunction:
-    """:func:`fast_chain_stiffness_columns` at :data:`WIDE` columns."""
-    return fast_chain_stiffness_columns(n, WIDE)
+def fast_chain_margin_columns_wide(n: int = WARM_LINKS) -> FastFunction:
+    """:func:`fast_chain_margin_columns` at :data:`WIDE` columns."""
+    return fast_chain_margin_columns(n, WIDE)
 
 
 class Columns:
@@ -163,8 +163,8 @@ def newton_columns(n: int) -> Columns:
 
 
 @lru_cache(maxsize=None)
-def stiffness_columns(n: int) -> Columns:
-    """The stiffness matrices of the n-link chain over columns (:class:`Columns`): (phi (n - 1,
-    N), f_t (1, N), q (4, N), p) -> the rows of
-    :func:`~ocp_crawl.model.chain_stability.chain_stiffness_function` (rows, N)."""
-    return Columns(fast_chain_stiffness_columns_wide(n), fast_chain_stiffness_columns(n), (3,))
+def margin_columns(n: int) -> Columns:
+    """What the stability margins of the n-link chain need over columns (:class:`Columns`): (phi
+    (n - 1, N), f_t (1, N), q (4, N), p) -> (A (m m, N), slip (1, N)) of
+    :func:`~ocp_crawl.model.chain_stability.chain_margin_function`."""
+    return Columns(fast_chain_margin_columns_wide(n), fast_chain_margin_columns(n), (3,))

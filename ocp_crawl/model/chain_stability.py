@@ -80,15 +80,74 @@ def chain_stiffness_function(n: int) -> cs.Function:
                        ["s"])
 
 
+@lru_cache(maxsize=None)
+def chain_margin_function(n: int) -> cs.Function:
+    """CasADi function ``(phi[m], f_t, q[4], p) -> (A, slip)`` of the n-link chain: what
+    :func:`chain_stability_margins` needs of one equilibrium, for compiling (built once per n).
+
+    ``A = P sym(H) P + c u u^T`` (m x m, column-major) [N m/rad], ``H = hess Pi + f_t hess d``,
+    ``u`` the unit ``grad d``, ``P = I - u u^T``, ``c = |sym(H)|_F + M g L``: on the tangent space
+    of ``d(phi) = d0`` it is ``K_red`` and along ``u`` it is ``c``, above every eigenvalue of
+    ``K_red``, so its smallest eigenvalue is ``kappa`` (basis-free).  ``slip`` is
+    :func:`routh_margin` of ``K/(M g L)`` (``K`` of the mode ``q``): its characteristic
+    polynomial's coefficients by the Faddeev-LeVerrier recursion and the first column of its Routh
+    array by the Routh recursion (``r_k = D_k / D_(k-1)``), a zero pivot replaced by 1e-300 as
+    :func:`routh_column` replaces a zero minor.
+    """
+    m = n - 1
+    phi, ft = cs.SX.sym("phi", m), cs.SX.sym("ft")
+    q, p = cs.SX.sym("q", NQ), cs.SX.sym("p", n_params(n))
+    P = chain_params(p, n)
+    MgL = cs.sum1(cs.vertcat(*P.masses)) * P.g * cs.sum1(cs.vertcat(*P.lengths))
+    s = chain_stiffness_function(n)(phi, ft, q, p)
+    grad_d = s[:m]
+    H = cs.reshape(s[m:m + m * m], m, m)
+    K = cs.reshape(s[m + m * m:], m, m)
+    Hs = 0.5 * (H + H.T)
+    u = grad_d / cs.norm_2(grad_d)
+    proj = cs.SX.eye(m) - u @ u.T
+    A = proj @ Hs @ proj + (cs.norm_fro(Hs) + MgL) * (u @ u.T)
+    r = _routh_first_column(_char_coefficients(K / MgL))
+    prev = [1.0] + [cs.fabs(v) for v in r[:-1]]
+    slip = r[0] / prev[0]
+    for v, w in zip(r[1:], prev[1:]):
+        slip = cs.fmin(slip, v / cs.fmax(w, 1e-300))
+    return cs.Function(f"chain{n}_margin", [phi, ft, q, p], [cs.reshape(A, m * m, 1), slip],
+                       ["phi", "ft", "q", "p"], ["A", "slip"])
+
+
+def _char_coefficients(K: cs.SX) -> list:
+    """``(a_1 .. a_m)`` of ``det(s I + K) = s^m + a_1 s^(m-1) + ... + a_m`` (Faddeev-LeVerrier:
+    ``M_k = -K M_(k-1) + a_(k-1) I``, ``a_k = tr(K M_k)/k``, ``M_0 = 0``, ``a_0 = 1``)."""
+    m = K.size1()
+    Mk, a, prev = cs.SX.zeros(m, m), [], 1.0
+    for k in range(1, m + 1):
+        Mk = -K @ Mk + prev * cs.SX.eye(m)
+        prev = cs.trace(K @ Mk) / k
+        a.append(prev)
+    return a
+
+
+def _routh_first_column(a: list) -> list:
+    """``(r_1 .. r_m)``: the first column of the Routh array of ``s^m + a_1 s^(m-1) + ... + a_m``
+    below its first row (``r_k = D_k / D_(k-1)``, :func:`routh_column`)."""
+    m = len(a)
+    coef = [1.0, *a] + [0.0] * (m + 2)
+    rows = [coef[0::2][:m // 2 + 2], coef[1::2][:m // 2 + 2]]
+    for _ in range(m - 1):
+        up, low = rows[-2], rows[-1]
+        piv = cs.if_else(low[0] == 0, 1e-300, low[0])
+        rows.append([up[j + 1] - up[0] / piv * low[j + 1] for j in range(len(low) - 1)] + [0.0])
+    return [row[0] for row in rows[1:]]
+
+
 def _matrices(model, phi: np.ndarray, ft: np.ndarray, Q: np.ndarray) -> tuple:
     """(grad d (N, m), H_lag (N, m, m), K (N, m, m)) at the columns ``phi`` (m, N), ``ft`` (N,)
     [N] and modes ``Q`` (4, N)."""
-    # (compiled: the steppers ask for a segment's margins at every event; the module imports this
-    # one's stiffness function)
-    from ocp_crawl.model.chain_compiled import stiffness_columns
+    from ocp_crawl.model.chain_model import call_columns
 
     m = model.chain.n_joints
-    s = stiffness_columns(model.chain.n)(phi, ft.reshape(1, -1), Q, model.p)[0]
+    s = call_columns(chain_stiffness_function(model.chain.n), phi, ft.reshape(1, -1), Q, model.p)
     g = s[:m].T
     H = s[m:m + m * m].T.reshape(-1, m, m).transpose(0, 2, 1)
     K = s[m + m * m:].T.reshape(-1, m, m).transpose(0, 2, 1)
@@ -201,7 +260,14 @@ def chain_stability_numbers(model, X, Q) -> dict[str, np.ndarray]:
 
 def _states(model, X, Q) -> tuple[np.ndarray, tuple]:
     """The modes Q (4, N) and :func:`_matrices` of the states X (n, N), both checked."""
-    n, m = model.chain.n, model.chain.n_joints
+    X, Q = _checked(model, X, Q)
+    m = model.chain.n_joints
+    return Q, _matrices(model, X[:m], X[m] * model.Mg, Q)
+
+
+def _checked(model, X, Q) -> tuple[np.ndarray, np.ndarray]:
+    """The states X (n, N) and the modes Q (4, N, from (4,) or (4, N)), checked."""
+    n = model.chain.n
     X = np.asarray(X, float)
     if X.ndim != 2 or X.shape[0] != n or not np.all(np.isfinite(X)):
         raise ValueError(f"X must be finite with shape ({n}, N) (phi [rad], f_t/(M g)), got "
@@ -211,7 +277,7 @@ def _states(model, X, Q) -> tuple[np.ndarray, tuple]:
         Q = np.tile(Q.reshape(-1, 1), (1, X.shape[1]))
     if Q.shape != (NQ, X.shape[1]) or not np.all(np.isfinite(Q)):
         raise ValueError(f"Q must be finite with shape (4,) or (4, {X.shape[1]}), got {Q.shape}")
-    return Q, _matrices(model, X[:m], X[m] * model.Mg, np.ascontiguousarray(Q))
+    return X, np.ascontiguousarray(Q)
 
 
 def _kappa(g: np.ndarray, H: np.ndarray) -> np.ndarray:
@@ -244,15 +310,18 @@ def chain_stability_margin(model, x, q) -> float:
 
 def chain_stability_margins(model, X, Q) -> np.ndarray:
     """:func:`chain_stability_margin` of N equilibria: ``X`` (n, N), ``Q`` (4,) or (4, N) (the
-    ``margin`` of :func:`chain_stability_numbers`, computing only what each mode's margin needs)."""
-    Q, (g, H, K) = _states(model, X, Q)
-    MgL = model.chain.MgL
+    ``margin`` of :func:`chain_stability_numbers`, by the compiled :func:`chain_margin_function`:
+    the steppers ask for a segment's margins at every event and for each candidate mode's)."""
+    from ocp_crawl.model.chain_compiled import margin_columns   # (it imports this module)
+
+    X, Q = _checked(model, X, Q)
+    m = model.chain.n_joints
+    A, margin = margin_columns(model.chain.n)(X[:m], X[m:] * model.Mg, Q, model.p)
+    margin = margin[0].copy()
     stick = Q[0] > 0.5
-    margin = np.empty(stick.size)
     if stick.any():
-        margin[stick] = _kappa(g[stick], H[stick]) / MgL
-    if not stick.all():
-        margin[~stick] = routh_margin(K[~stick] / MgL)
+        A = A[:, stick].T.reshape(-1, m, m).transpose(0, 2, 1)
+        margin[stick] = np.linalg.eigvalsh(A)[:, 0] / model.chain.MgL
     return margin
 
 

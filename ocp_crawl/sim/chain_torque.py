@@ -30,7 +30,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ocp_crawl.checks import real
 from ocp_crawl.model.chain_inputs import ChainReferenceTorque, as_joint_signal
@@ -41,8 +40,8 @@ from ocp_crawl.sim.assemble import (balance_metrics, default_phases, energy_gate
                                     failure_message, new_result, output_phases, sample_fields,
                                     success_message)
 from ocp_crawl.sim.chain_torque_parts import (GUARD_NOISE, JUMP_TOL, SINGLE_MODES, ChainSolver,
-                                              Point, Segment, mode_vector, sample_segment,
-                                              segment_integrals)
+                                              Point, Segment, Stop, locate, mode_vector,
+                                              sample_segment, segment_integrals)
 from ocp_crawl.sim.event_guards import transition
 from ocp_crawl.sim.event_kinks import linear_pieces, step_limit
 from ocp_crawl.sim.result import CrawlResult, Event, Mode, mode_change_kind
@@ -56,14 +55,6 @@ ENERGY_TOL = 1e-6
 
 class NoStart(ValueError):
     """No stable released equilibrium at t = 0 (:meth:`ChainTorqueStepper.start`)."""
-
-
-class _Stop(Exception):
-    """The end of a run by a failure status at phase t in a mode."""
-
-    def __init__(self, status: Status, t: float, mode: Mode, detail: str):
-        super().__init__(detail)
-        self.status, self.t, self.mode, self.detail = status, t, mode, detail
 
 
 class ChainTorqueStepper:
@@ -147,8 +138,8 @@ class ChainTorqueStepper:
             if new is None:
                 h = hh / 4
                 if h < self.min_step:
-                    raise _Stop(Status.FOLD, pt.t, seg.mode, "the equilibrium branch of mode "
-                                f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
+                    raise Stop(Status.FOLD, pt.t, seg.mode, "the equilibrium branch of mode "
+                               f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
                 continue
             g0, g1 = s.guards(seg.mode, pt.aux), s.guards(seg.mode, new.aux)
             # (a guard at zero to round-off at a kink or where a hold starts, such as the feet's
@@ -197,42 +188,21 @@ class ChainTorqueStepper:
         bad = np.flatnonzero(~(margins > 0))
         if bad.size:
             t = seg.points[bad[0]].t
-            raise _Stop(Status.FOLD, t, seg.mode, f"stability margin of mode {seg.mode.label} "
-                        f"{margins[bad[0]]:.3g} <= 0 at t = {t:.10f}")
-
-    def _locate(self, seg: Segment, pt: Point, new: Point, name: str, g0: float) -> float:
-        """Phase of the zero of guard ``name`` in (pt.t, new.t] by Brent's method."""
-        s = self.solver
-
-        def g(t: float) -> float:   # (at a kink ending the step: with the rates before it)
-            lam = (t - pt.t) / (new.t - pt.t)
-            p = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q, left=new.left and t == new.t)
-            if p is None:
-                raise _Stop(Status.NO_CONVERGENCE, t, seg.mode, "mode solve failed locating an "
-                            f"event of {name}")
-            return s.guards(seg.mode, p.aux)[name]
-
-        lo = pt.t
-        if not g0 > 0:
-            lo = min(pt.t + self.trial_step, 0.5 * (pt.t + new.t))
-            if not g(lo) > 0:
-                return pt.t
-        if not g(new.t) < 0:   # (the solve from the interpolated guess found another branch)
-            raise _Stop(Status.NO_CONVERGENCE, new.t, seg.mode, f"guard {name} changes sign "
-                        f"between the step's ends but not on the mode's solutions through them "
-                        f"(another equilibrium branch) at t = {new.t:.10f}")
-        return brentq(g, lo, new.t, xtol=self.event_xtol, rtol=4 * np.finfo(float).eps)
+            raise Stop(Status.FOLD, t, seg.mode, f"stability margin of mode {seg.mode.label} "
+                       f"{margins[bad[0]]:.3g} <= 0 at t = {t:.10f}")
 
     def _event(self, seg: Segment, pt: Point, new: Point, g0: dict, crossed: list) -> Segment:
         """Locate the first crossing in the step [pt, new], record the event and return the
         segment of the mode after it."""
-        s = self.solver
-        found = sorted((self._locate(seg, pt, new, k, g0[k]), k) for k in crossed)
-        t_ev, kind = found[0]
-        lam = (t_ev - pt.t) / (new.t - pt.t)
-        ev = s.solve(t_ev, (1 - lam) * pt.x + lam * new.x, seg.q) if t_ev > pt.t else pt
-        if ev is None:
-            raise _Stop(Status.NO_CONVERGENCE, t_ev, seg.mode, "mode solve failed at an event")
+        s, g1 = self.solver, self.solver.guards(seg.mode, new.aux)
+        best = None   # ((t, point), guard) of the earliest zero; the guards by their secant zeros
+        for k in sorted(crossed, key=lambda k: (g0[k] / (g0[k] - g1[k]) if g0[k] > 0 else 0, k)):
+            if best is not None and s.guards(seg.mode, best[0][1].aux)[k] > GUARD_NOISE:
+                continue   # (still positive at the earliest zero found: it crosses later)
+            found = (locate(s, seg, pt, new, k, g0[k], self.trial_step, self.event_xtol), k)
+            if best is None or (found[0][0], k) < (best[0][0], best[1]):
+                best = found
+        (t_ev, ev), kind = best
         if ev is not pt:
             seg.points.append(self._place(seg, ev))
         return self._switch(seg, ev, kind)
@@ -246,7 +216,7 @@ class ChainTorqueStepper:
         nxt = transition(seg.mode, kind)
         if isinstance(nxt, Status):
             self.events.append(Event(t_ev, kind, seg.mode.label, "failure", g_ev, kind))
-            raise _Stop(nxt, t_ev, seg.mode, f"guard {kind} reached zero at t = {t_ev:.10f}")
+            raise Stop(nxt, t_ev, seg.mode, f"guard {kind} reached zero at t = {t_ev:.10f}")
         chosen, start = nxt, s.consistent(nxt, ev, self.trial_step)
         if start is None:
             ok = [(m, p) for m in SINGLE_MODES if m is not seg.mode
@@ -254,14 +224,14 @@ class ChainTorqueStepper:
             if len(ok) > 1:   # (a mode that continues the state wins)
                 ok = [c for c in ok if s.jump(ev, c[1]) <= JUMP_TOL] or ok
             if len(ok) != 1:
-                raise _Stop(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
-                            f"{len(ok)} consistent modes after {kind} at t = {t_ev:.10f}")
+                raise Stop(Status.NO_CONSISTENT_MODE, t_ev, seg.mode,
+                           f"{len(ok)} consistent modes after {kind} at t = {t_ev:.10f}")
             chosen, start = ok[0]
         size = s.jump(ev, start)
         if size > JUMP_TOL:
-            raise _Stop(Status.SNAP_THROUGH, t_ev, seg.mode,
-                        f"{kind} from {seg.mode.label} to {chosen.label} needs a jump of the state "
-                        f"of {size:.3g} at t = {t_ev:.10f}")
+            raise Stop(Status.SNAP_THROUGH, t_ev, seg.mode,
+                       f"{kind} from {seg.mode.label} to {chosen.label} needs a jump of the state "
+                       f"of {size:.3g} at t = {t_ev:.10f}")
         return self._start_mode(seg, ev, chosen, start, kind, g_ev)
 
     def _start_mode(self, seg: Segment, ev: Point, chosen: Mode, start: Point, kind: str,
@@ -283,8 +253,8 @@ class ChainTorqueStepper:
         s = self.solver
         right = s.solve(left.t, left.x, seg.q)
         if right is None:
-            raise _Stop(Status.NO_CONVERGENCE, left.t, seg.mode, "mode solve failed at a kink "
-                        f"of the input at t = {left.t:.10f}")
+            raise Stop(Status.NO_CONVERGENCE, left.t, seg.mode, "mode solve failed at a kink "
+                       f"of the input at t = {left.t:.10f}")
         right.x1, right.x2 = left.x1, left.x2
         g = s.guards(seg.mode, right.aux)
         crossed = sorted((v, k) for k, v in g.items() if v < -GUARD_NOISE)
@@ -305,8 +275,8 @@ class ChainTorqueStepper:
         if stop > pt.t:
             solved = s.solve(stop, pt.x, seg.q)
             if solved is None:
-                raise _Stop(Status.NO_CONVERGENCE, stop, seg.mode, "mode solve failed at the "
-                            f"end of a hold of the input at t = {stop:.10f}")
+                raise Stop(Status.NO_CONVERGENCE, stop, seg.mode, "mode solve failed at the "
+                           f"end of a hold of the input at t = {stop:.10f}")
             end = self._place(seg, solved)
             seg.points.append(end)
         if span[0] == span[1]:
@@ -327,8 +297,8 @@ class ChainTorqueStepper:
         if len(ok) != 1:
             status = Status.SET_VALUED if ok else Status.NO_CONSISTENT_MODE
             names = ", ".join(m.label for m, _ in ok) or "none"
-            raise _Stop(status, end.t, seg.mode, "at the end of a hold of the input the modes "
-                        f"that continue from the state are {names}")
+            raise Stop(status, end.t, seg.mode, "at the end of a hold of the input the modes "
+                       f"that continue from the state are {names}")
         return self._start_mode(seg, end, ok[0][0], ok[0][1], "decided", 0.0)
 
     # ------------------------------------------------------------------ cycles
@@ -355,8 +325,8 @@ class ChainTorqueStepper:
             dev = float(np.max(np.abs(xb - xa)))
             if ma == mb and dev <= periodic_tol:
                 return cycle, dev
-        raise _Stop(Status.NOT_PERIODIC, float(cycles_max), seg.mode,
-                    f"not periodic after {cycles_max} cycles")
+        raise Stop(Status.NOT_PERIODIC, float(cycles_max), seg.mode,
+                   f"not periodic after {cycles_max} cycles")
 
     # ------------------------------------------------------------------ the steady cycle
     def steady(self, t0: float) -> list[tuple[Segment, float, float]]:
@@ -379,8 +349,8 @@ class ChainTorqueStepper:
             try:
                 p, wj, ds = segment_integrals(self.solver, seg, a, b, self.quad_h)
             except RuntimeError as exc:   # (a Newton solve at a quadrature node)
-                raise _Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the steady cycle's integrals: "
-                            f"{exc}") from None
+                raise Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the steady cycle's integrals: "
+                           f"{exc}") from None
             wp, work, diss = wp + p, work + wj, diss + ds
         # (|p| = 2 max(p, 0) - p)
         return wp, float(np.sum(work)), float(np.sum(2 * wp - work)), diss
@@ -397,8 +367,8 @@ class ChainTorqueStepper:
                 try:
                     parts.append(sample_segment(self.solver, seg, sel))
                 except RuntimeError as exc:   # (a Newton solve at an output phase)
-                    raise _Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the output samples: {exc}"
-                                ) from None
+                    raise Stop(Status.NO_CONVERGENCE, a, seg.mode, f"the output samples: {exc}"
+                               ) from None
                 modes.append(np.full(sel.size, int(seg.mode)))
         f = {k: np.concatenate([p[k] for p in parts], axis=-1) for k in parts[0]}
         mode = np.concatenate(modes)
@@ -482,7 +452,7 @@ def simulate_chain_torque(chain_model: ChainModel, torques, *, cycles_max: int =
         return new_result(chain_model, "torque", Status.NO_START,
                           failure_message(Status.NO_START, str(exc)), failure_t=0.0,
                           failure_mode="released start", nfev=st.solver.nfev)
-    except _Stop as stop:
+    except Stop as stop:
         return new_result(chain_model, "torque", stop.status,
                           failure_message(stop.status, stop.detail), events=st.events,
                           failure_t=stop.t, failure_mode=stop.mode.label, nfev=st.solver.nfev)

@@ -1,6 +1,6 @@
 """Parts of the torque-driven stepper of an n-link chain (:mod:`ocp_crawl.sim.chain_torque`): the
 mode solves at a phase, the guard functions of each contact mode, the choice of the mode after an
-event and the cycle integrals and samples of constant-mode segments.
+event, the location of events and the cycle integrals and samples of constant-mode segments.
 
 States are ``x = (phi_1 .. phi_m [rad], f_t/(M g) [-])``, phases t in cycles, rates per cycle.
 """
@@ -16,8 +16,10 @@ from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
 from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import NEAR_TOUCH, cubic_min
-from ocp_crawl.sim.quadrature import gauss_nodes, interpolant_roots
+from ocp_crawl.sim.event_locate import guard_root
+from ocp_crawl.sim.quadrature import gauss_nodes, sign_split
 from ocp_crawl.sim.result import Mode
+from ocp_crawl.status import Status
 
 #: largest change of the state from an event to the start of the mode after it that is not a jump
 #: (a snap-through): |d phi| [rad], |d f_t|/(M g)/(1 + max k/(M g L)), |d d|/L (the three-link
@@ -73,6 +75,14 @@ class Segment:
     @property
     def t1(self) -> float:
         return self.points[-1].t
+
+
+class Stop(Exception):
+    """The end of a run by a failure status at phase t in a mode."""
+
+    def __init__(self, status: Status, t: float, mode: Mode, detail: str):
+        super().__init__(detail)
+        self.status, self.t, self.mode, self.detail = status, t, mode, detail
 
 
 class ChainSolver:
@@ -252,6 +262,42 @@ class ChainSolver:
         return None
 
 
+def locate(s: ChainSolver, seg: Segment, pt: Point, new: Point, name: str, g0: float,
+           trial_step: float, xtol: float) -> tuple[float, Point]:
+    """Phase and solved point of the zero of guard ``name`` of the segment's mode in the step
+    (pt.t, new.t] (:func:`~ocp_crawl.sim.event_locate.guard_root`, the guard's exact rate from
+    :meth:`ChainSolver.guard_rates`), to ``xtol`` [cycles]; a guard not positive at pt is probed
+    ``trial_step`` [cycles] after it (not positive there either: the event is at pt)."""
+    # (the ends are known: a re-solve there could differ in the last bits and break the bracket;
+    # the step's end carries the rates before a kink that ends it)
+    known = {pt.t: pt, new.t: new}
+
+    def point_at(t: float) -> Point:
+        p = known.get(t)
+        if p is None:
+            lam = (t - pt.t) / (new.t - pt.t)
+            p = known[t] = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q)
+            if p is None:
+                raise Stop(Status.NO_CONVERGENCE, t, seg.mode, "mode solve failed locating an "
+                           f"event of {name}")
+        return p
+
+    def value(p: Point) -> float:
+        return s.guards(seg.mode, p.aux)[name]
+
+    lo = (pt.t, g0)
+    if not g0 > 0:
+        t = min(pt.t + trial_step, 0.5 * (pt.t + new.t))
+        lo = (t, value(point_at(t)))
+        if not lo[1] > 0:
+            return pt.t, pt
+    found = guard_root(point_at, value, lambda p: s.guard_rates(seg.mode, p, seg.q)[name], lo,
+                       (new.t, value(new)), xtol)
+    if found is None:
+        raise Stop(Status.NO_CONVERGENCE, new.t, seg.mode, f"event {name} not located to {xtol:g}")
+    return found
+
+
 def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,
                   upto: float | None = None) -> tuple[np.ndarray, dict]:
     """Newton solves of the mode ``q`` at the phases ``ts`` (N,) from the guesses ``X0`` (m+1, N)
@@ -316,9 +362,9 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
                       h: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,), the work per joint (m,)
     and the friction dissipation, by 5-point Gauss-Legendre panels of at most ``h`` cycles split at
-    the input's kinks; a joint's positive part also at the sign changes of its power in a panel
-    (the roots of its interpolant there, :func:`interpolant_roots`), solved at the pieces' nodes
-    (one solve for every joint)."""
+    the input's kinks; a joint's positive part split as the three-link stepper's
+    (:func:`~ocp_crawl.sim.quadrature.sign_split`), the split panels' nodes solved together (one
+    solve for every joint)."""
     m = solver.m
     wp, work, diss = np.zeros(m), np.zeros(m), 0.0
     for lo, hi in solver.pieces.split(a, b):
@@ -331,22 +377,12 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
             raise RuntimeError(f"the joints' powers are not finite in [{lo:.15g}, {hi:.15g}]")
         work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
         edges = np.linspace(lo, hi, tq.size // 5 + 1)   # (the panels of gauss_nodes)
-        pieces = []   # (joint, nodes, weights) of the split panels' pieces
-        for j in range(m):
-            values, weights = r[j].reshape(-1, 5), w.reshape(-1, 5)
-            roots = interpolant_roots(values)
-            whole = np.array([z.size == 0 for z in roots])
-            wp[j] += float(np.sum(np.maximum(values[whole], 0.0) * weights[whole]))
-            for k in np.flatnonzero(~whole):
-                cuts = edges[k] + 0.5 * (1.0 + roots[k]) * (edges[k + 1] - edges[k])
-                ends = np.concatenate([[edges[k]], cuts, [edges[k + 1]]])
-                pieces += [(j, *gauss_nodes(c0, c1, h, 5)) for c0, c1 in zip(ends, ends[1:])]
-        if pieces:
-            fp = ev.rows(np.concatenate([t for _, t, _ in pieces]))
-            at = 0
-            for j, t, wt in pieces:
-                wp[j] += float(np.sum(np.maximum(fp[j, at:at + t.size], 0.0) * wt))
-                at += t.size
+        pw = r[:m].reshape(m, -1, 5)
+        te, we, joint, _, positive = sign_split(np.column_stack([edges[:-1], edges[1:]]), pw, h)
+        wp += np.where(positive[:, :, None], pw * w.reshape(1, -1, 5), 0.0).sum(axis=(1, 2))
+        if te.size:
+            fp = ev.rows(te)[joint, np.arange(te.size)]
+            wp += np.bincount(joint, np.maximum(fp, 0.0) * we, minlength=m)
     return wp, work, diss
 
 

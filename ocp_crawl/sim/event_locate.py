@@ -39,6 +39,50 @@ def guard_noise(name: str, noise: float) -> float:
     return noise if name.startswith("slip_") else ANGLE_NOISE
 
 
+def guard_root(point_at, value, rate, a: tuple[float, float], b: tuple[float, float],
+               xtol: float) -> tuple[float, object] | None:
+    """Zero of a guard along a solved branch between a = (phase, value > 0) and b = (phase,
+    value < 0): safeguarded Newton (``rtsafe``) with the guard's exact rate along the branch, from
+    the secant point; a bisection step whenever the Newton step leaves the bracket or does not
+    halve the step before last.  Returns the last solved (t, point) when the bracket is below tol =
+    ``xtol`` + 4 eps |t| (brentq's tolerance) or the next Newton step below tol/10, so t is within
+    tol of the zero (in the quadratic phase the step is about the square of the previous one); None
+    after 200 steps.  About 3 solves per event against 7 for Brent's method.
+
+    ``point_at(t)`` solves the branch at phase t; ``value(point)`` and ``rate(point)`` are the
+    guard [-] and its rate [1/cycle] there.
+    """
+    (ta, fa), (tb, fb) = a, b
+    t = ta + (tb - ta) * fa / (fa - fb)
+    if not ta < t < tb:
+        t = 0.5 * (ta + tb)
+    dx_old = dx = tb - ta
+    for _ in range(200):
+        pt = point_at(t)
+        f = value(pt)
+        if f == 0.0:
+            return t, pt
+        if f > 0:
+            ta = t
+        else:
+            tb = t
+        tol = xtol + 4 * EPS * abs(t)
+        if tb - ta <= tol:
+            return t, pt
+        df = rate(pt)
+        step = f / df if df != 0.0 and math.isfinite(df) else math.nan
+        # (t is within about |step| of the zero, also when t - step rounds to t)
+        if abs(step) <= 0.1 * tol:
+            return t, pt
+        if ta < t - step < tb and abs(2 * f) <= abs(dx_old * df):
+            dx_old, dx = dx, step
+            t = t - step
+        else:
+            dx_old, dx = dx, 0.5 * (tb - ta)
+            t = ta + dx
+    return None
+
+
 class EventLocator:
     """Location of the events and folds of the branches solved by ``solver``, with the ``guards``;
     reads the context's input, symbolic fold system, round-off level and ``event_xtol``."""
@@ -139,45 +183,20 @@ class EventLocator:
     def _root(self, point_at, mode: Mode, q: np.ndarray, name: str, a: tuple[float, float],
               b: tuple[float, float]) -> tuple[float, _Point]:
         """Zero of the guard ``name`` of the solved branch between a = (phase, value > 0) and b =
-        (phase, value < 0): safeguarded Newton (``rtsafe``) with the exact rate of the guard along
-        the branch (:meth:`~ocp_crawl.sim.event_guards.Guards.rates`), from the secant point; a
-        bisection step whenever the Newton step leaves the bracket or does not halve the step before
-        last.  Returns the last solved (t, point) when the bracket is below tol = ``event_xtol`` + 4
-        eps |t| (brentq's tolerance) or the next Newton step below tol/10, so t is within tol of the
-        zero (in the quadratic phase the step is about the square of the previous one).  About 3
-        solves per event against 7 for Brent's method.  ``point_at(t)`` solves the mode at t."""
-        (ta, fa), (tb, fb) = a, b
-        t = ta + (tb - ta) * fa / (fa - fb)
-        if not ta < t < tb:
-            t = 0.5 * (ta + tb)
-        dx_old = dx = tb - ta
-        for _ in range(200):
-            pt = point_at(t)
-            f = self._guards.at(mode, pt)[name]
-            if f == 0.0:
-                return t, pt
-            if f > 0:
-                ta = t
-            else:
-                tb = t
-            tol = self._xtol + 4 * EPS * abs(t)
-            if tb - ta <= tol:
-                return t, pt
+        (phase, value < 0) by :func:`guard_root`, with the exact rate of the guard along the
+        branch (:meth:`~ocp_crawl.sim.event_guards.Guards.rates`).  ``point_at(t)`` solves the mode
+        at t."""
+        def rate(pt: _Point) -> float:
             if pt.rates is None:
                 pt.rates = self._guards.rates(mode, pt, q)
-            df = pt.rates[name]
-            step = f / df if df != 0.0 and math.isfinite(df) else math.nan
-            # (t is within about |step| of the zero, also when t - step rounds to t)
-            if abs(step) <= 0.1 * tol:
-                return t, pt
-            if ta < t - step < tb and abs(2 * f) <= abs(dx_old * df):
-                dx_old, dx = dx, step
-                t = t - step
-            else:
-                dx_old, dx = dx, 0.5 * (tb - ta)
-                t = ta + dx
-        raise _Failure(Status.NO_CONVERGENCE, t, mode,
-                       f"event {name} not located to {self._xtol:g}")
+            return pt.rates[name]
+
+        found = guard_root(point_at, lambda pt: self._guards.at(mode, pt)[name], rate, a, b,
+                           self._xtol)
+        if found is None:
+            raise _Failure(Status.NO_CONVERGENCE, b[0], mode,
+                           f"event {name} not located to {self._xtol:g}")
+        return found
 
     def fold(self, pt: _Point, q: np.ndarray,
              t_limit: float) -> tuple[float, np.ndarray, float] | None:

@@ -14,7 +14,7 @@ import numpy as np
 from ocp_crawl.model.statics import AUX
 from ocp_crawl.sim.event_context import StepperContext
 from ocp_crawl.sim.event_dense import DenseOutput
-from ocp_crawl.sim.quadrature import LEG_FIT5 as _LEG_FIT, gauss_nodes, legendre_roots
+from ocp_crawl.sim.quadrature import LEG_FIT5 as _LEG_FIT, sign_split
 
 #: adaptive quadrature of the cycle integrals: tolerance on the Legendre tail of a panel's integrand
 #: (relative to the segment's largest value) and the number of halvings allowed (16: panels down to
@@ -27,10 +27,8 @@ QUAD_DEPTH = 16
 #: hold: the joints at rest, their powers ~1e-15 W) is accepted below this fraction of that value
 #: (its noise never meets QUAD_TOL of itself: every panel would be halved QUAD_DEPTH times)
 QUAD_FLOOR = 1e-12
-#: 5-point Gauss-Legendre nodes and weights on [-1, 1]; the values at -1 and 1 of the degree-4
-#: interpolant through values at the nodes (its Legendre coefficients c = values @ _LEG_FIT)
+#: 5-point Gauss-Legendre nodes and weights on [-1, 1]
 _XG, _WG = np.polynomial.legendre.leggauss(5)
-_LEG_ENDS = _LEG_FIT @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
 #: the columns of _LEG_FIT of the two highest coefficients (the tail of a panel's interpolant)
 _LEG_TAIL = _LEG_FIT[:, 3:]
 #: rows of the actuators' rates phi1', phi2' in aux (adjacent)
@@ -129,13 +127,13 @@ class CycleQuadrature:
 
     def _split_group(self, spans, owner: np.ndarray, edges: np.ndarray, pw: np.ndarray,
                      offset: int) -> dict:
-        """The W+ sign split (:meth:`_sign_split`) of the panels (edges (n, 2), powers (2, n, 5)) of
-        the pieces ``owner`` (n,) accepted at one depth, ``offset``: the index of their first among
-        all accepted panels. Returns a dict: positive (2, n), the split nodes' phases te, weights
-        we, actuators ie, accepted-panel indices c, sorted by piece, the requests [(segment,
-        phases), ...] to solve them, and pv (None until
+        """The W+ sign split (:func:`~ocp_crawl.sim.quadrature.sign_split`) of the panels (edges
+        (n, 2), powers (2, n, 5)) of the pieces ``owner`` (n,) accepted at one depth, ``offset``:
+        the index of their first among all accepted panels. Returns a dict: positive (2, n), the
+        split nodes' phases te, weights we, actuators ie, accepted-panel indices c, sorted by
+        piece, the requests [(segment, phases), ...] to solve them, and pv (None until
         :meth:`_split_values`)."""
-        te, we, ie, je, pos = self._sign_split(edges, pw)
+        te, we, ie, je, pos = sign_split(edges, pw, self._quad_h)
         piece = owner[je]
         srt = np.argsort(piece, kind="stable")
         te, we, ie, je, piece = te[srt], we[srt], ie[srt], je[srt], piece[srt]
@@ -275,45 +273,3 @@ class CycleQuadrature:
                 for i in range(2):
                     wplus[i] += float(pos_k[i_k == i].sum())
         return wplus
-
-    def _sign_split(self, edges: np.ndarray, pw: np.ndarray):
-        """The panels (edges (npan, 2), powers (2, npan, 5) at their Gauss nodes) on which an
-        actuator's power stays >= 0, and the extra Gauss nodes (phases, weights, actuator, panel) of
-        the panels on which it changes sign, split at the real roots in the panel of its degree-4
-        interpolant: (phases, weights, actuator, panel index, whether the power of each actuator (2,
-        npan) keeps a positive sign on the panel)."""
-        npan = len(edges)
-        # values at the panel edges from each panel's degree-4 interpolant, so that a sign change
-        # between an edge and the nearest Gauss node is not missed
-        ends = (pw.reshape(-1, 5) @ _LEG_ENDS).reshape(2, npan, 2)
-        allv = np.concatenate([pw, ends], axis=2)
-        positive_panels = np.all(allv >= 0, axis=2)
-        mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
-        ii, jj = np.nonzero(mixed)
-        if not ii.size:
-            return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
-        # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
-        roots = legendre_roots(pw[ii, jj] @ _LEG_FIT)  # (the interpolants' Legendre coefficients)
-        lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
-        r = np.where((np.abs(roots.imag) < 1e-9) & (np.abs(roots.real) < 1), roots.real, np.nan)
-        r.sort(axis=1)  # (the real roots in the panel in increasing order, then nan)
-        # cuts lo, the roots, hi (hi also in place of the missing roots: the pieces of length 0 are
-        # dropped)
-        cuts = np.concatenate([lo, lo + (r + 1) * (hi - lo) / 2, hi], axis=1)
-        cuts = np.where(np.isnan(cuts), hi, cuts)
-        c0, c1 = cuts[:, :-1], cuts[:, 1:]
-        keep = c1 - c0 > 0
-        c0, c1 = c0[keep], c1[keep]
-        rows = np.nonzero(keep)[0]  # (the row of each kept piece, in the order of c0[keep])
-        owner, panel = ii[rows], jj[rows]
-        if np.all(c1 - c0 <= self._quad_h * (1 - 1e-9)):
-            # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, quad_h,
-            # 5), at once
-            mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
-            return ((mid + half * _XG).ravel(), (half * _WG).ravel(), np.repeat(owner, _XG.size),
-                    np.repeat(panel, _XG.size), positive_panels)
-        pieces = [gauss_nodes(a, b, self._quad_h, 5) for a, b in zip(c0, c1)]
-        return (np.concatenate([tt for tt, _ in pieces]), np.concatenate([w2 for _, w2 in pieces]),
-                np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]),
-                np.concatenate([np.full(len(tt), j) for (tt, _), j in zip(pieces, panel)]),
-                positive_panels)

@@ -54,13 +54,66 @@ def positive_part_integral(a: float, b: float, f_vec, f_scalar, h: float = 1.0 /
 LEG_FIT5 = np.linalg.inv(np.polynomial.legendre.legvander(_GL[5][0], 4)).T
 
 
-def interpolant_roots(values: np.ndarray) -> list[np.ndarray]:
-    """The sign changes of f inside panels, from its values (k, 5) at each panel's 5 Gauss-Legendre
-    nodes: for each panel the real roots in (-1, 1) (the panel mapped onto [-1, 1]), in order, of
-    the degree-4 interpolant of its values (the polynomial the Gauss rule integrates)."""
-    roots = legendre_roots(np.atleast_2d(np.asarray(values, float)) @ LEG_FIT5)
-    inside = (np.abs(roots.imag) <= 1e-12) & (np.abs(roots.real) < 1.0)
-    return [np.sort(r.real[k]) for r, k in zip(roots, inside)]
+#: the values at -1 and 1 of the degree-4 interpolant through values at the 5 Gauss-Legendre nodes
+LEG_ENDS5 = LEG_FIT5 @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4).T
+_XG5, _WG5 = _GL[5]
+
+
+def sign_split(edges: np.ndarray, pw: np.ndarray, h: float):
+    """The W+ sign split of Gauss panels: which panels keep each actuator's power >= 0, and extra
+    Gauss nodes on the panels where it changes sign.
+
+    Parameters
+    ----------
+    edges : ndarray, shape (npan, 2)
+        The panels (lo, hi) [cycles].
+    pw : ndarray, shape (m, npan, 5)
+        Each of the m actuators' power at each panel's 5 Gauss-Legendre nodes [J/cycle].
+    h : float
+        The largest panel [cycles] of the pieces' Gauss nodes (:func:`gauss_nodes`).
+
+    Returns
+    -------
+    tuple
+        (phases, weights, actuator, panel index) of the extra nodes, each (k,): the panels on which
+        the power's values at the nodes and at the edges (from the panel's degree-4 interpolant, so
+        that a sign change between an edge and the nearest node is not missed) have both signs,
+        split at the real roots in the panel of that interpolant; and whether each actuator's
+        power keeps a positive sign on each panel ((m, npan) bool).
+    """
+    m, npan = pw.shape[0], len(edges)
+    ends = (pw.reshape(-1, 5) @ LEG_ENDS5).reshape(m, npan, 2)
+    allv = np.concatenate([pw, ends], axis=2)
+    positive_panels = np.all(allv >= 0, axis=2)
+    mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
+    ii, jj = np.nonzero(mixed)
+    if not ii.size:
+        return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
+    # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
+    roots = legendre_roots(pw[ii, jj] @ LEG_FIT5)  # (the interpolants' Legendre coefficients)
+    lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
+    r = np.where((np.abs(roots.imag) < 1e-9) & (np.abs(roots.real) < 1), roots.real, np.nan)
+    r.sort(axis=1)  # (the real roots in the panel in increasing order, then nan)
+    # cuts lo, the roots, hi (hi also in place of the missing roots: the pieces of length 0 are
+    # dropped)
+    cuts = np.concatenate([lo, lo + (r + 1) * (hi - lo) / 2, hi], axis=1)
+    cuts = np.where(np.isnan(cuts), hi, cuts)
+    c0, c1 = cuts[:, :-1], cuts[:, 1:]
+    keep = c1 - c0 > 0
+    c0, c1 = c0[keep], c1[keep]
+    rows = np.nonzero(keep)[0]  # (the row of each kept piece, in the order of c0[keep])
+    owner, panel = ii[rows], jj[rows]
+    if np.all(c1 - c0 <= h * (1 - 1e-9)):
+        # each piece is one Gauss panel: the nodes and weights of gauss_nodes(c0, c1, h, 5), at
+        # once
+        mid, half = 0.5 * (c1 + c0)[:, None], 0.5 * (c1 - c0)[:, None]
+        return ((mid + half * _XG5).ravel(), (half * _WG5).ravel(), np.repeat(owner, _XG5.size),
+                np.repeat(panel, _XG5.size), positive_panels)
+    pieces = [gauss_nodes(a, b, h, 5) for a, b in zip(c0, c1)]
+    return (np.concatenate([tt for tt, _ in pieces]), np.concatenate([w2 for _, w2 in pieces]),
+            np.concatenate([np.full(len(tt), i) for (tt, _), i in zip(pieces, owner)]),
+            np.concatenate([np.full(len(tt), j) for (tt, _), j in zip(pieces, panel)]),
+            positive_panels)
 
 
 def legendre_roots(coefs: np.ndarray) -> np.ndarray:
