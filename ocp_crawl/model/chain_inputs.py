@@ -75,6 +75,9 @@ class JointFourier(PeriodicSignal):
         return cls(mean, (amp * np.sin(ph))[:, None], (amp * np.cos(ph))[:, None])
 
     def __call__(self, t):
+        if isinstance(t, float):   # (a phase: the steppers' many calls; the same operations)
+            w = TWO_PI * (t * self._k)
+            return self.a0 + self.a @ np.cos(w) + self.b @ np.sin(w)
         t = np.asarray(t, float)
         if t.ndim <= 1:   # (a phase or a row of phases: products of matrices, the fast path)
             w = TWO_PI * np.multiply.outer(t, self._k)
@@ -86,6 +89,9 @@ class JointFourier(PeriodicSignal):
                 + np.einsum("jk,...k->j...", self.b, np.sin(w)))
 
     def derivative(self, t):
+        if isinstance(t, float):
+            w = TWO_PI * (t * self._k)
+            return self._db @ np.cos(w) - self._da @ np.sin(w)
         t = np.asarray(t, float)
         w = TWO_PI * np.multiply.outer(t, self._k)
         if t.ndim <= 1:
@@ -225,12 +231,12 @@ class ChainReferenceTorque(PeriodicSignal):
         return v.reshape((-1,) + (1,) * np.ndim(t))
 
     def __call__(self, t):
-        if np.ndim(t) == 0:   # (a phase: the steppers' many calls)
+        if isinstance(t, float) or np.ndim(t) == 0:   # (a phase: the steppers' many calls)
             return self.k * (self.reference(t) - math.pi - self.rest)
         return self._col(self.k, t) * (self.reference(t) - math.pi - self._col(self.rest, t))
 
     def derivative(self, t):
-        if np.ndim(t) == 0:
+        if isinstance(t, float) or np.ndim(t) == 0:
             return self.k * self.reference.derivative(t)
         return self._col(self.k, t) * self.reference.derivative(t)
 

@@ -88,7 +88,7 @@ class ChainTorqueStepper:
         for lam in (1.0, 0.5, 0.25, 0.0):
             phi = lam * ref + (1 - lam) * 0.6 * math.pi
             pt = s.solve(0.0, np.append(phi, 0.0), released)
-            if pt is None or min(s.guards(Mode.STICK, pt.aux).values()) <= 0:
+            if pt is None or min(s.guards(Mode.STICK, pt).values()) <= 0:
                 continue
             q = mode_vector(Mode.STICK, pt.aux["d"])
             if s.margin(pt.x, q) > 0:
@@ -106,7 +106,7 @@ class ChainTorqueStepper:
         m = s.m
         if np.max(np.abs(new.x[:m] - pt.x[:m])) > 0.35:
             return None
-        if np.sign(new.aux["det"]) != np.sign(pt.aux["det"]):
+        if np.sign(new.det()) != np.sign(pt.det()):
             return None
         return new
 
@@ -141,7 +141,7 @@ class ChainTorqueStepper:
                     raise Stop(Status.FOLD, pt.t, seg.mode, "the equilibrium branch of mode "
                                f"{seg.mode.label} ends (fold) at t = {pt.t:.10f}")
                 continue
-            g0, g1 = s.guards(seg.mode, pt.aux), s.guards(seg.mode, new.aux)
+            g0, g1 = s.guards(seg.mode, pt), s.guards(seg.mode, new)
             # (a guard at zero to round-off at a kink or where a hold starts, such as the feet's
             # friction limits tying where a table's sample makes the shape symmetric, is decided
             # by the rates after it)
@@ -176,7 +176,7 @@ class ChainTorqueStepper:
             pm = s.solve(t, s.guess(pt, t), seg.q)
             if pm is None:
                 continue
-            crossed = [k for k, v in s.guards(seg.mode, pm.aux).items() if v < 0]
+            crossed = [k for k, v in s.guards(seg.mode, pm).items() if v < 0]
             if crossed:
                 return pm, crossed, near
         return new, [], near
@@ -194,10 +194,10 @@ class ChainTorqueStepper:
     def _event(self, seg: Segment, pt: Point, new: Point, g0: dict, crossed: list) -> Segment:
         """Locate the first crossing in the step [pt, new], record the event and return the
         segment of the mode after it."""
-        s, g1 = self.solver, self.solver.guards(seg.mode, new.aux)
+        s, g1 = self.solver, self.solver.guards(seg.mode, new)
         best = None   # ((t, point), guard) of the earliest zero; the guards by their secant zeros
         for k in sorted(crossed, key=lambda k: (g0[k] / (g0[k] - g1[k]) if g0[k] > 0 else 0, k)):
-            if best is not None and s.guards(seg.mode, best[0][1].aux)[k] > GUARD_NOISE:
+            if best is not None and s.guards(seg.mode, best[0][1])[k] > GUARD_NOISE:
                 continue   # (still positive at the earliest zero found: it crosses later)
             found = (locate(s, seg, pt, new, k, g0[k], self.trial_step, self.event_xtol), k)
             if best is None or (found[0][0], k) < (best[0][0], best[1]):
@@ -212,7 +212,7 @@ class ChainTorqueStepper:
         point ``ev`` (the transition table's mode when it is consistent, else the only
         consistent single-foot mode), the event recorded."""
         s, t_ev = self.solver, ev.t
-        g_ev = s.guards(seg.mode, ev.aux)[kind]
+        g_ev = s.guards(seg.mode, ev)[kind]
         nxt = transition(seg.mode, kind)
         if isinstance(nxt, Status):
             self.events.append(Event(t_ev, kind, seg.mode.label, "failure", g_ev, kind))
@@ -256,7 +256,7 @@ class ChainTorqueStepper:
             raise Stop(Status.NO_CONVERGENCE, left.t, seg.mode, "mode solve failed at a kink "
                        f"of the input at t = {left.t:.10f}")
         right.x1, right.x2 = left.x1, left.x2
-        g = s.guards(seg.mode, right.aux)
+        g = s.guards(seg.mode, right)
         crossed = sorted((v, k) for k, v in g.items() if v < -GUARD_NOISE)
         if not crossed:
             seg.points[-1] = right

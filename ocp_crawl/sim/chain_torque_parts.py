@@ -7,6 +7,7 @@ States are ``x = (phi_1 .. phi_m [rad], f_t/(M g) [-])``, phases t in cycles, ra
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -54,13 +55,31 @@ class Point:
     x1: float = 0.0
     x2: float = 0.0
     left: bool = False
+    jac: np.ndarray | None = field(default=None, repr=False, compare=False)
+    """the mode system's Jacobian at the point (n x n)"""
+    guards: dict = field(default_factory=dict, repr=False, compare=False)
+    """the guards at this point by mode (:meth:`ChainSolver.guards`), once each"""
     rates: dict = field(default_factory=dict, repr=False, compare=False)
     """the guards' rates at this point by mode (:meth:`ChainSolver.guard_rates`), once each"""
+    _det: float | None = field(default=None, repr=False, compare=False)
+
+    def det(self) -> float:
+        """det of the mode system's Jacobian (its sign tells the equilibrium branch; computed
+        when first asked: most solved points, an event's trials, never are)."""
+        if self._det is None:
+            self._det = float(np.linalg.det(self.jac))
+        return self._det
 
     def xdot(self, m: int, Mg: float) -> np.ndarray:
         """Rate of the state along the mode's solution [1/cycle]."""
         a = self.aux
-        return np.array([a[f"dphi{j}"] for j in range(1, m + 1)] + [a["dft"] / Mg])
+        return np.array([a[k] for k in _rate_names(m)] + [a["dft"] / Mg])
+
+
+@lru_cache(maxsize=None)
+def _rate_names(m: int) -> tuple[str, ...]:
+    """The outputs' names of the joints' rates of m joints."""
+    return tuple(f"dphi{j}" for j in range(1, m + 1))
 
 
 @dataclass
@@ -97,6 +116,9 @@ class ChainSolver:
         self.nfev = 0
         self.p = model.p
         self.names = aux_names(model.chain.n)
+        joints = range(1, self.m + 1)
+        self._heights = [(f"joint_{j}_on_ground", f"zj{j}") for j in joints]
+        self._height_rates = [(f"joint_{j}_on_ground", f"dzj{j}") for j in joints]
         # compiled (model.chain_compiled): the Newton loop makes thousands of calls per run
         n = model.chain.n
         self._newton, self._ddot2 = fast_chain_newton(n), fast_chain_ddot2(n)
@@ -143,24 +165,31 @@ class ChainSolver:
         x, out, J = self._newton(x0, tau, dtau, q, self.p)
         self.nfev += 1
         aux = dict(zip(self.names, out.tolist()))
-        if not abs(aux["res"]) <= self.residual_tol or not np.all(np.isfinite(x)):
+        if not abs(aux["res"]) <= self.residual_tol or not np.isfinite(x).all():
             return None
         nx = self.m + 1
-        aux["det"] = float(np.linalg.det(J.reshape(nx, nx, order="F")))
-        return Point(float(t), x, aux, left=left and self.pieces.is_kink(t))
+        return Point(float(t), x, aux, left=left and self.pieces.is_kink(t),
+                     jac=J.reshape(nx, nx, order="F"))
 
     def guess(self, pt: Point, t: float) -> np.ndarray:
         """The tangent predictor from ``pt`` to phase t."""
         return pt.x + (t - pt.t) * pt.xdot(self.m, self.Mg)
 
-    def guards(self, mode: Mode, aux: dict) -> dict[str, float]:
-        """Guard functions of ``mode`` (scaled [-], positive while the mode holds), named as the
-        guards of :mod:`ocp_crawl.sim.event_guards` (so that its ``transition`` table applies)."""
+    def guards(self, mode: Mode, pt: Point) -> dict[str, float]:
+        """Guard functions of ``mode`` at pt (scaled [-], positive while the mode holds), named as
+        the guards of :mod:`ocp_crawl.sim.event_guards` (so that its ``transition`` table
+        applies); each point's once per mode (the steps read their ends' several times)."""
+        known = pt.guards.get(mode)
+        if known is None:
+            known = pt.guards[mode] = self._guards(mode, pt.aux)
+        return known
+
+    def _guards(self, mode: Mode, aux: dict) -> dict[str, float]:
         Mg, L = self.Mg, self.L
         g = {"lift_off_1": aux["fn1"] / Mg, "lift_off_2": aux["fn2"] / Mg,
              "feet_crossed": aux["d"] / L}
-        for j in range(1, self.m + 1):
-            g[f"joint_{j}_on_ground"] = aux[f"zj{j}"] / L
+        for name, key in self._heights:
+            g[name] = aux[key] / L
         ft, lim1, lim2 = aux["ft"], aux["lim1"], aux["lim2"]
         if mode is Mode.STICK:
             g.update({"slip_1+": (lim1 - ft) / Mg, "slip_1-": (lim1 + ft) / Mg,
@@ -189,8 +218,8 @@ class ChainSolver:
         a, Mg, L = pt.aux, self.Mg, self.L
         r = {"lift_off_1": a["dfn1"] / Mg, "lift_off_2": a["dfn2"] / Mg,
              "feet_crossed": a["ddot"] / L}
-        for j in range(1, self.m + 1):
-            r[f"joint_{j}_on_ground"] = a[f"dzj{j}"] / L
+        for name, key in self._height_rates:
+            r[name] = a[key] / L
         dft, dlim1, dlim2 = a["dft"], self.mu[0] * a["dfn1"], self.mu[1] * a["dfn2"]
         if mode is Mode.STICK:
             r.update({"slip_1+": (dlim1 - dft) / Mg, "slip_1-": (dlim1 + dft) / Mg,
@@ -214,7 +243,7 @@ class ChainSolver:
         first; and whether a contact's guard nears zero inside the step
         (:data:`~ocp_crawl.sim.event_guards.NEAR_TOUCH`: the step is to be halved)."""
         h = p1.t - p0.t
-        g0, g1 = self.guards(mode, p0.aux), self.guards(mode, p1.aux)
+        g0, g1 = self.guards(mode, p0), self.guards(mode, p1)
         r0, r1 = self.guard_rates(mode, p0, q), self.guard_rates(mode, p1, q)
         out, near = [], False
         for k in g0:
@@ -254,7 +283,7 @@ class ChainSolver:
             after = self.solve(pt.t + trial, self.guess(start, pt.t + trial), q)
             if after is None:
                 return None
-            low = min(self.guards(mode, after.aux).values())
+            low = min(self.guards(mode, after).values())
             if low <= -GUARD_NOISE:
                 return None
             if low > GUARD_NOISE:
@@ -283,7 +312,7 @@ def locate(s: ChainSolver, seg: Segment, pt: Point, new: Point, name: str, g0: f
         return p
 
     def value(p: Point) -> float:
-        return s.guards(seg.mode, p.aux)[name]
+        return s.guards(seg.mode, p)[name]
 
     lo = (pt.t, g0)
     if not g0 > 0:
