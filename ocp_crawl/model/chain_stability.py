@@ -120,7 +120,7 @@ def _char_coefficients(K: cs.SX) -> list:
     """``(a_1 .. a_m)`` of ``det(s I + K) = s^m + a_1 s^(m-1) + ... + a_m`` (Faddeev-LeVerrier:
     ``M_k = -K M_(k-1) + a_(k-1) I``, ``a_k = tr(K M_k)/k``, ``M_0 = 0``, ``a_0 = 1``)."""
     m = K.size1()
-    Mk, a, prev = cs.SX.zeros(m, m), [], 1.0
+    Mk, a, prev = cs.SX.zeros(m, m), [], cs.SX(1.0)
     for k in range(1, m + 1):
         Mk = -K @ Mk + prev * cs.SX.eye(m)
         prev = cs.trace(K @ Mk) / k

@@ -38,9 +38,9 @@ ANNOUNCE_SECONDS = 60.0
 # MPCC's  set-up (its start and the NLP), a MuJoCo step, an OCP node of one friction scenario in one
 # IPOPT  iteration, a member of a baseline family
 UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco_step": 3e-5,
-             "ocp_node_iteration": 1.5e-3, "family_member": 0.025, "chain_event_cycle": 0.009}
+             "ocp_node_iteration": 1.5e-3, "family_member": 0.025, "chain_event_cycle": 0.0035}
 #  (chain_event_cycle: a typical cycle of the event-driven chain simulator per link [s]; a cycle of
-# n = 3..7 links took 0.02 to 0.045 s, 0.004 to 0.011 n s: docs/benchmarks.md)
+# n = 3..7 links took 0.010 to 0.014 s, 0.002 to 0.0035 n s: docs/benchmarks.md)
 #: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
 OCP_ITERATIONS = 1000
 #  event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped

@@ -9,10 +9,12 @@ zero is halved).  Guards (positive while the mode
 holds, :meth:`~ocp_crawl.sim.chain_torque_parts.ChainSolver.guards`): in stick-stick both feet's
 friction margins mu_i f_n,i -+ f_t; in a slip of foot s with sign(d') = sigma, sigma d' and the
 other foot's margin mu_o f_n,o - mu_s f_n,s; in every mode the normal forces, d and the joint
-heights.  A guard crossing zero in a step is located by Brent's method on the guard of the solved
-state (to 1e-13 cycles); the mode after it is that of the transition table
-(:func:`ocp_crawl.sim.event_guards.transition`) when it is consistent (its guards positive and its
-equilibrium stable just after the event), else the only consistent single-foot mode, else the run
+heights.  A guard crossing zero in a step is located on the guard of the solved state by the
+three-link stepper's safeguarded Newton method on its exact rate
+(:func:`~ocp_crawl.sim.event_locate.guard_root`, to 1e-13 cycles); the mode after it is that of
+the transition table (:func:`ocp_crawl.sim.event_guards.transition`) when it is consistent (its
+guards positive and its equilibrium stable just after the event), else the only consistent
+single-foot mode, else the run
 fails (``no_consistent_mode``).  A lost contact ends the run (``lift_off``, ``joint_on_ground``,
 ``feet_crossed``), so does a fold of the branch (the Newton solve fails as the step shrinks, or
 the sign of det J or of the stability margin changes: ``fold``).  A stuck foot stays; a slipping
@@ -202,6 +204,7 @@ class ChainTorqueStepper:
             found = (locate(s, seg, pt, new, k, g0[k], self.trial_step, self.event_xtol), k)
             if best is None or (found[0][0], k) < (best[0][0], best[1]):
                 best = found
+        assert best is not None   # (crossed is not empty)
         (t_ev, ev), kind = best
         if ev is not pt:
             seg.points.append(self._place(seg, ev))

@@ -67,6 +67,8 @@ class Point:
         """det of the mode system's Jacobian (its sign tells the equilibrium branch; computed
         when first asked: most solved points, an event's trials, never are)."""
         if self._det is None:
+            if self.jac is None:
+                raise ValueError("a point without its Jacobian has no det")
             self._det = float(np.linalg.det(self.jac))
         return self._det
 
@@ -305,10 +307,11 @@ def locate(s: ChainSolver, seg: Segment, pt: Point, new: Point, name: str, g0: f
         p = known.get(t)
         if p is None:
             lam = (t - pt.t) / (new.t - pt.t)
-            p = known[t] = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q)
+            p = s.solve(t, (1 - lam) * pt.x + lam * new.x, seg.q)
             if p is None:
                 raise Stop(Status.NO_CONVERGENCE, t, seg.mode, "mode solve failed locating an "
                            f"event of {name}")
+            known[t] = p
         return p
 
     def value(p: Point) -> float:

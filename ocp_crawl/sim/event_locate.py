@@ -10,6 +10,7 @@ chosen by
 from __future__ import annotations
 
 import math
+from typing import Callable, TypeVar
 
 import numpy as np
 
@@ -21,6 +22,8 @@ from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
 
 EPS = float(np.finfo(float).eps)
+#: a solved point of a branch (the three-link stepper's and the chain's)
+P = TypeVar("P")
 #: round-off level of the scaled guards that depend on the angles (and d') only, whatever k/(M g L)
 ANGLE_NOISE = 1e-13
 
@@ -39,8 +42,9 @@ def guard_noise(name: str, noise: float) -> float:
     return noise if name.startswith("slip_") else ANGLE_NOISE
 
 
-def guard_root(point_at, value, rate, a: tuple[float, float], b: tuple[float, float],
-               xtol: float) -> tuple[float, object] | None:
+def guard_root(point_at: Callable[[float], P], value: Callable[[P], float],
+               rate: Callable[[P], float], a: tuple[float, float], b: tuple[float, float],
+               xtol: float) -> tuple[float, P] | None:
     """Zero of a guard along a solved branch between a = (phase, value > 0) and b = (phase,
     value < 0): safeguarded Newton (``rtsafe``) with the guard's exact rate along the branch, from
     the secant point; a bisection step whenever the Newton step leaves the bracket or does not
