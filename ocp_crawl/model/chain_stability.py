@@ -321,7 +321,10 @@ def chain_stability_margins(model, X, Q) -> np.ndarray:
     stick = Q[0] > 0.5
     if stick.any():
         A = A[:, stick].T.reshape(-1, m, m).transpose(0, 2, 1)
-        margin[stick] = np.linalg.eigvalsh(A)[:, 0] / model.chain.MgL
+        kappa = np.full(len(A), np.nan)   # (grad d = 0, a straight chain: no tangent space)
+        finite = np.isfinite(A).all(axis=(1, 2))
+        kappa[finite] = np.linalg.eigvalsh(A[finite])[:, 0] / model.chain.MgL
+        margin[stick] = kappa
     return margin
 
 

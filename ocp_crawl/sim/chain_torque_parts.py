@@ -17,7 +17,7 @@ from ocp_crawl.model.chain_statics import aux_names
 from ocp_crawl.model.chain_stability import chain_stability_margin
 from ocp_crawl.sim.chain_pieces import ChainPieces
 from ocp_crawl.sim.event_guards import NEAR_TOUCH, cubic_min
-from ocp_crawl.sim.event_locate import guard_root
+from ocp_crawl.sim.event_locate import NotLocated, guard_root
 from ocp_crawl.sim.quadrature import gauss_nodes, sign_split
 from ocp_crawl.sim.result import Mode
 from ocp_crawl.status import Status
@@ -323,11 +323,12 @@ def locate(s: ChainSolver, seg: Segment, pt: Point, new: Point, name: str, g0: f
         lo = (t, value(point_at(t)))
         if not lo[1] > 0:
             return pt.t, pt
-    found = guard_root(point_at, value, lambda p: s.guard_rates(seg.mode, p, seg.q)[name], lo,
-                       (new.t, value(new)), xtol)
-    if found is None:
-        raise Stop(Status.NO_CONVERGENCE, new.t, seg.mode, f"event {name} not located to {xtol:g}")
-    return found
+    try:
+        return guard_root(point_at, value, lambda p: s.guard_rates(seg.mode, p, seg.q)[name], lo,
+                          (new.t, value(new)), xtol)
+    except NotLocated as exc:
+        raise Stop(Status.NO_CONVERGENCE, exc.t, seg.mode,
+                   f"event {name} not located to {xtol:g}") from None
 
 
 def solve_columns(solver: ChainSolver, ts: np.ndarray, X0: np.ndarray, q: np.ndarray,
@@ -394,9 +395,9 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
                       h: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Integrals over [a, b] in the segment's mode [J]: W+ per joint (m,), the work per joint (m,)
     and the friction dissipation, by 5-point Gauss-Legendre panels of at most ``h`` cycles split at
-    the input's kinks; a joint's positive part split as the three-link stepper's
-    (:func:`~ocp_crawl.sim.quadrature.sign_split`), the split panels' nodes solved together (one
-    solve for every joint)."""
+    the input's kinks; a joint's positive part split at the sign changes of its power's interpolant
+    in a panel, also between the nodes (:func:`~ocp_crawl.sim.quadrature.sign_split`: the panels are
+    fixed), the split panels' nodes solved together (one solve for every joint)."""
     m = solver.m
     wp, work, diss = np.zeros(m), np.zeros(m), 0.0
     for lo, hi in solver.pieces.split(a, b):
@@ -410,7 +411,8 @@ def segment_integrals(solver: ChainSolver, seg: Segment, a: float, b: float,
         work, diss = work + r[:m] @ w, diss + float(r[m] @ w)
         edges = np.linspace(lo, hi, tq.size // 5 + 1)   # (the panels of gauss_nodes)
         pw = r[:m].reshape(m, -1, 5)
-        te, we, joint, _, positive = sign_split(np.column_stack([edges[:-1], edges[1:]]), pw, h)
+        te, we, joint, _, positive = sign_split(np.column_stack([edges[:-1], edges[1:]]), pw, h,
+                                                dips=True)
         wp += np.where(positive[:, :, None], pw * w.reshape(1, -1, 5), 0.0).sum(axis=(1, 2))
         if te.size:
             fp = ev.rows(te)[joint, np.arange(te.size)]

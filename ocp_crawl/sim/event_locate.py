@@ -23,7 +23,7 @@ from ocp_crawl.status import Status
 
 EPS = float(np.finfo(float).eps)
 #: a solved point of a branch (the three-link stepper's and the chain's)
-P = TypeVar("P")
+PointT = TypeVar("PointT")
 #: round-off level of the scaled guards that depend on the angles (and d') only, whatever k/(M g L)
 ANGLE_NOISE = 1e-13
 
@@ -42,16 +42,24 @@ def guard_noise(name: str, noise: float) -> float:
     return noise if name.startswith("slip_") else ANGLE_NOISE
 
 
-def guard_root(point_at: Callable[[float], P], value: Callable[[P], float],
-               rate: Callable[[P], float], a: tuple[float, float], b: tuple[float, float],
-               xtol: float) -> tuple[float, P] | None:
+class NotLocated(Exception):
+    """A guard's zero not located in :func:`guard_root`'s steps; ``t`` the last phase tried."""
+
+    def __init__(self, t: float):
+        super().__init__(f"no zero located by t = {t!r}")
+        self.t = t
+
+
+def guard_root(point_at: Callable[[float], PointT], value: Callable[[PointT], float],
+               rate: Callable[[PointT], float], a: tuple[float, float], b: tuple[float, float],
+               xtol: float) -> tuple[float, PointT]:
     """Zero of a guard along a solved branch between a = (phase, value > 0) and b = (phase,
     value < 0): safeguarded Newton (``rtsafe``) with the guard's exact rate along the branch, from
     the secant point; a bisection step whenever the Newton step leaves the bracket or does not
     halve the step before last.  Returns the last solved (t, point) when the bracket is below tol =
     ``xtol`` + 4 eps |t| (brentq's tolerance) or the next Newton step below tol/10, so t is within
-    tol of the zero (in the quadratic phase the step is about the square of the previous one); None
-    after 200 steps.  About 3 solves per event against 7 for Brent's method.
+    tol of the zero (in the quadratic phase the step is about the square of the previous one);
+    :class:`NotLocated` after 200 steps.  About 3 solves per event against 7 for Brent's method.
 
     ``point_at(t)`` solves the branch at phase t; ``value(point)`` and ``rate(point)`` are the
     guard [-] and its rate [1/cycle] there.
@@ -84,7 +92,7 @@ def guard_root(point_at: Callable[[float], P], value: Callable[[P], float],
         else:
             dx_old, dx = dx, 0.5 * (tb - ta)
             t = ta + dx
-    return None
+    raise NotLocated(t)
 
 
 class EventLocator:
@@ -195,12 +203,12 @@ class EventLocator:
                 pt.rates = self._guards.rates(mode, pt, q)
             return pt.rates[name]
 
-        found = guard_root(point_at, lambda pt: self._guards.at(mode, pt)[name], rate, a, b,
-                           self._xtol)
-        if found is None:
-            raise _Failure(Status.NO_CONVERGENCE, b[0], mode,
-                           f"event {name} not located to {self._xtol:g}")
-        return found
+        try:
+            return guard_root(point_at, lambda pt: self._guards.at(mode, pt)[name], rate, a, b,
+                              self._xtol)
+        except NotLocated as exc:
+            raise _Failure(Status.NO_CONVERGENCE, exc.t, mode,
+                           f"event {name} not located to {self._xtol:g}") from None
 
     def fold(self, pt: _Point, q: np.ndarray,
              t_limit: float) -> tuple[float, np.ndarray, float] | None:

@@ -59,7 +59,7 @@ LEG_ENDS5 = LEG_FIT5 @ np.polynomial.legendre.legvander(np.array([-1.0, 1.0]), 4
 _XG5, _WG5 = _GL[5]
 
 
-def sign_split(edges: np.ndarray, pw: np.ndarray, h: float):
+def sign_split(edges: np.ndarray, pw: np.ndarray, h: float, dips: bool = False):
     """The W+ sign split of Gauss panels: which panels keep each actuator's power >= 0, and extra
     Gauss nodes on the panels where it changes sign.
 
@@ -71,6 +71,11 @@ def sign_split(edges: np.ndarray, pw: np.ndarray, h: float):
         Each of the m actuators' power at each panel's 5 Gauss-Legendre nodes [J/cycle].
     h : float
         The largest panel [cycles] of the pieces' Gauss nodes (:func:`gauss_nodes`).
+    dips : bool
+        Split also the panels of one sign at those values whose interpolant changes sign between
+        them (where its Legendre coefficients allow it, ``|c_0| <= sum |c_k|``, and it has a real
+        root in the panel): for fixed panels; adaptive ones are refined where the interpolant
+        bends.
 
     Returns
     -------
@@ -86,13 +91,24 @@ def sign_split(edges: np.ndarray, pw: np.ndarray, h: float):
     allv = np.concatenate([pw, ends], axis=2)
     positive_panels = np.all(allv >= 0, axis=2)
     mixed = ~positive_panels & ~np.all(allv <= 0, axis=2)
-    ii, jj = np.nonzero(mixed)
+    maybe = np.zeros_like(mixed)
+    if dips:   # (|P_k| <= 1 on the panel: the interpolant stays within c_0 -+ sum |c_k|)
+        c = pw @ LEG_FIT5
+        reach = np.abs(c[..., 1:]).sum(axis=2)
+        maybe = ~mixed & (c[..., 0] - reach <= 0) & (c[..., 0] + reach >= 0)
+    ii, jj = np.nonzero(mixed | maybe)
     if not ii.size:
         return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
     # the power changes sign inside the panel: split at the roots of its degree-4 interpolant
     roots = legendre_roots(pw[ii, jj] @ LEG_FIT5)  # (the interpolants' Legendre coefficients)
-    lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
     r = np.where((np.abs(roots.imag) < 1e-9) & (np.abs(roots.real) < 1), roots.real, np.nan)
+    if dips:   # (a panel of one sign at its values without a root inside keeps that sign)
+        split = ~maybe[ii, jj] | ~np.all(np.isnan(r), axis=1)
+        ii, jj, r = ii[split], jj[split], r[split]
+        positive_panels[ii, jj] = False
+        if not ii.size:
+            return np.zeros(0), np.zeros(0), np.zeros(0, int), np.zeros(0, int), positive_panels
+    lo, hi = edges[jj, 0][:, None], edges[jj, 1][:, None]
     r.sort(axis=1)  # (the real roots in the panel in increasing order, then nan)
     # cuts lo, the roots, hi (hi also in place of the missing roots: the pieces of length 0 are
     # dropped)
