@@ -258,6 +258,41 @@ def test_a_six_link_table_passes_the_crosscheck():
     assert check.passed, {k: c.text() for k, c in check.checks.items() if not c.passed}
 
 
+#: a three-link chain under a table whose slip of foot 2 ends at a kink (t = 0.43324) with the
+#: stick's friction guard at 4e-17 there: Brent's method took that round-off for the next slip's
+#: zero and the run ended as a snap-through at the kink of the second cycle
+KINK_TIE_CHAIN = Chain(lengths=(0.025686364685129096, 0.03733536902880197, 0.04816448726146781),
+                       masses=(0.022166092981944184, 0.022905925756199673, 0.01869849545245067),
+                       stiffness=(0.3567034686639414, 0.5462805597602385),
+                       mu=(0.2655635613098795, 0.29605579316246244),
+                       com=(0.3040432222336807, 0.5230593368214322, 0.3666376978825706),
+                       rest=(-0.07314738817412669, 0.1986484873307922))
+KINK_TIE_TABLE = JointLinear(
+    [0.0, 0.08369751592760977, 0.13766316714192994, 0.22020431473995072, 0.27865271766078503,
+     0.43324375739575316, 0.5154254917952313],
+    [[2.7886878313912025, 3.121228773856811, 3.137149278720934, 3.365332932799556,
+      3.2776322037890426, 3.068894592634066, 2.7882427038718043],
+     [2.446098254266591, 2.30913790280239, 2.2609222024500797, 2.0608363455200682,
+      1.9474809733170746, 1.808602264154351, 1.9387861308727807]])
+
+
+def test_a_slip_ending_at_a_kink_with_its_next_guard_at_round_off_continues():
+    """The event after the stick that starts at the kink is the next slip at its real zero (about
+    0.0499 cycles later, in both cycles alike), and the gait is a success as in the chain's
+    incremental steps (an independent solver: success, W+ within 0.1 %)."""
+    model = ChainModel(KINK_TIE_CHAIN)
+    torque = ChainReferenceTorque(KINK_TIE_TABLE, KINK_TIE_CHAIN)
+    res = simulate_chain_torque(model, torque)
+    assert res.status is Status.SUCCESS, res.message
+    onsets = [e.t for e in res.events if e.kind == "slip_onset_2"]
+    first = [t for t in onsets if 0.4 < t < 0.5]
+    second = [t for t in onsets if 1.4 < t < 1.5]
+    assert len(first) == len(second) == 1 and abs(second[0] - 1 - first[0]) <= 1e-9
+    steps = simulate_chain_mpcc(model, torque, steps=50)
+    assert steps.status is Status.SUCCESS, steps.message
+    assert abs(steps.W_plus - res.W_plus) <= 1e-3 * res.W_plus
+
+
 def test_a_reversed_chain_under_the_reversed_table_mirrors_s():
     """The five-link chain read from its other end, the table's rows reversed: -S, the same W+."""
     model, _ = _five_link()
