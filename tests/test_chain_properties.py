@@ -71,8 +71,8 @@ def chains_and_gaits(draw):
     return chain, reference
 
 
-#: a four-link chain whose slips end in stick-stick just before a step phase: the step that passes
-#: the slip's end in the slip mode (net slip still positive) is redone from the event
+#: a four-link chain whose slips end in stick-stick just before a step phase, inside a step whose
+#: net slip is still positive: the step is split at the slip's end
 PASSED_SLIP_END = (
     Chain(lengths=(0.031509756267871114, 0.018290145329482026, 0.02250293992993284,
                    0.021334763331139286),
@@ -87,10 +87,26 @@ PASSED_SLIP_END = (
                           -1.3408629330557327 * np.arange(3)))
 
 
+#: a five-link chain whose slip stops at 0.63363, inside the step [0.62, 0.64] (net slip still
+#: negative), and whose joint 1 touches the ground at 0.63655 in the stick after it: the touch was
+#: looked for in the slip's solution past its end (0.63657 at 25 and 50 steps)
+SLIP_STOPPED_BEFORE_A_TOUCH = (
+    Chain(lengths=(0.015, 0.02, 0.024689573074579883, 0.033203125, 0.02042326592857681),
+          masses=(0.0078125, 0.01171875, 0.0078125, 0.0078125, 0.009765625),
+          stiffness=(0.06242060780769592, 0.19974594498462694, 0.1498094587384702,
+                     0.049936486246156736),
+          mu=(0.5, 0.5), com=(0.5, 0.5, 0.5, 0.5, 0.5), rest=(0.0, 0.0, 0.0, 0.0)),
+    JointFourier([1.6580627893946132, 2.6179938779914944, 2.6179938779914944, 1.6580627893946132],
+                 [[0.0], [0.2218795758591703], [0.19254735068182713], [0.17071896203287812]],
+                 [[0.17453292519943295], [0.4549205467520418], [0.15043447750965994],
+                  [0.0362874355815836]]))
+
+
 @pytest.mark.slow
 @SETTINGS
 @given(chains_and_gaits())
 @example(PASSED_SLIP_END)
+@example(SLIP_STOPPED_BEFORE_A_TOUCH)
 def test_event_driven_and_incremental_chain_simulators_agree(case):
     chain, reference = case
     note(f"{chain}, {reference.describe()}")

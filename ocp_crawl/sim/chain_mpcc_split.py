@@ -7,11 +7,13 @@ Its guards are positive while the mode holds: in stick-stick the four friction m
 of pair j the other three margins and the slip rate ds_j/dtheta (central differences of the mode
 solutions, scaled by L).  When the enumerated step ends in another mode, the first zero in theta
 of a guard negative at theta = 1 is located by Brent's method, the step is cut there (an event
-point in the old mode) and the rest of the step is solved from it, at most ``MAX_SPLITS`` times.
-A guard already negative at the step's start belongs to an event the previous step passed in its
-mode (a slip that stops inside that step while its net slip over the step is still positive): it
-is located at theta < 0 on the same mode solutions, and the previous step is redone from its
-start to the event and from the event on in the new mode.
+point in the old mode) and the rest of the step is solved from it, at most ``MAX_SPLITS`` times;
+so is a step that ends in its slip mode with the slip's rate below zero at its end (a slip that
+stops inside the step while its net slip over the step is still positive: the step's contact
+checks then read the mode after it).  A guard already negative at the next step's start belongs
+to an event the previous step passed in its mode otherwise: it is located at theta < 0 on the
+same mode solutions, and the previous step is redone from its start to the event and from the
+event on in the new mode.
 """
 from __future__ import annotations
 
@@ -89,6 +91,22 @@ def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of, back: float = 0.0) 
     return min(found) if found else None
 
 
+def _slip_stopped(step: ChainStep, mode: Mode, row: tuple, tau_of) -> bool:
+    """Whether the slip ``mode`` of a step that ends in it stopped inside the step: its rate at
+    the step's end below zero (the net slip over the step still positive).  Its end is then an
+    event inside this step, located and split as a change of mode (the step's own contact checks
+    then read the mode that holds after it)."""
+    k = ENUM_MODES.index(mode)
+    if not k:
+        return False
+    # (the rate of _guards at the step's end, without the margins)
+    lo = 1.0 - RATE_EPS
+    a = step.mode_solution(mode, row[1], tau_of(lo), row[4])
+    b = step.mode_solution(mode, row[1], tau_of(1.0), row[4])
+    return (a is not None and b is not None
+            and float((b["slip"][k - 1] - a["slip"][k - 1]) / (1.0 - lo)) < -GUARD_TOL)
+
+
 def _row(t: float, res: ChainStepResult, mode: Mode | None = None) -> tuple:
     return (t, res.phi, res.x1, res.x2, res.f_t, res.f_n1, res.f_n2, res.d,
             res.mode if mode is None else mode)
@@ -161,8 +179,8 @@ def advance(step: ChainStep, torque, row: tuple, ta: float, tb: float,
             return np.asarray(torque(a + theta * (tb - a)), float).reshape(step.m)
 
         res = _solve_step(step, row, tau_of, switch_exact)
-        if (not res.success or res.mode == mode or not switch_exact or split == MAX_SPLITS
-                or mode not in ENUM_MODES):
+        if (not res.success or not switch_exact or split == MAX_SPLITS or mode not in ENUM_MODES
+                or (res.mode == mode and not _slip_stopped(step, mode, row, tau_of))):
             break
 
         back = (prev[0] - ta) / (tb - ta) if prev is not None and not out and prev[8] == mode \
