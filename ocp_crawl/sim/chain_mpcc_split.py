@@ -56,12 +56,23 @@ def _guards(step: ChainStep, mode: Mode, row: tuple, tau_of, theta: float,
             lo, hi = max(theta - RATE_EPS, 0.0), theta + RATE_EPS
         else:
             lo, hi = theta - RATE_EPS, min(theta + RATE_EPS, 0.0)
-        a = step.mode_solution(mode, phi_k, tau_of(lo), ft)
-        b = step.mode_solution(mode, phi_k, tau_of(hi), ft)
-        if a is None or b is None:
+        rate = _slip_rate(step, mode, row, tau_of, lo, hi)
+        if rate is None:
             return None
-        g["rate"] = float((b["slip"][k - 1] - a["slip"][k - 1]) / (hi - lo))
+        g["rate"] = rate
     return g
+
+
+def _slip_rate(step: ChainStep, mode: Mode, row: tuple, tau_of, lo: float,
+               hi: float) -> float | None:
+    """The slip ``mode``'s rate ds/dtheta on the step from ``row``, differenced between the step
+    fractions lo and hi; None when a mode solve fails."""
+    k = ENUM_MODES.index(mode)
+    a = step.mode_solution(mode, row[1], tau_of(lo), row[4])
+    b = step.mode_solution(mode, row[1], tau_of(hi), row[4])
+    if a is None or b is None:
+        return None
+    return float((b["slip"][k - 1] - a["slip"][k - 1]) / (hi - lo))
 
 
 def _locate(step: ChainStep, mode: Mode, row: tuple, tau_of, back: float = 0.0) -> float | None:
@@ -96,15 +107,10 @@ def _slip_stopped(step: ChainStep, mode: Mode, row: tuple, tau_of) -> bool:
     the step's end below zero (the net slip over the step still positive).  Its end is then an
     event inside this step, located and split as a change of mode (the step's own contact checks
     then read the mode that holds after it)."""
-    k = ENUM_MODES.index(mode)
-    if not k:
+    if not ENUM_MODES.index(mode):
         return False
-    # (the rate of _guards at the step's end, without the margins)
-    lo = 1.0 - RATE_EPS
-    a = step.mode_solution(mode, row[1], tau_of(lo), row[4])
-    b = step.mode_solution(mode, row[1], tau_of(1.0), row[4])
-    return (a is not None and b is not None
-            and float((b["slip"][k - 1] - a["slip"][k - 1]) / (1.0 - lo)) < -GUARD_TOL)
+    rate = _slip_rate(step, mode, row, tau_of, 1.0 - RATE_EPS, 1.0)
+    return rate is not None and rate < -GUARD_TOL
 
 
 def _row(t: float, res: ChainStepResult, mode: Mode | None = None) -> tuple:

@@ -5,8 +5,8 @@ The chain follows its equilibrium branch by continuation in the phase t [cycles]
 mode every point is a Newton solve of :meth:`~ocp_crawl.model.chain_model.ChainModel.solve` from
 the tangent predictor of the previous point, with an adaptive step (a guard that dips below zero
 and back inside a step is found by its Hermite interpolant; a step in which a contact's guard nears
-zero is halved).  Guards (positive while the mode
-holds, :meth:`~ocp_crawl.sim.chain_torque_parts.ChainSolver.guards`): in stick-stick both feet's
+zero is halved).  Guards (positive while the mode holds,
+:meth:`~ocp_crawl.sim.chain_torque_parts.ChainSolver.guards`): in stick-stick both feet's
 friction margins mu_i f_n,i -+ f_t; in a slip of foot s with sign(d') = sigma, sigma d' and the
 other foot's margin mu_o f_n,o - mu_s f_n,s; in every mode the normal forces, d and the joint
 heights.  A guard crossing zero in a step is located on the guard of the solved state by the
@@ -14,13 +14,13 @@ three-link stepper's safeguarded Newton method on its exact rate
 (:func:`~ocp_crawl.sim.event_locate.guard_root`, to 1e-13 cycles); the mode after it is that of
 the transition table (:func:`ocp_crawl.sim.event_guards.transition`) when it is consistent (its
 guards positive and its equilibrium stable just after the event), else the only consistent
-single-foot mode, else the run
-fails (``no_consistent_mode``).  A lost contact ends the run (``lift_off``, ``joint_on_ground``,
-``feet_crossed``), so does a fold of the branch (the Newton solve fails as the step shrinks, or
-the sign of det J or of the stability margin changes: ``fold``).  A stuck foot stays; a slipping
-foot moves with d.  Only single-foot slips are modelled (a gait whose friction limits tie
-identically, mu1 f_n1 = mu2 f_n2, ends with ``no_consistent_mode``).  Cycles run until the
-state and mode at the start of a cycle repeat (at least two cycles); the last cycle is reported.
+single-foot mode, else the run fails (``no_consistent_mode``).  A lost contact ends the run
+(``lift_off``, ``joint_on_ground``, ``feet_crossed``), so does a fold of the branch (the Newton
+solve fails as the step shrinks, or the sign of det J or of the stability margin changes:
+``fold``).  A stuck foot stays; a slipping foot moves with d.  Only single-foot slips are
+modelled (a gait whose friction limits tie identically, mu1 f_n1 = mu2 f_n2, ends with
+``no_consistent_mode``).  Cycles run until the state and mode at the start of a cycle repeat (at
+least two cycles); the last cycle is reported.
 
 An input with kinks or holds (piecewise-linear tables, pulses, optimal-control profiles) is taken
 piece by piece (:mod:`ocp_crawl.sim.chain_pieces`): steps end at its kinks, where the mode after a

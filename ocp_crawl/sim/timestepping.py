@@ -199,9 +199,9 @@ class TimeStepper:
                                    extra={"steps_per_cycle": self.steps, "ipopt_calls": 0})
         kin0 = self.model.kinematics(start.x[:2])
         state = StepState(start.x[:2], 0.0, float(kin0["d"]), 0.0)
-        run = SteppingRun(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]), state.x1,
-                            state.x2, 0.0, float(kin0["fn1"]), float(kin0["fn2"]),
-                            int(Mode.STICK))])
+        run = SteppingRun(state, [(0.0, state.phi, float(kin0["theta"]), float(kin0["d"]),
+                                   state.x1, state.x2, 0.0, float(kin0["fn1"]), float(kin0["fn2"]),
+                                   int(Mode.STICK))])
         status, detail, fail_t, fail_mode = Status.SUCCESS, "", None, None
         calls0 = self.step.ncalls
         try:
