@@ -481,6 +481,9 @@ COMMAND_ROWS = {
     "optimize: endgame without iterations":
         R("optimize", ["{ocp}", "--set", "ocp.endgame_max_iter=0"],
           ["[ocp] endgame_max_iter = 0", "[1, 10000]"]),
+    "optimize: an unknown way to solve the starts":
+        R("optimize", ["{ocp}", "--set", "ocp.start_solve=fast"],
+          ["ocp_max_speed.toml", "start_solve", "tightened"]),
     "optimize: too many homotopy stages":
         R("optimize", ["{ocp}", "--set", "ocp.sigma_factor=0.999"],
           ["ocp_max_speed.toml", "[ocp]", "sigma_factor 0.999", "homotopy stages"]),

@@ -29,6 +29,11 @@ PAPER = Robot.paper()
 #: the robot of tests/data/margin_at_friction_tol.csv (ocp_max_speed.toml with M, L, beta changed)
 GEOMETRY = PAPER.replace(M=0.08, L=0.15, beta=1.5)
 DATA = Path(__file__).parent / "data" / "margin_at_friction_tol.csv"
+#: min_cot's optimum on the friction-tolerance rule, and over the friction set {0.95, 1, 1.05}
+#: (ocp_min_cot.toml: the paper robot, speed_min 0.04 m/s)
+MIN_COT = Path(__file__).parent / "data" / "min_cot_at_friction_tol.csv"
+MIN_COT_SET = Path(__file__).parent / "data" / "min_cot_over_friction_set.csv"
+SPEED_MIN = 0.04
 
 
 def at_ratio(robot: Robot, ratio: float) -> Model:
@@ -42,11 +47,11 @@ def harmonic(psi_deg: float) -> ReferenceTorque:
     return ReferenceTorque(Harmonic.from_degrees(90.0, 30.0, psi_deg), PAPER.k)
 
 
-def optimum() -> tuple[PeriodicLinear, np.ndarray, float]:
-    """The stored max_speed optimum on the friction-tolerance row: its replay signal, node torques,
-    period."""
-    tau = np.loadtxt(DATA, delimiter=",").T
-    period = float(DATA.read_text().split("period T = ")[1].split()[0])
+def optimum(path: Path = DATA) -> tuple[PeriodicLinear, np.ndarray, float]:
+    """A stored optimum (default: max_speed's on the friction-tolerance row): its replay signal,
+    node torques, period."""
+    tau = np.loadtxt(path, delimiter=",").T
+    period = float(path.read_text().split("period T = ")[1].split()[0])
     N = tau.shape[1]
     return PeriodicLinear(np.arange(N) / N, tau), tau, period
 
@@ -88,6 +93,37 @@ def test_a_margin_keeps_the_gait_under_asymmetries_within_it(name):
         assert abs(S_at(robot, sig, r) - S0) <= 2 * 0.1 ** 2 * abs(S0)
     for r in (1 - 0.025, 1 + 0.025):
         assert S_at(robot, sig, r) * S0 > 0
+
+
+def test_the_margin_bounds_no_loss_of_S():
+    """min_cot's optimum on the rule (the premise: its margin within replay_tol of 0.05, read on a
+    fine output grid) loses more than 2 (delta/m)^2 = 2 % of S at delta = m/10, and its speed there
+    falls short of speed_min by more than replay_tol: the margin keeps a gait off the tie, it does
+    not keep its speed."""
+    sig, _, T = optimum(MIN_COT)
+    model = at_ratio(PAPER, 1.0)
+    fine = simulate_torque(model, sig, t_eval=np.linspace(0.0, 1.0, 4001))
+    m = margin_from_modes(fine, model.robot)
+    tol = OCPSettings().replay_tol
+    assert abs(m - 0.05) <= tol
+    S0 = S_at(PAPER, sig, 1.0)
+    assert abs(S0) / T >= SPEED_MIN * (1 - tol)
+    shifted = [S_at(PAPER, sig, r) for r in (1 - m / 10, 1 + m / 10)]
+    assert max(abs(S - S0) for S in shifted) > 2 * 0.1 ** 2 * abs(S0)
+    assert min(abs(S) for S in shifted) / T < SPEED_MIN * (1 - tol)
+
+
+def test_the_set_holds_the_speed_between_its_scenarios():
+    """min_cot's optimum over {0.95, 1, 1.05} (the worst; friction_tol 0) was solved and replayed at
+    those three ratios only.  At ratios between them it keeps its direction, meets speed_min within
+    replay_tol and keeps S within 3.5 % of S at equal feet."""
+    sig, _, T = optimum(MIN_COT_SET)
+    S0 = S_at(PAPER, sig, 1.0)
+    tol = OCPSettings().replay_tol
+    for r in (0.96, 0.975, 0.99, 0.995, 1.005, 1.01, 1.025, 1.04):
+        S = S_at(PAPER, sig, r)
+        assert S * S0 > 0 and abs(S) / T >= SPEED_MIN * (1 - tol), (r, S)
+        assert abs(S - S0) <= 0.035 * abs(S0), (r, S)
 
 
 def test_judge_compares_the_margin_as_a_fraction_of_the_friction_limit():

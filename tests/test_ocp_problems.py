@@ -27,7 +27,7 @@ REPO = Path(__file__).resolve().parents[1]
 #: the shipped files at N = 50 (a minute or more each) by hand; the default suite solves max_speed's
 #: at N = 30 (the shared run of conftest.py)
 FILES = ["ocp_max_speed", "ocp_min_cot", "ocp_robust", "ocp_max_speed_peak_torque",
-         "ocp_min_cot_two_levels"]
+         "ocp_min_cot_two_levels", "ocp_min_cot_friction_set"]
 
 
 def nodes_list() -> list[int]:

@@ -21,6 +21,8 @@ WARM_BARRIERS = ("adaptive", "monotone")
 PERTURBATIONS = ("as_needed", "always")
 #: the paths after the endgame's stage (:attr:`OCPSettings.endgame_paths`)
 ENDGAME_PATHS = ("endgame_first", "both")
+#: how the starts are solved (:attr:`OCPSettings.start_solve`)
+START_SOLVES = ("homotopy", "tightened", "both")
 #: keys of earlier versions that no longer exist, and what replaces each (problem files and
 #: OCPSettings)
 REMOVED_KEYS = {
@@ -110,7 +112,8 @@ LAYERS = {
                 "constraints", "mu_ratio_eps", "mu_ratios", "mu_levels", "robust", "friction_tol"),
     "transcription": ("nodes", "parametrization", "fourier_order", "regularization"),
     "solver": ("starts", "sigma0", "sigma_min", "sigma_factor", "stage_tol", "stage_tol_ratio",
-               "loose_last", "endgame_sigma", "endgame_paths", "endgame_max_iter", "perturbation",
+               "loose_last", "start_solve", "endgame_sigma", "endgame_paths", "endgame_max_iter",
+               "perturbation",
                "warm_barrier", "ipopt", "verbose"),
     "baselines": ("baselines", "harmonic_psi", "harmonic_A", "baseline_samples", "baseline_starts",
                   "baseline_evaluations"),

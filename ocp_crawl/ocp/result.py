@@ -21,7 +21,8 @@ class StartRecord:
     """One start of the multi-start OCP and what became of it."""
 
     label: str
-    """which start: 'harmonic baseline', 'second harmonic' or 'perturbed i'"""
+    """which start: 'harmonic baseline', 'second harmonic', 'perturbed i', 'given start', or a
+    family's best member solved by the tightened NLP, 'SHAPE baseline, tightened'"""
     status: Status
     T_start: float
     """the start's period [s]"""
@@ -29,7 +30,7 @@ class StartRecord:
     value_replay: float = float("nan")
     message: str = ""
     iterations: int = 0
-    """IPOPT iterations of the start's homotopies"""
+    """IPOPT iterations of the start's homotopies (or of its tightened NLP)"""
 
     @property
     def converged(self) -> bool:

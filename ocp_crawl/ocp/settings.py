@@ -18,7 +18,7 @@ from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
                                   HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, LAYERS, MAX_STAGES,
                                   NODES_BOUNDS, PARAMETRIZATIONS, PERTURBATIONS, PHYSICAL_BOUNDS,
-                                  STARTS_BOUNDS, WARM_BARRIERS, check_physical)
+                                  START_SOLVES, STARTS_BOUNDS, WARM_BARRIERS, check_physical)
 from ocp_crawl.ocp.objectives import resolve_objective
 from ocp_crawl.ocp.plant import (AnyRobot, joint_accel_bounds, joint_rate_bounds,
                                  joint_torque_bounds, with_friction)
@@ -140,6 +140,10 @@ class OCPSettings:
     :mod:`~ocp_crawl.ocp.convergence`): max_speed N = 50..400 took 169 s instead of 334 s, min_cot
     218 s instead of 466 s, with the same optima.  Off by default: from the harmonic baseline
     (max_speed, N = 20, the last stage to 1e-4) it reached another optimum, 2 % slower"""
+    start_solve: str = "homotopy"
+    """how the starts are solved: "homotopy" (default); "tightened" (each family's best member a
+    start too, every start solved by the tightened NLP alone on its simulated gait's branches, at
+    most ``endgame_max_iter`` iterations a candidate); "both" (the homotopy, then those)"""
     endgame_sigma: float | None = None
     """the endgame (:mod:`~ocp_crawl.ocp.endgame`): after the homotopy's stage at this sigma (one of
     the schedule's stages before the last), the tightened NLP on the branches of that stage's
@@ -151,8 +155,8 @@ class OCPSettings:
     a process can be forked, the better by replay kept: never worse than the whole homotopy, as slow
     as it)"""
     endgame_max_iter: int = 500
-    """most IPOPT iterations of the endgame's tightened NLP (beyond them the homotopy goes on), in
-    ENDGAME_MAX_ITER_BOUNDS"""
+    """most IPOPT iterations of the endgame's tightened NLP (beyond them the homotopy goes on) and
+    of each candidate of a tightened start (``start_solve``), in ENDGAME_MAX_ITER_BOUNDS"""
     perturbation: str = "as_needed"
     """when IPOPT perturbs the Hessian of its KKT system: "as_needed" (default: IPOPT's own rule, an
     unperturbed factorisation first at every iteration) or "always" (from the first factorisation:
@@ -204,9 +208,9 @@ class OCPSettings:
     the OCP has the same rule as a constraint on its sub-steps
     (:func:`ocp_crawl.ocp.substeps.friction_rows`), the judge accepts a replayed margin down to
     eps - replay_tol (a fraction of the mean friction limit).  What it guarantees, measured by
-    simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an exact friction tie, an
-    asymmetry delta <= eps/10 costs at most about 2 % of S (1.6 (delta/m)^2), where a gait at the
-    tie stops at delta = 0.5 %.  It does not hold the speed under +-eps/2 (an optimum on the rule
+    simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an exact friction tie (a gait
+    at the tie stops at delta = 0.5 %), but delta = eps/10 may cost S 2 % (max_speed's optimum) to
+    4.5 % (min_cot's).  It does not hold the speed under +-eps/2 (an optimum on the rule
     keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its worst
     case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps its
     speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
@@ -260,7 +264,8 @@ class OCPSettings:
         self._check_objective()
         for name, choices in (("parametrization", PARAMETRIZATIONS),
                               ("warm_barrier", WARM_BARRIERS), ("baselines", BASELINE_CHOICES),
-                              ("perturbation", PERTURBATIONS), ("endgame_paths", ENDGAME_PATHS)):
+                              ("perturbation", PERTURBATIONS), ("endgame_paths", ENDGAME_PATHS),
+                              ("start_solve", START_SOLVES)):
             if getattr(self, name) not in choices:
                 raise ValueError(f"OCPSettings.{name} must be one of {choices}, got "
                                  f"{getattr(self, name)!r}")

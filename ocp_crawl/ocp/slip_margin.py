@@ -21,18 +21,19 @@ margin is 2.5e-4 while m = 0.30).  Both-feet slip (slip-slip modes, only at the 
 
 What a margin m guarantees, measured by simulation at mu1/mu2 = 1 +- delta (the geometric mean
 fixed; ``scripts/friction_set.py``, ``tests/test_friction_set.py``): an asymmetry delta takes from
-the slipping foot the end of each slip phase where the limits approach the tie; S changes
-continuously, for delta <= m/5 by at most about 1.6 (delta/m)^2 of itself (0.7 to 1.6 times
-(delta/m)^2 on the harmonic gaits of margins 0.035 to 0.30 and the max_speed optimum below, whose
-slip phases end at the tie; 0.01 times on a robust_speed optimum), where the tie gait stops.  So
-``friction_tol = eps`` guarantees a gait that does not depend on an exact tie: an asymmetry delta <=
-eps/10 costs at most about 2 % of S.  It does not guarantee the speed under +-eps/2: the max_speed
-optimum of the robot M 0.08 kg, L 0.15 m, beta 1.5 (its margin on the rule, 0.0497) keeps its
-direction at mu1/mu2 = 0.975 and 1.025 but only 40 % and 57 % of its S.  Nor is it the limit of the
-set {1 - eps, 1, 1 + eps}: robust_speed's worst case over it (eps = 0.05, friction_tol = 0, paper
-robot, N = 50) ends on a margin of 0.103 with S within 0.03 % over the set.  A gait whose speed
-holds over a set of friction ratios is asked for by that set: ``[ocp] mu_ratio_eps`` with ``robust =
-"worst"``, for any objective (docs/guide/optimal_gaits.md, "Friction uncertainty").
+the slipping foot the end of each slip phase where the limits approach the tie, so S changes
+continuously where a gait at the tie stops.  At delta = m/10 the loss is 0.7 to 1.6 (delta/m)^2 of
+S on the harmonic gaits of margins 0.035 to 0.30 and the max_speed optimum below, whose slip phases
+end at the tie (0.01 times on a robust_speed optimum), but 4.5 (delta/m)^2 on min_cot's optimum.
+So ``friction_tol = eps`` keeps a gait off an exact tie and bounds no loss of S: min_cot's optimum
+loses 4.5 % at delta = eps/10 and then misses its speed requirement.  Nor does it hold the speed
+under +-eps/2: the max_speed optimum of the robot M 0.08 kg, L 0.15 m, beta 1.5 (its margin on the
+rule, 0.0497) keeps its direction at mu1/mu2 = 0.975 and 1.025 but only 40 % and 57 % of its S.  Nor
+is it the limit of the set {1 - eps, 1, 1 + eps}: robust_speed's worst case over it (eps = 0.05,
+friction_tol = 0, paper robot, N = 50) ends on a margin of 0.103 with S within 0.03 % over the set,
+min_cot's on 0.172 with S within 3.4 %.  A gait whose speed holds over a set of friction ratios is
+asked for by that set: ``[ocp] mu_ratio_eps`` with ``robust = "worst"``, for any objective (min_cot
+from tightened starts, ``start_solve``; docs/guide/optimal_gaits.md, "Friction uncertainty").
 """
 from __future__ import annotations
 

@@ -13,11 +13,15 @@ family (harmonic, triangle, pulse: ``settings.baselines``) and against the best 
 harmonic family is searched first (the start); the others, comparators only, are searched in a
 forked process while this one solves the OCP (:func:`~ocp_crawl.workers.overlap`).  With
 ``endgame_sigma`` the homotopy may end early (:mod:`~ocp_crawl.ocp.endgame`), judged by replay here.
+With ``start_solve`` = "tightened" every family is searched first and each family's best member is
+a start too, each start solved by the tightened NLP on its simulated branches alone; with "both"
+those tightened starts follow the homotopy's (:func:`~ocp_crawl.ocp.starts.family_starts`).
 """
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -30,16 +34,16 @@ from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_va
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
+from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains
 from ocp_crawl.ocp.plant import AnyRobot, Plant, as_plant
-from ocp_crawl.ocp.judge import (gain_over, is_better, judge_replay, replay_signal, spread_text,
+from ocp_crawl.ocp.judge import (is_better, judge_replay, replay_signal, spread_text,
                                  value_text)
-from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.chain_search import (SHAPES as CHAIN_SHAPES, ChainWaveChoice,
                                         best_chain_baselines)
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.starts import StartGuess, given_start, start_guesses
+from ocp_crawl.ocp.starts import StartGuess, family_starts, given_start, start_guesses
 from ocp_crawl.ocp.solver import GaitSolver
 from ocp_crawl.ocp.transcription import GaitOCP
 from ocp_crawl.workers import overlap
@@ -99,38 +103,69 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
                          f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
     t_start = time.perf_counter()
     solver = GaitSolver(GaitOCP(robot, gravity, settings))
-    harmonic = _baselines(robot, gravity, settings, ("harmonic",), jobs, solver.prepare)
-    harm = harmonic.choices["harmonic"]
+    shapes = tuple(s for s in settings.baseline_shapes
+                   if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
+    # tightened starts need every family's best before the solve; else the harmonic one only
+    first = shapes if settings.start_solve == "tightened" else ("harmonic",)
+    found = _baselines(robot, gravity, settings, first, jobs, solver.prepare)
+    harm = found.choices["harmonic"]
     if harm is None:
         return _no_harmonic(settings, solver.ocp.n_joints)
     models = [Plant(r, gravity) for r in settings.scenarios(robot)]
-    signal, T0 = baseline_gait(harm, robot, settings)
-    N, m = settings.nodes, solver.ocp.n_joints
-    phase = np.arange(N) / N
-
-    def follows(tau: np.ndarray) -> bool:
-        return all(p.simulate(replay_signal(phase, tau)).success for p in models)
+    tightened = settings.start_solve == "tightened"
 
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
-        guesses = start_guesses(settings, robot, signal(phase).reshape(m, N), T0, follows)
-        if start is not None:
-            guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(m, N),
-                                     start[1])
-        return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T, harm, replay,
-                               baselines=harmonic)) for g in guesses]
-    others = tuple(s for s in settings.baseline_shapes[1:]
-                   if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
+        guesses = _guesses(settings, robot, solver.ocp.n_joints, found, models, start)
+        return _solve_guesses(solver, models, guesses, found, replay, tightened)
+    others = tuple(s for s in shapes if s not in first)
     if others:  # the other families, the gains' comparators only, searched while the OCP solves
         # (on all the workers: the search takes longer than the solve, whose core it then takes
         # over)
         rest, solved = overlap(lambda send: _baselines(robot, gravity, settings, others, jobs),
                                solve_starts, lambda message: None)
-        base = harmonic.merged(rest)
+        base = found.merged(rest)
     else:
-        solved, base = solve_starts(), harmonic
+        solved, base = solve_starts(), found
+    if settings.start_solve == "both":
+        solved += _solve_guesses(solver, models, family_starts(base, settings, robot), base,
+                                 replay, True)
     res = _best_start(solved, base, models, settings, replay)
     res.solve_time_s = time.perf_counter() - t_start
     return res
+
+
+def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, models: list,
+             start: tuple | None) -> list[StartGuess]:
+    """The starts: the harmonic baseline (or the ``start`` given) and the settings' further starts
+    (:func:`~ocp_crawl.ocp.starts.start_guesses`); with ``start_solve`` = "tightened", labelled so
+    and followed by every other family's best member of ``found``."""
+    N = settings.nodes
+    phase = np.arange(N) / N
+    harm = found.choices["harmonic"]
+    signal, T0 = baseline_gait(harm, robot, settings)
+
+    def follows(tau: np.ndarray) -> bool:
+        return all(p.simulate(replay_signal(phase, tau)).success for p in models)
+    guesses = start_guesses(settings, robot, signal(phase).reshape(m, N), T0, follows)
+    if start is not None:
+        guesses[0] = given_start(settings, robot, np.asarray(start[0](phase)).reshape(m, N),
+                                 start[1])
+    if settings.start_solve != "tightened":
+        return guesses
+    return ([replace(g, label=f"{g.label}, tightened") for g in guesses]
+            + family_starts(found, settings, robot, skip=("harmonic",)))
+
+
+def _solve_guesses(solver: GaitSolver, models: list, guesses: list[StartGuess], base: Baselines,
+                   replay: bool, tightened: bool) -> list[tuple[StartGuess, OCPResult]]:
+    """Each start solved from its node profile (by the homotopy, or by the tightened NLP alone at
+    most ``endgame_max_iter`` iterations per candidate) and judged: (start, result) pairs."""
+    settings = solver.settings
+    phase = np.arange(settings.nodes) / settings.nodes
+    cap = settings.endgame_max_iter if tightened else None
+    return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T,
+                           base.choices["harmonic"], replay, tightened=tightened, baselines=base,
+                           max_iter=cap)) for g in guesses]
 
 
 def _no_harmonic(settings: OCPSettings, joints: int) -> OCPResult:
@@ -159,7 +194,7 @@ def _best_start(solved: list, base: Baselines, models: list, settings: OCPSettin
     for r in runs:
         r.baselines = base
         if replay:
-            _gains(r, models)
+            measure_gains(r, models)
     res = _pick(runs, settings, replay)
     if replay:
         harmonic_peaks(res, models)
@@ -191,7 +226,7 @@ def _pick(runs: list[OCPResult], settings: OCPSettings, replay: bool) -> OCPResu
 def solve_from(solver: GaitSolver, models: list, signal, T: float,
                harmonic: WaveChoice | ChainWaveChoice | None = None, replay: bool = True,
                tightened: bool = False,
-               baselines: Baselines | None = None) -> OCPResult:
+               baselines: Baselines | None = None, max_iter: int | None = None) -> OCPResult:
     """Solve the OCP from one start and judge its optimum by replay.
 
     Parameters
@@ -218,6 +253,9 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     baselines : Baselines, optional
         The best member of each waveform family (the gains are measured against them; without them,
         against ``harmonic``).
+    max_iter : int, optional
+        With ``tightened``: at most this many IPOPT iterations per candidate of the tightened NLP
+        (None: the solvers' own limit).
 
     Returns
     -------
@@ -238,7 +276,7 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
         return res
     x0 = ocp.initial_guess(signal, T)
     endgame = None if tightened or not replay else _endgame(solver, models)
-    x, hist, failed, status = (solver.solve_tightened(x0) if tightened
+    x, hist, failed, status = (solver.solve_tightened(x0, max_iter) if tightened
                                else solver.solve(x0, endgame=endgame))
     res.homotopy = hist
     res.path = "; ".join(endgame.outcome) if endgame is not None else ""
@@ -400,73 +438,4 @@ def _judge(res: OCPResult, models: list) -> None:
         res.message += ("; confirmed by the event-driven replay (objective within "
                         f"{units.ratio(verdict.rel_diff)}, replay_tol "
                         f"{units.ratio(res.settings.replay_tol)})")
-    _gains(res, models)
-
-
-def _gains(res: OCPResult, models: list) -> None:
-    """The gains by replay over each family's best member and over the best of them; an optimum
-    significantly worse than the harmonic baseline (its first start) is not one
-    (WORSE_THAN_BASELINE); one worse than another family's best says so in its message (a local
-    optimum: that gait is a start to try)."""
-    objective = res.settings.objective
-    best: WaveChoice | ChainWaveChoice | None
-    if res.baselines is not None:
-        res.gains = res.baselines.gains(res.value_replay, gain_over)
-        best = res.baselines.best
-    else:
-        best = res.harmonic
-        res.gains = {"harmonic": math.nan if best is None else
-                     gain_over(objective, res.value_replay, best.value)}
-    if best is None:
-        return
-    # NaN for an infeasible one's +inf
-    res.gain = gain_over(objective, res.value_replay, best.value)
-    h_gain, tol = res.gains.get("harmonic", math.nan), res.settings.replay_tol
-    if res.success and h_gain < -tol and _baseline_within(res, models, h_gain):
-        _worse_than_baseline(res, h_gain)
-    elif res.success and res.gain < -tol and best is not res.harmonic:
-        res.message += (f"; the best {best.shape} gait is better "
-                        f"({value_text(objective, best.value)}, gain {units.ratio(res.gain)}): the "
-                        f"resolution of N = {res.settings.nodes} nodes or a local optimum")
-
-
-def harmonic_peaks(res: OCPResult, models: list) -> None:
-    """The harmonic baseline's peak joint rates and foot sliding speeds (its replay in every
-    scenario), unless measured already or there is no baseline."""
-    if res.harmonic is None or res.harmonic_peak_joint_rate_deg_s:
-        return
-    signal = res.harmonic.signal_for(as_plant(models[0]).robot, res.settings)
-    peaks = [signal_peaks(m, signal, res.harmonic.T) for m in models]
-    res.harmonic_peak_joint_rate_deg_s = [list(p.joint_rate_deg_s) for p in peaks]
-    res.harmonic_peak_slip_speed_m_s = [list(p.slip_speed_m_s) for p in peaks]
-
-
-def _baseline_within(res: OCPResult, models: list, gain: float) -> bool:
-    """Whether the harmonic baseline meets the optional max_joint_rate_deg_s (the bandwidth and the
-    envelope it meets by construction); a baseline beyond it is no gait of the problem, so a profile
-    worse than it is no failure (the message says so)."""
-    bound = res.settings.max_joint_rate_deg_s
-    if bound is None:
-        return True
-    harmonic_peaks(res, models)
-    peak = max(max(p) for p in res.harmonic_peak_joint_rate_deg_s)
-    if peak <= bound * (1 + JOINT_RATE_RTOL):
-        return True
-    res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(gain)}), whose "
-                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond "
-                    "max_joint_rate_deg_s")
-    return False
-
-
-def _worse_than_baseline(res: OCPResult, gain: float) -> None:
-    """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same
-    envelope and bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both
-    values."""
-    objective = res.settings.objective
-    assert res.harmonic is not None  # a gain over the baseline was measured
-    res.success = False
-    res.status = Status.WORSE_THAN_BASELINE
-    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
-                   f"{value_text(objective, res.value_replay)} against the baseline's "
-                   f"{value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
-                   f"replay_tol {units.ratio(res.settings.replay_tol)})")
+    measure_gains(res, models)

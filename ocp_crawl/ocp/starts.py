@@ -17,6 +17,7 @@ from typing import Callable
 
 import numpy as np
 
+from ocp_crawl.ocp.baseline import Baselines
 from ocp_crawl.ocp.plant import AnyRobot, joint_rate_bounds, joint_torque_bounds, stiffness_of
 from ocp_crawl.ocp.settings import OCPSettings
 
@@ -67,11 +68,12 @@ def _profile(settings: OCPSettings, robot: AnyRobot, label: str, tau: np.ndarray
     return StartGuess(label, tau, feasible_period(settings, robot, tau, T))
 
 
-def given_start(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray, T: float) -> StartGuess:
+def given_start(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray, T: float,
+                label: str = "given start") -> StartGuess:
     """A start of the user's: node torques ``tau`` (m, N) [N m] and a period ``T`` [s] (e.g. a
-    previous optimum), clipped to the envelope, pinned, the period lengthened if the bandwidth
-    requires."""
-    return _profile(settings, robot, "given start", np.asarray(tau, float), T)
+    previous optimum, or a waveform family's best member), clipped to the envelope, pinned, the
+    period lengthened if the bandwidth requires."""
+    return _profile(settings, robot, label, np.asarray(tau, float), T)
 
 
 def second_harmonic_start(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: float,
@@ -142,4 +144,23 @@ def start_guesses(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: f
             if follows is None or follows(guess.tau):
                 break
         out.append(guess)
+    return out
+
+
+def family_starts(base: Baselines, settings: OCPSettings, robot: AnyRobot,
+                  skip: tuple[str, ...] = ()) -> list[StartGuess]:
+    """The best member of each searched waveform family of ``base`` (but the shapes ``skip``) as a
+    start: its torques at the node phases k/N, pinned, with its period; labelled "SHAPE baseline,
+    tightened" (they are solved by the tightened NLP, :attr:`OCPSettings.start_solve`).  A member
+    whose node profile and period equal an earlier one's is left out (the pulse family's best is
+    often the triangle's: a pulse of rise 0.5)."""
+    phase = np.arange(settings.nodes) / settings.nodes
+    out: list[StartGuess] = []
+    for shape, choice in base.choices.items():
+        if choice is None or shape in skip:
+            continue
+        tau = np.asarray(choice.signal_for(robot, settings)(phase), float).reshape(-1, phase.size)
+        guess = given_start(settings, robot, tau, choice.T, f"{shape} baseline, tightened")
+        if not any(np.array_equal(guess.tau, o.tau) and guess.T == o.T for o in out):
+            out.append(guess)
     return out

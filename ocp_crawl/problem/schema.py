@@ -30,7 +30,7 @@ from ocp_crawl.ocp.limits import (BASELINE_CHOICES, BASELINE_EVALUATIONS_BOUNDS,
                                   ENDGAME_MAX_ITER_BOUNDS, ENDGAME_PATHS, FOURIER_ORDER_BOUNDS,
                                   HARMONIC_A_BOUNDS, HARMONIC_PSI_BOUNDS, LAYER_OF, NODES_BOUNDS,
                                   OBJECTIVE_CHOICES, PERTURBATIONS, PHYSICAL_BOUNDS, REMOVED_KEYS,
-                                  STARTS_BOUNDS, WARM_BARRIERS)
+                                  START_SOLVES, STARTS_BOUNDS, WARM_BARRIERS)
 from ocp_crawl.sim import DEFAULT_SOLVER, SOLVERS
 from ocp_crawl.sim.options import MAX_CYCLES_BOUNDS, MAX_STEP_BOUNDS, STEPS_BOUNDS
 from ocp_crawl.sim.dynamic import CONES
@@ -393,6 +393,10 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         f"homotopy: a stage before the last is solved to IPOPT tol = "
         f"min({_ocp('stage_tol'):g}, stage_tol_ratio * sigma) (absent: {_ocp('stage_tol'):g})",
         rule=Rule(lambda v: 0 < v <= 1, "in (0, 1]")),
+    Key("start_solve", str, "-",
+        "homotopy (from each start), tightened (every family's best member a start too, each "
+        "solved on its simulated branches alone) or both", default=_ocp("start_solve"),
+        choices=START_SOLVES),
     Key("endgame_sigma", float, "-",
         "homotopy: after the stage at this sigma, the tightened NLP on its simulated "
         "profile's branches (absent: the whole homotopy)",

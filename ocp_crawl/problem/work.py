@@ -43,6 +43,9 @@ UNIT_COST = {"event_step": 1.5e-4, "mpcc_step": 1e-2, "mpcc_setup": 4.0, "mujoco
 # n = 3..7 links took 0.010 to 0.014 s, 0.002 to 0.0035 n s: docs/benchmarks.md)
 #: IPOPT iterations of a typical OCP start (the shipped files take 700 to 1,200 over all stages)
 OCP_ITERATIONS = 1000
+#: IPOPT iterations of a typical tightened start (``ocp.start_solve``: 56 to 500 on the shipped
+#: files and the tests' problems)
+TIGHTENED_ITERATIONS = 300
 #  event-solver steps per cycle at least (steps shorten near events: 20 to 400 on the shipped
 # gaits),  and in a typical cycle
 EVENT_STEPS, EVENT_STEPS_TYPICAL = 1000, 200
@@ -164,17 +167,24 @@ def simulation_work(problem) -> Work:
 def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     """The work of ``optimize`` on ``problem`` with :class:`~ocp_crawl.ocp.OCPSettings` ``settings``
     at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS`
-    IPOPT iterations per start, plus the harmonic baseline's search (the OCP's start; the other
-    families are searched in another process while the OCP solves)."""
+    IPOPT iterations per start (:data:`TIGHTENED_ITERATIONS` per tightened one), plus the harmonic
+    baseline's search (the OCP's start; the other families are searched in another process while
+    the OCP solves), or with tightened starts every family's."""
     nodes = list(nodes or [settings.nodes])
     scen = len(settings.scenarios(problem.robot))
     # a sub-step's variables grow with the joints m: m + 10, 12 for the three-link robot
     size = (problem.robot.n_joints + 10) / 12 if problem.is_chain else 1.0
     per_it = sum(nodes) * scen * size * UNIT_COST["ocp_node_iteration"]
-    solve = Work(per_it * OCP_ITERATIONS * settings.starts,
-                 f"{settings.starts} starts x {OCP_ITERATIONS} iterations x N = "
+    how = settings.start_solve
+    families = len(settings.baseline_shapes) if how != "homotopy" else 0
+    starts = settings.starts if how != "tightened" else families + settings.starts - 1
+    per_start = TIGHTENED_ITERATIONS if how == "tightened" else OCP_ITERATIONS
+    tightened = families * TIGHTENED_ITERATIONS if how == "both" else 0
+    solve = Work(per_it * (per_start * starts + tightened),
+                 f"{starts} starts x {per_start} iterations"
+                 f"{f' + {families} tightened starts' if tightened else ''} x N = "
                  f"{'+'.join(map(str, nodes))} x {scen} scenarios at ~{_ms('ocp_node_iteration')}",
-                 ("ocp.nodes", "ocp.starts", "--nodes"))
+                 ("ocp.nodes", "ocp.starts", "ocp.start_solve", "--nodes"))
     if problem.is_chain:   # its travelling waves, each a simulation of the chain
         from ocp_crawl.ocp.chain_search import local_budget, scan_points as chain_points
 
@@ -187,8 +197,12 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     from ocp_crawl.ocp.search import scan_points
 
     members = len(scan_points(settings)) + settings.baseline_starts * settings.baseline_evaluations
+    # tightened starts: every family searched before the solve; else the harmonic one
+    shapes = settings.baseline_shapes if how == "tightened" else ("harmonic",)
+    members *= len(shapes)
     search = Work(members * scen * UNIT_COST["family_member"],
-                  f"{members} harmonic members x {scen} scenarios at ~{_ms('family_member')}",
+                  f"{members} {'+'.join(shapes)} members x {scen} scenarios at "
+                  f"~{_ms('family_member')}",
                   ("ocp.harmonic_psi", "ocp.baseline_samples", "ocp.baseline_evaluations"))
     return solve + search
 
