@@ -62,8 +62,10 @@ def test_problem_file_is_solved_confirmed_and_converges(name):
     starts = int(os.environ.get("OCP_CRAWL_OCP_STARTS",
                                 settings.starts if len(nodes_list()) > 1 else 1))
     # the harmonic baseline alone (the start and the reference below): every family's baselines have
-    # their own tests (test_waveform_baselines.py) and cost three times the search
-    st = replace(settings, starts=starts, baselines="harmonic")
+    # their own tests (test_waveform_baselines.py) and cost three times the search; a file whose
+    # starts are every family's best members keeps them
+    st = replace(settings, starts=starts,
+                 baselines="harmonic" if settings.start_solve == "homotopy" else settings.baselines)
     table = converge_in_nodes(problem.robot, problem.gravity, st, nodes_list())
     print(f"\n{name}: N, status, value OCP, value replay, rel diff, rel change, order, time [s]")
     for row in table.rows:

@@ -3,6 +3,7 @@ every waveform family's best member, or both.
 
 The judge of every optimum is the event-driven replay of its torques; the families' best members
 are simulated by the baselines' search, independently of the OCP."""
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +40,7 @@ def _best_success(res) -> float:
 def test_both_paths_are_at_least_the_homotopy_and_report_every_start(both):
     """"both" solves the harmonic baseline by the homotopy, then the tightened NLP from each
     distinct family's best member: the reported optimum is the best of them by replay, so at least
-    the homotopy's; every start is in the record, each tightened one within its cap."""
+    the homotopy's; every start is in the record."""
     assert both.success, both.message
     labels = [s.label for s in both.starts]
     assert labels[:2] == ["harmonic baseline", "harmonic baseline, tightened"]
@@ -48,16 +49,14 @@ def test_both_paths_are_at_least_the_homotopy_and_report_every_start(both):
     assert len(set(shapes)) == len(shapes) and set(shapes) <= {"harmonic", "triangle", "pulse"}
     assert both.starts[0].status == Status.SUCCESS
     assert both.value_replay == _best_success(both) >= both.starts[0].value_replay
-    cap = both.settings.endgame_max_iter
-    assert all(s.iterations <= 2 * cap for s in both.starts[1:])  # at most two candidates each
 
 
 @pytest.mark.slow
-def test_tightened_starts_keep_their_members_pattern_and_improve_it(both):
-    """Each tightened start's optimum the replay confirms (to 1e-6 of the OCP) and at least the
-    family member it started from (the tightened NLP keeps the member's contact pattern and
-    optimises its profile), up to the transcription's resolution at N = 16 (replay_tol): here it
-    beats every family's best, which the homotopy from the sine does not."""
+def test_tightened_starts_are_confirmed_and_at_least_their_members(both):
+    """Each tightened start is a judged success (its replay within replay_tol of the OCP; the
+    reported one's within 1e-6) and at least the family member it started from, up to the
+    transcription's resolution at N = 16 (replay_tol): here it beats every family's best, which the
+    homotopy from the sine does not."""
     assert both.rel_diff_replay <= 1e-6
     for s in both.starts[1:]:
         member = both.baselines.choices[s.label.split(" ")[0]]
@@ -68,16 +67,22 @@ def test_tightened_starts_keep_their_members_pattern_and_improve_it(both):
 
 
 def test_equal_members_give_one_start():
-    """A pulse of rise 0.5 is the triangle: the same node profile and period start once."""
+    """A pulse of rise 0.5 is the triangle: the same node profile and period (up to round-off)
+    start once; a pulse of another rise is a start of its own."""
     settings = OCPSettings(**SMALL)
     robot = Robot.paper()
     from ocp_crawl.ocp.search import best_baselines
 
     base = best_baselines(robot, "physical", settings, ("triangle",), jobs=1)
     tri = base.choices["triangle"]
-    twin = Baselines(settings.objective, {"triangle": tri, "pulse": tri}, 0.0)
+    twin = Baselines(settings.objective,
+                     {"triangle": tri, "pulse": replace(tri, shape="pulse", rise=0.5)}, 0.0)
     starts = family_starts(twin, settings, robot)
     assert [s.label for s in starts] == ["triangle baseline, tightened"]
+    other = Baselines(settings.objective,
+                      {"triangle": tri, "pulse": replace(tri, shape="pulse", rise=0.3, duty=0.5)},
+                      0.0)
+    assert [s.family for s in family_starts(other, settings, robot)] == ["triangle", "pulse"]
     phase = np.arange(settings.nodes) / settings.nodes
     nodes = np.asarray(tri.signal_for(robot, settings)(phase)).reshape(2, -1)
     assert np.max(starts[0].tau[0]) == starts[0].tau[0, 0]  # pinned at the largest tau_1
@@ -111,9 +116,10 @@ def test_start_solve_is_one_of_its_choices():
 
 @pytest.mark.heavy
 def test_min_cot_over_a_friction_set_converges_from_tightened_starts():
-    """min_cot over mu1/mu2 in {0.95, 1, 1.05} (the worst, no friction margin; the shipped file, 4 to
-    5 min), where the homotopy does not converge: success from tightened starts, each scenario's replay within replay_tol of
-    speed_min or faster, and the worst CoT+ at most the best family member's over the same set."""
+    """min_cot over mu1/mu2 in {0.95, 1, 1.05} (the worst, no friction margin; the shipped file, 2
+    to 5 min), where the homotopy does not converge: success from tightened starts, each
+    scenario's replay within replay_tol of speed_min or faster, and the worst CoT+ at most the best
+    family member's over the same set."""
     problem = load_problem(ROOT / "problems" / "ocp_min_cot_friction_set.toml")
     settings = ocp_settings(problem)
     res = optimize_gait(problem.robot, problem.gravity, settings)
@@ -121,4 +127,35 @@ def test_min_cot_over_a_friction_set_converges_from_tightened_starts():
     tol = settings.replay_tol
     assert min(res.v_replay) >= settings.speed_min * (1 - tol)
     assert res.value_replay == max(res.CoT_plus_replay)
-    assert res.value_replay <= res.baselines.best.value
+    best = res.baselines.best
+    assert best is not None and best.feasible and res.value_replay <= best.value
+
+
+@pytest.mark.slow
+def test_tightened_starts_in_parallel_are_those_one_after_the_other(monkeypatch):
+    """The tightened starts are solved two at a time (the second half in a forked process); where no
+    process can be forked they run one after the other here: the same starts, statuses and values
+    to the last digit."""
+    from ocp_crawl import workers
+
+    settings = OCPSettings(**dict(SMALL, nodes=12), start_solve="tightened")
+    forked = optimize_gait(Robot.paper(), "physical", settings, jobs=1)
+    monkeypatch.setattr(workers, "mp_context",
+                        lambda: workers.multiprocessing.get_context("spawn"))
+    here = optimize_gait(Robot.paper(), "physical", settings, jobs=1)
+    assert len(forked.starts) >= 2
+    assert ([(s.label, s.status, s.value_replay) for s in forked.starts]
+            == [(s.label, s.status, s.value_replay) for s in here.starts])
+    assert np.array_equal(forked.tau, here.tau)
+
+
+def test_a_tightened_start_at_its_cap_fails_with_what_to_try():
+    """Each tightened start stops at ``endgame_max_iter`` IPOPT iterations a candidate: with 3, no
+    start converges, each within 2 x 3 iterations (two candidates at most), and the failure says
+    which setting to raise or which path to add."""
+    settings = OCPSettings(**dict(SMALL, nodes=12), start_solve="tightened", endgame_max_iter=3)
+    res = optimize_gait(Robot.paper(), "physical", settings, jobs=1)
+    assert not res.success and len(res.starts) >= 2
+    for s in res.starts:
+        assert s.status == Status.SOLVER_FAILURE and 0 < s.iterations <= 6
+        assert "endgame_max_iter" in s.message and 'start_solve = "both"' in s.message

@@ -7,6 +7,7 @@ with each count, and what the commands do with an estimate (refuse above --max-h
 above a minute).  The refusals of each command are rows of the bad-input matrix.
 """
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -107,6 +108,27 @@ def test_fit_and_optimize_work_scale_with_their_counts():
     # the solves' work is linear in the nodes summed over the counts (one baseline search)
     hundred = optimize_work(ocp, settings, [100])
     assert two.seconds - one.seconds == pytest.approx(2 * (hundred.seconds - one.seconds))
+
+
+@pytest.mark.parametrize("name", ["ocp_max_speed.toml", "ocp_four_links.toml"])
+def test_optimize_work_counts_tightened_starts_and_the_families_searched_first(name):
+    """With tightened starts every family is searched before the solve (three for the three-link
+    robot, a chain's two travelling waves), and there is one start per family: the estimate names
+    those counts, the search's part grows by the number of families, and "both" adds tightened
+    starts to the homotopy's."""
+    from ocp_crawl.problem.work import searched_shapes
+
+    p = problem(name)
+    settings = ocp_settings(p)
+    shapes = searched_shapes(p, settings)
+    assert len(shapes) == (2 if p.is_chain else 3)
+    homotopy, tightened, both = (optimize_work(p, replace(settings, start_solve=how))
+                                 for how in ("homotopy", "tightened", "both"))
+    assert f"{len(shapes)} starts x" in tightened.detail
+    assert f"{len(shapes)} tightened starts" in both.detail
+    assert both.seconds > homotopy.seconds
+    members = [int(w.detail.split("; ")[-1].split()[0]) for w in (homotopy, tightened)]
+    assert members[1] == len(shapes) * members[0]
 
 
 def test_codesign_work_counts_its_designs_on_the_workers_and_its_rounds():

@@ -285,21 +285,21 @@ def _warm_solve(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettin
                 solver: GaitSolver | None = None) -> OCPResult:
     """The OCP at settings.nodes from the previous optimum's profile and period (the baseline as
     before), with the settings of :func:`_near` (on ``solver`` when given: their transcription's
-    solver); settings with their own homotopy (:func:`own_homotopy`) first solve only the tightened
-    NLP on the branches of the previous profile's simulated guess
-    (:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve_tightened`), kept if the judge accepts it and it
-    is not worse than the previous optimum (:func:`_shortfall`); then the homotopy; if that is not a
-    success, the same start with the cold solve's settings.  A judged success of the tightened NLP
-    that was worse than the previous optimum is still the row when the homotopy gives no success or
-    a worse one.  The row's ``solve_time_s`` [s] is that of every attempt made (tightened, homotopy,
-    cold retry), whichever gave the row."""
+    solver); settings with their own homotopy (:func:`own_homotopy`) or tightened starts
+    (``start_solve``) first solve only the tightened NLP on the branches of the previous profile's
+    simulated guess (:meth:`~ocp_crawl.ocp.solver.GaitSolver.solve_tightened`), kept if the judge
+    accepts it and it is not worse than the previous optimum (:func:`_shortfall`); then the
+    homotopy; if that is not a success, the same start with the cold solve's settings.  A judged
+    success of the tightened NLP that is worse than the previous optimum is still the row when the
+    homotopy gives no success or a worse one.  The row's ``solve_time_s`` [s] is that of every
+    attempt made (tightened, homotopy, cold retry), whichever gave the row."""
     models = [Plant(r, gravity) for r in settings.scenarios(robot)]
     signal = replay_signal(prev.phase, prev.tau)
     n_prev = prev.tau.shape[1]
     near, how = _near(settings)
     solver = solver or GaitSolver(GaitOCP(robot, gravity, near))
     tight, tried, attempts = None, "", []
-    if own_homotopy(settings):
+    if own_homotopy(settings) or settings.start_solve != "homotopy":
         tight = solve_from(solver, models, signal, prev.T_ocp, prev.harmonic, tightened=True,
                            baselines=prev.baselines)
         attempts.append(tight)

@@ -65,9 +65,10 @@ def _baseline_within(res: OCPResult, models: list, gain: float) -> bool:
     peak = max(max(p) for p in res.harmonic_peak_joint_rate_deg_s)
     if peak <= bound * (1 + JOINT_RATE_RTOL):
         return True
-    res.message += (f"; worse than the harmonic baseline by replay ({units.ratio(gain)}), whose "
-                    f"joint rate reaches {units.significant(peak, 4)} deg/s, beyond "
-                    "max_joint_rate_deg_s")
+    note = (f"; worse than the harmonic baseline by replay ({units.ratio(gain)}), whose joint rate "
+            f"reaches {units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s")
+    if note not in res.message:  # (measured once by the start's judge, again over the starts)
+        res.message += note
     return False
 
 
@@ -80,6 +81,24 @@ def _worse_than_baseline(res: OCPResult, gain: float) -> None:
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
     res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
-                   f"{value_text(objective, res.value_replay)} against the baseline's "
+                   f"{value_text(objective, res.value_replay)} against the harmonic baseline's "
                    f"{value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
                    f"replay_tol {units.ratio(res.settings.replay_tol)})")
+
+
+def worse_than_member(res: OCPResult, shape: str) -> None:
+    """A start from the best member of the family ``shape`` (a tightened start) whose optimum is
+    worse by replay than that member by more than replay_tol is not an optimum either:
+    WORSE_THAN_BASELINE with both values (the harmonic baseline's check is
+    :func:`measure_gains`')."""
+    member = None if res.baselines is None else res.baselines.choices.get(shape)
+    gain, tol = res.gains.get(shape, math.nan), res.settings.replay_tol
+    if not res.success or member is None or not gain < -tol:
+        return
+    objective = res.settings.objective
+    res.success = False
+    res.status = Status.WORSE_THAN_BASELINE
+    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
+                   f"{value_text(objective, res.value_replay)} against the {shape} member's "
+                   f"{value_text(objective, member.value)} it started from (gain "
+                   f"{units.ratio(gain)}, replay_tol {units.ratio(tol)})")

@@ -34,7 +34,7 @@ from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_va
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
-from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains
+from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains, worse_than_member
 from ocp_crawl.ocp.plant import AnyRobot, Plant, as_plant
 from ocp_crawl.ocp.judge import (is_better, judge_replay, replay_signal, spread_text,
                                  value_text)
@@ -98,13 +98,9 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
         from); ``starts`` holds every start's outcome.
     """
     settings = settings or OCPSettings()
-    if isinstance(robot, Chain) and settings.baselines not in ("all", *CHAIN_SHAPES):
-        raise ValueError(f"optimize_gait: a chain's baselines are travelling waves of the shapes "
-                         f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
     t_start = time.perf_counter()
+    shapes = _shapes(robot, settings)
     solver = GaitSolver(GaitOCP(robot, gravity, settings))
-    shapes = tuple(s for s in settings.baseline_shapes
-                   if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
     # tightened starts need every family's best before the solve; else the harmonic one only
     first = shapes if settings.start_solve == "tightened" else ("harmonic",)
     found = _baselines(robot, gravity, settings, first, jobs, solver.prepare)
@@ -116,22 +112,40 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
 
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
         guesses = _guesses(settings, robot, solver.ocp.n_joints, found, models, start)
-        return _solve_guesses(solver, models, guesses, found, replay, tightened)
-    others = tuple(s for s in shapes if s not in first)
-    if others:  # the other families, the gains' comparators only, searched while the OCP solves
-        # (on all the workers: the search takes longer than the solve, whose core it then takes
-        # over)
-        rest, solved = overlap(lambda send: _baselines(robot, gravity, settings, others, jobs),
-                               solve_starts, lambda message: None)
+        return _solve_guesses(solver, models, guesses, found, replay, tightened, parallel=tightened)
+
+    def comparators(send) -> tuple[Baselines, list]:
+        # the other families (the gains' comparators) searched on all the workers while the OCP
+        # solves, then with "both" their tightened starts on the core the search leaves
+        rest = _baselines(robot, gravity, settings, others, jobs)
+        if settings.start_solve != "both":
+            return rest, []
         base = found.merged(rest)
+        return rest, _solve_guesses(solver, models, family_starts(base, settings, robot), base,
+                                    replay, True)
+    others = tuple(s for s in shapes if s not in first)
+    if others:
+        (rest, more), solved = overlap(comparators, solve_starts, lambda message: None)
+        base = found.merged(rest)
+        solved += more
     else:
         solved, base = solve_starts(), found
-    if settings.start_solve == "both":
-        solved += _solve_guesses(solver, models, family_starts(base, settings, robot), base,
-                                 replay, True)
+        if settings.start_solve == "both":
+            solved += _solve_guesses(solver, models, family_starts(base, settings, robot), base,
+                                     replay, True, parallel=True)
     res = _best_start(solved, base, models, settings, replay)
     res.solve_time_s = time.perf_counter() - t_start
     return res
+
+
+def _shapes(robot: AnyRobot, settings: OCPSettings) -> tuple[str, ...]:
+    """The families searched: the settings' (a chain's are its travelling waves: harmonic and
+    triangle)."""
+    if isinstance(robot, Chain) and settings.baselines not in ("all", *CHAIN_SHAPES):
+        raise ValueError(f"optimize_gait: a chain's baselines are travelling waves of the shapes "
+                         f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
+    return tuple(s for s in settings.baseline_shapes
+                 if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
 
 
 def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, models: list,
@@ -152,20 +166,39 @@ def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, m
                                  start[1])
     if settings.start_solve != "tightened":
         return guesses
+    # the harmonic best member is the first start unless one was given
     return ([replace(g, label=f"{g.label}, tightened") for g in guesses]
-            + family_starts(found, settings, robot, skip=("harmonic",)))
+            + family_starts(found, settings, robot, skip=("harmonic",) if start is None else ()))
 
 
 def _solve_guesses(solver: GaitSolver, models: list, guesses: list[StartGuess], base: Baselines,
-                   replay: bool, tightened: bool) -> list[tuple[StartGuess, OCPResult]]:
+                   replay: bool, tightened: bool,
+                   parallel: bool = False) -> list[tuple[StartGuess, OCPResult]]:
     """Each start solved from its node profile (by the homotopy, or by the tightened NLP alone at
-    most ``endgame_max_iter`` iterations per candidate) and judged: (start, result) pairs."""
+    most ``endgame_max_iter`` iterations per candidate) and judged: (start, result) pairs, in the
+    order of ``guesses``.  ``parallel``: the second half of the starts in a forked process while
+    this one solves the first (:func:`~ocp_crawl.workers.overlap`; each solve is deterministic, so
+    the results are those of one after the other)."""
     settings = solver.settings
     phase = np.arange(settings.nodes) / settings.nodes
     cap = settings.endgame_max_iter if tightened else None
-    return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T,
-                           base.choices["harmonic"], replay, tightened=tightened, baselines=base,
-                           max_iter=cap)) for g in guesses]
+
+    def one(g: StartGuess) -> OCPResult:
+        res = solve_from(solver, models, replay_signal(phase, g.tau), g.T,
+                         base.choices["harmonic"], replay, tightened=tightened, baselines=base,
+                         max_iter=cap)
+        if g.family is not None and replay:
+            worse_than_member(res, g.family)
+        return res
+
+    def solve(some: list[StartGuess]) -> list[tuple[StartGuess, OCPResult]]:
+        return [(g, one(g)) for g in some]
+    if not parallel or len(guesses) < 2:
+        return solve(guesses)
+    half = (len(guesses) + 1) // 2
+    later, first = overlap(lambda send: solve(guesses[half:]), lambda: solve(guesses[:half]),
+                           lambda message: None)
+    return first + later
 
 
 def _no_harmonic(settings: OCPSettings, joints: int) -> OCPResult:
@@ -282,6 +315,9 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     res.path = "; ".join(endgame.outcome) if endgame is not None else ""
     if not _accept(res, solver, x, failed, status):
         res.message += f"; {res.path}" if res.path else ""
+        if tightened and max_iter is not None and failed is not None:
+            res.message += (f"; a tightened start capped at {max_iter} IPOPT iterations: raise "
+                            "[ocp] endgame_max_iter, or add the homotopy (start_solve = \"both\")")
         res.solve_time_s = time.perf_counter() - t_start
         return res
     if replay:

@@ -12,7 +12,7 @@ same starts.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -42,6 +42,8 @@ class StartGuess:
     """torques [N m] at the node phases k/N, shape (m, N) of the m joints"""
     T: float
     """period [s]"""
+    family: str | None = None
+    """the waveform family whose best member the start is (:func:`family_starts`), else None"""
 
 
 def feasible_period(settings: OCPSettings, robot: AnyRobot, tau: np.ndarray, T: float) -> float:
@@ -160,7 +162,11 @@ def family_starts(base: Baselines, settings: OCPSettings, robot: AnyRobot,
         if choice is None or shape in skip:
             continue
         tau = np.asarray(choice.signal_for(robot, settings)(phase), float).reshape(-1, phase.size)
-        guess = given_start(settings, robot, tau, choice.T, f"{shape} baseline, tightened")
-        if not any(np.array_equal(guess.tau, o.tau) and guess.T == o.T for o in out):
+        guess = replace(given_start(settings, robot, tau, choice.T, f"{shape} baseline, tightened"),
+                        family=shape)
+        # equal up to round-off: a pulse of rise 0.5 is the triangle
+        atol = 1e-12 * float(np.max(np.abs(guess.tau)))
+        if not any(np.allclose(guess.tau, o.tau, rtol=0.0, atol=atol)
+                   and math.isclose(guess.T, o.T, rel_tol=1e-12) for o in out):
             out.append(guess)
     return out

@@ -164,6 +164,15 @@ def simulation_work(problem) -> Work:
                 keys, per_cycle[1] * TYPICAL_CYCLES * UNIT_COST["event_step"])
 
 
+def searched_shapes(problem, settings) -> tuple[str, ...]:
+    """The waveform families ``optimize`` searches: the settings' (a chain's are its travelling
+    waves, harmonic and triangle)."""
+    from ocp_crawl.ocp.chain_search import SHAPES as CHAIN_SHAPES
+
+    return tuple(s for s in settings.baseline_shapes
+                 if not problem.is_chain or s in CHAIN_SHAPES)
+
+
 def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     """The work of ``optimize`` on ``problem`` with :class:`~ocp_crawl.ocp.OCPSettings` ``settings``
     at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS`
@@ -176,7 +185,8 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     size = (problem.robot.n_joints + 10) / 12 if problem.is_chain else 1.0
     per_it = sum(nodes) * scen * size * UNIT_COST["ocp_node_iteration"]
     how = settings.start_solve
-    families = len(settings.baseline_shapes) if how != "homotopy" else 0
+    shapes = searched_shapes(problem, settings)
+    families = len(shapes) if how != "homotopy" else 0
     starts = settings.starts if how != "tightened" else families + settings.starts - 1
     per_start = TIGHTENED_ITERATIONS if how == "tightened" else OCP_ITERATIONS
     tightened = families * TIGHTENED_ITERATIONS if how == "both" else 0
@@ -185,10 +195,13 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
                  f"{f' + {families} tightened starts' if tightened else ''} x N = "
                  f"{'+'.join(map(str, nodes))} x {scen} scenarios at ~{_ms('ocp_node_iteration')}",
                  ("ocp.nodes", "ocp.starts", "ocp.start_solve", "--nodes"))
+    # tightened starts: every family searched before the solve; else the harmonic one
+    first = shapes if how == "tightened" else ("harmonic",)
     if problem.is_chain:   # its travelling waves, each a simulation of the chain
         from ocp_crawl.ocp.chain_search import local_budget, scan_points as chain_points
 
-        members = len(chain_points(settings)) + settings.baseline_starts * local_budget(settings)
+        members = len(first) * (len(chain_points(settings))
+                                + settings.baseline_starts * local_budget(settings))
         member = simulation_work(problem)
         return solve + Work(members * scen * member.typical,
                             f"{members} travelling waves x {scen} scenarios x a typical "
@@ -196,12 +209,10 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
                             ("ocp.harmonic_A", "ocp.harmonic_psi", "ocp.baseline_starts"))
     from ocp_crawl.ocp.search import scan_points
 
-    members = len(scan_points(settings)) + settings.baseline_starts * settings.baseline_evaluations
-    # tightened starts: every family searched before the solve; else the harmonic one
-    shapes = settings.baseline_shapes if how == "tightened" else ("harmonic",)
-    members *= len(shapes)
+    members = len(first) * (len(scan_points(settings))
+                            + settings.baseline_starts * settings.baseline_evaluations)
     search = Work(members * scen * UNIT_COST["family_member"],
-                  f"{members} {'+'.join(shapes)} members x {scen} scenarios at "
+                  f"{members} {'+'.join(first)} members x {scen} scenarios at "
                   f"~{_ms('family_member')}",
                   ("ocp.harmonic_psi", "ocp.baseline_samples", "ocp.baseline_evaluations"))
     return solve + search
