@@ -159,3 +159,26 @@ def test_a_tightened_start_at_its_cap_fails_with_what_to_try():
     for s in res.starts:
         assert s.status == Status.SOLVER_FAILURE and 0 < s.iterations <= 6
         assert "endgame_max_iter" in s.message and 'start_solve = "both"' in s.message
+
+
+def test_a_family_start_worse_than_its_member_is_not_an_optimum():
+    """A tightened start's optimum below the member it started from by more than replay_tol (by
+    replay) is WORSE_THAN_BASELINE naming that member; within replay_tol it stays a success."""
+    from ocp_crawl.ocp.baseline import WaveChoice
+    from ocp_crawl.ocp.gains import worse_than_member
+    from ocp_crawl.ocp.judge import gain_over
+    from ocp_crawl.ocp.result import OCPResult
+
+    settings = OCPSettings(**SMALL)
+    member = WaveChoice(90.0, 90.0, 27.5, 27.5, 9.0, 0.6, [-0.05], [0.5], [19.6], [0.0833],
+                        0.0833, True, "max_speed", shape="triangle")
+    base = Baselines("max_speed", {"triangle": member}, 0.0)
+    for value, status in ((0.0833 * (1 - 0.5 * settings.replay_tol), Status.SUCCESS),
+                          (0.0833 * (1 - 2 * settings.replay_tol), Status.WORSE_THAN_BASELINE)):
+        res = OCPResult(success=True, status=Status.SUCCESS, message="found",
+                        objective="max_speed", settings=settings, baselines=base)
+        res.value_replay = value
+        res.gains = base.gains(value, gain_over)
+        worse_than_member(res, "triangle")
+        assert res.status == status and res.success == (status == Status.SUCCESS)
+    assert "triangle member's 83.300 mm/s it started from" in res.message
