@@ -76,14 +76,8 @@ def _worse_than_baseline(res: OCPResult, gain: float) -> None:
     """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same
     envelope and bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both
     values."""
-    objective = res.settings.objective
     assert res.harmonic is not None  # a gain over the baseline was measured
-    res.success = False
-    res.status = Status.WORSE_THAN_BASELINE
-    res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
-                   f"{value_text(objective, res.value_replay)} against the harmonic baseline's "
-                   f"{value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
-                   f"replay_tol {units.ratio(res.settings.replay_tol)})")
+    _not_an_optimum(res, "the harmonic baseline's", res.harmonic.value, gain)
 
 
 def worse_than_member(res: OCPResult, shape: str) -> None:
@@ -92,13 +86,19 @@ def worse_than_member(res: OCPResult, shape: str) -> None:
     WORSE_THAN_BASELINE with both values (the harmonic baseline's check is
     :func:`measure_gains`')."""
     member = None if res.baselines is None else res.baselines.choices.get(shape)
-    gain, tol = res.gains.get(shape, math.nan), res.settings.replay_tol
-    if not res.success or member is None or not gain < -tol:
-        return
+    gain = res.gains.get(shape, math.nan)
+    if res.success and member is not None and gain < -res.settings.replay_tol:
+        _not_an_optimum(res, f"the {shape} member's", member.value, gain,
+                        " it started from")
+
+
+def _not_an_optimum(res: OCPResult, against: str, value: float, gain: float,
+                    how: str = "") -> None:
+    """WORSE_THAN_BASELINE: the replayed objective against ``value``, named ``against``."""
     objective = res.settings.objective
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
     res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
-                   f"{value_text(objective, res.value_replay)} against the {shape} member's "
-                   f"{value_text(objective, member.value)} it started from (gain "
-                   f"{units.ratio(gain)}, replay_tol {units.ratio(tol)})")
+                   f"{value_text(objective, res.value_replay)} against {against} "
+                   f"{value_text(objective, value)}{how} (gain {units.ratio(gain)}, replay_tol "
+                   f"{units.ratio(res.settings.replay_tol)})")
