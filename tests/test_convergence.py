@@ -205,15 +205,17 @@ def test_settings_with_their_own_homotopy_keep_it_in_the_warm_solves(monkeypatch
     # the tightened one
     (0.0498, None, 0.0502, 3, 0.0502), (0.0498, None, 0.0497, 3, 0.0498),
 ])
+@pytest.mark.parametrize("first", [dict(stage_tol_ratio=0.1), dict(start_solve="tightened")])
 def test_the_tightened_nlp_is_kept_unless_worse_than_the_previous_optimum_and_the_homotopy(
-        monkeypatch, tight, homotopy, cold, calls, row_value):
-    """With their own homotopy, the warm solve's first try, the tightened NLP on the previous
-    optimum's branches, is the row when the judge accepts it and it is not worse than the previous
-    N's optimum beyond WORSE_TOL plus both OCP-replay differences (1e-3 each in the fakes: more than
-    0.21 % below 0.05 is worse); otherwise the homotopy runs (then the cold retry if it fails:
-    None), and the worse tightened success stays the row unless the homotopy (or its cold retry)
-    does better; the row's result's solve time is that of all the attempts."""
-    settings = OCPSettings(stage_tol_ratio=0.1)
+        monkeypatch, first, tight, homotopy, cold, calls, row_value):
+    """With their own homotopy or tightened starts, the warm solve's first try, the tightened NLP
+    on the previous optimum's branches, is the row when the judge accepts it and it is not worse
+    than the previous N's optimum beyond WORSE_TOL plus both OCP-replay differences (1e-3 each in
+    the fakes: more than 0.21 % below 0.05 is worse); otherwise the homotopy runs (then the cold
+    retry if it fails: None), and the worse tightened success stays the row unless the homotopy
+    (or its cold retry) does better; the row's result's solve time is that of all the
+    attempts."""
+    settings = OCPSettings(**first)
     seen = []
 
     def fresh(robot, gravity, s, jobs=None):

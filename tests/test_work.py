@@ -116,11 +116,11 @@ def test_optimize_work_counts_tightened_starts_and_the_families_searched_first(n
     robot, a chain's two travelling waves), and there is one start per family: the estimate names
     those counts, the search's part grows by the number of families, and "both" adds tightened
     starts to the homotopy's."""
-    from ocp_crawl.problem.work import searched_shapes
+    from ocp_crawl.ocp.chain_search import family_shapes
 
     p = problem(name)
     settings = ocp_settings(p)
-    shapes = searched_shapes(p, settings)
+    shapes = family_shapes(settings, p.is_chain)
     assert len(shapes) == (2 if p.is_chain else 3)
     homotopy, tightened, both = (optimize_work(p, replace(settings, start_solve=how))
                                  for how in ("homotopy", "tightened", "both"))

@@ -76,29 +76,11 @@ def _worse_than_baseline(res: OCPResult, gain: float) -> None:
     """A profile confirmed by replay but worse than the harmonic baseline (a gait inside the same
     envelope and bandwidth, and the first start) is not an optimum: WORSE_THAN_BASELINE with both
     values."""
-    assert res.harmonic is not None  # a gain over the baseline was measured
-    _not_an_optimum(res, "the harmonic baseline's", res.harmonic.value, gain)
-
-
-def worse_than_member(res: OCPResult, shape: str) -> None:
-    """A start from the best member of the family ``shape`` (a tightened start) whose optimum is
-    worse by replay than that member by more than replay_tol is not an optimum either:
-    WORSE_THAN_BASELINE with both values (the harmonic baseline's check is
-    :func:`measure_gains`')."""
-    member = None if res.baselines is None else res.baselines.choices.get(shape)
-    gain = res.gains.get(shape, math.nan)
-    if res.success and member is not None and gain < -res.settings.replay_tol:
-        _not_an_optimum(res, f"the {shape} member's", member.value, gain,
-                        " it started from")
-
-
-def _not_an_optimum(res: OCPResult, against: str, value: float, gain: float,
-                    how: str = "") -> None:
-    """WORSE_THAN_BASELINE: the replayed objective against ``value``, named ``against``."""
     objective = res.settings.objective
+    assert res.harmonic is not None  # a gain over the baseline is measured
     res.success = False
     res.status = Status.WORSE_THAN_BASELINE
     res.message = (f"{Status.WORSE_THAN_BASELINE.text}: replay "
-                   f"{value_text(objective, res.value_replay)} against {against} "
-                   f"{value_text(objective, value)}{how} (gain {units.ratio(gain)}, replay_tol "
-                   f"{units.ratio(res.settings.replay_tol)})")
+                   f"{value_text(objective, res.value_replay)} against the harmonic baseline's "
+                   f"{value_text(objective, res.harmonic.value)} (gain {units.ratio(gain)}, "
+                   f"replay_tol {units.ratio(res.settings.replay_tol)})")

@@ -34,14 +34,14 @@ from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_va
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
-from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains, worse_than_member
+from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains
 from ocp_crawl.ocp.plant import AnyRobot, Plant, as_plant
 from ocp_crawl.ocp.judge import (is_better, judge_replay, replay_signal, spread_text,
                                  value_text)
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.ocp.chain_search import (SHAPES as CHAIN_SHAPES, ChainWaveChoice,
-                                        best_chain_baselines)
+                                        best_chain_baselines, family_shapes)
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.ocp.starts import StartGuess, family_starts, given_start, start_guesses
 from ocp_crawl.ocp.solver import GaitSolver
@@ -112,7 +112,8 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
 
     def solve_starts() -> list[tuple[StartGuess, OCPResult]]:
         guesses = _guesses(settings, robot, solver.ocp.n_joints, found, models, start)
-        return _solve_guesses(solver, models, guesses, found, replay, tightened, parallel=tightened)
+        return _solve_guesses(solver, models, guesses, found, replay, tightened,
+                              parallel=tightened and jobs != 1)
 
     def comparators(send) -> tuple[Baselines, list]:
         # the other families (the gains' comparators) searched on all the workers while the OCP
@@ -132,7 +133,7 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
         solved, base = solve_starts(), found
         if settings.start_solve == "both":
             solved += _solve_guesses(solver, models, family_starts(base, settings, robot), base,
-                                     replay, True, parallel=True)
+                                     replay, True, parallel=jobs != 1)
     res = _best_start(solved, base, models, settings, replay)
     res.solve_time_s = time.perf_counter() - t_start
     return res
@@ -144,8 +145,7 @@ def _shapes(robot: AnyRobot, settings: OCPSettings) -> tuple[str, ...]:
     if isinstance(robot, Chain) and settings.baselines not in ("all", *CHAIN_SHAPES):
         raise ValueError(f"optimize_gait: a chain's baselines are travelling waves of the shapes "
                          f"{CHAIN_SHAPES} ('all': both), got {settings.baselines!r}")
-    return tuple(s for s in settings.baseline_shapes
-                 if not isinstance(robot, Chain) or s in CHAIN_SHAPES)
+    return family_shapes(settings, isinstance(robot, Chain))
 
 
 def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, models: list,
@@ -166,7 +166,7 @@ def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, m
                                  start[1])
     if settings.start_solve != "tightened":
         return guesses
-    # the harmonic best member is the first start unless one was given
+    # the harmonic best member is the first start unless a start is given
     return ([replace(g, label=f"{g.label}, tightened") for g in guesses]
             + family_starts(found, settings, robot, skip=("harmonic",) if start is None else ()))
 
@@ -183,16 +183,10 @@ def _solve_guesses(solver: GaitSolver, models: list, guesses: list[StartGuess], 
     phase = np.arange(settings.nodes) / settings.nodes
     cap = settings.endgame_max_iter if tightened else None
 
-    def one(g: StartGuess) -> OCPResult:
-        res = solve_from(solver, models, replay_signal(phase, g.tau), g.T,
-                         base.choices["harmonic"], replay, tightened=tightened, baselines=base,
-                         max_iter=cap)
-        if g.family is not None and replay:
-            worse_than_member(res, g.family)
-        return res
-
     def solve(some: list[StartGuess]) -> list[tuple[StartGuess, OCPResult]]:
-        return [(g, one(g)) for g in some]
+        return [(g, solve_from(solver, models, replay_signal(phase, g.tau), g.T,
+                               base.choices["harmonic"], replay, tightened=tightened,
+                               baselines=base, max_iter=cap)) for g in some]
     if not parallel or len(guesses) < 2:
         return solve(guesses)
     half = (len(guesses) + 1) // 2
@@ -315,9 +309,7 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     res.path = "; ".join(endgame.outcome) if endgame is not None else ""
     if not _accept(res, solver, x, failed, status):
         res.message += f"; {res.path}" if res.path else ""
-        if tightened and max_iter is not None and failed is not None:
-            res.message += (f"; a tightened start capped at {max_iter} IPOPT iterations: raise "
-                            "[ocp] endgame_max_iter, or add the homotopy (start_solve = \"both\")")
+        res.message += _cap_hint(failed, max_iter if tightened else None, settings.start_solve)
         res.solve_time_s = time.perf_counter() - t_start
         return res
     if replay:
@@ -326,6 +318,16 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
         res.message += "; not replayed (the judge did not run)"
     res.solve_time_s = time.perf_counter() - t_start
     return res
+
+
+def _cap_hint(failed: str | None, max_iter: int | None, start_solve: str) -> str:
+    """What to try when a tightened start (at most ``max_iter`` IPOPT iterations a candidate; None:
+    not one) failed at its cap (``failed`` names IPOPT's statuses); '' otherwise."""
+    if max_iter is None or failed is None or "Maximum_Iterations_Exceeded" not in failed:
+        return ""
+    more = ", or add the homotopy (start_solve = \"both\")" if start_solve == "tightened" else ""
+    return (f"; a tightened start stopped at its {max_iter} IPOPT iterations: raise [ocp] "
+            f"endgame_max_iter{more}")
 
 
 def _endgame(solver: GaitSolver, models: list) -> Endgame | None:

@@ -164,15 +164,6 @@ def simulation_work(problem) -> Work:
                 keys, per_cycle[1] * TYPICAL_CYCLES * UNIT_COST["event_step"])
 
 
-def searched_shapes(problem, settings) -> tuple[str, ...]:
-    """The waveform families ``optimize`` searches: the settings' (a chain's are its travelling
-    waves, harmonic and triangle)."""
-    from ocp_crawl.ocp.chain_search import SHAPES as CHAIN_SHAPES
-
-    return tuple(s for s in settings.baseline_shapes
-                 if not problem.is_chain or s in CHAIN_SHAPES)
-
-
 def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     """The work of ``optimize`` on ``problem`` with :class:`~ocp_crawl.ocp.OCPSettings` ``settings``
     at each N of ``nodes`` (default: ``settings.nodes``): a typical run, :data:`OCP_ITERATIONS`
@@ -185,7 +176,9 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     size = (problem.robot.n_joints + 10) / 12 if problem.is_chain else 1.0
     per_it = sum(nodes) * scen * size * UNIT_COST["ocp_node_iteration"]
     how = settings.start_solve
-    shapes = searched_shapes(problem, settings)
+    from ocp_crawl.ocp.chain_search import family_shapes
+
+    shapes = family_shapes(settings, problem.is_chain)
     families = len(shapes) if how != "homotopy" else 0
     starts = settings.starts if how != "tightened" else families + settings.starts - 1
     per_start = TIGHTENED_ITERATIONS if how == "tightened" else OCP_ITERATIONS
