@@ -170,14 +170,17 @@ def test_a_tightened_start_at_its_cap_fails_with_what_to_try():
 def test_the_cap_hint_is_for_the_cap_alone():
     """The advice names the cap only where IPOPT stopped at it, and the homotopy only where it is
     not run already."""
+    from types import SimpleNamespace
+
     from ocp_crawl.ocp.solve import _cap_hint
 
-    capped = "the tightened NLP on the start's branches (Maximum_Iterations_Exceeded)"
+    def calls(*statuses):
+        return [SimpleNamespace(return_status=status) for status in statuses]
+    capped = calls("Restoration_Failed", "Maximum_Iterations_Exceeded")
     assert "endgame_max_iter, or add the homotopy" in _cap_hint(capped, 500, "tightened")
     assert _cap_hint(capped, 500, "both").endswith("raise [ocp] endgame_max_iter")
-    infeasible = "the tightened NLP on the start's branches (Infeasible_Problem_Detected)"
-    assert _cap_hint(infeasible, 500, "tightened") == ""
-    assert _cap_hint(capped, None, "tightened") == "" and _cap_hint(None, 500, "tightened") == ""
+    assert _cap_hint(calls("Infeasible_Problem_Detected"), 500, "tightened") == ""
+    assert _cap_hint(capped, None, "tightened") == "" and _cap_hint([], 500, "tightened") == ""
 
 
 

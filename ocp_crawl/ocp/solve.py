@@ -309,7 +309,8 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     res.path = "; ".join(endgame.outcome) if endgame is not None else ""
     if not _accept(res, solver, x, failed, status):
         res.message += f"; {res.path}" if res.path else ""
-        res.message += _cap_hint(failed, max_iter if tightened else None, settings.start_solve)
+        res.message += _cap_hint(hist if failed is not None else [],
+                                 max_iter if tightened else None, settings.start_solve)
         res.solve_time_s = time.perf_counter() - t_start
         return res
     if replay:
@@ -320,10 +321,10 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     return res
 
 
-def _cap_hint(failed: str | None, max_iter: int | None, start_solve: str) -> str:
+def _cap_hint(records: list, max_iter: int | None, start_solve: str) -> str:
     """What to try when a tightened start (at most ``max_iter`` IPOPT iterations a candidate; None:
-    not one) failed at its cap (``failed`` names IPOPT's statuses); '' otherwise."""
-    if max_iter is None or failed is None or "Maximum_Iterations_Exceeded" not in failed:
+    not one) failed and one of its IPOPT calls (``records``) stopped at a limit; '' otherwise."""
+    if max_iter is None or not any(ipopt_status(r.return_status).kind == "limit" for r in records):
         return ""
     more = ", or add the homotopy (start_solve = \"both\")" if start_solve == "tightened" else ""
     return (f"; a tightened start stopped at its {max_iter} IPOPT iterations: raise [ocp] "
