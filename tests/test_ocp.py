@@ -102,8 +102,8 @@ def test_optimize_text_of_a_failed_run_has_no_raw_values():
 def test_optimize_text_counts_its_starts_in_words():
     """One start has no "starts" line (its numbers are the other lines: no "1 starts, 1 converged,
     replayed objective x to x"); several give their count, the converged ones and the range, one
-    value when they agree; the solve's message says "none converged", not a range of missing
-    values."""
+    value when they agree, then a line each; the solve's message says "none converged", not a
+    range of missing values."""
     from ocp_crawl.cli.optimize_command import format_optimize
     from ocp_crawl.ocp import OCPResult, OCPSettings
     from ocp_crawl.ocp.judge import spread_text
@@ -123,6 +123,18 @@ def test_optimize_text_counts_its_starts_in_words():
     assert starts_line(3, 1, 0.0121, 0.0121) == [
         "starts      3 starts, 1 converged, replayed objective 12.100 mm/s"]
     assert starts_line(2, 0, None, None) == ["starts      2 starts, none converged"]
+    # each start on a line of its own, under the count
+    records = [{"label": "harmonic baseline", "status": "success", "value_replay": 0.0863,
+                "iterations": 696},
+               {"label": "triangle baseline, tightened", "status": "solver_failure",
+                "value_replay": None, "iterations": 500}]
+    text = format_optimize(dict(base, starts=records, starts_converged=1,
+                                objective_value_replay_min=0.0863,
+                                objective_value_replay_max=0.0863)).splitlines()
+    at = next(i for i, line in enumerate(text) if line.startswith("starts"))
+    assert text[at + 1:at + 3] == [
+        "  harmonic baseline: success, replay 86.300 mm/s, 696 IPOPT iterations",
+        "  triangle baseline, tightened: solver_failure, replay -, 500 IPOPT iterations"]
     assert spread_text("max_speed", float("nan"), float("nan"), 0) == "none converged"
     assert spread_text("min_cot", 20.31, 20.31, 2) == "2 converged, replayed objective 20.3"
 

@@ -189,6 +189,17 @@ def _starts_text(s: dict) -> str | None:
                                         "none converged")
 
 
+def _start_lines(s: dict) -> list[str]:
+    """Several starts: one line each, its label, status, replayed objective and IPOPT iterations
+    (which start gave the optimum, and how far the others ended from it); none for one."""
+    starts, obj, unit = s.get("starts") or [], s["objective"], s.get("objective_unit", "-")
+    if len(starts) < 2:
+        return []
+    return [f"  {r.get('label', '-')}: {r.get('status', '-')}, replay "
+            f"{_value(obj, r.get('value_replay'), unit=unit)}, {r.get('iterations', 0)} IPOPT "
+            "iterations" for r in starts]
+
+
 def format_optimize(s: dict) -> str:
     """Readable summary of an optimize run (``OCPResult.summary()`` in SI units) with units: S in
     mm, speeds in mm/s, W+ in mJ, CoT+ to 3 significant digits, times in s; "-" for what was not
@@ -214,6 +225,7 @@ def format_optimize(s: dict) -> str:
           f"replay {', '.join(units.significant(v, 6) for v in r['replay'])}"
           for r in s.get("requirements") or []],
         *([f"starts      {spread}"] if spread else []),
+        *_start_lines(s),
         *margin_text(s.get("dynamic_margin")),
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, "
         f"periodicity {units.scientific(s['periodicity_residual'])}",
