@@ -60,6 +60,7 @@ def family_shapes(settings: OCPSettings, chain: bool) -> tuple[str, ...]:
     chain's (``chain`` True) are its travelling waves, :data:`SHAPES`."""
     return tuple(s for s in settings.baseline_shapes if not chain or s in SHAPES)
 
+
 def local_budget(settings: OCPSettings) -> int:
     """Most simulated members of each local search: ``baseline_evaluations``, at most
     :data:`LOCAL_FEV`."""

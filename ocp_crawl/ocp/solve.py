@@ -115,26 +115,26 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
         return _solve_guesses(solver, models, guesses, found, replay, tightened,
                               parallel=tightened and jobs != 1)
 
+    def from_families(base: Baselines, parallel: bool) -> list[tuple[StartGuess, OCPResult]]:
+        # with "both": the tightened starts from every family's best member, after the homotopy's
+        if settings.start_solve != "both":
+            return []
+        return _solve_guesses(solver, models, family_starts(base, settings, robot), base, replay,
+                              True, parallel=parallel)
+    others = tuple(s for s in shapes if s not in first)
+
     def comparators(send) -> tuple[Baselines, list]:
         # the other families (the gains' comparators) searched on all the workers while the OCP
-        # solves, then with "both" their tightened starts on the core the search leaves
+        # solves, then their tightened starts on the core the search leaves
         rest = _baselines(robot, gravity, settings, others, jobs)
-        if settings.start_solve != "both":
-            return rest, []
-        base = found.merged(rest)
-        return rest, _solve_guesses(solver, models, family_starts(base, settings, robot), base,
-                                    replay, True)
-    others = tuple(s for s in shapes if s not in first)
+        return rest, from_families(found.merged(rest), False)
     if others:
         (rest, more), solved = overlap(comparators, solve_starts, lambda message: None)
         base = found.merged(rest)
-        solved += more
     else:
         solved, base = solve_starts(), found
-        if settings.start_solve == "both":
-            solved += _solve_guesses(solver, models, family_starts(base, settings, robot), base,
-                                     replay, True, parallel=jobs != 1)
-    res = _best_start(solved, base, models, settings, replay)
+        more = from_families(base, jobs != 1)
+    res = _best_start(solved + more, base, models, settings, replay)
     res.solve_time_s = time.perf_counter() - t_start
     return res
 

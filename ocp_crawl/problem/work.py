@@ -170,14 +170,14 @@ def optimize_work(problem, settings, nodes: list[int] | None = None) -> Work:
     IPOPT iterations per start (:data:`TIGHTENED_ITERATIONS` per tightened one), plus the harmonic
     baseline's search (the OCP's start; the other families are searched in another process while
     the OCP solves), or with tightened starts every family's."""
+    from ocp_crawl.ocp.chain_search import family_shapes
+
     nodes = list(nodes or [settings.nodes])
     scen = len(settings.scenarios(problem.robot))
     # a sub-step's variables grow with the joints m: m + 10, 12 for the three-link robot
     size = (problem.robot.n_joints + 10) / 12 if problem.is_chain else 1.0
     per_it = sum(nodes) * scen * size * UNIT_COST["ocp_node_iteration"]
     how = settings.start_solve
-    from ocp_crawl.ocp.chain_search import family_shapes
-
     shapes = family_shapes(settings, problem.is_chain)
     families = len(shapes) if how != "homotopy" else 0
     starts = settings.starts if how != "tightened" else families + settings.starts - 1
