@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 from ocp_crawl import (FourierSeries, Harmonic, PeriodicLinear, PeriodicPchip, PeriodicSpline,
                        ReferenceTorque)
+from ocp_crawl.model.pulse import PULSE_RAMPS, Pulse
 
 from _properties_common import BAD_NUMBERS, CHEAP, knots
 
@@ -108,6 +109,32 @@ def test_signal_vectorised_equals_scalar(u, ts):
                 assert np.shape(v) == (2,)
                 np.testing.assert_allclose(v, U[:, j], rtol=0, atol=4 * EPS * scale)
     assert u(0).shape == (2,) and u(np.array([0.0, 0.5])).shape == (2, 2)
+
+
+@st.composite
+def pulses(draw):
+    rise = draw(st.floats(0.01, 0.5))
+    c = st.floats(-3.0, 3.0)
+    return Pulse(draw(c), draw(c), draw(st.floats(0, 3)), draw(st.floats(0, 3)),
+                 draw(st.floats(-7, 7)), rise, draw(st.floats(0.0, 1.0)) * (1.0 - 2.0 * rise),
+                 draw(st.sampled_from(PULSE_RAMPS)))
+
+
+@CHEAP
+@given(u=pulses(), ts=st.lists(st.floats(-3.0, 3.0), min_size=1, max_size=20),
+       k=st.floats(1e-3, 1e3))
+def test_pulse_at_one_phase_is_its_vectorised_value(u, ts, k):
+    # the steppers call a pulse one float phase at a time (its own path, in floats): the same
+    # numbers as the array path, to the last bit, for the pulse and the torque of its reference
+    ts = np.array(ts, float)
+    for f in (u, u.derivative, ReferenceTorque(u, k), ReferenceTorque(u, k).derivative):
+        U = f(ts)
+        for j, tj in enumerate(ts):
+            for arg in (float(tj), np.float64(tj), np.array(tj)):
+                np.testing.assert_array_equal(f(arg), U[:, j])
+        corners = np.asarray(u.t_knots, float)  # at the kinks too
+        for tj, v in zip(corners, f(corners).T):
+            np.testing.assert_array_equal(f(float(tj)), v)
 
 
 @CHEAP

@@ -126,13 +126,27 @@ class Pulse(PeriodicSignal):
         return pulse_knots(self.rise, self.hold, [shift, -shift])
 
     def __call__(self, t):
+        if isinstance(t, float):  # the steppers' hot path (as Harmonic's): floats, no numpy
+            p1, p2 = (_unit_scalar(s, self.rise, self.hold, self.ramp)[0]
+                      for s in self._float_shifts(t))
+            return np.array([self.gamma1 + self.A1 * (2.0 * p1 - 1.0),
+                             self.gamma2 + self.A2 * (2.0 * p2 - 1.0)])
         s1, s2 = self._shifts(t)
         return np.array([self.gamma1 + self.A1 * (2.0 * self._unit(s1)[0] - 1.0),
                          self.gamma2 + self.A2 * (2.0 * self._unit(s2)[0] - 1.0)])
 
     def derivative(self, t):
+        if isinstance(t, float):
+            d1, d2 = (_unit_scalar(s, self.rise, self.hold, self.ramp)[1]
+                      for s in self._float_shifts(t))
+            return np.array([2.0 * self.A1 * d1, 2.0 * self.A2 * d2])
         s1, s2 = self._shifts(t)
         return np.array([2.0 * self.A1 * self._unit(s1)[1], 2.0 * self.A2 * self._unit(s2)[1]])
+
+    def _float_shifts(self, t: float) -> tuple[float, float]:
+        """:meth:`_shifts` of one phase, in floats (the same roundings)."""
+        shift = self.psi / (2.0 * TWO_PI)
+        return t + shift, t - shift
 
     def describe(self) -> dict:
         return {"type": "Pulse", "gamma1_deg": math.degrees(self.gamma1),
