@@ -287,3 +287,35 @@ def test_worker_processes_change_nothing_but_the_time():
     assert again == runs[0]
     with pytest.raises(ValueError, match="jobs"):
         best_harmonic(Robot.paper(), "physical", settings, jobs=0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("jobs", [2, 3])
+def test_every_family_on_workers_is_the_serial_search(jobs):
+    """Every family's scan and local searches on worker processes, the pulse search from the
+    triangle's best sent as soon as the triangle's searches end, give the serial search's choices
+    field by field (each local search's own count of simulations aside: in the serial search the
+    pulse search from the triangle finds members of the pulse family's own searches cached), on a
+    robot of unequal feet (asymmetric members)."""
+    from dataclasses import asdict
+
+    from ocp_crawl.ocp.search import best_baselines
+
+    settings = shipped_settings(objective="max_speed", harmonic_A=2, harmonic_psi=8,
+                                baseline_samples=16, baseline_starts=2)
+    robot = Robot.paper(mu1=0.30, mu2=0.45)
+
+    def choices(j):
+        found = best_baselines(robot, "physical", settings, ("harmonic", "triangle", "pulse"),
+                               maxfev=40, jobs=j).choices
+        out = {}
+        for shape, choice in found.items():
+            d = asdict(choice)
+            d.pop("time_s")
+            for start in d["starts"]:
+                start.pop("evaluations")
+            out[shape] = d
+        return out
+    serial, parallel = choices(1), choices(jobs)
+    assert serial == parallel
+    assert [len(serial[s]["starts"]) for s in ("harmonic", "triangle", "pulse")] == [2, 2, 3]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import time
+from concurrent.futures import FIRST_COMPLETED, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable
 
@@ -157,7 +158,8 @@ def search_families(robot: Robot, gravity: GravityConvention, settings: OCPSetti
                     ) -> dict[str, tuple[WaveFamily, list[dict]]]:
     """Scan and local searches of every shape's family: per shape, the family (every evaluation, in
     the order of a serial search) and the local searches' summaries.  On ``jobs`` worker processes
-    when more than one (all shapes' scans, then all their local searches, share the pool);
+    when more than one (all shapes' scans, then all their local searches, share the pool: the pulse
+    search from the triangle's best starts as soon as the triangle's searches end);
     ``meanwhile`` runs in this process while the workers scan.  A broken pool (a worker killed)
     starts the search over here."""
     try:
@@ -184,21 +186,52 @@ def _search(robot, gravity, settings, shapes, local_starts, maxfev, jobs, meanwh
             fam = fams[s]
             scored = [(search_rank(settings, fam.evaluate(fam.member(z))), z) for z in points[s]]
             starts[s] = seeds(scored, local_starts, 6.0 / settings.harmonic_psi)
-        summaries: dict[str, list] = {s: [] for s in shapes}
         if pool is None:
-            for s in shapes:
-                summaries[s] = [local_search(fams[s], z, maxfev) for z in starts[s]]
+            summaries = {s: [local_search(fams[s], z, maxfev) for z in starts[s]] for s in shapes}
+            if {"triangle", "pulse"} <= set(shapes):
+                summaries["pulse"].append(local_search(fams["pulse"], _as_pulse(fams["triangle"]),
+                                                       maxfev))
         else:
-            known = {s: fams[s].evaluated() for s in shapes}
-            tasks = [(s, pool.submit(_local_task, s, z, maxfev, known[s]))
-                     for s in shapes for z in starts[s]]
-            for s, future in tasks:
-                summary, evs = future.result()
-                fams[s].absorb(evs)
-                summaries[s].append(summary)
-    if {"triangle", "pulse"} <= set(shapes):
-        summaries["pulse"].append(local_search(fams["pulse"], _as_pulse(fams["triangle"]), maxfev))
+            summaries = _local_searches(pool, fams, starts, maxfev, jobs)
     return {s: (fams[s], summaries[s]) for s in shapes}
+
+
+def _local_searches(pool, fams: dict, starts: dict, maxfev: int, jobs: int) -> dict[str, list]:
+    """The local searches of every family on the pool's ``jobs`` workers, each sent when a worker
+    is free: the triangle family's first, then the pulse family's, then the others'; the pulse
+    search from the triangle's best (index -1) goes next as soon as the triangle's have ended.
+    Their evaluations are added to the families in the order of a serial search (each family's
+    own searches, then the pulse one from the triangle's best), so each family's best is the
+    serial search's."""
+    first = {"triangle": 0, "pulse": 1}
+    queue = [(s, i) for s in sorted(fams, key=lambda s: first.get(s, 2))
+             for i in range(len(starts[s]))]
+    chained = "triangle" in fams and "pulse" in fams
+    if chained and not starts["triangle"]:
+        queue.insert(0, ("pulse", -1))
+    out: dict = {s: [None] * len(starts[s]) + [None] for s in fams}  # [-1]: from the triangle
+    running: dict = {}
+    while queue or running:
+        while queue and len(running) < jobs:
+            s, i = queue.pop(0)
+            z = starts[s][i] if i >= 0 else _as_pulse(fams["triangle"])
+            running[pool.submit(_local_task, s, z, maxfev, fams[s].evaluated())] = (s, i)
+        done, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in done:
+            s, i = running.pop(future)
+            out[s][i] = future.result()
+            if chained and s == "triangle" and all(r is not None for r in out[s][:-1]):
+                for _, evs in out[s][:-1]:
+                    fams[s].absorb(evs)
+                queue.insert(0, ("pulse", -1))
+    summaries = {}
+    for s, runs in out.items():
+        runs = [r for r in runs if r is not None]
+        if not (chained and s == "triangle"):
+            for _, evs in runs:
+                fams[s].absorb(evs)
+        summaries[s] = [summary for summary, _ in runs]
+    return summaries
 
 
 def _as_pulse(triangles: WaveFamily) -> np.ndarray:
