@@ -9,7 +9,7 @@
     python scripts/bench.py ocp_kernel --repeat 3  # OCP solves: the expanded SX NLP against the
                                                      compiled kernel's map
     python scripts/bench.py ocp_files --repeat 3   # the three OCP problem files whole, and the
-                                                     N = 50..400 run
+                                                     N = 50..400 run (--old REV: against REV)
     python scripts/bench.py ocp_paths --repeat 2   # robust_speed and min_cot on each solver path
                                                      (endgame, ...)
     python scripts/bench.py work --repeat 3        # the work estimates against the runs they bound
@@ -416,15 +416,17 @@ def bench_ocp_kernel(repeat: int) -> dict:
 OCP_FILES = ("ocp_max_speed", "ocp_min_cot", "ocp_robust")
 
 
-def _optimize_process(args: list[str]) -> tuple[float, dict]:
-    """Wall time [s] of one whole ``ocp-crawl optimize`` process and its JSON output."""
+def _optimize_process(args: list[str], tree: str | None = None) -> tuple[float, dict]:
+    """Wall time [s] of one whole ``ocp-crawl optimize`` process and its JSON output (the package
+    of ``tree`` first on the path, when given: an old commit's, :func:`_old_tree`)."""
     import json
     import subprocess
     import sys
 
+    env = None if tree is None else dict(os.environ, PYTHONPATH=tree)
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "ocp_crawl.cli", "optimize", *args, "--json"],
-                          capture_output=True, text=True)
+                          capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t
     try:
         return wall, json.loads(proc.stdout)
@@ -432,27 +434,48 @@ def _optimize_process(args: list[str]) -> tuple[float, dict]:
         return wall, {"status": f"exit {proc.returncode}: {proc.stderr.strip()[-200:]}"}
 
 
-def bench_ocp_files(repeat: int) -> dict:
-    """Each shipped OCP problem file solved whole at its default N and starts (harmonic baseline,
-    solve, replay; one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status,
+def _file_runs(runs: list) -> dict:
+    """min and median wall time [s] of (wall, JSON) runs of one file, the first run's status,
+    replayed objective, gain and IPOPT split."""
+    walls = [w for w, _ in runs]
+    data = runs[0][1]
+    return {"wall_s": {"min": round(min(walls), 2), "median": round(statistics.median(walls), 2)},
+            "status": data.get("status"), "value_replay": data.get("objective_value_replay"),
+            "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain"),
+            **_ipopt_split(data.get("homotopy", []))}
+
+
+def bench_ocp_files(repeat: int, old: str | None = None) -> dict:
+    """Each shipped OCP problem file solved whole at its default N and starts (baselines, solve,
+    replay; one process each, ``min(repeat, 3)`` runs: min and median wall time [s], status,
     objective by replay, and the first run's IPOPT iterations, seconds and milliseconds per
     iteration), then the convergence run
     ``optimize problems/ocp_max_speed.toml --nodes 50 100 200 400`` once (wall time and the table).
-    Targets: <= 20 s per file, <= 120 s for the convergence run, on 2 cores."""
+    With ``old`` (a commit): each file's runs alternate with those of that commit's package, and
+    the ratios old/new of the minima and medians are reported (the convergence run of this tree
+    only).  Targets: <= 20 s per file, <= 60 s for the convergence run, on 2 cores."""
+    import shutil
     from pathlib import Path
 
     root = Path(__file__).resolve().parent.parent / "problems"
-    out = {"load_average_start": os.getloadavg()}
-    for name in OCP_FILES:
-        runs = [_optimize_process([str(root / f"{name}.toml")]) for _ in range(min(repeat, 3))]
-        walls = [w for w, _ in runs]
-        data = runs[0][1]
-        out[name] = {"wall_s": {"min": round(min(walls), 2),
-                                "median": round(statistics.median(walls), 2)},
-                     "status": data.get("status"),
-                     "value_replay": data.get("objective_value_replay"),
-                     "rel_diff_replay": data.get("rel_diff_replay"), "gain": data.get("gain"),
-                     **_ipopt_split(data.get("homotopy", []))}
+    out: dict = {"load_average_start": os.getloadavg()}
+    old_tree = None if old is None else _old_tree(old)
+    try:
+        for name in OCP_FILES:
+            runs: dict = {"new": [], "old": []}
+            for _ in range(min(repeat, 3)):
+                runs["new"].append(_optimize_process([str(root / f"{name}.toml")]))
+                if old_tree is not None:
+                    runs["old"].append(_optimize_process([str(root / f"{name}.toml")], old_tree))
+            out[name] = _file_runs(runs["new"])
+            if old_tree is not None:
+                before = out[name]["old"] = {"commit": old, **_file_runs(runs["old"])}
+                for stat in ("min", "median"):
+                    out[name][f"ratio_old_over_new_{stat}"] = round(
+                        before["wall_s"][stat] / out[name]["wall_s"][stat], 3)
+    finally:
+        if old_tree is not None:
+            shutil.rmtree(old_tree, ignore_errors=True)
     wall, data = _optimize_process([str(root / "ocp_max_speed.toml"), "--nodes", "50", "100", "200",
                                     "400"])
     rows = data.get("rows", [])
@@ -667,7 +690,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=30, help="timed repetitions per benchmark")
     ap.add_argument("--old", default=None,
                     help=f"commit that `hybrid` and `pressure` compare against (default: "
-                         f"{OLD_COMMIT} and {PRESSURE_OLD_COMMIT})")
+                         f"{OLD_COMMIT} and {PRESSURE_OLD_COMMIT}), and `ocp_files` (default: "
+                         f"none)")
     ap.add_argument("--hybrid-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     ap.add_argument("--pressure-worker", type=int, metavar="REPEAT", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -684,8 +708,9 @@ def main(argv=None) -> int:
         ap.error(f"unknown benchmark(s) {unknown}; choose from {list(BENCHMARKS)}")
     print(f"# {os.cpu_count()} cores, python {sys.version.split()[0]}")
     for name in names:
-        result = (BENCHMARKS[name](args.repeat, args.old) if name in ("hybrid", "pressure")
-                  and args.old else BENCHMARKS[name](args.repeat))
+        result = (BENCHMARKS[name](args.repeat, args.old)
+                  if name in ("hybrid", "pressure", "ocp_files") and args.old
+                  else BENCHMARKS[name](args.repeat))
         print(f"{name}: {result}")
     return 0
 
