@@ -250,7 +250,7 @@ class WaveFamily:
         Returns an :class:`Evaluation`; a member of (almost) zero amplitude or a failed simulation
         (a fold, a lift-off, a non-periodic gait, bad input to the stepper) is an unsuccessful
         evaluation."""
-        key = self._key(params)
+        key = self.key(params)
         if key in self._cache:
             return self._cache[key]
         T = params.period(self.settings)
@@ -264,7 +264,8 @@ class WaveFamily:
         return out
 
     @staticmethod
-    def _key(params: WaveParams) -> tuple:
+    def key(params: WaveParams) -> tuple:
+        """The cache key of a member: its parameters, floats rounded to 12 digits."""
         return tuple(round(v, 12) if isinstance(v, float) else v for v in params.as_dict().values())
 
     def absorb(self, evaluations) -> None:
@@ -272,7 +273,7 @@ class WaveFamily:
         settings and shape) to the cache, in their order; each one not cached yet counts as a
         simulated member unless of zero amplitude (as in :meth:`evaluate`)."""
         for ev in evaluations:
-            key = self._key(ev.params)
+            key = self.key(ev.params)
             if key not in self._cache:
                 self._cache[key] = ev
                 self.evaluations += max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG

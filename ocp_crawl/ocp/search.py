@@ -26,7 +26,7 @@ from ocp_crawl.model.statics import GravityConvention, Robot
 from ocp_crawl.checks import real
 from ocp_crawl.ocp.baseline import (FAIL_RANK, Baselines, WaveChoice, choice_of, search_rank,
                                      value_of)
-from ocp_crawl.ocp.family import WaveFamily, shape_box
+from ocp_crawl.ocp.family import A_MIN_DEG, Evaluation, WaveFamily, shape_box
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.workers import default_jobs, worker_pool
 
@@ -107,7 +107,8 @@ def _symmetric(z: np.ndarray) -> bool:
     return z[0] == z[1] and z[3] == 0
 
 
-def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
+def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int,
+                 scanned: frozenset = frozenset()) -> tuple[dict, list[Evaluation]]:
     """Local search from the box point ``z0`` on :func:`~ocp_crawl.ocp.baseline.search_rank`.
 
     From a symmetric point: bounded Nelder-Mead in the symmetric sub-family first (at most a third
@@ -116,16 +117,27 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
     until a round improves the rank by less than :data:`ROUND_RTOL` or ``maxfev`` is spent: a
     simplex in five or seven coordinates degenerates on the objective's ridges long before it
     converges, and a fresh one goes on (on an asymmetric robot one search of 600 evaluations gained
-    2.6 % over one of 200).  Returns the start's summary (seed and end point, their objective
-    values, evaluations)."""
+    2.6 % over one of 200).  The budget counts the members this search asks for that are neither
+    among ``scanned`` (the keys, :meth:`WaveFamily.key`, of the family's scan) nor asked for by it
+    before: not what else the family's cache holds, so that a search ends the same in any process,
+    after any other search.  Returns the start's summary (seed and end point, their objective
+    values, the members counted) and the evaluations it asked for, in the order of their first
+    request."""
     from scipy.optimize import minimize
 
     settings, box = fam.settings, shape_box(fam.shape)
+    asked: dict = {}
 
     def rank(z):
-        return search_rank(settings, fam.evaluate(fam.member(z)))
+        params = fam.member(z)
+        key = fam.key(params)
+        if key not in asked:
+            asked[key] = fam.evaluate(params)
+        return search_rank(settings, asked[key])
 
-    n0 = fam.evaluations
+    def spent() -> int:
+        return sum(k not in scanned and max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG
+                   for k, ev in asked.items())
     z, f = np.asarray(z0, float), rank(z0)
     if _symmetric(z):
         idx = _sym_index(fam.shape)
@@ -136,8 +148,8 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
                                 "initial_simplex": first_simplex(z[idx], first, sym_box)})
         if sym.fun <= f:
             z, f = _full(sym.x), sym.fun
-    while fam.evaluations - n0 < maxfev:
-        left = min(ROUND_FEV, maxfev - (fam.evaluations - n0))
+    while spent() < maxfev:
+        left = min(ROUND_FEV, maxfev - spent())
         out = minimize(rank, z, method="Nelder-Mead", bounds=box, options={
             **NM_TOL, "maxfev": left,
             "initial_simplex": first_simplex(z, FULL_STEPS[:len(box)], box)})
@@ -147,9 +159,9 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int) -> dict:
         if not gained > ROUND_RTOL * max(abs(f), 1e-12):
             break
     seed, end = (fam.evaluate(fam.member(x)) for x in (z0, z))
-    return {"seed": seed.params.as_dict(), "seed_value": value_of(settings, seed),
-            "end": end.params.as_dict(), "end_value": value_of(settings, end),
-            "evaluations": fam.evaluations - n0}
+    return ({"seed": seed.params.as_dict(), "seed_value": value_of(settings, seed),
+             "end": end.params.as_dict(), "end_value": value_of(settings, end),
+             "evaluations": spent()}, list(asked.values()))
 
 
 def search_families(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes,
@@ -186,23 +198,32 @@ def _search(robot, gravity, settings, shapes, local_starts, maxfev, jobs, meanwh
             fam = fams[s]
             scored = [(search_rank(settings, fam.evaluate(fam.member(z))), z) for z in points[s]]
             starts[s] = seeds(scored, local_starts, 6.0 / settings.harmonic_psi)
+        scan = {s: fams[s].evaluated() for s in shapes}
         if pool is None:
-            summaries = {s: [local_search(fams[s], z, maxfev) for z in starts[s]] for s in shapes}
+            summaries = {s: [_here(fams[s], z, maxfev, scan[s]) for z in starts[s]]
+                         for s in shapes}
             if {"triangle", "pulse"} <= set(shapes):
-                summaries["pulse"].append(local_search(fams["pulse"], _as_pulse(fams["triangle"]),
-                                                       maxfev))
+                summaries["pulse"].append(_here(fams["pulse"], _as_pulse(fams["triangle"]), maxfev,
+                                                scan["pulse"]))
         else:
-            summaries = _local_searches(pool, fams, starts, maxfev, jobs)
+            summaries = _local_searches(pool, fams, starts, maxfev, jobs, scan)
     return {s: (fams[s], summaries[s]) for s in shapes}
 
 
-def _local_searches(pool, fams: dict, starts: dict, maxfev: int, jobs: int) -> dict[str, list]:
+def _here(fam: WaveFamily, z0: np.ndarray, maxfev: int, scan: list) -> dict:
+    """One local search in this process (the family's cache holds what it asks for)."""
+    return local_search(fam, z0, maxfev, frozenset(fam.key(ev.params) for ev in scan))[0]
+
+
+def _local_searches(pool, fams: dict, starts: dict, maxfev: int, jobs: int,
+                    scan: dict) -> dict[str, list]:
     """The local searches of every family on the pool's ``jobs`` workers, each sent when a worker
     is free: the triangle family's first, then the pulse family's, then the others'; the pulse
     search from the triangle's best (index -1) goes next as soon as the triangle's have ended.
-    Their evaluations are added to the families in the order of a serial search (each family's
-    own searches, then the pulse one from the triangle's best), so each family's best is the
-    serial search's."""
+    Each search is the serial one (its budget does not depend on the worker's cache:
+    :func:`local_search`), and the members it asked for are added to its family in the order of a
+    serial search (each family's own searches, then the pulse one from the triangle's best), so
+    each family's best is the serial search's.  ``scan``: each family's scan evaluations."""
     first = {"triangle": 0, "pulse": 1}
     queue = [(s, i) for s in sorted(fams, key=lambda s: first.get(s, 2))
              for i in range(len(starts[s]))]
@@ -215,7 +236,7 @@ def _local_searches(pool, fams: dict, starts: dict, maxfev: int, jobs: int) -> d
         while queue and len(running) < jobs:
             s, i = queue.pop(0)
             z = starts[s][i] if i >= 0 else _as_pulse(fams["triangle"])
-            running[pool.submit(_local_task, s, z, maxfev, fams[s].evaluated())] = (s, i)
+            running[pool.submit(_local_task, s, z, maxfev, scan[s])] = (s, i)
         done, _ = wait(running, return_when=FIRST_COMPLETED)
         for future in done:
             s, i = running.pop(future)
@@ -275,14 +296,12 @@ def _scan_chunk(chunk) -> list:
     return [fam.evaluate(fam.member(z)) for z in points]
 
 
-def _local_task(shape: str, z0: np.ndarray, maxfev: int, known: list) -> tuple[dict, list]:
-    """One local search (:func:`local_search`) in a worker whose family knows the scan's evaluations
-    ``known``: its summary and the evaluations it added, in order."""
+def _local_task(shape: str, z0: np.ndarray, maxfev: int, scan: list) -> tuple[dict, list]:
+    """One local search (:func:`local_search`) in a worker, after the family's scan evaluations
+    ``scan``: its summary and the evaluations it asked for, in the order of its first requests."""
     fam = _WORKER[shape]
-    fam.absorb(known)
-    n = len(fam.evaluated())
-    summary = local_search(fam, z0, maxfev)
-    return summary, fam.evaluated()[n:]
+    fam.absorb(scan)
+    return local_search(fam, z0, maxfev, frozenset(fam.key(ev.params) for ev in scan))
 
 
 def best_baselines(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes=None,
@@ -309,8 +328,8 @@ def best_baselines(robot: Robot, gravity: GravityConvention, settings: OCPSettin
         Largest number of simulated members of each local search (None: ``baseline_evaluations``).
     jobs : int, optional
         Worker processes (None: the CPUs this process may use; 1: all in this process).  The result
-        does not depend on it, except the local searches' own ``evaluations``: in parallel, a search
-        does not find in its cache the members that another one simulated.
+        does not depend on it (each local search is the same in any process:
+        :func:`local_search`).
     meanwhile : callable, optional
         Called in this process while the workers scan (first, when there are none), e.g. to build
         the OCP's solvers (:meth:`~ocp_crawl.ocp.solver.GaitSolver.prepare`).
