@@ -265,7 +265,7 @@ class WaveFamily:
 
     @staticmethod
     def key(params: WaveParams) -> tuple:
-        """The cache key of a member: its parameters, floats rounded to 12 digits."""
+        """The cache key of a member: its parameters, floats rounded to 12 decimals."""
         return tuple(round(v, 12) if isinstance(v, float) else v for v in params.as_dict().values())
 
     def absorb(self, evaluations) -> None:

@@ -325,7 +325,7 @@ def best_baselines(robot: Robot, gravity: GravityConvention, settings: OCPSettin
     local_starts : int, optional
         Best distinct scan points refined by local searches, per family (None: ``baseline_starts``).
     maxfev : int, optional
-        Largest number of simulated members of each local search (None: ``baseline_evaluations``).
+        Most members each local search asks for beyond the scan (None: ``baseline_evaluations``).
     jobs : int, optional
         Worker processes (None: the CPUs this process may use; 1: all in this process).  The result
         does not depend on it (each local search is the same in any process:

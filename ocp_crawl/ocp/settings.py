@@ -189,8 +189,8 @@ class OCPSettings:
     """local searches of each waveform family, from its best distinct scan points, in
     BASELINE_STARTS_BOUNDS"""
     baseline_evaluations: int = 400
-    """most simulated members of each local search of the baselines, in
-    BASELINE_EVALUATIONS_BOUNDS"""
+    """most members each local search of the baselines asks for beyond the scan (a chain's: most
+    simulated members), in BASELINE_EVALUATIONS_BOUNDS"""
     baselines: str = "all"
     """the waveform families an optimum is compared with: "all" (harmonic, triangle, pulse) or one
     of them (:mod:`~ocp_crawl.ocp.family`); the harmonic family is searched always (it is the OCP's

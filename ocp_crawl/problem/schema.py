@@ -374,7 +374,7 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         rule=within(*BASELINE_STARTS_BOUNDS,
                     "each is up to baseline_evaluations event-driven runs")),
     Key("baseline_evaluations", int, "-",
-        "most simulated members of each local search of the baselines",
+        "most members each local search of the baselines asks for beyond the scan",
         default=_ocp("baseline_evaluations"),
         rule=within(*BASELINE_EVALUATIONS_BOUNDS,
                     "one event-driven run per member and friction scenario")),
