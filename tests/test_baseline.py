@@ -317,8 +317,7 @@ def test_a_local_search_ends_the_same_whatever_the_cache_holds():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("jobs", [2, 3])
-def test_every_family_on_workers_is_the_serial_search(jobs):
+def test_every_family_on_workers_is_the_serial_search():
     """Every family's scan and local searches on worker processes (whose caches keep what earlier
     searches simulated), the pulse search from the triangle's best sent as soon as the triangle's
     searches end, give the serial search's choices field by field, each local search's summary
@@ -340,6 +339,6 @@ def test_every_family_on_workers_is_the_serial_search(jobs):
             d.pop("time_s")
             out[shape] = d
         return out
-    serial, parallel = choices(1), choices(jobs)
+    serial, parallel = choices(1), choices(2)
     assert serial == parallel
     assert [len(serial[s]["starts"]) for s in ("harmonic", "triangle", "pulse")] == [2, 2, 3]
