@@ -304,11 +304,11 @@ def test_a_local_search_ends_the_same_whatever_the_cache_holds():
     scan = [fam.evaluate(fam.member(z)) for z in points]
     keys = frozenset(fam.key(ev.params) for ev in scan)
     z0 = seeds([(search_rank(settings, ev), z) for ev, z in zip(scan, points)], 1, 0.5)[0]
-    first, asked = local_search(fam, z0, 30, keys)
-    again, asked_again = local_search(fam, z0, 30, keys)
+    first, asked = local_search(fam, z0, 30, scan)
+    again, asked_again = local_search(fam, z0, 30, scan)
     fresh = WaveFamily(Robot.paper(), "physical", settings, "harmonic")
     fresh.absorb(scan)
-    third, asked_third = local_search(fresh, z0, 30, keys)
+    third, asked_third = local_search(fresh, z0, 30, scan)
     assert first == again == third and 0 < first["evaluations"] <= 30
     assert [ev.params for ev in asked] == [ev.params for ev in asked_again] == \
         [ev.params for ev in asked_third]

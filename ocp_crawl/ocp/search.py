@@ -108,7 +108,7 @@ def _symmetric(z: np.ndarray) -> bool:
 
 
 def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int,
-                 scanned: frozenset = frozenset()) -> tuple[dict, list[Evaluation]]:
+                 scan: list[Evaluation] | tuple = ()) -> tuple[dict, list[Evaluation]]:
     """Local search from the box point ``z0`` on :func:`~ocp_crawl.ocp.baseline.search_rank`.
 
     From a symmetric point: bounded Nelder-Mead in the symmetric sub-family first (at most a third
@@ -118,14 +118,15 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int,
     simplex in five or seven coordinates degenerates on the objective's ridges long before it
     converges, and a fresh one goes on (on an asymmetric robot one search of 600 evaluations gained
     2.6 % over one of 200).  The budget counts the members this search asks for that are neither
-    among ``scanned`` (the keys, :meth:`WaveFamily.key`, of the family's scan) nor asked for by it
-    before: not what else the family's cache holds, so that a search ends the same in any process,
+    among ``scan`` (the family's scan evaluations) nor asked for by it before: not what else the
+    family's cache holds, so that a search ends the same in any process,
     after any other search.  Returns the start's summary (seed and end point, their objective
     values, the members counted) and the evaluations it asked for, in the order of their first
     request."""
     from scipy.optimize import minimize
 
     settings, box = fam.settings, shape_box(fam.shape)
+    scanned = frozenset(fam.key(ev.params) for ev in scan)
     asked: dict = {}
 
     def rank(z):
@@ -200,19 +201,14 @@ def _search(robot, gravity, settings, shapes, local_starts, maxfev, jobs, meanwh
             starts[s] = seeds(scored, local_starts, 6.0 / settings.harmonic_psi)
         scan = {s: fams[s].evaluated() for s in shapes}
         if pool is None:
-            summaries = {s: [_here(fams[s], z, maxfev, scan[s]) for z in starts[s]]
+            summaries = {s: [local_search(fams[s], z, maxfev, scan[s])[0] for z in starts[s]]
                          for s in shapes}
             if {"triangle", "pulse"} <= set(shapes):
-                summaries["pulse"].append(_here(fams["pulse"], _as_pulse(fams["triangle"]), maxfev,
-                                                scan["pulse"]))
+                summaries["pulse"].append(local_search(fams["pulse"], _as_pulse(fams["triangle"]),
+                                                       maxfev, scan["pulse"])[0])
         else:
             summaries = _local_searches(pool, fams, starts, maxfev, jobs, scan)
     return {s: (fams[s], summaries[s]) for s in shapes}
-
-
-def _here(fam: WaveFamily, z0: np.ndarray, maxfev: int, scan: list) -> dict:
-    """One local search in this process (the family's cache holds what it asks for)."""
-    return local_search(fam, z0, maxfev, frozenset(fam.key(ev.params) for ev in scan))[0]
 
 
 def _local_searches(pool, fams: dict, starts: dict, maxfev: int, jobs: int,
@@ -301,7 +297,7 @@ def _local_task(shape: str, z0: np.ndarray, maxfev: int, scan: list) -> tuple[di
     ``scan``: its summary and the evaluations it asked for, in the order of its first requests."""
     fam = _WORKER[shape]
     fam.absorb(scan)
-    return local_search(fam, z0, maxfev, frozenset(fam.key(ev.params) for ev in scan))
+    return local_search(fam, z0, maxfev, scan)
 
 
 def best_baselines(robot: Robot, gravity: GravityConvention, settings: OCPSettings, shapes=None,
