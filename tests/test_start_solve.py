@@ -141,18 +141,27 @@ def test_min_cot_over_a_friction_set_converges_from_tightened_starts():
 def test_tightened_starts_in_parallel_are_those_one_after_the_other(monkeypatch):
     """The tightened starts are solved two at a time (the second half in a forked process, with more
     than one job); where no process can be forked they run one after the other here: the same
-    starts, statuses and values to the last digit."""
+    starts, statuses and values to the last digit.  Either way every start's IPOPT calls reach
+    this process's observers (the progress bar)."""
     from ocp_crawl import workers
+    from ocp_crawl.nlp.homotopy import observe
 
     settings = OCPSettings(**dict(SMALL, nodes=12), start_solve="tightened")
-    forked = optimize_gait(Robot.paper(), "physical", settings, jobs=2)
+
+    def observed() -> tuple:
+        seen: list = []
+        with observe(lambda stage: seen.append(stage.iterations)):
+            res = optimize_gait(Robot.paper(), "physical", settings, jobs=2)
+        return res, sum(seen)
+    forked, seen_forked = observed()
     monkeypatch.setattr(workers, "mp_context",
                         lambda: workers.multiprocessing.get_context("spawn"))
-    here = optimize_gait(Robot.paper(), "physical", settings, jobs=2)
+    here, seen_here = observed()
     assert len(forked.starts) >= 2
     assert ([(s.label, s.status, s.value_replay) for s in forked.starts]
             == [(s.label, s.status, s.value_replay) for s in here.starts])
     assert np.array_equal(forked.tau, here.tau)
+    assert seen_forked == seen_here == sum(s.iterations for s in here.starts) > 0
 
 
 def test_a_tightened_start_at_its_cap_fails_with_what_to_try():

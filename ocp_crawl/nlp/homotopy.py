@@ -23,13 +23,15 @@ import contextvars
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Iterator, cast
+from typing import Callable, Iterable, Iterator, TypeVar, cast
 
 import casadi as cs
 import numpy as np
 
 from ocp_crawl.nlp.ipopt import IpoptCall, LazySolver, Solvers, ipopt_status
 
+
+_T = TypeVar("_T")
 
 #: callbacks told of every IPOPT call of every homotopy (see :func:`observe`)
 _OBSERVERS: contextvars.ContextVar[tuple] = contextvars.ContextVar("homotopy_observers", default=())
@@ -51,6 +53,24 @@ def observe(callback: Callable[["Stage"], None], alone: bool = False) -> Iterato
 def observers() -> tuple:
     """The callbacks that :func:`observe` has registered here (innermost last)."""
     return _OBSERVERS.get()
+
+
+def observed_elsewhere(fn: Callable[[], _T]) -> tuple[Callable[[Callable], _T],
+                                                      Callable[[object], None]]:
+    """(task, forward) for :func:`~ocp_crawl.workers.overlap`: the task runs ``fn()`` with the
+    records of its homotopies' IPOPT calls sent (not observed there), and ``forward`` gives each
+    record to this process's observers (those registered when this is called), so that a solve in
+    a forked process still reaches the progress display."""
+    here = observers()
+
+    def task(send: Callable) -> _T:
+        with observe(send, alone=True):
+            return fn()
+
+    def forward(stage: object) -> None:
+        for callback in here:
+            callback(stage)
+    return task, forward
 
 
 def schedule(sigma0: float, factor: float, sigma_min: float) -> tuple[float, ...]:

@@ -28,7 +28,7 @@ import numpy as np
 
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import GravityConvention
-from ocp_crawl.nlp.homotopy import observe, observers
+from ocp_crawl.nlp.homotopy import observed_elsewhere
 from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.limits import NODES_BOUNDS
 from ocp_crawl.ocp.plant import AnyRobot, Plant
@@ -234,15 +234,7 @@ def _warm_row(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettings
     solver = ready if ready is not None and ready.settings.nodes == settings.nodes else None
     if not later:
         return _warm_solve(robot, gravity, settings, prev, solver), None
-    here = observers()
-
-    def task(send):
-        with observe(send, alone=True):
-            return _warm_solve(robot, gravity, settings, prev, solver)
-
-    def forward(stage):
-        for callback in here:
-            callback(stage)
+    task, forward = observed_elsewhere(lambda: _warm_solve(robot, gravity, settings, prev, solver))
     return overlap(task,
                    lambda: warm_transcription(robot, gravity, replace(settings, nodes=later[0])),
                    forward)

@@ -19,8 +19,9 @@ period found within and longer than every period found outside (S is assumed to 
 T grows); f_5pct = 1/T_min.  Only the reported optimum is checked (not every start).
 
 Cost: at most 5 MuJoCo runs of 3 to 12 cycles of T / 5e-4 steps each.  Measured: 2.9 s of CPU
-for the 5 runs (0.54 to 8.6 s) of a max_speed profile of ``problems/ocp_max_speed.toml`` (N = 30,
-T = 0.539 s), about 2 % of its solve; 3 runs of the paper gait (5, 2.5, 1.25 s) about 2 s.
+for the 5 runs (0.54 to 8.6 s) of a max_speed profile of ``problems/ocp_max_speed.toml`` by the
+homotopy (N = 30, ``start_solve = "homotopy"``, T = 0.539 s), about 2 % of its solve; 3 runs of
+the paper gait (5, 2.5, 1.25 s) about 2 s.
 """
 from __future__ import annotations
 

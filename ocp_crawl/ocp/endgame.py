@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from ocp_crawl.nlp.homotopy import observe, observers
+from ocp_crawl.nlp.homotopy import observed_elsewhere
 from ocp_crawl.workers import overlap
 
 #: a stage's sigma at most this far (relative) from the endgame's counts as it (round-off)
@@ -64,19 +64,12 @@ class Endgame:
         if not self.both:
             kept = self(x_stage, records)
             return kept if kept is not None else rest()
-        here = observers()
-
-        def homotopy(send) -> tuple:
+        def homotopy() -> tuple:
             n0 = len(records)
-            with observe(send, alone=True):
-                out = rest()
-            return out, records[n0:]
-
-        def forward(stage) -> None:
-            for callback in here:
-                callback(stage)
+            return rest(), records[n0:]
+        task, forward = observed_elsewhere(homotopy)
         n_stage = len(records)
-        (out, tail), ended = overlap(homotopy, lambda: self._solve(x_stage, []), forward)
+        (out, tail), ended = overlap(task, lambda: self._solve(x_stage, []), forward)
         # (where no process could be forked the homotopy ran here, after the endgame, into records)
         records[:] = [*records[:n_stage], *ended[1], *tail]
         x_ref = out[0] if out[1] is None and out[0] is not None else x_stage

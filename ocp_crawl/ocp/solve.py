@@ -28,7 +28,7 @@ import numpy as np
 from ocp_crawl.io import units
 from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.statics import GravityConvention
-from ocp_crawl.nlp.homotopy import Stage
+from ocp_crawl.nlp.homotopy import Stage, observed_elsewhere
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_value, value_from
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
@@ -123,13 +123,14 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
                               True, parallel=parallel)
     others = tuple(s for s in shapes if s not in first)
 
-    def comparators(send) -> tuple[Baselines, list]:
+    def comparators() -> tuple[Baselines, list]:
         # the other families (the gains' comparators) searched on all the workers while the OCP
         # solves, then their tightened starts on the core the search leaves
         rest = _baselines(robot, gravity, settings, others, jobs)
         return rest, from_families(found.merged(rest), False)
     if others:
-        (rest, more), solved = overlap(comparators, solve_starts, lambda message: None)
+        task, forward = observed_elsewhere(comparators)
+        (rest, more), solved = overlap(task, solve_starts, forward)
         base = found.merged(rest)
     else:
         solved, base = solve_starts(), found
@@ -190,8 +191,8 @@ def _solve_guesses(solver: GaitSolver, models: list, guesses: list[StartGuess], 
     if not parallel or len(guesses) < 2:
         return solve(guesses)
     half = (len(guesses) + 1) // 2
-    later, first = overlap(lambda send: solve(guesses[half:]), lambda: solve(guesses[:half]),
-                           lambda message: None)
+    task, forward = observed_elsewhere(lambda: solve(guesses[half:]))
+    later, first = overlap(task, lambda: solve(guesses[:half]), forward)
     return first + later
 
 
