@@ -167,7 +167,7 @@ def test_judge_ignores_the_margin_without_a_friction_tolerance():
 
 @pytest.mark.slow
 @pytest.mark.skipif(not os.environ.get("OCP_CRAWL_HEAVY"),
-                    reason="a whole optimisation of minutes (14 on a loaded machine); by hand, "
+                    reason="a whole optimisation in one process (1.5 min); by hand, "
                            "OCP_CRAWL_HEAVY=1")
 def test_changed_geometry_max_speed_ends_in_success():
     """ocp_max_speed.toml with M 0.08, L 0.15, beta 1.5: success, its replay's margin within
