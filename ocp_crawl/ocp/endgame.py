@@ -64,6 +64,7 @@ class Endgame:
         if not self.both:
             kept = self(x_stage, records)
             return kept if kept is not None else rest()
+
         def homotopy() -> tuple:
             n0 = len(records)
             return rest(), records[n0:]
