@@ -94,6 +94,11 @@ class WaveParams:
     duty: float = 0.0
     """share of the cycle outside the edges (1 - 2 rise) held at the high level (pulse) [-]"""
 
+    def simulated(self) -> bool:
+        """Whether the member is a gait to simulate: an amplitude max(A1, A2) of at least
+        :data:`A_MIN_DEG` (a zero amplitude has no period and no gait)."""
+        return max(self.A1_deg, self.A2_deg) >= A_MIN_DEG
+
     def gait(self) -> PeriodicSignal:
         """The reference angles [rad] of the gait (1-periodic in the phase)."""
         if self.shape == "harmonic":
@@ -255,7 +260,7 @@ class WaveFamily:
             return self._cache[key]
         T = params.period(self.settings)
         nan = (math.nan,) * len(self.models)
-        if max(params.A1_deg, params.A2_deg) < A_MIN_DEG:
+        if not params.simulated():
             out = Evaluation(params, T, nan, nan, nan, False, "zero amplitude: no gait")
         else:
             self.evaluations += 1
@@ -276,7 +281,7 @@ class WaveFamily:
             key = self.key(ev.params)
             if key not in self._cache:
                 self._cache[key] = ev
-                self.evaluations += max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG
+                self.evaluations += ev.params.simulated()
 
     def _simulate(self, params: WaveParams, T: float, nan: tuple) -> Evaluation:
         sims = []

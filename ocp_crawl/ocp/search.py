@@ -26,7 +26,7 @@ from ocp_crawl.model.statics import GravityConvention, Robot
 from ocp_crawl.checks import real
 from ocp_crawl.ocp.baseline import (FAIL_RANK, Baselines, WaveChoice, choice_of, search_rank,
                                      value_of)
-from ocp_crawl.ocp.family import A_MIN_DEG, Evaluation, WaveFamily, shape_box
+from ocp_crawl.ocp.family import Evaluation, WaveFamily, shape_box
 from ocp_crawl.ocp.settings import OCPSettings
 from ocp_crawl.workers import default_jobs, worker_pool
 
@@ -137,8 +137,7 @@ def local_search(fam: WaveFamily, z0: np.ndarray, maxfev: int,
         return search_rank(settings, asked[key])
 
     def spent() -> int:
-        return sum(k not in scanned and max(ev.params.A1_deg, ev.params.A2_deg) >= A_MIN_DEG
-                   for k, ev in asked.items())
+        return sum(k not in scanned and ev.params.simulated() for k, ev in asked.items())
     z, f = np.asarray(z0, float), rank(z0)
     if _symmetric(z):
         idx = _sym_index(fam.shape)
