@@ -75,6 +75,32 @@ def test_a_gait_at_the_friction_tie_stops_under_half_a_percent_asymmetry():
         assert abs(S_at(PAPER, sig, r)) < 1e-3 * abs(S0)
 
 
+@pytest.mark.parametrize("psi_deg", [0.01, 45.0])
+def test_an_optimum_reports_whether_a_friction_tie_decides_its_slip(psi_deg):
+    """The report every judged optimum carries (:mod:`ocp_crawl.ocp.asymmetry`), on node profiles of
+    the gait at the tie (psi 0.01 deg) and of one off it (psi 45 deg): its S at mu1/mu2 = 0.995 and
+    1.005 are those simulated directly at those ratios, and only the tie's is called a tie, in the
+    report and in the optimum's message."""
+    from ocp_crawl.ocp import OCPResult
+    from ocp_crawl.ocp.asymmetry import ASYMMETRY, check_friction_asymmetry, ties_decide
+    from ocp_crawl.ocp.plant import Plant
+
+    N = 100
+    tau = np.asarray(harmonic(psi_deg)(np.arange(N) / N), float).reshape(2, N)
+    sig = PeriodicLinear(np.arange(N) / N, tau)
+    S = [S_at(PAPER, sig, r) for r in (1 - ASYMMETRY, 1.0, 1 + ASYMMETRY)]
+    res = OCPResult(success=True, status=Status.SUCCESS, message="confirmed", objective="max_speed",
+                    settings=OCPSettings(), tau=tau, S_replay=[S[1]])
+    check_friction_asymmetry(res, [Plant(PAPER, "physical")])
+    d = res.friction_asymmetry
+    assert d is not None and d["S_m"][0][1] == S[1]
+    np.testing.assert_allclose(d["S_m"][0], S, rtol=1e-9, atol=1e-12)
+    at_tie = psi_deg < 1
+    assert ties_decide(d) == at_tie
+    assert ("a friction tie decides which foot slips" in res.message) == at_tie
+    assert (d["change"] > 0.9) if at_tie else (d["change"] < ASYMMETRY)
+
+
 @pytest.mark.parametrize("name", ["psi 10", "psi 45", "optimum"])
 def test_a_margin_keeps_the_gait_under_asymmetries_within_it(name):
     """A gait of margin m >= friction_tol = 0.05: at an asymmetry delta = m/10 S changes by at most

@@ -79,6 +79,34 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
         assert (out / name).stat().st_size > 0
 
 
+def test_cli_optimum_reports_its_s_under_a_friction_asymmetry(cli_optimize_run):
+    """The optimum's S at mu1/mu2 = 1 -+ 0.5 % (geometric mean kept) is that of its own problem file
+    (optimal_gait.toml, a table input) run with those coefficients: another path to the same
+    simulation; the middle value is the replay's S, and the gait is off the friction tie."""
+    import json
+    import math
+
+    from ocp_crawl.ocp.asymmetry import ASYMMETRY, ties_decide
+    from ocp_crawl.problem import load_problem, run_problem
+
+    code, stdout, _, out, _ = cli_optimize_run
+    data = json.loads(stdout)
+    assert data["success"], data["message"]
+    d = data["friction_asymmetry"]
+    assert d["delta"] == ASYMMETRY and d["messages"] == []
+    (low, mid, high), = d["S_m"]
+    assert mid == data["S_replay"]
+    mu = load_problem(out / "optimal_gait.toml").robot.mu1
+    for factor, S in ((1 - ASYMMETRY, low), (1 + ASYMMETRY, high)):
+        mu1, mu2 = mu * math.sqrt(factor), mu / math.sqrt(factor)
+        res = run_problem(load_problem(out / "optimal_gait.toml",
+                                       [f"robot.mu1={mu1!r}", f"robot.mu2={mu2!r}"]))
+        assert res.success and res.S == pytest.approx(S, rel=1e-9, abs=1e-12)
+    change = max(abs(low - mid), abs(high - mid)) / abs(mid)
+    assert d["change"] == pytest.approx(change, rel=1e-12)
+    assert not ties_decide(d) and "a friction tie decides" not in data["message"]
+
+
 def test_optimize_text_of_a_failed_run_has_no_raw_values():
     """A run that found nothing (no replay, no harmonic gait) reads "-" where a number is missing,
     never None or nan; numbers carry their units."""

@@ -15,6 +15,7 @@ from ocp_crawl.cli.common import (announce, check_work, finish, force_arg, integ
 from ocp_crawl.cli.run_commands import check_start
 from ocp_crawl.io import units
 from ocp_crawl.io.files import jsonable
+from ocp_crawl.ocp.asymmetry import asymmetry_text
 from ocp_crawl.ocp.dynamic_margin import margin_text
 from ocp_crawl.ocp.limits import NODES_BOUNDS
 from ocp_crawl.problem import (format_value, load_problem, ocp_settings, optimize_problem,
@@ -227,6 +228,7 @@ def format_optimize(s: dict) -> str:
         *([f"starts      {spread}"] if spread else []),
         *_start_lines(s),
         *margin_text(s.get("dynamic_margin")),
+        *asymmetry_text(s.get("friction_asymmetry")),
         f"residuals   complementarity {units.scientific(s['complementarity_residual'])}, "
         f"periodicity {units.scientific(s['periodicity_residual'])}",
         f"time        {units.seconds(s['solve_time_s'])}",

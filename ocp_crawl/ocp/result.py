@@ -130,6 +130,9 @@ class OCPResult:
     """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
     dynamic_margin: dict | None = None
     """with ``[ocp] dynamic_margin``: the MuJoCo check (:mod:`ocp_crawl.ocp.dynamic_margin`)"""
+    friction_asymmetry: dict | None = None
+    """of a judged optimum: its S replayed at mu1/mu2 moved by +-0.5 % in each scenario and the
+    largest relative change (:mod:`ocp_crawl.ocp.asymmetry`)"""
 
     @property
     def gain_significant(self) -> bool:
@@ -187,6 +190,7 @@ class OCPResult:
             "endgame": self.path or None,
             "objective_value_replay_min": low, "objective_value_replay_max": high,
             "solve_time_s": self.solve_time_s, "dynamic_margin": self.dynamic_margin,
+            "friction_asymmetry": self.friction_asymmetry,
             "complementarity_residual": self.complementarity_residual,
             "periodicity_residual": self.periodicity_residual,
             "equation_residual": self.equation_residual, "failed_stage": self.failed_stage,

@@ -32,6 +32,7 @@ from ocp_crawl.nlp.homotopy import Stage, observed_elsewhere
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
 from ocp_crawl.ocp.baseline import Baselines, WaveChoice, cycle_of, objective_value, value_from
 from ocp_crawl.ocp.quantities import cycle_values, profile_of_nodes
+from ocp_crawl.ocp.asymmetry import check_friction_asymmetry
 from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains
@@ -227,6 +228,7 @@ def _best_start(solved: list, base: Baselines, models: list, settings: OCPSettin
     if replay:
         harmonic_peaks(res, models)
         check_dynamic_margin(res, models)
+        check_friction_asymmetry(res, models)
     res.starts = [StartRecord(g.label, r.status, g.T, r.value_ocp, r.value_replay, r.message,
                               sum(stage.iterations for stage in r.homotopy))
                   for g, r in zip(guesses, runs)]
