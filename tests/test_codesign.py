@@ -5,6 +5,7 @@ refusals: tests/_bad_input_rows.py), and the command end to end (the chosen desi
 replays, beats the given robot's optimal gait and every scanned design's harmonic gait, and its
 optimal_gait.toml reproduces it)."""
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -158,6 +159,15 @@ def test_codesign_end_to_end(tmp_path, capsys):
     sim = json.loads(capsys.readouterr().out)
     assert sim["S"] == pytest.approx(summary["S_replay"], rel=1e-9)
     assert (out / "codesign.png").stat().st_size > 0
+    # the chosen design's optimum under a friction asymmetry: its own problem file at mu1/mu2 moved
+    low, mid, high = summary["friction_asymmetry"]["S_m"][0]
+    assert mid == summary["S_replay"]
+    mu = math.sqrt(gait.robot.mu1 * gait.robot.mu2)
+    for f, S in ((0.995, low), (1.005, high)):
+        assert main(["simulate", str(out / "optimal_gait.toml"), "--json",
+                     "--set", f"robot.mu1={mu * math.sqrt(f)!r}",
+                     "--set", f"robot.mu2={mu / math.sqrt(f)!r}"]) == 0
+        assert json.loads(capsys.readouterr().out)["S"] == pytest.approx(S, rel=1e-9)
 
 
 @pytest.mark.heavy

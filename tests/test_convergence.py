@@ -418,3 +418,21 @@ def test_a_warm_solve_with_a_finer_n_after_it_runs_in_a_fork_while_the_next_n_is
     # N = 200, 400 on the built ones
     assert all("prepared True" in r.message for r in tables[0].rows[2:])
     assert "prepared False" in tables[0].rows[1].message  # N = 100: none was built before it
+
+
+def test_every_row_reports_its_friction_asymmetry():
+    """The warm rows (solved by the warm path, not by ``optimize_gait``) carry the same report as
+    the first: each confirmed row's S at mu1/mu2 moved by -+0.5 %, its middle value the row's
+    replay."""
+    from dataclasses import replace
+
+    from conftest import COARSE
+
+    table = converge_in_nodes(Robot.paper(), "physical", replace(COARSE, nodes=12), [12, 16],
+                              jobs=1)
+    assert len(table.rows) == 2
+    for row in table.rows:
+        res = row.result
+        assert res is not None and res.success, row.message
+        d = res.friction_asymmetry
+        assert d is not None and d["S_m"][0][1] == res.S_replay[0] and d["messages"] == []

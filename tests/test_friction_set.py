@@ -6,6 +6,7 @@ friction_tol.
 The margin enters the tests only as the statement's premise; what is checked is the simulated S at
 the shifted friction, and, for the judge, a margin computed independently on a fine output grid (the
 slipping foot read from ``mode``, the rectangle rule)."""
+import dataclasses
 import math
 import os
 from pathlib import Path
@@ -75,13 +76,25 @@ def test_a_gait_at_the_friction_tie_stops_under_half_a_percent_asymmetry():
         assert abs(S_at(PAPER, sig, r)) < 1e-3 * abs(S0)
 
 
-@pytest.mark.parametrize("psi_deg", [0.01, 45.0])
-def test_an_optimum_reports_whether_a_friction_tie_decides_its_slip(psi_deg):
-    """The report every judged optimum carries (:mod:`ocp_crawl.ocp.asymmetry`), on node profiles of
-    the gait at the tie (psi 0.01 deg) and of one off it (psi 45 deg): its S at mu1/mu2 = 0.995 and
-    1.005 are those simulated directly at those ratios, and only the tie's is called a tie, in the
-    report and in the optimum's message."""
+def _judged(tau: np.ndarray, S: float, settings: OCPSettings | None = None):
+    """A confirmed optimum of node torques ``tau`` (2, N) [N m] whose replay gave ``S`` [m]."""
     from ocp_crawl.ocp import OCPResult
+
+    return OCPResult(success=True, status=Status.SUCCESS, message="confirmed",
+                     objective="max_speed", settings=settings or OCPSettings(), tau=tau,
+                     S_replay=[S])
+
+
+@pytest.mark.parametrize("psi_deg", [0.01, 45.0])
+@pytest.mark.parametrize("chain", [False, True])
+def test_an_optimum_reports_whether_a_friction_tie_decides_its_slip(psi_deg, chain):
+    """The report every confirmed optimum carries (:mod:`ocp_crawl.ocp.asymmetry`), on node
+    profiles of the gait at the tie (psi 0.01 deg) and of one off it (psi 45 deg), for the
+    three-link robot and for its chain (another model of the same robot): its S at mu1/mu2 = 0.995
+    and 1.005 are those simulated directly by the three-link model at those ratios, and only the
+    tie's is called a tie, in the report, the optimum's message and the text summary."""
+    from ocp_crawl.cli.optimize_command import format_optimize
+    from ocp_crawl.model.chain import Chain
     from ocp_crawl.ocp.asymmetry import ASYMMETRY, check_friction_asymmetry, ties_decide
     from ocp_crawl.ocp.plant import Plant
 
@@ -89,16 +102,79 @@ def test_an_optimum_reports_whether_a_friction_tie_decides_its_slip(psi_deg):
     tau = np.asarray(harmonic(psi_deg)(np.arange(N) / N), float).reshape(2, N)
     sig = PeriodicLinear(np.arange(N) / N, tau)
     S = [S_at(PAPER, sig, r) for r in (1 - ASYMMETRY, 1.0, 1 + ASYMMETRY)]
-    res = OCPResult(success=True, status=Status.SUCCESS, message="confirmed", objective="max_speed",
-                    settings=OCPSettings(), tau=tau, S_replay=[S[1]])
-    check_friction_asymmetry(res, [Plant(PAPER, "physical")])
+    res = _judged(tau, S[1])
+    check_friction_asymmetry(res, [Plant(Chain.from_robot(PAPER) if chain else PAPER, "physical")])
     d = res.friction_asymmetry
-    assert d is not None and d["S_m"][0][1] == S[1]
-    np.testing.assert_allclose(d["S_m"][0], S, rtol=1e-9, atol=1e-12)
+    assert d is not None and d["messages"] == []
+    np.testing.assert_allclose(d["S_m"][0], S, rtol=1e-8, atol=1e-12)
     at_tie = psi_deg < 1
     assert ties_decide(d) == at_tie
     assert ("a friction tie decides which foot slips" in res.message) == at_tie
     assert (d["change"] > 0.9) if at_tie else (d["change"] < ASYMMETRY)
+    text = format_optimize(res.summary())
+    assert ("a friction tie decides the slip" in text) == at_tie
+    assert "friction    S at mu1/mu2 x (1 - 0.5 %, 1, 1 + 0.5 %): " in text
+
+
+def test_a_gait_that_does_not_move_or_fails_is_no_tie(monkeypatch):
+    """S = 0 (constant torques: the robot stands still) has no relative change, and a replay that
+    fails at the moved ratio is reported with its message: neither is called a tie; the text shows
+    "-" for what is missing."""
+    from ocp_crawl.cli.optimize_command import format_optimize
+    from ocp_crawl.ocp.asymmetry import check_friction_asymmetry, ties_decide
+    from ocp_crawl.ocp.plant import Plant
+
+    still = np.full((2, 20), PAPER.k * (math.radians(90.0) - math.pi))
+    S0 = S_at(PAPER, PeriodicLinear(np.arange(20) / 20, still), 1.0)
+    assert S0 == 0.0  # the premise
+    res = _judged(still, S0)
+    check_friction_asymmetry(res, [Plant(PAPER, "physical")])
+    d = res.friction_asymmetry
+    assert d["change"] is None and not ties_decide(d) and res.message == "confirmed"
+    assert "largest change -" in format_optimize(res.summary())
+
+    tau = np.asarray(harmonic(0.01)(np.arange(20) / 20), float).reshape(2, 20)
+    real = Plant.simulate
+
+    def fails_off_the_ratio(plant, signal, *args, **kwargs):
+        out = real(plant, signal, *args, **kwargs)
+        if plant.robot.mu1 == plant.robot.mu2:
+            return out
+        return dataclasses.replace(out, success=False, status=Status.FOLD,
+                                   message="the branch folds")
+    monkeypatch.setattr(Plant, "simulate", fails_off_the_ratio)
+    res = _judged(tau, 0.05)
+    check_friction_asymmetry(res, [Plant(PAPER, "physical")])
+    d = res.friction_asymmetry
+    assert d["S_m"][0][0] is None and d["S_m"][0][2] is None and len(d["messages"]) == 2
+    assert not ties_decide(d) and "the replay fails" in res.message
+    assert "the branch folds" in res.message
+    text = format_optimize(res.summary())
+    assert "-, 50.000 mm, -" in text and "failed: " in text
+
+
+def test_the_report_labels_each_friction_scenario():
+    """Over a friction set the text has a line per scenario, labelled by its ratio, and the report
+    of each scenario is that scenario's robot moved by the asymmetry."""
+    from ocp_crawl.cli.optimize_command import format_optimize
+    from ocp_crawl.ocp.asymmetry import ASYMMETRY, friction_asymmetry
+    from ocp_crawl.ocp.plant import Plant
+
+    N = 40
+    tau = np.asarray(harmonic(45.0)(np.arange(N) / N), float).reshape(2, N)
+    sig = PeriodicLinear(np.arange(N) / N, tau)
+    ratios = (0.9, 1.1)
+    S = [S_at(PAPER, sig, r) for r in ratios]
+    d = friction_asymmetry([Plant(at_ratio(PAPER, r).robot, "physical") for r in ratios], sig, S,
+                           labels=["0.9", "1.1"])
+    for r, row in zip(ratios, d["S_m"]):
+        np.testing.assert_allclose(
+            row, [S_at(PAPER, sig, r * f) for f in (1 - ASYMMETRY, 1, 1 + ASYMMETRY)],
+            rtol=1e-8, atol=1e-12)
+    res = _judged(tau, S[0])
+    res.friction_asymmetry = d
+    lines = format_optimize(res.summary()).splitlines()
+    assert sum(line.strip().startswith(("scenario 0.9:", "scenario 1.1:")) for line in lines) == 2
 
 
 @pytest.mark.parametrize("name", ["psi 10", "psi 45", "optimum"])
@@ -137,6 +213,28 @@ def test_the_margin_bounds_no_loss_of_S():
     shifted = [S_at(PAPER, sig, r) for r in (1 - m / 10, 1 + m / 10)]
     assert max(abs(S - S0) for S in shifted) > 2 * 0.1 ** 2 * abs(S0)
     assert min(abs(S) for S in shifted) / T < SPEED_MIN * (1 - tol)
+
+
+@pytest.mark.parametrize("path", [MIN_COT, MIN_COT_SET], ids=["margin", "set"])
+def test_the_report_says_when_the_asymmetry_misses_a_requirement(path):
+    """min_cot's optimum on the margin misses its speed requirement at a 0.5 % asymmetry, the set's
+    does not: the report's ``missed`` and the message agree with direct simulations at those
+    ratios."""
+    from ocp_crawl.ocp.asymmetry import ASYMMETRY, check_friction_asymmetry
+    from ocp_crawl.ocp.plant import Plant
+
+    sig, tau, T = optimum(path)
+    settings = OCPSettings(objective="min_cot", speed_min=SPEED_MIN)
+    tol = settings.replay_tol
+    res = _judged(tau, S_at(PAPER, sig, 1.0), settings)
+    res.T_ocp = T
+    check_friction_asymmetry(res, [Plant(PAPER, "physical")])
+    slow = [f for f in (1 - ASYMMETRY, 1 + ASYMMETRY)
+            if abs(S_at(PAPER, sig, f)) / T < SPEED_MIN * (1 - tol)]
+    found = res.friction_asymmetry["missed"]
+    assert [text.split(",")[0] for text in found] == [f"at mu1/mu2 x {f:g}" for f in slow]
+    assert bool(slow) == (path == MIN_COT)
+    assert ("the replay misses its requirements" in res.message) == bool(slow)
 
 
 def test_the_set_holds_the_speed_between_its_scenarios():

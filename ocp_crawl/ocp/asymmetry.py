@@ -13,16 +13,22 @@ by 1 + delta (the geometric mean sqrt(mu1 mu2) kept, as the friction set's scena
 of S is reported.  A change of more than :data:`TIE_FACTOR` times delta means a friction tie
 decides the slip; the message then says so and what to ask for instead (a friction set,
 ``mu_ratio_eps``, whose optimum holds its value at each ratio of the set).  It is a report, not a
-rule: at exactly known friction the optimum is what the model gives.
+rule: at exactly known friction the optimum is what the model gives.  A replay that fails at the
+moved ratio (the gait cannot go on under the asymmetry) is reported with its message, and S = 0
+has no relative change: neither is called a tie.
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 from ocp_crawl.io import units
+from ocp_crawl.ocp.baseline import cycle_of
+from ocp_crawl.ocp.judge import replay_signal, scenario_labels
 from ocp_crawl.ocp.plant import Plant, as_plant, with_friction
+from ocp_crawl.ocp.quantities import missed, profile_of_nodes, reference_sizes
 
 #: the relative asymmetry of the friction ratio mu1/mu2 at which an optimum is replayed again [-]
 ASYMMETRY = 0.005
@@ -37,7 +43,9 @@ def asymmetric(plant: Plant, factor: float) -> Plant:
     return Plant(with_friction(r, r.mu1 * root, r.mu2 / root), plant.gravity)
 
 
-def friction_asymmetry(plants: list[Plant], signal, S: list, delta: float = ASYMMETRY) -> dict:
+def friction_asymmetry(plants: list[Plant], signal, S: list, delta: float = ASYMMETRY,
+                       labels: list[str] | None = None,
+                       misses: Callable[[list], list[str]] | None = None) -> dict:
     """Replay ``signal`` (a torque signal of the phase [N m]) in each friction scenario's plant at
     mu1/mu2 times 1 - ``delta`` and 1 + ``delta``.
 
@@ -49,67 +57,130 @@ def friction_asymmetry(plants: list[Plant], signal, S: list, delta: float = ASYM
         The optimum's torques tau(t) [N m] of the phase t [cycles]
         (:func:`~ocp_crawl.ocp.judge.replay_signal`).
     S : list of float
-        The displacement per cycle [m] of each scenario's own replay.
+        The displacement per cycle [m] of each scenario's own replay, as many as ``plants``.
     delta : float
         The relative asymmetry [-].
+    labels : list of str, optional
+        The scenarios' labels (:func:`~ocp_crawl.ocp.judge.scenario_labels`; None: one scenario).
+    misses : callable, optional
+        The requirements a gait misses, as texts, given its replays (CrawlResult) in every scenario
+        at one moved ratio; asked at each ratio where every scenario's replay succeeded.
 
     Returns
     -------
     dict
-        ``delta``; ``S_m``: per scenario [S at 1 - delta, S, S at 1 + delta] [m] (None where that
-        simulation failed); ``change``: the largest |S' - S| / |S| over them [-] (1 where a
-        simulation failed or S is 0: the gait's displacement is not defined by the ratio);
-        ``messages``: the failed simulations' messages.
+        ``delta``; ``labels``; ``S_m``: per scenario [S at 1 - delta, S, S at 1 + delta] [m] (None
+        where that simulation failed); ``change``: the largest |S' - S| / |S| [-] over the
+        successful ones (None where none has a relative change: every one failed, or S = 0);
+        ``messages``: the failed simulations' messages; ``missed``: what ``misses`` found, each
+        text preceded by its ratio's factor ("at mu1/mu2 x 0.995, ...").
     """
-    rows, changes, messages = [], [], []
-    for plant, s in zip(plants, S):
-        row: list[float | None] = []
-        for factor in (1 - delta, 1 + delta):
-            res = asymmetric(plant, factor).simulate(signal)
-            row.append(float(res.S) if res.success else None)
+    if len(plants) != len(S):
+        raise ValueError(f"friction_asymmetry: {len(plants)} scenarios but {len(S)} values of S")
+    factors = (1 - delta, 1 + delta)
+    runs = {f: [asymmetric(plant, f).simulate(signal) for plant in plants] for f in factors}
+    rows, changes, messages, found = [], [], [], []
+    for i, s in enumerate(S):
+        for f in factors:
+            res = runs[f][i]
             if not res.success:
-                messages.append(f"mu1/mu2 x {factor:g}: {res.message}")
-        rows.append([row[0], float(s), row[1]])
-        for other in row:
-            changes.append(1.0 if other is None or s == 0 else abs(other - s) / abs(s))
-    return {"delta": delta, "S_m": rows, "change": max(changes, default=math.nan),
-            "messages": messages}
+                where = f"{labels[i]}, " if labels else ""
+                messages.append(f"{where}mu1/mu2 x {f:g}: {res.message}")
+            elif s != 0:
+                changes.append(abs(float(res.S) - s) / abs(s))
+        rows.append([_S(runs[factors[0]][i]), float(s), _S(runs[factors[1]][i])])
+    for f in factors:
+        if misses is not None and all(r.success for r in runs[f]):
+            found += [f"at mu1/mu2 x {f:g}, {text}" for text in misses(runs[f])]
+    return {"delta": delta, "labels": labels, "S_m": rows,
+            "change": max(changes) if changes else None, "messages": messages, "missed": found}
+
+
+def _S(res) -> float | None:
+    """A replay's S [m], None where it failed."""
+    return float(res.S) if res.success else None
 
 
 def ties_decide(d: dict | None) -> bool:
     """Whether the report ``d`` of :func:`friction_asymmetry` shows a friction tie deciding the
-    slip (a change of S of more than :data:`TIE_FACTOR` times the asymmetry)."""
-    return bool(d) and not d["change"] <= TIE_FACTOR * d["delta"]
+    slip: every replay succeeded and S changed by more than :data:`TIE_FACTOR` times the
+    asymmetry."""
+    if not d or d["messages"] or d["change"] is None:
+        return False
+    return bool(d["change"] > TIE_FACTOR * d["delta"])
+
+
+def _remedy(settings) -> str:
+    """What to ask for instead of a gait that a friction tie decides, for these settings."""
+    if settings.ratio_set:
+        return "a wider set of friction ratios, [ocp] mu_ratio_eps"
+    ask = "a gait that holds over a set of friction ratios: [ocp] mu_ratio_eps"
+    # robust = "worst" exists for the named speed and CoT+ objectives only (objectives.py)
+    return ask + ' with robust = "worst"' if settings.objective in ("max_speed", "min_cot") else ask
 
 
 def check_friction_asymmetry(res, models: list) -> None:
-    """Set ``res.friction_asymmetry`` of an OCPResult judged ``success`` (nothing otherwise) and,
-    where a friction tie decides the slip, say so in its message with what to ask for instead."""
-    from ocp_crawl.ocp.judge import replay_signal
+    """Report how a friction asymmetry moves a confirmed optimum.
 
+    Parameters
+    ----------
+    res : OCPResult
+        An optimum judged by replay; nothing is done unless ``res.success``.  Sets
+        ``res.friction_asymmetry`` (:func:`friction_asymmetry`) and, where a friction tie decides
+        the slip or a replay at the moved ratio fails, says so in ``res.message``.
+    models : list of Plant, Model or ChainModel
+        One per friction scenario, in the OCP's order.
+    """
     if not res.success:
         return
-    N = res.tau.shape[1]
+    s, N = res.settings, res.tau.shape[1]
     plants = [as_plant(m) for m in models]
-    d = friction_asymmetry(plants, replay_signal(np.arange(N) / N, res.tau), res.S_replay)
+    robot = plants[0].robot
+    sizes = reference_sizes(robot.M, robot.g, robot.L, s.period_ref())
+
+    def misses(runs: list) -> list[str]:
+        cycle = cycle_of(s, [r.S for r in runs], [r.W_plus for r in runs],
+                         [r.CoT_plus for r in runs], res.T_ocp, profile_of_nodes(res.tau))
+        return missed(s.requirements, cycle, s.replay_tol, sizes)
+
+    labels = scenario_labels(s) if len(models) > 1 else None
+    d = friction_asymmetry(plants, replay_signal(np.arange(N) / N, res.tau), res.S_replay,
+                           labels=labels, misses=misses)
     res.friction_asymmetry = d
-    if ties_decide(d):
-        res.message += (f"; S changes by {_percent(d['change'])} at a "
-                        f"{_percent(d['delta'])} friction asymmetry: a friction tie decides "
-                        "which foot slips (a gait that holds over a set of friction ratios: "
-                        "[ocp] mu_ratio_eps with robust = \"worst\")")
+    pct = _percent(d["delta"])
+    if d["messages"]:
+        res.message += (f"; at a {pct} friction asymmetry the replay fails "
+                        f"({'; '.join(d['messages'])})")
+    elif ties_decide(d):
+        res.message += (f"; S changes by {_percent(d['change'])} at a {pct} friction asymmetry: a "
+                        f"friction tie decides which foot slips ({_remedy(s)})")
+    if d["missed"]:
+        res.message += (f"; under a {pct} friction asymmetry the replay misses its requirements "
+                        f"({'; '.join(d['missed'])}; {_remedy(s)})")
 
 
 def asymmetry_text(d: dict | None) -> list[str]:
-    """The text line of ``optimize``'s summary for its ``friction_asymmetry`` entry ([] without)."""
+    """The text lines of ``optimize``'s summary for its ``friction_asymmetry`` entry ([] without):
+    one, or one per labelled scenario, then the verdict."""
     if not d:
         return []
     pct = _percent(d["delta"])
-    rows = "; ".join(", ".join("-" if s is None else units.distance(s) for s in row)
-                     for row in d["S_m"])
-    tie = "; a friction tie decides the slip" if ties_decide(d) else ""
-    return [f"friction    S at mu1/mu2 x (1 - {pct}, 1, 1 + {pct}): {rows}; largest change "
-            f"{_percent(d['change'])} ({d['change'] / d['delta']:.3g} times the asymmetry){tie}"]
+    rows = [", ".join("-" if s is None else units.distance(s) for s in row) for row in d["S_m"]]
+    labels = d.get("labels") or [""] * len(rows)
+    lines = [f"friction    S at mu1/mu2 x (1 - {pct}, 1, 1 + {pct}): "
+             + ("" if len(rows) > 1 else rows[0])]
+    lines += [f"            scenario {label}: {row}" for label, row in zip(labels, rows)
+              if len(rows) > 1]
+    change = d["change"]
+    verdict = ("-" if change is None
+               else f"{_percent(change)} ({change / d['delta']:.3g} times the asymmetry)")
+    if d["messages"]:
+        verdict += f"; failed: {'; '.join(d['messages'])}"
+    elif ties_decide(d):
+        verdict += "; a friction tie decides the slip"
+    if d.get("missed"):
+        verdict += f"; misses {'; '.join(d['missed'])}"
+    return lines + [f"            largest change {verdict}"]
 
 
 def _percent(x: float) -> str:

@@ -27,6 +27,7 @@ from ocp_crawl.model.chain import Chain
 from ocp_crawl.model.robot import Robot
 from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.nlp.ipopt import ipopt_status, result_status
+from ocp_crawl.ocp.asymmetry import check_friction_asymmetry
 from ocp_crawl.ocp.chain_search import ChainWaveChoice, best_chain_baselines
 from ocp_crawl.ocp.design import Design
 from ocp_crawl.ocp.design_search import ROUNDS, DesignSearch, nlp_value
@@ -336,6 +337,7 @@ def _solve_design(out: CodesignResult, chain: Chain, design: Design,
     if not res.success:
         out.status, out.message = res.status, f"the gait at the chosen design: {res.message}"
         return
+    check_friction_asymmetry(res, models)
     _judge_design(out, settings, res)
 
 

@@ -29,6 +29,7 @@ import numpy as np
 from ocp_crawl.io.files import jsonable
 from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.nlp.homotopy import observed_elsewhere
+from ocp_crawl.ocp.asymmetry import check_friction_asymmetry
 from ocp_crawl.ocp.judge import is_better, replay_signal
 from ocp_crawl.ocp.limits import NODES_BOUNDS
 from ocp_crawl.ocp.plant import AnyRobot, Plant
@@ -300,6 +301,7 @@ def _warm_solve(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettin
         tight.message = (f"{base} (warm start from the optimum at N = {n_prev}: the tightened NLP "
                          f"on its branches{note})")
         if tight.status == Status.SUCCESS and not worse:
+            check_friction_asymmetry(tight, models)
             return tight
         tried = f"; the tightened NLP on its branches gave: {base}{note}"
     res = solve_from(solver, models, signal, prev.T_ocp, prev.harmonic, baselines=prev.baselines)
@@ -320,6 +322,7 @@ def _warm_solve(robot: AnyRobot, gravity: GravityConvention, settings: OCPSettin
         row = tight
     # the row's solve: every attempt, not the kept one's alone
     row.solve_time_s = sum(a.solve_time_s for a in attempts)
+    check_friction_asymmetry(row, models)
     return row
 
 

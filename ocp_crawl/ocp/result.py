@@ -131,8 +131,9 @@ class OCPResult:
     dynamic_margin: dict | None = None
     """with ``[ocp] dynamic_margin``: the MuJoCo check (:mod:`ocp_crawl.ocp.dynamic_margin`)"""
     friction_asymmetry: dict | None = None
-    """of a judged optimum: its S replayed at mu1/mu2 moved by +-0.5 % in each scenario and the
-    largest relative change (:mod:`ocp_crawl.ocp.asymmetry`)"""
+    """of a confirmed optimum: its S replayed in each scenario at mu1/mu2 moved by -+
+    :data:`~ocp_crawl.ocp.asymmetry.ASYMMETRY` and the largest relative change
+    (:func:`~ocp_crawl.ocp.asymmetry.friction_asymmetry`)"""
 
     @property
     def gain_significant(self) -> bool:
