@@ -132,6 +132,10 @@ def test_a_gait_that_does_not_move_or_fails_is_no_tie(monkeypatch):
     d = res.friction_asymmetry
     assert d["change"] is None and not ties_decide(d) and res.message == "confirmed"
     assert "largest change -" in format_optimize(res.summary())
+    unplayed = _judged(still, S0)  # solved without replay (optimize_gait(replay=False))
+    unplayed.S_replay = []
+    check_friction_asymmetry(unplayed, [Plant(PAPER, "physical")])
+    assert unplayed.friction_asymmetry is None
 
     tau = np.asarray(harmonic(0.01)(np.arange(20) / 20), float).reshape(2, 20)
     real = Plant.simulate

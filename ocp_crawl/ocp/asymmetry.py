@@ -125,13 +125,14 @@ def check_friction_asymmetry(res, models: list) -> None:
     Parameters
     ----------
     res : OCPResult
-        An optimum judged by replay; nothing is done unless ``res.success``.  Sets
+        An optimum judged by replay; nothing is done unless ``res.success`` with a replay in every
+        scenario (an optimum solved without replay has none).  Sets
         ``res.friction_asymmetry`` (:func:`friction_asymmetry`) and, where a friction tie decides
         the slip or a replay at the moved ratio fails, says so in ``res.message``.
     models : list of Plant, Model or ChainModel
         One per friction scenario, in the OCP's order.
     """
-    if not res.success:
+    if not res.success or len(res.S_replay) != len(models):
         return
     s, N = res.settings, res.tau.shape[1]
     plants = [as_plant(m) for m in models]
