@@ -506,6 +506,13 @@ COMMAND_ROWS = {
         R("optimize", ["{file}"], ["x.toml", "[ocp] tie_margin no longer exists",
                                     "switch-exact"],
           text=ocp_edit("nodes = 50", "nodes = 50\ntie_margin = 0.0005")),
+    "optimize: removed friction_tol in a file":
+        R("optimize", ["{file}"], ["x.toml", "[ocp] friction_tol no longer exists",
+                                    "mu_ratio_eps", "friction_tol = 0.05"],
+          text=ocp_edit("nodes = 50", "nodes = 50\nfriction_tol = 0.05")),
+    "optimize: removed friction_tol by --set":
+        R("optimize", ["{ocp}", "--set", "ocp.friction_tol=0.05"],
+          ["--set", "[ocp] friction_tol no longer exists", "robust = \"worst\""]),
     "optimize: removed max_rate by --set":
         R("optimize", ["{ocp}", "--set", "ocp.max_rate=2.0"],
           ["--set", "[ocp] max_rate no longer exists", "max_rate_deg_s [deg/s]"]),
@@ -773,7 +780,7 @@ COMMAND_ROWS.update({
         R("optimize", ["{file}"],
             ["x.toml", '[ocp] robust = "worst"', "mu_ratio_eps > 0",
              'objective = "robust_speed"'],
-            text=ocp_edit("nodes = 50", 'nodes = 50\nrobust = "worst"')),
+            text=ocp_edit("mu_ratio_eps = 0.05", "mu_ratio_eps = 0.0")),
     "optimize: a constraint on an unknown quantity": R(
         "optimize", ["{file}"],
         ["x.toml", "[ocp] constraint", "unknown quantity 'torque'", "peak_torque"],

@@ -117,7 +117,7 @@ def computed_once(tmp_path_factory, name: str, compute):
 
 @pytest.fixture(scope="session")
 def cli_optimize_run(tmp_path_factory):
-    """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 30
+    """One ``ocp-crawl optimize problems/ocp_max_speed.toml --json --progress --out DIR`` at N = 20
     (a cheap search of every waveform family), shared by the tests of its JSON, progress bar and
     output files, and by the worker processes of pytest-xdist: (exit code, stdout, stderr, the --out
     directory, N)."""
@@ -126,7 +126,7 @@ def cli_optimize_run(tmp_path_factory):
 
     from ocp_crawl.cli.app import main
 
-    nodes = 30
+    nodes = 20
     problem = Path(__file__).resolve().parents[1] / "problems" / "ocp_max_speed.toml"
     out = shared_tmp(tmp_path_factory) / "cli_optimize" / "opt"
 

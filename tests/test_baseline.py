@@ -19,14 +19,10 @@ from ocp_crawl.ocp.baseline import required_value, value_from
 from ocp_crawl.ocp.family import BOX, WaveParams
 from ocp_crawl.ocp.search import best_harmonic
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.slip_margin import result_margins
 from ocp_crawl.sim.event import simulate_torque
 
 GAMMA, A_MAX, RATE, DIRECTION = 90.0, 30.0, 180.0, -1
 RTOL = 1e-9
-#: the default friction tolerance: the family admits only gaits whose slipping foot does not depend
-#: on it
-FRICTION_TOL = OCPSettings().friction_tol
 
 
 def shipped_settings(**changes) -> OCPSettings:
@@ -47,9 +43,6 @@ def grid(n_gamma: int, amps, psis, robots, periods=(1.0, 1.25, 2.0)) -> list[dic
                 sims = [simulate_torque(Model(r, gravity="physical"),
                                         ReferenceTorque(gait, r.k)) for r in robots]
                 if not all(s.success for s in sims):
-                    continue
-                if min(result_margins(s, r)[0] for s, r in zip(sims, robots)) < FRICTION_TOL:
-                    # not admissible (the rule is checked on its own in test_slip_margin.py)
                     continue
                 t_min = 2 * math.pi * A / RATE
                 for f in periods:

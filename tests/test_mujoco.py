@@ -16,9 +16,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PAPER = str(ROOT / "problems" / "paper_gait.toml")
 PULSE = str(ROOT / "problems" / "pulse_gait.toml")
 
-#: the max_speed optimum of problems/ocp_max_speed.toml by the homotopy (``optimize --set
-#: ocp.nodes=50 --set 'ocp.baselines="harmonic"' --set ocp.baseline_samples=0 --set
-#: ocp.start_solve=homotopy``: T = 0.608 s, S = -52.49 mm): its node
+#: a max_speed optimum of the paper robot at equal feet only, its slip held 5 % of the mean friction
+#: limit from the tie (slip-weighted over the cycle), N = 50, T = 0.608 s, S = -52.49 mm: its node
 #: torques [N m] at the phases i/50, to 6 digits (S of the event solver moves by 2e-6 relative);
 #: during its slips the sticking foot uses 96 % of its friction (the paper gait 76 %)
 OPT_TAU1 = [-0.191059, -0.197466, -0.203872, -0.210279, -0.216686, -0.223093, -0.2295, -0.235907,

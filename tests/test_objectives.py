@@ -201,20 +201,23 @@ def test_a_sum_with_cot_moves_forwards():
 
 @pytest.mark.slow
 def test_min_mean_torque_sq_at_40_mm_s_is_a_judged_optimum():
-    """The least mean squared torque at >= 40 mm/s (N = 16, harmonic baseline): success, the replay
-    meets the speed within replay_tol, the value is the mean of tau1^2 + tau2^2 of the optimum's own
-    linear profile by an independent quadrature (20,000 midpoints), and it is not worse than the
-    best harmonic member under the same requirement that a short search (one start of 60
-    evaluations) finds."""
+    """The least mean squared torque at >= 40 mm/s over mu1/mu2 = 0.95, 1, 1.05 (N = 12, harmonic
+    baseline; at one friction the optimum holds a stick at a friction tie, which the simulator
+    cannot continue): success, the replay meets the speed in every scenario within replay_tol,
+    the value is the mean of tau1^2 + tau2^2 of the optimum's own linear profile by an independent
+    quadrature (20,000 midpoints), and it is not worse than the best harmonic member under the
+    same requirement that a short search (one start of 60 evaluations) finds."""
     from ocp_crawl.ocp import optimize_gait
 
-    settings = OCPSettings(objective="min:mean_torque_sq", nodes=16, starts=1, baselines="harmonic",
+    settings = OCPSettings(objective="min:mean_torque_sq", nodes=12, starts=1, baselines="harmonic",
+                           mu_ratio_eps=0.05,
                            baseline_samples=0, baseline_starts=1, baseline_evaluations=60,
                            constraints=({"quantity": "speed", "min": 0.04},))
     res = optimize_gait(Robot.paper(), "physical", settings)
     assert res.success, res.message
-    v = settings.direction * res.S_replay[0] / res.T_ocp
-    assert v >= 0.04 * (1 - settings.replay_tol)
+    assert len(res.S_replay) == 3
+    assert min(settings.direction * S / res.T_ocp for S in res.S_replay) >= 0.04 * (
+        1 - settings.replay_tol)
     t = (np.arange(20000) + 0.5) / 20000
     nodes = np.append(res.phase, 1.0)
     tau = np.array([np.interp(t, nodes, np.append(row, row[0])) for row in res.tau])

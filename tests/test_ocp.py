@@ -41,7 +41,7 @@ def test_infeasible_speed_requirement_is_a_status():
     (dict(nodes=10 ** 400), "nodes must be finite, got 1000"),
     (dict(speed_min=np.float32(20.0)), "speed_min must be in"),
     (dict(replay_tol=0.5), "replay_tol must be in"),
-    (dict(friction_tol=0.9), "friction_tol must be in"),
+    (dict(friction_tol=0.05), "friction_tol"),
     (dict(mu_ratio_eps=0.9), "mu_ratio_eps must be in"),
     (dict(stage_tol=0.0), "stage_tol must be > 0"),
     (dict(loose_last=True), "loose_last needs stage_tol <= sigma_min"),
@@ -80,29 +80,36 @@ def test_cli_optimize_json_and_outputs(cli_optimize_run):
 
 
 def test_cli_optimum_reports_its_s_under_a_friction_asymmetry(cli_optimize_run):
-    """The optimum's S at mu1/mu2 = 1 -+ 0.5 % (geometric mean kept) is that of its own problem file
-    (optimal_gait.toml, a table input) run with those coefficients: another path to the same
-    simulation; the middle value is the replay's S, and the gait is off the friction tie."""
+    """In each friction scenario of the file's set, the optimum's S at its mu1/mu2 times 1 -+ 0.5 %
+    (geometric mean kept) is that of its own problem file (optimal_gait.toml, a table input) run
+    with those coefficients: another path to the same simulation; the middle value is the
+    scenario's replayed S, and the gait is off the friction tie."""
     import json
     import math
+    from pathlib import Path
+
+    REPO = Path(__file__).resolve().parents[1]
 
     from ocp_crawl.ocp.asymmetry import ASYMMETRY, ties_decide
-    from ocp_crawl.problem import load_problem, run_problem
+    from ocp_crawl.problem import load_problem, ocp_settings, run_problem
 
     code, stdout, _, out, _ = cli_optimize_run
     data = json.loads(stdout)
     assert data["success"], data["message"]
     d = data["friction_asymmetry"]
     assert d["delta"] == ASYMMETRY and d["messages"] == []
-    (low, mid, high), = d["S_m"]
-    assert mid == data["S_replay"]
+    ratios = ocp_settings(load_problem(REPO / "problems" / "ocp_max_speed.toml")).friction_ratios
+    assert len(d["S_m"]) == len(data["S_replay"]) == len(ratios) > 1  # the file's friction set
     robot = load_problem(out / "optimal_gait.toml").robot
     mu = math.sqrt(robot.mu1 * robot.mu2)
-    for factor, S in ((1 - ASYMMETRY, low), (1 + ASYMMETRY, high)):
-        mu1, mu2 = mu * math.sqrt(factor), mu / math.sqrt(factor)
-        res = run_problem(load_problem(out / "optimal_gait.toml",
-                                       [f"robot.mu1={mu1!r}", f"robot.mu2={mu2!r}"]))
-        assert res.success and res.S == pytest.approx(S, rel=1e-9, abs=1e-12)
+    for ratio, (low, mid, high), S_replay in zip(ratios, d["S_m"], data["S_replay"]):
+        assert mid == S_replay
+        for factor, S in ((1 - ASYMMETRY, low), (1 + ASYMMETRY, high)):
+            r = ratio * factor
+            res = run_problem(load_problem(out / "optimal_gait.toml",
+                                           [f"robot.mu1={mu * math.sqrt(r)!r}",
+                                            f"robot.mu2={mu / math.sqrt(r)!r}"]))
+            assert res.success and res.S == pytest.approx(S, rel=1e-9, abs=1e-12)
     assert not ties_decide(d) and "a friction tie decides" not in data["message"]
 
 
@@ -178,7 +185,8 @@ def test_cli_optimize_infeasible_exits_1(tmp_path, capsys):
                  "--set", 'ocp.constraint=[{quantity = "speed", min = 5.0}]', "--set",
                  "ocp.baseline_samples=0", "--set",
                  "ocp.baselines=harmonic", "--set",
-                 "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40", "--json"])
+                 "ocp.baseline_starts=1", "--set", "ocp.baseline_evaluations=40",
+                 "--set", "ocp.start_solve=homotopy", "--json"])
     captured = capsys.readouterr()
     assert code == 1
     assert json.loads(captured.out)["status"] == "infeasible"

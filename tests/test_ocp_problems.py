@@ -25,9 +25,9 @@ from ocp_crawl.problem import load_problem, ocp_settings
 
 REPO = Path(__file__).resolve().parents[1]
 #: the shipped files at N = 50 (a minute or more each) by hand; the default suite solves max_speed's
-#: at N = 30 (the shared run of conftest.py)
+#: at N = 20 (the shared run of conftest.py)
 FILES = ["ocp_max_speed", "ocp_min_cot", "ocp_robust", "ocp_max_speed_peak_torque",
-         "ocp_min_cot_two_levels", "ocp_min_cot_friction_set"]
+         "ocp_min_cot_two_levels"]
 
 
 def nodes_list() -> list[int]:

@@ -10,6 +10,7 @@ asymmetric``.
 """
 import math
 import os
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -17,7 +18,6 @@ import pytest
 from ocp_crawl import Harmonic, Model, PeriodicLinear, ReferenceTorque, Robot
 from ocp_crawl.ocp.family import SHAPES, WaveFamily, WaveParams, shape_box
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.slip_margin import result_margins
 from ocp_crawl.ocp.search import best_baselines
 from ocp_crawl.sim.event import simulate_torque
 
@@ -49,10 +49,9 @@ def triangle(g1, g2, a1, a2, psi_deg, k) -> ReferenceTorque:
 
 
 def speed(robot: Robot, torque, T: float) -> float:
-    """direction * S / T [m/s] of an admissible gait (friction margin >= the default friction_tol),
-    else NaN."""
+    """direction * S / T [m/s] of a gait that simulates, else NaN."""
     r = simulate_torque(Model(robot, gravity="physical"), torque)
-    if not r.success or result_margins(r, robot)[0] < OCPSettings().friction_tol:
+    if not r.success:
         return math.nan
     return DIRECTION * r.S / T
 
@@ -196,3 +195,81 @@ def test_every_family_is_searched_and_the_best_is_their_best():
     assert len(base.choices["pulse"].starts) == len(base.choices["triangle"].starts) + 1
     table = base.table()
     assert [row["shape"] for row in table] == list(SHAPES)
+
+
+@pytest.mark.parametrize("N", [20, 50])
+def test_a_member_sampled_at_the_nodes_is_the_profile_the_ocp_can_hold(N):
+    """best_sampling: the audit's triangle wave sampled at N node phases (shifted by a quarter of a
+    node interval at a time) and replayed linear between the nodes, against the independent triangle
+    wave sampled the same way here and simulated directly: the best of the shifts, at most the
+    wave's own speed (the nodes cut its corners unless a shift puts them on nodes)."""
+    from ocp_crawl.ocp.baseline import WaveChoice
+    from ocp_crawl.ocp.sampling import NODE_SHIFTS, best_sampling
+
+    robot, st = Robot.paper(), settings(nodes=N)
+    T = 4 * 27.5 / RATE
+    wave = triangle(87.5, 87.5, 27.5, 27.5, 9.0, robot.k)
+    choice = WaveChoice(87.5, 87.5, 27.5, 27.5, 9.0, T, [], [], [], [], math.nan, True,
+                        "max_speed", shape="triangle")
+    nodes = np.arange(N) / N
+    direct = [speed(robot, PeriodicLinear(nodes, np.asarray(
+        wave(np.mod(nodes + j / (NODE_SHIFTS * N), 1.0)), float).reshape(2, N)), T)
+        for j in range(NODE_SHIFTS)]
+    value, tau = best_sampling(st, [Model(robot, gravity="physical")], choice)
+    assert value == pytest.approx(max(direct), rel=1e-9)
+    assert speed(robot, PeriodicLinear(nodes, tau), T) == value
+    assert value <= speed(robot, wave, T) * (1 + 1e-9)
+
+
+#: the best triangle wave of problems/ocp_max_speed.toml over its friction set (the worst of
+#: mu1/mu2 = 0.95, 1, 1.05): gamma, A [deg] per joint, psi [deg]
+SET_TRIANGLE = (82.91864402563719, 83.08186189182614, 22.896660587780147, 22.89613070117422,
+                22.271909603966897)
+
+
+def test_an_optimum_below_a_member_says_whether_the_nodes_or_the_path_decide():
+    """An optimum worse than the best triangle wave over a friction set: its message compares it
+    with the triangle wave sampled at its N = 50 nodes (computed here by direct simulation in each
+    scenario, the worst, the best of the shifts): below that profile the solver's path ended in a
+    local optimum, above it the nodes cannot hold the wave's corners (they sit on the set's edge,
+    where the speed falls)."""
+    from ocp_crawl.ocp import OCPResult
+    from ocp_crawl.ocp.baseline import Baselines, WaveChoice
+    from ocp_crawl.ocp.gains import measure_gains
+    from ocp_crawl.ocp.sampling import NODE_SHIFTS
+    from ocp_crawl.status import Status
+
+    N = 50
+    st = settings(nodes=N, mu_ratio_eps=0.05, robust="worst")
+    robots = st.scenarios(Robot.paper())
+    g1, g2, a1, a2, psi = SET_TRIANGLE
+    T = 4 * max(a1, a2) / RATE
+    wave = triangle(g1, g2, a1, a2, psi, robots[0].k)
+    full = min(speed(r, wave, T) for r in robots)
+    choice = WaveChoice(g1, g2, a1, a2, psi, T, [], [], [], [], full, True, "max_speed",
+                        shape="triangle")
+    nodes = np.arange(N) / N
+    sampled = max(min(speed(r, PeriodicLinear(nodes, np.asarray(
+        wave(np.mod(nodes + j / (NODE_SHIFTS * N), 1.0)), float).reshape(2, N)), T)
+        for r in robots) for j in range(NODE_SHIFTS))
+    # the premise: the nodes cut the corners by more than replay_tol
+    assert sampled < full * (1 - 1.5 * st.replay_tol)
+    for value, why in ((sampled + 0.1 * (full - sampled), "the nodes cannot hold its corners"),
+                       (0.99 * sampled, "a local optimum of the solver's path")):
+        res = OCPResult(success=True, status=Status.SUCCESS, message="confirmed",
+                        objective="max_speed", settings=st, value_replay=value,
+                        baselines=Baselines("max_speed", {"triangle": choice}))
+        measure_gains(res, [Model(r, gravity="physical") for r in robots])
+        assert why in res.message, res.message
+        assert res.baseline_at_nodes["value"] == pytest.approx(sampled, rel=1e-9)
+        assert res.gain == pytest.approx(value / full - 1, rel=1e-9)
+    # under a bound on the actual joint rates that the wave exceeds (its joints reach about 190
+    # deg/s), the wave is no gait of the problem: the message says so instead
+    bounded = replace(st, max_joint_rate_deg_s=180.0)
+    res = OCPResult(success=True, status=Status.SUCCESS, message="confirmed",
+                    objective="max_speed", settings=bounded, value_replay=0.99 * sampled,
+                    baselines=Baselines("max_speed", {"triangle": choice}))
+    measure_gains(res, [Model(r, gravity="physical") for r in robots])
+    peak = float(res.message.split("its joint rate reaches ")[1].split(" deg/s")[0])
+    assert peak > 180.0 * 1.01 and "beyond max_joint_rate_deg_s" in res.message, res.message
+    assert res.baseline_at_nodes is None

@@ -25,10 +25,8 @@ from collections.abc import Callable
 import numpy as np
 
 from ocp_crawl.io import units
-from ocp_crawl.ocp.baseline import cycle_of
-from ocp_crawl.ocp.judge import replay_signal, scenario_labels
+from ocp_crawl.ocp.judge import replay_misses, replay_signal, scenario_labels
 from ocp_crawl.ocp.plant import Plant, as_plant, with_friction
-from ocp_crawl.ocp.quantities import missed, profile_of_nodes, reference_sizes
 
 #: the relative asymmetry of the friction ratio mu1/mu2 at which an optimum is replayed again [-]
 ASYMMETRY = 0.005
@@ -136,13 +134,9 @@ def check_friction_asymmetry(res, models: list) -> None:
         return
     s, N = res.settings, res.tau.shape[1]
     plants = [as_plant(m) for m in models]
-    robot = plants[0].robot
-    sizes = reference_sizes(robot.M, robot.g, robot.L, s.period_ref())
 
     def misses(runs: list) -> list[str]:
-        cycle = cycle_of(s, [r.S for r in runs], [r.W_plus for r in runs],
-                         [r.CoT_plus for r in runs], res.T_ocp, profile_of_nodes(res.tau))
-        return missed(s.requirements, cycle, s.replay_tol, sizes)
+        return replay_misses(s, plants[0].robot, runs, res.T_ocp, res.tau)[1]
 
     labels = scenario_labels(s) if len(models) > 1 else None
     d = friction_asymmetry(plants, replay_signal(np.arange(N) / N, res.tau), res.S_replay,

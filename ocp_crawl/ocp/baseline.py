@@ -22,14 +22,14 @@ against: under a bound on the reference rate, a triangle wave covers its amplitu
 a sine needs 2 pi A / R, so most of what an optimum gains over the best sine a triangle wave gains
 too.
 
-On a robot with equal feet (max_speed, min_cot of the shipped problems) the fastest members in the
-model are nearly mirror-symmetric: gamma1 = gamma2, A1 = A2 and psi -> 0+ (towards foot 1; 0- the
-other way), a one-sided limit (at psi = 0 exactly the feet tie and S = 0) in which the anchoring
-foot holds by a margin O(psi): which foot slips there depends on friction coefficients known only
-approximately.  The families admit only members whose slip-weighted friction margin is at least
-``friction_tol`` (:mod:`ocp_crawl.ocp.slip_margin`; the same rule judges the OCP's replay): on the
-paper's robot, about 0.007 psi/deg for small psi, so psi >~ 7 deg at the default 0.05 (full-envelope
-sine: S = -60.19 mm at psi = 1 deg, -59.97 mm at 10 deg, -55.84 mm at 45 deg).
+On a robot with equal feet the fastest members in the model are nearly mirror-symmetric: gamma1 =
+gamma2, A1 = A2 and psi -> 0+ (towards foot 1; 0- the other way), a one-sided limit (at psi = 0
+exactly the feet tie and S = 0) in which the anchoring foot holds by a margin O(psi): which foot
+slips there depends on friction coefficients known only approximately (full-envelope sine of the
+paper's robot: S = -60.19 mm at psi = 0.01 deg and mu1 = mu2, 0 at mu1/mu2 = 0.995 or 1.005).  Over
+a friction set (``mu_ratio_eps``) such a member stops in a scenario and the search passes it by; at
+one friction it may be the best member, and its baseline then rides a tie as an optimum may (the
+optimum's ``friction_asymmetry`` report says so).
 """
 from __future__ import annotations
 

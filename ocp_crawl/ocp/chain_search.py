@@ -10,9 +10,8 @@ straight ramps up and down, each half a cycle (the reference rate saturated all 
 driven as the torque tau_j = k_j (phi_ref,j - pi - rest_j)
 (:class:`~ocp_crawl.model.chain_inputs.ChainReferenceTorque`).  Its period is the shortest the
 bandwidth allows, 2 pi A / R for the sine and 4 A / R for the triangle (a quasistatic gait is
-time-scale invariant: see :mod:`ocp_crawl.ocp.family`), and it is admissible as the three-link
-families' members are (every scenario simulates, the slip-weighted friction margin is at least
-``friction_tol``).
+time-scale invariant: see :mod:`ocp_crawl.ocp.family`), and it counts when it simulates in every
+friction scenario, as the three-link families' members.
 
 The search works in the box coordinates (u, p) in [0, 1] x [-1, 1], A = u A_max and psi = 180 p: a
 grid of ``harmonic_A`` amplitudes and ``harmonic_psi`` phases, then bounded Nelder-Mead from the
@@ -37,7 +36,7 @@ from ocp_crawl.model.inputs import PeriodicSignal
 from ocp_crawl.model.pulse import JointPulse
 from ocp_crawl.model.statics import GravityConvention
 from ocp_crawl.ocp.baseline import FAIL_RANK, Baselines, search_rank, speeds, value_of
-from ocp_crawl.ocp.family import A_MIN_DEG, Evaluation, allowed_period, screen
+from ocp_crawl.ocp.family import A_MIN_DEG, Evaluation, allowed_period
 from ocp_crawl.ocp.plant import Plant, envelope_centres
 from ocp_crawl.ocp.quantities import PROFILE_QUANTITIES, profile_of_signal
 from ocp_crawl.ocp.search import NM_TOL, first_simplex, seeds
@@ -146,9 +145,6 @@ class ChainWaveFamily:
             if not r.success:
                 return Evaluation(wave, T, nan, nan, nan, False, r.message)
             sims.append(r)
-        margins, why = screen(self.settings, sims, [p.robot for p in self.plants])
-        if why is not None:
-            return Evaluation(wave, T, nan, nan, nan, False, why, margins)
         S = tuple(r.S for r in sims)
         profile = (math.nan, math.nan)
         if (self.settings.user_objective is not None
@@ -156,7 +152,7 @@ class ChainWaveFamily:
             profile = profile_of_signal(wave.torque(self.settings, self.chain))
         return Evaluation(wave, allowed_period(self.settings, T, S), S,
                           tuple(r.W_plus for r in sims), tuple(r.CoT_plus for r in sims), True,
-                          margin=margins, profile=profile)
+                          profile=profile)
 
     def rank(self, z) -> float:
         """The search rank (:func:`~ocp_crawl.ocp.baseline.search_rank`) of the member at z."""

@@ -332,8 +332,17 @@ def _solve_design(out: CodesignResult, chain: Chain, design: Design,
     models = [Plant(r, gravity) for r in settings.scenarios(out.robot)]
     fixed = search.fixed_solver(np.asarray(out.chosen))
     phase = np.arange(settings.nodes) / settings.nodes
-    out.result = res = solve_from(fixed, models, replay_signal(phase, u["tau"]), u["T"],
-                                  tightened=True)
+    signal = replay_signal(phase, u["tau"])
+    bad = next((r for r in (m.simulate(signal) for m in models) if not r.success), None)
+    if bad is not None:
+        # the co-design NLP's own profile is the start of the fixed robot's solve
+        out.status = Status.REPLAY_FAILED
+        out.message = (f"the co-design optimum's profile at the chosen design fails in the "
+                       f"simulator: {bad.message}; try another ocp.nodes, or a friction set "
+                       f"(ocp.mu_ratio_eps with ocp.robust = \"worst\") if a friction tie "
+                       f"decides its slips")
+        return
+    out.result = res = solve_from(fixed, models, signal, u["T"], tightened=True)
     if not res.success:
         out.status, out.message = res.status, f"the gait at the chosen design: {res.message}"
         return

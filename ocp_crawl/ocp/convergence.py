@@ -348,12 +348,10 @@ def own_homotopy(settings: OCPSettings) -> bool:
     """Whether the settings have their own homotopy (sigma0, sigma_factor, sigma_min or
     stage_tol_ratio not the defaults, as in ocp_robust.toml): then a warm-started solve keeps it,
     with the warm barrier (:data:`WARM_SIGMA0` and :data:`WARM_STAGE_TOL` are tuned on the default
-    path).  Measured, robust_speed (both cores busy): N = 100 from its N = 50 optimum: the warm
-    schedule (1e-4 down to 1e-11, loose last stage) took 903 s (stages 1e-9 to 1e-11: 4154 IPOPT
-    iterations) to 69.662 mm/s, below N = 50's 69.891; the file's own homotopy with the cold barrier
-    460 s to 70.639 mm/s.  N = 200 from that optimum: own homotopy, cold barrier: its first stage
-    left the start (objective -0.002 against -0.645), max_iter at sigma = 1e-6, 1809 s; with the
-    warm barrier: success, 70.600 mm/s, 863 s."""
+    path).  On robust_speed's mean the warm schedule (1e-4 down to 1e-11, loose last stage) spent
+    thousands of IPOPT iterations in its deepest stages and ended below the coarser N's optimum,
+    and the file's own homotopy with the cold barrier left the start in its first stage and ended
+    at max_iter, where the same homotopy with the warm barrier converges."""
     default = OCPSettings()
     return any(getattr(settings, key) != getattr(default, key)
                for key in ("sigma0", "sigma_factor", "sigma_min", "stage_tol_ratio"))

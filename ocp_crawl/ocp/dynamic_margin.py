@@ -207,8 +207,8 @@ def check_dynamic_margin(res, models: list) -> None:
             f"dynamic_margin = {factor:g} asks T >= {factor:g} T_min; lower max_rate_deg_s "
             f"(now {units.significant(res.settings.max_rate_deg_s)} deg/s) for a longer period"
             + ("" if t_min is not None else "; if S misses also at long periods the cause is "
-               "not inertia but the contact, e.g. a slip close to the friction tie (raise "
-               "friction_tol)"))
+               "not inertia but the contact, e.g. a slip a friction tie decides (ask for a "
+               "friction set: mu_ratio_eps with robust = \"worst\")"))
 
 
 def _refuse(res, text: str) -> None:

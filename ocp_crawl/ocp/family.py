@@ -16,10 +16,10 @@ unit wave in [-1, 1]), joint 1 leading joint 2 by the phase psi, driven as the t
 A member belongs to the family of an :class:`~ocp_crawl.ocp.settings.OCPSettings` when both joints
 stay inside the envelope, |gamma_i - gamma| + A_i <= A_max, A_i >= 0, and its reference rates stay
 within the bandwidth R (``max_rate_deg_s``): slope * A_i / T <= R, i.e. T >=
-:meth:`WaveParams.period`.  A member is admissible only when which foot slips does not depend on the
-friction coefficients within +-friction_tol/2 (its slip-weighted friction margin,
-:mod:`ocp_crawl.ocp.slip_margin`, is at least ``settings.friction_tol``): this excludes the
-near-mirror-symmetric gaits psi -> 0 that hold the friction tie.
+:meth:`WaveParams.period`.  A member is simulated in every friction scenario of the settings and
+scored as the OCP's objective scores them (the worst or the mean over a friction set): over a set
+of friction ratios a near-mirror-symmetric member psi -> 0, whose slip a friction tie decides,
+stops in some scenario and loses (docs/guide/optimal_gaits.md, "Friction uncertainty").
 
 Why the period is always the shortest one: a quasistatic gait is time-scale invariant, so S, W+ and
 CoT+ of a member do not depend on T.  The mean speed direction * S / T is then largest at the
@@ -50,7 +50,6 @@ from ocp_crawl.model.pulse import Pulse
 from ocp_crawl.model.statics import GravityConvention, Model, Robot
 from ocp_crawl.ocp.quantities import PROFILE_QUANTITIES, profile_of_signal
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.sim.event import simulate_torque
 
 #: the waveform families, in the order of reports (the harmonic one is the OCP's first start)
@@ -181,9 +180,8 @@ class Evaluation:
     """The simulations of one member (one per friction scenario) at its period T [s].
 
     ``S`` [m], ``W_plus`` [J], ``CoT_plus`` [-] per scenario (NaN where a simulation failed or the
-    member is not admissible); ``success`` when every scenario simulated successfully with a
-    slip-weighted friction margin of at least ``friction_tol``; ``message`` the first failure's
-    message."""
+    member is not admissible); ``success`` when every scenario simulated successfully;
+    ``message`` the first failure's message."""
 
     params: Any
     """the member: a :class:`WaveParams` (a chain's
@@ -194,9 +192,6 @@ class Evaluation:
     CoT_plus: tuple
     success: bool
     message: str = ""
-    margin: tuple = ()
-    """per scenario: the slip-weighted friction margin [-] (:mod:`ocp_crawl.ocp.slip_margin`); a
-    member below ``settings.friction_tol`` is not admissible (``success`` False)"""
     profile: tuple = (math.nan, math.nan)
     """the torque profile's peak |tau| [N m] and mean squared torque [N^2 m^2]
     (:func:`~ocp_crawl.ocp.quantities.profile_of_signal`), computed only where a constraint bounds
@@ -216,17 +211,6 @@ def allowed_period(settings: OCPSettings, T: float, S) -> float:
             reach = [d * s for s in S] if c.over == "every" else [d * sum(S) / len(S)]
             T = max(T, max(reach) / c.max)
     return T
-
-
-def screen(settings: OCPSettings, runs, robots) -> tuple[tuple, str | None]:
-    """The slip-weighted friction margins [-] of a member's successful simulations ``runs`` (one
-    per friction scenario, of ``robots``) and, where one is below ``friction_tol``, why the member
-    is not admissible (which foot slips depends on friction known to +-friction_tol/2); else
-    None."""
-    margins = tuple(result_margins(r, robot)[0] for r, robot in zip(runs, robots))
-    eps = settings.friction_tol
-    low = next((x for x in margins if not x >= eps), None)
-    return margins, None if low is None else admissible_text(low, eps)
 
 
 class WaveFamily:
@@ -296,9 +280,6 @@ class WaveFamily:
             if not r.success:
                 return Evaluation(params, T, nan, nan, nan, False, r.message)
             sims.append(r)
-        margins, why = screen(self.settings, sims, [m.robot for m in self.models])
-        if why is not None:
-            return Evaluation(params, T, nan, nan, nan, False, why, margins)
         S = tuple(r.S for r in sims)
         T = allowed_period(self.settings, T, S)
         profile = (math.nan, math.nan)
@@ -306,7 +287,7 @@ class WaveFamily:
                 or any(c.quantity in PROFILE_QUANTITIES for c in self.settings.requirements)):
             profile = profile_of_signal(params.torque(self.robot.k))
         return Evaluation(params, T, S, tuple(r.W_plus for r in sims),
-                          tuple(r.CoT_plus for r in sims), True, margin=margins, profile=profile)
+                          tuple(r.CoT_plus for r in sims), True, profile=profile)
 
     def evaluated(self) -> list[Evaluation]:
         """Every evaluation so far (successful or not), in the order of their first request."""

@@ -1,5 +1,11 @@
 """The gains of a replayed optimum over the best member of each waveform family, and the verdict
-on an optimum worse than the harmonic baseline it started from (WORSE_THAN_BASELINE)."""
+on an optimum worse than the harmonic baseline it started from (WORSE_THAN_BASELINE).
+
+Where another family's member beats the optimum, that member sampled at the nodes
+(:mod:`ocp_crawl.ocp.sampling`) tells why: if that profile (a point of the OCP) is no better than
+the optimum, the nodes cannot hold the member's corners (refine N); if it is better, the solver's
+path ended in a local optimum (other starts).
+"""
 from __future__ import annotations
 
 import math
@@ -7,10 +13,11 @@ import math
 from ocp_crawl.io import units
 from ocp_crawl.ocp.baseline import WaveChoice
 from ocp_crawl.ocp.chain_search import ChainWaveChoice
-from ocp_crawl.ocp.judge import gain_over, value_text
+from ocp_crawl.ocp.judge import gain_over, is_better, value_text
 from ocp_crawl.ocp.plant import as_plant
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, signal_peaks
 from ocp_crawl.ocp.result import OCPResult
+from ocp_crawl.ocp.sampling import best_sampling
 from ocp_crawl.status import Status
 
 
@@ -36,11 +43,49 @@ def measure_gains(res: OCPResult, models: list) -> None:
     if res.success and h_gain < -tol and _baseline_within(res, models, h_gain):
         _worse_than_baseline(res, h_gain)
     elif res.success and res.gain < -tol and best is not res.harmonic:
-        note = (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, "
-                f"gain {units.ratio(res.gain)}): the resolution of N = {res.settings.nodes} nodes "
-                "or a local optimum")
-        if note not in res.message:  # (measured once by the start's judge, again over the starts)
+        _better_member(res, models, best)
+
+
+def _better_member(res: OCPResult, models: list, best) -> None:
+    """A confirmed optimum worse than another family's best member ``best``: that member sampled at
+    the nodes (:func:`~ocp_crawl.ocp.sampling.best_sampling`, in ``res.baseline_at_nodes``) and
+    what it means, in the message."""
+    s, objective, N = res.settings, res.settings.objective, res.settings.nodes
+    peak = _rate_beyond_bound(res, models, best)
+    if peak is not None:
+        note = (f"; the best {best.shape} gait reaches {value_text(objective, best.value)} (gain "
+                f"{units.ratio(res.gain)}), but its joint rate reaches "
+                f"{units.significant(peak, 4)} deg/s, beyond max_joint_rate_deg_s: no gait of "
+                f"this problem")
+        if note not in res.message:
             res.message += note
+        return
+    if res.baseline_at_nodes is None or res.baseline_at_nodes["shape"] != best.shape:
+        res.baseline_at_nodes = {"shape": best.shape, "nodes": N,
+                                 "value": best_sampling(s, models, best)[0]}
+    at_nodes = res.baseline_at_nodes["value"]
+    note = (f"; the best {best.shape} gait is better ({value_text(objective, best.value)}, gain "
+            f"{units.ratio(res.gain)}); sampled at the N = {N} nodes it reaches "
+            f"{value_text(objective, at_nodes)}")
+    if is_better(objective, at_nodes, res.value_replay):
+        note += (", better than the optimum: a local optimum of the solver's path (other starts: "
+                 "optimize --start with that gait, or start_solve = \"both\")")
+    else:
+        note += ": the nodes cannot hold its corners (raise ocp.nodes)"
+    if note not in res.message:  # (measured once by the start's judge, again over the starts)
+        res.message += note
+
+
+def _rate_beyond_bound(res: OCPResult, models: list, member) -> float | None:
+    """The peak actual joint rate [deg/s] of ``member`` over the scenarios when it exceeds the
+    optional max_joint_rate_deg_s (the members are searched within the bandwidth and the envelope
+    only), else None."""
+    bound = res.settings.max_joint_rate_deg_s
+    if bound is None:
+        return None
+    signal = member.signal_for(as_plant(models[0]).robot, res.settings)
+    peak = max(max(signal_peaks(m, signal, member.T).joint_rate_deg_s) for m in models)
+    return peak if peak > bound * (1 + JOINT_RATE_RTOL) else None
 
 
 def harmonic_peaks(res: OCPResult, models: list) -> None:

@@ -8,7 +8,7 @@ import numpy as np
 from ocp_crawl.model.step_equations import StepRows
 from ocp_crawl.ocp.judge import replay_signal
 from ocp_crawl.ocp.layout import fourier_basis
-from ocp_crawl.ocp.substeps import (THETA_GUESS, friction_rows, guess_block, sample_phases,
+from ocp_crawl.ocp.substeps import (THETA_GUESS, guess_block, sample_phases,
                                     substep_torques, switch_fractions)
 
 #  the initial guess's phase shift puts node 0 at the largest tau_1 on a grid this many times finer
@@ -68,8 +68,6 @@ def simulated_guess(ocp, torque_signal, period: float, switches: bool = True) ->
             x[ocp.slices[f"{name}_{j}"]] = blk[name]
         x[ocp.slices[f"Sc_{j}"]] = np.cumsum(blk["w"][R.s1p] - blk["w"][R.s1p + 1])
         x[ocp.slices[f"w_{j}"]] = blk["w"].ravel(order="F")
-        if f"Fc_{j}" in ocp.slices:
-            x[ocp.slices[f"Fc_{j}"]] = np.cumsum(friction_rows(blk["w"], s.friction_tol))
         x[ocp.slices[f"theta_{j}"]] = theta
         if f"v_{j}" in ocp.slices:
             tau_sub = substep_torques(tau_nodes, theta) / MgL

@@ -14,8 +14,6 @@ linear in phase between nodes (:class:`~ocp_crawl.model.sampled.PeriodicLinear`,
   :mod:`ocp_crawl.ocp.quantities`) holds on the replay within ``replay_tol`` (relative to the
   bound);
 * the replayed objective agrees with the OCP's own within ``replay_tol`` (relative to the replay's);
-* the replay's slip is held clear of the friction tie: its slip-weighted friction margin m
-  (:mod:`ocp_crawl.ocp.slip_margin`) is at least ``friction_tol - replay_tol`` (see below);
 * with the optional ``max_joint_rate_deg_s``: the replay's peak actual joint rate
   (:mod:`ocp_crawl.ocp.rates`) is within it to :data:`~ocp_crawl.ocp.rates.JOINT_RATE_RTOL`
   (relative: the OCP bounds the mean rates of the intervals and, 0.5 % looser, of the sub-steps; the
@@ -23,20 +21,6 @@ linear in phase between nodes (:class:`~ocp_crawl.model.sampled.PeriodicLinear`,
 
 otherwise ``REPLAY_MISMATCH`` with both sets of numbers in the message.  The judge computes its
 numbers itself, from the torques and the period alone; the OCP's numbers enter only to be compared.
-
-Why the margin's tolerance is absolute.  m is a fraction of the mean friction limit: the
-slip-weighted mean of (lim_anchor - lim_slip) / mean(lim).  The OCP holds it with the trapezoid rule
-on its 2N sub-steps, whose interior points are variables of the optimiser; the replay integrates the
-same limits against the same slip on the simulator's own steps.  The two quadratures differ by a
-fraction of the limits they integrate, not of their difference, which is 1/eps = 20 times smaller:
-measured on the max_speed optimum of the robot M 0.08 kg, L 0.15 m, beta 1.5 (N = 50), the OCP's
-rule on the replayed states at the OCP's sub-steps gives 0.0500, the replay's steps 0.04969, 3200
-output phases 0.04966 (converged to 1e-7): a quadrature error of 3.4e-4 of the mean limit, 0.7 % of
-the margin, which a tolerance relative to the margin (0.5 % of 0.05, i.e. 2.5e-4) would reject
-although S and the objective agree to 1e-12 and W+ to 6e-6.  The margin is therefore compared as
-what it is, a fraction of the limits, within replay_tol of them, as every other replayed integral:
-``m >= friction_tol - replay_tol``.  A margin short by more is a physical miss (the slip runs closer
-to the friction tie than friction_tol asks), not a disagreement of quadratures.
 """
 from __future__ import annotations
 
@@ -53,7 +37,6 @@ from ocp_crawl.ocp.baseline import cycle_of, value_from
 from ocp_crawl.ocp.quantities import Cycle, minimises, missed, profile_of_nodes, reference_sizes
 from ocp_crawl.ocp.rates import JOINT_RATE_RTOL, replay_peaks
 from ocp_crawl.ocp.settings import OCPSettings
-from ocp_crawl.ocp.slip_margin import admissible_text, result_margins
 from ocp_crawl.status import Status
 
 #: the ``[gait] interpolation`` of a problem file of samples that reproduces :func:`replay_signal`
@@ -124,6 +107,17 @@ def scenario_labels(settings: OCPSettings) -> list[str]:
         return ratios
     levels = ratio_labels(settings.levels)
     return [f"{r}_level_{lv}" for lv in levels for r in ratios]
+
+
+def replay_misses(settings: OCPSettings, robot, runs: list, T: float,
+                  tau: np.ndarray) -> tuple[Cycle, list[str]]:
+    """The :class:`~ocp_crawl.ocp.quantities.Cycle` of a profile's successful replays ``runs`` (one
+    per friction scenario of ``robot``, period ``T`` [s], node torques ``tau`` (m, N) [N m]) and the
+    requirements it misses by more than ``replay_tol``, as texts."""
+    cycle = cycle_of(settings, [r.S for r in runs], [r.W_plus for r in runs],
+                     [r.CoT_plus for r in runs], T, profile_of_nodes(tau))
+    sizes = reference_sizes(robot.M, robot.g, robot.L, settings.period_ref())
+    return cycle, missed(settings.requirements, cycle, settings.replay_tol, sizes)
 
 
 def is_better(objective: str, a: float, b: float) -> bool:
@@ -216,9 +210,6 @@ class Verdict:
     rate_ratio: float = float("nan")
     accel_ratio: float = float("nan")
     """largest second difference over its bound (NaN: no max_accel_deg_s2)"""
-    margin: list = field(default_factory=list)
-    """per scenario: the replay's slip-weighted friction margin [-]
-    (:mod:`ocp_crawl.ocp.slip_margin`)"""
     peaks: list = field(default_factory=list)
     """per scenario: the replay's peak joint rates and foot sliding speeds
     (:class:`~ocp_crawl.ocp.rates.Peaks`)"""
@@ -281,7 +272,6 @@ def judge_replay(models: list, settings: OCPSettings, tau: np.ndarray, T: float,
     v.speed = [settings.direction * s / T for s in v.S]
     v.cycle = cycle_of(settings, v.S, v.W_plus, v.CoT_plus, T, profile_of_nodes(tau))
     v.value = value_from(settings, v.S, v.CoT_plus, T, cycle=v.cycle)
-    v.margin = [result_margins(r, p.robot)[0] for r, p in zip(v.replay, plants)]
     v.peaks = [replay_peaks(p, sig, T, r, N) for r, p in zip(v.replay, plants)]
     r = plants[0].robot
     problems = _problems(v, settings, value_ocp,
@@ -299,8 +289,8 @@ def judge_replay(models: list, settings: OCPSettings, tau: np.ndarray, T: float,
 
 
 def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) -> list[str]:
-    """What the replay misses: the envelope, the bandwidth, the requirements, the friction
-    tolerance, the agreement with the OCP."""
+    """What the replay misses: the envelope, the bandwidth, the requirements, the joint rate, the
+    agreement with the OCP."""
     tol = settings.replay_tol
     out = []
     if not v.envelope_excess <= BOUND_RTOL:
@@ -319,11 +309,6 @@ def _problems(v: Verdict, settings: OCPSettings, value_ocp: float, sizes: dict) 
             for text in (missed(settings.requirements, v.cycle, tol, sizes)
                          if v.cycle is not None else [])]
     out += _joint_rate_problems(v, settings)
-    low = min(v.margin, default=math.inf)
-    if settings.friction_tol > 0 and not low >= settings.friction_tol - tol:  # absolute: module doc
-        out.append(admissible_text(low, settings.friction_tol)
-                   + f" by more than replay_tol {units.significant(tol)} (of the mean friction "
-                     "limit)")
     size = abs(v.value)
     magnitude = getattr(getattr(settings.user_objective, "value", None), "magnitude", None)
     if magnitude is not None and v.cycle is not None:  # a sum near 0: relative to its terms

@@ -26,6 +26,9 @@ START_SOLVES = ("homotopy", "tightened", "both")
 #: keys of earlier versions that no longer exist, and what replaces each (problem files and
 #: OCPSettings)
 REMOVED_KEYS = {
+    "friction_tol": "mu_ratio_eps with robust = \"worst\": a set of friction ratios mu1/mu2 over "
+                    "which the gait must keep its objective (a margin on the friction tie "
+                    "guaranteed no speed under a friction asymmetry)",
     "S_min": "speed_min [m/s], the smallest mean speed direction * S / T (a per-cycle S rewarded "
              "packing strokes)",
     "rate_limit": "max_rate_deg_s [deg/s], the actuators' largest reference-angle rate (a physical "
@@ -71,8 +74,6 @@ PHYSICAL_BOUNDS = {
     "mu_ratio_eps": (0.0, 0.5,
                      "friction ratios beyond 1 +- 0.5 are another robot: give robot.mu1 and "
                      "robot.mu2"),
-    "friction_tol": (0.0, 0.5,
-                     "a fraction of the mean friction limit: above 0.5 almost no gait slips"),
     "dynamic_margin": (1.0, 20.0, "a factor on the shortest period at which MuJoCo's S is "
                        "within 5 % of the quasistatic S: 1 asks it at the gait's own period; "
                        "above 20 a 1 s gait is run at 50 ms, fewer than 100 MuJoCo steps per "
@@ -109,7 +110,7 @@ LAYERS = {
     "problem": ("objective", "terms", "user_objective", "direction", "gamma_deg",
                 "gamma_joints_deg", "A_max_deg", "max_rate_deg_s", "max_accel_deg_s2",
                 "max_joint_rate_deg_s", "speed_min",
-                "constraints", "mu_ratio_eps", "mu_ratios", "mu_levels", "robust", "friction_tol"),
+                "constraints", "mu_ratio_eps", "mu_ratios", "mu_levels", "robust"),
     "transcription": ("nodes", "parametrization", "fourier_order", "regularization"),
     "solver": ("starts", "sigma0", "sigma_min", "sigma_factor", "stage_tol", "stage_tol_ratio",
                "loose_last", "start_solve", "endgame_sigma", "endgame_paths", "endgame_max_iter",

@@ -126,6 +126,10 @@ class OCPResult:
     gains: dict = field(default_factory=dict)
     """relative gain by replay over each family's best member, by shape (NaN: none, or
     infeasible)"""
+    baseline_at_nodes: dict | None = None
+    """where another family's best member beats the optimum: that member sampled at the N nodes
+    (``shape``, ``nodes``, ``value`` [the objective's unit];
+    :func:`~ocp_crawl.ocp.sampling.best_sampling`)"""
     starts: list = field(default_factory=list)
     """:class:`StartRecord` of every start of the multi-start (the reported one among them)"""
     dynamic_margin: dict | None = None
@@ -187,6 +191,7 @@ class OCPResult:
             "baselines": self.baselines.table() if self.baselines else None,
             "best_baseline": self._best_baseline(),
             "gain": self.gain, "gain_significant": self.gain_significant, "gains": self.gains,
+            "best_baseline_at_nodes": self.baseline_at_nodes,
             "starts": [s.to_dict() for s in self.starts], "starts_converged": converged,
             "endgame": self.path or None,
             "objective_value_replay_min": low, "objective_value_replay_max": high,

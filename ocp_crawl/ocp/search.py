@@ -33,8 +33,7 @@ from ocp_crawl.workers import default_jobs, worker_pool
 #: Nelder-Mead's stopping tolerances (box coordinates; search ranks, i.e. m/s or CoT+): both must
 #: hold.  The searches end by their evaluation budgets.  A tolerance of 5e-6 relative saved a
 #: quarter of the harmonic family's evaluations but moved its best member by 7e-6, which put
-#: robust_speed's homotopy on another path: 2,588 IPOPT iterations instead of 1,181, 69.813 mm/s
-#: instead of 69.891
+#: robust_speed's homotopy on another path (twice the IPOPT iterations, another local optimum)
 NM_TOL = {"xatol": 1e-7, "fatol": 1e-12}
 #: centre offsets w of the symmetric scan (gamma_i = gamma + w (A_max - A_i)): both edges and the
 #: middle

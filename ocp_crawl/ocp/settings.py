@@ -202,19 +202,6 @@ class OCPSettings:
     """relative tolerance of the replay judge: the event-driven replay must agree with the OCP's
     objective and meet speed_min within this fraction (envelope and bandwidth within 1e-9
     relative)"""
-    friction_tol: float = 0.05
-    """eps: a gait is admissible (baseline, replay judge) only when its slip-weighted friction
-    margin (lim_anchor - lim_slip) / mean(lim) is at least eps (:mod:`ocp_crawl.ocp.slip_margin`);
-    the OCP has the same rule as a constraint on its sub-steps
-    (:func:`ocp_crawl.ocp.substeps.friction_rows`), the judge accepts a replayed margin down to
-    eps - replay_tol (a fraction of the mean friction limit).  What it guarantees, measured by
-    simulation at mu1/mu2 = 1 +- delta: the gait does not depend on an exact friction tie (a gait
-    at the tie stops at delta = 0.5 %), but delta = eps/10 may cost S 2 % (max_speed's optimum) to
-    4.5 % (min_cot's).  It does not hold the speed under +-eps/2 (an optimum on the rule
-    keeps 40 % of its S at mu1/mu2 = 0.975) and is not the limit of robust_speed's set (its worst
-    case over {0.95, 1, 1.05} ends on a margin of 0.103, S flat over the set): a gait that keeps its
-    speed under a known friction uncertainty is asked for by that set (mu_ratio_eps, robust =
-    "worst"; any objective).  0 admits every gait; in [0, 1)"""
     dynamic_margin: float | None = None
     """optional factor c >= 1: the optimum is accepted only when its period T is at least c times
     the shortest period at which MuJoCo's S of its replay is within 5 % of the quasistatic S (a few

@@ -120,8 +120,8 @@ def optimize_gait(robot: AnyRobot, gravity: GravityConvention = "physical",
         # with "both": the tightened starts from every family's best member, after the homotopy's
         if settings.start_solve != "both":
             return []
-        return _solve_guesses(solver, models, family_starts(base, settings, robot), base, replay,
-                              True, parallel=parallel)
+        return _solve_guesses(solver, models, family_starts(base, settings, robot, models=models),
+                              base, replay, True, parallel=parallel)
     others = tuple(s for s in shapes if s not in first)
 
     def comparators() -> tuple[Baselines, list]:
@@ -170,7 +170,8 @@ def _guesses(settings: OCPSettings, robot: AnyRobot, m: int, found: Baselines, m
         return guesses
     # the harmonic best member is the first start unless a start is given
     return ([replace(g, label=f"{g.label}, tightened") for g in guesses]
-            + family_starts(found, settings, robot, skip=("harmonic",) if start is None else ()))
+            + family_starts(found, settings, robot, skip=("harmonic",) if start is None else (),
+                            models=models))
 
 
 def _solve_guesses(solver: GaitSolver, models: list, guesses: list[StartGuess], base: Baselines,

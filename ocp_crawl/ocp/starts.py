@@ -19,6 +19,7 @@ import numpy as np
 
 from ocp_crawl.ocp.baseline import Baselines
 from ocp_crawl.ocp.plant import AnyRobot, joint_rate_bounds, joint_torque_bounds, stiffness_of
+from ocp_crawl.ocp.sampling import best_sampling
 from ocp_crawl.ocp.settings import OCPSettings
 
 #: seed of the perturbed starts (start i uses the generator seeded with (START_SEED, i))
@@ -150,23 +151,31 @@ def start_guesses(settings: OCPSettings, robot: AnyRobot, base: np.ndarray, T: f
 
 
 def family_starts(base: Baselines, settings: OCPSettings, robot: AnyRobot,
-                  skip: tuple[str, ...] = ()) -> list[StartGuess]:
+                  skip: tuple[str, ...] = (), models: list | None = None) -> list[StartGuess]:
     """The best member of each searched waveform family of ``base`` (but the shapes ``skip``) as a
     start: its torques at the node phases k/N, pinned, with its period; labelled "SHAPE baseline,
-    tightened" (they are solved by the tightened NLP, :attr:`OCPSettings.start_solve`).  A member
-    whose node profile and period equal an earlier one's is left out (the pulse family's best is
-    often the triangle's: a pulse of rise 0.5)."""
+    tightened" (they are solved by the tightened NLP, :attr:`OCPSettings.start_solve`).  With the
+    friction scenarios' ``models``, also the member sampled at its best sub-node phase
+    (:func:`~ocp_crawl.ocp.sampling.best_sampling`, "SHAPE baseline, best node phase, tightened")
+    where that is another profile: which of its corners the nodes hold decides where the solve
+    starts (robust_speed: 69.89 mm/s from it, 68.82 by the homotopy).  A start whose node profile
+    and period equal an earlier one's is left out (the pulse family's best is often the
+    triangle's: a pulse of rise 0.5)."""
     phase = np.arange(settings.nodes) / settings.nodes
     out: list[StartGuess] = []
     for shape, choice in base.choices.items():
         if choice is None or shape in skip:
             continue
         tau = np.asarray(choice.signal_for(robot, settings)(phase), float).reshape(-1, phase.size)
-        guess = replace(given_start(settings, robot, tau, choice.T, f"{shape} baseline, tightened"),
-                        family=shape)
-        # equal up to round-off: a pulse of rise 0.5 is the triangle
-        atol = 1e-12 * float(np.max(np.abs(guess.tau)))
-        if not any(np.allclose(guess.tau, o.tau, rtol=0.0, atol=atol)
-                   and math.isclose(guess.T, o.T, rel_tol=1e-12) for o in out):
-            out.append(guess)
+        profiles = [(tau, f"{shape} baseline, tightened")]
+        if models is not None:
+            profiles.append((best_sampling(settings, models, choice)[1],
+                             f"{shape} baseline, best node phase, tightened"))
+        for nodes, label in profiles:
+            guess = replace(given_start(settings, robot, nodes, choice.T, label), family=shape)
+            # equal up to round-off: a pulse of rise 0.5 is the triangle
+            atol = 1e-12 * float(np.max(np.abs(guess.tau)))
+            if not any(np.allclose(guess.tau, o.tau, rtol=0.0, atol=atol)
+                       and math.isclose(guess.T, o.T, rel_tol=1e-12) for o in out):
+                out.append(guess)
     return out

@@ -51,16 +51,7 @@ successor modes in the replay).  A real change of the slipping foot passes: afte
 the foot that stopped grows in proportion to the other's slip (both linearly from the switch); a
 slip that stops near the tie slips little in its last sub-step.  The rules exclude margins that grow
 by less than TIE_SLOPE M g per slip L, or end below TIE_END M g per slip L (about 0.3 % of the
-friction limit for a sub-step's slip of 3e-3 L).  The cycle-integrated friction tolerance below does
-not see a held tie of small slip.
-
-Friction tolerance (``friction_tol`` = eps > 0): which foot slips must not depend on friction
-coefficients known only to +-eps/2, so
-``sum_j (s1_j - s2_j)(lim2_j - lim1_j) >= eps sum_j (s1_j + s2_j)(lim1_j + lim2_j)/2``
-(:func:`friction_rows`, lim_i = mu_i f_n,i at the sub-step's midpoint by the trapezoid rule): the
-slip-weighted margin rule of the harmonic baseline and the replay judge
-(:mod:`ocp_crawl.ocp.slip_margin`), to O(h).  It excludes holding the tie with one foot slipping
-(margin 0) over most of the slip, not over a few sub-steps (which the rule above excludes).
+friction limit for a sub-step's slip of 3e-3 L).
 """
 from __future__ import annotations
 
@@ -199,15 +190,14 @@ class Scenario:
     """The sub-step variables and constraints of one friction scenario, added to a Layout."""
 
     def __init__(self, nlp, j: int, model, T, Th, step_map, N: int, with_work: bool,
-                 friction_tol: float = 0.0, joint_rate: float | None = None, p=None,
+                 joint_rate: float | None = None, p=None,
                  stability: float | None = None):
         """Add scenario j: initial state, interior fractions, 2N sub-steps, periodicity, cross
         conditions, S and (``with_work``) W+ by the midpoint rule per sub-step.  ``model``: the
         scenario's :class:`~ocp_crawl.ocp.plant.Plant` (its parameter vector ``p``); ``T``: scaled
         node torques (m, N) of its m joints; ``Th``: the scaled period, which divides the relaxed
         products (a relaxation per unit time: the spurious slip that a relaxation sigma allows then
-        cannot buy speed by shrinking the period); ``friction_tol`` > 0 adds the friction-tolerance
-        constraint (:func:`friction_rows`); ``joint_rate`` (not None) bounds the joint rates
+        cannot buy speed by shrinking the period); ``joint_rate`` (not None) bounds the joint rates
         (:func:`joint_rate_rows`, the angle change over a whole interval at T_hat = 1 [rad]);
         ``p``: the parameter vector as an expression (a design's; None: the Plant's numbers);
         ``stability`` (not None): every sub-step end's stick-stick reduced stiffness at least this
@@ -247,10 +237,6 @@ class Scenario:
         if joint_rate is not None:
             rows = joint_rate_rows(PHI, theta, joint_rate * Th)
             nlp.con(f"joint_rate_{j}", cs.vec(rows), 0.0, inf, ("rule",))
-        # the sum as running sums (a dense row would cost a Jacobian direction per column)
-        if friction_tol > 0:
-            total = _running_sum(nlp, f"Fc_{j}", f"F_def_{j}", friction_rows(W, friction_tol))
-            nlp.con(f"friction_{j}", total, 0.0, inf, ("rule",))
         # S and W+ are lifted into running sums over the sub-steps (variables Sc_j, Wc_j, each
         # defined by a two-term recurrence): neither the nonlinear objective in them (W+/S, S/T) nor
         # their definitions make a dense row (a dense row costs one Jacobian direction per variable
@@ -302,21 +288,6 @@ def tie_rows(W, theta):
                  + _roll(w, shift) * _roll(W[o:o + 1, :], 2 * shift) - TIE_END
                  * W[q:q + 1, :] for q, c, o in pairs]
     return np.vstack(rows) if isinstance(W, np.ndarray) else cs.vertcat(*rows)
-
-
-def friction_rows(W, eps: float):
-    """Terms (1, 2N) of the friction-tolerance constraint sum_j terms_j >= 0, the transcription's
-    form of the slip-weighted margin rule of :mod:`ocp_crawl.ocp.slip_margin` (the same rule as the
-    replay judge's): ``(s1_j - s2_j)(lim2_j - lim1_j) - eps (s1_j + s2_j)(lim1_j + lim2_j)/2`` with
-    s_i the slip of foot i in sub-step j and lim_i the mean of mu_i f_n,i = (c_i+ + c_i-)/2 (scaled
-    by M g) at its two ends (the trapezoid rule of the simulation's margin; the start of sub-step 0
-    is the end of the last one, periodicity).  ``W``: (m+10, 2N) sub-step variables (CasADi or
-    numpy)."""
-    s1, s2 = _foot_slips(W)
-    c = rows_of(W).c1p
-    e1, e2 = 0.5 * (W[c, :] + W[c + 1, :]), 0.5 * (W[c + 2, :] + W[c + 3, :])
-    l1, l2 = 0.5 * (e1 + _roll(e1, 1)), 0.5 * (e2 + _roll(e2, 1))
-    return (s1 - s2) * (l2 - l1) - eps * (s1 + s2) * (l1 + l2) * 0.5
 
 
 #: the joint-rate bound on each sub-step's mean rate is this much looser (relative) than on each

@@ -235,7 +235,7 @@ class GaitOCP:
         work = (s.objective == "min_cot" or needs_work(s.requirements)
                 or (s.user_objective is not None and s.user_objective.work))
         scen = [Scenario(nlp, j, model, T, Th, step_map, s.nodes, work,
-                         s.friction_tol, s.joint_rate_step(), p=p, stability=self.stability)
+                         s.joint_rate_step(), p=p, stability=self.stability)
                 for j, (model, p) in enumerate(zip(self.scen, p_design))]
         weights = (cs.DM(stiffness_of(r)) / k if k is not None
                    else None if self._rate_weights is None else cs.DM(self._rate_weights))

@@ -415,11 +415,6 @@ _OCP = Section("ocp", "periodic-gait optimal control (ocp-crawl optimize)", sele
         "homotopy: IPOPT's barrier strategy in the warm-started solves (every stage after "
         "the first, the polish); monotone starts from mu = 1e-6", default=_ocp("warm_barrier"),
         choices=WARM_BARRIERS),
-    Key("friction_tol", float, "-",
-        "smallest slip-weighted friction margin (lim_anchor - lim_slip)/mean(lim) of "
-        "an admissible gait: keeps its slip off the friction tie (docs: Optimal gaits, Friction "
-        "uncertainty)",
-        default=_ocp("friction_tol"), rule=_physical("friction_tol")),
     Key("dynamic_margin", float, "-", "optional: the optimum's period T must be at least this "
         "factor times the shortest period at which MuJoCo's S is within 5 % of the quasistatic S "
         "(a few MuJoCo runs; absent: not computed, not required)",
