@@ -31,7 +31,7 @@ from ocp_crawl.ocp.asymmetry import check_friction_asymmetry
 from ocp_crawl.ocp.chain_search import ChainWaveChoice, best_chain_baselines
 from ocp_crawl.ocp.design import Design
 from ocp_crawl.ocp.design_search import ROUNDS, DesignSearch, nlp_value
-from ocp_crawl.ocp.judge import gain_over, is_better, replay_signal, value_text
+from ocp_crawl.ocp.judge import first_failure, gain_over, is_better, replay_signal, value_text
 from ocp_crawl.ocp.plant import AnyRobot, Plant
 from ocp_crawl.ocp.result import OCPResult
 from ocp_crawl.ocp.settings import OCPSettings
@@ -333,7 +333,7 @@ def _solve_design(out: CodesignResult, chain: Chain, design: Design,
     fixed = search.fixed_solver(np.asarray(out.chosen))
     phase = np.arange(settings.nodes) / settings.nodes
     signal = replay_signal(phase, u["tau"])
-    bad = next((r for r in (m.simulate(signal) for m in models) if not r.success), None)
+    bad = first_failure(models, signal)
     if bad is not None:
         # the co-design NLP's own profile is the start of the fixed robot's solve
         out.status = Status.REPLAY_FAILED

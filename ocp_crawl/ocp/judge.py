@@ -109,6 +109,12 @@ def scenario_labels(settings: OCPSettings) -> list[str]:
     return [f"{r}_level_{lv}" for lv in levels for r in ratios]
 
 
+def first_failure(models: list, signal):
+    """The first failed simulation of ``signal`` over the friction scenarios' ``models`` (the
+    scenarios after it not simulated), or None when every one succeeds."""
+    return next((r for r in (as_plant(m).simulate(signal) for m in models) if not r.success), None)
+
+
 def replay_misses(settings: OCPSettings, robot, runs: list, T: float,
                   tau: np.ndarray) -> tuple[Cycle, list[str]]:
     """The :class:`~ocp_crawl.ocp.quantities.Cycle` of a profile's successful replays ``runs`` (one

@@ -37,7 +37,7 @@ from ocp_crawl.ocp.dynamic_margin import check_dynamic_margin
 from ocp_crawl.ocp.endgame import Endgame
 from ocp_crawl.ocp.gains import harmonic_peaks, measure_gains
 from ocp_crawl.ocp.plant import AnyRobot, Plant, as_plant
-from ocp_crawl.ocp.judge import (is_better, judge_replay, replay_signal, spread_text,
+from ocp_crawl.ocp.judge import (first_failure, is_better, judge_replay, replay_signal, spread_text,
                                  value_text)
 from ocp_crawl.ocp.result import OCPResult, StartRecord
 from ocp_crawl.ocp.search import best_baselines
@@ -298,8 +298,7 @@ def solve_from(solver: GaitSolver, models: list, signal, T: float,
     res = OCPResult(success=False, status=Status.SOLVER_FAILURE, message="",
                     objective=settings.objective, tau=np.zeros((ocp.n_joints, 0)),
                     settings=settings, harmonic=harmonic, baselines=baselines)
-    bad = next((r for r in (as_plant(m).simulate(signal) for m in models) if not r.success),
-               None)
+    bad = first_failure(models, signal)
     if bad is not None:
         res.status = Status.NO_INITIAL_GUESS
         res.message = (f"{Status.NO_INITIAL_GUESS.text}: the start gait fails in the simulator: "
